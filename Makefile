@@ -1,0 +1,31 @@
+# ancf-petsc — every target bootstraps the environment first (scripts/setup.sh, idempotent).
+SHELL := /bin/bash
+VENV  := .venv
+PY    := $(VENV)/bin/python
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+export OMPI_MCA_rmaps_base_oversubscribe := 1
+export OPENBLAS_NUM_THREADS := 1
+export OMP_NUM_THREADS := 1
+MPIRUN := mpirun --oversubscribe
+DEMO_CONFIG ?= configs/uniaxial_neohookean.yaml
+
+.PHONY: setup demo test test-fast bench verify clean
+
+setup:
+	@bash scripts/setup.sh
+
+demo: setup
+	$(MPIRUN) -n 2 $(VENV)/bin/ancf-solve $(DEMO_CONFIG)
+
+test: setup
+	$(PY) -m pytest -q tests
+
+test-fast: setup
+	$(PY) -m pytest -q -m "not slow" tests
+
+bench: setup
+	$(PY) scripts/bench_kernel.py
+
+clean:
+	rm -rf results .pytest_cache

@@ -1,0 +1,217 @@
+"""Residual F(q, λ) = f_int(q) + f_con(q) − λ f_ext and Jacobian K(q) in PETSc Vec / Mat.
+
+The only module (with ``solver``) that touches PETSc objects.  Each rank evaluates the element
+kernels of its own elements on a local copy of exactly the node blocks they need (a VecScatter
+from the global vector), adds the element forces back with the reverse scatter, and inserts
+element matrices with one batched ``setValuesRCV`` per beam.  DOFs held by boundary conditions
+get the residual q − q̄ and a unit row/column; their entries in element matrices are dropped by
+giving them negative indices, so the Jacobian stays symmetric.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from petsc4py import PETSc
+
+from . import kernels
+from .layout import Layout
+from .model import Beam, Model
+
+ADD = PETSc.InsertMode.ADD_VALUES
+INSERT = PETSc.InsertMode.INSERT_VALUES
+
+EV_ELEMENTS = PETSc.Log.Event("ANCF element kernels")
+EV_CONTACT = PETSc.Log.Event("ANCF contact")
+STAGE_ASSEMBLY = PETSc.Log.Stage("ANCF assembly")
+
+
+@dataclass
+class ElementBlock:
+    """A rank's elements of one beam with their quadrature data."""
+    beam: Beam
+    G: np.ndarray        # (E, P, 18, 3)
+    w: np.ndarray        # (E, P)
+    lnodes: np.ndarray   # (E, 3) positions in the local node array
+    rows: np.ndarray     # (E, 54) PETSc DOF ids, −1 for DOFs held by BCs
+
+
+class Problem:
+    """PETSc residual/Jacobian of a model on a layout; ``load_factor`` scales the external loads."""
+
+    def __init__(self, model: Model, layout: Layout, comm=PETSc.COMM_WORLD, contact=None):
+        self.model, self.layout, self.comm = model, layout, comm
+        self.contact = contact
+        self.load_factor = 0.0
+        self.inverted = False
+        lo, hi = layout.owned_nodes
+        n_owned = hi - lo
+        N = model.n_dofs
+
+        fixed_petsc = layout.petsc_dofs(model.fixed_dofs)
+        self.fixed_mask = np.zeros(N, dtype=bool)
+        self.fixed_mask[fixed_petsc] = True
+        owned_fixed = np.sort(fixed_petsc[(fixed_petsc >= 18 * lo) & (fixed_petsc < 18 * hi)])
+        self.owned_fixed_local = owned_fixed - 18 * lo
+
+        # nodes this rank needs: those of its elements (+ contact candidates, see contact.py)
+        conn_all = layout.perm[model.connectivity()]
+        local_el = layout.local_elements
+        needed = [conn_all[local_el].ravel()]
+        if contact is not None:
+            needed.append(contact.needed_nodes(layout))
+        self.needed = np.unique(np.concatenate(needed)).astype(np.int64)
+
+        def lpos(petsc_nodes):
+            return np.searchsorted(self.needed, petsc_nodes)
+
+        self.blocks: list[ElementBlock] = []
+        elem_beam = model.element_beam()
+        for beam in model.beams:
+            mine = local_el[elem_beam[local_el] == beam.index]
+            if len(mine) == 0:
+                continue
+            local_ids = mine - beam.element_offset
+            G, w = model.element_data(beam, local_ids)
+            cn = conn_all[mine]
+            rows = (18 * cn[:, :, None] + np.arange(18)).reshape(len(mine), 54)
+            rows = np.where(self.fixed_mask[rows], -1, rows).astype(PETSc.IntType)
+            self.blocks.append(ElementBlock(beam, G, w, lpos(cn), rows))
+
+        # vectors and the scatter global → needed node blocks
+        self.X = PETSc.Vec().createMPI((18 * n_owned, N), bsize=18, comm=comm)
+        self.F = self.X.duplicate()
+        self.xloc = PETSc.Vec().createSeq(18 * len(self.needed), bsize=18, comm=PETSc.COMM_SELF)
+        self.floc = self.xloc.duplicate()
+        is_needed = PETSc.IS().createBlock(18, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
+
+        self.q0 = self._global_from_model(model.q0.reshape(-1))
+        self.fext = self._global_from_model(model.f_ext)
+        self.J = self._create_matrix()
+
+    # ------------------------------------------------------------------ helpers
+    def _global_from_model(self, arr_model: np.ndarray) -> PETSc.Vec:
+        """Global Vec from a model-numbered array (every rank holds the full array)."""
+        v = self.X.duplicate()
+        lo, hi = self.layout.owned_nodes
+        inv = np.argsort(self.layout.perm)[lo:hi]          # PETSc node → model node
+        v.setArray(arr_model.reshape(-1, 18)[inv].ravel())
+        return v
+
+    def to_model_order(self, full_petsc: np.ndarray) -> np.ndarray:
+        """A full PETSc-ordered array (n_dofs,) → model order (n_nodes, 6, 3)."""
+        return full_petsc.reshape(-1, 18)[self.layout.perm].reshape(-1, 6, 3)
+
+    def node_pattern(self) -> sp.csr_matrix:
+        """Node-block coupling (PETSc numbering): elements + current contact candidates."""
+        n = self.model.n_nodes
+        conn = self.layout.perm[self.model.connectivity()]
+        r = np.repeat(conn, 3, axis=1).ravel()
+        c = np.tile(conn, (1, 3)).ravel()
+        if self.contact is not None:
+            cr, cc = self.contact.node_couplings(self.layout)
+            r, c = np.concatenate([r, cr]), np.concatenate([c, cc])
+        A = sp.coo_matrix((np.ones(len(r), dtype=np.int8), (r, c)), shape=(n, n)).tocsr()
+        A.data[:] = 1
+        return A
+
+    def _create_matrix(self) -> PETSc.Mat:
+        lo, hi = self.layout.owned_nodes
+        A = self.node_pattern()[lo:hi]
+        S = sp.kron(A, sp.csr_matrix(np.ones((18, 18), dtype=np.int8)), format="csr")
+        free = ~self.fixed_mask
+        rows_free = free[18 * lo:18 * hi]
+        S = sp.diags(rows_free.astype(np.int8)) @ S @ sp.diags(free.astype(np.int8))
+        S = (S + sp.csr_matrix((np.ones(int((~rows_free).sum()), dtype=np.int8),
+                                (np.flatnonzero(~rows_free), np.flatnonzero(~rows_free) + 18 * lo)),
+                               shape=S.shape)).tocsr()
+        S.eliminate_zeros()
+        S.sort_indices()
+        J = PETSc.Mat().create(comm=self.comm)
+        J.setSizes(((18 * (hi - lo), self.model.n_dofs), (18 * (hi - lo), self.model.n_dofs)), bsize=18)
+        J.setType(PETSc.Mat.Type.AIJ)
+        J.setPreallocationCSR((S.indptr.astype(PETSc.IntType), S.indices.astype(PETSc.IntType)))
+        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        J.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        return J
+
+    def _local_state(self, X: PETSc.Vec) -> np.ndarray:
+        self.scatter.scatter(X, self.xloc, INSERT, PETSc.ScatterMode.FORWARD)
+        return self.xloc.getArray(readonly=True).reshape(-1, 6, 3)
+
+    # ------------------------------------------------------------------ SNES callbacks
+    def residual(self, snes, X: PETSc.Vec, F: PETSc.Vec) -> None:
+        STAGE_ASSEMBLY.push()
+        try:
+            xl = self._local_state(X)
+            floc = np.zeros(self.xloc.getLocalSize())
+            bad = False
+            EV_ELEMENTS.begin()
+            for blk in self.blocks:
+                qe = xl[blk.lnodes].reshape(-1, 18, 3)
+                f, Jmin = kernels.internal_force(qe, blk.G, blk.w, blk.beam.material)
+                bad |= not np.all(Jmin > 0.0)
+                floc += np.bincount((18 * blk.lnodes[:, :, None] + np.arange(18)).ravel(),
+                                    f.ravel(), minlength=floc.size)
+            EV_ELEMENTS.end()
+            if self.contact is not None:
+                EV_CONTACT.begin()
+                ok = self.contact.add_residual(xl, self.needed, floc)
+                bad |= not ok
+                EV_CONTACT.end()
+            self._finish_residual(X, F, floc, bad)
+        finally:
+            STAGE_ASSEMBLY.pop()
+
+    def _finish_residual(self, X, F, floc, bad):
+        self.floc.setArray(floc)
+        F.set(0.0)
+        self.scatter.scatter(self.floc, F, ADD, PETSc.ScatterMode.REVERSE)
+        F.axpy(-self.load_factor, self.fext)
+        fa = F.getArray()
+        if len(self.owned_fixed_local):
+            fa[self.owned_fixed_local] = (X.getArray(readonly=True)[self.owned_fixed_local]
+                                          - self.q0.getArray(readonly=True)[self.owned_fixed_local])
+        self.inverted = bool(bad or not np.all(np.isfinite(fa)))
+        if self.inverted:
+            # J <= 0 somewhere: a NaN residual makes the line search back off (no exception,
+            # so no rank is left waiting in a collective call)
+            fa[:] = np.nan
+        del fa
+
+    def jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
+        STAGE_ASSEMBLY.push()
+        try:
+            xl = self._local_state(X)
+            P.zeroEntries()
+            EV_ELEMENTS.begin()
+            for blk in self.blocks:
+                qe = xl[blk.lnodes].reshape(-1, 18, 3)
+                _, K, _ = kernels.internal_force_and_tangent(qe, blk.G, blk.w, blk.beam.material)
+                P.setValuesRCV(blk.rows, blk.rows, K, ADD)
+            EV_ELEMENTS.end()
+            if self.contact is not None:
+                EV_CONTACT.begin()
+                self.contact.add_jacobian(xl, self.needed, P, self.fixed_mask)
+                EV_CONTACT.end()
+            d = (self.owned_fixed_local + 18 * self.layout.owned_nodes[0]).astype(PETSc.IntType)
+            if len(d):
+                P.setValuesRCV(d[:, None], d[:, None], np.ones((len(d), 1, 1)), ADD)
+            P.assemble()
+            if J.handle != P.handle:
+                J.assemble()
+        finally:
+            STAGE_ASSEMBLY.pop()
+
+    # ------------------------------------------------------------------ state
+    def gather(self, X: PETSc.Vec | None = None) -> np.ndarray | None:
+        """Full state in model order (n_nodes, 6, 3) on rank 0 (None elsewhere)."""
+        X = self.X if X is None else X
+        scat, full = PETSc.Scatter.toZero(X)
+        scat.scatter(X, full, INSERT, PETSc.ScatterMode.FORWARD)
+        out = self.to_model_order(full.getArray().copy()) if self.comm.rank == 0 else None
+        scat.destroy()
+        full.destroy()
+        return out

@@ -1,0 +1,163 @@
+"""Hyperelastic materials (paper §4, eqs. 16–25), batched over points.
+
+Each material gives the strain energy Ψ(F), the first Piola–Kirchhoff stress P = ∂Ψ/∂F and the
+tangent 𝔸 = ∂P/∂F.  The tangent is returned as a short sum of dyadic terms (``TangentTerms``)
+so that the element kernel can contract it with the shape-function gradients as matrix products
+instead of forming the 81-component tensor at every Gauss point:
+
+    𝔸_ijkl = δ_ik S_jl            (``iso``; S a scalar multiple of I or a 3×3 field)
+           + B_ik δ_jl            (``gram``)
+           + Σ X_ij Y_kl          (``outer`` pairs (X, Y))
+           + Σ U_il V_kj          (``cross`` pairs (U, V))
+
+All arrays are batched over a leading point axis (n, 3, 3).  The paper works with S : δE
+(eq. 14); P : δF is the same virtual work.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def det_and_inverse_transpose(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """det F and F⁻ᵀ for a batch of 3×3 matrices by cofactors (no LAPACK call per matrix)."""
+    a = F
+    cof = np.empty_like(a)
+    cof[..., 0, 0] = a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1]
+    cof[..., 0, 1] = a[..., 1, 2] * a[..., 2, 0] - a[..., 1, 0] * a[..., 2, 2]
+    cof[..., 0, 2] = a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0]
+    cof[..., 1, 0] = a[..., 0, 2] * a[..., 2, 1] - a[..., 0, 1] * a[..., 2, 2]
+    cof[..., 1, 1] = a[..., 0, 0] * a[..., 2, 2] - a[..., 0, 2] * a[..., 2, 0]
+    cof[..., 1, 2] = a[..., 0, 1] * a[..., 2, 0] - a[..., 0, 0] * a[..., 2, 1]
+    cof[..., 2, 0] = a[..., 0, 1] * a[..., 1, 2] - a[..., 0, 2] * a[..., 1, 1]
+    cof[..., 2, 1] = a[..., 0, 2] * a[..., 1, 0] - a[..., 0, 0] * a[..., 1, 2]
+    cof[..., 2, 2] = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    det = np.einsum("...j,...j->...", a[..., 0, :], cof[..., 0, :])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        H = cof / det[..., None, None]
+    return det, H
+
+
+@dataclass
+class TangentTerms:
+    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ U_il V_kj (see module docstring)."""
+
+    iso: np.ndarray | None = None    # (n,) scalar multiple of I, or (n, 3, 3)
+    gram: np.ndarray | None = None   # (n, 3, 3)
+    outer: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    cross: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+
+    def full(self) -> np.ndarray:
+        """The 81-component tangent (n, 3, 3, 3, 3); for tests and diagnostics only."""
+        n = (self.outer[0][0] if self.outer else self.cross[0][0]).shape[0]
+        A = np.zeros((n, 3, 3, 3, 3))
+        eye = np.eye(3)
+        if self.iso is not None:
+            S = self.iso[:, None, None] * eye if self.iso.ndim == 1 else self.iso
+            A += np.einsum("ik,njl->nijkl", eye, S)
+        if self.gram is not None:
+            A += np.einsum("nik,jl->nijkl", self.gram, eye)
+        for X, Y in self.outer:
+            A += np.einsum("nij,nkl->nijkl", X, Y)
+        for U, V in self.cross:
+            A += np.einsum("nil,nkj->nijkl", U, V)
+        return A
+
+
+class NeoHookean:
+    """Decoupled compressible neo-Hookean, Ψ = μ/2 (Ī₁ − 3) + K/2 (J − 1)² (eqs. 18, 23, 24).
+
+    The paper writes Ψ_iso = c10 (Ī₁ − 3) and S_vol = d (J − 1) J C⁻¹, i.e. μ = 2 c10 and K = d.
+    """
+
+    name = "neo-hookean"
+
+    def __init__(self, mu: float, bulk_modulus: float):
+        self.mu = float(mu)
+        self.K = float(bulk_modulus)
+
+    def describe(self) -> str:
+        nu = (3 * self.K - 2 * self.mu) / (2 * (3 * self.K + self.mu))
+        return (f"neo-Hookean  mu={self.mu:.6g} Pa  K={self.K:.6g} Pa  "
+                f"(K/mu={self.K / self.mu:.4g}, small-strain nu={nu:.4f})")
+
+    def _invariants(self, F):
+        J, H = det_and_inverse_transpose(F)
+        I1 = np.einsum("...ij,...ij->...", F, F)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            Jm = np.where(J > 0.0, np.abs(J) ** (-2.0 / 3.0), np.nan)
+        return J, H, I1, Jm
+
+    def energy(self, F: np.ndarray) -> np.ndarray:
+        J, _, I1, Jm = self._invariants(F)
+        return 0.5 * self.mu * (Jm * I1 - 3.0) + 0.5 * self.K * (J - 1.0) ** 2
+
+    def stress(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """P = μ J^(−2/3) (F − I₁/3 F⁻ᵀ) + K (J − 1) J F⁻ᵀ, and J."""
+        J, H, I1, Jm = self._invariants(F)
+        P = (self.mu * Jm)[..., None, None] * (F - (I1 / 3.0)[..., None, None] * H) \
+            + (self.K * (J - 1.0) * J)[..., None, None] * H
+        return P, J
+
+    def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+        J, H, I1, Jm = self._invariants(F)
+        muJm = self.mu * Jm
+        P = muJm[..., None, None] * (F - (I1 / 3.0)[..., None, None] * H) \
+            + (self.K * (J - 1.0) * J)[..., None, None] * H
+        c1 = (2.0 / 9.0) * muJm * I1 + self.K * (2.0 * J - 1.0) * J
+        c2 = -(2.0 / 3.0) * muJm
+        gamma = muJm * I1 / 3.0 - self.K * (J * J - J)
+        c1, c2, gamma = (c[..., None, None] for c in (c1, c2, gamma))
+        terms = TangentTerms(iso=muJm,
+                             outer=[(c1 * H + c2 * F, H), (c2 * H, F)],
+                             cross=[(gamma * H, H)])
+        return P, J, terms
+
+
+class StVenantKirchhoff:
+    """St. Venant–Kirchhoff, Ψ = λ/2 (tr E)² + μ E:E with E = ½(FᵀF − I) (eq. 15); for verification."""
+
+    name = "svk"
+
+    def __init__(self, E: float, nu: float):
+        self.E, self.nu = float(E), float(nu)
+        self.lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+        self.mu = E / (2 * (1 + nu))
+
+    def describe(self) -> str:
+        return f"St. Venant-Kirchhoff  E={self.E:.6g} Pa  nu={self.nu:.4g}"
+
+    def _green(self, F):
+        C = np.matmul(np.swapaxes(F, -1, -2), F)
+        return 0.5 * (C - np.eye(3))
+
+    def energy(self, F: np.ndarray) -> np.ndarray:
+        E = self._green(F)
+        tr = np.trace(E, axis1=-2, axis2=-1)
+        return 0.5 * self.lam * tr ** 2 + self.mu * np.einsum("...ij,...ij->...", E, E)
+
+    def _pk2(self, F):
+        E = self._green(F)
+        tr = np.trace(E, axis1=-2, axis2=-1)
+        return self.lam * tr[..., None, None] * np.eye(3) + 2.0 * self.mu * E
+
+    def stress(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        J, _ = det_and_inverse_transpose(F)
+        return np.matmul(F, self._pk2(F)), J
+
+    def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+        S = self._pk2(F)
+        J, _ = det_and_inverse_transpose(F)
+        terms = TangentTerms(iso=S,
+                             gram=self.mu * np.matmul(F, np.swapaxes(F, -1, -2)),
+                             outer=[(self.lam * F, F)],
+                             cross=[(self.mu * F, F)])
+        return np.matmul(F, S), J, terms
+
+
+def make_material(spec: dict):
+    """Material from a validated config mapping (see ``config.py``)."""
+    if spec["model"] == "neo-hookean":
+        return NeoHookean(spec["mu"], spec["bulk_modulus"])
+    return StVenantKirchhoff(spec["E"], spec["nu"])

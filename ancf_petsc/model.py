@@ -1,0 +1,177 @@
+"""ModelSpec → Model: beams, node numbering, reference nodal coordinates, quadrature, BCs, loads.
+
+Global numbering (before any partitioning): beams in config order, nodes of a beam consecutive
+(2 n_el + 1 per beam), 18 DOFs per node in eq. (3) order (``element3363``).  Element e of a beam
+has nodes (2e, 2e+1, 2e+2).  The model is replicated on every rank; only the per-element
+quadrature data (``element_data``) is built for the elements a rank owns.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import element3363 as el
+from .config import ConfigError, ModelSpec, SectionSpec
+from .cubature import gauss_legendre
+from .geometry import reference_nodal_vectors
+from .materials import make_material
+from .section import Section, SectionError, inline_loop, load_sections_file, make_circle, \
+    make_ellipse, make_outline, make_rectangle
+
+
+@dataclass
+class Beam:
+    index: int
+    name: str
+    section: Section
+    material: object
+    n_elements: int
+    node_offset: int
+    element_offset: int
+    x_nodes: np.ndarray
+    axial_points: int
+    xi: np.ndarray = field(repr=False, default=None)      # (P,) ξ of the element's Gauss points
+    yz: np.ndarray = field(repr=False, default=None)      # (P, 2) section coordinates
+    wq: np.ndarray = field(repr=False, default=None)      # (P,) axial × section weights
+    dN: np.ndarray = field(repr=False, default=None)      # (P, 18, 3)
+
+    @property
+    def n_nodes(self) -> int:
+        return 2 * self.n_elements + 1
+
+    @property
+    def connectivity(self) -> np.ndarray:
+        """Global node ids (n_el, 3)."""
+        e = np.arange(self.n_elements)
+        return self.node_offset + np.stack([2 * e, 2 * e + 1, 2 * e + 2], axis=1)
+
+    @property
+    def points_per_element(self) -> int:
+        return len(self.wq)
+
+
+@dataclass
+class Model:
+    spec: ModelSpec
+    beams: list[Beam]
+    q0: np.ndarray                 # (n_nodes, 6, 3) reference nodal vectors
+    fixed_dofs: np.ndarray         # sorted global DOF ids held at their reference value
+    f_ext: np.ndarray              # (n_dofs,) external generalised forces at load factor 1
+    probes: dict[str, tuple[int, int]]   # name → (global node, vector slot)
+
+    @property
+    def n_nodes(self) -> int:
+        return self.q0.shape[0]
+
+    @property
+    def n_dofs(self) -> int:
+        return 18 * self.n_nodes
+
+    @property
+    def n_elements(self) -> int:
+        return sum(b.n_elements for b in self.beams)
+
+    def element_beam(self) -> np.ndarray:
+        """Beam index of every global element (n_elements,)."""
+        return np.concatenate([np.full(b.n_elements, b.index) for b in self.beams])
+
+    def connectivity(self) -> np.ndarray:
+        """Global node ids of every element (n_elements, 3)."""
+        return np.concatenate([b.connectivity for b in self.beams])
+
+    def element_data(self, beam: Beam, local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Material gradients G (E, P, 18, 3) and weights w (E, P) for elements ``local`` of a beam."""
+        conn = beam.connectivity[local]
+        q0e = self.q0[conn].reshape(len(local), 18, 3)
+        G, det = el.reference_gradients(q0e, beam.dN)
+        return G, det * beam.wq[None, :]
+
+    def describe(self) -> list[str]:
+        lines = []
+        for b in self.beams:
+            lines.append(f"beam {b.name}: {b.n_elements} elements x {b.points_per_element} Gauss "
+                         f"points ({b.axial_points} axial x {len(b.section.weights)} section)")
+            lines.append("  section " + b.section.describe())
+            lines.append("  material " + b.material.describe())
+        return lines
+
+
+_SECTIONS_FILE_CACHE: dict = {}
+
+
+def build_section(spec: SectionSpec, path: str) -> Section:
+    """Build a beam's cross-section; section problems become ConfigErrors at ``path``."""
+    try:
+        if spec.shape == "ellipse":
+            return make_ellipse(spec.semi_axes, spec.center, spec.cubature_degree)
+        if spec.shape == "circle":
+            return make_circle(spec.radius, spec.center, spec.cubature_degree)
+        if spec.shape == "rectangle":
+            return make_rectangle(spec.size, spec.center, spec.cubature_degree)
+        if spec.file is not None:
+            key = (spec.file, spec.spline_degree)
+            if key not in _SECTIONS_FILE_CACHE:
+                _SECTIONS_FILE_CACHE[key] = load_sections_file(spec.file, spec.spline_degree)
+            sf = _SECTIONS_FILE_CACHE[key]
+            if spec.loop not in sf.loops:
+                raise ConfigError(f"{path}.loop", f"no loop {spec.loop!r} in {spec.file}; "
+                                  f"available: {', '.join(sf.loops)}")
+            loop = sf.loops[spec.loop]
+        else:
+            loop = inline_loop(spec.curves, spec.spline_degree)
+        return make_outline(loop, spec.cubature_degree, compress=spec.compress, center=spec.center)
+    except SectionError as exc:
+        raise ConfigError(path, str(exc)) from None
+
+
+def build_model(spec: ModelSpec) -> Model:
+    """Assemble the replicated model description from a validated spec."""
+    beams: list[Beam] = []
+    q0_parts = []
+    node_offset = elem_offset = 0
+    for i, bs in enumerate(spec.beams):
+        section = build_section(bs.section, f"beams[{i}].section")
+        x_nodes = np.linspace(0.0, spec.length, 2 * bs.elements + 1)
+        beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
+                    n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,
+                    x_nodes=x_nodes, axial_points=bs.axial_points)
+        xa, wa = gauss_legendre(bs.axial_points)
+        beam.xi, y, z = el.tensor_points(xa, section.points)
+        beam.yz = np.column_stack([y, z])
+        beam.wq = np.repeat(wa, len(section.weights)) * np.tile(section.weights, len(xa))
+        _, beam.dN = el.shape_functions(beam.xi, y, z)
+        q0_parts.append(reference_nodal_vectors(x_nodes, section.centroid, spec.length,
+                                                spec.twist_deg, spec.twist_axis))
+        beams.append(beam)
+        node_offset += beam.n_nodes
+        elem_offset += beam.n_elements
+    q0 = np.concatenate(q0_parts)
+
+    fixed = set()
+    for bc in spec.boundary_conditions:
+        node = beams[bc.beam].node_offset + bc.node
+        fixed.update(18 * node + 3 * v + c for v, c in bc.dofs)
+    fixed_dofs = np.array(sorted(fixed), dtype=np.int64)
+
+    f_ext = np.zeros(18 * q0.shape[0])
+    for ld in spec.loads:
+        beam = beams[ld.beam]
+        node = beam.node_offset + ld.node
+        force = np.asarray(ld.force)
+        if ld.kind == "force":
+            f_ext[18 * node:18 * node + 3] += force
+        else:
+            # uniform dead traction t = F / A over the end section: f_k = t ∫ m_k dA
+            sec = beam.section
+            m, _, _ = el.section_monomials(sec.points[:, 0], sec.points[:, 1])
+            moments = sec.weights @ m / sec.weights.sum()
+            f_ext[18 * node:18 * node + 18] += np.outer(moments, force).ravel()
+        loaded = [18 * node + c for c in range(3) if force[c] != 0.0]
+        if np.any(np.isin(loaded, fixed_dofs)):
+            raise ConfigError(ld.path, "the load pushes on a fixed component of r at this node; "
+                                       "load another node or free that component")
+
+    probes = {p.name: (beams[p.beam].node_offset + p.node, el.VECTOR_INDEX[p.vector])
+              for p in spec.probes}
+    return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, f_ext=f_ext, probes=probes)

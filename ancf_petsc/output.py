@@ -1,0 +1,193 @@
+"""Results on disk, written step by step by rank 0 so a killed run keeps every finished step.
+
+* ``results.h5``  — ``/model`` (reference nodal vectors, connectivity, sections, config text,
+  partition) and ``/steps/step_NNNN`` (load factor, nodal vectors, SNES iterations/reason,
+  wall time).  The file is opened and closed for every step.
+* ``summary.json`` — probes per step, iterations, timings; replaced atomically after each step.
+* ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled
+  along ξ), with displacement, axial Green–Lagrange strain E_xx and volume ratio J, via meshio.
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import numpy as np
+import yaml
+
+from . import element3363 as el
+from .model import Model
+
+
+def _atomic_write(path: str, text: str) -> None:
+    tmp = path + ".tmp"
+    with open(tmp, "w") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
+def evaluate_beam(model: Model, beam, q: np.ndarray, xi: np.ndarray, yz: np.ndarray):
+    """Positions r, F and reference positions at points (ξ, y, z) of every element of a beam.
+
+    ``q`` model-ordered nodal vectors (n_nodes, 6, 3); points given per element: ``xi`` (m,),
+    ``yz`` (m, 2).  Returns r (E, m, 3), F (E, m, 3, 3), r0 (E, m, 3).
+    """
+    N, dN = el.shape_functions(xi, yz[:, 0], yz[:, 1])
+    conn = beam.connectivity
+    qe = q[conn].reshape(len(conn), 18, 3)
+    q0e = model.q0[conn].reshape(len(conn), 18, 3)
+    G, _ = el.reference_gradients(q0e, dN)
+    r = np.einsum("pa,eai->epi", N, qe)
+    r0 = np.einsum("pa,eai->epi", N, q0e)
+    F = np.matmul(np.swapaxes(qe, 1, 2)[:, None], G)
+    return r, F, r0
+
+
+class SurfaceSampler:
+    """Quad surface (plus end caps) of each beam, sampled ``samples`` times per element."""
+
+    def __init__(self, model: Model, samples: int):
+        self.model = model
+        self.parts = []
+        for beam in model.beams:
+            ring = beam.section.boundary_polyline(6)
+            if np.allclose(ring[0], ring[-1]):
+                ring = ring[:-1]
+            xi = np.linspace(-1.0, 1.0, samples + 1)
+            self.parts.append((beam, xi, ring))
+
+    def mesh(self, q: np.ndarray):
+        """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
+        pts, quads, caps = [], [], []
+        data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
+        offset = 0
+        for beam, xi, ring in self.parts:
+            m = len(ring)
+            XI = np.repeat(xi, m)
+            YZ = np.tile(ring, (len(xi), 1))
+            r, F, r0 = evaluate_beam(self.model, beam, q, XI, YZ)
+            ne, S = beam.n_elements, len(xi) - 1
+            # drop the duplicated first station of every element but the first
+            keep = [np.arange(len(xi) * m)] + [np.arange(m, len(xi) * m)] * (ne - 1)
+            r = np.concatenate([r[e][k] for e, k in enumerate(keep)])
+            r0 = np.concatenate([r0[e][k] for e, k in enumerate(keep)])
+            F = np.concatenate([F[e][k] for e, k in enumerate(keep)])
+            n_st = ne * S + 1
+            C = np.matmul(np.swapaxes(F, -1, -2), F)
+            data["displacement"].append(r - r0)
+            data["E_xx"].append(0.5 * (C[:, 0, 0] - 1.0))
+            data["J"].append(np.linalg.det(F))
+            data["beam"].append(np.full(len(r), float(beam.index)))
+            st = np.arange(n_st - 1)[:, None]
+            j = np.arange(m)[None, :]
+            a = st * m + j
+            b = st * m + (j + 1) % m
+            quads.append(offset + np.stack([a, b, b + m, a + m], axis=-1).reshape(-1, 4))
+            caps.append(offset + np.arange(m)[::-1])
+            caps.append(offset + (n_st - 1) * m + np.arange(m))
+            pts.append(r)
+            offset += len(r)
+        return (np.concatenate(pts), np.concatenate(quads), caps,
+                {k: np.concatenate(v) for k, v in data.items()})
+
+
+class ResultsWriter:
+    """Writes results.h5, summary.json and the VTU series (rank 0 only does I/O)."""
+
+    def __init__(self, model: Model, layout, comm, run_info: dict):
+        self.model, self.comm = model, comm
+        self.rank = comm.rank
+        spec = model.spec
+        self.dir = spec.output.dir
+        self.h5_path = os.path.join(self.dir, "results.h5")
+        self.summary_path = os.path.join(self.dir, "summary.json")
+        self.summary = {"name": spec.name, "status": "running", **run_info, "steps": []}
+        self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
+        self.pvd_entries: list[tuple[float, str]] = []
+        if self.rank != 0:
+            return
+        os.makedirs(self.dir, exist_ok=True)
+        for stale in os.listdir(self.dir):
+            if stale.startswith("surface") or stale in ("results.h5", "summary.json"):
+                os.remove(os.path.join(self.dir, stale))
+        import h5py
+        with h5py.File(self.h5_path, "w") as h5:
+            g = h5.create_group("model")
+            g.attrs["name"] = spec.name
+            g.attrs["config_yaml"] = yaml.safe_dump(spec.raw, sort_keys=False)
+            g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
+            g.create_dataset("reference_nodal_vectors", data=model.q0)
+            g.create_dataset("element_rank", data=layout.elem_owner)
+            g.attrs["partition"] = layout.summary()
+            for beam in model.beams:
+                b = g.create_group(f"beams/{beam.name}")
+                b.create_dataset("connectivity", data=beam.connectivity)
+                b.create_dataset("x_nodes", data=beam.x_nodes)
+                b.create_dataset("section_points", data=beam.section.points)
+                b.create_dataset("section_weights", data=beam.section.weights)
+                b.create_dataset("section_outline", data=beam.section.boundary_polyline(8))
+                b.attrs["centroid"] = beam.section.centroid
+                b.attrs["area"] = beam.section.area
+            h5.create_group("steps")
+        if self.sampler is not None:
+            self._write_vtu(0, 0.0, model.q0)
+        self._write_summary()
+
+    def _write_summary(self):
+        self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
+        _atomic_write(self.summary_path, json.dumps(self.summary, indent=1))
+
+    def _write_vtu(self, k: int, lam: float, q: np.ndarray) -> None:
+        import meshio
+        pts, quads, caps, data = self.sampler.mesh(q)
+        cells = [("quad", quads)] + [("polygon", c[None, :]) for c in caps]
+        name = f"surface_{k:04d}.vtu"
+        meshio.write(os.path.join(self.dir, name),
+                     meshio.Mesh(pts, cells, point_data=data), binary=True)
+        self.pvd_entries.append((lam, name))
+        rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
+                         for t, f in self.pvd_entries)
+        _atomic_write(os.path.join(self.dir, "surface.pvd"),
+                      '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                      f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+
+    def probe_values(self, q: np.ndarray) -> dict:
+        out = {}
+        for name, (node, slot) in self.model.probes.items():
+            out[name] = {"displacement": (q[node, slot] - self.model.q0[node, slot]).tolist(),
+                         "value": q[node, slot].tolist()}
+        return out
+
+    def write_step(self, record, q: np.ndarray | None, extra: dict | None = None) -> None:
+        """Append one converged level; ``q`` is the gathered state (rank 0)."""
+        if self.rank != 0:
+            return
+        import h5py
+        k = len(self.summary["steps"]) + 1
+        with h5py.File(self.h5_path, "a") as h5:
+            g = h5["steps"].create_group(f"step_{k:04d}")
+            g.create_dataset("nodal_vectors", data=q)
+            g.attrs["load_factor"] = record.load_factor
+            g.attrs["snes_iterations"] = record.iterations
+            g.attrs["snes_reason"] = record.reason
+            g.attrs["substeps"] = record.substeps
+            g.attrs["wall_time"] = record.wall_time
+        entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
+                 "iterations": record.iterations, "substeps": record.substeps,
+                 "cutbacks": record.cutbacks, "reason": record.reason,
+                 "residual_norm": record.residual_norm, "wall_time": record.wall_time,
+                 "newton_history": record.iteration_history}
+        if extra:
+            entry.update(extra)
+        self.summary["steps"].append(entry)
+        if self.sampler is not None:
+            self._write_vtu(k, record.load_factor, q)
+        self._write_summary()
+
+    def finish(self, status: str, **info) -> None:
+        if self.rank != 0:
+            return
+        self.summary["status"] = status
+        self.summary.update(info)
+        self._write_summary()

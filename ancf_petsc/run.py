@@ -1,0 +1,91 @@
+"""One run: spec → model → layout → problem → load stepping → results (no argument parsing)."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from petsc4py import PETSc
+
+from .assembly import Problem
+from .config import ModelSpec
+from .layout import block_layout
+from .model import build_model
+from .output import ResultsWriter
+from .solver import LoadStepFailure, LoadStepper
+
+STAGE_SETUP = PETSc.Log.Stage("ANCF setup")
+STAGE_OUTPUT = PETSc.Log.Stage("ANCF output")
+
+
+@dataclass
+class RunResult:
+    status: str                 # 'completed' | 'failed'
+    message: str
+    summary: dict | None        # rank 0 only
+    records: list
+
+
+def _fmt_vec(v) -> str:
+    return "[" + ", ".join(f"{x:+.4e}" for x in v) + "]"
+
+
+def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
+    """Solve ``spec``; every converged level is on disk before the next one starts."""
+    rank = comm.rank
+    say = log if rank == 0 else (lambda *_: None)
+    t_start = time.perf_counter()
+    STAGE_SETUP.push()
+    model = build_model(spec)
+    layout = block_layout(model.connectivity(), model.n_nodes, comm.size, rank)
+    contact = None
+    if spec.contact is not None:
+        from .contact import build_contact
+        contact = build_contact(model, spec.contact, say)
+    problem = Problem(model, layout, comm, contact)
+    stepper = LoadStepper(problem, spec.solver, spec.petsc, say)
+    STAGE_SETUP.pop()
+    t_setup = time.perf_counter() - t_start
+
+    say(f"[ancf] {spec.name}: {len(model.beams)} beam(s), {model.n_elements} elements, "
+        f"{model.n_dofs} DOFs, {comm.size} rank(s)")
+    for line in model.describe():
+        say("[ancf]   " + line)
+    say("[ancf]   " + layout.summary())
+    say("[ancf]   " + stepper.describe())
+    run_info = {"dofs": model.n_dofs, "elements": model.n_elements, "ranks": comm.size,
+                "partition": layout.summary(), "solver": stepper.describe(),
+                "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
+                                      "points": int(len(b.section.weights))} for b in model.beams}}
+    writer = ResultsWriter(model, layout, comm, run_info)
+    n_levels = len(spec.steps)
+    timings = {"setup": t_setup, "output": 0.0}
+
+    def on_level(rec):
+        STAGE_OUTPUT.push()
+        t0 = time.perf_counter()
+        q = problem.gather()
+        writer.write_step(rec, q)
+        timings["output"] += time.perf_counter() - t0
+        STAGE_OUTPUT.pop()
+        if rank == 0:
+            k = len(writer.summary["steps"])
+            probes = "  ".join(f"{n} u={_fmt_vec(p['displacement'])}"
+                               for n, p in writer.summary["steps"][-1]["probes"].items())
+            say(f"[ancf] step {k}/{n_levels}  load factor {rec.load_factor:.6g}  "
+                f"Newton {rec.iterations} in {rec.substeps} substep(s)  {rec.reason}  "
+                f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s  {probes}")
+
+    status, message = "completed", "completed"
+    records = []
+    try:
+        records = stepper.run(spec.steps, on_level)
+    except LoadStepFailure as exc:
+        status, message = "failed", str(exc)
+    timings["total"] = time.perf_counter() - t_start
+    timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
+    writer.finish(status, message=message, timings=timings,
+                  newton_iterations=stepper.newton_iterations)
+    say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations, "
+        f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")
+    return RunResult(status, message, writer.summary if rank == 0 else None, records)

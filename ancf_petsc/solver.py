@@ -1,0 +1,192 @@
+"""SNES Newton with line search inside an adaptive load-stepping loop (paper §3, static case).
+
+Options come from three places, highest priority first: the command line (already in PETSc's
+options database), the config's ``petsc:`` mapping, and ``DEFAULT_OPTIONS`` below.  The config
+and default values are inserted only around ``setFromOptions`` and removed again.
+
+Load stepping: from the last converged load factor λ the stepper tries an increment Δλ; on a
+converged SNES it accepts it (growing Δλ after easy steps), on divergence (including NaN
+residuals from inverted elements, J ≤ 0) it restores the last converged state and halves Δλ,
+at most ``max_cutbacks`` times in a row.  Requested levels are always hit exactly.  All
+decisions use the SNES converged reason, which is the same on every rank.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from petsc4py import PETSc
+
+from .assembly import Problem
+from .config import SolverSpec
+
+DEFAULT_OPTIONS = {
+    "snes_type": "newtonls",
+    "snes_linesearch_type": "bt",
+    "snes_rtol": "1e-10",
+    "snes_stol": "1e-12",
+    "snes_max_it": "25",
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+    "pc_factor_mat_solver_type": "mumps",
+}
+
+REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
+           for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
+
+STAGE_SOLVE = PETSc.Log.Stage("ANCF load stepping")
+
+
+def reason_name(reason: int) -> str:
+    return REASONS.get(reason, str(reason))
+
+
+class LoadStepFailure(Exception):
+    """A requested load level could not be reached; raised identically on every rank."""
+
+    def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool):
+        msg = (f"could not reach load factor {target:g}: SNES failed at load factor {attempted:.6g} "
+               f"(last converged {reached:.6g}) with {reason}")
+        if inverted:
+            msg += " (an element was inverted, J <= 0)"
+        super().__init__(msg)
+        self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
+
+
+@dataclass
+class StepRecord:
+    load_factor: float
+    iterations: int           # Newton iterations summed over the sub-steps of this level
+    substeps: int
+    cutbacks: int
+    reason: str               # reason of the final sub-step
+    residual_norm: float
+    wall_time: float
+    iteration_history: list = field(default_factory=list)
+
+
+def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) -> str:
+    """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found.
+
+    Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES).
+    """
+    opts = PETSc.Options()
+    inserted = []
+    for source in (config_options, defaults):
+        for key, value in source.items():
+            if not opts.hasName(key):
+                opts.setValue(key, value)
+                inserted.append(key)
+    try:
+        snes.setFromOptions()
+        linesearch = opts.getString("snes_linesearch_type", "bt")
+    finally:
+        for key in inserted:
+            opts.delValue(key)
+    return linesearch
+
+
+class LoadStepper:
+    """Drives ``problem`` through the requested load factors with one SNES."""
+
+    def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict,
+                 log: Callable[[str], None] = print):
+        self.problem, self.spec, self.log = problem, spec, log
+        self.snes = PETSc.SNES().create(comm=problem.comm)
+        self.snes.setFunction(problem.residual, problem.F)
+        self.snes.setJacobian(problem.jacobian, problem.J, problem.J)
+        defaults = dict(DEFAULT_OPTIONS)
+        fnorm = problem.fext.norm()
+        defaults["snes_atol"] = f"{max(1e-11 * fnorm, 1e-30):.3e}"
+        if problem.comm.size == 1:
+            defaults["pc_factor_mat_solver_type"] = "petsc"
+        self.linesearch = configure_options(self.snes, petsc_options, defaults)
+        self._history: list[int] = []
+        self.snes.setMonitor(self._monitor)
+        self.newton_iterations = 0
+
+    def _monitor(self, snes, its, fnorm):
+        self._history.append(float(fnorm))
+
+    def describe(self) -> str:
+        ksp = self.snes.getKSP()
+        pc = ksp.getPC()
+        ls = self.linesearch
+        extra = ""
+        if pc.getType() in ("lu", "cholesky"):
+            extra = f" ({pc.getFactorSolverType()})"
+        rtol, atol, stol, maxit = self.snes.getTolerances()
+        return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
+                f"{pc.getType()}{extra}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}")
+
+    def _solve_at(self, lam: float, X: PETSc.Vec) -> tuple[int, int, float]:
+        self.problem.load_factor = lam
+        self._history = []
+        self.snes.solve(None, X)
+        reason = self.snes.getConvergedReason()
+        its = self.snes.getIterationNumber()
+        self.newton_iterations += its
+        fnorm = self.snes.getFunctionNorm()
+        return reason, its, fnorm
+
+    def run(self, levels: list[float], on_level: Callable[[StepRecord], None]) -> list[StepRecord]:
+        """Reach every level in ``levels`` (increasing); call ``on_level`` after each one."""
+        P = self.problem
+        X = P.X
+        P.q0.copy(X)
+        lam = 0.0
+        X_prev = X.duplicate()
+        dX_last = X.duplicate()          # last accepted increment (secant predictor)
+        dX_last.set(0.0)
+        dlam_last = 0.0
+        dlam = levels[0] if self.spec.max_increment is None else min(levels[0], self.spec.max_increment)
+        records = []
+        STAGE_SOLVE.push()
+        try:
+            for target in levels:
+                t0 = time.perf_counter()
+                its_total = substeps = cutbacks = 0
+                consecutive = 0
+                history = []
+                while lam < target * (1.0 - 1e-14):
+                    step = min(dlam, target - lam)
+                    if self.spec.max_increment is not None:
+                        step = min(step, self.spec.max_increment)
+                    X.copy(X_prev)
+                    if dlam_last > 0.0:
+                        X.axpy(step / dlam_last, dX_last)       # secant predictor
+                    reason, its, fnorm = self._solve_at(lam + step, X)
+                    its_total += its
+                    history.append(list(self._history))
+                    if reason > 0 and np.isfinite(fnorm):
+                        X.copy(dX_last)
+                        dX_last.axpy(-1.0, X_prev)
+                        dlam_last = step
+                        lam += step
+                        substeps += 1
+                        consecutive = 0
+                        if its <= self.spec.easy_iterations and step >= dlam * (1 - 1e-12):
+                            dlam = step * self.spec.growth      # easy: grow (not past targets)
+                        continue
+                    # failed: restore and cut back (collective: reason is global)
+                    inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
+                    X_prev.copy(X)
+                    cutbacks += 1
+                    consecutive += 1
+                    dlam = 0.5 * step
+                    self.log(f"  cut back at load factor {lam + step:.6g}: {reason_name(reason)}"
+                             f"{' (inverted element)' if inverted else ''}; retry with increment {dlam:.4g}")
+                    if consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment:
+                        P.load_factor = lam
+                        raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted)
+                rec = StepRecord(load_factor=target, iterations=its_total, substeps=substeps,
+                                 cutbacks=cutbacks, reason=reason_name(reason),
+                                 residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
+                                 iteration_history=history)
+                records.append(rec)
+                on_level(rec)
+        finally:
+            STAGE_SOLVE.pop()
+        return records

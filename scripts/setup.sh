@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Idempotent bootstrap for a Debian 12 machine (run as root, or with sudo available).
+#  1. Debian packages compiled against PETSc 3.18: petsc4py, mpi4py, h5py-mpi, OpenMPI, OpenBLAS.
+#  2. A venv at .venv made by /usr/bin/python3 --system-site-packages for the PyPI parts.
+#  3. `pip install -e .` (meshio, pymetis) with numpy pinned to Debian's build.
+# Quick when everything is present: each step checks before it acts.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+DEB_PKGS=(python3-petsc4py python3-mpi4py python3-h5py-mpi openmpi-bin libopenmpi-dev
+          libpetsc-real3.18-dev libopenblas0-pthread python3-numpy python3-scipy
+          python3-matplotlib python3-yaml python3-pytest python3-venv python3-dev python3-pip)
+
+missing=()
+for p in "${DEB_PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[setup] installing Debian packages: ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  echo "[setup] creating .venv (system site packages)"
+  /usr/bin/python3 -m venv --system-site-packages .venv
+fi
+
+stamp=.venv/.ancf-installed
+if [ ! -f "$stamp" ] || [ setup.py -nt "$stamp" ] || [ scripts/constraints.txt -nt "$stamp" ]; then
+  echo "[setup] pip install -e . (PyPI parts)"
+  .venv/bin/python -m pip install -q --disable-pip-version-check -c scripts/constraints.txt -e . 
+  touch "$stamp"
+fi

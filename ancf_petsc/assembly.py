@@ -181,6 +181,27 @@ class Problem:
             fa[:] = np.nan
         del fa
 
+    def objective(self, snes, X: PETSc.Vec) -> float:
+        """Total potential Π = Σ ∫Ψ dV + Π_con − λ f_ext·q (the residual is its gradient).
+
+        Used by the line searches (bt, l2) as merit function instead of ‖F‖²; +inf when an
+        element is inverted.  Collective: every rank returns the same value.
+        """
+        STAGE_ASSEMBLY.push()
+        try:
+            xl = self._local_state(X)
+            local = 0.0
+            for blk in self.blocks:
+                qe = xl[blk.lnodes].reshape(-1, 18, 3)
+                local += float(np.sum(kernels.energy(qe, blk.G, blk.w, blk.beam.material)))
+            if self.contact is not None:
+                local += self.contact.energy(xl, self.needed)
+            total = self.comm.tompi4py().allreduce(local)
+            total -= self.load_factor * self.fext.dot(X)
+            return total if np.isfinite(total) else np.inf
+        finally:
+            STAGE_ASSEMBLY.pop()
+
     def jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         STAGE_ASSEMBLY.push()
         try:

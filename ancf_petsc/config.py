@@ -184,6 +184,7 @@ class SolverSpec:
     max_cutbacks: int = 12
     growth: float = 1.5
     easy_iterations: int = 4
+    predictor: str = "none"
 
 
 @dataclass
@@ -422,7 +423,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
                         vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64))
 
     sv = mapping(raw.get("solver", {}), "solver",
-                 optional=("max_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations"))
+                 optional=("max_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
+                           "predictor"))
     solver = SolverSpec()
     if sv.get("max_increment") is not None:
         solver.max_increment = number(sv["max_increment"], "solver.max_increment", positive=True)
@@ -432,6 +434,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         solver.max_cutbacks = integer(sv["max_cutbacks"], "solver.max_cutbacks", lo=0, hi=60)
     if "growth" in sv:
         solver.growth = number(sv["growth"], "solver.growth", lo=1.0, hi=10.0)
+    if "predictor" in sv:
+        solver.predictor = string(sv["predictor"], "solver.predictor", ("none", "secant"))
     if "easy_iterations" in sv:
         solver.easy_iterations = integer(sv["easy_iterations"], "solver.easy_iterations", lo=1)
 

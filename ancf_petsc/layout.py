@@ -47,12 +47,13 @@ class Layout:
 def layout_from_owner(elem_owner: np.ndarray, connectivity: np.ndarray, n_nodes: int,
                       size: int, rank: int, method: str) -> Layout:
     """Complete a layout from an element → rank assignment (nodes follow their first element)."""
-    node_owner = np.full(n_nodes, size, dtype=np.int64)
+    n_el = len(elem_owner)
+    first_elem = np.full(n_nodes, n_el, dtype=np.int64)
     for k in range(connectivity.shape[1]):
-        np.minimum.at(node_owner, connectivity[:, k], np.arange(len(elem_owner)))
-    if np.any(node_owner == size):
+        np.minimum.at(first_elem, connectivity[:, k], np.arange(n_el))
+    if np.any(first_elem == n_el):
         raise ValueError("a node belongs to no element")
-    node_owner = elem_owner[node_owner]
+    node_owner = np.asarray(elem_owner)[first_elem]
     order = np.lexsort((np.arange(n_nodes), node_owner))      # by rank, then model id
     perm = np.empty(n_nodes, dtype=np.int64)
     perm[order] = np.arange(n_nodes)

@@ -20,6 +20,19 @@ from . import element3363 as el
 from .model import Model
 
 
+def plain(obj):
+    """Config data → plain Python types (numpy scalars/arrays become floats/lists)."""
+    if isinstance(obj, dict):
+        return {str(k): plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return plain(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
+
+
 def _atomic_write(path: str, text: str) -> None:
     tmp = path + ".tmp"
     with open(tmp, "w") as fh:
@@ -115,7 +128,7 @@ class ResultsWriter:
         with h5py.File(self.h5_path, "w") as h5:
             g = h5.create_group("model")
             g.attrs["name"] = spec.name
-            g.attrs["config_yaml"] = yaml.safe_dump(spec.raw, sort_keys=False)
+            g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
             g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
             g.create_dataset("reference_nodal_vectors", data=model.q0)
             g.create_dataset("element_rank", data=layout.elem_owner)

@@ -24,7 +24,8 @@ from .config import SolverSpec
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",
-    "snes_linesearch_type": "bt",
+    "snes_linesearch_type": "basic",
+    "snes_divergence_tolerance": "-1",
     "snes_rtol": "1e-10",
     "snes_stol": "1e-12",
     "snes_max_it": "25",
@@ -81,7 +82,7 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) ->
                 inserted.append(key)
     try:
         snes.setFromOptions()
-        linesearch = opts.getString("snes_linesearch_type", "bt")
+        linesearch = opts.getString("snes_linesearch_type", "bt")  # PETSc's own default
     finally:
         for key in inserted:
             opts.delValue(key)
@@ -97,6 +98,7 @@ class LoadStepper:
         self.snes = PETSc.SNES().create(comm=problem.comm)
         self.snes.setFunction(problem.residual, problem.F)
         self.snes.setJacobian(problem.jacobian, problem.J, problem.J)
+        self.snes.setObjective(problem.objective)
         defaults = dict(DEFAULT_OPTIONS)
         fnorm = problem.fext.norm()
         defaults["snes_atol"] = f"{max(1e-11 * fnorm, 1e-30):.3e}"
@@ -155,7 +157,7 @@ class LoadStepper:
                     if self.spec.max_increment is not None:
                         step = min(step, self.spec.max_increment)
                     X.copy(X_prev)
-                    if dlam_last > 0.0:
+                    if self.spec.predictor == "secant" and dlam_last > 0.0:
                         X.axpy(step / dlam_last, dX_last)       # secant predictor
                     reason, its, fnorm = self._solve_at(lam + step, X)
                     its_total += its

@@ -39,6 +39,14 @@ def main(argv: list[str] | None = None) -> int:
         if comm.rank == 0:
             print(f"ancf-solve: config error: {exc}", file=sys.stderr, flush=True)
         return 2
+    except Exception:
+        # a bug, not a user error: show it, and never leave the other ranks waiting
+        import traceback
+        traceback.print_exc()
+        sys.stderr.flush()
+        if comm.size > 1:
+            comm.tompi4py().Abort(1)
+        return 1
     if result.status != "completed":
         if comm.rank == 0:
             print(f"ancf-solve: {result.message}; converged steps are in {spec.output.dir}",

@@ -1,0 +1,72 @@
+"""Shared test helpers: run configs in-process (serial) or through ancf-solve under mpirun."""
+from __future__ import annotations
+
+import copy
+import json
+import os
+import subprocess
+import sys
+
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+CONFIGS = os.path.join(ROOT, "configs")
+VENV_BIN = os.path.join(ROOT, ".venv", "bin")
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OPENBLAS_NUM_THREADS": "1",
+           "OMP_NUM_THREADS": "1"}
+
+
+def load_raw(name: str) -> dict:
+    with open(os.path.join(CONFIGS, name)) as fh:
+        return yaml.safe_load(fh)
+
+
+def petsc_init():
+    from mpi4py import MPI  # noqa: F401
+    import petsc4py
+    petsc4py.init([])
+
+
+def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | None = None):
+    """Run a raw config dict in this process (1 rank); returns the summary dict."""
+    petsc_init()
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.run import run_model
+    raw = copy.deepcopy(raw)
+    raw.setdefault("output", {})["dir"] = str(out_dir)
+    if petsc:
+        raw.setdefault("petsc", {}).update(petsc)
+    spec = parse_config(raw, base_dir=base_dir)
+    res = run_model(spec, log=lambda *_: None)
+    return res.summary
+
+
+def write_config(raw: dict, path) -> str:
+    with open(path, "w") as fh:
+        yaml.safe_dump(raw, fh, sort_keys=False)
+    return str(path)
+
+
+def solve_cli(config_path: str, ranks: int = 1, extra: list | None = None, cwd: str | None = None,
+              timeout: float = 600) -> subprocess.CompletedProcess:
+    """Run ancf-solve (under mpirun when ranks > 1); returns the completed process."""
+    exe = os.path.join(VENV_BIN, "ancf-solve")
+    if not os.path.exists(exe):
+        exe = None
+    cmd = [exe] if exe else [sys.executable, "-m", "apps.ancf_solve"]
+    cmd += [config_path] + (extra or [])
+    if ranks > 1:
+        cmd = ["mpirun", "--oversubscribe", "-n", str(ranks)] + cmd
+    env = dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT)
+    return subprocess.run(cmd, capture_output=True, text=True, cwd=cwd or ROOT, env=env,
+                          timeout=timeout)
+
+
+def read_summary(out_dir) -> dict:
+    with open(os.path.join(out_dir, "summary.json")) as fh:
+        return json.load(fh)
+
+
+def probe(summary: dict, name: str, step: int = -1, key: str = "displacement"):
+    return summary["steps"][step]["probes"][name][key]

@@ -1,0 +1,115 @@
+"""Bad input: one line naming the key path and the fix, exit code 2, no traceback."""
+import copy
+
+import pytest
+
+from ancf_petsc.config import ConfigError, parse_config
+from helpers import CONFIGS, load_raw, solve_cli, write_config
+
+BASE = load_raw("uniaxial_neohookean.yaml")
+
+
+def mutate(fn):
+    raw = copy.deepcopy(BASE)
+    fn(raw)
+    return raw
+
+
+def _set(path, value):
+    def fn(raw):
+        node = raw
+        for k in path[:-1]:
+            node = node[k]
+        node[path[-1]] = value
+    return fn
+
+
+def _del(path):
+    def fn(raw):
+        node = raw
+        for k in path[:-1]:
+            node = node[k]
+        del node[path[-1]]
+    return fn
+
+
+BOWTIE = {"shape": "outline", "spline_degree": 1,
+          "curves": [{"points": [[0, 0], [0.01, 0.01], [0.01, 0], [0, 0.01], [0, 0]]}]}
+
+CASES = [
+    ("unknown key", _set(["beams", 0, "material", "mue"], 1.0), "beams[0].material.mue", "unknown key"),
+    ("unknown top key", _set(["geometri"], {}), "geometri", "unknown key"),
+    ("wrong type", _set(["beams", 0, "elements"], "four"), "beams[0].elements", "expected an integer"),
+    ("wrong type list", _set(["geometry", "twist_axis"], 3), "geometry.twist_axis", "list of 2"),
+    ("missing value", _del(["beams", 0, "material", "bulk_modulus"]), "beams[0].material", "bulk_modulus"),
+    ("missing top", _del(["steps"]), "steps", "missing"),
+    ("mu <= 0", _set(["beams", 0, "material", "mu"], -1.0e6), "beams[0].material.mu", "must be > 0"),
+    ("L <= 0", _set(["geometry", "length"], 0.0), "geometry.length", "must be > 0"),
+    ("nu >= 0.5", _set(["beams", 0, "material"], {"model": "svk", "E": 1e6, "nu": 0.5}),
+     "beams[0].material.nu", "< 0.5"),
+    ("bad model", _set(["beams", 0, "material", "model"], "mooney"), "beams[0].material.model", "one of"),
+    ("node missing", _set(["boundary_conditions", 0, "node"], 7), "boundary_conditions[0].node",
+     "does not exist"),
+    ("unknown beam", _set(["loads", 0, "beam"], "rod"), "loads[0].beam", "unknown beam"),
+    ("bad fix", _set(["boundary_conditions", 0, "fix"], {"r": "xw"}), "boundary_conditions[0].fix.r",
+     "components"),
+    ("bad preset", _set(["boundary_conditions", 0, "fix"], "pinned"), "boundary_conditions[0].fix",
+     "unknown preset"),
+    ("steps order", _set(["steps"], [0.5, 0.2]), "steps", "increase"),
+    ("negative step", _set(["steps"], [-0.5]), "steps[0]", "> 0"),
+    ("both loads", _set(["loads", 0, "force"], [1, 0, 0]), "loads[0]", "exactly one"),
+    ("traction mid", _set(["loads", 0], {"beam": "bar", "node": 1, "traction_force": [1, 0, 0]}),
+     "loads[0].node", "end section"),
+    ("units", _set(["units"], "mm"), "units", "SI"),
+    ("petsc nested", _set(["petsc"], {"snes": {"rtol": 1}}), "petsc.snes", "scalars"),
+    ("load on fixed", _set(["boundary_conditions", 0, "node"], "last"), "loads[0]", "fixed"),
+    ("self-intersecting outline", _set(["beams", 0, "section"], BOWTIE), "beams[0].section", "intersect"),
+    ("semi axes", _set(["beams", 0, "section", "semi_axes"], [0.01, -0.002]),
+     "beams[0].section.semi_axes[1]", "> 0"),
+    ("missing file", _set(["beams", 0, "section"], {"shape": "outline", "file": "nope.yaml", "loop": "x"}),
+     "beams[0].section.file", "not found"),
+    ("bad loop", _set(["beams", 0, "section"], {"shape": "outline", "file": "data/achilles_type3_sections.yaml",
+                                                 "loop": "plantaris"}), "beams[0].section.loop", "soleus"),
+]
+
+
+@pytest.mark.parametrize("name,fn,path,text", CASES, ids=[c[0] for c in CASES])
+def test_error_names_key_path(name, fn, path, text):
+    from ancf_petsc.model import build_model
+    raw = mutate(fn)
+    with pytest.raises(ConfigError) as err:
+        build_model(parse_config(raw, base_dir=CONFIGS))   # sections are checked at build
+    msg = str(err.value)
+    assert msg.startswith(path + ":") or msg.startswith(path + "."), msg
+    assert text in msg, msg
+    assert "\n" not in msg
+
+
+@pytest.mark.parametrize("name,fn,path,text", [CASES[0], CASES[6], CASES[10], CASES[21]],
+                         ids=["unknown-key", "mu", "node", "outline"])
+def test_cli_reports_one_line_and_exit_code_2(tmp_path, name, fn, path, text):
+    raw = mutate(fn)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    cfg = write_config(raw, tmp_path / "bad.yaml")
+    p = solve_cli(cfg)
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stderr
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and path in lines[0] and text in lines[0], p.stderr
+
+
+def test_cli_yaml_syntax_and_missing_file(tmp_path):
+    bad = tmp_path / "broken.yaml"
+    bad.write_text("name: x\ngeometry: {length: 0.1\nbeams: []\n")
+    p = solve_cli(str(bad))
+    assert p.returncode == 2 and "YAML syntax error at line" in p.stderr and "Traceback" not in p.stderr
+    p = solve_cli(str(tmp_path / "missing.yaml"))
+    assert p.returncode == 2 and "no such config file" in p.stderr
+
+
+def test_cli_config_error_under_mpi_is_one_line(tmp_path):
+    raw = mutate(CASES[6][1])
+    cfg = write_config(raw, tmp_path / "bad.yaml")
+    p = solve_cli(cfg, ranks=2)
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert sum("config error" in ln for ln in p.stderr.splitlines()) == 1, p.stderr

@@ -1,0 +1,157 @@
+"""Assembled residual/Jacobian, inverted elements, solver failures and PETSc option handling."""
+import json
+import os
+
+import h5py
+import numpy as np
+import pytest
+
+from helpers import load_raw, petsc_init, read_summary, run_inline, solve_cli, write_config
+
+
+def _problem(raw):
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.assembly import Problem
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.layout import block_layout
+    from ancf_petsc.model import build_model
+    from helpers import CONFIGS
+    model = build_model(parse_config(raw, base_dir=CONFIGS))
+    layout = block_layout(model.connectivity(), model.n_nodes, 1, 0)
+    return Problem(model, layout, PETSc.COMM_WORLD), PETSc
+
+
+def two_beam_twisted():
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["beams"].append({"name": "second", "section": {"shape": "outline", "curves": [
+        {"points": [[-0.002, -0.004], [-0.001, -0.008], [-0.006, -0.007]]},
+        {"points": [[-0.006, -0.007], [-0.007, -0.003], [-0.002, -0.004]]}]},
+        "material": {"model": "svk", "E": 3.0e6, "nu": 0.3}, "elements": 3})
+    raw["boundary_conditions"].append({"beam": "second", "node": "first", "fix": "clamped"})
+    return raw
+
+
+def test_assembled_jacobian_matches_finite_differences():
+    P, PETSc = _problem(two_beam_twisted())
+    P.load_factor = 0.7
+    rng = np.random.default_rng(0)
+    X = P.X
+    P.q0.copy(X)
+    free = ~P.fixed_mask
+    X.setArray(X.getArray() + 2e-3 * rng.standard_normal(X.getLocalSize()) * free)
+    F0, J = X.duplicate(), P.J
+    P.jacobian(None, X, J, J)
+    for _ in range(3):
+        v = X.duplicate()
+        v.setArray(rng.standard_normal(X.getLocalSize()) * free)
+        Jv = X.duplicate()
+        J.mult(v, Jv)
+        h = 1e-7
+        Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.copy(), X.copy()
+        Xp.axpy(h, v)
+        Xm.axpy(-h, v)
+        P.residual(None, Xp, Fp)
+        P.residual(None, Xm, Fm)
+        fd = (Fp.getArray() - Fm.getArray()) / (2 * h)
+        jv = Jv.getArray()
+        assert np.abs(jv - fd)[free].max() <= 1e-6 * np.abs(jv).max()
+    # symmetric (energy) Jacobian
+    Jd = J.convert("dense").getDenseArray()
+    assert np.abs(Jd - Jd.T).max() <= 1e-10 * np.abs(Jd).max()
+
+
+def test_residual_is_gradient_of_objective():
+    P, PETSc = _problem(two_beam_twisted())
+    P.load_factor = 0.3
+    X = P.X
+    P.q0.copy(X)
+    rng = np.random.default_rng(1)
+    free = ~P.fixed_mask
+    X.setArray(X.getArray() + 1e-3 * rng.standard_normal(X.getLocalSize()) * free)
+    F = X.duplicate()
+    P.residual(None, X, F)
+    v = X.duplicate()
+    v.setArray(rng.standard_normal(X.getLocalSize()) * free)
+    h = 1e-6
+    Xp, Xm = X.copy(), X.copy()
+    Xp.axpy(h, v)
+    Xm.axpy(-h, v)
+    dPi = (P.objective(None, Xp) - P.objective(None, Xm)) / (2 * h)
+    assert dPi == pytest.approx(F.dot(v), rel=1e-6)
+
+
+def compression_case(tmp_path, force, steps, cutbacks=12, material=None):
+    raw = load_raw("uniaxial_neohookean.yaml")
+    if material:
+        raw["beams"][0]["material"] = material
+    raw["geometry"]["length"] = 0.01           # stocky: no buckling
+    raw["beams"][0]["elements"] = 2
+    raw["loads"][0]["traction_force"] = [force, 0.0, 0.0]
+    raw["steps"] = steps
+    raw["solver"] = {"max_cutbacks": cutbacks}
+    raw["output"]["dir"] = str(tmp_path / "out")
+    return raw
+
+
+def test_inverted_element_makes_the_step_back_off(tmp_path):
+    # one increment to ~58 % compression: the first Newton iterate inverts elements
+    raw = compression_case(tmp_path, -400.0, [1.0])
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"))
+    assert p.returncode == 0, p.stderr
+    assert "inverted element" in p.stdout
+    s = read_summary(tmp_path / "out")
+    assert s["status"] == "completed" and s["steps"][0]["cutbacks"] >= 1
+    assert s["steps"][0]["probes"]["tip"]["displacement"][0] < -0.005
+
+
+def test_failure_names_load_and_reason_and_keeps_converged_steps(tmp_path):
+    # SVK in uniaxial compression has a limit point at P = -E/(3 sqrt 3): 1.0 is beyond it
+    raw = compression_case(tmp_path, -100.0, [0.05, 0.1, 1.0], cutbacks=3,
+                           material={"model": "svk", "E": 3.0e6, "nu": 0.0})
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"))
+    assert p.returncode == 3, p.stdout + p.stderr
+    assert "Traceback" not in p.stderr
+    msg = p.stderr.strip().splitlines()[-1]
+    assert "could not reach load factor 1" in msg and "DIVERGED" in msg and "SNES failed at load factor" in msg
+    s = read_summary(tmp_path / "out")
+    assert s["status"] == "failed" and [st["load_factor"] for st in s["steps"]] == [0.05, 0.1]
+    with h5py.File(tmp_path / "out" / "results.h5") as h5:
+        assert sorted(h5["steps"]) == ["step_0001", "step_0002"]
+        assert h5["steps/step_0002"].attrs["load_factor"] == 0.1
+    assert os.path.exists(tmp_path / "out" / "surface_0002.vtu")
+
+
+def test_command_line_overrides_config_petsc_section(tmp_path):
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["petsc"] = {"snes_linesearch_type": "l2", "snes_max_it": 3}
+    raw["output"]["dir"] = str(tmp_path / "out")
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    p = solve_cli(cfg, extra=["-snes_linesearch_type", "bt", "-snes_monitor", "-log_view"])
+    assert p.returncode == 0, p.stderr
+    assert "line search bt" in p.stdout and "max_it 3" in p.stdout
+    assert "SNES Function norm" in p.stdout
+    for stage in ("ANCF setup", "ANCF load stepping", "ANCF assembly", "ANCF output"):
+        assert stage in p.stdout
+    s = read_summary(tmp_path / "out")
+    assert "line search bt" in s["solver"]
+
+
+def test_outputs_are_complete(tmp_path):
+    raw = load_raw("pretwisted_bar.yaml")
+    s = run_inline(raw, tmp_path)
+    assert s["status"] == "completed" and len(s["steps"]) == 4
+    step = s["steps"][-1]
+    assert set(step["probes"]) == {"tip", "tip_r_y"} and len(step["probes"]["tip"]["displacement"]) == 3
+    assert {"setup", "solve", "output", "total"} <= set(s["timings"])
+    import meshio
+    m = meshio.read(tmp_path / "surface_0004.vtu")
+    assert {"displacement", "E_xx", "J"} <= set(m.point_data)
+    assert np.all(m.point_data["J"] > 0.5)
+    pvd = (tmp_path / "surface.pvd").read_text()
+    assert pvd.count("<DataSet") == 5
+    with h5py.File(tmp_path / "results.h5") as h5:
+        q = h5["steps/step_0004/nodal_vectors"][()]
+        q0 = h5["model/reference_nodal_vectors"][()]
+        tip = h5["model/beams/bar/connectivity"][()][-1, -1]
+        assert np.allclose(q[tip, 0] - q0[tip, 0], step["probes"]["tip"]["displacement"], rtol=1e-12)

@@ -39,8 +39,28 @@ def internal_force(qe, G, w, material) -> tuple[np.ndarray, np.ndarray]:
     return f.reshape(E, 54), np.min(J, axis=1)
 
 
+#: Gauss points per batch: keeps the temporaries of the tangent in cache (and out of mmap);
+#: measured best between ~300 and ~600 on this machine (scripts/bench_kernel.py)
+CHUNK_POINTS = 400
+
+
 def internal_force_and_tangent(qe, G, w, material) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Internal forces (E, 54), tangents (E, 54, 54) and min J per element (E,)."""
+    """Internal forces (E, 54), tangents (E, 54, 54) and min J per element (E,).
+
+    Elements are processed in chunks of about ``CHUNK_POINTS`` Gauss points.
+    """
+    E, Np = w.shape
+    step = max(1, CHUNK_POINTS // Np)
+    if E <= step:
+        return _force_and_tangent(qe, G, w, material)
+    f, K, J = np.empty((E, 54)), np.empty((E, 54, 54)), np.empty(E)
+    for s in range(0, E, step):
+        sl = slice(s, s + step)
+        f[sl], K[sl], J[sl] = _force_and_tangent(qe[sl], G[sl], w[sl], material)
+    return f, K, J
+
+
+def _force_and_tangent(qe, G, w, material):
     F = deformation_gradient(qe, G)
     P, J, terms = material.stress_and_tangent(F)
     E, Np = w.shape
@@ -51,31 +71,43 @@ def internal_force_and_tangent(qe, G, w, material) -> tuple[np.ndarray, np.ndarr
 
 
 def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """K[(a,i),(b,k)] = Σ_p w G_aj 𝔸_ijkl G_bl for the dyadic form of 𝔸 (see materials.py)."""
+    """K[(a,i),(b,k)] = Σ_p w G_aj 𝔸_ijkl G_bl for the dyadic form of 𝔸 (see materials.py).
+
+    Each basis tensor B is multiplied with the gradients once, (B G_a)_i; every outer term
+    X ⊗ Y then contributes Σ_p (X G_a)_i w (Y G_b)_k, and all of them go into one GEMM whose
+    inner dimension stacks (term, point).  Cross terms U ⊠ V give Σ_p (U G_b)_i w (V G_a)_k.
+    """
     E, Np = w.shape
-    K = np.zeros((E, 18, 3, 18, 3))
-    Gs = _stack(G)
-    wcol = w[..., None, None]
+    BG = [np.matmul(G, np.swapaxes(B, -1, -2)) for B in terms.basis]   # (E, P, 18, 3) each
+
+    def side(sd, weight=None):
+        out = None
+        for c, k in sd:
+            coef = c if weight is None else (weight if c is None else c * weight)
+            term = BG[k] if coef is None else coef[..., None, None] * BG[k]
+            out = term if out is None else out + term
+        return out.reshape(E, Np, 54)
+
+    Kf = np.zeros((E, 54, 54))
+    if terms.outer:
+        left = np.concatenate([side(X) for X, _ in terms.outer], axis=1)
+        right = np.concatenate([side(Y, w) for _, Y in terms.outer], axis=1)
+        Kf += np.matmul(left.transpose(0, 2, 1), right)
+    for U, V in terms.cross:
+        M = np.matmul(side(V).transpose(0, 2, 1), side(U, w)).reshape(E, 18, 3, 18, 3)
+        Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, 54, 54)
+    K = Kf.reshape(E, 18, 3, 18, 3)
     if terms.iso is not None:
+        wcol = w[..., None, None]
         if terms.iso.ndim == 2:      # scalar field c: δ_ik c δ_jl
-            right = wcol * terms.iso[..., None, None] * G
+            right = (wcol * terms.iso[..., None, None]) * G
         else:                         # δ_ik S_jl
             right = np.matmul(G, np.swapaxes(terms.iso, -1, -2)) * wcol
-        Ks = np.matmul(Gs, _stack(right).transpose(0, 2, 1))
+        Ks = np.matmul(_stack(G), _stack(right).transpose(0, 2, 1))
         idx = np.arange(3)
         K[:, :, idx, :, idx] += Ks[None]
     if terms.gram is not None:       # (G_a · G_b) B_ik
         GG = np.matmul(G, np.swapaxes(G, -1, -2)).reshape(E, Np, 324)
         wB = (w[..., None, None] * terms.gram).reshape(E, Np, 9)
         K += np.matmul(GG.transpose(0, 2, 1), wB).reshape(E, 18, 18, 3, 3).transpose(0, 1, 3, 2, 4)
-    Kf = K.reshape(E, 54, 54)
-    for X, Y in terms.outer:         # (X G_a)_i (Y G_b)_k
-        XG = np.matmul(G, np.swapaxes(X, -1, -2)).reshape(E, Np, 54)
-        YG = (np.matmul(G, np.swapaxes(Y, -1, -2)) * wcol).reshape(E, Np, 54)
-        Kf += np.matmul(XG.transpose(0, 2, 1), YG)
-    for U, V in terms.cross:         # (U G_b)_i (V G_a)_k
-        VG = np.matmul(G, np.swapaxes(V, -1, -2)).reshape(E, Np, 54)
-        UG = (np.matmul(G, np.swapaxes(U, -1, -2)) * wcol).reshape(E, Np, 54)
-        M = np.matmul(VG.transpose(0, 2, 1), UG).reshape(E, 18, 3, 18, 3)
-        Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, 54, 54)
     return Kf

@@ -39,18 +39,32 @@ def det_and_inverse_transpose(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return det, H
 
 
+Side = list  # [(coefficient (n,) or None, basis index)]: the tensor Σ c_k B_k
+
+
 @dataclass
 class TangentTerms:
-    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ U_il V_kj (see module docstring)."""
+    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ U_il V_kj (see module docstring).
 
+    X, Y, U, V are linear combinations of a few ``basis`` tensors (e.g. F⁻ᵀ and F), written as
+    sides ``[(c, k), ...]`` meaning Σ c B_k (c None = 1), so that the element kernel multiplies
+    each basis tensor with the shape-function gradients only once.
+    """
+
+    basis: list = field(default_factory=list)            # [(n, 3, 3)]
     iso: np.ndarray | None = None    # (n,) scalar multiple of I, or (n, 3, 3)
     gram: np.ndarray | None = None   # (n, 3, 3)
-    outer: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
-    cross: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    outer: list[tuple[Side, Side]] = field(default_factory=list)
+    cross: list[tuple[Side, Side]] = field(default_factory=list)
+
+    def tensor(self, side: Side) -> np.ndarray:
+        """The 3×3 field Σ c_k B_k of one side."""
+        return sum(B if c is None else c[..., None, None] * B
+                   for c, B in ((c, self.basis[k]) for c, k in side))
 
     def full(self) -> np.ndarray:
         """The 81-component tangent (n, 3, 3, 3, 3); for tests and diagnostics only."""
-        n = (self.outer[0][0] if self.outer else self.cross[0][0]).shape[0]
+        n = self.basis[0].shape[0]
         A = np.zeros((n, 3, 3, 3, 3))
         eye = np.eye(3)
         if self.iso is not None:
@@ -59,9 +73,9 @@ class TangentTerms:
         if self.gram is not None:
             A += np.einsum("nik,jl->nijkl", self.gram, eye)
         for X, Y in self.outer:
-            A += np.einsum("nij,nkl->nijkl", X, Y)
+            A += np.einsum("nij,nkl->nijkl", self.tensor(X), self.tensor(Y))
         for U, V in self.cross:
-            A += np.einsum("nil,nkj->nijkl", U, V)
+            A += np.einsum("nil,nkj->nijkl", self.tensor(U), self.tensor(V))
         return A
 
 
@@ -108,10 +122,10 @@ class NeoHookean:
         c1 = (2.0 / 9.0) * muJm * I1 + self.K * (2.0 * J - 1.0) * J
         c2 = -(2.0 / 3.0) * muJm
         gamma = muJm * I1 / 3.0 - self.K * (J * J - J)
-        c1, c2, gamma = (c[..., None, None] for c in (c1, c2, gamma))
-        terms = TangentTerms(iso=muJm,
-                             outer=[(c1 * H + c2 * F, H), (c2 * H, F)],
-                             cross=[(gamma * H, H)])
+        # basis 0 = F⁻ᵀ, 1 = F:  (c1 H + c2 F) ⊗ H + c2 H ⊗ F,  γ H ⊠ H
+        terms = TangentTerms(basis=[H, F], iso=muJm,
+                             outer=[([(c1, 0), (c2, 1)], [(None, 0)]), ([(c2, 0)], [(None, 1)])],
+                             cross=[([(gamma, 0)], [(None, 0)])])
         return P, J, terms
 
 
@@ -149,10 +163,12 @@ class StVenantKirchhoff:
     def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
         S = self._pk2(F)
         J, _ = det_and_inverse_transpose(F)
-        terms = TangentTerms(iso=S,
+        lam = np.full(F.shape[:-2], self.lam)
+        mu = np.full(F.shape[:-2], self.mu)
+        terms = TangentTerms(basis=[F], iso=S,
                              gram=self.mu * np.matmul(F, np.swapaxes(F, -1, -2)),
-                             outer=[(self.lam * F, F)],
-                             cross=[(self.mu * F, F)])
+                             outer=[([(lam, 0)], [(None, 0)])],
+                             cross=[([(mu, 0)], [(None, 0)])])
         return np.matmul(F, S), J, terms
 
 

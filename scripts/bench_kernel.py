@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Element-kernel throughput (Gauss points per second, one core) and whole-run wall times.
+
+Prints the residual-only and residual+tangent rates for the neo-Hookean and SVK kernels on a
+realistic element block, the split of one tangent evaluation into its parts, and the wall time
+of the verification problems.  Target (issue 2): >= 200 000 tangent evaluations per second.
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/bench_kernel.py [--elements 64] [--repeat 20]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+import numpy as np  # noqa: E402
+
+from ancf_petsc import element3363 as el, kernels  # noqa: E402
+from ancf_petsc.cubature import gauss_legendre  # noqa: E402
+from ancf_petsc.geometry import reference_nodal_vectors  # noqa: E402
+from ancf_petsc.materials import NeoHookean, StVenantKirchhoff  # noqa: E402
+from ancf_petsc.section import make_ellipse  # noqa: E402
+
+
+def block(n_el: int, degree: int, axial: int):
+    sec = make_ellipse((0.004, 0.0025), (0.003, 0.0), degree)
+    xa, wa = gauss_legendre(axial)
+    xi, y, z = el.tensor_points(xa, sec.points)
+    _, dN = el.shape_functions(xi, y, z)
+    wq = np.repeat(wa, len(sec.weights)) * np.tile(sec.weights, axial)
+    x = np.linspace(0.0, 0.07, 2 * n_el + 1)
+    q0 = reference_nodal_vectors(x, sec.centroid, 0.07, 45.0, (0.0, 0.0))
+    conn = np.stack([2 * np.arange(n_el), 2 * np.arange(n_el) + 1, 2 * np.arange(n_el) + 2], 1)
+    q0e = q0[conn].reshape(n_el, 18, 3)
+    G, det = el.reference_gradients(q0e, dN)
+    rng = np.random.default_rng(0)
+    qe = q0e + 1e-3 * rng.standard_normal(q0e.shape) * np.abs(q0e).max()
+    return qe, G, det * wq[None]
+
+
+def rate(fn, n_gp: int, repeat: int) -> float:
+    fn()
+    t = time.perf_counter()
+    for _ in range(repeat):
+        fn()
+    return n_gp * repeat / (time.perf_counter() - t)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap.add_argument("--elements", type=int, default=64)
+    ap.add_argument("--repeat", type=int, default=20)
+    ap.add_argument("--skip-runs", action="store_true")
+    args = ap.parse_args()
+    print(f"# element kernel throughput, 1 core (OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']})")
+    print(f"{'material':14s} {'GP/elem':>8s} {'residual GP/s':>15s} {'res+tangent GP/s':>17s}  target 200000")
+    for mat in (NeoHookean(1e6, 5e7), StVenantKirchhoff(3e6, 0.3)):
+        for degree, axial in ((4, 3), (6, 3), (8, 3)):
+            qe, G, w = block(args.elements, degree, axial)
+            n = w.size
+            r1 = rate(lambda: kernels.internal_force(qe, G, w, mat), n, args.repeat)
+            r2 = rate(lambda: kernels.internal_force_and_tangent(qe, G, w, mat), n, args.repeat)
+            flag = "ok" if r2 >= 2e5 else "BELOW TARGET"
+            print(f"{mat.name:14s} {w.shape[1]:8d} {r1:15,.0f} {r2:17,.0f}  {flag}")
+    # split of one neo-Hookean tangent evaluation
+    qe, G, w = block(args.elements, 6, 3)
+    mat = NeoHookean(1e6, 5e7)
+    n = w.size
+    F = kernels.deformation_gradient(qe, G)
+    P, J, terms = mat.stress_and_tangent(F)
+    parts = {
+        "deformation gradient F": lambda: kernels.deformation_gradient(qe, G),
+        "material P and tangent terms": lambda: mat.stress_and_tangent(F),
+        "tangent contraction (GEMMs)": lambda: kernels.contract_tangent(terms, G, w),
+    }
+    print("\n# split of a neo-Hookean residual+tangent evaluation (microseconds per Gauss point)")
+    total = 0.0
+    for name, fn in parts.items():
+        us = 1e6 / rate(fn, n, args.repeat)
+        total += us
+        print(f"  {name:32s} {us:7.3f}")
+    print(f"  {'sum':32s} {total:7.3f}   ({1e6 / total:,.0f} GP/s)")
+    if args.skip_runs:
+        return
+    print("\n# whole-run wall time of the verification problems (ancf-solve, 1 rank, no VTK)")
+    exe = os.path.join(ROOT, ".venv", "bin", "ancf-solve")
+    for cfg in ("uniaxial_neohookean", "elastica_svk", "pretwisted_bar"):
+        t = time.perf_counter()
+        p = subprocess.run([exe, os.path.join(ROOT, "configs", cfg + ".yaml"), "--quiet",
+                            "--output-dir", f"/tmp/ancf-bench-{cfg}"], capture_output=True, text=True)
+        dt = time.perf_counter() - t
+        print(f"  {cfg:22s} {dt:6.2f} s  (exit {p.returncode})")
+
+
+if __name__ == "__main__":
+    main()

@@ -45,6 +45,7 @@ class Problem:
         self.contact = contact
         self.load_factor = 0.0
         self.inverted = False
+        self.contact_failed = False
         lo, hi = layout.owned_nodes
         n_owned = hi - lo
         N = model.n_dofs
@@ -156,12 +157,13 @@ class Problem:
                 floc += np.bincount((18 * blk.lnodes[:, :, None] + np.arange(18)).ravel(),
                                     f.ravel(), minlength=floc.size)
             EV_ELEMENTS.end()
+            self.contact_failed = False
             if self.contact is not None:
                 EV_CONTACT.begin()
                 ok = self.contact.add_residual(xl, self.needed, floc)
-                bad |= not ok
+                self.contact_failed = not ok
                 EV_CONTACT.end()
-            self._finish_residual(X, F, floc, bad)
+            self._finish_residual(X, F, floc, bad or self.contact_failed)
         finally:
             STAGE_ASSEMBLY.pop()
 
@@ -176,10 +178,49 @@ class Problem:
                                           - self.q0.getArray(readonly=True)[self.owned_fixed_local])
         self.inverted = bool(bad or not np.all(np.isfinite(fa)))
         if self.inverted:
+            self.inverted = not self.contact_failed
             # J <= 0 somewhere: a NaN residual makes the line search back off (no exception,
             # so no rank is left waiting in a collective call)
             fa[:] = np.nan
         del fa
+
+    def min_jacobian(self, X: PETSc.Vec) -> float:
+        """Smallest det F over every Gauss point of every rank (collective)."""
+        xl = self._local_state(X)
+        local = np.inf
+        for blk in self.blocks:
+            F = kernels.deformation_gradient(xl[blk.lnodes].reshape(-1, 18, 3), blk.G)
+            local = min(local, float(np.min(np.linalg.det(F))))
+        val = self.comm.tompi4py().allreduce(local, op=__import__("mpi4py").MPI.MIN)
+        return val if np.isfinite(val) else -np.inf
+
+    def precheck(self, X: PETSc.Vec, Y: PETSc.Vec, j_min: float = 0.1, halvings: int = 12) -> bool:
+        """Line-search pre-check: halve the Newton step X − Y until no Gauss point has det F below
+        ``j_min`` (an inverted element would only make SNES fail and the load step be cut back).
+        Returns whether Y was changed."""
+        changed = False
+        trial = X.duplicate()
+        for _ in range(halvings):
+            X.copy(trial)
+            trial.axpy(-1.0, Y)
+            if self.min_jacobian(trial) >= j_min:
+                break
+            Y.scale(0.5)
+            changed = True
+        trial.destroy()
+        return changed
+
+    def reference_residual_norm(self) -> float:
+        """‖F(q0, λ = 0)‖: zero in exact arithmetic, so it measures the residual's rounding floor."""
+        lam = self.load_factor
+        self.load_factor = 0.0
+        X, F = self.q0.copy(), self.F.duplicate()
+        self.residual(None, X, F)
+        self.load_factor = lam
+        value = F.norm()
+        X.destroy()
+        F.destroy()
+        return value
 
     def objective(self, snes, X: PETSc.Vec) -> float:
         """Total potential Π = Σ ∫Ψ dV + Π_con − λ f_ext·q (the residual is its gradient).
@@ -227,6 +268,39 @@ class Problem:
             STAGE_ASSEMBLY.pop()
 
     # ------------------------------------------------------------------ state
+    def predict_multipliers(self, factor: float) -> None:
+        if self.contact is not None:
+            self.contact.scale_multipliers(factor)
+
+    def augment(self, X: PETSc.Vec) -> tuple[float, float]:
+        """Augmented-Lagrangian update of the contact multipliers at X (collective).
+
+        Returns (relative multiplier change ‖p m‖/‖μ + p m‖, largest projected gap [m]) before
+        the update."""
+        if self.contact is None:
+            return 0.0, 0.0
+        from mpi4py import MPI
+        dsq, tsq, worst = self.contact.augment(self._local_state(X).copy(), self.needed)
+        comm = self.comm.tompi4py()
+        dsq, tsq = comm.allreduce(dsq), comm.allreduce(tsq)
+        worst = comm.allreduce(worst, op=MPI.MAX)
+        return (np.sqrt(dsq / tsq) if tsq > 0.0 else 0.0), worst
+
+    def state_is_clean(self) -> bool:
+        """After SNES converged: did the last residual use converged contact projections? (collective)"""
+        ok = self.contact is None or self.contact.converged_projection
+        return bool(self.comm.tompi4py().allreduce(int(not ok)) == 0)
+
+    def checkpoint(self) -> None:
+        """Called at every converged state: history the residual depends on (contact projections)."""
+        if self.contact is not None:
+            self.contact.checkpoint()
+
+    def restore(self) -> None:
+        """Back to the last checkpoint after a failed attempt."""
+        if self.contact is not None:
+            self.contact.restore()
+
     def gather(self, X: PETSc.Vec | None = None) -> np.ndarray | None:
         """Full state in model order (n_nodes, 6, 3) on rank 0 (None elsewhere)."""
         X = self.X if X is None else X

@@ -174,7 +174,15 @@ class ContactSpec:
     penalty_scale: float = 1.0
     interfaces: list = field(default_factory=list)   # [(beam_a, beam_b, curve name or None)]
     axial_points: int = 3
-    curve_points: int = 3
+    curve_points: int = 1
+    search_margin: float = 0.1            # fraction of the beam length a point may slide
+    # polynomial degrees (along ξ, along the curve) of the space the sliding gap is projected on
+    # per element (mortar-type); None = pointwise (every quadrature point constrained).
+    # Default: full along ξ (axial_points - 1), the mean across the interface (0)
+    projection: tuple[int, int] | None = None
+    augmented: bool = False                # augmented Lagrangian on the projected sliding gap
+    gap_tolerance: float = 1e-3            # relative multiplier change that ends the updates
+    max_augmentations: int = 25
 
 
 @dataclass
@@ -182,9 +190,11 @@ class SolverSpec:
     max_increment: float | None = None
     min_increment: float = 1e-4
     max_cutbacks: int = 12
-    growth: float = 1.5
-    easy_iterations: int = 4
+    growth: float = 2.0
+    easy_iterations: int = 8
     predictor: str = "none"
+    merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
+    min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
 
 
 @dataclass
@@ -262,8 +272,10 @@ def _section(value, path: str, base_dir: str) -> SectionSpec:
                 if len(pts) < 2:
                     raise ConfigError(_join(cp, "points"), "a curve needs at least 2 points")
                 pts = [vector(p, _join(_join(cp, "points"), j), 2) for j, p in enumerate(pts)]
-                out.append({"name": string(c.get("name", f"curve{i}"), _join(cp, "name")),
-                            "points": pts})
+                entry = {"points": pts}
+                if "name" in c:      # named curves shared by two outlines are contact interfaces
+                    entry["name"] = string(c["name"], _join(cp, "name"))
+                out.append(entry)
             s.curves = out
         if "spline_degree" in value:
             s.spline_degree = integer(value["spline_degree"], _join(path, "spline_degree"), lo=1, hi=7)
@@ -424,7 +436,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 
     sv = mapping(raw.get("solver", {}), "solver",
                  optional=("max_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
-                           "predictor"))
+                           "predictor", "merit", "min_det_f"))
     solver = SolverSpec()
     if sv.get("max_increment") is not None:
         solver.max_increment = number(sv["max_increment"], "solver.max_increment", positive=True)
@@ -434,6 +446,10 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         solver.max_cutbacks = integer(sv["max_cutbacks"], "solver.max_cutbacks", lo=0, hi=60)
     if "growth" in sv:
         solver.growth = number(sv["growth"], "solver.growth", lo=1.0, hi=10.0)
+    if "min_det_f" in sv:
+        solver.min_det_f = number(sv["min_det_f"], "solver.min_det_f", lo=0.0, hi=0.9)
+    if "merit" in sv:
+        solver.merit = string(sv["merit"], "solver.merit", ("energy", "residual"))
     if "predictor" in sv:
         solver.predictor = string(sv["predictor"], "solver.predictor", ("none", "secant"))
     if "easy_iterations" in sv:
@@ -460,7 +476,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 def _contact(value, names: list[str]) -> ContactSpec:
     p = "contact"
     mapping(value, p, optional=("mode", "penalty", "penalty_scale", "interfaces", "axial_points",
-                                "curve_points"))
+                                "curve_points", "search_margin", "projection", "augmented",
+                                "gap_tolerance", "max_augmentations"))
     c = ContactSpec()
     c.mode = string(value.get("mode", "sliding"), f"{p}.mode", CONTACT_MODES)
     pen = value.get("penalty", "auto")
@@ -468,7 +485,28 @@ def _contact(value, names: list[str]) -> ContactSpec:
         c.penalty = number(pen, f"{p}.penalty", positive=True, hint=" (Pa/m, or 'auto')")
     c.penalty_scale = number(value.get("penalty_scale", 1.0), f"{p}.penalty_scale", positive=True)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
-    c.curve_points = integer(value.get("curve_points", 3), f"{p}.curve_points", lo=1, hi=10)
+    c.curve_points = integer(value.get("curve_points", 1), f"{p}.curve_points", lo=1, hi=10)
+    c.search_margin = number(value.get("search_margin", 0.1), f"{p}.search_margin", positive=True, hi=1.0)
+    proj = value.get("projection", None)
+    if proj == "pointwise":
+        c.projection = None
+    elif proj is None:
+        c.projection = (c.axial_points - 1, 0)
+    else:
+        pp = f"{p}.projection"
+        mapping(proj, pp, required=("axial", "curve"))
+        c.projection = (integer(proj["axial"], f"{pp}.axial", lo=0, hi=c.axial_points - 1),
+                        integer(proj["curve"], f"{pp}.curve", lo=0, hi=8))
+    if c.mode == "unilateral" and proj not in (None, "pointwise"):
+        raise ConfigError(f"{p}.projection", "the unilateral mode is pointwise; remove projection")
+    if c.mode == "unilateral":
+        c.projection = None
+    c.augmented = boolean(value.get("augmented", False), f"{p}.augmented")
+    if c.augmented and c.projection is None:
+        raise ConfigError(f"{p}.augmented", "the augmented Lagrangian works on the projected sliding "
+                                            "gap; use mode: sliding without projection: pointwise")
+    c.gap_tolerance = number(value.get("gap_tolerance", 1e-3), f"{p}.gap_tolerance", positive=True, hi=0.5)
+    c.max_augmentations = integer(value.get("max_augmentations", 25), f"{p}.max_augmentations", lo=1)
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []

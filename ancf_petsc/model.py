@@ -100,7 +100,28 @@ class Model:
 _SECTIONS_FILE_CACHE: dict = {}
 
 
-def build_section(spec: SectionSpec, path: str) -> Section:
+def _share_inline_curves(loop, named: set, registry: dict, path: str):
+    """Inline curves with the same name in several beams become one curve (a contact interface)."""
+    out = []
+    for cv, flip in loop:
+        if cv.name not in named:
+            out.append((cv, flip))
+            continue
+        prev = registry.get(cv.name)
+        if prev is None:
+            registry[cv.name] = cv
+            out.append((cv, flip))
+        elif cv.points.shape == prev.points.shape and np.allclose(cv.points, prev.points, rtol=0, atol=1e-12):
+            out.append((prev, flip))
+        elif cv.points.shape == prev.points.shape and np.allclose(cv.points[::-1], prev.points, rtol=0, atol=1e-12):
+            out.append((prev, not flip))
+        else:
+            raise ConfigError(path, f"curve name {cv.name!r} is used by two outlines with different "
+                                    "points; shared interfaces need identical points (either order)")
+    return out
+
+
+def build_section(spec: SectionSpec, path: str, registry: dict | None = None) -> Section:
     """Build a beam's cross-section; section problems become ConfigErrors at ``path``."""
     try:
         if spec.shape == "ellipse":
@@ -120,6 +141,9 @@ def build_section(spec: SectionSpec, path: str) -> Section:
             loop = sf.loops[spec.loop]
         else:
             loop = inline_loop(spec.curves, spec.spline_degree)
+            named = {c["name"] for c in spec.curves if "name" in c}
+            if registry is not None and named:
+                loop = _share_inline_curves(loop, named, registry, path)
         return make_outline(loop, spec.cubature_degree, compress=spec.compress, center=spec.center)
     except SectionError as exc:
         raise ConfigError(path, str(exc)) from None
@@ -130,8 +154,9 @@ def build_model(spec: ModelSpec) -> Model:
     beams: list[Beam] = []
     q0_parts = []
     node_offset = elem_offset = 0
+    registry: dict = {}
     for i, bs in enumerate(spec.beams):
-        section = build_section(bs.section, f"beams[{i}].section")
+        section = build_section(bs.section, f"beams[{i}].section", registry)
         x_nodes = np.linspace(0.0, spec.length, 2 * bs.elements + 1)
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,

@@ -189,6 +189,7 @@ class ResultsWriter:
         entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
                  "iterations": record.iterations, "substeps": record.substeps,
                  "cutbacks": record.cutbacks, "reason": record.reason,
+                 "augmentations": record.augmentations,
                  "residual_norm": record.residual_norm, "wall_time": record.wall_time,
                  "newton_history": record.iteration_history}
         if extra:

@@ -43,7 +43,7 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
         from .contact import build_contact
         contact = build_contact(model, spec.contact, say)
     problem = Problem(model, layout, comm, contact)
-    stepper = LoadStepper(problem, spec.solver, spec.petsc, say)
+    stepper = LoadStepper(problem, spec.solver, spec.petsc, say, max_level=max(spec.steps))
     STAGE_SETUP.pop()
     t_setup = time.perf_counter() - t_start
 
@@ -65,7 +65,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
         STAGE_OUTPUT.push()
         t0 = time.perf_counter()
         q = problem.gather()
-        writer.write_step(rec, q)
+        extra = {"contact": contact.gaps(q)} if (contact is not None and rank == 0) else None
+        writer.write_step(rec, q, extra)
         timings["output"] += time.perf_counter() - t0
         STAGE_OUTPUT.pop()
         if rank == 0:

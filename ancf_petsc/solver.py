@@ -63,6 +63,7 @@ class StepRecord:
     substeps: int
     cutbacks: int
     reason: str               # reason of the final sub-step
+    augmentations: int
     residual_norm: float
     wall_time: float
     iteration_history: list = field(default_factory=list)
@@ -93,15 +94,22 @@ class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES."""
 
     def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict,
-                 log: Callable[[str], None] = print):
+                 log: Callable[[str], None] = print, max_level: float = 1.0):
         self.problem, self.spec, self.log = problem, spec, log
         self.snes = PETSc.SNES().create(comm=problem.comm)
         self.snes.setFunction(problem.residual, problem.F)
         self.snes.setJacobian(problem.jacobian, problem.J, problem.J)
-        self.snes.setObjective(problem.objective)
+        if spec.merit == "energy":
+            self.snes.setObjective(problem.objective)
+        if spec.min_det_f > 0.0:
+            self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
         defaults = dict(DEFAULT_OPTIONS)
-        fnorm = problem.fext.norm()
-        defaults["snes_atol"] = f"{max(1e-11 * fnorm, 1e-30):.3e}"
+        # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
+        # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic; it
+        # grows with the contact penalty times the rounding of positions)
+        fnorm = problem.fext.norm() * max_level
+        self.rounding_floor = problem.reference_residual_norm()
+        defaults["snes_atol"] = f"{max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30):.3e}"
         if problem.comm.size == 1:
             defaults["pc_factor_mat_solver_type"] = "petsc"
         self.linesearch = configure_options(self.snes, petsc_options, defaults)
@@ -121,7 +129,8 @@ class LoadStepper:
             extra = f" ({pc.getFactorSolverType()})"
         rtol, atol, stol, maxit = self.snes.getTolerances()
         return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
-                f"{pc.getType()}{extra}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}")
+                f"{pc.getType()}{extra}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}; "
+                f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}")
 
     def _solve_at(self, lam: float, X: PETSc.Vec) -> tuple[int, int, float]:
         self.problem.load_factor = lam
@@ -133,11 +142,17 @@ class LoadStepper:
         fnorm = self.snes.getFunctionNorm()
         return reason, its, fnorm
 
+    def _residual_small(self, fnorm: float, lam: float) -> bool:
+        """A 'converged' SNES (e.g. on a tiny step) must also have a small residual."""
+        rtol, atol, stol, maxit = self.snes.getTolerances()
+        return fnorm <= max(atol, 1e-6 * lam * self.problem.fext.norm())
+
     def run(self, levels: list[float], on_level: Callable[[StepRecord], None]) -> list[StepRecord]:
         """Reach every level in ``levels`` (increasing); call ``on_level`` after each one."""
         P = self.problem
         X = P.X
         P.q0.copy(X)
+        P.checkpoint()
         lam = 0.0
         X_prev = X.duplicate()
         dX_last = X.duplicate()          # last accepted increment (secant predictor)
@@ -159,10 +174,15 @@ class LoadStepper:
                     X.copy(X_prev)
                     if self.spec.predictor == "secant" and dlam_last > 0.0:
                         X.axpy(step / dlam_last, dX_last)       # secant predictor
+                    if lam > 0.0:
+                        P.predict_multipliers((lam + step) / lam)
                     reason, its, fnorm = self._solve_at(lam + step, X)
                     its_total += its
                     history.append(list(self._history))
-                    if reason > 0 and np.isfinite(fnorm):
+                    if reason > 0 and not self._residual_small(fnorm, lam + step):
+                        reason = PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH   # stalled, not converged
+                    if reason > 0 and np.isfinite(fnorm) and P.state_is_clean():
+                        P.checkpoint()
                         X.copy(dX_last)
                         dX_last.axpy(-1.0, X_prev)
                         dlam_last = step
@@ -174,17 +194,42 @@ class LoadStepper:
                         continue
                     # failed: restore and cut back (collective: reason is global)
                     inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
+                    lost = bool(P.comm.tompi4py().allreduce(int(P.contact_failed)))
                     X_prev.copy(X)
+                    P.restore()
                     cutbacks += 1
                     consecutive += 1
                     dlam = 0.5 * step
-                    self.log(f"  cut back at load factor {lam + step:.6g}: {reason_name(reason)}"
-                             f"{' (inverted element)' if inverted else ''}; retry with increment {dlam:.4g}")
+                    why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+                    self.log(f"  cut back at load factor {lam + step:.6g}: {reason_name(reason)}{why}; "
+                             f"retry with increment {dlam:.4g}")
                     if consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment:
                         P.load_factor = lam
                         raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted)
+                augmentations = 0
+                if P.contact is not None and P.contact.augmented:
+                    tol = P.contact.gap_tolerance()
+                    while True:
+                        change, gap = P.augment(X)  # μ ← μ + p m; measures before the update
+                        if change <= P.contact.spec.gap_tolerance or gap <= tol:
+                            break
+                        if augmentations >= P.contact.spec.max_augmentations:
+                            raise LoadStepFailure(target, target, target,
+                                                  f"AUGMENTED_LAGRANGIAN_NOT_CONVERGED (multiplier change "
+                                                  f"{change:.1e}, projected gap {gap:.2e} m after "
+                                                  f"{augmentations} updates)",
+                                                  False)
+                        augmentations += 1
+                        reason, its, fnorm = self._solve_at(target, X)
+                        its_total += its
+                        history.append(list(self._history))
+                        if not (reason > 0 and np.isfinite(fnorm) and P.state_is_clean()):
+                            raise LoadStepFailure(target, target, target,
+                                                  f"{reason_name(reason)} in augmented-Lagrangian update "
+                                                  f"{augmentations}", bool(P.inverted))
+                    P.checkpoint()
                 rec = StepRecord(load_factor=target, iterations=its_total, substeps=substeps,
-                                 cutbacks=cutbacks, reason=reason_name(reason),
+                                 cutbacks=cutbacks, reason=reason_name(reason), augmentations=augmentations,
                                  residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
                                  iteration_history=history)
                 records.append(rec)

@@ -1,0 +1,99 @@
+"""Contact: consistent Jacobians (finite differences), energy gradient, reference state, modes."""
+import copy
+
+import numpy as np
+import pytest
+
+from helpers import load_raw, petsc_init
+from test_solver import _problem
+
+
+def achilles(psi=45.0, elements=2, contact=None):
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["geometry"]["twist_deg"] = psi
+    for b in raw["beams"]:
+        b["elements"] = elements
+    if contact is not None:
+        raw["contact"] = contact
+    return raw
+
+
+def perturbed_state(P, scale, seed):
+    rng = np.random.default_rng(seed)
+    X = P.X
+    P.q0.copy(X)
+    free = ~P.fixed_mask
+    q = X.getArray().reshape(-1, 6, 3)
+    noise = rng.standard_normal(q.shape)
+    noise[:, 1:3] *= 20.0          # slopes are O(1), positions O(L)
+    noise[:, 3:] *= 200.0
+    X.setArray(X.getArray() + scale * noise.ravel() * free)
+    return X, free
+
+
+MODES = {
+    "sliding-projected": {"mode": "sliding"},
+    "sliding-pointwise": {"mode": "sliding", "projection": "pointwise"},
+    "unilateral": {"mode": "unilateral"},
+}
+
+
+@pytest.mark.parametrize("mode", list(MODES))
+def test_contact_jacobian_matches_finite_differences(mode):
+    P, PETSc = _problem(achilles(contact=MODES[mode]))
+    P.load_factor = 50.0
+    X, free = perturbed_state(P, 2e-6, 3)
+    P.jacobian(None, X, P.J, P.J)
+    rng = np.random.default_rng(7)
+    # unilateral: the probe must not cross g = 0 anywhere (the active set must not change)
+    h = 1e-6 if mode == "unilateral" else 1e-4
+    for _ in range(3):
+        v = X.duplicate()
+        v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
+        Jv = X.duplicate()
+        P.J.mult(v, Jv)
+        Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.copy(), X.copy()
+        Xp.axpy(h, v)
+        Xm.axpy(-h, v)
+        P.residual(None, Xp, Fp)
+        P.residual(None, Xm, Fm)
+        if mode == "unilateral":
+            active = [P.contact._evaluate(P._local_state(Y).copy(), P.needed, False)["w"] > 0
+                      for Y in (Xp, Xm)]
+            assert np.array_equal(active[0], active[1]) and 0 < active[0].sum() < len(active[0])
+        fd = (Fp.getArray() - Fm.getArray()) / (2 * h)
+        jv = Jv.getArray()
+        err = np.abs(jv - fd)[free].max() / np.abs(jv).max()
+        assert err < 1e-6, err
+    Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()
+    assert np.abs(Jd - Jd.T).max() <= 1e-9 * np.abs(Jd).max()
+
+
+@pytest.mark.parametrize("mode", list(MODES))
+def test_contact_residual_is_energy_gradient(mode):
+    P, PETSc = _problem(achilles(contact=MODES[mode]))
+    P.load_factor = 20.0
+    X, free = perturbed_state(P, 2e-6, 5)
+    F = X.duplicate()
+    P.residual(None, X, F)
+    v = X.duplicate()
+    v.setArray(np.random.default_rng(2).standard_normal(X.getLocalSize()) * free * 1e-3)
+    h = 1e-6 if mode == "unilateral" else 1e-4     # see the Jacobian test
+    Xp, Xm = X.copy(), X.copy()
+    Xp.axpy(h, v)
+    Xm.axpy(-h, v)
+    dPi = (P.objective(None, Xp) - P.objective(None, Xm)) / (2 * h)
+    assert dPi == pytest.approx(F.dot(v), rel=1e-6)
+
+
+def test_reference_state_is_gap_free_and_stress_free():
+    P, PETSc = _problem(achilles())
+    P.load_factor = 0.0
+    X = P.q0.copy()
+    F = X.duplicate()
+    P.residual(None, X, F)
+    # rounding only: penalty x contact area x position magnitude x machine epsilon
+    floor = 2.2e-16 * P.contact.penalty * P.contact.pts["w"].sum() * P.model.spec.length
+    assert F.norm() < floor, (F.norm(), floor)
+    gaps = P.contact.gaps(P.model.q0)
+    assert len(gaps) == 3 and all(g["max_gap"] < 1e-12 for g in gaps.values())

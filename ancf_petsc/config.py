@@ -188,6 +188,7 @@ class ContactSpec:
 @dataclass
 class SolverSpec:
     max_increment: float | None = None
+    initial_increment: float | None = None    # first increment (default: the first level)
     min_increment: float = 1e-4
     max_cutbacks: int = 12
     growth: float = 2.0
@@ -435,11 +436,13 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
                         vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64))
 
     sv = mapping(raw.get("solver", {}), "solver",
-                 optional=("max_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
+                 optional=("max_increment", "initial_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
                            "predictor", "merit", "min_det_f"))
     solver = SolverSpec()
     if sv.get("max_increment") is not None:
         solver.max_increment = number(sv["max_increment"], "solver.max_increment", positive=True)
+    if sv.get("initial_increment") is not None:
+        solver.initial_increment = number(sv["initial_increment"], "solver.initial_increment", positive=True)
     if "min_increment" in sv:
         solver.min_increment = number(sv["min_increment"], "solver.min_increment", positive=True)
     if "max_cutbacks" in sv:

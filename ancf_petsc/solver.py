@@ -28,7 +28,7 @@ DEFAULT_OPTIONS = {
     "snes_divergence_tolerance": "-1",
     "snes_rtol": "1e-10",
     "snes_stol": "1e-12",
-    "snes_max_it": "25",
+    "snes_max_it": "15",
     "ksp_type": "preonly",
     "pc_type": "lu",
     "pc_factor_mat_solver_type": "mumps",
@@ -158,7 +158,9 @@ class LoadStepper:
         dX_last = X.duplicate()          # last accepted increment (secant predictor)
         dX_last.set(0.0)
         dlam_last = 0.0
-        dlam = levels[0] if self.spec.max_increment is None else min(levels[0], self.spec.max_increment)
+        dlam = levels[0] if self.spec.initial_increment is None else min(levels[0], self.spec.initial_increment)
+        if self.spec.max_increment is not None:
+            dlam = min(dlam, self.spec.max_increment)
         records = []
         STAGE_SOLVE.push()
         try:

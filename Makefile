@@ -8,15 +8,22 @@ export OMPI_MCA_rmaps_base_oversubscribe := 1
 export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 MPIRUN := mpirun --oversubscribe
-DEMO_CONFIG ?= configs/uniaxial_neohookean.yaml
+DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
+DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo test test-fast bench verify clean
+.PHONY: setup demo report test test-fast bench verify clean
 
 setup:
 	@bash scripts/setup.sh
 
 demo: setup
-	$(MPIRUN) -n 2 $(VENV)/bin/ancf-solve $(DEMO_CONFIG)
+	$(MPIRUN) -n 2 $(VENV)/bin/ancf-solve $(DEMO_CONFIG) --output-dir $(DEMO_OUT)
+	$(VENV)/bin/ancf-report --existing $(DEMO_OUT) --out $(DEMO_OUT)/report
+	@echo "[demo] table: $(DEMO_OUT)/report/report.md; plots: $(DEMO_OUT)/report/*.png;"
+	@echo "[demo] ParaView: $(DEMO_OUT)/surface.pvd; data: $(DEMO_OUT)/results.h5, summary.json"
+
+report: setup
+	$(VENV)/bin/ancf-report --jobs 2
 
 test: setup
 	$(PY) -m pytest -q tests

@@ -15,6 +15,8 @@ setup(
     entry_points={
         "console_scripts": [
             "ancf-solve=apps.ancf_solve:main",
+            "ancf-report=apps.ancf_report:main",
+            "ancf-sweep=apps.ancf_sweep:main",
         ]
     },
 )

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import time
+
 import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
@@ -44,6 +46,10 @@ class Problem:
         self.model, self.layout, self.comm = model, layout, comm
         self.contact = contact
         self.load_factor = 0.0
+        self.timers = {"element_kernels": 0.0, "element_assembly": 0.0, "contact_projection": 0.0,
+                       "contact_assembly": 0.0}
+        if contact is not None:
+            contact.timers = self.timers
         self.inverted = False
         self.contact_failed = False
         lo, hi = layout.owned_nodes
@@ -150,17 +156,22 @@ class Problem:
             floc = np.zeros(self.xloc.getLocalSize())
             bad = False
             EV_ELEMENTS.begin()
+            t0 = time.perf_counter()
             for blk in self.blocks:
                 qe = xl[blk.lnodes].reshape(-1, 18, 3)
                 f, Jmin = kernels.internal_force(qe, blk.G, blk.w, blk.beam.material)
                 bad |= not np.all(Jmin > 0.0)
                 floc += np.bincount((18 * blk.lnodes[:, :, None] + np.arange(18)).ravel(),
                                     f.ravel(), minlength=floc.size)
+            self.timers["element_kernels"] += time.perf_counter() - t0
             EV_ELEMENTS.end()
             self.contact_failed = False
             if self.contact is not None:
                 EV_CONTACT.begin()
+                t0, p0 = time.perf_counter(), self.timers["contact_projection"]
                 ok = self.contact.add_residual(xl, self.needed, floc)
+                self.timers["contact_assembly"] += (time.perf_counter() - t0
+                                                    - (self.timers["contact_projection"] - p0))
                 self.contact_failed = not ok
                 EV_CONTACT.end()
             self._finish_residual(X, F, floc, bad or self.contact_failed)
@@ -195,20 +206,33 @@ class Problem:
         return val if np.isfinite(val) else -np.inf
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec, j_min: float = 0.1, halvings: int = 12) -> bool:
-        """Line-search pre-check: halve the Newton step X − Y until no Gauss point has det F below
-        ``j_min`` (an inverted element would only make SNES fail and the load step be cut back).
-        Returns whether Y was changed."""
+        """Line-search pre-check (collective).  A Newton step that moves a node by more than ten
+        section sizes is scaled down to that first (a near-singular tangent gives absurd steps);
+        then the step X − Y is halved until no Gauss point has det F below ``j_min``.  If that
+        fails, Y is filled with NaN so that SNES reports a domain failure and the load step is
+        cut back.  Returns whether Y was changed."""
+        from mpi4py import MPI
+        comm = self.comm.tompi4py()
+        size = min(np.sqrt(b.section.area) for b in self.model.beams)
+        y = Y.getArray(readonly=True).reshape(-1, 6, 3)
+        big = comm.allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (10.0 * size)
         changed = False
-        trial = X.duplicate()
-        for _ in range(halvings):
-            X.copy(trial)
-            trial.axpy(-1.0, Y)
-            if self.min_jacobian(trial) >= j_min:
-                break
-            Y.scale(0.5)
+        if big > 1.0:
+            Y.scale(1.0 / big)
             changed = True
-        trial.destroy()
-        return changed
+        trial = X.duplicate()
+        try:
+            for _ in range(halvings):
+                X.copy(trial)
+                trial.axpy(-1.0, Y)
+                if self.min_jacobian(trial) >= j_min:
+                    return changed
+                Y.scale(0.5)
+                changed = True
+            Y.set(np.nan)
+            return True
+        finally:
+            trial.destroy()
 
     def reference_residual_norm(self) -> float:
         """‖F(q0, λ = 0)‖: zero in exact arithmetic, so it measures the residual's rounding floor."""
@@ -251,12 +275,19 @@ class Problem:
             EV_ELEMENTS.begin()
             for blk in self.blocks:
                 qe = xl[blk.lnodes].reshape(-1, 18, 3)
+                t0 = time.perf_counter()
                 _, K, _ = kernels.internal_force_and_tangent(qe, blk.G, blk.w, blk.beam.material)
+                t1 = time.perf_counter()
                 P.setValuesRCV(blk.rows, blk.rows, K, ADD)
+                self.timers["element_kernels"] += t1 - t0
+                self.timers["element_assembly"] += time.perf_counter() - t1
             EV_ELEMENTS.end()
             if self.contact is not None:
                 EV_CONTACT.begin()
+                t0, p0 = time.perf_counter(), self.timers["contact_projection"]
                 self.contact.add_jacobian(xl, self.needed, P, self.fixed_mask)
+                self.timers["contact_assembly"] += (time.perf_counter() - t0
+                                                    - (self.timers["contact_projection"] - p0))
                 EV_CONTACT.end()
             d = (self.owned_fixed_local + 18 * self.layout.owned_nodes[0]).astype(PETSc.IntType)
             if len(d):

@@ -25,6 +25,7 @@ element count along the shared length), so that every reference gap is zero.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -261,8 +262,18 @@ class Contact:
     def _gather(self, xl, lpos, elems):
         return xl[lpos(self._conn[elems])].reshape(len(elems), 18, 3)
 
+    timers = None          # dict of accumulated seconds (set by the Problem)
+
     def _evaluate(self, xl: np.ndarray, needed: np.ndarray, hessian: bool):
         """Project the local points; returns everything the energy/force/Hessian need."""
+        t0 = time.perf_counter()
+        try:
+            return self._evaluate_projection(xl, needed, hessian)
+        finally:
+            if self.timers is not None:
+                self.timers["contact_projection"] += time.perf_counter() - t0
+
+    def _evaluate_projection(self, xl: np.ndarray, needed: np.ndarray, hessian: bool):
         idx = self.local
         def lpos(nodes):
             return np.searchsorted(needed, nodes)

@@ -3,8 +3,8 @@
 * :func:`render_surfaces` — shaded 3D render of a ``surface_NNNN.vtu`` (beam surfaces + end caps),
   faces coloured by a point field, optionally over the reference configuration.
 * :func:`render_pair` — two renders side by side with one shared colour scale.
-* :func:`plot_load_elongation` — load-elongation curves against a paper table, with relative errors.
-* :func:`plot_convergence` — elongation vs elements per subtendon (log2 axis), ours and the paper's.
+* :func:`plot_load_elongation` — load-elongation curves against a paper table + relative errors.
+* :func:`plot_convergence` — elongation vs elements per subtendon (log2 axis), ours and paper's.
 * :func:`read_csv_table`, :func:`curve_from_summary` — small readers for the inputs of the above.
 
 The surface reader relies on the layout written by :class:`ancf_petsc.output.SurfaceSampler`: per
@@ -18,7 +18,7 @@ import json
 from dataclasses import dataclass
 
 import numpy as np
-from matplotlib import cm, colors
+from matplotlib import cm, colormaps, colors
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, ScalarFormatter
@@ -79,7 +79,7 @@ def read_surface(vtu_path: str) -> SurfaceMesh:
         elif block.type.startswith("polygon"):
             caps.extend(np.asarray(c, dtype=np.int64) for c in block.data)
     if not quads:
-        raise ValueError(f"{vtu_path}: no quad cells (not a surface_NNNN.vtu written by ancf-solve?)")
+        raise ValueError(f"{vtu_path}: no quad cells (not a surface_NNNN.vtu of ancf-solve?)")
     caps.sort(key=lambda c: int(c.min()))
     return SurfaceMesh(np.asarray(mesh.points, dtype=float), np.concatenate(quads), caps,
                        {k: np.asarray(v, dtype=float) for k, v in mesh.point_data.items()},
@@ -126,39 +126,83 @@ def _box(points_mm: list[np.ndarray], section_scale: float | None) -> tuple[np.n
     return lo - pad, hi + pad, section_scale
 
 
-def _view_vector(view: tuple[float, float]) -> np.ndarray:
-    elev, azim = np.radians(view)
+def _view_vector(view: tuple[float, ...]) -> np.ndarray:
+    """Unit vector towards the eye for mplot3d's (elev, azim[, roll]) in box coordinates."""
+    elev, azim = np.radians(view[:2])
     return np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
 
 
-def _shade(polys_box: np.ndarray, view: tuple[float, float]) -> np.ndarray:
-    """Two-sided Lambert shading factor per quad (box coordinates, light above-left of the eye)."""
-    n = np.cross(polys_box[:, 2] - polys_box[:, 0], polys_box[:, 3] - polys_box[:, 1])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-    light = _view_vector((view[0] + 35.0, view[1] - 25.0))
-    return 0.5 + 0.5 * np.abs(n @ light)
+def _light(view: tuple[float, ...]) -> np.ndarray:
+    """Light direction: from above-left of the eye on the screen (``roll`` taken into account)."""
+    eye = _view_vector(view)
+    up = np.array([0.0, 0.0, 1.0]) - eye[2] * eye
+    if np.linalg.norm(up) < 1e-6:  # looking straight down or up
+        up = np.array([-np.cos(np.radians(view[1])), -np.sin(np.radians(view[1])), 0.0])
+    up /= np.linalg.norm(up)
+    right = np.cross(up, eye)
+    roll = np.radians(view[2]) if len(view) > 2 else 0.0
+    up, right = np.cos(roll) * up - np.sin(roll) * right, np.sin(roll) * up + np.cos(roll) * right
+    light = eye + 0.6 * up - 0.5 * right
+    return light / np.linalg.norm(light)
 
 
-def _seam_columns(mesh: SurfaceMesh, grids: list[np.ndarray], corner_deg: float = 30.0
-                  ) -> list[np.ndarray]:
-    """Per beam the ring indices of its longitudinal edges: sharp corners of the section outline
-    and the ends of stretches shared with another beam (both judged at the first station)."""
-    p = mesh.points
-    rings = [p[g[0]] for g in grids]
-    size = max(float(np.ptp(np.concatenate(rings), axis=0).max()), 1e-30)
-    out = []
+def _topology(mesh: SurfaceMesh, grids: list[np.ndarray], corner_deg: float = 30.0
+              ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Per beam, judged on the first station: the ring indices of its longitudinal edges (sharp
+    outline corners and the ends of stretches shared with another beam) and a mask of the ring
+    segments j -> j+1 that lie on an interface with another beam (covered by it, except where
+    the beams have slid along each other)."""
+    rings = [mesh.points[g[0]] for g in grids]
+    seams, iface = [], []
     for b, r in enumerate(rings):
         t = np.roll(r, -1, axis=0) - r
-        t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
+        seg = np.linalg.norm(t, axis=1)
+        t /= np.maximum(seg, 1e-30)[:, None]
         turn = np.degrees(np.arccos(np.clip(np.sum(t * np.roll(t, 1, axis=0), axis=1), -1, 1)))
         cols = turn > corner_deg
+        shared = np.zeros(len(r), dtype=bool)
         others = [o for k, o in enumerate(rings) if k != b]
         if others:
             d = np.linalg.norm(r[:, None, :] - np.concatenate(others)[None], axis=-1).min(1)
-            shared = d < 1e-4 * size
+            shared = d < 0.5 * np.median(seg)
             cols |= shared & ~(np.roll(shared, 1) & np.roll(shared, -1))
-        out.append(np.flatnonzero(cols))
+        seams.append(np.flatnonzero(cols))
+        iface.append(shared & np.roll(shared, -1))
+    return seams, iface
+
+
+def _quad_index(quads: np.ndarray, grids: list[np.ndarray]) -> list[np.ndarray]:
+    """Per beam a (stations - 1, ring) array of quad indices: the quad between stations s, s+1
+    starting at ring point j (-1 where the file has none)."""
+    out = []
+    a = quads[:, 0]
+    for g in grids:
+        start, m = g[0, 0], g.shape[1]
+        idx = np.full((g.shape[0] - 1, m), -1)
+        inside = np.flatnonzero((a >= start) & (a < start + g.size - m))
+        idx.ravel()[a[inside] - start] = inside
+        out.append(idx)
     return out
+
+
+def _normals(polys: list[np.ndarray] | np.ndarray) -> np.ndarray:
+    """Area-weighted polygon normals (Newell), (k, 3)."""
+    if isinstance(polys, np.ndarray):  # (k, n, 3), all the same size
+        p, q = polys, np.roll(polys, -1, axis=1)
+        return 0.5 * np.cross(p, q).sum(axis=1)
+    return np.array([0.5 * np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0) for p in polys])
+
+
+def _outward(normals: np.ndarray, centres: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """+1/-1 per face so that normals point out of each closed body (faces grouped by beam):
+    the flux of (x - c) through the surface, 3 x volume, must be positive."""
+    sign = np.ones(len(normals))
+    for g in np.unique(group):
+        sel = group == g
+        c = centres[sel].mean(axis=0)
+        if np.sum(normals[sel] * (centres[sel] - c)) < 0:
+            sign[sel] = -1.0
+    return sign
 
 
 def _line_segments(mesh: SurfaceMesh, grids: list[np.ndarray], cols: list[np.ndarray]
@@ -169,66 +213,112 @@ def _line_segments(mesh: SurfaceMesh, grids: list[np.ndarray], cols: list[np.nda
     return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
 
 
-def _reference_lines(ref: SurfaceMesh, n_rings: int = 6, n_long: int = 8) -> np.ndarray:
-    """Segments (k, 2, 3) of a coarse wireframe of the reference surface: a few cross-section
-    rings (always both ends) and longitudinal lines, following the sampled surface."""
+def _reference_lines(ref: SurfaceMesh) -> np.ndarray:
+    """Segments (k, 2, 3) outlining the reference configuration: every beam's section outline
+    at both ends and its longitudinal edges (the pretwisted seams between the beams)."""
     grids = ref.grids()
     p = ref.points
     if grids is None:  # unknown layout: the edges of every quad
         q = ref.quads
         e = np.stack([q, np.roll(q, -1, axis=1)], axis=-1).reshape(-1, 2)
         return p[np.unique(np.sort(e, axis=1), axis=0)]
-    segs = []
-    for g in grids:
-        ns, m = g.shape
-        for s in np.unique(np.linspace(0, ns - 1, min(n_rings, ns)).round().astype(int)):
-            segs.append(np.stack([p[g[s]], p[np.roll(g[s], -1)]], axis=1))
-    cols = [np.unique(np.linspace(0, g.shape[1], min(n_long, g.shape[1]), endpoint=False)
-                      .astype(int)) for g in grids]
+    segs = [np.stack([p[g[s]], p[np.roll(g[s], -1)]], axis=1) for g in grids for s in (0, -1)]
+    seams = _topology(ref, grids)[0]
+    cols = [c if len(c) else _generators(g.shape[1], 4) for g, c in zip(grids, seams)]
     segs.append(_line_segments(ref, grids, cols))
     return np.concatenate(segs)
 
 
+def _generators(m: int, n: int) -> np.ndarray:
+    """n ring indices evenly spaced around a ring of m points."""
+    return np.unique(np.linspace(0, m, min(n, m), endpoint=False).astype(int))
+
+
 def _draw(ax, mesh: SurfaceMesh, fvals: np.ndarray, norm: colors.Normalize, cmap: str,
-          view: tuple[float, float], lo: np.ndarray, hi: np.ndarray, scale: float,
-          reference: SurfaceMesh | None) -> None:
-    """Put one surface (caps, beam edges, reference wireframe) on a 3D axes as one collection,
-    so that mplot3d depth-sorts all faces and lines together."""
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+          view: tuple[float, ...], lo: np.ndarray, hi: np.ndarray, scale: float,
+          reference: SurfaceMesh | None, n_generators: int = 8) -> np.ndarray:
+    """Put one surface on a 3D axes.  Faces on an interface between beams (mostly covered, but
+    exposed where the beams slid along each other) are drawn first; the outer faces, end caps,
+    beam edges and reference wireframe follow in one collection that mplot3d depth-sorts."""
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
     aspect = (hi - lo) * np.array([1.0, scale, scale])
+    box = lambda x: (x - lo) / (hi - lo) * aspect  # noqa: E731  (what mplot3d projects)
+    eye = _view_vector(view)
+    light = _light(view)
     pts = mesh.points * MM
     quads = pts[mesh.quads]
-    cmap_ = cm.get_cmap(cmap)
+    qbeam = np.zeros(len(quads), dtype=int)
+    inner = np.zeros(len(quads), dtype=bool)
+    grids = mesh.grids()
+    if grids is not None:  # topology from the reference when it has the same layout
+        ref_grids = reference.grids() if reference is not None else None
+        same = ref_grids is not None and [g.shape for g in ref_grids] == [g.shape for g in grids]
+        seams, iface = _topology(reference if same else mesh, ref_grids if same else grids)
+        qidx = _quad_index(mesh.quads, grids)
+        for b, (idx, f) in enumerate(zip(qidx, iface)):
+            qbeam[idx[idx >= 0]] = b + 1
+            inner[idx[:, f][idx[:, f] >= 0]] = True
+    # outward normals in box coordinates; back faces are culled (orthographic view)
+    nq = _normals(box(quads))
+    nq *= _outward(nq, box(quads).mean(axis=1), qbeam)[:, None]
+    nq /= np.maximum(np.linalg.norm(nq, axis=1, keepdims=True), 1e-30)
+    front = nq @ eye > 0
+    cmap_ = colormaps[cmap] if isinstance(cmap, str) else cmap
     rgba = cmap_(norm(fvals))
-    rgba[:, :3] *= _shade((quads - lo) / (hi - lo) * aspect, view)[:, None]
-    polys, face, edge, width = list(quads), [rgba], [rgba.copy()], [np.full(len(quads), 0.3)]
+    rgba[:, :3] *= (0.55 + 0.45 * np.abs(nq @ light))[:, None]  # Lambert
+    ax.computed_zorder = False  # collections in zorder: interfaces, surface, edges on top
+    sel = front & inner
+    ax.add_collection3d(Poly3DCollection(list(quads[sel]), facecolors=rgba[sel],
+                                         edgecolors=rgba[sel], linewidths=0.3, zorder=1))
+    sel = front & ~inner
+    polys, face, edge, width = list(quads[sel]), [rgba[sel]], [rgba[sel]], [np.full(sel.sum(), 0.3)]
 
-    def add(items: list, fc: np.ndarray, ec, lw: float) -> None:
+    def add(items: list, fc: np.ndarray, ec: tuple, lw: float) -> None:
         polys.extend(items)
         face.append(fc)
-        edge.append(np.broadcast_to(colors.to_rgba(*ec) if isinstance(ec, tuple) else ec,
-                                    (len(items), 4)))
+        edge.append(np.broadcast_to(colors.to_rgba(*ec), (len(items), 4)))
         width.append(np.full(len(items), lw))
 
-    if mesh.caps:  # end caps: coloured by their mean value, outlined
-        crgba = cmap_(norm(np.array([mesh.values[c].mean() for c in mesh.caps])))
+    if mesh.caps:  # end caps facing the viewer: coloured by their mean value, outlined
+        cpts = [pts[c] for c in mesh.caps]
+        if grids is not None and len(mesh.caps) == 2 * len(grids):
+            nc = _normals([box(c) for c in cpts])
+            cen = np.array([box(c).mean(axis=0) for c in cpts])
+            body = np.array([box(pts[g.ravel()]).mean(axis=0) for g in grids]).repeat(2, axis=0)
+            show = np.sign(np.sum(nc * (cen - body), axis=1)) * (nc @ eye) > 0
+        else:
+            show = np.ones(len(cpts), dtype=bool)
+        crgba = cmap_(norm(np.array([mesh.values[c].mean() for c in mesh.caps])))[show]
         crgba[:, :3] *= 0.85
-        add([pts[c] for c in mesh.caps], crgba, ("0.15", 1.0), 0.8)
-    grids = mesh.grids()
-    if grids is not None:  # the beams' longitudinal edges
-        segs = _line_segments(mesh, grids, _seam_columns(mesh, grids)) * MM
-        add(list(segs), np.zeros((len(segs), 4)), ("0.1", 0.8), 0.7)
+        add([c for c, v in zip(cpts, show) if v], crgba, ("0.15", 1.0), 0.8)
     if reference is not None:
         segs = _reference_lines(reference) * MM
-        add(list(segs), np.zeros((len(segs), 4)), ("0.45", 0.6), 0.5)
+        add(list(segs), np.zeros((len(segs), 4)), ("0.4", 0.7), 0.6)
     ax.add_collection3d(Poly3DCollection(polys, facecolors=np.concatenate(face),
                                          edgecolors=np.concatenate(edge),
-                                         linewidths=np.concatenate(width)))
+                                         linewidths=np.concatenate(width), zorder=2))
+    if grids is not None:
+        # longitudinal lines where a face next to them is seen: the beams' edges (dark) and a
+        # few generators (faint; they show the twist of round sections)
+        seen = np.append(front & ~inner, False)  # index -1: no quad
+        for lines, colour, lw in ((seams, ("0.1", 1.0), 0.9),
+                                  ([_generators(g.shape[1], n_generators) for g in grids],
+                                   ("0.1", 0.3), 0.5)):
+            segs = []
+            for g, idx, cols in zip(grids, qidx, lines):
+                for j in cols:
+                    vis = seen[idx[:, j]] | seen[idx[:, j - 1]]
+                    segs.append(np.stack([pts[g[:-1, j]], pts[g[1:, j]]], axis=1)[vis])
+            if segs:
+                ax.add_collection3d(Line3DCollection(np.concatenate(segs),
+                                                     colors=[colors.to_rgba(*colour)],
+                                                     linewidths=lw, zorder=3))
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
     ax.set_box_aspect(aspect)
+    ax.set_proj_type("ortho")
     ax.view_init(*view)
     ax.set_facecolor((1, 1, 1, 0))
     ax.set_xlabel("x [mm]", fontsize=8, labelpad=6)
@@ -240,6 +330,7 @@ def _draw(ax, mesh: SurfaceMesh, fvals: np.ndarray, norm: colors.Normalize, cmap
         axis._axinfo["grid"]["linewidth"] = 0.4
         axis._axinfo["grid"]["color"] = (0.85, 0.85, 0.85, 1.0)
     ax.tick_params(labelsize=7, pad=0)
+    return aspect
 
 
 def _prepare(vtu_path: str, color_by: str) -> tuple[SurfaceMesh, np.ndarray]:
@@ -271,8 +362,18 @@ def _content_box(img: np.ndarray, cell: tuple[int, int, int, int], dpi: float
     return cols[0] / dpi, (h - rows[-1] - 1) / dpi, (cols[-1] + 1) / dpi, (h - rows[0]) / dpi
 
 
+def _clipped(img: np.ndarray, extents: np.ndarray) -> bool:
+    """Whether anything is drawn on the border of an axes (display extents x0, y0, x1, y1)."""
+    h = img.shape[0]
+    x0, y0, x1, y1 = extents
+    c0, c1 = int(np.ceil(x0)) + 1, int(np.floor(x1)) - 2
+    r0, r1 = h - int(np.floor(y1)) + 1, h - int(np.ceil(y0)) - 2
+    ink = (img[r0:r1 + 1, c0:c1 + 1, :3] < 250).any(axis=-1)
+    return bool(ink[0].any() or ink[-1].any() or ink[:, 0].any() or ink[:, -1].any())
+
+
 def _render(panels: list[tuple[SurfaceMesh, np.ndarray, SurfaceMesh | None, str]], out_png: str,
-            cmap: str, clim: tuple | None, view: tuple[float, float],
+            cmap: str, clim: tuple | None, view: tuple[float, ...],
             section_scale: float | None, vertical: bool, panel_in: float = 8.0) -> str:
     """Render 3D panels, crop each to its drawn content and lay them out tightly with titles,
     one colour bar and a footnote (exaggeration, reference)."""
@@ -281,7 +382,7 @@ def _render(panels: list[tuple[SurfaceMesh, np.ndarray, SurfaceMesh | None, str]
     lo, hi, scale = _box(pts, section_scale)
     norm = _norm([p[1] for p in panels], clim)
     n = len(panels)
-    cell = 1.5 * panel_in  # the axes square in the middle of a larger cell: nothing is clipped
+    cell = 2.0 * panel_in  # the axes square in the middle of a larger cell: nothing is clipped
     fig = Figure(figsize=(n * cell, cell), dpi=dpi, facecolor="white")
     canvas = FigureCanvasAgg(fig)
     axes = []
@@ -289,10 +390,17 @@ def _render(panels: list[tuple[SurfaceMesh, np.ndarray, SurfaceMesh | None, str]
         ax = fig.add_axes([(i * cell + (cell - panel_in) / 2) / (n * cell),
                            (cell - panel_in) / 2 / cell, panel_in / (n * cell), panel_in / cell],
                           projection="3d")
-        _draw(ax, mesh, fv, norm, cmap, view, lo, hi, scale, ref)
+        aspect = _draw(ax, mesh, fv, norm, cmap, view, lo, hi, scale, ref)
         axes.append(ax)
-    canvas.draw()
-    img = np.asarray(canvas.buffer_rgba())
+    zoom = 1.0
+    for _ in range(5):  # views along a diagonal of a long box can overflow the axes: zoom out
+        canvas.draw()
+        img = np.asarray(canvas.buffer_rgba())
+        if not any(_clipped(img, ax.bbox.extents) for ax in axes):
+            break
+        zoom *= 0.8
+        for ax in axes:
+            ax.set_box_aspect(aspect, zoom=zoom)
     px, off = int(round(cell * dpi)), (cell - panel_in) / 2
     boxes = [tuple(v - off for v in _content_box(img, (0, px, i * px, (i + 1) * px), dpi))
              for i in range(n)]
@@ -343,15 +451,18 @@ def _wrap(label: str, height_in: float) -> str:
 
 
 def render_surfaces(vtu_path: str, out_png: str, color_by: str = "E_xx", title: str = "",
-                    view: tuple[float, float] = (20.0, -60.0), cmap: str = "viridis",
+                    view: tuple[float, ...] = (20.0, -60.0), cmap: str = "viridis",
                     clim: tuple | None = None, reference_vtu: str | None = None, *,
                     section_scale: float | None = None) -> str:
     """Shaded 3D render of a surface VTU, faces coloured by ``color_by`` (per-face mean).
 
-    ``clim`` is in display units (strain in %).  ``reference_vtu`` (e.g. surface_0000.vtu) is
-    drawn as a grey wireframe.  ``section_scale`` stretches y and z in the box aspect (default:
-    automatic, 1-3x; stated in a footnote).  Dark lines mark each beam's longitudinal edges and
-    end-cap outlines.  Returns ``out_png``.
+    ``view`` is mplot3d's (elev, azim[, roll]) in degrees; orthographic projection, back faces
+    culled.  ``clim`` is in display units (strain in %).  ``reference_vtu`` (e.g.
+    surface_0000.vtu) is drawn as a grey wireframe (end outlines and longitudinal edges).
+    ``section_scale`` stretches y and z in the box aspect (default: automatic, 1-3x; stated in
+    a footnote).  Dark lines mark each beam's longitudinal edges and end-cap outlines; faint
+    ones follow a few generators (the twist).  ``ValueError`` for an unknown ``color_by``.
+    Returns ``out_png``.
     """
     mesh, fv = _prepare(vtu_path, color_by)
     ref = read_surface(reference_vtu) if reference_vtu else None
@@ -359,7 +470,7 @@ def render_surfaces(vtu_path: str, out_png: str, color_by: str = "E_xx", title: 
 
 
 def render_pair(vtu_a: str, vtu_b: str, out_png: str, titles: tuple[str, str] = ("", ""),
-                color_by: str = "E_xx", view: tuple[float, float] = (20.0, -60.0),
+                color_by: str = "E_xx", view: tuple[float, ...] = (20.0, -60.0),
                 cmap: str = "viridis", clim: tuple | None = None,
                 reference_vtu: tuple[str | None, str | None] | str | None = None, *,
                 section_scale: float | None = None, vertical: bool = False) -> str:
@@ -405,7 +516,7 @@ def curve_from_summary(summary_json: str, probe: str, component: int = 0,
 
 
 def _colours(labels: list[str]) -> dict[str, tuple]:
-    cycle = cm.get_cmap("tab10").colors
+    cycle = colormaps["tab10"].colors
     return {lab: cycle[i % len(cycle)] for i, lab in enumerate(dict.fromkeys(labels))}
 
 
@@ -413,7 +524,7 @@ def plot_load_elongation(curves: dict[str, tuple[list[float], list[float]]], pap
                          out_png: str, columns: dict[str, str], *, load_column: str = "load_N",
                          title: str = "") -> str:
     """Our load-elongation curves (lines) against the paper's points (markers), plus the relative
-    error [%] at the paper's loads (ours interpolated) in a lower panel.
+    error [%] at the paper's loads within our range (ours interpolated) in a lower panel.
 
     ``curves``: label -> (loads [N], elongations [mm]); ``columns``: label -> CSV column.
     """
@@ -434,9 +545,12 @@ def plot_load_elongation(curves: dict[str, tuple[list[float], list[float]]], pap
         ref = table[columns[lab]]
         ax.plot(loads_p, ref, "o", mfc="none", color=col[lab], ms=5,
                 label=f"{lab} (paper, {columns[lab]})")
+        if not len(loads):
+            continue
         inside = (loads_p >= loads.min() - 1e-9) & (loads_p <= loads.max() + 1e-9)
         if inside.any():
-            ours = np.interp(loads_p[inside], *(lambda o: (loads[o], elong[o]))(np.argsort(loads)))
+            order = np.argsort(loads)
+            ours = np.interp(loads_p[inside], loads[order], elong[order])
             err = 100.0 * (ours - ref[inside]) / ref[inside]
             axe.plot(loads_p[inside], err, "o-", color=col[lab], ms=3.5, lw=1.0)
     axe.axhline(0.0, color="0.5", lw=0.6)
@@ -458,7 +572,7 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
     """Elongation vs elements per subtendon (log2 x axis): ours lines + markers, the paper's open
     markers.  Entries with the same label in ``table`` and ``paper`` share a colour."""
     col = _colours(list(table) + list(paper))
-    fig = Figure(figsize=(5.2, 3.8))
+    fig = Figure(figsize=(6.8, 3.8))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     ticks: set[int] = set()
@@ -477,7 +591,7 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
     ax.set_xlabel("elements per subtendon")
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, frameon=False)
+    ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     if title:
         ax.set_title(title, fontsize=10)
     fig.tight_layout()

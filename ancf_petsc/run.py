@@ -1,21 +1,29 @@
 """One run: spec → model → layout → problem → load stepping → results (no argument parsing)."""
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass
 
 import numpy as np
 from petsc4py import PETSc
 
-from .assembly import Problem
+from .assembly import STAGE_ASSEMBLY, Problem
 from .config import ModelSpec
 from .layout import block_layout
 from .model import build_model
 from .output import ResultsWriter
-from .solver import LoadStepFailure, LoadStepper
+from .solver import STAGE_SOLVE, LoadStepFailure, LoadStepper
 
 STAGE_SETUP = PETSc.Log.Stage("ANCF setup")
 STAGE_OUTPUT = PETSc.Log.Stage("ANCF output")
+
+
+def petsc_event_time(name: str) -> float:
+    """Seconds spent in a PETSc log event, summed over all stages (logging is on, see run_model)."""
+    ev = PETSc.Log.Event(name)
+    stages = [0] + [st.id for st in (STAGE_SETUP, STAGE_OUTPUT, STAGE_SOLVE, STAGE_ASSEMBLY)]
+    return float(sum(ev.getPerfInfo(sid)["time"] for sid in sorted(set(stages))))
 
 
 @dataclass
@@ -34,6 +42,7 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
     """Solve ``spec``; every converged level is on disk before the next one starts."""
     rank = comm.rank
     say = log if rank == 0 else (lambda *_: None)
+    PETSc.Log.begin()                 # event timings for the summary (cheap)
     t_start = time.perf_counter()
     STAGE_SETUP.push()
     model = build_model(spec)
@@ -53,7 +62,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
         say("[ancf]   " + line)
     say("[ancf]   " + layout.summary())
     say("[ancf]   " + stepper.describe())
-    run_info = {"dofs": model.n_dofs, "elements": model.n_elements, "ranks": comm.size,
+    run_info = {"output_dir": os.path.abspath(spec.output.dir), "twist_deg": spec.twist_deg,
+                "dofs": model.n_dofs, "elements": model.n_elements, "ranks": comm.size,
                 "partition": layout.summary(), "solver": stepper.describe(),
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
                                       "points": int(len(b.section.weights))} for b in model.beams}}
@@ -85,6 +95,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
         status, message = "failed", str(exc)
     timings["total"] = time.perf_counter() - t_start
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
+    timings.update(problem.timers)
+    timings["linear_solve"] = petsc_event_time("KSPSolve") + petsc_event_time("PCSetUp")
     writer.finish(status, message=message, timings=timings,
                   newton_iterations=stepper.newton_iterations)
     say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations, "

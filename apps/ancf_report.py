@@ -1,0 +1,92 @@
+"""ancf-report: the paper's Tables 1 and 2 beside ours, the penalty study and the figures.
+
+    ancf-report                         # Table 1, Table 2 and figures into results/achilles_report
+    ancf-report --table1 --ranks 2      # one study, each run on 2 MPI ranks
+    ancf-report --penalty --fit-bulk-modulus
+    ancf-report --existing results/achilles_type3_psi45   # report on finished runs, no solving
+
+Runs are sweeps (see ancf-sweep): finished runs are reused, so re-running is cheap.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="ancf-report", allow_abbrev=False, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default="results/achilles_report", help="output directory")
+    ap.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
+    ap.add_argument("--jobs", type=int, default=1, help="runs at the same time")
+    ap.add_argument("--table1", action="store_true")
+    ap.add_argument("--table2", action="store_true")
+    ap.add_argument("--penalty", action="store_true", help="penalty study (psi = 45)")
+    ap.add_argument("--fit-bulk-modulus", action="store_true")
+    ap.add_argument("--figures", action="store_true")
+    ap.add_argument("--existing", nargs="+", metavar="RUN_DIR",
+                    help="finished ancf-solve output directories to report on (no solving)")
+    args = ap.parse_args(argv)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    from ancf_petsc import report as rp
+    from ancf_petsc.sweep import SweepError
+
+    chosen = args.table1 or args.table2 or args.penalty or args.fit_bulk_modulus or args.figures
+    if not chosen and not args.existing:
+        args.table1 = args.table2 = args.figures = True
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    sections = []
+    log = (lambda msg: print(msg, flush=True))
+    try:
+        t1 = t2 = None
+        if args.existing:
+            found = {}
+            for d in args.existing:
+                path = os.path.join(d, "summary.json")
+                if not os.path.exists(path):
+                    print(f"ancf-report: {path}: no summary.json (run ancf-solve first)", file=sys.stderr)
+                    return 2
+                with open(path) as fh:
+                    s = json.load(fh)
+                found[int(round(s.get("twist_deg", 0)))] = s
+            t1 = rp.table1_from(found)
+            args.figures = True
+        if args.table1:
+            t1 = rp.table1(out, args.ranks, args.jobs, log)
+        if t1 is not None:
+            sections.append(("Table 1: soleus elongation [mm], paper vs ours", t1.markdown()))
+            sections.append(("Run time per column [s] (1 column = 13 load levels)", rp.timing_markdown(t1)))
+        if args.table2:
+            t2 = rp.table2(out, ranks=args.ranks, jobs=args.jobs, log=log)
+            sections.append(("Table 2: soleus elongation at 400 N [mm] vs elements per subtendon",
+                             rp.table2_markdown(t2)))
+        if args.penalty:
+            res = rp.penalty_study(out, ranks=args.ranks, jobs=args.jobs, log=log)
+            d10, d400 = rp.penalty_plateau(res)
+            sections.append(("Penalty study", rp.penalty_markdown(res, 45)
+                             + f"\n\nOver the decade around the default p_n the soleus elongation changes "
+                               f"by {100 * d10:.3f} % (10 N) and {100 * d400:.3f} % (400 N)."))
+        if args.fit_bulk_modulus:
+            k, sse = rp.fit_bulk_modulus(out, jobs=args.jobs, log=log)
+            sections.append(("Bulk modulus fitted to Table 1, psi = 0",
+                             "\n".join([f"K = {k / 1e9:.4f} GPa (least squares on the relative errors)"]
+                                       + [f"- K = {kk / 1e9:.2f} GPa: sum of squared relative errors "
+                                          f"{v:.3e}" for kk, v in sse.items()])))
+        if args.figures and t1 is not None:
+            rp.figures(t1, out, t2, log)
+    except SweepError as exc:
+        print(f"ancf-report: {exc}", file=sys.stderr)
+        return 2
+    text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
+    with open(os.path.join(out, "report.md"), "w") as fh:
+        fh.write("# Type III Achilles tendon: reproduction of Obrezkov et al. (2022)\n\n" + text + "\n")
+    print(text)
+    print(f"\n[report] {os.path.join(out, 'report.md')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

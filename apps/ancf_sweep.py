@@ -1,0 +1,117 @@
+"""ancf-sweep SWEEP.yaml [--dry-run] [--slurm] [--collect] [--jobs N] [--ranks N] [--force]
+
+Runs a parameter sweep over a base config (format: ancf_petsc/sweep.py), locally with N
+concurrent ancf-solve processes, or writes a SLURM job-array script. Completed runs are skipped.
+Exit codes: 0 all runs completed, 1 some did not, 2 bad sweep file (one line, no traceback),
+130 interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
+    return value
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    parser = argparse.ArgumentParser(
+        prog="ancf-sweep", allow_abbrev=False,
+        description="Run ancf-solve over a grid or list of parameter values of a base config, "
+                    "then collect every run into <output>/results.csv and <output>/failed.txt.")
+    parser.add_argument("sweep", help="sweep file (YAML: base, parameters, mode, run, output, name)")
+    what = parser.add_mutually_exclusive_group()
+    what.add_argument("--dry-run", action="store_true",
+                      help="list the runs (and which are already done); write nothing")
+    what.add_argument("--slurm", action="store_true",
+                      help="prepare the run directories and write <output>/sweep.slurm "
+                           "(a job array) and runs.txt instead of running")
+    what.add_argument("--collect", action="store_true",
+                      help="only collect results.csv and failed.txt (also of a partial sweep)")
+    parser.add_argument("--jobs", type=_positive, help="concurrent runs (overrides run.jobs)")
+    parser.add_argument("--ranks", type=_positive, help="MPI ranks per run (overrides run.ranks)")
+    parser.add_argument("--force", action="store_true", help="rerun runs that already completed")
+    args = parser.parse_args(argv)
+
+    from ancf_petsc.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done, load_sweep,
+                                  run_sweep, write_slurm)
+
+    def say(msg: str) -> None:
+        print(msg, flush=True)
+
+    try:
+        sweep = load_sweep(args.sweep).with_overrides(jobs=args.jobs, ranks=args.ranks)
+    except SweepError as exc:
+        print(f"ancf-sweep: {args.sweep}: {exc}", file=sys.stderr, flush=True)
+        return 2
+    runs = expand(sweep)
+    say(f"[sweep] {sweep.name}: {len(runs)} runs ({sweep.shape()}) of {sweep.base}; "
+        f"{sweep.ranks} rank(s) per run, {sweep.jobs} at a time; output {sweep.output}")
+
+    try:
+        if args.dry_run:
+            width = max(len(r.run_id) for r in runs)
+            n_done = 0
+            for r in runs:
+                done = is_done(sweep, r)
+                n_done += done
+                values = "  ".join(f"{k}={v!r}" for k, v in r.params.items())
+                say(f"  {r.run_id:<{width}}  {'done' if done else 'todo'}  {values}")
+            say(f"[sweep] dry run: {len(runs) - n_done} to run, {n_done} already done")
+            return 0
+        if args.collect:
+            col = collect(sweep)
+            say(f"[sweep] {col.summary_line()}")
+            say(f"[sweep] results: {col.csv_path}")
+            if any(s.status in FAILED_STATUSES for s in col.states):
+                say(f"[sweep] failed runs and reasons: {col.failed_path}")
+            return 0 if col.all_completed() else 1
+        if args.slurm:
+            script, runs_txt = write_slurm(sweep, force=args.force)
+            say(f"[sweep] wrote {script} (array 0-{len(runs) - 1}) and {runs_txt}")
+            say(f"[sweep] submit: sbatch {script}")
+            say(f"[sweep] afterwards: ancf-sweep {args.sweep} --collect")
+            return 0
+
+        # SIGTERM (kill, a job scheduler) stops the runs like Ctrl-C: they run in their own
+        # sessions and would otherwise outlive the sweep
+        previous = signal.signal(signal.SIGTERM, _interrupt)
+        try:
+            report = run_sweep(sweep, force=args.force, log=say)
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+        col = collect(sweep)
+        if report.interrupted:
+            say(f"[sweep] interrupted: {report.summary_line()}")
+        else:
+            say(f"[sweep] {report.summary_line()}")
+        say(f"[sweep] results: {col.csv_path}")
+        if any(s.status in FAILED_STATUSES for s in col.states):
+            say(f"[sweep] failed runs and reasons: {col.failed_path}")
+        if report.interrupted:
+            return 130
+        return 0 if report.ok() and col.all_completed() else 1
+    except OSError as exc:
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"ancf-sweep: {exc.strerror or exc}{where}", file=sys.stderr, flush=True)
+        return 1
+    except KeyboardInterrupt:
+        print("ancf-sweep: interrupted", file=sys.stderr, flush=True)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

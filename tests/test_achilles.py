@@ -1,0 +1,74 @@
+"""The paper's Type III Achilles tendon: Table 1 reproduction, geometry, MPI equality."""
+import json
+import os
+
+import numpy as np
+import pytest
+import yaml
+
+from ancf_petsc import report as rp
+from helpers import CONFIGS, load_raw, read_summary, solve_cli, write_config
+
+PAPER = rp.read_paper(rp.PAPER_T1)
+
+
+def _run(tmp_path, psi, ranks=1, name=None):
+    raw = load_raw(f"achilles_type3_psi{psi}.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    out = tmp_path / (name or f"psi{psi}_n{ranks}")
+    raw["output"] = {"dir": str(out), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / f"{out.name}.yaml"), ranks=ranks)
+    assert p.returncode == 0, p.stdout[-2000:] + p.stderr
+    return read_summary(out)
+
+
+@pytest.fixture(scope="module")
+def table1(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("table1")
+    return rp.table1_from({psi: _run(tmp, psi) for psi in rp.TWISTS})
+
+
+def test_configs_differ_only_in_twist_and_name():
+    raws = [load_raw(f"achilles_type3_psi{p}.yaml") for p in rp.TWISTS]
+    for raw, p in zip(raws, rp.TWISTS):
+        assert raw["geometry"]["twist_deg"] == p
+        assert [b["elements"] for b in raw["beams"]] == [4, 4, 4]
+        assert [float(s) for s in raw["steps"]] == list(PAPER["load_N"])
+        raw["geometry"].pop("twist_deg"), raw.pop("name"), raw.pop("output")
+    assert raws[0] == raws[1] == raws[2]
+
+
+def test_table1_reproduced(table1):
+    err = table1.errors()
+    print("\n" + table1.markdown())
+    # psi = 0 and 15: every load level within 2 % (measured: within 0.54 % and 1.01 %)
+    assert np.all(np.abs(err[0]) < 0.01) and np.all(np.abs(err[15]) < 0.0125)
+    # psi = 45: within 2 % from 20 N on; at 10 N the paper's pretwist offset (0.025 mm) is larger
+    # than ours (0.020 mm), -3.6 % (README: "where we differ")
+    assert np.all(np.abs(err[45][1:]) < 0.015) and abs(err[45][0]) < 0.04
+    assert table1.ordered()
+    # the neighbours barely move (they slide; with pretwist the helical interface drags them a
+    # little): below 2 % of the soleus' elongation at 400 N, at every load
+    for p in rp.TWISTS:
+        for k in ("medial_gastrocnemius", "lateral_gastrocnemius"):
+            assert np.all(np.abs(table1.others[p][k]) < 0.02 * table1.ours[p][-1]), (p, k)
+
+
+def test_sections_and_interfaces(table1):
+    s = table1.summaries[45]
+    areas = {k: v["area"] * 1e6 for k, v in s["sections"].items()}
+    # cubic splines through the traced points (the paper: 16.31, 15.98, 19.57 mm^2)
+    assert areas["soleus"] == pytest.approx(16.49, abs=0.01)
+    assert areas["medial_gastrocnemius"] == pytest.approx(16.11, abs=0.01)
+    assert areas["lateral_gastrocnemius"] == pytest.approx(19.72, abs=0.01)
+    gaps = s["steps"][-1]["contact"]
+    assert len(gaps) == 3 and all(g["active_points"] > 0 for g in gaps.values())
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_mpi_gives_the_serial_table(tmp_path, table1, ranks):
+    s = _run(tmp_path, 45, ranks=ranks)
+    assert s["ranks"] == ranks
+    _, ours = rp.elongations(s)
+    assert np.max(np.abs(ours / table1.ours[45] - 1.0)) < 1e-8

@@ -1,0 +1,263 @@
+"""ancf-sweep end to end: grid expansion, concurrent local runs, resume, failures, SLURM script,
+bad sweep files, and one run under mpirun (uniaxial config, about 1 s per run)."""
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import os
+import shutil
+import subprocess
+
+import pytest
+import yaml
+
+from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN
+
+from apps.ancf_sweep import main
+from ancf_petsc.sweep import (SweepError, expand, format_value, load_sweep, parse_key_path,
+                              run_config)
+
+UNIAXIAL = os.path.join(CONFIGS, "uniaxial_neohookean.yaml")
+
+
+def write_sweep(directory, body: dict, name: str = "sweep.yaml") -> str:
+    """Write a sweep file whose base is the uniaxial config, given relative to the sweep file."""
+    body = {"base": os.path.relpath(UNIAXIAL, directory), **body}
+    path = os.path.join(directory, name)
+    with open(path, "w") as fh:
+        yaml.safe_dump(body, fh, sort_keys=False)
+    return path
+
+
+def run_main(argv: list[str]) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(argv)
+    return rc, out.getvalue(), err.getvalue()
+
+
+def read_csv(path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+GRID = {"name": "grid", "mode": "grid",
+        "parameters": {"beams[0].material.mu": [1.0e6, 2.0e6], "geometry.length": [0.1, 0.2],
+                       "output.vtk": [False]},
+        "run": {"jobs": 2, "petsc": ["-snes_rtol", "1e-9"], "timeout": 120},
+        "output": "out/grid"}
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory):
+    """The 2 x 2 grid, run once for the module: (sweep file, output dir, exit code, stdout)."""
+    d = tmp_path_factory.mktemp("sweep")
+    path = write_sweep(str(d), GRID)
+    rc, out, err = run_main([path])
+    return path, str(d / "out" / "grid"), rc, out + err
+
+
+def test_grid_runs_and_collects(grid):
+    path, out_dir, rc, out = grid
+    assert rc == 0, out
+    assert out.count(" completed in ") == 4 and out.count(" started") == 4
+    assert "4 runs: 4 completed" in out
+    rows = read_csv(os.path.join(out_dir, "results.csv"))
+    assert len(rows) == 4
+    assert [(float(r["beams[0].material.mu"]), float(r["geometry.length"])) for r in rows] == \
+        [(1e6, 0.1), (1e6, 0.2), (2e6, 0.1), (2e6, 0.2)]
+    assert all(r["status"] == "completed" and float(r["load_factor"]) == 1.0 for r in rows)
+    assert all(int(r["newton_iterations"]) > 0 and float(r["wall_time"]) > 0 for r in rows)
+    dx = {(float(r["beams[0].material.mu"]), float(r["geometry.length"])): float(r["tip_dx"])
+          for r in rows}
+    for length in (0.1, 0.2):
+        assert 0 < dx[(2e6, length)] < dx[(1e6, length)]          # stiffer -> shorter elongation
+    for mu in (1e6, 2e6):                                          # same strain, twice the length
+        assert dx[(mu, 0.2)] == pytest.approx(2 * dx[(mu, 0.1)], rel=1e-6)
+    assert abs(float(rows[0]["tip_dy"])) < 1e-12 and "tip_dz" in rows[0]
+    with open(os.path.join(out_dir, "failed.txt")) as fh:
+        assert fh.read() == ""
+
+    runs = expand(load_sweep(path))
+    assert [r.run_id for r in runs] == [r["run_id"] for r in rows]
+    assert [r.run_id for r in expand(load_sweep(path))] == [r.run_id for r in runs]   # stable
+    assert runs[3].run_id == "run_0003__mu=2e+06__length=0.2"
+    for r in runs:
+        files = set(os.listdir(r.dir))
+        assert {"config.yaml", "params.json", "log.txt", "results.h5", "summary.json",
+                "run.json"} <= files
+        assert not any(f.endswith(".vtu") for f in files)               # output.vtk: [false]
+        with open(os.path.join(r.dir, "config.yaml")) as fh:
+            cfg = yaml.safe_load(fh)
+        assert cfg["output"] == {"dir": r.dir, "vtk": False}
+        assert cfg["beams"][0]["material"]["mu"] == r.params["beams[0].material.mu"]
+        with open(os.path.join(r.dir, "params.json")) as fh:
+            assert json.load(fh)["parameters"] == r.params
+    with open(os.path.join(runs[0].dir, "log.txt")) as fh:
+        log = fh.read()
+    assert "-snes_rtol 1e-09" in log.splitlines()[0] and "[ancf] completed" in log
+    with open(os.path.join(runs[0].dir, "summary.json")) as fh:
+        assert "rtol 1.0e-09" in json.load(fh)["solver"]
+
+
+def test_rerun_skips_done_and_redoes_missing(grid):
+    path, out_dir, _, _ = grid
+    rc, out, _ = run_main([path])
+    assert rc == 0
+    assert out.count("skipped (already done)") == 5      # 4 progress lines + the summary
+    assert "4 runs: 0 completed, 4 skipped (already done)" in out and " started" not in out
+    runs = expand(load_sweep(path))
+    os.remove(os.path.join(runs[2].dir, "summary.json"))
+    rc, out, _ = run_main([path])
+    assert rc == 0
+    assert out.count(" started") == 1 and f"3/4 {runs[2].run_id} completed in" in out
+    assert "4 runs: 1 completed, 3 skipped (already done)" in out
+    assert [r["status"] for r in read_csv(os.path.join(out_dir, "results.csv"))] == ["completed"] * 4
+
+
+def test_dry_run_lists_and_writes_nothing(tmp_path):
+    path = write_sweep(str(tmp_path), {**GRID, "output": "dry"})
+    rc, out, _ = run_main([path, "--dry-run"])
+    assert rc == 0 and out.count(" todo ") == 4 and "4 to run, 0 already done" in out
+    assert not (tmp_path / "dry").exists()
+
+
+def test_failures_are_classified_and_listed(tmp_path):
+    """list mode: a good run, a config error, a run whose first load level diverges, a timeout."""
+    body = {"mode": "list",
+            "parameters": {"beams[0].elements": [1, 0, 1],
+                           "loads[0].traction_force[0]": [45.0, 45.0, 4.5e6],
+                           "solver.max_cutbacks": [2, 2, 2],        # not in the base: created
+                           "output.vtk": [False, False, False]},
+            "run": {"jobs": 2}}
+    path = write_sweep(str(tmp_path), body)
+    rc, out, _ = run_main([path])
+    assert rc == 1
+    assert "3 runs: 1 completed, 1 failed, 1 config_error" in out
+    assert "config_error: config error: beams[0].elements: must be >= 1; got 0" in out
+    rows = read_csv(tmp_path / "sweeps" / "sweep" / "results.csv")
+    assert [r["status"] for r in rows] == ["completed", "config_error", "failed"]
+    assert "DIVERGED" in rows[2]["reason"] and "could not reach load factor 0.1" in rows[2]["reason"]
+    assert rows[2]["load_factor"] == "" and rows[0]["tip_dx"] != ""
+    with open(tmp_path / "sweeps" / "sweep" / "failed.txt") as fh:
+        failed = fh.read().splitlines()
+    assert len(failed) == 2
+    assert failed[0].split("\t") == [rows[1]["run_id"], "config_error",
+                                     "config error: beams[0].elements: must be >= 1; got 0"]
+    assert failed[1].startswith(rows[2]["run_id"] + "\tfailed\tcould not reach load factor")
+
+    # a timeout kills the run (ancf-solve needs ~0.5 s just to import)
+    path = write_sweep(str(tmp_path), {"parameters": {"output.vtk": [False]}, "run": {"timeout": 0.2}},
+                       "slow.yaml")
+    rc, out, _ = run_main([path])
+    assert rc == 1 and "1/1 run_0000 timeout: timed out after 0.2 s" in out
+    assert read_csv(tmp_path / "sweeps" / "slow" / "results.csv")[0]["status"] == "timeout"
+
+
+def test_slurm_script(tmp_path):
+    path = write_sweep(str(tmp_path), {**GRID, "output": "slurm"})
+    rc, out, _ = run_main([path, "--slurm"])
+    assert rc == 0 and "sbatch" in out and "--collect" in out
+    out_dir = tmp_path / "slurm"
+    script = (out_dir / "sweep.slurm").read_text()
+    runs = expand(load_sweep(path))
+    assert "#SBATCH --array=0-3%2" in script and "SLURM_ARRAY_TASK_ID" in script
+    assert "#SBATCH --ntasks=1" in script and "#SBATCH --job-name=grid" in script
+    assert "#SBATCH --output=" in script and "ancf-sweep" in script and "--collect" in script
+    assert (out_dir / "runs.txt").read_text().splitlines() == [r.dir for r in runs]
+    assert all(os.path.isfile(os.path.join(r.dir, "config.yaml")) for r in runs)
+    assert os.path.realpath(out_dir / "tasks" / "2") == os.path.realpath(runs[2].dir)
+    assert subprocess.run(["bash", "-n", str(out_dir / "sweep.slurm")]).returncode == 0
+    if shutil.which("srun"):
+        return                                    # on a SLURM host, do not launch srun here
+
+    # run array task 1 as SLURM would (no srun here, so the script falls back to mpirun -n 1)
+    env = dict(os.environ, **MPI_ENV, SLURM_ARRAY_TASK_ID="1", SLURM_ARRAY_JOB_ID="7")
+    p = subprocess.run(["bash", str(out_dir / "sweep.slurm")], env=env, capture_output=True,
+                       text=True, timeout=120)
+    assert p.returncode == 0, p.stdout + p.stderr
+    with open(os.path.join(runs[1].dir, "run.json")) as fh:
+        assert json.load(fh)["status"] == "completed"
+    p = subprocess.run(["bash", str(out_dir / "sweep.slurm")], env=env, capture_output=True,
+                       text=True, timeout=60)
+    assert p.returncode == 0 and "already completed; skipping" in p.stdout
+    rc, out, _ = run_main([path, "--collect"])
+    assert rc == 1 and "4 runs: 1 completed, 3 missing" in out
+    assert [r["status"] for r in read_csv(out_dir / "results.csv")] == \
+        ["missing", "completed", "missing", "missing"]
+
+
+def test_single_run_on_two_ranks(tmp_path, monkeypatch):
+    for k, v in MPI_ENV.items():
+        monkeypatch.setenv(k, v)
+    path = write_sweep(str(tmp_path), {"parameters": {"beams[0].elements": [2],
+                                                      "output.vtk": [False]},
+                                       "run": {"ranks": 2}})
+    rc, out, _ = run_main([path])
+    assert rc == 0, out
+    assert "started on 2 ranks" in out and "1 runs: 1 completed" in out
+    run = expand(load_sweep(path))[0]
+    with open(os.path.join(run.dir, "summary.json")) as fh:
+        summary = json.load(fh)
+    assert summary["status"] == "completed" and summary["ranks"] == 2
+
+
+BAD = {
+    "unknown key path": ({"parameters": {"geometry.twist_degree": [1, 2]}},
+                         "parameters.geometry.twist_degree: not in the base config"),
+    "index out of range": ({"parameters": {"beams[1].material.mu": [1e6]}},
+                           "parameters.beams[1].material.mu: index [1] out of range"),
+    "list lengths": ({"mode": "list", "parameters": {"geometry.length": [0.1, 0.2],
+                                                     "beams[0].material.mu": [1e6, 2e6, 3e6]}},
+                     "parameters.beams[0].material.mu: has 3 values but geometry.length has 2"),
+    "empty list": ({"parameters": {"geometry.length": []}}, "parameters.geometry.length: empty"),
+    "unknown sweep key": ({"parameters": {"geometry.length": [1]}, "runs": {}}, "runs: unknown key"),
+    "bad run value": ({"parameters": {"geometry.length": [1]}, "run": {"jobs": 0}}, "run.jobs:"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD))
+def test_bad_sweep_file(tmp_path, case):
+    body, message = BAD[case]
+    path = write_sweep(str(tmp_path), body)
+    rc, out, err = run_main([path])
+    assert rc == 2
+    assert len(err.splitlines()) == 1 and message in err, err
+    assert not (tmp_path / "sweeps").exists()
+
+
+def test_bad_sweep_file_console_script(tmp_path):
+    path = write_sweep(str(tmp_path), BAD["list lengths"][0])
+    exe = os.path.join(VENV_BIN, "ancf-sweep")
+    if not os.path.exists(exe):
+        pytest.skip("console script not installed (pip install -e .)")
+    p = subprocess.run([exe, path], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert p.returncode == 2 and len(p.stderr.splitlines()) == 1 and "Traceback" not in p.stderr
+    assert p.stderr.startswith("ancf-sweep: ") and "has 3 values" in p.stderr
+
+
+def test_key_paths_ids_and_data_files(tmp_path):
+    assert parse_key_path("loads[0].force[2]") == ("loads", 0, "force", 2)
+    with pytest.raises(ValueError):
+        parse_key_path("geometry..length")
+    assert [format_value(v) for v in (45, 0.86e9, 1e-3, True, "neo-hookean", [1.0, 0, 0])] == \
+        ["45", "8.6e+08", "0.001", "true", "neo-hookean", "1,0,0"]
+    # colliding last keys get longer labels; relative section files become absolute
+    base = os.path.relpath(os.path.join(CONFIGS, "achilles_type3_psi45.yaml"), tmp_path)
+    (tmp_path / "a.yaml").write_text(
+        f"base: {base}\nparameters:\n  beams[0].material.mu: [1e8, 2e8]\n"
+        "  beams[1].material.mu: [3e8]\n  geometry.twist_deg: [0, 45]\n")
+    sweep = load_sweep(str(tmp_path / "a.yaml"))
+    runs = expand(sweep)
+    assert len(runs) == 4
+    assert runs[1].run_id == "run_0001__beams0.material.mu=1e+08__twist_deg=45"
+    assert runs[1].params["beams[0].material.mu"] == 1e8          # 1e8 read as a number
+    cfg = run_config(sweep, runs[1])
+    for beam in cfg["beams"]:
+        assert os.path.isabs(beam["section"]["file"]) and os.path.isfile(beam["section"]["file"])
+    assert cfg["beams"][1]["material"]["mu"] == 3e8 and cfg["output"]["dir"] == runs[1].dir
+    with pytest.raises(SweepError, match="loads"):
+        (tmp_path / "b.yaml").write_text(f"base: {base}\nparameters:\n  loads[0].force[3]: [1]\n")
+        load_sweep(str(tmp_path / "b.yaml"))

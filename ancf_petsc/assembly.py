@@ -95,6 +95,12 @@ class Problem:
         self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
 
         self.q0 = self._global_from_model(model.q0.reshape(-1))
+        # the internal forces are evaluated with held DOFs at their prescribed values, so the free
+        # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
+        model_node = np.argsort(layout.perm)[self.needed]
+        held = self.fixed_mask[(18 * self.needed[:, None] + np.arange(18))]
+        self.held_local = np.flatnonzero(held.ravel())
+        self.held_values = model.q0.reshape(-1, 18)[model_node].ravel()[self.held_local]
         self.fext = self._global_from_model(model.f_ext)
         self.J = self._create_matrix()
 
@@ -145,8 +151,11 @@ class Problem:
         return J
 
     def _local_state(self, X: PETSc.Vec) -> np.ndarray:
+        """The needed node blocks of X, with held DOFs at their prescribed values."""
         self.scatter.scatter(X, self.xloc, INSERT, PETSc.ScatterMode.FORWARD)
-        return self.xloc.getArray(readonly=True).reshape(-1, 6, 3)
+        xl = self.xloc.getArray().reshape(-1, 6, 3)
+        xl.reshape(-1)[self.held_local] = self.held_values
+        return xl
 
     # ------------------------------------------------------------------ SNES callbacks
     def residual(self, snes, X: PETSc.Vec, F: PETSc.Vec) -> None:

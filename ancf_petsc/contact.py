@@ -342,7 +342,6 @@ class Contact:
         lo, hi = self._allowed[0][idx], self._allowed[1][idx]
         if np.any((eB < lo) | (eB > hi)):
             ok = False              # slid beyond the candidate window (see search_margin)
-            self.last_failure = "slid beyond the search window"
         d = xA - Y
         n = np.cross(Yz[:, :, 1], Yz[:, :, 0])                   # outward normal of B
         n /= np.linalg.norm(n, axis=1)[:, None]
@@ -656,24 +655,28 @@ class Contact:
         return dsq, tsq, worst
 
     # ---------------------------------------------------------------- checks and reports
-    def _check_reference_gaps(self) -> None:
-        q0 = self.model.q0.reshape(-1, 18)
-        xl = self.model.q0.reshape(-1, 6, 3)
-        needed = np.arange(self.model.n_nodes)
+    def _evaluate_all(self, q_model: np.ndarray) -> dict:
+        """Evaluate every point at a full model-ordered state (replicated data, no PETSc), leaving
+        the rank's own working state (local points, numbering, windows, projections) untouched."""
+        saved = (self.local, self.eB.copy(), self.xiB.copy(), self.tB.copy(),
+                 getattr(self, "_conn", None), getattr(self, "_allowed", None))
+        self.local = np.arange(self.n_points)
         self._conn = self.model.connectivity()
         self._allowed = (np.zeros(self.n_points, dtype=np.int64),
                          np.full(self.n_points, self.model.n_elements, dtype=np.int64))
-        saved = self.local
-        self.local = np.arange(self.n_points)
-        r = self._evaluate(xl, needed, hessian=False)
-        self.local = saved
+        try:
+            return self._evaluate(q_model.reshape(-1, 6, 3), np.arange(self.model.n_nodes), hessian=False)
+        finally:
+            self.local, self.eB, self.xiB, self.tB, self._conn, self._allowed = saved
+
+    def _check_reference_gaps(self) -> None:
+        r = self._evaluate_all(self.model.q0)
         gap = np.linalg.norm(r["d"], axis=1)
         size = max(np.sqrt(b.section.area) for b in self.model.beams)
         if not r["ok"] or gap.max() > 1e-9 * size:
             raise ConfigError("contact", f"the interfaces do not match in the reference configuration "
                                          f"(largest gap {gap.max():.3e} m); neighbours must share "
                                          "their interface curve and element boundaries")
-        del q0
 
     def describe(self) -> list[str]:
         proj = ("pointwise gap" if self.projection is None else
@@ -689,23 +692,23 @@ class Contact:
         return lines
 
     def gaps(self, q_model: np.ndarray) -> dict:
-        """Signed normal gaps per interface at a gathered state (for reports): max |g|, mean slip."""
-        xl = q_model.reshape(-1, 6, 3)
-        needed = np.arange(self.model.n_nodes)
-        saved = (self.local, self.eB.copy(), self.xiB.copy(), self.tB.copy(), self._conn, self._allowed)
-        self.local = np.arange(self.n_points)
-        self._conn = self.model.connectivity()
-        self._allowed = (np.zeros(self.n_points, dtype=np.int64),
-                         np.full(self.n_points, self.model.n_elements, dtype=np.int64))
-        r = self._evaluate(xl, needed, hessian=False)
+        """Distances of the active points to the other surface per interface, at a gathered state."""
+        r = self._evaluate_all(q_model)
+        mean_gap = np.zeros(self.n_segments)
+        if self.projection is not None:       # RMS of the projected gap per segment, |B g| / √area
+            g = r["g"] * r["valid"]
+            for s in range(self.n_segments):
+                sl = slice(self.seg_start[s], self.seg_start[s] + self.seg_size[s])
+                mean_gap[s] = np.linalg.norm(self.B[s] @ g[sl]) / np.sqrt(self.pts["w"][sl].sum())
         out = {}
         for k, itf in enumerate(self.interfaces):
             sel = (self.pts["itf"] == k) & (r["w"] > 0.0)
             gap = np.linalg.norm(r["d"][sel], axis=1) if np.any(sel) else np.zeros(1)
+            segs = np.unique(self.pts["seg"][self.pts["itf"] == k])
             out[itf.name] = {"max_gap": float(gap.max()), "rms_gap": float(np.sqrt(np.mean(gap ** 2))),
+                             "max_projected_gap": float(mean_gap[segs].max()),
                              "active_points": int(sel.sum()),
                              "points": int(np.sum(self.pts["itf"] == k))}
-        self.local, self.eB, self.xiB, self.tB, self._conn, self._allowed = saved
         return out
 
 

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench verify clean
+.PHONY: setup demo report test test-fast bench bench-scaling verify clean
 
 setup:
 	@bash scripts/setup.sh
@@ -33,6 +33,9 @@ test-fast: setup
 
 bench: setup
 	$(PY) scripts/bench_kernel.py
+
+bench-scaling: setup
+	$(PY) scripts/bench_scaling.py
 
 clean:
 	rm -rf results .pytest_cache

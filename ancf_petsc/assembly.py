@@ -35,8 +35,25 @@ class ElementBlock:
     beam: Beam
     G: np.ndarray        # (E, P, 18, 3)
     w: np.ndarray        # (E, P)
-    lnodes: np.ndarray   # (E, 3) positions in the local node array
+    nodes: np.ndarray    # (E, 3) PETSc node ids
     rows: np.ndarray     # (E, 54) PETSc DOF ids, −1 for DOFs held by BCs
+
+
+class _Collector:
+    """Stands in for a Mat in ``setValuesRCV`` calls; adds the blocks to a real Mat later."""
+
+    def __init__(self):
+        self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def clear(self) -> None:
+        self.blocks.clear()
+
+    def setValuesRCV(self, rows, cols, values, mode=None) -> None:    # noqa: N802 (PETSc name)
+        self.blocks.append((rows, values))
+
+    def add_to(self, mat: PETSc.Mat) -> None:
+        for rows, values in self.blocks:
+            mat.setValuesRCV(rows, rows, values, ADD)
 
 
 class Problem:
@@ -62,16 +79,10 @@ class Problem:
         owned_fixed = np.sort(fixed_petsc[(fixed_petsc >= 18 * lo) & (fixed_petsc < 18 * hi)])
         self.owned_fixed_local = owned_fixed - 18 * lo
 
-        # nodes this rank needs: those of its elements (+ contact candidates, see contact.py)
+        # nodes this rank needs: those of its elements, plus the contact partners' (see _exchange)
         conn_all = layout.perm[model.connectivity()]
         local_el = layout.local_elements
-        needed = [conn_all[local_el].ravel()]
-        if contact is not None:
-            needed.append(contact.needed_nodes(layout))
-        self.needed = np.unique(np.concatenate(needed)).astype(np.int64)
-
-        def lpos(petsc_nodes):
-            return np.searchsorted(self.needed, petsc_nodes)
+        self.element_nodes = np.unique(conn_all[local_el].ravel()).astype(np.int64)
 
         self.blocks: list[ElementBlock] = []
         elem_beam = model.element_beam()
@@ -84,25 +95,100 @@ class Problem:
             cn = conn_all[mine]
             rows = (18 * cn[:, :, None] + np.arange(18)).reshape(len(mine), 54)
             rows = np.where(self.fixed_mask[rows], -1, rows).astype(PETSc.IntType)
-            self.blocks.append(ElementBlock(beam, G, w, lpos(cn), rows))
+            self.blocks.append(ElementBlock(beam, G, w, cn, rows))
 
-        # vectors and the scatter global → needed node blocks
         self.X = PETSc.Vec().createMPI((18 * n_owned, N), bsize=18, comm=comm)
         self.F = self.X.duplicate()
+        self._model_q0 = model.q0.reshape(-1)
+        self.exchanges = 0              # how often the contact exchange was rebuilt
+        self.scatter = None
+        if contact is not None:
+            contact.setup_layout(layout)
+            self._build_exchange(contact.required_nodes())
+        else:
+            self._build_exchange(np.zeros(0, dtype=np.int64))
+        self.q0 = self._global_from_model(model.q0.reshape(-1))
+        # the internal forces are evaluated with held DOFs at their prescribed values, so the free
+        # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
+        self.fext = self._global_from_model(model.f_ext)
+        self.J = self._create_matrix()
+        self.set_near_null_space()
+
+    def rigid_body_modes(self) -> list[PETSc.Vec]:
+        """Orthonormal rigid-body modes of the reference configuration in nodal coordinates:
+        translations move r only; an infinitesimal rotation ω× acts on all six nodal vectors.
+        Given to the Jacobian as its near null space (used by GAMG, ignored by LU)."""
+        x = self.q0.getArray(readonly=True).reshape(-1, 6, 3)
+        vecs = []
+        for k in range(3):
+            v = np.zeros_like(x)
+            v[:, 0, k] = 1.0
+            vecs.append(v)
+        for k in range(3):
+            vecs.append(np.cross(np.eye(3)[k], x))
+        out = []
+        for v in vecs:                          # modified Gram-Schmidt (collective dots)
+            w = self.X.duplicate()
+            w.setArray(v.ravel())
+            for u in out:
+                w.axpy(-w.dot(u), u)
+            w.scale(1.0 / w.norm())
+            out.append(w)
+        return out
+
+    def set_near_null_space(self) -> None:
+        ns = PETSc.NullSpace().create(vectors=self.rigid_body_modes(), comm=self.comm)
+        self.J.setNearNullSpace(ns)
+
+    # ------------------------------------------------------------------ contact exchange
+    def _build_exchange(self, contact_nodes: np.ndarray) -> None:
+        """(Re)build the local node array and the scatter global → local (collective).
+
+        The local array holds this rank's element nodes and the node blocks its contact points
+        read (their A elements and the B elements they project onto): never the whole vector."""
+        self.needed = np.union1d(self.element_nodes, contact_nodes).astype(np.int64)
+        self.contact_nodes = np.asarray(contact_nodes, dtype=np.int64)
+        if self.scatter is not None:
+            for obj in (self.scatter, self.xloc, self.floc):
+                obj.destroy()
         self.xloc = PETSc.Vec().createSeq(18 * len(self.needed), bsize=18, comm=PETSc.COMM_SELF)
         self.floc = self.xloc.duplicate()
         is_needed = PETSc.IS().createBlock(18, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
-
-        self.q0 = self._global_from_model(model.q0.reshape(-1))
-        # the internal forces are evaluated with held DOFs at their prescribed values, so the free
-        # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
-        model_node = np.argsort(layout.perm)[self.needed]
+        is_needed.destroy()
+        model_node = np.argsort(self.layout.perm)[self.needed]
         held = self.fixed_mask[(18 * self.needed[:, None] + np.arange(18))]
         self.held_local = np.flatnonzero(held.ravel())
-        self.held_values = model.q0.reshape(-1, 18)[model_node].ravel()[self.held_local]
-        self.fext = self._global_from_model(model.f_ext)
-        self.J = self._create_matrix()
+        self.held_values = self._model_q0.reshape(-1, 18)[model_node].ravel()[self.held_local]
+        for blk in self.blocks:
+            blk.lnodes = np.searchsorted(self.needed, blk.nodes)
+        if self.contact is not None:
+            self.contact.set_available(self.needed)
+
+    def _exchange(self) -> bool:
+        """Rebuild the exchange if any rank's contact pairs changed (collective); returns whether
+        it was rebuilt."""
+        if self.contact is None:
+            return False
+        want = self.contact.required_nodes()
+        changed = self.contact.missing or not np.array_equal(want, self.contact_nodes)
+        if not self.comm.tompi4py().allreduce(int(changed)):
+            return False
+        self._build_exchange(want)
+        self.exchanges += 1
+        return True
+
+    def _with_exchange(self, X: PETSc.Vec, evaluate):
+        """Run ``evaluate(xl)`` on the local state of X; if a contact projection reached a node
+        block the rank did not hold, exchange and evaluate again (collective)."""
+        for _ in range(20):
+            self._exchange()
+            xl = self._local_state(X)
+            out = evaluate(xl)
+            missing = self.contact is not None and self.contact.missing
+            if not self.comm.tompi4py().allreduce(int(missing)):
+                return out
+        raise RuntimeError("contact exchange did not settle")   # not reached: one element per retry
 
     # ------------------------------------------------------------------ helpers
     def _global_from_model(self, arr_model: np.ndarray) -> PETSc.Vec:
@@ -161,31 +247,35 @@ class Problem:
     def residual(self, snes, X: PETSc.Vec, F: PETSc.Vec) -> None:
         STAGE_ASSEMBLY.push()
         try:
-            xl = self._local_state(X)
-            floc = np.zeros(self.xloc.getLocalSize())
-            bad = False
-            EV_ELEMENTS.begin()
-            t0 = time.perf_counter()
-            for blk in self.blocks:
-                qe = xl[blk.lnodes].reshape(-1, 18, 3)
-                f, Jmin = kernels.internal_force(qe, blk.G, blk.w, blk.beam.material)
-                bad |= not np.all(Jmin > 0.0)
-                floc += np.bincount((18 * blk.lnodes[:, :, None] + np.arange(18)).ravel(),
-                                    f.ravel(), minlength=floc.size)
-            self.timers["element_kernels"] += time.perf_counter() - t0
-            EV_ELEMENTS.end()
-            self.contact_failed = False
-            if self.contact is not None:
-                EV_CONTACT.begin()
-                t0, p0 = time.perf_counter(), self.timers["contact_projection"]
-                ok = self.contact.add_residual(xl, self.needed, floc)
-                self.timers["contact_assembly"] += (time.perf_counter() - t0
-                                                    - (self.timers["contact_projection"] - p0))
-                self.contact_failed = not ok
-                EV_CONTACT.end()
+            floc, bad = self._with_exchange(X, self._local_residual)
             self._finish_residual(X, F, floc, bad or self.contact_failed)
         finally:
             STAGE_ASSEMBLY.pop()
+
+    def _local_residual(self, xl: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Internal (eq. 9) and contact forces of this rank's elements and points, local order."""
+        floc = np.zeros(self.xloc.getLocalSize())
+        bad = False
+        EV_ELEMENTS.begin()
+        t0 = time.perf_counter()
+        for blk in self.blocks:
+            qe = xl[blk.lnodes].reshape(-1, 18, 3)
+            f, Jmin = kernels.internal_force(qe, blk.G, blk.w, blk.beam.material)
+            bad |= not np.all(Jmin > 0.0)
+            floc += np.bincount((18 * blk.lnodes[:, :, None] + np.arange(18)).ravel(),
+                                f.ravel(), minlength=floc.size)
+        self.timers["element_kernels"] += time.perf_counter() - t0
+        EV_ELEMENTS.end()
+        self.contact_failed = False
+        if self.contact is not None:
+            EV_CONTACT.begin()
+            t0, p0 = time.perf_counter(), self.timers["contact_projection"]
+            ok = self.contact.add_residual(xl, self.needed, floc)
+            self.timers["contact_assembly"] += (time.perf_counter() - t0
+                                                - (self.timers["contact_projection"] - p0))
+            self.contact_failed = not ok
+            EV_CONTACT.end()
+        return floc, bad
 
     def _finish_residual(self, X, F, floc, bad):
         self.floc.setArray(floc)
@@ -263,13 +353,15 @@ class Problem:
         """
         STAGE_ASSEMBLY.push()
         try:
-            xl = self._local_state(X)
-            local = 0.0
-            for blk in self.blocks:
-                qe = xl[blk.lnodes].reshape(-1, 18, 3)
-                local += float(np.sum(kernels.energy(qe, blk.G, blk.w, blk.beam.material)))
-            if self.contact is not None:
-                local += self.contact.energy(xl, self.needed)
+            def local_energy(xl):
+                local = 0.0
+                for blk in self.blocks:
+                    qe = xl[blk.lnodes].reshape(-1, 18, 3)
+                    local += float(np.sum(kernels.energy(qe, blk.G, blk.w, blk.beam.material)))
+                if self.contact is not None:
+                    local += self.contact.energy(xl, self.needed)
+                return local
+            local = self._with_exchange(X, local_energy)
             total = self.comm.tompi4py().allreduce(local)
             total -= self.load_factor * self.fext.dot(X)
             return total if np.isfinite(total) else np.inf
@@ -279,8 +371,25 @@ class Problem:
     def jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         STAGE_ASSEMBLY.push()
         try:
-            xl = self._local_state(X)
             P.zeroEntries()
+            contact_blocks = _Collector()
+            if self.contact is not None:
+                # contact first: the exchange may grow the local array; its blocks are only
+                # added to P once no rank had to exchange again
+                EV_CONTACT.begin()
+                t0, p0 = time.perf_counter(), self.timers["contact_projection"]
+
+                def contact_hessian(xl):
+                    contact_blocks.clear()
+                    self.contact.add_jacobian(xl, self.needed, contact_blocks, self.fixed_mask)
+                    return xl
+                xl = self._with_exchange(X, contact_hessian)
+                contact_blocks.add_to(P)
+                self.timers["contact_assembly"] += (time.perf_counter() - t0
+                                                    - (self.timers["contact_projection"] - p0))
+                EV_CONTACT.end()
+            else:
+                xl = self._local_state(X)
             EV_ELEMENTS.begin()
             for blk in self.blocks:
                 qe = xl[blk.lnodes].reshape(-1, 18, 3)
@@ -291,13 +400,6 @@ class Problem:
                 self.timers["element_kernels"] += t1 - t0
                 self.timers["element_assembly"] += time.perf_counter() - t1
             EV_ELEMENTS.end()
-            if self.contact is not None:
-                EV_CONTACT.begin()
-                t0, p0 = time.perf_counter(), self.timers["contact_projection"]
-                self.contact.add_jacobian(xl, self.needed, P, self.fixed_mask)
-                self.timers["contact_assembly"] += (time.perf_counter() - t0
-                                                    - (self.timers["contact_projection"] - p0))
-                EV_CONTACT.end()
             d = (self.owned_fixed_local + 18 * self.layout.owned_nodes[0]).astype(PETSc.IntType)
             if len(d):
                 P.setValuesRCV(d[:, None], d[:, None], np.ones((len(d), 1, 1)), ADD)
@@ -320,7 +422,8 @@ class Problem:
         if self.contact is None:
             return 0.0, 0.0
         from mpi4py import MPI
-        dsq, tsq, worst = self.contact.augment(self._local_state(X).copy(), self.needed)
+        dsq, tsq, worst = self._with_exchange(
+            X, lambda xl: self.contact.augment(xl.copy(), self.needed))
         comm = self.comm.tompi4py()
         dsq, tsq = comm.allreduce(dsq), comm.allreduce(tsq)
         worst = comm.allreduce(worst, op=MPI.MAX)

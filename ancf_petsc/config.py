@@ -222,6 +222,7 @@ class ModelSpec:
     contact: ContactSpec | None
     base_dir: str
     raw: dict = field(repr=False, default_factory=dict)
+    partition: str = "blocks"              # 'blocks' (contiguous per beam) or 'metis'
 
     def beam_index(self, name: str) -> int:
         return [b.name for b in self.beams].index(name)
@@ -359,12 +360,16 @@ def _fix(value, path: str) -> list[tuple[int, int]]:
     return sorted(dofs)
 
 
+PARTITION_METHODS = ("blocks", "metis")
 TOP_KEYS = ("name", "units", "geometry", "beams", "boundary_conditions", "loads", "steps",
-            "probes", "output", "solver", "petsc", "contact")
+            "probes", "output", "solver", "petsc", "contact", "partition", "bundle")
 
 
 def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> ModelSpec:
     """Validate a loaded YAML document and return the ``ModelSpec``."""
+    if isinstance(raw, dict) and "bundle" in raw:
+        from .bundle import expand_bundle
+        raw = expand_bundle(raw)
     mapping(raw, "", required=("name", "geometry", "beams", "steps"), optional=TOP_KEYS[1:])
     name = string(raw["name"], "name")
     if "units" in raw and raw["units"] != "SI":
@@ -470,10 +475,15 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         petsc[k.lstrip("-")] = "" if v is None or v is True else ("0" if v is False else str(v))
 
     contact = _contact(raw["contact"], names) if raw.get("contact") is not None else None
+    partition = "blocks"
+    if raw.get("partition") is not None:
+        mapping(raw["partition"], "partition", optional=("method",))
+        partition = string(raw["partition"].get("method", "blocks"), "partition.method",
+                           PARTITION_METHODS)
     return ModelSpec(name=name, length=length, twist_deg=twist, twist_axis=axis, beams=beams,
                      boundary_conditions=bcs, loads=loads, steps=steps, probes=probes,
                      output=output, solver=solver, petsc=petsc, contact=contact,
-                     base_dir=base_dir, raw=raw)
+                     base_dir=base_dir, raw=raw, partition=partition)
 
 
 def _contact(value, names: list[str]) -> ContactSpec:
@@ -516,12 +526,15 @@ def _contact(value, names: list[str]) -> ContactSpec:
     else:
         for i, it in enumerate(sequence(inter, f"{p}.interfaces")):
             ip = f"{p}.interfaces[{i}]"
-            mapping(it, ip, required=("a", "b"), optional=("curve",))
+            mapping(it, ip, required=("a", "b"), optional=("curve", "curve_b"))
             a = _beam_ref(it["a"], f"{ip}.a", names)
             b = _beam_ref(it["b"], f"{ip}.b", names)
             if a == b:
                 raise ConfigError(ip, "a beam cannot be in contact with itself here; name two beams")
-            c.interfaces.append((a, b, string(it["curve"], f"{ip}.curve") if "curve" in it else None))
+            if "curve_b" in it and "curve" not in it:
+                raise ConfigError(ip, "curve_b (the curve on b) needs curve (the curve on a)")
+            c.interfaces.append((a, b, string(it["curve"], f"{ip}.curve") if "curve" in it else None,
+                                 string(it["curve_b"], f"{ip}.curve_b") if "curve_b" in it else None))
     return c
 
 

@@ -45,9 +45,14 @@ class Interface:
     name: str
     a: Beam
     b: Beam
-    curve: object          # the shared SplineCurve (base parameter t for both sides)
-    flip_b: bool           # B traverses the curve backwards in its CCW loop (normal sign)
+    curve: object          # the SplineCurve on A carrying the points (shared interfaces: also B's)
+    flip_b: bool           # B traverses curve_b backwards in its CCW loop (normal sign)
+    curve_b: object = None # the SplineCurve on B (defaults to the shared curve)
     n_points: int = 0
+
+    def __post_init__(self):
+        if self.curve_b is None:
+            self.curve_b = self.curve
 
 
 def _section_shift(beam: Beam) -> np.ndarray:
@@ -89,6 +94,20 @@ def shape_on_curve(xi, S, S1, S2=None):
     return N, Nz, Nzz
 
 
+def _closest_parameter(curve, points: np.ndarray, samples: int = 400) -> np.ndarray:
+    """Parameter of the closest point of ``curve`` to each point (sampling, then Newton in t)."""
+    ts = np.linspace(0.0, curve.t_end, samples)
+    P = curve(ts)
+    t = ts[np.argmin(np.linalg.norm(points[:, None, :] - P[None], axis=2), axis=1)]
+    for _ in range(20):
+        d = curve(t) - points
+        d1, d2 = curve(t, 1), (curve(t, 2) if curve.degree >= 2 else np.zeros_like(points))
+        g = np.einsum("pi,pi->p", d, d1)
+        h = np.einsum("pi,pi->p", d1, d1) + np.einsum("pi,pi->p", d, d2)
+        t = np.clip(t - g / h, 0.0, curve.t_end)
+    return t
+
+
 def find_interfaces(model: Model, spec: ContactSpec) -> list[Interface]:
     """Interfaces from the config (explicit pairs) or every curve shared by two outlines ('auto')."""
     def shared(a: Beam, b: Beam):
@@ -102,14 +121,22 @@ def find_interfaces(model: Model, spec: ContactSpec) -> list[Interface]:
 
     pairs = []
     if spec.interfaces:
-        for k, (ia, ib, cname) in enumerate(spec.interfaces):
+        for k, (ia, ib, cname, cname_b) in enumerate(spec.interfaces):
             a, b = model.beams[ia], model.beams[ib]
+            if cname_b is not None:            # two curves: one on each body (non-matching)
+                ca = [c for c, _ in (a.section.loop or []) if c.name == cname]
+                cb = [(c, f) for c, f in (b.section.loop or []) if c.name == cname_b]
+                if not ca or not cb:
+                    raise ConfigError(f"contact.interfaces[{k}]", f"no curve {cname!r} in {a.name}'s "
+                                      f"outline or {cname_b!r} in {b.name}'s")
+                pairs.append((a, b, ca[0], cb[0][1], cb[0][0]))
+                continue
             found = [(c, f) for c, f in shared(a, b) if cname is None or c.name == cname]
             if not found:
                 raise ConfigError(f"contact.interfaces[{k}]", f"beams {a.name} and {b.name} share no "
                                   "outline curve" + (f" named {cname!r}" if cname else "")
                                   + "; interfaces are curves used by both section outlines")
-            pairs += [(a, b, c, f) for c, f in found]
+            pairs += [(a, b, c, f, None) for c, f in found]
     else:
         # the quadrature points go on the body that does not slide out of the interface: a
         # loaded beam is the target (B); otherwise the later beam in the config carries them
@@ -119,17 +146,17 @@ def find_interfaces(model: Model, spec: ContactSpec) -> list[Interface]:
                 a, b = second, first
                 if first.index not in loaded and second.index in loaded:
                     a, b = first, second
-                pairs += [(a, b, c, f) for c, f in shared(a, b)]
+                pairs += [(a, b, c, f, None) for c, f in shared(a, b)]
         if not pairs:
             raise ConfigError("contact", "no two beam outlines share a curve; give the "
                                          "neighbours a common named curve or remove contact")
     out = []
-    for a, b, c, fb in pairs:
+    for a, b, c, fb, cb in pairs:
         if a.n_elements != b.n_elements:
             raise ConfigError("contact", f"interface {c.name}: beams {a.name} ({a.n_elements} "
                               f"elements) and {b.name} ({b.n_elements}) must have the same number "
                               "of elements so that the interface is conforming")
-        out.append(Interface(f"{c.name} ({a.name}|{b.name})", a, b, c, fb))
+        out.append(Interface(f"{c.name} ({a.name}|{b.name})", a, b, c, fb, cb))
     return out
 
 
@@ -195,7 +222,12 @@ class Contact:
         self.eB = self.pts["eB"].copy()
         self.xiB = self.pts["xi"].copy()
         self.tB = self.pts["t"].copy()
-        self.t_end = np.array([interfaces[k].curve.t_end for k in self.pts["itf"]])
+        for k, itf in enumerate(interfaces):
+            if itf.curve_b is not itf.curve:      # start from the closest point of B's curve
+                sel = self.pts["itf"] == k
+                self.tB[sel] = _closest_parameter(itf.curve_b, itf.curve(self.pts["t"][sel]))
+        self.t_end = np.array([interfaces[k].curve_b.t_end for k in self.pts["itf"]])    # B side
+        self.t_end_a = np.array([interfaces[k].curve.t_end for k in self.pts["itf"]])  # A side
         self.NA = np.empty((self.n_points, 18))                  # A side: fixed material points
         for k, itf in enumerate(interfaces):
             sel = self.pts["itf"] == k
@@ -244,19 +276,30 @@ class Contact:
             cols.append(np.tile(both, len(both)))
         return np.concatenate(rows), np.concatenate(cols)
 
-    def needed_nodes(self, layout) -> np.ndarray:
-        """Node blocks this rank needs for its contact points; also selects its local points."""
+    def setup_layout(self, layout) -> None:
+        """Select this rank's points (those on its A elements) and the PETSc node numbering."""
         own = layout.elem_owner[self.pts["eA"]] == layout.rank
         self.local = np.flatnonzero(own)
-        conn = layout.perm[self.model.connectivity()]
-        if len(self.local) == 0:
-            return np.zeros(0, dtype=np.int64)
-        pairs = np.unique(np.stack([self.pts["eA"][self.local], self.pts["itf"][self.local]], 1), axis=0)
-        cands = self._window(pairs[:, 0], pairs[:, 1])
         self._allowed = self._window_range(self.pts["eA"], self.pts["itf"])
-        els = np.concatenate([pairs[:, 0]] + cands)
-        self._conn = conn
-        return np.unique(conn[els].ravel())
+        self._conn = layout.perm[self.model.connectivity()]
+        self._avail = np.ones(self.model.n_elements, dtype=bool)
+        self._want = np.zeros(0, dtype=np.int64)
+
+    def required_nodes(self) -> np.ndarray:
+        """Node blocks (PETSc numbering) of the elements the local points live on (A) and
+        currently project onto (B), plus any B element a projection tried to enter but could
+        not (it was not exchanged yet).  This is all the contact ever reads from other ranks."""
+        idx = self.local
+        els = np.concatenate([self.pts["eA"][idx], self.eB[idx], self._want])
+        return np.unique(self._conn[els].ravel())
+
+    def set_available(self, needed: np.ndarray) -> None:
+        """Record which elements have every node block in the rank's local array ``needed``."""
+        self._avail = np.all(np.isin(self._conn, needed), axis=1)
+        self._want = np.zeros(0, dtype=np.int64)
+        self.missing = False
+
+    missing = False        # a projection wanted an element whose nodes this rank does not hold
 
     # ---------------------------------------------------------------- kernels
     def _gather(self, xl, lpos, elems):
@@ -327,6 +370,15 @@ class Contact:
             xiB += dz[:, 0]
             tB += dz[:, 1]
             eB, xiB, tB, valid = self._wrap(itf, eB, xiB, tB)
+            miss = ~self._avail[eB]
+            if np.any(miss):
+                # the point slid onto a B element this rank has not received: remember it, stay
+                # at the boundary of the element it came from; the Problem exchanges the missing
+                # node blocks and evaluates again (see Problem._exchange)
+                self.missing = True
+                self._want = np.union1d(self._want, eB[miss])
+                xiB[miss] = np.where(eB[miss] > e_prev[miss], 1.0, -1.0)
+                eB[miss] = e_prev[miss]
             bounce = (eB == e_prev2) & (eB != e_prev) & ~pinned
             if np.any(bounce):
                 # stay on the element with the lower index, at its ξ = +1 end
@@ -364,10 +416,10 @@ class Contact:
             if not np.any(sel):
                 continue
             t = tB[sel]
-            S[sel] = inter.curve(t) + _section_shift(inter.b)
-            S1[sel] = inter.curve(t, 1)
-            if second and inter.curve.degree >= 2:
-                S2[sel] = inter.curve(t, 2)
+            S[sel] = inter.curve_b(t) + _section_shift(inter.b)
+            S1[sel] = inter.curve_b(t, 1)
+            if second and inter.curve_b.degree >= 2:
+                S2[sel] = inter.curve_b(t, 2)
         res = shape_on_curve(xiB, S, S1, S2)
         NB, NBz = res[0], res[1]
         NBzz = res[2] if second else None
@@ -396,7 +448,7 @@ class Contact:
             # spline's end piece is extrapolated), so a point whose partner slid off the curve end
             # by a little stays in contact instead of switching off abruptly
             t = tB[sel]
-            T = inter.curve.t_end
+            T = inter.curve_b.t_end
             out |= (t < -CURVE_OVERHANG * T) | (t > (1.0 + CURVE_OVERHANG) * T)
             t = np.minimum(np.maximum(t, -CURVE_OVERHANG * T), (1.0 + CURVE_OVERHANG) * T)
             eB[sel], xiB[sel], tB[sel], valid[sel] = e_new, x, t, ~out
@@ -587,7 +639,7 @@ class Contact:
         self.C, self.B = [], []
         for s in range(self.n_segments):
             sl = slice(self.seg_start[s], self.seg_start[s] + self.seg_size[s])
-            xi, tau = self.pts["xi"][sl], 2.0 * self.pts["t"][sl] / self.t_end[sl] - 1.0
+            xi, tau = self.pts["xi"][sl], 2.0 * self.pts["t"][sl] / self.t_end_a[sl] - 1.0
             kc_eff = min(kc, len(np.unique(tau)) - 1)
             Pa = leg.legvander(xi, ka)
             Pb = leg.legvander(tau, kc_eff)
@@ -662,17 +714,26 @@ class Contact:
                  getattr(self, "_conn", None), getattr(self, "_allowed", None))
         self.local = np.arange(self.n_points)
         self._conn = self.model.connectivity()
+        avail, want, missing = getattr(self, "_avail", None), getattr(self, "_want", None), self.missing
+        self._avail = np.ones(self.model.n_elements, dtype=bool)
         self._allowed = (np.zeros(self.n_points, dtype=np.int64),
                          np.full(self.n_points, self.model.n_elements, dtype=np.int64))
         try:
             return self._evaluate(q_model.reshape(-1, 6, 3), np.arange(self.model.n_nodes), hessian=False)
         finally:
             self.local, self.eB, self.xiB, self.tB, self._conn, self._allowed = saved
+            self._avail, self._want, self.missing = avail, want, missing
 
     def _check_reference_gaps(self) -> None:
+        """Sliding holds the reference gap (zero); unilateral contact must not start penetrating."""
         r = self._evaluate_all(self.model.q0)
-        gap = np.linalg.norm(r["d"], axis=1)
         size = max(np.sqrt(b.section.area) for b in self.model.beams)
+        if self.mode == "unilateral":
+            if not r["ok"] or np.min(r["g"][r["valid"]], initial=0.0) < -1e-9 * size:
+                raise ConfigError("contact", "the bodies interpenetrate in the reference configuration "
+                                             f"(gap {np.min(r['g']):.3e} m); separate them")
+            return
+        gap = np.linalg.norm(r["d"], axis=1)
         if not r["ok"] or gap.max() > 1e-9 * size:
             raise ConfigError("contact", f"the interfaces do not match in the reference configuration "
                                          f"(largest gap {gap.max():.3e} m); neighbours must share "

@@ -133,6 +133,12 @@ class ResultsWriter:
             g.create_dataset("reference_nodal_vectors", data=model.q0)
             g.create_dataset("element_rank", data=layout.elem_owner)
             g.attrs["partition"] = layout.summary()
+            part = g.create_group("partition")
+            part.create_dataset("element_rank", data=layout.elem_owner)
+            part.create_dataset("node_rank", data=layout.node_owner)
+            part.create_dataset("petsc_node_of_model_node", data=layout.perm)
+            for key, val in (run_info.get("partition") or {}).items():
+                part.attrs[key] = val
             for beam in model.beams:
                 b = g.create_group(f"beams/{beam.name}")
                 b.create_dataset("connectivity", data=beam.connectivity)

@@ -10,7 +10,7 @@ from petsc4py import PETSc
 
 from .assembly import STAGE_ASSEMBLY, Problem
 from .config import ModelSpec
-from .layout import block_layout
+from .partition import make_layout, partition_stats
 from .model import build_model
 from .output import ResultsWriter
 from .solver import STAGE_SOLVE, LoadStepFailure, LoadStepper
@@ -46,11 +46,12 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
     t_start = time.perf_counter()
     STAGE_SETUP.push()
     model = build_model(spec)
-    layout = block_layout(model.connectivity(), model.n_nodes, comm.size, rank)
     contact = None
     if spec.contact is not None:
         from .contact import build_contact
         contact = build_contact(model, spec.contact, say)
+    layout = make_layout(model, spec.partition, comm.size, rank, contact, comm.tompi4py())
+    partition = partition_stats(layout, model, contact)
     problem = Problem(model, layout, comm, contact)
     stepper = LoadStepper(problem, spec.solver, spec.petsc, say, max_level=max(spec.steps))
     STAGE_SETUP.pop()
@@ -60,11 +61,13 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
         f"{model.n_dofs} DOFs, {comm.size} rank(s)")
     for line in model.describe():
         say("[ancf]   " + line)
-    say("[ancf]   " + layout.summary())
+    say("[ancf]   " + layout.summary() + (
+        f", cut contact pairs {partition['cut_contact_pairs']}/{partition['contact_pairs']}"
+        if "contact_pairs" in partition else "") + f", cut beam nodes {partition['cut_beam_nodes']}")
     say("[ancf]   " + stepper.describe())
     run_info = {"output_dir": os.path.abspath(spec.output.dir), "twist_deg": spec.twist_deg,
                 "dofs": model.n_dofs, "elements": model.n_elements, "ranks": comm.size,
-                "partition": layout.summary(), "solver": stepper.describe(),
+                "partition": partition, "solver": stepper.describe(),
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
                                       "points": int(len(b.section.weights))} for b in model.beams}}
     writer = ResultsWriter(model, layout, comm, run_info)
@@ -97,8 +100,16 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
     timings.update(problem.timers)
     timings["linear_solve"] = petsc_event_time("KSPSolve") + petsc_event_time("PCSetUp")
+    lo, hi = layout.owned_nodes
+    ghosts = int(np.sum((problem.needed < lo) | (problem.needed >= hi)))
+    exchange = {"rebuilds": problem.exchanges,
+                "ghost_nodes_per_rank": comm.tompi4py().gather(ghosts, root=0),
+                "total_nodes": model.n_nodes}
     writer.finish(status, message=message, timings=timings,
-                  newton_iterations=stepper.newton_iterations)
+                  newton_iterations=stepper.newton_iterations, exchange=exchange)
+    if comm.size > 1:
+        say(f"[ancf] exchange: node blocks received per rank {exchange['ghost_nodes_per_rank']} of "
+            f"{model.n_nodes}; rebuilt {problem.exchanges} times (the set of projected-on elements changed)")
     say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations, "
         f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")
     return RunResult(status, message, writer.summary if rank == 0 else None, records)

@@ -70,6 +70,28 @@ CASES = [
      "beams[0].section.file", "not found"),
     ("bad loop", _set(["beams", 0, "section"], {"shape": "outline", "file": "data/achilles_type3_sections.yaml",
                                                  "loop": "plantaris"}), "beams[0].section.loop", "soleus"),
+    ("partition method", _set(["partition"], {"method": "scotch"}), "partition.method", "metis"),
+]
+
+BUNDLE = {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2, "force": [1, 0, 0],
+          "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9}}
+
+
+def _bundle(**change):
+    def fn(raw):
+        for k in ("beams", "boundary_conditions", "loads", "probes"):
+            raw.pop(k, None)
+        raw["bundle"] = {**copy.deepcopy(BUNDLE), **change}
+        raw["bundle"] = {k: v for k, v in raw["bundle"].items() if v is not None}
+    return fn
+
+
+CASES += [
+    ("bundle count", _bundle(count=8), "bundle.count", "7"),
+    ("bundle section", _bundle(fascicle_section="square"), "bundle.fascicle_section", "hexagon"),
+    ("bundle radius", _bundle(radius=-1.0), "bundle.radius", "> 0"),
+    ("bundle missing", _bundle(force=None), "bundle", "force"),
+    ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
 ]
 
 

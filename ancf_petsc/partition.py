@@ -1,0 +1,101 @@
+"""Distribution of elements over MPI ranks: contiguous blocks or a METIS graph partition.
+
+The element graph has one vertex per element (weight: its Gauss points, the cost of eq. 9) and
+an edge between elements that share a node (weight: 18 × shared nodes, the DOFs they couple) or
+that are coupled by contact (weight: the contact quadrature points of A's element projecting onto
+B's element in the reference configuration, ×18).  METIS (pymetis) cuts it into equal-work parts
+with few cut couplings; ``layout_from_owner`` then renumbers the nodes rank by rank.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .layout import Layout, block_layout, layout_from_owner
+from .model import Model
+
+
+def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """CSR element graph (xadj, adjncy, edge weights) and vertex weights."""
+    n_el = model.n_elements
+    conn = model.connectivity()
+    rows, cols, wts = [], [], []
+    # elements sharing a node (along a beam: the end node)
+    node_el = np.repeat(np.arange(n_el), conn.shape[1])
+    nodes = conn.ravel()
+    order = np.argsort(nodes, kind="stable")
+    nodes, node_el = nodes[order], node_el[order]
+    starts = np.flatnonzero(np.r_[True, nodes[1:] != nodes[:-1]])
+    ends = np.r_[starts[1:], len(nodes)]
+    for s, e in zip(starts, ends):
+        els = np.unique(node_el[s:e])
+        if len(els) > 1:
+            a, b = np.meshgrid(els, els)
+            off = a != b
+            rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), 18))
+    if contact is not None:
+        eA, eB = contact.pts["eA"], contact.eB
+        pair = np.unique(np.stack([eA, eB], 1), axis=0, return_counts=True)
+        (pa, pb), cnt = pair[0].T, pair[1]
+        keep = pa != pb
+        rows += [pa[keep], pb[keep]]; cols += [pb[keep], pa[keep]]
+        wts += [18 * cnt[keep], 18 * cnt[keep]]
+    if rows:
+        r, c, w = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
+    else:
+        r = c = w = np.zeros(0, dtype=np.int64)
+    import scipy.sparse as sp
+    G = sp.coo_matrix((w.astype(np.int64), (r, c)), shape=(n_el, n_el)).tocsr()   # sums duplicates
+    G.sort_indices()
+    vw = np.concatenate([np.full(b.n_elements, len(b.section.weights) * b.axial_points)
+                         for b in model.beams])
+    return G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data.astype(np.int64), vw
+
+
+def metis_owner(model: Model, size: int, contact=None) -> np.ndarray:
+    """Element → rank from METIS (k-way); identical on every rank (METIS is deterministic)."""
+    if size == 1:
+        return np.zeros(model.n_elements, dtype=np.int64)
+    import pymetis
+    xadj, adjncy, ew, vw = element_graph(model, contact)
+    opts = pymetis.Options(seed=1)
+    adjacency = pymetis.CSRAdjacency(xadj.tolist(), adjncy.tolist())
+    _, parts = pymetis.part_graph(size, adjacency, vweights=vw.tolist(), eweights=ew.tolist(),
+                                  options=opts)
+    owner = np.asarray(parts, dtype=np.int64)
+    if len(np.unique(owner)) < size:           # tiny graphs: METIS may leave a part empty
+        owner = np.argsort(np.argsort(owner, kind="stable"), kind="stable") * size // len(owner)
+    return owner
+
+
+def make_layout(model: Model, method: str, size: int, rank: int, contact=None, comm=None) -> Layout:
+    """Layout by ``method`` ('blocks' | 'metis'); METIS runs on rank 0 and is broadcast."""
+    if method == "blocks" or size == 1:
+        lay = block_layout(model.connectivity(), model.n_nodes, size, rank)
+        lay.method = method if size > 1 else lay.method
+        return lay
+    owner = metis_owner(model, size, contact) if rank == 0 else None
+    if comm is not None:
+        owner = comm.bcast(owner, root=0)
+    return layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, "metis")
+
+
+def partition_stats(layout: Layout, model: Model, contact=None) -> dict:
+    """Elements/nodes per rank, cut beam couplings and cut contact pairs (reference pairs)."""
+    conn = model.connectivity()
+    own = layout.elem_owner
+    # a node shared by elements of different ranks is a cut coupling
+    el_of = np.repeat(np.arange(model.n_elements), conn.shape[1])
+    nodes = conn.ravel()
+    rk = own[el_of]
+    lo = np.full(model.n_nodes, layout.size); hi = np.full(model.n_nodes, -1)
+    np.minimum.at(lo, nodes, rk); np.maximum.at(hi, nodes, rk)
+    cut_nodes = int(np.sum(lo != hi))
+    out = {"method": layout.method, "elements_per_rank": np.bincount(own, minlength=layout.size).tolist(),
+           "nodes_per_rank": np.diff(layout.ranges).tolist(), "cut_beam_nodes": cut_nodes}
+    if contact is not None:
+        eA, eB = contact.pts["eA"], contact.eB
+        pairs = np.unique(np.stack([eA, eB], 1), axis=0)
+        out["contact_pairs"] = int(len(pairs))
+        out["cut_contact_pairs"] = int(np.sum(own[pairs[:, 0]] != own[pairs[:, 1]]))
+        out["cut_contact_points"] = int(np.sum(own[eA] != own[eB]))
+    return out

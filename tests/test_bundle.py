@@ -1,0 +1,145 @@
+"""Fascicle-bundle scenes, METIS partitioning and the cross-rank contact exchange (issue 4)."""
+import os
+
+import h5py
+import numpy as np
+import pytest
+
+from helpers import CONFIGS, load_raw, petsc_init, read_summary, solve_cli, write_config
+from test_mpi import probes_table
+
+
+def _expand(**bundle):
+    from ancf_petsc.bundle import expand_bundle
+    raw = {"name": "b", "geometry": {"length": 0.05, "twist_deg": 30.0}, "steps": [1.0],
+           "bundle": {"radius": 0.6e-3, "elements": 2, "force": [1.0, 0, 0],
+                      "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9}, **bundle}}
+    return expand_bundle(raw)
+
+
+@pytest.mark.parametrize("count,shared", [(7, 12), (19, 42), (37, 90)])
+def test_hexagons_tile_and_share_edges(count, shared):
+    petsc_init()
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.contact import find_interfaces
+    from ancf_petsc.model import build_model
+    raw = _expand(count=count, fascicle_section="hexagon")
+    assert len(raw["beams"]) == count
+    spec = parse_config(raw)
+    model = build_model(spec)
+    # regular hexagons of circumradius r: area 3√3/2 r², and they tile (no overlap): the
+    # centroids are √3 r apart
+    r = 0.6e-3
+    for b in model.beams:
+        assert b.section.area == pytest.approx(1.5 * np.sqrt(3) * r * r, rel=1e-12)
+    c = np.array([b.section.centroid for b in model.beams])
+    d = np.linalg.norm(c[:, None] - c[None], axis=2) + np.eye(count)
+    assert d.min() == pytest.approx(np.sqrt(3) * r, rel=1e-9)
+    assert len(find_interfaces(model, spec.contact)) == shared       # interior edges of the patch
+
+
+def test_circles_pair_facing_arcs():
+    raw = _expand(count=7, fascicle_section="circle")
+    assert len(raw["contact"]["interfaces"]) == 12 and raw["contact"]["mode"] == "unilateral"
+    assert all("curve_b" in it for it in raw["contact"]["interfaces"])
+
+
+def test_metis_partition_balances_and_is_stored(tmp_path):
+    petsc_init()
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model import build_model
+    from ancf_petsc.partition import element_graph, make_layout, partition_stats
+    raw = load_raw("bundle_hex37.yaml")
+    spec = parse_config(raw)
+    model = build_model(spec)
+    contact = build_contact(model, spec.contact, lambda *a: None)
+    xadj, adj, ew, vw = element_graph(model, contact)
+    assert len(xadj) == model.n_elements + 1 and np.all(ew > 0)
+    for size in (2, 3, 4):
+        lay = make_layout(model, "metis", size, 0, contact)
+        st = partition_stats(lay, model, contact)
+        counts = np.array(st["elements_per_rank"])
+        assert counts.sum() == model.n_elements and counts.min() >= 0.9 * counts.max()
+        # every rank owns one contiguous range of PETSc nodes, nodes follow their elements
+        assert np.array_equal(np.sort(lay.perm), np.arange(model.n_nodes))
+        assert np.all(np.diff(lay.node_owner[np.argsort(lay.perm)]) >= 0)
+        blocks = make_layout(model, "blocks", size, 0, contact)
+        bs = partition_stats(blocks, model, contact)
+        # METIS cuts fewer couplings (beam nodes + contact pairs) than beam-major blocks
+        assert (st["cut_beam_nodes"] + st["cut_contact_pairs"]
+                <= bs["cut_beam_nodes"] + bs["cut_contact_pairs"])
+
+
+def _hex7(tmp_path, name):
+    raw = load_raw("bundle_hex7.yaml")
+    raw["output"] = {"dir": str(tmp_path / name), "vtk": False}
+    return raw
+
+
+def test_bundle_ranks_agree(tmp_path):
+    """-n 1/2/3 (METIS) agree to 1e-8 on every probe; the partition is in results.h5."""
+    tables = {}
+    for n in (1, 2, 3):
+        raw = _hex7(tmp_path, f"n{n}")
+        p = solve_cli(write_config(raw, tmp_path / f"c{n}.yaml"), ranks=n)
+        assert p.returncode == 0, p.stdout + p.stderr
+        s = read_summary(tmp_path / f"n{n}")
+        assert s["status"] == "completed" and s["partition"]["method"] == ("metis" if n > 1 else "blocks")
+        tables[n] = probes_table(s)
+        with h5py.File(tmp_path / f"n{n}" / "results.h5") as h5:
+            er = h5["model/partition/element_rank"][()]
+            assert er.max() == n - 1 and len(er) == 28
+            assert list(h5["model/partition"].attrs["elements_per_rank"]) == np.bincount(er).tolist()
+        if n > 1:
+            # never the whole vector: each rank holds far fewer node blocks than the model has
+            assert max(s["exchange"]["ghost_nodes_per_rank"]) < 0.5 * s["exchange"]["total_nodes"]
+    scale = np.abs(tables[1]).max()
+    for n in (2, 3):
+        assert np.abs(tables[n] - tables[1]).max() <= 1e-8 * scale
+
+
+def test_achilles_metis_cross_rank_contact(tmp_path):
+    """Achilles ψ = 45° on 3 ranks with METIS: contact pairs cut across ranks, the exchange is
+    rebuilt as the soleus slides, and Table 1's column equals the serial one to 1e-8."""
+    out = {}
+    for n, method in ((1, "blocks"), (3, "metis")):
+        raw = load_raw("achilles_type3_psi45.yaml")
+        for b in raw["beams"]:
+            b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        raw["steps"] = [10.0, 100.0, 400.0]
+        raw["partition"] = {"method": method}
+        raw["output"] = {"dir": str(tmp_path / f"n{n}"), "vtk": False}
+        p = solve_cli(write_config(raw, tmp_path / f"a{n}.yaml"), ranks=n)
+        assert p.returncode == 0, p.stdout + p.stderr
+        out[n] = read_summary(tmp_path / f"n{n}")
+    s3 = out[3]
+    assert s3["partition"]["cut_contact_pairs"] > 0
+    assert s3["exchange"]["rebuilds"] > 0
+    t1, t3 = probes_table(out[1]), probes_table(s3)
+    assert np.abs(t3 - t1).max() <= 1e-8 * np.abs(t1).max()
+
+
+def test_rigid_body_modes_are_zero_energy():
+    """The near null space handed to GAMG: element tangents annihilate the six modes."""
+    petsc_init()
+    from ancf_petsc import kernels
+    from ancf_petsc.assembly import Problem
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.layout import block_layout
+    from ancf_petsc.model import build_model
+    spec = parse_config(load_raw("pretwisted_bar.yaml"), base_dir=CONFIGS)
+    model = build_model(spec)
+    prob = Problem(model, block_layout(model.connectivity(), model.n_nodes, 1, 0))
+    modes = [m.getArray().copy() for m in prob.rigid_body_modes()]
+    M = np.array(modes)
+    assert np.allclose(M @ M.T, np.eye(6), atol=1e-12)            # orthonormal
+    beam = model.beams[0]
+    ids = np.arange(beam.n_elements)
+    G, w = model.element_data(beam, ids)
+    qe = model.q0[beam.connectivity].reshape(len(ids), 18, 3)
+    _, K, _ = kernels.internal_force_and_tangent(qe, G, w, beam.material)
+    perm = prob.layout.perm
+    for m in modes:
+        v = m.reshape(-1, 18)[perm[beam.connectivity]].reshape(len(ids), 54)
+        assert np.abs(np.einsum("eij,ej->ei", K, v)).max() <= 1e-9 * np.abs(K).max() * np.abs(v).max()

@@ -1,6 +1,7 @@
 """Distribution of elements over MPI ranks: contiguous blocks or a METIS graph partition.
 
-The element graph has one vertex per element (weight: its Gauss points, the cost of eq. 9) and
+The element graph has one vertex per element (weight: its Gauss points, the cost of eq. 9, plus
+``CONTACT_COST`` per contact point it carries) and
 an edge between elements that share a node (weight: 18 × shared nodes, the DOFs they couple) or
 that are coupled by contact (weight: the contact quadrature points of A's element projecting onto
 B's element in the reference configuration, ×18).  METIS (pymetis) cuts it into equal-work parts
@@ -12,6 +13,8 @@ import numpy as np
 
 from .layout import Layout, block_layout, layout_from_owner
 from .model import Model
+
+CONTACT_COST = 4
 
 
 def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -48,6 +51,9 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
     G.sort_indices()
     vw = np.concatenate([np.full(b.n_elements, len(b.section.weights) * b.axial_points)
                          for b in model.beams])
+    if contact is not None:
+        # a contact point (projection + Hessian) costs about as much as CONTACT_COST Gauss points
+        vw = vw + CONTACT_COST * np.bincount(contact.pts["eA"], minlength=n_el)
     return G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data.astype(np.int64), vw
 
 

@@ -43,17 +43,17 @@ class _Collector:
     """Stands in for a Mat in ``setValuesRCV`` calls; adds the blocks to a real Mat later."""
 
     def __init__(self):
-        self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     def clear(self) -> None:
         self.blocks.clear()
 
     def setValuesRCV(self, rows, cols, values, mode=None) -> None:    # noqa: N802 (PETSc name)
-        self.blocks.append((rows, values))
+        self.blocks.append((rows, cols, values))
 
     def add_to(self, mat: PETSc.Mat) -> None:
-        for rows, values in self.blocks:
-            mat.setValuesRCV(rows, rows, values, ADD)
+        for rows, cols, values in self.blocks:
+            mat.setValuesRCV(rows, cols, values, ADD)
 
 
 class Problem:
@@ -108,8 +108,6 @@ class Problem:
         else:
             self._build_exchange(np.zeros(0, dtype=np.int64))
         self.q0 = self._global_from_model(model.q0.reshape(-1))
-        # the internal forces are evaluated with held DOFs at their prescribed values, so the free
-        # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
         self.fext = self._global_from_model(model.f_ext)
         self.J = self._create_matrix()
         self.set_near_null_space()
@@ -156,6 +154,8 @@ class Problem:
         is_needed = PETSc.IS().createBlock(18, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
         is_needed.destroy()
+        # the internal forces are evaluated with held DOFs at their prescribed values, so the free
+        # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
         model_node = np.argsort(self.layout.perm)[self.needed]
         held = self.fixed_mask[(18 * self.needed[:, None] + np.arange(18))]
         self.held_local = np.flatnonzero(held.ravel())
@@ -165,18 +165,15 @@ class Problem:
         if self.contact is not None:
             self.contact.set_available(self.needed)
 
-    def _exchange(self) -> bool:
-        """Rebuild the exchange if any rank's contact pairs changed (collective); returns whether
-        it was rebuilt."""
+    def _exchange(self) -> None:
+        """Rebuild the exchange if any rank's contact pairs changed (collective)."""
         if self.contact is None:
-            return False
+            return
         want = self.contact.required_nodes()
         changed = self.contact.missing or not np.array_equal(want, self.contact_nodes)
-        if not self.comm.tompi4py().allreduce(int(changed)):
-            return False
-        self._build_exchange(want)
-        self.exchanges += 1
-        return True
+        if self.comm.tompi4py().allreduce(int(changed)):
+            self._build_exchange(want)
+            self.exchanges += 1
 
     def _with_exchange(self, X: PETSc.Vec, evaluate):
         """Run ``evaluate(xl)`` on the local state of X; if a contact projection reached a node

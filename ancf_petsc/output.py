@@ -131,8 +131,6 @@ class ResultsWriter:
             g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
             g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
             g.create_dataset("reference_nodal_vectors", data=model.q0)
-            g.create_dataset("element_rank", data=layout.elem_owner)
-            g.attrs["partition"] = layout.summary()
             part = g.create_group("partition")
             part.create_dataset("element_rank", data=layout.elem_owner)
             part.create_dataset("node_rank", data=layout.node_owner)

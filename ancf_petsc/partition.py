@@ -76,9 +76,7 @@ def metis_owner(model: Model, size: int, contact=None) -> np.ndarray:
 def make_layout(model: Model, method: str, size: int, rank: int, contact=None, comm=None) -> Layout:
     """Layout by ``method`` ('blocks' | 'metis'); METIS runs on rank 0 and is broadcast."""
     if method == "blocks" or size == 1:
-        lay = block_layout(model.connectivity(), model.n_nodes, size, rank)
-        lay.method = method if size > 1 else lay.method
-        return lay
+        return block_layout(model.connectivity(), model.n_nodes, size, rank)
     owner = metis_owner(model, size, contact) if rank == 0 else None
     if comm is not None:
         owner = comm.bcast(owner, root=0)

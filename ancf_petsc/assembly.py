@@ -33,10 +33,23 @@ STAGE_ASSEMBLY = PETSc.Log.Stage("ANCF assembly")
 class ElementBlock:
     """A rank's elements of one beam with their quadrature data."""
     beam: Beam
-    G: np.ndarray        # (E, P, 18, 3)
-    w: np.ndarray        # (E, P)
+    parts: list          # [(G (E, P, S, 3), w (E, P), material)] per energy part (Beam.parts)
     nodes: np.ndarray    # (E, 3) PETSc node ids
-    rows: np.ndarray     # (E, 54) PETSc DOF ids, −1 for DOFs held by BCs
+    rows: np.ndarray     # (E, 3S) PETSc DOF ids, −1 for DOFs held by BCs
+    node_dofs: np.ndarray  # (3S/3,) offsets of the active DOFs inside a node's 18-DOF block
+
+    @property
+    def G(self) -> np.ndarray:
+        """Gradients at the full Gauss points (the first part)."""
+        return self.parts[0][0]
+
+    def element_vectors(self, xl: np.ndarray) -> np.ndarray:
+        """Active nodal vectors of the elements (E, S, 3) from the local state (n, 6, 3)."""
+        return xl[self.lnodes][:, :, list(self.beam.vectors)].reshape(len(self.nodes), -1, 3)
+
+    def local_dofs(self) -> np.ndarray:
+        """Positions of the elements' active DOFs in the local array (E, 3S)."""
+        return (18 * self.lnodes[:, :, None] + self.node_dofs).reshape(len(self.nodes), -1)
 
 
 class _Collector:
@@ -91,11 +104,12 @@ class Problem:
             if len(mine) == 0:
                 continue
             local_ids = mine - beam.element_offset
-            G, w = model.element_data(beam, local_ids)
+            parts = model.element_data(beam, local_ids)
             cn = conn_all[mine]
-            rows = (18 * cn[:, :, None] + np.arange(18)).reshape(len(mine), 54)
+            node_dofs = (3 * np.array(beam.vectors)[:, None] + np.arange(3)).ravel()
+            rows = (18 * cn[:, :, None] + node_dofs).reshape(len(mine), -1)
             rows = np.where(self.fixed_mask[rows], -1, rows).astype(PETSc.IntType)
-            self.blocks.append(ElementBlock(beam, G, w, cn, rows))
+            self.blocks.append(ElementBlock(beam, parts, cn, rows, node_dofs))
 
         self.X = PETSc.Vec().createMPI((18 * n_owned, N), bsize=18, comm=comm)
         self.F = self.X.duplicate()
@@ -256,11 +270,11 @@ class Problem:
         EV_ELEMENTS.begin()
         t0 = time.perf_counter()
         for blk in self.blocks:
-            qe = xl[blk.lnodes].reshape(-1, 18, 3)
-            f, Jmin = kernels.internal_force(qe, blk.G, blk.w, blk.beam.material)
-            bad |= not np.all(Jmin > 0.0)
-            floc += np.bincount((18 * blk.lnodes[:, :, None] + np.arange(18)).ravel(),
-                                f.ravel(), minlength=floc.size)
+            qe = blk.element_vectors(xl)
+            for k, (G, w, material) in enumerate(blk.parts):
+                f, Jmin = kernels.internal_force(qe, G, w, material)
+                bad |= k == 0 and not np.all(Jmin > 0.0)      # full-section part
+                floc += np.bincount(blk.local_dofs().ravel(), f.ravel(), minlength=floc.size)
         self.timers["element_kernels"] += time.perf_counter() - t0
         EV_ELEMENTS.end()
         self.contact_failed = False
@@ -296,7 +310,7 @@ class Problem:
         xl = self._local_state(X)
         local = np.inf
         for blk in self.blocks:
-            F = kernels.deformation_gradient(xl[blk.lnodes].reshape(-1, 18, 3), blk.G)
+            F = kernels.deformation_gradient(blk.element_vectors(xl), blk.G)
             local = min(local, float(np.min(np.linalg.det(F))))
         val = self.comm.tompi4py().allreduce(local, op=__import__("mpi4py").MPI.MIN)
         return val if np.isfinite(val) else -np.inf
@@ -353,8 +367,9 @@ class Problem:
             def local_energy(xl):
                 local = 0.0
                 for blk in self.blocks:
-                    qe = xl[blk.lnodes].reshape(-1, 18, 3)
-                    local += float(np.sum(kernels.energy(qe, blk.G, blk.w, blk.beam.material)))
+                    qe = blk.element_vectors(xl)
+                    local += sum(float(np.sum(kernels.energy(qe, G, w, material)))
+                                 for G, w, material in blk.parts)
                 if self.contact is not None:
                     local += self.contact.energy(xl, self.needed)
                 return local
@@ -389,9 +404,10 @@ class Problem:
                 xl = self._local_state(X)
             EV_ELEMENTS.begin()
             for blk in self.blocks:
-                qe = xl[blk.lnodes].reshape(-1, 18, 3)
+                qe = blk.element_vectors(xl)
                 t0 = time.perf_counter()
-                _, K, _ = kernels.internal_force_and_tangent(qe, blk.G, blk.w, blk.beam.material)
+                K = sum(kernels.internal_force_and_tangent(qe, G, w, material)[1]
+                        for G, w, material in blk.parts)
                 t1 = time.perf_counter()
                 P.setValuesRCV(blk.rows, blk.rows, K, ADD)
                 self.timers["element_kernels"] += t1 - t0

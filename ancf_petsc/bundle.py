@@ -23,7 +23,8 @@ from .config import ConfigError, integer, mapping, number, string, vector
 COUNTS = {1: 0, 7: 1, 19: 2, 37: 3}
 SECTIONS = ("hexagon", "circle")
 KEYS_REQUIRED = ("count", "fascicle_section", "radius", "elements", "material", "force")
-KEYS_OPTIONAL = ("packing", "gap", "arc_deg", "cubature_degree", "axial_points", "pulled_end")
+KEYS_OPTIONAL = ("packing", "gap", "arc_deg", "cubature_degree", "axial_points", "pulled_end",
+                 "element", "locking")
 # a grip holds the pulled end's section orientation and transverse position (as a testing
 # machine's clamp); the end moves along x only.  "free" lets every fascicle end align with the
 # pull, and a frictionless twisted bundle then untwists like a rope (a near-mechanism at load 0)
@@ -127,8 +128,9 @@ def expand_bundle(raw: dict) -> dict:
         loops, pairs = circle_beams(centres, radius, pitch,
                                     number(b.get("arc_deg", 40.0), "bundle.arc_deg", positive=True, hi=59.0))
     axial = integer(b.get("axial_points", 3), "bundle.axial_points", lo=1, hi=10)
+    per_beam = {k: b[k] for k in ("element", "locking") if k in b}     # checked per beam
     out["beams"] = [{"name": f"fascicle{i}", "elements": elements, "axial_points": axial,
-                     "material": b["material"],
+                     "material": b["material"], **per_beam,
                      "section": {"shape": "outline", "curves": loop, **section_opts}}
                     for i, loop in enumerate(loops)]
     out["boundary_conditions"] = [{"beam": f"fascicle{i}", "node": "first", "fix": "reduced"}

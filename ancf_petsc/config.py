@@ -12,8 +12,9 @@ from typing import Any
 
 import yaml
 
-from .element3363 import VECTORS
+from .element3363 import ELEMENT_TYPES, VECTORS
 
+LOCKING = ("none", "ecm")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = ("neo-hookean", "svk")
 CONTACT_MODES = ("sliding", "unilateral")
@@ -140,6 +141,8 @@ class BeamSpec:
     material: dict
     elements: int
     axial_points: int = 3
+    element: str = "3363"                 # element type, see element3363.ELEMENT_VECTORS
+    locking: str = "none"                 # 'ecm': Poisson-locking remedy (model.Beam.parts)
 
 
 @dataclass
@@ -383,7 +386,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     beams: list[BeamSpec] = []
     for i, b in enumerate(beams_raw):
         p = f"beams[{i}]"
-        mapping(b, p, required=("name", "section", "material", "elements"), optional=("axial_points",))
+        mapping(b, p, required=("name", "section", "material", "elements"),
+                optional=("axial_points", "element", "locking"))
         bname = string(b["name"], f"{p}.name")
         if bname in [x.name for x in beams]:
             raise ConfigError(f"{p}.name", f"duplicate beam name {bname!r}; names must be unique")
@@ -393,6 +397,9 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
             material=_material(b["material"], f"{p}.material"),
             elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
             axial_points=integer(b.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)))
+        beams[-1].element = string(str(b.get("element", "3363")), f"{p}.element", ELEMENT_TYPES)
+        default_locking = "ecm" if beams[-1].element == "3333" else "none"
+        beams[-1].locking = string(b.get("locking", default_locking), f"{p}.locking", LOCKING)
     names = [b.name for b in beams]
     n_nodes = [2 * b.elements + 1 for b in beams]
 

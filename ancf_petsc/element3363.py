@@ -1,4 +1,4 @@
-"""ANCF continuum beam element 3363 (paper §2.1, eqs. 1–8).
+"""ANCF continuum beam elements 3363 (paper §2.1, eqs. 1–8) and 3333.
 
 Three nodes at ξ = −1, 0, +1; each node carries six nodal vectors (18 DOFs).  The shape
 functions N1..N18 of eq. (6) factor as ``L_i(ξ) · m_k(y, z)`` with the quadratic Lagrange
@@ -24,6 +24,12 @@ the paper's N4..N6 multiply yz, y²/2, z²/2: the table above is that permutatio
 Within an element a shape-function *slot* is ``6 * node + vector`` (node 0..2), and the DOF of
 component ``c`` (x, y, z) of slot ``s`` is ``3 * s + c``; this is also the order of a node's
 18-DOF block in the global vectors.
+
+Element 3333 (Nachbagauer et al. 2013, Ebel et al. 2017) keeps the same quadratic axial
+interpolation but only the section monomials 1, y, z: its nodes carry r, r_y, r_z (9 DOFs).  In
+this code a 3333 beam keeps the 18-DOF node block and holds r_yy, r_zz, r_yz at their reference
+value 0, so its kinematics are exactly 3333's while contact, output and the DOF layout stay
+one code path; its element kernels run on the 27 active DOFs only (``ELEMENT_VECTORS``).
 """
 from __future__ import annotations
 
@@ -39,6 +45,9 @@ DOFS_PER_ELEMENT = 3 * SLOTS                  # 54
 VECTOR_INDEX = {name: k for k, name in enumerate(VECTORS)}
 #: index of the paper's N-function (1-based, node 1) carried by each slot of a node
 PAPER_FUNCTION = (1, 2, 3, 5, 6, 4)
+#: nodal vectors (slots of a node) each element type interpolates with
+ELEMENT_VECTORS = {"3363": (0, 1, 2, 3, 4, 5), "3333": (0, 1, 2)}
+ELEMENT_TYPES = tuple(ELEMENT_VECTORS)
 
 
 def lagrange(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -60,19 +69,22 @@ def section_monomials(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndar
     return m, my, mz
 
 
-def shape_functions(xi: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Shape functions N (n, 18) and their derivatives dN (n, 18, 3) w.r.t. (ξ, y, z) (eq. 6).
+def shape_functions(xi: np.ndarray, y: np.ndarray, z: np.ndarray,
+                    vectors: tuple[int, ...] = ELEMENT_VECTORS["3363"]) -> tuple[np.ndarray, np.ndarray]:
+    """Shape functions N (n, S) and their derivatives dN (n, S, 3) w.r.t. (ξ, y, z) (eq. 6).
 
-    Points are given pointwise (xi, y, z of equal length n).
+    Points are given pointwise (xi, y, z of equal length n).  ``vectors`` selects the nodal
+    vectors (default all six: 3363, S = 18; ``ELEMENT_VECTORS["3333"]``: S = 9); slot order is
+    node-major, ``len(vectors) * node + k``.
     """
     L, dL = lagrange(xi)
-    m, my, mz = section_monomials(y, z)
-    n = L.shape[0]
-    N = (L[:, :, None] * m[:, None, :]).reshape(n, SLOTS)
-    dN = np.empty((n, SLOTS, 3))
-    dN[:, :, 0] = (dL[:, :, None] * m[:, None, :]).reshape(n, SLOTS)
-    dN[:, :, 1] = (L[:, :, None] * my[:, None, :]).reshape(n, SLOTS)
-    dN[:, :, 2] = (L[:, :, None] * mz[:, None, :]).reshape(n, SLOTS)
+    m, my, mz = (a[:, list(vectors)] for a in section_monomials(y, z))
+    n, S = L.shape[0], 3 * len(vectors)
+    N = (L[:, :, None] * m[:, None, :]).reshape(n, S)
+    dN = np.empty((n, S, 3))
+    dN[:, :, 0] = (dL[:, :, None] * m[:, None, :]).reshape(n, S)
+    dN[:, :, 1] = (L[:, :, None] * my[:, None, :]).reshape(n, S)
+    dN[:, :, 2] = (L[:, :, None] * mz[:, None, :]).reshape(n, S)
     return N, dN
 
 
@@ -108,8 +120,8 @@ def slot_of_paper_function(k: int) -> int:
 def reference_gradients(q0e: np.ndarray, dN: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Material gradients ∇₀N_a = J0⁻ᵀ ∂N_a/∂(ξ,y,z) and det J0 at the points of each element.
 
-    ``q0e`` (E, 18, 3) reference nodal vectors per slot, ``dN`` (P, 18, 3) derivatives at P points.
-    Returns G (E, P, 18, 3) with F = Σ_a q_a ⊗ G_a (eq. 7), and detJ0 (E, P).
+    ``q0e`` (E, S, 3) reference nodal vectors per slot, ``dN`` (P, S, 3) derivatives at P points.
+    Returns G (E, P, S, 3) with F = Σ_a q_a ⊗ G_a (eq. 7), and detJ0 (E, P).
     """
     J0 = np.einsum("eai,paj->epij", q0e, dN)  # columns ∂X/∂ξ, ∂X/∂y, ∂X/∂z
     det = np.linalg.det(J0)

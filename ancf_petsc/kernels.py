@@ -1,5 +1,8 @@
 """Element kernels batched over (elements × Gauss points) — pure numpy, no PETSc.
 
+Shapes are written for element 3363 (S = 18 shape functions, 54 DOFs); every kernel takes the
+slot count from G, so element 3333 (S = 9, 27 DOFs) runs through the same code.
+
 With scalar shape functions the deformation gradient is F = Σ_a q_a ⊗ G_a (G_a = ∇₀N_a, eq. 7),
 the internal force is f_a = Σ_gp w P G_a and the tangent K_ab = Σ_gp w G_a · 𝔸 · G_b: the virtual
 work ∫ S : δE dV of eq. (14) written with P = F S.  ``w`` already holds det J0 and the axial ×
@@ -21,7 +24,7 @@ def deformation_gradient(qe: np.ndarray, G: np.ndarray) -> np.ndarray:
 def _stack(G: np.ndarray) -> np.ndarray:
     """(E, P, 18, 3) → (E, 18, 3P): shape functions × (points, components)."""
     E, P = G.shape[:2]
-    return G.transpose(0, 2, 1, 3).reshape(E, 18, 3 * P)
+    return G.transpose(0, 2, 1, 3).reshape(E, G.shape[2], 3 * P)
 
 
 def energy(qe: np.ndarray, G: np.ndarray, w: np.ndarray, material) -> np.ndarray:
@@ -36,7 +39,7 @@ def internal_force(qe, G, w, material) -> tuple[np.ndarray, np.ndarray]:
     E, Np = w.shape
     wP = (w[..., None, None] * P).transpose(0, 1, 3, 2).reshape(E, 3 * Np, 3)
     f = np.matmul(_stack(G), wP)
-    return f.reshape(E, 54), np.min(J, axis=1)
+    return f.reshape(E, 3 * G.shape[2]), np.min(J, axis=1)
 
 
 #: Gauss points per batch: keeps the temporaries of the tangent in cache (and out of mmap);
@@ -53,7 +56,8 @@ def internal_force_and_tangent(qe, G, w, material) -> tuple[np.ndarray, np.ndarr
     step = max(1, CHUNK_POINTS // Np)
     if E <= step:
         return _force_and_tangent(qe, G, w, material)
-    f, K, J = np.empty((E, 54)), np.empty((E, 54, 54)), np.empty(E)
+    D = 3 * G.shape[2]
+    f, K, J = np.empty((E, D)), np.empty((E, D, D)), np.empty(E)
     for s in range(0, E, step):
         sl = slice(s, s + step)
         f[sl], K[sl], J[sl] = _force_and_tangent(qe[sl], G[sl], w[sl], material)
@@ -66,7 +70,7 @@ def _force_and_tangent(qe, G, w, material):
     E, Np = w.shape
     Gs = _stack(G)
     wP = (w[..., None, None] * P).transpose(0, 1, 3, 2).reshape(E, 3 * Np, 3)
-    f = np.matmul(Gs, wP).reshape(E, 54)
+    f = np.matmul(Gs, wP).reshape(E, 3 * G.shape[2])
     return f, contract_tangent(terms, G, w), np.min(J, axis=1)
 
 
@@ -78,6 +82,8 @@ def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.nd
     inner dimension stacks (term, point).  Cross terms U ⊠ V give Σ_p (U G_b)_i w (V G_a)_k.
     """
     E, Np = w.shape
+    S = G.shape[2]
+    D = 3 * S
     BG = [np.matmul(G, np.swapaxes(B, -1, -2)) for B in terms.basis]   # (E, P, 18, 3) each
 
     def side(sd, weight=None):
@@ -86,17 +92,17 @@ def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.nd
             coef = c if weight is None else (weight if c is None else c * weight)
             term = BG[k] if coef is None else coef[..., None, None] * BG[k]
             out = term if out is None else out + term
-        return out.reshape(E, Np, 54)
+        return out.reshape(E, Np, D)
 
-    Kf = np.zeros((E, 54, 54))
+    Kf = np.zeros((E, D, D))
     if terms.outer:
         left = np.concatenate([side(X) for X, _ in terms.outer], axis=1)
         right = np.concatenate([side(Y, w) for _, Y in terms.outer], axis=1)
         Kf += np.matmul(left.transpose(0, 2, 1), right)
     for U, V in terms.cross:
-        M = np.matmul(side(V).transpose(0, 2, 1), side(U, w)).reshape(E, 18, 3, 18, 3)
-        Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, 54, 54)
-    K = Kf.reshape(E, 18, 3, 18, 3)
+        M = np.matmul(side(V).transpose(0, 2, 1), side(U, w)).reshape(E, S, 3, S, 3)
+        Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, D, D)
+    K = Kf.reshape(E, S, 3, S, 3)
     if terms.iso is not None:
         wcol = w[..., None, None]
         if terms.iso.ndim == 2:      # scalar field c: δ_ik c δ_jl
@@ -107,7 +113,7 @@ def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.nd
         idx = np.arange(3)
         K[:, :, idx, :, idx] += Ks[None]
     if terms.gram is not None:       # (G_a · G_b) B_ik
-        GG = np.matmul(G, np.swapaxes(G, -1, -2)).reshape(E, Np, 324)
+        GG = np.matmul(G, np.swapaxes(G, -1, -2)).reshape(E, Np, S * S)
         wB = (w[..., None, None] * terms.gram).reshape(E, Np, 9)
-        K += np.matmul(GG.transpose(0, 2, 1), wB).reshape(E, 18, 18, 3, 3).transpose(0, 1, 3, 2, 4)
+        K += np.matmul(GG.transpose(0, 2, 1), wB).reshape(E, S, S, 3, 3).transpose(0, 1, 3, 2, 4)
     return Kf

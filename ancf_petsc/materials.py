@@ -91,6 +91,16 @@ class NeoHookean:
         self.mu = float(mu)
         self.K = float(bulk_modulus)
 
+    @property
+    def young(self) -> float:
+        """Small-strain Young's modulus E = 9Kμ / (3K + μ)."""
+        return 9.0 * self.K * self.mu / (3.0 * self.K + self.mu)
+
+    def poisson_free(self) -> "NeoHookean":
+        """The same small-strain E with ν = 0 (μ₀ = E/2, K₀ = E/3): used by ``locking: ecm``."""
+        E = self.young
+        return NeoHookean(0.5 * E, E / 3.0)
+
     def describe(self) -> str:
         nu = (3 * self.K - 2 * self.mu) / (2 * (3 * self.K + self.mu))
         return (f"neo-Hookean  mu={self.mu:.6g} Pa  K={self.K:.6g} Pa  "
@@ -138,6 +148,14 @@ class StVenantKirchhoff:
         self.E, self.nu = float(E), float(nu)
         self.lam = E * nu / ((1 + nu) * (1 - 2 * nu))
         self.mu = E / (2 * (1 + nu))
+
+    @property
+    def young(self) -> float:
+        return self.E
+
+    def poisson_free(self) -> "StVenantKirchhoff":
+        """The same E with ν = 0: used by ``locking: ecm``."""
+        return StVenantKirchhoff(self.E, 0.0)
 
     def describe(self) -> str:
         return f"St. Venant-Kirchhoff  E={self.E:.6g} Pa  nu={self.nu:.4g}"

@@ -31,10 +31,34 @@ class Beam:
     element_offset: int
     x_nodes: np.ndarray
     axial_points: int
+    element: str = "3363"                                  # '3363' | '3333' (element3363.py)
+    locking: str = "none"                                  # 'none' | 'ecm' (see ``parts``)
     xi: np.ndarray = field(repr=False, default=None)      # (P,) ξ of the element's Gauss points
     yz: np.ndarray = field(repr=False, default=None)      # (P, 2) section coordinates
     wq: np.ndarray = field(repr=False, default=None)      # (P,) axial × section weights
-    dN: np.ndarray = field(repr=False, default=None)      # (P, 18, 3)
+    dN: np.ndarray = field(repr=False, default=None)      # (P, S, 3), S = 3 × active vectors
+    dN_axis: np.ndarray = field(repr=False, default=None)  # (na, S, 3) on the beam axis y = z = 0
+    wq_axis: np.ndarray = field(repr=False, default=None)  # (na,) axial weights × section area
+
+    @property
+    def vectors(self) -> tuple[int, ...]:
+        """The nodal vectors this beam's element interpolates (all six for 3363)."""
+        return el.ELEMENT_VECTORS[self.element]
+
+    def parts(self) -> list[tuple[np.ndarray, np.ndarray, object]]:
+        """(dN, weights, material) of each integrated part of the strain energy.
+
+        ``locking: ecm`` is the enhanced continuum mechanics approach of Gerstmayr, Matikainen &
+        Mikkola (2008) against Poisson locking of the linear section (3333), which cannot contract
+        linearly in y, z under bending:  Π = ∫ Ψ₀ dV + ∫ A [Ψ − Ψ₀]_axis dx, with Ψ₀ the same
+        material at ν = 0 (``material.poisson_free()``) over the full section rule and the
+        difference Ψ − Ψ₀ on the beam axis (one point per axial station, weight = area).  A
+        homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν))."""
+        if self.locking == "ecm":
+            free = self.material.poisson_free()
+            return [(self.dN, self.wq, free), (self.dN_axis, self.wq_axis, self.material),
+                    (self.dN_axis, -self.wq_axis, free)]
+        return [(self.dN, self.wq, self.material)]
 
     @property
     def n_nodes(self) -> int:
@@ -80,18 +104,23 @@ class Model:
         """Global node ids of every element (n_elements, 3)."""
         return np.concatenate([b.connectivity for b in self.beams])
 
-    def element_data(self, beam: Beam, local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Material gradients G (E, P, 18, 3) and weights w (E, P) for elements ``local`` of a beam."""
+    def element_data(self, beam: Beam, local: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, object]]:
+        """Per energy part (``Beam.parts``): material gradients G (E, P, S, 3), weights w (E, P)
+        and material, for elements ``local`` of a beam (S = 18 for 3363, 9 for 3333)."""
         conn = beam.connectivity[local]
-        q0e = self.q0[conn].reshape(len(local), 18, 3)
-        G, det = el.reference_gradients(q0e, beam.dN)
-        return G, det * beam.wq[None, :]
+        q0e = self.q0[conn][:, :, list(beam.vectors)].reshape(len(local), -1, 3)
+        out = []
+        for dN, wq, material in beam.parts():
+            G, det = el.reference_gradients(q0e, dN)
+            out.append((G, det * wq[None, :], material))
+        return out
 
     def describe(self) -> list[str]:
         lines = []
         for b in self.beams:
-            lines.append(f"beam {b.name}: {b.n_elements} elements x {b.points_per_element} Gauss "
-                         f"points ({b.axial_points} axial x {len(b.section.weights)} section)")
+            lock = ", Poisson part on the axis (ecm)" if b.locking == "ecm" else ""
+            lines.append(f"beam {b.name}: {b.n_elements} elements {b.element} x {b.points_per_element} "
+                         f"Gauss points ({b.axial_points} axial x {len(b.section.weights)} section{lock})")
             lines.append("  section " + b.section.describe())
             lines.append("  material " + b.material.describe())
         return lines
@@ -160,12 +189,16 @@ def build_model(spec: ModelSpec) -> Model:
         x_nodes = np.linspace(0.0, spec.length, 2 * bs.elements + 1)
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,
-                    x_nodes=x_nodes, axial_points=bs.axial_points)
+                    x_nodes=x_nodes, axial_points=bs.axial_points, element=bs.element,
+                    locking=bs.locking)
         xa, wa = gauss_legendre(bs.axial_points)
         beam.xi, y, z = el.tensor_points(xa, section.points)
         beam.yz = np.column_stack([y, z])
         beam.wq = np.repeat(wa, len(section.weights)) * np.tile(section.weights, len(xa))
-        _, beam.dN = el.shape_functions(beam.xi, y, z)
+        _, beam.dN = el.shape_functions(beam.xi, y, z, beam.vectors)
+        zero = np.zeros_like(xa)     # the beam axis y = z = 0 runs through the section centroid
+        _, beam.dN_axis = el.shape_functions(xa, zero, zero, beam.vectors)
+        beam.wq_axis = wa * section.weights.sum()
         q0_parts.append(reference_nodal_vectors(x_nodes, section.centroid, spec.length,
                                                 spec.twist_deg, spec.twist_axis))
         beams.append(beam)
@@ -174,6 +207,11 @@ def build_model(spec: ModelSpec) -> Model:
     q0 = np.concatenate(q0_parts)
 
     fixed = set()
+    for beam in beams:     # 3333: r_yy, r_zz, r_yz held at their reference value 0
+        held = [v for v in range(el.VECTORS_PER_NODE) if v not in beam.vectors]
+        nodes = beam.node_offset + np.arange(beam.n_nodes)
+        fixed.update((18 * nodes[:, None] + (3 * np.array(held, dtype=int)[:, None] + np.arange(3)).ravel())
+                     .ravel().tolist())
     for bc in spec.boundary_conditions:
         node = beams[bc.beam].node_offset + bc.node
         fixed.update(18 * node + 3 * v + c for v, c in bc.dofs)

@@ -136,7 +136,7 @@ def test_rigid_body_modes_are_zero_energy():
     assert np.allclose(M @ M.T, np.eye(6), atol=1e-12)            # orthonormal
     beam = model.beams[0]
     ids = np.arange(beam.n_elements)
-    G, w = model.element_data(beam, ids)
+    [(G, w, _)] = model.element_data(beam, ids)
     qe = model.q0[beam.connectivity].reshape(len(ids), 18, 3)
     _, K, _ = kernels.internal_force_and_tangent(qe, G, w, beam.material)
     perm = prob.layout.perm

@@ -14,7 +14,12 @@ def _cases():
     two = two_beam_twisted()
     two["probes"].append({"name": "second_tip", "beam": "second", "node": "last"})
     two["loads"].append({"beam": "second", "node": "last", "force": [0.0, 0.05, 0.02]})
-    return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two}
+    mixed = two_beam_twisted()                  # element 3333 (ecm) beside 3363
+    mixed["beams"][1].update({"element": 3333, "section": dict(mixed["beams"][1]["section"], cubature_degree=3)})
+    mixed["probes"] = two["probes"]
+    mixed["loads"] = two["loads"]
+    return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
+            "two-beams-3363-3333": mixed}
 
 
 CASES = _cases()

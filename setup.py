@@ -17,6 +17,7 @@ setup(
             "ancf-solve=apps.ancf_solve:main",
             "ancf-report=apps.ancf_report:main",
             "ancf-sweep=apps.ancf_sweep:main",
+            "ancf-study=apps.ancf_study:main",
         ]
     },
 )

@@ -209,6 +209,17 @@ class OutputSpec:
 
 
 @dataclass
+class AccuracySpec:
+    """``accuracy:``: pick the coarsest element count whose probe is within rtol (refinement.py)."""
+    probe: str
+    rtol: float = 1e-3
+    component: str = "norm"               # x | y | z | norm of the probe's displacement
+    level: float | None = None            # load factor the probe is read at (default: last step)
+    start: int = 1                        # elements of the first beam on the first rung
+    max_elements: int = 64
+
+
+@dataclass
 class ModelSpec:
     name: str
     length: float
@@ -226,6 +237,7 @@ class ModelSpec:
     base_dir: str
     raw: dict = field(repr=False, default_factory=dict)
     partition: str = "blocks"              # 'blocks' (contiguous per beam) or 'metis'
+    accuracy: AccuracySpec | None = None
 
     def beam_index(self, name: str) -> int:
         return [b.name for b in self.beams].index(name)
@@ -365,7 +377,7 @@ def _fix(value, path: str) -> list[tuple[int, int]]:
 
 PARTITION_METHODS = ("blocks", "metis")
 TOP_KEYS = ("name", "units", "geometry", "beams", "boundary_conditions", "loads", "steps",
-            "probes", "output", "solver", "petsc", "contact", "partition", "bundle")
+            "probes", "output", "solver", "petsc", "contact", "partition", "bundle", "accuracy")
 
 
 def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> ModelSpec:
@@ -487,10 +499,35 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         mapping(raw["partition"], "partition", optional=("method",))
         partition = string(raw["partition"].get("method", "blocks"), "partition.method",
                            PARTITION_METHODS)
+    accuracy = _accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None
     return ModelSpec(name=name, length=length, twist_deg=twist, twist_axis=axis, beams=beams,
                      boundary_conditions=bcs, loads=loads, steps=steps, probes=probes,
                      output=output, solver=solver, petsc=petsc, contact=contact,
-                     base_dir=base_dir, raw=raw, partition=partition)
+                     base_dir=base_dir, raw=raw, partition=partition, accuracy=accuracy)
+
+
+def _accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
+    p = "accuracy"
+    mapping(value, p, required=("probe",), optional=("rtol", "component", "level", "start", "max_elements"))
+    names = [x.name for x in probes]
+    probe = string(value["probe"], f"{p}.probe")
+    if probe not in names:
+        raise ConfigError(f"{p}.probe", f"no probe {probe!r}; define it under probes "
+                                        f"(have: {', '.join(names) or 'none'})")
+    acc = AccuracySpec(probe=probe,
+                       rtol=number(value.get("rtol", 1e-3), f"{p}.rtol", positive=True, hi=0.5),
+                       component=string(value.get("component", "norm"), f"{p}.component",
+                                        ("x", "y", "z", "norm")),
+                       start=integer(value.get("start", 1), f"{p}.start", lo=1, hi=10000),
+                       max_elements=integer(value.get("max_elements", 64), f"{p}.max_elements", lo=1, hi=100000))
+    if "level" in value:
+        acc.level = number(value["level"], f"{p}.level", positive=True)
+        if not any(math.isclose(acc.level, s, rel_tol=1e-12) for s in steps):
+            raise ConfigError(f"{p}.level", f"must be one of the steps ({', '.join(f'{s:g}' for s in steps)})")
+    if acc.max_elements < 4 * acc.start:
+        raise ConfigError(f"{p}.max_elements", "the ladder needs three rungs: use at least 4 x start "
+                                               f"(= {4 * acc.start})")
+    return acc
 
 
 def _contact(value, names: list[str]) -> ContactSpec:

@@ -38,8 +38,17 @@ def _fmt_vec(v) -> str:
     return "[" + ", ".join(f"{x:+.4e}" for x in v) + "]"
 
 
-def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
-    """Solve ``spec``; every converged level is on disk before the next one starts."""
+def solve(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
+    """Solve ``spec``; with ``accuracy:`` first choose its element count (accuracy.py)."""
+    if spec.accuracy is not None:
+        from .accuracy import select_and_run
+        return select_and_run(spec, comm, log, run_model)
+    return run_model(spec, comm, log)
+
+
+def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | None = None) -> RunResult:
+    """Solve ``spec``; every converged level is on disk before the next one starts.
+    ``info`` is stored in summary.json beside the run's own information."""
     rank = comm.rank
     say = log if rank == 0 else (lambda *_: None)
     PETSc.Log.begin()                 # event timings for the summary (cheap)
@@ -69,7 +78,9 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
                 "dofs": model.n_dofs, "elements": model.n_elements, "ranks": comm.size,
                 "partition": partition, "solver": stepper.describe(),
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
-                                      "points": int(len(b.section.weights))} for b in model.beams}}
+                                      "points": int(len(b.section.weights))} for b in model.beams},
+                "elements_per_beam": {b.name: b.n_elements for b in model.beams},
+                "element_types": {b.name: b.element for b in model.beams}, **(info or {})}
     writer = ResultsWriter(model, layout, comm, run_info)
     n_levels = len(spec.steps)
     timings = {"setup": t_setup, "output": 0.0}

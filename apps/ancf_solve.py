@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     from petsc4py import PETSc
 
     from ancf_petsc.config import ConfigError, load_config
-    from ancf_petsc.run import run_model
+    from ancf_petsc.run import solve
 
     comm = PETSc.COMM_WORLD
     log = (lambda *_: None) if args.quiet else (lambda msg: print(msg, flush=True))
@@ -38,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
         spec = load_config(args.config)
         if args.output_dir:
             spec.output.dir = args.output_dir
-        result = run_model(spec, comm, log)
+        result = solve(spec, comm, log)
     except ConfigError as exc:
         if comm.rank == 0:
             print(f"ancf-solve: config error: {exc}", file=sys.stderr, flush=True)

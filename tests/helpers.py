@@ -32,13 +32,13 @@ def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | N
     """Run a raw config dict in this process (1 rank); returns the summary dict."""
     petsc_init()
     from ancf_petsc.config import parse_config
-    from ancf_petsc.run import run_model
+    from ancf_petsc.run import solve
     raw = copy.deepcopy(raw)
     raw.setdefault("output", {})["dir"] = str(out_dir)
     if petsc:
         raw.setdefault("petsc", {}).update(petsc)
     spec = parse_config(raw, base_dir=base_dir)
-    res = run_model(spec, log=lambda *_: None)
+    res = solve(spec, log=lambda *_: None)
     return res.summary
 
 

@@ -1,0 +1,61 @@
+"""ancf-study: speed–accuracy studies and stability maps of a model.
+
+    ancf-study configs/studies/bending_pareto.yaml       # wall time vs error, Pareto chart
+    ancf-study configs/studies/bending_stability.yaml    # converged/failed map, stability chart
+    ancf-study STUDY.yaml --out DIR                       # results elsewhere
+
+The study file's ``kind`` (pareto | stability) chooses the study; see ancf_petsc/study.py and
+ancf_petsc/stability.py for the keys.  Runs are solved in this process, one after another, on
+one core.  Exit codes: 0 done, 2 study-file error.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="ancf-study", allow_abbrev=False, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("study", help="study file (YAML)")
+    ap.add_argument("--out", help="output directory (default: the study file's 'output')")
+    args, petsc_args = ap.parse_known_args(argv)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    from mpi4py import MPI  # noqa: F401  (before petsc4py)
+    import petsc4py
+    petsc4py.init([sys.argv[0]] + petsc_args)
+    import yaml
+
+    from ancf_petsc.study import StudyError
+    log = (lambda msg: print(msg, flush=True))
+    try:
+        if not os.path.isfile(args.study):
+            raise StudyError("", f"{args.study}: no such file")
+        with open(args.study) as fh:
+            kind = (yaml.safe_load(fh) or {}).get("kind", "pareto")
+        if kind == "pareto":
+            from ancf_petsc.study import load_study, run_study
+            spec = load_study(args.study)
+            if args.out:
+                spec.output = os.path.abspath(args.out)
+            run_study(spec, log)
+        elif kind == "stability":
+            from ancf_petsc.stability import load_stability, run_stability
+            spec = load_stability(args.study)
+            if args.out:
+                spec.output = os.path.abspath(args.out)
+            run_stability(spec, log)
+        else:
+            raise StudyError("kind", f"must be pareto or stability; got {kind!r}")
+    except StudyError as exc:
+        print(f"ancf-study: {args.study}: {exc}", file=sys.stderr)
+        return 2
+    except yaml.YAMLError as exc:
+        print(f"ancf-study: {args.study}: not valid YAML ({str(exc).splitlines()[0]})", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

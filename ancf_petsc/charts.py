@@ -78,7 +78,7 @@ def stability_chart(cells: list, out_png: str, row_key: str, col_key: str, x_key
     iteration count or the failure written in it.  ``cells`` are dicts with the four keys,
     'status', 'iterations', 'short' (a short failure text) and 'rel_error'."""
     def values(key):
-        return list(dict.fromkeys(c[key] for c in cells))
+        return list(dict.fromkeys(c.get(key, "") for c in cells))
     rows_v, cols_v, xs, ys = values(row_key), values(col_key), values(x_key), values(y_key)
     its = [c["iterations"] for c in cells if c["status"] == "completed"]
     vmax = max(its + [1])
@@ -86,7 +86,7 @@ def stability_chart(cells: list, out_png: str, row_key: str, col_key: str, x_key
     fig = Figure(figsize=(2.2 + 2.3 * len(cols_v), 0.8 + 0.42 * len(ys) * len(rows_v) + 0.4 * len(rows_v)))
     FigureCanvasAgg(fig)
     axes = fig.subplots(len(rows_v), len(cols_v), squeeze=False)
-    index = {(c[row_key], c[col_key], c[x_key], c[y_key]): c for c in cells}
+    index = {(c.get(row_key, ""), c.get(col_key, ""), c[x_key], c[y_key]): c for c in cells}
     for i, rv in enumerate(rows_v):
         for j, cv in enumerate(cols_v):
             ax = axes[i][j]
@@ -113,8 +113,8 @@ def stability_chart(cells: list, out_png: str, row_key: str, col_key: str, x_key
             if i == len(rows_v) - 1:
                 ax.set_xlabel(x_key, fontsize=7)
             if j == 0:
-                ax.set_ylabel(f"{row_key} = {rv}\n{y_key}", fontsize=7)
-            if i == 0:
+                ax.set_ylabel((f"{row_key} = {rv}\n" if rv != "" else "") + y_key, fontsize=7)
+            if i == 0 and cv != "":
                 ax.set_title(f"{col_key} = {cv}", fontsize=8)
     if title:
         fig.suptitle(title, fontsize=9)

@@ -1,0 +1,105 @@
+"""``accuracy: {probe, rtol}``: Richardson estimates and the automatic choice of the element count."""
+import math
+
+import pytest
+
+from ancf_petsc.config import ConfigError, parse_config
+from ancf_petsc.refinement import Discretisation, apply, choose, quantity, richardson
+from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
+
+
+@pytest.mark.parametrize("p", [1.0, 2.0, 3.5])
+def test_richardson_recovers_limit_and_order_of_a_power_law(p):
+    q = [2.5 + 0.3 * h ** p for h in (0.4, 0.2, 0.1)]
+    ex = richardson(*q)
+    assert ex.reliable
+    assert ex.order == pytest.approx(p, rel=1e-10)
+    assert ex.limit == pytest.approx(2.5, rel=1e-12)
+
+
+def test_richardson_flags_oscillating_and_constant_sequences():
+    assert not richardson(1.0, 1.2, 1.1).reliable          # oscillates
+    assert not richardson(1.0, 1.1, 1.3).reliable          # diverges
+    same = richardson(4.0, 4.0, 4.0)
+    assert same.reliable and same.limit == 4.0
+
+
+def test_choose_picks_the_coarsest_rung_within_tolerance():
+    values = [1.0 + 0.1 * 2.0 ** (-2 * k) for k in range(5)]    # error 0.1 · 4^-k
+    idx, errs, ex = choose(values, 1e-2)
+    assert ex.limit == pytest.approx(1.0, rel=1e-12)
+    assert idx == 2 and errs[2] <= 1e-2 < errs[1]
+    assert choose(values[:2], 1e-2)[0] is None                  # fewer than three rungs
+    assert choose([1.0, math.nan, 1.1, 1.2], 1e-2)[0] is None   # no three consecutive finite rungs
+
+
+def test_apply_sets_every_beam_and_keeps_the_rest():
+    raw = load_raw("achilles_type3_psi45.yaml")
+    out = apply(raw, Discretisation(elements=2, axial_points=2, cubature_degree=4, element="3333"))
+    for b in out["beams"]:
+        assert (b["elements"], b["axial_points"], b["section"]["cubature_degree"], b["element"]) == \
+            (2, 2, 4, "3333")
+    assert raw["beams"][0]["elements"] == 4 and "element" not in raw["beams"][0]
+    assert quantity({"steps": [{"load_factor": 1.0, "probes": {"p": {"displacement": [3.0, 4.0, 0.0]}}}]},
+                    "p") == 5.0
+
+
+@pytest.mark.parametrize("accuracy,path,words", [
+    ({"probe": "nope"}, "accuracy.probe", "no probe 'nope'"),
+    ({"probe": "tip", "rtol": 0.0}, "accuracy.rtol", "must be > 0"),
+    ({"probe": "tip", "level": 0.33}, "accuracy.level", "must be one of the steps"),
+    ({"probe": "tip", "start": 4, "max_elements": 8}, "accuracy.max_elements", "three rungs"),
+    ({"probe": "tip", "component": "w"}, "accuracy.component", "must be one of x, y, z, norm"),
+])
+def test_accuracy_config_errors_name_the_key(accuracy, path, words):
+    raw = load_raw("bending_neohookean.yaml")
+    raw["accuracy"] = accuracy
+    with pytest.raises(ConfigError) as exc:
+        parse_config(raw, base_dir=CONFIGS)
+    assert exc.value.path == path and words in str(exc.value)
+
+
+def test_uniaxial_tension_needs_one_element(tmp_path):
+    """The homogeneous solution is in the element's space: the ladder sees three equal rungs."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["elements"] = 4
+    raw["accuracy"] = {"probe": "tip", "component": "x", "rtol": 1e-6}
+    s = run_inline(raw, tmp_path)
+    acc = s["accuracy"]
+    assert acc["met"] and acc["chosen_elements"] == 1
+    assert s["elements_per_beam"] == {"bar": 1}
+    assert [r["elements"] for r in acc["ladder"]] == [1, 2, 4]
+    values = [r["value"] for r in acc["ladder"]]
+    assert max(values) - min(values) < 1e-12 * abs(values[0])
+
+
+def test_bending_choice_meets_tolerance_against_a_fine_reference(tmp_path):
+    rtol = 2e-3
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0]["axial_points"] = 2
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": rtol, "start": 2}
+    s = run_inline(raw, tmp_path / "auto")
+    acc = s["accuracy"]
+    assert acc["met"] and acc["estimated_error"] <= rtol
+    fine = run_inline(apply(raw | {"accuracy": None}, Discretisation(elements=64)), tmp_path / "fine")
+    z, z_fine = (st["steps"][-1]["probes"]["tip"]["displacement"][2] for st in (s, fine))
+    assert abs(z - z_fine) <= rtol * abs(z_fine)
+    assert s["elements_per_beam"]["beam"] == acc["chosen_elements"] < 64
+    # the estimate is honest: the chosen model's true error is within a factor 3 of it
+    assert abs(z - z_fine) / abs(z_fine) <= 3.0 * acc["estimated_error"]
+
+
+def test_accuracy_run_is_the_same_on_two_ranks(tmp_path):
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0]["axial_points"] = 2
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 2e-3, "start": 2}
+    serial = run_inline(raw, tmp_path / "serial")
+    raw["output"] = {"dir": str(tmp_path / "mpi"), "vtk": False}
+    cfg = write_config(raw, tmp_path / "acc.yaml")
+    proc = solve_cli(cfg, ranks=2, extra=["--output-dir", str(tmp_path / "mpi")], cwd=CONFIGS)
+    assert proc.returncode == 0, proc.stderr
+    assert "[accuracy] chosen:" in proc.stdout
+    par = read_summary(tmp_path / "mpi")
+    assert par["accuracy"]["chosen_elements"] == serial["accuracy"]["chosen_elements"]
+    a, b = (st["steps"][-1]["probes"]["tip"]["displacement"][2] for st in (serial, par))
+    assert a == pytest.approx(b, rel=1e-9)

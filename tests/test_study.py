@@ -1,0 +1,97 @@
+"""ancf-study: the speed-accuracy study and the stability map (small grids of the bending scene)."""
+import csv
+import math
+import os
+
+import pytest
+import yaml
+
+from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, petsc_init
+
+
+def _write(tmp_path, doc, name="study.yaml"):
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return str(path)
+
+
+BASE = os.path.join(CONFIGS, "bending_neohookean.yaml")
+
+
+def test_pareto_study_ranks_discretisations_against_the_reference(tmp_path):
+    petsc_init()
+    from ancf_petsc.study import load_study, run_study
+    spec = load_study(_write(tmp_path, {
+        "kind": "pareto", "base": BASE, "probe": "tip", "component": "z",
+        "grid": {"elements": [1, 2, 4, 8], "axial_points": [2, 3]},
+        "reference": {"elements": 32, "axial_points": 2, "richardson": True},
+        "output": str(tmp_path / "out")}))
+    res = run_study(spec, log=lambda *_: None)
+    rows = res["rows"]
+    assert len(rows) == 8 and all(r.status == "completed" for r in rows)
+    ref = res["reference"]
+    for r in rows:
+        assert r.rel_error == pytest.approx(abs(r.value - ref) / abs(ref))
+    # reduced axial integration converges much faster than full (shear/Poisson locking)
+    err = {(r.elements, r.axial_points): r.rel_error for r in rows}
+    assert err[(8, 2)] < 1e-3 < 0.02 < err[(8, 3)]
+    assert err[(2, 2)] > err[(4, 2)] > err[(8, 2)]          # (1 element: pre-asymptotic)
+    # the Pareto front: non-dominated, and every other row is dominated by one of its members
+    front = [r for r in rows if r.pareto]
+    assert front
+    for r in rows:
+        beaten = any(f.wall_time <= r.wall_time and f.rel_error <= r.rel_error for f in front)
+        assert beaten
+    with open(res["csv"]) as fh:
+        table = list(csv.DictReader(fh))
+    assert len(table) == 8 and {"wall_time", "rel_error", "pareto", "dofs"} <= set(table[0])
+    assert os.path.getsize(res["png"]) > 10_000
+
+
+def test_stability_map_default_strategy_converges_and_failures_are_clean(tmp_path):
+    petsc_init()
+    from ancf_petsc.stability import FAILURE, default_strategy_converged, load_stability, run_stability
+    spec = load_stability(_write(tmp_path, {
+        "kind": "stability", "base": BASE, "probe": "tip", "component": "z",
+        "axes": {"increment": ["adaptive", 1.0], "linesearch": ["basic"],
+                 "bulk_ratio": [10, 10000], "element": ["3363", "3333", "3333-none"]},
+        "reference": {"elements": 16, "axial_points": 2}, "max_it": 30,
+        "output": str(tmp_path / "map")}))
+    res = run_stability(spec, log=lambda *_: None)
+    cells = res["cells"]
+    assert len(cells) == 12
+    assert default_strategy_converged(res)
+    failed = [c for c in cells if c["status"] != "completed"]
+    assert failed, "full Newton in one load increment is expected to fail here"
+    for c in failed:
+        assert FAILURE.match(c["message"]), c["message"]
+        assert c["increment"] == 1.0          # only the one-increment raw method fails
+    # locking: 3333 without its remedy converges to a far too stiff answer near incompressibility
+    locked = [c for c in cells if c["element"] == "3333-none" and c["increment"] == "adaptive"]
+    assert all(c["rel_error"] > 0.5 for c in locked)
+    healthy = [c for c in cells if c["element"] == "3363" and c["increment"] == "adaptive"]
+    assert all(c["rel_error"] < 0.1 for c in healthy)
+    assert os.path.getsize(res["png"]) > 10_000
+
+
+@pytest.mark.parametrize("doc,words", [
+    ({"kind": "pareto", "probe": "tip"}, "base: missing value"),
+    ({"kind": "pareto", "base": BASE, "probe": "nope", "grid": {"elements": [1]}}, "probe: no probe 'nope'"),
+    ({"kind": "pareto", "base": BASE, "probe": "tip", "grid": {"elements": [0]}},
+     "grid.elements: expected a non-empty list of integers >= 1"),
+    ({"kind": "pareto", "base": BASE, "probe": "tip", "grid": {"element": ["3300"]}},
+     "grid.element: expected a list of element types"),
+    ({"kind": "stability", "base": BASE, "probe": "tip", "axes": {"penalty_scale": [1.0]}},
+     "axes.penalty_scale: the base config has no contact"),
+    ({"kind": "stability", "base": BASE, "probe": "tip", "axes": {"increment": [2.0]}},
+     "axes.increment: expected 'adaptive' or fractions"),
+    ({"kind": "sideways", "base": BASE}, "kind: must be pareto or stability"),
+])
+def test_study_file_errors_are_one_line_with_the_key(tmp_path, doc, words):
+    import subprocess
+    cmd = [os.path.join(VENV_BIN, "ancf-study"), _write(tmp_path, doc)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV))
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], proc.stderr
+    assert "Traceback" not in proc.stderr and math.isfinite(2.0)

@@ -1,30 +1,52 @@
 """``accuracy: {probe, rtol}``: model no more than the scene needs.
 
-Before the real run, the model is solved on a ladder of meshes (every beam's element count
-scaled together: the first beam runs ``start``, 2·start, 4·start, … elements), each rung only up
-to the probe's load level and without ParaView output.  After every rung the last three finite
-rungs give a Richardson estimate of the converged probe (``refinement.choose``); the coarsest
-rung within ``rtol`` of it is chosen, and the full run (every step, every output) is done with
-that element count.  The ladder's rungs stay on disk under ``<output>/accuracy/``.
+The model is solved on a ladder of meshes (every beam's element count scaled together: the first
+beam runs ``start``, 2·start, 4·start, … elements), each rung being the scene up to the probe's
+load level.  After every rung the last three finite rungs give a Richardson estimate of the
+converged probe (``refinement.choose``); the coarsest rung within ``rtol`` of it is chosen.  When
+the probe's level is the scene's last step, the chosen rung already is the full run and its
+files are adopted as the run's output; otherwise the scene is solved again with that element
+count.  The rungs stay on disk under ``<output>/accuracy/``.
 """
 from __future__ import annotations
 
 import copy
+import json
 import math
 import os
+import shutil
 import time
 
 from .config import ModelSpec, parse_config
 from .refinement import choose, quantity
 
 
-def _rung_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> dict:
+def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> dict:
+    """The scene up to ``level`` with every beam's element count scaled by ``factor``."""
     raw = copy.deepcopy({k: v for k, v in spec.raw.items() if k != "accuracy"})
-    raw["steps"] = [s for s in spec.steps if s <= level * (1 + 1e-12)][-1:]
-    raw["output"] = {"dir": out_dir, "vtk": False}
+    raw["steps"] = [s for s in spec.steps if s <= level * (1 + 1e-12)]
+    raw["output"] = {"dir": out_dir, "vtk": spec.output.vtk, "vtk_samples": spec.output.vtk_samples}
     for b in raw.get("beams", []):
         b["elements"] = max(1, int(round(b["elements"] * factor)))
     return raw
+
+
+def _adopt(rung_dir: str, out_dir: str, info: dict, comm) -> None:
+    """Copy a rung's files into the run's output directory and record the choice (collective)."""
+    if comm.rank == 0:
+        os.makedirs(out_dir, exist_ok=True)
+        for name in os.listdir(rung_dir):
+            src = os.path.join(rung_dir, name)
+            if os.path.isfile(src):
+                shutil.copy2(src, os.path.join(out_dir, name))
+        path = os.path.join(out_dir, "summary.json")
+        with open(path) as fh:
+            summary = json.load(fh)
+        summary.update(info, output_dir=os.path.abspath(out_dir))
+        with open(path + ".tmp", "w") as fh:
+            json.dump(summary, fh, indent=1)
+        os.replace(path + ".tmp", path)
+    comm.tompi4py().Barrier()
 
 
 def element_counts(spec: ModelSpec) -> list[int]:
@@ -44,16 +66,18 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
     level = acc.level if acc.level is not None else max(spec.steps)
     base = spec.beams[0].elements
     t0 = time.perf_counter()
-    rungs, values, chosen, errs, ex = [], [], None, [], None
+    rungs, values, results, chosen, errs, ex = [], [], [], None, [], None
     say(f"[accuracy] probe {acc.probe} ({acc.component}) at load factor {level:g}, rtol {acc.rtol:g}: "
         f"ladder over elements per beam {element_counts(spec)}")
     quiet = (lambda *_: None)
     for n in element_counts(spec):
         out = os.path.join(spec.output.dir, "accuracy", f"elements_{n}")
-        rung = parse_config(_rung_raw(spec, n / base, out, level), base_dir=spec.base_dir,
+        rung = parse_config(_scaled_raw(spec, n / base, out, level), base_dir=spec.base_dir,
                             source=f"accuracy rung {n}")
+        say(f"[accuracy]   solving with {n} elements per beam ...")
         t1 = time.perf_counter()
         res = run_model(rung, comm, quiet)
+        results.append(res)
         value = quantity(res.summary, acc.probe, acc.component, level) if comm.rank == 0 else None
         value = comm.tompi4py().bcast(value if res.status == "completed" else math.nan, root=0)
         seconds = time.perf_counter() - t1
@@ -80,9 +104,17 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         info.update(chosen_elements=n, estimated_error=errs[chosen], met=True)
         say(f"[accuracy] chosen: {n} elements per beam (first beam), estimated error "
             f"{errs[chosen]:.2e} <= {acc.rtol:g}; ladder {ladder_time:.2f} s")
-    final_raw = copy.deepcopy({k: v for k, v in spec.raw.items() if k != "accuracy"})
-    for b in final_raw.get("beams", []):
-        b["elements"] = max(1, int(round(b["elements"] * n / base)))
-    final = parse_config(final_raw, base_dir=spec.base_dir)
-    final.output = spec.output
+    k = next(i for i, r in enumerate(rungs) if r["elements"] == n) if rungs else None
+    if k is not None and results[k].status == "completed" and level >= max(spec.steps) * (1 - 1e-12):
+        info["reused_rung"] = True          # the chosen rung is the whole scene: no second solve
+        _adopt(os.path.join(spec.output.dir, "accuracy", f"elements_{n}"), spec.output.dir,
+               {"accuracy": info}, comm)
+        res = results[k]
+        if comm.rank == 0:
+            res.summary.update(accuracy=info, output_dir=os.path.abspath(spec.output.dir))
+        say(f"[accuracy] the {n}-element rung is the whole scene: its results are in {spec.output.dir}")
+        return res
+    info["reused_rung"] = False
+    final = parse_config(_scaled_raw(spec, n / base, spec.output.dir, max(spec.steps)),
+                         base_dir=spec.base_dir)
     return run_model(final, comm, log, info={"accuracy": info})

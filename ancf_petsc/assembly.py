@@ -243,7 +243,10 @@ class Problem:
         J.setSizes(((18 * (hi - lo), self.model.n_dofs), (18 * (hi - lo), self.model.n_dofs)), bsize=18)
         J.setType(PETSc.Mat.Type.AIJ)
         J.setPreallocationCSR((S.indptr.astype(PETSc.IntType), S.indices.astype(PETSc.IntType)))
-        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        # contact pairs that sliding creates later (a point moving onto the next B element) are
+        # new nonzeros: PETSc allocates them and MUMPS redoes its symbolic factorisation; the
+        # pattern holds only couplings that occurred, not the whole search window
+        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, self.contact is None)
         J.setOption(PETSc.Mat.Option.SYMMETRIC, True)
         return J
 

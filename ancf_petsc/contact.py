@@ -264,14 +264,16 @@ class Contact:
         return [np.arange(a, b + 1) for a, b in zip(lo, hi)]
 
     def node_couplings(self, layout) -> tuple[np.ndarray, np.ndarray]:
-        """Node-block couplings (PETSc numbering) of every A element with its candidate B elements."""
+        """Node-block couplings (PETSc numbering) of the current contact pairs: per segment
+        (interface × A element) its A nodes and the nodes of every B element its points project
+        onto, all with all (the projected gap couples the points of a segment).  Couplings that
+        sliding creates later are added to the matrix when they first occur."""
         conn = layout.perm[self.model.connectivity()]
-        pairs = np.unique(np.stack([self.pts["eA"], self.pts["itf"]], 1), axis=0)
+        seg_b = np.unique(np.stack([self.pts["seg"], self.eB], 1), axis=0)
         rows, cols = [], []
-        for (e, k), cands in zip(pairs, self._window(pairs[:, 0], pairs[:, 1])):
-            na = conn[e]
-            nb = conn[cands].ravel()
-            both = np.concatenate([na, nb])
+        for s in np.unique(seg_b[:, 0]):
+            e_a = self.pts["eA"][np.searchsorted(self.pts["seg"], s)]
+            both = np.unique(np.concatenate([conn[e_a], conn[seg_b[seg_b[:, 0] == s, 1]].ravel()]))
             rows.append(np.repeat(both, len(both)))
             cols.append(np.tile(both, len(both)))
         return np.concatenate(rows), np.concatenate(cols)
@@ -307,14 +309,24 @@ class Contact:
 
     timers = None          # dict of accumulated seconds (set by the Problem)
 
+    _cache = None          # (xl, needed, result) of the last evaluation
+
     def _evaluate(self, xl: np.ndarray, needed: np.ndarray, hessian: bool):
-        """Project the local points; returns everything the energy/force/Hessian need."""
+        """Project the local points; returns everything the energy/force/Hessian need.
+
+        SNES evaluates the Jacobian at the state of the residual before it: the projection of
+        that state is reused (the projection state is its result, so nothing else changes)."""
+        c = self._cache
+        if c is not None and c[1] is needed and np.array_equal(c[0], xl):
+            return c[2]
         t0 = time.perf_counter()
         try:
-            return self._evaluate_projection(xl, needed, hessian)
+            r = self._evaluate_projection(xl, needed, hessian)
         finally:
             if self.timers is not None:
                 self.timers["contact_projection"] += time.perf_counter() - t0
+        self._cache = None if self.missing else (xl.copy(), needed, r)
+        return r
 
     def _evaluate_projection(self, xl: np.ndarray, needed: np.ndarray, hessian: bool):
         idx = self.local
@@ -463,6 +475,7 @@ class Contact:
                        [m.copy() for m in getattr(self, "mu", [])])
 
     def restore(self) -> None:
+        self._cache = None
         self.eB, self.xiB, self.tB = (a.copy() for a in self._saved[:3])
         if hasattr(self, "mu"):
             self.mu = [m.copy() for m in self._saved[3]]
@@ -539,10 +552,10 @@ class Contact:
     def _mortar_jacobian(self, r: dict, mat, fixed_mask) -> None:
         """p Σ_s Σ_pp' C_pp' ∇g_p ∇g_p'ᵀ + Σ_p τ_p ∇²g_p for the projected sliding gap.
 
-        One dense matrix per segment over [A nodes, B window nodes], inserted once; window nodes
-        no point projects onto get index −1 (skipped by PETSc).
+        One dense matrix per segment over its A nodes and the nodes of the B elements its
+        points project onto (usually one element, two near a boundary), inserted once; segments
+        are batched by that number of B elements.
         """
-        from petsc4py import PETSc
         g, tau, _ = self._lambda(r)
         valid = r["valid"]
         size = max(np.sqrt(b.section.area) for b in self.model.beams)
@@ -550,53 +563,63 @@ class Contact:
         segs, srow = self._segments(r)
         itf_of_seg = self.pts["itf"][self.seg_start[segs]]
         seg_first = np.searchsorted(self.local, self.seg_start[segs])
-        for k, inter in enumerate(self.interfaces):
-            sk = np.flatnonzero(itf_of_seg == k)
-            if len(sk) == 0:
-                continue
-            width = self.window_width(inter)
-            n_s, P_s = len(sk), int(self.seg_size[segs[sk[0]]])
-            D = 54 + 18 * (2 * width + 1)
-            pts = np.flatnonzero(np.isin(srow, sk))           # local points of these segments
-            s_loc = np.searchsorted(sk, srow[pts])
-            p_loc = pts - seg_first[sk][s_loc]
-            j = (r["eB"][pts] - self._allowed[0][self.local[pts]]).astype(np.int64)
-            # (1) p Vᵀ C V, V[p] = ∇g_p = [N_A, −N_B] ⊗ n_p on [A nodes, B element j nodes]
-            ng = r["n"][pts] * valid[pts][:, None]
-            V = np.zeros((n_s, P_s, D))
-            V[s_loc[:, None], p_loc[:, None], np.arange(54)] = \
-                (r["NA"][pts][:, :, None] * ng[:, None, :]).reshape(-1, 54)
-            colsB = 54 + 36 * j[:, None] + np.arange(54)
-            V[s_loc[:, None], p_loc[:, None], colsB] = \
-                -(r["NB"][pts][:, :, None] * ng[:, None, :]).reshape(-1, 54)
-            C = np.asarray([self.C[s] for s in segs[sk]])
-            K = self.penalty * np.matmul(V.transpose(0, 2, 1), np.matmul(C, V))
-            # (2) Σ τ_p ∇²g_p = Σ (τ_p/g_p)[∇²(½g_p²) − ∇g_p∇g_pᵀ], summed per (segment, j)
-            use = curv[pts]
-            if np.any(use):
-                sel = pts[use]
-                ru = {key: (v[sel] if isinstance(v, np.ndarray) and v.shape[:1] == valid.shape else v)
-                      for key, v in r.items()}
-                group = s_loc[use] * width + j[use]
-                uniq, inv = np.unique(group, return_inverse=True)
-                Gs = self.pair_hessians(ru, inv, len(uniq), coef=tau[sel] / g[sel],
-                                        minus_grad_outer=True)
-                gs, gj = np.divmod(uniq, width)
-                for jj in range(width):
-                    m = gj == jj
-                    if not np.any(m):
-                        continue
-                    ij = np.concatenate([np.arange(54), 54 + 36 * jj + np.arange(54)])
-                    K[gs[m][:, None, None], ij[None, :, None], ij[None, None, :]] += Gs[m]
-            eA = self.pts["eA"][self.seg_start[segs[sk]]]
-            lo = self._allowed[0][self.seg_start[segs[sk]]]
-            win = self._conn[lo[:, None] + np.arange(width)]                  # (n_s, W, 3)
-            bnodes = np.concatenate([win[:, :, :2].reshape(n_s, -1), win[:, -1:, 2]], axis=1)
-            nodes = np.concatenate([self._conn[eA], bnodes], axis=1)
-            rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
-            unused = ~np.any(V != 0.0, axis=1)                   # window nodes no point projects on
-            rows = np.where(fixed_mask[rows] | unused, -1, rows).astype(PETSc.IntType)
-            mat.setValuesRCV(rows, rows, K, PETSc.InsertMode.ADD_VALUES)
+        eB = r["eB"]
+        first_b = np.full(len(segs), np.iinfo(np.int64).max)
+        np.minimum.at(first_b, srow, eB)                     # first B element of each segment
+        last_b = np.full(len(segs), -1)
+        np.maximum.at(last_b, srow, eB)
+        span = last_b - first_b + 1
+        for k in range(len(self.interfaces)):
+            for width in np.unique(span[itf_of_seg == k]):
+                sk = np.flatnonzero((itf_of_seg == k) & (span == width))
+                self._mortar_block(r, g, tau, curv, segs, srow, seg_first, first_b, sk, int(width),
+                                   mat, fixed_mask)
+
+    def _mortar_block(self, r, g, tau, curv, segs, srow, seg_first, first_b, sk, width, mat,
+                      fixed_mask) -> None:
+        """The segments ``sk`` (one interface, each spanning ``width`` B elements)."""
+        from petsc4py import PETSc
+        valid = r["valid"]
+        n_s, P_s = len(sk), int(self.seg_size[segs[sk[0]]])
+        D = 54 + 18 * (2 * width + 1)
+        pts = np.flatnonzero(np.isin(srow, sk))           # local points of these segments
+        s_loc = np.searchsorted(sk, srow[pts])
+        p_loc = pts - seg_first[sk][s_loc]
+        j = (r["eB"][pts] - first_b[srow[pts]]).astype(np.int64)
+        # (1) p Vᵀ C V, V[p] = ∇g_p = [N_A, −N_B] ⊗ n_p on [A nodes, B element j nodes]
+        ng = r["n"][pts] * valid[pts][:, None]
+        V = np.zeros((n_s, P_s, D))
+        V[s_loc[:, None], p_loc[:, None], np.arange(54)] = \
+            (r["NA"][pts][:, :, None] * ng[:, None, :]).reshape(-1, 54)
+        colsB = 54 + 36 * j[:, None] + np.arange(54)
+        V[s_loc[:, None], p_loc[:, None], colsB] = \
+            -(r["NB"][pts][:, :, None] * ng[:, None, :]).reshape(-1, 54)
+        C = np.asarray([self.C[s] for s in segs[sk]])
+        K = self.penalty * np.matmul(V.transpose(0, 2, 1), np.matmul(C, V))
+        # (2) Σ τ_p ∇²g_p = Σ (τ_p/g_p)[∇²(½g_p²) − ∇g_p∇g_pᵀ], summed per (segment, j)
+        use = curv[pts]
+        if np.any(use):
+            sel = pts[use]
+            ru = {key: (v[sel] if isinstance(v, np.ndarray) and v.shape[:1] == valid.shape else v)
+                  for key, v in r.items()}
+            group = s_loc[use] * width + j[use]
+            uniq, inv = np.unique(group, return_inverse=True)
+            Gs = self.pair_hessians(ru, inv, len(uniq), coef=tau[sel] / g[sel],
+                                    minus_grad_outer=True)
+            gs, gj = np.divmod(uniq, width)
+            for jj in range(width):
+                m = gj == jj
+                if not np.any(m):
+                    continue
+                ij = np.concatenate([np.arange(54), 54 + 36 * jj + np.arange(54)])
+                K[gs[m][:, None, None], ij[None, :, None], ij[None, None, :]] += Gs[m]
+        eA = self.pts["eA"][self.seg_start[segs[sk]]]
+        els = self._conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
+        bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
+        nodes = np.concatenate([self._conn[eA], bnodes], axis=1)
+        rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
+        rows = np.where(fixed_mask[rows], -1, rows).astype(PETSc.IntType)
+        mat.setValuesRCV(rows, rows, K, PETSc.InsertMode.ADD_VALUES)
 
     def add_jacobian(self, xl, needed, mat, fixed_mask) -> None:
         if len(self.local) == 0:
@@ -715,6 +738,7 @@ class Contact:
         self.local = np.arange(self.n_points)
         self._conn = self.model.connectivity()
         avail, want, missing = getattr(self, "_avail", None), getattr(self, "_want", None), self.missing
+        cache, self._cache = self._cache, None
         self._avail = np.ones(self.model.n_elements, dtype=bool)
         self._allowed = (np.zeros(self.n_points, dtype=np.int64),
                          np.full(self.n_points, self.model.n_elements, dtype=np.int64))
@@ -722,7 +746,7 @@ class Contact:
             return self._evaluate(q_model.reshape(-1, 6, 3), np.arange(self.model.n_nodes), hessian=False)
         finally:
             self.local, self.eB, self.xiB, self.tB, self._conn, self._allowed = saved
-            self._avail, self._want, self.missing = avail, want, missing
+            self._avail, self._want, self.missing, self._cache = avail, want, missing, cache
 
     def _check_reference_gaps(self) -> None:
         """Sliding holds the reference gap (zero); unilateral contact must not start penetrating."""

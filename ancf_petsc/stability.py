@@ -44,7 +44,8 @@ from .refinement import Discretisation, apply, quantity
 from .study import Scene, StudyError, _expect, parse_discretisation, parse_scene, solve_raw
 
 AXES = ("increment", "linesearch", "bulk_ratio", "penalty_scale", "element")
-PHYSICAL = ("bulk_ratio", "penalty_scale")       # change the solution (reference per combination)
+PHYSICAL = ("bulk_ratio",)     # changes the material: one reference per value (a penalty is
+#                                a method parameter: its error is against the config's own p_n)
 LINESEARCHES = ("basic", "bt", "l2", "cp")
 KEYS = ("kind", "name", "base", "probe", "component", "axes", "reference", "max_it", "output")
 #: the solver's one-line failure message (solver.LoadStepFailure)

@@ -215,19 +215,42 @@ class Problem:
         return full_petsc.reshape(-1, 18)[self.layout.perm].reshape(-1, 6, 3)
 
     def node_pattern(self) -> sp.csr_matrix:
-        """Node-block coupling (PETSc numbering): elements + current contact candidates."""
+        """Node-block coupling (PETSc numbering): elements + the contact pairs seen so far."""
         n = self.model.n_nodes
         conn = self.layout.perm[self.model.connectivity()]
         r = np.repeat(conn, 3, axis=1).ravel()
         c = np.tile(conn, (1, 3)).ravel()
         if self.contact is not None:
-            cr, cc = self.contact.node_couplings(self.layout)
+            cr, cc = np.divmod(self._contact_pairs, n)
             r, c = np.concatenate([r, cr]), np.concatenate([c, cc])
         A = sp.coo_matrix((np.ones(len(r), dtype=np.int8), (r, c)), shape=(n, n)).tocsr()
         A.data[:] = 1
         return A
 
-    def _create_matrix(self) -> PETSc.Mat:
+    def _current_contact_pairs(self) -> np.ndarray:
+        """Node pairs (row · n_nodes + col) the contact of every rank couples now (collective)."""
+        cr, cc = self.contact.node_couplings(self.layout, self.contact.local)
+        mine = np.unique(cr.astype(np.int64) * self.model.n_nodes + cc)
+        return np.unique(np.concatenate(self.comm.tompi4py().allgather(mine)))
+
+    def grow_pattern(self) -> bool:
+        """Add the node couplings of the current contact pairs to the Jacobian's nonzero pattern
+        (collective).  A point that slides onto another element of B couples new node blocks:
+        the matrix is preallocated again with the union (MUMPS redoes its symbolic analysis), so
+        the pattern holds exactly the couplings that occurred, never a whole search window."""
+        if self.contact is None:
+            return False
+        now = self._current_contact_pairs()
+        new = np.setdiff1d(now, self._contact_pairs, assume_unique=True)
+        if len(new) == 0:                       # the same on every rank (allgathered)
+            return False
+        self._contact_pairs = np.union1d(self._contact_pairs, new)
+        self._preallocate(self.J)
+        self.pattern_growths += 1
+        return True
+
+    def _preallocate(self, J: PETSc.Mat) -> None:
+        """(Re)set J's nonzero pattern from ``node_pattern`` (exact; held DOFs only on the diagonal)."""
         lo, hi = self.layout.owned_nodes
         A = self.node_pattern()[lo:hi]
         S = sp.kron(A, sp.csr_matrix(np.ones((18, 18), dtype=np.int8)), format="csr")
@@ -239,15 +262,19 @@ class Problem:
                                shape=S.shape)).tocsr()
         S.eliminate_zeros()
         S.sort_indices()
+        J.setPreallocationCSR((S.indptr.astype(PETSc.IntType), S.indices.astype(PETSc.IntType)))
+        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        J.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+
+    def _create_matrix(self) -> PETSc.Mat:
+        lo, hi = self.layout.owned_nodes
+        self.pattern_growths = 0
+        if self.contact is not None:
+            self._contact_pairs = self._current_contact_pairs()
         J = PETSc.Mat().create(comm=self.comm)
         J.setSizes(((18 * (hi - lo), self.model.n_dofs), (18 * (hi - lo), self.model.n_dofs)), bsize=18)
         J.setType(PETSc.Mat.Type.AIJ)
-        J.setPreallocationCSR((S.indptr.astype(PETSc.IntType), S.indices.astype(PETSc.IntType)))
-        # contact pairs that sliding creates later (a point moving onto the next B element) are
-        # new nonzeros: PETSc allocates them and MUMPS redoes its symbolic factorisation; the
-        # pattern holds only couplings that occurred, not the whole search window
-        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, self.contact is None)
-        J.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        self._preallocate(J)
         return J
 
     def _local_state(self, X: PETSc.Vec) -> np.ndarray:
@@ -399,6 +426,9 @@ class Problem:
                     self.contact.add_jacobian(xl, self.needed, contact_blocks, self.fixed_mask)
                     return xl
                 xl = self._with_exchange(X, contact_hessian)
+                if self.grow_pattern() and P.handle != self.J.handle:
+                    raise RuntimeError("the contact pattern grew on a preconditioner matrix "
+                                       "this Problem did not create")
                 contact_blocks.add_to(P)
                 self.timers["contact_assembly"] += (time.perf_counter() - t0
                                                     - (self.timers["contact_projection"] - p0))

@@ -183,6 +183,7 @@ class ContactSpec:
     # per element (mortar-type); None = pointwise (every quadrature point constrained).
     # Default: full along ξ (axial_points - 1), the mean across the interface (0)
     projection: tuple[int, int] | None = None
+    smoothing: float | None = None         # unilateral: width δ of the C² penalty ramp [m] (None: auto)
     augmented: bool = False                # augmented Lagrangian on the projected sliding gap
     gap_tolerance: float = 1e-3            # relative multiplier change that ends the updates
     max_augmentations: int = 25
@@ -534,7 +535,7 @@ def _contact(value, names: list[str]) -> ContactSpec:
     p = "contact"
     mapping(value, p, optional=("mode", "penalty", "penalty_scale", "interfaces", "axial_points",
                                 "curve_points", "search_margin", "projection", "augmented",
-                                "gap_tolerance", "max_augmentations"))
+                                "gap_tolerance", "max_augmentations", "smoothing"))
     c = ContactSpec()
     c.mode = string(value.get("mode", "sliding"), f"{p}.mode", CONTACT_MODES)
     pen = value.get("penalty", "auto")
@@ -558,6 +559,12 @@ def _contact(value, names: list[str]) -> ContactSpec:
         raise ConfigError(f"{p}.projection", "the unilateral mode is pointwise; remove projection")
     if c.mode == "unilateral":
         c.projection = None
+    if "smoothing" in value and value["smoothing"] != "auto":
+        if c.mode != "unilateral":
+            raise ConfigError(f"{p}.smoothing", "only the unilateral mode has a penalty ramp; "
+                                                "remove smoothing or use mode: unilateral")
+        c.smoothing = number(value["smoothing"], f"{p}.smoothing", nonneg=True,
+                             hint=" (metres of penetration over which the penalty ramps up)")
     c.augmented = boolean(value.get("augmented", False), f"{p}.augmented")
     if c.augmented and c.projection is None:
         raise ConfigError(f"{p}.augmented", "the augmented Lagrangian works on the projected sliding "

@@ -163,6 +163,7 @@ def find_interfaces(model: Model, spec: ContactSpec) -> list[Interface]:
 #: p_n = factor · E / h; the augmented Lagrangian only needs a penalty that keeps Newton's
 #: convergence radius large, pure penalty needs one on the plateau (penalty study in the README)
 PENALTY_FACTOR = {"augmented": 30.0, "penalty": 1000.0}
+SMOOTHING_FACTOR = 1e-3
 
 
 def default_penalty(interfaces: list[Interface], factor: float) -> float:
@@ -190,6 +191,9 @@ class Contact:
         factor = PENALTY_FACTOR["augmented" if self.augmented else "penalty"]
         self.penalty = spec.penalty if spec.penalty is not None else default_penalty(interfaces, factor)
         self.penalty *= spec.penalty_scale
+        #: unilateral penalty ramp width δ [m]; auto: 1e-3 of the smallest section size
+        self.smoothing = (spec.smoothing if spec.smoothing is not None else
+                          SMOOTHING_FACTOR * min(np.sqrt(b.section.area) for b in model.beams))
         xa, wa = gauss_legendre(spec.axial_points)
         xc, wc = gauss_legendre(spec.curve_points)
         cols = {k: [] for k in ("itf", "eA", "xi", "t", "w", "eB", "seg")}
@@ -263,13 +267,17 @@ class Contact:
         lo, hi = self._window_range(eA, itf_idx)
         return [np.arange(a, b + 1) for a, b in zip(lo, hi)]
 
-    def node_couplings(self, layout) -> tuple[np.ndarray, np.ndarray]:
-        """Node-block couplings (PETSc numbering) of the current contact pairs: per segment
-        (interface × A element) its A nodes and the nodes of every B element its points project
-        onto, all with all (the projected gap couples the points of a segment).  Couplings that
-        sliding creates later are added to the matrix when they first occur."""
+    def node_couplings(self, layout, points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Node-block couplings (PETSc numbering) of the current contact pairs of ``points``
+        (default: all): per segment (interface × A element) its A nodes and the nodes of every
+        B element its points project onto, all with all (the projected gap couples the points
+        of a segment).  Couplings that sliding creates later are added when they first occur
+        (``Problem.grow_pattern``)."""
         conn = layout.perm[self.model.connectivity()]
-        seg_b = np.unique(np.stack([self.pts["seg"], self.eB], 1), axis=0)
+        points = np.arange(self.n_points) if points is None else points
+        if len(points) == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        seg_b = np.unique(np.stack([self.pts["seg"][points], self.eB[points]], 1), axis=0)
         rows, cols = [], []
         for s in np.unique(seg_b[:, 0]):
             e_a = self.pts["eA"][np.searchsorted(self.pts["seg"], s)]
@@ -414,7 +422,7 @@ class Contact:
         g = np.einsum("pi,pi->p", d, n)
         active = valid.copy()
         if self.mode == "unilateral":
-            active &= g < 0.0
+            active &= g < 0.0           # (φ, φ', φ'' vanish for g >= 0 in any case)
         return dict(eA=eA, eB=eB, w=w * active, d=d, n=n, g=g, valid=valid, NA=NA, NB=NB,
                     NBz=NBz, Yz=Yz, Yzz=Yzz, lpos=lpos, ok=ok)
 
@@ -481,6 +489,26 @@ class Contact:
             self.mu = [m.copy() for m in self._saved[3]]
 
     # ---------------------------------------------------------------- energy, force, Hessian
+    def penalty_function(self, g: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """φ(g), φ'(g), φ''(g) of the pointwise penalty energy Π = p Σ w φ(g).
+
+        Sliding: φ = g²/2.  Unilateral: φ = 0 for g ≥ 0 and g²/2 + δg/2 + δ²/6 for g ≤ −δ, joined
+        by −g³/(6δ) on (−δ, 0): twice differentiable, so the stiffness grows smoothly from 0 at
+        touch to p at δ of penetration (δ = ``contact.smoothing``; δ = 0: the plain max(0, −g)²/2,
+        whose stiffness jumps at touch and makes Newton chatter between active sets)."""
+        if self.mode != "unilateral":
+            return 0.5 * g * g, g, np.ones_like(g)
+        dlt = self.smoothing
+        pen = np.minimum(g, 0.0)
+        if dlt <= 0.0:
+            return 0.5 * pen * pen, pen, (g < 0.0).astype(float)
+        deep = g <= -dlt
+        mid = (g < 0.0) & ~deep
+        phi = np.where(deep, 0.5 * g * g + 0.5 * dlt * g + dlt * dlt / 6.0, np.where(mid, -g ** 3 / (6.0 * dlt), 0.0))
+        d1 = np.where(deep, g + 0.5 * dlt, np.where(mid, -g * g / (2.0 * dlt), 0.0))
+        d2 = np.where(deep, 1.0, np.where(mid, -g / dlt, 0.0))
+        return phi, d1, d2
+
     def energy(self, xl: np.ndarray, needed: np.ndarray) -> float:
         if len(self.local) == 0:
             return 0.0
@@ -489,6 +517,8 @@ class Contact:
             return np.inf
         if self.projection is not None:
             return self._lambda(r)[2]
+        if self.mode == "unilateral":
+            return float(self.penalty * np.sum(r["w"] * self.penalty_function(r["g"])[0]))
         return float(0.5 * self.penalty * np.sum(r["w"] * np.einsum("pi,pi->p", r["d"], r["d"])))
 
     def add_residual(self, xl: np.ndarray, needed: np.ndarray, floc: np.ndarray) -> bool:
@@ -498,6 +528,8 @@ class Contact:
         if self.projection is not None:
             _, tau, _ = self._lambda(r)
             traction = tau[:, None] * r["n"]                                     # τ_p n_p
+        elif self.mode == "unilateral":
+            traction = (self.penalty * r["w"] * self.penalty_function(r["g"])[1])[:, None] * r["n"]
         else:
             traction = (self.penalty * r["w"])[:, None] * r["d"]                 # p w_p d_p
         fA = r["NA"][:, :, None] * traction[:, None, :]                          # (P, 18, 3)
@@ -509,11 +541,12 @@ class Contact:
         return bool(r["ok"])
 
     def pair_hessians(self, r: dict, pair_index: np.ndarray, n_pairs: int,
-                      coef: np.ndarray | None = None, minus_grad_outer: bool = False) -> np.ndarray:
-        """Σ_p c_p ∇²(½|d_p|²) summed per group (A element, B element), (n_groups, 108, 108).
+                      coef: np.ndarray | None = None, outer: np.ndarray | None = None) -> np.ndarray:
+        """Σ_p c_p ∇²(½|d_p|²) + Σ_p o_p ∇g_p ∇g_pᵀ summed per group (A element, B element),
+        (n_groups, 108, 108).
 
         Per point ∇²(½|d|²) = (n nᵀ) ⊗ I₃ − Q φ_ζζ⁻¹ Qᵀ with n = [N_A, −N_B], Q = φ_qζ (108 × 2);
-        c_p = p w_p by default.  ``minus_grad_outer`` subtracts c_p ∇g ∇gᵀ, which turns the sum
+        c_p = p w_p by default.  Since ∇²(½g²) = ∇g∇gᵀ + g ∇²g, ``outer = −c`` turns the sum
         into Σ c_p g_p ∇²g_p (g the signed gap).  Points are grouped (zero-padded) so that each
         sum is one batched GEMM.
         """
@@ -543,10 +576,11 @@ class Contact:
         K4 = K.reshape(n_pairs, 36, 3, 36, 3)
         for i in range(3):
             K4[:, :, i, :, i] += nn
-        if minus_grad_outer:
+        if outer is not None:
             G = (n[:, :, None] * r["n"][:, None, :]).reshape(P, 108)              # ∇g_p
             Gp = np.concatenate([G, np.zeros((1, 108))])[pad]
-            K -= np.matmul(Gp.transpose(0, 2, 1), wpad[:, :, None] * Gp)
+            opad = np.concatenate([outer, [0.0]])[pad]
+            K += np.matmul(Gp.transpose(0, 2, 1), opad[:, :, None] * Gp)
         return K
 
     def _mortar_jacobian(self, r: dict, mat, fixed_mask) -> None:
@@ -605,7 +639,7 @@ class Contact:
             group = s_loc[use] * width + j[use]
             uniq, inv = np.unique(group, return_inverse=True)
             Gs = self.pair_hessians(ru, inv, len(uniq), coef=tau[sel] / g[sel],
-                                    minus_grad_outer=True)
+                                    outer=-tau[sel] / g[sel])
             gs, gj = np.divmod(uniq, width)
             for jj in range(width):
                 m = gj == jj
@@ -635,7 +669,15 @@ class Contact:
              for k, v in r.items()}
         pair = r["eA"].astype(np.int64) * self.model.n_elements + r["eB"]
         uniq, inv = np.unique(pair, return_inverse=True)
-        K = self.pair_hessians(r, inv, len(uniq))
+        if self.mode == "unilateral":
+            # p w [φ'' ∇g∇gᵀ + φ' ∇²g] = c ∇²(½g²) + (p w φ'' − c) ∇g∇gᵀ with c = p w φ'/g
+            _, d1, d2 = self.penalty_function(r["g"])
+            pw = self.penalty * r["w"]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                c = np.where(r["g"] != 0.0, pw * d1 / r["g"], 0.0)
+            K = self.pair_hessians(r, inv, len(uniq), coef=c, outer=pw * d2 - c)
+        else:
+            K = self.pair_hessians(r, inv, len(uniq))
         eA, eB = np.divmod(uniq, self.model.n_elements)
         nodes = np.concatenate([self._conn[eA], self._conn[eB]], axis=1)         # (pairs, 6)
         rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(len(uniq), 108)

@@ -117,7 +117,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                 "ghost_nodes_per_rank": comm.tompi4py().gather(ghosts, root=0),
                 "total_nodes": model.n_nodes}
     writer.finish(status, message=message, timings=timings,
-                  newton_iterations=stepper.newton_iterations, exchange=exchange)
+                  newton_iterations=stepper.newton_iterations, exchange=exchange,
+                  jacobian_pattern_growths=problem.pattern_growths)
     if comm.size > 1:
         say(f"[ancf] exchange: node blocks received per rank {exchange['ghost_nodes_per_rank']} of "
             f"{model.n_nodes}; rebuilt {problem.exchanges} times (the set of projected-on elements changed)")

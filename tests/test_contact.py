@@ -34,7 +34,8 @@ def perturbed_state(P, scale, seed):
 MODES = {
     "sliding-projected": {"mode": "sliding"},
     "sliding-pointwise": {"mode": "sliding", "projection": "pointwise"},
-    "unilateral": {"mode": "unilateral"},
+    "unilateral": {"mode": "unilateral"},                       # C2 penalty ramp (auto width)
+    "unilateral-sharp": {"mode": "unilateral", "smoothing": 0.0},
 }
 
 
@@ -46,7 +47,11 @@ def test_contact_jacobian_matches_finite_differences(mode):
     P.jacobian(None, X, P.J, P.J)
     rng = np.random.default_rng(7)
     # unilateral: the probe must not cross g = 0 anywhere (the active set must not change)
-    h = 1e-6 if mode == "unilateral" else 1e-4
+    h = 1e-6 if mode.startswith("unilateral") else 1e-4
+    if mode == "unilateral":       # the state has points on the ramp and beyond it
+        g = P.contact._evaluate(P._local_state(X).copy(), P.needed, False)["g"]
+        dlt = P.contact.smoothing
+        assert np.any((g < 0) & (g > -dlt)) and np.any(g < -dlt)
     for _ in range(3):
         v = X.duplicate()
         v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
@@ -57,7 +62,7 @@ def test_contact_jacobian_matches_finite_differences(mode):
         Xm.axpy(-h, v)
         P.residual(None, Xp, Fp)
         P.residual(None, Xm, Fm)
-        if mode == "unilateral":
+        if mode.startswith("unilateral"):
             active = [P.contact._evaluate(P._local_state(Y).copy(), P.needed, False)["w"] > 0
                       for Y in (Xp, Xm)]
             assert np.array_equal(active[0], active[1]) and 0 < active[0].sum() < len(active[0])
@@ -78,7 +83,7 @@ def test_contact_residual_is_energy_gradient(mode):
     P.residual(None, X, F)
     v = X.duplicate()
     v.setArray(np.random.default_rng(2).standard_normal(X.getLocalSize()) * free * 1e-3)
-    h = 1e-6 if mode == "unilateral" else 1e-4     # see the Jacobian test
+    h = 1e-6 if mode.startswith("unilateral") else 1e-4     # see the Jacobian test
     Xp, Xm = X.copy(), X.copy()
     Xp.axpy(h, v)
     Xm.axpy(-h, v)
@@ -97,3 +102,25 @@ def test_reference_state_is_gap_free_and_stress_free():
     assert F.norm() < floor, (F.norm(), floor)
     gaps = P.contact.gaps(P.model.q0)
     assert len(gaps) == 3 and all(g["max_gap"] < 1e-12 for g in gaps.values())
+
+
+def test_unilateral_penalty_ramp_is_twice_differentiable():
+    P, _ = _problem(achilles(contact={"mode": "unilateral", "smoothing": 2e-6}))
+    c = P.contact
+    dlt = c.smoothing
+    g = np.linspace(-3 * dlt, 2 * dlt, 2001)
+    phi, d1, d2 = c.penalty_function(g)
+    h = 1e-3 * dlt
+    plus, minus = c.penalty_function(g + h), c.penalty_function(g - h)
+    for k in (0, 1):         # the slope and the stiffness agree with central differences
+        fd = (plus[k] - minus[k]) / (2 * h)
+        exact = (d1, d2)[k]
+        # the third derivative jumps at the joints: there the difference is only O(h) accurate
+        assert np.allclose(fd, exact, atol=(1e-6, 2e-3)[k] * np.abs(exact).max())
+    for x in (-dlt, 0.0):                     # value, slope and stiffness continuous at the joints
+        lo = np.array(c.penalty_function(np.array([x - 1e-9 * dlt])))
+        hi = np.array(c.penalty_function(np.array([x + 1e-9 * dlt])))
+        assert np.allclose(lo, hi, rtol=0, atol=1e-8)
+    assert np.all(phi[g >= 0] == 0) and np.all(d2 >= 0) and np.all(d2 <= 1)
+    deep = g < -dlt
+    assert np.allclose(d2[deep], 1.0)         # the full penalty beyond the ramp

@@ -120,9 +120,9 @@ def expand_bundle(raw: dict) -> dict:
         loops = hexagon_beams(centres, radius)
         pairs = None
     else:
-        # touching circles meet along lines; with no initial gap the unilateral active set
-        # chatters from the first increment (see README), so they start 2 % of r apart
-        gap = number(b.get("gap", 0.02 * radius), "bundle.gap", nonneg=True)
+        # touching circles meet along lines; the unilateral penalty's C2 ramp (contact.smoothing)
+        # lets them start touching (gap 0) without the active set chattering
+        gap = number(b.get("gap", 0.0), "bundle.gap", nonneg=True)
         pitch = 2.0 * radius + gap
         centres = hex_centres(rings, pitch)
         loops, pairs = circle_beams(centres, radius, pitch,
@@ -148,6 +148,11 @@ def expand_bundle(raw: dict) -> dict:
         contact = dict(out.get("contact") or {})
         if shape == "circle":
             contact.setdefault("mode", "unilateral")
+            # closing contact: the first Newton steps see no contact stiffness (the ramp starts
+            # at zero), and only an energy line search stops them from diving into the penalty
+            petsc = dict(out.get("petsc") or {})
+            petsc.setdefault("snes_linesearch_type", "bt")
+            out["petsc"] = petsc
             contact["interfaces"] = [{"a": f"fascicle{j}", "b": f"fascicle{i}", "curve": ca, "curve_b": cb}
                                      for i, j, cb, ca in pairs]
         else:

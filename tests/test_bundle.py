@@ -41,7 +41,28 @@ def test_hexagons_tile_and_share_edges(count, shared):
 def test_circles_pair_facing_arcs():
     raw = _expand(count=7, fascicle_section="circle")
     assert len(raw["contact"]["interfaces"]) == 12 and raw["contact"]["mode"] == "unilateral"
+    assert raw["petsc"]["snes_linesearch_type"] == "bt"          # default for closing contact
     assert all("curve_b" in it for it in raw["contact"]["interfaces"])
+
+
+def test_touching_circles_close_contact_on_one_and_two_ranks(tmp_path):
+    """Circles that touch along lines (gap 0), twisted and pulled: the outer helices press on
+    the centre, unilateral contact becomes active with a tiny penetration, and 2 METIS ranks
+    give the serial answer."""
+    out = {}
+    for n in (1, 2):
+        raw = load_raw("bundle_circle7.yaml")
+        raw["steps"] = [1.0]
+        raw["output"] = {"dir": str(tmp_path / f"n{n}"), "vtk": False}
+        p = solve_cli(write_config(raw, tmp_path / f"c{n}.yaml"), ranks=n)
+        assert p.returncode == 0, p.stdout + p.stderr
+        out[n] = read_summary(tmp_path / f"n{n}")
+    contact = out[1]["steps"][-1]["contact"]
+    active = sum(v["active_points"] for v in contact.values())
+    assert 0 < active < sum(v["points"] for v in contact.values())
+    assert max(v["max_gap"] for v in contact.values()) < 1e-3 * 0.5e-3        # penetration << r
+    t1, t2 = probes_table(out[1]), probes_table(out[2])
+    assert np.abs(t2 - t1).max() <= 1e-8 * np.abs(t1).max()
 
 
 def test_metis_partition_balances_and_is_stored(tmp_path):

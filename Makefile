@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling verify clean
+.PHONY: setup demo report test test-fast bench bench-scaling verify verify-solid clean
 
 setup:
 	@bash scripts/setup.sh
@@ -36,6 +36,13 @@ bench: setup
 
 bench-scaling: setup
 	$(PY) scripts/bench_scaling.py
+
+verify: setup
+	$(PY) scripts/verification_report.py
+
+verify-solid: setup
+	bash scripts/setup_solid.sh
+	$(PY) scripts/verify_solid.py
 
 clean:
 	rm -rf results .pytest_cache

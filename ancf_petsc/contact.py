@@ -652,7 +652,12 @@ class Contact:
         bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
         nodes = np.concatenate([self._conn[eA], bnodes], axis=1)
         rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
-        rows = np.where(fixed_mask[rows], -1, rows).astype(PETSc.IntType)
+        # the B elements of a segment need not be contiguous (points on e and e + 2): the
+        # nodes of an element in between that no point projects onto stay out of the matrix
+        used = np.zeros((n_s, D), dtype=bool)
+        used[:, :54] = True
+        used[s_loc[:, None], colsB] = True
+        rows = np.where(fixed_mask[rows] | ~used, -1, rows).astype(PETSc.IntType)
         mat.setValuesRCV(rows, rows, K, PETSc.InsertMode.ADD_VALUES)
 
     def add_jacobian(self, xl, needed, mat, fixed_mask) -> None:

@@ -124,3 +124,26 @@ def test_unilateral_penalty_ramp_is_twice_differentiable():
     assert np.all(phi[g >= 0] == 0) and np.all(d2 >= 0) and np.all(d2 <= 1)
     deep = g < -dlt
     assert np.allclose(d2[deep], 1.0)         # the full penalty beyond the ramp
+
+
+def test_mortar_blocks_skip_elements_no_point_projects_on():
+    """A segment whose points project onto B elements e and e + 2 (none on e + 1) must not insert
+    the middle node of e + 1: that coupling is not in the matrix pattern."""
+    from ancf_petsc.assembly import _Collector
+    P, _ = _problem(achilles(elements=4))
+    c = P.contact
+    xl = P._local_state(P.q0).copy()
+    r = dict(c._evaluate(xl, P.needed, True))
+    seg0 = c.pts["seg"] == c.pts["seg"][0]
+    idx = np.flatnonzero(seg0)
+    first = int(r["eB"][idx[0]])
+    r["eB"] = r["eB"].copy()
+    r["eB"][idx[: len(idx) // 2]] = first + 2          # half the points two elements further
+    col = _Collector()
+    c._mortar_jacobian(r, col, P.fixed_mask)
+    middle = c._conn[first + 1][1]                      # the node only element e + 1 has
+    wide = [rows for rows, _, _ in col.blocks if rows.shape[1] == 54 + 18 * 7]   # spans 3 elements
+    assert len(wide) == 1 and wide[0].shape[0] == 1
+    nodes = wide[0][0] // 18
+    assert middle not in nodes[wide[0][0] >= 0]
+    assert c._conn[first + 2][1] in nodes and c._conn[first][1] in nodes

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling verify verify-solid clean
+.PHONY: setup demo report test test-fast bench bench-scaling verify verify-solid studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -36,6 +36,13 @@ bench: setup
 
 bench-scaling: setup
 	$(PY) scripts/bench_scaling.py
+
+studies: setup
+	$(VENV)/bin/ancf-study configs/studies/bending_pareto.yaml
+	$(VENV)/bin/ancf-study configs/studies/bending_stability.yaml
+	$(VENV)/bin/ancf-study configs/studies/achilles_pareto.yaml
+	$(VENV)/bin/ancf-study configs/studies/achilles_stability.yaml
+	$(PY) scripts/accuracy_demo.py
 
 verify: setup
 	$(PY) scripts/verification_report.py

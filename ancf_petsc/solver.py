@@ -49,9 +49,10 @@ def reason_name(reason: int) -> str:
 class LoadStepFailure(Exception):
     """A requested load level could not be reached; raised identically on every rank."""
 
-    def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool):
+    def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
+                 detail: str = ""):
         msg = (f"could not reach load factor {target:g}: SNES failed at load factor {attempted:.6g} "
-               f"(last converged {reached:.6g}) with {reason}")
+               f"(last converged {reached:.6g}) with {reason}{detail}")
         if inverted:
             msg += " (an element was inverted, J <= 0)"
         super().__init__(msg)
@@ -181,6 +182,14 @@ class LoadStepper:
                     reason, its, fnorm = self._solve_at(lam + step, X)
                     its_total += its
                     history.append(list(self._history))
+                    budget = self.spec.max_newton_iterations
+                    if budget is not None and self.newton_iterations > budget:
+                        P.load_factor = lam
+                        X_prev.copy(X)
+                        P.restore()
+                        raise LoadStepFailure(target, lam + step, lam, "NEWTON_BUDGET_EXCEEDED", False,
+                                              f" after {self.newton_iterations} Newton iterations "
+                                              f"(solver.max_newton_iterations = {budget})")
                     if reason > 0 and not self._residual_small(fnorm, lam + step):
                         reason = PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH   # stalled, not converged
                     if reason > 0 and np.isfinite(fnorm) and P.state_is_clean():

@@ -17,7 +17,8 @@ A stability file (YAML)::
       element: ["3363", "3333", "3333-none"]  # element type (-none: 3333 without its locking remedy)
     reference: {element: "3363", axial_points: 2, elements: 32}   # per (bulk_ratio, penalty_scale)
     max_it: 50                              # Newton iterations per increment
-    output: ../../studies/bending_stability
+    max_newton: 2000                        # Newton iterations per cell (a slow cell is a failure)
+    output: ../../results/studies/bending_stability
 
 Every cell is solved in this process to the base config's last load level.  A cell records
 converged / failed, the Newton iterations, the SNES reason of a failure and the one-line message
@@ -47,10 +48,13 @@ AXES = ("increment", "linesearch", "bulk_ratio", "penalty_scale", "element")
 PHYSICAL = ("bulk_ratio",)     # changes the material: one reference per value (a penalty is
 #                                a method parameter: its error is against the config's own p_n)
 LINESEARCHES = ("basic", "bt", "l2", "cp")
-KEYS = ("kind", "name", "base", "probe", "component", "axes", "reference", "max_it", "output")
+KEYS = ("kind", "name", "base", "probe", "component", "axes", "reference", "max_it", "max_newton",
+        "output")
 #: the solver's one-line failure message (solver.LoadStepFailure)
 FAILURE = re.compile(r"^could not reach load factor \S+: SNES failed at load factor \S+ "
-                     r"\(last converged \S+\) with [A-Z_]+( \(an element was inverted, J <= 0\))?$")
+                     r"\(last converged \S+\) with [A-Z_]+"
+                     r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+\))?"
+                     r"( \(an element was inverted, J <= 0\))?$")
 ADAPTIVE = "adaptive"
 
 
@@ -62,6 +66,7 @@ class StabilitySpec:
     reference: Discretisation
     max_it: int
     output: str
+    max_newton: int | None = None
 
 
 def _element(value: str) -> dict:
@@ -70,7 +75,7 @@ def _element(value: str) -> dict:
     return {"element": element, **({"locking": locking} if locking else {})}
 
 
-def cell_config(scene: Scene, cell: dict, max_it: int) -> dict:
+def cell_config(scene: Scene, cell: dict, max_it: int, max_newton: int | None = None) -> dict:
     """The raw config of one cell of the map."""
     raw = copy.deepcopy(scene.raw)
     last = float(raw["steps"][-1])
@@ -90,6 +95,8 @@ def cell_config(scene: Scene, cell: dict, max_it: int) -> dict:
             raise StudyError("axes.penalty_scale", "the base config has no contact")
         raw["contact"]["penalty_scale"] = float(cell["penalty_scale"])
     solver = raw.setdefault("solver", {})
+    if max_newton is not None:
+        solver["max_newton_iterations"] = max_newton
     inc = cell.get("increment", ADAPTIVE)
     if inc != ADAPTIVE:
         step = float(inc) * last
@@ -107,6 +114,7 @@ def short_reason(message: str) -> str:
     if not m:
         return "error"
     text = m.group(1).replace("DIVERGED_", "").replace("FNORM_NAN", "NaN")
+    text = text.replace("NEWTON_BUDGET_EXCEEDED", "budget")
     return text.replace("LINE_SEARCH", "LS").replace("MAX_IT", "max it") + \
         (" J<0" if "inverted" in message else "")
 
@@ -132,7 +140,7 @@ def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> di
         log(f"[stability] reference {dict(phys)}: {spec.scene.probe} = {refs[phys]:.8g}")
     out = []
     for k, cell in enumerate(cells):
-        raw = cell_config(spec.scene, cell, spec.max_it)
+        raw = cell_config(spec.scene, cell, spec.max_it, spec.max_newton)
         res, summary = solve_raw(raw, spec.scene.base_dir, os.path.join(spec.output, "cell"))
         ok = res.status == "completed"
         value = quantity(summary, spec.scene.probe, spec.scene.component) if ok else math.nan
@@ -213,6 +221,10 @@ def load_stability(path: str) -> StabilitySpec:
     ref = Discretisation(**parse_discretisation(doc.get("reference", {}), "reference"))
     max_it = doc.get("max_it", 50)
     _expect(isinstance(max_it, int) and max_it >= 1, "max_it", "expected an integer >= 1")
+    max_newton = doc.get("max_newton")
+    _expect(max_newton is None or (isinstance(max_newton, int) and max_newton >= 1), "max_newton",
+            "expected an integer >= 1 (Newton iterations per cell)")
     name = str(doc.get("name", os.path.splitext(os.path.basename(path))[0]))
     output = os.path.normpath(os.path.join(here, str(doc.get("output", os.path.join("studies", name)))))
-    return StabilitySpec(name=name, scene=scene, axes=axes, reference=ref, max_it=max_it, output=output)
+    return StabilitySpec(name=name, scene=scene, axes=axes, reference=ref, max_it=max_it, output=output,
+                         max_newton=max_newton)

@@ -132,6 +132,22 @@ def test_failure_names_load_and_reason_and_keeps_converged_steps(tmp_path):
     assert os.path.exists(tmp_path / "out" / "surface_0002.vtu")
 
 
+def test_newton_budget_stops_a_run_cleanly(tmp_path):
+    """solver.max_newton_iterations: the run stops with a one-line message naming the budget;
+    the levels reached before it stay on disk."""
+    from ancf_petsc.stability import FAILURE
+    raw = load_raw("bending_neohookean.yaml")
+    raw["solver"] = {"max_newton_iterations": 12}
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"))
+    assert p.returncode == 3, p.stdout + p.stderr
+    msg = p.stderr.strip().splitlines()[-1]
+    assert "NEWTON_BUDGET_EXCEEDED after" in msg and "solver.max_newton_iterations = 12" in msg
+    s = read_summary(tmp_path / "out")
+    assert s["status"] == "failed" and FAILURE.match(s["message"])
+    assert 1 <= len(s["steps"]) < 4 and s["newton_iterations"] > 12
+
+
 def test_command_line_overrides_config_petsc_section(tmp_path):
     raw = load_raw("uniaxial_neohookean.yaml")
     raw["petsc"] = {"snes_linesearch_type": "l2", "snes_max_it": 3}

@@ -84,7 +84,9 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         values.append(value)
         rungs.append({"elements": n, "value": value, "seconds": seconds, "status": res.status})
         chosen, errs, ex = choose(values, acc.rtol)
-        est = "" if ex is None or not ex.reliable else f", limit {ex.limit:.8g} (order {ex.order:.2f})"
+        est = "" if ex is None or not ex.reliable else (
+            f", limit {ex.limit:.8g} (order {ex.order:.2f})" if ex.kind == "richardson" else
+            f", {ex.kind}: the last three agree within rtol/2, limit {ex.limit:.8g}")
         say(f"[accuracy]   {n:5d} elements: {acc.probe} = {value:.8g}  ({res.status}, {seconds:.2f} s){est}")
         if chosen is not None:
             break
@@ -93,7 +95,8 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
     ladder_time = time.perf_counter() - t0
     info = {"probe": acc.probe, "component": acc.component, "level": level, "rtol": acc.rtol,
             "ladder": rungs, "ladder_seconds": ladder_time,
-            "limit": None if ex is None else ex.limit, "order": None if ex is None else ex.order}
+            "limit": None if ex is None else ex.limit, "order": None if ex is None else ex.order,
+            "estimate": None if ex is None else ex.kind}
     if chosen is None:
         n = next((r["elements"] for r in reversed(rungs) if r["status"] == "completed"), base)
         info.update(chosen_elements=n, estimated_error=None, met=False)

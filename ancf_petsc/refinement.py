@@ -66,7 +66,8 @@ def quantity(summary: dict, probe: str, component: str = "norm", level: float | 
 class Extrapolation:
     limit: float          # estimated converged value
     order: float          # observed order p (nan: no monotone convergence seen)
-    reliable: bool        # monotone convergence with p > 0.5, or all three equal
+    reliable: bool        # monotone convergence with p > 0.5, all three equal, or a plateau
+    kind: str = "richardson"   # richardson | constant | plateau (see ``choose``)
 
 
 def richardson(q1: float, q2: float, q3: float, ratio: float = 2.0, tiny: float = 1e-12) -> Extrapolation:
@@ -76,7 +77,7 @@ def richardson(q1: float, q2: float, q3: float, ratio: float = 2.0, tiny: float 
     d1, d2 = q2 - q1, q3 - q2
     scale = max(abs(q1), abs(q2), abs(q3), 1e-300)
     if abs(d1) <= tiny * scale and abs(d2) <= tiny * scale:
-        return Extrapolation(q3, math.inf, True)
+        return Extrapolation(q3, math.inf, True, "constant")
     if abs(d2) <= tiny * scale or d1 * d2 <= 0.0 or abs(d1) <= abs(d2):
         return Extrapolation(q3, math.nan, False)
     p = math.log(abs(d1 / d2)) / math.log(ratio)
@@ -86,14 +87,24 @@ def richardson(q1: float, q2: float, q3: float, ratio: float = 2.0, tiny: float 
 def choose(values: list[float], rtol: float) -> tuple[int | None, list[float], Extrapolation | None]:
     """Coarsest rung of a ladder (values on meshes refined by 2) within ``rtol`` of the
     Richardson limit of the last three finite rungs.  Returns (index or None, estimated relative
-    errors per rung (nan where unknown), the extrapolation)."""
+    errors per rung (nan where unknown), the extrapolation).
+
+    A *plateau* counts too: when the last three rungs no longer converge monotonically but all
+    lie within rtol/2 of their mean, they have converged to within the tolerance (what is left
+    is the noise of the discretisation, e.g. of reduced integration), and the mean is the limit.
+    """
     ok = [i for i, v in enumerate(values) if math.isfinite(v)]
     if len(ok) < 3 or ok[-3:] != list(range(ok[-1] - 2, ok[-1] + 1)):
         return None, [math.nan] * len(values), None
     i3 = ok[-1]
-    ex = richardson(values[i3 - 2], values[i3 - 1], values[i3])
+    last = values[i3 - 2:i3 + 1]
+    ex = richardson(*last)
     if not ex.reliable:
-        return None, [math.nan] * len(values), ex
+        mean = sum(last) / 3.0
+        if mean != 0.0 and max(abs(v - mean) for v in last) <= 0.5 * rtol * abs(mean):
+            ex = Extrapolation(mean, math.nan, True, "plateau")
+        else:
+            return None, [math.nan] * len(values), ex
     errs = [abs(v - ex.limit) / abs(ex.limit) if math.isfinite(v) and ex.limit != 0 else math.nan
             for v in values]
     for i, e in enumerate(errs):

@@ -4,9 +4,9 @@ fine reference, and does choosing it (ladder + run) cost less than solving a fix
 
     .venv/bin/python scripts/accuracy_demo.py [--out docs/accuracy_demo.md] [--quick]
 
-Scenes: uniaxial tension (configs/uniaxial_neohookean.yaml), bending (configs/bending_neohookean.yaml,
-2 axial Gauss points) and the Achilles tendon (configs/achilles_type3_psi45.yaml, soleus elongation
-at 400 N).  Every run is in this process on one core; times are wall-clock seconds of the runs
+Scenes: uniaxial tension (configs/uniaxial_neohookean.yaml), bending (configs/bending_neohookean.yaml)
+and the Achilles tendon (configs/achilles_type3_psi45.yaml, soleus elongation at 400 N), the last two
+with 2 axial Gauss points (the front of the speed-accuracy studies).  Every run is in this process on one core; times are wall-clock seconds of the runs
 (set-up + load stepping + output), the automatic one including its whole refinement ladder.
 """
 from __future__ import annotations
@@ -26,8 +26,9 @@ SCENES = [  # (label, config, accuracy block, beam overrides, fine element count
      {"probe": "tip", "component": "x", "rtol": 1e-6}, {"elements": 8}, 64),
     ("bending (K/mu = 50)", "bending_neohookean.yaml",
      {"probe": "tip", "component": "z", "rtol": 1e-3, "start": 2}, {"axial_points": 2}, 64),
-    ("Achilles, psi = 45 deg", "achilles_type3_psi45.yaml",
-     {"probe": "soleus", "component": "x", "rtol": 1e-2, "start": 4, "max_elements": 32}, {}, 32),
+    ("Achilles, psi = 45 deg (2 axial pts)", "achilles_type3_psi45.yaml",
+     {"probe": "soleus", "component": "x", "rtol": 5e-3, "start": 4, "max_elements": 32},
+     {"axial_points": 2}, 32),
 ]
 
 

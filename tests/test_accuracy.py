@@ -24,6 +24,15 @@ def test_richardson_flags_oscillating_and_constant_sequences():
     assert same.reliable and same.limit == 4.0
 
 
+def test_choose_accepts_a_converged_plateau_but_not_scatter():
+    """Non-monotone rungs within rtol/2 of their mean have converged (e.g. reduced integration);
+    the same pattern spread wider is no estimate at all."""
+    idx, errs, ex = choose([6.10, 6.3794, 6.3703, 6.3812], 5e-3)
+    assert ex.kind == "plateau" and idx == 1 and errs[1] <= 5e-3
+    assert ex.limit == pytest.approx((6.3794 + 6.3703 + 6.3812) / 3)
+    assert choose([6.3794, 6.30, 6.3812], 5e-3)[0] is None
+
+
 def test_choose_picks_the_coarsest_rung_within_tolerance():
     values = [1.0 + 0.1 * 2.0 ** (-2 * k) for k in range(5)]    # error 0.1 · 4^-k
     idx, errs, ex = choose(values, 1e-2)

@@ -250,19 +250,30 @@ class Problem:
         return True
 
     def _preallocate(self, J: PETSc.Mat) -> None:
-        """(Re)set J's nonzero pattern from ``node_pattern`` (exact; held DOFs only on the diagonal)."""
+        """(Re)set J's nonzero pattern from ``node_pattern`` (exact; held DOFs only on the diagonal).
+
+        A free DOF row of node i couples with every free DOF of the nodes i is coupled with; a
+        held DOF's row is its diagonal alone (its column is dropped everywhere else)."""
         lo, hi = self.layout.owned_nodes
         A = self.node_pattern()[lo:hi]
-        S = sp.kron(A, sp.csr_matrix(np.ones((18, 18), dtype=np.int8)), format="csr")
         free = ~self.fixed_mask
-        rows_free = free[18 * lo:18 * hi]
-        S = sp.diags(rows_free.astype(np.int8)) @ S @ sp.diags(free.astype(np.int8))
-        S = (S + sp.csr_matrix((np.ones(int((~rows_free).sum()), dtype=np.int8),
-                                (np.flatnonzero(~rows_free), np.flatnonzero(~rows_free) + 18 * lo)),
-                               shape=S.shape)).tocsr()
-        S.eliminate_zeros()
-        S.sort_indices()
-        J.setPreallocationCSR((S.indptr.astype(PETSc.IntType), S.indices.astype(PETSc.IntType)))
+        node_cols = (18 * A.indices[:, None] + np.arange(18)).ravel()      # DOF columns per entry
+        keep = free[node_cols]
+        cols = node_cols[keep]                                            # free columns, node by node
+        count = np.add.reduceat(keep.reshape(-1, 18).sum(axis=1), A.indptr[:-1]) \
+            if A.nnz else np.zeros(hi - lo, dtype=np.int64)
+        count[np.diff(A.indptr) == 0] = 0
+        start = np.concatenate([[0], np.cumsum(count)])[:-1]
+        rows = 18 * lo + np.arange(18 * (hi - lo))
+        row_free = free[rows]
+        length = np.where(row_free, np.repeat(count, 18), 1)
+        indptr = np.concatenate([[0], np.cumsum(length)])
+        # free row r of node i: cols[start_i : start_i + count_i]; held row: itself
+        first = np.where(row_free, np.repeat(start, 18), -1)
+        pos = np.arange(indptr[-1]) - np.repeat(indptr[:-1], length)
+        src = np.repeat(first, length) + pos
+        indices = np.where(np.repeat(row_free, length), cols[np.maximum(src, 0)], np.repeat(rows, length))
+        J.setPreallocationCSR((indptr.astype(PETSc.IntType), indices.astype(PETSc.IntType)))
         J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         J.setOption(PETSc.Mat.Option.SYMMETRIC, True)
 

@@ -206,20 +206,22 @@ class Contact:
             T, XI = np.meshgrid(t, xa)                       # (na, nt)
             WT, WX = np.meshgrid(wt, wa)
             T, XI, W0 = T.ravel(), XI.ravel(), (WT * WX).ravel()
-            for e in range(a.n_elements):
-                N, Nz = curve_shape(a, curve, XI, T)
-                q0e = model.q0[a.connectivity[e]].reshape(18, 3)
-                Xz = np.einsum("pak,ai->pik", Nz, q0e)      # (P, 3, 2): X_ξ, X_t
-                dA = np.linalg.norm(np.cross(Xz[:, :, 0], Xz[:, :, 1]), axis=1)
-                cols["itf"].append(np.full(len(T), k))
-                cols["eA"].append(np.full(len(T), a.element_offset + e))
-                cols["xi"].append(XI)
-                cols["t"].append(T)
-                cols["w"].append(W0 * dA)
-                cols["eB"].append(np.full(len(T), itf.b.element_offset + e))
-                cols["seg"].append(np.full(len(T), n_seg))
-                n_seg += 1
-            itf.n_points = len(T) * a.n_elements
+            # the same points (ξ, t) on every element of A: one shape-function evaluation
+            _, Nz = curve_shape(a, curve, XI, T)
+            q0e = model.q0[a.connectivity].reshape(a.n_elements, 18, 3)
+            Xz = np.einsum("pak,eai->epik", Nz, q0e)        # (E, P, 3, 2): X_ξ, X_t
+            dA = np.linalg.norm(np.cross(Xz[..., 0], Xz[..., 1]), axis=-1)
+            E, P = a.n_elements, len(T)
+            elems = np.repeat(np.arange(E), P)
+            cols["itf"].append(np.full(E * P, k))
+            cols["eA"].append(a.element_offset + elems)
+            cols["xi"].append(np.tile(XI, E))
+            cols["t"].append(np.tile(T, E))
+            cols["w"].append((W0 * dA).ravel())
+            cols["eB"].append(itf.b.element_offset + elems)
+            cols["seg"].append(n_seg + elems)
+            n_seg += E
+            itf.n_points = E * P
         self.pts = {k: np.concatenate(v) for k, v in cols.items()}
         self.n_points = len(self.pts["w"])
         # projection state (B element, ξ_B, t_B), started at the matching reference point
@@ -277,13 +279,19 @@ class Contact:
         points = np.arange(self.n_points) if points is None else points
         if len(points) == 0:
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-        seg_b = np.unique(np.stack([self.pts["seg"][points], self.eB[points]], 1), axis=0)
-        rows, cols = [], []
-        for s in np.unique(seg_b[:, 0]):
-            e_a = self.pts["eA"][np.searchsorted(self.pts["seg"], s)]
-            both = np.unique(np.concatenate([conn[e_a], conn[seg_b[seg_b[:, 0] == s, 1]].ravel()]))
-            rows.append(np.repeat(both, len(both)))
-            cols.append(np.tile(both, len(both)))
+        seg = self.pts["seg"][points]
+        seg_b = np.unique(np.stack([seg, self.eB[points]], 1), axis=0)     # sorted by segment
+        e_a = self.pts["eA"][np.searchsorted(self.pts["seg"], seg_b[:, 0])]
+        # (A element, one B element) of each pair: its 6 nodes, all with all
+        six = np.concatenate([conn[e_a], conn[seg_b[:, 1]]], axis=1)
+        rows, cols = [np.repeat(six, 6, axis=1).ravel()], [np.tile(six, (1, 6)).ravel()]
+        # a segment on several B elements also couples those elements with each other
+        first = np.searchsorted(seg_b[:, 0], seg_b[:, 0])
+        for i in np.flatnonzero(first != np.arange(len(seg_b))):
+            others = conn[seg_b[first[i]:i, 1]].ravel()
+            mine = conn[seg_b[i, 1]]
+            rows += [np.repeat(mine, len(others)), np.tile(others, 3)]
+            cols += [np.tile(others, 3), np.repeat(mine, len(others))]
         return np.concatenate(rows), np.concatenate(cols)
 
     def setup_layout(self, layout) -> None:
@@ -706,20 +714,27 @@ class Contact:
             raise RuntimeError("contact points must be stored segment by segment")
         self.seg_start = np.searchsorted(seg, np.arange(self.n_segments))
         self.seg_size = np.diff(np.append(self.seg_start, self.n_points))
-        self.C, self.B = [], []
-        for s in range(self.n_segments):
-            sl = slice(self.seg_start[s], self.seg_start[s] + self.seg_size[s])
+        self.C, self.B = [None] * self.n_segments, [None] * self.n_segments
+        # the segments of one interface share their points (ξ, τ), hence Φ; only the reference
+        # area weights differ: one batched Cholesky per interface
+        for k in range(len(self.interfaces)):
+            segs = np.flatnonzero(self.pts["itf"][self.seg_start] == k)
+            if len(segs) == 0:
+                continue
+            n = int(self.seg_size[segs[0]])
+            sl = slice(self.seg_start[segs[0]], self.seg_start[segs[0]] + n)
             xi, tau = self.pts["xi"][sl], 2.0 * self.pts["t"][sl] / self.t_end_a[sl] - 1.0
             kc_eff = min(kc, len(np.unique(tau)) - 1)
             Pa = leg.legvander(xi, ka)
             Pb = leg.legvander(tau, kc_eff)
-            Phi = (Pa[:, :, None] * Pb[:, None, :]).reshape(len(xi), -1)
-            w = self.pts["w"][sl]
-            M = Phi.T @ (w[:, None] * Phi)
-            WPhi = w[:, None] * Phi
-            Bs = np.linalg.solve(np.linalg.cholesky(M), WPhi.T)      # orthonormal moments m = B g
-            self.B.append(Bs)
-            self.C.append(Bs.T @ Bs)
+            Phi = (Pa[:, :, None] * Pb[:, None, :]).reshape(n, -1)
+            w = self.pts["w"][self.seg_start[segs][:, None] + np.arange(n)]     # (S, n)
+            WPhi = w[:, :, None] * Phi[None]                                    # (S, n, m)
+            M = np.matmul(Phi.T[None], WPhi)
+            Bs = np.linalg.solve(np.linalg.cholesky(M), WPhi.transpose(0, 2, 1))  # m = B g
+            Cs = np.matmul(Bs.transpose(0, 2, 1), Bs)
+            for j, s in enumerate(segs):
+                self.B[s], self.C[s] = Bs[j], Cs[j]
         self.mu = [np.zeros(Bs.shape[0]) for Bs in self.B]         # augmented-Lagrangian multipliers
 
     def _segments(self, r: dict):

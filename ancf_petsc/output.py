@@ -195,6 +195,7 @@ class ResultsWriter:
                  "cutbacks": record.cutbacks, "reason": record.reason,
                  "augmentations": record.augmentations,
                  "residual_norm": record.residual_norm, "wall_time": record.wall_time,
+                 "negative_eigenvalues": record.negative_eigenvalues,
                  "newton_history": record.iteration_history}
         if extra:
             entry.update(extra)

@@ -568,22 +568,34 @@ def plot_load_elongation(curves: dict[str, tuple[list[float], list[float]]], pap
 
 def plot_convergence(table: dict[str, list[tuple[int, float]]],
                      paper: dict[str, list[tuple[int, float]]], out_png: str, *,
-                     title: str = "", ylabel: str = "elongation at 400 N [mm]") -> str:
+                     title: str = "", ylabel: str = "elongation at 400 N [mm]",
+                     flagged: list[tuple[int, float]] | None = None) -> str:
     """Elongation vs elements per subtendon (log2 x axis): ours lines + markers, the paper's open
-    markers.  Entries with the same label in ``table`` and ``paper`` share a colour."""
-    col = _colours(list(table) + list(paper))
-    fig = Figure(figsize=(6.8, 3.8))
+    markers.  A label of ``table`` shares the colour of the ``paper`` label it starts with
+    (``"psi = 0, linear gap"`` goes with ``"psi = 0"``); variants after the comma get their own
+    line style; ``flagged`` points get a black cross."""
+    col = _colours(list(paper) + [lab.split(",")[0] for lab in table])
+    variants = list(dict.fromkeys(lab.split(",", 1)[1].strip() for lab in table if "," in lab))
+    styles = ["-s", "--^", ":o", "-.d"]
+    fig = Figure(figsize=(7.4, 3.8))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     ticks: set[int] = set()
     for lab, pts in table.items():
+        if not pts:
+            continue
         n, v = np.array(sorted(pts), dtype=float).T
-        ax.plot(n, v, "-s", color=col[lab], ms=5, lw=1.5, label=f"{lab} (this code)")
+        var = lab.split(",", 1)[1].strip() if "," in lab else ""
+        style = styles[variants.index(var) % len(styles)] if var else styles[0]
+        ax.plot(n, v, style, color=col[lab.split(",")[0]], ms=5, lw=1.5, label=f"{lab} (this code)")
         ticks.update(int(x) for x in n)
     for lab, pts in paper.items():
         n, v = np.array(sorted(pts), dtype=float).T
         ax.plot(n, v, "o", mfc="none", color=col[lab], ms=8, mew=1.3, label=f"{lab} (paper)")
         ticks.update(int(x) for x in n)
+    if flagged:
+        n, v = np.array(flagged, dtype=float).T
+        ax.plot(n, v, "x", color="k", ms=9, mew=1.6, label="reached through unstable states")
     ax.set_xscale("log", base=2)
     ax.xaxis.set_major_locator(FixedLocator(sorted(ticks)))
     ax.xaxis.set_major_formatter(ScalarFormatter())

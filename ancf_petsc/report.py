@@ -139,50 +139,82 @@ def table1_from(summaries: dict[int, dict | None]) -> Table1:
 
 
 # ------------------------------------------------------------------------------ Table 2
-def table2(out: str, elements=(1, 2, 4, 8, 16), ranks: int = 1, jobs: int = 1, log=print):
-    """Soleus elongation at 400 N for several elements per subtendon (n x n x n)."""
-    twist, ne = zip(*[(p, n) for p in TWISTS for n in elements])
-    params = {"geometry.twist_deg": list(twist), "steps": [[50, 100, 200, 300, 400]] * len(twist)}
+#: the sliding-gap spaces Table 2 is computed with (contact.projection): the default, the gap's
+#: mean across the interface, and the gap linear across it, which also holds the subtendons'
+#: relative section rotations and so keeps one- and two-element models stable
+T2_VARIANTS = {"mean gap": None, "linear gap": {"axial": 2, "curve": 1}}
+T2_ELEMENTS = (1, 2, 4, 8, 16)
+
+
+def table2(out: str, elements=T2_ELEMENTS, variants: dict = T2_VARIANTS, ranks: int = 1,
+           jobs: int = 1, log=print) -> dict:
+    """Soleus elongation at 400 N for n x n x n elements, per gap space and pretwist.
+
+    Rows are keyed (variant, ψ, n); each records whether the path stayed stable (the number
+    of negative tangent eigenvalues at every converged level, ``inertia.py``)."""
+    combos = [(v, p, n) for v in variants for p in TWISTS for n in elements]
+    params = {"geometry.twist_deg": [p for _, p, _ in combos],
+              "steps": [[50, 100, 150, 200, 300, 400]] * len(combos),
+              "contact.projection": [variants[v] for v, _, _ in combos]}
     for b in range(BEAMS):
-        params[f"beams[{b}].elements"] = list(ne)
+        params[f"beams[{b}].elements"] = [n for _, _, n in combos]
     sweep = make_sweep(out, "table2", params, ranks=ranks, jobs=jobs)
     states = execute(sweep, log)
     rows = {}
-    for (p, n), st in zip(zip(twist, ne), states):
+    for key, st in zip(combos, states):
         s = summary_of(st)
         lf, el = elongations(s) if s else (np.array([]), np.array([]))
         done = len(lf) and np.isclose(lf[-1], 400.0)
-        rows[(p, n)] = {"elong": float(el[-1]) if done else np.nan,
-                        "status": st.status, "reason": st.reason,
-                        "reached": float(lf[-1]) if len(lf) else 0.0,
-                        "time": s["timings"]["total"] if s else np.nan,
-                        "iterations": s.get("newton_iterations") if s else None,
-                        "dofs": s.get("dofs") if s else None}
+        neg = [(x["load_factor"], x.get("negative_eigenvalues")) for x in (s["steps"] if s else [])]
+        unstable = [f for f, k in neg if k]
+        rows[key] = {"elong": float(el[-1]) if done else np.nan,
+                     "status": st.status, "reason": st.reason,
+                     "reached": float(lf[-1]) if len(lf) else 0.0,
+                     "unstable_from": min(unstable) if unstable else None,
+                     "time": s["timings"]["total"] if s else np.nan,
+                     "iterations": s.get("newton_iterations") if s else None,
+                     "dofs": s.get("dofs") if s else None}
     return rows
 
 
-def table2_markdown(rows: dict, elements=(1, 2, 4, 8, 16)) -> str:
+def table2_markdown(rows: dict, elements=T2_ELEMENTS) -> str:
+    """One table per gap space; ``u`` marks a result reached through unstable equilibria."""
     paper = read_paper(PAPER_T2)
     pn = {int(n): i for i, n in enumerate(paper["elements_per_subtendon"])}
-    lines = ["| elements n×n×n | DOFs | " + " | ".join(f"ψ={p}° paper | ψ={p}° ours | err" for p in TWISTS) + " |",
-             "|---:|---:|" + "---:|---:|---:|" * len(TWISTS)]
-    for n in elements:
-        cells = []
-        for p in TWISTS:
-            r = rows[(p, n)]
-            pv = paper[f"psi{p}_mm"][pn[n]] if n in pn else np.nan
-            if np.isfinite(r["elong"]):
-                ours = f"{r['elong']:.3f}"
-                err = f"{100 * (r['elong'] / pv - 1):+.2f} %" if np.isfinite(pv) else ""
-            else:
-                ours, err = f"stopped at {r['reached']:g} N", ""
-            cells.append(f"{pv:.3f} | {ours} | {err}" if np.isfinite(pv) else f"– | {ours} | ")
-        dofs = next((rows[(p, n)]["dofs"] for p in TWISTS if rows[(p, n)]["dofs"]), "")
-        lines.append(f"| {n} | {dofs} | " + " | ".join(cells) + " |")
-    failed = [(k, r) for k, r in rows.items() if r["status"] != "completed"]
-    for (p, n), r in failed:
-        lines.append(f"\nψ={p}°, {n} element(s): {r['status']}: {r['reason']}")
-    return "\n".join(lines)
+    variants = list(dict.fromkeys(v for v, _, _ in rows))
+    lines = []
+    for v in variants:
+        lines += ["", f"**{v}**" + (" (default)" if T2_VARIANTS.get(v, 0) is None else
+                                    f" (contact.projection: {T2_VARIANTS.get(v)})"), "",
+                  "| elements n×n×n | DOFs | " + " | ".join(f"ψ={p}° paper | ψ={p}° ours | err"
+                                                          for p in TWISTS) + " |",
+                  "|---:|---:|" + "---:|---:|---:|" * len(TWISTS)]
+        for n in elements:
+            cells = []
+            for p in TWISTS:
+                r = rows[(v, p, n)]
+                pv = paper[f"psi{p}_mm"][pn[n]] if n in pn else np.nan
+                mark = f" (u ≥ {r['unstable_from']:g} N)" if r["unstable_from"] is not None else ""
+                if np.isfinite(r["elong"]):
+                    ours = f"{r['elong']:.3f}{mark}"
+                    err = f"{100 * (r['elong'] / pv - 1):+.2f} %" if np.isfinite(pv) else ""
+                else:
+                    ours, err = f"stopped after {r['reached']:g} N{mark}", ""
+                cells.append(f"{pv:.3f} | {ours} | {err}" if np.isfinite(pv) else f"– | {ours} | ")
+            dofs = next((rows[(v, p, n)]["dofs"] for p in TWISTS if rows[(v, p, n)]["dofs"]), "")
+            lines.append(f"| {n} | {dofs} | " + " | ".join(cells) + " |")
+    lines += ["", "(u ≥ F N): from that load on the converged states have a negative tangent "
+                  "eigenvalue (a saddle of the total potential, not a stable equilibrium)."]
+    for (v, p, n), r in rows.items():
+        if r["status"] != "completed":
+            lines.append(f"- {v}, ψ={p}°, {n} element(s): {r['status']}: {r['reason']}")
+    return "\n".join(lines).strip("\n")
+
+
+def table2_stable(rows: dict, variant: str, twist: int, n: int) -> float:
+    """Elongation of a Table 2 entry if it reached 400 N through stable states only, else nan."""
+    r = rows[(variant, twist, n)]
+    return r["elong"] if r["unstable_from"] is None else np.nan
 
 
 # ------------------------------------------------------------------------------ penalty study
@@ -305,12 +337,18 @@ def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list
                                                   title="Type III tendon: soleus elongation vs Table 1"))
     if t2rows:
         paper = read_paper(PAPER_T2)
-        ours = {f"psi = {p}": [(n, r["elong"]) for (pp, n), r in sorted(t2rows.items())
-                               if pp == p and np.isfinite(r["elong"])] for p in TWISTS}
+        ours = {}
+        for v in dict.fromkeys(k[0] for k in t2rows):
+            for p in TWISTS:
+                ours[f"psi = {p}, {v}"] = [(n, r["elong"]) for (vv, pp, n), r in sorted(t2rows.items())
+                                           if vv == v and pp == p and np.isfinite(r["elong"])]
         theirs = {f"psi = {p}": list(zip(paper["elements_per_subtendon"].astype(int), paper[f"psi{p}_mm"]))
                   for p in TWISTS}
+        unstable = [(n, r["elong"]) for (_, _, n), r in t2rows.items()
+                    if r["unstable_from"] is not None and np.isfinite(r["elong"])]
         made.append(plotting.plot_convergence(ours, theirs, os.path.join(out, "convergence.png"),
-                                              title="Soleus elongation at 400 N vs elements per subtendon"))
+                                              title="Soleus elongation at 400 N vs elements per subtendon",
+                                              flagged=unstable))
     vtus = {}
     for p in (15, 45):
         s = t1.summaries.get(p)

@@ -99,9 +99,11 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
             k = len(writer.summary["steps"])
             probes = "  ".join(f"{n} u={_fmt_vec(p['displacement'])}"
                                for n, p in writer.summary["steps"][-1]["probes"].items())
+            unstable = (f"  UNSTABLE: {rec.negative_eigenvalues} negative tangent eigenvalue(s)"
+                        if rec.negative_eigenvalues else "")
             say(f"[ancf] step {k}/{n_levels}  load factor {rec.load_factor:.6g}  "
                 f"Newton {rec.iterations} in {rec.substeps} substep(s)  {rec.reason}  "
-                f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s  {probes}")
+                f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s{unstable}  {probes}")
 
     status, message = "completed", "completed"
     records = []
@@ -109,6 +111,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
         records = stepper.run(spec.steps, on_level)
     except LoadStepFailure as exc:
         status, message = "failed", str(exc)
+    finally:
+        stepper.close()
     timings["total"] = time.perf_counter() - t_start
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
     timings.update(problem.timers)

@@ -21,6 +21,7 @@ from petsc4py import PETSc
 
 from .assembly import Problem
 from .config import SolverSpec
+from .inertia import negative_pivots
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",
@@ -70,12 +71,22 @@ class StepRecord:
     residual_norm: float
     wall_time: float
     iteration_history: list = field(default_factory=list)
+    # negative eigenvalues of the tangent of the last Newton iteration (inertia of its LDLᵀ
+    # factor): 0 = a stable equilibrium, > 0 = a saddle; None when the PC is not MUMPS LDLᵀ
+    negative_eigenvalues: int | None = None
 
 
-def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) -> str:
-    """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found.
+#: options read only when the factorisation is first set up, after ``setFromOptions``
+DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
 
-    Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES).
+
+def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) -> tuple[str, list[str]]:
+    """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found
+    except for the factorisation options (``DEFERRED_OPTIONS``), which MUMPS reads at its first
+    symbolic factorisation: those stay until the caller removes them (``LoadStepper.close``).
+
+    Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES) and the
+    option names left in the database.
     """
     opts = PETSc.Options()
     inserted = []
@@ -84,13 +95,15 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) ->
             if not opts.hasName(key):
                 opts.setValue(key, value)
                 inserted.append(key)
+    kept = [k for k in inserted if k.startswith(DEFERRED_OPTIONS)]
     try:
         snes.setFromOptions()
         linesearch = opts.getString("snes_linesearch_type", "bt")  # PETSc's own default
     finally:
         for key in inserted:
-            opts.delValue(key)
-    return linesearch
+            if key not in kept:
+                opts.delValue(key)
+    return linesearch, kept
 
 
 class LoadStepper:
@@ -108,9 +121,11 @@ class LoadStepper:
             self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
         defaults = dict(DEFAULT_OPTIONS)
         if 1 < problem.comm.size <= 4:
-            # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid) is slower than
-            # factoring the root on one rank (37-fascicle bundle, 22k DOFs, 2 ranks: 1.22 -> 1.08 s
-            # per factorisation); more ranks keep MUMPS's default
+            # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid: LU, twice the
+            # flops of the LDLᵀ root) is slower than factoring the root on one rank (37-fascicle
+            # bundle, 22k DOFs, 2 ranks: 0.72 -> 0.65 s per factorisation), and only a sequential
+            # root gives the stability check its negative-pivot count (inertia.py); more ranks
+            # keep MUMPS's default
             defaults["mat_mumps_icntl_13"] = "1"
         # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
         # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic; it
@@ -118,10 +133,17 @@ class LoadStepper:
         fnorm = problem.fext.norm() * max_level
         self.rounding_floor = problem.reference_residual_norm()
         defaults["snes_atol"] = f"{max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30):.3e}"
-        self.linesearch = configure_options(self.snes, petsc_options, defaults)
+        self.linesearch, self._kept_options = configure_options(self.snes, petsc_options, defaults)
         self._history: list[int] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
+
+    def close(self) -> None:
+        """Remove the factorisation options this stepper left in PETSc's database."""
+        opts = PETSc.Options()
+        for key in self._kept_options:
+            opts.delValue(key)
+        self._kept_options = []
 
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
@@ -247,7 +269,8 @@ class LoadStepper:
                 rec = StepRecord(load_factor=target, iterations=its_total, substeps=substeps,
                                  cutbacks=cutbacks, reason=reason_name(reason), augmentations=augmentations,
                                  residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
-                                 iteration_history=history)
+                                 iteration_history=history,
+                                 negative_eigenvalues=negative_pivots(self.snes.getKSP()))
                 records.append(rec)
                 on_level(rec)
         finally:

@@ -214,16 +214,21 @@ class Problem:
         """A full PETSc-ordered array (n_dofs,) → model order (n_nodes, 6, 3)."""
         return full_petsc.reshape(-1, 18)[self.layout.perm].reshape(-1, 6, 3)
 
-    def node_pattern(self) -> sp.csr_matrix:
-        """Node-block coupling (PETSc numbering): elements + the contact pairs seen so far."""
+    def node_pattern(self, rows: tuple[int, int] | None = None) -> sp.csr_matrix:
+        """Node-block coupling (PETSc numbering): elements + the contact pairs seen so far;
+        with ``rows = (lo, hi)`` only those node rows (shape (hi − lo, n))."""
         n = self.model.n_nodes
+        lo, hi = (0, n) if rows is None else rows
         conn = self.layout.perm[self.model.connectivity()]
+        conn = conn[np.any((conn >= lo) & (conn < hi), axis=1)]
         r = np.repeat(conn, 3, axis=1).ravel()
         c = np.tile(conn, (1, 3)).ravel()
         if self.contact is not None:
             cr, cc = np.divmod(self._contact_pairs, n)
             r, c = np.concatenate([r, cr]), np.concatenate([c, cc])
-        A = sp.coo_matrix((np.ones(len(r), dtype=np.int8), (r, c)), shape=(n, n)).tocsr()
+        mine = (r >= lo) & (r < hi)
+        A = sp.coo_matrix((np.ones(int(mine.sum()), dtype=np.int8), (r[mine] - lo, c[mine])),
+                          shape=(hi - lo, n)).tocsr()
         A.data[:] = 1
         return A
 
@@ -255,7 +260,7 @@ class Problem:
         A free DOF row of node i couples with every free DOF of the nodes i is coupled with; a
         held DOF's row is its diagonal alone (its column is dropped everywhere else)."""
         lo, hi = self.layout.owned_nodes
-        A = self.node_pattern()[lo:hi]
+        A = self.node_pattern((lo, hi))
         free = ~self.fixed_mask
         node_cols = (18 * A.indices[:, None] + np.arange(18)).ravel()      # DOF columns per entry
         keep = free[node_cols]

@@ -71,7 +71,7 @@ def test_metis_partition_balances_and_is_stored(tmp_path):
     from ancf_petsc.contact import build_contact
     from ancf_petsc.model import build_model
     from ancf_petsc.partition import element_graph, make_layout, partition_stats
-    raw = load_raw("bundle_hex37.yaml")
+    raw = load_raw("bundle_hex37_coarse.yaml")
     spec = parse_config(raw)
     model = build_model(spec)
     contact = build_contact(model, spec.contact, lambda *a: None)
@@ -164,3 +164,16 @@ def test_rigid_body_modes_are_zero_energy():
     for m in modes:
         v = m.reshape(-1, 18)[perm[beam.connectivity]].reshape(len(ids), 54)
         assert np.abs(np.einsum("eij,ej->ei", K, v)).max() <= 1e-9 * np.abs(K).max() * np.abs(v).max()
+
+
+def test_the_37_fascicle_scene_has_tens_of_thousands_of_dofs():
+    """configs/bundle_hex37.yaml (scripts/bench_scaling.py) is the scene that needs MPI."""
+    petsc_init()
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model import build_model
+    spec = parse_config(load_raw("bundle_hex37.yaml"))
+    model = build_model(spec)
+    contact = build_contact(model, spec.contact, lambda *a: None)
+    assert len(model.beams) == 37 and model.n_dofs == 21978
+    assert len(contact.interfaces) == 90 and contact.n_segments == 90 * 16

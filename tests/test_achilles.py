@@ -96,3 +96,10 @@ def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
     bundle_offset = table1.ours[45] - table1.ours[0]
     assert np.all(np.abs(solo_offset - paper_offset) < 0.002), solo_offset - paper_offset
     assert bundle_offset[0] < 0.85 * solo_offset[0]
+
+
+def test_table1_paths_are_stable(table1):
+    """Every converged level of the three columns is a minimum of the total potential (no
+    negative tangent eigenvalue; README "Table 2" for the coarse meshes where this fails)."""
+    for psi, s in table1.summaries.items():
+        assert [st["negative_eigenvalues"] for st in s["steps"]] == [0] * 13, psi

@@ -211,12 +211,6 @@ def table2_markdown(rows: dict, elements=T2_ELEMENTS) -> str:
     return "\n".join(lines).strip("\n")
 
 
-def table2_stable(rows: dict, variant: str, twist: int, n: int) -> float:
-    """Elongation of a Table 2 entry if it reached 400 N through stable states only, else nan."""
-    r = rows[(variant, twist, n)]
-    return r["elong"] if r["unstable_from"] is None else np.nan
-
-
 # ------------------------------------------------------------------------------ penalty study
 PENALTY_SCALES = (1e-3, 1e-2, 1e-1, 10 ** -0.5, 1.0, 10 ** 0.5, 10.0, 100.0, 1e3, 1e4)
 

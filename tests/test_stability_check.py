@@ -83,3 +83,19 @@ def test_no_count_without_an_ldlt_factor(tmp_path):
     raw = coarse_achilles(steps=(10,))
     s = run_inline(raw, tmp_path / "lu", petsc={"pc_type": "lu"})
     assert s["steps"][0]["negative_eigenvalues"] is None
+
+
+def test_table2_markdown_marks_unstable_and_stopped_runs():
+    rows = {}
+    for v in rp.T2_VARIANTS:
+        for p in rp.TWISTS:
+            for n in rp.T2_ELEMENTS:
+                rows[(v, p, n)] = {"elong": 6.1 + 0.01 * n, "status": "completed", "reason": "",
+                                   "reached": 400.0, "unstable_from": None, "dofs": 54 * (2 * n + 1)}
+    rows[("mean gap", 0, 1)].update(elong=np.nan, status="failed", reached=200.0, unstable_from=50.0,
+                                    reason="could not reach load factor 300")
+    text = rp.table2_markdown(rows)
+    assert "**mean gap** (default)" in text and "**linear gap** (contact.projection:" in text
+    assert "stopped after 200 N (u ≥ 50 N)" in text
+    assert "- mean gap, ψ=0°, 1 element(s): failed: could not reach load factor 300" in text
+    assert text.count("| 4 | 486 |") == 2

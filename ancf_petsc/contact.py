@@ -838,25 +838,53 @@ class Contact:
                          f"projected onto {itf.b.name}")
         return lines
 
-    def gaps(self, q_model: np.ndarray) -> dict:
-        """Distances of the active points to the other surface per interface, at a gathered state."""
-        r = self._evaluate_all(q_model)
-        mean_gap = np.zeros(self.n_segments)
-        if self.projection is not None:       # RMS of the projected gap per segment, |B g| / √area
+    def _gap_sums(self, r: dict, points: np.ndarray) -> np.ndarray:
+        """Per interface (rows): [largest |d| of the active points, Σ |d|² over them, active
+        points, largest projected gap RMS |B g| / √area of a segment, points], over ``points``
+        (``r`` evaluated on them, in that order).  Rows reduce over ranks by max, sum, sum, max,
+        sum (``gap_report``)."""
+        itf = self.pts["itf"][points]
+        act = r["w"] > 0.0
+        dist = np.linalg.norm(r["d"], axis=1)
+        out = np.zeros((len(self.interfaces), 5))
+        for k in range(len(self.interfaces)):
+            sel, on = act & (itf == k), itf == k
+            out[k, 0] = dist[sel].max(initial=0.0)
+            out[k, 1] = float(np.sum(dist[sel] ** 2))
+            out[k, 2], out[k, 4] = sel.sum(), on.sum()
+        if self.projection is not None:       # RMS of the projected gap per segment
             g = r["g"] * r["valid"]
-            for s in range(self.n_segments):
-                sl = slice(self.seg_start[s], self.seg_start[s] + self.seg_size[s])
-                mean_gap[s] = np.linalg.norm(self.B[s] @ g[sl]) / np.sqrt(self.pts["w"][sl].sum())
+            seg = self.pts["seg"][points]
+            for s in np.unique(seg):
+                p0, n = int(np.searchsorted(seg, s)), int(self.seg_size[s])
+                sl = slice(self.seg_start[s], self.seg_start[s] + n)
+                rms = np.linalg.norm(self.B[s] @ g[p0:p0 + n]) / np.sqrt(self.pts["w"][sl].sum())
+                k = self.pts["itf"][self.seg_start[s]]
+                out[k, 3] = max(out[k, 3], rms)
+        return out
+
+    def gap_sums(self, xl: np.ndarray, needed: np.ndarray) -> np.ndarray:
+        """``_gap_sums`` of this rank's points at the local state (the projection of the last
+        residual at the same state is reused)."""
+        if len(self.local) == 0:
+            return np.zeros((len(self.interfaces), 5))
+        return self._gap_sums(self._evaluate(xl, needed, hessian=False), self.local)
+
+    def gap_report(self, sums: np.ndarray) -> dict:
+        """Per-interface gap statistics from (rank-reduced) ``_gap_sums``."""
         out = {}
         for k, itf in enumerate(self.interfaces):
-            sel = (self.pts["itf"] == k) & (r["w"] > 0.0)
-            gap = np.linalg.norm(r["d"][sel], axis=1) if np.any(sel) else np.zeros(1)
-            segs = np.unique(self.pts["seg"][self.pts["itf"] == k])
-            out[itf.name] = {"max_gap": float(gap.max()), "rms_gap": float(np.sqrt(np.mean(gap ** 2))),
-                             "max_projected_gap": float(mean_gap[segs].max()),
-                             "active_points": int(sel.sum()),
-                             "points": int(np.sum(self.pts["itf"] == k))}
+            mx, sq, na, mp, npts = sums[k]
+            out[itf.name] = {"max_gap": float(mx), "rms_gap": float(np.sqrt(sq / na)) if na else 0.0,
+                             "max_projected_gap": float(mp), "active_points": int(na),
+                             "points": int(npts)}
         return out
+
+    def gaps(self, q_model: np.ndarray) -> dict:
+        """Distances of the active points to the other surface per interface, at a gathered
+        state (every point evaluated here; runs use ``Problem.contact_gaps``)."""
+        r = self._evaluate_all(q_model)
+        return self.gap_report(self._gap_sums(r, np.arange(self.n_points)))
 
 
 def build_contact(model: Model, spec: ContactSpec, log=print) -> Contact:

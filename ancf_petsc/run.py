@@ -91,7 +91,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
         STAGE_OUTPUT.push()
         t0 = time.perf_counter()
         q = problem.gather()
-        extra = {"contact": contact.gaps(q)} if (contact is not None and rank == 0) else None
+        gaps = problem.contact_gaps(problem.X)          # collective: every rank its own points
+        extra = {"contact": gaps} if gaps is not None else None
         writer.write_step(rec, q, extra)
         timings["output"] += time.perf_counter() - t0
         STAGE_OUTPUT.pop()

@@ -201,6 +201,7 @@ class SolverSpec:
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
+    matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solver.matrix_type)
 
 
 @dataclass
@@ -463,7 +464,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 
     sv = mapping(raw.get("solver", {}), "solver",
                  optional=("max_increment", "initial_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
-                           "predictor", "merit", "min_det_f", "max_newton_iterations"))
+                           "predictor", "merit", "min_det_f", "max_newton_iterations", "matrix"))
     solver = SolverSpec()
     if sv.get("max_increment") is not None:
         solver.max_increment = number(sv["max_increment"], "solver.max_increment", positive=True)
@@ -483,6 +484,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         solver.predictor = string(sv["predictor"], "solver.predictor", ("none", "secant"))
     if "easy_iterations" in sv:
         solver.easy_iterations = integer(sv["easy_iterations"], "solver.easy_iterations", lo=1)
+    if "matrix" in sv:
+        solver.matrix = string(sv["matrix"], "solver.matrix", ("auto", "aij", "sbaij"))
     if sv.get("max_newton_iterations") is not None:
         solver.max_newton_iterations = integer(sv["max_newton_iterations"], "solver.max_newton_iterations", lo=1)
 

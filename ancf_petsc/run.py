@@ -13,7 +13,7 @@ from .config import ModelSpec
 from .partition import make_layout, partition_stats
 from .model import build_model
 from .output import ResultsWriter
-from .solver import STAGE_SOLVE, LoadStepFailure, LoadStepper
+from .solver import STAGE_SOLVE, LoadStepFailure, LoadStepper, matrix_type
 
 STAGE_SETUP = PETSc.Log.Stage("ANCF setup")
 STAGE_OUTPUT = PETSc.Log.Stage("ANCF output")
@@ -63,7 +63,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
         contact = build_contact(model, spec.contact, say)
     layout = make_layout(model, spec.partition, comm.size, rank, contact, comm.tompi4py())
     partition = partition_stats(layout, model, contact)
-    problem = Problem(model, layout, comm, contact)
+    problem = Problem(model, layout, comm, contact,
+                      matrix_type(model, spec.solver.matrix, spec.petsc))
     stepper = LoadStepper(problem, spec.solver, spec.petsc, say, max_level=max(spec.steps))
     STAGE_SETUP.pop()
     t_setup = time.perf_counter() - t_start

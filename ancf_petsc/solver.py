@@ -20,7 +20,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from .assembly import Problem
-from .config import SolverSpec
+from .config import ConfigError, SolverSpec
 from .inertia import negative_pivots
 
 DEFAULT_OPTIONS = {
@@ -74,6 +74,38 @@ class StepRecord:
     # negative eigenvalues of the tangent of the last Newton iteration (inertia of its LDLᵀ
     # factor): 0 = a stable equilibrium, > 0 = a saddle; None when the PC is not MUMPS LDLᵀ
     negative_eigenvalues: int | None = None
+
+
+#: preconditioners PETSc runs on an SBAIJ matrix (MUMPS LDLᵀ, incomplete Cholesky, and the
+#: block/overlapping ones around them); LU, ILU, GAMG and hypre need AIJ
+SBAIJ_PCS = ("cholesky", "icc", "bjacobi", "asm", "jacobi", "none")
+
+
+def matrix_type(model, choice: str, config_options: dict) -> str:
+    """The Jacobian's storage, 'aij' or 'sbaij' (``solver.matrix``; the options in effect are the
+    command line's, then the config's ``petsc:``, then ``DEFAULT_OPTIONS``).
+
+    ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) on
+    3363 beams (3333 beams hold half of each node block at zero)."""
+    opts = PETSc.Options()
+
+    def option(key: str) -> str:
+        if opts.hasName(key):
+            return str(opts.getString(key, ""))
+        return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
+
+    pc, factor = option("pc_type"), option("pc_factor_mat_solver_type")
+    full = all(len(b.vectors) == 6 for b in model.beams)
+    if choice == "auto":
+        return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
+    if choice == "sbaij":
+        if not full:
+            raise ConfigError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
+                                               "half of each node block); use aij or auto")
+        if pc not in SBAIJ_PCS:
+            raise ConfigError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij; "
+                                               f"use aij or auto")
+    return choice
 
 
 #: options read only when the factorisation is first set up, after ``setFromOptions``
@@ -157,7 +189,7 @@ class LoadStepper:
             extra = f" ({pc.getFactorSolverType()})"
         rtol, atol, stol, maxit = self.snes.getTolerances()
         return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
-                f"{pc.getType()}{extra}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}; "
+                f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}; "
                 f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}")
 
     def _solve_at(self, lam: float, X: PETSc.Vec) -> tuple[int, int, float]:

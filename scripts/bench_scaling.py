@@ -115,7 +115,7 @@ def main(argv=None) -> int:
                 rows.append(run(f"{name}_n2", 2, SOLVERS[name], base, a.out))
     ref = rows[0]
     print(f"\nDOFs {ref['summary'].get('dofs')}.  Phase times [s] (rank 0; elements = kernels + "
-          "MatSetValues, contact = projection + assembly, linear = KSPSolve + PCSetUp; wall = the "
+          "insertion, contact = projection + assembly, linear = KSPSolve + PCSetUp; wall = the "
           "whole mpirun command, run = set-up + load stepping + output)")
     hdr = (f"{'run':24s} {'status':9s} {'wall':>6s} {'run':>6s} {'setup':>6s} {'elements':>8s} "
            f"{'contact':>8s} {'linear':>7s} {'Newton':>6s} {'Krylov':>6s} {'vs first':>9s}")

@@ -93,6 +93,7 @@ CASES += [
     ("bundle section", _bundle(fascicle_section="square"), "bundle.fascicle_section", "hexagon"),
     ("bundle radius", _bundle(radius=-1.0), "bundle.radius", "> 0"),
     ("bundle missing", _bundle(force=None), "bundle", "force"),
+    ("matrix format", _set(["solver"], {"matrix": "dense"}), "solver.matrix", "one of"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
 ]
 

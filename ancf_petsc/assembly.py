@@ -74,8 +74,8 @@ def node_blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
 
 
 def zero_held(values: np.ndarray, held: np.ndarray | None) -> np.ndarray:
-    """``values`` (n, D, D) with the rows and columns of ``held`` (n, D) zeroed (a copy of the
-    affected blocks only)."""
+    """Zero the rows and columns of ``held`` (n, D) in ``values`` (n, D, D), in place (the
+    callers' blocks are fresh arrays, inserted once)."""
     if held is None:
         return values
     hit = np.flatnonzero(held.any(axis=1))
@@ -83,9 +83,13 @@ def zero_held(values: np.ndarray, held: np.ndarray | None) -> np.ndarray:
     h = held[hit]
     v[h] = 0.0                                        # rows
     v.transpose(0, 2, 1)[h] = 0.0                     # columns
-    out = values.copy()
-    out[hit] = v
-    return out
+    values[hit] = v
+    return values
+
+
+def node_blocks_fit(model: Model) -> bool:
+    """Whether every node's 18 DOFs are active (all beams 3363), as SBAIJ node blocks need."""
+    return all(len(b.vectors) == 6 for b in model.beams)
 
 
 def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, values: np.ndarray) -> None:
@@ -123,7 +127,7 @@ class Problem:
                  matrix_type: str = "aij"):
         if matrix_type not in MATRIX_TYPES:
             raise ValueError(f"matrix_type must be one of {MATRIX_TYPES}, not {matrix_type!r}")
-        if matrix_type == "sbaij" and not all(len(b.vectors) == 6 for b in model.beams):
+        if matrix_type == "sbaij" and not node_blocks_fit(model):
             raise ValueError("SBAIJ node blocks need every beam to use all six nodal vectors "
                              "(element 3363); use matrix_type 'aij'")
         self.matrix_type = matrix_type
@@ -304,15 +308,19 @@ class Problem:
         if len(new) == 0:                       # the same on every rank (allgathered)
             return False
         self._contact_pairs = np.union1d(self._contact_pairs, new)
-        if self.matrix_type == "sbaij":
-            self._preallocate_sbaij(self.J)
-        else:
-            self._preallocate(self.J)
+        self._preallocate(self.J)
         self.pattern_growths += 1
         return True
 
     def _preallocate(self, J: PETSc.Mat) -> None:
-        """(Re)set J's nonzero pattern from ``node_pattern`` (exact; held DOFs only on the diagonal).
+        """(Re)set J's nonzero pattern from ``node_pattern``, in J's format."""
+        if self.matrix_type == "sbaij":
+            self._preallocate_sbaij(J)
+        else:
+            self._preallocate_aij(J)
+
+    def _preallocate_aij(self, J: PETSc.Mat) -> None:
+        """(Re)set an AIJ J's pattern from ``node_pattern`` (exact; held DOFs only on the diagonal).
 
         A free DOF row of node i couples with every free DOF of the nodes i is coupled with; a
         held DOF's row is its diagonal alone (its column is dropped everywhere else)."""
@@ -363,12 +371,8 @@ class Problem:
             self._contact_pairs = self._current_contact_pairs()
         J = PETSc.Mat().create(comm=self.comm)
         J.setSizes(((18 * (hi - lo), self.model.n_dofs), (18 * (hi - lo), self.model.n_dofs)), bsize=18)
-        if self.matrix_type == "sbaij":
-            J.setType(PETSc.Mat.Type.SBAIJ)
-            self._preallocate_sbaij(J)
-        else:
-            J.setType(PETSc.Mat.Type.AIJ)
-            self._preallocate(J)
+        J.setType(PETSc.Mat.Type.SBAIJ if self.matrix_type == "sbaij" else PETSc.Mat.Type.AIJ)
+        self._preallocate(J)
         return J
 
     def _local_state(self, X: PETSc.Vec) -> np.ndarray:

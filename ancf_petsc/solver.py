@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 from petsc4py import PETSc
 
-from .assembly import Problem
+from .assembly import Problem, node_blocks_fit
 from .config import ConfigError, SolverSpec
 from .inertia import negative_pivots
 
@@ -95,7 +95,7 @@ def matrix_type(model, choice: str, config_options: dict) -> str:
         return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
 
     pc, factor = option("pc_type"), option("pc_factor_mat_solver_type")
-    full = all(len(b.vectors) == 6 for b in model.beams)
+    full = node_blocks_fit(model)
     if choice == "auto":
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
     if choice == "sbaij":

@@ -1,11 +1,14 @@
-"""Residual F(q, λ) = f_int(q) + f_con(q) − λ f_ext and Jacobian K(q) in PETSc Vec / Mat.
+"""Residual F(q, z; λ) = f_int(q) + f_con(q, z) − λ f_ext (and the contact constraint rows) and
+its Jacobian in PETSc Vec / Mat.
 
 The only module (with ``solver``) that touches PETSc objects.  Each rank evaluates the element
 kernels of its own elements on a local copy of exactly the node blocks they need (a VecScatter
 from the global vector), adds the element forces back with the reverse scatter, and inserts
 element matrices with one batched call per beam.  DOFs held by boundary conditions get the
 residual q − q̄ and a unit row/column; their entries in element matrices are dropped (negative
-indices, or zeroed values in node blocks), so the Jacobian stays symmetric.
+indices, or zeroed values in node blocks), so the Jacobian stays symmetric.  The contact
+multipliers z are extra node blocks after the beams' nodes (``Layout.n_blocks``); their unused
+slots are held at zero like supported DOFs.
 
 The Jacobian is AIJ, or SBAIJ with 18 × 18 node blocks (``matrix_type``): the upper triangle of
 node blocks, inserted one block at a time (``insert_node_blocks``).  That is ~15× faster than
@@ -100,24 +103,8 @@ def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, values: np.ndarray) -> 
         node, held = node_blocks(rows)
         mat.setValuesBlockedRCV(node, node, zero_held(values, held), ADD)
     else:
+        rows = rows.astype(PETSc.IntType)
         mat.setValuesRCV(rows, rows, values, ADD)
-
-
-class _Collector:
-    """Stands in for a Mat in ``setValuesRCV`` calls; adds the blocks to a real Mat later."""
-
-    def __init__(self):
-        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-
-    def clear(self) -> None:
-        self.blocks.clear()
-
-    def setValuesRCV(self, rows, cols, values, mode=None) -> None:    # noqa: N802 (PETSc name)
-        self.blocks.append((rows, cols, values))
-
-    def add_to(self, mat: PETSc.Mat) -> None:
-        for rows, cols, values in self.blocks:     # contact blocks: rows is cols
-            insert_node_blocks(mat, rows, values)
 
 
 class Problem:
@@ -140,11 +127,16 @@ class Problem:
             contact.timers = self.timers
         self.inverted = False
         self.contact_failed = False
+        if contact is not None and layout.n_blocks != model.n_nodes + contact.space.n_nodes:
+            raise ValueError("the layout has no blocks for the contact multipliers; make it with "
+                             "partition.make_layout(..., contact)")
         lo, hi = layout.owned_nodes
         n_owned = hi - lo
-        N = model.n_dofs
-
-        fixed_petsc = layout.petsc_dofs(model.fixed_dofs)
+        self.n_blocks = layout.n_blocks
+        N = 18 * self.n_blocks
+        held = model.fixed_dofs if contact is None else np.concatenate([model.fixed_dofs,
+                                                                      contact.padding_dofs()])
+        fixed_petsc = layout.petsc_dofs(held)
         self.fixed_mask = np.zeros(N, dtype=bool)
         self.fixed_mask[fixed_petsc] = True
         owned_fixed = np.sort(fixed_petsc[(fixed_petsc >= 18 * lo) & (fixed_petsc < 18 * hi)])
@@ -171,16 +163,28 @@ class Problem:
 
         self.X = PETSc.Vec().createMPI((18 * n_owned, N), bsize=18, comm=comm)
         self.F = self.X.duplicate()
-        self._model_q0 = model.q0.reshape(-1)
+        # reference state of every block (multipliers start at zero)
+        self._model_q0 = np.zeros(N)
+        self._model_q0[:model.n_dofs] = model.q0.reshape(-1)
+        # owned blocks that are beam nodes (not multipliers)
+        self.owned_physical = np.argsort(layout.perm)[lo:hi] < model.n_nodes
+        self.n_constraints = 0 if contact is None else contact.n_multipliers
         self.exchanges = 0              # how often the contact exchange was rebuilt
         self.scatter = None
         if contact is not None:
-            contact.setup_layout(layout)
+            contact.set_layout(layout)
+            if comm.size > 1:
+                # a multiplier's function may live on elements of two ranks: its weighted gap
+                # (and the law's decision) needs both ranks' points
+                contact.sum_over_ranks = self._sum_over_ranks
+                contact.all_ranks = self._all_ranks
             self._build_exchange(contact.required_nodes())
         else:
             self._build_exchange(np.zeros(0, dtype=np.int64))
-        self.q0 = self._global_from_model(model.q0.reshape(-1))
-        self.fext = self._global_from_model(model.f_ext)
+        self.q0 = self._global_from_model(self._model_q0)
+        fext = np.zeros(N)
+        fext[:model.n_dofs] = model.f_ext
+        self.fext = self._global_from_model(fext)
         self.J = self._create_matrix()
         self.set_near_null_space()
 
@@ -189,13 +193,14 @@ class Problem:
         translations move r only; an infinitesimal rotation ω× acts on all six nodal vectors.
         Given to the Jacobian as its near null space (used by GAMG, ignored by LU)."""
         x = self.q0.getArray(readonly=True).reshape(-1, 6, 3)
+        phys = self.owned_physical[:, None, None]
         vecs = []
         for k in range(3):
             v = np.zeros_like(x)
             v[:, 0, k] = 1.0
-            vecs.append(v)
+            vecs.append(v * phys)
         for k in range(3):
-            vecs.append(np.cross(np.eye(3)[k], x))
+            vecs.append(np.cross(np.eye(3)[k], x) * phys)
         out = []
         for v in vecs:                          # modified Gram-Schmidt (collective dots)
             w = self.X.duplicate()
@@ -259,9 +264,30 @@ class Problem:
                 return out
         raise RuntimeError("contact exchange did not settle")   # not reached: one element per retry
 
+    def _sum_over_ranks(self, values: np.ndarray) -> np.ndarray:
+        """Sum per-rank partial values of the local multipliers (columns of ``values``) over
+        the ranks that hold them (collective: reverse scatter-add, forward scatter)."""
+        pos = self.contact.multiplier_positions(self.needed)
+        out = np.empty_like(values)
+        work = self.F.duplicate()
+        local = np.zeros(self.xloc.getLocalSize())
+        for c in range(values.shape[1]):
+            local[:] = 0.0
+            local[pos] = values[:, c]
+            self.floc.setArray(local)
+            work.set(0.0)
+            self.scatter.scatter(self.floc, work, ADD, PETSc.ScatterMode.REVERSE)
+            self.scatter.scatter(work, self.floc, INSERT, PETSc.ScatterMode.FORWARD)
+            out[:, c] = self.floc.getArray(readonly=True)[pos]
+        work.destroy()
+        return out
+
+    def _all_ranks(self, flag: bool) -> bool:
+        return bool(self.comm.tompi4py().allreduce(int(not flag)) == 0)
+
     # ------------------------------------------------------------------ helpers
     def _global_from_model(self, arr_model: np.ndarray) -> PETSc.Vec:
-        """Global Vec from a model-numbered array (every rank holds the full array)."""
+        """Global Vec from a model-numbered array of every block (every rank holds it all)."""
         v = self.X.duplicate()
         lo, hi = self.layout.owned_nodes
         inv = np.argsort(self.layout.perm)[lo:hi]          # PETSc node → model node
@@ -269,13 +295,14 @@ class Problem:
         return v
 
     def to_model_order(self, full_petsc: np.ndarray) -> np.ndarray:
-        """A full PETSc-ordered array (n_dofs,) → model order (n_nodes, 6, 3)."""
+        """A full PETSc-ordered array (18 n_blocks,) → model order (n_blocks, 6, 3): the beam
+        nodes, then the multiplier blocks."""
         return full_petsc.reshape(-1, 18)[self.layout.perm].reshape(-1, 6, 3)
 
     def node_pattern(self, rows: tuple[int, int] | None = None) -> sp.csr_matrix:
         """Node-block coupling (PETSc numbering): elements + the contact pairs seen so far;
         with ``rows = (lo, hi)`` only those node rows (shape (hi − lo, n))."""
-        n = self.model.n_nodes
+        n = self.n_blocks
         lo, hi = (0, n) if rows is None else rows
         conn = self.layout.perm[self.model.connectivity()]
         conn = conn[np.any((conn >= lo) & (conn < hi), axis=1)]
@@ -291,9 +318,9 @@ class Problem:
         return A
 
     def _current_contact_pairs(self) -> np.ndarray:
-        """Node pairs (row · n_nodes + col) the contact of every rank couples now (collective)."""
-        cr, cc = self.contact.node_couplings(self.layout, self.contact.local)
-        mine = np.unique(cr.astype(np.int64) * self.model.n_nodes + cc)
+        """Block pairs (row · n_blocks + col) the contact of every rank couples now (collective)."""
+        cr, cc = self.contact.node_couplings()
+        mine = np.unique(cr.astype(np.int64) * self.n_blocks + cc)
         return np.unique(np.concatenate(self.comm.tompi4py().allgather(mine)))
 
     def grow_pattern(self) -> bool:
@@ -370,7 +397,8 @@ class Problem:
         if self.contact is not None:
             self._contact_pairs = self._current_contact_pairs()
         J = PETSc.Mat().create(comm=self.comm)
-        J.setSizes(((18 * (hi - lo), self.model.n_dofs), (18 * (hi - lo), self.model.n_dofs)), bsize=18)
+        N = 18 * self.n_blocks
+        J.setSizes(((18 * (hi - lo), N), (18 * (hi - lo), N)), bsize=18)
         J.setType(PETSc.Mat.Type.SBAIJ if self.matrix_type == "sbaij" else PETSc.Mat.Type.AIJ)
         self._preallocate(J)
         return J
@@ -452,7 +480,7 @@ class Problem:
         from mpi4py import MPI
         comm = self.comm.tompi4py()
         size = min(np.sqrt(b.section.area) for b in self.model.beams)
-        y = Y.getArray(readonly=True).reshape(-1, 6, 3)
+        y = Y.getArray(readonly=True).reshape(-1, 6, 3)[self.owned_physical]
         big = comm.allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (10.0 * size)
         changed = False
         if big > 1.0:
@@ -488,8 +516,12 @@ class Problem:
         """Total potential Π = Σ ∫Ψ dV + Π_con − λ f_ext·q (the residual is its gradient).
 
         Used by the line searches (bt, l2) as merit function instead of ‖F‖²; +inf when an
-        element is inverted.  Collective: every rank returns the same value.
+        element is inverted.  Collective: every rank returns the same value.  Not defined with
+        contact: the residual is then the gradient of a Lagrangian, whose stationary point is a
+        saddle (``has_potential``).
         """
+        if not self.has_potential:
+            raise RuntimeError("no potential with contact multipliers; use the residual merit")
         STAGE_ASSEMBLY.push()
         try:
             def local_energy(xl):
@@ -498,8 +530,6 @@ class Problem:
                     qe = blk.element_vectors(xl)
                     local += sum(float(np.sum(kernels.energy(qe, G, w, material)))
                                  for G, w, material in blk.parts)
-                if self.contact is not None:
-                    local += self.contact.energy(xl, self.needed)
                 return local
             local = self._with_exchange(X, local_energy)
             total = self.comm.tompi4py().allreduce(local)
@@ -512,18 +542,17 @@ class Problem:
         STAGE_ASSEMBLY.push()
         try:
             P.zeroEntries()
-            contact_blocks = _Collector()
             if self.contact is not None:
                 # contact first: the exchange may grow the local array; its blocks are only
                 # added to P once no rank had to exchange again
                 EV_CONTACT.begin()
                 t0, p0 = time.perf_counter(), self.timers["contact_projection"]
+                blocks = []
 
-                def contact_hessian(xl):
-                    contact_blocks.clear()
-                    self.contact.add_jacobian(xl, self.needed, contact_blocks, self.fixed_mask)
+                def contact_blocks(xl):
+                    blocks[:] = self.contact.jacobian_blocks(xl, self.needed, self.fixed_mask)
                     return xl
-                xl = self._with_exchange(X, contact_hessian)
+                xl = self._with_exchange(X, contact_blocks)
                 if self.grow_pattern():
                     if P.handle != self.J.handle:
                         raise RuntimeError("the contact pattern grew on a preconditioner matrix "
@@ -532,7 +561,8 @@ class Problem:
                         # re-preallocating an SBAIJ matrix does not mark its pattern as new, so
                         # the factorisation would reuse the old symbolic analysis: start afresh
                         snes.getKSP().getPC().reset()
-                contact_blocks.add_to(P)
+                for rows, values in blocks:
+                    insert_node_blocks(P, rows, values)
                 self.timers["contact_assembly"] += (time.perf_counter() - t0
                                                     - (self.timers["contact_projection"] - p0))
                 EV_CONTACT.end()
@@ -559,41 +589,49 @@ class Problem:
             STAGE_ASSEMBLY.pop()
 
     # ------------------------------------------------------------------ state
-    def predict_multipliers(self, factor: float) -> None:
-        if self.contact is not None:
-            self.contact.scale_multipliers(factor)
-
-    def augment(self, X: PETSc.Vec) -> tuple[float, float]:
-        """Augmented-Lagrangian update of the contact multipliers at X (collective).
-
-        Returns (relative multiplier change ‖p m‖/‖μ + p m‖, largest projected gap [m]) before
-        the update."""
-        if self.contact is None:
-            return 0.0, 0.0
-        from mpi4py import MPI
-        dsq, tsq, worst = self._with_exchange(
-            X, lambda xl: self.contact.augment(xl.copy(), self.needed))
-        comm = self.comm.tompi4py()
-        dsq, tsq = comm.allreduce(dsq), comm.allreduce(tsq)
-        worst = comm.allreduce(worst, op=MPI.MAX)
-        return (np.sqrt(dsq / tsq) if tsq > 0.0 else 0.0), worst
+    @property
+    def has_potential(self) -> bool:
+        """Whether the residual is the gradient of a potential (no contact multipliers)."""
+        return self.contact is None
 
     def contact_gaps(self, X: PETSc.Vec) -> dict | None:
-        """Per-interface gap statistics at X, each rank over its own points, reduced (collective)."""
+        """Per-interface gap and pressure statistics at X, each rank over its own points,
+        combined (collective)."""
         if self.contact is None:
             return None
         from mpi4py import MPI
+        from .contact import GAP_COLUMNS
         local = self._with_exchange(X, lambda xl: self.contact.gap_sums(xl, self.needed))
         comm = self.comm.tompi4py()
-        mx, sums = np.empty((len(local), 2)), np.empty((len(local), 3))
-        comm.Allreduce(np.ascontiguousarray(local[:, [0, 3]]), mx, op=MPI.MAX)
-        comm.Allreduce(np.ascontiguousarray(local[:, [1, 2, 4]]), sums, op=MPI.SUM)
-        return self.contact.gap_report(np.column_stack([mx[:, 0], sums[:, 0], sums[:, 1],
-                                                        mx[:, 1], sums[:, 2]]))
+        out = np.empty_like(local)
+        for op, mpi_op in (("max", MPI.MAX), ("sum", MPI.SUM)):
+            cols = [k for k, (_, how) in enumerate(GAP_COLUMNS) if how == op]
+            part = np.empty((len(local), len(cols)))
+            comm.Allreduce(np.ascontiguousarray(local[:, cols]), part, op=mpi_op)
+            out[:, cols] = part
+        return self.contact.gap_report(out)
+
+    def contact_fields(self, X: PETSc.Vec) -> dict | None:
+        """Per contact point (sorted by point id) on rank 0: interface, reference position,
+        gap, pressure and slip (collective; None without contact and on other ranks)."""
+        if self.contact is None:
+            return None
+        q0 = self.model.q0.reshape(-1, 18, 3)
+        conn = self.model.connectivity()
+
+        def q0_of(els):
+            return q0[conn[els]].reshape(len(els), 18, 3)
+        local = self._with_exchange(X, lambda xl: self.contact.point_fields(xl, self.needed, q0_of))
+        parts = self.comm.tompi4py().gather(local, root=0)
+        if self.comm.rank != 0:
+            return None
+        out = {k: np.concatenate([p[k] for p in parts]) for k in local}
+        order = np.argsort(out["id"])
+        return {k: v[order] for k, v in out.items()}
 
     def state_is_clean(self) -> bool:
         """After SNES converged: did the last residual use converged contact projections? (collective)"""
-        ok = self.contact is None or self.contact.converged_projection
+        ok = self.contact is None or self.contact.converged()
         return bool(self.comm.tompi4py().allreduce(int(not ok)) == 0)
 
     def checkpoint(self) -> None:
@@ -606,12 +644,16 @@ class Problem:
         if self.contact is not None:
             self.contact.restore()
 
-    def gather(self, X: PETSc.Vec | None = None) -> np.ndarray | None:
-        """Full state in model order (n_nodes, 6, 3) on rank 0 (None elsewhere)."""
+    def gather(self, X: PETSc.Vec | None = None, blocks: bool = False) -> np.ndarray | None:
+        """Beam nodal vectors in model order (n_nodes, 6, 3) on rank 0 (None elsewhere); with
+        ``blocks`` every block, multiplier blocks after the nodes (n_blocks, 6, 3)."""
         X = self.X if X is None else X
         scat, full = PETSc.Scatter.toZero(X)
         scat.scatter(X, full, INSERT, PETSc.ScatterMode.FORWARD)
-        out = self.to_model_order(full.getArray().copy()) if self.comm.rank == 0 else None
+        out = None
+        if self.comm.rank == 0:
+            out = self.to_model_order(full.getArray().copy())
+            out = out if blocks else out[:self.model.n_nodes]
         scat.destroy()
         full.destroy()
         return out

@@ -13,6 +13,7 @@ from typing import Any
 import yaml
 
 from .element3363 import ELEMENT_TYPES, VECTORS
+from .errors import InputError
 
 LOCKING = ("none", "ecm")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
@@ -20,12 +21,8 @@ MATERIAL_MODELS = ("neo-hookean", "svk")
 CONTACT_MODES = ("sliding", "unilateral")
 
 
-class ConfigError(Exception):
-    """A config problem: ``path`` is the key path (e.g. ``beams[0].material.mu``)."""
-
-    def __init__(self, path: str, message: str):
-        super().__init__(f"{path}: {message}" if path else message)
-        self.path = path
+#: a config problem: ``path`` is the key path (e.g. ``beams[0].material.mu``); see errors.py
+ConfigError = InputError
 
 
 # --------------------------------------------------------------------------------- primitives
@@ -172,21 +169,15 @@ class ProbeSpec:
 
 @dataclass
 class ContactSpec:
-    mode: str = "sliding"
-    penalty: float | None = None           # None → derived from moduli and element size
-    penalty_scale: float = 1.0
+    mode: str = "sliding"                  # sliding | unilateral (contact/laws.py)
     interfaces: list = field(default_factory=list)   # [(beam_a, beam_b, curve name or None)]
     axial_points: int = 3
     curve_points: int = 1
     search_margin: float = 0.1            # fraction of the beam length a point may slide
-    # polynomial degrees (along ξ, along the curve) of the space the sliding gap is projected on
-    # per element (mortar-type); None = pointwise (every quadrature point constrained).
-    # Default: full along ξ (axial_points - 1), the mean across the interface (0)
-    projection: tuple[int, int] | None = None
-    smoothing: float | None = None         # unilateral: width δ of the C² penalty ramp [m] (None: auto)
-    augmented: bool = False                # augmented Lagrangian on the projected sliding gap
-    gap_tolerance: float = 1e-3            # relative multiplier change that ends the updates
-    max_augmentations: int = 25
+    # Bernstein degrees (along ξ, along the curve) of the contact pressure per element
+    # (contact/multipliers.py).  Default: full along ξ (axial_points − 1), constant across (0)
+    projection: tuple[int, int] = (2, 0)
+    scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
 
 
 @dataclass
@@ -537,46 +528,38 @@ def _accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
     return acc
 
 
+#: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
+REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
+                        "smoothing")
+
+
 def _contact(value, names: list[str]) -> ContactSpec:
     p = "contact"
-    mapping(value, p, optional=("mode", "penalty", "penalty_scale", "interfaces", "axial_points",
-                                "curve_points", "search_margin", "projection", "augmented",
-                                "gap_tolerance", "max_augmentations", "smoothing"))
+    if isinstance(value, dict):
+        for key in REMOVED_CONTACT_KEYS:
+            if key in value:
+                raise ConfigError(f"{p}.{key}", "contact is enforced exactly by Lagrange multipliers "
+                                                "(no penalty, nothing to tune); remove this key")
+    mapping(value, p, optional=("mode", "interfaces", "axial_points", "curve_points", "search_margin",
+                                "projection", "scaling"))
     c = ContactSpec()
     c.mode = string(value.get("mode", "sliding"), f"{p}.mode", CONTACT_MODES)
-    pen = value.get("penalty", "auto")
-    if pen != "auto":
-        c.penalty = number(pen, f"{p}.penalty", positive=True, hint=" (Pa/m, or 'auto')")
-    c.penalty_scale = number(value.get("penalty_scale", 1.0), f"{p}.penalty_scale", positive=True)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
     c.curve_points = integer(value.get("curve_points", 1), f"{p}.curve_points", lo=1, hi=10)
     c.search_margin = number(value.get("search_margin", 0.1), f"{p}.search_margin", positive=True, hi=1.0)
+    c.scaling = number(value.get("scaling", 1.0), f"{p}.scaling", positive=True,
+                       hint=" (a factor on the multipliers' unit k_s; it does not change the answer)")
     proj = value.get("projection", None)
     if proj == "pointwise":
-        c.projection = None
-    elif proj is None:
+        raise ConfigError(f"{p}.projection", "a multiplier per point over-constrains the quadratic "
+                                             "section fields; give {axial: .., curve: ..} degrees")
+    if proj is None:
         c.projection = (c.axial_points - 1, 0)
     else:
         pp = f"{p}.projection"
         mapping(proj, pp, required=("axial", "curve"))
         c.projection = (integer(proj["axial"], f"{pp}.axial", lo=0, hi=c.axial_points - 1),
                         integer(proj["curve"], f"{pp}.curve", lo=0, hi=8))
-    if c.mode == "unilateral" and proj not in (None, "pointwise"):
-        raise ConfigError(f"{p}.projection", "the unilateral mode is pointwise; remove projection")
-    if c.mode == "unilateral":
-        c.projection = None
-    if "smoothing" in value and value["smoothing"] != "auto":
-        if c.mode != "unilateral":
-            raise ConfigError(f"{p}.smoothing", "only the unilateral mode has a penalty ramp; "
-                                                "remove smoothing or use mode: unilateral")
-        c.smoothing = number(value["smoothing"], f"{p}.smoothing", nonneg=True,
-                             hint=" (metres of penetration over which the penalty ramps up)")
-    c.augmented = boolean(value.get("augmented", False), f"{p}.augmented")
-    if c.augmented and c.projection is None:
-        raise ConfigError(f"{p}.augmented", "the augmented Lagrangian works on the projected sliding "
-                                            "gap; use mode: sliding without projection: pointwise")
-    c.gap_tolerance = number(value.get("gap_tolerance", 1e-3), f"{p}.gap_tolerance", positive=True, hi=0.5)
-    c.max_augmentations = integer(value.get("max_augmentations", 25), f"{p}.max_augmentations", lo=1)
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []

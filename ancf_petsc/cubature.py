@@ -20,7 +20,6 @@ from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 from numpy.polynomial import legendre as _leg
-from scipy.optimize import nnls
 
 __all__ = [
     "CurvePiece",
@@ -261,6 +260,7 @@ def compress_rule(pts: np.ndarray, w: np.ndarray, degree: int,
         if cand.shape[0] < 1:
             continue
         A = basis(cand).T                                  # (n_mom, n_cand)
+        from scipy.optimize import nnls     # only here: scipy.optimize takes 60 ms to import
         x, _ = nnls(A, mom, maxiter=max(50 * n_mom, 3 * A.shape[1]))
         supp = np.flatnonzero(x > 0.0)
         if supp.size == 0:

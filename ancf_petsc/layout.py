@@ -2,7 +2,10 @@
 
 A ``Layout`` says which rank computes each element and how nodes are renumbered so that every
 rank owns one contiguous range of node blocks (18 DOFs each) in the PETSc vectors.  A node is
-owned by the rank of the lowest-numbered element that contains it.  ``block_layout`` cuts the
+owned by the rank of the lowest-numbered element that contains it.  Besides the beams' nodes
+there may be *extra* blocks that belong to one element each (the contact multipliers of an A
+element, contact/multipliers.py): model block ids n_nodes, n_nodes + 1, ..., owned with their
+element.  ``block_layout`` cuts the
 beam-major element list into contiguous blocks (the design card's "by subtendon and element
 blocks"); a graph partitioner only has to supply another ``elem_owner``.
 """
@@ -18,10 +21,15 @@ class Layout:
     size: int
     rank: int
     elem_owner: np.ndarray      # (n_elements,) rank computing each element
-    node_owner: np.ndarray      # (n_nodes,) rank owning each node (in model numbering)
-    perm: np.ndarray            # (n_nodes,) model node id → PETSc node id
+    node_owner: np.ndarray      # (n_blocks,) rank owning each block (in model numbering)
+    perm: np.ndarray            # (n_blocks,) model block id → PETSc block id
     ranges: np.ndarray          # (size + 1,) PETSc node ownership ranges
     method: str = "blocks"
+    n_nodes: int = -1           # beam nodes; blocks n_nodes … n_blocks − 1 are extra blocks
+
+    @property
+    def n_blocks(self) -> int:
+        return len(self.perm)
 
     @property
     def owned_nodes(self) -> tuple[int, int]:
@@ -45,24 +53,30 @@ class Layout:
 
 
 def layout_from_owner(elem_owner: np.ndarray, connectivity: np.ndarray, n_nodes: int,
-                      size: int, rank: int, method: str) -> Layout:
-    """Complete a layout from an element → rank assignment (nodes follow their first element)."""
+                      size: int, rank: int, method: str,
+                      extra_elements: np.ndarray | None = None) -> Layout:
+    """Complete a layout from an element → rank assignment (nodes follow their first element,
+    extra blocks their element)."""
     n_el = len(elem_owner)
+    elem_owner = np.asarray(elem_owner, dtype=np.int64)
     first_elem = np.full(n_nodes, n_el, dtype=np.int64)
     for k in range(connectivity.shape[1]):
         np.minimum.at(first_elem, connectivity[:, k], np.arange(n_el))
     if np.any(first_elem == n_el):
         raise ValueError("a node belongs to no element")
-    node_owner = np.asarray(elem_owner)[first_elem]
-    order = np.lexsort((np.arange(n_nodes), node_owner))      # by rank, then model id
-    perm = np.empty(n_nodes, dtype=np.int64)
-    perm[order] = np.arange(n_nodes)
+    extra = np.zeros(0, dtype=np.int64) if extra_elements is None else np.asarray(extra_elements)
+    node_owner = np.concatenate([elem_owner[first_elem], elem_owner[extra]])
+    n_blocks = len(node_owner)
+    order = np.lexsort((np.arange(n_blocks), node_owner))      # by rank, then model id
+    perm = np.empty(n_blocks, dtype=np.int64)
+    perm[order] = np.arange(n_blocks)
     ranges = np.concatenate([[0], np.cumsum(np.bincount(node_owner, minlength=size))])
-    return Layout(size, rank, np.asarray(elem_owner, dtype=np.int64), node_owner, perm, ranges, method)
+    return Layout(size, rank, elem_owner, node_owner, perm, ranges, method, n_nodes)
 
 
-def block_layout(connectivity: np.ndarray, n_nodes: int, size: int, rank: int) -> Layout:
+def block_layout(connectivity: np.ndarray, n_nodes: int, size: int, rank: int,
+                 extra_elements: np.ndarray | None = None) -> Layout:
     """Contiguous blocks of the beam-major element list, as equal as possible."""
     n_el = connectivity.shape[0]
     elem_owner = (np.arange(n_el) * size) // max(n_el, 1)
-    return layout_from_owner(elem_owner, connectivity, n_nodes, size, rank, "blocks")
+    return layout_from_owner(elem_owner, connectivity, n_nodes, size, rank, "blocks", extra_elements)

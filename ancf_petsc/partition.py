@@ -36,7 +36,7 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
             off = a != b
             rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), 18))
     if contact is not None:
-        eA, eB = contact.pts["eA"], contact.eB
+        eA, eB = contact.points.eA, contact.projector.eB
         pair = np.unique(np.stack([eA, eB], 1), axis=0, return_counts=True)
         (pa, pb), cnt = pair[0].T, pair[1]
         keep = pa != pb
@@ -53,7 +53,7 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
                          for b in model.beams])
     if contact is not None:
         # a contact point (projection + Hessian) costs about as much as CONTACT_COST Gauss points
-        vw = vw + CONTACT_COST * np.bincount(contact.pts["eA"], minlength=n_el)
+        vw = vw + CONTACT_COST * np.bincount(contact.points.eA, minlength=n_el)
     return G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data.astype(np.int64), vw
 
 
@@ -75,12 +75,13 @@ def metis_owner(model: Model, size: int, contact=None) -> np.ndarray:
 
 def make_layout(model: Model, method: str, size: int, rank: int, contact=None, comm=None) -> Layout:
     """Layout by ``method`` ('blocks' | 'metis'); METIS runs on rank 0 and is broadcast."""
+    extra = None if contact is None else contact.space.node_element
     if method == "blocks" or size == 1:
-        return block_layout(model.connectivity(), model.n_nodes, size, rank)
+        return block_layout(model.connectivity(), model.n_nodes, size, rank, extra)
     owner = metis_owner(model, size, contact) if rank == 0 else None
     if comm is not None:
         owner = comm.bcast(owner, root=0)
-    return layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, "metis")
+    return layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, "metis", extra)
 
 
 def partition_stats(layout: Layout, model: Model, contact=None) -> dict:
@@ -97,7 +98,7 @@ def partition_stats(layout: Layout, model: Model, contact=None) -> dict:
     out = {"method": layout.method, "elements_per_rank": np.bincount(own, minlength=layout.size).tolist(),
            "nodes_per_rank": np.diff(layout.ranges).tolist(), "cut_beam_nodes": cut_nodes}
     if contact is not None:
-        eA, eB = contact.pts["eA"], contact.eB
+        eA, eB = contact.points.eA, contact.projector.eB
         pairs = np.unique(np.stack([eA, eB], 1), axis=0)
         out["contact_pairs"] = int(len(pairs))
         out["cut_contact_pairs"] = int(np.sum(own[pairs[:, 0]] != own[pairs[:, 1]]))

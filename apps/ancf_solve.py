@@ -20,9 +20,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--output-dir", help="override output.dir of the config")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     args, petsc_args = parser.parse_known_args(argv)
-    # small dense kernels: BLAS threads only contend with MPI ranks (override by setting it)
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    from ancf_petsc.launch import prepare_environment
+    prepare_environment()
 
     from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
     import petsc4py

@@ -17,14 +17,14 @@ def _problems(raw):
     from ancf_petsc.assembly import Problem
     from ancf_petsc.config import parse_config
     from ancf_petsc.contact import build_contact
-    from ancf_petsc.layout import block_layout
+    from ancf_petsc.partition import make_layout
     from ancf_petsc.model import build_model
     spec = parse_config(raw, base_dir=CONFIGS)
     model = build_model(spec)
     out = {}
     for kind in ("aij", "sbaij"):
         contact = build_contact(model, spec.contact, lambda *_: None) if spec.contact else None
-        layout = block_layout(model.connectivity(), model.n_nodes, 1, 0)
+        layout = make_layout(model, "blocks", 1, 0, contact)
         out[kind] = Problem(model, layout, PETSc.COMM_WORLD, contact, kind)
     return out
 

@@ -14,16 +14,16 @@ def _problem(raw):
     from petsc4py import PETSc
     from ancf_petsc.assembly import Problem
     from ancf_petsc.config import parse_config
-    from ancf_petsc.layout import block_layout
+    from ancf_petsc.partition import make_layout
     from ancf_petsc.model import build_model
     from helpers import CONFIGS
     spec = parse_config(raw, base_dir=CONFIGS)
     model = build_model(spec)
-    layout = block_layout(model.connectivity(), model.n_nodes, 1, 0)
     contact = None
     if spec.contact is not None:
         from ancf_petsc.contact import build_contact
         contact = build_contact(model, spec.contact, lambda *_: None)
+    layout = make_layout(model, "blocks", 1, 0, contact)
     return Problem(model, layout, PETSc.COMM_WORLD, contact), PETSc
 
 

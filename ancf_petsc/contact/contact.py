@@ -1,0 +1,447 @@
+"""Frictionless surface-to-surface contact with Lagrange multipliers (paper §5, eqs. 26–29).
+
+The contact term of the virtual work (eq. 12) is −Σ_k z_k δc_k with c_k = k_s ḡ_k the scaled
+weighted gaps and z_k the scaled multipliers (multipliers.py); the contact law (laws.py) says
+which constraints are active.  The residual rows are
+
+    q:  f_int − f_ext − Σ_p τ_p ∇g_p,   τ_p = k_s Σ_k z_k Φ_kp  (= w_p × contact pressure)
+    z:  −c_k (active)  or  −k_s z_k (inactive)
+
+and the Jacobian is the symmetric saddle-point matrix [[K − Σ τ ∇²g, −∇cᵀ], [−∇c, 0]] that
+MUMPS LDLᵀ factors as it is.  No penalty: the answer does not depend on k_s.
+
+``Contact`` works on a rank's local array of node blocks (PETSc numbering, see ``set_layout``);
+it never touches PETSc objects: it adds to local force arrays and returns dense blocks with their
+DOF indices for the assembly layer to insert.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .gap import gap_gradient, gap_hessian_factors
+from .interfaces import find_interfaces
+from .laws import make_law
+from .multipliers import SLOTS, build_space
+from .points import build_points
+from .projection import Projection, Projector
+
+#: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
+CHUNK_POINTS = 2048
+
+#: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
+GAP_COLUMNS = (("max_gap", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
+               ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
+               ("max_pressure", "max"), ("normal_force", "sum"), ("points", "sum"))
+
+
+def reference_stiffness(interfaces) -> float:
+    """k_s = E_min h [N/m]: E the small-strain Young's modulus of the softer beam, h = min(element
+    length, √area).  It only scales the multiplier unknowns (the constraint rows then have the
+    size of the stiffness rows); the answer does not depend on it."""
+    best = np.inf
+    for itf in interfaces:
+        for beam in (itf.a, itf.b):
+            mat = beam.material
+            E = getattr(mat, "E", None)
+            if E is None:
+                E = 9.0 * mat.K * mat.mu / (3.0 * mat.K + mat.mu)
+            h = min(beam.x_nodes[2] - beam.x_nodes[0], np.sqrt(beam.section.area))
+            best = min(best, E * h)
+    return float(best)
+
+
+@dataclass
+class ContactState:
+    """Everything one evaluation at a state found (local points and multipliers)."""
+    pr: Projection
+    gbar: np.ndarray       # (M_loc,) weighted gaps ḡ [m]
+    z: np.ndarray          # (M_loc,) scaled multipliers [m]
+    active: np.ndarray     # (M_loc,) bool
+    tau: np.ndarray        # (P_loc,) w_p × pressure [N/m... × m² = N]
+    lpos: object           # PETSc node id → position in the local array
+
+
+class Contact:
+    """Contact points, their projections, the multiplier space and the law of all interfaces."""
+
+    def __init__(self, model, spec, interfaces):
+        self.model, self.spec, self.interfaces = model, spec, interfaces
+        self.law = make_law(spec.mode)
+        self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
+        ka, kc = spec.projection
+        if (ka + 1) * (kc + 1) > SLOTS:
+            raise InputError("contact.projection", f"(axial + 1) x (curve + 1) = {(ka + 1) * (kc + 1)} "
+                                                   f"pressure functions per segment; at most {SLOTS}")
+        self.space = build_space(self.points, interfaces, spec.projection,
+                                 reference_stiffness(interfaces) * spec.scaling)
+        self.projector = Projector(model, interfaces, self.points, spec.search_margin)
+        self.timers: dict | None = None
+        # multiplier nodes of each segment's functions: its own A element's and the previous
+        # element's (whose end function it shares), −1 where there is only one
+        sm = self.space.seg_mults
+        nodes = np.where(sm >= 0, self.space.node[np.maximum(sm, 0)], -1)
+        first = nodes[:, 0]
+        last = np.max(nodes, axis=1)
+        self.seg_mnodes = np.stack([first, np.where(last != first, last, -1)], axis=1)
+        #: set by a parallel assembly for laws that need whole weighted gaps (unilateral):
+        #: ``sum_over_ranks(values over self.mults)`` and ``all_ranks(flag)`` (both collective)
+        self.sum_over_ranks = None
+        self.all_ranks = None
+        #: gaps this small are closed [m] (the rounding of positions in a touching reference)
+        self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
+        self._cache = None
+        n_blocks = model.n_nodes + self.space.n_nodes
+        self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
+        self._check_reference_gaps()
+
+    # ---------------------------------------------------------------- numbering and layout
+    @property
+    def stiffness(self) -> float:
+        return self.space.stiffness
+
+    @property
+    def n_multipliers(self) -> int:
+        return self.space.n_multipliers
+
+    def padding_dofs(self) -> np.ndarray:
+        """Model-numbered DOF ids of the unused multiplier slots (held at zero)."""
+        node, slot = np.nonzero(self.space.padding())
+        return 18 * (self.model.n_nodes + node) + slot
+
+    def multiplier_dofs(self) -> np.ndarray:
+        """Model-numbered DOF id of every multiplier (M,)."""
+        return 18 * (self.model.n_nodes + self.space.node) + self.space.slot
+
+    def set_numbering(self, perm: np.ndarray, local_segments: np.ndarray,
+                      owned_elements: np.ndarray | None = None) -> None:
+        """Block numbering ``perm`` (model block id → PETSc block id, multiplier nodes after the
+        physical ones), the segments this rank evaluates (bool per segment) and the elements it
+        owns (bool per element; default all), whose multipliers it reports."""
+        pts, sp = self.points, self.space
+        self.conn = perm[self.model.connectivity()]
+        self.projector.conn = self.conn
+        self.mult_block = perm[self.model.n_nodes + sp.node]           # (M,) PETSc block
+        self.seg_blocks = np.where(self.seg_mnodes >= 0,
+                                   perm[self.model.n_nodes + np.maximum(self.seg_mnodes, 0)], -1)
+        self.segments = np.flatnonzero(local_segments)
+        self.local = (np.concatenate([pts.seg_start[s] + np.arange(pts.seg_size[s]) for s in self.segments])
+                      if len(self.segments) else np.zeros(0, dtype=np.int64))
+        m = sp.seg_mults[self.segments].ravel()
+        self.mults = np.unique(m[m >= 0])          # multipliers living on the local segments
+        self.owned = (np.ones(len(self.mults), dtype=bool) if owned_elements is None
+                      else owned_elements[sp.element[self.mults]])
+        self.Phi = sp.Phi[self.mults][:, self.local].tocsr()
+        self._cache = None
+
+    def set_layout(self, layout) -> None:
+        """This rank's segments (those of its A elements) in the layout's numbering."""
+        mine = layout.elem_owner == layout.rank
+        self.set_numbering(layout.perm, mine[self.points.seg_eA], mine)
+
+    def multiplier_positions(self, needed: np.ndarray) -> np.ndarray:
+        """Positions of the local multipliers (``mults``) in a local DOF array over ``needed``."""
+        return 18 * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
+
+    def required_nodes(self) -> np.ndarray:
+        """Node blocks (PETSc numbering) the local evaluation reads: the A and B elements of the
+        local points, any B element a projection wanted but did not have, the multiplier nodes."""
+        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local],
+                              self.projector.wanted])
+        return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]))
+
+    def set_available(self, needed: np.ndarray) -> None:
+        """Record which elements have every node block in the rank's local array ``needed``."""
+        self.projector.set_available(np.all(np.isin(self.conn, needed), axis=1))
+        self._cache = None
+
+    @property
+    def missing(self) -> bool:
+        """A projection wanted an element whose nodes this rank does not hold."""
+        return self.projector.missing
+
+    def node_couplings(self) -> tuple[np.ndarray, np.ndarray]:
+        """Node-block couplings (PETSc numbering) of the local segments now: per segment its A
+        nodes, the nodes of every B element its points project onto and its multiplier node,
+        all with all.  Couplings that sliding creates later are added when they first occur."""
+        if len(self.local) == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        seg = self.points.seg[self.local]
+        seg_b = np.unique(np.stack([seg, self.projector.eB[self.local]], 1), axis=0)
+        e_a = self.points.seg_eA[seg_b[:, 0]]
+        group = np.concatenate([self.conn[e_a], self.conn[seg_b[:, 1]], self.seg_blocks[seg_b[:, 0]]],
+                               axis=1)                                         # (pairs, 8), −1 unused
+        a = np.repeat(group, 8, axis=1).ravel()
+        b = np.tile(group, (1, 8)).ravel()
+        ok = (a >= 0) & (b >= 0)
+        rows, cols = [a[ok]], [b[ok]]
+        # a segment on several B elements also couples those elements with each other
+        first = np.searchsorted(seg_b[:, 0], seg_b[:, 0])
+        for i in np.flatnonzero(first != np.arange(len(seg_b))):
+            others = self.conn[seg_b[first[i]:i, 1]].ravel()
+            mine = self.conn[seg_b[i, 1]]
+            rows += [np.repeat(mine, len(others)), np.tile(others, 3)]
+            cols += [np.tile(others, 3), np.repeat(mine, len(others))]
+        return np.concatenate(rows), np.concatenate(cols)
+
+    # ---------------------------------------------------------------- evaluation
+    def evaluate(self, xl: np.ndarray, needed: np.ndarray) -> ContactState:
+        """Project the local points at the local state ``xl`` (n, 6, 3) and apply the law.
+
+        SNES evaluates the Jacobian at the state of the residual before it: that evaluation is
+        reused (the projection state is its result, so nothing else changes).  With the
+        parallel hooks set (``sum_over_ranks``) this is collective: every rank calls it."""
+        c = self._cache
+        hit = c is not None and c[1] is needed and np.array_equal(c[0], xl)
+        if self.all_ranks is not None:
+            hit = self.all_ranks(hit)
+        if hit:
+            return c[2]
+        t0 = time.perf_counter()
+
+        def lpos(nodes):
+            return np.searchsorted(needed, nodes)
+
+        def x_of(els):
+            return xl[lpos(self.conn[els])].reshape(len(els), 18, 3)
+
+        idx = self.local
+        xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
+        pr = self.projector.project(idx, xA, x_of)
+        valid = pr.valid.astype(float)
+        sums = np.stack([self.Phi @ (pr.g * valid), self.Phi @ valid], axis=1)
+        if self.sum_over_ranks is not None:          # functions shared with another rank
+            sums = self.sum_over_ranks(sums)
+        gbar = sums[:, 0]
+        support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
+        z = xl.reshape(-1)[18 * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
+        active = self.law.active(gbar, z, self.tie_tolerance) & support
+        tau = self.stiffness * (self.Phi.T @ (z * active)) * valid
+        st = ContactState(pr=pr, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos)
+        self._cache = None if self.missing else (xl.copy(), needed, st)
+        if self.timers is not None:
+            self.timers["contact_projection"] += time.perf_counter() - t0
+        return st
+
+    def add_residual(self, xl: np.ndarray, needed: np.ndarray, floc: np.ndarray) -> bool:
+        """Add the contact forces and the constraint rows to the local residual ``floc``;
+        False when a point slid out of its search window."""
+        st = self.evaluate(xl, needed)
+        pr = st.pr
+        traction = st.tau[:, None] * pr.n                                  # τ_p n_p
+        for e, N, sign in ((self.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
+            f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
+            pos = st.lpos(self.conn[e])                                       # (P, 3)
+            dofs = (18 * pos[:, :, None] + np.arange(18)).ravel()
+            floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
+        # the constraint rows; a function shared with another rank: each adds its own points
+        rows = 18 * st.lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]
+        own = self.Phi @ (pr.g * pr.valid) if self.sum_over_ranks is not None else st.gbar
+        share = self.Phi @ np.ones(len(pr.g)) if self.sum_over_ranks is not None else 1.0
+        floc[rows] -= self.stiffness * np.where(st.active, own, st.z * share)
+        return bool(pr.in_window)
+
+    def jacobian_blocks(self, xl: np.ndarray, needed: np.ndarray,
+                        fixed_mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Dense blocks (rows (n, D) PETSc DOF ids, −1 dropped; values (n, D, D)) of the contact
+        part of the Jacobian: one per local segment over its A nodes, the nodes of the B elements
+        its points project onto and its multiplier node; segments are batched by the number of
+        B elements they span (and in chunks of at most ``CHUNK_POINTS`` points)."""
+        st = self.evaluate(xl, needed)
+        if len(self.local) == 0:
+            return []
+        srow = np.searchsorted(self.segments, self.points.seg[self.local])
+        first_b = np.full(len(self.segments), np.iinfo(np.int64).max)
+        np.minimum.at(first_b, srow, st.pr.eB)
+        last_b = np.full(len(self.segments), -1)
+        np.maximum.at(last_b, srow, st.pr.eB)
+        span = last_b - first_b + 1
+        p_max = int(self.points.seg_size.max())
+        out = []
+        for width in np.unique(span):
+            group = np.flatnonzero(span == width)
+            for sk in np.array_split(group, -(-len(group) * p_max // CHUNK_POINTS)):
+                out.append(self._segment_blocks(st, srow, first_b, sk, int(width), fixed_mask))
+        return out
+
+    def _segment_blocks(self, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
+        """Blocks of the local segments ``sk``, each spanning ``width`` B elements.  The block's
+        unknowns: A's 3 nodes, B's 2 width + 1 nodes and the (at most two) multiplier nodes of
+        the functions living on the segment: D = 18 (2 width + 6)."""
+        pr, pts, sp = st.pr, self.points, self.space
+        segs = self.segments[sk]
+        n_s = len(sk)
+        P_s = int(pts.seg_size[segs].max())
+        D = 18 * (2 * width + 6)
+        Dq = D - 36
+        sel = np.flatnonzero(np.isin(srow, sk))             # positions in the local arrays
+        s_loc = np.searchsorted(sk, srow[sel])
+        p_loc = self.local[sel] - pts.seg_start[segs[s_loc]]
+        j = pr.eB[sel] - first_b[srow[sel]]
+        # each point's 108 unknowns (A element, its B element) inside the block
+        cols = np.concatenate([np.broadcast_to(np.arange(54), (len(sel), 54)),
+                               54 + 36 * j[:, None] + np.arange(54)], axis=1)
+        sub = _subset(pr, sel)
+        at = (s_loc[:, None], p_loc[:, None], cols)
+        V = np.zeros((n_s, P_s, Dq))                         # ∇g_p
+        V[at] = gap_gradient(sub) * sub.valid[:, None]
+        K = np.zeros((n_s, D, D))
+        tau = st.tau[sel]
+        if np.any(tau != 0.0):
+            # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
+            W, C = gap_hessian_factors(sub)
+            We = np.zeros((n_s, P_s, Dq, 4))
+            We[at] = W
+            WCe = np.zeros((n_s, P_s, Dq, 4))
+            WCe[at] = np.matmul(W, C * tau[:, None, None])
+            K[:, :Dq, :Dq] = np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
+                                       We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+        # constraint rows −k_s Φ_s ∇g (active multipliers), −k_s × (the segment's share of the
+        # function) on inactive diagonals
+        m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad
+        real = m_ids >= 0
+        act = np.zeros(m_ids.shape, dtype=bool)
+        act[real] = st.active[np.searchsorted(self.mults, m_ids[real])]
+        Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
+        Gc = -self.stiffness * np.matmul(Phi_s * act[:, :, None], V)          # (n_s, K, Dq)
+        share = Phi_s.sum(axis=2)
+        ss, kk = np.nonzero(real)
+        second = sp.node[m_ids[ss, kk]] != self.seg_mnodes[segs[ss], 0]
+        mrow = Dq + 18 * second + sp.slot[m_ids[ss, kk]]
+        K[ss, mrow, :Dq] = Gc[ss, kk]
+        K[ss, :Dq, mrow] = Gc[ss, kk]
+        K[ss, mrow, mrow] = np.where(act[ss, kk], 0.0, -self.stiffness * share[ss, kk])
+        # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes
+        els = self.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
+        bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
+        nodes = np.concatenate([self.conn[pts.seg_eA[segs]], bnodes, self.seg_blocks[segs]], axis=1)
+        rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
+        # the B elements of a segment need not be contiguous (points on e and e + 2): the
+        # nodes of an element in between that no point projects onto stay out of the matrix
+        used = np.zeros((n_s, D), dtype=bool)
+        used[:, :54] = True
+        used[:, Dq:] = np.repeat(self.seg_blocks[segs] >= 0, 18, axis=1)
+        used[s_loc[:, None], cols[:, 54:]] = True
+        rows = np.where(used, rows, -1)
+        rows[rows >= 0] = np.where(fixed_mask[rows[rows >= 0]], -1, rows[rows >= 0])
+        return rows, K
+
+    # ---------------------------------------------------------------- checks
+    def _check_reference_gaps(self) -> None:
+        """The reference configuration must be gap-free (sliding) or not penetrating
+        (unilateral): evaluated with every point local, then the projection state is reset."""
+        n_blocks = self.model.n_nodes + self.space.n_nodes
+        xl = np.zeros((n_blocks, 6, 3))
+        xl[:self.model.n_nodes] = self.model.q0
+        st = self.evaluate(xl, np.arange(n_blocks))
+        size = max(np.sqrt(b.section.area) for b in self.model.beams)
+        g = st.pr.g[st.pr.valid]
+        self.projector.restore()
+        self._cache = None
+        if self.law.name == "unilateral":
+            if not st.pr.in_window or np.min(g, initial=0.0) < -1e-9 * size:
+                raise InputError("contact", "the bodies interpenetrate in the reference configuration "
+                                            f"(gap {np.min(g):.3e} m); separate them")
+            return
+        gap = np.linalg.norm(st.pr.d, axis=1)
+        if not st.pr.in_window or gap.max() > 1e-9 * size:
+            raise InputError("contact", f"the interfaces do not match in the reference configuration "
+                                        f"(largest gap {gap.max():.3e} m); neighbours must share "
+                                        "their interface curve and element boundaries")
+
+    def converged(self) -> bool:
+        """Whether the last evaluation's projections all converged (this rank)."""
+        return self._cache is not None and self._cache[2].pr.converged
+
+    def checkpoint(self) -> None:
+        self.projector.checkpoint()
+
+    def restore(self) -> None:
+        self._cache = None
+        self.projector.restore()
+
+    # ---------------------------------------------------------------- reports
+    def describe(self) -> list[str]:
+        ka, kc = self.space.degrees
+        lines = [f"contact: {self.law.describe()}; Lagrange multipliers (pressure of degree {ka} "
+                 f"along the beam x {kc} across the interface per element, {self.n_multipliers} in "
+                 f"all); {self.points.n_points} points ({self.spec.axial_points} axial x "
+                 f"{self.spec.curve_points} per curve piece); unknowns scaled by k_s = "
+                 f"{self.stiffness:.4g} N/m"]
+        for itf in self.interfaces:
+            lines.append(f"  interface {itf.name}: {itf.n_points} points on {itf.a.name}, "
+                         f"projected onto {itf.b.name}")
+        return lines
+
+    def gap_sums(self, xl: np.ndarray, needed: np.ndarray) -> np.ndarray:
+        """Per interface (rows) the local parts of ``GAP_COLUMNS`` at the local state."""
+        out = np.zeros((len(self.interfaces), len(GAP_COLUMNS)))
+        st = self.evaluate(xl, needed)
+        if len(self.local) == 0:
+            return out
+        pr = st.pr
+        itf_p = self.points.itf[self.local]
+        itf_m = self.space.interface[self.mults]
+        area = self.space.area[self.mults] * self.owned        # each multiplier counted once
+        lam = self.pressure_coefficients(st)
+        for k in range(len(self.interfaces)):
+            on, m = itf_p == k, itf_m == k
+            v = on & pr.valid
+            m = m & self.owned
+            act = m & st.active
+            out[k] = [np.abs(pr.g[v]).max(initial=0.0), float(np.sum(pr.g[v] ** 2)), v.sum(),
+                      np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
+                      lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()]
+        return out
+
+    def pressure_coefficients(self, st: ContactState) -> np.ndarray:
+        """λ_k [Pa] of the local multipliers (zero where inactive)."""
+        return self.stiffness * st.z * st.active / self.space.area[self.mults]
+
+    def gap_report(self, sums: np.ndarray) -> dict:
+        """Per-interface statistics from (rank-combined) ``gap_sums``."""
+        out = {}
+        for k, itf in enumerate(self.interfaces):
+            c = dict(zip([n for n, _ in GAP_COLUMNS], sums[k]))
+            nv = c["valid_points"]
+            out[itf.name] = {"max_gap": c["max_gap"], "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
+                             "max_weighted_gap": c["max_weighted_gap"],
+                             "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
+                             "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
+                             "points": int(c["points"])}
+        return out
+
+    def point_fields(self, xl: np.ndarray, needed: np.ndarray, q0_of) -> dict:
+        """Per local point: id, interface, reference position on A, gap, pressure and slip (the
+        reference position of the partner point on B minus that of the point: how far B's
+        material has slid past it).  ``q0_of(elements)`` gives reference nodal vectors."""
+        st = self.evaluate(xl, needed)
+        if len(self.local) == 0:
+            return {k: np.zeros((0,) + s) for k, s in (("id", ()), ("interface", ()), ("x0", (3,)),
+                                                      ("gap", ()), ("pressure", ()), ("slip", (3,)))}
+        pr = st.pr
+        idx = self.local
+        X0A = np.einsum("pa,pai->pi", pr.NA, q0_of(self.points.eA[idx]))
+        X0B = np.einsum("pa,pai->pi", pr.NB, q0_of(pr.eB))
+        pressure = np.where(pr.valid, st.tau / self.points.w[idx], 0.0)
+        return {"id": idx, "interface": self.points.itf[idx], "x0": X0A, "gap": pr.g * pr.valid,
+                "pressure": pressure, "slip": (X0B - X0A) * pr.valid[:, None]}
+
+
+def _subset(pr: Projection, sel: np.ndarray) -> Projection:
+    """The points ``sel`` (positions) of a projection."""
+    return Projection(idx=pr.idx[sel], eB=pr.eB[sel], xiB=pr.xiB[sel], tB=pr.tB[sel], d=pr.d[sel],
+                      n=pr.n[sel], g=pr.g[sel], valid=pr.valid[sel], NA=pr.NA[sel], NB=pr.NB[sel],
+                      NBz=pr.NBz[sel], Yz=pr.Yz[sel], Yzz=pr.Yzz[sel], in_window=pr.in_window,
+                      converged=pr.converged)
+
+
+def build_contact(model, spec, log=print) -> Contact:
+    """Contact from the spec; prints the interfaces and the multiplier space."""
+    contact = Contact(model, spec, find_interfaces(model, spec))
+    for line in contact.describe():
+        log("[ancf]   " + line)
+    return contact

@@ -1,0 +1,54 @@
+"""Derivatives of the signed normal gap g = (x_A − Y(ζ̄))·n (paper eq. 27) with respect to q.
+
+Per contact point the unknowns are A's element (18 slots × 3 components) then B's element
+(18 × 3): 108 numbers, slot-major.  With ζ̄ = (ξ_B, t_B) the closest point (Y_ζ·d = 0, d = g n):
+
+    ∇g  = Dᵀ n,                     D = ∂d/∂q at fixed ζ = [N_A ⊗ I, −N_B ⊗ I]
+    ∇²g = −W C Wᵀ,                  W = [u₁ u₂ v₁ v₂] (108 × 4)
+
+with the tangents T_α = Y_,α, u_α = Dᵀ T_α, v_α = [0, N_B,α ⊗ n] (the normal component of the
+tangents' variation), the metric a = TᵀT, the curvature b_αβ = n·Y_,αβ, H = a − g b and
+
+    C = [[a⁻¹ b H⁻¹, H⁻¹], [H⁻¹, g H⁻¹]]   (symmetric).
+
+It follows from δg = nᵀD δq, the rotation of the normal δn = −a^{αβ}(n·δT_α) T_β and the
+linearised projection H Δζ = (U + g V) Δq.  No division by g: the formula holds on the surface.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def gap_gradient(pr) -> np.ndarray:
+    """∇g of every point (P, 108)."""
+    NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
+    return (NAB[:, :, None] * pr.n[:, None, :]).reshape(len(pr.g), 108)
+
+
+def _inverse2(M: np.ndarray) -> np.ndarray:
+    """Inverses of (P, 2, 2) matrices in closed form."""
+    det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
+    out = np.empty_like(M)
+    out[:, 0, 0], out[:, 1, 1] = M[:, 1, 1] / det, M[:, 0, 0] / det
+    out[:, 0, 1], out[:, 1, 0] = -M[:, 0, 1] / det, -M[:, 1, 0] / det
+    return out
+
+
+def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
+    """W (P, 108, 4) and C (P, 4, 4) with ∇²g_p = −W_p C_p W_pᵀ."""
+    P = len(pr.g)
+    T = pr.Yz                                                        # (P, 3, 2)
+    a = np.matmul(T.transpose(0, 2, 1), T)
+    b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
+    Hi = _inverse2(a - pr.g[:, None, None] * b)
+    C = np.empty((P, 4, 4))
+    Cuu = _inverse2(a) @ b @ Hi
+    C[:, :2, :2] = 0.5 * (Cuu + Cuu.transpose(0, 2, 1))           # symmetric in exact arithmetic
+    C[:, :2, 2:] = Hi
+    C[:, 2:, :2] = Hi
+    C[:, 2:, 2:] = pr.g[:, None, None] * Hi
+    NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
+    W = np.zeros((P, 36, 3, 4))
+    W[..., :2] = NAB[:, :, None, None] * T[:, None, :, :]            # u_α
+    W[:, 18:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
+    return W.reshape(P, 108, 4), C

@@ -1,0 +1,83 @@
+"""Contact interfaces: a section curve shared by two beams' outlines, swept along both beams.
+
+Quadrature points live on body A's side of the interface and are projected onto body B's.
+``find_interfaces`` takes them from explicit pairs in the contact spec or finds every curve two
+outlines share.  Errors are ``InputError``s naming the ``contact`` keys.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..errors import InputError
+
+
+@dataclass
+class Interface:
+    name: str
+    a: object              # Beam carrying the quadrature points
+    b: object              # Beam they are projected onto
+    curve: object          # the SplineCurve on A carrying the points (shared interfaces: also B's)
+    flip_b: bool           # B traverses curve_b backwards in its CCW loop (normal sign)
+    curve_b: object = None  # the SplineCurve on B (defaults to the shared curve)
+    n_points: int = field(default=0)
+
+    def __post_init__(self):
+        if self.curve_b is None:
+            self.curve_b = self.curve
+
+
+def _shared(a, b) -> list:
+    """(curve, B's flip) of every curve object both outlines use."""
+    la, lb = a.section.loop or [], b.section.loop or []
+    return [(ca, fb) for ca, _ in la for cb, fb in lb if ca is cb]
+
+
+def _explicit_pairs(model, spec) -> list:
+    pairs = []
+    for k, (ia, ib, cname, cname_b) in enumerate(spec.interfaces):
+        a, b = model.beams[ia], model.beams[ib]
+        if cname_b is not None:            # two curves: one on each body (non-matching)
+            ca = [c for c, _ in (a.section.loop or []) if c.name == cname]
+            cb = [(c, f) for c, f in (b.section.loop or []) if c.name == cname_b]
+            if not ca or not cb:
+                raise InputError(f"contact.interfaces[{k}]", f"no curve {cname!r} in {a.name}'s "
+                                 f"outline or {cname_b!r} in {b.name}'s")
+            pairs.append((a, b, ca[0], cb[0][1], cb[0][0]))
+            continue
+        found = [(c, f) for c, f in _shared(a, b) if cname is None or c.name == cname]
+        if not found:
+            raise InputError(f"contact.interfaces[{k}]", f"beams {a.name} and {b.name} share no "
+                             "outline curve" + (f" named {cname!r}" if cname else "")
+                             + "; interfaces are curves used by both section outlines")
+        pairs += [(a, b, c, f, None) for c, f in found]
+    return pairs
+
+
+def _automatic_pairs(model) -> list:
+    # the quadrature points go on the body that does not slide out of the interface: a loaded
+    # beam is the target (B); otherwise the later beam in the config carries them
+    loaded = {ld.beam for ld in model.spec.loads}
+    pairs = []
+    for i, first in enumerate(model.beams):
+        for second in model.beams[i + 1:]:
+            a, b = second, first
+            if first.index not in loaded and second.index in loaded:
+                a, b = first, second
+            pairs += [(a, b, c, f, None) for c, f in _shared(a, b)]
+    if not pairs:
+        raise InputError("contact", "no two beam outlines share a curve; give the neighbours a "
+                                    "common named curve or remove contact")
+    return pairs
+
+
+def find_interfaces(model, spec) -> list[Interface]:
+    """Interfaces from the contact spec (explicit pairs) or every curve shared by two outlines."""
+    pairs = _explicit_pairs(model, spec) if spec.interfaces else _automatic_pairs(model)
+    out = []
+    for a, b, c, fb, cb in pairs:
+        if a.n_elements != b.n_elements:
+            raise InputError("contact", f"interface {c.name}: beams {a.name} ({a.n_elements} "
+                             f"elements) and {b.name} ({b.n_elements}) must have the same number "
+                             "of elements so that the interface is conforming")
+        out.append(Interface(f"{c.name} ({a.name}|{b.name})", a, b, c, fb, cb))
+    return out

@@ -1,0 +1,137 @@
+"""The contact pressure space: Lagrange multipliers on weighted gaps (mortar type).
+
+The paper holds the sliding gap at zero with a penalty (eqs. 28–29).  Here the constraint is
+exact.  On every interface the pressure is p_h(x, τ) = Σ_k λ_k φ_k(x, τ): along the beam the
+functions are continuous piecewise Bernstein polynomials of degree ``axial`` over A's elements
+(the trace space of the quadratic elements for degree 2: one function per A node, so no
+constraint repeats what continuity already says — a per-element space would, and its
+multipliers would not be unique), piecewise constants for degree 0; across the interface they
+are Bernstein polynomials of degree ``curve`` in τ ∈ [−1, 1].  The constraints are the weighted
+mean gaps
+
+    ḡ_k = ∫ φ_k g dA / ∫ φ_k dA = Σ_p Φ_kp g_p,       Φ_kp = w_p φ_k(p) / A_k,
+
+held at zero (sliding) or non-negative with λ_k ≥ 0 (unilateral).  Bernstein polynomials are
+non-negative and sum to one, so λ_k ≥ 0 means p_h ≥ 0 everywhere and ḡ_k ≥ 0 is a weighted
+non-penetration condition.
+
+Unknowns: z_k = λ_k A_k / k_s [m] with k_s = E h [N/m] a reference stiffness, so that the
+constraint rows k_s ∂ḡ/∂q are of the size of the stiffness rows.  A multiplier belongs to the
+lowest A element its function lives on (as a node does); each element's multipliers are packed
+per interface into *multiplier nodes* of 18 slots (the Jacobian's node blocks); unused slots are
+held at zero like supported DOFs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.special import comb
+
+SLOTS = 18
+
+
+def bernstein(x: np.ndarray, degree: int) -> np.ndarray:
+    """Bernstein polynomials of ``degree`` on [−1, 1] at x: (len(x), degree + 1)."""
+    s = 0.5 * (np.asarray(x, dtype=float)[:, None] + 1.0)
+    k = np.arange(degree + 1)
+    return comb(degree, k) * s ** k * (1.0 - s) ** (degree - k)
+
+
+@dataclass
+class MultiplierSpace:
+    Phi: sp.csr_matrix        # (M, P) Φ_kp: ḡ = Φ g
+    area: np.ndarray          # (M,) A_k = ∫ φ_k dA [m²]
+    interface: np.ndarray     # (M,) interface of each multiplier
+    element: np.ndarray       # (M,) A element owning it (the lowest its function lives on)
+    node: np.ndarray          # (M,) multiplier node (0-based among multiplier nodes)
+    slot: np.ndarray          # (M,) slot in its node (0..17)
+    node_element: np.ndarray  # (nodes,) A element each multiplier node belongs to
+    seg_mults: np.ndarray     # (S, K) the multipliers whose functions live on each segment
+    dense: np.ndarray         # (S, K, P) Φ of those multipliers over the segment's own points
+    degrees: tuple[int, int]
+    stiffness: float          # k_s [N/m]
+
+    @property
+    def n_multipliers(self) -> int:
+        return len(self.area)
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.node_element)
+
+    def padding(self) -> np.ndarray:
+        """(nodes, 18) True for the slots no multiplier uses."""
+        used = np.zeros((self.n_nodes, SLOTS), dtype=bool)
+        used[self.node, self.slot] = True
+        return ~used
+
+
+def _axial_functions(xi: np.ndarray, degree: int) -> tuple[np.ndarray, int]:
+    """Values (n, degree + 1) of one element's axial functions at ξ and the offset between
+    consecutive elements' first function (``degree``: they share an end; 1 for constants)."""
+    if degree == 0:
+        return np.ones((len(xi), 1)), 1
+    return bernstein(xi, degree), degree
+
+
+def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float) -> MultiplierSpace:
+    """Multipliers of ``degrees`` (axial, curve) on every interface of ``points``."""
+    ka, kc = degrees
+    S = points.n_segments
+    K = (ka + 1) * (kc + 1)
+    P_max = int(points.seg_size.max(initial=0))
+    seg_mults = np.full((S, K), -1, dtype=np.int64)
+    dense = np.zeros((S, K, P_max))
+    rows, cols, vals, itf_of, elem_of = [], [], [], [], []
+    first = 0
+    for k, itf in enumerate(interfaces):
+        segs = np.flatnonzero(points.seg_itf == k)         # one per A element, in order
+        p0 = points.seg_start[segs[0]]
+        n = int(points.seg_size[segs[0]])
+        xi, tau = points.xi[p0:p0 + n], points.tau[p0:p0 + n]
+        dc = min(kc, len(np.unique(np.round(tau, 12))) - 1)   # no more than the points tell apart
+        ax, step = _axial_functions(xi, ka)
+        phi = (ax[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)   # (n, na·nc)
+        na, nc = ax.shape[1], dc + 1
+        n_axial = step * (len(segs) - 1) + na
+        for e, s in enumerate(segs):
+            # the segment's functions: axial dofs e·step … e·step + na − 1, all across dofs
+            ids = first + ((e * step + np.arange(na))[:, None] * nc + np.arange(nc)).ravel()
+            seg_mults[s, :len(ids)] = ids
+            sl = points.seg_start[s] + np.arange(n)
+            rows.append(np.repeat(ids, n))
+            cols.append(np.tile(sl, len(ids)))
+            wphi = (points.w[sl][:, None] * phi).T                    # w_p φ_k(p), divided below
+            vals.append(wphi.ravel())
+            dense[s, :len(ids), :n] = wphi
+        m_here = n_axial * nc
+        axial_dof = np.arange(m_here) // nc
+        owner = np.minimum(axial_dof // step, len(segs) - 1)          # lowest element it lives on
+        itf_of.append(np.full(m_here, k))
+        elem_of.append(points.seg_eA[segs][owner])
+        first += m_here
+    M = first
+    W = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(M, points.n_points))
+    area = np.asarray(W.sum(axis=1)).ravel()
+    Phi = sp.diags(1.0 / area) @ W
+    dense /= np.where(seg_mults >= 0, area[seg_mults], 1.0)[:, :, None]
+    # pack each A element's multipliers into nodes of 18 slots, interface by interface
+    element, interface = np.concatenate(elem_of), np.concatenate(itf_of)
+    node = np.empty(M, dtype=np.int64)
+    slot = np.empty(M, dtype=np.int64)
+    node_element = []
+    for e in np.unique(element):
+        fill = SLOTS
+        for k in np.unique(interface[element == e]):
+            idx = np.flatnonzero((element == e) & (interface == k))
+            if fill + len(idx) > SLOTS:
+                node_element.append(e)
+                fill = 0
+            node[idx], slot[idx] = len(node_element) - 1, fill + np.arange(len(idx))
+            fill += len(idx)
+    return MultiplierSpace(Phi=Phi.tocsr(), area=area, interface=interface, element=element,
+                           node=node, slot=slot, node_element=np.asarray(node_element, dtype=np.int64),
+                           seg_mults=seg_mults, dense=dense, degrees=degrees, stiffness=float(stiffness))

@@ -1,0 +1,233 @@
+"""Closest-point projection of A's contact points onto B's surface (paper eqs. 26–27).
+
+Each point x_A is projected onto B's swept interface surface Y(e_B, ξ_B, t_B) by Newton on
+ζ = (ξ_B, t_B), for all points at once, following the point across B's element boundaries as the
+bodies slide.  The result is a ``Projection``: the closest points, the distance vector
+d = x_A − Y, B's unit outward normal n, the signed gap g = d·n and the shape-function data the
+gap derivatives (gap.py) need.  The projection state (e_B, ξ_B, t_B) of the last evaluation is
+the starting point of the next; ``checkpoint``/``restore`` keep it across a cut-back load step.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .surface import closest_parameter, section_shift, shape_on_curve
+
+CURVE_OVERHANG = 0.25                     # fraction of an interface curve it is extended by
+PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
+MAX_ITERATIONS = 40
+
+
+@dataclass
+class Projection:
+    """Closest points of the points ``idx`` (arrays over those points)."""
+    idx: np.ndarray        # (P,) contact point ids
+    eB: np.ndarray         # (P,) B element of the closest point
+    xiB: np.ndarray
+    tB: np.ndarray
+    d: np.ndarray          # (P, 3) x_A − Y
+    n: np.ndarray          # (P, 3) B's unit outward normal
+    g: np.ndarray          # (P,) signed gap d·n (> 0: apart)
+    valid: np.ndarray      # (P,) the closest point lies on B's surface (not past its ends)
+    NA: np.ndarray         # (P, 18) A's shape functions
+    NB: np.ndarray         # (P, 18) B's shape functions at the closest point
+    NBz: np.ndarray        # (P, 18, 2) their ζ derivatives
+    Yz: np.ndarray         # (P, 3, 2) surface tangents Y_ξ, Y_t
+    Yzz: np.ndarray        # (P, 3, 2, 2) second derivatives
+    in_window: bool        # every point stayed within its candidate B elements (search_margin)
+    converged: bool        # every local Newton iteration converged
+
+
+class Projector:
+    """Projection state of every contact point and the Newton iteration that updates it."""
+
+    def __init__(self, model, interfaces, points, search_margin: float):
+        self.model, self.interfaces, self.points = model, interfaces, points
+        self.search_margin = search_margin
+        itf = points.itf
+        self.t_end = np.array([interfaces[k].curve_b.t_end for k in itf])
+        self.flip = np.array([interfaces[k].flip_b for k in itf], dtype=bool)
+        self._shift = [section_shift(i.b) for i in interfaces]
+        # state (B element, ξ_B, t_B), started at the matching reference point
+        self.eB = points.eB0.copy()
+        self.xiB = points.xi.copy()
+        self.tB = points.t.copy()
+        for k, i in enumerate(interfaces):
+            if i.curve_b is not i.curve:         # start from the closest point of B's curve
+                sel = itf == k
+                self.tB[sel] = closest_parameter(i.curve_b, i.curve(points.t[sel]))
+        self.lo, self.hi = self.window_range(points.eA, itf)
+        self.conn = model.connectivity()          # node ids of every element (set_numbering)
+        self.available = np.ones(model.n_elements, dtype=bool)
+        self.wanted = np.zeros(0, dtype=np.int64)
+        self.missing = False
+        self._saved = None
+        self.checkpoint()
+
+    # ------------------------------------------------------------------ search window
+    def window_width(self, itf) -> int:
+        """Number of B elements a point of one A element may project onto (fixed per interface)."""
+        reach = max(1, int(np.ceil(self.search_margin * itf.b.n_elements)))
+        return min(2 * reach + 1, itf.b.n_elements)
+
+    def window_range(self, eA: np.ndarray, itf_idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Candidate B elements [lo, hi] for points of A element eA: within the sliding margin."""
+        lo, hi = np.empty(len(eA), dtype=np.int64), np.empty(len(eA), dtype=np.int64)
+        for k, itf in enumerate(self.interfaces):
+            sel = itf_idx == k
+            a, b = itf.a, itf.b
+            width = self.window_width(itf)
+            le = eA[sel] - a.element_offset
+            first = np.clip(le - (width - 1) // 2, 0, b.n_elements - width)
+            lo[sel] = b.element_offset + first
+            hi[sel] = lo[sel] + width - 1
+        return lo, hi
+
+    # ------------------------------------------------------------------ state
+    def set_available(self, available: np.ndarray) -> None:
+        """Elements whose node blocks are in the rank's local array."""
+        self.available = available
+        self.wanted = np.zeros(0, dtype=np.int64)
+        self.missing = False
+
+    def checkpoint(self) -> None:
+        """Remember the projections of a converged state (restored when a step is cut back)."""
+        self._saved = (self.eB.copy(), self.xiB.copy(), self.tB.copy())
+
+    def restore(self) -> None:
+        self.eB, self.xiB, self.tB = (a.copy() for a in self._saved)
+
+    def state(self) -> np.ndarray:
+        """(P, 3) [e_B, ξ_B, t_B] of every point (for restart files)."""
+        return np.column_stack([self.eB, self.xiB, self.tB])
+
+    def set_state(self, state: np.ndarray) -> None:
+        self.eB = state[:, 0].astype(np.int64)
+        self.xiB, self.tB = state[:, 1].copy(), state[:, 2].copy()
+        self.checkpoint()
+
+    # ------------------------------------------------------------------ surface
+    def surface(self, x_of, itf, eB, xiB, tB):
+        """B's surface at (e_B, ξ_B, t_B): Y, Y_ζ (P,3,2), Y_ζζ (P,3,2,2), N_B, N_B,ζ, N_B,ζζ.
+        ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
+        P = len(eB)
+        S, S1, S2 = np.empty((P, 2)), np.empty((P, 2)), np.zeros((P, 2))
+        for k, inter in enumerate(self.interfaces):          # only the spline evaluations
+            sel = itf == k
+            if not np.any(sel):
+                continue
+            t = tB[sel]
+            S[sel] = inter.curve_b(t) + self._shift[k]
+            S1[sel] = inter.curve_b(t, 1)
+            if inter.curve_b.degree >= 2:
+                S2[sel] = inter.curve_b(t, 2)
+        NB, NBz, NBzz = shape_on_curve(xiB, S, S1, S2)
+        qB = x_of(eB)                                           # (P, 18, 3)
+        Y = np.matmul(NB[:, None, :], qB)[:, 0]
+        Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
+        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, 18, 4)).reshape(P, 3, 2, 2)
+        return Y, Yz, Yzz, NB, NBz
+
+    def wrap(self, itf, eB, xiB, tB):
+        """Move points across B's element boundaries; clamp at beam and curve ends (invalid there)."""
+        valid = np.ones(len(eB), dtype=bool)
+        for k, inter in enumerate(self.interfaces):
+            sel = itf == k
+            b = inter.b
+            lo, hi = b.element_offset, b.element_offset + b.n_elements - 1
+            e, x = eB[sel], xiB[sel]
+            shift = np.floor((x + 1.0) / 2.0).astype(int)
+            shift = np.where(x == 1.0, 0, shift)
+            e_new = np.minimum(np.maximum(e + shift, lo), hi)
+            x = x - 2.0 * (e_new - e)
+            out = (x < -1.0 - 1e-12) | (x > 1.0 + 1e-12)
+            x = np.minimum(np.maximum(x, -1.0), 1.0)
+            # past an end of the interface curve the target surface continues smoothly (the
+            # spline's end piece is extrapolated), so a point whose partner slid off the curve end
+            # by a little stays in contact instead of switching off abruptly
+            t = tB[sel]
+            T = inter.curve_b.t_end
+            out |= (t < -CURVE_OVERHANG * T) | (t > (1.0 + CURVE_OVERHANG) * T)
+            t = np.minimum(np.maximum(t, -CURVE_OVERHANG * T), (1.0 + CURVE_OVERHANG) * T)
+            eB[sel], xiB[sel], tB[sel], valid[sel] = e_new, x, t, ~out
+        return eB, xiB, tB, valid
+
+    # ------------------------------------------------------------------ Newton on ζ
+    @staticmethod
+    def _newton_step(Yz, Yzz, d, pinned):
+        """Step dζ of the closest-point Newton iteration (Levenberg-damped where φ_ζζ is not
+        positive definite, far from the surface); pinned points move in t only."""
+        r = -np.einsum("pik,pi->pk", Yz, d)                                     # φ_ζ
+        H = np.einsum("pik,pil->pkl", Yz, Yz) - np.einsum("pikl,pi->pkl", Yzz, d)
+        det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0]
+        bad = (det <= 0.0) | (H[:, 0, 0] <= 0.0) | (H[:, 1, 1] <= 0.0)
+        if np.any(bad):
+            shift = np.abs(H[bad]).max(axis=(1, 2))
+            H[bad, 0, 0] += shift
+            H[bad, 1, 1] += shift
+            det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0]
+        dz = np.empty((len(d), 2))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dz[:, 0] = -(H[:, 1, 1] * r[:, 0] - H[:, 0, 1] * r[:, 1]) / det
+            dz[:, 1] = -(-H[:, 1, 0] * r[:, 0] + H[:, 0, 0] * r[:, 1]) / det
+            dz[pinned, 0] = 0.0
+            dz[pinned, 1] = -r[pinned, 1] / H[pinned, 1, 1]
+        return dz
+
+    def project(self, idx: np.ndarray, xA: np.ndarray, x_of) -> Projection:
+        """Project the points ``idx`` (positions ``xA``) onto B; updates the state of those points.
+
+        A point whose closest point sits on a boundary between two B elements (the surface is
+        only C0 in ξ there) makes Newton jump back and forth: it is pinned to the boundary and
+        only t is solved for.  A point sliding onto a B element this rank does not hold stays at
+        the boundary and the element is recorded in ``wanted`` (the caller exchanges it and
+        projects again)."""
+        itf = self.points.itf[idx]
+        eB, xiB, tB = self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy()
+        valid = np.ones(len(idx), dtype=bool)
+        converged = True
+        tol_t = PROJECTION_TOL * self.t_end[idx]
+        pinned = np.zeros(len(idx), dtype=bool)
+        e_prev2, e_prev = np.full(len(idx), -1), eB.copy()
+        for it in range(MAX_ITERATIONS):
+            Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
+            d = xA - Y
+            dz = self._newton_step(Yz, Yzz, d, pinned)
+            stuck = ~np.all(np.isfinite(dz), axis=1)
+            if np.any(stuck):
+                # degenerate local problem (only in wild intermediate iterates, far from the
+                # surface): keep the point where it is; such a state is never accepted
+                dz[stuck] = 0.0
+                converged = False
+            if it > 0 and np.all((np.abs(dz[:, 0]) < PROJECTION_TOL) & (np.abs(dz[:, 1]) < tol_t) | ~valid):
+                break
+            xiB += np.clip(dz[:, 0], -1.0, 1.0)
+            tB += dz[:, 1]
+            eB, xiB, tB, valid = self.wrap(itf, eB, xiB, tB)
+            miss = ~self.available[eB]
+            if np.any(miss):
+                self.missing = True
+                self.wanted = np.union1d(self.wanted, eB[miss])
+                xiB[miss] = np.where(eB[miss] > e_prev[miss], 1.0, -1.0)
+                eB[miss] = e_prev[miss]
+            bounce = (eB == e_prev2) & (eB != e_prev) & ~pinned
+            if np.any(bounce):
+                # stay on the element with the lower index, at its ξ = +1 end
+                low = np.minimum(eB[bounce], e_prev[bounce])
+                eB[bounce], xiB[bounce] = low, 1.0
+                pinned |= bounce
+            e_prev2, e_prev = e_prev, eB.copy()
+        else:
+            converged = False
+        self.eB[idx], self.xiB[idx], self.tB[idx] = eB, xiB, tB
+        in_window = not np.any((eB < self.lo[idx]) | (eB > self.hi[idx]))
+        d = xA - Y
+        n = np.cross(Yz[:, :, 1], Yz[:, :, 0])                   # outward normal of B
+        n /= np.linalg.norm(n, axis=1)[:, None]
+        n[self.flip[idx]] *= -1.0
+        g = np.einsum("pi,pi->p", d, n)
+        return Projection(idx=idx, eB=eB, xiB=xiB, tB=tB, d=d, n=n, g=g, valid=valid,
+                          NA=self.points.NA[idx], NB=NB, NBz=NBz, Yz=Yz, Yzz=Yzz,
+                          in_window=in_window, converged=converged)

@@ -1,0 +1,64 @@
+"""A beam's interface surface: the shared section curve S(t) swept along the element, (ξ, S(t)).
+
+The element's shape functions (eq. 6: Lagrange in ξ times the section monomials in y, z) are
+evaluated on that surface with their derivatives in ζ = (ξ, t), which the closest-point
+projection (eqs. 26–27) and the gap derivatives need.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import element3363 as el
+
+DDL = np.array([1.0, -2.0, 1.0])          # second ξ-derivatives of the Lagrange polynomials
+
+
+def section_shift(beam) -> np.ndarray:
+    """Add to a base-curve point (tendon frame, before offset) to get beam section coordinates."""
+    sec = beam.section
+    offset = np.asarray(sec.shape_params.get("offset", (0.0, 0.0)), dtype=float)
+    return offset - sec.centroid
+
+
+def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray | None = None):
+    """N (P, 18), N_ζ (P, 18, 2) and, if S2 is given, N_ζζ (P, 18, 2, 2) at section points S(t)
+    with derivatives S1 = S'(t), S2 = S''(t)."""
+    L, dL = el.lagrange(xi)
+    m, my, mz = el.section_monomials(S[:, 0], S[:, 1])
+    mt = my * S1[:, :1] + mz * S1[:, 1:]
+    P = len(xi)
+    N = (L[:, :, None] * m[:, None, :]).reshape(P, 18)
+    Nz = np.stack([(dL[:, :, None] * m[:, None, :]).reshape(P, 18),
+                   (L[:, :, None] * mt[:, None, :]).reshape(P, 18)], axis=-1)
+    if S2 is None:
+        return N, Nz
+    mtt = my * S2[:, :1] + mz * S2[:, 1:]
+    mtt[:, 3] += S1[:, 0] ** 2                 # (y²/2)'' = y'² + y y''
+    mtt[:, 4] += S1[:, 1] ** 2
+    mtt[:, 5] += 2.0 * S1[:, 0] * S1[:, 1]     # (yz)'' = 2 y'z' + y''z + y z''
+    cross = (dL[:, :, None] * mt[:, None, :]).reshape(P, 18)
+    Nzz = np.stack([np.stack([(DDL[None, :, None] * m[:, None, :]).reshape(P, 18), cross], -1),
+                    np.stack([cross, (L[:, :, None] * mtt[:, None, :]).reshape(P, 18)], -1)], -2)
+    return N, Nz, Nzz
+
+
+def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False):
+    """``shape_on_curve`` of ``beam`` on ``curve`` at (ξ, t)."""
+    S = curve(t) + section_shift(beam)
+    S1 = curve(t, 1)
+    S2 = (curve(t, 2) if curve.degree >= 2 else np.zeros_like(S1)) if second else None
+    return shape_on_curve(xi, S, S1, S2)
+
+
+def closest_parameter(curve, points: np.ndarray, samples: int = 400) -> np.ndarray:
+    """Parameter of the closest point of ``curve`` to each point (sampling, then Newton in t)."""
+    ts = np.linspace(0.0, curve.t_end, samples)
+    P = curve(ts)
+    t = ts[np.argmin(np.linalg.norm(points[:, None, :] - P[None], axis=2), axis=1)]
+    for _ in range(20):
+        d = curve(t) - points
+        d1, d2 = curve(t, 1), (curve(t, 2) if curve.degree >= 2 else np.zeros_like(points))
+        g = np.einsum("pi,pi->p", d, d1)
+        h = np.einsum("pi,pi->p", d1, d1) + np.einsum("pi,pi->p", d, d2)
+        t = np.clip(t - g / h, 0.0, curve.t_end)
+    return t

@@ -612,11 +612,12 @@ class Problem:
         return self.contact.gap_report(out)
 
     def contact_fields(self, X: PETSc.Vec) -> dict | None:
-        """Per contact point (sorted by point id) on rank 0: interface, reference position,
-        gap, pressure and slip (collective; None without contact and on other ranks)."""
+        """``Contact.point_fields`` of every rank on rank 0, points sorted by id (``point_*``,
+        ``x``, ...) and multipliers sorted by id (``multiplier_*``); collective; None without
+        contact and on the other ranks."""
         if self.contact is None:
             return None
-        q0 = self.model.q0.reshape(-1, 18, 3)
+        q0 = self.model.q0                                       # (n_nodes, 6, 3)
         conn = self.model.connectivity()
 
         def q0_of(els):
@@ -626,8 +627,12 @@ class Problem:
         if self.comm.rank != 0:
             return None
         out = {k: np.concatenate([p[k] for p in parts]) for k in local}
-        order = np.argsort(out["id"])
-        return {k: v[order] for k, v in out.items()}
+        for key in ("id", "multiplier_id"):
+            order = np.argsort(out[key])
+            for k in out:
+                if k.startswith("multiplier") == key.startswith("multiplier"):
+                    out[k] = out[k][order]
+        return out
 
     def state_is_clean(self) -> bool:
         """After SNES converged: did the last residual use converged contact projections? (collective)"""

@@ -172,11 +172,13 @@ class ContactSpec:
     mode: str = "sliding"                  # sliding | unilateral (contact/laws.py)
     interfaces: list = field(default_factory=list)   # [(beam_a, beam_b, curve name or None)]
     axial_points: int = 3
-    curve_points: int = 1
+    curve_points: int = 2
     search_margin: float = 0.1            # fraction of the beam length a point may slide
-    # Bernstein degrees (along ξ, along the curve) of the contact pressure per element
-    # (contact/multipliers.py).  Default: full along ξ (axial_points − 1), constant across (0)
-    projection: tuple[int, int] = (2, 0)
+    # Bernstein degrees (along the beam, across the interface) of the contact pressure
+    # (contact/multipliers.py).  Default: the trace of the elements along the beam
+    # (axial_points − 1), linear across (1): docs/contact.md, "Which pressure space"
+    projection: tuple[int, int] = (2, 1)
+    per_element: bool = False             # pressure discontinuous between A elements
     scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
 
 
@@ -188,10 +190,11 @@ class SolverSpec:
     max_cutbacks: int = 12
     growth: float = 2.0
     easy_iterations: int = 8
-    predictor: str = "none"
+    predictor: str = "secant"              # none | secant (extrapolate the last increment)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
+    stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solver.matrix_type)
 
 
@@ -455,7 +458,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 
     sv = mapping(raw.get("solver", {}), "solver",
                  optional=("max_increment", "initial_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
-                           "predictor", "merit", "min_det_f", "max_newton_iterations", "matrix"))
+                           "predictor", "merit", "min_det_f", "max_newton_iterations", "matrix",
+                           "stability_cutbacks"))
     solver = SolverSpec()
     if sv.get("max_increment") is not None:
         solver.max_increment = number(sv["max_increment"], "solver.max_increment", positive=True)
@@ -477,6 +481,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         solver.easy_iterations = integer(sv["easy_iterations"], "solver.easy_iterations", lo=1)
     if "matrix" in sv:
         solver.matrix = string(sv["matrix"], "solver.matrix", ("auto", "aij", "sbaij"))
+    if "stability_cutbacks" in sv:
+        solver.stability_cutbacks = integer(sv["stability_cutbacks"], "solver.stability_cutbacks", lo=0, hi=20)
     if sv.get("max_newton_iterations") is not None:
         solver.max_newton_iterations = integer(sv["max_newton_iterations"], "solver.max_newton_iterations", lo=1)
 
@@ -545,7 +551,7 @@ def _contact(value, names: list[str]) -> ContactSpec:
     c = ContactSpec()
     c.mode = string(value.get("mode", "sliding"), f"{p}.mode", CONTACT_MODES)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
-    c.curve_points = integer(value.get("curve_points", 1), f"{p}.curve_points", lo=1, hi=10)
+    c.curve_points = integer(value.get("curve_points", 2), f"{p}.curve_points", lo=1, hi=10)
     c.search_margin = number(value.get("search_margin", 0.1), f"{p}.search_margin", positive=True, hi=1.0)
     c.scaling = number(value.get("scaling", 1.0), f"{p}.scaling", positive=True,
                        hint=" (a factor on the multipliers' unit k_s; it does not change the answer)")
@@ -554,12 +560,16 @@ def _contact(value, names: list[str]) -> ContactSpec:
         raise ConfigError(f"{p}.projection", "a multiplier per point over-constrains the quadratic "
                                              "section fields; give {axial: .., curve: ..} degrees")
     if proj is None:
-        c.projection = (c.axial_points - 1, 0)
+        c.projection = (c.axial_points - 1, 1)
     else:
         pp = f"{p}.projection"
-        mapping(proj, pp, required=("axial", "curve"))
+        mapping(proj, pp, required=("axial", "curve"), optional=("per_element",))
         c.projection = (integer(proj["axial"], f"{pp}.axial", lo=0, hi=c.axial_points - 1),
                         integer(proj["curve"], f"{pp}.curve", lo=0, hi=8))
+        c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
+    if (c.projection[0] + 1) * (c.projection[1] + 1) > 18:
+        raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + 1) pressure functions per element "
+                                             "must not exceed 18 (one node block)")
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []

@@ -6,6 +6,9 @@
 * ``summary.json`` — probes per step, iterations, timings; replaced atomically after each step.
 * ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled
   along ξ), with displacement, axial Green–Lagrange strain E_xx and volume ratio J, via meshio.
+* ``contact_NNNN.vtu`` + ``contact.pvd`` — the contact points at their deformed positions with gap,
+  pressure, slip (vector and its axial part) and interface; the same per step in results.h5
+  (``steps/step_NNNN/contact``) with the multipliers and the projection state.
 """
 from __future__ import annotations
 
@@ -124,12 +127,12 @@ class ResultsWriter:
         self.summary_path = os.path.join(self.dir, "summary.json")
         self.summary = {"name": spec.name, "status": "running", **run_info, "steps": []}
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
-        self.pvd_entries: list[tuple[float, str]] = []
+        self.pvd_entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
         if self.rank != 0:
             return
         os.makedirs(self.dir, exist_ok=True)
         for stale in os.listdir(self.dir):
-            if stale.startswith("surface") or stale in ("results.h5", "summary.json"):
+            if stale.startswith(("surface", "contact")) or stale in ("results.h5", "summary.json"):
                 os.remove(os.path.join(self.dir, stale))
         import h5py
         with h5py.File(self.h5_path, "w") as h5:
@@ -163,17 +166,27 @@ class ResultsWriter:
         _atomic_write(self.summary_path, json.dumps(self.summary, indent=1))
 
     def _write_vtu(self, k: int, lam: float, q: np.ndarray) -> None:
-        import meshio
         pts, quads, caps, data = self.sampler.mesh(q)
         cells = [("quad", quads)] + [("polygon", c[None, :]) for c in caps]
-        name = f"surface_{k:04d}.vtu"
-        # raw binary: zlib compression took 10 ms per file (half the output time of a run)
-        meshio.write(os.path.join(self.dir, name),
-                     meshio.Mesh(pts, cells, point_data=data), binary=True, compression=None)
-        self.pvd_entries.append((lam, name))
+        self._write_series("surface", k, lam, pts, cells, data)
+
+    def _write_contact_vtu(self, k: int, lam: float, fields: dict) -> None:
+        data = {"gap": fields["gap"], "pressure": fields["pressure"], "slip": fields["slip"],
+                "slip_axial": fields["slip"][:, 0], "interface": fields["interface"].astype(float)}
+        cells = [("vertex", np.arange(len(fields["x"]))[:, None])]
+        self._write_series("contact", k, lam, fields["x"], cells, data)
+
+    def _write_series(self, series: str, k: int, lam: float, pts, cells, data) -> None:
+        """One VTU of a time series and its .pvd collection (meshio; raw binary: zlib took
+        10 ms per file, half the output time of a run)."""
+        import meshio
+        name = f"{series}_{k:04d}.vtu"
+        meshio.write(os.path.join(self.dir, name), meshio.Mesh(pts, cells, point_data=data),
+                     binary=True, compression=None)
+        self.pvd_entries[series].append((lam, name))
         rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
-                         for t, f in self.pvd_entries)
-        _atomic_write(os.path.join(self.dir, "surface.pvd"),
+                         for t, f in self.pvd_entries[series])
+        _atomic_write(os.path.join(self.dir, f"{series}.pvd"),
                       '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                       f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
 
@@ -184,8 +197,11 @@ class ResultsWriter:
                          "value": q[node, slot].tolist()}
         return out
 
-    def write_step(self, record, q: np.ndarray | None, extra: dict | None = None) -> None:
-        """Append one converged level; ``q`` is the gathered state (rank 0)."""
+    def write_step(self, record, q: np.ndarray | None, extra: dict | None = None,
+                   contact: dict | None = None, multipliers: np.ndarray | None = None) -> None:
+        """Append one converged level; ``q`` is the gathered state (rank 0), ``contact`` the
+        gathered contact fields (``Problem.contact_fields``), ``multipliers`` the multiplier
+        blocks (n, 18) in model order."""
         if self.rank != 0:
             return
         import h5py
@@ -198,6 +214,13 @@ class ResultsWriter:
             g.attrs["snes_reason"] = record.reason
             g.attrs["substeps"] = record.substeps
             g.attrs["wall_time"] = record.wall_time
+            if contact is not None:
+                c = g.create_group("contact")
+                c.attrs["units"] = "SI: m, Pa; slip = reference position of the partner point on B minus the point's"
+                for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
+                            "multiplier_pressure", "multiplier_active"):
+                    c.create_dataset(key, data=contact[key])
+                c.create_dataset("multiplier_blocks", data=multipliers)
         entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
                  "iterations": record.iterations, "substeps": record.substeps,
                  "cutbacks": record.cutbacks, "reason": record.reason,
@@ -209,6 +232,8 @@ class ResultsWriter:
         self.summary["steps"].append(entry)
         if self.sampler is not None:
             self._write_vtu(k, record.load_factor, q)
+            if contact is not None:
+                self._write_contact_vtu(k, record.load_factor, contact)
         self._write_summary()
 
     def finish(self, status: str, **info) -> None:

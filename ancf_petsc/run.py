@@ -91,10 +91,13 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
     def on_level(rec):
         STAGE_OUTPUT.push()
         t0 = time.perf_counter()
-        q = problem.gather()
+        blocks = problem.gather(blocks=True)
+        q = None if blocks is None else blocks[:model.n_nodes]
         gaps = problem.contact_gaps(problem.X)          # collective: every rank its own points
+        fields = problem.contact_fields(problem.X)
         extra = {"contact": gaps} if gaps is not None else None
-        writer.write_step(rec, q, extra)
+        mult = None if blocks is None or contact is None else blocks[model.n_nodes:].reshape(-1, 18)
+        writer.write_step(rec, q, extra, fields, mult)
         timings["output"] += time.perf_counter() - t0
         STAGE_OUTPUT.pop()
         if rank == 0:

@@ -47,6 +47,11 @@ DEFAULT_OPTIONS = {
 
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
+#: a converged step whose state is less stable than the last accepted one (more negative
+#: tangent eigenvalues) is cut back, at most ``solver.stability_cutbacks`` times per load level;
+#: then the less stable state is accepted (a genuine loss of stability)
+UNSTABLE_STEP = -1000
+REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
 
 STAGE_SOLVE = PETSc.Log.Stage("ANCF load stepping")
 
@@ -239,12 +244,13 @@ class LoadStepper:
         if self.spec.max_increment is not None:
             dlam = min(dlam, self.spec.max_increment)
         records = []
+        accepted_negative = 0
         STAGE_SOLVE.push()
         try:
             for target in levels:
                 t0 = time.perf_counter()
                 its_total = substeps = cutbacks = 0
-                consecutive = 0
+                consecutive = stability_cuts = 0
                 history = []
                 while lam < target * (1.0 - 1e-14):
                     step = min(dlam, target - lam)
@@ -266,7 +272,17 @@ class LoadStepper:
                                               f"(solver.max_newton_iterations = {budget})")
                     if reason > 0 and not self._residual_small(fnorm, lam + step):
                         reason = PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH   # stalled, not converged
-                    if reason > 0 and np.isfinite(fnorm) and P.state_is_clean():
+                    converged = reason > 0 and np.isfinite(fnorm) and P.state_is_clean()
+                    neg = self.negative_eigenvalues() if converged else None
+                    jumped = (neg is not None and neg > accepted_negative
+                              and stability_cuts < self.spec.stability_cutbacks)
+                    if jumped:
+                        # a stable path does not step onto a saddle: the step may have jumped to
+                        # another branch; retry smaller (a genuine loss of stability survives)
+                        stability_cuts += 1
+                        reason = UNSTABLE_STEP
+                    elif converged:
+                        accepted_negative = neg if neg is not None else accepted_negative
                         P.checkpoint()
                         X.copy(dX_last)
                         dX_last.axpy(-1.0, X_prev)
@@ -283,9 +299,11 @@ class LoadStepper:
                     X_prev.copy(X)
                     P.restore()
                     cutbacks += 1
-                    consecutive += 1
+                    consecutive += reason != UNSTABLE_STEP      # bounded by stability_cutbacks
                     dlam = 0.5 * step
                     why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+                    if reason == UNSTABLE_STEP:
+                        why = f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
                     self.log(f"  cut back at load factor {lam + step:.6g}: {reason_name(reason)}{why}; "
                              f"retry with increment {dlam:.4g}")
                     if consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment:

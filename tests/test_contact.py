@@ -49,8 +49,20 @@ def test_contact_jacobian_matches_finite_differences(mode):
     P.load_factor = 50.0
     X, free = perturbed_state(P, 2e-6, 3, multipliers=1e-5)
     act = _active(P, X)
-    if mode == "unilateral":         # both kinds of multiplier are present
-        assert 0 < act.sum() < len(act)
+    if mode == "unilateral":
+        # a state the law keeps: pressure where the bodies penetrate, random pulls elsewhere
+        # (released, and not penetrating: they stay released)
+        c = P.contact
+        st = c.evaluate(P._local_state(X).copy(), P.needed)
+        pos = c.multiplier_positions(P.needed)
+        x = X.getArray()
+        assert len(P.needed) == P.n_blocks        # one rank: local positions are global ones
+        x[pos] = np.where(st.gbar < 0, np.abs(st.z), st.z)
+        X.setArray(x)
+        c.status[:] = True
+        act = _active(P, X)
+        assert 0 < act.sum() < len(act)         # both kinds of multiplier are present
+        assert np.array_equal(_active(P, X), act)
     P.jacobian(None, X, P.J, P.J)
     rng = np.random.default_rng(7)
     h = 1e-6

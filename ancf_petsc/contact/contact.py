@@ -25,7 +25,7 @@ from ..errors import InputError
 from .gap import gap_gradient, gap_hessian_factors
 from .interfaces import find_interfaces
 from .laws import make_law
-from .multipliers import SLOTS, build_space
+from .multipliers import build_space
 from .points import build_points
 from .projection import Projection, Projector
 
@@ -58,6 +58,7 @@ def reference_stiffness(interfaces) -> float:
 class ContactState:
     """Everything one evaluation at a state found (local points and multipliers)."""
     pr: Projection
+    xA: np.ndarray         # (P_loc, 3) positions of the points
     gbar: np.ndarray       # (M_loc,) weighted gaps ḡ [m]
     z: np.ndarray          # (M_loc,) scaled multipliers [m]
     active: np.ndarray     # (M_loc,) bool
@@ -72,12 +73,8 @@ class Contact:
         self.model, self.spec, self.interfaces = model, spec, interfaces
         self.law = make_law(spec.mode)
         self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
-        ka, kc = spec.projection
-        if (ka + 1) * (kc + 1) > SLOTS:
-            raise InputError("contact.projection", f"(axial + 1) x (curve + 1) = {(ka + 1) * (kc + 1)} "
-                                                   f"pressure functions per segment; at most {SLOTS}")
         self.space = build_space(self.points, interfaces, spec.projection,
-                                 reference_stiffness(interfaces) * spec.scaling)
+                                 reference_stiffness(interfaces) * spec.scaling, spec.per_element)
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         self.timers: dict | None = None
         # multiplier nodes of each segment's functions: its own A element's and the previous
@@ -91,8 +88,11 @@ class Contact:
         #: ``sum_over_ranks(values over self.mults)`` and ``all_ranks(flag)`` (both collective)
         self.sum_over_ranks = None
         self.all_ranks = None
-        #: gaps this small are closed [m] (the rounding of positions in a touching reference)
+        #: the unilateral law's tolerance [m]: a penetration or a pull (z) smaller than this does
+        #: not change a constraint's status (rounding of positions in a touching reference)
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
+        self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
+        self._saved_status = self.status.copy()
         self._cache = None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
@@ -218,9 +218,11 @@ class Contact:
         gbar = sums[:, 0]
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
         z = xl.reshape(-1)[18 * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
-        active = self.law.active(gbar, z, self.tie_tolerance) & support
+        prev = self.status[self.mults]
+        active = self.law.active(gbar, z, prev, self.tie_tolerance) & support
+        self.status[self.mults] = active
         tau = self.stiffness * (self.Phi.T @ (z * active)) * valid
-        st = ContactState(pr=pr, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos)
+        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos)
         self._cache = None if self.missing else (xl.copy(), needed, st)
         if self.timers is not None:
             self.timers["contact_projection"] += time.perf_counter() - t0
@@ -358,10 +360,12 @@ class Contact:
 
     def checkpoint(self) -> None:
         self.projector.checkpoint()
+        self._saved_status = self.status.copy()
 
     def restore(self) -> None:
         self._cache = None
         self.projector.restore()
+        self.status = self._saved_status.copy()
 
     # ---------------------------------------------------------------- reports
     def describe(self) -> list[str]:
@@ -415,20 +419,27 @@ class Contact:
         return out
 
     def point_fields(self, xl: np.ndarray, needed: np.ndarray, q0_of) -> dict:
-        """Per local point: id, interface, reference position on A, gap, pressure and slip (the
-        reference position of the partner point on B minus that of the point: how far B's
-        material has slid past it).  ``q0_of(elements)`` gives reference nodal vectors."""
+        """Per local point: id, interface, current and reference position on A, gap, pressure,
+        slip (the reference position of the partner point on B minus that of the point: how far
+        B's material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
+        multiplier: id, pressure coefficient λ [Pa] and status.  ``q0_of(elements)`` gives
+        reference nodal vectors."""
         st = self.evaluate(xl, needed)
-        if len(self.local) == 0:
-            return {k: np.zeros((0,) + s) for k, s in (("id", ()), ("interface", ()), ("x0", (3,)),
-                                                      ("gap", ()), ("pressure", ()), ("slip", (3,)))}
-        pr = st.pr
-        idx = self.local
-        X0A = np.einsum("pa,pai->pi", pr.NA, q0_of(self.points.eA[idx]))
-        X0B = np.einsum("pa,pai->pi", pr.NB, q0_of(pr.eB))
+        pr, idx = st.pr, self.local
+        if len(idx):
+            X0A = np.einsum("pa,pai->pi", pr.NA, q0_of(self.points.eA[idx]))
+            X0B = np.einsum("pa,pai->pi", pr.NB, q0_of(pr.eB))
+        else:
+            X0A = X0B = np.zeros((0, 3))
         pressure = np.where(pr.valid, st.tau / self.points.w[idx], 0.0)
-        return {"id": idx, "interface": self.points.itf[idx], "x0": X0A, "gap": pr.g * pr.valid,
-                "pressure": pressure, "slip": (X0B - X0A) * pr.valid[:, None]}
+        own = self.owned
+        return {"id": idx, "interface": self.points.itf[idx], "x": st.xA, "x0": X0A,
+                "gap": pr.g * pr.valid, "pressure": pressure,
+                "slip": (X0B - X0A) * pr.valid[:, None],
+                "projection": np.column_stack([pr.eB, pr.xiB, pr.tB]) if len(idx) else np.zeros((0, 3)),
+                "multiplier_id": self.mults[own],
+                "multiplier_pressure": self.pressure_coefficients(st)[own],
+                "multiplier_active": st.active[own]}
 
 
 def _subset(pr: Projection, sel: np.ndarray) -> Projection:

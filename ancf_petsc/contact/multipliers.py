@@ -68,16 +68,22 @@ class MultiplierSpace:
         return ~used
 
 
-def _axial_functions(xi: np.ndarray, degree: int) -> tuple[np.ndarray, int]:
+def _axial_functions(xi: np.ndarray, degree: int, per_element: bool) -> tuple[np.ndarray, int]:
     """Values (n, degree + 1) of one element's axial functions at ξ and the offset between
-    consecutive elements' first function (``degree``: they share an end; 1 for constants)."""
+    consecutive elements' first function (``degree``: they share an end; degree + 1 when each
+    element has its own functions, as constants always do)."""
     if degree == 0:
         return np.ones((len(xi), 1)), 1
-    return bernstein(xi, degree), degree
+    return bernstein(xi, degree), degree + 1 if per_element else degree
 
 
-def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float) -> MultiplierSpace:
-    """Multipliers of ``degrees`` (axial, curve) on every interface of ``points``."""
+def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
+                per_element: bool = False) -> MultiplierSpace:
+    """Multipliers of ``degrees`` (axial, curve) on every interface of ``points``; with
+    ``per_element`` the pressure is discontinuous between A elements.  That space repeats
+    constraints (in the reference state its gaps vanish together with the continuous ones, so
+    some multipliers are not unique) and needs the factorisation's null-pivot detection; it is
+    the space of the former penalty formulation, kept to compare with it."""
     ka, kc = degrees
     S = points.n_segments
     K = (ka + 1) * (kc + 1)
@@ -92,7 +98,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float) 
         n = int(points.seg_size[segs[0]])
         xi, tau = points.xi[p0:p0 + n], points.tau[p0:p0 + n]
         dc = min(kc, len(np.unique(np.round(tau, 12))) - 1)   # no more than the points tell apart
-        ax, step = _axial_functions(xi, ka)
+        ax, step = _axial_functions(xi, ka, per_element)
         phi = (ax[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)   # (n, na·nc)
         na, nc = ax.shape[1], dc + 1
         n_axial = step * (len(segs) - 1) + na
@@ -108,7 +114,9 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float) 
             dense[s, :len(ids), :n] = wphi
         m_here = n_axial * nc
         axial_dof = np.arange(m_here) // nc
-        owner = np.minimum(axial_dof // step, len(segs) - 1)          # lowest element it lives on
+        shared = step < na                                          # neighbours share an end
+        owner = (np.maximum(axial_dof - 1, 0) if shared else axial_dof) // step
+        owner = np.minimum(owner, len(segs) - 1)                      # lowest element it lives on
         itf_of.append(np.full(m_here, k))
         elem_of.append(points.seg_eA[segs][owner])
         first += m_here

@@ -44,15 +44,22 @@ def evaluate_beam(model: Model, beam, q: np.ndarray, xi: np.ndarray, yz: np.ndar
     """Positions r, F and reference positions at points (ξ, y, z) of every element of a beam.
 
     ``q`` model-ordered nodal vectors (n_nodes, 6, 3); points given per element: ``xi`` (m,),
-    ``yz`` (m, 2).  Returns r (E, m, 3), F (E, m, 3, 3), r0 (E, m, 3).
+    ``yz`` (m, 2), or (E, m, 2) when every element has its own (sections varying along x).
+    Returns r (E, m, 3), F (E, m, 3, 3), r0 (E, m, 3).
     """
-    N, dN = el.shape_functions(xi, yz[:, 0], yz[:, 1])
     conn = beam.connectivity
     qe = q[conn].reshape(len(conn), 18, 3)
     q0e = model.q0[conn].reshape(len(conn), 18, 3)
+    if yz.ndim == 3:
+        E, m = yz.shape[:2]
+        N, dN = el.shape_functions(np.tile(xi, E), yz[..., 0].ravel(), yz[..., 1].ravel())
+        N, dN = N.reshape(E, m, 18), dN.reshape(E, m, 18, 3)
+    else:
+        N, dN = el.shape_functions(xi, yz[:, 0], yz[:, 1])
     G, _ = el.reference_gradients(q0e, dN)
-    r = np.einsum("pa,eai->epi", N, qe)
-    r0 = np.einsum("pa,eai->epi", N, q0e)
+    sub = "epa,eai->epi" if N.ndim == 3 else "pa,eai->epi"
+    r = np.einsum(sub, N, qe)
+    r0 = np.einsum(sub, N, q0e)
     F = np.matmul(np.swapaxes(qe, 1, 2)[:, None], G)
     return r, F, r0
 
@@ -64,10 +71,15 @@ class SurfaceSampler:
         self.model = model
         self.parts = []
         for beam in model.beams:
+            xi = np.linspace(-1.0, 1.0, samples + 1)
+            if beam.ring_at is not None:            # the outline at every sampled x, per element
+                x = beam.x_nodes[0:-1:2, None] + 0.5 * (xi[None, :] + 1.0) * (beam.x_nodes[2] - beam.x_nodes[0])
+                ring = np.stack([np.concatenate([beam.ring_at(xx) for xx in row]) for row in x])
+                self.parts.append((beam, xi, ring))
+                continue
             ring = beam.section.boundary_polyline(6)
             if np.allclose(ring[0], ring[-1]):
                 ring = ring[:-1]
-            xi = np.linspace(-1.0, 1.0, samples + 1)
             self.parts.append((beam, xi, ring))
 
     def mesh(self, q: np.ndarray):
@@ -76,9 +88,9 @@ class SurfaceSampler:
         data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
         offset = 0
         for beam, xi, ring in self.parts:
-            m = len(ring)
+            m = ring.shape[-2] // len(xi) if ring.ndim == 3 else len(ring)
             XI = np.repeat(xi, m)
-            YZ = np.tile(ring, (len(xi), 1))
+            YZ = ring if ring.ndim == 3 else np.tile(ring, (len(xi), 1))
             r, F, r0 = evaluate_beam(self.model, beam, q, XI, YZ)
             ne, S = beam.n_elements, len(xi) - 1
             # drop the duplicated first station of every element but the first

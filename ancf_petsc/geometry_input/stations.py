@@ -3,8 +3,8 @@
 Between two stations x_k < x_{k+1} (s = (x - x_k) / (x_{k+1} - x_k)) every outline is interpolated
 in size and shape.  Two ways, chosen once for the whole tendon:
 
-* **shared curves** (``structured``): every loop has the same sequence of curves at every station
-  and every curve used by two loops (an interface) is the same at every station.  The interfaces
+* **shared curves** (``structured``): there are interfaces (curves used by two loops), every loop
+  has the same sequence of curves at every station and every interface is the same at every station.  The interfaces
   are kept as they are (one SplineCurve object for the whole length, so contact works unchanged);
   each free curve is blended point by point at equal fractions of its arc length.
 * **registered outlines** (otherwise): each outline is resampled at ``RING`` points; the points of
@@ -99,6 +99,9 @@ class SectionField:
             for name, loop in st.loops.items():
                 for cv, _ in loop:
                     users.setdefault(id(cv), set()).add(name)
+        if not any(len(v) > 1 for v in users.values()):
+            self._why_not = "no interfaces"
+            return False
         for name in self.names:
             loops = [st.loops[name] for st in self.stations]
             if len({len(lp) for lp in loops}) != 1:

@@ -40,11 +40,12 @@ class TendonGeometry:
             return self.stations[0][1].loops[name]
         return self.field.loop_at(name, x)
 
-    def ring(self, name: str, x: float) -> np.ndarray:
-        """Closed polyline of outline ``name`` at x, with the same number of points at every x."""
+    def ring(self, name: str, x: float, n: int = 48) -> np.ndarray:
+        """Closed polyline of outline ``name`` at x: ``n`` points at equal arc length, matched
+        from one x to the next (output surfaces)."""
         if self.field is None:
-            return self.stations[0][1].polyline(name)
-        return self.field.ring_at(name, x)
+            return pl.resample(self.stations[0][1].polyline(name), n)
+        return pl.resample(self.field.ring_at(name, x), n)
 
     def junctions(self, names: list[str]) -> np.ndarray:
         """Junctions (x = 0) through which every loop in ``names`` passes, (k, 2)."""

@@ -28,6 +28,7 @@ __all__ = ["Station", "build_station", "AREA_LIMITS"]
 AREA_LIMITS = (1e-10, 1e-2)
 DEFAULT_MERGE_TOL = 50e-6          # [m]
 DEFAULT_MERGE_PX = 1.5             # pixels, for image sources (if larger)
+DEFAULT_SMOOTHING_PX = 2.0         # pixels, for image sources (0 for point lists and SVG)
 #: largest control-point spacing of a fitted curve, as a fraction of its outline's perimeter
 MAX_SPACING = 1.0 / 12.0
 
@@ -174,7 +175,7 @@ def build_station(src: GeometrySource, opts: SectionsSpec, label: str = "") -> S
     raw_area = {n: pl.signed_area(P) for n, P in raw.items()}
     _plausible(raw_area, src)
 
-    sigma = opts.smoothing if opts.smoothing is not None else (pixel or 0.0)
+    sigma = opts.smoothing if opts.smoothing is not None else DEFAULT_SMOOTHING_PX * (pixel or 0.0)
     tol = opts.merge_tolerance if opts.merge_tolerance is not None else \
         max(DEFAULT_MERGE_TOL, DEFAULT_MERGE_PX * (pixel or 0.0))
     fit_tol = opts.fit_tolerance if opts.fit_tolerance is not None else \

@@ -118,7 +118,7 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
     box = {a: (D[a].min(axis=0) - tol, D[a].max(axis=0) + tol) for a in names}
     dist = {a: PolylineDistance(D[a]) for a in names}
 
-    label, foot, seg = {}, {}, {}
+    label, seg = {}, {}
     for ia, a in enumerate(names):
         n = len(D[a])
         best = np.full(n, np.inf)
@@ -138,7 +138,7 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
                     "correct the tracing or raise geometry.sections.merge_tolerance")
             near = (d <= tol) & (d < best)
             best[near], lab[near], ft[near], sg[near] = d[near], ib, f[near], j[near]
-        label[a], foot[a], seg[a] = lab, ft, sg
+        label[a], seg[a] = lab, sg
 
     # label runs, pair them across neighbours; unpaired border runs become free surface
     for _ in range(4):
@@ -154,7 +154,7 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
             label[a] = _clean(label[a], W[a], min_run)
         pairs, _ = _pair_runs(names, label, seg)
 
-    return _assemble(names, D, label, foot, pairs, tol, h)
+    return _assemble(names, D, dist, pairs, tol, h)
 
 
 def _pair_runs(names, label, seg):
@@ -179,14 +179,16 @@ def _pair_runs(names, label, seg):
     return pairs, unpaired
 
 
-def _assemble(names, D, label, foot, pairs, tol, h) -> Merged:
+def _assemble(names, D, dist, pairs, tol, h) -> Merged:
     rho = 2.0 * tol + 2.0 * h
-    # interfaces: midline of A's run and its closest points on B
+    # interfaces: midline of A's run and its closest points on B (recomputed: cleaning may have
+    # given a run points that were nearer another neighbour, or none)
     mids, ends = [], []
     for a, (s, m, _), b, _rb in pairs:
         n = len(D[a])
         idx = (s + np.arange(m)) % n
-        mid = 0.5 * (D[a][idx] + foot[a][idx])
+        _, _, foot = dist[b].query(D[a][idx])
+        mid = 0.5 * (D[a][idx] + foot)
         mids.append(mid)
         ends += [mid[0], mid[-1]]
     # junctions: cluster the interface ends

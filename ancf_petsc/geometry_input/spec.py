@@ -73,8 +73,8 @@ class SectionsSpec:
     """``geometry.sections``: one section (``stations`` = [(None, source)]) or stations along x."""
     stations: list[tuple[float | None, GeometrySource]]
     merge_tolerance: float | None = None      # None: auto (50 um, 1.5 px for images)
-    smoothing: float | None = None            # None: auto (1 px for images, 0 otherwise)
-    fit_tolerance: float | None = None        # None: auto (0.5 px for images, tol / 4 otherwise)
+    smoothing: float | None = None            # None: auto (2 px for images, 0 otherwise)
+    fit_tolerance: float | None = None        # None: auto (0.5 px for images, tol / 2 otherwise)
     spline_degree: int = 3
     key: str = "geometry.sections"
 

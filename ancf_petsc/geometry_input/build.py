@@ -134,12 +134,16 @@ def _plausible(areas: dict[str, float], src: GeometrySource) -> None:
 
 
 def _fit_segment(Q: np.ndarray, closed: bool, degree: int, tol: float, name: str,
-                 max_spacing: float) -> list[SplineCurve]:
-    """Curves through an open polyline Q (or closed: Q[0] == Q[-1]), broken at sharp corners."""
+                 max_spacing: float, traced: np.ndarray | None = None) -> list[SplineCurve]:
+    """Curves through an open polyline Q (or closed: Q[0] == Q[-1]), broken at sharp corners;
+    ``traced`` marks the traced points (see fit.fit_curve)."""
+    traced = np.ones(len(Q), dtype=bool) if traced is None else traced
     body = Q[:-1] if closed else Q
     cidx = corners(body, closed=closed)
     if closed and cidx.size:
         body = np.roll(body, -int(cidx[0]), axis=0)
+        traced = np.r_[np.roll(traced[:-1], -int(cidx[0])), False]
+        traced[-1] = traced[0]
         cidx = (cidx - cidx[0]) % len(body)
         Q = np.vstack([body, body[:1]])
         cuts = np.r_[np.sort(cidx), len(body)]
@@ -153,7 +157,8 @@ def _fit_segment(Q: np.ndarray, closed: bool, degree: int, tol: float, name: str
         part = Q[i:j + 1]
         nm = name if len(cuts) == 2 else f"{name}.{k + 1}"
         whole = closed and len(cuts) == 2
-        out.append(fit_curve(part, degree, tol, nm, max_spacing, min_points=5 if whole else 2).curve)
+        out.append(fit_curve(part, degree, tol, nm, max_spacing, min_points=5 if whole else 2,
+                             traced=traced[i:j + 1]).curve)
     return out
 
 
@@ -195,7 +200,7 @@ def build_station(src: GeometrySource, opts: SectionsSpec, label: str = "") -> S
             len(merged.loops[owner]) == 1
         try:
             curves_of.append(_fit_segment(seg.points, closed, opts.spline_degree, fit_tol, seg.name,
-                                          MAX_SPACING * perim[owner]))
+                                          MAX_SPACING * perim[owner], seg.traced))
         except SectionError as exc:
             raise src.err(f"outlines.{owner}", str(exc)) from None
     loops = {}

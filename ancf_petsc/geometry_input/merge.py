@@ -49,6 +49,7 @@ class Segment:
     points: np.ndarray
     owners: tuple[str, ...]
     sides: dict = field(default_factory=dict)
+    traced: np.ndarray | None = None      # mask: points from trace vertices (not densified)
 
     @property
     def is_interface(self) -> bool:
@@ -112,7 +113,9 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
     run kept (default max(2 tol, 4 h))."""
     names = list(outlines)
     min_run = max(2.0 * tol, 4.0 * h) if min_run is None else min_run
-    D = {a: densify(outlines[a], h) for a in names}
+    DV = {a: densify(outlines[a], h, vertices=True) for a in names}
+    D = {a: DV[a][0] for a in names}
+    V = {a: DV[a][1] for a in names}
     W = {a: 0.5 * (np.linalg.norm(D[a] - np.roll(D[a], 1, axis=0), axis=1)
                    + np.linalg.norm(np.roll(D[a], -1, axis=0) - D[a], axis=1)) for a in names}
     box = {a: (D[a].min(axis=0) - tol, D[a].max(axis=0) + tol) for a in names}
@@ -154,7 +157,7 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
             label[a] = _clean(label[a], W[a], min_run)
         pairs, _ = _pair_runs(names, label, seg)
 
-    return _assemble(names, D, dist, pairs, tol, h)
+    return _assemble(names, D, V, dist, pairs, tol, h)
 
 
 def _pair_runs(names, label, seg):
@@ -179,7 +182,7 @@ def _pair_runs(names, label, seg):
     return pairs, unpaired
 
 
-def _assemble(names, D, dist, pairs, tol, h) -> Merged:
+def _assemble(names, D, V, dist, pairs, tol, h) -> Merged:
     rho = 2.0 * tol + 2.0 * h
     # interfaces: midline of A's run and its closest points on B (recomputed: cleaning may have
     # given a run points that were nearer another neighbour, or none)
@@ -189,7 +192,7 @@ def _assemble(names, D, dist, pairs, tol, h) -> Merged:
         idx = (s + np.arange(m)) % n
         _, _, foot = dist[b].query(D[a][idx])
         mid = 0.5 * (D[a][idx] + foot)
-        mids.append(mid)
+        mids.append((mid, V[a][idx]))
         ends += [mid[0], mid[-1]]
     # junctions: cluster the interface ends
     if ends:
@@ -213,7 +216,7 @@ def _assemble(names, D, dist, pairs, tol, h) -> Merged:
     # per loop: (start index on the loop, end index, kind, segment id, reversed, j_start, j_end)
     pieces = {a: [] for a in names}
     count = {}
-    for k, ((a, (s, m, _), b, (sb, mb, _)), mid) in enumerate(zip(pairs, mids)):
+    for k, ((a, (s, m, _), b, (sb, mb, _)), (mid, vert)) in enumerate(zip(pairs, mids)):
         j0, j1 = cluster[2 * k], cluster[2 * k + 1]
         if j0 == j1:                       # a border shorter than the junction radius
             continue
@@ -224,7 +227,7 @@ def _assemble(names, D, dist, pairs, tol, h) -> Merged:
         name = f"{a}/{b}" + (f"#{count[key]}" if count[key] > 1 else "")
         na, nb = len(D[a]), len(D[b])
         sides = {a: D[a][(s + np.arange(m)) % na], b: D[b][(sb + np.arange(mb)) % nb]}
-        segments.append(Segment(name, pts, (a, b), sides))
+        segments.append(Segment(name, pts, (a, b), sides, np.r_[False, vert[keep], False]))
         sid = len(segments) - 1
         pieces[a].append((s, s + m, sid, False, j0, j1))
         pieces[b].append((sb, sb + mb, sid, True, j1, j0))
@@ -235,7 +238,7 @@ def _assemble(names, D, dist, pairs, tol, h) -> Merged:
         P, n = D[a], len(D[a])
         ps = sorted(pieces[a])
         if not ps:
-            segments.append(Segment(f"{a}", np.vstack([P, P[:1]]), (a,), {a: P}))
+            segments.append(Segment(f"{a}", np.vstack([P, P[:1]]), (a,), {a: P}, np.r_[V[a], V[a][:1]]))
             loops[a] = [(len(segments) - 1, False)]
             continue
         loop = []
@@ -246,7 +249,8 @@ def _assemble(names, D, dist, pairs, tol, h) -> Merged:
             s2, e2, _, _, js2, _ = ps[(i + 1) % len(ps)]
             if i + 1 == len(ps):
                 s2 += n
-            own = P[np.arange(e, s2) % n]
+            own_idx = np.arange(e, s2) % n
+            own = P[own_idx]
             if js2 == je and len(own) == 0:
                 continue
             keep = (np.linalg.norm(own - J[je], axis=1) > rho) & (np.linalg.norm(own - J[js2], axis=1) > rho)
@@ -254,7 +258,7 @@ def _assemble(names, D, dist, pairs, tol, h) -> Merged:
                 continue                   # a notch smaller than the junction radius
             pts = np.vstack([J[je], own[keep], J[js2]])
             segments.append(Segment(f"{a}:free{sum(1 for g in segments if g.owners == (a,)) + 1}",
-                                    pts, (a,), {a: own}))
+                                    pts, (a,), {a: own}, np.r_[False, V[a][own_idx][keep], False]))
             loop.append((len(segments) - 1, False))
         loops[a] = loop
     return Merged(segments, loops, J, jloops)

@@ -46,15 +46,20 @@ def drop_duplicates(P: np.ndarray, tol: float, closed: bool = True) -> np.ndarra
     return P
 
 
-def densify(P: np.ndarray, h: float, closed: bool = True) -> np.ndarray:
-    """Subdivide every segment into pieces no longer than ``h``; the vertices are kept."""
+def densify(P: np.ndarray, h: float, closed: bool = True,
+            vertices: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Subdivide every segment into pieces no longer than ``h``; the vertices are kept (with
+    ``vertices``, also a mask of which output points are the input's vertices)."""
     Q = np.vstack([P, P[:1]]) if closed else P
     seg = np.diff(Q, axis=0)
     n = np.maximum(1, np.ceil(np.linalg.norm(seg, axis=1) / h).astype(int))
     k = np.repeat(np.arange(len(seg)), n)
-    s = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
-    out = Q[k] + s[:, None] * seg[k]
-    return out if closed else np.vstack([out, Q[-1:]])
+    first = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+    out = Q[k] + (first / np.repeat(n, n))[:, None] * seg[k]
+    is_vertex = first == 0
+    if not closed:
+        out, is_vertex = np.vstack([out, Q[-1:]]), np.r_[is_vertex, True]
+    return (out, is_vertex) if vertices else out
 
 
 def _arclength(Q: np.ndarray) -> np.ndarray:

@@ -184,7 +184,7 @@ def build_station(src: GeometrySource, opts: SectionsSpec, label: str = "") -> S
     tol = opts.merge_tolerance if opts.merge_tolerance is not None else \
         max(DEFAULT_MERGE_TOL, DEFAULT_MERGE_PX * (pixel or 0.0))
     fit_tol = opts.fit_tolerance if opts.fit_tolerance is not None else \
-        (0.5 * pixel if pixel else 0.5 * tol)
+        (0.5 * pixel if pixel else 0.25 * tol)
     smooth = {n: (pl.smooth(P, sigma) if sigma > 0 else P) for n, P in raw.items()}
     perim = {n: pl.perimeter(P) for n, P in smooth.items()}
     h = min(0.5 * tol, min(perim.values()) / 200.0)

@@ -19,6 +19,7 @@ from .polyline import PolylineDistance, _arclength, douglas_peucker
 __all__ = ["FittedCurve", "fit_curve", "corners"]
 
 MAX_REFINEMENTS = 12
+CHORD_FACTOR = 4.0
 CORNER_DEG = 45.0
 
 
@@ -106,7 +107,9 @@ def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
     Q = np.asarray(Q, dtype=float)
     traced = np.ones(len(Q), dtype=bool) if traced is None else np.asarray(traced, dtype=bool)
     s = _arclength(Q)
-    idx = douglas_peucker(Q, tol)
+    # a spline follows a smooth trace far closer than the chords Douglas-Peucker measures: start
+    # coarse for splines (CHORD_FACTOR x tol) and let the refinement add points where needed
+    idx = douglas_peucker(Q, tol * (CHORD_FACTOR if degree > 1 else 1.0))
     spacing = s[-1] / max(1, min_points - 1)
     if max_spacing is not None:
         spacing = min(spacing, max_spacing)

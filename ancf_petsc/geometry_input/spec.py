@@ -74,7 +74,7 @@ class SectionsSpec:
     stations: list[tuple[float | None, GeometrySource]]
     merge_tolerance: float | None = None      # None: auto (50 um, 1.5 px for images)
     smoothing: float | None = None            # None: auto (2 px for images, 0 otherwise)
-    fit_tolerance: float | None = None        # None: auto (0.5 px for images, tol / 2 otherwise)
+    fit_tolerance: float | None = None        # None: auto (0.5 px for images, tol / 4 otherwise)
     spline_degree: int = 3
     key: str = "geometry.sections"
 

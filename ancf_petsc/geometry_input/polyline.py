@@ -155,7 +155,15 @@ def douglas_peucker(P: np.ndarray, eps: float) -> np.ndarray:
 def self_intersection(P: np.ndarray, tol: float) -> np.ndarray | None:
     """A point where the closed polyline crosses or touches itself, or None."""
     hit = _first_self_intersection(P, tol)
-    return None if hit is None else 0.5 * (P[hit[0]] + P[hit[1]])
+    if hit is None:
+        return None
+    a, b = P[hit[0]], P[(hit[0] + 1) % len(P)]
+    c, d = P[hit[1]], P[(hit[1] + 1) % len(P)]
+    M = np.column_stack([b - a, c - d])
+    if abs(np.linalg.det(M)) <= 1e-300:                 # parallel (touching): a shared point
+        return c
+    s = np.linalg.solve(M, c - a)[0]
+    return a + np.clip(s, 0.0, 1.0) * (b - a)
 
 
 def inside(Q: np.ndarray, P: np.ndarray) -> np.ndarray:

@@ -124,8 +124,10 @@ class Model:
         lines = list(self.geometry_report)
         for b in self.beams:
             lock = ", Poisson part on the axis (ecm)" if b.locking == "ecm" else ""
+            per = (f"up to {b.points_per_element // b.axial_points} section points, varying along x"
+                   if b.ring_at is not None else f"{len(b.section.weights)} section")
             lines.append(f"beam {b.name}: {b.n_elements} elements {b.element} x {b.points_per_element} "
-                         f"Gauss points ({b.axial_points} axial x {len(b.section.weights)} section{lock})")
+                         f"Gauss points ({b.axial_points} axial x {per}{lock})")
             lines.append("  section " + b.section.describe()
                          + (" at x = 0 (varies along x)" if b.ring_at is not None else ""))
             lines.append("  material " + b.material.describe())

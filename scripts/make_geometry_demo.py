@@ -83,7 +83,7 @@ def figure(config: str, out_png: str, mask: str) -> None:
     h, w = lab.shape
     p = PIXEL_MM
     ext = [-0.5 * p, (w - 0.5) * p, -(h - 0.5) * p, 0.5 * p]     # y right, z up (image axes)
-    fig, ax = plt.subplots(figsize=(7.5, 5.6))
+    fig, ax = plt.subplots(figsize=(7.5, 6.2))
     cmap = matplotlib.colors.ListedColormap(["#ffffff", "#c6dbef", "#fdd0a2", "#c7e9c0"])
     ax.imshow(lab, cmap=cmap, vmin=0, vmax=3, extent=ext, interpolation="nearest")
     shared = {}
@@ -108,7 +108,7 @@ def figure(config: str, out_png: str, mask: str) -> None:
     ax.plot([], [], "-", color="#b2182b", lw=2.2, label="merged interface (one curve, both loops)")
     ax.plot([], [], ".", color="k", label="spline control points")
     ax.plot([], [], "o", mfc="none", mec="k", label="junctions")
-    ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False)
     ax.set_xlabel("y [mm] (image columns)")
     ax.set_ylabel("z [mm] (image rows, upwards)")
     ax.set_title("Outlines extracted from the label mask (scripts/make_geometry_demo.py)", fontsize=10)

@@ -234,7 +234,7 @@ def _varying_rules(beam: Beam, tendon, bs, length: float) -> None:
     h = length / beam.n_elements
     xg = (np.arange(beam.n_elements)[:, None] + 0.5 * (xa[None, :] + 1.0)) * h      # (E, na)
     c0 = beam.section.centroid
-    secs = [[build_section_at(bs.section, tendon, x, beam.section) for x in row] for row in xg]
+    secs = [[build_section_at(bs.section, tendon, x) for x in row] for row in xg]
     n = max(len(s.weights) for row in secs for s in row)
     E, na = xg.shape
     yz = np.zeros((E, na, n, 2))
@@ -259,7 +259,7 @@ def _varying_rules(beam: Beam, tendon, bs, length: float) -> None:
     beam.ring_at = lambda x, _n=bs.section.loop: tendon.ring(_n, x) + offset
 
 
-def build_section_at(sspec: SectionSpec, tendon, x: float, like: Section) -> Section:
+def build_section_at(sspec: SectionSpec, tendon, x: float) -> Section:
     """The measured section of ``sspec`` at x (tendon frame, like ``build_section``)."""
     try:
         return make_outline(tendon.loop(sspec.loop, x), sspec.cubature_degree,
@@ -275,7 +275,7 @@ def _end_moments(beam: Beam, tendon, bs, x: float) -> np.ndarray:
         sec = beam.section
         m, _, _ = el.section_monomials(sec.points[:, 0], sec.points[:, 1])
         return sec.weights @ m / sec.weights.sum()
-    sec = build_section_at(bs.section, tendon, x, beam.section)
+    sec = build_section_at(bs.section, tendon, x)
     P = sec.points + sec.centroid - beam.section.centroid
     m, _, _ = el.section_monomials(P[:, 0], P[:, 1])
     return sec.weights @ m / sec.weights.sum()

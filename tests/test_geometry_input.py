@@ -1,7 +1,6 @@
 """geometry.sections: importers on shapes with known areas and centroids, the border merge of
 neighbours traced apart, the paper's Type III file in the new format (docs/geometry.md)."""
 import copy
-import textwrap
 
 import numpy as np
 import pytest

@@ -5,7 +5,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 
 import geometry_cases as gc
 from helpers import CONFIGS, ROOT, load_raw, read_summary, run_inline, solve_cli, write_config
@@ -76,6 +75,8 @@ def test_worked_example_from_the_mask_script(tmp_path):
     assert p.returncode == 0, p.stdout + p.stderr
     s = read_summary(tmp_path / "mask")
     assert s["status"] == "completed" and len(s["steps"]) == 2
+    assert any(ln.startswith("twist axis: area centroid") for ln in s["geometry"])   # also on disk
+    assert len(s["twist_axis"]) == 2
     assert p.stdout.count("interface ") >= 6                # 3 merged, 3 with contact points
     assert "dropped 1 separate region" in p.stdout           # the stray pixel
     areas = [float(ln.split("->")[1].split("mm^2")[0]) for ln in p.stdout.splitlines()

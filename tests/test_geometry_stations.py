@@ -80,7 +80,7 @@ def test_bar_whose_section_turns_in_place(tmp_path):
     from ancf_petsc.geometry_input.tendon import build_tendon
     tendon = build_tendon(spec.sections)
     for x, turn in ((0.25 * L, 15.0), (0.5 * L, 30.0), (L, 60.0)):
-        sec = build_section_at(spec.beams[0].section, tendon, x, None)
+        sec = build_section_at(spec.beams[0].section, tendon, x)
         ang = 0.5 * np.degrees(np.arctan2(2 * sec.Syz, sec.Syy - sec.Szz))
         assert ang == pytest.approx(turn, abs=0.05), x
         assert sec.area == pytest.approx(A, rel=1e-4)

@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import ConfigError
 from ..section import SectionError, SplineCurve
 from . import polyline as pl
 from .fit import corners, fit_curve

@@ -7,7 +7,7 @@ level of the label's mask), nibabel (NIfTI) and svgelements (SVG paths, with the
 
 Image coordinates: u = column index, v = row index (pixel centres at integers, v downwards);
 NIfTI slices: u, v = the indices along the two remaining voxel axes, in increasing axis order.
-Errors are :class:`ImportError_` with one line naming the file and the fix.
+Errors are :class:`OutlineReadError` with one line naming the file and the fix.
 """
 from __future__ import annotations
 

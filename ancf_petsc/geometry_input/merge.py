@@ -126,12 +126,11 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
         n = len(D[a])
         best = np.full(n, np.inf)
         lab = np.full(n, -1)
-        ft = np.zeros((n, 2))
         sg = np.zeros(n, dtype=int)
         for ib, b in enumerate(names):
             if b == a or np.any(box[a][1] < box[b][0]) or np.any(box[b][1] < box[a][0]):
                 continue
-            d, j, f = dist[b].query(D[a])
+            d, j, _ = dist[b].query(D[a])
             deep = (d > tol) & inside(D[a], D[b])
             if deep.any():
                 k = np.flatnonzero(deep)[np.argmax(d[deep])]
@@ -140,7 +139,7 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
                     f"{_fmt_mm(D[a][k])}, more than the merge tolerance {tol * 1e3:.3g} mm; "
                     "correct the tracing or raise geometry.sections.merge_tolerance")
             near = (d <= tol) & (d < best)
-            best[near], lab[near], ft[near], sg[near] = d[near], ib, f[near], j[near]
+            best[near], lab[near], sg[near] = d[near], ib, j[near]
         label[a], seg[a] = lab, sg
 
     # label runs, pair them across neighbours; unpaired border runs become free surface

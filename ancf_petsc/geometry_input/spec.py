@@ -125,7 +125,7 @@ def _pairs(value, key: str) -> list[list[float]]:
     return out
 
 
-def _kind_of(path: str, key: str, src: "GeometrySource | None" = None) -> str:
+def _kind_of(path: str, key: str) -> str:
     low = path.lower()
     if low.endswith(POINT_EXT):
         return "list"
@@ -139,8 +139,7 @@ def _kind_of(path: str, key: str, src: "GeometrySource | None" = None) -> str:
                            "(point list), .svg, .png/.tif/.tiff (label mask) or .nii/.nii.gz (NIfTI)")
 
 
-def _outline(name: str, value, key: str, default_file: str | None, base_dir: str,
-             src_key) -> OutlineSource:
+def _outline(name: str, value, key: str, default_file: str | None, base_dir: str) -> OutlineSource:
     if isinstance(value, list):
         value = {"points": value}
     mapping(value, key, optional=OUTLINE_KEYS)
@@ -229,7 +228,7 @@ def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
                 raise ConfigError(_join(_join(inner, "outlines"), name),
                                   "outline names may not start with '-' or contain '/' or ':'")
             outlines[name] = _outline(name, v, _join(_join(inner, "outlines"), name), default_file,
-                                      base_dir, key)
+                                      base_dir)
         kinds = {o.kind for o in outlines.values()}
         if "curves" in kinds and len(kinds) > 1:
             raise ConfigError(_join(inner, "outlines"), "use either loops of named curves or traced "

@@ -118,15 +118,6 @@ class SectionField:
                     return False
         return True
 
-    def shared_curves(self) -> set[int]:
-        """ids of the curves used by two loops (interfaces)."""
-        users: dict[int, set] = {}
-        for st in self.stations:
-            for name, loop in st.loops.items():
-                for cv, _ in loop:
-                    users.setdefault(id(cv), set()).add(name)
-        return {k for k, v in users.items() if len(v) > 1}
-
     # ------------------------------------------------------------------ registered mode
     def _register(self) -> None:
         """Matched rings of every outline at every station and the rotation between stations."""

@@ -88,3 +88,40 @@ def test_bad_geometry_is_one_line_exit_2(tmp_path, name, raw, path, text):
     assert "Traceback" not in p.stderr and len(lines) == 1, p.stderr
     assert lines[0].startswith(f"ancf-solve: config error: {path}:"), lines[0]
     assert text in lines[0], lines[0]
+
+
+KEY_CASES = [
+    ("units missing", {"axes": ["y", "z"], "outlines": {"a": {"points": disc()}}}, "geometry.sections.units", "missing"),
+    ("axes not a frame", inline({"a": {"points": disc()}}, axes=("y", "y")), "geometry.sections.axes", "[y, -z]"),
+    ("px without size", inline({"a": {"points": disc()}}, units="px"), "geometry.sections.pixel_size", "0.05 mm"),
+    ("unknown outline", inline({"b": {"points": disc()}}), "beams[0].section.loop", "available: b"),
+    ("material in the geometry file", {"file": "g.yaml"}, "geometry.sections.file", "g.yaml: length_m: a geometry description holds geometry only"),
+    ("label on a point list", inline({"a": {"file": "g.yaml", "label": 3}}), "geometry.sections.outlines.a.label", "mask images"),
+    ("station beyond the tendon", {"stations": [dict(inline({"a": {"points": disc()}}), x=0.0),
+                                                dict(inline({"a": {"points": disc()}}), x=0.5)]},
+     "geometry.sections.stations[1].x", "beyond the tendon"),
+]
+
+
+@pytest.mark.parametrize("name,sections,path,text", KEY_CASES, ids=[c[0] for c in KEY_CASES])
+def test_geometry_keys_are_checked_with_their_path(tmp_path, name, sections, path, text):
+    from ancf_petsc.config import ConfigError, parse_config
+    from ancf_petsc.model import build_model
+    (tmp_path / "g.yaml").write_text("units: mm\naxes: [y, z]\nlength_m: 0.05\noutlines: {a: {points: [[0, 0], [1, 0], [0, 1]]}}\n")
+    with pytest.raises(ConfigError) as err:
+        build_model(parse_config(config(sections), base_dir=str(tmp_path)))
+    msg = str(err.value)
+    assert msg.startswith(path + ":") and text in msg and "\n" not in msg, msg
+
+
+def test_twist_axis_rule_errors():
+    from ancf_petsc.config import ConfigError, parse_config
+    from ancf_petsc.model import build_model
+    raw = config(inline({"a": {"points": disc()}}))
+    raw["geometry"]["twist_axis"] = "junction"               # one outline: nothing to meet
+    with pytest.raises(ConfigError, match=r"^geometry.twist_axis: junction needs one point where all "
+                                          r"measured outlines meet; found 0"):
+        build_model(parse_config(raw))
+    raw["geometry"]["twist_axis"] = {"centroid_of": "zz"}
+    with pytest.raises(ConfigError, match=r"^geometry.twist_axis.centroid_of: unknown beam 'zz'"):
+        parse_config(raw)

@@ -129,6 +129,7 @@ class SectionSpec:
     spline_degree: int = 3
     cubature_degree: int = 6
     compress: bool = True
+    spline_degree_given: bool = False
 
 
 @dataclass
@@ -235,6 +236,9 @@ class ModelSpec:
     raw: dict = field(repr=False, default_factory=dict)
     partition: str = "blocks"              # 'blocks' (contiguous per beam) or 'metis'
     accuracy: AccuracySpec | None = None
+    sections: Any = None                   # geometry.sections (geometry_input.spec.SectionsSpec)
+    twist_rule: tuple = ("point",)         # twist-axis rule (model.resolve_twist_axis); twist_axis then
+    twist_default: bool = False            # holds the resolved point; True: the rule was not given
 
     def beam_index(self, name: str) -> int:
         return [b.name for b in self.beams].index(name)
@@ -265,10 +269,13 @@ def _section(value, path: str, base_dir: str) -> SectionSpec:
         s.size = vector(value["size"], _join(path, "size"), 2, positive=True)
     else:
         has_curves, has_file = "curves" in value, "file" in value
-        if has_curves == has_file:
-            raise ConfigError(path, "an outline needs either 'curves' (inline loop of point lists) "
-                                    "or 'file' + 'loop' (sections file), not both/neither")
-        if has_file:
+        if has_curves == has_file and not (has_curves is False and "loop" in value):
+            raise ConfigError(path, "an outline needs either 'curves' (inline loop of point lists), "
+                                    "'file' + 'loop' (sections file) or 'loop' alone (an outline of "
+                                    "geometry.sections), not both/neither")
+        if not has_curves and not has_file:
+            s.loop = string(value["loop"], _join(path, "loop"))
+        elif has_file:
             mapping(value, path, required=("shape", "file", "loop"), optional=common[1:] + opt_outline)
             f = string(value["file"], _join(path, "file"))
             s.file = f if os.path.isabs(f) else os.path.normpath(os.path.join(base_dir, f))
@@ -293,6 +300,7 @@ def _section(value, path: str, base_dir: str) -> SectionSpec:
             s.curves = out
         if "spline_degree" in value:
             s.spline_degree = integer(value["spline_degree"], _join(path, "spline_degree"), lo=1, hi=7)
+            s.spline_degree_given = True
         if "compress" in value:
             s.compress = boolean(value["compress"], _join(path, "compress"))
     return s
@@ -386,10 +394,15 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     name = string(raw["name"], "name")
     if "units" in raw and raw["units"] != "SI":
         raise ConfigError("units", "only SI (m, N, Pa) is supported; write units: SI or omit it")
-    geo = mapping(raw["geometry"], "geometry", required=("length",), optional=("twist_deg", "twist_axis"))
+    geo = mapping(raw["geometry"], "geometry", required=("length",),
+                  optional=("twist_deg", "twist_axis", "sections"))
     length = number(geo["length"], "geometry.length", positive=True, hint=" (metres)")
     twist = number(geo.get("twist_deg", 0.0), "geometry.twist_deg", lo=-3600, hi=3600)
-    axis = vector(geo.get("twist_axis", [0.0, 0.0]), "geometry.twist_axis", 2)
+    axis, twist_rule = _twist_axis(geo.get("twist_axis", "centroid"))
+    sections = None
+    if geo.get("sections") is not None:      # measured sections (docs/geometry.md)
+        from .geometry_input.spec import parse_sections
+        sections = parse_sections(geo["sections"], "geometry.sections", base_dir, length)
 
     beams_raw = sequence(raw["beams"], "beams")
     beams: list[BeamSpec] = []
@@ -411,6 +424,9 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         beams[-1].locking = string(b.get("locking", default_locking), f"{p}.locking", LOCKING)
     names = [b.name for b in beams]
     n_nodes = [2 * b.elements + 1 for b in beams]
+    _check_imported_loops(beams, sections)
+    if twist_rule[0] == "centroid_of":
+        _beam_ref(twist_rule[1], "geometry.twist_axis.centroid_of", names)
 
     bcs = []
     for i, bc in enumerate(sequence(raw.get("boundary_conditions", []), "boundary_conditions",
@@ -507,7 +523,46 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     return ModelSpec(name=name, length=length, twist_deg=twist, twist_axis=axis, beams=beams,
                      boundary_conditions=bcs, loads=loads, steps=steps, probes=probes,
                      output=output, solver=solver, petsc=petsc, contact=contact,
-                     base_dir=base_dir, raw=raw, partition=partition, accuracy=accuracy)
+                     base_dir=base_dir, raw=raw, partition=partition, accuracy=accuracy,
+                     sections=sections, twist_rule=twist_rule,
+                     twist_default="twist_axis" not in geo)
+
+
+TWIST_RULES = ("centroid", "origin", "junction")
+
+
+def _twist_axis(value) -> tuple[tuple[float, float], tuple]:
+    """geometry.twist_axis: a point [y, z] (m) or a rule (resolved by model.resolve_twist_axis)."""
+    p = "geometry.twist_axis"
+    if isinstance(value, str) and value in TWIST_RULES:
+        return (0.0, 0.0), ((value,) if value != "origin" else ("point",))
+    if isinstance(value, dict):
+        mapping(value, p, required=("centroid_of",))
+        return (0.0, 0.0), ("centroid_of", string(value["centroid_of"], f"{p}.centroid_of"))
+    if not isinstance(value, (list, tuple)):
+        raise ConfigError(p, "expected a list of 2 numbers [y, z] (metres) or a rule: centroid "
+                             "(the whole section's area centroid, default), origin, junction (the "
+                             f"point all outlines share) or {{centroid_of: <beam>}}; got {_fmt(value)}")
+    return vector(value, p, 2), ("point",)
+
+
+def _check_imported_loops(beams: list, sections) -> None:
+    """beams[i].section {shape: outline, loop: <name>} without file/curves names an outline of
+    geometry.sections."""
+    for i, b in enumerate(beams):
+        s = b.section
+        if s.shape != "outline" or s.file is not None or s.curves is not None:
+            continue
+        p = f"beams[{i}].section"
+        if sections is None:
+            raise ConfigError(f"{p}.loop", "names an outline of geometry.sections, which this config "
+                                           "does not have; add geometry.sections or give curves / file")
+        if s.loop not in sections.names:
+            raise ConfigError(f"{p}.loop", f"no outline {s.loop!r} in geometry.sections; available: "
+                                           f"{', '.join(sections.names)}")
+        if s.spline_degree_given:
+            raise ConfigError(f"{p}.spline_degree", "imported outlines share one spline degree: set "
+                                                    "geometry.sections.spline_degree instead")
 
 
 def _accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:

@@ -120,12 +120,14 @@ def slot_of_paper_function(k: int) -> int:
 def reference_gradients(q0e: np.ndarray, dN: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Material gradients ∇₀N_a = J0⁻ᵀ ∂N_a/∂(ξ,y,z) and det J0 at the points of each element.
 
-    ``q0e`` (E, S, 3) reference nodal vectors per slot, ``dN`` (P, S, 3) derivatives at P points.
+    ``q0e`` (E, S, 3) reference nodal vectors per slot, ``dN`` (P, S, 3) derivatives at P points
+    (or (E, P, S, 3): points of each element's own, e.g. sections varying along the beam).
     Returns G (E, P, S, 3) with F = Σ_a q_a ⊗ G_a (eq. 7), and detJ0 (E, P).
     """
-    J0 = np.einsum("eai,paj->epij", q0e, dN)  # columns ∂X/∂ξ, ∂X/∂y, ∂X/∂z
-    det = np.linalg.det(J0)
+    per_element = dN.ndim == 4
+    J0 = np.einsum("eai,epaj->epij" if per_element else "eai,paj->epij", q0e, dN)
+    det = np.linalg.det(J0)                   # columns of J0: ∂X/∂ξ, ∂X/∂y, ∂X/∂z
     if np.any(det <= 0.0):
         raise ValueError("reference element is inverted or degenerate (det ∂X/∂(ξ,y,z) <= 0)")
-    G = np.matmul(dN[None, :, :, :], np.linalg.inv(J0))
+    G = np.matmul(dN if per_element else dN[None, :, :, :], np.linalg.inv(J0))
     return G, det

@@ -39,6 +39,9 @@ class Beam:
     dN: np.ndarray = field(repr=False, default=None)      # (P, S, 3), S = 3 × active vectors
     dN_axis: np.ndarray = field(repr=False, default=None)  # (na, S, 3) on the beam axis y = z = 0
     wq_axis: np.ndarray = field(repr=False, default=None)  # (na,) axial weights × section area
+    # sections that vary along x (geometry.sections with stations): dN (E, P, S, 3), wq (E, P),
+    # yz (E, P, 2), wq_axis (E, na) per element; ``ring_at(x)`` the outline (beam coordinates)
+    ring_at: object = field(repr=False, default=None)
 
     @property
     def vectors(self) -> tuple[int, ...]:
@@ -72,7 +75,7 @@ class Beam:
 
     @property
     def points_per_element(self) -> int:
-        return len(self.wq)
+        return self.wq.shape[-1]
 
 
 @dataclass
@@ -83,6 +86,7 @@ class Model:
     fixed_dofs: np.ndarray         # sorted global DOF ids held at their reference value
     f_ext: np.ndarray              # (n_dofs,) external generalised forces at load factor 1
     probes: dict[str, tuple[int, int]]   # name → (global node, vector slot)
+    geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
 
     @property
     def n_nodes(self) -> int:
@@ -111,17 +115,21 @@ class Model:
         q0e = self.q0[conn][:, :, list(beam.vectors)].reshape(len(local), -1, 3)
         out = []
         for dN, wq, material in beam.parts():
-            G, det = el.reference_gradients(q0e, dN)
-            out.append((G, det * wq[None, :], material))
+            # per-element rules (sections varying along x) carry a leading element axis
+            G, det = el.reference_gradients(q0e, dN[local] if dN.ndim == 4 else dN)
+            out.append((G, det * (wq[local] if wq.ndim == 2 else wq[None, :]), material))
         return out
 
     def describe(self) -> list[str]:
-        lines = []
+        lines = list(self.geometry_report)
         for b in self.beams:
             lock = ", Poisson part on the axis (ecm)" if b.locking == "ecm" else ""
+            per = (f"up to {b.points_per_element // b.axial_points} section points, varying along x"
+                   if b.ring_at is not None else f"{len(b.section.weights)} section")
             lines.append(f"beam {b.name}: {b.n_elements} elements {b.element} x {b.points_per_element} "
-                         f"Gauss points ({b.axial_points} axial x {len(b.section.weights)} section{lock})")
-            lines.append("  section " + b.section.describe())
+                         f"Gauss points ({b.axial_points} axial x {per}{lock})")
+            lines.append("  section " + b.section.describe()
+                         + (" at x = 0 (varies along x)" if b.ring_at is not None else ""))
             lines.append("  material " + b.material.describe())
         return lines
 
@@ -150,9 +158,14 @@ def _share_inline_curves(loop, named: set, registry: dict, path: str):
     return out
 
 
-def build_section(spec: SectionSpec, path: str, registry: dict | None = None) -> Section:
-    """Build a beam's cross-section; section problems become ConfigErrors at ``path``."""
+def build_section(spec: SectionSpec, path: str, registry: dict | None = None,
+                  tendon=None) -> Section:
+    """Build a beam's cross-section; section problems become ConfigErrors at ``path``.
+    ``tendon``: the measured sections (geometry.sections) an outline ``loop`` alone refers to."""
     try:
+        if spec.shape == "outline" and spec.file is None and spec.curves is None:
+            return make_outline(tendon.loop(spec.loop, 0.0), spec.cubature_degree,
+                                compress=spec.compress, center=spec.center)
         if spec.shape == "ellipse":
             return make_ellipse(spec.semi_axes, spec.center, spec.cubature_degree)
         if spec.shape == "circle":
@@ -178,14 +191,114 @@ def build_section(spec: SectionSpec, path: str, registry: dict | None = None) ->
         raise ConfigError(path, str(exc)) from None
 
 
+def _measured(bs) -> bool:
+    """The beam's section is an outline of geometry.sections."""
+    s = bs.section
+    return s.shape == "outline" and s.file is None and s.curves is None
+
+
+def resolve_twist_axis(spec: ModelSpec, beams: list[Beam], tendon) -> tuple[np.ndarray, str]:
+    """The twist axis a (tendon frame, m) from ``geometry.twist_axis`` and a line saying which
+    rule gave it: a point, ``centroid`` (area centroid of all sections at x = 0, the default),
+    ``centroid_of`` one beam, or ``junction`` (the point where all measured outlines meet)."""
+    rule = spec.twist_rule
+    if rule[0] == "point":
+        a, how = np.asarray(spec.twist_axis, dtype=float), "the given point"
+    elif rule[0] == "centroid":
+        areas = np.array([b.section.area for b in beams])
+        a = areas @ np.array([b.section.centroid for b in beams]) / areas.sum()
+        how = "area centroid of all sections at x = 0"
+    elif rule[0] == "centroid_of":
+        b = next(b for b in beams if b.name == rule[1])
+        a, how = b.section.centroid.copy(), f"centroid of {b.name}'s section at x = 0"
+    else:
+        names = [bs.section.loop for bs in spec.beams if _measured(bs)]
+        J = tendon.junctions(names) if tendon is not None and len(names) >= 2 else np.zeros((0, 2))
+        if len(J) != 1:
+            raise ConfigError("geometry.twist_axis", f"junction needs one point where all measured "
+                              f"outlines meet; found {len(J)} (use centroid, a point [y, z] or "
+                              "{centroid_of: <beam>})")
+        centre = next(bs.section.center for bs in spec.beams if _measured(bs))
+        a, how = J[0] + np.asarray(centre), "junction of all outlines"
+    default = " (default rule; set geometry.twist_axis to change it)" if spec.twist_default else ""
+    return a, (f"twist axis: {how} at ({a[0] * 1e3:.4g}, {a[1] * 1e3:.4g}) mm{default}, "
+               f"twist {spec.twist_deg:g} deg")
+
+
+def _varying_rules(beam: Beam, tendon, bs, length: float) -> None:
+    """Per-element section rules of a beam whose measured section varies along x: at every axial
+    Gauss point the rule of the section there (cubature of eq. 11 on the interpolated loop),
+    in the beam's frame (origin: the centroid of its section at x = 0); rules are padded with
+    zero weights to one point count.  Also the beam's outline ring at any x (output)."""
+    xa, wa = gauss_legendre(bs.axial_points)
+    h = length / beam.n_elements
+    xg = (np.arange(beam.n_elements)[:, None] + 0.5 * (xa[None, :] + 1.0)) * h      # (E, na)
+    c0 = beam.section.centroid
+    secs = [[build_section_at(bs.section, tendon, x) for x in row] for row in xg]
+    n = max(len(s.weights) for row in secs for s in row)
+    E, na = xg.shape
+    yz = np.zeros((E, na, n, 2))
+    w = np.zeros((E, na, n))
+    area = np.zeros((E, na))
+    for e in range(E):
+        for g in range(na):
+            s = secs[e][g]
+            k = len(s.weights)
+            yz[e, g, :k] = s.points + s.centroid - c0
+            yz[e, g, k:] = s.centroid - c0                       # padding: zero weight
+            w[e, g, :k] = s.weights
+            area[e, g] = s.area
+    xi = np.repeat(xa, n)
+    _, dN = el.shape_functions(np.tile(xi, E), yz[..., 0].ravel(), yz[..., 1].ravel(), beam.vectors)
+    beam.xi = xi
+    beam.yz = yz.reshape(E, na * n, 2)
+    beam.dN = dN.reshape(E, na * n, -1, 3)
+    beam.wq = (wa[None, :, None] * w).reshape(E, na * n)
+    beam.wq_axis = wa[None, :] * area
+    offset = np.asarray(bs.section.center, dtype=float) - c0
+    beam.ring_at = lambda x, _n=bs.section.loop: tendon.ring(_n, x) + offset
+
+
+def build_section_at(sspec: SectionSpec, tendon, x: float) -> Section:
+    """The measured section of ``sspec`` at x (tendon frame, like ``build_section``)."""
+    try:
+        return make_outline(tendon.loop(sspec.loop, x), sspec.cubature_degree,
+                            compress=sspec.compress, center=sspec.center)
+    except SectionError as exc:
+        raise ConfigError("geometry.sections", f"the section of {sspec.loop} interpolated at "
+                          f"x = {x * 1e3:.4g} mm: {exc}") from None
+
+
+def _end_moments(beam: Beam, tendon, bs, x: float) -> np.ndarray:
+    """∫ m_k dA / A over the section at x in the beam frame (a uniform end traction)."""
+    if beam.ring_at is None:
+        sec = beam.section
+        m, _, _ = el.section_monomials(sec.points[:, 0], sec.points[:, 1])
+        return sec.weights @ m / sec.weights.sum()
+    sec = build_section_at(bs.section, tendon, x)
+    P = sec.points + sec.centroid - beam.section.centroid
+    m, _, _ = el.section_monomials(P[:, 0], P[:, 1])
+    return sec.weights @ m / sec.weights.sum()
+
+
 def build_model(spec: ModelSpec) -> Model:
     """Assemble the replicated model description from a validated spec."""
     beams: list[Beam] = []
     q0_parts = []
     node_offset = elem_offset = 0
     registry: dict = {}
+    tendon = None
+    report: list[str] = []
+    if spec.sections is not None:
+        from .geometry_input.tendon import build_tendon
+        tendon = build_tendon(spec.sections)
+        report += tendon.report()
+        if spec.contact is not None and tendon.varies and not tendon.field.structured:
+            raise ConfigError("contact", "sections that vary along x work with contact only when every "
+                              f"interface curve is the same at every station ({tendon.field.reason}); "
+                              "remove contact or give equal borders at every station")
     for i, bs in enumerate(spec.beams):
-        section = build_section(bs.section, f"beams[{i}].section", registry)
+        section = build_section(bs.section, f"beams[{i}].section", registry, tendon)
         x_nodes = np.linspace(0.0, spec.length, 2 * bs.elements + 1)
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,
@@ -199,11 +312,17 @@ def build_model(spec: ModelSpec) -> Model:
         zero = np.zeros_like(xa)     # the beam axis y = z = 0 runs through the section centroid
         _, beam.dN_axis = el.shape_functions(xa, zero, zero, beam.vectors)
         beam.wq_axis = wa * section.weights.sum()
-        q0_parts.append(reference_nodal_vectors(x_nodes, section.centroid, spec.length,
-                                                spec.twist_deg, spec.twist_axis))
+        if tendon is not None and tendon.varies and _measured(bs):
+            _varying_rules(beam, tendon, bs, spec.length)
         beams.append(beam)
         node_offset += beam.n_nodes
         elem_offset += beam.n_elements
+    axis, line = resolve_twist_axis(spec, beams, tendon)
+    spec.twist_axis = (float(axis[0]), float(axis[1]))
+    report.append(line)
+    for beam in beams:
+        q0_parts.append(reference_nodal_vectors(beam.x_nodes, beam.section.centroid, spec.length,
+                                                spec.twist_deg, spec.twist_axis))
     q0 = np.concatenate(q0_parts)
 
     fixed = set()
@@ -226,9 +345,7 @@ def build_model(spec: ModelSpec) -> Model:
             f_ext[18 * node:18 * node + 3] += force
         else:
             # uniform dead traction t = F / A over the end section: f_k = t ∫ m_k dA
-            sec = beam.section
-            m, _, _ = el.section_monomials(sec.points[:, 0], sec.points[:, 1])
-            moments = sec.weights @ m / sec.weights.sum()
+            moments = _end_moments(beam, tendon, spec.beams[ld.beam], beam.x_nodes[ld.node])
             f_ext[18 * node:18 * node + 18] += np.outer(moments, force).ravel()
         loaded = [18 * node + c for c in range(3) if force[c] != 0.0]
         if np.any(np.isin(loaded, fixed_dofs)):
@@ -237,4 +354,5 @@ def build_model(spec: ModelSpec) -> Model:
 
     probes = {p.name: (beams[p.beam].node_offset + p.node, el.VECTOR_INDEX[p.vector])
               for p in spec.probes}
-    return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, f_ext=f_ext, probes=probes)
+    return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, f_ext=f_ext, probes=probes,
+                 geometry_report=report)

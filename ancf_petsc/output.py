@@ -43,23 +43,6 @@ def _atomic_write(path: str, text: str) -> None:
     os.replace(tmp, path)
 
 
-def evaluate_beam(model: Model, beam, q: np.ndarray, xi: np.ndarray, yz: np.ndarray):
-    """Positions r, F and reference positions at points (ξ, y, z) of every element of a beam.
-
-    ``q`` model-ordered nodal vectors (n_nodes, 6, 3); points given per element: ``xi`` (m,),
-    ``yz`` (m, 2).  Returns r (E, m, 3), F (E, m, 3, 3), r0 (E, m, 3).
-    """
-    N, dN = el.shape_functions(xi, yz[:, 0], yz[:, 1])
-    conn = beam.connectivity
-    qe = q[conn].reshape(len(conn), 18, 3)
-    q0e = model.q0[conn].reshape(len(conn), 18, 3)
-    G, _ = el.reference_gradients(q0e, dN)
-    r = np.einsum("pa,eai->epi", N, qe)
-    r0 = np.einsum("pa,eai->epi", N, q0e)
-    F = np.matmul(np.swapaxes(qe, 1, 2)[:, None], G)
-    return r, F, r0
-
-
 class SurfaceSampler:
     """Quad surface (plus end caps) of each beam, sampled ``samples`` times per element.  The
     shape functions and reference gradients at the sample points are computed once."""
@@ -68,34 +51,39 @@ class SurfaceSampler:
         self.model = model
         self.parts = []
         for beam in model.beams:
-            ring = beam.section.boundary_polyline(6)
-            if np.allclose(ring[0], ring[-1]):
-                ring = ring[:-1]
-            m = len(ring)
             xi = np.linspace(-1.0, 1.0, samples + 1)
-            XI, YZ = np.repeat(xi, m), np.tile(ring, (len(xi), 1))
-            N, dN = el.shape_functions(XI, YZ[:, 0], YZ[:, 1])
             conn = beam.connectivity
-            q0e = model.q0[conn].reshape(len(conn), 18, 3)
-            G, _ = el.reference_gradients(q0e, dN)
+            E = len(conn)
+            if beam.ring_at is not None:            # the outline at every sampled x, per element
+                x = beam.x_nodes[0:-1:2, None] + 0.5 * (xi[None, :] + 1.0) * (beam.x_nodes[2] - beam.x_nodes[0])
+                YZ = np.stack([np.concatenate([beam.ring_at(xx) for xx in row]) for row in x])
+                m = YZ.shape[1] // len(xi)
+            else:
+                ring = beam.section.boundary_polyline(6)
+                if np.allclose(ring[0], ring[-1]):
+                    ring = ring[:-1]
+                m = len(ring)
+                YZ = np.broadcast_to(np.tile(ring, (len(xi), 1)), (E, len(xi) * m, 2))
+            M = len(xi) * m
+            N, dN = el.shape_functions(np.tile(np.repeat(xi, m), E), YZ[..., 0].ravel(), YZ[..., 1].ravel())
+            q0e = model.q0[conn].reshape(E, 18, 3)
+            G, _ = el.reference_gradients(q0e, dN.reshape(E, M, 18, 3))
             # drop the duplicated first station of every element but the first
-            keep = np.concatenate([np.arange(len(xi) * m)]
-                                  + [e * len(XI) + np.arange(m, len(xi) * m) for e in range(1, len(conn))])
-            self.parts.append((beam, m, len(xi) - 1, N, G.reshape(-1, 18, 3)[keep], keep))
+            keep = np.concatenate([np.arange(M)] + [e * M + np.arange(m, M) for e in range(1, E)])
+            self.parts.append((beam, m, len(xi) - 1, N[keep], G.reshape(-1, 18, 3)[keep], keep // M))
 
     def mesh(self, q: np.ndarray):
         """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
         pts, quads, caps = [], [], []
         data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
         offset = 0
-        for beam, m, S, N, G, keep in self.parts:
+        for beam, m, S, N, G, e_of in self.parts:
             conn = beam.connectivity
-            qe = q[conn].reshape(len(conn), 18, 3)
-            q0e = self.model.q0[conn].reshape(len(conn), 18, 3)
-            r = np.einsum("pa,eai->epi", N, qe).reshape(-1, 3)[keep]
-            r0 = np.einsum("pa,eai->epi", N, q0e).reshape(-1, 3)[keep]
-            e_of = keep // len(N)
-            F = np.matmul(np.swapaxes(qe, 1, 2)[e_of], G)
+            qe = q[conn].reshape(len(conn), 18, 3)[e_of]
+            q0e = self.model.q0[conn].reshape(len(conn), 18, 3)[e_of]
+            r = np.einsum("pa,pai->pi", N, qe)
+            r0 = np.einsum("pa,pai->pi", N, q0e)
+            F = np.matmul(np.swapaxes(qe, 1, 2), G)
             n_st = beam.n_elements * S + 1
             C = np.matmul(np.swapaxes(F, -1, -2), F)
             data["displacement"].append(r - r0)

@@ -83,7 +83,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
                                       "points": int(len(b.section.weights))} for b in model.beams},
                 "elements_per_beam": {b.name: b.n_elements for b in model.beams},
-                "element_types": {b.name: b.element for b in model.beams}, **(info or {})}
+                "element_types": {b.name: b.element for b in model.beams},
+                "twist_axis": list(spec.twist_axis), "geometry": model.geometry_report, **(info or {})}
     writer = ResultsWriter(model, layout, comm, run_info)
     n_levels = len(spec.steps)
     timings = {"setup": t_setup, "output": 0.0}

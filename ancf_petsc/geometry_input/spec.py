@@ -1,0 +1,338 @@
+"""``geometry.sections`` of a config → a validated :class:`SectionsSpec` (no file is opened here
+except the YAML geometry files themselves; images, SVGs and point lists are read at build time).
+
+A geometry description says what it is: ``units`` (m, mm, um, or px with ``pixel_size``) and
+``axes`` (which tendon axes the file's first and second coordinates point along; ``image`` means
+columns to the right = y and rows downwards = -z).  It holds geometry only: one ``outlines`` entry
+per subtendon, taken from inline points, a point-list file (CSV/YAML), an SVG path, a label in a
+mask image (PNG/TIFF) or a NIfTI label volume slice, or a loop of named ``curves``.  The user
+guide is docs/geometry.md.
+"""
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+import yaml
+
+from ..config import ConfigError, _fmt, _join, integer, mapping, number, sequence, string
+
+__all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS",
+           "POINT_EXT", "IMAGE_EXT", "NIFTI_EXT", "SVG_EXT"]
+
+UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
+POINT_EXT = (".csv", ".txt", ".yaml", ".yml")
+IMAGE_EXT = (".png", ".tif", ".tiff")
+NIFTI_EXT = (".nii", ".nii.gz")
+SVG_EXT = (".svg",)
+AXIS_NAMES = ("y", "-y", "z", "-z")
+NOT_GEOMETRY = ("length", "length_m", "material", "materials", "c10", "c10_MPa", "mu",
+                "bulk_modulus", "twist_deg", "twist_axis", "triple_point_px", "scale_m_per_px")
+FILE_KEYS = ("units", "pixel_size", "axes", "source", "slice", "outlines", "curves", "description")
+OUTLINE_KEYS = ("points", "file", "label", "path", "curves")
+OPTION_KEYS = ("merge_tolerance", "smoothing", "fit_tolerance", "spline_degree")
+
+
+@dataclass
+class OutlineSource:
+    """Where one subtendon's outline comes from (``kind``: points | list | svg | image | nifti |
+    curves); ``key`` is its key path for error messages."""
+    name: str
+    kind: str
+    key: str
+    points: list | None = None
+    file: str | None = None
+    label: int | None = None
+    path_id: str | None = None
+    curves: list[str] | None = None
+
+
+@dataclass
+class GeometrySource:
+    """One measured cross-section: units, axes and the outlines of every subtendon."""
+    key: str                                  # config key path (+ file) for messages
+    where: str                                # 'config' or the geometry file path
+    units: str
+    scale: tuple[float, float] | None         # metres per file unit (u, v); None: NIfTI header
+    axes: np.ndarray                          # (2, 2): (y, z) = axes @ (u, v)
+    outlines: dict[str, OutlineSource]
+    curves: dict[str, list] = field(default_factory=dict)
+    slice: tuple[int, int] | None = None      # NIfTI: (axis, index)
+
+    def err(self, key: str, msg: str) -> ConfigError:
+        """A ConfigError at this source (config key, or file + key inside it)."""
+        if self.where == "config":
+            return ConfigError(_join(self.key, key) if key else self.key, msg)
+        return ConfigError(self.key, f"{os.path.basename(self.where)}: {key + ': ' if key else ''}{msg}")
+
+
+@dataclass
+class SectionsSpec:
+    """``geometry.sections``: one section (``stations`` = [(None, source)]) or stations along x."""
+    stations: list[tuple[float | None, GeometrySource]]
+    merge_tolerance: float | None = None      # None: auto (50 um, 1.5 px for images)
+    smoothing: float | None = None            # None: auto (2 px for images, 0 otherwise)
+    fit_tolerance: float | None = None        # None: auto (0.5 px for images, tol / 4 otherwise)
+    spline_degree: int = 3
+    key: str = "geometry.sections"
+
+    @property
+    def names(self) -> list[str]:
+        return list(self.stations[0][1].outlines)
+
+    @property
+    def varies(self) -> bool:
+        return len(self.stations) > 1
+
+
+def _abs(path: str, base_dir: str) -> str:
+    return path if os.path.isabs(path) else os.path.normpath(os.path.join(base_dir, path))
+
+
+def _length_with_unit(value, path: str) -> float:
+    """'0.05 mm' / '20 um' / '1.2e-5 m' → metres."""
+    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-zµ]+)\s*", str(value)) if isinstance(value, str) else None
+    if m is None or m.group(2) not in UNITS:
+        raise ConfigError(path, f"expected a length with its unit, e.g. '0.05 mm' (units: m, mm, um); "
+                                f"got {_fmt(value)}")
+    v = number(m.group(1), path, positive=True)
+    return v * UNITS[m.group(2)]
+
+
+def _axes(value, path: str) -> np.ndarray:
+    if value == "image":
+        value = ["y", "-z"]
+    if not isinstance(value, list) or len(value) != 2 or not all(v in AXIS_NAMES for v in value) \
+            or {v.lstrip("-") for v in value} != {"y", "z"}:
+        raise ConfigError(path, "give the tendon axis of the file's first and second coordinate, e.g. "
+                                "[y, z], [y, -z] or image (= [y, -z]: columns right, rows down); "
+                                f"got {_fmt(value)}")
+    M = np.zeros((2, 2))
+    for col, v in enumerate(value):
+        M["yz".index(v[-1]), col] = -1.0 if v.startswith("-") else 1.0
+    return M
+
+
+def _pairs(value, key: str) -> list[list[float]]:
+    """A list of [u, v] number pairs."""
+    out = []
+    for j, p in enumerate(sequence(value, key)):
+        if not isinstance(p, list) or len(p) != 2:
+            raise ConfigError(_join(key, j), f"expected a [u, v] pair; got {_fmt(p)}")
+        out.append([number(x, _join(_join(key, j), c)) for c, x in enumerate(p)])
+    return out
+
+
+def _kind_of(path: str, key: str) -> str:
+    low = path.lower()
+    if low.endswith(POINT_EXT):
+        return "list"
+    if low.endswith(SVG_EXT):
+        return "svg"
+    if low.endswith(IMAGE_EXT):
+        return "image"
+    if low.endswith(NIFTI_EXT):
+        return "nifti"
+    raise ConfigError(key, f"unknown file type {_fmt(os.path.basename(path))}; use .csv/.txt/.yaml "
+                           "(point list), .svg, .png/.tif/.tiff (label mask) or .nii/.nii.gz (NIfTI)")
+
+
+def _outline(name: str, value, key: str, default_file: str | None, base_dir: str) -> OutlineSource:
+    if isinstance(value, list):
+        value = {"points": value}
+    mapping(value, key, optional=OUTLINE_KEYS)
+    given = [k for k in ("points", "curves") if k in value]
+    if len(given) > 1 or (given and any(k in value for k in ("file", "label", "path"))):
+        raise ConfigError(key, "give one source: points, curves, or a file (with label for masks, "
+                               "path for SVG)")
+    if "points" in value:
+        return OutlineSource(name, "points", key, points=_pairs(value["points"], _join(key, "points")))
+    if "curves" in value:
+        refs = sequence(value["curves"], _join(key, "curves"))
+        return OutlineSource(name, "curves", key, curves=[string(str(r), _join(key, "curves")) for r in refs])
+    f = value.get("file", default_file)
+    if f is None:
+        raise ConfigError(key, "no source: give points, curves, or a file (or a top-level 'source' file)")
+    f = _abs(string(f, _join(key, "file")), base_dir)
+    if not os.path.isfile(f):
+        raise ConfigError(_join(key, "file") if "file" in value else key,
+                          f"file not found: {f} (paths are relative to the file that names them)")
+    kind = _kind_of(f, _join(key, "file"))
+    out = OutlineSource(name, kind, key, file=f)
+    if kind in ("image", "nifti"):
+        if "label" not in value:
+            raise ConfigError(key, f"a mask needs the label value of this subtendon, e.g. label: 2")
+        out.label = integer(value["label"], _join(key, "label"), lo=1)
+    elif "label" in value:
+        raise ConfigError(_join(key, "label"), "label belongs to mask images (.png/.tif/.nii)")
+    if kind == "svg":
+        if "path" in value:
+            out.path_id = string(value["path"], _join(key, "path"))
+    elif "path" in value:
+        raise ConfigError(_join(key, "path"), "path (an SVG element id) belongs to .svg files")
+    return out
+
+
+def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
+    """Validate one geometry description (the contents of a geometry file or the inline keys)."""
+    if not isinstance(value, dict):
+        raise ConfigError(key, f"expected a mapping with keys {', '.join(FILE_KEYS)}; got {_fmt(value)}")
+    bad = [k for k in value if k in NOT_GEOMETRY]
+    inner = key if where == "config" else ""
+
+    def err(k, msg):
+        if where == "config":
+            return ConfigError(_join(key, k) if k else key, msg)
+        return ConfigError(key, f"{os.path.basename(where)}: {k + ': ' if k else ''}{msg}")
+
+    if bad:
+        raise err(bad[0], "a geometry description holds geometry only: give the length in "
+                          "geometry.length, materials per beam, the twist in geometry.twist_deg/twist_axis")
+    try:
+        mapping(value, inner, required=("units", "axes", "outlines"), optional=FILE_KEYS)
+        units = string(value["units"], _join(inner, "units"), tuple(UNITS) + ("px",))
+        scale = None
+        if units == "px":
+            if "pixel_size" not in value:
+                raise ConfigError(_join(inner, "pixel_size"), "units: px needs the pixel size, e.g. "
+                                  "pixel_size: 0.05 mm (or [0.05 mm, 0.06 mm] for u, v; or header for NIfTI)")
+            ps = value["pixel_size"]
+            if ps == "header":
+                scale = None
+            elif isinstance(ps, list) and len(ps) == 2:
+                scale = tuple(_length_with_unit(v, _join(_join(inner, "pixel_size"), i)) for i, v in enumerate(ps))
+            else:
+                s = _length_with_unit(ps, _join(inner, "pixel_size"))
+                scale = (s, s)
+        else:
+            if "pixel_size" in value:
+                raise ConfigError(_join(inner, "pixel_size"), f"pixel_size needs units: px (the units are {units})")
+            scale = (UNITS[units], UNITS[units])
+        axes = _axes(value["axes"], _join(inner, "axes"))
+        default_file = None
+        if "source" in value:
+            default_file = _abs(string(value["source"], _join(inner, "source")), base_dir)
+            if not os.path.isfile(default_file):
+                raise ConfigError(_join(inner, "source"), f"file not found: {default_file}")
+            _kind_of(default_file, _join(inner, "source"))
+        raw_out = value["outlines"]
+        if not isinstance(raw_out, dict) or not raw_out:
+            raise ConfigError(_join(inner, "outlines"), "expected a mapping subtendon name -> source, "
+                                                        "e.g. {soleus: {label: 1}}")
+        outlines = {}
+        for name, v in raw_out.items():
+            name = str(name)
+            if name.startswith("-") or "/" in name or ":" in name:
+                raise ConfigError(_join(_join(inner, "outlines"), name),
+                                  "outline names may not start with '-' or contain '/' or ':'")
+            outlines[name] = _outline(name, v, _join(_join(inner, "outlines"), name), default_file,
+                                      base_dir)
+        kinds = {o.kind for o in outlines.values()}
+        if "curves" in kinds and len(kinds) > 1:
+            raise ConfigError(_join(inner, "outlines"), "use either loops of named curves or traced "
+                                                        "outlines in one description, not both")
+        curves = {}
+        if "curves" in value:
+            if not isinstance(value["curves"], dict):
+                raise ConfigError(_join(inner, "curves"), "expected a mapping name -> list of [u, v] points")
+            for cname, pts in value["curves"].items():
+                curves[str(cname)] = _pairs(pts, _join(_join(inner, "curves"), str(cname)))
+        for o in outlines.values():
+            for ref in o.curves or []:
+                if ref.lstrip("-").strip() not in curves:
+                    raise ConfigError(_join(o.key, "curves"), f"unknown curve {_fmt(ref)}; define it under "
+                                      f"curves (known: {', '.join(curves) or 'none'})")
+        slc = None
+        if "slice" in value:
+            sk = _join(inner, "slice")
+            mapping(value["slice"], sk, required=("axis", "index"))
+            ax = value["slice"]["axis"]
+            ax = {"i": 0, "j": 1, "k": 2}.get(ax, ax)
+            slc = (integer(ax, _join(sk, "axis"), lo=0, hi=2), integer(value["slice"]["index"], _join(sk, "index"), lo=0))
+        if "nifti" in kinds and slc is None:
+            raise ConfigError(_join(inner, "slice"), "a NIfTI volume needs the slice: {axis: 2, index: 40} "
+                                                     "(axis 0/1/2 or i/j/k, 0-based index)")
+        if scale is None and kinds != {"nifti"}:
+            raise ConfigError(_join(inner, "pixel_size"), "pixel_size: header reads the voxel size of a "
+                                                          "NIfTI file; give the size for other sources")
+    except ConfigError as exc:
+        if where == "config":
+            raise
+        raise ConfigError(key, f"{os.path.basename(where)}: {exc}") from None
+    return GeometrySource(key, where, units, scale, axes, outlines, curves, slc)
+
+
+def _load_file(f: str, key: str, base_dir: str) -> GeometrySource:
+    path = _abs(f, base_dir)
+    if not os.path.isfile(path):
+        raise ConfigError(key, f"geometry file not found: {path} (paths are relative to the config file)")
+    try:
+        with open(path) as fh:
+            data = yaml.safe_load(fh)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise ConfigError(key, f"{os.path.basename(path)}: YAML syntax error{where}") from None
+    return _source(data, key, path, os.path.dirname(path))
+
+
+def _station(value, key: str, base_dir: str, with_x: bool) -> tuple[float | None, GeometrySource]:
+    if not isinstance(value, dict):
+        raise ConfigError(key, f"expected a mapping (file: ... or units/axes/outlines); got {_fmt(value)}")
+    x = None
+    rest = dict(value)
+    if with_x:
+        if "x" not in rest:
+            raise ConfigError(_join(key, "x"), "missing value (required): the station's position along "
+                                               "the tendon [m]")
+        x = number(rest.pop("x"), _join(key, "x"), nonneg=True, hint=" (metres from the x = 0 end)")
+    if "file" in rest:
+        extra = [k for k in rest if k != "file"]
+        if extra:
+            raise ConfigError(_join(key, extra[0]), "give either file: or the keys inline, not both")
+        return x, _load_file(string(rest["file"], _join(key, "file")), _join(key, "file"), base_dir)
+    return x, _source(rest, key, "config", base_dir)
+
+
+def parse_sections(value, key: str, base_dir: str, length: float) -> SectionsSpec:
+    """Validate ``geometry.sections``."""
+    if not isinstance(value, dict):
+        raise ConfigError(key, "expected a mapping: file: <geometry file>, or the keys units/axes/"
+                               "outlines inline, or stations: [{x, file}, ...]")
+    opts = {k: value[k] for k in OPTION_KEYS if k in value}
+    rest = {k: v for k, v in value.items() if k not in OPTION_KEYS}
+    spec = SectionsSpec(stations=[], key=key)
+    for k, v in opts.items():
+        if k == "spline_degree":
+            spec.spline_degree = integer(v, _join(key, k), lo=1, hi=5)
+        elif v != "auto":
+            setattr(spec, k, number(v, _join(key, k), nonneg=(k == "smoothing"), positive=(k != "smoothing"),
+                                    hint=" (metres, or auto)"))
+    if "stations" in rest:
+        if len(rest) > 1:
+            other = [k for k in rest if k != "stations"][0]
+            raise ConfigError(_join(key, other), "with stations, every station names its own file "
+                                                 "or keys; move this key into the stations")
+        st = sequence(rest["stations"], _join(key, "stations"))
+        if len(st) < 2:
+            raise ConfigError(_join(key, "stations"), "give at least two stations (or one section "
+                                                      "without stations)")
+        for i, s in enumerate(st):
+            spec.stations.append(_station(s, _join(_join(key, "stations"), i), base_dir, True))
+        xs = [x for x, _ in spec.stations]
+        if any(b <= a for a, b in zip(xs, xs[1:])):
+            raise ConfigError(_join(key, "stations"), f"station positions x must increase strictly; got {xs}")
+        if xs[-1] > length * (1 + 1e-12):
+            raise ConfigError(_join(_join(key, "stations"), len(xs) - 1) + ".x",
+                              f"x = {xs[-1]:g} m lies beyond the tendon (geometry.length = {length:g} m)")
+        names = spec.stations[0][1].outlines.keys()
+        for i, (_, s) in enumerate(spec.stations[1:], start=1):
+            if s.outlines.keys() != names:
+                raise ConfigError(_join(_join(key, "stations"), i),
+                                  f"outlines {sorted(s.outlines)} differ from station 0's {sorted(names)}; "
+                                  "every station needs the same subtendons")
+    else:
+        spec.stations.append(_station(rest, key, base_dir, False))
+    return spec

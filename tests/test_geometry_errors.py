@@ -1,0 +1,127 @@
+"""Bad geometry gets one clear line through ancf-solve: exit code 2, the key path, no traceback."""
+import numpy as np
+import pytest
+
+from helpers import solve_cli, write_config
+
+
+def disc(r=4.0, n=40, c=(0.0, 0.0)):
+    t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    return (np.array(c) + r * np.column_stack([np.cos(t), np.sin(t)])).tolist()
+
+
+def config(sections, beams=("a",), contact=False):
+    raw = {"name": "bad", "geometry": {"length": 0.02, "sections": sections},
+           "beams": [{"name": b, "section": {"shape": "outline", "loop": b}, "elements": 1,
+                      "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}} for b in beams],
+           "steps": [1.0]}
+    if contact:
+        raw["contact"] = {"mode": "sliding"}
+    return raw
+
+
+def inline(outlines, units="mm", axes=("y", "z"), **kw):
+    return {"units": units, "axes": axes if isinstance(axes, str) else list(axes), "outlines": outlines, **kw}
+
+
+def three(mirror=False, r=3.0):
+    """Three sectors of a disc of radius r (points, mm, closed); mirrored in z if asked."""
+    out = {}
+    for k, name in enumerate(("p", "q", "r")):
+        th = np.deg2rad(np.linspace(120 * k, 120 * (k + 1), 30))
+        P = np.vstack([[0.0, 0.0], r * np.column_stack([np.cos(th), np.sin(th)]), [0.0, 0.0]])
+        if mirror:
+            P = P * [1.0, -1.0]
+        out[name] = {"points": P.tolist()}
+    return out
+
+
+def write_files(tmp):
+    from PIL import Image
+    lab = np.zeros((60, 60), dtype=np.uint8)
+    lab[10:30, 10:30], lab[30:50, 10:30] = 1, 2
+    Image.fromarray(lab, mode="L").save(tmp / "m.png")
+    (tmp / "open.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 20 20">'
+                                  '<path id="a" d="M 1,1 L 10,1 L 10,10"/>'
+                                  '<path id="b" d="M 12,12 C 14,12 16,14 16,16"/></svg>')
+
+
+CASES = [
+    ("self-intersecting", config(inline({"a": {"points": [[0, 0], [2, 2], [2, 0], [0, 2]]}})),
+     "geometry.sections.outlines.a", "crosses itself near (1.000, 1.000) mm"),
+    ("open outline", config(inline({"a": {"points": disc()[:25]}})),
+     "geometry.sections.outlines.a", "the outline is open"),
+    ("wrong orientation of a curve", config(inline(
+        {"a": {"curves": ["base", "right", "left"]}},
+        curves={"base": [[0, 0], [2, 0]], "right": [[1, 2], [1.8, 1], [2, 0]], "left": [[1, 2], [0, 0]]})),
+     "geometry.sections.outlines.a.curves", "curve 'right' runs the wrong way round in this loop "
+                                           "(wrong orientation); write '-right'"),
+    ("mirrored station", config({"stations": [dict(inline(three()), x=0.0),
+                                               dict(inline(three(mirror=True)), x=0.02)]}, beams=("p", "q", "r")),
+     "geometry.sections.stations[1]", "mirror image of station 0"),
+    ("tendon of 50 m^2", config(inline({"a": {"points": disc()}}, units="m")),
+     "geometry.sections.units", "too large for a tendon"),
+    ("tendon of 50 um^2", config(inline({"a": {"points": disc()}}, units="um")),
+     "geometry.sections.units", "in mm the outlines would enclose 50.1 mm^2"),
+    ("mask without the label", config(inline({"a": {"label": 7}}, units="px", pixel_size="0.05 mm",
+                                             axes="image", source="m.png")),
+     "geometry.sections.outlines.a", "m.png: no pixel has label 7 (labels present: 0, 1, 2)"),
+    ("SVG without closed paths", config(inline({"a": {"file": "open.svg"}}, axes="image")),
+     "geometry.sections.outlines.a", "open.svg: none of its 2 path(s) is closed"),
+    ("overlap", config(inline({"a": {"points": disc(2.0)}, "b": {"points": disc(2.0, c=(3.5, 0.0))}}),
+                       beams=("a", "b")),
+     "geometry.sections.outlines", "subtendons 'a' and 'b' overlap by 0.498 mm near (2.000, 0.000) mm"),
+    ("contact with stations whose interfaces differ", config(
+        {"stations": [dict(inline(three()), x=0.0), dict(inline(three(r=2.5)), x=0.02)]},
+        beams=("p", "q", "r"), contact=True),
+     "contact", "interface curve is the same at every station"),
+]
+
+
+@pytest.mark.parametrize("name,raw,path,text", CASES, ids=[c[0] for c in CASES])
+def test_bad_geometry_is_one_line_exit_2(tmp_path, name, raw, path, text):
+    write_files(tmp_path)
+    raw = dict(raw, output={"dir": str(tmp_path / "out")})
+    p = solve_cli(write_config(raw, tmp_path / "bad.yaml"), cwd=str(tmp_path))
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert "Traceback" not in p.stderr and len(lines) == 1, p.stderr
+    assert lines[0].startswith(f"ancf-solve: config error: {path}:"), lines[0]
+    assert text in lines[0], lines[0]
+
+
+KEY_CASES = [
+    ("units missing", {"axes": ["y", "z"], "outlines": {"a": {"points": disc()}}}, "geometry.sections.units", "missing"),
+    ("axes not a frame", inline({"a": {"points": disc()}}, axes=("y", "y")), "geometry.sections.axes", "[y, -z]"),
+    ("px without size", inline({"a": {"points": disc()}}, units="px"), "geometry.sections.pixel_size", "0.05 mm"),
+    ("unknown outline", inline({"b": {"points": disc()}}), "beams[0].section.loop", "available: b"),
+    ("material in the geometry file", {"file": "g.yaml"}, "geometry.sections.file", "g.yaml: length_m: a geometry description holds geometry only"),
+    ("label on a point list", inline({"a": {"file": "g.yaml", "label": 3}}), "geometry.sections.outlines.a.label", "mask images"),
+    ("station beyond the tendon", {"stations": [dict(inline({"a": {"points": disc()}}), x=0.0),
+                                                dict(inline({"a": {"points": disc()}}), x=0.5)]},
+     "geometry.sections.stations[1].x", "beyond the tendon"),
+]
+
+
+@pytest.mark.parametrize("name,sections,path,text", KEY_CASES, ids=[c[0] for c in KEY_CASES])
+def test_geometry_keys_are_checked_with_their_path(tmp_path, name, sections, path, text):
+    from ancf_petsc.config import ConfigError, parse_config
+    from ancf_petsc.model import build_model
+    (tmp_path / "g.yaml").write_text("units: mm\naxes: [y, z]\nlength_m: 0.05\noutlines: {a: {points: [[0, 0], [1, 0], [0, 1]]}}\n")
+    with pytest.raises(ConfigError) as err:
+        build_model(parse_config(config(sections), base_dir=str(tmp_path)))
+    msg = str(err.value)
+    assert msg.startswith(path + ":") and text in msg and "\n" not in msg, msg
+
+
+def test_twist_axis_rule_errors():
+    from ancf_petsc.config import ConfigError, parse_config
+    from ancf_petsc.model import build_model
+    raw = config(inline({"a": {"points": disc()}}))
+    raw["geometry"]["twist_axis"] = "junction"               # one outline: nothing to meet
+    with pytest.raises(ConfigError, match=r"^geometry.twist_axis: junction needs one point where all "
+                                          r"measured outlines meet; found 0"):
+        build_model(parse_config(raw))
+    raw["geometry"]["twist_axis"] = {"centroid_of": "zz"}
+    with pytest.raises(ConfigError, match=r"^geometry.twist_axis.centroid_of: unknown beam 'zz'"):
+        parse_config(raw)

@@ -1,0 +1,266 @@
+"""geometry.sections: importers on shapes with known areas and centroids, the border merge of
+neighbours traced apart, the paper's Type III file in the new format (docs/geometry.md)."""
+import copy
+
+import numpy as np
+import pytest
+
+import geometry_cases as gc
+from ancf_petsc.config import ConfigError, parse_config
+from ancf_petsc.geometry_input import polyline as pl
+from ancf_petsc.geometry_input.build import build_station
+from ancf_petsc.geometry_input.spec import parse_sections
+from ancf_petsc.model import build_model
+from ancf_petsc.section import make_outline
+from helpers import CONFIGS, load_raw
+
+
+def station(desc: dict, base_dir=".", **opts):
+    spec = parse_sections({**desc, **opts}, "geometry.sections", str(base_dir), 0.05)
+    return build_station(spec.stations[0][1], spec)
+
+
+def section(st, name, degree=6):
+    return make_outline(st.loops[name], degree)
+
+
+def shared_curves(st):
+    """{curve id: [(loop, reversed)]} of the curves used by two loops."""
+    use = {}
+    for name, loop in st.loops.items():
+        for cv, f in loop:
+            use.setdefault(id(cv), []).append((name, f))
+    return {k: v for k, v in use.items() if len(v) > 1}
+
+
+def write_png(path, labels, mode="L"):
+    from PIL import Image
+    Image.fromarray(labels.astype(np.uint8 if mode == "L" else np.uint16), mode=mode).save(path)
+
+
+# ------------------------------------------------------------------------------ point lists
+def test_csv_disc_area_and_centroid(tmp_path):
+    r, c = 3.0, np.array([1.5, -2.0])                     # mm
+    th = np.linspace(0.0, 2 * np.pi, 90, endpoint=False) + 0.3
+    P = c + r * np.column_stack([np.cos(th), np.sin(th)])
+    (tmp_path / "disc.csv").write_text("y_mm,z_mm\n" + "\n".join(f"{y:.9f},{z:.9f}" for y, z in P))
+    st = station({"units": "mm", "axes": ["y", "z"], "outlines": {"disc": {"file": "disc.csv"}}}, tmp_path)
+    sec = section(st, "disc")
+    # spline through points on the circle (fit tolerance 12.5 um): area to 5e-5, centroid to 1e-5 r
+    assert sec.area == pytest.approx(np.pi * (r * 1e-3) ** 2, rel=5e-5)
+    assert np.allclose(sec.centroid, c * 1e-3, rtol=0, atol=5e-5 * r * 1e-3)
+    ctrl = sum(len(cv.points) for cv, _ in st.loops["disc"])
+    assert 8 <= ctrl <= 30                                  # decimated from 90 points
+
+
+def test_yaml_ellipse_with_declared_axes(tmp_path):
+    a, b, rot, c = 4.0, 2.5, np.deg2rad(30.0), np.array([0.5, 1.0])      # file coordinates, mm
+    th = np.linspace(0.0, 2 * np.pi, 200, endpoint=False)
+    R = np.array([[np.cos(rot), -np.sin(rot)], [np.sin(rot), np.cos(rot)]])
+    P = c + np.column_stack([a * np.cos(th), b * np.sin(th)]) @ R.T
+    (tmp_path / "ell.yaml").write_text("points:\n" + "".join(f"  - [{u:.9f}, {v:.9f}]\n" for u, v in P))
+    # the file's second coordinate points along -z: the section is the mirror image in z
+    st = station({"units": "mm", "axes": ["y", "-z"], "outlines": {"ell": {"file": "ell.yaml"}}}, tmp_path)
+    sec = section(st, "ell")
+    assert sec.area == pytest.approx(np.pi * a * b * 1e-6, rel=1e-4)
+    assert np.allclose(sec.centroid, [0.5e-3, -1.0e-3], rtol=0, atol=1e-4 * b * 1e-3)
+    # principal direction mirrored: -30 degrees
+    ang = 0.5 * np.degrees(np.arctan2(2 * sec.Syz, sec.Syy - sec.Szz))
+    assert ang == pytest.approx(-30.0, abs=0.01)
+
+
+def test_polygon_exact_with_linear_splines(tmp_path):
+    L = np.array([[0, 0], [6, 0], [6, 2], [2, 2], [2, 5], [0, 5]], dtype=float)   # an L, mm
+    (tmp_path / "l.csv").write_text("\n".join(f"{y} {z}" for y, z in L))       # space separated
+    st = station({"units": "mm", "axes": ["y", "z"], "outlines": {"l": {"file": "l.csv"}}}, tmp_path,
+                 spline_degree=1)
+    sec = section(st, "l")
+    area = 6 * 2 + 2 * 3
+    cent = (np.array([3.0, 1.0]) * 12 + np.array([1.0, 3.5]) * 6) / 18
+    assert sec.area == pytest.approx(area * 1e-6, rel=1e-12)
+    assert np.allclose(sec.centroid, cent * 1e-3, rtol=0, atol=1e-15)
+    assert len(st.loops["l"]) == 6                          # broken at its six corners
+
+
+# ------------------------------------------------------------------------------ SVG
+SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="40mm" height="40mm" viewBox="0 0 40 40">
+  <g transform="translate(10, 12)">
+    <path id="upper" d="M -3,0 A 3,3 0 0,1 3,0 Z"/>
+    <path id="lower" d="M 3,0 A 3,3 0 0,1 -3,0 Z"/>
+    <path id="open" d="M 0,0 L 5,5 L 5,0"/>
+  </g>
+</svg>"""
+
+
+def test_svg_half_discs_share_their_diameter(tmp_path):
+    (tmp_path / "t.svg").write_text(SVG)
+    desc = {"units": "mm", "axes": "image", "source": "t.svg",
+            "outlines": {"upper": {"path": "upper"}, "lower": {"path": "lower"}}}
+    st = station(desc, tmp_path)
+    r, c = 3e-3, np.array([10e-3, -12e-3])                 # user units are mm; rows point down
+    off = 4 * r / (3 * np.pi)
+    for name, sign in (("upper", 1.0), ("lower", -1.0)):
+        sec = section(st, name)
+        assert sec.area == pytest.approx(0.5 * np.pi * r * r, rel=2e-4)
+        assert np.allclose(sec.centroid, c + [0.0, sign * off], rtol=0, atol=2e-4 * r)
+    # the two traces of the diameter became one interface curve, reversed in one loop
+    [(uses)] = shared_curves(st).values()
+    assert sorted(f for _, f in uses) == [False, True]
+    cv = next(cv for cv, _ in st.loops["upper"] if id(cv) in shared_curves(st))
+    S = cv.sample(16)
+    inner = np.abs(S[:, 0] - c[0]) < 0.8 * r               # the two traces coincide there
+    assert np.abs(S[inner, 1] - c[1]).max() < st.fit_tolerance
+    # its ends, where the arcs leave each other within the merge tolerance, move less than that
+    assert np.abs(S[:, 1] - c[1]).max() < st.merge_tolerance
+    assert np.ptp(S[:, 0]) == pytest.approx(2 * r, abs=st.merge_tolerance)
+
+
+# ------------------------------------------------------------------------------ masks
+def _mask_scene():
+    shape = (170, 220)
+    lab = gc.disc_mask(shape, (50.3, 50.6), 30.0, 1)
+    gc.ellipse_mask(shape, (150.2, 48.7), (45.0, 22.0), 2, lab)
+    half = gc.disc_mask(shape, (110.0, 124.5), 30.0, 3)  # cut along the diameter v = 124.5
+    rows = np.arange(shape[0])[:, None] * np.ones(shape[1])
+    lab[(half == 3) & (rows < 124.5)] = 3                  # upper half (rows above the cut)
+    lab[(half == 3) & (rows > 124.5)] = 4
+    return lab
+
+
+def test_png_mask_disc_ellipse_half_discs(tmp_path):
+    lab = _mask_scene()
+    write_png(tmp_path / "m.png", lab)
+    p = 0.02                                                # mm per pixel
+    desc = {"units": "px", "pixel_size": f"{p} mm", "axes": "image", "source": "m.png",
+            "outlines": {"disc": {"label": 1}, "ellipse": {"label": 2}, "up": {"label": 3},
+                         "down": {"label": 4}}}
+    st = station(desc, tmp_path)
+    to_m = lambda u, v: np.array([u, -v]) * p * 1e-3
+    # rasterised shapes: areas within 0.5 % of the exact ones, centroids within 0.1 pixel
+    for name, area_px, cent in (("disc", np.pi * 900, to_m(50.3, 50.6)),
+                                ("ellipse", np.pi * 45 * 22, to_m(150.2, 48.7))):
+        sec = section(st, name)
+        assert sec.area == pytest.approx(area_px * (p * 1e-3) ** 2, rel=5e-3), name
+        assert np.linalg.norm(sec.centroid - cent) < 0.1 * p * 1e-3, name
+    off = 4 * 30.0 / (3 * np.pi)
+    for name, dv in (("up", -off), ("down", off)):
+        sec = section(st, name)
+        assert sec.area == pytest.approx(0.5 * np.pi * 900 * (p * 1e-3) ** 2, rel=1e-2), name
+        assert np.linalg.norm(sec.centroid - to_m(110.0, 124.5 + dv)) < 0.2 * p * 1e-3, name
+    assert len(shared_curves(st)) == 1                     # the two halves share their diameter
+    assert not any(set(v) & {"disc", "ellipse"} for v in map(lambda u: {n for n, _ in u}, shared_curves(st).values()))
+    assert st.report[0].startswith("geometry: smoothing 0.04 mm")   # 2 px by default
+
+
+def test_tiff_16bit_labels_and_nifti_slice(tmp_path):
+    from PIL import Image
+    import nibabel as nib
+    lab = gc.disc_mask((120, 120), (60.4, 58.8), 35.0, 300)
+    Image.fromarray(lab.astype(np.uint16)).save(tmp_path / "m.tif")
+    st = station({"units": "px", "pixel_size": "10 um", "axes": "image", "source": "m.tif",
+                  "outlines": {"d": {"label": 300}}}, tmp_path)
+    sec = section(st, "d")
+    assert sec.area == pytest.approx(np.pi * 35.0 ** 2 * 1e-10, rel=5e-3)
+    assert np.linalg.norm(sec.centroid - np.array([60.4, -58.8]) * 1e-5) < 0.1e-5
+    # NIfTI: the disc lies in slice 3 across voxel axis 1 (other slices hold another label)
+    vol = np.zeros((120, 6, 120), dtype=np.int16)
+    vol[:, :, :] = 5 * (gc.disc_mask((120, 120), (60.0, 60.0), 10.0, 1) > 0)[:, None, :]
+    vol[:, 3, :] = gc.disc_mask((120, 120), (58.8, 60.4), 35.0, 2).T     # [u, v] = [column, row].T
+    img = nib.Nifti1Image(vol, np.diag([0.04, 2.0, 0.04, 1.0]))
+    img.header.set_xyzt_units("mm")
+    nib.save(img, tmp_path / "v.nii.gz")
+    st = station({"units": "px", "pixel_size": "header", "axes": ["y", "z"], "source": "v.nii.gz",
+                  "slice": {"axis": "j", "index": 3}, "outlines": {"d": {"label": 2}}}, tmp_path)
+    sec = section(st, "d")
+    assert sec.area == pytest.approx(np.pi * 35.0 ** 2 * (0.04e-3) ** 2, rel=5e-3)
+    # u = voxel axis 0 (the mask's columns: centre 58.8), v = voxel axis 2 (its rows: 60.4)
+    assert np.linalg.norm(sec.centroid - np.array([58.8, 60.4]) * 0.04e-3) < 0.1 * 0.04e-3
+
+
+# ------------------------------------------------------------------------------ border merge
+def _strip_station(seed, shift_right=0.0, **opts):
+    rng = np.random.default_rng(seed)
+    exact = gc.strip_tendon()
+    outl = {n: {"points": (gc.trace(P, rng) + [shift_right if n == "right" else 0.0, 0.0]).tolist()}
+            for n, P in exact.items()}
+    return station({"units": "mm", "axes": ["y", "z"], "outlines": outl}, **opts), exact
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_merge_of_neighbours_traced_apart(seed):
+    st, exact = _strip_station(seed)
+    tol = st.merge_tolerance
+    assert tol == pytest.approx(50e-6)                      # the stated default
+    for name, P in exact.items():                           # areas within 0.5 % of the exact ones
+        assert section(st, name).area == pytest.approx(gc.area(P) * 1e-6, rel=5e-3), name
+    shared = shared_curves(st)
+    pairs = sorted(tuple(sorted(n for n, _ in uses)) for uses in shared.values())
+    assert pairs == [("left", "middle"), ("middle", "right")]   # left and right never touch
+    for uses in shared.values():                             # one object, reversed on one side
+        assert sorted(f for _, f in uses) == [False, True]
+    for name, loop in st.loops.items():
+        for cv, _ in loop:
+            if id(cv) in shared:                             # merged interface within tolerance
+                k = 0 if "left" in cv.name else 1
+                d, _, _ = pl.PolylineDistance(gc.border_points(k) * 1e-3, closed=False).query(cv.sample(16))
+                assert d.max() < tol, (cv.name, d.max())
+    # every junction joins two loops: there is no triple point
+    assert len(st.junctions) == 4 and all(len(j) == 2 for j in st.junction_loops)
+    moved = [ln for ln in st.report if ln.startswith("  interface")]
+    assert len(moved) == 2 and all("moved <=" in ln for ln in moved)
+
+
+def test_gap_wider_than_tolerance_stays_free():
+    st, exact = _strip_station(0, shift_right=0.2)          # right pulled 0.2 mm away
+    pairs = [tuple(sorted(n for n, _ in u)) for u in shared_curves(st).values()]
+    assert pairs == [("left", "middle")]
+    assert not any(id(cv) in shared_curves(st) for cv, _ in st.loops["right"])   # all free
+    assert any("no neighbour within the merge tolerance: right" in ln for ln in st.report)
+
+
+def test_overlap_beyond_tolerance_names_both_and_where():
+    with pytest.raises(ConfigError, match=r"subtendons '(middle|right)' and '(middle|right)' overlap by "
+                                          r"0\.\d+ mm near \(-?\d+\.\d+, -?\d+\.\d+\) mm"):
+        _strip_station(0, shift_right=-0.2)
+
+
+# ------------------------------------------------------------------------------ Type III
+def test_type3_in_the_geometry_format_gives_the_same_model():
+    raw = load_raw("achilles_type3_psi45.yaml")
+    old = build_model(parse_config(copy.deepcopy(raw), CONFIGS))
+    raw["geometry"]["twist_axis"] = "junction"
+    raw["geometry"]["sections"] = {"file": "data/achilles_type3_geometry.yaml"}
+    for b in raw["beams"]:
+        b["section"] = {"shape": "outline", "loop": b["name"]}
+    new = build_model(parse_config(raw, CONFIGS))
+    for a, b in zip(old.beams, new.beams):
+        assert a.section.area == b.section.area
+        assert np.array_equal(a.section.points, b.section.points)
+    assert np.array_equal(old.q0, new.q0)                   # the junction is the triple point
+    assert any("twist axis: junction of all outlines" in ln for ln in new.geometry_report)
+
+
+def test_twist_axis_rules_and_stated_default():
+    raw = load_raw("geometry_mask_demo.yaml")
+    spec = parse_config(copy.deepcopy(raw), CONFIGS)
+    model = build_model(spec)
+    line = [ln for ln in model.geometry_report if ln.startswith("twist axis")][0]
+    areas = np.array([b.section.area for b in model.beams])
+    cent = areas @ np.array([b.section.centroid for b in model.beams]) / areas.sum()
+    assert "area centroid of all sections" in line and "default rule" in line
+    assert np.allclose(spec.twist_axis, cent, rtol=0, atol=1e-15)
+    for rule, expect in (({"centroid_of": "soleus"}, model.beams[0].section.centroid),
+                         ([0.001, -0.002], [0.001, -0.002]), ("origin", [0.0, 0.0])):
+        r = copy.deepcopy(raw)
+        r["geometry"]["twist_axis"] = rule
+        s = parse_config(r, CONFIGS)
+        m = build_model(s)
+        assert np.allclose(s.twist_axis, expect, rtol=0, atol=1e-15), rule
+        assert "default rule" not in " ".join(m.geometry_report)
+    r = copy.deepcopy(raw)
+    r["geometry"]["twist_axis"] = "junction"                # the mask's three outlines meet once
+    s = parse_config(r, CONFIGS)
+    build_model(s)
+    d = [np.linalg.norm(np.asarray(s.twist_axis) - (cv.start if not f else cv.end))
+         for b in model.beams for cv, f in b.section.loop]
+    assert min(d) < 1e-12

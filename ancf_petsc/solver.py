@@ -22,6 +22,8 @@ from petsc4py import PETSc
 from .assembly import Problem, node_blocks_fit
 from .config import ConfigError, SolverSpec
 from .inertia import negative_pivots
+from .interrupt import RunInterrupted, stop_requested
+from .petsc_options import petsc_message, solver_hint, used_anywhere
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",
@@ -32,10 +34,12 @@ DEFAULT_OPTIONS = {
     "snes_max_it": "15",
     "ksp_type": "preonly",
     # the Jacobian is a symmetric (energy) Hessian: MUMPS LDLᵀ (indefinite allowed) does half
-    # the flops of LU (37-fascicle bundle: 11.1 s vs 18.5 s per run; scripts/bench_scaling.py)
+    # the flops of LU (37-fascicle bundle: 11.1 s vs 18.5 s per run; scripts/bench_scaling.py);
+    # -pc_factor_mat_solver_type mumps is added only where it applies (``factor_package``)
     "pc_type": "cholesky",
-    "pc_factor_mat_solver_type": "mumps",
 }
+#: preconditioners whose factorisation package defaults to MUMPS
+MUMPS_PCS = ("lu", "cholesky")
 
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
@@ -48,7 +52,8 @@ def reason_name(reason: int) -> str:
 
 
 class LoadStepFailure(Exception):
-    """A requested load level could not be reached; raised identically on every rank."""
+    """A requested load level could not be reached; raised identically on every rank.
+    ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...)."""
 
     def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
                  detail: str = ""):
@@ -58,6 +63,11 @@ class LoadStepFailure(Exception):
             msg += " (an element was inverted, J <= 0)"
         super().__init__(msg)
         self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
+        self.code = reason.split()[0] if reason else "FAILED"
+
+
+class SolverOptionError(ConfigError):
+    """PETSc refused the solver the options ask for (exit 2, one line naming the options)."""
 
 
 @dataclass
@@ -87,14 +97,7 @@ def matrix_type(model, choice: str, config_options: dict) -> str:
 
     ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) on
     3363 beams (3333 beams hold half of each node block at zero)."""
-    opts = PETSc.Options()
-
-    def option(key: str) -> str:
-        if opts.hasName(key):
-            return str(opts.getString(key, ""))
-        return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
-
-    pc, factor = option("pc_type"), option("pc_factor_mat_solver_type")
+    pc, factor = factor_package(config_options)
     full = node_blocks_fit(model)
     if choice == "auto":
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
@@ -108,17 +111,37 @@ def matrix_type(model, choice: str, config_options: dict) -> str:
     return choice
 
 
+def option_in_effect(key: str, config_options: dict) -> str:
+    """The value of a PETSc option: command line, else config ``petsc:``, else ``DEFAULT_OPTIONS``."""
+    opts = PETSc.Options()
+    if opts.hasName(key):
+        return str(opts.getString(key, ""))
+    return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
+
+
+def factor_package(config_options: dict) -> tuple[str, str]:
+    """(pc_type, factorisation package) in effect.  The package defaults to MUMPS for LU and
+    Cholesky only: ILU, ICC and the block preconditioners keep PETSc's own default."""
+    pc = option_in_effect("pc_type", config_options)
+    factor = option_in_effect("pc_factor_mat_solver_type", config_options)
+    if not factor and pc in MUMPS_PCS:
+        factor = "mumps"
+    return pc, factor
+
+
 #: options read only when the factorisation is first set up, after ``setFromOptions``
 DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
 
 
 def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) -> tuple[str, list[str]]:
     """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found
-    except for the factorisation options (``DEFERRED_OPTIONS``), which MUMPS reads at its first
-    symbolic factorisation: those stay until the caller removes them (``LoadStepper.close``).
+    except for the config's options and the default factorisation options (``DEFERRED_OPTIONS``,
+    read by MUMPS at its first symbolic factorisation): those stay for the run, like command-line
+    ones (-ksp_view, -ksp_converged_reason are read at every solve), until ``LoadStepper.close``.
 
     Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES) and the
-    option names left in the database.
+    option names left in the database.  A value or combination PETSc refuses raises
+    ``SolverOptionError`` (the same on every rank: the options are).
     """
     opts = PETSc.Options()
     inserted = []
@@ -127,15 +150,33 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) ->
             if not opts.hasName(key):
                 opts.setValue(key, value)
                 inserted.append(key)
-    kept = [k for k in inserted if k.startswith(DEFERRED_OPTIONS)]
+    kept = [k for k in inserted if k in config_options or k.startswith(DEFERRED_OPTIONS)]
     try:
         snes.setFromOptions()
         linesearch = opts.getString("snes_linesearch_type", "bt")  # PETSc's own default
+    except PETSc.Error as exc:
+        for key in kept:
+            opts.delValue(key)
+        raise SolverOptionError("", _refused(exc, config_options, snes.getComm().getSize())) from None
     finally:
         for key in inserted:
             if key not in kept:
                 opts.delValue(key)
     return linesearch, kept
+
+
+def _solver_options(config_options: dict) -> str:
+    """``-ksp_type gmres -pc_type ilu`` as in effect (for messages)."""
+    pc, factor = factor_package(config_options)
+    text = f"-ksp_type {option_in_effect('ksp_type', config_options)} -pc_type {pc}"
+    return text + (f" -pc_factor_mat_solver_type {factor}" if factor else "")
+
+
+def _refused(exc: Exception, config_options: dict, ranks: int) -> str:
+    """One line: PETSc's reason, the options in effect and what works instead."""
+    pc, factor = factor_package(config_options)
+    return (f"PETSc refused the solver options {_solver_options(config_options)} on {ranks} "
+            f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
 
 
 class LoadStepper:
@@ -152,7 +193,11 @@ class LoadStepper:
         if spec.min_det_f > 0.0:
             self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
         defaults = dict(DEFAULT_OPTIONS)
-        if 1 < problem.comm.size <= 4:
+        pc, factor = factor_package(petsc_options)
+        if factor == "mumps" and not PETSc.Options().hasName("pc_factor_mat_solver_type") \
+                and "pc_factor_mat_solver_type" not in petsc_options:
+            defaults["pc_factor_mat_solver_type"] = "mumps"
+        if factor == "mumps" and 1 < problem.comm.size <= 4:
             # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid: LU, twice the
             # flops of the LDLᵀ root) is slower than factoring the root on one rank (37-fascicle
             # bundle, 22k DOFs, 2 ranks: 0.72 -> 0.65 s per factorisation), and only a sequential
@@ -165,14 +210,39 @@ class LoadStepper:
         fnorm = problem.fext.norm() * max_level
         self.rounding_floor = problem.reference_residual_norm()
         defaults["snes_atol"] = f"{max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30):.3e}"
+        self.petsc_options = petsc_options
+        self._kept_options: list[str] = []
         self.linesearch, self._kept_options = configure_options(self.snes, petsc_options, defaults)
+        self._check_factorisation()
         self._history: list[int] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
+        self._ksp_reason = 0
+        #: config ``petsc:`` options PETSc never read (known at ``close``)
+        self.unused_config_options: list[str] = []
+
+    def _check_factorisation(self) -> None:
+        """Create the factor matrix now (no numbers yet), so that a package that cannot factor
+        this matrix type on this many ranks is refused before the first load level."""
+        ksp = self.snes.getKSP()
+        pc = ksp.getPC()
+        if pc.getType() not in ("lu", "cholesky", "ilu", "icc"):
+            return
+        ksp.setOperators(self.problem.J, self.problem.J)
+        try:
+            pc.setFactorSetUpSolverType()
+        except PETSc.Error as exc:
+            self.close()
+            raise SolverOptionError("", _refused(exc, self.petsc_options,
+                                                 self.problem.comm.size)) from None
 
     def close(self) -> None:
-        """Remove the factorisation options this stepper left in PETSc's database."""
+        """Remove the options this stepper left in PETSc's database; config options PETSc never
+        read go to ``unused_config_options`` (collective)."""
         opts = PETSc.Options()
+        mine = [k for k in self._kept_options if k in self.petsc_options]
+        used = used_anywhere(mine, self.problem.comm)
+        self.unused_config_options = [k for k, u in zip(mine, used) if not u]
         for key in self._kept_options:
             opts.delValue(key)
         self._kept_options = []
@@ -192,15 +262,40 @@ class LoadStepper:
                 f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}; "
                 f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}")
 
-    def _solve_at(self, lam: float, X: PETSc.Vec) -> tuple[int, int, float]:
+    def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float) -> tuple[int, int, float]:
         self.problem.load_factor = lam
         self._history = []
-        self.snes.solve(None, X)
+        try:
+            self.snes.solve(None, X)
+        except PETSc.Error as exc:
+            # an error inside PETSc or an external package (a factorisation MUMPS gave up on,
+            # a package that cannot handle this matrix); the same on every rank for these
+            self.problem.load_factor = reached
+            raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
+                                  f" in the linear solver ({_solver_options(self.petsc_options)}): "
+                                  f"{petsc_message(exc)}") from None
+        self._ksp_reason = self.snes.getKSP().getConvergedReason()
         reason = self.snes.getConvergedReason()
         its = self.snes.getIterationNumber()
         self.newton_iterations += its
         fnorm = self.snes.getFunctionNorm()
         return reason, its, fnorm
+
+    def _stop_if_requested(self, lam: float) -> None:
+        """Between Newton solves: stop on every rank if any rank got SIGTERM/SIGINT (collective)."""
+        signum = stop_requested(self.problem.comm)
+        if signum:
+            raise RunInterrupted(signum, f"after load factor {lam:.6g}")
+
+    def _linear_solver_detail(self, reason: int) -> str:
+        """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
+        if reason != PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
+            return ""
+        kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
+                   if not k.startswith("_")}.get(self._ksp_reason, str(self._ksp_reason))
+        pc, factor = factor_package(self.petsc_options)
+        return (f" (the linear solver {_solver_options(self.petsc_options)} stopped with {kreason}; "
+                f"{solver_hint(pc, factor, self.problem.comm.size, PETSc.Sys.hasExternalPackage)})")
 
     def _residual_small(self, fnorm: float, lam: float) -> bool:
         """A 'converged' SNES (e.g. on a tiny step) must also have a small residual."""
@@ -230,6 +325,7 @@ class LoadStepper:
                 consecutive = 0
                 history = []
                 while lam < target * (1.0 - 1e-14):
+                    self._stop_if_requested(lam)
                     step = min(dlam, target - lam)
                     if self.spec.max_increment is not None:
                         step = min(step, self.spec.max_increment)
@@ -238,7 +334,7 @@ class LoadStepper:
                         X.axpy(step / dlam_last, dX_last)       # secant predictor
                     if lam > 0.0:
                         P.predict_multipliers((lam + step) / lam)
-                    reason, its, fnorm = self._solve_at(lam + step, X)
+                    reason, its, fnorm = self._solve_at(lam + step, X, target, lam)
                     its_total += its
                     history.append(list(self._history))
                     budget = self.spec.max_newton_iterations
@@ -275,7 +371,8 @@ class LoadStepper:
                              f"retry with increment {dlam:.4g}")
                     if consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment:
                         P.load_factor = lam
-                        raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted)
+                        raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted,
+                                              self._linear_solver_detail(reason))
                 augmentations = 0
                 if P.contact is not None and P.contact.augmented:
                     tol = P.contact.gap_tolerance()
@@ -290,7 +387,8 @@ class LoadStepper:
                                                   f"{augmentations} updates)",
                                                   False)
                         augmentations += 1
-                        reason, its, fnorm = self._solve_at(target, X)
+                        self._stop_if_requested(lam)
+                        reason, its, fnorm = self._solve_at(target, X, target, target)
                         its_total += its
                         history.append(list(self._history))
                         if not (reason > 0 and np.isfinite(fnorm) and P.state_is_clean()):

@@ -22,8 +22,10 @@ class RunInterrupted(Exception):
 
     def __init__(self, signum: int, where: str):
         self.signum = signum
-        self.name = signal.Signals(signum).name if signum in signal.Signals._value2member_map_ \
-            else f"signal {signum}"
+        try:
+            self.name = signal.Signals(signum).name
+        except ValueError:
+            self.name = f"signal {signum}"
         super().__init__(f"interrupted by {self.name} {where}")
 
 

@@ -281,11 +281,12 @@ class LoadStepper:
         fnorm = self.snes.getFunctionNorm()
         return reason, its, fnorm
 
-    def _stop_if_requested(self, lam: float) -> None:
+    def _stop_if_requested(self, target: float, level: float) -> None:
         """Between Newton solves: stop on every rank if any rank got SIGTERM/SIGINT (collective)."""
         signum = stop_requested(self.problem.comm)
         if signum:
-            raise RunInterrupted(signum, f"after load factor {lam:.6g}")
+            raise RunInterrupted(signum, f"on the way to load factor {target:g} (last converged "
+                                         f"level {level:g})")
 
     def _linear_solver_detail(self, reason: int) -> str:
         """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
@@ -324,8 +325,9 @@ class LoadStepper:
                 its_total = substeps = cutbacks = 0
                 consecutive = 0
                 history = []
+                level = records[-1].load_factor if records else 0.0
                 while lam < target * (1.0 - 1e-14):
-                    self._stop_if_requested(lam)
+                    self._stop_if_requested(target, level)
                     step = min(dlam, target - lam)
                     if self.spec.max_increment is not None:
                         step = min(step, self.spec.max_increment)
@@ -387,7 +389,7 @@ class LoadStepper:
                                                   f"{augmentations} updates)",
                                                   False)
                         augmentations += 1
-                        self._stop_if_requested(lam)
+                        self._stop_if_requested(target, level)
                         reason, its, fnorm = self._solve_at(target, X, target, target)
                         its_total += its
                         history.append(list(self._history))

@@ -627,7 +627,8 @@ def failure_reason(lines: list[str]) -> str:
     for ln in reversed(lines):
         if ln.startswith("ancf-solve:"):
             msg = ln[len("ancf-solve:"):].strip()
-            return re.sub(r"; converged steps are in .*$", "", msg)
+            return re.sub(r"; (converged steps are in|results in|\d+ converged level\(s\) kept in) .*$",
+                          "", msg)
     for ln in reversed(lines):
         if _PY_EXC.match(ln):
             return ln

@@ -304,3 +304,28 @@ def test_key_paths_ids_and_data_files(tmp_path):
     with pytest.raises(SweepError, match="loads"):
         (tmp_path / "b.yaml").write_text(f"base: {base}\nparameters:\n  loads[0].force[3]: [1]\n")
         load_sweep(str(tmp_path / "b.yaml"))
+
+
+def test_new_solver_outcomes_are_classified(tmp_path):
+    """ancf-solve's unstable (exit 4), interrupted (143/130) and disk-full (exit 2, OUTPUT_ERROR)
+    endings each get their own sweep status; unstable runs count as done."""
+    from ancf_petsc.sweep import classify, run_state, RunSpec
+
+    def case(summary: dict, rc: int, line: str):
+        d = tmp_path / f"r{rc}{summary['status']}"
+        d.mkdir()
+        (d / "summary.json").write_text(json.dumps({**summary, "steps": []}))
+        return classify(str(d), rc, [line]), d
+
+    (st, reason), d = case({"status": "unstable", "message": "1 of 2 levels are unstable"}, 4,
+                           "ancf-solve: unstable: 1 of 2 levels are unstable; results in /x")
+    assert (st, reason) == ("unstable", "unstable: 1 of 2 levels are unstable")
+    assert run_state(RunSpec(0, "r", {}, str(d))).status == "unstable"
+    (st, reason), _ = case({"status": "interrupted", "message": "interrupted by SIGTERM"}, 143,
+                           "ancf-solve: interrupted by SIGTERM on the way to load factor 0.2 (last "
+                           "converged level 0.15); 3 converged level(s) kept in /x")
+    assert st == "interrupted" and reason.endswith("(last converged level 0.15)")
+    (st, reason), _ = case({"status": "failed", "reason_code": "OUTPUT_ERROR", "message": "output error"}, 2,
+                           "ancf-solve: output error: /x: no space left on device for level 3; "
+                           "converged steps are in /x")
+    assert st == "failed" and reason == "output error: /x: no space left on device for level 3"

@@ -640,8 +640,9 @@ def load_config(path: str) -> ModelSpec:
     if not os.path.isfile(path):
         raise ConfigError("", f"{path}: no such config file")
     try:
-        with open(path, encoding="utf-8") as fh:
-            raw = yaml.safe_load(fh)
+        with open(path, "rb") as fh:
+            text = fh.read().decode("utf-8")
+        raw = yaml.safe_load(text)
     except UnicodeDecodeError as exc:
         raise ConfigError("", f"{path}: not a text (UTF-8) YAML file: byte 0x{exc.object[exc.start]:02x} "
                               f"at offset {exc.start}") from None

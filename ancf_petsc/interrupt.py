@@ -40,12 +40,24 @@ def _handler(signum, frame) -> None:
     _pending = signum
 
 
+_previous: dict = {}
+
+
 def install() -> None:
     """Handlers for SIGTERM and SIGINT (record, stop at the next safe point); SIGPIPE ignored.
-    Call after petsc4py.init: PETSc installs its own handler for SIGPIPE, which this replaces."""
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, _handler)
-    signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    Call (again) after petsc4py.init: PETSc installs its own SIGPIPE handler, replaced here."""
+    for sig, handler in ((signal.SIGTERM, _handler), (signal.SIGINT, _handler),
+                         (signal.SIGPIPE, signal.SIG_IGN)):
+        previous = signal.signal(sig, handler)
+        _previous.setdefault(sig, previous)
+
+
+def uninstall() -> None:
+    """Restore the handlers found by the first ``install`` and forget any recorded signal."""
+    for sig, handler in _previous.items():
+        signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+    _previous.clear()
+    reset()
 
 
 def pending() -> int:

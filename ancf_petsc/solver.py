@@ -193,7 +193,7 @@ class LoadStepper:
         if spec.min_det_f > 0.0:
             self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
         defaults = dict(DEFAULT_OPTIONS)
-        pc, factor = factor_package(petsc_options)
+        _, factor = factor_package(petsc_options)
         if factor == "mumps" and not PETSc.Options().hasName("pc_factor_mat_solver_type") \
                 and "pc_factor_mat_solver_type" not in petsc_options:
             defaults["pc_factor_mat_solver_type"] = "mumps"
@@ -271,9 +271,13 @@ class LoadStepper:
             # an error inside PETSc or an external package (a factorisation MUMPS gave up on,
             # a package that cannot handle this matrix); the same on every rank for these
             self.problem.load_factor = reached
+            why = petsc_message(exc)
+            if "MUMPS" in why:
+                why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
+                        "move or an integration rule with zero-energy modes)")
             raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
                                   f" in the linear solver ({_solver_options(self.petsc_options)}): "
-                                  f"{petsc_message(exc)}") from None
+                                  f"{why}") from None
         self._ksp_reason = self.snes.getKSP().getConvergedReason()
         reason = self.snes.getConvergedReason()
         its = self.snes.getIterationNumber()

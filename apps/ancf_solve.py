@@ -19,7 +19,7 @@ def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
     """(ours, PETSc's, error): PETSc's ``-help`` goes to PETSc (argparse would take it for -h),
     and a double-dash option we do not know is an error, not a PETSc option (``--outputdir``)."""
     ours, petsc = [], []
-    for i, arg in enumerate(argv):
+    for arg in argv:
         if arg == "-help":
             petsc.append(arg)
             continue
@@ -34,8 +34,14 @@ def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
     return ours, petsc, None
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):
+        """One line (argparse prints the usage too), exit 2 like every input error."""
+        self.exit(2, f"ancf-solve: {message} (see ancf-solve --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="ancf-solve", allow_abbrev=False,
         description="Solve an ANCF continuum-beam model described by a YAML config. "
                     "Options with one dash (-snes_*, -ksp_*, -pc_*, -log_view, -help) go to PETSc.",
@@ -57,7 +63,10 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     from ancf_petsc import interrupt
     interrupt.install()                  # from the start: Ctrl-C is a clean stop, never a traceback
-    code = _main(argv, interrupt)
+    try:
+        code = _main(argv, interrupt)
+    finally:
+        interrupt.uninstall()            # back to the caller's handlers (main() called in-process)
     try:
         sys.stdout.flush()
     except OSError:                      # stdout was a pipe that closed (ancf-solve ... | head)

@@ -141,6 +141,25 @@ def test_one_axial_point_is_really_singular():
     assert abs(smallest[1]) < 1e-12 and smallest[2] > 1e-6, smallest
 
 
+def test_a_factorisation_mumps_gives_up_on_ends_the_run_cleanly(tmp_path):
+    """The singular one-point model (past the config check): PETSc's error inside the solve
+    becomes a failed run with reason PETSC_ERROR and one line, not a traceback."""
+    petsc_init()
+    from petsc4py import PETSc
+
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.run import run_model
+    raw = tiny()
+    raw["output"]["dir"] = str(tmp_path / "out")
+    spec = parse_config(raw, base_dir=CONFIGS)
+    spec.beams[0].axial_points = 1
+    res = run_model(spec, PETSc.COMM_WORLD, lambda *_: None)
+    assert (res.status, res.reason_code, res.exit_code) == ("failed", "PETSC_ERROR", 3)
+    assert "MUMPS could not factor the tangent: it is singular" in res.message and "\n" not in res.message
+    s = _check_agreement(tmp_path / "out", 0)
+    assert s["reason_code"] == "PETSC_ERROR"
+
+
 def test_config_file_is_binary_or_a_directory(tmp_path):
     binary = tmp_path / "model.yaml"
     binary.write_bytes(b"name: x\n" + bytes(range(128, 256)))

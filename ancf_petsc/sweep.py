@@ -658,7 +658,7 @@ def classify(run_dir: str, returncode: int | None, stderr_lines: list[str],
     if returncode == 0 and sstat == "completed":
         return "completed", ""
     if returncode == EXIT_UNSTABLE and sstat == "unstable":
-        return "unstable", reason or str(summary.get("message") or "")
+        return "unstable", str(summary.get("message") or reason)
     if sstat == "interrupted" or returncode in (128 + signal.SIGTERM, 128 + signal.SIGINT):
         return "interrupted", reason or str(summary.get("message") or "interrupted")
     if returncode == EXIT_INPUT and summary.get("reason_code") == "OUTPUT_ERROR":

@@ -319,7 +319,7 @@ def test_new_solver_outcomes_are_classified(tmp_path):
 
     (st, reason), d = case({"status": "unstable", "message": "1 of 2 levels are unstable"}, 4,
                            "ancf-solve: unstable: 1 of 2 levels are unstable; results in /x")
-    assert (st, reason) == ("unstable", "unstable: 1 of 2 levels are unstable")
+    assert (st, reason) == ("unstable", "1 of 2 levels are unstable")
     assert run_state(RunSpec(0, "r", {}, str(d))).status == "unstable"
     (st, reason), _ = case({"status": "interrupted", "message": "interrupted by SIGTERM"}, 143,
                            "ancf-solve: interrupted by SIGTERM on the way to load factor 0.2 (last "

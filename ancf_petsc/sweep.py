@@ -1087,6 +1087,9 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         "# missing; log.txt " + ("gets one more section per attempt" if sl.logs == "append" else
                                  "is a link to log.N.txt, N counting the attempts") + ".",
         "set -u",
+        "# at the time limit SLURM signals the tasks and this shell: the shell waits for ancf-solve",
+        "# (which stops at its next safe point, status interrupted) and then records the outcome",
+        "trap 'echo \"ancf-sweep: task signalled; waiting for ancf-solve to stop cleanly\" >&2' TERM INT",
         f"SWEEP_OUTPUT={q(sweep.output)}",
     ]
     if venv is not None:

@@ -160,8 +160,12 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
         failure = ("interrupted", st.signal_reason(signum), str(exc))
     except OutputError as exc:
         failure = ("failed", st.OUTPUT_ERROR, f"output error: {exc}")
-    finally:
-        stepper.close()
+    except BaseException as exc:
+        # a bug, possibly on this rank only: no collective calls; record it where we can
+        stepper.close(collective=False)
+        writer.finish("failed", reason_code=st.INTERNAL_ERROR, message=f"{type(exc).__name__}: {exc}")
+        raise
+    stepper.close()
     records = converged
     status, code, message = _final_status(records, failure, spec.solver.allow_unstable)
     unused = [f"petsc.{k}" for k in stepper.unused_config_options] + unused_command_line_options(comm)

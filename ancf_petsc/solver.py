@@ -236,13 +236,14 @@ class LoadStepper:
             raise SolverOptionError("", _refused(exc, self.petsc_options,
                                                  self.problem.comm.size)) from None
 
-    def close(self) -> None:
+    def close(self, collective: bool = True) -> None:
         """Remove the options this stepper left in PETSc's database; config options PETSc never
-        read go to ``unused_config_options`` (collective)."""
+        read go to ``unused_config_options`` (collective unless ``collective`` is False)."""
         opts = PETSc.Options()
-        mine = [k for k in self._kept_options if k in self.petsc_options]
-        used = used_anywhere(mine, self.problem.comm)
-        self.unused_config_options = [k for k, u in zip(mine, used) if not u]
+        if collective:
+            mine = [k for k in self._kept_options if k in self.petsc_options]
+            used = used_anywhere(mine, self.problem.comm)
+            self.unused_config_options = [k for k, u in zip(mine, used) if not u]
         for key in self._kept_options:
             opts.delValue(key)
         self._kept_options = []

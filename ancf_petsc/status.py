@@ -24,6 +24,7 @@ COMPLETED = "COMPLETED"
 NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
 OUTPUT_ERROR = "OUTPUT_ERROR"
 PETSC_ERROR = "PETSC_ERROR"
+INTERNAL_ERROR = "INTERNAL_ERROR"         # a bug (exit code 1, with a traceback)
 
 
 def signal_reason(signum: int) -> str:

@@ -160,6 +160,26 @@ def test_a_factorisation_mumps_gives_up_on_ends_the_run_cleanly(tmp_path):
     assert s["reason_code"] == "PETSC_ERROR"
 
 
+def test_a_bug_still_leaves_a_final_status(tmp_path, monkeypatch):
+    """An unexpected exception (a bug) propagates (exit 1 with its traceback in ancf-solve), but
+    summary.json does not stay 'running'."""
+    from ancf_petsc.assembly import Problem
+    real, calls = Problem.gather, []
+
+    def broken_gather(self, X=None):
+        calls.append(1)
+        if len(calls) == 2:                 # while writing the second level
+            raise RuntimeError("simulated bug")
+        return real(self, X)
+    monkeypatch.setattr(Problem, "gather", broken_gather)
+    raw = tiny()
+    with pytest.raises(RuntimeError, match="simulated bug"):
+        run_inline(raw, tmp_path / "out")
+    s = _check_agreement(tmp_path / "out", 1)
+    assert (s["status"], s["reason_code"]) == ("failed", "INTERNAL_ERROR")
+    assert s["message"] == "RuntimeError: simulated bug"
+
+
 def test_config_file_is_binary_or_a_directory(tmp_path):
     binary = tmp_path / "model.yaml"
     binary.write_bytes(b"name: x\n" + bytes(range(128, 256)))

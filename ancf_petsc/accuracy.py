@@ -77,9 +77,12 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         say(f"[accuracy]   solving with {n} elements per beam ...")
         t1 = time.perf_counter()
         res = run_model(rung, comm, quiet)
+        if res.status == "interrupted" or res.reason_code == "OUTPUT_ERROR":
+            return res                              # stop the ladder: a signal, or a full disk
         results.append(res)
-        value = quantity(res.summary, acc.probe, acc.component, level) if comm.rank == 0 else None
-        value = comm.tompi4py().bcast(value if res.status == "completed" else math.nan, root=0)
+        solved = res.status in ("completed", "unstable")    # unstable: the run's verdict, a value still
+        value = quantity(res.summary, acc.probe, acc.component, level) if comm.rank == 0 and solved else None
+        value = comm.tompi4py().bcast(value if solved else math.nan, root=0)
         seconds = time.perf_counter() - t1
         values.append(value)
         rungs.append({"elements": n, "value": value, "seconds": seconds, "status": res.status})
@@ -98,7 +101,7 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
             "limit": None if ex is None else ex.limit, "order": None if ex is None else ex.order,
             "estimate": None if ex is None else ex.kind}
     if chosen is None:
-        n = next((r["elements"] for r in reversed(rungs) if r["status"] == "completed"), base)
+        n = next((r["elements"] for r in reversed(rungs) if r["status"] in ("completed", "unstable")), base)
         info.update(chosen_elements=n, estimated_error=None, met=False)
         say(f"[accuracy] no rung met rtol {acc.rtol:g} with a reliable estimate up to "
             f"{acc.max_elements} elements; solving with the finest finite rung, {n} elements")
@@ -108,7 +111,8 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         say(f"[accuracy] chosen: {n} elements per beam (first beam), estimated error "
             f"{errs[chosen]:.2e} <= {acc.rtol:g}; ladder {ladder_time:.2f} s")
     k = next(i for i, r in enumerate(rungs) if r["elements"] == n) if rungs else None
-    if k is not None and results[k].status == "completed" and level >= max(spec.steps) * (1 - 1e-12):
+    if k is not None and results[k].status in ("completed", "unstable") \
+            and level >= max(spec.steps) * (1 - 1e-12):
         info["reused_rung"] = True          # the chosen rung is the whole scene: no second solve
         _adopt(os.path.join(spec.output.dir, "accuracy", f"elements_{n}"), spec.output.dir,
                {"accuracy": info}, comm)

@@ -197,6 +197,7 @@ class SolverSpec:
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solver.matrix_type)
+    allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
 
 
 @dataclass
@@ -310,6 +311,10 @@ def _material(value, path: str) -> dict:
     model = string(mapping(value, path, required=("model",),
                            optional=("mu", "bulk_modulus", "c10", "d", "E", "nu"))["model"],
                    _join(path, "model"), MATERIAL_MODELS)
+    ours, papers = [k for k in ("mu", "bulk_modulus") if k in value], [k for k in ("c10", "d") if k in value]
+    if model == "neo-hookean" and ours and papers:
+        raise ConfigError(path, f"give either mu and bulk_modulus or the paper's c10 and d "
+                                f"(mu = 2 c10, bulk_modulus = d), not both; got {', '.join(ours + papers)}")
     if model == "svk":
         mapping(value, path, required=("model", "E", "nu"))
         nu = number(value["nu"], _join(path, "nu"), lo=-0.999, hint=" (Poisson ratio)")
@@ -380,6 +385,45 @@ def _fix(value, path: str) -> list[tuple[int, int]]:
     return sorted(dofs)
 
 
+def _axial_points(value, path: str) -> int:
+    """Gauss points along ξ: one point leaves the three-node element's stiffness singular."""
+    n = integer(value, path, hi=10)
+    if n < 2:
+        raise ConfigError(path, f"must be >= 2; got {n}: one point along the beam leaves the "
+                                "three-node element's stiffness singular (zero-energy modes); "
+                                "use 2 (reduced) or 3 (full, the paper's)")
+    return n
+
+
+def _name(value) -> str:
+    """The model's name, which names its default output directory results/<name>."""
+    name = string(value, "name")
+    if "/" in name or "\\" in name or name.startswith(".") or not name.isprintable():
+        raise ConfigError("name", f"it names the output directory results/<name>: no '/', '\\', "
+                                  f"leading '.' or control characters; got {_fmt(name)}")
+    return name
+
+
+def _petsc(value) -> dict[str, str]:
+    """``petsc:`` options as PETSc will read them (values checked like PETSc parses them)."""
+    from .petsc_options import check_value
+    if not isinstance(value, dict):
+        raise ConfigError("petsc", "expected a mapping of PETSc options, e.g. {snes_rtol: 1e-10}")
+    petsc = {}
+    for k, v in value.items():
+        if not isinstance(k, str) or not k.strip("-"):
+            raise ConfigError(f"petsc.{k}", "option names are strings like snes_monitor")
+        if isinstance(v, (dict, list)):
+            raise ConfigError(f"petsc.{k}", "option values are scalars (number, string, true/false)")
+        name = k.lstrip("-")
+        text = "" if v is None or v is True else ("0" if v is False else str(v))
+        why = check_value(name, None if v is None or v is True else text)
+        if why:
+            raise ConfigError(f"petsc.{k}", why)
+        petsc[name] = text
+    return petsc
+
+
 PARTITION_METHODS = ("blocks", "metis")
 TOP_KEYS = ("name", "units", "geometry", "beams", "boundary_conditions", "loads", "steps",
             "probes", "output", "solver", "petsc", "contact", "partition", "bundle", "accuracy")
@@ -391,7 +435,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         from .bundle import expand_bundle
         raw = expand_bundle(raw)
     mapping(raw, "", required=("name", "geometry", "beams", "steps"), optional=TOP_KEYS[1:])
-    name = string(raw["name"], "name")
+    name = _name(raw["name"])
     if "units" in raw and raw["units"] != "SI":
         raise ConfigError("units", "only SI (m, N, Pa) is supported; write units: SI or omit it")
     geo = mapping(raw["geometry"], "geometry", required=("length",),
@@ -418,7 +462,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
             section=_section(b["section"], f"{p}.section", base_dir),
             material=_material(b["material"], f"{p}.material"),
             elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
-            axial_points=integer(b.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)))
+            axial_points=_axial_points(b.get("axial_points", 3), f"{p}.axial_points")))
         beams[-1].element = string(str(b.get("element", "3363")), f"{p}.element", ELEMENT_TYPES)
         default_locking = "ecm" if beams[-1].element == "3333" else "none"
         beams[-1].locking = string(b.get("locking", default_locking), f"{p}.locking", LOCKING)
@@ -475,7 +519,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     sv = mapping(raw.get("solver", {}), "solver",
                  optional=("max_increment", "initial_increment", "min_increment", "max_cutbacks", "growth", "easy_iterations",
                            "predictor", "merit", "min_det_f", "max_newton_iterations", "matrix",
-                           "stability_cutbacks"))
+                           "stability_cutbacks", "allow_unstable"))
     solver = SolverSpec()
     if sv.get("max_increment") is not None:
         solver.max_increment = number(sv["max_increment"], "solver.max_increment", positive=True)
@@ -499,19 +543,12 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         solver.matrix = string(sv["matrix"], "solver.matrix", ("auto", "aij", "sbaij"))
     if "stability_cutbacks" in sv:
         solver.stability_cutbacks = integer(sv["stability_cutbacks"], "solver.stability_cutbacks", lo=0, hi=20)
+    if "allow_unstable" in sv:
+        solver.allow_unstable = boolean(sv["allow_unstable"], "solver.allow_unstable")
     if sv.get("max_newton_iterations") is not None:
         solver.max_newton_iterations = integer(sv["max_newton_iterations"], "solver.max_newton_iterations", lo=1)
 
-    petsc_raw = raw.get("petsc", {}) or {}
-    if not isinstance(petsc_raw, dict):
-        raise ConfigError("petsc", "expected a mapping of PETSc options, e.g. {snes_rtol: 1e-10}")
-    petsc = {}
-    for k, v in petsc_raw.items():
-        if not isinstance(k, str) or not k.strip("-"):
-            raise ConfigError(f"petsc.{k}", "option names are strings like snes_monitor")
-        if isinstance(v, (dict, list)):
-            raise ConfigError(f"petsc.{k}", "option values are scalars (number, string, true/false)")
-        petsc[k.lstrip("-")] = "" if v is None or v is True else ("0" if v is False else str(v))
+    petsc = _petsc(raw.get("petsc", {}) or {})
 
     contact = _contact(raw["contact"], names) if raw.get("contact") is not None else None
     partition = "blocks"
@@ -645,11 +682,19 @@ def _contact(value, names: list[str]) -> ContactSpec:
 
 def load_config(path: str) -> ModelSpec:
     """Read and validate a YAML config file; raises ConfigError (never a traceback-worthy error)."""
+    if os.path.isdir(path):
+        raise ConfigError("", f"{path}: is a directory, not a config file")
     if not os.path.isfile(path):
         raise ConfigError("", f"{path}: no such config file")
     try:
-        with open(path) as fh:
-            raw = yaml.safe_load(fh)
+        with open(path, "rb") as fh:
+            text = fh.read().decode("utf-8")
+        raw = yaml.safe_load(text)
+    except UnicodeDecodeError as exc:
+        raise ConfigError("", f"{path}: not a text (UTF-8) YAML file: byte 0x{exc.object[exc.start]:02x} "
+                              f"at offset {exc.start}") from None
+    except OSError as exc:
+        raise ConfigError("", f"{path}: cannot read: {exc.strerror}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""

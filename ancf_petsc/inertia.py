@@ -37,9 +37,10 @@ def _petsc_library():
     return _LIB
 
 
-def negative_pivots(ksp: PETSc.KSP) -> int | None:
-    """Negative eigenvalues of the matrix last factored by ``ksp``'s MUMPS Cholesky (LDLᵀ)
-    preconditioner, or None when the preconditioner is not one (collective; same on every rank)."""
+def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
+    """(negative, null) pivots of the matrix last factored by ``ksp``'s MUMPS Cholesky (LDLᵀ)
+    preconditioner — INFOG(12) and INFOG(28), the latter with null-pivot detection on
+    (ICNTL(24)) — or None when the preconditioner is not one (collective; same on every rank)."""
     pc = ksp.getPC()
     if pc.getType() != "cholesky" or pc.getFactorSolverType() != "mumps":
         return None
@@ -55,6 +56,10 @@ def negative_pivots(ksp: PETSc.KSP) -> int | None:
         # leaves its pivots out of the count: only trust it with a sequential root
         if lib.MatMumpsGetIcntl(handle, int_t(13), ctypes.byref(value)) != 0 or value.value != 1:
             return None
-    if lib.MatMumpsGetInfog(handle, int_t(12), ctypes.byref(value)) != 0:
-        return None
-    return int(value.value)
+    counts = []
+    for k in (12, 28):
+        if lib.MatMumpsGetInfog(handle, int_t(k), ctypes.byref(value)) != 0:
+            return None
+        counts.append(int(value.value))
+    return counts[0], counts[1]
+

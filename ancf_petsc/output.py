@@ -9,9 +9,18 @@
 * ``contact_NNNN.vtu`` + ``contact.pvd`` — the contact points at their deformed positions with gap,
   pressure, slip (vector and its axial part) and interface; the same per step in results.h5
   (``steps/step_NNNN/contact``) with the multipliers and the projection state.
+
+results.h5 and summary.json agree on the converged levels, also when the disk fills: a level is
+written to results.h5 under a temporary name and renamed when complete (``/steps`` attributes
+``converged`` and ``last_load_factor`` name the last one, for a restart); summary.json lists
+exactly the levels results.h5 holds.  Before each level the free space is checked against the
+size of the previous one, and a small reserve file (``RESERVE``) set aside at the start is
+released when writing fails, so that the final summary.json can still be written.  Every file
+problem becomes an ``OutputError`` naming the path, raised on every rank.
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
 import time
@@ -21,6 +30,62 @@ import yaml
 
 from . import element3363 as el
 from .model import Model
+from .version import version_info
+
+#: space set aside for the final summary.json (released on a write error and at the end)
+RESERVE = ".ancf-space-reserve"
+RESERVE_BYTES = 64 * 1024
+_NO_SPACE = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+class OutputError(Exception):
+    """A file-system problem with the output; ``path`` is the file or directory concerned."""
+
+    def __init__(self, path: str, reason: str):
+        super().__init__(f"{path}: {reason}")
+        self.path, self.reason = path, reason
+
+
+def _reason(exc: BaseException) -> str:
+    """The OS's words for an error (``No space left on device``), h5py's otherwise."""
+    err = getattr(exc, "errno", None)
+    if err:
+        return os.strerror(err)
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    for code in _NO_SPACE:                       # h5py: "... errno = 28, error message = ..."
+        if f"errno = {code}," in str(exc):
+            return os.strerror(code)
+    return text
+
+
+def _remove(*paths: str) -> None:
+    for p in paths:
+        try:
+            os.remove(p)
+        except OSError:
+            pass
+
+
+def prepare_output_dir(path: str) -> None:
+    """Create ``path`` if needed and check that files can be written in it (rank 0 only);
+    raises ``OutputError`` naming the path and the reason."""
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise OutputError(path, "exists and is not a directory (choose another output.dir / --output-dir)")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        where = exc.filename or path
+        if isinstance(exc, (FileExistsError, NotADirectoryError)):
+            raise OutputError(where, "cannot create the output directory: a file is in the way") from None
+        raise OutputError(where, f"cannot create the output directory: {_reason(exc)}") from None
+    probe = os.path.join(path, f".ancf-write-test-{os.getpid()}")
+    try:
+        with open(probe, "w") as fh:
+            fh.write("ok")
+    except OSError as exc:
+        _remove(probe)
+        raise OutputError(path, f"cannot write in the output directory: {_reason(exc)}") from None
+    _remove(probe)
 
 
 def plain(obj):
@@ -38,9 +103,13 @@ def plain(obj):
 
 def _atomic_write(path: str, text: str) -> None:
     tmp = path + ".tmp"
-    with open(tmp, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        _remove(tmp)
+        raise
 
 
 class SurfaceSampler:
@@ -104,7 +173,8 @@ class SurfaceSampler:
 
 
 class ResultsWriter:
-    """Writes results.h5, summary.json and the VTU series (rank 0 only does I/O)."""
+    """Writes results.h5, summary.json and the VTU series (rank 0 does the I/O; every method is
+    called on every rank, and a file-system error becomes an ``OutputError`` on every rank)."""
 
     def __init__(self, model: Model, layout, comm, run_info: dict):
         self.model, self.comm = model, comm
@@ -116,42 +186,96 @@ class ResultsWriter:
         self.summary = {"name": spec.name, "status": "running", **run_info, "steps": []}
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
         self.pvd_entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
-        if self.rank != 0:
-            return
-        os.makedirs(self.dir, exist_ok=True)
+        self._last_sizes = {"vtu": 0, "h5": 0}
+        self._on_root(lambda: self._create(layout, run_info))
+
+    def _on_root(self, action) -> None:
+        """Run ``action`` on rank 0; its file-system error is raised on every rank (collective)."""
+        err = None
+        if self.rank == 0:
+            try:
+                action()
+            except OutputError as exc:
+                err = (exc.path, exc.reason)
+            except OSError as exc:
+                self._release_reserve()
+                err = (exc.filename or self.dir, _reason(exc))
+        if self.comm.size > 1:
+            err = self.comm.tompi4py().bcast(err, root=0)
+        if err:
+            raise OutputError(*err)
+
+    def _create(self, layout, run_info: dict) -> None:
+        spec, model = self.model.spec, self.model
+        prepare_output_dir(self.dir)
         for stale in os.listdir(self.dir):
-            if stale.startswith(("surface", "contact")) or stale in ("results.h5", "summary.json"):
+            if stale.startswith(("surface", "contact")) or stale in ("results.h5", "summary.json", RESERVE):
                 os.remove(os.path.join(self.dir, stale))
+        self.summary["version"] = version_info()
+        try:
+            with open(os.path.join(self.dir, RESERVE), "wb") as fh:
+                fh.write(b"\0" * RESERVE_BYTES)
+        except OSError as exc:
+            self._release_reserve()
+            raise OutputError(self.dir, f"cannot set aside {RESERVE_BYTES // 1024} KB for the results: "
+                                        f"{_reason(exc)}") from None
         import h5py
-        with h5py.File(self.h5_path, "w") as h5:
-            g = h5.create_group("model")
-            g.attrs["name"] = spec.name
-            g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
-            g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
-            g.create_dataset("reference_nodal_vectors", data=model.q0)
-            part = g.create_group("partition")
-            part.create_dataset("element_rank", data=layout.elem_owner)
-            part.create_dataset("node_rank", data=layout.node_owner)
-            part.create_dataset("petsc_node_of_model_node", data=layout.perm)
-            for key, val in (run_info.get("partition") or {}).items():
-                part.attrs[key] = val
-            for beam in model.beams:
-                b = g.create_group(f"beams/{beam.name}")
-                b.create_dataset("connectivity", data=beam.connectivity)
-                b.create_dataset("x_nodes", data=beam.x_nodes)
-                b.create_dataset("section_points", data=beam.section.points)
-                b.create_dataset("section_weights", data=beam.section.weights)
-                b.create_dataset("section_outline", data=beam.section.boundary_polyline(8))
-                b.attrs["centroid"] = beam.section.centroid
-                b.attrs["area"] = beam.section.area
-            h5.create_group("steps")
+        try:
+            with h5py.File(self.h5_path, "w") as h5:
+                self._write_model(h5, layout, run_info)
+        except (OSError, RuntimeError) as exc:
+            self._release_reserve()
+            raise OutputError(self.h5_path, f"cannot write: {_reason(exc)}") from None
         if self.sampler is not None:
             self._write_vtu(0, 0.0, model.q0)
         self._write_summary()
 
+    def _write_model(self, h5, layout, run_info: dict) -> None:
+        spec, model = self.model.spec, self.model
+        info = self.summary["version"]
+        h5.attrs["ancf_version"] = info["version"]
+        h5.attrs["ancf_git"] = info["git"] or ""
+        h5.attrs["status"] = "running"
+        g = h5.create_group("model")
+        g.attrs["name"] = spec.name
+        g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
+        g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
+        g.create_dataset("reference_nodal_vectors", data=model.q0)
+        part = g.create_group("partition")
+        part.create_dataset("element_rank", data=layout.elem_owner)
+        part.create_dataset("node_rank", data=layout.node_owner)
+        part.create_dataset("petsc_node_of_model_node", data=layout.perm)
+        for key, val in (run_info.get("partition") or {}).items():
+            part.attrs[key] = val
+        for beam in model.beams:
+            b = g.create_group(f"beams/{beam.name}")
+            b.create_dataset("connectivity", data=beam.connectivity)
+            b.create_dataset("x_nodes", data=beam.x_nodes)
+            b.create_dataset("section_points", data=beam.section.points)
+            b.create_dataset("section_weights", data=beam.section.weights)
+            b.create_dataset("section_outline", data=beam.section.boundary_polyline(8))
+            b.attrs["centroid"] = beam.section.centroid
+            b.attrs["area"] = beam.section.area
+        steps = h5.create_group("steps")
+        steps.attrs["converged"] = 0
+        steps.attrs["last_load_factor"] = 0.0
+
+    def _release_reserve(self) -> None:
+        _remove(os.path.join(self.dir, RESERVE))
+
     def _write_summary(self):
         self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
-        _atomic_write(self.summary_path, json.dumps(self.summary, indent=1))
+        text = json.dumps(self.summary, indent=1)
+        try:
+            _atomic_write(self.summary_path, text)
+        except OSError as exc:
+            if exc.errno not in _NO_SPACE or not os.path.exists(os.path.join(self.dir, RESERVE)):
+                raise OutputError(self.summary_path, f"cannot write: {_reason(exc)}") from None
+            self._release_reserve()               # the space set aside for exactly this
+            try:
+                _atomic_write(self.summary_path, text)
+            except OSError as exc2:
+                raise OutputError(self.summary_path, f"cannot write: {_reason(exc2)}") from None
 
     def _write_vtu(self, k: int, lam: float, q: np.ndarray) -> None:
         pts, quads, caps, data = self.sampler.mesh(q)
@@ -165,18 +289,24 @@ class ResultsWriter:
         self._write_series("contact", k, lam, fields["x"], cells, data)
 
     def _write_series(self, series: str, k: int, lam: float, pts, cells, data) -> None:
-        """One VTU of a time series and its .pvd collection (meshio; raw binary: zlib took
-        10 ms per file, half the output time of a run)."""
+        """One VTU of a time series and its .pvd collection (meshio, zlib-compressed binary: a
+        fifth of the raw size).  A failed write leaves no VTU."""
         import meshio
         name = f"{series}_{k:04d}.vtu"
-        meshio.write(os.path.join(self.dir, name), meshio.Mesh(pts, cells, point_data=data),
-                     binary=True, compression=None)
+        path = os.path.join(self.dir, name)
+        try:
+            meshio.write(path, meshio.Mesh(pts, cells, point_data=data), binary=True)
+            self._last_sizes["vtu"] = os.path.getsize(path)
+            rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
+                             for t, f in self.pvd_entries[series] + [(lam, name)])
+            _atomic_write(os.path.join(self.dir, f"{series}.pvd"),
+                          '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                          f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+        except OSError as exc:
+            _remove(path)                          # never leave a truncated VTU behind
+            self._release_reserve()
+            raise OutputError(path, f"cannot write: {_reason(exc)}") from None
         self.pvd_entries[series].append((lam, name))
-        rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
-                         for t, f in self.pvd_entries[series])
-        _atomic_write(os.path.join(self.dir, f"{series}.pvd"),
-                      '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                      f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
 
     def probe_values(self, q: np.ndarray) -> dict:
         out = {}
@@ -189,26 +319,26 @@ class ResultsWriter:
                    contact: dict | None = None, multipliers: np.ndarray | None = None) -> None:
         """Append one converged level; ``q`` is the gathered state (rank 0), ``contact`` the
         gathered contact fields (``Problem.contact_fields``), ``multipliers`` the multiplier
-        blocks (n, 18) in model order."""
-        if self.rank != 0:
+        blocks (n, 18) in model order.  Collective."""
+        self._on_root(lambda: self._write_step(record, q, extra, contact, multipliers))
+
+    def _check_space(self, k: int, q: np.ndarray) -> None:
+        """Stop before level ``k`` if the file system has clearly no room for it."""
+        try:
+            st = os.statvfs(self.dir)
+        except OSError:
             return
+        free = st.f_bavail * st.f_frsize
+        need = (max(self._last_sizes["h5"], q.nbytes) + self._last_sizes["vtu"]
+                + 2 * len(json.dumps(self.summary)) + 16 * 1024)
+        if free < need:
+            raise OutputError(self.dir, f"no space left on device for level {k}: {free // 1024} KB "
+                                        f"free, about {need // 1024} KB needed")
+
+    def _write_step(self, record, q: np.ndarray, extra: dict | None, contact: dict | None,
+                    multipliers: np.ndarray | None) -> None:
         import h5py
         k = len(self.summary["steps"]) + 1
-        with h5py.File(self.h5_path, "a") as h5:
-            g = h5["steps"].create_group(f"step_{k:04d}")
-            g.create_dataset("nodal_vectors", data=q)
-            g.attrs["load_factor"] = record.load_factor
-            g.attrs["snes_iterations"] = record.iterations
-            g.attrs["snes_reason"] = record.reason
-            g.attrs["substeps"] = record.substeps
-            g.attrs["wall_time"] = record.wall_time
-            if contact is not None:
-                c = g.create_group("contact")
-                c.attrs["units"] = "SI: m, Pa; slip = reference position of the partner point on B minus the point's"
-                for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
-                            "multiplier_pressure", "multiplier_active"):
-                    c.create_dataset(key, data=contact[key])
-                c.create_dataset("multiplier_blocks", data=multipliers)
         entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
                  "iterations": record.iterations, "substeps": record.substeps,
                  "cutbacks": record.cutbacks, "reason": record.reason,
@@ -217,16 +347,88 @@ class ResultsWriter:
                  "newton_history": record.iteration_history}
         if extra:
             entry.update(extra)
-        self.summary["steps"].append(entry)
+        self._check_space(k, q)
+        name = f"step_{k:04d}"
+        size0 = os.path.getsize(self.h5_path)
+        try:
+            with h5py.File(self.h5_path, "a") as h5:
+                steps = h5["steps"]
+                g = steps.create_group(name + ".partial")      # renamed once complete
+                g.create_dataset("nodal_vectors", data=q)
+                g.attrs["load_factor"] = record.load_factor
+                g.attrs["snes_iterations"] = record.iterations
+                g.attrs["snes_reason"] = record.reason
+                g.attrs["substeps"] = record.substeps
+                g.attrs["wall_time"] = record.wall_time
+                g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
+                    else record.negative_eigenvalues
+                if contact is not None:
+                    self._write_contact(g, contact, multipliers)
+                steps.move(name + ".partial", name)
+                steps.attrs["converged"] = k
+                steps.attrs["last_load_factor"] = record.load_factor
+        except (OSError, RuntimeError) as exc:
+            self._release_reserve()
+            if self._recover_h5(name):            # the level made it to disk after all
+                self._append(entry)
+            raise OutputError(self.h5_path, f"cannot write level {k}: {_reason(exc)}") from None
+        self._last_sizes["h5"] = max(os.path.getsize(self.h5_path) - size0, q.nbytes)
+        self._append(entry)
         if self.sampler is not None:
             self._write_vtu(k, record.load_factor, q)
             if contact is not None:
                 self._write_contact_vtu(k, record.load_factor, contact)
         self._write_summary()
 
-    def finish(self, status: str, **info) -> None:
+    @staticmethod
+    def _write_contact(g, contact: dict, multipliers: np.ndarray) -> None:
+        """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
+        c = g.create_group("contact")
+        c.attrs["units"] = "SI: m, Pa; slip = reference position of the partner point on B minus the point's"
+        for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
+                    "multiplier_pressure", "multiplier_active"):
+            c.create_dataset(key, data=contact[key])
+        c.create_dataset("multiplier_blocks", data=multipliers)
+
+    def _append(self, entry: dict) -> None:
+        self.summary["steps"].append(entry)
+        self.summary["last_converged"] = {"step": len(self.summary["steps"]),
+                                          "load_factor": entry["load_factor"]}
+
+    def _recover_h5(self, name: str) -> bool:
+        """After a failed write: drop a partial level; True if level ``name`` is complete."""
+        import h5py
+        try:
+            with h5py.File(self.h5_path, "a") as h5:
+                steps = h5["steps"]
+                if name + ".partial" in steps:
+                    del steps[name + ".partial"]
+                if name in steps:
+                    steps.attrs["converged"] = int(name.split("_")[1])
+                    steps.attrs["last_load_factor"] = steps[name].attrs["load_factor"]
+                    return True
+        except (OSError, RuntimeError, KeyError):
+            pass
+        return False
+
+    def finish(self, status: str, **info) -> str | None:
+        """Write the final status (rank 0; not collective).  Returns None, or the one-line
+        reason summary.json could not be written."""
         if self.rank != 0:
-            return
+            return None
         self.summary["status"] = status
         self.summary.update(info)
-        self._write_summary()
+        self._release_reserve()
+        problem = None
+        try:
+            self._write_summary()
+        except OutputError as exc:
+            problem = str(exc)
+        try:
+            import h5py
+            with h5py.File(self.h5_path, "a") as h5:
+                h5.attrs["status"] = status
+                h5.attrs["reason_code"] = str(info.get("reason_code", ""))
+        except (OSError, RuntimeError):
+            pass                                   # results.h5 keeps its levels; the summary has the status
+        return problem

@@ -39,6 +39,9 @@ def make_sweep(out: str, name: str, parameters: dict, mode: str = "list", ranks:
     """Write ``<out>/<name>.sweep.yaml`` and load it."""
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, f"{name}.sweep.yaml")
+    # the report marks unstable levels itself (Table 2's "u"): they are results, not failures
+    n = len(next(iter(parameters.values()))) if mode == "list" else 1
+    parameters = {**parameters, "solver.allow_unstable": [True] * n}
     doc = {"base": base, "name": name, "mode": mode, "parameters": parameters,
            "run": {"ranks": ranks, "jobs": jobs, "petsc": list(petsc or [])},
            "output": os.path.join(out, name)}

@@ -3,16 +3,19 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from petsc4py import PETSc
 
+from . import status as st
 from .assembly import STAGE_ASSEMBLY, Problem
 from .config import ModelSpec
+from .interrupt import RunInterrupted
 from .partition import make_layout, partition_stats
 from .model import build_model
-from .output import ResultsWriter
+from .output import OutputError, ResultsWriter, prepare_output_dir
+from .petsc_options import unused_command_line_options
 from .solver import STAGE_SOLVE, LoadStepFailure, LoadStepper, matrix_type
 
 STAGE_SETUP = PETSc.Log.Stage("ANCF setup")
@@ -28,10 +31,41 @@ def petsc_event_time(name: str) -> float:
 
 @dataclass
 class RunResult:
-    status: str                 # 'completed' | 'failed'
+    status: str                 # status.FINAL_STATUSES: completed | failed | interrupted | unstable
     message: str
     summary: dict | None        # rank 0 only
-    records: list
+    records: list               # the converged levels' StepRecords
+    reason_code: str = st.COMPLETED
+    exit_code: int = st.EXIT_OK
+    unused_options: list = field(default_factory=list)   # PETSc options never read, as in the summary
+    output_dir: str = ""
+
+
+def check_output_dir(path: str, comm) -> None:
+    """Fail fast (before the model is built) if ``path`` cannot hold results; collective."""
+    err = None
+    if comm.rank == 0:
+        try:
+            prepare_output_dir(path)
+        except OutputError as exc:
+            err = (exc.path, exc.reason)
+    if comm.size > 1:
+        err = comm.tompi4py().bcast(err, root=0)
+    if err:
+        raise OutputError(*err)
+
+
+def _final_status(records: list, failure: tuple | None, allow_unstable: bool) -> tuple[str, str, str]:
+    """(status, reason code, message) of a run from its converged levels and how it stopped."""
+    unstable = [r.load_factor for r in records if r.negative_eigenvalues]
+    if failure is not None:
+        return failure
+    if unstable and not allow_unstable:
+        return ("unstable", st.NEGATIVE_EIGENVALUES,
+                f"{len(unstable)} of {len(records)} levels are unstable equilibria (negative tangent "
+                f"eigenvalues at load factor {', '.join(f'{x:g}' for x in unstable)}): a buckled "
+                "or under-supported model; set solver.allow_unstable: true to accept them")
+    return "completed", st.COMPLETED, "completed"
 
 
 def _fmt_vec(v) -> str:
@@ -51,6 +85,7 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
     ``info`` is stored in summary.json beside the run's own information."""
     rank = comm.rank
     say = log if rank == 0 else (lambda *_: None)
+    check_output_dir(spec.output.dir, comm)
     PETSc.Log.begin()                 # event timings for the summary (cheap)
     # PETSc's event times add up over the process: this run's share is the difference
     solver_events0 = petsc_event_time("KSPSolve") + petsc_event_time("PCSetUp")
@@ -85,22 +120,30 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                 "elements_per_beam": {b.name: b.n_elements for b in model.beams},
                 "element_types": {b.name: b.element for b in model.beams},
                 "twist_axis": list(spec.twist_axis), "geometry": model.geometry_report, **(info or {})}
-    writer = ResultsWriter(model, layout, comm, run_info)
+    try:
+        writer = ResultsWriter(model, layout, comm, run_info)
+    except OutputError:
+        stepper.close()
+        raise
     n_levels = len(spec.steps)
     timings = {"setup": t_setup, "output": 0.0}
+    converged = []
 
     def on_level(rec):
         STAGE_OUTPUT.push()
-        t0 = time.perf_counter()
-        blocks = problem.gather(blocks=True)
-        q = None if blocks is None else blocks[:model.n_nodes]
-        gaps = problem.contact_gaps(problem.X)          # collective: every rank its own points
-        fields = problem.contact_fields(problem.X)
-        extra = {"contact": gaps} if gaps is not None else None
-        mult = None if blocks is None or contact is None else blocks[model.n_nodes:].reshape(-1, 18)
-        writer.write_step(rec, q, extra, fields, mult)
-        timings["output"] += time.perf_counter() - t0
-        STAGE_OUTPUT.pop()
+        try:
+            t0 = time.perf_counter()
+            blocks = problem.gather(blocks=True)
+            q = None if blocks is None else blocks[:model.n_nodes]
+            gaps = problem.contact_gaps(problem.X)          # collective: every rank its own points
+            fields = problem.contact_fields(problem.X)
+            extra = {"contact": gaps} if gaps is not None else None
+            mult = None if blocks is None or contact is None else blocks[model.n_nodes:].reshape(-1, 18)
+            writer.write_step(rec, q, extra, fields, mult)
+            converged.append(rec)
+            timings["output"] += time.perf_counter() - t0
+        finally:
+            STAGE_OUTPUT.pop()
         if rank == 0:
             k = len(writer.summary["steps"])
             probes = "  ".join(f"{n} u={_fmt_vec(p['displacement'])}"
@@ -111,14 +154,25 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                 f"Newton {rec.iterations} in {rec.substeps} substep(s)  {rec.reason}  "
                 f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s{unstable}  {probes}")
 
-    status, message = "completed", "completed"
-    records = []
+    failure, signum = None, 0
     try:
-        records = stepper.run(spec.steps, on_level)
+        stepper.run(spec.steps, on_level)
     except LoadStepFailure as exc:
-        status, message = "failed", str(exc)
-    finally:
-        stepper.close()
+        failure = ("failed", exc.code, str(exc))
+    except RunInterrupted as exc:
+        signum = exc.signum
+        failure = ("interrupted", st.signal_reason(signum), str(exc))
+    except OutputError as exc:
+        failure = ("failed", st.OUTPUT_ERROR, f"output error: {exc}")
+    except BaseException as exc:
+        # a bug, possibly on this rank only: no collective calls; record it where we can
+        stepper.close(collective=False)
+        writer.finish("failed", reason_code=st.INTERNAL_ERROR, message=f"{type(exc).__name__}: {exc}")
+        raise
+    stepper.close()
+    records = converged
+    status, code, message = _final_status(records, failure, spec.solver.allow_unstable)
+    unused = [f"petsc.{k}" for k in stepper.unused_config_options] + unused_command_line_options(comm)
     timings["total"] = time.perf_counter() - t_start
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
     timings.update(problem.timers)
@@ -128,12 +182,22 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
     exchange = {"rebuilds": problem.exchanges,
                 "ghost_nodes_per_rank": comm.tompi4py().gather(ghosts, root=0),
                 "total_nodes": model.n_nodes}
-    writer.finish(status, message=message, timings=timings,
-                  newton_iterations=stepper.newton_iterations, exchange=exchange,
-                  jacobian_pattern_growths=problem.pattern_growths)
+    unstable = [r.load_factor for r in records if r.negative_eigenvalues]
+    problem_writing = writer.finish(
+        status, reason_code=code, message=message, timings=timings,
+        newton_iterations=stepper.newton_iterations, exchange=exchange,
+        jacobian_pattern_growths=problem.pattern_growths,
+        unstable_levels=unstable, allow_unstable=spec.solver.allow_unstable,
+        stability_checked=all(r.negative_eigenvalues is not None for r in records),
+        unused_petsc_options=unused)
+    if comm.size > 1:
+        problem_writing = comm.tompi4py().bcast(problem_writing, root=0)
+    if problem_writing:
+        status, code, message = "failed", st.OUTPUT_ERROR, f"output error: {problem_writing}"
     if comm.size > 1:
         say(f"[ancf] exchange: node blocks received per rank {exchange['ghost_nodes_per_rank']} of "
             f"{model.n_nodes}; rebuilt {problem.exchanges} times (the set of projected-on elements changed)")
     say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations, "
         f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")
-    return RunResult(status, message, writer.summary if rank == 0 else None, records)
+    return RunResult(status, message, writer.summary if rank == 0 else None, records, code,
+                     st.exit_code(status, code, signum), unused, spec.output.dir)

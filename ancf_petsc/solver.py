@@ -21,7 +21,9 @@ from petsc4py import PETSc
 
 from .assembly import Problem, node_blocks_fit
 from .config import ConfigError, SolverSpec
-from .inertia import negative_pivots
+from .inertia import pivot_counts
+from .interrupt import RunInterrupted, stop_requested
+from .petsc_options import petsc_message, solver_hint, used_anywhere
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",
@@ -32,18 +34,20 @@ DEFAULT_OPTIONS = {
     "snes_max_it": "15",
     "ksp_type": "preonly",
     # the Jacobian is a symmetric (energy) Hessian: MUMPS LDLᵀ (indefinite allowed) does half
-    # the flops of LU (37-fascicle bundle: 11.1 s vs 18.5 s per run; scripts/bench_scaling.py)
+    # the flops of LU (37-fascicle bundle: 11.1 s vs 18.5 s per run; scripts/bench_scaling.py);
+    # -pc_factor_mat_solver_type mumps is added only where it applies (``factor_package``)
     "pc_type": "cholesky",
-    "pc_factor_mat_solver_type": "mumps",
     # null-pivot detection: a mechanism the load does not excite (the unloaded Achilles bundle,
     # pinned at one node per subtendon and sliding without friction, can tilt as a whole; a
     # beam held only in position can rotate) is left out of the Newton step instead of being
     # amplified by a pivot at rounding level; |pivot| <= 1e-11 ||A|| after MUMPS's scaling
     # (1e-12 ... 1e-10 all solve the psi = 0 column in the same 73 iterations, 1e-8 treats
-    # real pivots as null).  The count is reported per level (``null_pivots``).
+    # real pivots as null).  Read by MUMPS only.
     "mat_mumps_icntl_24": "1",
     "mat_mumps_cntl_3": "1e-11",
 }
+#: preconditioners whose factorisation package defaults to MUMPS
+MUMPS_PCS = ("lu", "cholesky")
 
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
@@ -61,7 +65,8 @@ def reason_name(reason: int) -> str:
 
 
 class LoadStepFailure(Exception):
-    """A requested load level could not be reached; raised identically on every rank."""
+    """A requested load level could not be reached; raised identically on every rank.
+    ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...)."""
 
     def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
                  detail: str = ""):
@@ -71,6 +76,11 @@ class LoadStepFailure(Exception):
             msg += " (an element was inverted, J <= 0)"
         super().__init__(msg)
         self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
+        self.code = reason.split()[0] if reason else "FAILED"
+
+
+class SolverOptionError(ConfigError):
+    """PETSc refused the solver the options ask for (exit 2, one line naming the options)."""
 
 
 @dataclass
@@ -100,14 +110,7 @@ def matrix_type(model, choice: str, config_options: dict) -> str:
 
     ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) on
     3363 beams (3333 beams hold half of each node block at zero)."""
-    opts = PETSc.Options()
-
-    def option(key: str) -> str:
-        if opts.hasName(key):
-            return str(opts.getString(key, ""))
-        return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
-
-    pc, factor = option("pc_type"), option("pc_factor_mat_solver_type")
+    pc, factor = factor_package(config_options)
     full = node_blocks_fit(model)
     if choice == "auto":
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
@@ -121,17 +124,37 @@ def matrix_type(model, choice: str, config_options: dict) -> str:
     return choice
 
 
+def option_in_effect(key: str, config_options: dict) -> str:
+    """The value of a PETSc option: command line, else config ``petsc:``, else ``DEFAULT_OPTIONS``."""
+    opts = PETSc.Options()
+    if opts.hasName(key):
+        return str(opts.getString(key, ""))
+    return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
+
+
+def factor_package(config_options: dict) -> tuple[str, str]:
+    """(pc_type, factorisation package) in effect.  The package defaults to MUMPS for LU and
+    Cholesky only: ILU, ICC and the block preconditioners keep PETSc's own default."""
+    pc = option_in_effect("pc_type", config_options)
+    factor = option_in_effect("pc_factor_mat_solver_type", config_options)
+    if not factor and pc in MUMPS_PCS:
+        factor = "mumps"
+    return pc, factor
+
+
 #: options read only when the factorisation is first set up, after ``setFromOptions``
 DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
 
 
 def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) -> tuple[str, list[str]]:
     """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found
-    except for the factorisation options (``DEFERRED_OPTIONS``), which MUMPS reads at its first
-    symbolic factorisation: those stay until the caller removes them (``LoadStepper.close``).
+    except for the config's options and the default factorisation options (``DEFERRED_OPTIONS``,
+    read by MUMPS at its first symbolic factorisation): those stay for the run, like command-line
+    ones (-ksp_view, -ksp_converged_reason are read at every solve), until ``LoadStepper.close``.
 
     Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES) and the
-    option names left in the database.
+    option names left in the database.  A value or combination PETSc refuses raises
+    ``SolverOptionError`` (the same on every rank: the options are).
     """
     opts = PETSc.Options()
     inserted = []
@@ -140,15 +163,33 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) ->
             if not opts.hasName(key):
                 opts.setValue(key, value)
                 inserted.append(key)
-    kept = [k for k in inserted if k.startswith(DEFERRED_OPTIONS)]
+    kept = [k for k in inserted if k in config_options or k.startswith(DEFERRED_OPTIONS)]
     try:
         snes.setFromOptions()
         linesearch = opts.getString("snes_linesearch_type", "bt")  # PETSc's own default
+    except PETSc.Error as exc:
+        for key in kept:
+            opts.delValue(key)
+        raise SolverOptionError("", _refused(exc, config_options, snes.getComm().getSize())) from None
     finally:
         for key in inserted:
             if key not in kept:
                 opts.delValue(key)
     return linesearch, kept
+
+
+def _solver_options(config_options: dict) -> str:
+    """``-ksp_type gmres -pc_type ilu`` as in effect (for messages)."""
+    pc, factor = factor_package(config_options)
+    text = f"-ksp_type {option_in_effect('ksp_type', config_options)} -pc_type {pc}"
+    return text + (f" -pc_factor_mat_solver_type {factor}" if factor else "")
+
+
+def _refused(exc: Exception, config_options: dict, ranks: int) -> str:
+    """One line: PETSc's reason, the options in effect and what works instead."""
+    pc, factor = factor_package(config_options)
+    return (f"PETSc refused the solver options {_solver_options(config_options)} on {ranks} "
+            f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
 
 
 class LoadStepper:
@@ -167,7 +208,11 @@ class LoadStepper:
         if spec.min_det_f > 0.0:
             self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
         defaults = dict(DEFAULT_OPTIONS)
-        if 1 < problem.comm.size <= 4:
+        _, factor = factor_package(petsc_options)
+        if factor == "mumps" and not PETSc.Options().hasName("pc_factor_mat_solver_type") \
+                and "pc_factor_mat_solver_type" not in petsc_options:
+            defaults["pc_factor_mat_solver_type"] = "mumps"
+        if factor == "mumps" and 1 < problem.comm.size <= 4:
             # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid: LU, twice the
             # flops of the LDLᵀ root) is slower than factoring the root on one rank (37-fascicle
             # bundle, 22k DOFs, 2 ranks: 0.72 -> 0.65 s per factorisation), and only a sequential
@@ -180,24 +225,54 @@ class LoadStepper:
         fnorm = problem.fext.norm() * max_level
         self.rounding_floor = problem.reference_residual_norm()
         defaults["snes_atol"] = f"{max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30):.3e}"
+        self.petsc_options = petsc_options
+        self._kept_options: list[str] = []
         self.linesearch, self._kept_options = configure_options(self.snes, petsc_options, defaults)
+        self._check_factorisation()
         self._history: list[int] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
+        self._ksp_reason = 0
+        #: config ``petsc:`` options PETSc never read (known at ``close``)
+        self.unused_config_options: list[str] = []
 
-    def close(self) -> None:
-        """Remove the factorisation options this stepper left in PETSc's database."""
+    def _check_factorisation(self) -> None:
+        """Create the factor matrix now (no numbers yet), so that a package that cannot factor
+        this matrix type on this many ranks is refused before the first load level."""
+        ksp = self.snes.getKSP()
+        pc = ksp.getPC()
+        if pc.getType() not in ("lu", "cholesky", "ilu", "icc"):
+            return
+        ksp.setOperators(self.problem.J, self.problem.J)
+        try:
+            pc.setFactorSetUpSolverType()
+        except PETSc.Error as exc:
+            self.close()
+            raise SolverOptionError("", _refused(exc, self.petsc_options,
+                                                 self.problem.comm.size)) from None
+
+    def close(self, collective: bool = True) -> None:
+        """Remove the options this stepper left in PETSc's database; config options PETSc never
+        read go to ``unused_config_options`` (collective unless ``collective`` is False)."""
         opts = PETSc.Options()
+        if collective:
+            mine = [k for k in self._kept_options if k in self.petsc_options]
+            used = used_anywhere(mine, self.problem.comm)
+            self.unused_config_options = [k for k, u in zip(mine, used) if not u]
         for key in self._kept_options:
             opts.delValue(key)
         self._kept_options = []
 
     def negative_eigenvalues(self) -> int | None:
-        """Negative eigenvalues of the last factored tangent on the constraint surface: the LDLᵀ
+        """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ
         inertia less one per contact constraint (a saddle-point matrix with m independent
-        constraints has m negative eigenvalues besides those of the constrained tangent)."""
-        count = negative_pivots(self.snes.getKSP())
-        return None if count is None else count - self.problem.n_constraints
+        constraints has m negative eigenvalues besides those of the constrained tangent), plus
+        the null pivots (a singular tangent: a mechanism the supports leave free)."""
+        counts = pivot_counts(self.snes.getKSP())
+        if counts is None:
+            return None
+        negative, null = counts
+        return negative - self.problem.n_constraints + null
 
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
@@ -214,15 +289,45 @@ class LoadStepper:
                 f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}; "
                 f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}")
 
-    def _solve_at(self, lam: float, X: PETSc.Vec) -> tuple[int, int, float]:
+    def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float) -> tuple[int, int, float]:
         self.problem.load_factor = lam
         self._history = []
-        self.snes.solve(None, X)
+        try:
+            self.snes.solve(None, X)
+        except PETSc.Error as exc:
+            # an error inside PETSc or an external package (a factorisation MUMPS gave up on,
+            # a package that cannot handle this matrix); the same on every rank for these
+            self.problem.load_factor = reached
+            why = petsc_message(exc)
+            if "MUMPS" in why:
+                why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
+                        "move or an integration rule with zero-energy modes)")
+            raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
+                                  f" in the linear solver ({_solver_options(self.petsc_options)}): "
+                                  f"{why}") from None
+        self._ksp_reason = self.snes.getKSP().getConvergedReason()
         reason = self.snes.getConvergedReason()
         its = self.snes.getIterationNumber()
         self.newton_iterations += its
         fnorm = self.snes.getFunctionNorm()
         return reason, its, fnorm
+
+    def _stop_if_requested(self, target: float, level: float) -> None:
+        """Between Newton solves: stop on every rank if any rank got SIGTERM/SIGINT (collective)."""
+        signum = stop_requested(self.problem.comm)
+        if signum:
+            raise RunInterrupted(signum, f"on the way to load factor {target:g} (last converged "
+                                         f"level {level:g})")
+
+    def _linear_solver_detail(self, reason: int) -> str:
+        """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
+        if reason != PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
+            return ""
+        kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
+                   if not k.startswith("_")}.get(self._ksp_reason, str(self._ksp_reason))
+        pc, factor = factor_package(self.petsc_options)
+        return (f" (the linear solver {_solver_options(self.petsc_options)} stopped with {kreason}; "
+                f"{solver_hint(pc, factor, self.problem.comm.size, PETSc.Sys.hasExternalPackage)})")
 
     def _residual_small(self, fnorm: float, lam: float) -> bool:
         """A 'converged' SNES (e.g. on a tiny step) must also have a small residual."""
@@ -252,14 +357,16 @@ class LoadStepper:
                 its_total = substeps = cutbacks = 0
                 consecutive = stability_cuts = 0
                 history = []
+                level = records[-1].load_factor if records else 0.0
                 while lam < target * (1.0 - 1e-14):
+                    self._stop_if_requested(target, level)
                     step = min(dlam, target - lam)
                     if self.spec.max_increment is not None:
                         step = min(step, self.spec.max_increment)
                     X.copy(X_prev)
                     if self.spec.predictor == "secant" and dlam_last > 0.0:
                         X.axpy(step / dlam_last, dX_last)       # secant predictor
-                    reason, its, fnorm = self._solve_at(lam + step, X)
+                    reason, its, fnorm = self._solve_at(lam + step, X, target, lam)
                     its_total += its
                     history.append(list(self._history))
                     budget = self.spec.max_newton_iterations
@@ -308,7 +415,8 @@ class LoadStepper:
                              f"retry with increment {dlam:.4g}")
                     if consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment:
                         P.load_factor = lam
-                        raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted)
+                        raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted,
+                                              self._linear_solver_detail(reason))
                 rec = StepRecord(load_factor=target, iterations=its_total, substeps=substeps,
                                  cutbacks=cutbacks, reason=reason_name(reason),
                                  residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,

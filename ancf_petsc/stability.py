@@ -13,9 +13,9 @@ A stability file (YAML)::
                                             #   of the last load level, no cut-back: the raw method
       linesearch: [basic, bt, l2, cp]       # -snes_linesearch_type
       bulk_ratio: [10, 1000]                # K / mu of every neo-Hookean beam (mu kept)
-      penalty_scale: [0.01, 1, 100]         # contact.penalty_scale (contact scenes)
+      contact: [sliding, unilateral]        # contact.mode (contact scenes)
       element: ["3363", "3333", "3333-none"]  # element type (-none: 3333 without its locking remedy)
-    reference: {element: "3363", axial_points: 2, elements: 32}   # per (bulk_ratio, penalty_scale)
+    reference: {element: "3363", axial_points: 2, elements: 32}   # per (bulk_ratio, contact)
     max_it: 50                              # Newton iterations per increment
     max_newton: 2000                        # Newton iterations per cell (a slow cell is a failure)
     output: ../../results/studies/bending_stability
@@ -44,9 +44,8 @@ import yaml
 from .refinement import Discretisation, apply, quantity
 from .study import Scene, StudyError, _expect, parse_discretisation, parse_scene, solve_raw
 
-AXES = ("increment", "linesearch", "bulk_ratio", "penalty_scale", "element")
-PHYSICAL = ("bulk_ratio",)     # changes the material: one reference per value (a penalty is
-#                                a method parameter: its error is against the config's own p_n)
+AXES = ("increment", "linesearch", "bulk_ratio", "contact", "element")
+PHYSICAL = ("bulk_ratio", "contact")     # change the model: one reference per value
 LINESEARCHES = ("basic", "bt", "l2", "cp")
 KEYS = ("kind", "name", "base", "probe", "component", "axes", "reference", "max_it", "max_newton",
         "output")
@@ -90,10 +89,10 @@ def cell_config(scene: Scene, cell: dict, max_it: int, max_newton: int | None = 
                 raise StudyError("axes.bulk_ratio", f"beam {beam['name']}: needs a neo-hookean "
                                                     "material given by mu and bulk_modulus")
             mat["bulk_modulus"] = float(cell["bulk_ratio"]) * float(mat["mu"])
-    if "penalty_scale" in cell:
+    if "contact" in cell:
         if raw.get("contact") is None:
-            raise StudyError("axes.penalty_scale", "the base config has no contact")
-        raw["contact"]["penalty_scale"] = float(cell["penalty_scale"])
+            raise StudyError("axes.contact", "the base config has no contact")
+        raw["contact"]["mode"] = str(cell["contact"])
     solver = raw.setdefault("solver", {})
     if max_newton is not None:
         solver["max_newton_iterations"] = max_newton
@@ -209,6 +208,8 @@ def load_stability(path: str) -> StabilitySpec:
                     kp, "expected 'adaptive' or fractions 0 < f <= 1 of the last load level")
         elif key == "linesearch":
             _expect(all(v in LINESEARCHES for v in vals), kp, f"expected values from {', '.join(LINESEARCHES)}")
+        elif key == "contact":
+            _expect(all(v in ("sliding", "unilateral") for v in vals), kp, "expected sliding or unilateral")
         elif key == "element":
             axes[key] = vals = [str(v) for v in vals]
             _expect(all(_element(v)["element"] in ("3363", "3333")
@@ -216,8 +217,8 @@ def load_stability(path: str) -> StabilitySpec:
                     kp, "expected 3363, 3333, 3333-none or 3333-ecm")
         else:
             _expect(all(isinstance(v, (int, float)) and v > 0 for v in vals), kp, "expected positive numbers")
-    if "penalty_scale" in axes:
-        _expect(scene.raw.get("contact") is not None, "axes.penalty_scale", "the base config has no contact")
+    if "contact" in axes:
+        _expect(scene.raw.get("contact") is not None, "axes.contact", "the base config has no contact")
     ref = Discretisation(**parse_discretisation(doc.get("reference", {}), "reference"))
     max_it = doc.get("max_it", 50)
     _expect(isinstance(max_it, int) and max_it >= 1, "max_it", "expected an integer >= 1")

@@ -112,6 +112,9 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
     from .run import RunResult, run_model
     raw = copy.deepcopy(raw)
     raw["output"] = {"dir": out_dir, "vtk": False}
+    # studies measure accuracy, cost and convergence; the stability of every level stays in the
+    # summary (negative_eigenvalues) instead of turning the run's status to 'unstable'
+    raw.setdefault("solver", {}).setdefault("allow_unstable", True)
     comm = PETSc.COMM_SELF if comm is None else comm
     try:
         spec = parse_config(raw, base_dir=base_dir)

@@ -11,6 +11,15 @@ A sweep file (YAML)::
       beams[0].material.bulk_modulus: [0.5e9, 0.86e9]
     run: {ranks: 1, jobs: 2, petsc: ["-snes_rtol", "1e-9"], timeout: 3600, mpiexec: mpirun}
     output: sweeps/twist_sweep                # root directory, relative to the sweep file
+    slurm:                                    # only for --slurm (all optional)
+      throttle: 20                            # at most 20 array tasks at once (--array=0-N%20)
+      cpus_per_task: 1
+      mem: 4G                                 # per node, SLURM's syntax
+      time: "02:00:00"                        # default: run.timeout plus 2 minutes, else none
+      partition: short
+      account: myproject
+      venv: ../.venv                          # relative to the sweep file (or absolute)
+      logs: append                            # append | numbered: log.txt on resubmission
 
 Every run gets ``<output>/<run id>/`` with ``config.yaml`` (the base config with the values
 substituted, ``output.dir`` set to the run directory and relative section ``file:`` paths made
@@ -38,13 +47,20 @@ from typing import Any, Callable
 
 import yaml
 
-SWEEP_KEYS = ("base", "name", "mode", "parameters", "run", "output")
+SWEEP_KEYS = ("base", "name", "mode", "parameters", "run", "output", "slurm")
 RUN_KEYS = ("ranks", "jobs", "petsc", "timeout", "mpiexec")
+SLURM_KEYS = ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs")
+LOG_MODES = ("append", "numbered")
 MODES = ("grid", "list")
-# final states of one attempt, then the states collection reports for unfinished runs
-FINAL_STATUSES = ("completed", "failed", "config_error", "timeout", "crashed")
-FAILED_STATUSES = FINAL_STATUSES[1:]
+# final states of one attempt, then the states collection reports for unfinished runs;
+# completed and unstable runs are done (a rerun would give the same answer), the others are redone
+FINAL_STATUSES = ("completed", "unstable", "failed", "config_error", "timeout", "interrupted",
+                  "crashed")
+DONE_STATUSES = ("completed", "unstable")
+FAILED_STATUSES = ("failed", "config_error", "timeout", "interrupted", "crashed")
 STATUS_ORDER = FINAL_STATUSES + ("running", "missing")
+#: ancf-solve's exit codes (docs/running.md)
+EXIT_INPUT, EXIT_FAILED, EXIT_UNSTABLE = 2, 3, 4
 
 
 class SweepError(Exception):
@@ -158,6 +174,57 @@ class RunSpec:
 
 
 @dataclass
+class SlurmSpec:
+    """``slurm:`` of a sweep file (or the matching ancf-sweep options): the job array's resources."""
+    throttle: int | None = None     # most array tasks running at once (None: SLURM's limit)
+    cpus_per_task: int | None = None
+    mem: str | None = None
+    time: str | None = None         # SLURM's time syntax; None: run.timeout + 2 min, else none
+    partition: str | None = None
+    account: str | None = None
+    venv: str | None = None         # absolute; None: the environment running ancf-sweep
+    logs: str = "append"            # append | numbered
+
+
+_SLURM_TIME = re.compile(r"(\d+-)?\d+(:\d{1,2}){0,2}|\d+-\d+")
+_SLURM_MEM = re.compile(r"\d+[KMGT]?B?", re.IGNORECASE)
+
+
+def slurm_spec(value: Any, here: str, path: str = "slurm") -> SlurmSpec:
+    """Validate a ``slurm:`` mapping (``here``: the directory relative venv paths start from)."""
+    value = value or {}
+    if not isinstance(value, dict):
+        raise SweepError(path, "expected a mapping with keys " + ", ".join(SLURM_KEYS))
+    for k in value:
+        if k not in SLURM_KEYS:
+            raise SweepError(f"{path}.{k}", "unknown key; allowed: " + ", ".join(SLURM_KEYS))
+    sl = SlurmSpec()
+    if value.get("throttle") is not None:
+        sl.throttle = _int(value["throttle"], f"{path}.throttle")
+    if value.get("cpus_per_task") is not None:
+        sl.cpus_per_task = _int(value["cpus_per_task"], f"{path}.cpus_per_task")
+    if value.get("mem") is not None:
+        sl.mem = str(value["mem"])
+        if not _SLURM_MEM.fullmatch(sl.mem):
+            raise SweepError(f"{path}.mem", f"expected SLURM's memory syntax, e.g. 4G or 500M; got {sl.mem!r}")
+    if value.get("time") is not None:
+        sl.time = str(value["time"])
+        if not _SLURM_TIME.fullmatch(sl.time):
+            raise SweepError(f"{path}.time", "expected SLURM's time syntax, e.g. 90, 02:00:00 or "
+                                             f"1-12:00:00; got {sl.time!r}")
+    for key in ("partition", "account"):
+        if value.get(key) is not None:
+            setattr(sl, key, _str(value[key], f"{path}.{key}"))
+    if value.get("venv") is not None:
+        sl.venv = os.path.normpath(os.path.join(here, _str(value["venv"], f"{path}.venv")))
+    if value.get("logs") is not None:
+        if value["logs"] not in LOG_MODES:
+            raise SweepError(f"{path}.logs", f"must be one of {', '.join(LOG_MODES)}; got {value['logs']!r}")
+        sl.logs = value["logs"]
+    return sl
+
+
+@dataclass
 class Sweep:
     """A validated sweep file."""
     file: str                       # absolute path of the sweep file
@@ -172,15 +239,19 @@ class Sweep:
     petsc: list[str] = field(default_factory=list)
     timeout: float | None = None
     mpiexec: list[str] = field(default_factory=lambda: ["mpirun"])
+    slurm: SlurmSpec = field(default_factory=SlurmSpec)
 
     @property
     def base_dir(self) -> str:
         return os.path.dirname(self.base)
 
-    def with_overrides(self, jobs: int | None = None, ranks: int | None = None) -> "Sweep":
-        """A copy with ``run.jobs`` / ``run.ranks`` replaced (command-line overrides)."""
+    def with_overrides(self, jobs: int | None = None, ranks: int | None = None,
+                       **slurm: Any) -> "Sweep":
+        """A copy with ``run.jobs`` / ``run.ranks`` / ``slurm.*`` replaced (command-line
+        overrides; a ``None`` keeps the file's value)."""
+        sl = replace(self.slurm, **{k: v for k, v in slurm.items() if v is not None})
         return replace(self, jobs=jobs if jobs is not None else self.jobs,
-                       ranks=ranks if ranks is not None else self.ranks)
+                       ranks=ranks if ranks is not None else self.ranks, slurm=sl)
 
     def n_runs(self) -> int:
         if self.mode == "list":
@@ -329,6 +400,8 @@ def load_sweep(path: str) -> Sweep:
         raise SweepError("run.mpiexec", "expected a command like 'mpirun --oversubscribe'; "
                                         f"got {mpiexec!r}")
 
+    slurm = slurm_spec(raw.get("slurm"), here)
+
     # base config: must itself be valid, so that every later config error is the sweep's doing
     base_raw = _load_yaml(base, "base")
     if not isinstance(base_raw, dict):
@@ -381,7 +454,8 @@ def load_sweep(path: str) -> Sweep:
     _labels(params)
     return Sweep(file=path, name=name, mode=mode, base=base, base_raw=base_raw, parameters=params,
                  output=output, ranks=ranks, jobs=jobs, petsc=petsc,
-                 timeout=float(timeout) if timeout is not None else None, mpiexec=mpiexec)
+                 timeout=float(timeout) if timeout is not None else None, mpiexec=mpiexec,
+                 slurm=slurm)
 
 
 # ------------------------------------------------------------------------------- expansion
@@ -488,9 +562,10 @@ def _remove(*paths: str) -> None:
 
 
 def is_done(sweep: Sweep, run: RunSpec) -> bool:
-    """Completed, and with exactly the config this sweep would write now."""
+    """Completed (or unstable: a rerun gives the same), with exactly the config this sweep would
+    write now."""
     summary = _read_json(os.path.join(run.dir, "summary.json"))
-    return (summary is not None and summary.get("status") == "completed"
+    return (summary is not None and summary.get("status") in DONE_STATUSES
             and _read_text(os.path.join(run.dir, "config.yaml")) == config_text(sweep, run))
 
 
@@ -552,7 +627,8 @@ def failure_reason(lines: list[str]) -> str:
     for ln in reversed(lines):
         if ln.startswith("ancf-solve:"):
             msg = ln[len("ancf-solve:"):].strip()
-            return re.sub(r"; converged steps are in .*$", "", msg)
+            return re.sub(r"; (converged steps are in|results in|\d+ converged level\(s\) kept in) .*$",
+                          "", msg)
     for ln in reversed(lines):
         if _PY_EXC.match(ln):
             return ln
@@ -581,9 +657,15 @@ def classify(run_dir: str, returncode: int | None, stderr_lines: list[str],
         return "timeout", f"timed out after {timeout:g} s{last}" if timeout else "timed out" + last
     if returncode == 0 and sstat == "completed":
         return "completed", ""
-    if returncode == 2:
+    if returncode == EXIT_UNSTABLE and sstat == "unstable":
+        return "unstable", str(summary.get("message") or reason)
+    if sstat == "interrupted" or returncode in (128 + signal.SIGTERM, 128 + signal.SIGINT):
+        return "interrupted", reason or str(summary.get("message") or "interrupted")
+    if returncode == EXIT_INPUT and summary.get("reason_code") == "OUTPUT_ERROR":
+        return "failed", reason or str(summary.get("message") or "output error")
+    if returncode == EXIT_INPUT:
         return "config_error", reason or "config error (exit code 2)"
-    if sstat == "failed" or returncode == 3:
+    if sstat == "failed" or returncode == EXIT_FAILED:
         return "failed", reason or str(summary.get("message") or "a load level was not reached")
     if returncode is not None and returncode < 0:
         sig = f"killed by {_signal_name(returncode)}"
@@ -603,7 +685,7 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
         status, reason = verdict
     else:
         if stderr_lines is None:
-            stderr_lines = (_read_text(os.path.join(run_dir, "log.txt")) or "").splitlines()
+            stderr_lines = last_attempt((_read_text(os.path.join(run_dir, "log.txt")) or "").splitlines())
         status, reason = classify(run_dir, returncode, stderr_lines, timed_out, timeout)
     record = _read_json(os.path.join(run_dir, "run.json")) or {}
     record.update(extra or {})
@@ -611,6 +693,16 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
                    "returncode": returncode, "finished": time.strftime("%Y-%m-%dT%H:%M:%S")})
     _write_atomic(os.path.join(run_dir, "run.json"), json.dumps(record, indent=1) + "\n")
     return Outcome(status, reason, wall_time, returncode)
+
+
+#: first line of each attempt in an appended log.txt (SLURM resubmissions)
+ATTEMPT_HEADER = "=== ancf-sweep attempt"
+
+
+def last_attempt(lines: list[str]) -> list[str]:
+    """The lines of the last attempt in a log that resubmissions append to."""
+    starts = [i for i, ln in enumerate(lines) if ln.startswith(ATTEMPT_HEADER)]
+    return lines[starts[-1] + 1:] if starts else lines
 
 
 def finish_slurm_task(run_dir: str, returncode: int, wall_time: float,
@@ -827,12 +919,13 @@ def run_state(run: RunSpec) -> RunState:
     st = RunState(run, "missing")
     sstat = summary.get("status") if summary else None
     rstat = record.get("status") if record else None
-    if sstat == "completed":
-        st.status = "completed"
+    if sstat in DONE_STATUSES:
+        st.status = sstat
+        st.reason = str(summary.get("message") or "") if sstat != "completed" else ""  # type: ignore[union-attr]
     elif rstat in FAILED_STATUSES:
         st.status, st.reason = rstat, str(record.get("reason") or "")  # type: ignore[union-attr]
-    elif sstat == "failed":
-        st.status, st.reason = "failed", str(summary.get("message") or "")  # type: ignore[union-attr]
+    elif sstat in ("failed", "interrupted"):
+        st.status, st.reason = sstat, str(summary.get("message") or "")  # type: ignore[union-attr]
     elif sstat == "running" or rstat == "running":
         st.status = "running"
         st.reason = "running, or died without a record (rerun the sweep to redo it)"
@@ -918,11 +1011,31 @@ def collect(sweep: Sweep) -> Collection:
 
 
 # ----------------------------------------------------------------------------------- SLURM
+def _slurm_time(sweep: Sweep) -> str | None:
+    """``--time``: slurm.time, else the run's timeout plus a start-up margin, else none."""
+    if sweep.slurm.time is not None:
+        return sweep.slurm.time
+    if sweep.timeout is None:
+        return None
+    minutes = int(sweep.timeout // 60) + 2
+    return f"{minutes // 60:02d}:{minutes % 60:02d}:00"
+
+
+def default_venv() -> str | None:
+    """The virtual environment running this program, if it has ancf-solve."""
+    prefix = sys.prefix
+    if prefix != getattr(sys, "base_prefix", prefix) and \
+            os.path.isfile(os.path.join(prefix, "bin", "ancf-solve")):
+        return prefix
+    return None
+
+
 def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     """Prepare every run directory and write ``sweep.slurm`` + ``runs.txt``; returns their paths.
 
     Array task i runs line i+1 of runs.txt; ``tasks/<i>`` links to that run directory so that
-    SLURM's ``--output`` lands in the run directory itself."""
+    SLURM's ``--output`` lands in the run directory itself.  Resources come from ``sweep.slurm``;
+    the environment is ``$ANCF_VENV`` at submission, else slurm.venv, else the one running this."""
     runs = expand(sweep)
     os.makedirs(sweep.output, exist_ok=True)
     for run in runs:
@@ -941,8 +1054,9 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
 
     q = shlex.quote
     n = len(runs)
-    throttle = f"%{sweep.jobs}" if sweep.jobs < n else ""
-    solve = shlex.join(solver_command())
+    sl = sweep.slurm
+    throttle = f"%{sl.throttle}" if sl.throttle is not None and sl.throttle < n else ""
+    venv = sl.venv or default_venv()
     petsc = (" " + shlex.join(sweep.petsc)) if sweep.petsc else ""
     sweep_cmd = f"ancf-sweep {q(sweep.file)} --collect"
     record = ("import sys; from ancf_petsc.sweep import finish_slurm_task as f; "
@@ -955,22 +1069,38 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         f"#SBATCH --ntasks={sweep.ranks}",
         f"#SBATCH --output={os.path.join(sweep.output, 'tasks', '%a', 'slurm-%A_%a.out')}",
     ]
-    if sweep.timeout is not None:
-        minutes = int(sweep.timeout // 60) + 2          # the run's timeout plus start-up margin
-        lines.append(f"#SBATCH --time={minutes // 60:02d}:{minutes % 60:02d}:00")
+    time_limit = _slurm_time(sweep)
+    for option, value in (("time", time_limit), ("cpus-per-task", sl.cpus_per_task), ("mem", sl.mem),
+                          ("partition", sl.partition), ("account", sl.account)):
+        if value is not None:
+            lines.append(f"#SBATCH --{option}={value}")
     lines += [
         f"# Sweep {sweep.name}: {n} runs ({sweep.shape()}) of {sweep.base}",
         f"# generated by ancf-sweep from {sweep.file}",
         "#",
         f"# Submit:   sbatch {q(os.path.join(sweep.output, 'sweep.slurm'))}",
+        "#           (ANCF_VENV=/path/to/venv sbatch ... runs another environment's ancf-solve)",
         f"# Collect:  {sweep_cmd}",
         "#           (results.csv and failed.txt in the output directory; works while tasks still run)",
         "# Array task i runs the directory on line i+1 of runs.txt and skips it if its",
-        "# summary.json already says completed, so resubmitting only redoes what is missing.",
+        "# summary.json already says completed (or unstable), so resubmitting only redoes what is",
+        "# missing; log.txt " + ("gets one more section per attempt" if sl.logs == "append" else
+                                 "is a link to log.N.txt, N counting the attempts") + ".",
         "set -u",
+        "# at the time limit SLURM signals the tasks and this shell: the shell waits for ancf-solve",
+        "# (which stops at its next safe point, status interrupted) and then records the outcome",
+        "trap 'echo \"ancf-sweep: task signalled; waiting for ancf-solve to stop cleanly\" >&2' TERM INT",
         f"SWEEP_OUTPUT={q(sweep.output)}",
-        f"PYTHON={q(sys.executable)}",
-        f"ANCF_SOLVE=({solve})",
+    ]
+    if venv is not None:
+        lines += [f'VENV="${{ANCF_VENV:-{venv}}}"',
+                  'PYTHON="$VENV/bin/python"',
+                  'ANCF_SOLVE=("$VENV/bin/ancf-solve")']
+    else:
+        lines += ['VENV="${ANCF_VENV:-}"',
+                  f'if [ -n "$VENV" ]; then PYTHON="$VENV/bin/python"; ANCF_SOLVE=("$VENV/bin/ancf-solve"); '
+                  f"else PYTHON={q(sys.executable)}; ANCF_SOLVE=({shlex.join(solver_command())}); fi"]
+    lines += [
         f"RANKS={sweep.ranks}",
         'TASK="${SLURM_ARRAY_TASK_ID:?not running as a SLURM array task}"',
         'RUN_DIR=$(sed -n "$((TASK + 1))p" "$SWEEP_OUTPUT/runs.txt")',
@@ -978,9 +1108,13 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         '  echo "ancf-sweep: array task $TASK has no run directory in $SWEEP_OUTPUT/runs.txt" >&2',
         "  exit 1",
         "fi",
+        'if [ ! -x "${ANCF_SOLVE[0]}" ] && ! command -v "${ANCF_SOLVE[0]}" >/dev/null 2>&1; then',
+        '  echo "ancf-sweep: no ancf-solve at ${ANCF_SOLVE[0]} (set ANCF_VENV or slurm.venv)" >&2',
+        "  exit 1",
+        "fi",
         "if \"$PYTHON\" -c 'import json, sys; sys.exit(json.load(open(sys.argv[1])).get(\"status\") "
-        "!= \"completed\")' \"$RUN_DIR/summary.json\" 2>/dev/null; then",
-        '  echo "ancf-sweep: $RUN_DIR already completed; skipping"',
+        "not in (\"completed\", \"unstable\"))' \"$RUN_DIR/summary.json\" 2>/dev/null; then",
+        '  echo "ancf-sweep: $RUN_DIR already done; skipping"',
         "  exit 0",
         "fi",
         'if command -v srun >/dev/null 2>&1; then LAUNCH=(srun --ntasks="${SLURM_NTASKS:-$RANKS}")',
@@ -989,14 +1123,21 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     if sweep.timeout is not None:
         lines.append(f"LAUNCH=(timeout --signal=TERM --kill-after=30 {sweep.timeout:g} "
                      '"${LAUNCH[@]}")')
+    if sl.logs == "numbered":
+        lines += ['N=1; while [ -e "$RUN_DIR/log.$N.txt" ]; do N=$((N + 1)); done',
+                  'LOG="$RUN_DIR/log.$N.txt"; : > "$LOG"; ln -sfn "log.$N.txt" "$RUN_DIR/log.txt"']
+    else:
+        lines += ['LOG="$RUN_DIR/log.txt"']
     lines += [
         'export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"',
         'export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"',
         'rm -f "$RUN_DIR/run.json"',
         'echo "ancf-sweep: task $TASK: $RUN_DIR on $(hostname), $RANKS rank(s)"',
+        f'echo "{ATTEMPT_HEADER}: job ${{SLURM_ARRAY_JOB_ID:-?}}_$TASK on $(hostname) at '
+        '$(date +%Y-%m-%dT%H:%M:%S) ===" >> "$LOG"',
         "START=$(date +%s.%N)",
         '"${LAUNCH[@]}" "${ANCF_SOLVE[@]}" "$RUN_DIR/config.yaml" --output-dir "$RUN_DIR"'
-        f'{petsc} > "$RUN_DIR/log.txt" 2>&1',
+        f'{petsc} >> "$LOG" 2>&1',
         "RC=$?",
         "END=$(date +%s.%N)",
         f"\"$PYTHON\" -c {q(record)} \"$RUN_DIR\" \"$RC\" \"$START\" \"$END\"",

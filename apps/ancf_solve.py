@@ -1,27 +1,110 @@
-"""ancf-solve CONFIG.yaml [--output-dir DIR] [PETSc options ...]
+"""ancf-solve CONFIG.yaml [--output-dir DIR] [--quiet] [PETSc options ...]
 
-Exit codes: 0 solved, 2 config error (one line, no traceback), 3 a load level was not reached
-(every converged level is already on disk).
+Exit codes (docs/running.md): 0 completed; 2 config, command-line, PETSc-option or file-system
+error (one line, no traceback); 3 a load level was not reached (every converged level is on
+disk); 4 unstable (levels with negative tangent eigenvalues, see solver.allow_unstable);
+130 / 143 stopped by SIGINT / SIGTERM at the next safe point (converged levels kept); 1 a bug.
 """
 from __future__ import annotations
 
 import argparse
+import difflib
 import os
 import sys
+
+OPTIONS = ("--output-dir", "--quiet", "--version", "--help")
+
+
+def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
+    """(ours, PETSc's, error): PETSc's ``-help`` goes to PETSc (argparse would take it for -h),
+    and a double-dash option we do not know is an error, not a PETSc option (``--outputdir``)."""
+    ours, petsc = [], []
+    for arg in argv:
+        if arg == "-help":
+            petsc.append(arg)
+            continue
+        if arg.startswith("--") and len(arg) > 2:
+            name = arg.split("=", 1)[0]
+            if name not in OPTIONS and name != "--":
+                near = difflib.get_close_matches(name, OPTIONS, n=1, cutoff=0.6)
+                hint = f"; did you mean {near[0]}?" if near else f"; ancf-solve knows {', '.join(OPTIONS)}"
+                return [], [], (f"unknown option {name}{hint} (PETSc options take one dash, "
+                                "e.g. -snes_monitor)")
+        ours.append(arg)
+    return ours, petsc, None
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):
+        """One line (argparse prints the usage too), exit 2 like every input error."""
+        self.exit(2, f"ancf-solve: {message} (see ancf-solve --help)\n")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="ancf-solve", allow_abbrev=False,
+        description="Solve an ANCF continuum-beam model described by a YAML config. "
+                    "Options with one dash (-snes_*, -ksp_*, -pc_*, -log_view, -help) go to PETSc.",
+        epilog="Exit codes: 0 completed, 2 input or file-system error, 3 a load level not "
+               "reached, 4 unstable levels, 130/143 interrupted (SIGINT/SIGTERM). See docs/running.md.")
+    parser.add_argument("config", help="YAML model description")
+    parser.add_argument("--output-dir", help="override output.dir of the config")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    parser.add_argument("--version", action="store_true", help="print the version and exit")
+    return parser
+
+
+def _error(line: str, rank: int = 0) -> None:
+    if rank == 0:
+        print(f"ancf-solve: {line}", file=sys.stderr, flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    parser = argparse.ArgumentParser(
-        prog="ancf-solve", allow_abbrev=False,
-        description="Solve an ANCF continuum-beam model described by a YAML config. "
-                    "Unrecognised options (-snes_*, -ksp_*, -pc_*, -log_view, ...) go to PETSc.")
-    parser.add_argument("config", help="YAML model description")
-    parser.add_argument("--output-dir", help="override output.dir of the config")
-    parser.add_argument("--quiet", action="store_true", help="no progress lines")
-    args, petsc_args = parser.parse_known_args(argv)
+    from ancf_petsc import interrupt
+    interrupt.install()                  # from the start: Ctrl-C is a clean stop, never a traceback
+    try:
+        code = _main(argv, interrupt)
+    finally:
+        interrupt.uninstall()            # back to the caller's handlers (main() called in-process)
+    try:
+        sys.stdout.flush()
+    except OSError:                      # stdout was a pipe that closed (ancf-solve ... | head)
+        interrupt.SafePrinter().close_stdout()
+    return code
+
+
+def _main(argv: list[str], interrupt) -> int:
+    ours, petsc_help, problem = _split_argv(argv)
+    if problem:
+        _error(problem)
+        return 2
+    if "--version" in ours:
+        from ancf_petsc.version import version_line
+        print(version_line(), flush=True)
+        return 0
+    parser = _parser()
+    if petsc_help and not [a for a in ours if not a.startswith("-")]:
+        parser.print_help()
+        print("\nPETSc's own options are listed by running a model: ancf-solve CONFIG.yaml -help",
+              flush=True)
+        return 0
+    try:
+        args, petsc_args = parser.parse_known_args(ours)
+    except SystemExit as exc:            # argparse already printed its one-line usage error
+        return 2 if exc.code else 0
+    petsc_args = petsc_help + petsc_args
+    from ancf_petsc.petsc_options import check_command_line
+    problem = check_command_line(petsc_args)
+    if problem:
+        _error(f"PETSc option {problem}")
+        return 2
+    if petsc_help:
+        # PETSc prints its help during PetscInitialize, under its own SIGPIPE handler (which
+        # aborts): without PETSc's handlers, `ancf-solve CONFIG -help | head` ends quietly
+        petsc_args.append("-no_signal_handler")
     from ancf_petsc.launch import prepare_environment
-    prepare_environment()
+    prepare_environment()               # BLAS threads, Open MPI's layer for a singleton
 
     from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
     import petsc4py
@@ -29,18 +112,28 @@ def main(argv: list[str] | None = None) -> int:
     from petsc4py import PETSc
 
     from ancf_petsc.config import ConfigError, load_config
+    from ancf_petsc.output import OutputError
+    from ancf_petsc.petsc_options import unused_line
     from ancf_petsc.run import solve
+    from ancf_petsc.solver import SolverOptionError
 
+    interrupt.install()                  # again: PETSc installed its own SIGPIPE handler
     comm = PETSc.COMM_WORLD
-    log = (lambda *_: None) if args.quiet else (lambda msg: print(msg, flush=True))
+    rank = comm.rank
+    printer = interrupt.SafePrinter(quiet=args.quiet)
     try:
         spec = load_config(args.config)
         if args.output_dir:
             spec.output.dir = args.output_dir
-        result = solve(spec, comm, log)
+        result = solve(spec, comm, printer)
+    except SolverOptionError as exc:
+        _error(str(exc), rank)
+        return 2
     except ConfigError as exc:
-        if comm.rank == 0:
-            print(f"ancf-solve: config error: {exc}", file=sys.stderr, flush=True)
+        _error(f"config error: {exc}", rank)
+        return 2
+    except OutputError as exc:
+        _error(f"output error: {exc}", rank)
         return 2
     except Exception:
         # a bug, not a user error: show it, and never leave the other ranks waiting
@@ -50,12 +143,21 @@ def main(argv: list[str] | None = None) -> int:
         if comm.size > 1:
             comm.tompi4py().Abort(1)
         return 1
-    if result.status != "completed":
-        if comm.rank == 0:
-            print(f"ancf-solve: {result.message}; converged steps are in {spec.output.dir}",
-                  file=sys.stderr, flush=True)
-        return 3
-    return 0
+    if rank == 0:
+        opts = PETSc.Options()
+        if not opts.hasName("options_left"):   # else PETSc reports (or was told not to)
+            for name in result.unused_options:
+                source = "config" if name.startswith("petsc.") else ""
+                option = "-" + name[len("petsc."):] if source else name
+                print(unused_line(option, source), file=sys.stderr, flush=True)
+        if result.status == "unstable":
+            _error(f"unstable: {result.message}; results in {spec.output.dir}")
+        elif result.status == "interrupted":
+            n = len(result.records)
+            _error(f"{result.message}; {n} converged level(s) kept in {spec.output.dir}")
+        elif result.status != "completed":
+            _error(f"{result.message}; converged steps are in {spec.output.dir}")
+    return result.exit_code
 
 
 if __name__ == "__main__":

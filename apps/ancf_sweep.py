@@ -1,13 +1,17 @@
 """ancf-sweep SWEEP.yaml [--dry-run] [--slurm] [--collect] [--jobs N] [--ranks N] [--force]
+                  [--throttle N] [--cpus-per-task N] [--mem M] [--time T] [--partition P]
+                  [--account A] [--venv DIR] [--logs append|numbered]
 
 Runs a parameter sweep over a base config (format: ancf_petsc/sweep.py), locally with N
-concurrent ancf-solve processes, or writes a SLURM job-array script. Completed runs are skipped.
+concurrent ancf-solve processes, or writes a SLURM job-array script (resources from the sweep
+file's ``slurm:`` or the options above; docs/running.md). Completed runs are skipped.
 Exit codes: 0 all runs completed, 1 some did not, 2 bad sweep file (one line, no traceback),
 130 interrupted.
 """
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 
@@ -44,16 +48,36 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=_positive, help="concurrent runs (overrides run.jobs)")
     parser.add_argument("--ranks", type=_positive, help="MPI ranks per run (overrides run.ranks)")
     parser.add_argument("--force", action="store_true", help="rerun runs that already completed")
+    slurm = parser.add_argument_group("SLURM (with --slurm; override the sweep file's slurm:)")
+    slurm.add_argument("--throttle", type=_positive,
+                       help="most array tasks running at once (--array=0-N%%T; not run.jobs)")
+    slurm.add_argument("--cpus-per-task", type=_positive, help="#SBATCH --cpus-per-task")
+    slurm.add_argument("--mem", help="#SBATCH --mem (e.g. 4G)")
+    slurm.add_argument("--time", help="#SBATCH --time (e.g. 02:00:00; default run.timeout + 2 min)")
+    slurm.add_argument("--partition", help="#SBATCH --partition")
+    slurm.add_argument("--account", help="#SBATCH --account")
+    slurm.add_argument("--venv", help="environment with ancf-solve on the compute nodes "
+                                      "(default: the one running ancf-sweep; ANCF_VENV at submission wins)")
+    slurm.add_argument("--logs", choices=("append", "numbered"),
+                       help="log.txt of a resubmitted task: appended (default) or log.N.txt")
     args = parser.parse_args(argv)
 
     from ancf_petsc.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done, load_sweep,
-                                  run_sweep, write_slurm)
+                                  run_sweep, slurm_spec, write_slurm)
 
     def say(msg: str) -> None:
         print(msg, flush=True)
 
     try:
-        sweep = load_sweep(args.sweep).with_overrides(jobs=args.jobs, ranks=args.ranks)
+        overrides = {}
+        for key in ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs"):
+            value = getattr(args, key)
+            if value is not None:
+                try:
+                    overrides[key] = getattr(slurm_spec({key: value}, os.getcwd()), key)
+                except SweepError as exc:
+                    raise SweepError("--" + key.replace("_", "-"), exc.message) from None
+        sweep = load_sweep(args.sweep).with_overrides(jobs=args.jobs, ranks=args.ranks, **overrides)
     except SweepError as exc:
         print(f"ancf-sweep: {args.sweep}: {exc}", file=sys.stderr, flush=True)
         return 2

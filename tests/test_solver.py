@@ -90,11 +90,13 @@ def compression_case(tmp_path, force, steps, cutbacks=12, material=None):
     raw = load_raw("uniaxial_neohookean.yaml")
     if material:
         raw["beams"][0]["material"] = material
-    raw["geometry"]["length"] = 0.01           # stocky: no buckling
+    raw["geometry"]["length"] = 0.01           # stocky: no Euler buckling
     raw["beams"][0]["elements"] = 2
     raw["loads"][0]["traction_force"] = [force, 0.0, 0.0]
     raw["steps"] = steps
-    raw["solver"] = {"max_cutbacks": cutbacks}
+    # these tests are about the step control: at ~58 % compression the states reached are
+    # saddles (2-7 negative tangent eigenvalues, depending on the path), accepted here
+    raw["solver"] = {"max_cutbacks": cutbacks, "allow_unstable": True}
     raw["output"]["dir"] = str(tmp_path / "out")
     return raw
 

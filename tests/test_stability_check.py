@@ -78,9 +78,13 @@ def test_stability_count_on_two_ranks(tmp_path):
     raw = unguarded(coarse_achilles())
     raw["output"] = {"dir": str(tmp_path / "n2"), "vtk": False}
     p = solve_cli(write_config(raw, tmp_path / "n2.yaml"), ranks=2)
-    assert p.returncode == 0, p.stderr
+    # an unstable level makes the run end 'unstable' (exit 4, one warning line; docs/running.md)
+    assert p.returncode == 4, p.stderr
     assert "UNSTABLE: 1 negative tangent eigenvalue(s)" in p.stdout
-    assert [st["negative_eigenvalues"] for st in read_summary(tmp_path / "n2")["steps"]] == [0, 1]
+    assert sum(ln.startswith("ancf-solve: unstable: 1 of 2 levels") for ln in p.stderr.splitlines()) == 1
+    s = read_summary(tmp_path / "n2")
+    assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 1]
+    assert s["status"] == "unstable" and s["unstable_levels"] == [50.0]
 
 
 @pytest.mark.parametrize("psi, paper", [(0, 6.051), (45, 6.123)])

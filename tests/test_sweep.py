@@ -157,15 +157,21 @@ def test_failures_are_classified_and_listed(tmp_path):
 
 
 def test_slurm_script(tmp_path):
-    path = write_sweep(str(tmp_path), {**GRID, "output": "slurm"})
-    rc, out, _ = run_main([path, "--slurm"])
+    body = {**GRID, "output": "slurm", "slurm": {"throttle": 3, "mem": "2G", "cpus_per_task": 2}}
+    path = write_sweep(str(tmp_path), body)
+    rc, out, _ = run_main([path, "--slurm", "--partition", "short"])
     assert rc == 0 and "sbatch" in out and "--collect" in out
     out_dir = tmp_path / "slurm"
     script = (out_dir / "sweep.slurm").read_text()
     runs = expand(load_sweep(path))
-    assert "#SBATCH --array=0-3%2" in script and "SLURM_ARRAY_TASK_ID" in script
+    # the array throttle is its own setting (run.jobs = 2 is the local concurrency)
+    assert "#SBATCH --array=0-3%3" in script and "SLURM_ARRAY_TASK_ID" in script
     assert "#SBATCH --ntasks=1" in script and "#SBATCH --job-name=grid" in script
+    assert "#SBATCH --mem=2G" in script and "#SBATCH --cpus-per-task=2" in script
+    assert "#SBATCH --partition=short" in script
+    assert "#SBATCH --time=00:04:00" in script               # run.timeout 120 s + 2 min
     assert "#SBATCH --output=" in script and "ancf-sweep" in script and "--collect" in script
+    assert 'VENV="${ANCF_VENV:-' in script                   # the environment is configurable
     assert (out_dir / "runs.txt").read_text().splitlines() == [r.dir for r in runs]
     assert all(os.path.isfile(os.path.join(r.dir, "config.yaml")) for r in runs)
     assert os.path.realpath(out_dir / "tasks" / "2") == os.path.realpath(runs[2].dir)
@@ -182,11 +188,48 @@ def test_slurm_script(tmp_path):
         assert json.load(fh)["status"] == "completed"
     p = subprocess.run(["bash", str(out_dir / "sweep.slurm")], env=env, capture_output=True,
                        text=True, timeout=60)
-    assert p.returncode == 0 and "already completed; skipping" in p.stdout
+    assert p.returncode == 0 and "already done; skipping" in p.stdout
+    # a resubmitted task (its run lost) appends to log.txt instead of overwriting it
+    os.remove(os.path.join(runs[1].dir, "summary.json"))
+    p = subprocess.run(["bash", str(out_dir / "sweep.slurm")], env=dict(env, SLURM_ARRAY_JOB_ID="8"),
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stdout + p.stderr
+    log = open(os.path.join(runs[1].dir, "log.txt")).read()
+    assert log.count("=== ancf-sweep attempt") == 2 and "job 7_1" in log and "job 8_1" in log
     rc, out, _ = run_main([path, "--collect"])
     assert rc == 1 and "4 runs: 1 completed, 3 missing" in out
     assert [r["status"] for r in read_csv(out_dir / "results.csv")] == \
         ["missing", "completed", "missing", "missing"]
+
+
+def test_slurm_numbered_logs_and_environment(tmp_path):
+    body = {"parameters": {"output.vtk": [False]}, "output": "num",
+            "slurm": {"logs": "numbered", "venv": os.path.relpath(os.path.join(ROOT, ".venv"), tmp_path)}}
+    path = write_sweep(str(tmp_path), body)
+    rc, out, _ = run_main([path, "--slurm", "--throttle", "5", "--time", "1-00:00:00"])
+    assert rc == 0, out
+    script = (tmp_path / "num" / "sweep.slurm").read_text()
+    assert "#SBATCH --array=0-0\n" in script                # a throttle above the task count is dropped
+    assert "#SBATCH --time=1-00:00:00" in script and "--mem" not in script
+    assert f'VENV="${{ANCF_VENV:-{os.path.join(ROOT, ".venv")}}}"' in script
+    rc, _, err = run_main([path, "--slurm", "--time", "two hours"])
+    assert rc == 2 and err.startswith("ancf-sweep: ") and "--time: expected SLURM's time syntax" in err
+    if shutil.which("srun"):
+        return
+    run = expand(load_sweep(path))[0]
+    env = dict(os.environ, **MPI_ENV, SLURM_ARRAY_TASK_ID="0", SLURM_ARRAY_JOB_ID="3")
+    for attempt in (1, 2):
+        p = subprocess.run(["bash", str(tmp_path / "num" / "sweep.slurm")], env=env,
+                           capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0, p.stdout + p.stderr
+        os.remove(os.path.join(run.dir, "summary.json"))     # as if the task had been killed
+    assert os.path.isfile(os.path.join(run.dir, "log.1.txt")) and os.path.isfile(os.path.join(run.dir, "log.2.txt"))
+    assert os.readlink(os.path.join(run.dir, "log.txt")) == "log.2.txt"
+    # ANCF_VENV at submission time wins over the script's default
+    p = subprocess.run(["bash", str(tmp_path / "num" / "sweep.slurm")],
+                       env=dict(env, ANCF_VENV=str(tmp_path / "nowhere")), capture_output=True,
+                       text=True, timeout=60)
+    assert p.returncode == 1 and "no ancf-solve at " + str(tmp_path / "nowhere") in p.stderr
 
 
 def test_single_run_on_two_ranks(tmp_path, monkeypatch):
@@ -261,3 +304,28 @@ def test_key_paths_ids_and_data_files(tmp_path):
     with pytest.raises(SweepError, match="loads"):
         (tmp_path / "b.yaml").write_text(f"base: {base}\nparameters:\n  loads[0].force[3]: [1]\n")
         load_sweep(str(tmp_path / "b.yaml"))
+
+
+def test_new_solver_outcomes_are_classified(tmp_path):
+    """ancf-solve's unstable (exit 4), interrupted (143/130) and disk-full (exit 2, OUTPUT_ERROR)
+    endings each get their own sweep status; unstable runs count as done."""
+    from ancf_petsc.sweep import classify, run_state, RunSpec
+
+    def case(summary: dict, rc: int, line: str):
+        d = tmp_path / f"r{rc}{summary['status']}"
+        d.mkdir()
+        (d / "summary.json").write_text(json.dumps({**summary, "steps": []}))
+        return classify(str(d), rc, [line]), d
+
+    (st, reason), d = case({"status": "unstable", "message": "1 of 2 levels are unstable"}, 4,
+                           "ancf-solve: unstable: 1 of 2 levels are unstable; results in /x")
+    assert (st, reason) == ("unstable", "1 of 2 levels are unstable")
+    assert run_state(RunSpec(0, "r", {}, str(d))).status == "unstable"
+    (st, reason), _ = case({"status": "interrupted", "message": "interrupted by SIGTERM"}, 143,
+                           "ancf-solve: interrupted by SIGTERM on the way to load factor 0.2 (last "
+                           "converged level 0.15); 3 converged level(s) kept in /x")
+    assert st == "interrupted" and reason.endswith("(last converged level 0.15)")
+    (st, reason), _ = case({"status": "failed", "reason_code": "OUTPUT_ERROR", "message": "output error"}, 2,
+                           "ancf-solve: output error: /x: no space left on device for level 3; "
+                           "converged steps are in /x")
+    assert st == "failed" and reason == "output error: /x: no space left on device for level 3"

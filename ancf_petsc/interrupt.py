@@ -1,0 +1,108 @@
+"""Clean stops on SIGTERM / SIGINT, and output that survives a closed pipe.
+
+A signal handler only records the signal.  The load stepper asks ``stop_requested`` between
+Newton solves; it reduces the record over all ranks (an allreduce), so every rank stops at the
+same safe point even when only one of them got the signal.  A second signal of either kind ends
+the process at once (converged levels are on disk already; summary.json then still says running).
+
+SIGPIPE (``ancf-solve ... | head``) is ignored: a write to the closed pipe fails with EPIPE,
+``SafePrinter`` then stops printing for the rest of the run and the solve goes on.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import sys
+
+_pending = 0                    # the signal number received (0: none)
+
+
+class RunInterrupted(Exception):
+    """Raised identically on every rank when a stop was requested; ``signum`` is the signal."""
+
+    def __init__(self, signum: int, where: str):
+        self.signum = signum
+        try:
+            self.name = signal.Signals(signum).name
+        except ValueError:
+            self.name = f"signal {signum}"
+        super().__init__(f"interrupted by {self.name} {where}")
+
+
+def _handler(signum, frame) -> None:
+    global _pending
+    if _pending:
+        # a second signal: the user (or scheduler) insists; stop now without cleaning up
+        try:
+            os.write(2, f"ancf-solve: second {signal.Signals(signum).name}: stopping at once\n".encode())
+        finally:
+            os._exit(128 + signum)
+    _pending = signum
+
+
+_previous: dict = {}
+
+
+def install() -> None:
+    """Handlers for SIGTERM and SIGINT (record, stop at the next safe point); SIGPIPE ignored.
+    Call (again) after petsc4py.init: PETSc installs its own SIGPIPE handler, replaced here."""
+    for sig, handler in ((signal.SIGTERM, _handler), (signal.SIGINT, _handler),
+                         (signal.SIGPIPE, signal.SIG_IGN)):
+        previous = signal.signal(sig, handler)
+        _previous.setdefault(sig, previous)
+
+
+def uninstall() -> None:
+    """Restore the handlers found by the first ``install`` and forget any recorded signal."""
+    for sig, handler in _previous.items():
+        signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+    _previous.clear()
+    reset()
+
+
+def pending() -> int:
+    """This rank's recorded signal (0: none); not collective."""
+    return _pending
+
+
+def reset() -> None:
+    global _pending
+    _pending = 0
+
+
+def stop_requested(comm) -> int:
+    """The signal any rank received (0: none); collective over ``comm`` (a PETSc Comm)."""
+    from mpi4py import MPI
+    mpi = comm.tompi4py()
+    if mpi.Get_size() == 1:
+        return _pending
+    return int(mpi.allreduce(_pending, op=MPI.MAX))
+
+
+class SafePrinter:
+    """``print`` to stdout that stops quietly once stdout is a closed pipe (EPIPE): the file
+    descriptor is pointed at /dev/null, so PETSc's own printing (-snes_monitor) goes there too."""
+
+    def __init__(self, quiet: bool = False):
+        self.quiet = quiet
+        self.closed = False
+
+    def __call__(self, msg: str) -> None:
+        if self.quiet or self.closed:
+            return
+        try:
+            print(msg, flush=True)
+        except (BrokenPipeError, OSError) as exc:
+            if isinstance(exc, BrokenPipeError) or getattr(exc, "errno", None) == 32:
+                self.close_stdout()
+            else:
+                raise
+
+    def close_stdout(self) -> None:
+        self.closed = True
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
+        except OSError:
+            pass

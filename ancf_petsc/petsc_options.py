@@ -1,0 +1,299 @@
+"""PETSc options at the edges: config values checked the way PETSc parses them, options PETSc
+never used, and PETSc errors turned into one line that names the option and what works.
+
+``check_value`` is pure Python (the config layer calls it before PETSc is initialised); it
+mirrors PETSc 3.18's ``PetscOptionsStringToReal/Int/Bool`` (strtod/strtol over the whole string,
+plus the words DEFAULT and DECIDE) and its type registries (case-sensitive names, e.g. ``lu``;
+case-insensitive enum values, e.g. ``nonzero``).  tests/test_edges.py checks these tables against
+the PETSc library itself.  Options not in the tables are passed on unchecked; a misspelt one is
+caught after the run by ``unused_options`` (PETSc's own ``PetscOptionsUsed`` flags).
+"""
+from __future__ import annotations
+
+import re
+
+SNES_TYPES = ("anderson", "aspin", "composite", "fas", "ksponly", "ksptransposeonly", "ms", "nasm",
+              "ncg", "newtonls", "newtontr", "ngmres", "ngs", "nrichardson", "patch", "python", "qn",
+              "shell", "vinewtonrsls", "vinewtonssls")
+KSP_TYPES = ("bcgs", "bcgsl", "bicg", "cg", "cgls", "cgne", "cgs", "chebyshev", "cr", "dgmres",
+             "fbcgs", "fbcgsr", "fcg", "fetidp", "fgmres", "gcr", "gltr", "gmres", "groppcg", "hpddm",
+             "ibcgs", "lcd", "lgmres", "lsqr", "minres", "nash", "none", "pgmres", "pipebcgs",
+             "pipecg", "pipecg2", "pipecgrr", "pipecr", "pipefcg", "pipefgmres", "pipegcr",
+             "pipelcg", "pipeprcg", "preonly", "python", "qcg", "qmrcgs", "richardson", "stcg",
+             "symmlq", "tcqmr", "tfqmr", "tsirm")
+PC_TYPES = ("asm", "bddc", "bfbt", "bjacobi", "cholesky", "chowiluviennacl", "composite", "cp",
+            "deflation", "eisenstat", "exotic", "fieldsplit", "galerkin", "gamg", "gasm", "h2opus",
+            "hmg", "hpddm", "hypre", "icc", "ilu", "jacobi", "kaczmarz", "ksp", "lmvm", "lsc", "lu",
+            "mat", "mg", "ml", "nn", "none", "parms", "patch", "pbjacobi", "pfmg", "python", "qr",
+            "redistribute", "redundant", "rowscalingviennacl", "saviennacl", "shell", "sor", "spai",
+            "svd", "syspfmg", "telescope", "tfs", "vpbjacobi")
+SOLVER_TYPES = ("bas", "cholmod", "cuda", "cusparse", "elemental", "essl", "klu", "lusol", "matlab",
+                "mkl_cpardiso", "mkl_pardiso", "mumps", "pastix", "petsc", "scalapack",
+                "sparseelemental", "spqr", "strumpack", "superlu", "superlu_dist", "umfpack")
+ORDERING_TYPES = ("1wd", "amd", "external", "metisnd", "natural", "nd", "qmd", "rcm", "rowlength",
+                  "spectral", "wbm")
+LINESEARCH_TYPES = ("basic", "bt", "cp", "l2", "ncglinear", "nleqerr", "none", "shell")
+
+#: registry types (case-sensitive, as PetscFunctionListFind compares them)
+TYPES = {
+    "snes_type": SNES_TYPES, "ksp_type": KSP_TYPES, "pc_type": PC_TYPES,
+    "snes_linesearch_type": LINESEARCH_TYPES, "pc_factor_mat_solver_type": SOLVER_TYPES,
+    "pc_factor_mat_ordering_type": ORDERING_TYPES,
+    "pc_hypre_type": ("ads", "ams", "boomeramg", "euclid", "parasails", "pilut"),
+    "pc_gamg_type": ("agg", "classical", "geo"),
+}
+#: enum values (case-insensitive, as PetscEListFind compares them)
+ENUMS = {
+    "ksp_norm_type": ("none", "preconditioned", "unpreconditioned", "natural"),
+    "pc_factor_shift_type": ("none", "nonzero", "positive_definite", "inblocks"),
+    "pc_asm_type": ("none", "basic", "restrict", "interpolate"),
+    "pc_side": ("left", "right", "symmetric"),
+}
+#: reals with the smallest value that makes sense (PETSc parses them with strtod)
+REALS = {
+    "snes_rtol": 0.0, "snes_atol": 0.0, "snes_stol": 0.0, "snes_divergence_tolerance": None,
+    "snes_linesearch_damping": 0.0, "snes_linesearch_maxstep": 0.0, "snes_linesearch_minlambda": 0.0,
+    "snes_linesearch_rtol": 0.0, "snes_linesearch_atol": 0.0, "snes_linesearch_ltol": 0.0,
+    "ksp_rtol": 0.0, "ksp_atol": 0.0, "ksp_divtol": None, "pc_factor_shift_amount": 0.0,
+    "pc_factor_zeropivot": 0.0, "pc_factor_fill": 0.0, "pc_hypre_boomeramg_strong_threshold": 0.0,
+}
+#: integers with the smallest value that makes sense (PETSc parses them with strtol)
+INTS = {
+    "snes_max_it": 0, "snes_max_funcs": -1, "snes_max_fail": 0, "snes_max_linear_solve_fail": 0,
+    "snes_lag_jacobian": -2, "snes_lag_preconditioner": -2, "snes_linesearch_max_it": 0,
+    "ksp_max_it": 0, "ksp_gmres_restart": 1, "pc_factor_levels": 0, "pc_asm_overlap": 0,
+    "pc_bjacobi_blocks": 1, "pc_gamg_agg_nsmooths": 0, "pc_mg_levels": 1,
+    "pc_hypre_boomeramg_max_iter": 1, "pc_hypre_boomeramg_max_levels": 1,
+}
+BOOLS = ("ksp_initial_guess_nonzero", "snes_ksp_ew", "snes_mf", "snes_mf_operator",
+         "ksp_error_if_not_converged", "snes_error_if_not_converged", "pc_factor_reuse_ordering",
+         "pc_factor_reuse_fill", "ksp_gmres_modifiedgramschmidt", "pc_gamg_repartition",
+         "pc_gamg_reuse_interpolation", "pc_jacobi_fixdiagonal", "options_left")
+
+#: prefixes under which the same option names appear (block, multigrid and split solvers)
+_PREFIX = re.compile(r"^(?:(?:sub|mg_coarse|mg_levels(?:_\d+)?|fieldsplit_\w+?|redundant|ksp)_)+")
+
+_SPECIAL_REAL = ("petsc_default", "default", "petsc_decide", "decide")
+_SPECIAL_INT = _SPECIAL_REAL + ("mouse",)
+# C strtod (decimal, hexadecimal, inf, nan) and strtol base 10, each over the whole string;
+# leading white space is skipped by both, trailing text makes PETSc reject the value
+_STRTOD = re.compile(r"""\s*[+-]?(?:
+    (?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?
+  | 0[xX](?:[0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)(?:[pP][+-]?\d+)?
+  | inf(?:inity)? | nan(?:\([0-9A-Za-z_]*\))? )""", re.VERBOSE | re.IGNORECASE)
+_STRTOL = re.compile(r"\s*[+-]?\d+")
+_TRUE = ("", "true", "yes", "1", "on")
+_FALSE = ("false", "no", "0", "off")
+
+
+def parse_real(text: str) -> float | None:
+    """The value PETSc's PetscOptionsStringToReal gives ``text``, or None if it rejects it
+    (DEFAULT/DECIDE are returned as nan: PETSc's own placeholders)."""
+    if text.strip().lower() in _SPECIAL_REAL and text == text.strip():
+        return float("nan")
+    if not text or not _STRTOD.fullmatch(text):
+        return None
+    s = text.strip().lower()
+    if s.lstrip("+-").startswith("0x"):
+        sign = -1.0 if s.startswith("-") else 1.0
+        return sign * float.fromhex(s.lstrip("+-"))
+    if "nan" in s:
+        return float("nan")
+    return float(s.replace("infinity", "inf"))
+
+
+def parse_int(text: str) -> int | None:
+    """PetscOptionsStringToInt: a base-10 integer over the whole string (no '.', no exponent)."""
+    if text.lower() in _SPECIAL_INT:
+        return -1
+    if not text or not _STRTOL.fullmatch(text):
+        return None
+    return int(text.strip())
+
+
+def parse_bool(text: str) -> bool | None:
+    """PetscOptionsStringToBool: true/yes/1/on (or no value), false/no/0/off; any case."""
+    t = text.lower()
+    return True if t in _TRUE else (False if t in _FALSE else None)
+
+
+def _kind(name: str) -> tuple[str, str]:
+    """(kind, base name) of an option name without its dash; kind '' = not checked."""
+    base = _PREFIX.sub("", name)
+    for key in (name, base):
+        if key in TYPES:
+            return "type", key
+        if key in ENUMS:
+            return "enum", key
+        if key in REALS or re.fullmatch(r"mat_mumps_cntl_\d+", key):
+            return "real", key
+        if key in INTS or re.fullmatch(r"mat_mumps_icntl_\d+", key):
+            return "int", key
+        if key in BOOLS:
+            return "bool", key
+    return "", name
+
+
+def check_value(name: str, value: str | None) -> str | None:
+    """Why PETSc would reject ``value`` for option ``name`` (no leading dash), or None.
+
+    ``value`` None means the option is given without a value (``-snes_monitor``)."""
+    kind, base = _kind(name)
+    if not kind:
+        return None
+    if kind == "bool":
+        if value is None or parse_bool(value) is not None:
+            return None
+        return f"expected a boolean (true/false, yes/no, on/off, 1/0); got {value!r}"
+    if value is None or value == "":
+        what = {"type": "a type name", "enum": "one of " + ", ".join(ENUMS.get(base, ())),
+                "real": "a number", "int": "an integer"}[kind]
+        return f"needs a value: {what}"
+    if kind == "type":
+        if value in TYPES[base]:
+            return None
+        near = [t for t in TYPES[base] if t.lower() == value.lower()]
+        hint = f" (type names are lower case: {near[0]})" if near else ""
+        return f"unknown {base.rsplit('_', 1)[0]} type {value!r}{hint}; PETSc 3.18 has " \
+               + ", ".join(_common(base))
+    if kind == "enum":
+        if value.lower() in ENUMS[base]:
+            return None
+        return f"expected one of {', '.join(ENUMS[base])}; got {value!r}"
+    if kind == "real":
+        x = parse_real(value)
+        if x is None:
+            return f"expected a number (PETSc reads it with strtod); got {value!r}"
+        lo = REALS.get(base, None)
+        if lo is not None and x == x and x < lo:
+            return f"must be >= {lo:g}; got {value}"
+        return None
+    n = parse_int(value)
+    if n is None:
+        return f"expected an integer (PETSc reads it with strtol: no '.' or exponent); got {value!r}"
+    lo = INTS.get(base, None)
+    if lo is not None and value.lower() not in _SPECIAL_INT and n < lo:
+        return f"must be >= {lo}; got {value}"
+    return None
+
+
+def _is_key(token: str) -> bool:
+    """PetscOptionsValidKey: one or two dashes and a letter (``-5`` is a value)."""
+    t = token[1:] if token.startswith("--") else token
+    return t.startswith("-") and len(t) > 1 and t[1].isalpha()
+
+
+def command_line_options(args: list[str]) -> list[tuple[str, str | None]]:
+    """(name without dashes, value or None) pairs as PETSc reads a command line."""
+    out = []
+    for i, tok in enumerate(args):
+        if not _is_key(tok):
+            continue
+        value = args[i + 1] if i + 1 < len(args) and not _is_key(args[i + 1]) else None
+        out.append((tok.lstrip("-"), value))
+    return out
+
+
+def check_command_line(args: list[str]) -> str | None:
+    """The first PETSc option on a command line that PETSc would reject, as one line."""
+    for name, value in command_line_options(args):
+        why = check_value(name, value)
+        if why:
+            return f"-{name}" + (f" {value}" if value is not None else "") + f": {why}"
+    return None
+
+
+_COMMON = {
+    "snes_type": ("newtonls", "newtontr", "vinewtonrsls", "qn", "ksponly"),
+    "ksp_type": ("preonly", "gmres", "fgmres", "cg", "minres", "bcgs"),
+    "pc_type": ("cholesky", "lu", "ilu", "icc", "gamg", "hypre", "jacobi", "bjacobi", "asm", "none"),
+    "snes_linesearch_type": ("basic", "bt", "l2", "cp", "nleqerr"),
+    "pc_factor_mat_solver_type": ("mumps", "superlu_dist", "petsc", "superlu"),
+}
+
+
+def _common(base: str) -> tuple[str, ...]:
+    """The types worth naming in a message (all of them for short lists)."""
+    return _COMMON.get(base, TYPES[base]) + (("...",) if base in _COMMON else ())
+
+
+# ------------------------------------------------------------------ after the run (needs PETSc)
+def options_used(names: list[str]) -> list[bool]:
+    """PETSc's own 'used' flag of each option in the global database (this rank's view)."""
+    import ctypes
+
+    from .inertia import _petsc_library
+    lib = _petsc_library()
+    out = []
+    for name in names:
+        flag = ctypes.c_int(0)                   # PetscBool is a C enum
+        if lib.PetscOptionsUsed(None, name.encode(), ctypes.byref(flag)) != 0:
+            flag.value = 1                        # cannot tell: do not accuse it
+        out.append(bool(flag.value))
+    return out
+
+
+#: options PETSc reads only in PetscFinalize, after the report is made
+READ_AT_FINALIZE = ("options_left", "log_view", "log_summary", "malloc_dump", "memory_view",
+                    "objects_dump", "log_all", "log_trace", "options_view", "check_pointer_intensity")
+HINTS = {"mat_type": "the Jacobian's format is solver.matrix in the config (auto, aij, sbaij)",
+         "help": ""}
+
+
+def unused_command_line_options(comm) -> list[str]:
+    """Options in PETSc's database (command line, PETSC_OPTIONS, .petscrc) that no PETSc object
+    ever read, as ``-name``; collective (an option read on any rank counts as used)."""
+    from petsc4py import PETSc
+    names = sorted(PETSc.Options().getAll())
+    names = [n for n in names if n not in READ_AT_FINALIZE]
+    return [f"-{n}" for n, u in zip(names, used_anywhere(names, comm)) if not u]
+
+
+def used_anywhere(names: list[str], comm) -> list[bool]:
+    """``options_used`` reduced over the ranks (collective; same list on every rank)."""
+    import numpy as np
+    from mpi4py import MPI
+    mpi = comm.tompi4py()
+    names = mpi.bcast(list(names), root=0)     # rank 0's list decides the order everywhere
+    used = np.array(options_used(names), dtype=np.int32)
+    if mpi.Get_size() > 1 and len(names):
+        out = np.empty_like(used)
+        mpi.Allreduce(used, out, op=MPI.MAX)
+        used = out
+    return [bool(u) for u in used]
+
+
+def unused_line(option: str, source: str = "") -> str:
+    """One warning line for an unused option (``source``: where it was set)."""
+    base = option.lstrip("-")
+    hint = HINTS.get(_PREFIX.sub("", base)) or "misspelt, or not read by the solver in use"
+    where = f" ({source})" if source else ""
+    return f"ancf-solve: warning: PETSc option {option}{where} was never used: {hint}"
+
+
+# ------------------------------------------------------------------ PETSc errors → one line
+def petsc_message(exc: Exception) -> str:
+    """The last line of a PETSc error (the reason; the lines above are PETSc's call stack)."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    for ln in reversed(lines):
+        text = re.sub(r"^\[\d+\]\s*", "", ln)
+        if text and not text.startswith("See ") and not re.match(r"\w+\(\) at ", text):
+            return text
+    return lines[-1] if lines else "PETSc error"
+
+
+def solver_hint(pc: str, factor: str, ranks: int, has_package=lambda name: True) -> str:
+    """What works instead of a preconditioner / factorisation PETSc refused."""
+    direct = ("the default direct solver (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu with "
+              "-pc_factor_mat_solver_type mumps" + (" or superlu_dist" if ranks > 1 else ""))
+    if pc in ("ilu", "icc") and ranks > 1:
+        return (f"PETSc's {pc.upper()} is sequential: on {ranks} ranks use -pc_type bjacobi or asm "
+                f"(-sub_pc_type {pc} on each rank's block), gamg, hypre, or {direct}")
+    if pc in ("lu", "cholesky") and factor in ("petsc", "superlu", "umfpack", "klu", "cholmod") \
+            and ranks > 1:
+        return f"-pc_factor_mat_solver_type {factor} is sequential: on {ranks} ranks use {direct}"
+    if pc == "hypre" and not has_package("hypre"):
+        return f"this PETSc has no hypre: use -pc_type gamg, or {direct}"
+    if pc in ("lu", "cholesky", "ilu", "icc") and factor:
+        return f"-pc_factor_mat_solver_type {factor} cannot do {pc} here: use {direct}"
+    return f"use {direct}, or -ksp_type gmres with -pc_type gamg, hypre, bjacobi or asm"

@@ -1,0 +1,48 @@
+"""How a run ends: final status, machine-readable reason code and exit code, in one place.
+
+summary.json's ``status`` is ``running`` while a run goes on and always ends in one of
+``FINAL_STATUSES``; ``reason_code`` says why (a fixed upper-case word; ``message`` is the prose).
+docs/running.md documents the table below for users.
+"""
+from __future__ import annotations
+
+import signal
+
+FINAL_STATUSES = ("completed", "failed", "interrupted", "unstable")
+
+#: exit codes of ancf-solve
+EXIT_OK = 0
+EXIT_BUG = 1                 # a bug (Python traceback); please report it
+EXIT_INPUT = 2               # config, command line, PETSc option or file-system error (one line)
+EXIT_FAILED = 3              # a load level was not reached (the converged ones are on disk)
+EXIT_UNSTABLE = 4            # every level converged, but some are unstable equilibria
+#: interrupted by a signal: 128 + the signal number (130 SIGINT, 143 SIGTERM)
+
+#: reason codes beside the SNES ones (DIVERGED_LINE_SEARCH, DIVERGED_MAX_IT, ...), which a failed
+#: level reports as they are
+COMPLETED = "COMPLETED"
+NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
+OUTPUT_ERROR = "OUTPUT_ERROR"
+PETSC_ERROR = "PETSC_ERROR"
+INTERNAL_ERROR = "INTERNAL_ERROR"         # a bug (exit code 1, with a traceback)
+
+
+def signal_reason(signum: int) -> str:
+    """``SIGTERM`` / ``SIGINT`` (the reason code of an interrupted run)."""
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"SIGNAL_{signum}"
+
+
+def exit_code(status: str, reason_code: str = "", signum: int = 0) -> int:
+    """The exit code of a run that ended with ``status`` (``signum`` for interrupted runs)."""
+    if reason_code == OUTPUT_ERROR:
+        return EXIT_INPUT             # a file-system problem, named in one line like a config error
+    if status == "completed":
+        return EXIT_OK
+    if status == "unstable":
+        return EXIT_UNSTABLE
+    if status == "interrupted":
+        return 128 + signum
+    return EXIT_FAILED

@@ -38,6 +38,7 @@ from typing import Any, Callable
 
 import yaml
 
+from .config import DEFAULT_AXIAL_POINTS
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")
@@ -124,7 +125,7 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
 def _discretisation_of(raw: dict) -> tuple[str, int, int, int | None]:
     """(element, elements, axial points, cubature degree) of the first beam of a raw config."""
     b = raw["beams"][0]
-    return (str(b.get("element", "3363")), int(b["elements"]), int(b.get("axial_points", 3)),
+    return (str(b.get("element", "3363")), int(b["elements"]), int(b.get("axial_points", DEFAULT_AXIAL_POINTS)),
             b["section"].get("cubature_degree"))
 
 

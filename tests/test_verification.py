@@ -138,8 +138,9 @@ def test_pretwisted_bar_converges_under_refinement(tmp_path):
     elong = np.array([r[1] for r in rows])
     twist = np.array([r[2] for r in rows])
     d_el, d_tw = np.abs(np.diff(elong)), np.abs(np.diff(twist))
-    # past the coarsest pair, successive changes shrink (a boundary layer at the reduced root,
-    # which stops the section from untwisting there, makes the elongation converge slowly)
-    assert np.all(d_el[2:] < d_el[1:-1]) and d_el[-1] < 1e-3 * abs(elong[-1])
-    assert np.all(d_tw[1:] < d_tw[:-1]) and d_tw[-1] < 1e-2 * abs(twist[-1])
+    # default (2-point) axial rule: the elongation has settled to 1e-5 from 4 elements on
+    # (measured 6e-6); the untwist, which the reduced root holds back in a boundary layer,
+    # converges monotonically (changes 0.85, 0.092, 0.0085, 0.0012 deg)
+    assert d_el[0] > d_el[1] and np.all(d_el[2:] < 1e-5 * abs(elong[-1]))
+    assert np.all(d_tw[1:] < d_tw[:-1]) and d_tw[-1] < 1e-3 * abs(twist[-1])
     assert twist[-1] > 0.5   # the tension untwists the bar

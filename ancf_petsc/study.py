@@ -233,7 +233,9 @@ def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
         rows[i].pareto = True
     csv_path = os.path.join(spec.output, "study.csv")
     write_csv(rows, csv_path)
-    title = (f"{spec.name}: {spec.scene.probe} ({spec.scene.component}) at load factor "
+    comp = spec.scene.component
+    what = "displacement magnitude" if comp == "norm" else f"{comp}-displacement"
+    title = (f"{spec.name.replace('_', ' ')}: {what} of probe '{spec.scene.probe}' at load factor "
              f"{spec.scene.levels()[-1]:g}")
     png = pareto_chart(rows, os.path.join(spec.output, "pareto.png"), title, ref_text)
     log(f"[study] reference: {ref_text} = {ref:.10g}")

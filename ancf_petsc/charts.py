@@ -5,6 +5,7 @@ overlap neither each other nor the markers (:func:`place_labels`)."""
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 from matplotlib import colormaps
@@ -286,10 +287,13 @@ def stability_chart(cells: list, out_png: str, row_key: str, col_key: str, x_key
                 ax.set_title(axis_words(col_key, cv), fontsize=8)
     if title:
         fig.suptitle(title, fontsize=9)
-    notes = ["green: converged (Newton iterations; % = error against the reference where above 1 %)"
+    notes = ["green: converged (Newton iterations; % = error against the reference where above 1\u00a0%)"
              + ("; adaptive: the default load stepping with cut-backs" if x_key == "increment" else "")]
     notes.append("red: failed" + (" — " + "; ".join(f"{w}: {FAILURE_WORDS[w]}" for w in FAILURE_WORDS
                                                      if w in shown) if shown else ""))
-    fig.tight_layout(rect=(0, 0.3 / fig.get_size_inches()[1], 1, 1))
-    fig.text(0.01, 0.01, "\n".join(notes), fontsize=6.5, color="0.25", va="bottom")
+    width, height = fig.get_size_inches()
+    lines = [ln for note in notes for ln in textwrap.wrap(note, int((width - 0.2) / 0.05),
+                                                           subsequent_indent="  ")]
+    fig.tight_layout(rect=(0, (0.1 + 0.12 * len(lines)) / height, 1, 1))
+    fig.text(0.01, 0.01, "\n".join(lines), fontsize=6.5, color="0.25", va="bottom")
     return _save(fig, out_png)

@@ -71,7 +71,7 @@ def elastica(tmp, figdir):
     print("| elements | axial points | PL²/EI | u/L FE | u/L elastica | w/L FE | w/L elastica | "
           "err u | err w | Newton its |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    fig, ax = plt.subplots(figsize=(4.8, 3.4))
+    fig, ax = plt.subplots(figsize=(7.4, 3.4))
     alphas = np.linspace(0.05, 5, 60)
     ex = np.array([elastica_tip(a) for a in alphas])
     ax.plot(alphas, ex[:, 1], "k-", label="exact: deflection w/L (filled)")
@@ -94,13 +94,13 @@ def elastica(tmp, figdir):
             print(f"| {ne} | {ax_pts} | {a:g} | {d[0]:.5f} | {ux:.5f} | {d[2]:.5f} | {w:.5f} | "
                   f"{d[0] / ux - 1:+.1e} | {d[2] / w - 1:+.1e} | {st['iterations']} |")
         ax.plot(a_fe, w_fe, mk, label=f"{ne} elements, {ax_pts} axial points"
-                + (" (default)" if ax_pts == default else ""))
+                + (" (the default rule)" if ax_pts == default else ""))
         ax.plot(a_fe, u_fe, mk, mfc="none", color=ax.lines[-1].get_color())
     ax.set_xlabel("P L² / EI")
     ax.set_ylabel("tip displacement / L")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     fig.tight_layout()
-    fig.savefig(os.path.join(figdir, "elastica.png"), dpi=130)
+    fig.savefig(os.path.join(figdir, "elastica.png"), dpi=130, bbox_inches="tight")
     plt.close(fig)
 
 

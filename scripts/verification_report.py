@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Verification report: runs the core verification problems and prints Markdown tables.
 
-Figures go to docs/figures/.  The README's "Verification report" section is this output.
+Figures go to docs/figures/.  docs/verification.md is this output (with its words around it).
 Usage: python scripts/verification_report.py [--out docs/figures]
 """
 from __future__ import annotations

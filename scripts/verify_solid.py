@@ -718,7 +718,7 @@ the second is what "ANCF instead of a converged solid model" saves.
   section cannot contract, so the section contracts over a boundary layer of about one section
   size.  With the full 3-point rule the nearly incompressible material over-constrains the
   element that holds it (Poisson/volumetric locking of the quadratic section field), and the
-  error falls only slowly with n.  Bending adds shear locking (see the README, "Locking").  Two
+  error falls only slowly with n.  Bending adds shear locking (see docs/verification.md, "Locking").  Two
   axial points (selective reduced integration along ξ) remove both: compare the two ANCF
   blocks of each table.
 * *What is left at 8-16 elements (2 points) is model error,* not discretisation error: the

@@ -45,7 +45,7 @@ def test_table1_reproduced(table1):
     # psi = 0 and 15: every load level within 2 % (measured: within 0.54 % and 1.01 %)
     assert np.all(np.abs(err[0]) < 0.01) and np.all(np.abs(err[15]) < 0.0125)
     # psi = 45: within 2 % from 20 N on; at 10 N the paper's pretwist offset (0.025 mm) is larger
-    # than ours (0.020 mm), -3.6 % (README: "where we differ")
+    # than ours (0.020 mm), -3.6 % (docs/paper.md: "where we differ")
     assert np.all(np.abs(err[45][1:]) < 0.015) and abs(err[45][0]) < 0.04
     assert table1.ordered()
     # the neighbours barely move (they slide; with pretwist the helical interface drags them a
@@ -75,7 +75,7 @@ def test_mpi_gives_the_serial_table(tmp_path, table1, ranks):
 
 
 def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
-    """README "Where we differ": the paper's psi = 45 - 0 difference matches the soleus alone
+    """docs/paper.md "Where we differ": the paper's psi = 45 - 0 difference matches the soleus alone
     (neighbours and contact removed) within the table's rounding (three decimals: +-0.001 mm on
     a difference); the bundle's is smaller at 10 N, where the neighbours hold the helix back."""
     solo = {}
@@ -100,6 +100,6 @@ def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
 
 def test_table1_paths_are_stable(table1):
     """Every converged level of the three columns is a minimum of the total potential (no
-    negative tangent eigenvalue; README "Table 2" for the coarse meshes where this fails)."""
+    negative tangent eigenvalue; docs/paper.md "Table 2" for the coarse meshes where this fails)."""
     for psi, s in table1.summaries.items():
         assert [st["negative_eigenvalues"] for st in s["steps"]] == [0] * 13, psi

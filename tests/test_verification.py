@@ -1,4 +1,4 @@
-"""Verification against exact solutions (README "Verification report")."""
+"""Verification against exact solutions (docs/verification.md)."""
 import math
 
 import numpy as np

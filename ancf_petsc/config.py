@@ -134,7 +134,7 @@ class SectionSpec:
     compress: bool = True
 
 
-# Gauss points along ξ per element.  2 (selective reduced integration along the beam) is the
+# Gauss points along ξ per element.  2 (reduced integration along the beam) is the
 # accurate rule: 3 (the paper's full rule) shear- and volume-locks slender or clamped beams
 # (docs/verification.md, "Locking"); configs that reproduce the paper state axial_points: 3.
 DEFAULT_AXIAL_POINTS = 2

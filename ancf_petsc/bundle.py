@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from .config import ConfigError, integer, mapping, number, string, vector
+from .config import DEFAULT_AXIAL_POINTS, ConfigError, integer, mapping, number, string, vector
 
 COUNTS = {1: 0, 7: 1, 19: 2, 37: 3}
 SECTIONS = ("hexagon", "circle")
@@ -127,7 +127,7 @@ def expand_bundle(raw: dict) -> dict:
         centres = hex_centres(rings, pitch)
         loops, pairs = circle_beams(centres, radius, pitch,
                                     number(b.get("arc_deg", 40.0), "bundle.arc_deg", positive=True, hi=59.0))
-    axial = integer(b.get("axial_points", 3), "bundle.axial_points", lo=1, hi=10)
+    axial = integer(b.get("axial_points", DEFAULT_AXIAL_POINTS), "bundle.axial_points", lo=1, hi=10)
     per_beam = {k: b[k] for k in ("element", "locking") if k in b}     # checked per beam
     out["beams"] = [{"name": f"fascicle{i}", "elements": elements, "axial_points": axial,
                      "material": b["material"], **per_beam,

@@ -132,13 +132,19 @@ class SectionSpec:
     spline_degree_given: bool = False
 
 
+# Gauss points along ξ per element.  2 (reduced integration along the beam) is the
+# accurate rule: 3 (the paper's full rule) shear- and volume-locks slender or clamped beams
+# (docs/verification.md, "Locking"); configs that reproduce the paper state axial_points: 3.
+DEFAULT_AXIAL_POINTS = 2
+
+
 @dataclass
 class BeamSpec:
     name: str
     section: SectionSpec
     material: dict
     elements: int
-    axial_points: int = 3
+    axial_points: int = DEFAULT_AXIAL_POINTS
     element: str = "3363"                 # element type, see element3363.ELEMENT_VECTORS
     locking: str = "none"                 # 'ecm': Poisson-locking remedy (model.Beam.parts)
 
@@ -462,7 +468,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
             section=_section(b["section"], f"{p}.section", base_dir),
             material=_material(b["material"], f"{p}.material"),
             elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
-            axial_points=_axial_points(b.get("axial_points", 3), f"{p}.axial_points")))
+            axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points")))
         beams[-1].element = string(str(b.get("element", "3363")), f"{p}.element", ELEMENT_TYPES)
         default_locking = "ecm" if beams[-1].element == "3333" else "none"
         beams[-1].locking = string(b.get("locking", default_locking), f"{p}.locking", LOCKING)

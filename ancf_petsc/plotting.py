@@ -407,7 +407,9 @@ def _render(panels: list[tuple[SurfaceMesh, np.ndarray, SurfaceMesh | None, str]
     # layout in inches: margin, title band, colour bar band, footnote band
     m, gap, cbw = 0.1, 0.25, 1.25
     title_h = 0.3 if any(p[3] for p in panels) else 0.0
+    rolled = len(view) > 2 and abs((view[2] + 180.0) % 360.0 - 180.0) > 90.0
     notes = ([f"y and z stretched {scale:g}x"] if scale != 1 else []) \
+        + (["camera rolled: z points down"] if rolled else []) \
         + (["grey wireframe: reference configuration"] if any(p[2] for p in panels) else [])
     note_h = 0.25 if notes else 0.0
     w = [b[2] - b[0] for b in boxes]
@@ -544,7 +546,7 @@ def plot_load_elongation(curves: dict[str, tuple[list[float], list[float]]], pap
             continue
         ref = table[columns[lab]]
         ax.plot(loads_p, ref, "o", mfc="none", color=col[lab], ms=5,
-                label=f"{lab} (paper, {columns[lab]})")
+                label=f"{lab} (paper)")
         if not len(loads):
             continue
         inside = (loads_p >= loads.min() - 1e-9) & (loads_p <= loads.max() + 1e-9)
@@ -555,7 +557,7 @@ def plot_load_elongation(curves: dict[str, tuple[list[float], list[float]]], pap
             axe.plot(loads_p[inside], err, "o-", color=col[lab], ms=3.5, lw=1.0)
     axe.axhline(0.0, color="0.5", lw=0.6)
     ax.set_ylabel("elongation [mm]")
-    axe.set_ylabel("rel. error [%]")
+    axe.set_ylabel("ours vs paper [%]")
     axe.set_xlabel("load [N]")
     ax.legend(fontsize=8, frameon=False)
     for a in (ax, axe):
@@ -572,7 +574,7 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
                      flagged: list[tuple[int, float]] | None = None) -> str:
     """Elongation vs elements per subtendon (log2 x axis): ours lines + markers, the paper's open
     markers.  A label of ``table`` shares the colour of the ``paper`` label it starts with
-    (``"psi = 0, linear gap"`` goes with ``"psi = 0"``); variants after the comma get their own
+    (``"ψ = 0°, linear gap"`` goes with ``"ψ = 0°"``); variants after the comma get their own
     line style; ``flagged`` points get a black cross."""
     col = _colours(list(paper) + [lab.split(",")[0] for lab in table])
     variants = list(dict.fromkeys(lab.split(",", 1)[1].strip() for lab in table if "," in lab))

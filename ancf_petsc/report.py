@@ -323,24 +323,29 @@ def timing_markdown(t1: Table1) -> str:
 
 
 # ------------------------------------------------------------------------------ figures
+#: Figure 5's camera: from the soleus' side (+y), rolled by 180° so that x runs 0 -> L from
+#: left to right (z then points down; a rotation, not a mirror image)
+FIGURE5_VIEW = (-8.0, 70.0, 180.0)
+
+
 def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list[str]:
     """Load-elongation vs the paper, Table 2 convergence, Figure 5 (ψ = 15°, 45°) renders."""
     from . import plotting
     made = []
-    curves = {f"psi = {p}": (list(t1.loads[np.isfinite(t1.ours[p])]), list(t1.ours[p][np.isfinite(t1.ours[p])]))
+    curves = {f"ψ = {p}°": (list(t1.loads[np.isfinite(t1.ours[p])]), list(t1.ours[p][np.isfinite(t1.ours[p])]))
               for p in TWISTS if p in t1.summaries}
     if curves:
         made.append(plotting.plot_load_elongation(curves, PAPER_T1, os.path.join(out, "load_elongation.png"),
-                                                  {f"psi = {p}": f"psi{p}_mm" for p in TWISTS},
+                                                  {f"ψ = {p}°": f"psi{p}_mm" for p in TWISTS},
                                                   title="Type III tendon: soleus elongation vs Table 1"))
     if t2rows:
         paper = read_paper(PAPER_T2)
         ours = {}
         for v in dict.fromkeys(k[0] for k in t2rows):
             for p in TWISTS:
-                ours[f"psi = {p}, {v}"] = [(n, r["elong"]) for (vv, pp, n), r in sorted(t2rows.items())
+                ours[f"ψ = {p}°, {v}"] = [(n, r["elong"]) for (vv, pp, n), r in sorted(t2rows.items())
                                            if vv == v and pp == p and np.isfinite(r["elong"])]
-        theirs = {f"psi = {p}": list(zip(paper["elements_per_subtendon"].astype(int), paper[f"psi{p}_mm"]))
+        theirs = {f"ψ = {p}°": list(zip(paper["elements_per_subtendon"].astype(int), paper[f"psi{p}_mm"]))
                   for p in TWISTS}
         unstable = [(n, r["elong"]) for (_, _, n), r in t2rows.items()
                     if r["unstable_from"] is not None and np.isfinite(r["elong"])]
@@ -358,10 +363,10 @@ def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list
     if len(vtus) == 2:
         made.append(plotting.render_pair(vtus[15][0], vtus[45][0], os.path.join(out, "figure5.png"),
                                          titles=("(a) ψ = 15°, 400 N", "(b) ψ = 45°, 400 N"),
-                                         view=(8.0, 70.0), reference_vtu=(vtus[15][1], vtus[45][1])))
+                                         view=FIGURE5_VIEW, reference_vtu=(vtus[15][1], vtus[45][1])))
     for p, (last, ref) in vtus.items():
         made.append(plotting.render_surfaces(last, os.path.join(out, f"figure5_psi{p}.png"),
-                                             title=f"ψ = {p}°, soleus at 400 N", view=(8.0, 70.0),
+                                             title=f"ψ = {p}°, soleus at 400 N", view=FIGURE5_VIEW,
                                              reference_vtu=ref))
     for m in made:
         log(f"[report] wrote {m}")

@@ -162,8 +162,8 @@ def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> di
         w.writerows(out)
     axes4 = _chart_axes(keys)
     png = stability_chart(out, os.path.join(spec.output, "stability.png"), *axes4,
-                          title=f"{spec.name}: Newton iterations (green) / failures (red); "
-                                f"% = error vs reference where > 1 %") if axes4 else None
+                          title=f"{spec.name.replace('_', ' ')}: Newton iterations to the last load "
+                                f"level") if axes4 else None
     n_ok = sum(r["status"] == "completed" for r in out)
     log(f"[stability] {n_ok}/{len(out)} cells converged, {time.perf_counter() - t0:.1f} s; {path}"
         + (f", {png}" if png else ""))

@@ -38,6 +38,7 @@ from typing import Any, Callable
 
 import yaml
 
+from .config import DEFAULT_AXIAL_POINTS
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")
@@ -127,7 +128,7 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
 def _discretisation_of(raw: dict) -> tuple[str, int, int, int | None]:
     """(element, elements, axial points, cubature degree) of the first beam of a raw config."""
     b = raw["beams"][0]
-    return (str(b.get("element", "3363")), int(b["elements"]), int(b.get("axial_points", 3)),
+    return (str(b.get("element", "3363")), int(b["elements"]), int(b.get("axial_points", DEFAULT_AXIAL_POINTS)),
             b["section"].get("cubature_degree"))
 
 
@@ -235,7 +236,9 @@ def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
         rows[i].pareto = True
     csv_path = os.path.join(spec.output, "study.csv")
     write_csv(rows, csv_path)
-    title = (f"{spec.name}: {spec.scene.probe} ({spec.scene.component}) at load factor "
+    comp = spec.scene.component
+    what = "displacement magnitude" if comp == "norm" else f"{comp}-displacement"
+    title = (f"{spec.name.replace('_', ' ')}: {what} of probe '{spec.scene.probe}' at load factor "
              f"{spec.scene.levels()[-1]:g}")
     png = pareto_chart(rows, os.path.join(spec.output, "pareto.png"), title, ref_text)
     log(f"[study] reference: {ref_text} = {ref:.10g}")

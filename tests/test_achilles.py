@@ -45,7 +45,7 @@ def test_table1_reproduced(table1):
     # sliding contact, exact (docs/contact.md): psi = 0 within 1.8 % at every level (measured
     # -1.72 ... +0.06 %), psi = 15 within 2.2 % (-2.11 ... +0.14 %); psi = 45 within 1.5 % from
     # 30 N on and 2.1 % at 20 N; at 10 N the paper's pretwist offset (0.025 mm) is that of a
-    # free soleus, the bundle's 0.021 mm: -4.1 % (docs/achilles.md, "where we differ")
+    # free soleus, the bundle's 0.021 mm: -4.1 % (docs/paper.md, "where we differ")
     assert np.all(np.abs(err[0]) < 0.018) and np.all(np.abs(err[15]) < 0.022)
     assert np.all(np.abs(err[45][2:]) < 0.015) and abs(err[45][1]) < 0.021 and abs(err[45][0]) < 0.045
     assert table1.ordered()
@@ -78,7 +78,7 @@ def test_mpi_gives_the_serial_table(tmp_path, table1, ranks):
 
 
 def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
-    """README "Where we differ": the paper's psi = 45 - 0 difference matches the soleus alone
+    """docs/paper.md "Where we differ": the paper's psi = 45 - 0 difference matches the soleus alone
     (neighbours and contact removed) within the table's rounding (three decimals: +-0.001 mm on
     a difference); the bundle's is smaller at 10 N, where the neighbours hold the helix back."""
     solo = {}
@@ -103,6 +103,6 @@ def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
 
 def test_table1_paths_are_stable(table1):
     """Every converged level of the three columns is a minimum of the total potential (no
-    negative tangent eigenvalue; README "Table 2" for the coarse meshes where this fails)."""
+    negative tangent eigenvalue; docs/paper.md "Table 2" for the coarse meshes where this fails)."""
     for psi, s in table1.summaries.items():
         assert [st["negative_eigenvalues"] for st in s["steps"]] == [0] * 13, psi

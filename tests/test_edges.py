@@ -260,6 +260,9 @@ RUNS = {   # options that must run and give the default solver's answer
     2: ["-ksp_type gmres -pc_type bjacobi", "-ksp_type gmres -pc_type asm", "-pc_type lu",
         "-pc_type lu -pc_factor_mat_solver_type superlu_dist", "-ksp_type gmres -pc_type hypre"],
 }
+#: GMRES + GAMG on the two-element bar runs with 3 axial Gauss points but breaks down
+#: (DIVERGED_BREAKDOWN at the first step) with the 2-point default: it may end in the failure line
+MAY_DIVERGE = {"-ksp_type gmres -pc_type gamg"}
 REFUSED = {   # options PETSc cannot run here: exit 2, one line with the options and what works
     1: [("-pc_type ilu -pc_factor_mat_solver_type mumps", "mumps does not support factorization type ILU")],
     2: [("-ksp_type gmres -pc_type ilu", "on 2 ranks use -pc_type bjacobi or asm"),
@@ -287,8 +290,9 @@ for k, opts in enumerate(sets):
     spec.output.dir = f"{out}/{k}"
     try:
         res = run_model(spec, PETSc.COMM_WORLD, lambda *_: None)
-        tip = res.summary["steps"][-1]["probes"]["tip"]["displacement"] if res.summary else None
-        results.append({"status": res.status, "tip": tip})
+        steps = res.summary["steps"] if res.summary else []
+        tip = steps[-1]["probes"]["tip"]["displacement"] if steps else None
+        results.append({"status": res.status, "tip": tip, "message": res.message})
     except ConfigError as exc:
         results.append({"status": "refused", "message": str(exc)})
     for name, _ in pairs:
@@ -319,6 +323,11 @@ def test_standard_solver_options_run_or_say_what_works(tmp_path, ranks):
     results = json.loads(next(ln for ln in p.stdout.splitlines() if ln.startswith("RESULTS "))[8:])
     ref = np.array(results[0]["tip"])
     for opts, res in zip(runs, results[1:1 + len(runs)]):
+        if opts in MAY_DIVERGE and res["status"] == "failed":
+            # a Krylov method that breaks down ends in one line naming it and what works
+            assert "DIVERGED_LINEAR_SOLVE (the linear solver " + opts in res["message"], res
+            assert "use the default direct solver" in res["message"] and "\n" not in res["message"]
+            continue
         assert res["status"] == "completed", (opts, res)
         assert np.abs(np.array(res["tip"]) - ref).max() <= 1e-7 * np.abs(ref).max(), opts
     whys = dict(REFUSED[ranks], **{"-ksp_type gmres -pc_type hypre": "no hypre"})

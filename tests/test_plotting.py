@@ -96,3 +96,118 @@ def test_plot_convergence(tmp_path):
     paper = {"psi = 0": [(1, 6.051), (2, 6.089), (4, 6.151)]}
     assert_picture(plotting.plot_convergence(ours, paper, str(tmp_path / "conv.png")),
                    min_ink=0.02)
+
+
+# ---------------------------------------------------------------- charts people read (issue 14)
+def _rows(spec):
+    """Study rows (element, axial points, degree, elements, wall time, error, pareto)."""
+    from ancf_petsc.study import Row
+    return [Row(label="", element=e, elements=n, axial_points=a, cubature_degree=d, dofs=18 * (2 * n + 1),
+                gauss_points=0, status="completed", value=1.0, wall_time=t, newton_iterations=10,
+                rel_error=err, pareto=p) for e, a, d, n, t, err, p in spec]
+
+
+def _labelled_ticks(axis):
+    lo, hi = sorted(axis.get_view_interval())
+    return [t.get_text() for t, v in zip(axis.get_majorticklabels(), axis.get_majorticklocs())
+            if lo <= v <= hi and t.get_text()]
+
+
+@pytest.mark.parametrize("lo,hi", [(4.5, 60.0), (1.3e-3, 3.1e-2), (0.05, 0.09), (1e-16, 2.0), (7.0, 9.0)])
+def test_log_ticks_give_at_least_two_labels(lo, hi):
+    from ancf_petsc.charts import log_ticks, tick_label
+    ticks = log_ticks(lo, hi)
+    assert len(ticks) >= 2 or hi / lo < 1.5
+    assert all(lo <= t <= hi for t in ticks)
+    labels = [tick_label(t) for t in ticks]
+    assert len(set(labels)) == len(labels) and all(labels)
+    assert tick_label(2e-4) == "2×10⁻⁴" and tick_label(1e-5) == "10⁻⁵" and tick_label(0.05) == "0.05"
+
+
+def test_pareto_chart_axes_labels_and_legend_are_readable(tmp_path):
+    """A narrow study (the Achilles one spans one decade in time and error) still gets two or
+    more labelled ticks per axis; a cluster of runs gets labels that do not overlap; the legend
+    is in words."""
+    from ancf_petsc.charts import pareto_figure, text_overlaps
+    spec = [("3363", 2, 4, 4, 6.7, 1.6e-3, True), ("3363", 2, 4, 8, 32.0, 3.0e-3, False),
+            ("3363", 2, 4, 16, 53.0, 1.3e-3, True), ("3363", 3, 4, 4, 5.7, 2.6e-2, True),
+            ("3363", 3, 4, 8, 13.0, 1.4e-2, False), ("3363", 3, 4, 16, 36.0, 7.2e-3, False),
+            ("3333", 2, 4, 4, 5.5, 2.7e-2, True), ("3333", 2, 4, 8, 4.8, 2.7e-2, True),
+            ("3333", 2, 4, 16, 16.0, 2.7e-2, False)]
+    # a tight cluster: eight runs within a few per cent of each other in time and error
+    spec += [("3333", 3, 4, n, 10.0 * (1 + 0.02 * k), 2.0e-2 * (1 + 0.03 * k), False)
+             for k, n in enumerate((1, 2, 4, 8, 16, 32, 64, 128))]
+    fig, ax, labels = pareto_figure(_rows(spec), "achilles psi45: x-displacement of probe 'soleus'")
+    fig.canvas.draw()
+    assert len(_labelled_ticks(ax.xaxis)) >= 2 and len(_labelled_ticks(ax.yaxis)) >= 2
+    assert labels and not text_overlaps(fig, labels)
+    box = ax.bbox.extents
+    renderer = fig.canvas.get_renderer()
+    from matplotlib.text import Text
+    for t in labels:
+        x0, y0, x1, y1 = Text.get_window_extent(t, renderer).extents
+        assert box[0] - 0.5 <= x0 and x1 <= box[2] + 0.5 and box[1] - 0.5 <= y0 and y1 <= box[3] + 0.5
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "3363, 2 axial Gauss points" in legend and not any("_" in t for t in legend)
+    # the front's labels are placed first, so all four Pareto runs are labelled
+    assert sum(t.get_text() in ("4", "8") for t in labels) >= 4
+
+
+def test_stability_chart_speaks_words(tmp_path):
+    from ancf_petsc.charts import axis_words, stability_chart
+    assert axis_words("bulk_ratio", 100) == "K/μ = 100"
+    assert axis_words("element", "3333-none") == "element 3333 without ecm"
+    assert axis_words("penalty_scale", 0.01) == "penalty × 0.01"
+    cells = [{"increment": inc, "linesearch": ls, "bulk_ratio": k, "status": st, "iterations": 12,
+              "short": "max it", "rel_error": 0.02}
+             for inc in ("adaptive", 0.5) for ls in ("basic", "bt") for k in (10, 1000)
+             for st in (("completed",) if inc == "adaptive" else ("failed",))]
+    assert_picture(stability_chart(cells, str(tmp_path / "s.png"), "bulk_ratio", "", "increment",
+                                   "linesearch"), min_ink=0.05)
+
+
+def test_figure5_view_runs_x_from_0_to_L_left_to_right():
+    """Figure 5's camera (report.FIGURE5_VIEW) puts x = 0 left of x = L on the screen, by
+    matplotlib's own 3D projection; the old view (8, 70) ran it right to left."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d import proj3d
+    from ancf_petsc.report import FIGURE5_VIEW
+
+    def screen_x(view):
+        fig = Figure()
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot(projection="3d")
+        ax.set_xlim(0, 70)
+        ax.set_ylim(0, 10)
+        ax.set_zlim(-8, 0)
+        ax.view_init(*view)
+        fig.canvas.draw()
+        xs, _, _ = proj3d.proj_transform(np.array([0.0, 70.0]), np.array([5.0, 5.0]),
+                                         np.array([-4.0, -4.0]), ax.get_proj())
+        return xs
+
+    xs = screen_x(FIGURE5_VIEW)
+    assert xs[1] > xs[0]
+    old = screen_x((8.0, 70.0))
+    assert old[1] < old[0]
+
+
+def test_load_elongation_legend_has_no_csv_column_names(tmp_path):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: F401
+    table = plotting.read_csv_table(PAPER_CSV)
+    curves = {"ψ = 0°": (list(table["load_N"]), list(table["psi0_mm"]))}
+    captured = {}
+    real_save = plotting._save
+
+    def grab(fig, out_png):
+        captured["fig"] = fig
+        return real_save(fig, out_png)
+    plotting._save = grab
+    try:
+        plotting.plot_load_elongation(curves, PAPER_CSV, str(tmp_path / "le.png"), {"ψ = 0°": "psi0_mm"})
+    finally:
+        plotting._save = real_save
+    legend = [t.get_text() for ax in captured["fig"].axes if ax.get_legend()
+              for t in ax.get_legend().get_texts()]
+    assert legend == ["ψ = 0° (this code)", "ψ = 0° (paper)"]

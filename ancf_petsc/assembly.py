@@ -330,6 +330,13 @@ class Problem:
         the pattern holds exactly the couplings that occurred, never a whole search window."""
         if self.contact is None:
             return False
+        # the couplings follow the B elements the local points project onto: unchanged on
+        # every rank, nothing to do (the common case; no allgather of the pairs)
+        projected = self.contact.projected_elements()
+        changed = not np.array_equal(projected, self._projected)
+        if not self.comm.tompi4py().allreduce(int(changed)):
+            return False
+        self._projected = projected
         now = self._current_contact_pairs()
         new = np.setdiff1d(now, self._contact_pairs, assume_unique=True)
         if len(new) == 0:                       # the same on every rank (allgathered)
@@ -396,6 +403,7 @@ class Problem:
         self.pattern_growths = 0
         if self.contact is not None:
             self._contact_pairs = self._current_contact_pairs()
+            self._projected = self.contact.projected_elements()
         J = PETSc.Mat().create(comm=self.comm)
         N = 18 * self.n_blocks
         J.setSizes(((18 * (hi - lo), N), (18 * (hi - lo), N)), bsize=18)

@@ -214,7 +214,7 @@ def pareto_chart(rows: list, out_png: str, title: str = "", reference: str = "")
 
 # the stability map's keys and values in words (the CSV keeps the config's names)
 AXIS_WORDS = {"increment": "load increment (fraction of the load)",
-              "linesearch": "line search", "bulk_ratio": "K/μ", "penalty_scale": "penalty",
+              "linesearch": "line search", "bulk_ratio": "K/μ", "contact": "contact",
               "element": "element"}
 FAILURE_WORDS = {"max it": "out of Newton iterations", "LS": "line search failed",
                  "J<0": "an element inverted", "NaN": "residual not a number",
@@ -222,13 +222,13 @@ FAILURE_WORDS = {"max it": "out of Newton iterations", "LS": "line search failed
 
 
 def axis_words(key: str, value=None) -> str:
-    """A stability-map key (and value) as a reader would say it: 'K/μ = 100', 'penalty ×
-    0.01', 'element 3333 without ecm'."""
+    """A stability-map key (and value) as a reader would say it: 'K/μ = 100', 'sliding
+    contact', 'element 3333 without ecm'."""
     name = AXIS_WORDS.get(key, key.replace("_", " "))
     if value is None:
         return name
-    if key == "penalty_scale":
-        return f"penalty × {value}"
+    if key == "contact":
+        return f"{value} contact"
     if key == "element":
         text = str(value)
         return "element " + (text.replace("-none", " without ecm") if text.endswith("-none")

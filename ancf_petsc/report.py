@@ -1,4 +1,4 @@
-"""The paper's Tables 1 and 2, the penalty study and the figures for the Type III Achilles tendon.
+"""The paper's Tables 1 and 2, the contact study and the figures for the Type III Achilles tendon.
 
 Every study is a sweep (``sweep.py``) over the Achilles config, so runs resume, fail cleanly and
 can be run with several ranks.  The tables put our numbers beside the paper's
@@ -113,9 +113,14 @@ class Table1:
         return "\n".join(lines)
 
 
-def table1(out: str, ranks: int = 1, jobs: int = 1, log=print) -> Table1:
-    """Table 1: the three pretwist columns at the paper's 13 load levels."""
-    sweep = make_sweep(out, "table1", {"geometry.twist_deg": list(TWISTS)}, ranks=ranks, jobs=jobs)
+def table1(out: str, ranks: int = 1, jobs: int = 1, log=print, mode: str = "sliding") -> Table1:
+    """Table 1: the three pretwist columns at the paper's 13 load levels, with contact ``mode``."""
+    params = {"geometry.twist_deg": list(TWISTS)}
+    name = "table1"
+    if mode != "sliding":
+        params["contact.mode"] = [mode] * len(TWISTS)
+        name = f"table1_{mode}"
+    sweep = make_sweep(out, name, params, ranks=ranks, jobs=jobs)
     return table1_from({p: summary_of(s) for p, s in zip(TWISTS, execute(sweep, log))})
 
 
@@ -215,79 +220,86 @@ def table2_markdown(rows: dict, elements=T2_ELEMENTS) -> str:
     return "\n".join(lines).strip("\n")
 
 
-# ------------------------------------------------------------------------------ penalty study
-PENALTY_SCALES = (1e-3, 1e-2, 1e-1, 10 ** -0.5, 1.0, 10 ** 0.5, 10.0, 100.0, 1e3, 1e4)
+# ------------------------------------------------------------------------------ contact study
+#: factors on k_s, the unit of the multipliers: two decades
+SCALINGS = (0.1, 1.0, 10.0)
+#: the former penalty formulation's gap space (per element, degree 2 along, mean across) and its
+#: answers at ψ = 45° (docs/contact.md, "Before": p_n → ∞ limit of the penalty study at daf134a)
+PER_ELEMENT_MEAN = {"axial": 2, "curve": 0, "per_element": True}
+PENALTY_LIMIT_MM = {10: 0.16188, 400: 6.22170}
+PENALTY_DEFAULT_MM = {10: 0.16200, 400: 6.22250}
 
 
-def penalty_study(out: str, twist: int = 45, scales=PENALTY_SCALES, ranks: int = 1, jobs: int = 1,
-                  log=print) -> dict:
-    """Soleus elongation at 10 and 400 N vs penalty (× the default p_n) for the projected gap,
-    and the pointwise gap for comparison."""
-    steps = [10, 50, 100, 200, 300, 400]
-    n = len(scales)
-    params = {"geometry.twist_deg": [twist] * (2 * n), "steps": [steps] * (2 * n),
-              "contact.penalty_scale": list(scales) * 2,
-              "contact.projection": [None] * n + ["pointwise"] * n}
-    sweep = make_sweep(out, f"penalty_psi{twist}", params, ranks=ranks, jobs=jobs)
-    states = execute(sweep, log)
-    res = {"scales": list(scales), "projected": [], "pointwise": []}
-    for i, st in enumerate(states):
+def scaling_study(out: str, twist: int = 45, scalings=SCALINGS, ranks: int = 1, jobs: int = 1,
+                  log=print) -> list[dict]:
+    """Soleus elongation at 10 and 400 N for both contact laws with the multipliers' unit k_s
+    scaled over two decades, and the former penalty space solved exactly (no penalty)."""
+    rows = [("sliding", sc, None) for sc in scalings] + [("unilateral", sc, None) for sc in scalings]
+    rows.append(("sliding", 1.0, PER_ELEMENT_MEAN))
+    params = {"geometry.twist_deg": [twist] * len(rows), "contact.mode": [m for m, _, _ in rows],
+              "contact.scaling": [sc for _, sc, _ in rows],
+              "contact.projection": [pr for _, _, pr in rows]}
+    states = execute(make_sweep(out, f"scaling_psi{twist}", params, ranks=ranks, jobs=jobs), log)
+    out_rows = []
+    for (mode, sc, proj), st in zip(rows, states):
         s = summary_of(st)
-        row = {"status": st.status, "reason": st.reason, "iterations": None, "e10": np.nan,
-               "e400": np.nan, "max_gap": np.nan, "mean_gap": np.nan,
-               "penalty": _penalty_from_log(st.run.dir)}
+        row = {"mode": mode, "scaling": sc, "space": "per element, mean" if proj else "default",
+               "status": st.status, "e10": np.nan, "e400": np.nan, "iterations": None}
         if s and s["steps"]:
             lf, el = elongations(s)
-            row["iterations"] = s.get("newton_iterations")
-            row["e10"] = float(el[0]) if np.isclose(lf[0], 10) else np.nan
-            row["e400"] = float(el[-1]) if np.isclose(lf[-1], 400) else np.nan
-            gaps = s["steps"][-1].get("contact", {})
-            row["max_gap"] = max((g["max_gap"] for g in gaps.values()), default=np.nan)
-            row["mean_gap"] = max((g.get("max_projected_gap", np.nan) for g in gaps.values()), default=np.nan)
-        (res["projected"] if i < n else res["pointwise"]).append(row)
-    return res
+            row.update(e10=float(el[0]) if np.isclose(lf[0], 10) else np.nan,
+                       e400=float(el[-1]) if np.isclose(lf[-1], 400) else np.nan,
+                       iterations=s.get("newton_iterations"))
+        out_rows.append(row)
+    return out_rows
 
 
-def _penalty_from_log(run_dir: str) -> float:
-    try:
-        with open(os.path.join(run_dir, "log.txt")) as fh:
-            for ln in fh:
-                if "penalty p_n =" in ln:
-                    return float(ln.split("penalty p_n =")[1].split()[0])
-    except OSError:
-        pass
-    return np.nan
+def scaling_spread(rows: list[dict], mode: str) -> tuple[float, float]:
+    """Largest relative change of the 10 N and 400 N elongations over the scalings of ``mode``."""
+    sel = [r for r in rows if r["mode"] == mode and r["space"] == "default"]
+    return tuple(float((max(r[k] for r in sel) - min(r[k] for r in sel)) / np.mean([r[k] for r in sel]))
+                 for k in ("e10", "e400"))
 
 
-def penalty_markdown(res: dict, twist: int) -> str:
-    ref_i = res["scales"].index(100.0)
-    ref = res["projected"][ref_i]["e400"]
-    lines = [f"ψ = {twist}°; scale = p_n / default (p_n = 1000 E/h); reference: scale 100.", "",
-             "| scale | p_n [Pa/m] | 10 N [mm] | 400 N [mm] | vs ref. | max mean gap [µm] | max local gap [µm] "
-             "| Newton its | pointwise gap: 400 N [mm] | Newton its |",
-             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    for sc, a, b in zip(res["scales"], res["projected"], res["pointwise"]):
-        if a["status"] == "completed":
-            fa = (f"{a['e10']:.5f} | {a['e400']:.5f} | {100 * (a['e400'] / ref - 1):+.3f} % | "
-                  f"{1e6 * a['mean_gap']:.3f} | {1e6 * a['max_gap']:.1f} | {a['iterations']}")
-        else:
-            fa = f"{a['status']}: {a['reason'][:60]} | | | | | {a['iterations'] or ''}"
-        fb = (f"{b['e400']:.5f} | {b['iterations']}" if b["status"] == "completed"
-              else f"{b['status']} | {b['iterations'] or ''}")
-        lines.append(f"| {sc:.3g} | {a['penalty']:.3g} | {fa} | {fb} |")
+def scaling_markdown(rows: list[dict]) -> str:
+    lines = ["| contact | pressure space | k_s scale | 10 N [mm] | 400 N [mm] | Newton its |",
+             "|---|---|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['mode']} | {r['space']} | {r['scaling']:g} | {r['e10']:.6f} | "
+                     f"{r['e400']:.6f} | {r['iterations']} |")
+    for mode in ("sliding", "unilateral"):
+        d10, d400 = scaling_spread(rows, mode)
+        lines.append(f"\n{mode}: over two decades of k_s the elongation changes by {100 * d10:.1e} % "
+                     f"(10 N) and {100 * d400:.1e} % (400 N).")
+    pe = next(r for r in rows if r["space"] != "default")
+    lines.append(f"\nThe former penalty formulation's space solved exactly: {pe['e10']:.5f} / {pe['e400']:.5f} mm "
+                 f"at 10 / 400 N; its penalty answers at daf134a were {PENALTY_DEFAULT_MM[10]:.5f} / "
+                 f"{PENALTY_DEFAULT_MM[400]:.5f} mm at the default p_n and {PENALTY_LIMIT_MM[10]:.5f} / "
+                 f"{PENALTY_LIMIT_MM[400]:.5f} mm in the limit p_n → ∞.")
     return "\n".join(lines)
 
 
-def penalty_plateau(res: dict) -> tuple[float, float]:
-    """Largest relative change of the 10 N and 400 N elongations over the decade around the
-    default (scales 10^-1/2 .. 10^1/2)."""
-    sc = np.array(res["scales"])
-    sel = (sc >= 10 ** -0.5 * 0.999) & (sc <= 10 ** 0.5 * 1.001)
-    out = []
-    for key in ("e10", "e400"):
-        v = np.array([r[key] for r in res["projected"]])[sel]
-        out.append(float((v.max() - v.min()) / v.mean()))
-    return out[0], out[1]
+def laws_markdown(sliding: Table1, unilateral: Table1) -> str:
+    """Table 1 for both contact laws beside the paper, with the open share of each interface."""
+    paper = sliding.paper
+    lines = ["| load [N] | " + " | ".join(f"ψ={p}° paper | sliding | unilateral | open mg/lg/lg-mg"
+                                          for p in TWISTS) + " |",
+             "|---:|" + "---:|---:|---:|:---:|" * len(TWISTS)]
+    for i, f in enumerate(sliding.loads):
+        cells = []
+        for p in TWISTS:
+            s, u = sliding.ours[p][i], unilateral.ours[p][i]
+            steps = unilateral.summaries[p]["steps"] if p in unilateral.summaries else []
+            step = next((st for st in steps if np.isclose(st["load_factor"], f)), None)
+            shares = "/".join(f"{100 * c['open_share']:.0f}" for c in step["contact"].values()) if step else ""
+            cells.append(f"{paper[p][i]:.3f} | {s:.3f} ({100 * (s / paper[p][i] - 1):+.1f} %) | "
+                         f"{u:.3f} ({100 * (u / paper[p][i] - 1):+.1f} %) | {shares} %")
+        lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
+    its = " · ".join(f"ψ={p}°: {sliding.summaries[p]['newton_iterations']} / "
+                     f"{unilateral.summaries[p]['newton_iterations']}" for p in TWISTS
+                     if p in sliding.summaries and p in unilateral.summaries)
+    lines += ["", f"Newton iterations per column (sliding / unilateral): {its}."]
+    return "\n".join(lines)
 
 
 # ------------------------------------------------------------------------------ bulk modulus fit

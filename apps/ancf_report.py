@@ -1,8 +1,8 @@
-"""ancf-report: the paper's Tables 1 and 2 beside ours, the penalty study and the figures.
+"""ancf-report: the paper's Tables 1 and 2 beside ours, the contact study and the figures.
 
     ancf-report                         # Table 1, Table 2 and figures into results/achilles_report
     ancf-report --table1 --ranks 2      # one study, each run on 2 MPI ranks
-    ancf-report --penalty --fit-bulk-modulus
+    ancf-report --contact --fit-bulk-modulus
     ancf-report --existing results/achilles_type3_psi45   # report on finished runs, no solving
 
 Runs are sweeps (see ancf-sweep): finished runs are reused, so re-running is cheap.
@@ -23,7 +23,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="runs at the same time")
     ap.add_argument("--table1", action="store_true")
     ap.add_argument("--table2", action="store_true")
-    ap.add_argument("--penalty", action="store_true", help="penalty study (psi = 45)")
+    ap.add_argument("--contact", action="store_true",
+                    help="contact study: Table 1 for both laws, k_s scaling (psi = 45)")
     ap.add_argument("--fit-bulk-modulus", action="store_true")
     ap.add_argument("--figures", action="store_true")
     ap.add_argument("--existing", nargs="+", metavar="RUN_DIR",
@@ -33,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     from ancf_petsc import report as rp
     from ancf_petsc.sweep import SweepError
 
-    chosen = args.table1 or args.table2 or args.penalty or args.fit_bulk_modulus or args.figures
+    chosen = args.table1 or args.table2 or args.contact or args.fit_bulk_modulus or args.figures
     if not chosen and not args.existing:
         args.table1 = args.table2 = args.figures = True
     out = os.path.abspath(args.out)
@@ -63,12 +64,13 @@ def main(argv: list[str] | None = None) -> int:
             t2 = rp.table2(out, ranks=args.ranks, jobs=args.jobs, log=log)
             sections.append(("Table 2: soleus elongation at 400 N [mm] vs elements per subtendon",
                              rp.table2_markdown(t2)))
-        if args.penalty:
-            res = rp.penalty_study(out, ranks=args.ranks, jobs=args.jobs, log=log)
-            d10, d400 = rp.penalty_plateau(res)
-            sections.append(("Penalty study", rp.penalty_markdown(res, 45)
-                             + f"\n\nOver the decade around the default p_n the soleus elongation changes "
-                               f"by {100 * d10:.3f} % (10 N) and {100 * d400:.3f} % (400 N)."))
+        if args.contact:
+            t1s = t1 if t1 is not None else rp.table1(out, args.ranks, args.jobs, log)
+            t1u = rp.table1(out, args.ranks, args.jobs, log, mode="unilateral")
+            sections.append(("Table 1 for both contact laws", rp.laws_markdown(t1s, t1u)))
+            rows = rp.scaling_study(out, ranks=args.ranks, jobs=args.jobs, log=log)
+            sections.append(("No penalty in the answer: the multipliers' unit k_s over two decades",
+                             rp.scaling_markdown(rows)))
         if args.fit_bulk_modulus:
             k, sse = rp.fit_bulk_modulus(out, jobs=args.jobs, log=log)
             sections.append(("Bulk modulus fitted to Table 1, psi = 0",

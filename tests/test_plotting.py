@@ -157,7 +157,7 @@ def test_stability_chart_speaks_words(tmp_path):
     from ancf_petsc.charts import axis_words, stability_chart
     assert axis_words("bulk_ratio", 100) == "K/μ = 100"
     assert axis_words("element", "3333-none") == "element 3333 without ecm"
-    assert axis_words("penalty_scale", 0.01) == "penalty × 0.01"
+    assert axis_words("contact", "unilateral") == "unilateral contact"
     cells = [{"increment": inc, "linesearch": ls, "bulk_ratio": k, "status": st, "iterations": 12,
               "short": "max it", "rel_error": 0.02}
              for inc in ("adaptive", 0.5) for ls in ("basic", "bt") for k in (10, 1000)

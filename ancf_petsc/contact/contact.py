@@ -163,6 +163,10 @@ class Contact:
         """A projection wanted an element whose nodes this rank does not hold."""
         return self.projector.missing
 
+    def projected_elements(self) -> np.ndarray:
+        """The B element each local point projects onto now (what ``node_couplings`` follows)."""
+        return self.projector.eB[self.local].copy()
+
     def node_couplings(self) -> tuple[np.ndarray, np.ndarray]:
         """Node-block couplings (PETSc numbering) of the local segments now: per segment its A
         nodes, the nodes of every B element its points project onto and its multiplier node,

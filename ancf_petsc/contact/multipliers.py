@@ -23,11 +23,11 @@ held at zero like supported DOFs.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.special import comb
 
 SLOTS = 18
 
@@ -36,7 +36,8 @@ def bernstein(x: np.ndarray, degree: int) -> np.ndarray:
     """Bernstein polynomials of ``degree`` on [−1, 1] at x: (len(x), degree + 1)."""
     s = 0.5 * (np.asarray(x, dtype=float)[:, None] + 1.0)
     k = np.arange(degree + 1)
-    return comb(degree, k) * s ** k * (1.0 - s) ** (degree - k)
+    binomial = np.array([math.comb(degree, j) for j in k], dtype=float)
+    return binomial * s ** k * (1.0 - s) ** (degree - k)
 
 
 @dataclass

@@ -387,7 +387,7 @@ class ResultsWriter:
     def _write_contact(g, contact: dict, multipliers: np.ndarray) -> None:
         """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
         c = g.create_group("contact")
-        c.attrs["units"] = "SI: m, Pa; slip = reference position of the partner point on B minus the point's"
+        c.attrs["units"] = "SI: m, Pa; slip = reference position of the point minus its partner's on B"
         for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
                     "multiplier_pressure", "multiplier_active"):
             c.create_dataset(key, data=contact[key])

@@ -5,7 +5,9 @@
 * :func:`render_pair` — two renders side by side with one shared colour scale.
 * :func:`plot_load_elongation` — load-elongation curves against a paper table + relative errors.
 * :func:`plot_convergence` — elongation vs elements per subtendon (log2 axis), ours and paper's.
-* :func:`read_csv_table`, :func:`curve_from_summary` — small readers for the inputs of the above.
+* :func:`plot_slip` — axial slip and contact pressure along the tendon per load level.
+* :func:`read_csv_table`, :func:`curve_from_summary`, :func:`read_contact` — small readers for
+  the inputs of the above.
 
 The surface reader relies on the layout written by :class:`ancf_petsc.output.SurfaceSampler`: per
 beam a contiguous block of ``stations x ring`` points, quads between consecutive stations, and
@@ -608,5 +610,52 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
     ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     if title:
         ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, out_png)
+
+
+def read_contact(results_h5: str, step: int) -> dict:
+    """Contact fields of one converged level of a run (``steps/step_NNNN/contact``) and its
+    load factor."""
+    import h5py
+    with h5py.File(results_h5, "r") as h5:
+        g = h5["steps"][f"step_{step:04d}"]
+        out = {k: g["contact"][k][()] for k in g["contact"]}
+        out["load_factor"] = float(g.attrs["load_factor"])
+    return out
+
+
+def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tuple[int, ...],
+              length: float, title: str = "") -> str:
+    """Axial slip (top) and contact pressure (bottom) of the contact points along the tendon,
+    one colour per load level, one marker per interface: ``levels`` from ``read_contact``."""
+    fig = Figure(figsize=(8.0, 6.0))
+    FigureCanvasAgg(fig)
+    ax_s = fig.add_subplot(2, 1, 1)
+    ax_p = fig.add_subplot(2, 1, 2, sharex=ax_s)
+    cmap = colormaps["viridis"]
+    markers = ("o", "s", "^", "D")
+    for i, lev in enumerate(levels):
+        c = cmap(i / max(len(levels) - 1, 1))
+        for j, k in enumerate(interfaces):
+            sel = lev["interface"] == k
+            x = MM * lev["x0"][sel, 0]
+            order = np.argsort(x)
+            label = f"{lev['load_factor']:g} N" if j == 0 else None
+            ax_s.plot(x[order], MM * lev["slip"][sel, 0][order], markers[j % 4], color=c, ms=3,
+                      label=label)
+            ax_p.plot(x[order], 1e-6 * lev["pressure"][sel][order], markers[j % 4], color=c, ms=3)
+    for j, k in enumerate(interfaces):
+        ax_s.plot([], [], markers[j % 4], color="0.4", ms=4, label=names[k])
+    ax_s.set_ylabel("axial slip of the soleus past\nthe point [mm]")
+    ax_p.set_ylabel("contact pressure [MPa]\n(> 0 presses, < 0 holds)")
+    ax_p.set_xlabel("x along the tendon [mm] (0: supports, L: loaded end)")
+    ax_p.set_xlim(0.0, MM * length)
+    for ax in (ax_s, ax_p):
+        ax.grid(alpha=0.3)
+        ax.axhline(0.0, color="0.5", lw=0.8)
+    ax_s.legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    if title:
+        ax_s.set_title(title, fontsize=10)
     fig.tight_layout()
     return _save(fig, out_png)

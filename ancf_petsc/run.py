@@ -119,7 +119,9 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                                       "points": int(len(b.section.weights))} for b in model.beams},
                 "elements_per_beam": {b.name: b.n_elements for b in model.beams},
                 "element_types": {b.name: b.element for b in model.beams},
-                "twist_axis": list(spec.twist_axis), "geometry": model.geometry_report, **(info or {})}
+                "twist_axis": list(spec.twist_axis), "geometry": model.geometry_report,
+                "contact_interfaces": [itf.name for itf in contact.interfaces] if contact else [],
+                **(info or {})}
     try:
         writer = ResultsWriter(model, layout, comm, run_info)
     except OutputError:

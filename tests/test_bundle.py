@@ -60,9 +60,12 @@ def test_touching_circles_close_contact_on_one_and_two_ranks(tmp_path):
     contact = out[1]["steps"][-1]["contact"]
     open_share = [v["open_share"] for v in contact.values()]
     assert min(open_share) < 1.0 and max(open_share) > 0.0      # some closed, some apart
-    # pressed together (compression), and the closed weighted gaps vanish
+    # pressed together (compression) and the closed weighted gaps vanish.  Circles touch along a
+    # line: a gap weighted over the 40° facing arcs is zero while the middle of the arc
+    # penetrates (measured 22 µm, 4.5 % of r; docs/contact.md, Limits): bound it at 5 %
     assert sum(v["normal_force"] for v in contact.values()) > 0.0
     assert max(v["max_weighted_gap"] for v in contact.values()) < 1e-9 * 0.5e-3
+    assert max(v["max_penetration"] for v in contact.values()) < 0.05 * 0.5e-3
     t1, t2 = probes_table(out[1]), probes_table(out[2])
     assert np.abs(t2 - t1).max() <= 1e-9 * np.abs(t1).max()
 

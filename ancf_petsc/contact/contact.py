@@ -33,7 +33,7 @@ from .projection import Projection, Projector
 CHUNK_POINTS = 2048
 
 #: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
-GAP_COLUMNS = (("max_gap", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
+GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
                ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
                ("max_pressure", "max"), ("normal_force", "sum"), ("points", "sum"))
 
@@ -400,7 +400,8 @@ class Contact:
             v = on & pr.valid
             m = m & self.owned
             act = m & st.active
-            out[k] = [np.abs(pr.g[v]).max(initial=0.0), float(np.sum(pr.g[v] ** 2)), v.sum(),
+            out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[v], initial=0.0),
+                      float(np.sum(pr.g[v] ** 2)), v.sum(),
                       np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
                       lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()]
         return out
@@ -415,7 +416,8 @@ class Contact:
         for k, itf in enumerate(self.interfaces):
             c = dict(zip([n for n, _ in GAP_COLUMNS], sums[k]))
             nv = c["valid_points"]
-            out[itf.name] = {"max_gap": c["max_gap"], "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
+            out[itf.name] = {"max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
+                             "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
                              "max_weighted_gap": c["max_weighted_gap"],
                              "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
                              "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
@@ -424,8 +426,8 @@ class Contact:
 
     def point_fields(self, xl: np.ndarray, needed: np.ndarray, q0_of) -> dict:
         """Per local point: id, interface, current and reference position on A, gap, pressure,
-        slip (the reference position of the partner point on B minus that of the point: how far
-        B's material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
+        slip (the reference position of the point minus that of its partner on B: how far B's
+        material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
         multiplier: id, pressure coefficient λ [Pa] and status.  ``q0_of(elements)`` gives
         reference nodal vectors."""
         st = self.evaluate(xl, needed)
@@ -439,7 +441,7 @@ class Contact:
         own = self.owned
         return {"id": idx, "interface": self.points.itf[idx], "x": st.xA, "x0": X0A,
                 "gap": pr.g * pr.valid, "pressure": pressure,
-                "slip": (X0B - X0A) * pr.valid[:, None],
+                "slip": (X0A - X0B) * pr.valid[:, None],
                 "projection": np.column_stack([pr.eB, pr.xiB, pr.tB]) if len(idx) else np.zeros((0, 3)),
                 "multiplier_id": self.mults[own],
                 "multiplier_pressure": self.pressure_coefficients(st)[own],

@@ -176,8 +176,9 @@ class ResultsWriter:
     """Writes results.h5, summary.json and the VTU series (rank 0 does the I/O; every method is
     called on every rank, and a file-system error becomes an ``OutputError`` on every rank)."""
 
-    def __init__(self, model: Model, layout, comm, run_info: dict):
+    def __init__(self, model: Model, layout, comm, run_info: dict, restart=None):
         self.model, self.comm = model, comm
+        self.restart = restart
         self.rank = comm.rank
         spec = model.spec
         self.dir = spec.output.dir
@@ -187,7 +188,7 @@ class ResultsWriter:
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
         self.pvd_entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
         self._last_sizes = {"vtu": 0, "h5": 0}
-        self._on_root(lambda: self._create(layout, run_info))
+        self._on_root(lambda: self._create(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
         """Run ``action`` on rank 0; its file-system error is raised on every rank (collective)."""
@@ -260,6 +261,38 @@ class ResultsWriter:
         steps.attrs["converged"] = 0
         steps.attrs["last_load_factor"] = 0.0
 
+    def _resume(self) -> None:
+        """Continue the files of ``self.restart`` (a ``restart.RestartPoint``): the levels after
+        its step are dropped from results.h5, summary.json and the VTU series."""
+        import h5py
+        point = self.restart
+        self.summary["version"] = version_info()
+        self.summary["restarted_from"] = {"step": point.step, "load_factor": point.load_factor}
+        self.summary["steps"] = list(point.summary.get("steps", []))
+        loads = [0.0] + [st["load_factor"] for st in self.summary["steps"]]
+        for series in self.pvd_entries:
+            for k in range(len(loads)):
+                if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
+                    self.pvd_entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
+        for name in os.listdir(self.dir):
+            stem = name.split("_")[-1].split(".")[0]
+            if name.startswith(("surface_", "contact_")) and stem.isdigit() and int(stem) > point.step:
+                os.remove(os.path.join(self.dir, name))
+        try:
+            with h5py.File(self.h5_path, "a") as h5:
+                steps = h5["steps"]
+                for name in list(steps):
+                    if name.endswith(".partial") or int(name.split("_")[1]) > point.step:
+                        del steps[name]
+                steps.attrs["converged"] = point.step
+                steps.attrs["last_load_factor"] = point.load_factor
+                h5.attrs["status"] = "running"
+        except (OSError, RuntimeError) as exc:
+            raise OutputError(self.h5_path, f"cannot continue: {_reason(exc)}") from None
+        with open(os.path.join(self.dir, RESERVE), "wb") as fh:
+            fh.write(b"\0" * RESERVE_BYTES)
+        self._write_summary()
+
     def _release_reserve(self) -> None:
         _remove(os.path.join(self.dir, RESERVE))
 
@@ -319,11 +352,12 @@ class ResultsWriter:
         return out
 
     def write_step(self, record, q: np.ndarray | None, extra: dict | None = None,
-                   contact: dict | None = None, multipliers: np.ndarray | None = None) -> None:
-        """Append one converged level; ``q`` is the gathered state (rank 0), ``contact`` the
-        gathered contact fields (``Problem.contact_fields``), ``multipliers`` the multiplier
-        blocks (n, 18) in model order.  Collective."""
-        self._on_root(lambda: self._write_step(record, q, extra, contact, multipliers))
+                   contact: dict | None = None, path: dict | None = None) -> None:
+        """Append one converged level; ``q`` is the gathered nodal vectors (rank 0), ``contact``
+        the gathered contact fields (``Problem.contact_fields``), ``path`` what a restart needs:
+        ``blocks`` and ``increment_blocks`` (every block in model order, (n, 18)) and
+        ``accepted_negative``.  Collective."""
+        self._on_root(lambda: self._write_step(record, q, extra, contact, path))
 
     def _check_space(self, k: int, q: np.ndarray) -> None:
         """Stop before level ``k`` if the file system has clearly no room for it."""
@@ -339,7 +373,7 @@ class ResultsWriter:
                                         f"free, about {need // 1024} KB needed")
 
     def _write_step(self, record, q: np.ndarray, extra: dict | None, contact: dict | None,
-                    multipliers: np.ndarray | None) -> None:
+                    path: dict | None) -> None:
         import h5py
         k = len(self.summary["steps"]) + 1
         entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
@@ -366,7 +400,9 @@ class ResultsWriter:
                 g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
                     else record.negative_eigenvalues
                 if contact is not None:
-                    self._write_contact(g, contact, multipliers)
+                    self._write_contact(g, contact, path["blocks"][self.model.n_nodes:])
+                if path is not None:
+                    self._write_restart(g, record, path)
                 steps.move(name + ".partial", name)
                 steps.attrs["converged"] = k
                 steps.attrs["last_load_factor"] = record.load_factor
@@ -382,6 +418,16 @@ class ResultsWriter:
             if contact is not None:
                 self._write_contact_vtu(k, record.load_factor, contact)
         self._write_summary()
+
+    @staticmethod
+    def _write_restart(g, record, path: dict) -> None:
+        """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
+        r = g.create_group("restart")
+        r.create_dataset("blocks", data=path["blocks"])
+        r.create_dataset("increment_blocks", data=path["increment_blocks"])
+        r.attrs["increment"] = record.increment
+        r.attrs["last_increment"] = record.last_increment
+        r.attrs["accepted_negative"] = path["accepted_negative"]
 
     @staticmethod
     def _write_contact(g, contact: dict, multipliers: np.ndarray) -> None:

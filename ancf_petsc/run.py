@@ -11,6 +11,7 @@ from petsc4py import PETSc
 from . import status as st
 from .assembly import STAGE_ASSEMBLY, Problem
 from .config import ModelSpec
+from .errors import InputError
 from .interrupt import RunInterrupted
 from .partition import make_layout, partition_stats
 from .model import build_model
@@ -72,19 +73,66 @@ def _fmt_vec(v) -> str:
     return "[" + ", ".join(f"{x:+.4e}" for x in v) + "]"
 
 
-def solve(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print) -> RunResult:
-    """Solve ``spec``; with ``accuracy:`` first choose its element count (accuracy.py)."""
+def solve(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, restart: str | None = None) -> RunResult:
+    """Solve ``spec``; with ``accuracy:`` first choose its element count (accuracy.py);
+    ``restart``: continue the run in that directory (run_model)."""
     if spec.accuracy is not None:
+        if restart is not None:
+            raise InputError("--restart", "a run with accuracy: chooses its mesh first; restart "
+                                          "the chosen run's config instead")
         from .accuracy import select_and_run
         return select_and_run(spec, comm, log, run_model)
-    return run_model(spec, comm, log)
+    return run_model(spec, comm, log, restart=restart)
 
 
-def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | None = None) -> RunResult:
+def _read_restart(directory: str, spec: ModelSpec, comm):
+    """``restart.read_restart`` on rank 0, its result or its input error on every rank."""
+    from .restart import read_restart
+    point, err = None, None
+    if comm.rank == 0:
+        try:
+            point = read_restart(directory, spec.raw)
+        except InputError as exc:
+            err = (exc.path, str(exc).split(": ", 1)[1] if ": " in str(exc) else str(exc))
+    if comm.size > 1:
+        point, err = comm.tompi4py().bcast((point, err), root=0)
+    if err:
+        raise InputError(*err)
+    return point
+
+
+def _check_supports(problem) -> None:
+    """One input error naming the beams and motions the supports and contact leave free."""
+    from .supports import free_rigid_motions
+    free = free_rigid_motions(problem)
+    if free:
+        held = " (frictionless contact lets beams slide along each other)" if problem.contact else ""
+        raise InputError("boundary_conditions", "nothing holds " + "; ".join(free) + held
+                         + "; add supports so that no beam can move as a rigid body")
+
+
+def _continue_path(problem, contact, point):
+    """The load path of a restart point (``PathState``), with the contact state restored."""
+    from .solver import PathState
+    if contact is not None:
+        contact.restore_state(point.projection, point.status)
+    X = problem._global_from_model(point.blocks.ravel())
+    dX = problem._global_from_model(point.increment_blocks.ravel())
+    return PathState(X=X, dX_last=dX, lam=point.load_factor, dlam=point.increment,
+                     dlam_last=point.last_increment, accepted_negative=point.accepted_negative)
+
+
+def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | None = None,
+              restart: str | None = None) -> RunResult:
     """Solve ``spec``; every converged level is on disk before the next one starts.
-    ``info`` is stored in summary.json beside the run's own information."""
+    ``info`` is stored in summary.json beside the run's own information.  ``restart``: a run's
+    output directory to continue from its last converged level (it is the output directory)."""
     rank = comm.rank
     say = log if rank == 0 else (lambda *_: None)
+    point = None
+    if restart is not None:
+        spec.output.dir = restart
+        point = _read_restart(restart, spec, comm)
     check_output_dir(spec.output.dir, comm)
     PETSc.Log.begin()                 # event timings for the summary (cheap)
     # PETSc's event times add up over the process: this run's share is the difference
@@ -100,6 +148,8 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
     partition = partition_stats(layout, model, contact)
     problem = Problem(model, layout, comm, contact,
                       matrix_type(model, spec.solver.matrix, spec.petsc))
+    if point is None:
+        _check_supports(problem)
     stepper = LoadStepper(problem, spec.solver, spec.petsc, say, max_level=max(spec.steps))
     STAGE_SETUP.pop()
     t_setup = time.perf_counter() - t_start
@@ -122,8 +172,15 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                 "twist_axis": list(spec.twist_axis), "geometry": model.geometry_report,
                 "contact_interfaces": [itf.name for itf in contact.interfaces] if contact else [],
                 **(info or {})}
+    levels = list(spec.steps)
+    start = None
+    if point is not None:
+        start = _continue_path(problem, contact, point)
+        levels = [f for f in spec.steps if f > point.load_factor * (1.0 + 1e-12)]
+        say(f"[ancf] restart from step {point.step} (load factor {point.load_factor:g}) of {restart}: "
+            f"{len(levels)} level(s) to go")
     try:
-        writer = ResultsWriter(model, layout, comm, run_info)
+        writer = ResultsWriter(model, layout, comm, run_info, restart=point)
     except OutputError:
         stepper.close()
         raise
@@ -136,12 +193,15 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
         try:
             t0 = time.perf_counter()
             blocks = problem.gather(blocks=True)
+            increment = problem.gather(stepper.path.dX_last, blocks=True)
             q = None if blocks is None else blocks[:model.n_nodes]
             gaps = problem.contact_gaps(problem.X)          # collective: every rank its own points
             fields = problem.contact_fields(problem.X)
             extra = {"contact": gaps} if gaps is not None else None
-            mult = None if blocks is None or contact is None else blocks[model.n_nodes:].reshape(-1, 18)
-            writer.write_step(rec, q, extra, fields, mult)
+            path = None if blocks is None else {
+                "blocks": blocks.reshape(-1, 18), "increment_blocks": increment.reshape(-1, 18),
+                "accepted_negative": stepper.path.accepted_negative}
+            writer.write_step(rec, q, extra, fields, path)
             converged.append(rec)
             timings["output"] += time.perf_counter() - t0
         finally:
@@ -158,7 +218,7 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
 
     failure, signum = None, 0
     try:
-        stepper.run(spec.steps, on_level)
+        stepper.run(levels, on_level, start) if levels else None
     except LoadStepFailure as exc:
         failure = ("failed", exc.code, str(exc))
     except RunInterrupted as exc:

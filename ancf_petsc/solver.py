@@ -56,6 +56,9 @@ REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
 #: then the less stable state is accepted (a genuine loss of stability)
 UNSTABLE_STEP = -1000
 REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
+#: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
+UNCLEAN_STATE = -1001
+REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
 
 STAGE_SOLVE = PETSc.Log.Stage("ANCF load stepping")
 
@@ -97,6 +100,21 @@ class StepRecord:
     # surface (inertia of its LDLᵀ factor less one per contact constraint): 0 = a stable
     # equilibrium, > 0 = a saddle; None when the PC is not MUMPS LDLᵀ
     negative_eigenvalues: int | None = None
+    increment: float = 0.0          # the load increment the next level starts with
+    last_increment: float = 0.0     # the last accepted one (secant predictor)
+
+
+@dataclass
+class PathState:
+    """Where the load path is: the state, the last accepted increment of it and of the load,
+    the next increment, and the stability of the last accepted state.  Everything a restart
+    needs to continue exactly as an uninterrupted run would."""
+    X: PETSc.Vec
+    dX_last: PETSc.Vec
+    lam: float
+    dlam: float
+    dlam_last: float
+    accepted_negative: int = 0
 
 
 #: preconditioners PETSc runs on an SBAIJ matrix (MUMPS LDLᵀ, incomplete Cholesky, and the
@@ -334,96 +352,129 @@ class LoadStepper:
         rtol, atol, stol, maxit = self.snes.getTolerances()
         return fnorm <= max(atol, 1e-6 * lam * self.problem.fext.norm())
 
-    def run(self, levels: list[float], on_level: Callable[[StepRecord], None]) -> list[StepRecord]:
-        """Reach every level in ``levels`` (increasing); call ``on_level`` after each one."""
+    def run(self, levels: list[float], on_level: Callable[[StepRecord], None],
+            start: PathState | None = None) -> list[StepRecord]:
+        """Reach every level in ``levels`` (increasing); call ``on_level`` after each one.
+        ``start``: continue a path (a restart) instead of starting from the reference state."""
         P = self.problem
-        X = P.X
-        P.q0.copy(X)
+        self.path = path = start or self.initial_path(levels[0])
+        path.X.copy(P.X)
         P.checkpoint()
-        lam = 0.0
-        X_prev = X.duplicate()
-        dX_last = X.duplicate()          # last accepted increment (secant predictor)
-        dX_last.set(0.0)
-        dlam_last = 0.0
-        dlam = levels[0] if self.spec.initial_increment is None else min(levels[0], self.spec.initial_increment)
-        if self.spec.max_increment is not None:
-            dlam = min(dlam, self.spec.max_increment)
         records = []
-        accepted_negative = 0
         STAGE_SOLVE.push()
         try:
             for target in levels:
-                t0 = time.perf_counter()
-                its_total = substeps = cutbacks = 0
-                consecutive = stability_cuts = 0
-                history = []
-                level = records[-1].load_factor if records else 0.0
-                while lam < target * (1.0 - 1e-14):
-                    self._stop_if_requested(target, level)
-                    step = min(dlam, target - lam)
-                    if self.spec.max_increment is not None:
-                        step = min(step, self.spec.max_increment)
-                    X.copy(X_prev)
-                    if self.spec.predictor == "secant" and dlam_last > 0.0:
-                        X.axpy(step / dlam_last, dX_last)       # secant predictor
-                    reason, its, fnorm = self._solve_at(lam + step, X, target, lam)
-                    its_total += its
-                    history.append(list(self._history))
-                    budget = self.spec.max_newton_iterations
-                    if budget is not None and self.newton_iterations > budget:
-                        P.load_factor = lam
-                        X_prev.copy(X)
-                        P.restore()
-                        raise LoadStepFailure(target, lam + step, lam, "NEWTON_BUDGET_EXCEEDED", False,
-                                              f" after {self.newton_iterations} Newton iterations "
-                                              f"(solver.max_newton_iterations = {budget})")
-                    if reason > 0 and not self._residual_small(fnorm, lam + step):
-                        reason = PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH   # stalled, not converged
-                    converged = reason > 0 and np.isfinite(fnorm) and P.state_is_clean()
-                    neg = self.negative_eigenvalues() if converged else None
-                    jumped = (neg is not None and neg > accepted_negative
-                              and stability_cuts < self.spec.stability_cutbacks)
-                    if jumped:
-                        # a stable path does not step onto a saddle: the step may have jumped to
-                        # another branch; retry smaller (a genuine loss of stability survives)
-                        stability_cuts += 1
-                        reason = UNSTABLE_STEP
-                    elif converged:
-                        accepted_negative = neg if neg is not None else accepted_negative
-                        P.checkpoint()
-                        X.copy(dX_last)
-                        dX_last.axpy(-1.0, X_prev)
-                        dlam_last = step
-                        lam += step
-                        substeps += 1
-                        consecutive = 0
-                        if its <= self.spec.easy_iterations and step >= dlam * (1 - 1e-12):
-                            dlam = step * self.spec.growth      # easy: grow (not past targets)
-                        continue
-                    # failed: restore and cut back (collective: reason is global)
-                    inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
-                    lost = bool(P.comm.tompi4py().allreduce(int(P.contact_failed)))
-                    X_prev.copy(X)
-                    P.restore()
-                    cutbacks += 1
-                    consecutive += reason != UNSTABLE_STEP      # bounded by stability_cutbacks
-                    dlam = 0.5 * step
-                    why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
-                    if reason == UNSTABLE_STEP:
-                        why = f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
-                    self.log(f"  cut back at load factor {lam + step:.6g}: {reason_name(reason)}{why}; "
-                             f"retry with increment {dlam:.4g}")
-                    if consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment:
-                        P.load_factor = lam
-                        raise LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted,
-                                              self._linear_solver_detail(reason))
-                rec = StepRecord(load_factor=target, iterations=its_total, substeps=substeps,
-                                 cutbacks=cutbacks, reason=reason_name(reason),
-                                 residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
-                                 iteration_history=history,
-                                 negative_eigenvalues=self.negative_eigenvalues())
+                rec = self._reach(path, target, records[-1].load_factor if records else path.lam)
                 records.append(rec)
                 on_level(rec)
         finally:
             STAGE_SOLVE.pop()
         return records
+
+    def initial_path(self, first_level: float) -> PathState:
+        """The path at the reference state, with the first increment."""
+        X = self.problem.q0.copy()
+        dlam = first_level if self.spec.initial_increment is None else min(first_level,
+                                                                          self.spec.initial_increment)
+        if self.spec.max_increment is not None:
+            dlam = min(dlam, self.spec.max_increment)
+        dX = X.duplicate()
+        dX.set(0.0)
+        return PathState(X=X, dX_last=dX, lam=0.0, dlam=dlam, dlam_last=0.0)
+
+    def _reach(self, path: PathState, target: float, level: float) -> StepRecord:
+        """Sub-steps from ``path.lam`` to ``target``: accept converged ones (growing the
+        increment after easy ones), cut back failed ones; raises LoadStepFailure."""
+        P, X = self.problem, self.problem.X
+        t0 = time.perf_counter()
+        tally = {"its": 0, "substeps": 0, "cutbacks": 0, "consecutive": 0, "stability": 0}
+        history = []
+        X_prev = X.duplicate()
+        try:
+            while path.lam < target * (1.0 - 1e-14):
+                self._stop_if_requested(target, level)
+                step = min(path.dlam, target - path.lam)
+                if self.spec.max_increment is not None:
+                    step = min(step, self.spec.max_increment)
+                X.copy(X_prev)
+                if self.spec.predictor == "secant" and path.dlam_last > 0.0:
+                    X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
+                reason, its, fnorm = self._solve_at(path.lam + step, X, target, path.lam)
+                tally["its"] += its
+                history.append(list(self._history))
+                self._check_budget(path, X_prev, target, step)
+                reason, neg = self._judge(path, reason, fnorm, step, tally)
+                if reason > 0:
+                    self._accept(path, X_prev, step, its, neg, tally)
+                else:
+                    self._cut_back(path, X_prev, target, step, reason, neg, tally)
+        finally:
+            X_prev.destroy()
+        return StepRecord(load_factor=target, iterations=tally["its"], substeps=tally["substeps"],
+                          cutbacks=tally["cutbacks"], reason=reason_name(reason),
+                          residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
+                          iteration_history=history, negative_eigenvalues=self.negative_eigenvalues(),
+                          increment=path.dlam, last_increment=path.dlam_last)
+
+    def _check_budget(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float) -> None:
+        budget = self.spec.max_newton_iterations
+        if budget is not None and self.newton_iterations > budget:
+            self.problem.load_factor = path.lam
+            X_prev.copy(self.problem.X)
+            self.problem.restore()
+            raise LoadStepFailure(target, path.lam + step, path.lam, "NEWTON_BUDGET_EXCEEDED", False,
+                                  f" after {self.newton_iterations} Newton iterations "
+                                  f"(solver.max_newton_iterations = {budget})")
+
+    def _judge(self, path: PathState, reason: int, fnorm: float, step: float, tally: dict):
+        """The sub-step's verdict: SNES's reason, made a failure when the residual is not small
+        (stalled), when a projection did not converge, or when the state is less stable than
+        the last accepted one (``UNSTABLE_STEP``, at most ``stability_cutbacks`` per level: a
+        stable path does not step onto a saddle, another branch may have been reached)."""
+        P = self.problem
+        if reason > 0 and not self._residual_small(fnorm, path.lam + step):
+            reason = PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH   # stalled, not converged
+        converged = reason > 0 and np.isfinite(fnorm) and P.state_is_clean()
+        if reason > 0 and not converged:
+            reason = UNCLEAN_STATE
+        neg = self.negative_eigenvalues() if converged else None
+        if (neg is not None and neg > path.accepted_negative
+                and tally["stability"] < self.spec.stability_cutbacks):
+            tally["stability"] += 1
+            reason = UNSTABLE_STEP
+        return reason, neg
+
+    def _accept(self, path: PathState, X_prev: PETSc.Vec, step: float, its: int, neg, tally: dict):
+        if neg is not None:
+            path.accepted_negative = neg
+        self.problem.checkpoint()
+        self.problem.X.copy(path.dX_last)
+        path.dX_last.axpy(-1.0, X_prev)
+        path.dlam_last = step
+        path.lam += step
+        tally["substeps"] += 1
+        tally["consecutive"] = 0
+        if its <= self.spec.easy_iterations and step >= path.dlam * (1 - 1e-12):
+            path.dlam = step * self.spec.growth      # easy: grow (not past targets)
+
+    def _cut_back(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float,
+                  reason: int, neg, tally: dict) -> None:
+        """Back to the last converged state with half the increment (collective: the reason is
+        global); raises LoadStepFailure after ``max_cutbacks`` in a row."""
+        P = self.problem
+        inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
+        lost = bool(P.comm.tompi4py().allreduce(int(P.contact_failed)))
+        X_prev.copy(P.X)
+        P.restore()
+        tally["cutbacks"] += 1
+        tally["consecutive"] += reason != UNSTABLE_STEP      # bounded by stability_cutbacks
+        path.dlam = 0.5 * step
+        why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+        if reason == UNSTABLE_STEP:
+            why = f" ({neg} negative tangent eigenvalue(s), the last state had {path.accepted_negative})"
+        self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}{why}; "
+                 f"retry with increment {path.dlam:.4g}")
+        if tally["consecutive"] > self.spec.max_cutbacks or path.dlam < self.spec.min_increment:
+            P.load_factor = path.lam
+            raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
+                                  self._linear_solver_detail(reason))

@@ -1,4 +1,4 @@
-"""ancf-solve CONFIG.yaml [--output-dir DIR] [--quiet] [PETSc options ...]
+"""ancf-solve CONFIG.yaml [--output-dir DIR | --restart DIR] [--quiet] [PETSc options ...]
 
 Exit codes (docs/running.md): 0 completed; 2 config, command-line, PETSc-option or file-system
 error (one line, no traceback); 3 a load level was not reached (every converged level is on
@@ -12,7 +12,7 @@ import difflib
 import os
 import sys
 
-OPTIONS = ("--output-dir", "--quiet", "--version", "--help")
+OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help")
 
 
 def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
@@ -49,6 +49,9 @@ def _parser() -> argparse.ArgumentParser:
                "reached, 4 unstable levels, 130/143 interrupted (SIGINT/SIGTERM). See docs/running.md.")
     parser.add_argument("config", help="YAML model description")
     parser.add_argument("--output-dir", help="override output.dir of the config")
+    parser.add_argument("--restart", metavar="DIR",
+                        help="continue the run in DIR (its output directory) from its last "
+                             "converged level; the config must describe the same model")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     parser.add_argument("--version", action="store_true", help="print the version and exit")
     return parser
@@ -125,7 +128,10 @@ def _main(argv: list[str], interrupt) -> int:
         spec = load_config(args.config)
         if args.output_dir:
             spec.output.dir = args.output_dir
-        result = solve(spec, comm, printer)
+        if args.restart and args.output_dir and os.path.abspath(args.output_dir) != os.path.abspath(args.restart):
+            _error("--restart DIR writes into DIR; leave out --output-dir", rank)
+            return 2
+        result = solve(spec, comm, printer, restart=args.restart)
     except SolverOptionError as exc:
         _error(str(exc), rank)
         return 2

@@ -169,7 +169,7 @@ def test_a_bug_still_leaves_a_final_status(tmp_path, monkeypatch):
 
     def broken_gather(self, X=None, blocks=False):
         calls.append(1)
-        if len(calls) == 2:                 # while writing the second level
+        if len(calls) == 3:                 # while writing the second level (two gathers a level)
             raise RuntimeError("simulated bug")
         return real(self, X, blocks)
     monkeypatch.setattr(Problem, "gather", broken_gather)

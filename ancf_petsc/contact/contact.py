@@ -362,6 +362,15 @@ class Contact:
         """Whether the last evaluation's projections all converged (this rank)."""
         return self._cache is not None and self._cache[2].pr.converged
 
+    def restore_state(self, projection: np.ndarray | None, status: np.ndarray | None) -> None:
+        """A restart's projection state (points, 3) and multiplier status (multipliers,)."""
+        if projection is not None:
+            self.projector.set_state(projection)
+        if status is not None:
+            self.status = np.asarray(status, dtype=bool).copy()
+        self._cache = None
+        self.checkpoint()
+
     def checkpoint(self) -> None:
         self.projector.checkpoint()
         self._saved_status = self.status.copy()

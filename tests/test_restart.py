@@ -1,0 +1,110 @@
+"""Restart (`ancf-solve CONFIG --restart DIR`): a run killed with SIGKILL mid-column continues
+from its last converged level and gives the answers of an uninterrupted run; a changed model
+is refused with one line; another rank count is fine."""
+import json
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, read_summary, solve_cli, write_config
+from test_mpi import probes_table
+
+
+def _config(tmp_path, mode="sliding", name="c"):
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["contact"]["mode"] = mode
+    raw["output"] = {"dir": str(tmp_path / "unused"), "vtk": False}
+    return write_config(raw, tmp_path / f"{name}.yaml"), raw
+
+
+def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
+    """Start ancf-solve, SIGKILL it (its whole process group) once ``after_levels`` levels are
+    in summary.json."""
+    exe = os.path.join(VENV_BIN, "ancf-solve")
+    cmd = [exe, cfg, "--output-dir", str(out), "--quiet"]
+    if ranks > 1:
+        cmd = ["mpirun", "--oversubscribe", "-n", str(ranks)] + cmd
+    p = subprocess.Popen(cmd, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT), cwd=ROOT,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    t0 = time.time()
+    try:
+        while time.time() - t0 < timeout:
+            try:
+                with open(out / "summary.json") as fh:
+                    if len(json.load(fh)["steps"]) >= after_levels:
+                        break
+            except (OSError, ValueError, KeyError):
+                pass
+            if p.poll() is not None:
+                break
+            time.sleep(0.02)
+    finally:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+    s = read_summary(out)
+    assert s["status"] == "running" and after_levels <= len(s["steps"]) < 13, (s["status"], len(s["steps"]))
+
+
+@pytest.mark.parametrize("ranks,restart_ranks,mode", [(1, 1, "sliding"), (2, 2, "sliding"),
+                                                      (1, 2, "sliding"), (1, 1, "unilateral")])
+def test_killed_column_restarts_to_the_uninterrupted_answers(tmp_path, ranks, restart_ranks, mode):
+    cfg, _ = _config(tmp_path, mode)
+    p = solve_cli(cfg, extra=["--output-dir", str(tmp_path / "full"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    full = read_summary(tmp_path / "full")
+    _killed_run(cfg, tmp_path / "killed", ranks)
+    p = solve_cli(cfg, ranks=restart_ranks, extra=["--restart", str(tmp_path / "killed"), "--quiet"])
+    assert p.returncode == 0, p.stdout + p.stderr
+    s = read_summary(tmp_path / "killed")
+    assert s["status"] == "completed" and s["restarted_from"]["step"] >= 4 and len(s["steps"]) == 13
+    a, b = probes_table(full), probes_table(s)
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max(), np.abs(a - b).max() / np.abs(a).max()
+    import h5py
+    with h5py.File(tmp_path / "killed" / "results.h5") as h5:
+        assert h5["steps"].attrs["converged"] == 13 and sorted(h5["steps"])[-1] == "step_0013"
+
+
+def test_restart_refuses_another_model(tmp_path):
+    cfg, raw = _config(tmp_path)
+    raw["steps"] = raw["steps"][:2]
+    p = solve_cli(write_config(raw, tmp_path / "short.yaml"), extra=["--output-dir", str(tmp_path / "run")])
+    assert p.returncode == 0, p.stderr
+    raw["beams"][1]["elements"] = 8
+    raw["steps"] = load_raw("achilles_type3_psi45.yaml")["steps"]
+    p = solve_cli(write_config(raw, tmp_path / "other.yaml"), ranks=2, extra=["--restart", str(tmp_path / "run")])
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
+    assert p.returncode == 2 and len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert "beams[1].elements differs" in lines[0] and str(tmp_path / "run") in lines[0]
+    p = solve_cli(cfg, extra=["--restart", str(tmp_path / "nowhere")])
+    assert p.returncode == 2 and "results.h5: no such file" in p.stderr
+
+
+# ------------------------------------------------------------------------------ free motions
+def test_unsupported_models_are_refused_before_solving(tmp_path):
+    """No supports at all, and a strand held only by frictionless contact (the centre of a
+    twisted hexagonal bundle without its support): exit 2, one line naming the beam and motion,
+    on 1 and 2 ranks, before any level is solved."""
+    from ancf_petsc.bundle import expand_bundle
+    bar = load_raw("uniaxial_neohookean.yaml")
+    bar.pop("boundary_conditions")
+    strand = expand_bundle(dict(load_raw("bundle_hex7.yaml"),
+                                bundle=dict(load_raw("bundle_hex7.yaml")["bundle"], pulled_end="free")))
+    strand["boundary_conditions"] = [b for b in strand["boundary_conditions"] if b["beam"] != "fascicle0"]
+    for name, raw, words in (("bar", bar, ["bar (free: translation along x, translation along y",
+                                           "rotation about z)"]),
+                             ("strand", strand, ["fascicle0 (free: ", "rotation about x",
+                                                 "frictionless contact lets beams slide"])):
+        raw["output"] = {"dir": str(tmp_path / name)}
+        cfg = write_config(raw, tmp_path / f"{name}.yaml")
+        for ranks in (1, 2):
+            p = solve_cli(cfg, ranks=ranks, extra=["--quiet"])
+            lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
+            assert p.returncode == 2 and len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+            assert "boundary_conditions: nothing holds" in lines[0] and all(w in lines[0] for w in words), lines[0]
+        assert not (tmp_path / name / "results.h5").exists()

@@ -609,9 +609,23 @@ def solver_command() -> list[str]:
     return [found] if found else [sys.executable, "-m", "apps.ancf_solve"]
 
 
+#: statuses of an attempt that stopped early but kept its converged levels: continued with
+#: ``ancf-solve --restart`` (a task killed at the time limit, or by the node)
+RESTARTABLE = ("interrupted", "running")
+
+
+def can_restart(run_dir: str) -> bool:
+    """The run in ``run_dir`` stopped early with converged levels on disk (same config)."""
+    summary = _read_json(os.path.join(run_dir, "summary.json"))
+    return (summary is not None and summary.get("status") in RESTARTABLE and bool(summary.get("steps"))
+            and os.path.exists(os.path.join(run_dir, "results.h5")))
+
+
 def solve_command(sweep: Sweep, run: RunSpec) -> list[str]:
-    """Full command of one local run (``mpiexec -n ranks`` in front when ranks > 1)."""
-    cmd = solver_command() + [os.path.join(run.dir, "config.yaml"), "--output-dir", run.dir]
+    """Full command of one local run (``mpiexec -n ranks`` in front when ranks > 1); a run that
+    stopped early is continued from its last converged level."""
+    where = ["--restart", run.dir] if can_restart(run.dir) else ["--output-dir", run.dir]
+    cmd = solver_command() + [os.path.join(run.dir, "config.yaml")] + where
     cmd += sweep.petsc
     if sweep.ranks > 1:
         cmd = sweep.mpiexec + ["-n", str(sweep.ranks)] + cmd
@@ -756,8 +770,10 @@ class _Active:
 def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Outcome:
     """Run one prepared run directory; writes log.txt and run.json, returns the outcome."""
     active = active or _Active()
-    _remove(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
-    cmd = solve_command(sweep, run)
+    cmd = solve_command(sweep, run)              # decides on a restart from summary.json
+    if "--restart" not in cmd:
+        _remove(os.path.join(run.dir, "summary.json"))
+    _remove(os.path.join(run.dir, "run.json"))
     _write_atomic(os.path.join(run.dir, "run.json"), json.dumps(
         {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
          "host": socket.gethostname(), "sweep_pid": os.getpid(), "ranks": sweep.ranks,
@@ -1136,7 +1152,15 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         f'echo "{ATTEMPT_HEADER}: job ${{SLURM_ARRAY_JOB_ID:-?}}_$TASK on $(hostname) at '
         '$(date +%Y-%m-%dT%H:%M:%S) ===" >> "$LOG"',
         "START=$(date +%s.%N)",
-        '"${LAUNCH[@]}" "${ANCF_SOLVE[@]}" "$RUN_DIR/config.yaml" --output-dir "$RUN_DIR"'
+        # a task killed at the time limit (interrupted) or with its node (running) goes on from
+        # its last converged level when the array is submitted again
+        'WHERE=(--output-dir "$RUN_DIR")',
+        "if \"$PYTHON\" -c 'import json, os, sys; s = json.load(open(sys.argv[1])); "
+        "sys.exit(not (s.get(\"status\") in (\"interrupted\", \"running\") and s.get(\"steps\") "
+        "and os.path.exists(sys.argv[2])))' \"$RUN_DIR/summary.json\" \"$RUN_DIR/results.h5\" 2>/dev/null; then",
+        '  WHERE=(--restart "$RUN_DIR"); echo "ancf-sweep: continuing $RUN_DIR from its last converged level"',
+        "fi",
+        '"${LAUNCH[@]}" "${ANCF_SOLVE[@]}" "$RUN_DIR/config.yaml" "${WHERE[@]}"'
         f'{petsc} >> "$LOG" 2>&1',
         "RC=$?",
         "END=$(date +%s.%N)",

@@ -329,3 +329,28 @@ def test_new_solver_outcomes_are_classified(tmp_path):
                            "ancf-solve: output error: /x: no space left on device for level 3; "
                            "converged steps are in /x")
     assert st == "failed" and reason == "output error: /x: no space left on device for level 3"
+
+
+def test_a_killed_run_is_continued_from_its_last_level(tmp_path):
+    """A run that stopped early (status interrupted, as SLURM's time limit leaves it) is not
+    started again but continued with ancf-solve --restart, locally and by the array script."""
+    path = write_sweep(str(tmp_path), {"parameters": {"output.vtk": [False]}, "output": "again"})
+    rc, out, _ = run_main([path])
+    assert rc == 0, out
+    run = expand(load_sweep(path))[0]
+    summary_path = os.path.join(run.dir, "summary.json")
+    with open(summary_path) as fh:
+        s = json.load(fh)
+    assert len(s["steps"]) >= 2
+    s["status"], s["steps"] = "interrupted", s["steps"][:1]
+    with open(summary_path, "w") as fh:
+        json.dump(s, fh)
+    rc, out, _ = run_main([path])
+    assert rc == 0, out
+    with open(summary_path) as fh:
+        s = json.load(fh)
+    assert s["status"] == "completed" and s["restarted_from"]["step"] == 1
+    rc, _, _ = run_main([path, "--slurm"])
+    script = (tmp_path / "again" / "sweep.slurm").read_text()
+    assert 'WHERE=(--restart "$RUN_DIR")' in script and '"${WHERE[@]}"' in script
+    assert subprocess.run(["bash", "-n", str(tmp_path / "again" / "sweep.slurm")]).returncode == 0

@@ -29,7 +29,7 @@ test: setup
 	$(PY) -m pytest -q tests
 
 test-fast: setup
-	$(PY) -m pytest -q -m "not slow" tests
+	$(PY) -m pytest -q -m "not slow and not mpi" tests
 
 bench: setup
 	$(PY) scripts/bench_kernel.py

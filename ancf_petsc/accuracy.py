@@ -18,6 +18,7 @@ import shutil
 import time
 
 from .config import ModelSpec, parse_config
+from .files import atomic_write
 from .refinement import choose, quantity
 
 
@@ -43,9 +44,7 @@ def _adopt(rung_dir: str, out_dir: str, info: dict, comm) -> None:
         with open(path) as fh:
             summary = json.load(fh)
         summary.update(info, output_dir=os.path.abspath(out_dir))
-        with open(path + ".tmp", "w") as fh:
-            json.dump(summary, fh, indent=1)
-        os.replace(path + ".tmp", path)
+        atomic_write(path, json.dumps(summary, indent=1))
     comm.tompi4py().Barrier()
 
 

@@ -29,6 +29,7 @@ import numpy as np
 import yaml
 
 from . import element3363 as el
+from .files import atomic_write
 from .model import Model
 from .version import version_info
 
@@ -99,17 +100,6 @@ def plain(obj):
     if isinstance(obj, np.generic):
         return obj.item()
     return obj
-
-
-def _atomic_write(path: str, text: str) -> None:
-    tmp = path + ".tmp"
-    try:
-        with open(tmp, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except OSError:
-        _remove(tmp)
-        raise
 
 
 class SurfaceSampler:
@@ -300,13 +290,13 @@ class ResultsWriter:
         self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
         text = json.dumps(self.summary, indent=1)
         try:
-            _atomic_write(self.summary_path, text)
+            atomic_write(self.summary_path, text)
         except OSError as exc:
             if exc.errno not in _NO_SPACE or not os.path.exists(os.path.join(self.dir, RESERVE)):
                 raise OutputError(self.summary_path, f"cannot write: {_reason(exc)}") from None
             self._release_reserve()               # the space set aside for exactly this
             try:
-                _atomic_write(self.summary_path, text)
+                atomic_write(self.summary_path, text)
             except OSError as exc2:
                 raise OutputError(self.summary_path, f"cannot write: {_reason(exc2)}") from None
 
@@ -335,7 +325,7 @@ class ResultsWriter:
             self._last_sizes["vtu"] = os.path.getsize(path)
             rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
                              for t, f in self.pvd_entries[series] + [(lam, name)])
-            _atomic_write(os.path.join(self.dir, f"{series}.pvd"),
+            atomic_write(os.path.join(self.dir, f"{series}.pvd"),
                           '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                           f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
         except OSError as exc:

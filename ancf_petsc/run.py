@@ -40,6 +40,7 @@ class RunResult:
     exit_code: int = st.EXIT_OK
     unused_options: list = field(default_factory=list)   # PETSc options never read, as in the summary
     output_dir: str = ""
+    inverted: bool = False      # the failure came with an inverted element (J <= 0)
 
 
 def check_output_dir(path: str, comm) -> None:
@@ -216,11 +217,12 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
                 f"Newton {rec.iterations} in {rec.substeps} substep(s)  {rec.reason}  "
                 f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s{unstable}  {probes}")
 
-    failure, signum = None, 0
+    failure, signum, inverted = None, 0, False
     try:
         stepper.run(levels, on_level, start) if levels else None
     except LoadStepFailure as exc:
         failure = ("failed", exc.code, str(exc))
+        inverted = exc.inverted
     except RunInterrupted as exc:
         signum = exc.signum
         failure = ("interrupted", st.signal_reason(signum), str(exc))
@@ -262,4 +264,4 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
     say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations, "
         f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")
     return RunResult(status, message, writer.summary if rank == 0 else None, records, code,
-                     st.exit_code(status, code, signum), unused, spec.output.dir)
+                     st.exit_code(status, code, signum), unused, spec.output.dir, inverted)

@@ -80,6 +80,7 @@ class LoadStepFailure(Exception):
         super().__init__(msg)
         self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
         self.code = reason.split()[0] if reason else "FAILED"
+        self.inverted = inverted
 
 
 class SolverOptionError(ConfigError):

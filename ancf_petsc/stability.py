@@ -34,7 +34,6 @@ import csv
 import itertools
 import math
 import os
-import re
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -49,11 +48,6 @@ PHYSICAL = ("bulk_ratio", "contact")     # change the model: one reference per v
 LINESEARCHES = ("basic", "bt", "l2", "cp")
 KEYS = ("kind", "name", "base", "probe", "component", "axes", "reference", "max_it", "max_newton",
         "output")
-#: the solver's one-line failure message (solver.LoadStepFailure)
-FAILURE = re.compile(r"^could not reach load factor \S+: SNES failed at load factor \S+ "
-                     r"\(last converged \S+\) with [A-Z_]+"
-                     r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+\))?"
-                     r"( \(an element was inverted, J <= 0\))?$")
 ADAPTIVE = "adaptive"
 
 
@@ -107,15 +101,13 @@ def cell_config(scene: Scene, cell: dict, max_it: int, max_newton: int | None = 
     return raw
 
 
-def short_reason(message: str) -> str:
-    """A few letters for a chart cell: the SNES reason without DIVERGED_."""
-    m = re.search(r"with ([A-Z_]+)", message)
-    if not m:
+def short_reason(code: str, inverted: bool = False) -> str:
+    """A few letters for a chart cell from a run's reason code (RunResult.reason_code)."""
+    if not code or not code.isupper():
         return "error"
-    text = m.group(1).replace("DIVERGED_", "").replace("FNORM_NAN", "NaN")
+    text = code.replace("DIVERGED_", "").replace("FNORM_NAN", "NaN")
     text = text.replace("NEWTON_BUDGET_EXCEEDED", "budget")
-    return text.replace("LINE_SEARCH", "LS").replace("MAX_IT", "max it") + \
-        (" J<0" if "inverted" in message else "")
+    return text.replace("LINE_SEARCH", "LS").replace("MAX_IT", "max it") + (" J<0" if inverted else "")
 
 
 def _physical(cell: dict) -> tuple:
@@ -147,8 +139,9 @@ def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> di
         row = {**cell, "status": res.status, "iterations": int(summary["newton_iterations"]) if summary else 0,
                "wall_time": float(summary["timings"]["total"]) if summary else math.nan,
                "value": value, "rel_error": abs(value - ref) / abs(ref) if ok else math.nan,
-               "message": "" if ok else res.message, "short": "" if ok else short_reason(res.message),
-               "clean_message": ok or bool(FAILURE.match(res.message))}
+               "message": "" if ok else res.message,
+               "short": "" if ok else short_reason(res.reason_code, res.inverted),
+               "clean_message": ok or ("\n" not in res.message and res.reason_code != "INTERNAL_ERROR")}
         out.append(row)
         what = (f"{row['iterations']} its, error {row['rel_error']:.1e}" if ok
                 else f"FAILED {row['short']} after {row['iterations']} its")

@@ -38,6 +38,7 @@ from typing import Any, Callable
 
 import yaml
 
+from .errors import InputError
 from .config import DEFAULT_AXIAL_POINTS
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
@@ -46,12 +47,8 @@ STUDY_KEYS = ("kind", "name", "base", "probe", "component", "level", "grid", "re
               "repeats", "output")
 
 
-class StudyError(Exception):
-    """A study-file problem: ``path`` is the key path."""
-
-    def __init__(self, path: str, message: str):
-        super().__init__(f"{path}: {message}" if path else message)
-        self.path = path
+class StudyError(InputError):
+    """A study-file problem: ``path`` is the key path in the study file."""
 
 
 @dataclass

@@ -47,6 +47,9 @@ from typing import Any, Callable
 
 import yaml
 
+from .errors import InputError
+from .files import atomic_write
+
 SWEEP_KEYS = ("base", "name", "mode", "parameters", "run", "output", "slurm")
 RUN_KEYS = ("ranks", "jobs", "petsc", "timeout", "mpiexec")
 SLURM_KEYS = ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs")
@@ -63,12 +66,11 @@ STATUS_ORDER = FINAL_STATUSES + ("running", "missing")
 EXIT_INPUT, EXIT_FAILED, EXIT_UNSTABLE = 2, 3, 4
 
 
-class SweepError(Exception):
+class SweepError(InputError):
     """A problem with a sweep file; ``path`` is the key in the sweep file (e.g. ``run.jobs``)."""
 
     def __init__(self, path: str, message: str):
-        super().__init__(f"{path}: {message}" if path else message)
-        self.path = path
+        super().__init__(path, message)
         self.message = message
 
 
@@ -546,13 +548,6 @@ def _read_json(path: str) -> dict | None:
         return None
 
 
-def _write_atomic(path: str, text: str) -> None:
-    tmp = f"{path}.tmp{os.getpid()}.{threading.get_ident()}"
-    with open(tmp, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
-
-
 def _remove(*paths: str) -> None:
     for p in paths:
         try:
@@ -581,10 +576,10 @@ def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     if old != text:
         if old is not None:
             _remove(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
-        _write_atomic(cfg_path, text)
+        atomic_write(cfg_path, text)
     params = {"sweep": sweep.name, "sweep_file": sweep.file, "base": sweep.base,
               "run_id": run.run_id, "index": run.index, "parameters": run.params}
-    _write_atomic(os.path.join(run.dir, "params.json"),
+    atomic_write(os.path.join(run.dir, "params.json"),
                   json.dumps(params, indent=1, default=str) + "\n")
     return is_done(sweep, run)
 
@@ -705,7 +700,7 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
     record.update(extra or {})
     record.update({"status": status, "reason": reason, "wall_time": wall_time,
                    "returncode": returncode, "finished": time.strftime("%Y-%m-%dT%H:%M:%S")})
-    _write_atomic(os.path.join(run_dir, "run.json"), json.dumps(record, indent=1) + "\n")
+    atomic_write(os.path.join(run_dir, "run.json"), json.dumps(record, indent=1) + "\n")
     return Outcome(status, reason, wall_time, returncode)
 
 
@@ -774,7 +769,7 @@ def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Ou
     if "--restart" not in cmd:
         _remove(os.path.join(run.dir, "summary.json"))
     _remove(os.path.join(run.dir, "run.json"))
-    _write_atomic(os.path.join(run.dir, "run.json"), json.dumps(
+    atomic_write(os.path.join(run.dir, "run.json"), json.dumps(
         {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
          "host": socket.gethostname(), "sweep_pid": os.getpid(), "ranks": sweep.ranks,
          "command": shlex.join(cmd)}, indent=1) + "\n")
@@ -1022,7 +1017,7 @@ def collect(sweep: Sweep) -> Collection:
     os.replace(tmp, csv_path)
     failed_path = os.path.join(sweep.output, "failed.txt")
     lines = [f"{s.run.run_id}\t{s.status}\t{s.reason}" for s in states if s.status in FAILED_STATUSES]
-    _write_atomic(failed_path, "".join(ln + "\n" for ln in lines))
+    atomic_write(failed_path, "".join(ln + "\n" for ln in lines))
     return Collection(states, csv_path, failed_path)
 
 
@@ -1059,7 +1054,7 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         if force:
             _remove(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
     runs_txt = os.path.join(sweep.output, "runs.txt")
-    _write_atomic(runs_txt, "".join(r.dir + "\n" for r in runs))
+    atomic_write(runs_txt, "".join(r.dir + "\n" for r in runs))
     tasks = os.path.join(sweep.output, "tasks")
     os.makedirs(tasks, exist_ok=True)
     for old in os.listdir(tasks):
@@ -1168,6 +1163,6 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         'exit "$RC"',
     ]
     script = os.path.join(sweep.output, "sweep.slurm")
-    _write_atomic(script, "\n".join(lines) + "\n")
+    atomic_write(script, "\n".join(lines) + "\n")
     os.chmod(script, 0o755)
     return script, runs_txt

@@ -4,9 +4,11 @@ from __future__ import annotations
 import copy
 import json
 import os
+import re
 import subprocess
 import sys
 
+import numpy as np
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -70,3 +72,49 @@ def read_summary(out_dir) -> dict:
 
 def probe(summary: dict, name: str, step: int = -1, key: str = "displacement"):
     return summary["steps"][step]["probes"][name][key]
+
+
+def build_problem(raw, matrix_type: str = "aij"):
+    """A Problem (1 rank, blocks layout) of a raw config, and the PETSc module."""
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.assembly import Problem
+    from ancf_petsc.config import parse_config
+    from ancf_petsc.partition import make_layout
+    from ancf_petsc.model import build_model
+    from helpers import CONFIGS
+    spec = parse_config(raw, base_dir=CONFIGS)
+    model = build_model(spec)
+    contact = None
+    if spec.contact is not None:
+        from ancf_petsc.contact import build_contact
+        contact = build_contact(model, spec.contact, lambda *_: None)
+    layout = make_layout(model, "blocks", 1, 0, contact)
+    return Problem(model, layout, PETSc.COMM_WORLD, contact, matrix_type), PETSc
+
+
+def two_beam_twisted():
+    """configs/pretwisted_bar.yaml with a second, clamped SVK beam beside it."""
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["beams"].append({"name": "second", "section": {"shape": "outline", "curves": [
+        {"points": [[-0.002, -0.004], [-0.001, -0.008], [-0.006, -0.007]]},
+        {"points": [[-0.006, -0.007], [-0.007, -0.003], [-0.002, -0.004]]}]},
+        "material": {"model": "svk", "E": 3.0e6, "nu": 0.3}, "elements": 3})
+    raw["boundary_conditions"].append({"beam": "second", "node": "first", "fix": "clamped"})
+    return raw
+
+
+def probes_table(summary):
+    """Every probe's displacement at every step, as one array (steps × probes, 3)."""
+    rows = []
+    for step in summary["steps"]:
+        for name in sorted(step["probes"]):
+            rows.append(step["probes"][name]["displacement"])
+    return np.array(rows)
+
+
+#: the solver's one-line failure message (solver.LoadStepFailure), checked by tests as users read it
+FAILURE_MESSAGE = re.compile(r"^could not reach load factor \S+: SNES failed at load factor \S+ "
+                             r"\(last converged \S+\) with [A-Z_]+"
+                             r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+\))?"
+                             r"( \(an element was inverted, J <= 0\))?$")

@@ -98,6 +98,7 @@ def test_bending_choice_meets_tolerance_against_a_fine_reference(tmp_path):
     assert abs(z - z_fine) / abs(z_fine) <= 3.0 * acc["estimated_error"]
 
 
+@pytest.mark.mpi
 def test_accuracy_run_is_the_same_on_two_ranks(tmp_path):
     raw = load_raw("bending_neohookean.yaml")
     raw["beams"][0]["axial_points"] = 2

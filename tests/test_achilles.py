@@ -39,6 +39,7 @@ def test_configs_differ_only_in_twist_and_name():
     assert raws[0] == raws[1] == raws[2]
 
 
+@pytest.mark.slow
 def test_table1_reproduced(table1):
     err = table1.errors()
     print("\n" + table1.markdown())
@@ -56,6 +57,7 @@ def test_table1_reproduced(table1):
             assert np.all(np.abs(table1.others[p][k]) < 0.02 * table1.ours[p][-1]), (p, k)
 
 
+@pytest.mark.slow
 def test_sections_and_interfaces(table1):
     s = table1.summaries[45]
     areas = {k: v["area"] * 1e6 for k, v in s["sections"].items()}
@@ -69,6 +71,8 @@ def test_sections_and_interfaces(table1):
     assert max(g["max_weighted_gap"] for g in gaps.values()) < 1e-12
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_mpi_gives_the_serial_table(tmp_path, table1, ranks):
     s = _run(tmp_path, 45, ranks=ranks)
@@ -77,6 +81,7 @@ def test_mpi_gives_the_serial_table(tmp_path, table1, ranks):
     assert np.max(np.abs(ours / table1.ours[45] - 1.0)) < 1e-9
 
 
+@pytest.mark.slow
 def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
     """docs/paper.md "Where we differ": the paper's psi = 45 - 0 difference matches the soleus alone
     (neighbours and contact removed) within the table's rounding (three decimals: +-0.001 mm on
@@ -101,6 +106,7 @@ def test_paper_pretwist_offset_is_that_of_a_free_soleus(tmp_path, table1):
     assert bundle_offset[0] < 0.9 * solo_offset[0]          # measured 0.87
 
 
+@pytest.mark.slow
 def test_table1_paths_are_stable(table1):
     """Every converged level of the three columns is a minimum of the total potential (no
     negative tangent eigenvalue; docs/paper.md "Table 2" for the coarse meshes where this fails)."""

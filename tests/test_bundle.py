@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from helpers import CONFIGS, load_raw, petsc_init, read_summary, solve_cli, write_config
-from test_mpi import probes_table
+from helpers import probes_table
 
 
 def _expand(**bundle):
@@ -45,6 +45,8 @@ def test_circles_pair_facing_arcs():
     assert all("curve_b" in it for it in raw["contact"]["interfaces"])
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_touching_circles_close_contact_on_one_and_two_ranks(tmp_path):
     """Circles that touch along lines (gap 0), twisted and pulled: the outer helices press on
     the centre, unilateral contact becomes active with a tiny penetration, and 2 METIS ranks
@@ -103,6 +105,8 @@ def _hex7(tmp_path, name):
     return raw
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_bundle_ranks_agree(tmp_path):
     """-n 1/2/3 (METIS) agree to 1e-9 on every probe; the partition is in results.h5."""
     tables = {}
@@ -125,6 +129,8 @@ def test_bundle_ranks_agree(tmp_path):
         assert np.abs(tables[n] - tables[1]).max() <= 1e-9 * scale
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["sliding", "unilateral"])
 def test_achilles_metis_cross_rank_contact(tmp_path, mode):
     """Achilles ψ = 45° on 3 ranks with METIS: contact pairs (and pressure functions) cut across

@@ -132,6 +132,7 @@ def test_cli_yaml_syntax_and_missing_file(tmp_path):
     assert p.returncode == 2 and "no such config file" in p.stderr
 
 
+@pytest.mark.mpi
 def test_cli_config_error_under_mpi_is_one_line(tmp_path):
     raw = mutate(CASES[6][1])
     cfg = write_config(raw, tmp_path / "bad.yaml")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from helpers import load_raw
-from test_solver import _problem
+from helpers import build_problem as _problem
 
 
 def achilles(psi=45.0, elements=2, contact=None):

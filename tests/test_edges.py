@@ -90,6 +90,7 @@ def test_config_values_rejected_in_process(case):
     assert str(err.value).startswith(message) and "\n" not in str(err.value), str(err.value)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case,ranks", [("mu with c10", 1), ("name with a path", 2)])
 def test_config_errors_on_the_command_line(tmp_path, case, ranks):
     fn, message = CONFIG_CASES[case]
@@ -181,6 +182,7 @@ def test_a_bug_still_leaves_a_final_status(tmp_path, monkeypatch):
     assert s["message"] == "RuntimeError: simulated bug"
 
 
+@pytest.mark.mpi
 def test_config_file_is_binary_or_a_directory(tmp_path):
     binary = tmp_path / "model.yaml"
     binary.write_bytes(b"name: x\n" + bytes(range(128, 256)))
@@ -302,6 +304,7 @@ if MPI.COMM_WORLD.rank == 0:
 """
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_standard_solver_options_run_or_say_what_works(tmp_path, ranks):
     petsc_init()
@@ -437,6 +440,7 @@ OUTPUT_CASES = {
 }
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("case,ranks", [("in /proc", 1), ("a file", 2), ("under a file", 1)])
 def test_output_dir_problems(tmp_path, case, ranks):
     (tmp_path / "f").write_text("a file")
@@ -446,6 +450,7 @@ def test_output_dir_problems(tmp_path, case, ranks):
     assert_one_line(p, 2, "output error: ", message)
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_unwritable_output_dir(tmp_path, ranks):
     cfg = write_config(tiny(), tmp_path / "c.yaml")
@@ -480,6 +485,7 @@ def _check_agreement(out_dir, n_levels=None):
     return s
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_full_disk_on_a_small_tmpfs(tmp_path, ranks):
     """A 150 KB file system: the run stops before the level that would not fit, exit 2, one line
@@ -532,14 +538,14 @@ class _Fault:
                 return real_file(path, mode, *a, **k)
             monkeypatch.setattr(h5py, "File", file)
         elif target == "summary":
-            real_atomic = out._atomic_write
+            real_atomic = out.atomic_write
 
             def atomic(path, text):
                 doc = json.loads(text) if path.endswith("summary.json") else {}
                 if doc.get("status") == "running" and len(doc["steps"]) >= level:
                     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), path + ".tmp")
                 return real_atomic(path, text)
-            monkeypatch.setattr(out, "_atomic_write", atomic)
+            monkeypatch.setattr(out, "atomic_write", atomic)
         monkeypatch.setattr(out.ResultsWriter, "_check_space", lambda self, k, q: None)
 
 
@@ -572,6 +578,7 @@ def buckled_bar(allow=None) -> dict:
     return raw
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_unstable_levels_end_in_status_unstable(tmp_path, ranks):
     p = run_cfg(tmp_path, buckled_bar(), ranks)        # --quiet: the warning is printed anyway
@@ -630,6 +637,7 @@ def _interrupt(tmp_path, ranks: int, sig: int, to_ranks: bool):
     return subprocess.CompletedProcess(cmd, proc.returncode, stdout, stderr), out, raw["steps"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks,sig,to_ranks", [(1, signal.SIGTERM, False), (1, signal.SIGINT, False),
                                                 (2, signal.SIGTERM, True), (2, signal.SIGINT, False)])
 def test_signals_stop_cleanly(tmp_path, ranks, sig, to_ranks):
@@ -645,6 +653,7 @@ def test_signals_stop_cleanly(tmp_path, ranks, sig, to_ranks):
     assert 1 <= k < len(levels) and [st["load_factor"] for st in s["steps"]] == levels[:k]
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_closed_stdout_pipe_does_not_stop_the_solve(tmp_path, ranks):
     """`ancf-solve ... | head -1`: one rank stops printing and solves on.  Under mpirun the

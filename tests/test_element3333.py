@@ -7,7 +7,7 @@ import pytest
 
 from ancf_petsc import element3363 as el
 from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
-from test_solver import _problem, two_beam_twisted
+from helpers import build_problem as _problem, two_beam_twisted
 
 
 def test_3333_shape_functions_are_the_linear_section_subset_of_3363():
@@ -105,6 +105,8 @@ def test_3333_poisson_locking_and_its_remedy(tmp_path, kappa):
     assert locked["displacement"][2] < 0.3 * ref          # 74 % / 97 % / 99.5 % too stiff
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_3333_achilles_contact_under_mpi_matches_serial(tmp_path):
     """Contact between 3333 beams (held curvature vectors) across 3 METIS ranks = serial."""
     raw = load_raw("achilles_type3_psi45.yaml")

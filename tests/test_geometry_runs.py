@@ -1,5 +1,6 @@
 """Runs from measured sections: a three-subtendon tendon from independently traced, noisy outlines
 with sliding contact on 1, 2 and 3 ranks, and the worked example of docs/geometry.md."""
+import pytest
 import os
 import subprocess
 import sys
@@ -36,6 +37,8 @@ def probes(summary):
                      for step in summary["steps"]])
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_traced_noisy_tendon_with_contact_same_on_1_2_3_ranks(tmp_path):
     cfg = traced_tendon(tmp_path)
     tables = {}
@@ -84,6 +87,8 @@ def test_worked_example_from_the_mask_script(tmp_path):
     assert len(areas) == 3 and 22.0 < sum(areas) < 24.0     # 9223 pixels of 0.0025 mm^2 = 23.06 mm^2
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_sections_varying_along_x_same_on_1_2_3_ranks(tmp_path):
     """Per-element section rules (two NIfTI slices, 3 elements per beam) on 1, 2 and 3 ranks."""
     raw = load_raw("geometry_stations_demo.yaml")

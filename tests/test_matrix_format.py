@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from helpers import CONFIGS, load_raw, petsc_init, run_inline
-from test_solver import two_beam_twisted
+from helpers import two_beam_twisted
 
 
 def _problems(raw):

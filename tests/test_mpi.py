@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from helpers import load_raw, read_summary, solve_cli, write_config
-from test_solver import two_beam_twisted
+from helpers import probes_table, two_beam_twisted
 
 
 def _cases():
@@ -25,14 +25,8 @@ def _cases():
 CASES = _cases()
 
 
-def probes_table(summary):
-    rows = []
-    for step in summary["steps"]:
-        for name in sorted(step["probes"]):
-            rows.append(step["probes"][name]["displacement"])
-    return np.array(rows)
-
-
+@pytest.mark.mpi
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_ranks_agree_with_serial(tmp_path, name):
     raw = CASES[name]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, read_summary, solve_cli, write_config
-from test_mpi import probes_table
+from helpers import probes_table
 
 
 def _config(tmp_path, mode="sliding", name="c"):
@@ -51,6 +51,8 @@ def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
     assert s["status"] == "running" and after_levels <= len(s["steps"]) < 13, (s["status"], len(s["steps"]))
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks,restart_ranks,mode", [(1, 1, "sliding"), (2, 2, "sliding"),
                                                       (1, 2, "sliding"), (1, 1, "unilateral")])
 def test_killed_column_restarts_to_the_uninterrupted_answers(tmp_path, ranks, restart_ranks, mode):
@@ -70,6 +72,8 @@ def test_killed_column_restarts_to_the_uninterrupted_answers(tmp_path, ranks, re
         assert h5["steps"].attrs["converged"] == 13 and sorted(h5["steps"])[-1] == "step_0013"
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_restart_refuses_another_model(tmp_path):
     cfg, raw = _config(tmp_path)
     raw["steps"] = raw["steps"][:2]
@@ -86,6 +90,8 @@ def test_restart_refuses_another_model(tmp_path):
 
 
 # ------------------------------------------------------------------------------ free motions
+@pytest.mark.mpi
+@pytest.mark.slow
 def test_unsupported_models_are_refused_before_solving(tmp_path):
     """No supports at all, and a strand held only by frictionless contact (the centre of a
     twisted hexagonal bundle without its support): exit 2, one line naming the beam and motion,

@@ -6,35 +6,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import load_raw, petsc_init, read_summary, run_inline, solve_cli, write_config
-
-
-def _problem(raw):
-    petsc_init()
-    from petsc4py import PETSc
-    from ancf_petsc.assembly import Problem
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.partition import make_layout
-    from ancf_petsc.model import build_model
-    from helpers import CONFIGS
-    spec = parse_config(raw, base_dir=CONFIGS)
-    model = build_model(spec)
-    contact = None
-    if spec.contact is not None:
-        from ancf_petsc.contact import build_contact
-        contact = build_contact(model, spec.contact, lambda *_: None)
-    layout = make_layout(model, "blocks", 1, 0, contact)
-    return Problem(model, layout, PETSc.COMM_WORLD, contact), PETSc
-
-
-def two_beam_twisted():
-    raw = load_raw("pretwisted_bar.yaml")
-    raw["beams"].append({"name": "second", "section": {"shape": "outline", "curves": [
-        {"points": [[-0.002, -0.004], [-0.001, -0.008], [-0.006, -0.007]]},
-        {"points": [[-0.006, -0.007], [-0.007, -0.003], [-0.002, -0.004]]}]},
-        "material": {"model": "svk", "E": 3.0e6, "nu": 0.3}, "elements": 3})
-    raw["boundary_conditions"].append({"beam": "second", "node": "first", "fix": "clamped"})
-    return raw
+from helpers import FAILURE_MESSAGE, build_problem as _problem, load_raw, petsc_init, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
 
 
 def test_assembled_jacobian_matches_finite_differences():
@@ -137,7 +109,6 @@ def test_failure_names_load_and_reason_and_keeps_converged_steps(tmp_path):
 def test_newton_budget_stops_a_run_cleanly(tmp_path):
     """solver.max_newton_iterations: the run stops with a one-line message naming the budget;
     the levels reached before it stay on disk."""
-    from ancf_petsc.stability import FAILURE
     raw = load_raw("bending_neohookean.yaml")
     raw["solver"] = {"max_newton_iterations": 12}
     raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
@@ -146,7 +117,7 @@ def test_newton_budget_stops_a_run_cleanly(tmp_path):
     msg = p.stderr.strip().splitlines()[-1]
     assert "NEWTON_BUDGET_EXCEEDED after" in msg and "solver.max_newton_iterations = 12" in msg
     s = read_summary(tmp_path / "out")
-    assert s["status"] == "failed" and FAILURE.match(s["message"])
+    assert s["status"] == "failed" and FAILURE_MESSAGE.match(s["message"])
     assert 1 <= len(s["steps"]) < 4 and s["newton_iterations"] > 12
 
 

@@ -35,7 +35,7 @@ def unguarded(raw):
 def dense_negative_eigenvalues(raw, out_dir, step):
     """Negative eigenvalues of the free-DOF Jacobian at a stored converged state (numpy eigvalsh),
     independent of the factorisation the solver counted them with."""
-    from test_solver import _problem
+    from helpers import build_problem as _problem
     problem, PETSc = _problem(raw)
     with h5py.File(os.path.join(out_dir, "results.h5")) as h5:
         g = h5["steps"][f"step_{step:04d}"]
@@ -74,6 +74,7 @@ def test_negative_pivots_equal_the_dense_spectrum(tmp_path):
 
 
 
+@pytest.mark.mpi
 def test_stability_count_on_two_ranks(tmp_path):
     raw = unguarded(coarse_achilles())
     raw["output"] = {"dir": str(tmp_path / "n2"), "vtk": False}

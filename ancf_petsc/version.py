@@ -5,7 +5,7 @@ import functools
 import os
 import subprocess
 
-from . import __version__
+__version__ = "0.1.0"
 
 
 @functools.lru_cache(maxsize=1)

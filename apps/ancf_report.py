@@ -31,8 +31,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="finished ancf-solve output directories to report on (no solving)")
     args = ap.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from ancf_petsc import report as rp
-    from ancf_petsc.sweep import SweepError
+    from ancf_petsc.paper import report as rp
+    from ancf_petsc.workflows.sweep import SweepError
 
     chosen = args.table1 or args.table2 or args.contact or args.fit_bulk_modulus or args.figures
     if not chosen and not args.existing:

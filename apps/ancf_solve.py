@@ -64,7 +64,7 @@ def _error(line: str, rank: int = 0) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    from ancf_petsc import interrupt
+    from ancf_petsc.solving import interrupt
     interrupt.install()                  # from the start: Ctrl-C is a clean stop, never a traceback
     try:
         code = _main(argv, interrupt)
@@ -97,7 +97,7 @@ def _main(argv: list[str], interrupt) -> int:
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0
     petsc_args = petsc_help + petsc_args
-    from ancf_petsc.petsc_options import check_command_line
+    from ancf_petsc.config.petsc_options import check_command_line
     problem = check_command_line(petsc_args)
     if problem:
         _error(f"PETSc option {problem}")
@@ -106,7 +106,7 @@ def _main(argv: list[str], interrupt) -> int:
         # PETSc prints its help during PetscInitialize, under its own SIGPIPE handler (which
         # aborts): without PETSc's handlers, `ancf-solve CONFIG -help | head` ends quietly
         petsc_args.append("-no_signal_handler")
-    from ancf_petsc.launch import prepare_environment
+    from ancf_petsc.parallel.launch import prepare_environment
     prepare_environment()               # BLAS threads, Open MPI's layer for a singleton
 
     from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
@@ -114,11 +114,11 @@ def _main(argv: list[str], interrupt) -> int:
     petsc4py.init([sys.argv[0]] + petsc_args)
     from petsc4py import PETSc
 
-    from ancf_petsc.config import ConfigError, load_config
-    from ancf_petsc.output import OutputError
-    from ancf_petsc.petsc_options import unused_line
-    from ancf_petsc.run import solve
-    from ancf_petsc.solver import SolverOptionError
+    from ancf_petsc.config.parse import ConfigError, load_config
+    from ancf_petsc.io.results import OutputError
+    from ancf_petsc.config.petsc_options import unused_line
+    from ancf_petsc.solving.run import solve
+    from ancf_petsc.solving.stepper import SolverOptionError
 
     interrupt.install()                  # again: PETSc installed its own SIGPIPE handler
     comm = PETSc.COMM_WORLD

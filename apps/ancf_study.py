@@ -4,8 +4,8 @@
     ancf-study configs/studies/bending_stability.yaml    # converged/failed map, stability chart
     ancf-study STUDY.yaml --out DIR                       # results elsewhere
 
-The study file's ``kind`` (pareto | stability) chooses the study; see ancf_petsc/study.py and
-ancf_petsc/stability.py for the keys.  Runs are solved in this process, one after another, on
+The study file's ``kind`` (pareto | stability) chooses the study; see ancf_petsc/workflows/study.py and
+ancf_petsc/workflows/stability.py for the keys.  Runs are solved in this process, one after another, on
 one core.  Exit codes: 0 done, 2 study-file error.
 """
 from __future__ import annotations
@@ -27,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
     petsc4py.init([sys.argv[0]] + petsc_args)
     import yaml
 
-    from ancf_petsc.study import StudyError
+    from ancf_petsc.workflows.study import StudyError
     log = (lambda msg: print(msg, flush=True))
     try:
         if not os.path.isfile(args.study):
@@ -35,13 +35,13 @@ def main(argv: list[str] | None = None) -> int:
         with open(args.study) as fh:
             kind = (yaml.safe_load(fh) or {}).get("kind", "pareto")
         if kind == "pareto":
-            from ancf_petsc.study import load_study, run_study
+            from ancf_petsc.workflows.study import load_study, run_study
             spec = load_study(args.study)
             if args.out:
                 spec.output = os.path.abspath(args.out)
             run_study(spec, log)
         elif kind == "stability":
-            from ancf_petsc.stability import load_stability, run_stability
+            from ancf_petsc.workflows.stability import load_stability, run_stability
             spec = load_stability(args.study)
             if args.out:
                 spec.output = os.path.abspath(args.out)

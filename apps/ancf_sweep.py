@@ -2,7 +2,7 @@
                   [--throttle N] [--cpus-per-task N] [--mem M] [--time T] [--partition P]
                   [--account A] [--venv DIR] [--logs append|numbered]
 
-Runs a parameter sweep over a base config (format: ancf_petsc/sweep.py), locally with N
+Runs a parameter sweep over a base config (format: ancf_petsc/workflows/sweep.py), locally with N
 concurrent ancf-solve processes, or writes a SLURM job-array script (resources from the sweep
 file's ``slurm:`` or the options above; docs/running.md). Completed runs are skipped.
 Exit codes: 0 all runs completed, 1 some did not, 2 bad sweep file (one line, no traceback),
@@ -62,8 +62,8 @@ def main(argv: list[str] | None = None) -> int:
                        help="log.txt of a resubmitted task: appended (default) or log.N.txt")
     args = parser.parse_args(argv)
 
-    from ancf_petsc.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done, load_sweep,
-                                  run_sweep, slurm_spec, write_slurm)
+    from ancf_petsc.workflows.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done,
+        load_sweep, run_sweep, slurm_spec, write_slurm)
 
     def say(msg: str) -> None:
         print(msg, flush=True)

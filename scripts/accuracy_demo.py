@@ -43,9 +43,9 @@ def main() -> int:
     import petsc4py
     petsc4py.init([])
     import yaml
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.refinement import quantity
-    from ancf_petsc.run import solve
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.workflows.refinement import quantity
+    from ancf_petsc.solving.run import solve
 
     rows = []
     for label, cfg, acc, over, fine_n in SCENES[:2] if args.quick else SCENES:

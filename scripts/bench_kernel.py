@@ -20,11 +20,11 @@ sys.path.insert(0, ROOT)
 
 import numpy as np  # noqa: E402
 
-from ancf_petsc import element3363 as el, kernels  # noqa: E402
-from ancf_petsc.cubature import gauss_legendre  # noqa: E402
-from ancf_petsc.geometry import reference_nodal_vectors  # noqa: E402
-from ancf_petsc.materials import NeoHookean, StVenantKirchhoff  # noqa: E402
-from ancf_petsc.section import make_ellipse  # noqa: E402
+from ancf_petsc.physics import element3363 as el, kernels
+from ancf_petsc.physics.cubature import gauss_legendre
+from ancf_petsc.physics.geometry import reference_nodal_vectors
+from ancf_petsc.physics.materials import NeoHookean, StVenantKirchhoff
+from ancf_petsc.physics.section import make_ellipse
 
 
 def block(n_el: int, degree: int, axial: int):

@@ -73,7 +73,7 @@ def figure(config: str, out_png: str, mask: str) -> None:
     import matplotlib.pyplot as plt
     from PIL import Image
 
-    from ancf_petsc.config import load_config
+    from ancf_petsc.config.parse import load_config
     from ancf_petsc.geometry_input.tendon import build_tendon
 
     spec = load_config(config)

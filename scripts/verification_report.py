@@ -23,9 +23,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ancf_petsc.config import DEFAULT_AXIAL_POINTS  # noqa: E402
-from ancf_petsc.materials import NeoHookean  # noqa: E402
-from ancf_petsc.reference_solutions import elastica_tip, uniaxial_stretches  # noqa: E402
+from ancf_petsc.config.parse import DEFAULT_AXIAL_POINTS
+from ancf_petsc.physics.materials import NeoHookean
+from ancf_petsc.physics.reference_solutions import elastica_tip, uniaxial_stretches
 from helpers import load_raw, run_inline  # noqa: E402
 
 

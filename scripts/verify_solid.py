@@ -8,7 +8,7 @@ The same bars are solved twice, serially on one core:
 * **solid**: quadratic tetrahedra (gmsh 4.8) with FEniCSx/dolfinx 0.5.2 on the same PETSc 3.18.
   The straight prism is meshed by extruding the section along x; every mesh node (mid-edge
   nodes included, the geometry is P2) is then mapped through the ANCF pretwist map
-  ``ancf_petsc.geometry.place``, so both models share one reference geometry.  The energy is
+  ``ancf_petsc.physics.geometry.place``, so both models share one reference geometry.  The energy is
   the ANCF neo-Hookean law Ψ = μ/2 (J^(-2/3) I1 − 3) + K/2 (J − 1)², the root face x = 0 is
   clamped (ANCF ``fix: clamped``) and the face x = L carries the uniform dead traction F/A
   (ANCF ``traction_force``).  Newton uses MUMPS LDLᵀ, as the ANCF default does.
@@ -134,8 +134,8 @@ def ancf_config(case: Case, elements: int, axial_points: int, out_dir: str) -> d
 
 def ancf_section(case: Case):
     """The ANCF Section object of ``case`` (outline, centroid and area for the solid)."""
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.model import build_model
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.model.build import build_model
     spec = parse_config(ancf_config(case, 1, 3, tempfile.mkdtemp()), base_dir=CONFIGS)
     return build_model(spec).beams[0].section
 
@@ -145,8 +145,8 @@ def ancf_section(case: Case):
 # --------------------------------------------------------------------------------------------
 def run_ancf(case: Case, elements: int, axial_points: int, repeats: int, tmp: str) -> dict:
     """Best-of-``repeats`` wall time of parse + build + solve; tip displacement and DOFs."""
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.run import run_model
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.run import run_model
     best, out = math.inf, None
     for k in range(repeats):
         raw = ancf_config(case, elements, axial_points, os.path.join(tmp, f"{case.key}_{elements}_{axial_points}_{k}"))
@@ -200,7 +200,7 @@ def solid_mesh(case: Case, sec, h: float):
     import gmsh
     from mpi4py import MPI
     from dolfinx.io import gmshio
-    from ancf_petsc.geometry import place
+    from ancf_petsc.physics.geometry import place
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -357,7 +357,7 @@ def solve_solid(case: Case, sec, msh, quad_degree: int = 2) -> dict:
                     raise SolidError(f"solid {case.key}: Newton failed at load factor {trial:.4g}")
     u.x.scatter_forward()
     # end-face centroid in the reference configuration: a + R(psi)(c - a)
-    from ancf_petsc.geometry import place
+    from ancf_petsc.physics.geometry import place
     pt = place(np.array([L]), sec.centroid[None, :], L, case.twist_deg, case.twist_axis)
     tree = geometry.BoundingBoxTree(msh, msh.topology.dim)
     cells = geometry.compute_colliding_cells(msh, geometry.compute_collisions(tree, pt), pt)
@@ -520,11 +520,11 @@ MODEL_WORDS = {"ANCF 3pt": "ANCF 3363, 3 axial Gauss points (the paper's rule)",
 
 def plot(path: str, results: dict) -> None:
     """Relative error vs wall time (log-log), one panel per case; point labels placed without
-    overlaps (ancf_petsc.charts.place_labels), at least two labelled ticks per axis."""
+    overlaps (ancf_petsc.viz.charts.place_labels), at least two labelled ticks per axis."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from ancf_petsc.charts import place_labels, readable_log_axis
+    from ancf_petsc.viz.charts import place_labels, readable_log_axis
     n = len(results)
     ncol = 2 if n > 1 else 1
     nrow = (n + ncol - 1) // ncol

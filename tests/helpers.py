@@ -33,8 +33,8 @@ def petsc_init():
 def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | None = None):
     """Run a raw config dict in this process (1 rank); returns the summary dict."""
     petsc_init()
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.run import solve
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.run import solve
     raw = copy.deepcopy(raw)
     raw.setdefault("output", {})["dir"] = str(out_dir)
     if petsc:
@@ -78,10 +78,10 @@ def build_problem(raw, matrix_type: str = "aij"):
     """A Problem (1 rank, blocks layout) of a raw config, and the PETSc module."""
     petsc_init()
     from petsc4py import PETSc
-    from ancf_petsc.assembly import Problem
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.partition import make_layout
-    from ancf_petsc.model import build_model
+    from ancf_petsc.petsc.problem import Problem
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.parallel.partition import make_layout
+    from ancf_petsc.model.build import build_model
     from helpers import CONFIGS
     spec = parse_config(raw, base_dir=CONFIGS)
     model = build_model(spec)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
-from ancf_petsc import report as rp
+from ancf_petsc.paper import report as rp
 from helpers import CONFIGS, load_raw, read_summary, solve_cli, write_config
 
 PAPER = rp.read_paper(rp.PAPER_T1)

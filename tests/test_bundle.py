@@ -10,7 +10,7 @@ from helpers import probes_table
 
 
 def _expand(**bundle):
-    from ancf_petsc.bundle import expand_bundle
+    from ancf_petsc.config.bundle import expand_bundle
     raw = {"name": "b", "geometry": {"length": 0.05, "twist_deg": 30.0}, "steps": [1.0],
            "bundle": {"radius": 0.6e-3, "elements": 2, "force": [1.0, 0, 0],
                       "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9}, **bundle}}
@@ -20,9 +20,9 @@ def _expand(**bundle):
 @pytest.mark.parametrize("count,shared", [(7, 12), (19, 42), (37, 90)])
 def test_hexagons_tile_and_share_edges(count, shared):
     petsc_init()
-    from ancf_petsc.config import parse_config
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.contact import find_interfaces
-    from ancf_petsc.model import build_model
+    from ancf_petsc.model.build import build_model
     raw = _expand(count=count, fascicle_section="hexagon")
     assert len(raw["beams"]) == count
     spec = parse_config(raw)
@@ -74,10 +74,10 @@ def test_touching_circles_close_contact_on_one_and_two_ranks(tmp_path):
 
 def test_metis_partition_balances_and_is_stored(tmp_path):
     petsc_init()
-    from ancf_petsc.config import parse_config
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.contact import build_contact
-    from ancf_petsc.model import build_model
-    from ancf_petsc.partition import element_graph, make_layout, partition_stats
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.parallel.partition import element_graph, make_layout, partition_stats
     raw = load_raw("bundle_hex37_coarse.yaml")
     spec = parse_config(raw)
     model = build_model(spec)
@@ -158,11 +158,11 @@ def test_achilles_metis_cross_rank_contact(tmp_path, mode):
 def test_rigid_body_modes_are_zero_energy():
     """The near null space handed to GAMG: element tangents annihilate the six modes."""
     petsc_init()
-    from ancf_petsc import kernels
-    from ancf_petsc.assembly import Problem
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.layout import block_layout
-    from ancf_petsc.model import build_model
+    from ancf_petsc.physics import kernels
+    from ancf_petsc.petsc.problem import Problem
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.parallel.layout import block_layout
+    from ancf_petsc.model.build import build_model
     spec = parse_config(load_raw("pretwisted_bar.yaml"), base_dir=CONFIGS)
     model = build_model(spec)
     prob = Problem(model, block_layout(model.connectivity(), model.n_nodes, 1, 0))
@@ -183,9 +183,9 @@ def test_rigid_body_modes_are_zero_energy():
 def test_the_37_fascicle_scene_has_tens_of_thousands_of_dofs():
     """configs/bundle_hex37.yaml (scripts/bench_scaling.py) is the scene that needs MPI."""
     petsc_init()
-    from ancf_petsc.config import parse_config
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.contact import build_contact
-    from ancf_petsc.model import build_model
+    from ancf_petsc.model.build import build_model
     spec = parse_config(load_raw("bundle_hex37.yaml"))
     model = build_model(spec)
     contact = build_contact(model, spec.contact, lambda *a: None)

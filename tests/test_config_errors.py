@@ -3,7 +3,7 @@ import copy
 
 import pytest
 
-from ancf_petsc.config import ConfigError, parse_config
+from ancf_petsc.config.parse import ConfigError, parse_config
 from helpers import CONFIGS, load_raw, solve_cli, write_config
 
 BASE = load_raw("uniaxial_neohookean.yaml")
@@ -100,7 +100,7 @@ CASES += [
 
 @pytest.mark.parametrize("name,fn,path,text", CASES, ids=[c[0] for c in CASES])
 def test_error_names_key_path(name, fn, path, text):
-    from ancf_petsc.model import build_model
+    from ancf_petsc.model.build import build_model
     raw = mutate(fn)
     with pytest.raises(ConfigError) as err:
         build_model(parse_config(raw, base_dir=CONFIGS))   # sections are checked at build

@@ -81,7 +81,7 @@ CONFIG_CASES = {
 
 @pytest.mark.parametrize("case", list(CONFIG_CASES))
 def test_config_values_rejected_in_process(case):
-    from ancf_petsc.config import ConfigError, parse_config
+    from ancf_petsc.config.parse import ConfigError, parse_config
     fn, message = CONFIG_CASES[case]
     raw = copy.deepcopy(UNIAXIAL)
     fn(raw)
@@ -120,10 +120,10 @@ def test_one_axial_point_is_really_singular():
     petsc_init()
     from petsc4py import PETSc
 
-    from ancf_petsc.assembly import Problem
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.layout import block_layout
-    from ancf_petsc.model import build_model
+    from ancf_petsc.petsc.problem import Problem
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.parallel.layout import block_layout
+    from ancf_petsc.model.build import build_model
     smallest = {}
     for n in (1, 2):
         spec = parse_config(tiny(), base_dir=CONFIGS)
@@ -148,8 +148,8 @@ def test_a_factorisation_mumps_gives_up_on_ends_the_run_cleanly(tmp_path):
     petsc_init()
     from petsc4py import PETSc
 
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.run import run_model
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.run import run_model
     raw = tiny()
     raw["output"]["dir"] = str(tmp_path / "out")
     spec = parse_config(raw, base_dir=CONFIGS)
@@ -165,7 +165,7 @@ def test_a_factorisation_mumps_gives_up_on_ends_the_run_cleanly(tmp_path):
 def test_a_bug_still_leaves_a_final_status(tmp_path, monkeypatch):
     """An unexpected exception (a bug) propagates (exit 1 with its traceback in ancf-solve), but
     summary.json does not stay 'running'."""
-    from ancf_petsc.assembly import Problem
+    from ancf_petsc.petsc.problem import Problem
     real, calls = Problem.gather, []
 
     def broken_gather(self, X=None, blocks=False):
@@ -279,9 +279,9 @@ from mpi4py import MPI
 import petsc4py
 petsc4py.init([])
 from petsc4py import PETSc
-from ancf_petsc.config import ConfigError, load_config
-from ancf_petsc.petsc_options import command_line_options
-from ancf_petsc.run import run_model
+from ancf_petsc.config.parse import ConfigError, load_config
+from ancf_petsc.config.petsc_options import command_line_options
+from ancf_petsc.solving.run import run_model
 cfg, out, sets = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 results = []
 for k, opts in enumerate(sets):
@@ -363,8 +363,8 @@ def test_option_tables_match_petsc():
     petsc_init()
     from petsc4py import PETSc
 
-    from ancf_petsc import petsc_options as po
-    from ancf_petsc.inertia import _petsc_library
+    from ancf_petsc.config import petsc_options as po
+    from ancf_petsc.petsc.inertia import _petsc_library
     names = lambda cls: sorted({getattr(cls, k) for k in dir(cls) if not k.startswith("_")
                                 and isinstance(getattr(cls, k), str)})
     assert sorted(po.KSP_TYPES) == names(PETSc.KSP.Type)
@@ -515,7 +515,7 @@ class _Fault:
     def __init__(self, monkeypatch, target: str, level: int):
         import meshio
 
-        import ancf_petsc.output as out
+        import ancf_petsc.io.results as out
         self.calls = 0
         if target == "vtu":
             real = meshio.write
@@ -690,8 +690,8 @@ def test_a_singular_tangent_is_reported_as_unstable(tmp_path):
     petsc_init()
     from petsc4py import PETSc
 
-    from ancf_petsc.config import parse_config
-    from ancf_petsc.run import run_model
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.run import run_model
     raw = tiny()
     raw["output"]["dir"] = str(tmp_path / "out")
     spec = parse_config(raw, base_dir=CONFIGS)

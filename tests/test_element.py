@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from ancf_petsc import element3363 as el
-from ancf_petsc import kernels
-from ancf_petsc.materials import NeoHookean, StVenantKirchhoff
+from ancf_petsc.physics import element3363 as el
+from ancf_petsc.physics import kernels
+from ancf_petsc.physics.materials import NeoHookean, StVenantKirchhoff
 
 
 def test_factorised_shape_functions_equal_papers_N1_to_N18():

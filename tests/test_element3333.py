@@ -5,7 +5,7 @@ import os
 import numpy as np
 import pytest
 
-from ancf_petsc import element3363 as el
+from ancf_petsc.physics import element3363 as el
 from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
 from helpers import build_problem as _problem, two_beam_twisted
 
@@ -60,8 +60,8 @@ def test_mixed_3363_3333_jacobian_matches_finite_differences(locking):
 def test_3333_uniaxial_tension_is_exact(tmp_path, locking):
     """A linear section contracts uniformly, so one 3333 element is exact in uniaxial tension,
     and ecm leaves homogeneous states untouched (its two axis terms cancel the Ψ₀ integral)."""
-    from ancf_petsc.materials import NeoHookean
-    from ancf_petsc.reference_solutions import uniaxial_stretches
+    from ancf_petsc.physics.materials import NeoHookean
+    from ancf_petsc.physics.reference_solutions import uniaxial_stretches
     raw = load_raw("uniaxial_neohookean.yaml")
     raw["beams"][0].update({"element": 3333, "locking": locking})
     raw["beams"][0]["section"]["cubature_degree"] = 2

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 import geometry_cases as gc
-from ancf_petsc.config import ConfigError, parse_config
+from ancf_petsc.config.parse import ConfigError, parse_config
 from ancf_petsc.geometry_input import polyline as pl
 from ancf_petsc.geometry_input.build import build_station
-from ancf_petsc.geometry_input.spec import parse_sections
-from ancf_petsc.model import build_model
-from ancf_petsc.section import make_outline
+from ancf_petsc.config.sections import parse_sections
+from ancf_petsc.model.build import build_model
+from ancf_petsc.physics.section import make_outline
 from helpers import CONFIGS, load_raw
 
 

@@ -6,8 +6,8 @@ import copy
 import numpy as np
 import pytest
 
-from ancf_petsc.config import ConfigError, parse_config
-from ancf_petsc.model import build_model, build_section_at
+from ancf_petsc.config.parse import ConfigError, parse_config
+from ancf_petsc.model.build import build_model, build_section_at
 from helpers import run_inline
 
 E, F = 1.0e9, 1.0            # Young's modulus [Pa], end force [N]: strains ~1e-4 (small strain)
@@ -40,7 +40,7 @@ def ellipse(a, b, turn_deg, n=64):
 
 def gauss_point_areas(beam):
     """Area of the section rule at every axial Gauss point, (E, na)."""
-    from ancf_petsc.cubature import gauss_legendre
+    from ancf_petsc.physics.cubature import gauss_legendre
     _, wa = gauss_legendre(beam.axial_points)
     return beam.wq.reshape(beam.n_elements, beam.axial_points, -1).sum(axis=2) / wa
 
@@ -53,7 +53,7 @@ def test_linearly_tapered_bar_axial_stiffness(tmp_path):
     beam = model.beams[0]
     assert beam.dN.ndim == 4 and beam.ring_at is not None       # one rule per element
     h = L / beam.n_elements
-    from ancf_petsc.cubature import gauss_legendre
+    from ancf_petsc.physics.cubature import gauss_legendre
     xa, _ = gauss_legendre(beam.axial_points)
     xg = (np.arange(beam.n_elements)[:, None] + 0.5 * (xa + 1.0)) * h
     a = a0 + (a1 - a0) * xg / L

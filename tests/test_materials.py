@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ancf_petsc.materials import NeoHookean, StVenantKirchhoff, det_and_inverse_transpose
+from ancf_petsc.physics.materials import NeoHookean, StVenantKirchhoff, det_and_inverse_transpose
 
 
 def random_F(n, scale=0.25, seed=0):

@@ -14,11 +14,11 @@ from helpers import two_beam_twisted
 def _problems(raw):
     petsc_init()
     from petsc4py import PETSc
-    from ancf_petsc.assembly import Problem
-    from ancf_petsc.config import parse_config
+    from ancf_petsc.petsc.problem import Problem
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.contact import build_contact
-    from ancf_petsc.partition import make_layout
-    from ancf_petsc.model import build_model
+    from ancf_petsc.parallel.partition import make_layout
+    from ancf_petsc.model.build import build_model
     spec = parse_config(raw, base_dir=CONFIGS)
     model = build_model(spec)
     out = {}
@@ -77,9 +77,9 @@ def test_sbaij_run_follows_the_aij_path_through_pattern_growth(tmp_path):
 
 def test_matrix_format_choice():
     petsc_init()
-    from ancf_petsc.config import ConfigError, parse_config
-    from ancf_petsc.model import build_model
-    from ancf_petsc.solver import matrix_type
+    from ancf_petsc.config.parse import ConfigError, parse_config
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.solving.stepper import matrix_type
     m3363 = build_model(parse_config(load_raw("achilles_type3_psi0.yaml"), base_dir=CONFIGS))
     mixed = two_beam_twisted()
     mixed["beams"][1].update({"element": 3333})

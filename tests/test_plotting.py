@@ -9,7 +9,7 @@ from helpers import CONFIGS, solve_cli
 matplotlib = pytest.importorskip("matplotlib")
 from matplotlib import image as mpimg  # noqa: E402
 
-from ancf_petsc import plotting  # noqa: E402
+from ancf_petsc.viz import plotting
 
 PAPER_CSV = os.path.join(CONFIGS, "data", "paper_table1_elongation.csv")
 
@@ -101,7 +101,7 @@ def test_plot_convergence(tmp_path):
 # ---------------------------------------------------------------- charts people read (issue 14)
 def _rows(spec):
     """Study rows (element, axial points, degree, elements, wall time, error, pareto)."""
-    from ancf_petsc.study import Row
+    from ancf_petsc.workflows.study import Row
     return [Row(label="", element=e, elements=n, axial_points=a, cubature_degree=d, dofs=18 * (2 * n + 1),
                 gauss_points=0, status="completed", value=1.0, wall_time=t, newton_iterations=10,
                 rel_error=err, pareto=p) for e, a, d, n, t, err, p in spec]
@@ -115,7 +115,7 @@ def _labelled_ticks(axis):
 
 @pytest.mark.parametrize("lo,hi", [(4.5, 60.0), (1.3e-3, 3.1e-2), (0.05, 0.09), (1e-16, 2.0), (7.0, 9.0)])
 def test_log_ticks_give_at_least_two_labels(lo, hi):
-    from ancf_petsc.charts import log_ticks, tick_label
+    from ancf_petsc.viz.charts import log_ticks, tick_label
     ticks = log_ticks(lo, hi)
     assert len(ticks) >= 2 or hi / lo < 1.5
     assert all(lo <= t <= hi for t in ticks)
@@ -128,7 +128,7 @@ def test_pareto_chart_axes_labels_and_legend_are_readable(tmp_path):
     """A narrow study (the Achilles one spans one decade in time and error) still gets two or
     more labelled ticks per axis; a cluster of runs gets labels that do not overlap; the legend
     is in words."""
-    from ancf_petsc.charts import pareto_figure, text_overlaps
+    from ancf_petsc.viz.charts import pareto_figure, text_overlaps
     spec = [("3363", 2, 4, 4, 6.7, 1.6e-3, True), ("3363", 2, 4, 8, 32.0, 3.0e-3, False),
             ("3363", 2, 4, 16, 53.0, 1.3e-3, True), ("3363", 3, 4, 4, 5.7, 2.6e-2, True),
             ("3363", 3, 4, 8, 13.0, 1.4e-2, False), ("3363", 3, 4, 16, 36.0, 7.2e-3, False),
@@ -154,7 +154,7 @@ def test_pareto_chart_axes_labels_and_legend_are_readable(tmp_path):
 
 
 def test_stability_chart_speaks_words(tmp_path):
-    from ancf_petsc.charts import axis_words, stability_chart
+    from ancf_petsc.viz.charts import axis_words, stability_chart
     assert axis_words("bulk_ratio", 100) == "K/μ = 100"
     assert axis_words("element", "3333-none") == "element 3333 without ecm"
     assert axis_words("contact", "unilateral") == "unilateral contact"
@@ -172,7 +172,7 @@ def test_figure5_view_runs_x_from_0_to_L_left_to_right():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from mpl_toolkits.mplot3d import proj3d
-    from ancf_petsc.report import FIGURE5_VIEW
+    from ancf_petsc.paper.report import FIGURE5_VIEW
 
     def screen_x(view):
         fig = Figure()

@@ -96,7 +96,7 @@ def test_unsupported_models_are_refused_before_solving(tmp_path):
     """No supports at all, and a strand held only by frictionless contact (the centre of a
     twisted hexagonal bundle without its support): exit 2, one line naming the beam and motion,
     on 1 and 2 ranks, before any level is solved."""
-    from ancf_petsc.bundle import expand_bundle
+    from ancf_petsc.config.bundle import expand_bundle
     bar = load_raw("uniaxial_neohookean.yaml")
     bar.pop("boundary_conditions")
     strand = expand_bundle(dict(load_raw("bundle_hex7.yaml"),

@@ -1,13 +1,13 @@
-"""Cross-sections of ancf_petsc.section (paper Sec. 2.2)."""
+"""Cross-sections of ancf_petsc.physics.section (paper Sec. 2.2)."""
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-import ancf_petsc.section as section_mod
-from ancf_petsc.cubature import CompressionError
-from ancf_petsc.section import (SectionError, SplineCurve, inline_loop, load_sections_file,
-                                make_circle, make_ellipse, make_outline, make_rectangle)
+import ancf_petsc.physics.section as section_mod
+from ancf_petsc.physics.cubature import CompressionError
+from ancf_petsc.physics.section import (SectionError, SplineCurve, inline_loop, load_sections_file,
+    make_circle, make_ellipse, make_outline, make_rectangle)
 
 SECTIONS = Path(__file__).resolve().parents[1] / "configs" / "data" / "achilles_type3_sections.yaml"
 TYPE3 = ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")

@@ -8,7 +8,7 @@ import h5py
 import numpy as np
 import pytest
 
-from ancf_petsc import report as rp
+from ancf_petsc.paper import report as rp
 from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
 
 

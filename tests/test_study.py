@@ -20,7 +20,7 @@ BASE = os.path.join(CONFIGS, "bending_neohookean.yaml")
 
 def test_pareto_study_ranks_discretisations_against_the_reference(tmp_path):
     petsc_init()
-    from ancf_petsc.study import load_study, run_study
+    from ancf_petsc.workflows.study import load_study, run_study
     spec = load_study(_write(tmp_path, {
         "kind": "pareto", "base": BASE, "probe": "tip", "component": "z",
         "grid": {"elements": [1, 2, 4, 8], "axial_points": [2, 3]},
@@ -50,7 +50,7 @@ def test_pareto_study_ranks_discretisations_against_the_reference(tmp_path):
 
 def test_stability_map_default_strategy_converges_and_failures_are_clean(tmp_path):
     petsc_init()
-    from ancf_petsc.stability import default_strategy_converged, load_stability, run_stability
+    from ancf_petsc.workflows.stability import default_strategy_converged, load_stability, run_stability
     spec = load_stability(_write(tmp_path, {
         "kind": "stability", "base": BASE, "probe": "tip", "component": "z",
         "axes": {"increment": ["adaptive", 1.0], "linesearch": ["basic"],

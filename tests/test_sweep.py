@@ -16,8 +16,8 @@ import yaml
 from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN
 
 from apps.ancf_sweep import main
-from ancf_petsc.sweep import (SweepError, expand, format_value, load_sweep, parse_key_path,
-                              run_config)
+from ancf_petsc.workflows.sweep import (SweepError, expand, format_value, load_sweep, parse_key_path,
+    run_config)
 
 UNIAXIAL = os.path.join(CONFIGS, "uniaxial_neohookean.yaml")
 
@@ -309,7 +309,7 @@ def test_key_paths_ids_and_data_files(tmp_path):
 def test_new_solver_outcomes_are_classified(tmp_path):
     """ancf-solve's unstable (exit 4), interrupted (143/130) and disk-full (exit 2, OUTPUT_ERROR)
     endings each get their own sweep status; unstable runs count as done."""
-    from ancf_petsc.sweep import classify, run_state, RunSpec
+    from ancf_petsc.workflows.sweep import classify, run_state, RunSpec
 
     def case(summary: dict, rc: int, line: str):
         d = tmp_path / f"r{rc}{summary['status']}"

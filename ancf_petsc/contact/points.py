@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cubature import gauss_legendre
+from ..physics.cubature import gauss_legendre
 from .surface import curve_shape
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import element3363 as el
+from ..physics import element3363 as el
 
 DDL = np.array([1.0, -2.0, 1.0])          # second ξ-derivatives of the Lagrange polynomials
 

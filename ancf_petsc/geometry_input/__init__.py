@@ -6,6 +6,6 @@ of neighbours traced apart → ``fit``); ``stations`` interpolates sections meas
 stations along the tendon; ``twist`` resolves the twist-axis rule.  User guide: docs/geometry.md.
 """
 from .build import Station, build_station
-from .spec import SectionsSpec, parse_sections
+from ..config.sections import SectionsSpec, parse_sections
 
 __all__ = ["Station", "build_station", "SectionsSpec", "parse_sections"]

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..section import SectionError
+from ..physics.section import SectionError
 from .polyline import PolylineDistance, densify, inside
 
 __all__ = ["Segment", "Merged", "MergeError", "merge_outlines"]

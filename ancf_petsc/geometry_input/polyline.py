@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..section import _first_self_intersection, _points_in_polygon
+from ..physics.section import _first_self_intersection, _points_in_polygon
 
 __all__ = ["signed_area", "centroid", "perimeter", "drop_duplicates", "densify", "resample",
            "smooth", "PolylineDistance", "douglas_peucker", "self_intersection", "inside"]

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import ConfigError
-from ..section import SplineCurve
+from ..config.parse import ConfigError
+from ..physics.section import SplineCurve
 from . import polyline as pl
 from .build import Station, build_station
-from .spec import SectionsSpec
+from ..config.sections import SectionsSpec
 from .stations import SectionField
 
 __all__ = ["TendonGeometry", "build_tendon"]

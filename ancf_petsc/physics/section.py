@@ -20,8 +20,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
-from .cubature import (CompressionError, CurvePiece, compress_rule, ellipse_rule,
-                       gauss_green_rule, rectangle_rule)
+from .cubature import (CompressionError, CurvePiece, compress_rule, ellipse_rule, gauss_green_rule,
+    rectangle_rule)
 
 __all__ = [
     "SectionError",

@@ -38,8 +38,8 @@ from typing import Any, Callable
 
 import yaml
 
-from .errors import InputError
-from .config import DEFAULT_AXIAL_POINTS
+from ..errors import InputError
+from ..config.parse import DEFAULT_AXIAL_POINTS
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")
@@ -106,8 +106,8 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
     """
     from petsc4py import PETSc
 
-    from .config import ConfigError, parse_config
-    from .run import RunResult, run_model
+    from ..config.parse import ConfigError, parse_config
+    from ..solving.run import RunResult, run_model
     raw = copy.deepcopy(raw)
     raw["output"] = {"dir": out_dir, "vtk": False}
     # studies measure accuracy, cost and convergence; the stability of every level stays in the
@@ -216,7 +216,7 @@ def write_csv(rows: list[Row], path: str) -> None:
 
 def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
     """Solve the reference and every grid point; write study.csv and pareto.png."""
-    from .charts import pareto_chart
+    from ..viz.charts import pareto_chart
     os.makedirs(spec.output, exist_ok=True)
     t0 = time.perf_counter()
     ref, ref_rows, ref_text = reference_value(spec.scene, spec.reference, spec.richardson,
@@ -304,7 +304,7 @@ def parse_discretisation(value: Any, path: str, extra: tuple = ()) -> dict:
 
 
 def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
-    from .element3363 import ELEMENT_TYPES
+    from ..physics.element3363 import ELEMENT_TYPES
     _expect(isinstance(value, dict) and value, path,
             f"expected a mapping of lists over {', '.join(GRID_KEYS)}")
     out = {}

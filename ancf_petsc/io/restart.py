@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from .errors import InputError
+from ..errors import InputError
 
 #: config keys that define the model (a restart must not change them; steps, solver, petsc,
 #: output and partition may change)

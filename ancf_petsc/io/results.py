@@ -28,10 +28,10 @@ import time
 import numpy as np
 import yaml
 
-from . import element3363 as el
+from ..physics import element3363 as el
 from .files import atomic_write
-from .model import Model
-from .version import version_info
+from ..model.build import Model
+from ..version import version_info
 
 #: space set aside for the final summary.json (released on a write error and at the end)
 RESERVE = ".ancf-space-reserve"

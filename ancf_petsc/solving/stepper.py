@@ -19,11 +19,11 @@ from typing import Callable
 import numpy as np
 from petsc4py import PETSc
 
-from .assembly import Problem, node_blocks_fit
-from .config import ConfigError, SolverSpec
-from .inertia import pivot_counts
+from ..petsc.problem import Problem, node_blocks_fit
+from ..config.parse import ConfigError, SolverSpec
+from ..petsc.inertia import pivot_counts
 from .interrupt import RunInterrupted, stop_requested
-from .petsc_options import petsc_message, solver_hint, used_anywhere
+from ..config.petsc_options import petsc_message, solver_hint, used_anywhere
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",

@@ -8,16 +8,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from petsc4py import PETSc
 
-from . import status as st
-from .assembly import STAGE_ASSEMBLY, Problem
-from .config import ModelSpec
-from .errors import InputError
+from .. import status as st
+from ..petsc.problem import STAGE_ASSEMBLY, Problem
+from ..config.parse import ModelSpec
+from ..errors import InputError
 from .interrupt import RunInterrupted
-from .partition import make_layout, partition_stats
-from .model import build_model
-from .output import OutputError, ResultsWriter, prepare_output_dir
-from .petsc_options import unused_command_line_options
-from .solver import STAGE_SOLVE, LoadStepFailure, LoadStepper, matrix_type
+from ..parallel.partition import make_layout, partition_stats
+from ..model.build import build_model
+from ..io.results import OutputError, ResultsWriter, prepare_output_dir
+from ..config.petsc_options import unused_command_line_options
+from .stepper import STAGE_SOLVE, LoadStepFailure, LoadStepper, matrix_type
 
 STAGE_SETUP = PETSc.Log.Stage("ANCF setup")
 STAGE_OUTPUT = PETSc.Log.Stage("ANCF output")
@@ -81,14 +81,14 @@ def solve(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, restart: str | None
         if restart is not None:
             raise InputError("--restart", "a run with accuracy: chooses its mesh first; restart "
                                           "the chosen run's config instead")
-        from .accuracy import select_and_run
+        from ..workflows.accuracy import select_and_run
         return select_and_run(spec, comm, log, run_model)
     return run_model(spec, comm, log, restart=restart)
 
 
 def _read_restart(directory: str, spec: ModelSpec, comm):
     """``restart.read_restart`` on rank 0, its result or its input error on every rank."""
-    from .restart import read_restart
+    from ..io.restart import read_restart
     point, err = None, None
     if comm.rank == 0:
         try:
@@ -114,7 +114,7 @@ def _check_supports(problem) -> None:
 
 def _continue_path(problem, contact, point):
     """The load path of a restart point (``PathState``), with the contact state restored."""
-    from .solver import PathState
+    from .stepper import PathState
     if contact is not None:
         contact.restore_state(point.projection, point.status)
     X = problem._global_from_model(point.blocks.ravel())
@@ -143,7 +143,7 @@ def run_model(spec: ModelSpec, comm=PETSc.COMM_WORLD, log=print, info: dict | No
     model = build_model(spec)
     contact = None
     if spec.contact is not None:
-        from .contact import build_contact
+        from ..contact import build_contact
         contact = build_contact(model, spec.contact, say)
     layout = make_layout(model, spec.partition, comm.size, rank, contact, comm.tompi4py())
     partition = partition_stats(layout, model, contact)

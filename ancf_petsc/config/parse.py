@@ -12,8 +12,8 @@ from typing import Any
 
 import yaml
 
-from .element3363 import ELEMENT_TYPES, VECTORS
-from .errors import InputError
+from ..physics.element3363 import ELEMENT_TYPES, VECTORS
+from ..errors import InputError
 
 LOCKING = ("none", "ecm")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
@@ -451,7 +451,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     axis, twist_rule = _twist_axis(geo.get("twist_axis", "centroid"))
     sections = None
     if geo.get("sections") is not None:      # measured sections (docs/geometry.md)
-        from .geometry_input.spec import parse_sections
+        from .sections import parse_sections
         sections = parse_sections(geo["sections"], "geometry.sections", base_dir, length)
 
     beams_raw = sequence(raw["beams"], "beams")

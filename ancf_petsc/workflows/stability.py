@@ -116,7 +116,7 @@ def _physical(cell: dict) -> tuple:
 
 def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> dict:
     """Solve every cell (and the references); write stability.csv and stability.png."""
-    from .charts import stability_chart
+    from ..viz.charts import stability_chart
     os.makedirs(spec.output, exist_ok=True)
     t0 = time.perf_counter()
     keys = [k for k in AXES if k in spec.axes]

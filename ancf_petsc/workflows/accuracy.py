@@ -17,8 +17,8 @@ import os
 import shutil
 import time
 
-from .config import ModelSpec, parse_config
-from .files import atomic_write
+from ..config.parse import ModelSpec, parse_config
+from ..io.files import atomic_write
 from .refinement import choose, quantity
 
 

@@ -25,9 +25,9 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
-from . import kernels
-from .layout import Layout
-from .model import Beam, Model
+from ..physics import kernels
+from ..parallel.layout import Layout
+from ..model.build import Beam, Model
 
 ADD = PETSc.InsertMode.ADD_VALUES
 INSERT = PETSc.InsertMode.INSERT_VALUES
@@ -608,7 +608,7 @@ class Problem:
         if self.contact is None:
             return None
         from mpi4py import MPI
-        from .contact import GAP_COLUMNS
+        from ..contact import GAP_COLUMNS
         local = self._with_exchange(X, lambda xl: self.contact.gap_sums(xl, self.needed))
         comm = self.comm.tompi4py()
         out = np.empty_like(local)

@@ -47,8 +47,8 @@ from typing import Any, Callable
 
 import yaml
 
-from .errors import InputError
-from .files import atomic_write
+from ..errors import InputError
+from ..io.files import atomic_write
 
 SWEEP_KEYS = ("base", "name", "mode", "parameters", "run", "output", "slurm")
 RUN_KEYS = ("ranks", "jobs", "petsc", "timeout", "mpiexec")
@@ -322,7 +322,7 @@ def _petsc_args(value: Any) -> list[str]:
 
 def _check_against_schema(sweep_base: dict, base_dir: str, param: Parameter, key: str) -> None:
     """A key missing from the base config must be one the config format knows (e.g. output.vtk)."""
-    from .config import ConfigError, parse_config
+    from ..config.parse import ConfigError, parse_config
     raw = copy.deepcopy(sweep_base)
     set_key_path(raw, param.tokens, param.values[0])
     try:
@@ -408,7 +408,7 @@ def load_sweep(path: str) -> Sweep:
     base_raw = _load_yaml(base, "base")
     if not isinstance(base_raw, dict):
         raise SweepError("base", f"{base}: not a model config (expected a mapping)")
-    from .config import ConfigError, parse_config
+    from ..config.parse import ConfigError, parse_config
     try:
         parse_config(base_raw, base_dir=os.path.dirname(base), source=base)
     except ConfigError as exc:
@@ -1070,7 +1070,7 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     venv = sl.venv or default_venv()
     petsc = (" " + shlex.join(sweep.petsc)) if sweep.petsc else ""
     sweep_cmd = f"ancf-sweep {q(sweep.file)} --collect"
-    record = ("import sys; from ancf_petsc.sweep import finish_slurm_task as f; "
+    record = ("import sys; from ancf_petsc.workflows.sweep import finish_slurm_task as f; "
               "o = f(sys.argv[1], int(sys.argv[2]), float(sys.argv[4]) - float(sys.argv[3]), "
               f"{sweep.timeout!r}); print(vars(o))")
     lines = [

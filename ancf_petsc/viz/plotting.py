@@ -9,7 +9,7 @@
 * :func:`read_csv_table`, :func:`curve_from_summary`, :func:`read_contact` — small readers for
   the inputs of the above.
 
-The surface reader relies on the layout written by :class:`ancf_petsc.output.SurfaceSampler`: per
+The surface reader relies on the layout written by :class:`ancf_petsc.io.results.SurfaceSampler`: per
 beam a contiguous block of ``stations x ring`` points, quads between consecutive stations, and
 two polygon caps (first and last station).
 """

@@ -11,13 +11,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import element3363 as el
-from .config import ConfigError, ModelSpec, SectionSpec
-from .cubature import gauss_legendre
-from .geometry import reference_nodal_vectors
-from .materials import make_material
-from .section import Section, SectionError, inline_loop, load_sections_file, make_circle, \
-    make_ellipse, make_outline, make_rectangle
+from ..physics import element3363 as el
+from ..config.parse import ConfigError, ModelSpec, SectionSpec
+from ..physics.cubature import gauss_legendre
+from ..physics.geometry import reference_nodal_vectors
+from ..physics.materials import make_material
+from ..physics.section import (Section, SectionError, inline_loop, load_sections_file, make_circle,
+    make_ellipse, make_outline, make_rectangle)
 
 
 @dataclass
@@ -290,7 +290,7 @@ def build_model(spec: ModelSpec) -> Model:
     tendon = None
     report: list[str] = []
     if spec.sections is not None:
-        from .geometry_input.tendon import build_tendon
+        from ..geometry_input.tendon import build_tendon
         tendon = build_tendon(spec.sections)
         report += tendon.report()
         if spec.contact is not None and tendon.varies and not tendon.field.structured:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import yaml
 
-from ..config import ConfigError, _fmt, _join, integer, mapping, number, sequence, string
+from .parse import ConfigError, _fmt, _join, integer, mapping, number, sequence, string
 
 __all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS",
            "POINT_EXT", "IMAGE_EXT", "NIFTI_EXT", "SVG_EXT"]

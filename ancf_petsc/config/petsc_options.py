@@ -222,7 +222,7 @@ def options_used(names: list[str]) -> list[bool]:
     """PETSc's own 'used' flag of each option in the global database (this rank's view)."""
     import ctypes
 
-    from .inertia import _petsc_library
+    from ..petsc.inertia import _petsc_library
     lib = _petsc_library()
     out = []
     for name in names:

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from . import sweep as sw
+from ..workflows import sweep as sw
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CONFIGS = os.path.join(ROOT, "configs")
 BASE = os.path.join(CONFIGS, "achilles_type3_psi45.yaml")
 PAPER_T1 = os.path.join(CONFIGS, "data", "paper_table1_elongation.csv")
@@ -353,7 +353,7 @@ SLIP_LEVELS = (10, 100, 200, 400)
 
 def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
     """Soleus–gastrocnemius slip and contact pressure along the tendon (plotting.plot_slip)."""
-    from . import plotting
+    from ..viz import plotting
     s = t1.summaries.get(twist)
     if not s or not s.get("contact_interfaces"):
         return []
@@ -371,7 +371,7 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
 
 def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list[str]:
     """Load-elongation vs the paper, Table 2 convergence, Figure 5 (ψ = 15°, 45°) renders."""
-    from . import plotting
+    from ..viz import plotting
     made = []
     curves = {f"ψ = {p}°": (list(t1.loads[np.isfinite(t1.ours[p])]), list(t1.ours[p][np.isfinite(t1.ours[p])]))
               for p in TWISTS if p in t1.summaries}

@@ -114,7 +114,8 @@ def _main(argv: list[str], interrupt) -> int:
     petsc4py.init([sys.argv[0]] + petsc_args)
     from petsc4py import PETSc
 
-    from ancf_petsc.config.parse import ConfigError, load_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.config.parse import load_config
     from ancf_petsc.io.results import OutputError
     from ancf_petsc.config.petsc_options import unused_line
     from ancf_petsc.solving.run import solve

@@ -7,7 +7,6 @@ Usage: python scripts/verification_report.py [--out docs/figures]
 from __future__ import annotations
 
 import argparse
-import copy
 import math
 import os
 import sys
@@ -23,7 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ancf_petsc.config.parse import DEFAULT_AXIAL_POINTS
+from ancf_petsc.config.specs import DEFAULT_AXIAL_POINTS
 from ancf_petsc.physics.materials import NeoHookean
 from ancf_petsc.physics.reference_solutions import elastica_tip, uniaxial_stretches
 from helpers import load_raw, run_inline  # noqa: E402

@@ -3,7 +3,8 @@ import math
 
 import pytest
 
-from ancf_petsc.config.parse import ConfigError, parse_config
+from ancf_petsc.config.values import ConfigError
+from ancf_petsc.config.parse import parse_config
 from ancf_petsc.workflows.refinement import Discretisation, apply, choose, quantity, richardson
 from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
 

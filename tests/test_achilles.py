@@ -1,10 +1,8 @@
 """The paper's Type III Achilles tendon: Table 1 reproduction, geometry, MPI equality."""
-import json
 import os
 
 import numpy as np
 import pytest
-import yaml
 
 from ancf_petsc.paper import report as rp
 from helpers import CONFIGS, load_raw, read_summary, solve_cli, write_config

@@ -3,7 +3,8 @@ import copy
 
 import pytest
 
-from ancf_petsc.config.parse import ConfigError, parse_config
+from ancf_petsc.config.values import ConfigError
+from ancf_petsc.config.parse import parse_config
 from helpers import CONFIGS, load_raw, solve_cli, write_config
 
 BASE = load_raw("uniaxial_neohookean.yaml")

@@ -159,7 +159,8 @@ def test_multiplier_space_is_the_trace_space_and_has_full_rank(elements, project
 
 
 def test_removed_penalty_keys_are_config_errors():
-    from ancf_petsc.config.parse import ConfigError, parse_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.config.parse import parse_config
     from helpers import CONFIGS
     for key, value in (("penalty", 1e9), ("penalty_scale", 10), ("smoothing", 0.0), ("augmented", True)):
         raw = achilles(contact={"mode": "sliding", key: value})

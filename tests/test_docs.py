@@ -46,7 +46,7 @@ def test_relative_links_resolve(path):
 
 
 def test_config_reference_shows_the_default_axial_rule():
-    from ancf_petsc.config.parse import BeamSpec, DEFAULT_AXIAL_POINTS
+    from ancf_petsc.config.specs import BeamSpec, DEFAULT_AXIAL_POINTS
     with open(README, encoding="utf-8") as fh:
         text = fh.read()
     assert re.search(rf"^\s+axial_points: {DEFAULT_AXIAL_POINTS}\s+# Gauss points along xi", text, re.M)

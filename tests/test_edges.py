@@ -81,7 +81,8 @@ CONFIG_CASES = {
 
 @pytest.mark.parametrize("case", list(CONFIG_CASES))
 def test_config_values_rejected_in_process(case):
-    from ancf_petsc.config.parse import ConfigError, parse_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.config.parse import parse_config
     fn, message = CONFIG_CASES[case]
     raw = copy.deepcopy(UNIAXIAL)
     fn(raw)

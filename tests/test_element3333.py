@@ -1,5 +1,4 @@
 """Element 3333 (linear section) and its Poisson-locking remedy (``locking: ecm``)."""
-import copy
 import os
 
 import numpy as np

@@ -105,7 +105,8 @@ KEY_CASES = [
 
 @pytest.mark.parametrize("name,sections,path,text", KEY_CASES, ids=[c[0] for c in KEY_CASES])
 def test_geometry_keys_are_checked_with_their_path(tmp_path, name, sections, path, text):
-    from ancf_petsc.config.parse import ConfigError, parse_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
     (tmp_path / "g.yaml").write_text("units: mm\naxes: [y, z]\nlength_m: 0.05\noutlines: {a: {points: [[0, 0], [1, 0], [0, 1]]}}\n")
     with pytest.raises(ConfigError) as err:
@@ -115,7 +116,8 @@ def test_geometry_keys_are_checked_with_their_path(tmp_path, name, sections, pat
 
 
 def test_twist_axis_rule_errors():
-    from ancf_petsc.config.parse import ConfigError, parse_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
     raw = config(inline({"a": {"points": disc()}}))
     raw["geometry"]["twist_axis"] = "junction"               # one outline: nothing to meet

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import geometry_cases as gc
-from ancf_petsc.config.parse import ConfigError, parse_config
+from ancf_petsc.config.values import ConfigError
+from ancf_petsc.config.parse import parse_config
 from ancf_petsc.geometry_input import polyline as pl
 from ancf_petsc.geometry_input.build import build_station
 from ancf_petsc.config.sections import parse_sections

@@ -6,7 +6,8 @@ import copy
 import numpy as np
 import pytest
 
-from ancf_petsc.config.parse import ConfigError, parse_config
+from ancf_petsc.config.values import ConfigError
+from ancf_petsc.config.parse import parse_config
 from ancf_petsc.model.build import build_model, build_section_at
 from helpers import run_inline
 

@@ -77,7 +77,8 @@ def test_sbaij_run_follows_the_aij_path_through_pattern_growth(tmp_path):
 
 def test_matrix_format_choice():
     petsc_init()
-    from ancf_petsc.config.parse import ConfigError, parse_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
     from ancf_petsc.solving.stepper import matrix_type
     m3363 = build_model(parse_config(load_raw("achilles_type3_psi0.yaml"), base_dir=CONFIGS))

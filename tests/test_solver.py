@@ -1,12 +1,11 @@
 """Assembled residual/Jacobian, inverted elements, solver failures and PETSc option handling."""
-import json
 import os
 
 import h5py
 import numpy as np
 import pytest
 
-from helpers import FAILURE_MESSAGE, build_problem as _problem, load_raw, petsc_init, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
+from helpers import FAILURE_MESSAGE, build_problem as _problem, load_raw, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
 
 
 def test_assembled_jacobian_matches_finite_differences():

@@ -84,7 +84,8 @@ def test_elastica_at_the_defaults_is_accurate_with_16_elements(tmp_path):
     """Issue 14: a newcomer's model (no axial_points given) must not lock.  The default axial rule
     (2 Gauss points) gives 16 elements within 0.5 % of the exact elastica at every level; the
     paper's 3 points lock the same mesh by more than 1 % at PL^2/EI = 5 (so the default matters)."""
-    from ancf_petsc.config.parse import DEFAULT_AXIAL_POINTS, parse_config
+    from ancf_petsc.config.specs import DEFAULT_AXIAL_POINTS
+    from ancf_petsc.config.parse import parse_config
     raw = load_raw("elastica_svk.yaml")
     assert "axial_points" not in raw["beams"][0] and raw["beams"][0]["elements"] == 16
     assert parse_config(raw, base_dir=CONFIGS).beams[0].axial_points == DEFAULT_AXIAL_POINTS == 2

@@ -18,7 +18,8 @@ import math
 
 import numpy as np
 
-from .parse import DEFAULT_AXIAL_POINTS, ConfigError, integer, mapping, number, string, vector
+from .specs import DEFAULT_AXIAL_POINTS
+from .values import ConfigError, integer, mapping, number, string, vector
 
 COUNTS = {1: 0, 7: 1, 19: 2, 37: 3}
 SECTIONS = ("hexagon", "circle")

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import yaml
 
-from .parse import ConfigError, _fmt, _join, integer, mapping, number, sequence, string
+from .values import ConfigError, shown, key_path, integer, mapping, number, sequence, string
 
 __all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS",
            "POINT_EXT", "IMAGE_EXT", "NIFTI_EXT", "SVG_EXT"]
@@ -64,7 +64,7 @@ class GeometrySource:
     def err(self, key: str, msg: str) -> ConfigError:
         """A ConfigError at this source (config key, or file + key inside it)."""
         if self.where == "config":
-            return ConfigError(_join(self.key, key) if key else self.key, msg)
+            return ConfigError(key_path(self.key, key) if key else self.key, msg)
         return ConfigError(self.key, f"{os.path.basename(self.where)}: {key + ': ' if key else ''}{msg}")
 
 
@@ -96,7 +96,7 @@ def _length_with_unit(value, path: str) -> float:
     m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-zµ]+)\s*", str(value)) if isinstance(value, str) else None
     if m is None or m.group(2) not in UNITS:
         raise ConfigError(path, f"expected a length with its unit, e.g. '0.05 mm' (units: m, mm, um); "
-                                f"got {_fmt(value)}")
+                                f"got {shown(value)}")
     v = number(m.group(1), path, positive=True)
     return v * UNITS[m.group(2)]
 
@@ -108,7 +108,7 @@ def _axes(value, path: str) -> np.ndarray:
             or {v.lstrip("-") for v in value} != {"y", "z"}:
         raise ConfigError(path, "give the tendon axis of the file's first and second coordinate, e.g. "
                                 "[y, z], [y, -z] or image (= [y, -z]: columns right, rows down); "
-                                f"got {_fmt(value)}")
+                                f"got {shown(value)}")
     M = np.zeros((2, 2))
     for col, v in enumerate(value):
         M["yz".index(v[-1]), col] = -1.0 if v.startswith("-") else 1.0
@@ -120,8 +120,8 @@ def _pairs(value, key: str) -> list[list[float]]:
     out = []
     for j, p in enumerate(sequence(value, key)):
         if not isinstance(p, list) or len(p) != 2:
-            raise ConfigError(_join(key, j), f"expected a [u, v] pair; got {_fmt(p)}")
-        out.append([number(x, _join(_join(key, j), c)) for c, x in enumerate(p)])
+            raise ConfigError(key_path(key, j), f"expected a [u, v] pair; got {shown(p)}")
+        out.append([number(x, key_path(key_path(key, j), c)) for c, x in enumerate(p)])
     return out
 
 
@@ -135,7 +135,7 @@ def _kind_of(path: str, key: str) -> str:
         return "image"
     if low.endswith(NIFTI_EXT):
         return "nifti"
-    raise ConfigError(key, f"unknown file type {_fmt(os.path.basename(path))}; use .csv/.txt/.yaml "
+    raise ConfigError(key, f"unknown file type {shown(os.path.basename(path))}; use .csv/.txt/.yaml "
                            "(point list), .svg, .png/.tif/.tiff (label mask) or .nii/.nii.gz (NIfTI)")
 
 
@@ -148,43 +148,43 @@ def _outline(name: str, value, key: str, default_file: str | None, base_dir: str
         raise ConfigError(key, "give one source: points, curves, or a file (with label for masks, "
                                "path for SVG)")
     if "points" in value:
-        return OutlineSource(name, "points", key, points=_pairs(value["points"], _join(key, "points")))
+        return OutlineSource(name, "points", key, points=_pairs(value["points"], key_path(key, "points")))
     if "curves" in value:
-        refs = sequence(value["curves"], _join(key, "curves"))
-        return OutlineSource(name, "curves", key, curves=[string(str(r), _join(key, "curves")) for r in refs])
+        refs = sequence(value["curves"], key_path(key, "curves"))
+        return OutlineSource(name, "curves", key, curves=[string(str(r), key_path(key, "curves")) for r in refs])
     f = value.get("file", default_file)
     if f is None:
         raise ConfigError(key, "no source: give points, curves, or a file (or a top-level 'source' file)")
-    f = _abs(string(f, _join(key, "file")), base_dir)
+    f = _abs(string(f, key_path(key, "file")), base_dir)
     if not os.path.isfile(f):
-        raise ConfigError(_join(key, "file") if "file" in value else key,
+        raise ConfigError(key_path(key, "file") if "file" in value else key,
                           f"file not found: {f} (paths are relative to the file that names them)")
-    kind = _kind_of(f, _join(key, "file"))
+    kind = _kind_of(f, key_path(key, "file"))
     out = OutlineSource(name, kind, key, file=f)
     if kind in ("image", "nifti"):
         if "label" not in value:
             raise ConfigError(key, f"a mask needs the label value of this subtendon, e.g. label: 2")
-        out.label = integer(value["label"], _join(key, "label"), lo=1)
+        out.label = integer(value["label"], key_path(key, "label"), lo=1)
     elif "label" in value:
-        raise ConfigError(_join(key, "label"), "label belongs to mask images (.png/.tif/.nii)")
+        raise ConfigError(key_path(key, "label"), "label belongs to mask images (.png/.tif/.nii)")
     if kind == "svg":
         if "path" in value:
-            out.path_id = string(value["path"], _join(key, "path"))
+            out.path_id = string(value["path"], key_path(key, "path"))
     elif "path" in value:
-        raise ConfigError(_join(key, "path"), "path (an SVG element id) belongs to .svg files")
+        raise ConfigError(key_path(key, "path"), "path (an SVG element id) belongs to .svg files")
     return out
 
 
 def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
     """Validate one geometry description (the contents of a geometry file or the inline keys)."""
     if not isinstance(value, dict):
-        raise ConfigError(key, f"expected a mapping with keys {', '.join(FILE_KEYS)}; got {_fmt(value)}")
+        raise ConfigError(key, f"expected a mapping with keys {', '.join(FILE_KEYS)}; got {shown(value)}")
     bad = [k for k in value if k in NOT_GEOMETRY]
     inner = key if where == "config" else ""
 
     def err(k, msg):
         if where == "config":
-            return ConfigError(_join(key, k) if k else key, msg)
+            return ConfigError(key_path(key, k) if k else key, msg)
         return ConfigError(key, f"{os.path.basename(where)}: {k + ': ' if k else ''}{msg}")
 
     if bad:
@@ -192,70 +192,70 @@ def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
                           "geometry.length, materials per beam, the twist in geometry.twist_deg/twist_axis")
     try:
         mapping(value, inner, required=("units", "axes", "outlines"), optional=FILE_KEYS)
-        units = string(value["units"], _join(inner, "units"), tuple(UNITS) + ("px",))
+        units = string(value["units"], key_path(inner, "units"), tuple(UNITS) + ("px",))
         scale = None
         if units == "px":
             if "pixel_size" not in value:
-                raise ConfigError(_join(inner, "pixel_size"), "units: px needs the pixel size, e.g. "
+                raise ConfigError(key_path(inner, "pixel_size"), "units: px needs the pixel size, e.g. "
                                   "pixel_size: 0.05 mm (or [0.05 mm, 0.06 mm] for u, v; or header for NIfTI)")
             ps = value["pixel_size"]
             if ps == "header":
                 scale = None
             elif isinstance(ps, list) and len(ps) == 2:
-                scale = tuple(_length_with_unit(v, _join(_join(inner, "pixel_size"), i)) for i, v in enumerate(ps))
+                scale = tuple(_length_with_unit(v, key_path(key_path(inner, "pixel_size"), i)) for i, v in enumerate(ps))
             else:
-                s = _length_with_unit(ps, _join(inner, "pixel_size"))
+                s = _length_with_unit(ps, key_path(inner, "pixel_size"))
                 scale = (s, s)
         else:
             if "pixel_size" in value:
-                raise ConfigError(_join(inner, "pixel_size"), f"pixel_size needs units: px (the units are {units})")
+                raise ConfigError(key_path(inner, "pixel_size"), f"pixel_size needs units: px (the units are {units})")
             scale = (UNITS[units], UNITS[units])
-        axes = _axes(value["axes"], _join(inner, "axes"))
+        axes = _axes(value["axes"], key_path(inner, "axes"))
         default_file = None
         if "source" in value:
-            default_file = _abs(string(value["source"], _join(inner, "source")), base_dir)
+            default_file = _abs(string(value["source"], key_path(inner, "source")), base_dir)
             if not os.path.isfile(default_file):
-                raise ConfigError(_join(inner, "source"), f"file not found: {default_file}")
-            _kind_of(default_file, _join(inner, "source"))
+                raise ConfigError(key_path(inner, "source"), f"file not found: {default_file}")
+            _kind_of(default_file, key_path(inner, "source"))
         raw_out = value["outlines"]
         if not isinstance(raw_out, dict) or not raw_out:
-            raise ConfigError(_join(inner, "outlines"), "expected a mapping subtendon name -> source, "
+            raise ConfigError(key_path(inner, "outlines"), "expected a mapping subtendon name -> source, "
                                                         "e.g. {soleus: {label: 1}}")
         outlines = {}
         for name, v in raw_out.items():
             name = str(name)
             if name.startswith("-") or "/" in name or ":" in name:
-                raise ConfigError(_join(_join(inner, "outlines"), name),
+                raise ConfigError(key_path(key_path(inner, "outlines"), name),
                                   "outline names may not start with '-' or contain '/' or ':'")
-            outlines[name] = _outline(name, v, _join(_join(inner, "outlines"), name), default_file,
+            outlines[name] = _outline(name, v, key_path(key_path(inner, "outlines"), name), default_file,
                                       base_dir)
         kinds = {o.kind for o in outlines.values()}
         if "curves" in kinds and len(kinds) > 1:
-            raise ConfigError(_join(inner, "outlines"), "use either loops of named curves or traced "
+            raise ConfigError(key_path(inner, "outlines"), "use either loops of named curves or traced "
                                                         "outlines in one description, not both")
         curves = {}
         if "curves" in value:
             if not isinstance(value["curves"], dict):
-                raise ConfigError(_join(inner, "curves"), "expected a mapping name -> list of [u, v] points")
+                raise ConfigError(key_path(inner, "curves"), "expected a mapping name -> list of [u, v] points")
             for cname, pts in value["curves"].items():
-                curves[str(cname)] = _pairs(pts, _join(_join(inner, "curves"), str(cname)))
+                curves[str(cname)] = _pairs(pts, key_path(key_path(inner, "curves"), str(cname)))
         for o in outlines.values():
             for ref in o.curves or []:
                 if ref.lstrip("-").strip() not in curves:
-                    raise ConfigError(_join(o.key, "curves"), f"unknown curve {_fmt(ref)}; define it under "
+                    raise ConfigError(key_path(o.key, "curves"), f"unknown curve {shown(ref)}; define it under "
                                       f"curves (known: {', '.join(curves) or 'none'})")
         slc = None
         if "slice" in value:
-            sk = _join(inner, "slice")
+            sk = key_path(inner, "slice")
             mapping(value["slice"], sk, required=("axis", "index"))
             ax = value["slice"]["axis"]
             ax = {"i": 0, "j": 1, "k": 2}.get(ax, ax)
-            slc = (integer(ax, _join(sk, "axis"), lo=0, hi=2), integer(value["slice"]["index"], _join(sk, "index"), lo=0))
+            slc = (integer(ax, key_path(sk, "axis"), lo=0, hi=2), integer(value["slice"]["index"], key_path(sk, "index"), lo=0))
         if "nifti" in kinds and slc is None:
-            raise ConfigError(_join(inner, "slice"), "a NIfTI volume needs the slice: {axis: 2, index: 40} "
+            raise ConfigError(key_path(inner, "slice"), "a NIfTI volume needs the slice: {axis: 2, index: 40} "
                                                      "(axis 0/1/2 or i/j/k, 0-based index)")
         if scale is None and kinds != {"nifti"}:
-            raise ConfigError(_join(inner, "pixel_size"), "pixel_size: header reads the voxel size of a "
+            raise ConfigError(key_path(inner, "pixel_size"), "pixel_size: header reads the voxel size of a "
                                                           "NIfTI file; give the size for other sources")
     except ConfigError as exc:
         if where == "config":
@@ -280,19 +280,19 @@ def _load_file(f: str, key: str, base_dir: str) -> GeometrySource:
 
 def _station(value, key: str, base_dir: str, with_x: bool) -> tuple[float | None, GeometrySource]:
     if not isinstance(value, dict):
-        raise ConfigError(key, f"expected a mapping (file: ... or units/axes/outlines); got {_fmt(value)}")
+        raise ConfigError(key, f"expected a mapping (file: ... or units/axes/outlines); got {shown(value)}")
     x = None
     rest = dict(value)
     if with_x:
         if "x" not in rest:
-            raise ConfigError(_join(key, "x"), "missing value (required): the station's position along "
+            raise ConfigError(key_path(key, "x"), "missing value (required): the station's position along "
                                                "the tendon [m]")
-        x = number(rest.pop("x"), _join(key, "x"), nonneg=True, hint=" (metres from the x = 0 end)")
+        x = number(rest.pop("x"), key_path(key, "x"), nonneg=True, hint=" (metres from the x = 0 end)")
     if "file" in rest:
         extra = [k for k in rest if k != "file"]
         if extra:
-            raise ConfigError(_join(key, extra[0]), "give either file: or the keys inline, not both")
-        return x, _load_file(string(rest["file"], _join(key, "file")), _join(key, "file"), base_dir)
+            raise ConfigError(key_path(key, extra[0]), "give either file: or the keys inline, not both")
+        return x, _load_file(string(rest["file"], key_path(key, "file")), key_path(key, "file"), base_dir)
     return x, _source(rest, key, "config", base_dir)
 
 
@@ -306,31 +306,31 @@ def parse_sections(value, key: str, base_dir: str, length: float) -> SectionsSpe
     spec = SectionsSpec(stations=[], key=key)
     for k, v in opts.items():
         if k == "spline_degree":
-            spec.spline_degree = integer(v, _join(key, k), lo=1, hi=5)
+            spec.spline_degree = integer(v, key_path(key, k), lo=1, hi=5)
         elif v != "auto":
-            setattr(spec, k, number(v, _join(key, k), nonneg=(k == "smoothing"), positive=(k != "smoothing"),
+            setattr(spec, k, number(v, key_path(key, k), nonneg=(k == "smoothing"), positive=(k != "smoothing"),
                                     hint=" (metres, or auto)"))
     if "stations" in rest:
         if len(rest) > 1:
             other = [k for k in rest if k != "stations"][0]
-            raise ConfigError(_join(key, other), "with stations, every station names its own file "
+            raise ConfigError(key_path(key, other), "with stations, every station names its own file "
                                                  "or keys; move this key into the stations")
-        st = sequence(rest["stations"], _join(key, "stations"))
+        st = sequence(rest["stations"], key_path(key, "stations"))
         if len(st) < 2:
-            raise ConfigError(_join(key, "stations"), "give at least two stations (or one section "
+            raise ConfigError(key_path(key, "stations"), "give at least two stations (or one section "
                                                       "without stations)")
         for i, s in enumerate(st):
-            spec.stations.append(_station(s, _join(_join(key, "stations"), i), base_dir, True))
+            spec.stations.append(_station(s, key_path(key_path(key, "stations"), i), base_dir, True))
         xs = [x for x, _ in spec.stations]
         if any(b <= a for a, b in zip(xs, xs[1:])):
-            raise ConfigError(_join(key, "stations"), f"station positions x must increase strictly; got {xs}")
+            raise ConfigError(key_path(key, "stations"), f"station positions x must increase strictly; got {xs}")
         if xs[-1] > length * (1 + 1e-12):
-            raise ConfigError(_join(_join(key, "stations"), len(xs) - 1) + ".x",
+            raise ConfigError(key_path(key_path(key, "stations"), len(xs) - 1) + ".x",
                               f"x = {xs[-1]:g} m lies beyond the tendon (geometry.length = {length:g} m)")
         names = spec.stations[0][1].outlines.keys()
         for i, (_, s) in enumerate(spec.stations[1:], start=1):
             if s.outlines.keys() != names:
-                raise ConfigError(_join(_join(key, "stations"), i),
+                raise ConfigError(key_path(key_path(key, "stations"), i),
                                   f"outlines {sorted(s.outlines)} differ from station 0's {sorted(names)}; "
                                   "every station needs the same subtendons")
     else:

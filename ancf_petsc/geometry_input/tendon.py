@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config.parse import ConfigError
+from ..config.values import ConfigError
 from ..physics.section import SplineCurve
 from . import polyline as pl
 from .build import Station, build_station

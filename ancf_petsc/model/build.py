@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..physics import element3363 as el
-from ..config.parse import ConfigError, ModelSpec, SectionSpec
+from ..config.values import ConfigError
+from ..config.specs import ModelSpec, SectionSpec
 from ..physics.cubature import gauss_legendre
 from ..physics.geometry import reference_nodal_vectors
 from ..physics.materials import make_material

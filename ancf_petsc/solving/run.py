@@ -10,7 +10,7 @@ from petsc4py import PETSc
 
 from .. import status as st
 from ..petsc.problem import STAGE_ASSEMBLY, Problem
-from ..config.parse import ModelSpec
+from ..config.specs import ModelSpec
 from ..errors import InputError
 from .interrupt import RunInterrupted
 from ..parallel.partition import make_layout, partition_stats

@@ -20,7 +20,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..petsc.problem import Problem, node_blocks_fit
-from ..config.parse import ConfigError, SolverSpec
+from ..config.values import ConfigError
+from ..config.specs import SolverSpec
 from ..petsc.inertia import pivot_counts
 from .interrupt import RunInterrupted, stop_requested
 from ..config.petsc_options import petsc_message, solver_hint, used_anywhere

@@ -33,13 +33,13 @@ import itertools
 import math
 import os
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any, Callable
 
 import yaml
 
 from ..errors import InputError
-from ..config.parse import DEFAULT_AXIAL_POINTS
+from ..config.specs import DEFAULT_AXIAL_POINTS
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")
@@ -106,7 +106,8 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
     """
     from petsc4py import PETSc
 
-    from ..config.parse import ConfigError, parse_config
+    from ..config.values import ConfigError
+    from ..config.parse import parse_config
     from ..solving.run import RunResult, run_model
     raw = copy.deepcopy(raw)
     raw["output"] = {"dir": out_dir, "vtk": False}

@@ -322,7 +322,8 @@ def _petsc_args(value: Any) -> list[str]:
 
 def _check_against_schema(sweep_base: dict, base_dir: str, param: Parameter, key: str) -> None:
     """A key missing from the base config must be one the config format knows (e.g. output.vtk)."""
-    from ..config.parse import ConfigError, parse_config
+    from ..config.values import ConfigError
+    from ..config.parse import parse_config
     raw = copy.deepcopy(sweep_base)
     set_key_path(raw, param.tokens, param.values[0])
     try:
@@ -408,7 +409,8 @@ def load_sweep(path: str) -> Sweep:
     base_raw = _load_yaml(base, "base")
     if not isinstance(base_raw, dict):
         raise SweepError("base", f"{base}: not a model config (expected a mapping)")
-    from ..config.parse import ConfigError, parse_config
+    from ..config.values import ConfigError
+    from ..config.parse import parse_config
     try:
         parse_config(base_raw, base_dir=os.path.dirname(base), source=base)
     except ConfigError as exc:

@@ -1,0 +1,159 @@
+"""``beams:`` of a config: sections, materials, elements (paper Secs. 2.1-2.3)."""
+from __future__ import annotations
+
+import os
+
+from ..physics.element3363 import ELEMENT_TYPES
+from .specs import DEFAULT_AXIAL_POINTS, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec, SectionSpec
+from .values import ConfigError, boolean, integer, key_path, mapping, number, sequence, string, vector
+
+
+def parse_beams(value, base_dir: str) -> list[BeamSpec]:
+    """``beams``: name, section, material, element count and type, Gauss points along ξ."""
+    beams: list[BeamSpec] = []
+    for i, b in enumerate(sequence(value, "beams")):
+        p = f"beams[{i}]"
+        mapping(b, p, required=("name", "section", "material", "elements"),
+                optional=("axial_points", "element", "locking"))
+        bname = string(b["name"], f"{p}.name")
+        if bname in [x.name for x in beams]:
+            raise ConfigError(f"{p}.name", f"duplicate beam name {bname!r}; names must be unique")
+        beams.append(BeamSpec(
+            name=bname,
+            section=parse_section(b["section"], f"{p}.section", base_dir),
+            material=parse_material(b["material"], f"{p}.material"),
+            elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
+            axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points")))
+        beams[-1].element = string(str(b.get("element", "3363")), f"{p}.element", ELEMENT_TYPES)
+        default_locking = "ecm" if beams[-1].element == "3333" else "none"
+        beams[-1].locking = string(b.get("locking", default_locking), f"{p}.locking", LOCKING)
+    return beams
+
+
+def parse_section(value, path: str, base_dir: str) -> SectionSpec:
+    """``beams[i].section``: an analytic shape or an outline (paper Sec. 2.2)."""
+    common = ("shape", "center", "cubature_degree")
+    shape = string(mapping(value, path, required=("shape",),
+                           optional=common[1:] + ("semi_axes", "radius", "size", "curves", "file",
+                                                  "loop", "spline_degree", "compress"))["shape"],
+                   key_path(path, "shape"), SECTION_SHAPES)
+    per_shape = {"ellipse": ("semi_axes",), "circle": ("radius",), "rectangle": ("size",),
+                 "outline": ()}
+    opt_outline = ("curves", "file", "loop", "spline_degree", "compress")
+    allowed_extra = per_shape[shape] + (opt_outline if shape == "outline" else ())
+    mapping(value, path, required=("shape",) + per_shape[shape], optional=common[1:] + allowed_extra)
+    s = SectionSpec(shape=shape)
+    if "center" in value:
+        s.center = vector(value["center"], key_path(path, "center"), 2)
+    if "cubature_degree" in value:
+        s.cubature_degree = integer(value["cubature_degree"], key_path(path, "cubature_degree"), lo=1, hi=30)
+    if shape == "ellipse":
+        s.semi_axes = vector(value["semi_axes"], key_path(path, "semi_axes"), 2, positive=True)
+    elif shape == "circle":
+        s.radius = number(value["radius"], key_path(path, "radius"), positive=True, hint=" (metres)")
+    elif shape == "rectangle":
+        s.size = vector(value["size"], key_path(path, "size"), 2, positive=True)
+    else:
+        _outline(value, path, base_dir, s, common)
+    return s
+
+
+def _outline(value, path: str, base_dir: str, s: SectionSpec, common: tuple) -> None:
+    """An outline section: inline curves, a sections file + loop, or a loop of geometry.sections."""
+    opt_outline = ("curves", "file", "loop", "spline_degree", "compress")
+    has_curves, has_file = "curves" in value, "file" in value
+    if has_curves == has_file and not (has_curves is False and "loop" in value):
+        raise ConfigError(path, "an outline needs either 'curves' (inline loop of point lists), "
+                                "'file' + 'loop' (sections file) or 'loop' alone (an outline of "
+                                "geometry.sections), not both/neither")
+    if not has_curves and not has_file:
+        s.loop = string(value["loop"], key_path(path, "loop"))
+    elif has_file:
+        mapping(value, path, required=("shape", "file", "loop"), optional=common[1:] + opt_outline)
+        f = string(value["file"], key_path(path, "file"))
+        s.file = f if os.path.isabs(f) else os.path.normpath(os.path.join(base_dir, f))
+        if not os.path.isfile(s.file):
+            raise ConfigError(key_path(path, "file"), f"file not found: {s.file} "
+                              "(paths are relative to the config file)")
+        s.loop = string(value["loop"], key_path(path, "loop"))
+    else:
+        curves = sequence(value["curves"], key_path(path, "curves"))
+        out = []
+        for i, c in enumerate(curves):
+            cp = key_path(key_path(path, "curves"), i)
+            mapping(c, cp, required=("points",), optional=("name",))
+            pts = sequence(c["points"], key_path(cp, "points"))
+            if len(pts) < 2:
+                raise ConfigError(key_path(cp, "points"), "a curve needs at least 2 points")
+            pts = [vector(p, key_path(key_path(cp, "points"), j), 2) for j, p in enumerate(pts)]
+            entry = {"points": pts}
+            if "name" in c:      # named curves shared by two outlines are contact interfaces
+                entry["name"] = string(c["name"], key_path(cp, "name"))
+            out.append(entry)
+        s.curves = out
+    if "spline_degree" in value:
+        s.spline_degree = integer(value["spline_degree"], key_path(path, "spline_degree"), lo=1, hi=7)
+        s.spline_degree_given = True
+    if "compress" in value:
+        s.compress = boolean(value["compress"], key_path(path, "compress"))
+
+
+def parse_material(value, path: str) -> dict:
+    """``beams[i].material``: neo-Hookean (mu, K or the paper's c10, d; eq. 14) or SVK."""
+    model = string(mapping(value, path, required=("model",),
+                           optional=("mu", "bulk_modulus", "c10", "d", "E", "nu"))["model"],
+                   key_path(path, "model"), MATERIAL_MODELS)
+    ours, papers = [k for k in ("mu", "bulk_modulus") if k in value], [k for k in ("c10", "d") if k in value]
+    if model == "neo-hookean" and ours and papers:
+        raise ConfigError(path, f"give either mu and bulk_modulus or the paper's c10 and d "
+                                f"(mu = 2 c10, bulk_modulus = d), not both; got {', '.join(ours + papers)}")
+    if model == "svk":
+        mapping(value, path, required=("model", "E", "nu"))
+        nu = number(value["nu"], key_path(path, "nu"), lo=-0.999, hint=" (Poisson ratio)")
+        if nu >= 0.5:
+            raise ConfigError(key_path(path, "nu"), f"must be < 0.5 for St. Venant-Kirchhoff; got {nu:g}")
+        return {"model": model, "E": number(value["E"], key_path(path, "E"), positive=True,
+                                            hint=" (Young's modulus in Pa)"), "nu": nu}
+    if "mu" in value or "bulk_modulus" in value:
+        mapping(value, path, required=("model", "mu", "bulk_modulus"))
+        mu = number(value["mu"], key_path(path, "mu"), positive=True, hint=" (shear modulus in Pa)")
+        K = number(value["bulk_modulus"], key_path(path, "bulk_modulus"), positive=True,
+                   hint=" (bulk modulus in Pa)")
+    elif "c10" in value or "d" in value:
+        # the paper's form: Ψ = c10 (Ī₁ − 3) + d/2 (J − 1)²  →  μ = 2 c10, K = d
+        mapping(value, path, required=("model", "c10", "d"))
+        mu = 2.0 * number(value["c10"], key_path(path, "c10"), positive=True, hint=" (Pa)")
+        K = number(value["d"], key_path(path, "d"), positive=True, hint=" (Pa)")
+    else:
+        raise ConfigError(path, "neo-hookean needs 'mu' and 'bulk_modulus' (or the paper's "
+                                "'c10' and 'd', with mu = 2 c10, bulk_modulus = d)")
+    return {"model": model, "mu": mu, "bulk_modulus": K}
+
+
+def _axial_points(value, path: str) -> int:
+    """Gauss points along ξ: one point leaves the three-node element's stiffness singular."""
+    n = integer(value, path, hi=10)
+    if n < 2:
+        raise ConfigError(path, f"must be >= 2; got {n}: one point along the beam leaves the "
+                                "three-node element's stiffness singular (zero-energy modes); "
+                                "use 2 (reduced) or 3 (full, the paper's)")
+    return n
+
+
+def check_imported_loops(beams: list, sections) -> None:
+    """beams[i].section {shape: outline, loop: <name>} without file/curves names an outline of
+    geometry.sections."""
+    for i, b in enumerate(beams):
+        s = b.section
+        if s.shape != "outline" or s.file is not None or s.curves is not None:
+            continue
+        p = f"beams[{i}].section"
+        if sections is None:
+            raise ConfigError(f"{p}.loop", "names an outline of geometry.sections, which this config "
+                                           "does not have; add geometry.sections or give curves / file")
+        if s.loop not in sections.names:
+            raise ConfigError(f"{p}.loop", f"no outline {s.loop!r} in geometry.sections; available: "
+                                           f"{', '.join(sections.names)}")
+        if s.spline_degree_given:
+            raise ConfigError(f"{p}.spline_degree", "imported outlines share one spline degree: set "
+                                                    "geometry.sections.spline_degree instead")

@@ -1,0 +1,99 @@
+"""Supports, loads, load steps and probes of a config, referring to beams by name and nodes."""
+from __future__ import annotations
+
+from ..physics.element3363 import VECTORS
+from .specs import FIX_PRESETS, BCSpec, LoadSpec, ProbeSpec
+from .values import ConfigError, key_path, mapping, number, sequence, shown, string, vector
+
+
+def node_ref(value, path: str, n_nodes: int) -> int:
+    """A node: first, last or an index (negative counts from the end)."""
+    if value == "first":
+        return 0
+    if value == "last":
+        return n_nodes - 1
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ConfigError(path, f"expected 'first', 'last' or a node index; got {shown(value)}")
+    idx = value + n_nodes if value < 0 else value
+    if not 0 <= idx < n_nodes:
+        raise ConfigError(path, f"node {value} does not exist; this beam has nodes 0..{n_nodes - 1}")
+    return idx
+
+
+def beam_ref(value, path: str, names: list[str]) -> int:
+    """A beam by name → its index."""
+    if value not in names:
+        raise ConfigError(path, f"unknown beam {shown(value)}; beams are: {', '.join(names)}")
+    return names.index(value)
+
+
+def _fix(value, path: str) -> list[tuple[int, int]]:
+    if isinstance(value, str):
+        if value not in FIX_PRESETS:
+            raise ConfigError(path, f"unknown preset {shown(value)}; use clamped, reduced or a "
+                                    "mapping like {r: xyz, r_y: xz}")
+        return list(FIX_PRESETS[value])
+    mapping(value, path, optional=VECTORS)
+    dofs = []
+    for name, comps in value.items():
+        cp = key_path(path, name)
+        if not isinstance(comps, str) or not comps or any(c not in "xyz" for c in comps) \
+                or len(set(comps)) != len(comps):
+            raise ConfigError(cp, f"expected components as a string from 'xyz' (e.g. xz); "
+                                  f"got {shown(comps)}")
+        dofs += [(VECTORS.index(name), "xyz".index(c)) for c in comps]
+    if not dofs:
+        raise ConfigError(path, "fixes nothing; name at least one vector, e.g. {r: xyz}")
+    return sorted(dofs)
+
+
+def parse_boundary_conditions(value, names: list[str], n_nodes: list[int]) -> list[BCSpec]:
+    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced)."""
+    bcs = []
+    for i, bc in enumerate(sequence(value, "boundary_conditions", nonempty=False)):
+        p = f"boundary_conditions[{i}]"
+        mapping(bc, p, required=("beam", "node", "fix"))
+        bi = beam_ref(bc["beam"], f"{p}.beam", names)
+        bcs.append(BCSpec(bi, node_ref(bc["node"], f"{p}.node", n_nodes[bi]), _fix(bc["fix"], f"{p}.fix"), p))
+    return bcs
+
+
+def parse_loads(value, names: list[str], n_nodes: list[int]) -> list[LoadSpec]:
+    """``loads``: a point force on r, or a total force spread over an end section (traction)."""
+    loads = []
+    for i, ld in enumerate(sequence(value, "loads", nonempty=False)):
+        p = f"loads[{i}]"
+        mapping(ld, p, required=("beam", "node"), optional=("force", "traction_force"))
+        if ("force" in ld) == ("traction_force" in ld):
+            raise ConfigError(p, "give exactly one of 'force' (point force on r) or "
+                                 "'traction_force' (total force spread over the end section)")
+        bi = beam_ref(ld["beam"], f"{p}.beam", names)
+        node = node_ref(ld["node"], f"{p}.node", n_nodes[bi])
+        kind = "force" if "force" in ld else "traction_force"
+        if kind == "traction_force" and node not in (0, n_nodes[bi] - 1):
+            raise ConfigError(f"{p}.node", "a traction_force acts on an end section: use first or last")
+        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p))
+    return loads
+
+
+def parse_steps(value) -> list[float]:
+    """``steps``: strictly increasing load factors."""
+    steps = [number(s, f"steps[{i}]", positive=True) for i, s in enumerate(sequence(value, "steps"))]
+    if any(b <= a for a, b in zip(steps, steps[1:])):
+        raise ConfigError("steps", f"load factors must increase strictly; got {steps}")
+    return steps
+
+
+def parse_probes(value, names: list[str], n_nodes: list[int]) -> list[ProbeSpec]:
+    """``probes``: named nodal vectors reported at every level."""
+    probes = []
+    for i, pr in enumerate(sequence(value, "probes", nonempty=False)):
+        p = f"probes[{i}]"
+        mapping(pr, p, required=("name", "beam", "node"), optional=("vector",))
+        bi = beam_ref(pr["beam"], f"{p}.beam", names)
+        pname = string(pr["name"], f"{p}.name")
+        if pname in [x.name for x in probes]:
+            raise ConfigError(f"{p}.name", f"duplicate probe name {pname!r}")
+        probes.append(ProbeSpec(pname, bi, node_ref(pr["node"], f"{p}.node", n_nodes[bi]),
+                                string(pr.get("vector", "r"), f"{p}.vector", VECTORS)))
+    return probes

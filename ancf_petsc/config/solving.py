@@ -1,0 +1,96 @@
+"""Solver, PETSc, output, partition and accuracy keys of a config: how a model is solved and kept."""
+from __future__ import annotations
+
+import math
+import os
+
+from .petsc_options import check_value
+from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
+from .values import ConfigError, boolean, integer, mapping, number, string
+
+#: ``solver:`` keys → (validator, whether null means "the default")
+SOLVER_KEYS = {
+    "max_increment": (lambda v, p: number(v, p, positive=True), True),
+    "initial_increment": (lambda v, p: number(v, p, positive=True), True),
+    "min_increment": (lambda v, p: number(v, p, positive=True), False),
+    "max_cutbacks": (lambda v, p: integer(v, p, lo=0, hi=60), False),
+    "growth": (lambda v, p: number(v, p, lo=1.0, hi=10.0), False),
+    "min_det_f": (lambda v, p: number(v, p, lo=0.0, hi=0.9), False),
+    "merit": (lambda v, p: string(v, p, ("energy", "residual")), False),
+    "predictor": (lambda v, p: string(v, p, ("none", "secant")), False),
+    "easy_iterations": (lambda v, p: integer(v, p, lo=1), False),
+    "matrix": (lambda v, p: string(v, p, ("auto", "aij", "sbaij")), False),
+    "stability_cutbacks": (lambda v, p: integer(v, p, lo=0, hi=20), False),
+    "allow_unstable": (boolean, False),
+    "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),
+}
+
+
+def parse_solver(value) -> SolverSpec:
+    """``solver``: load stepping (increments, cut-backs, predictor, merit, budgets, matrix format)."""
+    sv = mapping(value, "solver", optional=tuple(SOLVER_KEYS))
+    solver = SolverSpec()
+    for key, (check, nullable) in SOLVER_KEYS.items():
+        if key in sv and not (nullable and sv[key] is None):
+            setattr(solver, key, check(sv[key], f"solver.{key}"))
+    return solver
+
+
+def parse_output(value, name: str) -> OutputSpec:
+    """``output``: directory (default results/<name>), VTK on/off and its samples per element edge."""
+    out = mapping(value, "output", optional=("dir", "vtk", "vtk_samples"))
+    return OutputSpec(dir=string(out.get("dir", os.path.join("results", name)), "output.dir"),
+                      vtk=boolean(out.get("vtk", True), "output.vtk"),
+                      vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64))
+
+
+def parse_partition(value) -> str:
+    """``partition.method``: how elements are distributed over ranks."""
+    if value is None:
+        return "blocks"
+    mapping(value, "partition", optional=("method",))
+    return string(value.get("method", "blocks"), "partition.method", PARTITION_METHODS)
+
+
+def parse_petsc(value) -> dict[str, str]:
+    """``petsc:`` options as PETSc will read them (values checked like PETSc parses them)."""
+    if not isinstance(value, dict):
+        raise ConfigError("petsc", "expected a mapping of PETSc options, e.g. {snes_rtol: 1e-10}")
+    petsc = {}
+    for k, v in value.items():
+        if not isinstance(k, str) or not k.strip("-"):
+            raise ConfigError(f"petsc.{k}", "option names are strings like snes_monitor")
+        if isinstance(v, (dict, list)):
+            raise ConfigError(f"petsc.{k}", "option values are scalars (number, string, true/false)")
+        name = k.lstrip("-")
+        text = "" if v is None or v is True else ("0" if v is False else str(v))
+        why = check_value(name, None if v is None or v is True else text)
+        if why:
+            raise ConfigError(f"petsc.{k}", why)
+        petsc[name] = text
+    return petsc
+
+
+def parse_accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
+    """``accuracy``: the probe, tolerance and ladder of the mesh choice (workflows/refinement.py)."""
+    p = "accuracy"
+    mapping(value, p, required=("probe",), optional=("rtol", "component", "level", "start", "max_elements"))
+    names = [x.name for x in probes]
+    probe = string(value["probe"], f"{p}.probe")
+    if probe not in names:
+        raise ConfigError(f"{p}.probe", f"no probe {probe!r}; define it under probes "
+                                        f"(have: {', '.join(names) or 'none'})")
+    acc = AccuracySpec(probe=probe,
+                       rtol=number(value.get("rtol", 1e-3), f"{p}.rtol", positive=True, hi=0.5),
+                       component=string(value.get("component", "norm"), f"{p}.component",
+                                        ("x", "y", "z", "norm")),
+                       start=integer(value.get("start", 1), f"{p}.start", lo=1, hi=10000),
+                       max_elements=integer(value.get("max_elements", 64), f"{p}.max_elements", lo=1, hi=100000))
+    if "level" in value:
+        acc.level = number(value["level"], f"{p}.level", positive=True)
+        if not any(math.isclose(acc.level, s, rel_tol=1e-12) for s in steps):
+            raise ConfigError(f"{p}.level", f"must be one of the steps ({', '.join(f'{s:g}' for s in steps)})")
+    if acc.max_elements < 4 * acc.start:
+        raise ConfigError(f"{p}.max_elements", "the ladder needs three rungs: use at least 4 x start "
+                                               f"(= {4 * acc.start})")
+    return acc

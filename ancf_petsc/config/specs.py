@@ -1,0 +1,154 @@
+"""The validated config as dataclasses (ModelSpec and its parts) and the vocabularies of choices."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+LOCKING = ("none", "ecm")
+SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
+MATERIAL_MODELS = ("neo-hookean", "svk")
+CONTACT_MODES = ("sliding", "unilateral")
+PARTITION_METHODS = ("blocks", "metis")
+TWIST_RULES = ("centroid", "origin", "junction")
+#: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
+REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
+                        "smoothing")
+FIX_PRESETS = {
+    "clamped": [(v, c) for v in range(6) for c in range(3)],
+    # the paper's "r fixed, cross-section free to contract": all but r_y·e_y and r_z·e_z
+    "reduced": [(v, c) for v in range(6) for c in range(3) if (v, c) not in ((1, 1), (2, 2))],
+}
+
+
+# --------------------------------------------------------------------------------- spec types
+@dataclass
+class SectionSpec:
+    shape: str
+    center: tuple[float, float] = (0.0, 0.0)
+    semi_axes: tuple[float, float] | None = None
+    radius: float | None = None
+    size: tuple[float, float] | None = None
+    curves: list | None = None            # inline outline: [{name, points}]
+    file: str | None = None               # sections file (Type III format)
+    loop: str | None = None
+    spline_degree: int = 3
+    cubature_degree: int = 6
+    compress: bool = True
+    spline_degree_given: bool = False
+
+
+# Gauss points along ξ per element.  2 (reduced integration along the beam) is the
+# accurate rule: 3 (the paper's full rule) shear- and volume-locks slender or clamped beams
+# (docs/verification.md, "Locking"); configs that reproduce the paper state axial_points: 3.
+DEFAULT_AXIAL_POINTS = 2
+
+
+@dataclass
+class BeamSpec:
+    name: str
+    section: SectionSpec
+    material: dict
+    elements: int
+    axial_points: int = DEFAULT_AXIAL_POINTS
+    element: str = "3363"                 # element type, see element3363.ELEMENT_VECTORS
+    locking: str = "none"                 # 'ecm': Poisson-locking remedy (model.Beam.parts)
+
+
+@dataclass
+class BCSpec:
+    beam: int
+    node: int
+    dofs: list[tuple[int, int]]           # (vector slot 0..5, component 0..2)
+    path: str = ""
+
+
+@dataclass
+class LoadSpec:
+    beam: int
+    node: int
+    kind: str                             # 'force' | 'traction_force'
+    force: tuple[float, float, float]
+    path: str = ""
+
+
+@dataclass
+class ProbeSpec:
+    name: str
+    beam: int
+    node: int
+    vector: str = "r"
+
+
+@dataclass
+class ContactSpec:
+    mode: str = "sliding"                  # sliding | unilateral (contact/laws.py)
+    interfaces: list = field(default_factory=list)   # [(beam_a, beam_b, curve name or None)]
+    axial_points: int = 3
+    curve_points: int = 2
+    search_margin: float = 0.1            # fraction of the beam length a point may slide
+    # Bernstein degrees (along the beam, across the interface) of the contact pressure
+    # (contact/multipliers.py).  Default: the trace of the elements along the beam
+    # (axial_points − 1), linear across (1): docs/contact.md, "Which pressure space"
+    projection: tuple[int, int] = (2, 1)
+    per_element: bool = False             # pressure discontinuous between A elements
+    scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
+
+
+@dataclass
+class SolverSpec:
+    max_increment: float | None = None
+    initial_increment: float | None = None    # first increment (default: the first level)
+    min_increment: float = 1e-4
+    max_cutbacks: int = 12
+    growth: float = 2.0
+    easy_iterations: int = 8
+    predictor: str = "secant"              # none | secant (extrapolate the last increment)
+    merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
+    min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
+    max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
+    stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
+    matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solver.matrix_type)
+    allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
+
+
+@dataclass
+class OutputSpec:
+    dir: str
+    vtk: bool = True
+    vtk_samples: int = 4
+
+
+@dataclass
+class AccuracySpec:
+    """``accuracy:``: pick the coarsest element count whose probe is within rtol (refinement.py)."""
+    probe: str
+    rtol: float = 1e-3
+    component: str = "norm"               # x | y | z | norm of the probe's displacement
+    level: float | None = None            # load factor the probe is read at (default: last step)
+    start: int = 1                        # elements of the first beam on the first rung
+    max_elements: int = 64
+
+
+@dataclass
+class ModelSpec:
+    name: str
+    length: float
+    twist_deg: float
+    twist_axis: tuple[float, float]
+    beams: list[BeamSpec]
+    boundary_conditions: list[BCSpec]
+    loads: list[LoadSpec]
+    steps: list[float]
+    probes: list[ProbeSpec]
+    output: OutputSpec
+    solver: SolverSpec
+    petsc: dict[str, str]
+    contact: ContactSpec | None
+    base_dir: str
+    raw: dict = field(repr=False, default_factory=dict)
+    partition: str = "blocks"              # 'blocks' (contiguous per beam) or 'metis'
+    accuracy: AccuracySpec | None = None
+    sections: Any = None                   # geometry.sections (config.sections.SectionsSpec)
+    twist_rule: tuple = ("point",)         # twist-axis rule (model.build.resolve_twist_axis); twist_axis then
+    twist_default: bool = False            # holds the resolved point; True: the rule was not given
+

@@ -1,0 +1,99 @@
+"""Validators for config values: each checks one value and names its key path in the error."""
+from __future__ import annotations
+
+import math
+from ..errors import InputError
+
+
+#: a config problem: ``path`` is the key path (e.g. ``beams[0].material.mu``); see errors.py
+ConfigError = InputError
+
+
+# --------------------------------------------------------------------------------- primitives
+def key_path(path: str, key) -> str:
+    if isinstance(key, int):
+        return f"{path}[{key}]"
+    return f"{path}.{key}" if path else str(key)
+
+
+def shown(v) -> str:
+    s = repr(v)
+    return s if len(s) < 60 else s[:57] + "..."
+
+
+def mapping(value, path: str, required: tuple = (), optional: tuple = ()) -> dict:
+    """Check a mapping with exactly the given keys (required ones present, no unknown ones)."""
+    if not isinstance(value, dict):
+        raise ConfigError(path, f"expected a mapping with keys {', '.join(required + optional)}; "
+                                f"got {type(value).__name__} {shown(value)}")
+    allowed = set(required) | set(optional)
+    for key in value:
+        if key not in allowed:
+            raise ConfigError(key_path(path, key), "unknown key; allowed here: "
+                              + ", ".join(sorted(allowed)))
+    for key in required:
+        if key not in value or value[key] is None:
+            raise ConfigError(key_path(path, key), "missing value (required)")
+    return value
+
+
+def number(value, path: str, *, positive=False, nonneg=False, lo=None, hi=None,
+           hint: str = "") -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, str):
+            try:
+                value = float(value)
+            except ValueError:
+                raise ConfigError(path, f"expected a number{hint}; got {shown(value)}") from None
+        else:
+            raise ConfigError(path, f"expected a number{hint}; got {shown(value)}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ConfigError(path, f"must be finite; got {value}")
+    if positive and value <= 0:
+        raise ConfigError(path, f"must be > 0{hint}; got {value:g}")
+    if nonneg and value < 0:
+        raise ConfigError(path, f"must be >= 0{hint}; got {value:g}")
+    if lo is not None and value < lo:
+        raise ConfigError(path, f"must be >= {lo:g}{hint}; got {value:g}")
+    if hi is not None and value > hi:
+        raise ConfigError(path, f"must be <= {hi:g}{hint}; got {value:g}")
+    return value
+
+
+def integer(value, path: str, *, lo: int | None = None, hi: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ConfigError(path, f"expected an integer; got {shown(value)}")
+    if lo is not None and value < lo:
+        raise ConfigError(path, f"must be >= {lo}; got {value}")
+    if hi is not None and value > hi:
+        raise ConfigError(path, f"must be <= {hi}; got {value}")
+    return value
+
+
+def string(value, path: str, choices: tuple | None = None) -> str:
+    if not isinstance(value, str) or not value:
+        raise ConfigError(path, f"expected a non-empty string; got {shown(value)}")
+    if choices is not None and value not in choices:
+        raise ConfigError(path, f"must be one of {', '.join(choices)}; got {shown(value)}")
+    return value
+
+
+def boolean(value, path: str) -> bool:
+    if not isinstance(value, bool):
+        raise ConfigError(path, f"expected true or false; got {shown(value)}")
+    return value
+
+
+def vector(value, path: str, n: int, **kw) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)) or len(value) != n:
+        raise ConfigError(path, f"expected a list of {n} numbers; got {shown(value)}")
+    return tuple(number(v, key_path(path, i), **kw) for i, v in enumerate(value))
+
+
+def sequence(value, path: str, *, nonempty=True) -> list:
+    if not isinstance(value, list):
+        raise ConfigError(path, f"expected a list; got {shown(value)}")
+    if nonempty and not value:
+        raise ConfigError(path, "expected a non-empty list")
+    return value

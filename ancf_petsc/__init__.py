@@ -2,4 +2,4 @@
 
 Implements Obrezkov, Finni, Matikainen (2022), Materials 15:8906.
 """
-from .version import __version__  # noqa: F401  (re-exported)
+from .version import __version__

@@ -117,7 +117,7 @@ def _main(argv: list[str], interrupt) -> int:
     from ancf_petsc.config.values import ConfigError
     from ancf_petsc.config.parse import load_config
     from ancf_petsc.io.results import OutputError
-    from ancf_petsc.config.petsc_options import unused_line
+    from ancf_petsc.petsc.options import unused_line
     from ancf_petsc.solving.run import solve
     from ancf_petsc.solving.stepper import SolverOptionError
 

@@ -365,7 +365,7 @@ def test_option_tables_match_petsc():
     from petsc4py import PETSc
 
     from ancf_petsc.config import petsc_options as po
-    from ancf_petsc.petsc.inertia import _petsc_library
+    from ancf_petsc.petsc.inertia import petsc_library
     names = lambda cls: sorted({getattr(cls, k) for k in dir(cls) if not k.startswith("_")
                                 and isinstance(getattr(cls, k), str)})
     assert sorted(po.KSP_TYPES) == names(PETSc.KSP.Type)
@@ -373,7 +373,7 @@ def test_option_tables_match_petsc():
     assert sorted(po.SNES_TYPES) == names(PETSc.SNES.Type)
     assert sorted(po.SOLVER_TYPES) == names(PETSc.Mat.SolverType)
     assert set(names(PETSc.Mat.OrderingType)) <= set(po.ORDERING_TYPES)
-    lib = _petsc_library()
+    lib = petsc_library()
 
     def enum(symbol, pointer):
         arr = ctypes.POINTER(ctypes.c_char_p).in_dll(lib, symbol) if pointer else \

@@ -20,7 +20,7 @@ from petsc4py import PETSc
 _LIB = None
 
 
-def _petsc_library():
+def petsc_library():
     """The libpetsc that petsc4py runs on (already loaded)."""
     global _LIB
     if _LIB is None:
@@ -46,7 +46,7 @@ def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
         return None
     try:
         factor = pc.getFactorMatrix()          # raises before the first factorisation
-        lib = _petsc_library()
+        lib = petsc_library()
     except (PETSc.Error, OSError):
         return None
     int_t = ctypes.c_int64 if np.dtype(PETSc.IntType).itemsize == 8 else ctypes.c_int32

@@ -16,7 +16,7 @@ from .interrupt import RunInterrupted
 from ..parallel.partition import make_layout, partition_stats
 from ..model.build import build_model
 from ..io.results import OutputError, ResultsWriter, prepare_output_dir
-from ..config.petsc_options import unused_command_line_options
+from ..petsc.options import unused_command_line_options
 from .stepper import STAGE_SOLVE, LoadStepFailure, LoadStepper, matrix_type
 
 STAGE_SETUP = PETSc.Log.Stage("ANCF setup")

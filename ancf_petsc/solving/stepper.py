@@ -24,7 +24,7 @@ from ..config.values import ConfigError
 from ..config.specs import SolverSpec
 from ..petsc.inertia import pivot_counts
 from .interrupt import RunInterrupted, stop_requested
-from ..config.petsc_options import petsc_message, solver_hint, used_anywhere
+from ..petsc.options import petsc_message, solver_hint, used_anywhere
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",

@@ -1,0 +1,89 @@
+"""PETSc options after the run and PETSc errors: options PETSc never used (its own
+``PetscOptionsUsed`` flags, reduced over the ranks), and PETSc errors turned into one line that
+names the option and what works instead.  The input-side checks are in config/petsc_options.py."""
+from __future__ import annotations
+
+import ctypes
+import re
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from ..config.petsc_options import PREFIX
+from .inertia import petsc_library
+
+
+def options_used(names: list[str]) -> list[bool]:
+    """PETSc's own 'used' flag of each option in the global database (this rank's view)."""
+    lib = petsc_library()
+    out = []
+    for name in names:
+        flag = ctypes.c_int(0)                   # PetscBool is a C enum
+        if lib.PetscOptionsUsed(None, name.encode(), ctypes.byref(flag)) != 0:
+            flag.value = 1                        # cannot tell: do not accuse it
+        out.append(bool(flag.value))
+    return out
+
+
+#: options PETSc reads only in PetscFinalize, after the report is made
+READ_AT_FINALIZE = ("options_left", "log_view", "log_summary", "malloc_dump", "memory_view",
+                    "objects_dump", "log_all", "log_trace", "options_view", "check_pointer_intensity")
+HINTS = {"mat_type": "the Jacobian's format is solver.matrix in the config (auto, aij, sbaij)",
+         "help": ""}
+
+
+def unused_command_line_options(comm) -> list[str]:
+    """Options in PETSc's database (command line, PETSC_OPTIONS, .petscrc) that no PETSc object
+    ever read, as ``-name``; collective (an option read on any rank counts as used)."""
+    names = sorted(PETSc.Options().getAll())
+    names = [n for n in names if n not in READ_AT_FINALIZE]
+    return [f"-{n}" for n, u in zip(names, used_anywhere(names, comm)) if not u]
+
+
+def used_anywhere(names: list[str], comm) -> list[bool]:
+    """``options_used`` reduced over the ranks (collective; same list on every rank)."""
+    mpi = comm.tompi4py()
+    names = mpi.bcast(list(names), root=0)     # rank 0's list decides the order everywhere
+    used = np.array(options_used(names), dtype=np.int32)
+    if mpi.Get_size() > 1 and len(names):
+        out = np.empty_like(used)
+        mpi.Allreduce(used, out, op=MPI.MAX)
+        used = out
+    return [bool(u) for u in used]
+
+
+def unused_line(option: str, source: str = "") -> str:
+    """One warning line for an unused option (``source``: where it was set)."""
+    base = option.lstrip("-")
+    hint = HINTS.get(PREFIX.sub("", base)) or "misspelt, or not read by the solver in use"
+    where = f" ({source})" if source else ""
+    return f"ancf-solve: warning: PETSc option {option}{where} was never used: {hint}"
+
+
+# ------------------------------------------------------------------ PETSc errors → one line
+def petsc_message(exc: Exception) -> str:
+    """The last line of a PETSc error (the reason; the lines above are PETSc's call stack)."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    for ln in reversed(lines):
+        text = re.sub(r"^\[\d+\]\s*", "", ln)
+        if text and not text.startswith("See ") and not re.match(r"\w+\(\) at ", text):
+            return text
+    return lines[-1] if lines else "PETSc error"
+
+
+def solver_hint(pc: str, factor: str, ranks: int, has_package=lambda name: True) -> str:
+    """What works instead of a preconditioner / factorisation PETSc refused."""
+    direct = ("the default direct solver (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu with "
+              "-pc_factor_mat_solver_type mumps" + (" or superlu_dist" if ranks > 1 else ""))
+    if pc in ("ilu", "icc") and ranks > 1:
+        return (f"PETSc's {pc.upper()} is sequential: on {ranks} ranks use -pc_type bjacobi or asm "
+                f"(-sub_pc_type {pc} on each rank's block), gamg, hypre, or {direct}")
+    if pc in ("lu", "cholesky") and factor in ("petsc", "superlu", "umfpack", "klu", "cholmod") \
+            and ranks > 1:
+        return f"-pc_factor_mat_solver_type {factor} is sequential: on {ranks} ranks use {direct}"
+    if pc == "hypre" and not has_package("hypre"):
+        return f"this PETSc has no hypre: use -pc_type gamg, or {direct}"
+    if pc in ("lu", "cholesky", "ilu", "icc") and factor:
+        return f"-pc_factor_mat_solver_type {factor} cannot do {pc} here: use {direct}"
+    return f"use {direct}, or -ksp_type gmres with -pc_type gamg, hypre, bjacobi or asm"

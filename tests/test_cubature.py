@@ -7,7 +7,8 @@ import pytest
 
 from ancf_petsc.physics.cubature import (CurvePiece, compress_rule, ellipse_rule, gauss_green_rule,
     gauss_legendre, rectangle_rule)
-from ancf_petsc.physics.section import SplineCurve, make_outline
+from ancf_petsc.physics.spline import SplineCurve
+from ancf_petsc.physics.section import make_outline
 
 # A non-convex (notched, L-ish) polygon, counter-clockwise, integer vertices scaled by 1/8.
 POLY_INT = [(0, 0), (9, -2), (12, 3), (7, 4), (6, 9), (11, 13), (2, 12), (-3, 7), (3, 5)]

@@ -6,8 +6,9 @@ import pytest
 
 import ancf_petsc.physics.section as section_mod
 from ancf_petsc.physics.cubature import CompressionError
-from ancf_petsc.physics.section import (SectionError, SplineCurve, inline_loop, load_sections_file,
-    make_circle, make_ellipse, make_outline, make_rectangle)
+from ancf_petsc.physics.spline import SectionError, SplineCurve
+from ancf_petsc.physics.sections_file import inline_loop, load_sections_file
+from ancf_petsc.physics.section import make_circle, make_ellipse, make_outline, make_rectangle
 
 SECTIONS = Path(__file__).resolve().parents[1] / "configs" / "data" / "achilles_type3_sections.yaml"
 TYPE3 = ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..physics.section import SectionError, SplineCurve
+from ..physics.spline import SectionError, SplineCurve
 from . import polyline as pl
 from .fit import corners, fit_curve
 from .importers import (OutlineReadError, label_image, mask_outline, nifti_slice, read_point_list,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.section import SplineCurve
+from ..physics.spline import SplineCurve
 from .polyline import PolylineDistance, _arclength, douglas_peucker
 
 __all__ = ["FittedCurve", "fit_curve", "corners"]

@@ -18,7 +18,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..physics.section import SectionError
+from ..physics.spline import SectionError
 
 __all__ = ["OutlineReadError", "RawOutline", "read_point_list", "read_svg_path", "label_image",
            "nifti_slice", "mask_outline"]

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..physics.section import SectionError
+from ..physics.spline import SectionError
 from .polyline import PolylineDistance, densify, inside
 
 __all__ = ["Segment", "Merged", "MergeError", "merge_outlines"]

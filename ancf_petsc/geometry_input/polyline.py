@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..physics.section import _first_self_intersection, _points_in_polygon
+from ..physics.polygon import first_self_intersection, points_in_polygon
 
 __all__ = ["signed_area", "centroid", "perimeter", "drop_duplicates", "densify", "resample",
            "smooth", "PolylineDistance", "douglas_peucker", "self_intersection", "inside"]
@@ -154,7 +154,7 @@ def douglas_peucker(P: np.ndarray, eps: float) -> np.ndarray:
 
 def self_intersection(P: np.ndarray, tol: float) -> np.ndarray | None:
     """A point where the closed polyline crosses or touches itself, or None."""
-    hit = _first_self_intersection(P, tol)
+    hit = first_self_intersection(P, tol)
     if hit is None:
         return None
     a, b = P[hit[0]], P[(hit[0] + 1) % len(P)]
@@ -168,4 +168,4 @@ def self_intersection(P: np.ndarray, tol: float) -> np.ndarray | None:
 
 def inside(Q: np.ndarray, P: np.ndarray) -> np.ndarray:
     """Points Q strictly inside the closed polyline P (crossing number)."""
-    return _points_in_polygon(np.asarray(Q, dtype=float).reshape(-1, 2), P)
+    return points_in_polygon(np.asarray(Q, dtype=float).reshape(-1, 2), P)

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.section import SplineCurve
+from ..physics.spline import SplineCurve
 from . import polyline as pl
 from .build import Station, _fit_segment
 

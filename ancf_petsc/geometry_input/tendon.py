@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config.values import ConfigError
-from ..physics.section import SplineCurve
+from ..physics.spline import SplineCurve
 from . import polyline as pl
 from .build import Station, build_station
 from ..config.sections import SectionsSpec

@@ -17,8 +17,9 @@ from ..config.specs import ModelSpec, SectionSpec
 from ..physics.cubature import gauss_legendre
 from ..physics.geometry import reference_nodal_vectors
 from ..physics.materials import make_material
-from ..physics.section import (Section, SectionError, inline_loop, load_sections_file, make_circle,
-    make_ellipse, make_outline, make_rectangle)
+from ..physics.section import Section, make_circle, make_ellipse, make_outline, make_rectangle
+from ..physics.spline import SectionError
+from ..physics.sections_file import inline_loop, load_sections_file
 
 
 @dataclass

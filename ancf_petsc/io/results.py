@@ -30,7 +30,7 @@ import yaml
 
 from ..physics import element3363 as el
 from .files import atomic_write
-from ..model.build import Model
+from ..model.beams import Model
 from ..version import version_info
 
 #: space set aside for the final summary.json (released on a write error and at the end)

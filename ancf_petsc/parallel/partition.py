@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .layout import Layout, block_layout, layout_from_owner
-from ..model.build import Model
+from ..model.beams import Model
 
 CONTACT_COST = 4
 

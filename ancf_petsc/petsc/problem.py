@@ -27,7 +27,7 @@ from petsc4py import PETSc
 
 from ..physics import kernels
 from ..parallel.layout import Layout
-from ..model.build import Beam, Model
+from ..model.beams import Beam, Model
 
 ADD = PETSc.InsertMode.ADD_VALUES
 INSERT = PETSc.InsertMode.INSERT_VALUES

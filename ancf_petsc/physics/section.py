@@ -16,7 +16,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .cubature import (CompressionError, compress_rule, ellipse_rule, gauss_green_rule, rectangle_rule)
+from .cubature import CompressionError, compress_rule, ellipse_rule, gauss_green_rule, rectangle_rule
 from .spline import SectionError, SplineCurve
 from .polygon import first_self_intersection, inside_with_margin, loop_polyline, segment_owner
 

@@ -1,0 +1,127 @@
+"""The discretised model: beams (elements, nodes, section, material, quadrature) and their numbering.
+
+Global numbering (before any partitioning): beams in config order, nodes of a beam consecutive
+(2 n_el + 1 per beam), 18 DOFs per node in eq. (3) order (``element3363``).  Element e of a beam
+has nodes (2e, 2e+1, 2e+2).  The model is replicated on every rank; only the per-element
+quadrature data (``element_data``) is built for the elements a rank owns."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import numpy as np
+from ..physics import element3363 as el
+from ..config.specs import ModelSpec
+from ..physics.section import Section
+
+
+@dataclass
+class Beam:
+    index: int
+    name: str
+    section: Section
+    material: object
+    n_elements: int
+    node_offset: int
+    element_offset: int
+    x_nodes: np.ndarray
+    axial_points: int
+    element: str = "3363"                                  # '3363' | '3333' (element3363.py)
+    locking: str = "none"                                  # 'none' | 'ecm' (see ``parts``)
+    xi: np.ndarray = field(repr=False, default=None)      # (P,) ξ of the element's Gauss points
+    yz: np.ndarray = field(repr=False, default=None)      # (P, 2) section coordinates
+    wq: np.ndarray = field(repr=False, default=None)      # (P,) axial × section weights
+    dN: np.ndarray = field(repr=False, default=None)      # (P, S, 3), S = 3 × active vectors
+    dN_axis: np.ndarray = field(repr=False, default=None)  # (na, S, 3) on the beam axis y = z = 0
+    wq_axis: np.ndarray = field(repr=False, default=None)  # (na,) axial weights × section area
+    # sections that vary along x (geometry.sections with stations): dN (E, P, S, 3), wq (E, P),
+    # yz (E, P, 2), wq_axis (E, na) per element; ``ring_at(x)`` the outline (beam coordinates)
+    ring_at: object = field(repr=False, default=None)
+
+    @property
+    def vectors(self) -> tuple[int, ...]:
+        """The nodal vectors this beam's element interpolates (all six for 3363)."""
+        return el.ELEMENT_VECTORS[self.element]
+
+    def parts(self) -> list[tuple[np.ndarray, np.ndarray, object]]:
+        """(dN, weights, material) of each integrated part of the strain energy.
+
+        ``locking: ecm`` is the enhanced continuum mechanics approach of Gerstmayr, Matikainen &
+        Mikkola (2008) against Poisson locking of the linear section (3333), which cannot contract
+        linearly in y, z under bending:  Π = ∫ Ψ₀ dV + ∫ A [Ψ − Ψ₀]_axis dx, with Ψ₀ the same
+        material at ν = 0 (``material.poisson_free()``) over the full section rule and the
+        difference Ψ − Ψ₀ on the beam axis (one point per axial station, weight = area).  A
+        homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν))."""
+        if self.locking == "ecm":
+            free = self.material.poisson_free()
+            return [(self.dN, self.wq, free), (self.dN_axis, self.wq_axis, self.material),
+                    (self.dN_axis, -self.wq_axis, free)]
+        return [(self.dN, self.wq, self.material)]
+
+    @property
+    def n_nodes(self) -> int:
+        return 2 * self.n_elements + 1
+
+    @property
+    def connectivity(self) -> np.ndarray:
+        """Global node ids (n_el, 3)."""
+        e = np.arange(self.n_elements)
+        return self.node_offset + np.stack([2 * e, 2 * e + 1, 2 * e + 2], axis=1)
+
+    @property
+    def points_per_element(self) -> int:
+        return self.wq.shape[-1]
+
+
+@dataclass
+class Model:
+    spec: ModelSpec
+    beams: list[Beam]
+    q0: np.ndarray                 # (n_nodes, 6, 3) reference nodal vectors
+    fixed_dofs: np.ndarray         # sorted global DOF ids held at their reference value
+    f_ext: np.ndarray              # (n_dofs,) external generalised forces at load factor 1
+    probes: dict[str, tuple[int, int]]   # name → (global node, vector slot)
+    geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
+
+    @property
+    def n_nodes(self) -> int:
+        return self.q0.shape[0]
+
+    @property
+    def n_dofs(self) -> int:
+        return 18 * self.n_nodes
+
+    @property
+    def n_elements(self) -> int:
+        return sum(b.n_elements for b in self.beams)
+
+    def element_beam(self) -> np.ndarray:
+        """Beam index of every global element (n_elements,)."""
+        return np.concatenate([np.full(b.n_elements, b.index) for b in self.beams])
+
+    def connectivity(self) -> np.ndarray:
+        """Global node ids of every element (n_elements, 3)."""
+        return np.concatenate([b.connectivity for b in self.beams])
+
+    def element_data(self, beam: Beam, local: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, object]]:
+        """Per energy part (``Beam.parts``): material gradients G (E, P, S, 3), weights w (E, P)
+        and material, for elements ``local`` of a beam (S = 18 for 3363, 9 for 3333)."""
+        conn = beam.connectivity[local]
+        q0e = self.q0[conn][:, :, list(beam.vectors)].reshape(len(local), -1, 3)
+        out = []
+        for dN, wq, material in beam.parts():
+            # per-element rules (sections varying along x) carry a leading element axis
+            G, det = el.reference_gradients(q0e, dN[local] if dN.ndim == 4 else dN)
+            out.append((G, det * (wq[local] if wq.ndim == 2 else wq[None, :]), material))
+        return out
+
+    def describe(self) -> list[str]:
+        lines = list(self.geometry_report)
+        for b in self.beams:
+            lock = ", Poisson part on the axis (ecm)" if b.locking == "ecm" else ""
+            per = (f"up to {b.points_per_element // b.axial_points} section points, varying along x"
+                   if b.ring_at is not None else f"{len(b.section.weights)} section")
+            lines.append(f"beam {b.name}: {b.n_elements} elements {b.element} x {b.points_per_element} "
+                         f"Gauss points ({b.axial_points} axial x {per}{lock})")
+            lines.append("  section " + b.section.describe()
+                         + (" at x = 0 (varies along x)" if b.ring_at is not None else ""))
+            lines.append("  material " + b.material.describe())
+        return lines

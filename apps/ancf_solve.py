@@ -116,10 +116,10 @@ def _main(argv: list[str], interrupt) -> int:
 
     from ancf_petsc.config.values import ConfigError
     from ancf_petsc.config.parse import load_config
-    from ancf_petsc.io.results import OutputError
+    from ancf_petsc.io.files import OutputError
     from ancf_petsc.petsc.options import unused_line
-    from ancf_petsc.solving.run import solve
-    from ancf_petsc.solving.stepper import SolverOptionError
+    from ancf_petsc.api import solve
+    from ancf_petsc.solving.options import SolverOptionError
 
     interrupt.install()                  # again: PETSc installed its own SIGPIPE handler
     comm = PETSc.COMM_WORLD

@@ -45,7 +45,7 @@ def main() -> int:
     import yaml
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.workflows.refinement import quantity
-    from ancf_petsc.solving.run import solve
+    from ancf_petsc.api import solve
 
     rows = []
     for label, cfg, acc, over, fine_n in SCENES[:2] if args.quick else SCENES:

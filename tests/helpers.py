@@ -34,7 +34,7 @@ def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | N
     """Run a raw config dict in this process (1 rank); returns the summary dict."""
     petsc_init()
     from ancf_petsc.config.parse import parse_config
-    from ancf_petsc.solving.run import solve
+    from ancf_petsc.api import solve
     raw = copy.deepcopy(raw)
     raw.setdefault("output", {})["dir"] = str(out_dir)
     if petsc:

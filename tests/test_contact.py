@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from helpers import load_raw
+from ancf_petsc.petsc.contact_reports import contact_gaps
 from helpers import build_problem as _problem
 
 
@@ -38,7 +39,7 @@ MODES = {"sliding": {"mode": "sliding"},
 
 
 def _active(P, X):
-    return P.contact.evaluate(P._local_state(X).copy(), P.needed).active
+    return P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).active
 
 
 @pytest.mark.parametrize("mode", list(MODES))
@@ -53,10 +54,10 @@ def test_contact_jacobian_matches_finite_differences(mode):
         # a state the law keeps: pressure where the bodies penetrate, random pulls elsewhere
         # (released, and not penetrating: they stay released)
         c = P.contact
-        st = c.evaluate(P._local_state(X).copy(), P.needed)
-        pos = c.multiplier_positions(P.needed)
+        st = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+        pos = c.multiplier_positions(P.exchange.needed)
         x = X.getArray()
-        assert len(P.needed) == P.n_blocks        # one rank: local positions are global ones
+        assert len(P.exchange.needed) == P.n_blocks        # one rank: local positions are global ones
         x[pos] = np.where(st.gbar < 0, np.abs(st.z), st.z)
         X.setArray(x)
         c.status[:] = True
@@ -93,15 +94,15 @@ def test_gap_hessian_matches_differences_of_the_gradient():
     P, _ = _problem(achilles())
     c = P.contact
     X, _ = perturbed_state(P, 5e-6, 11)
-    xl = P._local_state(X).copy()
-    st = c.evaluate(xl, P.needed)
+    xl = P.exchange.local_state(X).copy()
+    st = c.evaluate(xl, P.exchange.needed)
     assert np.any(st.pr.g > 1e-7) and np.any(st.pr.g < -1e-7)
     W, C = gap_hessian_factors(st.pr)
     H = -np.einsum("pia,pab,pjb->pij", W, C, W)
     rng = np.random.default_rng(2)
     idx = st.pr.idx
     eA, eB = c.points.eA[idx], st.pr.eB.copy()
-    pos = lambda e: np.searchsorted(P.needed, c.conn[e])           # noqa: E731
+    pos = lambda e: np.searchsorted(P.exchange.needed, c.conn[e])           # noqa: E731
     dofs = np.concatenate([(18 * pos(eA)[:, :, None] + np.arange(18)).reshape(len(idx), 54),
                            (18 * pos(eB)[:, :, None] + np.arange(18)).reshape(len(idx), 54)], axis=1)
     v = rng.standard_normal(xl.size) * 1e-3
@@ -110,7 +111,7 @@ def test_gap_hessian_matches_differences_of_the_gradient():
     for sgn in (1.0, -1.0):
         c.restore()
         c.projector.eB[idx], c.projector.xiB[idx], c.projector.tB[idx] = st.pr.eB, st.pr.xiB, st.pr.tB
-        stp = c.evaluate((xl.reshape(-1) + sgn * h * v).reshape(xl.shape), P.needed)
+        stp = c.evaluate((xl.reshape(-1) + sgn * h * v).reshape(xl.shape), P.exchange.needed)
         assert np.array_equal(stp.pr.eB, eB)
         grads.append(gap_gradient(stp.pr))
     fd = (grads[0] - grads[1]) / (2 * h)
@@ -125,7 +126,7 @@ def test_reference_state_is_gap_free_and_stress_free():
     F = X.duplicate()
     P.residual(None, X, F)
     assert F.norm() < 1e-9
-    gaps = P.contact_gaps(X)
+    gaps = contact_gaps(P, X)
     assert len(gaps) == 3 and all(g["max_gap"] < 1e-12 for g in gaps.values())
 
 

@@ -54,7 +54,7 @@ def test_sbaij_holds_the_aij_jacobian_with_contact_and_supports():
     got = _products(probs["sbaij"], x, vs)
     assert np.abs(got - ref).max() <= 1e-13 * np.abs(ref).max()
     # a re-preallocated pattern (what a growing contact pattern does) holds the same matrix
-    probs["sbaij"]._preallocate_sbaij(probs["sbaij"].J)
+    probs["sbaij"].pattern.preallocate(probs["sbaij"].J)
     again = _products(probs["sbaij"], x, vs)
     assert np.abs(again - ref).max() <= 1e-13 * np.abs(ref).max()
 
@@ -80,7 +80,7 @@ def test_matrix_format_choice():
     from ancf_petsc.config.values import ConfigError
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
-    from ancf_petsc.solving.stepper import matrix_type
+    from ancf_petsc.solving.options import matrix_type
     m3363 = build_model(parse_config(load_raw("achilles_type3_psi0.yaml"), base_dir=CONFIGS))
     mixed = two_beam_twisted()
     mixed["beams"][1].update({"element": 3333})

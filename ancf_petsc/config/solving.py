@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 
 from .petsc_options import check_value
 from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
@@ -23,7 +24,17 @@ SOLVER_KEYS = {
     "stability_cutbacks": (lambda v, p: integer(v, p, lo=0, hi=20), False),
     "allow_unstable": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),
+    "options_prefix": (lambda v, p: options_prefix(v, p), False),
 }
+
+
+def options_prefix(value, path: str) -> str:
+    """A PETSc options prefix: letters, digits and underscores, ending in an underscore."""
+    text = string(value, path)
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*_", text):
+        raise ConfigError(path, "a PETSc options prefix is letters, digits and underscores, starts "
+                                f"with a letter and ends with '_' (e.g. left_); got {text!r}")
+    return text
 
 
 def parse_solver(value) -> SolverSpec:

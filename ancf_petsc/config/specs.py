@@ -109,6 +109,7 @@ class SolverSpec:
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solver.matrix_type)
     allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
+    options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 
 
 @dataclass

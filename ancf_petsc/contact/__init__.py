@@ -1,7 +1,8 @@
 """Surface-to-surface contact between beams (paper §5): interfaces, quadrature points, closest-point
 projection, gap derivatives, the multiplier (pressure) space and the contact laws.  No PETSc here:
 ``Contact`` fills local arrays and returns dense blocks that the assembly layer inserts."""
-from .contact import GAP_COLUMNS, Contact, build_contact, reference_stiffness
+from .contact import Contact, build_contact, reference_stiffness
+from .reports import GAP_COLUMNS
 from .interfaces import Interface, find_interfaces
 from .laws import LAWS
 

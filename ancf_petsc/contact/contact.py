@@ -17,25 +17,17 @@ DOF indices for the assembly layer to insert.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..errors import InputError
-from .gap import gap_gradient, gap_hessian_factors
+from . import blocks, reports
 from .interfaces import find_interfaces
 from .laws import make_law
 from .multipliers import build_space
 from .points import build_points
-from .projection import Projection, Projector
+from .projection import Projector
+from .state import ContactState
 
-#: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
-CHUNK_POINTS = 2048
-
-#: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
-GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
-               ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
-               ("max_pressure", "max"), ("normal_force", "sum"), ("points", "sum"))
 
 
 def reference_stiffness(interfaces) -> float:
@@ -52,18 +44,6 @@ def reference_stiffness(interfaces) -> float:
             h = min(beam.x_nodes[2] - beam.x_nodes[0], np.sqrt(beam.section.area))
             best = min(best, E * h)
     return float(best)
-
-
-@dataclass
-class ContactState:
-    """Everything one evaluation at a state found (local points and multipliers)."""
-    pr: Projection
-    xA: np.ndarray         # (P_loc, 3) positions of the points
-    gbar: np.ndarray       # (M_loc,) weighted gaps ḡ [m]
-    z: np.ndarray          # (M_loc,) scaled multipliers [m]
-    active: np.ndarray     # (M_loc,) bool
-    tau: np.ndarray        # (P_loc,) w_p × pressure [N/m... × m² = N]
-    lpos: object           # PETSc node id → position in the local array
 
 
 class Contact:
@@ -252,88 +232,8 @@ class Contact:
 
     def jacobian_blocks(self, xl: np.ndarray, needed: np.ndarray,
                         fixed_mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Dense blocks (rows (n, D) PETSc DOF ids, −1 dropped; values (n, D, D)) of the contact
-        part of the Jacobian: one per local segment over its A nodes, the nodes of the B elements
-        its points project onto and its multiplier node; segments are batched by the number of
-        B elements they span (and in chunks of at most ``CHUNK_POINTS`` points)."""
-        st = self.evaluate(xl, needed)
-        if len(self.local) == 0:
-            return []
-        srow = np.searchsorted(self.segments, self.points.seg[self.local])
-        first_b = np.full(len(self.segments), np.iinfo(np.int64).max)
-        np.minimum.at(first_b, srow, st.pr.eB)
-        last_b = np.full(len(self.segments), -1)
-        np.maximum.at(last_b, srow, st.pr.eB)
-        span = last_b - first_b + 1
-        p_max = int(self.points.seg_size.max())
-        out = []
-        for width in np.unique(span):
-            group = np.flatnonzero(span == width)
-            for sk in np.array_split(group, -(-len(group) * p_max // CHUNK_POINTS)):
-                out.append(self._segment_blocks(st, srow, first_b, sk, int(width), fixed_mask))
-        return out
-
-    def _segment_blocks(self, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
-        """Blocks of the local segments ``sk``, each spanning ``width`` B elements.  The block's
-        unknowns: A's 3 nodes, B's 2 width + 1 nodes and the (at most two) multiplier nodes of
-        the functions living on the segment: D = 18 (2 width + 6)."""
-        pr, pts, sp = st.pr, self.points, self.space
-        segs = self.segments[sk]
-        n_s = len(sk)
-        P_s = int(pts.seg_size[segs].max())
-        D = 18 * (2 * width + 6)
-        Dq = D - 36
-        sel = np.flatnonzero(np.isin(srow, sk))             # positions in the local arrays
-        s_loc = np.searchsorted(sk, srow[sel])
-        p_loc = self.local[sel] - pts.seg_start[segs[s_loc]]
-        j = pr.eB[sel] - first_b[srow[sel]]
-        # each point's 108 unknowns (A element, its B element) inside the block
-        cols = np.concatenate([np.broadcast_to(np.arange(54), (len(sel), 54)),
-                               54 + 36 * j[:, None] + np.arange(54)], axis=1)
-        sub = _subset(pr, sel)
-        at = (s_loc[:, None], p_loc[:, None], cols)
-        V = np.zeros((n_s, P_s, Dq))                         # ∇g_p
-        V[at] = gap_gradient(sub) * sub.valid[:, None]
-        K = np.zeros((n_s, D, D))
-        tau = st.tau[sel]
-        if np.any(tau != 0.0):
-            # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
-            W, C = gap_hessian_factors(sub)
-            We = np.zeros((n_s, P_s, Dq, 4))
-            We[at] = W
-            WCe = np.zeros((n_s, P_s, Dq, 4))
-            WCe[at] = np.matmul(W, C * tau[:, None, None])
-            K[:, :Dq, :Dq] = np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
-                                       We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
-        # constraint rows −k_s Φ_s ∇g (active multipliers), −k_s × (the segment's share of the
-        # function) on inactive diagonals
-        m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad
-        real = m_ids >= 0
-        act = np.zeros(m_ids.shape, dtype=bool)
-        act[real] = st.active[np.searchsorted(self.mults, m_ids[real])]
-        Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
-        Gc = -self.stiffness * np.matmul(Phi_s * act[:, :, None], V)          # (n_s, K, Dq)
-        share = Phi_s.sum(axis=2)
-        ss, kk = np.nonzero(real)
-        second = sp.node[m_ids[ss, kk]] != self.seg_mnodes[segs[ss], 0]
-        mrow = Dq + 18 * second + sp.slot[m_ids[ss, kk]]
-        K[ss, mrow, :Dq] = Gc[ss, kk]
-        K[ss, :Dq, mrow] = Gc[ss, kk]
-        K[ss, mrow, mrow] = np.where(act[ss, kk], 0.0, -self.stiffness * share[ss, kk])
-        # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes
-        els = self.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
-        bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
-        nodes = np.concatenate([self.conn[pts.seg_eA[segs]], bnodes, self.seg_blocks[segs]], axis=1)
-        rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
-        # the B elements of a segment need not be contiguous (points on e and e + 2): the
-        # nodes of an element in between that no point projects onto stay out of the matrix
-        used = np.zeros((n_s, D), dtype=bool)
-        used[:, :54] = True
-        used[:, Dq:] = np.repeat(self.seg_blocks[segs] >= 0, 18, axis=1)
-        used[s_loc[:, None], cols[:, 54:]] = True
-        rows = np.where(used, rows, -1)
-        rows[rows >= 0] = np.where(fixed_mask[rows[rows >= 0]], -1, rows[rows >= 0])
-        return rows, K
+        """The contact blocks of the Jacobian at the local state (``blocks.jacobian_blocks``)."""
+        return blocks.jacobian_blocks(self, self.evaluate(xl, needed), fixed_mask)
 
     # ---------------------------------------------------------------- checks
     def _check_reference_gaps(self) -> None:
@@ -394,75 +294,16 @@ class Contact:
         return lines
 
     def gap_sums(self, xl: np.ndarray, needed: np.ndarray) -> np.ndarray:
-        """Per interface (rows) the local parts of ``GAP_COLUMNS`` at the local state."""
-        out = np.zeros((len(self.interfaces), len(GAP_COLUMNS)))
-        st = self.evaluate(xl, needed)
-        if len(self.local) == 0:
-            return out
-        pr = st.pr
-        itf_p = self.points.itf[self.local]
-        itf_m = self.space.interface[self.mults]
-        area = self.space.area[self.mults] * self.owned        # each multiplier counted once
-        lam = self.pressure_coefficients(st)
-        for k in range(len(self.interfaces)):
-            on, m = itf_p == k, itf_m == k
-            v = on & pr.valid
-            m = m & self.owned
-            act = m & st.active
-            out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[v], initial=0.0),
-                      float(np.sum(pr.g[v] ** 2)), v.sum(),
-                      np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
-                      lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()]
-        return out
-
-    def pressure_coefficients(self, st: ContactState) -> np.ndarray:
-        """λ_k [Pa] of the local multipliers (zero where inactive)."""
-        return self.stiffness * st.z * st.active / self.space.area[self.mults]
+        """Per interface the local parts of ``reports.GAP_COLUMNS`` at the local state."""
+        return reports.gap_sums(self, self.evaluate(xl, needed))
 
     def gap_report(self, sums: np.ndarray) -> dict:
         """Per-interface statistics from (rank-combined) ``gap_sums``."""
-        out = {}
-        for k, itf in enumerate(self.interfaces):
-            c = dict(zip([n for n, _ in GAP_COLUMNS], sums[k]))
-            nv = c["valid_points"]
-            out[itf.name] = {"max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
-                             "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
-                             "max_weighted_gap": c["max_weighted_gap"],
-                             "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
-                             "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
-                             "points": int(c["points"])}
-        return out
+        return reports.gap_report(self.interfaces, sums)
 
     def point_fields(self, xl: np.ndarray, needed: np.ndarray, q0_of) -> dict:
-        """Per local point: id, interface, current and reference position on A, gap, pressure,
-        slip (the reference position of the point minus that of its partner on B: how far B's
-        material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
-        multiplier: id, pressure coefficient λ [Pa] and status.  ``q0_of(elements)`` gives
-        reference nodal vectors."""
-        st = self.evaluate(xl, needed)
-        pr, idx = st.pr, self.local
-        if len(idx):
-            X0A = np.einsum("pa,pai->pi", pr.NA, q0_of(self.points.eA[idx]))
-            X0B = np.einsum("pa,pai->pi", pr.NB, q0_of(pr.eB))
-        else:
-            X0A = X0B = np.zeros((0, 3))
-        pressure = np.where(pr.valid, st.tau / self.points.w[idx], 0.0)
-        own = self.owned
-        return {"id": idx, "interface": self.points.itf[idx], "x": st.xA, "x0": X0A,
-                "gap": pr.g * pr.valid, "pressure": pressure,
-                "slip": (X0A - X0B) * pr.valid[:, None],
-                "projection": np.column_stack([pr.eB, pr.xiB, pr.tB]) if len(idx) else np.zeros((0, 3)),
-                "multiplier_id": self.mults[own],
-                "multiplier_pressure": self.pressure_coefficients(st)[own],
-                "multiplier_active": st.active[own]}
-
-
-def _subset(pr: Projection, sel: np.ndarray) -> Projection:
-    """The points ``sel`` (positions) of a projection."""
-    return Projection(idx=pr.idx[sel], eB=pr.eB[sel], xiB=pr.xiB[sel], tB=pr.tB[sel], d=pr.d[sel],
-                      n=pr.n[sel], g=pr.g[sel], valid=pr.valid[sel], NA=pr.NA[sel], NB=pr.NB[sel],
-                      NBz=pr.NBz[sel], Yz=pr.Yz[sel], Yzz=pr.Yzz[sel], in_window=pr.in_window,
-                      converged=pr.converged)
+        """Per local point and owned multiplier fields for the output (``reports.point_fields``)."""
+        return reports.point_fields(self, self.evaluate(xl, needed), q0_of)
 
 
 def build_contact(model, spec, log=print) -> Contact:

@@ -20,73 +20,23 @@ problem becomes an ``OutputError`` naming the path, raised on every rank.
 """
 from __future__ import annotations
 
-import errno
 import json
 import os
 import time
 
+import h5py
 import numpy as np
 import yaml
 
 from ..physics import element3363 as el
-from .files import atomic_write
+from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
+from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 from ..model.beams import Model
 from ..version import version_info
 
 #: space set aside for the final summary.json (released on a write error and at the end)
 RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
-_NO_SPACE = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
-
-
-class OutputError(Exception):
-    """A file-system problem with the output; ``path`` is the file or directory concerned."""
-
-    def __init__(self, path: str, reason: str):
-        super().__init__(f"{path}: {reason}")
-        self.path, self.reason = path, reason
-
-
-def _reason(exc: BaseException) -> str:
-    """The OS's words for an error (``No space left on device``), h5py's otherwise."""
-    err = getattr(exc, "errno", None)
-    if err:
-        return os.strerror(err)
-    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-    for code in _NO_SPACE:                       # h5py: "... errno = 28, error message = ..."
-        if f"errno = {code}," in str(exc):
-            return os.strerror(code)
-    return text
-
-
-def _remove(*paths: str) -> None:
-    for p in paths:
-        try:
-            os.remove(p)
-        except OSError:
-            pass
-
-
-def prepare_output_dir(path: str) -> None:
-    """Create ``path`` if needed and check that files can be written in it (rank 0 only);
-    raises ``OutputError`` naming the path and the reason."""
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise OutputError(path, "exists and is not a directory (choose another output.dir / --output-dir)")
-    try:
-        os.makedirs(path, exist_ok=True)
-    except OSError as exc:
-        where = exc.filename or path
-        if isinstance(exc, (FileExistsError, NotADirectoryError)):
-            raise OutputError(where, "cannot create the output directory: a file is in the way") from None
-        raise OutputError(where, f"cannot create the output directory: {_reason(exc)}") from None
-    probe = os.path.join(path, f".ancf-write-test-{os.getpid()}")
-    try:
-        with open(probe, "w") as fh:
-            fh.write("ok")
-    except OSError as exc:
-        _remove(probe)
-        raise OutputError(path, f"cannot write in the output directory: {_reason(exc)}") from None
-    _remove(probe)
 
 
 def plain(obj):
@@ -100,66 +50,6 @@ def plain(obj):
     if isinstance(obj, np.generic):
         return obj.item()
     return obj
-
-
-class SurfaceSampler:
-    """Quad surface (plus end caps) of each beam, sampled ``samples`` times per element.  The
-    shape functions and reference gradients at the sample points are computed once."""
-
-    def __init__(self, model: Model, samples: int):
-        self.model = model
-        self.parts = []
-        for beam in model.beams:
-            xi = np.linspace(-1.0, 1.0, samples + 1)
-            conn = beam.connectivity
-            E = len(conn)
-            if beam.ring_at is not None:            # the outline at every sampled x, per element
-                x = beam.x_nodes[0:-1:2, None] + 0.5 * (xi[None, :] + 1.0) * (beam.x_nodes[2] - beam.x_nodes[0])
-                YZ = np.stack([np.concatenate([beam.ring_at(xx) for xx in row]) for row in x])
-                m = YZ.shape[1] // len(xi)
-            else:
-                ring = beam.section.boundary_polyline(6)
-                if np.allclose(ring[0], ring[-1]):
-                    ring = ring[:-1]
-                m = len(ring)
-                YZ = np.broadcast_to(np.tile(ring, (len(xi), 1)), (E, len(xi) * m, 2))
-            M = len(xi) * m
-            N, dN = el.shape_functions(np.tile(np.repeat(xi, m), E), YZ[..., 0].ravel(), YZ[..., 1].ravel())
-            q0e = model.q0[conn].reshape(E, 18, 3)
-            G, _ = el.reference_gradients(q0e, dN.reshape(E, M, 18, 3))
-            # drop the duplicated first station of every element but the first
-            keep = np.concatenate([np.arange(M)] + [e * M + np.arange(m, M) for e in range(1, E)])
-            self.parts.append((beam, m, len(xi) - 1, N[keep], G.reshape(-1, 18, 3)[keep], keep // M))
-
-    def mesh(self, q: np.ndarray):
-        """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
-        pts, quads, caps = [], [], []
-        data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
-        offset = 0
-        for beam, m, S, N, G, e_of in self.parts:
-            conn = beam.connectivity
-            qe = q[conn].reshape(len(conn), 18, 3)[e_of]
-            q0e = self.model.q0[conn].reshape(len(conn), 18, 3)[e_of]
-            r = np.einsum("pa,pai->pi", N, qe)
-            r0 = np.einsum("pa,pai->pi", N, q0e)
-            F = np.matmul(np.swapaxes(qe, 1, 2), G)
-            n_st = beam.n_elements * S + 1
-            C = np.matmul(np.swapaxes(F, -1, -2), F)
-            data["displacement"].append(r - r0)
-            data["E_xx"].append(0.5 * (C[:, 0, 0] - 1.0))
-            data["J"].append(np.linalg.det(F))
-            data["beam"].append(np.full(len(r), float(beam.index)))
-            st = np.arange(n_st - 1)[:, None]
-            j = np.arange(m)[None, :]
-            a = st * m + j
-            b = st * m + (j + 1) % m
-            quads.append(offset + np.stack([a, b, b + m, a + m], axis=-1).reshape(-1, 4))
-            caps.append(offset + np.arange(m)[::-1])
-            caps.append(offset + (n_st - 1) * m + np.arange(m))
-            pts.append(r)
-            offset += len(r)
-        return (np.concatenate(pts), np.concatenate(quads), caps,
-                {k: np.concatenate(v) for k, v in data.items()})
 
 
 class ResultsWriter:
@@ -176,7 +66,7 @@ class ResultsWriter:
         self.summary_path = os.path.join(self.dir, "summary.json")
         self.summary = {"name": spec.name, "status": "running", **run_info, "steps": []}
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
-        self.pvd_entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
+        self.vtk = VtkSeries(self.dir)
         self._last_sizes = {"vtu": 0, "h5": 0}
         self._on_root(lambda: self._create(layout, run_info) if restart is None else self._resume())
 
@@ -190,7 +80,7 @@ class ResultsWriter:
                 err = (exc.path, exc.reason)
             except OSError as exc:
                 self._release_reserve()
-                err = (exc.filename or self.dir, _reason(exc))
+                err = (exc.filename or self.dir, os_reason(exc))
         if self.comm.size > 1:
             err = self.comm.tompi4py().bcast(err, root=0)
         if err:
@@ -209,16 +99,15 @@ class ResultsWriter:
         except OSError as exc:
             self._release_reserve()
             raise OutputError(self.dir, f"cannot set aside {RESERVE_BYTES // 1024} KB for the results: "
-                                        f"{_reason(exc)}") from None
-        import h5py
+                                        f"{os_reason(exc)}") from None
         try:
             with h5py.File(self.h5_path, "w") as h5:
                 self._write_model(h5, layout, run_info)
         except (OSError, RuntimeError) as exc:
             self._release_reserve()
-            raise OutputError(self.h5_path, f"cannot write: {_reason(exc)}") from None
+            raise OutputError(self.h5_path, f"cannot write: {os_reason(exc)}") from None
         if self.sampler is not None:
-            self._write_vtu(0, 0.0, model.q0)
+            self._write_series("surface", 0, 0.0, surface_cells(self.sampler, model.q0))
         self._write_summary()
 
     def _write_model(self, h5, layout, run_info: dict) -> None:
@@ -254,16 +143,15 @@ class ResultsWriter:
     def _resume(self) -> None:
         """Continue the files of ``self.restart`` (a ``restart.RestartPoint``): the levels after
         its step are dropped from results.h5, summary.json and the VTU series."""
-        import h5py
         point = self.restart
         self.summary["version"] = version_info()
         self.summary["restarted_from"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["steps"] = list(point.summary.get("steps", []))
         loads = [0.0] + [st["load_factor"] for st in self.summary["steps"]]
-        for series in self.pvd_entries:
+        for series in self.vtk.entries:
             for k in range(len(loads)):
                 if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
-                    self.pvd_entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
+                    self.vtk.entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
         for name in os.listdir(self.dir):
             stem = name.split("_")[-1].split(".")[0]
             if name.startswith(("surface_", "contact_")) and stem.isdigit() and int(stem) > point.step:
@@ -278,13 +166,13 @@ class ResultsWriter:
                 steps.attrs["last_load_factor"] = point.load_factor
                 h5.attrs["status"] = "running"
         except (OSError, RuntimeError) as exc:
-            raise OutputError(self.h5_path, f"cannot continue: {_reason(exc)}") from None
+            raise OutputError(self.h5_path, f"cannot continue: {os_reason(exc)}") from None
         with open(os.path.join(self.dir, RESERVE), "wb") as fh:
             fh.write(b"\0" * RESERVE_BYTES)
         self._write_summary()
 
     def _release_reserve(self) -> None:
-        _remove(os.path.join(self.dir, RESERVE))
+        remove_quietly(os.path.join(self.dir, RESERVE))
 
     def _write_summary(self):
         self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
@@ -292,47 +180,22 @@ class ResultsWriter:
         try:
             atomic_write(self.summary_path, text)
         except OSError as exc:
-            if exc.errno not in _NO_SPACE or not os.path.exists(os.path.join(self.dir, RESERVE)):
-                raise OutputError(self.summary_path, f"cannot write: {_reason(exc)}") from None
+            if exc.errno not in NO_SPACE or not os.path.exists(os.path.join(self.dir, RESERVE)):
+                raise OutputError(self.summary_path, f"cannot write: {os_reason(exc)}") from None
             self._release_reserve()               # the space set aside for exactly this
             try:
                 atomic_write(self.summary_path, text)
             except OSError as exc2:
-                raise OutputError(self.summary_path, f"cannot write: {_reason(exc2)}") from None
+                raise OutputError(self.summary_path, f"cannot write: {os_reason(exc2)}") from None
 
-    def _write_vtu(self, k: int, lam: float, q: np.ndarray) -> None:
-        pts, quads, caps, data = self.sampler.mesh(q)
-        cells = [("quad", quads)] + [("polygon", c[None, :]) for c in caps]
-        self._write_series("surface", k, lam, pts, cells, data)
-
-    def _write_contact_vtu(self, k: int, lam: float, fields: dict) -> None:
-        data = {"gap": fields["gap"], "pressure": fields["pressure"], "slip": fields["slip"],
-                "slip_axial": fields["slip"][:, 0], "interface": fields["interface"].astype(float)}
-        cells = [("vertex", np.arange(len(fields["x"]))[:, None])]
-        self._write_series("contact", k, lam, fields["x"], cells, data)
-
-    def _write_series(self, series: str, k: int, lam: float, pts, cells, data) -> None:
-        """One VTU of a time series and its .pvd collection (meshio, zlib-compressed binary, in
-        single precision: for display, results.h5 keeps double; half the size and the write
-        time).  A failed write leaves no VTU."""
-        import meshio
-        name = f"{series}_{k:04d}.vtu"
-        path = os.path.join(self.dir, name)
-        data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
+    def _write_series(self, series: str, k: int, lam: float, mesh: tuple) -> None:
+        """One VTU of ``series`` (``vtk.VtkSeries``); a failure is an OutputError."""
         try:
-            meshio.write(path, meshio.Mesh(np.asarray(pts, dtype=np.float32), cells, point_data=data),
-                         binary=True)
-            self._last_sizes["vtu"] = os.path.getsize(path)
-            rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
-                             for t, f in self.pvd_entries[series] + [(lam, name)])
-            atomic_write(os.path.join(self.dir, f"{series}.pvd"),
-                          '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                          f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+            self._last_sizes["vtu"] = self.vtk.write(series, k, lam, *mesh)
         except OSError as exc:
-            _remove(path)                          # never leave a truncated VTU behind
             self._release_reserve()
-            raise OutputError(path, f"cannot write: {_reason(exc)}") from None
-        self.pvd_entries[series].append((lam, name))
+            raise OutputError(os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
+                              f"cannot write: {os_reason(exc)}") from None
 
     def probe_values(self, q: np.ndarray) -> dict:
         out = {}
@@ -344,7 +207,7 @@ class ResultsWriter:
     def write_step(self, record, q: np.ndarray | None, extra: dict | None = None,
                    contact: dict | None = None, path: dict | None = None) -> None:
         """Append one converged level; ``q`` is the gathered nodal vectors (rank 0), ``contact``
-        the gathered contact fields (``Problem.contact_fields``), ``path`` what a restart needs:
+        the gathered contact fields (``petsc.contact_reports.contact_fields``), ``path`` what a restart needs:
         ``blocks`` and ``increment_blocks`` (every block in model order, (n, 18)) and
         ``accepted_negative``.  Collective."""
         self._on_root(lambda: self._write_step(record, q, extra, contact, path))
@@ -364,7 +227,6 @@ class ResultsWriter:
 
     def _write_step(self, record, q: np.ndarray, extra: dict | None, contact: dict | None,
                     path: dict | None) -> None:
-        import h5py
         k = len(self.summary["steps"]) + 1
         entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
                  "iterations": record.iterations, "substeps": record.substeps,
@@ -400,13 +262,13 @@ class ResultsWriter:
             self._release_reserve()
             if self._recover_h5(name):            # the level made it to disk after all
                 self._append(entry)
-            raise OutputError(self.h5_path, f"cannot write level {k}: {_reason(exc)}") from None
+            raise OutputError(self.h5_path, f"cannot write level {k}: {os_reason(exc)}") from None
         self._last_sizes["h5"] = max(os.path.getsize(self.h5_path) - size0, q.nbytes)
         self._append(entry)
         if self.sampler is not None:
-            self._write_vtu(k, record.load_factor, q)
+            self._write_series("surface", k, record.load_factor, surface_cells(self.sampler, q))
             if contact is not None:
-                self._write_contact_vtu(k, record.load_factor, contact)
+                self._write_series("contact", k, record.load_factor, contact_cells(contact))
         self._write_summary()
 
     @staticmethod
@@ -436,7 +298,6 @@ class ResultsWriter:
 
     def _recover_h5(self, name: str) -> bool:
         """After a failed write: drop a partial level; True if level ``name`` is complete."""
-        import h5py
         try:
             with h5py.File(self.h5_path, "a") as h5:
                 steps = h5["steps"]
@@ -464,7 +325,6 @@ class ResultsWriter:
         except OutputError as exc:
             problem = str(exc)
         try:
-            import h5py
             with h5py.File(self.h5_path, "a") as h5:
                 h5.attrs["status"] = status
                 h5.attrs["reason_code"] = str(info.get("reason_code", ""))

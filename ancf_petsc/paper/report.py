@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from ..io.reader import read_contact
 from ..workflows import sweep as sw
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -361,7 +362,7 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
     if not os.path.exists(h5):
         return []
     loads = [st["load_factor"] for st in s["steps"]]
-    levels = [plotting.read_contact(h5, loads.index(f) + 1) for f in SLIP_LEVELS if f in loads]
+    levels = [read_contact(h5, loads.index(f) + 1) for f in SLIP_LEVELS if f in loads]
     names = [n.split(" ")[0].replace("_", "–") for n in s["contact_interfaces"]]
     soleus = tuple(k for k, n in enumerate(s["contact_interfaces"]) if "soleus" in n)
     return [plotting.plot_slip(levels, names, os.path.join(out, f"slip_psi{twist}.png"), soleus,

@@ -1,10 +1,6 @@
 """SNES Newton with line search inside an adaptive load-stepping loop (paper §3, static case).
 
-Options come from three places, highest priority first: the command line (already in PETSc's
-options database), the config's ``petsc:`` mapping, and ``DEFAULT_OPTIONS`` below.  The config
-and default values are inserted only around ``setFromOptions`` and removed again.
-
-Load stepping: from the last converged load factor λ the stepper tries an increment Δλ; on a
+The SNES's options are set up by ``options.py``.  Load stepping: from the last converged load factor λ the stepper tries an increment Δλ; on a
 converged SNES it accepts it (growing Δλ after easy steps), on divergence (including NaN
 residuals from inverted elements, J ≤ 0) it restores the last converged state and halves Δλ,
 at most ``max_cutbacks`` times in a row.  Requested levels are always hit exactly.  All
@@ -19,36 +15,14 @@ from typing import Callable
 import numpy as np
 from petsc4py import PETSc
 
-from ..petsc.problem import Problem, node_blocks_fit
-from ..config.values import ConfigError
 from ..config.specs import SolverSpec
+from ..petsc import logging
 from ..petsc.inertia import pivot_counts
-from .interrupt import RunInterrupted, stop_requested
 from ..petsc.options import petsc_message, solver_hint, used_anywhere
-
-DEFAULT_OPTIONS = {
-    "snes_type": "newtonls",
-    "snes_linesearch_type": "basic",
-    "snes_divergence_tolerance": "-1",
-    "snes_rtol": "1e-10",
-    "snes_stol": "1e-12",
-    "snes_max_it": "15",
-    "ksp_type": "preonly",
-    # the Jacobian is a symmetric (energy) Hessian: MUMPS LDLᵀ (indefinite allowed) does half
-    # the flops of LU (37-fascicle bundle: 11.1 s vs 18.5 s per run; scripts/bench_scaling.py);
-    # -pc_factor_mat_solver_type mumps is added only where it applies (``factor_package``)
-    "pc_type": "cholesky",
-    # null-pivot detection: a mechanism the load does not excite (the unloaded Achilles bundle,
-    # pinned at one node per subtendon and sliding without friction, can tilt as a whole; a
-    # beam held only in position can rotate) is left out of the Newton step instead of being
-    # amplified by a pivot at rounding level; |pivot| <= 1e-11 ||A|| after MUMPS's scaling
-    # (1e-12 ... 1e-10 all solve the psi = 0 column in the same 73 iterations, 1e-8 treats
-    # real pivots as null).  Read by MUMPS only.
-    "mat_mumps_icntl_24": "1",
-    "mat_mumps_cntl_3": "1e-11",
-}
-#: preconditioners whose factorisation package defaults to MUMPS
-MUMPS_PCS = ("lu", "cholesky")
+from ..petsc.problem import Problem
+from .interrupt import RunInterrupted, stop_requested
+from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
+    solver_options)
 
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
@@ -60,9 +34,6 @@ REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
 #: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
 UNCLEAN_STATE = -1001
 REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
-
-STAGE_SOLVE = PETSc.Log.Stage("ANCF load stepping")
-
 
 def reason_name(reason: int) -> str:
     return REASONS.get(reason, str(reason))
@@ -82,10 +53,6 @@ class LoadStepFailure(Exception):
         self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
         self.code = reason.split()[0] if reason else "FAILED"
         self.inverted = inverted
-
-
-class SolverOptionError(ConfigError):
-    """PETSc refused the solver the options ask for (exit 2, one line naming the options)."""
 
 
 @dataclass
@@ -119,106 +86,16 @@ class PathState:
     accepted_negative: int = 0
 
 
-#: preconditioners PETSc runs on an SBAIJ matrix (MUMPS LDLᵀ, incomplete Cholesky, and the
-#: block/overlapping ones around them); LU, ILU, GAMG and hypre need AIJ
-SBAIJ_PCS = ("cholesky", "icc", "bjacobi", "asm", "jacobi", "none")
-
-
-def matrix_type(model, choice: str, config_options: dict) -> str:
-    """The Jacobian's storage, 'aij' or 'sbaij' (``solver.matrix``; the options in effect are the
-    command line's, then the config's ``petsc:``, then ``DEFAULT_OPTIONS``).
-
-    ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) on
-    3363 beams (3333 beams hold half of each node block at zero)."""
-    pc, factor = factor_package(config_options)
-    full = node_blocks_fit(model)
-    if choice == "auto":
-        return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
-    if choice == "sbaij":
-        if not full:
-            raise ConfigError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
-                                               "half of each node block); use aij or auto")
-        if pc not in SBAIJ_PCS:
-            raise ConfigError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij; "
-                                               f"use aij or auto")
-    return choice
-
-
-def option_in_effect(key: str, config_options: dict) -> str:
-    """The value of a PETSc option: command line, else config ``petsc:``, else ``DEFAULT_OPTIONS``."""
-    opts = PETSc.Options()
-    if opts.hasName(key):
-        return str(opts.getString(key, ""))
-    return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
-
-
-def factor_package(config_options: dict) -> tuple[str, str]:
-    """(pc_type, factorisation package) in effect.  The package defaults to MUMPS for LU and
-    Cholesky only: ILU, ICC and the block preconditioners keep PETSc's own default."""
-    pc = option_in_effect("pc_type", config_options)
-    factor = option_in_effect("pc_factor_mat_solver_type", config_options)
-    if not factor and pc in MUMPS_PCS:
-        factor = "mumps"
-    return pc, factor
-
-
-#: options read only when the factorisation is first set up, after ``setFromOptions``
-DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
-
-
-def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict) -> tuple[str, list[str]]:
-    """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found
-    except for the config's options and the default factorisation options (``DEFERRED_OPTIONS``,
-    read by MUMPS at its first symbolic factorisation): those stay for the run, like command-line
-    ones (-ksp_view, -ksp_converged_reason are read at every solve), until ``LoadStepper.close``.
-
-    Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES) and the
-    option names left in the database.  A value or combination PETSc refuses raises
-    ``SolverOptionError`` (the same on every rank: the options are).
-    """
-    opts = PETSc.Options()
-    inserted = []
-    for source in (config_options, defaults):
-        for key, value in source.items():
-            if not opts.hasName(key):
-                opts.setValue(key, value)
-                inserted.append(key)
-    kept = [k for k in inserted if k in config_options or k.startswith(DEFERRED_OPTIONS)]
-    try:
-        snes.setFromOptions()
-        linesearch = opts.getString("snes_linesearch_type", "bt")  # PETSc's own default
-    except PETSc.Error as exc:
-        for key in kept:
-            opts.delValue(key)
-        raise SolverOptionError("", _refused(exc, config_options, snes.getComm().getSize())) from None
-    finally:
-        for key in inserted:
-            if key not in kept:
-                opts.delValue(key)
-    return linesearch, kept
-
-
-def _solver_options(config_options: dict) -> str:
-    """``-ksp_type gmres -pc_type ilu`` as in effect (for messages)."""
-    pc, factor = factor_package(config_options)
-    text = f"-ksp_type {option_in_effect('ksp_type', config_options)} -pc_type {pc}"
-    return text + (f" -pc_factor_mat_solver_type {factor}" if factor else "")
-
-
-def _refused(exc: Exception, config_options: dict, ranks: int) -> str:
-    """One line: PETSc's reason, the options in effect and what works instead."""
-    pc, factor = factor_package(config_options)
-    return (f"PETSc refused the solver options {_solver_options(config_options)} on {ranks} "
-            f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
-
-
 class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES."""
 
     def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict,
                  log: Callable[[str], None] = print, max_level: float = 1.0):
         self.problem, self.spec, self.log = problem, spec, log
+        self.prefix = spec.options_prefix
         self.snes = PETSc.SNES().create(comm=problem.comm)
+        if self.prefix:
+            self.snes.setOptionsPrefix(self.prefix)
         self.snes.setFunction(problem.residual, problem.F)
         self.snes.setJacobian(problem.jacobian, problem.J, problem.J)
         if spec.merit == "energy" and problem.has_potential:
@@ -227,29 +104,19 @@ class LoadStepper:
             self.snes.setObjective(problem.objective)
         if spec.min_det_f > 0.0:
             self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
-        defaults = dict(DEFAULT_OPTIONS)
-        _, factor = factor_package(petsc_options)
-        if factor == "mumps" and not PETSc.Options().hasName("pc_factor_mat_solver_type") \
-                and "pc_factor_mat_solver_type" not in petsc_options:
-            defaults["pc_factor_mat_solver_type"] = "mumps"
-        if factor == "mumps" and 1 < problem.comm.size <= 4:
-            # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid: LU, twice the
-            # flops of the LDLᵀ root) is slower than factoring the root on one rank (37-fascicle
-            # bundle, 22k DOFs, 2 ranks: 0.72 -> 0.65 s per factorisation), and only a sequential
-            # root gives the stability check its negative-pivot count (inertia.py); more ranks
-            # keep MUMPS's default
-            defaults["mat_mumps_icntl_13"] = "1"
         # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
-        # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic; it
-        # grows with the contact penalty times the rounding of positions)
+        # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic)
         fnorm = problem.fext.norm() * max_level
         self.rounding_floor = problem.reference_residual_norm()
-        defaults["snes_atol"] = f"{max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30):.3e}"
+        atol = max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30)
         self.petsc_options = petsc_options
         self._kept_options: list[str] = []
-        self.linesearch, self._kept_options = configure_options(self.snes, petsc_options, defaults)
+        self.path: PathState | None = None      # where the load path is (``run``)
+        self.linesearch, self._kept_options = configure_options(
+            self.snes, petsc_options, run_defaults(petsc_options, problem.comm.size, atol, self.prefix),
+            self.prefix)
         self._check_factorisation()
-        self._history: list[int] = []
+        self._history: list[float] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
         self._ksp_reason = 0
@@ -268,20 +135,29 @@ class LoadStepper:
             pc.setFactorSetUpSolverType()
         except PETSc.Error as exc:
             self.close()
-            raise SolverOptionError("", _refused(exc, self.petsc_options,
-                                                 self.problem.comm.size)) from None
+            raise SolverOptionError("", refused(exc, self.petsc_options, self.problem.comm.size,
+                                                self.prefix)) from None
 
     def close(self, collective: bool = True) -> None:
         """Remove the options this stepper left in PETSc's database; config options PETSc never
         read go to ``unused_config_options`` (collective unless ``collective`` is False)."""
         opts = PETSc.Options()
+        n = len(self.prefix)
         if collective:
-            mine = [k for k in self._kept_options if k in self.petsc_options]
+            mine = [k for k in self._kept_options if k[n:] in self.petsc_options]
             used = used_anywhere(mine, self.problem.comm)
-            self.unused_config_options = [k for k, u in zip(mine, used) if not u]
+            self.unused_config_options = [k[n:] for k, u in zip(mine, used) if not u]
         for key in self._kept_options:
             opts.delValue(key)
         self._kept_options = []
+
+    def destroy(self) -> None:
+        """Free the SNES (with its KSP, PC and factor) and the path's vectors; not collective."""
+        if self.path is not None:
+            for v in (self.path.X, self.path.dX_last):
+                v.destroy()
+            self.path = None
+        self.snes.destroy()
 
     def negative_eigenvalues(self) -> int | None:
         """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ
@@ -323,7 +199,7 @@ class LoadStepper:
                 why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
                         "move or an integration rule with zero-energy modes)")
             raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
-                                  f" in the linear solver ({_solver_options(self.petsc_options)}): "
+                                  f" in the linear solver ({solver_options(self.petsc_options, self.prefix)}): "
                                   f"{why}") from None
         self._ksp_reason = self.snes.getKSP().getConvergedReason()
         reason = self.snes.getConvergedReason()
@@ -345,8 +221,8 @@ class LoadStepper:
             return ""
         kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
                    if not k.startswith("_")}.get(self._ksp_reason, str(self._ksp_reason))
-        pc, factor = factor_package(self.petsc_options)
-        return (f" (the linear solver {_solver_options(self.petsc_options)} stopped with {kreason}; "
+        pc, factor = factor_package(self.petsc_options, self.prefix)
+        return (f" (the linear solver {solver_options(self.petsc_options, self.prefix)} stopped with {kreason}; "
                 f"{solver_hint(pc, factor, self.problem.comm.size, PETSc.Sys.hasExternalPackage)})")
 
     def _residual_small(self, fnorm: float, lam: float) -> bool:
@@ -363,14 +239,14 @@ class LoadStepper:
         path.X.copy(P.X)
         P.checkpoint()
         records = []
-        STAGE_SOLVE.push()
+        logging.stage(logging.SOLVE).push()
         try:
             for target in levels:
                 rec = self._reach(path, target, records[-1].load_factor if records else path.lam)
                 records.append(rec)
                 on_level(rec)
         finally:
-            STAGE_SOLVE.pop()
+            logging.stage(logging.SOLVE).pop()
         return records
 
     def initial_path(self, first_level: float) -> PathState:
@@ -387,7 +263,7 @@ class LoadStepper:
     def _reach(self, path: PathState, target: float, level: float) -> StepRecord:
         """Sub-steps from ``path.lam`` to ``target``: accept converged ones (growing the
         increment after easy ones), cut back failed ones; raises LoadStepFailure."""
-        P, X = self.problem, self.problem.X
+        X = self.problem.X
         t0 = time.perf_counter()
         tally = {"its": 0, "substeps": 0, "cutbacks": 0, "consecutive": 0, "stability": 0}
         history = []

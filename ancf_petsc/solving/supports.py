@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics.rigid import rigid_modes
+
 #: a combination of unit modes is free when its constraint violation (held DOFs in metres or
 #: slope units, contact rows divided by k_s) is below this.  Measured: a supported beam ≈ 0.33;
 #: a strand held only by sliding contact in a twisted hexagonal bundle: its screw motion 5e-8
@@ -33,14 +35,9 @@ def _modes(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     for beam in P.model.beams:
         mine = ((model_block >= beam.node_offset)
                 & (model_block < beam.node_offset + beam.n_nodes))[:, None, None]
-        for k in range(3):
-            v = np.zeros_like(x)
-            v[:, 0, k] = 1.0
+        for m, v in enumerate(rigid_modes(x)):
             cols.append((v * mine).ravel())
-            labels.append((beam.name, "translation", k))
-        for k in range(3):
-            cols.append((np.cross(np.eye(3)[k], x) * mine).ravel())
-            labels.append((beam.name, "rotation", k))
+            labels.append((beam.name, "translation" if m < 3 else "rotation", m % 3))
     return np.array(cols).T, labels
 
 

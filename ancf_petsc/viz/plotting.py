@@ -6,7 +6,7 @@
 * :func:`plot_load_elongation` — load-elongation curves against a paper table + relative errors.
 * :func:`plot_convergence` — elongation vs elements per subtendon (log2 axis), ours and paper's.
 * :func:`plot_slip` — axial slip and contact pressure along the tendon per load level.
-* :func:`read_csv_table`, :func:`curve_from_summary`, :func:`read_contact` — small readers for
+* :func:`read_csv_table`, :func:`curve_from_summary` — small readers for
   the inputs of the above.
 
 The surface reader relies on the layout written by :class:`ancf_petsc.io.results.SurfaceSampler`: per
@@ -614,21 +614,10 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
     return _save(fig, out_png)
 
 
-def read_contact(results_h5: str, step: int) -> dict:
-    """Contact fields of one converged level of a run (``steps/step_NNNN/contact``) and its
-    load factor."""
-    import h5py
-    with h5py.File(results_h5, "r") as h5:
-        g = h5["steps"][f"step_{step:04d}"]
-        out = {k: g["contact"][k][()] for k in g["contact"]}
-        out["load_factor"] = float(g.attrs["load_factor"])
-    return out
-
-
 def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tuple[int, ...],
               length: float, title: str = "") -> str:
     """Axial slip (top) and contact pressure (bottom) of the contact points along the tendon,
-    one colour per load level, one marker per interface: ``levels`` from ``read_contact``."""
+    one colour per load level, one marker per interface: ``levels`` from ``io.reader.read_contact``."""
     fig = Figure(figsize=(8.0, 6.0))
     FigureCanvasAgg(fig)
     ax_s = fig.add_subplot(2, 1, 1)

@@ -1,0 +1,107 @@
+"""The contact part of the Jacobian as dense blocks with their DOF indices (eqs. 26-29): per
+segment of contact points, the gap Hessian term −Σ τ ∇²g over A's and B's nodes and the
+constraint rows −k_s Φ ∇g of its multipliers.  The assembly layer inserts them."""
+from __future__ import annotations
+
+import numpy as np
+
+from .gap import gap_gradient, gap_hessian_factors
+from .projection import Projection
+from .state import ContactState
+
+#: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
+CHUNK_POINTS = 2048
+
+
+def jacobian_blocks(c, st: ContactState, fixed_mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Dense blocks (rows (n, D) PETSc DOF ids, −1 dropped; values (n, D, D)) of the contact
+    part of the Jacobian: one per local segment over its A nodes, the nodes of the B elements
+    its points project onto and its multiplier node; segments are batched by the number of
+    B elements they span (and in chunks of at most ``CHUNK_POINTS`` points).  ``c`` is the
+    ``Contact``, ``st`` its evaluation at the state."""
+    if len(c.local) == 0:
+        return []
+    srow = np.searchsorted(c.segments, c.points.seg[c.local])
+    first_b = np.full(len(c.segments), np.iinfo(np.int64).max)
+    np.minimum.at(first_b, srow, st.pr.eB)
+    last_b = np.full(len(c.segments), -1)
+    np.maximum.at(last_b, srow, st.pr.eB)
+    span = last_b - first_b + 1
+    p_max = int(c.points.seg_size.max())
+    out = []
+    for width in np.unique(span):
+        group = np.flatnonzero(span == width)
+        for sk in np.array_split(group, -(-len(group) * p_max // CHUNK_POINTS)):
+            out.append(_segment_blocks(c, st, srow, first_b, sk, int(width), fixed_mask))
+    return out
+
+
+def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
+    """Blocks of the local segments ``sk``, each spanning ``width`` B elements.  The block's
+    unknowns: A's 3 nodes, B's 2 width + 1 nodes and the (at most two) multiplier nodes of
+    the functions living on the segment: D = 18 (2 width + 6)."""
+    pr, pts, sp = st.pr, c.points, c.space
+    segs = c.segments[sk]
+    n_s = len(sk)
+    P_s = int(pts.seg_size[segs].max())
+    D = 18 * (2 * width + 6)
+    Dq = D - 36
+    sel = np.flatnonzero(np.isin(srow, sk))             # positions in the local arrays
+    s_loc = np.searchsorted(sk, srow[sel])
+    p_loc = c.local[sel] - pts.seg_start[segs[s_loc]]
+    j = pr.eB[sel] - first_b[srow[sel]]
+    # each point's 108 unknowns (A element, its B element) inside the block
+    cols = np.concatenate([np.broadcast_to(np.arange(54), (len(sel), 54)),
+                           54 + 36 * j[:, None] + np.arange(54)], axis=1)
+    sub = _subset(pr, sel)
+    at = (s_loc[:, None], p_loc[:, None], cols)
+    V = np.zeros((n_s, P_s, Dq))                         # ∇g_p
+    V[at] = gap_gradient(sub) * sub.valid[:, None]
+    K = np.zeros((n_s, D, D))
+    tau = st.tau[sel]
+    if np.any(tau != 0.0):
+        # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
+        W, C = gap_hessian_factors(sub)
+        We = np.zeros((n_s, P_s, Dq, 4))
+        We[at] = W
+        WCe = np.zeros((n_s, P_s, Dq, 4))
+        WCe[at] = np.matmul(W, C * tau[:, None, None])
+        K[:, :Dq, :Dq] = np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
+                                   We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+    # constraint rows −k_s Φ_s ∇g (active multipliers), −k_s × (the segment's share of the
+    # function) on inactive diagonals
+    m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad
+    real = m_ids >= 0
+    act = np.zeros(m_ids.shape, dtype=bool)
+    act[real] = st.active[np.searchsorted(c.mults, m_ids[real])]
+    Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
+    Gc = -c.stiffness * np.matmul(Phi_s * act[:, :, None], V)          # (n_s, K, Dq)
+    share = Phi_s.sum(axis=2)
+    ss, kk = np.nonzero(real)
+    second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]
+    mrow = Dq + 18 * second + sp.slot[m_ids[ss, kk]]
+    K[ss, mrow, :Dq] = Gc[ss, kk]
+    K[ss, :Dq, mrow] = Gc[ss, kk]
+    K[ss, mrow, mrow] = np.where(act[ss, kk], 0.0, -c.stiffness * share[ss, kk])
+    # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes
+    els = c.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
+    bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
+    nodes = np.concatenate([c.conn[pts.seg_eA[segs]], bnodes, c.seg_blocks[segs]], axis=1)
+    rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
+    # the B elements of a segment need not be contiguous (points on e and e + 2): the
+    # nodes of an element in between that no point projects onto stay out of the matrix
+    used = np.zeros((n_s, D), dtype=bool)
+    used[:, :54] = True
+    used[:, Dq:] = np.repeat(c.seg_blocks[segs] >= 0, 18, axis=1)
+    used[s_loc[:, None], cols[:, 54:]] = True
+    rows = np.where(used, rows, -1)
+    rows[rows >= 0] = np.where(fixed_mask[rows[rows >= 0]], -1, rows[rows >= 0])
+    return rows, K
+
+
+def _subset(pr: Projection, sel: np.ndarray) -> Projection:
+    """The points ``sel`` (positions) of a projection."""
+    return Projection(idx=pr.idx[sel], eB=pr.eB[sel], xiB=pr.xiB[sel], tB=pr.tB[sel], d=pr.d[sel],
+                      n=pr.n[sel], g=pr.g[sel], valid=pr.valid[sel], NA=pr.NA[sel], NB=pr.NB[sel],
+                      NBz=pr.NBz[sel], Yz=pr.Yz[sel], Yzz=pr.Yzz[sel], in_window=pr.in_window,
+                      converged=pr.converged)

@@ -1,0 +1,77 @@
+"""Contact results of one rank at a state: per-interface gap and pressure statistics (combined over
+the ranks by the caller, ``GAP_COLUMNS`` says how) and per-point fields for the output."""
+from __future__ import annotations
+
+import numpy as np
+
+from .state import ContactState
+
+#: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
+GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
+               ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
+               ("max_pressure", "max"), ("normal_force", "sum"), ("points", "sum"))
+
+
+def gap_sums(c, st: ContactState) -> np.ndarray:
+    """Per interface (rows) the local parts of ``GAP_COLUMNS`` of the ``Contact`` c at its state st."""
+    out = np.zeros((len(c.interfaces), len(GAP_COLUMNS)))
+    if len(c.local) == 0:
+        return out
+    pr = st.pr
+    itf_p = c.points.itf[c.local]
+    itf_m = c.space.interface[c.mults]
+    area = c.space.area[c.mults] * c.owned        # each multiplier counted once
+    lam = pressure_coefficients(c, st)
+    for k in range(len(c.interfaces)):
+        on, m = itf_p == k, itf_m == k
+        v = on & pr.valid
+        m = m & c.owned
+        act = m & st.active
+        out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[v], initial=0.0),
+                  float(np.sum(pr.g[v] ** 2)), v.sum(),
+                  np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
+                  lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()]
+    return out
+
+
+def pressure_coefficients(c, st: ContactState) -> np.ndarray:
+    """λ_k [Pa] of the local multipliers (zero where inactive)."""
+    return c.stiffness * st.z * st.active / c.space.area[c.mults]
+
+
+def gap_report(interfaces, sums: np.ndarray) -> dict:
+    """Per-interface statistics from (rank-combined) ``gap_sums``."""
+    out = {}
+    for k, itf in enumerate(interfaces):
+        c = dict(zip([n for n, _ in GAP_COLUMNS], sums[k]))
+        nv = c["valid_points"]
+        out[itf.name] = {"max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
+                         "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
+                         "max_weighted_gap": c["max_weighted_gap"],
+                         "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
+                         "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
+                         "points": int(c["points"])}
+    return out
+
+
+def point_fields(c, st: ContactState, q0_of) -> dict:
+    """Per local point: id, interface, current and reference position on A, gap, pressure,
+    slip (the reference position of the point minus that of its partner on B: how far B's
+    material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
+    multiplier: id, pressure coefficient λ [Pa] and status.  ``q0_of(elements)`` gives
+    reference nodal vectors."""
+    pr, idx = st.pr, c.local
+    if len(idx):
+        X0A = np.einsum("pa,pai->pi", pr.NA, q0_of(c.points.eA[idx]))
+        X0B = np.einsum("pa,pai->pi", pr.NB, q0_of(pr.eB))
+    else:
+        X0A = X0B = np.zeros((0, 3))
+    pressure = np.where(pr.valid, st.tau / c.points.w[idx], 0.0)
+    own = c.owned
+    return {"id": idx, "interface": c.points.itf[idx], "x": st.xA, "x0": X0A,
+            "gap": pr.g * pr.valid, "pressure": pressure,
+            "slip": (X0A - X0B) * pr.valid[:, None],
+            "projection": np.column_stack([pr.eB, pr.xiB, pr.tB]) if len(idx) else np.zeros((0, 3)),
+            "multiplier_id": c.mults[own],
+            "multiplier_pressure": pressure_coefficients(c, st)[own],
+            "multiplier_active": st.active[own]}

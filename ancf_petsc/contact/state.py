@@ -1,0 +1,20 @@
+"""What one evaluation of the contact at a state found (local points and multipliers)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .projection import Projection
+
+
+@dataclass
+class ContactState:
+    """Everything one evaluation at a state found (local points and multipliers)."""
+    pr: Projection
+    xA: np.ndarray         # (P_loc, 3) positions of the points
+    gbar: np.ndarray       # (M_loc,) weighted gaps ḡ [m]
+    z: np.ndarray          # (M_loc,) scaled multipliers [m]
+    active: np.ndarray     # (M_loc,) bool
+    tau: np.ndarray        # (P_loc,) w_p × pressure [N/m... × m² = N]
+    lpos: object           # PETSc node id → position in the local array

@@ -1,0 +1,77 @@
+"""A finished (or interrupted) run read back from its directory: summary.json and results.h5.
+
+``read_results(directory)`` is the public reader (``ancf_petsc.read_results``); it reads what
+``results.ResultsWriter`` wrote, level by level, without PETSc.
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+
+import h5py
+import numpy as np
+
+from ..errors import InputError
+
+
+@dataclass
+class Results:
+    """The converged levels of one run (``summary`` is summary.json as a dict)."""
+    directory: str
+    summary: dict
+
+    @property
+    def status(self) -> str:
+        """completed | unstable | failed | interrupted | running (summary.json ``status``)."""
+        return str(self.summary.get("status", ""))
+
+    @property
+    def load_factors(self) -> np.ndarray:
+        """Load factor of every converged level (step 1, 2, ...)."""
+        return np.array([s["load_factor"] for s in self.summary.get("steps", [])])
+
+    def probe(self, name: str, what: str = "displacement") -> np.ndarray:
+        """A probe's displacement (or ``value``) at every converged level, shape (levels, 3)."""
+        steps = self.summary.get("steps", [])
+        if steps and name not in steps[0]["probes"]:
+            raise KeyError(f"no probe {name!r}; the run has {', '.join(steps[0]['probes'])}")
+        return np.array([s["probes"][name][what] for s in steps]).reshape(-1, 3)
+
+    @property
+    def h5_path(self) -> str:
+        return os.path.join(self.directory, "results.h5")
+
+    def nodal_vectors(self, step: int) -> np.ndarray:
+        """Nodal vectors (n_nodes, 6, 3) at converged level ``step`` (0: the reference state)."""
+        with h5py.File(self.h5_path, "r") as h5:
+            if step == 0:
+                return h5["model/reference_nodal_vectors"][()]
+            return h5["steps"][f"step_{step:04d}"]["nodal_vectors"][()]
+
+    def contact(self, step: int) -> dict:
+        """Contact fields of converged level ``step`` (``read_contact``)."""
+        return read_contact(self.h5_path, step)
+
+
+def read_results(directory: str) -> Results:
+    """The run in ``directory`` (its summary.json must exist; results.h5 is read on demand)."""
+    path = os.path.join(directory, "summary.json")
+    try:
+        with open(path) as fh:
+            summary = json.load(fh)
+    except FileNotFoundError:
+        raise InputError("results", f"{directory}: no summary.json (not a run's output directory)") from None
+    except (OSError, ValueError) as exc:
+        raise InputError("results", f"{path}: cannot read: {exc}") from None
+    return Results(os.path.abspath(directory), summary)
+
+
+def read_contact(results_h5: str, step: int) -> dict:
+    """Contact fields of one converged level of a run (``steps/step_NNNN/contact``) and its
+    load factor."""
+    with h5py.File(results_h5, "r") as h5:
+        g = h5["steps"][f"step_{step:04d}"]
+        out = {k: g["contact"][k][()] for k in g["contact"]}
+        out["load_factor"] = float(g.attrs["load_factor"])
+    return out

@@ -1,0 +1,115 @@
+"""ParaView output: the deformed beam surfaces (sections sampled along ξ) and the contact points,
+as VTU time series with .pvd collections, written with meshio."""
+from __future__ import annotations
+
+import os
+
+import meshio
+import numpy as np
+
+from ..model.beams import Model
+from ..physics import element3363 as el
+from .files import atomic_write, remove_quietly
+
+
+class SurfaceSampler:
+    """Quad surface (plus end caps) of each beam, sampled ``samples`` times per element.  The
+    shape functions and reference gradients at the sample points are computed once."""
+
+    def __init__(self, model: Model, samples: int):
+        self.model = model
+        self.parts = []
+        for beam in model.beams:
+            xi = np.linspace(-1.0, 1.0, samples + 1)
+            conn = beam.connectivity
+            E = len(conn)
+            if beam.ring_at is not None:            # the outline at every sampled x, per element
+                x = beam.x_nodes[0:-1:2, None] + 0.5 * (xi[None, :] + 1.0) * (beam.x_nodes[2] - beam.x_nodes[0])
+                YZ = np.stack([np.concatenate([beam.ring_at(xx) for xx in row]) for row in x])
+                m = YZ.shape[1] // len(xi)
+            else:
+                ring = beam.section.boundary_polyline(6)
+                if np.allclose(ring[0], ring[-1]):
+                    ring = ring[:-1]
+                m = len(ring)
+                YZ = np.broadcast_to(np.tile(ring, (len(xi), 1)), (E, len(xi) * m, 2))
+            M = len(xi) * m
+            N, dN = el.shape_functions(np.tile(np.repeat(xi, m), E), YZ[..., 0].ravel(), YZ[..., 1].ravel())
+            q0e = model.q0[conn].reshape(E, 18, 3)
+            G, _ = el.reference_gradients(q0e, dN.reshape(E, M, 18, 3))
+            # drop the duplicated first station of every element but the first
+            keep = np.concatenate([np.arange(M)] + [e * M + np.arange(m, M) for e in range(1, E)])
+            self.parts.append((beam, m, len(xi) - 1, N[keep], G.reshape(-1, 18, 3)[keep], keep // M))
+
+    def mesh(self, q: np.ndarray):
+        """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
+        pts, quads, caps = [], [], []
+        data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
+        offset = 0
+        for beam, m, S, N, G, e_of in self.parts:
+            conn = beam.connectivity
+            qe = q[conn].reshape(len(conn), 18, 3)[e_of]
+            q0e = self.model.q0[conn].reshape(len(conn), 18, 3)[e_of]
+            r = np.einsum("pa,pai->pi", N, qe)
+            r0 = np.einsum("pa,pai->pi", N, q0e)
+            F = np.matmul(np.swapaxes(qe, 1, 2), G)
+            n_st = beam.n_elements * S + 1
+            C = np.matmul(np.swapaxes(F, -1, -2), F)
+            data["displacement"].append(r - r0)
+            data["E_xx"].append(0.5 * (C[:, 0, 0] - 1.0))
+            data["J"].append(np.linalg.det(F))
+            data["beam"].append(np.full(len(r), float(beam.index)))
+            st = np.arange(n_st - 1)[:, None]
+            j = np.arange(m)[None, :]
+            a = st * m + j
+            b = st * m + (j + 1) % m
+            quads.append(offset + np.stack([a, b, b + m, a + m], axis=-1).reshape(-1, 4))
+            caps.append(offset + np.arange(m)[::-1])
+            caps.append(offset + (n_st - 1) * m + np.arange(m))
+            pts.append(r)
+            offset += len(r)
+        return (np.concatenate(pts), np.concatenate(quads), caps,
+                {k: np.concatenate(v) for k, v in data.items()})
+
+
+def surface_cells(sampler: SurfaceSampler, q: np.ndarray) -> tuple:
+    """(points, cells, point data) of the deformed surfaces for nodal vectors q."""
+    pts, quads, caps, data = sampler.mesh(q)
+    return pts, [("quad", quads)] + [("polygon", c[None, :]) for c in caps], data
+
+
+def contact_cells(fields: dict) -> tuple:
+    """(points, cells, point data) of the contact points (``contact_reports.contact_fields``)."""
+    data = {"gap": fields["gap"], "pressure": fields["pressure"], "slip": fields["slip"],
+            "slip_axial": fields["slip"][:, 0], "interface": fields["interface"].astype(float)}
+    return fields["x"], [("vertex", np.arange(len(fields["x"]))[:, None])], data
+
+
+class VtkSeries:
+    """VTU files ``<series>_NNNN.vtu`` and their ``<series>.pvd`` collections in one directory."""
+
+    def __init__(self, directory: str):
+        self.dir = directory
+        self.entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
+
+    def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
+        """One VTU of a time series and its .pvd collection (zlib-compressed binary, in single
+        precision: for display, results.h5 keeps double; half the size and the write time).
+        A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
+        name = f"{series}_{k:04d}.vtu"
+        path = os.path.join(self.dir, name)
+        data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
+        try:
+            meshio.write(path, meshio.Mesh(np.asarray(pts, dtype=np.float32), cells, point_data=data),
+                         binary=True)
+            size = os.path.getsize(path)
+            rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
+                             for t, f in self.entries[series] + [(lam, name)])
+            atomic_write(os.path.join(self.dir, f"{series}.pvd"),
+                         '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                         f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+        except OSError:
+            remove_quietly(path)                   # never leave a truncated VTU behind
+            raise
+        self.entries[series].append((lam, name))
+        return size

@@ -1,0 +1,111 @@
+"""Element blocks and node-block insertion into PETSc matrices (AIJ or SBAIJ).
+
+The Jacobian is AIJ, or SBAIJ with 18 × 18 node blocks (``solving.options.matrix_type``): the upper
+triangle of node blocks, inserted one block at a time (``insert_node_blocks``).  That is ~15×
+faster than AIJ's entry-by-entry insertion of the same dense element and contact blocks and halves
+the stored entries; MUMPS's LDLᵀ takes SBAIJ directly, but PETSc's LU, ILU and GAMG do not.
+DOFs held by boundary conditions are −1 in the element rows (AIJ drops them) or zeroed inside
+their node block (SBAIJ), so the Jacobian stays symmetric.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from petsc4py import PETSc
+
+from ..model.beams import Beam, Model
+from ..parallel.layout import Layout
+
+ADD = PETSc.InsertMode.ADD_VALUES
+INSERT = PETSc.InsertMode.INSERT_VALUES
+
+
+@dataclass
+class ElementBlock:
+    """A rank's elements of one beam with their quadrature data."""
+    beam: Beam
+    parts: list          # [(G (E, P, S, 3), w (E, P), material)] per energy part (Beam.parts)
+    nodes: np.ndarray    # (E, 3) PETSc node ids
+    rows: np.ndarray     # (E, 3S) PETSc DOF ids, −1 for DOFs held by BCs
+    node_dofs: np.ndarray  # (3S/3,) offsets of the active DOFs inside a node's 18-DOF block
+    lnodes: np.ndarray | None = None   # (E, 3) positions of the nodes in the local array (exchange.py)
+
+    @property
+    def G(self) -> np.ndarray:
+        """Gradients at the full Gauss points (the first part)."""
+        return self.parts[0][0]
+
+    def element_vectors(self, xl: np.ndarray) -> np.ndarray:
+        """Active nodal vectors of the elements (E, S, 3) from the local state (n, 6, 3)."""
+        return xl[self.lnodes][:, :, list(self.beam.vectors)].reshape(len(self.nodes), -1, 3)
+
+    def local_dofs(self) -> np.ndarray:
+        """Positions of the elements' active DOFs in the local array (E, 3S)."""
+        return (18 * self.lnodes[:, :, None] + self.node_dofs).reshape(len(self.nodes), -1)
+
+
+#: Jacobian storage formats (``Problem(matrix_type=...)``)
+MATRIX_TYPES = ("aij", "sbaij")
+
+
+def node_blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Node ids (n, D/18) of DOF index blocks (n, D) made of whole 18-DOF nodes, and a mask
+    (n, D) of the held DOFs (−1) of nodes that have free DOFs (None when there are none).
+    A node whose 18 DOFs are all −1 (unused, or held entirely) gets the node id −1."""
+    n, D = rows.shape
+    g = rows.reshape(n, D // 18, 18)
+    valid = g >= 0
+    node = np.where(valid.any(axis=2), g.max(axis=2) // 18, -1).astype(PETSc.IntType)
+    held = ~valid & (node >= 0)[:, :, None]
+    return node, (held.reshape(n, D) if held.any() else None)
+
+
+def zero_held(values: np.ndarray, held: np.ndarray | None) -> np.ndarray:
+    """Zero the rows and columns of ``held`` (n, D) in ``values`` (n, D, D), in place (the
+    callers' blocks are fresh arrays, inserted once)."""
+    if held is None:
+        return values
+    hit = np.flatnonzero(held.any(axis=1))
+    v = values[hit]
+    h = held[hit]
+    v[h] = 0.0                                        # rows
+    v.transpose(0, 2, 1)[h] = 0.0                     # columns
+    values[hit] = v
+    return values
+
+
+def node_blocks_fit(model: Model) -> bool:
+    """Whether every node's 18 DOFs are active (all beams 3363), as SBAIJ node blocks need."""
+    return all(len(b.vectors) == 6 for b in model.beams)
+
+
+def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, values: np.ndarray) -> None:
+    """Add dense blocks ``values`` (n, D, D) at DOF indices ``rows`` (n, D; −1 = dropped) to an
+    AIJ or SBAIJ ``mat``.  For SBAIJ the DOFs must come as whole nodes (18 consecutive indices
+    18 k … 18 k + 17, held ones −1); its lower triangle is ignored (the blocks are symmetric)."""
+    if mat.getType().endswith("sbaij"):
+        node, held = node_blocks(rows)
+        mat.setValuesBlockedRCV(node, node, zero_held(values, held), ADD)
+    else:
+        rows = rows.astype(PETSc.IntType)
+        mat.setValuesRCV(rows, rows, values, ADD)
+
+
+def element_blocks(model: Model, layout: Layout, fixed_mask: np.ndarray) -> list[ElementBlock]:
+    """This rank's elements, one block per beam, with quadrature data and PETSc DOF rows."""
+    conn_all = layout.perm[model.connectivity()]
+    local_el = layout.local_elements
+    elem_beam = model.element_beam()
+    out = []
+    for beam in model.beams:
+        mine = local_el[elem_beam[local_el] == beam.index]
+        if len(mine) == 0:
+            continue
+        parts = model.element_data(beam, mine - beam.element_offset)
+        cn = conn_all[mine]
+        node_dofs = (3 * np.array(beam.vectors)[:, None] + np.arange(3)).ravel()
+        rows = (18 * cn[:, :, None] + node_dofs).reshape(len(mine), -1)
+        rows = np.where(fixed_mask[rows], -1, rows).astype(PETSc.IntType)
+        out.append(ElementBlock(beam, parts, cn, rows, node_dofs))
+    return out

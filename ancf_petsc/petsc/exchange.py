@@ -1,0 +1,125 @@
+"""The node blocks one rank reads (ghost exchange): its elements' nodes plus the nodes its contact
+points read (their A elements and the B elements they project onto), never the whole vector.
+
+A VecScatter copies them from the global vector into a local array (``local_state``) and adds
+local forces back (``add_to``).  When a contact projection reaches a node block the rank does
+not hold, the exchange is rebuilt and the evaluation repeated (``evaluate``; collective).
+"""
+from __future__ import annotations
+
+import numpy as np
+from petsc4py import PETSc
+
+from ..parallel.layout import Layout
+from .blocks import ADD, INSERT, ElementBlock
+
+
+class GhostExchange:
+    """Global vector ↔ this rank's local node array (collective methods unless noted)."""
+
+    def __init__(self, X: PETSc.Vec, layout: Layout, fixed_mask: np.ndarray, q0_model: np.ndarray,
+                 blocks: list[ElementBlock], contact=None):
+        self.X, self.layout, self.fixed_mask, self.contact = X, layout, fixed_mask, contact
+        self.q0_model = q0_model                # reference state of every block, model order
+        self.blocks = blocks
+        self.comm = X.getComm()
+        conn = np.concatenate([b.nodes.ravel() for b in blocks]) if blocks else np.zeros(0, np.int64)
+        self.element_nodes = np.unique(conn).astype(np.int64)
+        self.needed = self.element_nodes        # local array: these node blocks, in this order
+        self.contact_nodes = np.zeros(0, dtype=np.int64)
+        self.scatter: PETSc.Scatter | None = None
+        self.xloc: PETSc.Vec | None = None
+        self.floc: PETSc.Vec | None = None
+        self.held_local = np.zeros(0, dtype=np.int64)    # held DOFs in the local array …
+        self.held_values = np.zeros(0)                   # … and their prescribed values
+        self.rebuilds = 0                       # how often contact pairs changed the exchange
+        self.build(contact.required_nodes() if contact is not None else np.zeros(0, dtype=np.int64))
+
+    def build(self, contact_nodes: np.ndarray) -> None:
+        """(Re)build the local node array and the scatter global → local (collective).
+
+        The local array holds this rank's element nodes and the node blocks its contact points
+        read (their A elements and the B elements they project onto): never the whole vector."""
+        self.needed = np.union1d(self.element_nodes, contact_nodes).astype(np.int64)
+        self.contact_nodes = np.asarray(contact_nodes, dtype=np.int64)
+        if self.scatter is not None:
+            for obj in (self.scatter, self.xloc, self.floc):
+                obj.destroy()
+        self.xloc = PETSc.Vec().createSeq(18 * len(self.needed), bsize=18, comm=PETSc.COMM_SELF)
+        self.floc = self.xloc.duplicate()
+        is_needed = PETSc.IS().createBlock(18, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
+        is_needed.destroy()
+        # the internal forces are evaluated with held DOFs at their prescribed values, so the free
+        # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
+        model_node = np.argsort(self.layout.perm)[self.needed]
+        held = self.fixed_mask[(18 * self.needed[:, None] + np.arange(18))]
+        self.held_local = np.flatnonzero(held.ravel())
+        self.held_values = self.q0_model.reshape(-1, 18)[model_node].ravel()[self.held_local]
+        for blk in self.blocks:
+            blk.lnodes = np.searchsorted(self.needed, blk.nodes)
+        if self.contact is not None:
+            self.contact.set_available(self.needed)
+
+    def refresh(self) -> None:
+        """Rebuild the exchange if any rank's contact pairs changed."""
+        if self.contact is None:
+            return
+        want = self.contact.required_nodes()
+        changed = self.contact.missing or not np.array_equal(want, self.contact_nodes)
+        if self.comm.tompi4py().allreduce(int(changed)):
+            self.build(want)
+            self.rebuilds += 1
+
+    def evaluate(self, X: PETSc.Vec, evaluate):
+        """``evaluate(xl)`` on the local state of X; if a contact projection reached a node block
+        the rank did not hold, exchange and evaluate again."""
+        for _ in range(20):
+            self.refresh()
+            out = evaluate(self.local_state(X))
+            missing = self.contact is not None and self.contact.missing
+            if not self.comm.tompi4py().allreduce(int(missing)):
+                return out
+        raise RuntimeError("contact exchange did not settle")   # not reached: one element per retry
+
+    def local_state(self, X: PETSc.Vec) -> np.ndarray:
+        """The needed node blocks of X (n, 6, 3), with held DOFs at their prescribed values."""
+        self.scatter.scatter(X, self.xloc, INSERT, PETSc.ScatterMode.FORWARD)
+        xl = self.xloc.getArray().reshape(-1, 6, 3)
+        xl.reshape(-1)[self.held_local] = self.held_values
+        return xl
+
+    def add_to(self, local: np.ndarray, F: PETSc.Vec) -> None:
+        """F = the local forces summed over the ranks (reverse scatter-add)."""
+        self.floc.setArray(local)
+        F.set(0.0)
+        self.scatter.scatter(self.floc, F, ADD, PETSc.ScatterMode.REVERSE)
+
+    def sum_over_ranks(self, values: np.ndarray) -> np.ndarray:
+        """Sum per-rank partial values of the local multipliers (columns of ``values``) over
+        the ranks that hold them (collective: reverse scatter-add, forward scatter)."""
+        pos = self.contact.multiplier_positions(self.needed)
+        out = np.empty_like(values)
+        work = self.X.duplicate()
+        local = np.zeros(self.xloc.getLocalSize())
+        for c in range(values.shape[1]):
+            local[:] = 0.0
+            local[pos] = values[:, c]
+            self.floc.setArray(local)
+            work.set(0.0)
+            self.scatter.scatter(self.floc, work, ADD, PETSc.ScatterMode.REVERSE)
+            self.scatter.scatter(work, self.floc, INSERT, PETSc.ScatterMode.FORWARD)
+            out[:, c] = self.floc.getArray(readonly=True)[pos]
+        work.destroy()
+        return out
+
+    def all_ranks(self, flag: bool) -> bool:
+        """Whether ``flag`` holds on every rank."""
+        return bool(self.comm.tompi4py().allreduce(int(not flag)) == 0)
+
+    def destroy(self) -> None:
+        """Free the scatter and the local vectors (not collective)."""
+        for obj in (self.scatter, self.xloc, self.floc):
+            if obj is not None:
+                obj.destroy()
+        self.scatter = self.xloc = self.floc = None

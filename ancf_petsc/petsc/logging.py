@@ -1,0 +1,35 @@
+"""PETSc log stages and events of the program, created on first use: importing ancf_petsc creates
+no PETSc object, and a program that never solves never registers them.  ``-log_view`` shows them
+under these names."""
+from __future__ import annotations
+
+import functools
+
+from petsc4py import PETSc
+
+SETUP = "ANCF setup"
+ASSEMBLY = "ANCF assembly"
+SOLVE = "ANCF load stepping"
+OUTPUT = "ANCF output"
+STAGES = (SETUP, OUTPUT, SOLVE, ASSEMBLY)
+ELEMENTS = "ANCF element kernels"
+CONTACT = "ANCF contact"
+
+
+@functools.cache
+def stage(name: str) -> PETSc.Log.Stage:
+    """The log stage ``name`` (registered once per process)."""
+    return PETSc.Log.Stage(name)
+
+
+@functools.cache
+def event(name: str) -> PETSc.Log.Event:
+    """The log event ``name`` (registered once per process)."""
+    return PETSc.Log.Event(name)
+
+
+def event_time(name: str) -> float:
+    """Seconds spent in event ``name``, summed over the main stage and the program's stages."""
+    ev = event(name)
+    ids = sorted({0} | {stage(s).id for s in STAGES})
+    return float(sum(ev.getPerfInfo(i)["time"] for i in ids))

@@ -1,0 +1,160 @@
+"""PETSc options of a solve: the defaults, the Jacobian's storage they imply, and putting them
+into PETSc's options database around ``setFromOptions``.
+
+Options come from three places, highest priority first: the command line (already in PETSc's
+options database), the config's ``petsc:`` mapping, and ``DEFAULT_OPTIONS`` below.  The config
+and default values are inserted only around ``setFromOptions`` and removed again.  With an
+options prefix (``solver.options_prefix``, e.g. ``left_``) every option of the solve is read as
+``-left_snes_type`` etc., so several solves in one process can be tuned apart.
+"""
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+from ..config.values import ConfigError
+from ..petsc.blocks import node_blocks_fit
+from ..petsc.options import petsc_message, solver_hint
+
+DEFAULT_OPTIONS = {
+    "snes_type": "newtonls",
+    "snes_linesearch_type": "basic",
+    "snes_divergence_tolerance": "-1",
+    "snes_rtol": "1e-10",
+    "snes_stol": "1e-12",
+    "snes_max_it": "15",
+    "ksp_type": "preonly",
+    # the Jacobian is a symmetric (energy) Hessian: MUMPS LDLᵀ (indefinite allowed) does half
+    # the flops of LU (37-fascicle bundle: 11.1 s vs 18.5 s per run; scripts/bench_scaling.py);
+    # -pc_factor_mat_solver_type mumps is added only where it applies (``factor_package``)
+    "pc_type": "cholesky",
+    # null-pivot detection: a mechanism the load does not excite (the unloaded Achilles bundle,
+    # pinned at one node per subtendon and sliding without friction, can tilt as a whole; a
+    # beam held only in position can rotate) is left out of the Newton step instead of being
+    # amplified by a pivot at rounding level; |pivot| <= 1e-11 ||A|| after MUMPS's scaling
+    # (1e-12 ... 1e-10 all solve the psi = 0 column in the same 73 iterations, 1e-8 treats
+    # real pivots as null).  Read by MUMPS only.
+    "mat_mumps_icntl_24": "1",
+    "mat_mumps_cntl_3": "1e-11",
+}
+#: preconditioners whose factorisation package defaults to MUMPS
+MUMPS_PCS = ("lu", "cholesky")
+
+
+class SolverOptionError(ConfigError):
+    """PETSc refused the solver the options ask for (exit 2, one line naming the options)."""
+
+
+#: preconditioners PETSc runs on an SBAIJ matrix (MUMPS LDLᵀ, incomplete Cholesky, and the
+#: block/overlapping ones around them); LU, ILU, GAMG and hypre need AIJ
+SBAIJ_PCS = ("cholesky", "icc", "bjacobi", "asm", "jacobi", "none")
+
+
+def matrix_type(model, choice: str, config_options: dict, prefix: str = "") -> str:
+    """The Jacobian's storage, 'aij' or 'sbaij' (``solver.matrix``; the options in effect are the
+    command line's, then the config's ``petsc:``, then ``DEFAULT_OPTIONS``).
+
+    ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) on
+    3363 beams (3333 beams hold half of each node block at zero)."""
+    pc, factor = factor_package(config_options, prefix)
+    full = node_blocks_fit(model)
+    if choice == "auto":
+        return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
+    if choice == "sbaij":
+        if not full:
+            raise ConfigError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
+                                               "half of each node block); use aij or auto")
+        if pc not in SBAIJ_PCS:
+            raise ConfigError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij; "
+                                               f"use aij or auto")
+    return choice
+
+
+def option_in_effect(key: str, config_options: dict, prefix: str = "") -> str:
+    """The value of a PETSc option: command line, else config ``petsc:``, else ``DEFAULT_OPTIONS``."""
+    opts = PETSc.Options()
+    if opts.hasName(prefix + key):
+        return str(opts.getString(prefix + key, ""))
+    return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
+
+
+def factor_package(config_options: dict, prefix: str = "") -> tuple[str, str]:
+    """(pc_type, factorisation package) in effect.  The package defaults to MUMPS for LU and
+    Cholesky only: ILU, ICC and the block preconditioners keep PETSc's own default."""
+    pc = option_in_effect("pc_type", config_options, prefix)
+    factor = option_in_effect("pc_factor_mat_solver_type", config_options, prefix)
+    if not factor and pc in MUMPS_PCS:
+        factor = "mumps"
+    return pc, factor
+
+
+#: options read only when the factorisation is first set up, after ``setFromOptions``
+DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
+
+
+def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
+                      prefix: str = "") -> tuple[str, list[str]]:
+    """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found
+    except for the config's options and the default factorisation options (``DEFERRED_OPTIONS``,
+    read by MUMPS at its first symbolic factorisation): those stay for the run, like command-line
+    ones (-ksp_view, -ksp_converged_reason are read at every solve), until ``LoadStepper.close``.
+
+    The SNES must carry ``prefix`` already (``snes.setOptionsPrefix``).  Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES) and the
+    option names (with the prefix) left in the database.  A value or combination PETSc refuses raises
+    ``SolverOptionError`` (the same on every rank: the options are).
+    """
+    opts = PETSc.Options()
+    inserted = []
+    for source in (config_options, defaults):
+        for key, value in source.items():
+            if not opts.hasName(prefix + key):
+                opts.setValue(prefix + key, value)
+                inserted.append(prefix + key)
+    n = len(prefix)
+    kept = [k for k in inserted if k[n:] in config_options or k[n:].startswith(DEFERRED_OPTIONS)]
+    try:
+        snes.setFromOptions()
+        linesearch = opts.getString(prefix + "snes_linesearch_type", "bt")  # PETSc's own default
+    except PETSc.Error as exc:
+        for key in kept:
+            opts.delValue(key)
+        raise SolverOptionError("", refused(exc, config_options, snes.getComm().getSize(), prefix)) from None
+    finally:
+        for key in inserted:
+            if key not in kept:
+                opts.delValue(key)
+    return linesearch, kept
+
+
+def solver_options(config_options: dict, prefix: str = "") -> str:
+    """``-ksp_type gmres -pc_type ilu`` as in effect (for messages)."""
+    pc, factor = factor_package(config_options, prefix)
+    text = f"-{prefix}ksp_type {option_in_effect('ksp_type', config_options, prefix)} -{prefix}pc_type {pc}"
+    return text + (f" -{prefix}pc_factor_mat_solver_type {factor}" if factor else "")
+
+
+def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "") -> str:
+    """One line: PETSc's reason, the options in effect and what works instead."""
+    pc, factor = factor_package(config_options, prefix)
+    return (f"PETSc refused the solver options {solver_options(config_options, prefix)} on {ranks} "
+            f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
+
+
+
+
+def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = "") -> dict:
+    """``DEFAULT_OPTIONS`` completed for this solve: MUMPS where it is the factorisation package,
+    its sequential root on a few ranks, and the absolute tolerance ``atol``."""
+    defaults = dict(DEFAULT_OPTIONS)
+    _, factor = factor_package(config_options, prefix)
+    if factor == "mumps" and not PETSc.Options().hasName(prefix + "pc_factor_mat_solver_type") \
+            and "pc_factor_mat_solver_type" not in config_options:
+        defaults["pc_factor_mat_solver_type"] = "mumps"
+    if factor == "mumps" and 1 < ranks <= 4:
+        # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid: LU, twice the
+        # flops of the LDLᵀ root) is slower than factoring the root on one rank (37-fascicle
+        # bundle, 22k DOFs, 2 ranks: 0.72 -> 0.65 s per factorisation), and only a sequential
+        # root gives the stability check its negative-pivot count (inertia.py); more ranks
+        # keep MUMPS's default
+        defaults["mat_mumps_icntl_13"] = "1"
+    defaults["snes_atol"] = f"{atol:.3e}"
+    return defaults

@@ -1,0 +1,247 @@
+"""One run of a sweep as a child ancf-solve process: the command, its outcome classified from the exit code and summary.json, kill on timeout or cancel."""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shlex
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from ...status import EXIT_FAILED, EXIT_INPUT, EXIT_UNSTABLE
+from ...io.files import atomic_write
+from .base import _read_json, _read_text, _remove
+from .spec import RunSpec, Sweep
+
+
+# ------------------------------------------------------------------------- running one run
+@dataclass
+class Outcome:
+    """How one attempt ended."""
+    status: str                     # one of FINAL_STATUSES
+    reason: str = ""
+    wall_time: float | None = None
+    returncode: int | None = None
+
+
+def solver_command() -> list[str]:
+    """The ancf-solve command: beside this interpreter, else on PATH, else ``python -m``."""
+    exe = os.path.join(os.path.dirname(sys.executable), "ancf-solve")
+    if os.path.isfile(exe) and os.access(exe, os.X_OK):
+        return [exe]
+    import shutil
+    found = shutil.which("ancf-solve")
+    return [found] if found else [sys.executable, "-m", "apps.ancf_solve"]
+
+
+#: statuses of an attempt that stopped early but kept its converged levels: continued with
+#: ``ancf-solve --restart`` (a task killed at the time limit, or by the node)
+RESTARTABLE = ("interrupted", "running")
+
+
+def can_restart(run_dir: str) -> bool:
+    """The run in ``run_dir`` stopped early with converged levels on disk (same config)."""
+    summary = _read_json(os.path.join(run_dir, "summary.json"))
+    return (summary is not None and summary.get("status") in RESTARTABLE and bool(summary.get("steps"))
+            and os.path.exists(os.path.join(run_dir, "results.h5")))
+
+
+def solve_command(sweep: Sweep, run: RunSpec) -> list[str]:
+    """Full command of one local run (``mpiexec -n ranks`` in front when ranks > 1); a run that
+    stopped early is continued from its last converged level."""
+    where = ["--restart", run.dir] if can_restart(run.dir) else ["--output-dir", run.dir]
+    cmd = solver_command() + [os.path.join(run.dir, "config.yaml")] + where
+    cmd += sweep.petsc
+    if sweep.ranks > 1:
+        cmd = sweep.mpiexec + ["-n", str(sweep.ranks)] + cmd
+    return cmd
+
+
+_PY_EXC = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception|Interrupt|Exit|Warning)\b")
+
+
+def failure_reason(lines: list[str]) -> str:
+    """The one-line reason in ancf-solve's stderr (MPI launcher noise and paths trimmed)."""
+    lines = [ln.strip() for ln in lines if ln.strip()]
+    for ln in reversed(lines):
+        if ln.startswith("ancf-solve:"):
+            msg = ln[len("ancf-solve:"):].strip()
+            return re.sub(r"; (converged steps are in|results in|\d+ converged level\(s\) kept in) .*$",
+                          "", msg)
+    for ln in reversed(lines):
+        if _PY_EXC.match(ln):
+            return ln
+    for ln in reversed(lines):
+        if re.search(r"[A-Za-z0-9]", ln):
+            return ln
+    return ""
+
+
+def _signal_name(returncode: int) -> str:
+    try:
+        return signal.Signals(-returncode).name
+    except ValueError:
+        return f"signal {-returncode}"
+
+
+def classify(run_dir: str, returncode: int | None, stderr_lines: list[str],
+             timed_out: bool = False, timeout: float | None = None) -> tuple[str, str]:
+    """(status, reason) of a finished attempt from its exit code, stderr and summary.json."""
+    summary = _read_json(os.path.join(run_dir, "summary.json")) or {}
+    sstat = summary.get("status")
+    reason = failure_reason(stderr_lines)
+    if timed_out:
+        steps = summary.get("steps") or []
+        last = f"; last converged load factor {steps[-1].get('load_factor'):g}" if steps else ""
+        return "timeout", f"timed out after {timeout:g} s{last}" if timeout else "timed out" + last
+    if returncode == 0 and sstat == "completed":
+        return "completed", ""
+    if returncode == EXIT_UNSTABLE and sstat == "unstable":
+        return "unstable", str(summary.get("message") or reason)
+    if sstat == "interrupted" or returncode in (128 + signal.SIGTERM, 128 + signal.SIGINT):
+        return "interrupted", reason or str(summary.get("message") or "interrupted")
+    if returncode == EXIT_INPUT and summary.get("reason_code") == "OUTPUT_ERROR":
+        return "failed", reason or str(summary.get("message") or "output error")
+    if returncode == EXIT_INPUT:
+        return "config_error", reason or "config error (exit code 2)"
+    if sstat == "failed" or returncode == EXIT_FAILED:
+        return "failed", reason or str(summary.get("message") or "a load level was not reached")
+    if returncode is not None and returncode < 0:
+        sig = f"killed by {_signal_name(returncode)}"
+        return "crashed", f"{sig}: {reason}" if reason else sig
+    if returncode == 0:
+        return "crashed", f"exit code 0 but summary.json says status {sstat!r}"
+    return "crashed", reason or f"exit code {returncode}"
+
+
+def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
+                   stderr_lines: list[str] | None = None, timed_out: bool = False,
+                   timeout: float | None = None, extra: dict | None = None,
+                   verdict: tuple[str, str] | None = None) -> Outcome:
+    """Classify a finished attempt (unless ``verdict`` gives (status, reason)) and write
+    ``run.json``; ``stderr_lines`` defaults to the lines of log.txt."""
+    if verdict is not None:
+        status, reason = verdict
+    else:
+        if stderr_lines is None:
+            stderr_lines = last_attempt((_read_text(os.path.join(run_dir, "log.txt")) or "").splitlines())
+        status, reason = classify(run_dir, returncode, stderr_lines, timed_out, timeout)
+    record = _read_json(os.path.join(run_dir, "run.json")) or {}
+    record.update(extra or {})
+    record.update({"status": status, "reason": reason, "wall_time": wall_time,
+                   "returncode": returncode, "finished": time.strftime("%Y-%m-%dT%H:%M:%S")})
+    atomic_write(os.path.join(run_dir, "run.json"), json.dumps(record, indent=1) + "\n")
+    return Outcome(status, reason, wall_time, returncode)
+
+
+#: first line of each attempt in an appended log.txt (SLURM resubmissions)
+ATTEMPT_HEADER = "=== ancf-sweep attempt"
+
+
+def last_attempt(lines: list[str]) -> list[str]:
+    """The lines of the last attempt in a log that resubmissions append to."""
+    starts = [i for i, ln in enumerate(lines) if ln.startswith(ATTEMPT_HEADER)]
+    return lines[starts[-1] + 1:] if starts else lines
+
+
+def finish_slurm_task(run_dir: str, returncode: int, wall_time: float,
+                      timeout: float | None = None) -> Outcome:
+    """Record a run executed by the SLURM script (exit code 124 of ``timeout`` = time limit)."""
+    return record_outcome(run_dir, returncode, wall_time, None,
+                          timed_out=timeout is not None and returncode == 124, timeout=timeout,
+                          extra={"host": socket.gethostname(),
+                                 "slurm_job": os.environ.get("SLURM_ARRAY_JOB_ID"),
+                                 "slurm_task": os.environ.get("SLURM_ARRAY_TASK_ID")})
+
+
+def _child_env() -> dict[str, str]:
+    env = dict(os.environ)
+    for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+        env.setdefault(k, "1")      # ranks x jobs processes: BLAS threads would only contend
+    env.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")   # jobs x ranks may exceed the cores
+    return env
+
+
+def _kill(proc: subprocess.Popen) -> None:
+    """Terminate the run's process group (it was started in its own session), then kill it."""
+    for sig, grace in ((signal.SIGTERM, 5.0), (signal.SIGKILL, 10.0)):
+        try:
+            os.killpg(proc.pid, sig)
+        except (ProcessLookupError, PermissionError):
+            pass
+        try:
+            proc.wait(timeout=grace)
+            return
+        except subprocess.TimeoutExpired:
+            continue
+
+
+class _Active:
+    """The processes currently running, so an interrupt can stop them."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.procs: set[subprocess.Popen] = set()
+        self.cancelled = threading.Event()
+
+    def cancel(self) -> None:
+        self.cancelled.set()
+        with self.lock:
+            procs = list(self.procs)
+        for p in procs:
+            _kill(p)
+
+
+def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Outcome:
+    """Run one prepared run directory; writes log.txt and run.json, returns the outcome."""
+    active = active or _Active()
+    cmd = solve_command(sweep, run)              # decides on a restart from summary.json
+    if "--restart" not in cmd:
+        _remove(os.path.join(run.dir, "summary.json"))
+    _remove(os.path.join(run.dir, "run.json"))
+    atomic_write(os.path.join(run.dir, "run.json"), json.dumps(
+        {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
+         "host": socket.gethostname(), "sweep_pid": os.getpid(), "ranks": sweep.ranks,
+         "command": shlex.join(cmd)}, indent=1) + "\n")
+    stderr_lines: list[str] = []
+    t0 = time.monotonic()
+    with open(os.path.join(run.dir, "log.txt"), "wb", buffering=0) as log:
+        log.write(("$ " + shlex.join(cmd) + "\n").encode())
+        try:
+            proc = subprocess.Popen(cmd, cwd=run.dir, env=_child_env(), stdin=subprocess.DEVNULL,
+                                    stdout=log, stderr=subprocess.PIPE, start_new_session=True)
+        except OSError as exc:
+            msg = f"cannot start {cmd[0]}: {exc.strerror}"
+            log.write((msg + "\n").encode())
+            return record_outcome(run.dir, None, time.monotonic() - t0, verdict=("crashed", msg))
+        with active.lock:
+            active.procs.add(proc)
+
+        def pump() -> None:
+            for raw in proc.stderr:             # type: ignore[union-attr]
+                log.write(raw)
+                stderr_lines.append(raw.decode(errors="replace"))
+
+        reader = threading.Thread(target=pump, daemon=True)
+        reader.start()
+        timed_out = False
+        try:
+            rc = proc.wait(timeout=sweep.timeout)
+        except subprocess.TimeoutExpired:
+            timed_out = True
+            _kill(proc)
+            rc = proc.returncode
+        finally:
+            with active.lock:
+                active.procs.discard(proc)
+        reader.join(timeout=10.0)
+    wall = time.monotonic() - t0
+    if active.cancelled.is_set() and not timed_out and rc != 0:
+        return record_outcome(run.dir, rc, wall,
+                              verdict=("crashed", "interrupted (ancf-sweep stopped)"))
+    return record_outcome(run.dir, rc, wall, stderr_lines, timed_out=timed_out,
+                          timeout=sweep.timeout)

@@ -1,0 +1,108 @@
+"""Running a sweep locally: runs in parallel jobs with progress lines, stopped cleanly on a signal."""
+from __future__ import annotations
+
+import os
+import threading
+from dataclasses import dataclass
+from typing import Callable
+from .base import FINAL_STATUSES
+from .spec import RunSpec, Sweep
+from .expand import expand, prepare_run
+from .execute import Outcome, _Active, execute_run
+
+
+# --------------------------------------------------------------------------- running a sweep
+@dataclass
+class SweepReport:
+    """What one local execution did."""
+    runs: list[RunSpec]
+    outcomes: dict[str, Outcome]    # run id -> outcome, for the runs executed now
+    skipped: list[str]              # run ids already completed
+    interrupted: bool = False
+
+    def counts(self) -> dict[str, int]:
+        c = {s: 0 for s in FINAL_STATUSES}
+        for o in self.outcomes.values():
+            c[o.status] = c.get(o.status, 0) + 1
+        return c
+
+    def ok(self) -> bool:
+        return not self.interrupted and all(o.status == "completed" for o in self.outcomes.values())
+
+    def summary_line(self) -> str:
+        """``12 runs: 10 completed, 1 failed, 1 skipped (already done)``."""
+        c = self.counts()
+        parts = [f"{c['completed']} completed"]
+        parts += [f"{n} {s}" for s, n in c.items() if s != "completed" and n]
+        if self.skipped:
+            parts.append(f"{len(self.skipped)} skipped (already done)")
+        not_run = len(self.runs) - len(self.outcomes) - len(self.skipped)
+        if not_run:
+            parts.append(f"{not_run} not run (interrupted)")
+        return f"{len(self.runs)} runs: " + ", ".join(parts)
+
+
+def progress_line(run: RunSpec, n: int, outcome: Outcome | None = None, event: str = "") -> str:
+    """``[sweep] 3/12 run_0003__... completed in 4.2 s`` (or ``failed: <reason> (4.2 s)``)."""
+    head = f"[sweep] {run.index + 1}/{n} {run.run_id}"
+    if outcome is None:
+        return f"{head} {event}"
+    t = f"{outcome.wall_time:.1f} s" if outcome.wall_time is not None else "?"
+    if outcome.status == "completed":
+        return f"{head} completed in {t}"
+    return f"{head} {outcome.status}: {outcome.reason or 'no reason given'} ({t})"
+
+
+def run_sweep(sweep: Sweep, force: bool = False,
+              log: Callable[[str], None] = print) -> SweepReport:
+    """Run every run not already completed, ``sweep.jobs`` at a time; one line per start/end."""
+    runs = expand(sweep)
+    n = len(runs)
+    os.makedirs(sweep.output, exist_ok=True)
+    todo: list[RunSpec] = []
+    report = SweepReport(runs, {}, [])
+    for run in runs:
+        done = prepare_run(sweep, run)
+        if done and not force:
+            report.skipped.append(run.run_id)
+            log(progress_line(run, n, event="skipped (already done)"))
+        else:
+            todo.append(run)
+    lock = threading.Lock()
+    queue = list(reversed(todo))
+    active = _Active()
+
+    def say(line: str) -> None:
+        with lock:
+            log(line)
+
+    def worker() -> None:
+        while not active.cancelled.is_set():
+            with lock:
+                if not queue:
+                    return
+                run = queue.pop()
+            ranks = f" on {sweep.ranks} ranks" if sweep.ranks > 1 else ""
+            say(progress_line(run, n, event=f"started{ranks}"))
+            try:
+                outcome = execute_run(sweep, run, active)
+            except OSError as exc:
+                outcome = Outcome("crashed", f"ancf-sweep: {exc}", None, None)
+            with lock:
+                report.outcomes[run.run_id] = outcome
+            say(progress_line(run, n, outcome))
+
+    threads = [threading.Thread(target=worker, daemon=True)
+               for _ in range(max(1, min(sweep.jobs, len(todo))))] if todo else []
+    for t in threads:
+        t.start()
+    try:
+        while any(t.is_alive() for t in threads):
+            for t in threads:
+                t.join(timeout=0.2)
+    except KeyboardInterrupt:
+        report.interrupted = True
+        active.cancel()
+        for t in threads:
+            t.join(timeout=30.0)
+    return report

@@ -353,8 +353,8 @@ SLIP_LEVELS = (10, 100, 200, 400)
 
 
 def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
-    """Soleus–gastrocnemius slip and contact pressure along the tendon (plotting.plot_slip)."""
-    from ..viz import plotting
+    """Soleus–gastrocnemius slip and contact pressure along the tendon (viz.plot_slip)."""
+    from .. import viz
     s = t1.summaries.get(twist)
     if not s or not s.get("contact_interfaces"):
         return []
@@ -365,19 +365,19 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
     levels = [read_contact(h5, loads.index(f) + 1) for f in SLIP_LEVELS if f in loads]
     names = [n.split(" ")[0].replace("_", "–") for n in s["contact_interfaces"]]
     soleus = tuple(k for k, n in enumerate(s["contact_interfaces"]) if "soleus" in n)
-    return [plotting.plot_slip(levels, names, os.path.join(out, f"slip_psi{twist}.png"), soleus,
+    return [viz.plot_slip(levels, names, os.path.join(out, f"slip_psi{twist}.png"), soleus,
                                s.get("length", 0.07),
                                title=f"ψ = {twist}°: the soleus slides past the gastrocnemius subtendons")]
 
 
 def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list[str]:
     """Load-elongation vs the paper, Table 2 convergence, Figure 5 (ψ = 15°, 45°) renders."""
-    from ..viz import plotting
+    from .. import viz
     made = []
     curves = {f"ψ = {p}°": (list(t1.loads[np.isfinite(t1.ours[p])]), list(t1.ours[p][np.isfinite(t1.ours[p])]))
               for p in TWISTS if p in t1.summaries}
     if curves:
-        made.append(plotting.plot_load_elongation(curves, PAPER_T1, os.path.join(out, "load_elongation.png"),
+        made.append(viz.plot_load_elongation(curves, PAPER_T1, os.path.join(out, "load_elongation.png"),
                                                   {f"ψ = {p}°": f"psi{p}_mm" for p in TWISTS},
                                                   title="Type III tendon: soleus elongation vs Table 1"))
     made += slip_figures(t1, out)
@@ -392,7 +392,7 @@ def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list
                   for p in TWISTS}
         unstable = [(n, r["elong"]) for (_, _, n), r in t2rows.items()
                     if r["unstable_from"] is not None and np.isfinite(r["elong"])]
-        made.append(plotting.plot_convergence(ours, theirs, os.path.join(out, "convergence.png"),
+        made.append(viz.plot_convergence(ours, theirs, os.path.join(out, "convergence.png"),
                                               title="Soleus elongation at 400 N vs elements per subtendon",
                                               flagged=unstable))
     vtus = {}
@@ -404,11 +404,11 @@ def figures(t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list
             if os.path.exists(last):
                 vtus[p] = (last, os.path.join(run_dir, "surface_0000.vtu"))
     if len(vtus) == 2:
-        made.append(plotting.render_pair(vtus[15][0], vtus[45][0], os.path.join(out, "figure5.png"),
+        made.append(viz.render_pair(vtus[15][0], vtus[45][0], os.path.join(out, "figure5.png"),
                                          titles=("(a) ψ = 15°, 400 N", "(b) ψ = 45°, 400 N"),
                                          view=FIGURE5_VIEW, reference_vtu=(vtus[15][1], vtus[45][1])))
     for p, (last, ref) in vtus.items():
-        made.append(plotting.render_surfaces(last, os.path.join(out, f"figure5_psi{p}.png"),
+        made.append(viz.render_surfaces(last, os.path.join(out, f"figure5_psi{p}.png"),
                                              title=f"ψ = {p}°, soleus at 400 N", view=FIGURE5_VIEW,
                                              reference_vtu=ref))
     for m in made:

@@ -45,6 +45,11 @@ class RunResult:
     inverted: bool = False      # the failure came with an inverted element (J <= 0)
 
 
+def serial_comm():
+    """PETSc's communicator of this process alone (in-process solves of a study)."""
+    return PETSc.COMM_SELF
+
+
 def check_output_dir(path: str, comm) -> None:
     """Fail fast (before the model is built) if ``path`` cannot hold results; collective."""
     err = None

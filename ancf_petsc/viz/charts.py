@@ -13,7 +13,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FuncFormatter, LogLocator, NullFormatter
 
-from .plotting import _save
+from .figures import save_figure
 
 ERROR_FLOOR = 1e-16       # exact answers (e.g. uniaxial tension) are drawn at this error
 
@@ -209,7 +209,7 @@ def pareto_chart(rows: list, out_png: str, title: str = "", reference: str = "")
     failed runs as crosses on the top edge, and the Pareto front as a black staircase.
     """
     fig, _, _ = pareto_figure(rows, title, reference)
-    return _save(fig, out_png)
+    return save_figure(fig, out_png)
 
 
 # the stability map's keys and values in words (the CSV keeps the config's names)
@@ -296,4 +296,4 @@ def stability_chart(cells: list, out_png: str, row_key: str, col_key: str, x_key
                                                            subsequent_indent="  ")]
     fig.tight_layout(rect=(0, (0.1 + 0.12 * len(lines)) / height, 1, 1))
     fig.text(0.01, 0.01, "\n".join(lines), fontsize=6.5, color="0.25", va="bottom")
-    return _save(fig, out_png)
+    return save_figure(fig, out_png)

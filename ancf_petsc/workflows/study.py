@@ -104,17 +104,15 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
 
     Config errors are returned as a failed result (message = the config error), not raised.
     """
-    from petsc4py import PETSc
-
-    from ..config.values import ConfigError
     from ..config.parse import parse_config
-    from ..solving.run import RunResult, run_model
+    from ..config.values import ConfigError
+    from ..solving.run import RunResult, run_model, serial_comm
     raw = copy.deepcopy(raw)
     raw["output"] = {"dir": out_dir, "vtk": False}
     # studies measure accuracy, cost and convergence; the stability of every level stays in the
     # summary (negative_eigenvalues) instead of turning the run's status to 'unstable'
     raw.setdefault("solver", {}).setdefault("allow_unstable", True)
-    comm = PETSc.COMM_SELF if comm is None else comm
+    comm = serial_comm() if comm is None else comm
     try:
         spec = parse_config(raw, base_dir=base_dir)
         res = run_model(spec, comm, log=lambda *_: None)

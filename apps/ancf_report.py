@@ -14,6 +14,9 @@ import json
 import os
 import sys
 
+#: the configs shipped beside the command lines (a checkout or an editable install)
+CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="ancf-report", allow_abbrev=False, description=__doc__,
@@ -27,16 +30,23 @@ def main(argv: list[str] | None = None) -> int:
                     help="contact study: Table 1 for both laws, k_s scaling (psi = 45)")
     ap.add_argument("--fit-bulk-modulus", action="store_true")
     ap.add_argument("--figures", action="store_true")
+    ap.add_argument("--configs", default=CONFIGS, metavar="DIR",
+                    help="the Achilles configs and data/paper_table*.csv (default: this checkout's configs/)")
     ap.add_argument("--existing", nargs="+", metavar="RUN_DIR",
                     help="finished ancf-solve output directories to report on (no solving)")
     args = ap.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from ancf_petsc.paper import report as rp
-    from ancf_petsc.workflows.sweep import SweepError
+    from ancf_petsc import paper as rp
+    from ancf_petsc.errors import InputError
 
     chosen = args.table1 or args.table2 or args.contact or args.fit_bulk_modulus or args.figures
     if not chosen and not args.existing:
         args.table1 = args.table2 = args.figures = True
+    try:
+        inputs = rp.PaperInputs(os.path.abspath(args.configs)).check()
+    except InputError as exc:
+        print(f"ancf-report: {exc}", file=sys.stderr)
+        return 2
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
     sections = []
@@ -53,33 +63,33 @@ def main(argv: list[str] | None = None) -> int:
                 with open(path) as fh:
                     s = json.load(fh)
                 found[int(round(s.get("twist_deg", 0)))] = s
-            t1 = rp.table1_from(found)
+            t1 = rp.table1_from(inputs, found)
             args.figures = True
         if args.table1:
-            t1 = rp.table1(out, args.ranks, args.jobs, log)
+            t1 = rp.table1(inputs, out, args.ranks, args.jobs, log)
         if t1 is not None:
             sections.append(("Table 1: soleus elongation [mm], paper vs ours", t1.markdown()))
             sections.append(("Run time per column [s] (1 column = 13 load levels)", rp.timing_markdown(t1)))
         if args.table2:
-            t2 = rp.table2(out, ranks=args.ranks, jobs=args.jobs, log=log)
+            t2 = rp.table2(inputs, out, ranks=args.ranks, jobs=args.jobs, log=log)
             sections.append(("Table 2: soleus elongation at 400 N [mm] vs elements per subtendon",
-                             rp.table2_markdown(t2)))
+                             rp.table2_markdown(inputs, t2)))
         if args.contact:
-            t1s = t1 if t1 is not None else rp.table1(out, args.ranks, args.jobs, log)
-            t1u = rp.table1(out, args.ranks, args.jobs, log, mode="unilateral")
+            t1s = t1 if t1 is not None else rp.table1(inputs, out, args.ranks, args.jobs, log)
+            t1u = rp.table1(inputs, out, args.ranks, args.jobs, log, mode="unilateral")
             sections.append(("Table 1 for both contact laws", rp.laws_markdown(t1s, t1u)))
-            rows = rp.scaling_study(out, ranks=args.ranks, jobs=args.jobs, log=log)
+            rows = rp.scaling_study(inputs, out, ranks=args.ranks, jobs=args.jobs, log=log)
             sections.append(("No penalty in the answer: the multipliers' unit k_s over two decades",
                              rp.scaling_markdown(rows)))
         if args.fit_bulk_modulus:
-            k, sse = rp.fit_bulk_modulus(out, jobs=args.jobs, log=log)
+            k, sse = rp.fit_bulk_modulus(inputs, out, jobs=args.jobs, log=log)
             sections.append(("Bulk modulus fitted to Table 1, psi = 0",
                              "\n".join([f"K = {k / 1e9:.4f} GPa (least squares on the relative errors)"]
                                        + [f"- K = {kk / 1e9:.2f} GPa: sum of squared relative errors "
                                           f"{v:.3e}" for kk, v in sse.items()])))
         if args.figures and t1 is not None:
-            rp.figures(t1, out, t2, log)
-    except SweepError as exc:
+            rp.figures(inputs, t1, out, t2, log)
+    except InputError as exc:
         print(f"ancf-report: {exc}", file=sys.stderr)
         return 2
     text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)

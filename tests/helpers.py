@@ -118,3 +118,12 @@ FAILURE_MESSAGE = re.compile(r"^could not reach load factor \S+: SNES failed at 
                              r"\(last converged \S+\) with [A-Z_]+"
                              r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+\))?"
                              r"( \(an element was inverted, J <= 0\))?$")
+
+
+def _paper_inputs():
+    from ancf_petsc.paper import PaperInputs
+    return PaperInputs(CONFIGS)
+
+
+#: the reproduction's inputs in this checkout
+PAPER_INPUTS = _paper_inputs()

@@ -4,10 +4,10 @@ import os
 import numpy as np
 import pytest
 
-from ancf_petsc.paper import report as rp
-from helpers import CONFIGS, load_raw, read_summary, solve_cli, write_config
+from ancf_petsc import paper as rp
+from helpers import PAPER_INPUTS, CONFIGS, load_raw, read_summary, solve_cli, write_config
 
-PAPER = rp.read_paper(rp.PAPER_T1)
+PAPER = rp.read_paper(PAPER_INPUTS.table1_csv)
 
 
 def _run(tmp_path, psi, ranks=1, name=None):
@@ -24,7 +24,7 @@ def _run(tmp_path, psi, ranks=1, name=None):
 @pytest.fixture(scope="module")
 def table1(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("table1")
-    return rp.table1_from({psi: _run(tmp, psi) for psi in rp.TWISTS})
+    return rp.table1_from(PAPER_INPUTS, {psi: _run(tmp, psi) for psi in rp.TWISTS})
 
 
 def test_configs_differ_only_in_twist_and_name():

@@ -172,7 +172,7 @@ def test_figure5_view_runs_x_from_0_to_L_left_to_right():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from mpl_toolkits.mplot3d import proj3d
-    from ancf_petsc.paper.report import FIGURE5_VIEW
+    from ancf_petsc.paper import FIGURE5_VIEW
 
     def screen_x(view):
         fig = Figure()

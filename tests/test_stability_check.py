@@ -8,8 +8,8 @@ import h5py
 import numpy as np
 import pytest
 
-from ancf_petsc.paper import report as rp
-from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
+from ancf_petsc import paper as rp
+from helpers import PAPER_INPUTS, CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
 
 
 MEAN_GAP = {"axial": 2, "curve": 0}
@@ -90,7 +90,7 @@ def test_stability_count_on_two_ranks(tmp_path):
 
 @pytest.mark.parametrize("psi, paper", [(0, 6.051), (45, 6.123)])
 def test_linear_gap_takes_one_element_subtendons_to_400N(tmp_path, psi, paper):
-    raw = coarse_achilles(psi, steps=rp.read_paper(rp.PAPER_T1)["load_N"].tolist(),
+    raw = coarse_achilles(psi, steps=rp.read_paper(PAPER_INPUTS.table1_csv)["load_N"].tolist(),
                           projection=None)                              # Table 1's path, defaults
     s = run_inline(raw, tmp_path / f"lin{psi}")
     assert s["status"] == "completed"
@@ -115,7 +115,7 @@ def test_table2_markdown_marks_unstable_and_stopped_runs():
                                    "reached": 400.0, "unstable_from": None, "dofs": 54 * (2 * n + 1)}
     rows[("mean gap", 0, 1)].update(elong=np.nan, status="failed", reached=200.0, unstable_from=50.0,
                                     reason="could not reach load factor 300")
-    text = rp.table2_markdown(rows)
+    text = rp.table2_markdown(PAPER_INPUTS, rows)
     assert "**linear gap** (default)" in text and "**mean gap** (contact.projection:" in text
     assert "stopped after 200 N (u ≥ 50 N)" in text
     assert "- mean gap, ψ=0°, 1 element(s): failed: could not reach load factor 300" in text

@@ -1,0 +1,50 @@
+"""Studies of the reproduction as sweeps over the Achilles config (workflows/sweep): finished runs
+are reused, failures stay clean, runs may use several ranks."""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import yaml
+
+from ..workflows import sweep as sw
+from .inputs import PROBE, PaperInputs
+
+
+def make_sweep(inputs: PaperInputs, out: str, name: str, parameters: dict, mode: str = "list", ranks: int = 1,
+               jobs: int = 1, petsc: list[str] | None = None) -> sw.Sweep:
+    """Write ``<out>/<name>.sweep.yaml`` and load it."""
+    os.makedirs(out, exist_ok=True)
+    path = os.path.join(out, f"{name}.sweep.yaml")
+    # the report marks unstable levels itself (Table 2's "u"): they are results, not failures
+    n = len(next(iter(parameters.values()))) if mode == "list" else 1
+    parameters = {**parameters, "solver.allow_unstable": [True] * n}
+    doc = {"base": inputs.base, "name": name, "mode": mode, "parameters": parameters,
+           "run": {"ranks": ranks, "jobs": jobs, "petsc": list(petsc or [])},
+           "output": os.path.join(out, name)}
+    with open(path, "w") as fh:
+        yaml.safe_dump(doc, fh, sort_keys=False)
+    return sw.load_sweep(path)
+
+
+def execute(sweep: sw.Sweep, log=print) -> list[sw.RunState]:
+    """Run what is not done yet; the state of every run afterwards."""
+    sw.run_sweep(sweep, log=log)
+    sw.collect(sweep)
+    return [sw.run_state(r) for r in sw.expand(sweep)]
+
+
+def summary_of(state: sw.RunState) -> dict | None:
+    path = os.path.join(state.run.dir, "summary.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as fh:
+        return json.load(fh)
+
+
+def elongations(summary: dict, probe: str = PROBE) -> tuple[np.ndarray, np.ndarray]:
+    """(load levels, x-elongation [mm]) of a probe over the converged steps."""
+    steps = summary["steps"]
+    return (np.array([s["load_factor"] for s in steps]),
+            np.array([1e3 * s["probes"][probe]["displacement"][0] for s in steps]))

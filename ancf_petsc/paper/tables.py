@@ -1,0 +1,171 @@
+"""The paper's Tables 1 and 2 beside ours, with relative errors (``configs/data/paper_table*.csv``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
+from .runs import elongations, execute, make_sweep, summary_of
+
+
+@dataclass
+class Table1:
+    loads: np.ndarray
+    ours: dict[int, np.ndarray]            # psi -> soleus elongation [mm] (nan where missing)
+    paper: dict[int, np.ndarray]
+    others: dict[int, dict[str, np.ndarray]]   # psi -> medial/lateral elongation [mm]
+    summaries: dict[int, dict]
+
+    @property
+    def columns(self) -> list[int]:
+        """The pretwists that have results."""
+        return [p for p in TWISTS if p in self.summaries]
+
+    def errors(self) -> dict[int, np.ndarray]:
+        return {p: self.ours[p] / self.paper[p] - 1.0 for p in self.columns}
+
+    def ordered(self) -> bool:
+        """ψ = 0 < 15 < 45 at every load (as in the paper)."""
+        return bool(np.all(self.ours[0] < self.ours[15]) and np.all(self.ours[15] < self.ours[45]))
+
+    def markdown(self) -> str:
+        e, cols = self.errors(), self.columns
+        lines = ["| load [N] | " + " | ".join(f"ψ={p}° paper | ψ={p}° ours | err" for p in cols) + " |",
+                 "|---:|" + "---:|---:|---:|" * len(cols)]
+        for i, f in enumerate(self.loads):
+            cells = [f"{self.paper[p][i]:.3f} | {self.ours[p][i]:.3f} | {100 * e[p][i]:+.2f} %" for p in cols]
+            lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
+        worst = max(np.nanmax(np.abs(v)) for v in e.values())
+        n = sum(len(v) for v in e.values())
+        within = [sum(int(np.sum(np.abs(v) <= tol)) for v in e.values()) for tol in (0.01, 0.02)]
+        lines += ["", f"Largest deviation {100 * worst:.2f} %; {within[0]}/{n} entries within 1 %, "
+                      f"{within[1]}/{n} within 2 %"
+                      + (f"; ordering ψ = 0 < 15 < 45 at every load: {'yes' if self.ordered() else 'NO'}."
+                         if len(cols) == len(TWISTS) else ".")]
+        lines += ["", "Medial and lateral gastrocnemius (x-elongation of their last nodes, mm) at 400 N: "
+                  + "; ".join(f"ψ={p}°: medial {self.others[p]['medial_gastrocnemius'][-1]:+.4f}, "
+                              f"lateral {self.others[p]['lateral_gastrocnemius'][-1]:+.4f}" for p in cols)]
+        return "\n".join(lines)
+
+
+def table1(inputs: PaperInputs, out: str, ranks: int = 1, jobs: int = 1, log=print,
+           mode: str = "sliding") -> Table1:
+    """Table 1: the three pretwist columns at the paper's 13 load levels, with contact ``mode``."""
+    params = {"geometry.twist_deg": list(TWISTS)}
+    name = "table1"
+    if mode != "sliding":
+        params["contact.mode"] = [mode] * len(TWISTS)
+        name = f"table1_{mode}"
+    sweep = make_sweep(inputs, out, name, params, ranks=ranks, jobs=jobs)
+    return table1_from(inputs, {p: summary_of(s) for p, s in zip(TWISTS, execute(sweep, log))})
+
+
+def table1_from(inputs: PaperInputs, summaries: dict[int, dict | None]) -> Table1:
+    """Table 1 from the summaries of the three columns (ψ → summary.json, None if missing)."""
+    paper = read_paper(inputs.table1_csv)
+    loads = paper["load_N"]
+    ours, others = {}, {}
+    for p in TWISTS:
+        s = summaries.get(p)
+        col = np.full(len(loads), np.nan)
+        oth = {k: np.full(len(loads), np.nan) for k in ("medial_gastrocnemius", "lateral_gastrocnemius")}
+        if s is not None:
+            lf, el = elongations(s)
+            for i, f in enumerate(loads):
+                hit = np.flatnonzero(np.isclose(lf, f))
+                if len(hit):
+                    col[i] = el[hit[0]]
+                    for k in oth:
+                        oth[k][i] = elongations(s, k)[1][hit[0]]
+        ours[p] = col
+        others[p] = oth
+    return Table1(loads, ours, {p: paper[f"psi{p}_mm"] for p in TWISTS}, others,
+                  {p: s for p, s in summaries.items() if s is not None})
+
+
+#: the contact pressure spaces Table 2 is computed with (contact.projection): the default, linear
+#: across the interface, which also holds the subtendons' relative section rotations and so keeps
+#: one- and two-element models stable, and constant across it (the mean gap)
+T2_VARIANTS = {"linear gap": None, "mean gap": {"axial": 2, "curve": 0}}
+T2_ELEMENTS = (1, 2, 4, 8, 16)
+
+
+def table2(inputs: PaperInputs, out: str, elements=T2_ELEMENTS, variants: dict = T2_VARIANTS,
+           ranks: int = 1, jobs: int = 1, log=print) -> dict:
+    """Soleus elongation at 400 N for n x n x n elements, per gap space and pretwist.
+
+    Rows are keyed (variant, ψ, n); each records whether the path stayed stable (the number
+    of negative tangent eigenvalues at every converged level, ``inertia.py``)."""
+    combos = [(v, p, n) for v in variants for p in TWISTS for n in elements]
+    # the load path of Table 1 (a coarse model stepped straight to 50 N can land on another,
+    # unstable branch: docs/contact.md)
+    params = {"geometry.twist_deg": [p for _, p, _ in combos],
+              "contact.projection": [variants[v] for v, _, _ in combos]}
+    for b in range(BEAMS):
+        params[f"beams[{b}].elements"] = [n for _, _, n in combos]
+    sweep = make_sweep(inputs, out, "table2", params, ranks=ranks, jobs=jobs)
+    states = execute(sweep, log)
+    rows = {}
+    for key, st in zip(combos, states):
+        s = summary_of(st)
+        lf, el = elongations(s) if s else (np.array([]), np.array([]))
+        done = len(lf) and np.isclose(lf[-1], 400.0)
+        neg = [(x["load_factor"], x.get("negative_eigenvalues")) for x in (s["steps"] if s else [])]
+        unstable = [f for f, k in neg if k]
+        rows[key] = {"elong": float(el[-1]) if done else np.nan,
+                     "status": st.status, "reason": st.reason,
+                     "reached": float(lf[-1]) if len(lf) else 0.0,
+                     "unstable_from": min(unstable) if unstable else None,
+                     "time": s["timings"]["total"] if s else np.nan,
+                     "iterations": s.get("newton_iterations") if s else None,
+                     "dofs": s.get("dofs") if s else None}
+    return rows
+
+
+def table2_markdown(inputs: PaperInputs, rows: dict, elements=T2_ELEMENTS) -> str:
+    """One table per gap space; ``u`` marks a result reached through unstable equilibria."""
+    paper = read_paper(inputs.table2_csv)
+    pn = {int(n): i for i, n in enumerate(paper["elements_per_subtendon"])}
+    variants = list(dict.fromkeys(v for v, _, _ in rows))
+    lines = []
+    for v in variants:
+        lines += ["", f"**{v}**" + (" (default)" if T2_VARIANTS.get(v, 0) is None else
+                                    f" (contact.projection: {T2_VARIANTS.get(v)})"), "",
+                  "| elements n×n×n | DOFs | " + " | ".join(f"ψ={p}° paper | ψ={p}° ours | err"
+                                                          for p in TWISTS) + " |",
+                  "|---:|---:|" + "---:|---:|---:|" * len(TWISTS)]
+        for n in elements:
+            cells = []
+            for p in TWISTS:
+                r = rows[(v, p, n)]
+                pv = paper[f"psi{p}_mm"][pn[n]] if n in pn else np.nan
+                mark = f" (u ≥ {r['unstable_from']:g} N)" if r["unstable_from"] is not None else ""
+                if np.isfinite(r["elong"]):
+                    ours = f"{r['elong']:.3f}{mark}"
+                    err = f"{100 * (r['elong'] / pv - 1):+.2f} %" if np.isfinite(pv) else ""
+                else:
+                    ours, err = f"stopped after {r['reached']:g} N{mark}", ""
+                cells.append(f"{pv:.3f} | {ours} | {err}" if np.isfinite(pv) else f"– | {ours} | ")
+            dofs = next((rows[(v, p, n)]["dofs"] for p in TWISTS if rows[(v, p, n)]["dofs"]), "")
+            lines.append(f"| {n} | {dofs} | " + " | ".join(cells) + " |")
+    lines += ["", "(u ≥ F N): from that load on the converged states have a negative tangent "
+                  "eigenvalue (a saddle of the total potential, not a stable equilibrium)."]
+    for (v, p, n), r in rows.items():
+        if r["status"] != "completed":
+            lines.append(f"- {v}, ψ={p}°, {n} element(s): {r['status']}: {r['reason']}")
+    return "\n".join(lines).strip("\n")
+
+
+def timing_markdown(t1: Table1) -> str:
+    """Run time per Table 1 column, by part (summary.json ``timings``)."""
+    keys = ("total", "setup", "element_kernels", "element_assembly", "contact_projection",
+            "contact_assembly", "linear_solve", "output")
+    lines = ["| ψ | Newton its | " + " | ".join(keys) + " |", "|---:|---:|" + "---:|" * len(keys)]
+    for p in TWISTS:
+        s = t1.summaries.get(p)
+        if s:
+            t = s["timings"]
+            lines.append(f"| {p}° | {s['newton_iterations']} | "
+                         + " | ".join(f"{t.get(k, float('nan')):.2f}" for k in keys) + " |")
+    return "\n".join(lines)

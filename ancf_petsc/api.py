@@ -41,8 +41,8 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
 
 def _init_petsc() -> None:
     """Initialise MPI, then PETSc (once; a no-op when the program already did)."""
-    from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
     import petsc4py
+    from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
     petsc4py.init()
 
 

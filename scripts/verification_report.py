@@ -15,7 +15,7 @@ import tempfile
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.join(ROOT, "tests"))
+CONFIGS = os.path.join(ROOT, "configs")
 
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
@@ -25,7 +25,21 @@ import numpy as np  # noqa: E402
 from ancf_petsc.config.specs import DEFAULT_AXIAL_POINTS
 from ancf_petsc.physics.materials import NeoHookean
 from ancf_petsc.physics.reference_solutions import elastica_tip, uniaxial_stretches
-from helpers import load_raw, run_inline  # noqa: E402
+import yaml  # noqa: E402
+
+import ancf_petsc  # noqa: E402
+
+
+def load_raw(name: str) -> dict:
+    """A config of configs/ as a dict."""
+    with open(os.path.join(CONFIGS, name)) as fh:
+        return yaml.safe_load(fh)
+
+
+def run_inline(raw: dict, out_dir: str) -> dict:
+    """Solve a config dict in this process (1 rank, quietly); its summary."""
+    raw = dict(raw, output={**raw.get("output", {}), "dir": out_dir})
+    return ancf_petsc.solve(ancf_petsc.parse_config(raw, base_dir=CONFIGS), log=lambda *_: None).summary
 
 
 def newton_counts(summary):

@@ -1,6 +1,7 @@
 """``contact:`` of a config: the law, the interfaces and the pressure space (docs/contact.md)."""
 from __future__ import annotations
 
+from ..physics.element3363 import DOFS_PER_NODE
 from .conditions import beam_ref
 from .specs import CONTACT_MODES, REMOVED_CONTACT_KEYS, ContactSpec
 from .values import ConfigError, boolean, integer, mapping, number, sequence, string
@@ -35,7 +36,7 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
         c.projection = (integer(proj["axial"], f"{pp}.axial", lo=0, hi=c.axial_points - 1),
                         integer(proj["curve"], f"{pp}.curve", lo=0, hi=8))
         c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
-    if (c.projection[0] + 1) * (c.projection[1] + 1) > 18:
+    if (c.projection[0] + 1) * (c.projection[1] + 1) > DOFS_PER_NODE:
         raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + 1) pressure functions per element "
                                              "must not exceed 18 (one node block)")
     inter = value.get("interfaces", "auto")

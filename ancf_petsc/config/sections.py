@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import yaml
 
-from .values import ConfigError, shown, key_path, integer, mapping, number, sequence, string
+from .values import ConfigError, integer, key_path, mapping, number, sequence, shown, string
 
 __all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS",
            "POINT_EXT", "IMAGE_EXT", "NIFTI_EXT", "SVG_EXT"]

@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import math
-from ..errors import InputError
 
+from ..errors import InputError
 
 #: a config problem: ``path`` is the key path (e.g. ``beams[0].material.mu``); see errors.py
 ConfigError = InputError

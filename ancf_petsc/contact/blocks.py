@@ -5,9 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE
 from .gap import gap_gradient, gap_hessian_factors
 from .projection import Projection
 from .state import ContactState
+
+EL = DOFS_PER_ELEMENT          # an element's 54 DOFs (3 nodes)
+Z = 2 * DOFS_PER_NODE          # the segment's two multiplier nodes
 
 #: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
 CHUNK_POINTS = 2048
@@ -44,15 +48,16 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     segs = c.segments[sk]
     n_s = len(sk)
     P_s = int(pts.seg_size[segs].max())
-    D = 18 * (2 * width + 6)
-    Dq = D - 36
+    D = DOFS_PER_NODE * (2 * width + 6)
+    Dq = D - Z
     sel = np.flatnonzero(np.isin(srow, sk))             # positions in the local arrays
     s_loc = np.searchsorted(sk, srow[sel])
     p_loc = c.local[sel] - pts.seg_start[segs[s_loc]]
     j = pr.eB[sel] - first_b[srow[sel]]
-    # each point's 108 unknowns (A element, its B element) inside the block
-    cols = np.concatenate([np.broadcast_to(np.arange(54), (len(sel), 54)),
-                           54 + 36 * j[:, None] + np.arange(54)], axis=1)
+    # each point's 2 x 54 unknowns (A element, its B element) inside the block; B's elements
+    # share end nodes, so element j starts 2 nodes after element j - 1
+    cols = np.concatenate([np.broadcast_to(np.arange(EL), (len(sel), EL)),
+                           EL + 2 * DOFS_PER_NODE * j[:, None] + np.arange(EL)], axis=1)
     sub = _subset(pr, sel)
     at = (s_loc[:, None], p_loc[:, None], cols)
     V = np.zeros((n_s, P_s, Dq))                         # ∇g_p
@@ -79,7 +84,7 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     share = Phi_s.sum(axis=2)
     ss, kk = np.nonzero(real)
     second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]
-    mrow = Dq + 18 * second + sp.slot[m_ids[ss, kk]]
+    mrow = Dq + DOFS_PER_NODE * second + sp.slot[m_ids[ss, kk]]
     K[ss, mrow, :Dq] = Gc[ss, kk]
     K[ss, :Dq, mrow] = Gc[ss, kk]
     K[ss, mrow, mrow] = np.where(act[ss, kk], 0.0, -c.stiffness * share[ss, kk])
@@ -87,13 +92,13 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     els = c.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
     bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
     nodes = np.concatenate([c.conn[pts.seg_eA[segs]], bnodes, c.seg_blocks[segs]], axis=1)
-    rows = (18 * nodes[:, :, None] + np.arange(18)).reshape(n_s, D)
+    rows = (DOFS_PER_NODE * nodes[:, :, None] + np.arange(DOFS_PER_NODE)).reshape(n_s, D)
     # the B elements of a segment need not be contiguous (points on e and e + 2): the
     # nodes of an element in between that no point projects onto stay out of the matrix
     used = np.zeros((n_s, D), dtype=bool)
-    used[:, :54] = True
-    used[:, Dq:] = np.repeat(c.seg_blocks[segs] >= 0, 18, axis=1)
-    used[s_loc[:, None], cols[:, 54:]] = True
+    used[:, :EL] = True
+    used[:, Dq:] = np.repeat(c.seg_blocks[segs] >= 0, DOFS_PER_NODE, axis=1)
+    used[s_loc[:, None], cols[:, EL:]] = True
     rows = np.where(used, rows, -1)
     rows[rows >= 0] = np.where(fixed_mask[rows[rows >= 0]], -1, rows[rows >= 0])
     return rows, K

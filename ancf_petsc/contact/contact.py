@@ -17,9 +17,11 @@ DOF indices for the assembly layer to insert.
 from __future__ import annotations
 
 import time
+
 import numpy as np
 
 from ..errors import InputError
+from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, reports
 from .interfaces import find_interfaces
 from .laws import make_law
@@ -27,7 +29,6 @@ from .multipliers import build_space
 from .points import build_points
 from .projection import Projector
 from .state import ContactState
-
 
 
 def reference_stiffness(interfaces) -> float:
@@ -90,11 +91,11 @@ class Contact:
     def padding_dofs(self) -> np.ndarray:
         """Model-numbered DOF ids of the unused multiplier slots (held at zero)."""
         node, slot = np.nonzero(self.space.padding())
-        return 18 * (self.model.n_nodes + node) + slot
+        return DOFS_PER_NODE * (self.model.n_nodes + node) + slot
 
     def multiplier_dofs(self) -> np.ndarray:
         """Model-numbered DOF id of every multiplier (M,)."""
-        return 18 * (self.model.n_nodes + self.space.node) + self.space.slot
+        return DOFS_PER_NODE * (self.model.n_nodes + self.space.node) + self.space.slot
 
     def set_numbering(self, perm: np.ndarray, local_segments: np.ndarray,
                       owned_elements: np.ndarray | None = None) -> None:
@@ -124,7 +125,7 @@ class Contact:
 
     def multiplier_positions(self, needed: np.ndarray) -> np.ndarray:
         """Positions of the local multipliers (``mults``) in a local DOF array over ``needed``."""
-        return 18 * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
+        return DOFS_PER_NODE * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
         """Node blocks (PETSc numbering) the local evaluation reads: the A and B elements of the
@@ -190,7 +191,7 @@ class Contact:
             return np.searchsorted(needed, nodes)
 
         def x_of(els):
-            return xl[lpos(self.conn[els])].reshape(len(els), 18, 3)
+            return xl[lpos(self.conn[els])].reshape(len(els), SLOTS, 3)
 
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
@@ -201,7 +202,7 @@ class Contact:
             sums = self.sum_over_ranks(sums)
         gbar = sums[:, 0]
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
-        z = xl.reshape(-1)[18 * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
+        z = xl.reshape(-1)[DOFS_PER_NODE * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
         prev = self.status[self.mults]
         active = self.law.active(gbar, z, prev, self.tie_tolerance) & support
         self.status[self.mults] = active
@@ -221,10 +222,10 @@ class Contact:
         for e, N, sign in ((self.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
             f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
             pos = st.lpos(self.conn[e])                                       # (P, 3)
-            dofs = (18 * pos[:, :, None] + np.arange(18)).ravel()
+            dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
             floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
         # the constraint rows; a function shared with another rank: each adds its own points
-        rows = 18 * st.lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]
+        rows = DOFS_PER_NODE * st.lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]
         own = self.Phi @ (pr.g * pr.valid) if self.sum_over_ranks is not None else st.gbar
         share = self.Phi @ np.ones(len(pr.g)) if self.sum_over_ranks is not None else 1.0
         floc[rows] -= self.stiffness * np.where(st.active, own, st.z * share)

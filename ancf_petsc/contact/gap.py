@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics.element3363 import SLOTS
+
 
 def gap_gradient(pr) -> np.ndarray:
     """∇g of every point (P, 108)."""
@@ -50,5 +52,5 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
     NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
     W = np.zeros((P, 36, 3, 4))
     W[..., :2] = NAB[:, :, None, None] * T[:, None, :, :]            # u_α
-    W[:, 18:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
+    W[:, SLOTS:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
     return W.reshape(P, 108, 4), C

@@ -29,7 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-SLOTS = 18
+from ..physics.element3363 import DOFS_PER_NODE
+
+#: multiplier slots in one node block (the multipliers share the beams' 18-DOF block layout)
+SLOTS = DOFS_PER_NODE
 
 
 def bernstein(x: np.ndarray, degree: int) -> np.ndarray:

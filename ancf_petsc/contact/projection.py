@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..physics.element3363 import SLOTS
 from .surface import closest_parameter, section_shift, shape_on_curve
 
 CURVE_OVERHANG = 0.25                     # fraction of an interface curve it is extended by
@@ -127,7 +128,7 @@ class Projector:
         qB = x_of(eB)                                           # (P, 18, 3)
         Y = np.matmul(NB[:, None, :], qB)[:, 0]
         Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
-        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, 18, 4)).reshape(P, 3, 2, 2)
+        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, SLOTS, 4)).reshape(P, 3, 2, 2)
         return Y, Yz, Yzz, NB, NBz
 
     def wrap(self, itf, eB, xiB, tB):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..physics import element3363 as el
+from ..physics.element3363 import SLOTS
 
 DDL = np.array([1.0, -2.0, 1.0])          # second ξ-derivatives of the Lagrange polynomials
 
@@ -27,18 +28,18 @@ def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray
     m, my, mz = el.section_monomials(S[:, 0], S[:, 1])
     mt = my * S1[:, :1] + mz * S1[:, 1:]
     P = len(xi)
-    N = (L[:, :, None] * m[:, None, :]).reshape(P, 18)
-    Nz = np.stack([(dL[:, :, None] * m[:, None, :]).reshape(P, 18),
-                   (L[:, :, None] * mt[:, None, :]).reshape(P, 18)], axis=-1)
+    N = (L[:, :, None] * m[:, None, :]).reshape(P, SLOTS)
+    Nz = np.stack([(dL[:, :, None] * m[:, None, :]).reshape(P, SLOTS),
+                   (L[:, :, None] * mt[:, None, :]).reshape(P, SLOTS)], axis=-1)
     if S2 is None:
         return N, Nz
     mtt = my * S2[:, :1] + mz * S2[:, 1:]
     mtt[:, 3] += S1[:, 0] ** 2                 # (y²/2)'' = y'² + y y''
     mtt[:, 4] += S1[:, 1] ** 2
     mtt[:, 5] += 2.0 * S1[:, 0] * S1[:, 1]     # (yz)'' = 2 y'z' + y''z + y z''
-    cross = (dL[:, :, None] * mt[:, None, :]).reshape(P, 18)
-    Nzz = np.stack([np.stack([(DDL[None, :, None] * m[:, None, :]).reshape(P, 18), cross], -1),
-                    np.stack([cross, (L[:, :, None] * mtt[:, None, :]).reshape(P, 18)], -1)], -2)
+    cross = (dL[:, :, None] * mt[:, None, :]).reshape(P, SLOTS)
+    Nzz = np.stack([np.stack([(DDL[None, :, None] * m[:, None, :]).reshape(P, SLOTS), cross], -1),
+                    np.stack([cross, (L[:, :, None] * mtt[:, None, :]).reshape(P, SLOTS)], -1)], -2)
     return N, Nz, Nzz
 
 

@@ -13,13 +13,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..config.sections import UNITS, GeometrySource, SectionsSpec
 from ..physics.spline import SectionError, SplineCurve
 from . import polyline as pl
 from .fit import corners, fit_curve
 from .importers import (OutlineReadError, label_image, mask_outline, nifti_slice, read_point_list,
-    read_svg_path)
+                        read_svg_path)
 from .merge import MergeError, merge_outlines
-from ..config.sections import UNITS, GeometrySource, SectionsSpec
 
 __all__ = ["Station", "build_station", "AREA_LIMITS"]
 

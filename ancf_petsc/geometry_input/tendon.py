@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config.sections import SectionsSpec
 from ..config.values import ConfigError
 from ..physics.spline import SplineCurve
 from . import polyline as pl
 from .build import Station, build_station
-from ..config.sections import SectionsSpec
 from .stations import SectionField
 
 __all__ = ["TendonGeometry", "build_tendon"]

@@ -28,11 +28,11 @@ import h5py
 import numpy as np
 import yaml
 
+from ..model.beams import Model
 from ..physics import element3363 as el
+from ..version import version_info
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
 from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
-from ..model.beams import Model
-from ..version import version_info
 
 #: space set aside for the final summary.json (released on a write error and at the end)
 RESERVE = ".ancf-space-reserve"

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..model.beams import Model
 from ..physics import element3363 as el
+from ..physics.element3363 import SLOTS
 from .files import atomic_write, remove_quietly
 
 
@@ -35,11 +36,11 @@ class SurfaceSampler:
                 YZ = np.broadcast_to(np.tile(ring, (len(xi), 1)), (E, len(xi) * m, 2))
             M = len(xi) * m
             N, dN = el.shape_functions(np.tile(np.repeat(xi, m), E), YZ[..., 0].ravel(), YZ[..., 1].ravel())
-            q0e = model.q0[conn].reshape(E, 18, 3)
-            G, _ = el.reference_gradients(q0e, dN.reshape(E, M, 18, 3))
+            q0e = model.q0[conn].reshape(E, SLOTS, 3)
+            G, _ = el.reference_gradients(q0e, dN.reshape(E, M, SLOTS, 3))
             # drop the duplicated first station of every element but the first
             keep = np.concatenate([np.arange(M)] + [e * M + np.arange(m, M) for e in range(1, E)])
-            self.parts.append((beam, m, len(xi) - 1, N[keep], G.reshape(-1, 18, 3)[keep], keep // M))
+            self.parts.append((beam, m, len(xi) - 1, N[keep], G.reshape(-1, SLOTS, 3)[keep], keep // M))
 
     def mesh(self, q: np.ndarray):
         """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
@@ -48,8 +49,8 @@ class SurfaceSampler:
         offset = 0
         for beam, m, S, N, G, e_of in self.parts:
             conn = beam.connectivity
-            qe = q[conn].reshape(len(conn), 18, 3)[e_of]
-            q0e = self.model.q0[conn].reshape(len(conn), 18, 3)[e_of]
+            qe = q[conn].reshape(len(conn), SLOTS, 3)[e_of]
+            q0e = self.model.q0[conn].reshape(len(conn), SLOTS, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
             r0 = np.einsum("pa,pai->pi", N, q0e)
             F = np.matmul(np.swapaxes(qe, 1, 2), G)

@@ -7,9 +7,12 @@ quadrature data (``element_data``) is built for the elements a rank owns."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
 import numpy as np
-from ..physics import element3363 as el
+
 from ..config.specs import ModelSpec
+from ..physics import element3363 as el
+from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.section import Section
 
 
@@ -87,7 +90,7 @@ class Model:
 
     @property
     def n_dofs(self) -> int:
-        return 18 * self.n_nodes
+        return DOFS_PER_NODE * self.n_nodes
 
     @property
     def n_elements(self) -> int:

@@ -5,20 +5,19 @@ The numbering and the Model/Beam types are in beams.py.
 """
 from __future__ import annotations
 
-
 import numpy as np
 
-from ..physics import element3363 as el
-from ..config.values import ConfigError
 from ..config.specs import ModelSpec, SectionSpec
+from ..config.values import ConfigError
+from ..physics import element3363 as el
 from ..physics.cubature import gauss_legendre
+from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.geometry import reference_nodal_vectors
 from ..physics.materials import make_material
 from ..physics.section import Section, make_circle, make_ellipse, make_outline, make_rectangle
-from ..physics.spline import SectionError
 from ..physics.sections_file import inline_loop, load_sections_file
+from ..physics.spline import SectionError
 from .beams import Beam, Model
-
 
 _SECTIONS_FILE_CACHE: dict = {}
 
@@ -215,25 +214,25 @@ def build_model(spec: ModelSpec) -> Model:
     for beam in beams:     # 3333: r_yy, r_zz, r_yz held at their reference value 0
         held = [v for v in range(el.VECTORS_PER_NODE) if v not in beam.vectors]
         nodes = beam.node_offset + np.arange(beam.n_nodes)
-        fixed.update((18 * nodes[:, None] + (3 * np.array(held, dtype=int)[:, None] + np.arange(3)).ravel())
+        fixed.update((DOFS_PER_NODE * nodes[:, None] + (3 * np.array(held, dtype=int)[:, None] + np.arange(3)).ravel())
                      .ravel().tolist())
     for bc in spec.boundary_conditions:
         node = beams[bc.beam].node_offset + bc.node
-        fixed.update(18 * node + 3 * v + c for v, c in bc.dofs)
+        fixed.update(DOFS_PER_NODE * node + 3 * v + c for v, c in bc.dofs)
     fixed_dofs = np.array(sorted(fixed), dtype=np.int64)
 
-    f_ext = np.zeros(18 * q0.shape[0])
+    f_ext = np.zeros(DOFS_PER_NODE * q0.shape[0])
     for ld in spec.loads:
         beam = beams[ld.beam]
         node = beam.node_offset + ld.node
         force = np.asarray(ld.force)
         if ld.kind == "force":
-            f_ext[18 * node:18 * node + 3] += force
+            f_ext[DOFS_PER_NODE * node:DOFS_PER_NODE * node + 3] += force
         else:
             # uniform dead traction t = F / A over the end section: f_k = t ∫ m_k dA
             moments = _end_moments(beam, tendon, spec.beams[ld.beam], beam.x_nodes[ld.node])
-            f_ext[18 * node:18 * node + 18] += np.outer(moments, force).ravel()
-        loaded = [18 * node + c for c in range(3) if force[c] != 0.0]
+            f_ext[DOFS_PER_NODE * node:DOFS_PER_NODE * node + DOFS_PER_NODE] += np.outer(moments, force).ravel()
+        loaded = [DOFS_PER_NODE * node + c for c in range(3) if force[c] != 0.0]
         if np.any(np.isin(loaded, fixed_dofs)):
             raise ConfigError(ld.path, "the load pushes on a fixed component of r at this node; "
                                        "load another node or free that component")

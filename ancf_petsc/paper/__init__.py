@@ -6,7 +6,8 @@ from .contact_study import fit_bulk_modulus, laws_markdown, scaling_markdown, sc
 from .figures import FIGURE5_VIEW, figures, slip_figures
 from .inputs import BEAMS, PROBE, TWISTS, PaperInputs, read_paper
 from .runs import elongations, execute, make_sweep, summary_of
-from .tables import T2_ELEMENTS, T2_VARIANTS, Table1, table1, table1_from, table2, table2_markdown, timing_markdown
+from .tables import (T2_ELEMENTS, T2_VARIANTS, Table1, table1, table1_from, table2, table2_markdown,
+                     timing_markdown)
 
 __all__ = ["BEAMS", "FIGURE5_VIEW", "PROBE", "T2_ELEMENTS", "T2_VARIANTS", "TWISTS", "PaperInputs", "Table1",
            "elongations", "execute", "figures", "fit_bulk_modulus", "laws_markdown", "make_sweep", "read_paper",

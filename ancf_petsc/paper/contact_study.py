@@ -9,7 +9,6 @@ from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
 from .runs import elongations, execute, make_sweep, summary_of
 from .tables import Table1
 
-
 #: factors on k_s, the unit of the multipliers: two decades
 SCALINGS = (0.1, 1.0, 10.0)
 #: the former penalty formulation's gap space (per element, degree 2 along, mean across) and its

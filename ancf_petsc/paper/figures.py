@@ -11,7 +11,6 @@ from ..io.reader import read_contact
 from .inputs import TWISTS, PaperInputs, read_paper
 from .tables import Table1
 
-
 #: Figure 5's camera: from the soleus' side (+y), rolled by 180° so that x runs 0 -> L from
 #: left to right (z then points down; a rotation, not a mirror image)
 FIGURE5_VIEW = (-8.0, 70.0, 180.0)

@@ -1,1 +1,3 @@
-"""parallel"""
+"""Distribution over MPI ranks without PETSc: ``layout`` (which rank owns which nodes and elements,
+the PETSc numbering), ``partition`` (contiguous blocks per beam or METIS, contact pairs kept
+together) and ``launch`` (the environment a launcher gives a process)."""

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..physics.element3363 import DOFS_PER_NODE
+
 
 @dataclass
 class Layout:
@@ -42,8 +44,8 @@ class Layout:
     def petsc_dofs(self, model_dofs: np.ndarray) -> np.ndarray:
         """Map model DOF ids to PETSc DOF ids (negative ids pass through unchanged)."""
         model_dofs = np.asarray(model_dofs)
-        node, local = np.divmod(np.maximum(model_dofs, 0), 18)
-        return np.where(model_dofs < 0, model_dofs, 18 * self.perm[node] + local)
+        node, local = np.divmod(np.maximum(model_dofs, 0), DOFS_PER_NODE)
+        return np.where(model_dofs < 0, model_dofs, DOFS_PER_NODE * self.perm[node] + local)
 
     def summary(self) -> str:
         counts = np.bincount(self.elem_owner, minlength=self.size)

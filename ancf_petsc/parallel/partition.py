@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .layout import Layout, block_layout, layout_from_owner
 from ..model.beams import Model
+from ..physics.element3363 import DOFS_PER_NODE
+from .layout import Layout, block_layout, layout_from_owner
 
 CONTACT_COST = 4
 
@@ -34,14 +35,14 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
         if len(els) > 1:
             a, b = np.meshgrid(els, els)
             off = a != b
-            rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), 18))
+            rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), DOFS_PER_NODE))
     if contact is not None:
         eA, eB = contact.points.eA, contact.projector.eB
         pair = np.unique(np.stack([eA, eB], 1), axis=0, return_counts=True)
         (pa, pb), cnt = pair[0].T, pair[1]
         keep = pa != pb
         rows += [pa[keep], pb[keep]]; cols += [pb[keep], pa[keep]]
-        wts += [18 * cnt[keep], 18 * cnt[keep]]
+        wts += [DOFS_PER_NODE * cnt[keep], DOFS_PER_NODE * cnt[keep]]
     if rows:
         r, c, w = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
     else:

@@ -1,1 +1,5 @@
-"""petsc"""
+"""The PETSc layer: ``problem`` (the residual and Jacobian SNES calls, in Vec/Mat), ``blocks``
+(element blocks, node-block insertion), ``pattern`` (exact preallocation, growing with contact),
+``exchange`` (the node blocks a rank reads), ``contact_reports`` (contact results over ranks),
+``inertia`` (MUMPS pivot counts), ``options`` (unused options, PETSc errors as one line) and
+``logging`` (log stages and events, created on first use)."""

@@ -16,6 +16,7 @@ from petsc4py import PETSc
 
 from ..model.beams import Beam, Model
 from ..parallel.layout import Layout
+from ..physics.element3363 import DOFS_PER_NODE
 
 ADD = PETSc.InsertMode.ADD_VALUES
 INSERT = PETSc.InsertMode.INSERT_VALUES
@@ -42,7 +43,7 @@ class ElementBlock:
 
     def local_dofs(self) -> np.ndarray:
         """Positions of the elements' active DOFs in the local array (E, 3S)."""
-        return (18 * self.lnodes[:, :, None] + self.node_dofs).reshape(len(self.nodes), -1)
+        return (DOFS_PER_NODE * self.lnodes[:, :, None] + self.node_dofs).reshape(len(self.nodes), -1)
 
 
 #: Jacobian storage formats (``Problem(matrix_type=...)``)
@@ -54,9 +55,9 @@ def node_blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     (n, D) of the held DOFs (−1) of nodes that have free DOFs (None when there are none).
     A node whose 18 DOFs are all −1 (unused, or held entirely) gets the node id −1."""
     n, D = rows.shape
-    g = rows.reshape(n, D // 18, 18)
+    g = rows.reshape(n, D // DOFS_PER_NODE, DOFS_PER_NODE)
     valid = g >= 0
-    node = np.where(valid.any(axis=2), g.max(axis=2) // 18, -1).astype(PETSc.IntType)
+    node = np.where(valid.any(axis=2), g.max(axis=2) // DOFS_PER_NODE, -1).astype(PETSc.IntType)
     held = ~valid & (node >= 0)[:, :, None]
     return node, (held.reshape(n, D) if held.any() else None)
 
@@ -105,7 +106,7 @@ def element_blocks(model: Model, layout: Layout, fixed_mask: np.ndarray) -> list
         parts = model.element_data(beam, mine - beam.element_offset)
         cn = conn_all[mine]
         node_dofs = (3 * np.array(beam.vectors)[:, None] + np.arange(3)).ravel()
-        rows = (18 * cn[:, :, None] + node_dofs).reshape(len(mine), -1)
+        rows = (DOFS_PER_NODE * cn[:, :, None] + node_dofs).reshape(len(mine), -1)
         rows = np.where(fixed_mask[rows], -1, rows).astype(PETSc.IntType)
         out.append(ElementBlock(beam, parts, cn, rows, node_dofs))
     return out

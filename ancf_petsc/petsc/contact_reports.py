@@ -8,6 +8,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..contact import GAP_COLUMNS
+from ..physics.element3363 import SLOTS
 from .problem import Problem
 
 
@@ -38,7 +39,7 @@ def contact_fields(problem: Problem, X: PETSc.Vec) -> dict | None:
     conn = problem.model.connectivity()
 
     def q0_of(els):
-        return q0[conn[els]].reshape(len(els), 18, 3)
+        return q0[conn[els]].reshape(len(els), SLOTS, 3)
     local = problem.exchange.evaluate(
         X, lambda xl: problem.contact.point_fields(xl, problem.exchange.needed, q0_of))
     parts = problem.comm.tompi4py().gather(local, root=0)

@@ -11,6 +11,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..parallel.layout import Layout
+from ..physics.element3363 import DOFS_PER_NODE
 from .blocks import ADD, INSERT, ElementBlock
 
 
@@ -45,17 +46,17 @@ class GhostExchange:
         if self.scatter is not None:
             for obj in (self.scatter, self.xloc, self.floc):
                 obj.destroy()
-        self.xloc = PETSc.Vec().createSeq(18 * len(self.needed), bsize=18, comm=PETSc.COMM_SELF)
+        self.xloc = PETSc.Vec().createSeq(DOFS_PER_NODE * len(self.needed), bsize=DOFS_PER_NODE, comm=PETSc.COMM_SELF)
         self.floc = self.xloc.duplicate()
-        is_needed = PETSc.IS().createBlock(18, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        is_needed = PETSc.IS().createBlock(DOFS_PER_NODE, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
         is_needed.destroy()
         # the internal forces are evaluated with held DOFs at their prescribed values, so the free
         # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
         model_node = np.argsort(self.layout.perm)[self.needed]
-        held = self.fixed_mask[(18 * self.needed[:, None] + np.arange(18))]
+        held = self.fixed_mask[(DOFS_PER_NODE * self.needed[:, None] + np.arange(DOFS_PER_NODE))]
         self.held_local = np.flatnonzero(held.ravel())
-        self.held_values = self.q0_model.reshape(-1, 18)[model_node].ravel()[self.held_local]
+        self.held_values = self.q0_model.reshape(-1, DOFS_PER_NODE)[model_node].ravel()[self.held_local]
         for blk in self.blocks:
             blk.lnodes = np.searchsorted(self.needed, blk.nodes)
         if self.contact is not None:

@@ -10,6 +10,7 @@ from petsc4py import PETSc
 
 from ..model.beams import Model
 from ..parallel.layout import Layout
+from ..physics.element3363 import DOFS_PER_NODE
 
 
 class JacobianPattern:
@@ -75,8 +76,8 @@ class JacobianPattern:
         """A new AIJ or SBAIJ matrix (18 × 18 blocks) preallocated with the pattern."""
         lo, hi = self.layout.owned_nodes
         J = PETSc.Mat().create(comm=self.comm)
-        N = 18 * self.n_blocks
-        J.setSizes(((18 * (hi - lo), N), (18 * (hi - lo), N)), bsize=18)
+        N = DOFS_PER_NODE * self.n_blocks
+        J.setSizes(((DOFS_PER_NODE * (hi - lo), N), (DOFS_PER_NODE * (hi - lo), N)), bsize=DOFS_PER_NODE)
         J.setType(PETSc.Mat.Type.SBAIJ if self.matrix_type == "sbaij" else PETSc.Mat.Type.AIJ)
         self.preallocate(J)
         return J
@@ -96,21 +97,21 @@ class JacobianPattern:
         lo, hi = self.layout.owned_nodes
         A = self.node_pattern((lo, hi))
         free = ~self.fixed_mask
-        node_cols = (18 * A.indices[:, None] + np.arange(18)).ravel()      # DOF columns per entry
+        node_cols = (DOFS_PER_NODE * A.indices[:, None] + np.arange(DOFS_PER_NODE)).ravel()      # DOF columns per entry
         keep = free[node_cols]
         cols = node_cols[keep]                                            # free columns, node by node
-        count = np.add.reduceat(keep.reshape(-1, 18).sum(axis=1), A.indptr[:-1]) \
+        count = np.add.reduceat(keep.reshape(-1, DOFS_PER_NODE).sum(axis=1), A.indptr[:-1]) \
             if A.nnz else np.zeros(hi - lo, dtype=np.int64)
         count[np.diff(A.indptr) == 0] = 0
         start = np.concatenate([[0], np.cumsum(count)])[:-1]
-        rows = 18 * lo + np.arange(18 * (hi - lo))
+        rows = DOFS_PER_NODE * lo + np.arange(DOFS_PER_NODE * (hi - lo))
         row_free = free[rows]
-        length = np.where(row_free, np.repeat(count, 18), 1)
+        length = np.where(row_free, np.repeat(count, DOFS_PER_NODE), 1)
         indptr = np.concatenate([[0], np.cumsum(length)])
         # free row r of node i: cols[start_i : start_i + count_i]; held row: itself.  Entry k of
         # row r reads cols[start_i + k - indptr_r] (few full-size temporaries: this runs on
         # millions of entries, and fresh large arrays cost page faults)
-        shift = np.where(row_free, np.repeat(start, 18), 0) - indptr[:-1]
+        shift = np.where(row_free, np.repeat(start, DOFS_PER_NODE), 0) - indptr[:-1]
         src = np.repeat(shift, length)
         src += np.arange(indptr[-1])
         indices = cols.astype(PETSc.IntType)[src]

@@ -21,6 +21,7 @@ from petsc4py import PETSc
 from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
+from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.rigid import rigid_modes
 from . import logging
 from .blocks import ADD, INSERT, MATRIX_TYPES, element_blocks, insert_node_blocks, node_blocks_fit
@@ -50,16 +51,16 @@ class Problem:
         self.contact_failed = False             # the last residual's contact projection failed
         lo, hi = layout.owned_nodes
         self.n_blocks = layout.n_blocks
-        N = 18 * self.n_blocks
+        N = DOFS_PER_NODE * self.n_blocks
         held = model.fixed_dofs if contact is None else np.concatenate([model.fixed_dofs,
                                                                       contact.padding_dofs()])
         fixed_petsc = layout.petsc_dofs(held)
         self.fixed_mask = np.zeros(N, dtype=bool)
         self.fixed_mask[fixed_petsc] = True
-        owned_fixed = np.sort(fixed_petsc[(fixed_petsc >= 18 * lo) & (fixed_petsc < 18 * hi)])
-        self.owned_fixed_local = owned_fixed - 18 * lo
+        owned_fixed = np.sort(fixed_petsc[(fixed_petsc >= DOFS_PER_NODE * lo) & (fixed_petsc < DOFS_PER_NODE * hi)])
+        self.owned_fixed_local = owned_fixed - DOFS_PER_NODE * lo
         self.blocks = element_blocks(model, layout, self.fixed_mask)
-        self.X = PETSc.Vec().createMPI((18 * (hi - lo), N), bsize=18, comm=comm)
+        self.X = PETSc.Vec().createMPI((DOFS_PER_NODE * (hi - lo), N), bsize=DOFS_PER_NODE, comm=comm)
         self.F = self.X.duplicate()
         q0_model = np.zeros(N)                  # reference state of every block (multipliers 0)
         q0_model[:model.n_dofs] = model.q0.reshape(-1)
@@ -105,7 +106,7 @@ class Problem:
         v = self.X.duplicate()
         lo, hi = self.layout.owned_nodes
         inv = np.argsort(self.layout.perm)[lo:hi]          # PETSc node → model node
-        v.setArray(arr_model.reshape(-1, 18)[inv].ravel())
+        v.setArray(arr_model.reshape(-1, DOFS_PER_NODE)[inv].ravel())
         return v
 
     @property
@@ -187,7 +188,7 @@ class Problem:
                 self.timers["element_kernels"] += t1 - t0
                 self.timers["element_assembly"] += time.perf_counter() - t1
             logging.event(logging.ELEMENTS).end()
-            d = (self.owned_fixed_local + 18 * self.layout.owned_nodes[0]).astype(PETSc.IntType)
+            d = (self.owned_fixed_local + DOFS_PER_NODE * self.layout.owned_nodes[0]).astype(PETSc.IntType)
             if len(d):
                 P.setValuesRCV(d[:, None], d[:, None], np.ones((len(d), 1, 1)), ADD)
             P.assemble()
@@ -323,7 +324,7 @@ class Problem:
         scat.scatter(X, full, INSERT, PETSc.ScatterMode.FORWARD)
         out = None
         if self.comm.rank == 0:
-            out = full.getArray()[:].reshape(-1, 18)[self.layout.perm].reshape(-1, 6, 3)
+            out = full.getArray()[:].reshape(-1, DOFS_PER_NODE)[self.layout.perm].reshape(-1, 6, 3)
             out = out if blocks else out[:self.model.n_nodes]
         scat.destroy()
         full.destroy()

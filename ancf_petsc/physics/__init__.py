@@ -1,1 +1,7 @@
-"""physics"""
+"""The continuum mechanics of one beam, in numpy (no PETSc, no config): the ANCF 3363 element
+(``element3363``: shape functions, eqs. 1-5), cross-sections (``section``, ``spline``,
+``polygon``, ``sections_file``) and their Gauss-Green cubature (``cubature``, eqs. 9-11), the
+materials (``materials``: neo-Hookean, eq. 14; St. Venant-Kirchhoff), the vectorised element
+kernels (``kernels``: internal forces and tangents over elements x Gauss points), the pretwisted
+reference geometry (``geometry``), rigid modes (``rigid``) and exact solutions for verification
+(``reference_solutions``)."""

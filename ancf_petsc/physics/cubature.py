@@ -260,7 +260,7 @@ def compress_rule(pts: np.ndarray, w: np.ndarray, degree: int,
         if cand.shape[0] < 1:
             continue
         A = basis(cand).T                                  # (n_mom, n_cand)
-        from scipy.optimize import nnls     # only here: scipy.optimize takes 60 ms to import
+        from scipy.optimize import nnls  # only here: scipy.optimize takes 60 ms to import
         x, _ = nnls(A, mom, maxiter=max(50 * n_mom, 3 * A.shape[1]))
         supp = np.flatnonzero(x > 0.0)
         if supp.size == 0:

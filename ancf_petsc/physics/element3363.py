@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import numpy as np
 
-NODE_XI = np.array([-1.0, 0.0, 1.0])
 NODES_PER_ELEMENT = 3
 VECTORS = ("r", "r_y", "r_z", "r_yy", "r_zz", "r_yz")
 VECTORS_PER_NODE = len(VECTORS)

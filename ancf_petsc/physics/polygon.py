@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import math
 from typing import Sequence
-import numpy as np
-from .spline import SplineCurve
 
+import numpy as np
+
+from .spline import SplineCurve
 
 _MAX_SEGMENTS = 4096          # cap on the fine polyline used for geometric checks
 

@@ -17,8 +17,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from .cubature import CompressionError, compress_rule, ellipse_rule, gauss_green_rule, rectangle_rule
-from .spline import SectionError, SplineCurve
 from .polygon import first_self_intersection, inside_with_margin, loop_polyline, segment_owner
+from .spline import SectionError, SplineCurve
 
 __all__ = ["SectionError", "SplineCurve", "Section", "make_ellipse", "make_circle", "make_rectangle",
            "make_outline"]

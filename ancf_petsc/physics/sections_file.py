@@ -4,9 +4,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
+
 import numpy as np
-from .spline import DEFAULT_SPLINE_DEGREE, SectionError, SplineCurve
+
 from .section import DEFAULT_CUBATURE_DEGREE, Section, make_outline
+from .spline import DEFAULT_SPLINE_DEGREE, SectionError, SplineCurve
 
 
 # --------------------------------------------------------------------------------------

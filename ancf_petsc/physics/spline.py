@@ -2,10 +2,11 @@
 from __future__ import annotations
 
 from typing import Any
+
 import numpy as np
 from scipy.interpolate import make_interp_spline
-from .cubature import CurvePiece
 
+from .cubature import CurvePiece
 
 DEFAULT_SPLINE_DEGREE = 3
 

@@ -1,1 +1,4 @@
-"""solving"""
+"""Solving a model: ``options`` (the SNES/KSP/PC options and the Jacobian's storage), ``stepper``
+(Newton with line search inside adaptive load stepping), ``run`` (one run from spec to results,
+its PETSc objects destroyed at the end), ``supports`` (rigid motions left free), ``interrupt``
+(signals between Newton solves)."""

@@ -17,8 +17,8 @@ from .. import status as st
 from ..config.specs import ModelSpec
 from ..contact import build_contact
 from ..errors import InputError
-from ..io.restart import read_restart
 from ..io.files import OutputError, prepare_output_dir
+from ..io.restart import read_restart
 from ..io.results import ResultsWriter
 from ..model.build import build_model
 from ..parallel.partition import make_layout, partition_stats
@@ -26,6 +26,7 @@ from ..petsc import logging
 from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..petsc.options import unused_command_line_options
 from ..petsc.problem import Problem
+from ..physics.element3363 import DOFS_PER_NODE
 from .interrupt import RunInterrupted
 from .options import matrix_type
 from .stepper import LoadStepFailure, LoadStepper, PathState
@@ -188,7 +189,7 @@ class Run:
             gaps = contact_gaps(problem, problem.X)        # collective: every rank its own points
             fields = contact_fields(problem, problem.X)
             path = None if blocks is None else {
-                "blocks": blocks.reshape(-1, 18), "increment_blocks": increment.reshape(-1, 18),
+                "blocks": blocks.reshape(-1, DOFS_PER_NODE), "increment_blocks": increment.reshape(-1, DOFS_PER_NODE),
                 "accepted_negative": stepper.path.accepted_negative}
             self.writer.write_step(rec, q, {"contact": gaps} if gaps is not None else None, fields, path)
             self.converged.append(rec)

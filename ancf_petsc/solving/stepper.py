@@ -22,7 +22,7 @@ from ..petsc.options import petsc_message, solver_hint, used_anywhere
 from ..petsc.problem import Problem
 from .interrupt import RunInterrupted, stop_requested
 from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
-    solver_options)
+                      solver_options)
 
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}

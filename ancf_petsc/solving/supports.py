@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.rigid import rigid_modes
 
 #: a combination of unit modes is free when its constraint violation (held DOFs in metres or
@@ -53,8 +54,8 @@ def free_rigid_motions(problem) -> list[str]:
     P.residual(None, X, P.F)                 # the contact projections of the reference state
     P.jacobian(None, X, P.J, P.J)
     lo, hi = P.layout.owned_nodes
-    held = P.fixed_mask[18 * lo:18 * hi]
-    constraint = np.repeat(~P.owned_physical, 18) & ~held
+    held = P.fixed_mask[DOFS_PER_NODE * lo:DOFS_PER_NODE * hi]
+    constraint = np.repeat(~P.owned_physical, DOFS_PER_NODE) & ~held
     scale = np.where(held, 1.0, 0.0) + np.where(constraint, 1.0 / (P.contact.stiffness if P.contact else 1.0), 0.0)
     v, y = X.duplicate(), X.duplicate()
     Y = np.empty_like(R)

@@ -3,11 +3,13 @@ from __future__ import annotations
 
 import csv
 import json
+
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, ScalarFormatter
+
 from .surface_mesh import MM
 
 

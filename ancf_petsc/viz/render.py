@@ -9,12 +9,13 @@ The surfaces are read by ``surface_mesh.read_surface``, which relies on the layo
 """
 from __future__ import annotations
 
-
 import numpy as np
 from matplotlib import cm, colormaps, colors
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from .surface_mesh import MM, SurfaceMesh, generator_columns, face_normals, outward_signs, quad_index, reference_lines, topology, field_values, read_surface
+
+from .surface_mesh import (MM, SurfaceMesh, face_normals, field_values, generator_columns, outward_signs,
+                           quad_index, read_surface, reference_lines, topology)
 
 
 def _box(points_mm: list[np.ndarray], section_scale: float | None) -> tuple[np.ndarray, np.ndarray,

@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-import numpy as np
 
+import numpy as np
 
 MM = 1.0e3  # model units are metres; figures are in millimetres
 

@@ -1,1 +1,3 @@
-"""workflows"""
+"""Many runs: ``study`` (speed-accuracy Pareto studies), ``stability`` (maps of where methods
+fail), ``accuracy`` and ``refinement`` (the coarsest mesh within a tolerance), ``sweep``
+(parameter sweeps, local or as SLURM job arrays)."""

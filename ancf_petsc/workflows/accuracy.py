@@ -17,8 +17,8 @@ import os
 import shutil
 import time
 
-from ..config.specs import ModelSpec
 from ..config.parse import parse_config
+from ..config.specs import ModelSpec
 from ..io.files import atomic_write
 from .refinement import choose, quantity
 

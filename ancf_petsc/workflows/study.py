@@ -38,8 +38,8 @@ from typing import Any, Callable
 
 import yaml
 
-from ..errors import InputError
 from ..config.specs import DEFAULT_AXIAL_POINTS
+from ..errors import InputError
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")

@@ -6,9 +6,10 @@ import json
 import os
 import re
 from typing import Any
-import yaml
-from ...errors import InputError
 
+import yaml
+
+from ...errors import InputError
 
 SWEEP_KEYS = ("base", "name", "mode", "parameters", "run", "output", "slurm")
 

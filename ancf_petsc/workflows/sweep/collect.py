@@ -6,10 +6,11 @@ import json
 import os
 from dataclasses import dataclass, field
 from typing import Any
+
 from ...io.files import atomic_write
 from .base import DONE_STATUSES, FAILED_STATUSES, STATUS_ORDER, _read_json
-from .spec import RunSpec, Sweep
 from .expand import expand
+from .spec import RunSpec, Sweep
 
 
 # ------------------------------------------------------------------------------ collection

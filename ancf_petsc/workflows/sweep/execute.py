@@ -12,8 +12,9 @@ import sys
 import threading
 import time
 from dataclasses import dataclass
-from ...status import EXIT_FAILED, EXIT_INPUT, EXIT_UNSTABLE
+
 from ...io.files import atomic_write
+from ...status import EXIT_FAILED, EXIT_INPUT, EXIT_UNSTABLE
 from .base import _read_json, _read_text, _remove
 from .spec import RunSpec, Sweep
 

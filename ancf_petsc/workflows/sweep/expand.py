@@ -8,7 +8,9 @@ import json
 import os
 import re
 from typing import Any
+
 import yaml
+
 from ...io.files import atomic_write
 from .base import DONE_STATUSES, _read_json, _read_text, _remove, set_key_path
 from .spec import RunSpec, Sweep

@@ -5,10 +5,11 @@ import os
 import threading
 from dataclasses import dataclass
 from typing import Callable
+
 from .base import FINAL_STATUSES
-from .spec import RunSpec, Sweep
-from .expand import expand, prepare_run
 from .execute import Outcome, _Active, execute_run
+from .expand import expand, prepare_run
+from .spec import RunSpec, Sweep
 
 
 # --------------------------------------------------------------------------- running a sweep

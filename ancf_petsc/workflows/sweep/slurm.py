@@ -6,12 +6,11 @@ import os
 import shlex
 import sys
 
-
 from ...io.files import atomic_write
 from .base import _remove
-from .spec import Sweep
-from .expand import expand, prepare_run
 from .execute import ATTEMPT_HEADER, solver_command
+from .expand import expand, prepare_run
+from .spec import Sweep
 
 
 # ----------------------------------------------------------------------------------- SLURM

@@ -7,9 +7,11 @@ import re
 import shlex
 from dataclasses import dataclass, field, replace
 from typing import Any
+
 from ...config.parse import parse_config
 from ...config.values import ConfigError
-from .base import LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, _Loader, _int, _load_yaml, _path_exists, _str, format_key_path, parse_key_path, set_key_path
+from .base import (LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, _int, _load_yaml,
+                   _Loader, _path_exists, _str, format_key_path, parse_key_path, set_key_path)
 
 
 # --------------------------------------------------------------------------- sweep spec

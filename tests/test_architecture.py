@@ -1,0 +1,199 @@
+"""The package's architecture, read from its imports (issue 15): layers that import only downwards,
+no import cycles, PETSc in one layer, size limits, and ``import ancf_petsc`` without PETSc.
+
+The layers, lowest first (README.md, "Architecture"); a module may import its own layer and the
+layers below it, never above:
+"""
+import ast
+import os
+import subprocess
+import sys
+
+import pytest
+
+from helpers import ROOT
+
+PACKAGE = os.path.join(ROOT, "ancf_petsc")
+#: layer of each top-level component of ancf_petsc (sub-package or root module)
+LAYERS = [
+    ("errors", "version", "status"),          # vocabulary shared by everything
+    ("physics",),                             # element 3363, sections and cubature, materials, kernels
+    ("contact",),                             # contact points, projection, multipliers, laws
+    ("config",),                              # YAML → validated ModelSpec (key-path errors)
+    ("geometry_input", "model"),              # measured outlines; ModelSpec → Model
+    ("io", "parallel"),                       # results on disk; layouts and partitions
+    ("petsc",),                               # Problem: PETSc Vec/Mat, SNES callbacks, exchange
+    ("solving",),                             # SNES options, load stepping, one run
+    ("viz",),                                 # figures from outputs
+    ("workflows",),                           # studies, stability maps, accuracy ladders, sweeps
+    ("api", "paper", "__init__"),             # the public API; the paper's reproduction
+]
+LAYER = {c: k for k, names in enumerate(LAYERS) for c in names}
+#: components that may import petsc4py / mpi4py (api only to initialise PETSc on first use)
+PETSC_COMPONENTS = {"petsc", "solving", "api"}
+#: functions longer than 60 lines, each with the reason it stays in one piece
+LONG_FUNCTIONS = {
+    "workflows/sweep/slurm.py:write_slurm": "one bash script, written line by line in order",
+    "workflows/sweep/spec.py:load_sweep": "one pass over a sweep file's keys, each checked in place",
+    "config/sections.py:_source": "one pass over a geometry source's keys, each checked in place",
+    "physics/sections_file.py:load_sections_file": "one pass over a sections file's keys",
+    "physics/section.py:make_outline": "the steps of eq. (11) and their checks, in order",
+    "physics/cubature.py:compress_rule": "one algorithm (moment-preserving rule compression)",
+    "physics/cubature.py:gauss_green_rule": "one algorithm (Gauss-Green cubature, eq. 11)",
+    "geometry_input/merge.py:_assemble": "one algorithm (outlines merged along shared boundaries)",
+    "model/build.py:build_model": "the model's parts built in dependency order",
+    "contact/blocks.py:_segment_blocks": "one vectorised block assembly over all segments",
+    "contact/multipliers.py:build_space": "one construction (the Bernstein pressure space)",
+    "config/bundle.py:expand_bundle": "one expansion of a bundle into beams, supports and loads",
+    "viz/render.py:_render": "one figure's layout, in drawing order",
+    "viz/charts.py:stability_chart": "one figure's layout, in drawing order",
+    "workflows/accuracy.py:select_and_run": "one ladder: solve, estimate, stop",
+}
+
+
+def _modules() -> dict[str, str]:
+    """Dotted module name → file, for every module of the package."""
+    out = {}
+    for base, _, files in os.walk(PACKAGE):
+        for f in files:
+            if f.endswith(".py"):
+                path = os.path.join(base, f)
+                rel = os.path.relpath(path, ROOT)[:-3].replace(os.sep, ".")
+                out[rel[:-9] if rel.endswith(".__init__") else rel] = path
+    return out
+
+
+MODULES = _modules()
+
+
+def _imports(name: str, path: str) -> list[tuple[str, int]]:
+    """(imported module, line) of every import in a module (also inside functions), resolved."""
+    tree = ast.parse(open(path).read())
+    package = name if path.endswith("__init__.py") else name.rsplit(".", 1)[0]
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1])
+                mod = f"{base}.{node.module}" if node.module else base
+            else:
+                mod = node.module
+            for a in node.names:           # "from package import module" imports the module
+                sub = f"{mod}.{a.name}"
+                out.append((sub if sub in MODULES else mod, node.lineno))
+    return out
+
+
+def _component(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+GRAPH = {m: [(i, ln) for i, ln in _imports(m, p) if i in MODULES] for m, p in MODULES.items()}
+
+
+def test_every_component_has_a_layer():
+    assert {_component(m) for m in MODULES} <= set(LAYER), set(_component(m) for m in MODULES) - set(LAYER)
+
+
+def test_imports_only_go_down_the_layers():
+    upward = [f"{m} (layer {LAYER[_component(m)]}) imports {i} (layer {LAYER[_component(i)]}) at line {ln}"
+              for m, edges in GRAPH.items() for i, ln in edges
+              if LAYER[_component(i)] > LAYER[_component(m)]]
+    assert not upward, "\n".join(upward)
+
+
+def test_nothing_in_the_library_imports_the_paper_reproduction():
+    users = [m for m, edges in GRAPH.items() for i, _ in edges
+             if _component(i) == "paper" and _component(m) != "paper"]
+    assert not users, users
+
+
+def test_no_import_cycles():
+    """Tarjan's strongly connected components of the module graph: all of size one."""
+    index, low, stack, on, cycles, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w, _ in GRAPH[v]:
+            if w == v:
+                continue
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    sys.setrecursionlimit(10000)
+    for v in GRAPH:
+        if v not in index:
+            visit(v)
+    assert not cycles, cycles
+
+
+def test_petsc_lives_in_one_layer():
+    """petsc4py and mpi4py are imported only by the PETSc layer and the solving layer on it."""
+    outside = [f"{m}:{ln} imports {i}" for m, p in MODULES.items() for i, ln in _imports(m, p)
+               if i.split(".")[0] in ("petsc4py", "mpi4py") and _component(m) not in PETSC_COMPONENTS]
+    assert not outside, "\n".join(outside)
+
+
+def test_importing_the_package_loads_neither_petsc_nor_mpi():
+    code = ("import sys, ancf_petsc; from ancf_petsc import config, physics, contact, model; "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('petsc4py', 'mpi4py')))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                       env=dict(os.environ, PYTHONPATH=ROOT))
+    assert p.returncode == 0 and p.stdout.strip() == "[]", p.stdout + p.stderr
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_small_pieces(name):
+    """No module over 400 lines, no class over 300, no function over 60 without a stated reason."""
+    path = MODULES[name]
+    src = open(path).read()
+    rel = os.path.relpath(path, PACKAGE)
+    assert src.count("\n") <= 400, f"{rel}: {src.count(chr(10))} lines"
+    for node in ast.walk(ast.parse(src)):
+        size = getattr(node, "end_lineno", 0) - getattr(node, "lineno", 0) + 1
+        if isinstance(node, ast.ClassDef):
+            assert size <= 310, f"{rel}: class {node.name} has {size} lines"
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and size > 60:
+            assert f"{rel}:{node.name}" in LONG_FUNCTIONS, f"{rel}: {node.name} has {size} lines"
+
+
+def test_long_function_reasons_are_current():
+    """Every listed long function still exists and is still long (else drop it from the list)."""
+    for key in LONG_FUNCTIONS:
+        rel, fn = key.split(":")
+        tree = ast.parse(open(os.path.join(PACKAGE, rel)).read())
+        sizes = [n.end_lineno - n.lineno + 1 for n in ast.walk(tree)
+                 if isinstance(n, ast.FunctionDef) and n.name == fn]
+        assert sizes and max(sizes) > 60, key
+
+
+def test_scripts_do_not_import_tests():
+    bad = []
+    for f in os.listdir(os.path.join(ROOT, "scripts")):
+        if f.endswith(".py"):
+            tree = ast.parse(open(os.path.join(ROOT, "scripts", f)).read())
+            for node in ast.walk(tree):
+                names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                         [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+                bad += [f"{f}: {n}" for n in names if n.split(".")[0] in ("tests", "helpers", "conftest")]
+    assert not bad, bad

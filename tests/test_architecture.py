@@ -197,3 +197,25 @@ def test_scripts_do_not_import_tests():
                          [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
                 bad += [f"{f}: {n}" for n in names if n.split(".")[0] in ("tests", "helpers", "conftest")]
     assert not bad, bad
+
+
+def test_object_state_is_declared_in_init():
+    """Every attribute a method sets (self.x = ...) is also set in __init__ (or is a dataclass field)."""
+    late = []
+    for name, path in MODULES.items():
+        for cls in [n for n in ast.walk(ast.parse(open(path).read())) if isinstance(n, ast.ClassDef)]:
+            declared = {st.target.id for st in cls.body
+                        if isinstance(st, ast.AnnAssign) and isinstance(st.target, ast.Name)}
+            set_in = {}
+            for fn in [n for n in cls.body if isinstance(n, ast.FunctionDef)]:
+                for node in ast.walk(fn):
+                    targets = node.targets if isinstance(node, ast.Assign) else \
+                        [node.target] if isinstance(node, (ast.AugAssign, ast.AnnAssign)) else []
+                    for t in targets:
+                        for x in ast.walk(t):
+                            if isinstance(x, ast.Attribute) and isinstance(x.value, ast.Name) \
+                                    and x.value.id == "self":
+                                (declared.add(x.attr) if fn.name == "__init__"
+                                 else set_in.setdefault(x.attr, fn.name))
+            late += [f"{name}.{cls.name}.{a} (set in {m})" for a, m in set_in.items() if a not in declared]
+    assert not late, late

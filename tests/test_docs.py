@@ -51,3 +51,24 @@ def test_config_reference_shows_the_default_axial_rule():
         text = fh.read()
     assert re.search(rf"^\s+axial_points: {DEFAULT_AXIAL_POINTS}\s+# Gauss points along xi", text, re.M)
     assert BeamSpec.__dataclass_fields__["axial_points"].default == DEFAULT_AXIAL_POINTS
+
+
+def test_readme_python_api_example_runs(tmp_path):
+    """The README's Python example, run as written (from a copy of the repository's configs, in
+    a fresh process: ``import ancf_petsc`` initialises nothing until ``solve``)."""
+    import shutil
+    import subprocess
+    import sys
+
+    from helpers import MPI_ENV
+    with open(README, encoding="utf-8") as fh:
+        text = fh.read()
+    code = re.search(r"\*\*Python API\.\*\*.*?```python\n(.*?)```", text, re.S).group(1)
+    shutil.copytree(os.path.join(ROOT, "configs"), tmp_path / "configs")
+    p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=300, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode == 0, p.stdout + p.stderr
+    first, second = p.stdout.splitlines()
+    assert first == "completed 0"
+    level, disp = second.split(" ", 1)
+    assert float(level) == 1.0 and disp.startswith("[") and float(disp.strip("[]").split()[0]) > 0.0

@@ -174,3 +174,29 @@ def test_petsc_snes_test_jacobian_agrees(tmp_path, config, tol):
     assert p.returncode in (0, 3), p.stderr
     ratios = [float(m) for m in re.findall(r"\|\|J - Jfd\|\|_F/\|\|J\|\|_F = ([0-9.eE+-]+)", p.stdout)]
     assert ratios and max(ratios) < tol, ratios
+
+
+def test_options_prefix_tunes_two_solves_in_one_process_apart(tmp_path):
+    """solver.options_prefix: -a_… options reach the solve with prefix a_ only; the config's
+    petsc: options are read under the prefix too, and leave no option behind."""
+    from petsc4py import PETSc
+
+    raw = load_raw("bending_neohookean.yaml")
+    opts = PETSc.Options()
+    already = set(opts.getAll())
+    opts["a_snes_linesearch_type"] = "bt"
+    try:
+        runs = {}
+        for prefix in ("a_", "b_"):
+            r = dict(raw, solver={"options_prefix": prefix}, petsc={"snes_max_it": 20})
+            runs[prefix] = run_inline(r, tmp_path / prefix)
+        before = set(opts.getAll())
+    finally:
+        opts.delValue("a_snes_linesearch_type")
+    assert "line search bt" in runs["a_"]["solver"] and "line search basic" in runs["b_"]["solver"]
+    assert all("max_it 20" in s["solver"] for s in runs.values())
+    assert all(s["status"] == "completed" for s in runs.values())
+    assert runs["a_"]["steps"][-1]["probes"]["tip"]["displacement"] == pytest.approx(
+        runs["b_"]["steps"][-1]["probes"]["tip"]["displacement"], rel=1e-8)
+    assert not runs["b_"]["unused_petsc_options"], runs["b_"]["unused_petsc_options"]
+    assert before - already == {"a_snes_linesearch_type"}      # the prefixed config options are gone

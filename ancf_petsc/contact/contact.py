@@ -75,6 +75,14 @@ class Contact:
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
         self._cache = None
+        # the rank's numbering (``set_numbering``): PETSc block of every element node, multiplier
+        # and segment multiplier node; the local segments, points and multipliers, which of those
+        # multipliers this rank reports, and Φ restricted to them
+        empty = np.zeros(0, dtype=np.int64)
+        self.conn, self.mult_block, self.seg_blocks = empty, empty, empty
+        self.segments, self.local, self.mults = empty, empty, empty
+        self.owned = np.zeros(0, dtype=bool)
+        self.Phi = None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
         self._check_reference_gaps()

@@ -72,6 +72,10 @@ class SectionField:
         self.names = list(self.stations[0].loops)
         self.fit_tolerance = fit_tolerance
         self.degree = spline_degree
+        self._why_not = ""                  # why the stations do not share their curves
+        self.rings: list = []               # resampled outlines per station (``_register``), ...
+        self.centres: list = []             # ... their area centroids ...
+        self.theta: list = []               # ... and the rotation between neighbouring stations
         self.structured = self._share_equal_curves()
         self.reason = "" if self.structured else self._why_not
         if not self.structured:

@@ -1,6 +1,6 @@
 """The whole measured tendon: every station built, sections at any x, twist-axis rules.
 
-:class:`TendonGeometry` is what ``model.build_model`` asks for loops (x = 0, or any x when the
+:class:`TendonGeometry` is what ``model.build.build_model`` asks for loops (x = 0, or any x when the
 sections vary along the tendon), outline rings for the output, the junction where all outlines
 meet, and the report printed at the start of a run.
 """

@@ -1,7 +1,7 @@
 """Continue a run from the last converged level in its results.h5 (``ancf-solve --restart DIR``).
 
 Every converged level stores what the load stepping needs to go on exactly as an uninterrupted
-run would (output.py): the nodal vectors, the contact multipliers, the projection state of every
+run would (results.py): the nodal vectors, the contact multipliers, the projection state of every
 contact point and the status of every multiplier, the last accepted increment of the state and
 of the load, and the next load increment.  All of it is in model order, so a restart may use
 another number of ranks.  The model must be the one that wrote the file: the config's model

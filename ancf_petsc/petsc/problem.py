@@ -41,7 +41,7 @@ class Problem:
                              "(element 3363); use matrix_type 'aij'")
         if contact is not None and layout.n_blocks != model.n_nodes + contact.space.n_nodes:
             raise ValueError("the layout has no blocks for the contact multipliers; make it with "
-                             "partition.make_layout(..., contact)")
+                             "parallel.partition.make_layout(..., contact)")
         self.matrix_type = matrix_type
         self.model, self.layout, self.comm, self.contact = model, layout, comm, contact
         self.load_factor = 0.0

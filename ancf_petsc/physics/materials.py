@@ -191,7 +191,7 @@ class StVenantKirchhoff:
 
 
 def make_material(spec: dict):
-    """Material from a validated config mapping (see ``config.py``)."""
+    """Material from a validated config mapping (see ``config/beams.py``)."""
     if spec["model"] == "neo-hookean":
         return NeoHookean(spec["mu"], spec["bulk_modulus"])
     return StVenantKirchhoff(spec["E"], spec["nu"])

@@ -3,7 +3,7 @@
 ``check_value`` is pure Python (the config layer calls it before PETSc is initialised); it
 mirrors PETSc 3.18's ``PetscOptionsStringToReal/Int/Bool`` (strtod/strtol over the whole string,
 plus the words DEFAULT and DECIDE) and its type registries (case-sensitive names, e.g. ``lu``;
-case-insensitive enum values, e.g. ``nonzero``).  tests/test_edges.py checks these tables against
+case-insensitive enum values, e.g. ``nonzero``).  tests/apps/test_edges.py checks these tables against
 the PETSc library itself.  Options not in the tables are passed on unchecked; a misspelt one is
 caught after the run by ``petsc.options.unused_command_line_options`` (PETSc's own
 ``PetscOptionsUsed`` flags).

@@ -10,7 +10,7 @@ from ancf_petsc.physics.spline import SectionError, SplineCurve
 from ancf_petsc.physics.sections_file import inline_loop, load_sections_file
 from ancf_petsc.physics.section import make_circle, make_ellipse, make_outline, make_rectangle
 
-SECTIONS = Path(__file__).resolve().parents[1] / "configs" / "data" / "achilles_type3_sections.yaml"
+SECTIONS = Path(__file__).resolve().parents[2] / "configs" / "data" / "achilles_type3_sections.yaml"
 TYPE3 = ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")
 
 

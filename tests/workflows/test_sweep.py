@@ -140,6 +140,9 @@ def test_failures_are_classified_and_listed(tmp_path):
     rows = read_csv(tmp_path / "sweeps" / "sweep" / "results.csv")
     assert [r["status"] for r in rows] == ["completed", "config_error", "failed"]
     assert "DIVERGED" in rows[2]["reason"] and "could not reach load factor 0.1" in rows[2]["reason"]
+    # the machine-readable reasons: read these, not the text
+    assert [r["reason_code"] for r in rows[:2]] == ["COMPLETED", "CONFIG_ERROR"]
+    assert rows[2]["reason_code"].startswith("DIVERGED_"), rows[2]
     assert rows[2]["load_factor"] == "" and rows[0]["tip_dx"] != ""
     with open(tmp_path / "sweeps" / "sweep" / "failed.txt") as fh:
         failed = fh.read().splitlines()

@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...io.files import atomic_write
-from .base import DONE_STATUSES, FAILED_STATUSES, STATUS_ORDER, _read_json
+from .base import DONE_STATUSES, FAILED_STATUSES, FINAL_STATUSES, STATUS_ORDER, _read_json
+from .execute import reason_code
 from .expand import expand
 from .spec import RunSpec, Sweep
 
@@ -20,6 +21,7 @@ class RunState:
     run: RunSpec
     status: str                     # FINAL_STATUSES, 'running' or 'missing'
     reason: str = ""
+    reason_code: str = ""           # machine-readable (execute.reason_code); read this, not ``reason``
     load_factor: float | None = None
     probes: dict[str, list] = field(default_factory=dict)
     newton_iterations: int | None = None
@@ -55,6 +57,9 @@ def run_state(run: RunSpec) -> RunState:
         its = summary.get("newton_iterations")
         st.newton_iterations = its if its is not None else sum(s.get("iterations") or 0 for s in steps)
         st.wall_time = (summary.get("timings") or {}).get("total")
+    if st.status in FINAL_STATUSES:
+        st.reason_code = reason_code(run.dir, st.status) if rstat != st.status or not record \
+            else str(record.get("reason_code") or reason_code(run.dir, st.status))
     if record and record.get("wall_time") is not None and rstat != "running":
         st.wall_time = record["wall_time"]
     return st
@@ -99,7 +104,7 @@ def collect(sweep: Sweep) -> Collection:
         for name in s.probes:
             if name not in probes:
                 probes.append(name)
-    header = (["run_id"] + [p.path for p in sweep.parameters] + ["status", "reason", "load_factor"]
+    header = (["run_id"] + [p.path for p in sweep.parameters] + ["status", "reason_code", "reason", "load_factor"]
               + [f"{p}_{c}" for p in probes for c in ("dx", "dy", "dz")]
               + ["newton_iterations", "wall_time"])
     os.makedirs(sweep.output, exist_ok=True)
@@ -110,7 +115,7 @@ def collect(sweep: Sweep) -> Collection:
         w.writerow(header)
         for s in states:
             row = [s.run.run_id] + [_csv_value(s.run.params[p.path]) for p in sweep.parameters]
-            row += [s.status, s.reason, _csv_value(s.load_factor)]
+            row += [s.status, s.reason_code, s.reason, _csv_value(s.load_factor)]
             for p in probes:
                 d = s.probes.get(p) or [None, None, None]
                 row += [_csv_value(x) for x in d]

@@ -119,6 +119,19 @@ def classify(run_dir: str, returncode: int | None, stderr_lines: list[str],
     return "crashed", reason or f"exit code {returncode}"
 
 
+#: reason codes of sweep statuses that ancf-solve does not report itself
+SWEEP_CODES = {"config_error": "CONFIG_ERROR", "timeout": "TIMEOUT", "crashed": "CRASHED"}
+
+
+def reason_code(run_dir: str, status: str) -> str:
+    """The machine-readable reason of an attempt: summary.json's ``reason_code`` (the SNES reason,
+    NEWTON_BUDGET_EXCEEDED, OUTPUT_ERROR, SIGTERM, ...) or the sweep's own (``SWEEP_CODES``)."""
+    if status in SWEEP_CODES:
+        return SWEEP_CODES[status]
+    summary = _read_json(os.path.join(run_dir, "summary.json")) or {}
+    return str(summary.get("reason_code") or ("COMPLETED" if status == "completed" else ""))
+
+
 def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
                    stderr_lines: list[str] | None = None, timed_out: bool = False,
                    timeout: float | None = None, extra: dict | None = None,
@@ -133,7 +146,8 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
         status, reason = classify(run_dir, returncode, stderr_lines, timed_out, timeout)
     record = _read_json(os.path.join(run_dir, "run.json")) or {}
     record.update(extra or {})
-    record.update({"status": status, "reason": reason, "wall_time": wall_time,
+    record.update({"status": status, "reason": reason, "reason_code": reason_code(run_dir, status),
+                   "wall_time": wall_time,
                    "returncode": returncode, "finished": time.strftime("%Y-%m-%dT%H:%M:%S")})
     atomic_write(os.path.join(run_dir, "run.json"), json.dumps(record, indent=1) + "\n")
     return Outcome(status, reason, wall_time, returncode)

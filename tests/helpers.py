@@ -127,3 +127,15 @@ def _paper_inputs():
 
 #: the reproduction's inputs in this checkout
 PAPER_INPUTS = _paper_inputs()
+
+
+def jacobian_and_difference(P, X, v, h: float = 1e-7):
+    """(J v, central difference (F(X + h v) − F(X − h v)) / 2h, X + h v, X − h v) for a Problem
+    whose Jacobian was assembled at X."""
+    Jv, Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.duplicate(), X.copy(), X.copy()
+    P.J.mult(v, Jv)
+    Xp.axpy(h, v)
+    Xm.axpy(-h, v)
+    P.residual(None, Xp, Fp)
+    P.residual(None, Xm, Fm)
+    return Jv.getArray().copy(), (Fp.getArray() - Fm.getArray()) / (2 * h), Xp, Xm

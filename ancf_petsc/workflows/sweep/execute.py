@@ -13,9 +13,9 @@ import threading
 import time
 from dataclasses import dataclass
 
-from ...io.files import atomic_write
+from ...io.files import atomic_write, remove_quietly
 from ...status import EXIT_FAILED, EXIT_INPUT, EXIT_UNSTABLE
-from .base import _read_json, _read_text, _remove
+from .base import _read_json, _read_text
 from .spec import RunSpec, Sweep
 
 
@@ -216,8 +216,8 @@ def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Ou
     active = active or _Active()
     cmd = solve_command(sweep, run)              # decides on a restart from summary.json
     if "--restart" not in cmd:
-        _remove(os.path.join(run.dir, "summary.json"))
-    _remove(os.path.join(run.dir, "run.json"))
+        remove_quietly(os.path.join(run.dir, "summary.json"))
+    remove_quietly(os.path.join(run.dir, "run.json"))
     atomic_write(os.path.join(run.dir, "run.json"), json.dumps(
         {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
          "host": socket.gethostname(), "sweep_pid": os.getpid(), "ranks": sweep.ranks,

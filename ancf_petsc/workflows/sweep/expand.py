@@ -11,8 +11,8 @@ from typing import Any
 
 import yaml
 
-from ...io.files import atomic_write
-from .base import DONE_STATUSES, _read_json, _read_text, _remove, set_key_path
+from ...io.files import atomic_write, remove_quietly
+from .base import DONE_STATUSES, _read_json, _read_text, set_key_path
 from .spec import RunSpec, Sweep
 
 
@@ -106,7 +106,7 @@ def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     old = _read_text(cfg_path)
     if old != text:
         if old is not None:
-            _remove(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
+            remove_quietly(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
         atomic_write(cfg_path, text)
     params = {"sweep": sweep.name, "sweep_file": sweep.file, "base": sweep.base,
               "run_id": run.run_id, "index": run.index, "parameters": run.params}

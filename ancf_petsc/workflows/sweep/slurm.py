@@ -6,8 +6,7 @@ import os
 import shlex
 import sys
 
-from ...io.files import atomic_write
-from .base import _remove
+from ...io.files import atomic_write, remove_quietly
 from .execute import ATTEMPT_HEADER, solver_command
 from .expand import expand, prepare_run
 from .spec import Sweep
@@ -44,7 +43,7 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     for run in runs:
         prepare_run(sweep, run)
         if force:
-            _remove(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
+            remove_quietly(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
     runs_txt = os.path.join(sweep.output, "runs.txt")
     atomic_write(runs_txt, "".join(r.dir + "\n" for r in runs))
     tasks = os.path.join(sweep.output, "tasks")

@@ -2,9 +2,9 @@
 projection, gap derivatives, the multiplier (pressure) space and the contact laws.  No PETSc here:
 ``Contact`` fills local arrays and returns dense blocks that the assembly layer inserts."""
 from .contact import Contact, build_contact, reference_stiffness
-from .interfaces import Interface, find_interfaces
+from .interfaces import ContactSetupError, Interface, find_interfaces
 from .laws import LAWS
 from .reports import GAP_COLUMNS
 
-__all__ = ["Contact", "GAP_COLUMNS", "Interface", "LAWS", "build_contact", "find_interfaces",
+__all__ = ["Contact", "ContactSetupError", "GAP_COLUMNS", "Interface", "LAWS", "build_contact", "find_interfaces",
            "reference_stiffness"]

@@ -20,10 +20,9 @@ import time
 
 import numpy as np
 
-from ..errors import InputError
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, reports
-from .interfaces import find_interfaces
+from .interfaces import ContactSetupError, find_interfaces
 from .laws import make_law
 from .multipliers import build_space
 from .points import build_points
@@ -258,12 +257,12 @@ class Contact:
         self._cache = None
         if self.law.name == "unilateral":
             if not st.pr.in_window or np.min(g, initial=0.0) < -1e-9 * size:
-                raise InputError("contact", "the bodies interpenetrate in the reference configuration "
+                raise ContactSetupError("the bodies interpenetrate in the reference configuration "
                                             f"(gap {np.min(g):.3e} m); separate them")
             return
         gap = np.linalg.norm(st.pr.d, axis=1)
         if not st.pr.in_window or gap.max() > 1e-9 * size:
-            raise InputError("contact", f"the interfaces do not match in the reference configuration "
+            raise ContactSetupError(f"the interfaces do not match in the reference configuration "
                                         f"(largest gap {gap.max():.3e} m); neighbours must share "
                                         "their interface curve and element boundaries")
 

@@ -2,13 +2,21 @@
 
 Quadrature points live on body A's side of the interface and are projected onto body B's.
 ``find_interfaces`` takes them from explicit pairs in the contact spec or finds every curve two
-outlines share.  Errors are ``InputError``s naming the ``contact`` keys.
+outlines share.  Errors are ``ContactSetupError``s; the model layer names their config keys.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..errors import InputError
+
+
+class ContactSetupError(ValueError):
+    """Contact cannot be set up as given; ``interface`` is the index of the interface concerned
+    (``contact.interfaces[k]``) or None for the contact as a whole."""
+
+    def __init__(self, message: str, interface: int | None = None):
+        super().__init__(message)
+        self.interface = interface
 
 
 @dataclass
@@ -40,15 +48,15 @@ def _explicit_pairs(model, spec) -> list:
             ca = [c for c, _ in (a.section.loop or []) if c.name == cname]
             cb = [(c, f) for c, f in (b.section.loop or []) if c.name == cname_b]
             if not ca or not cb:
-                raise InputError(f"contact.interfaces[{k}]", f"no curve {cname!r} in {a.name}'s "
-                                 f"outline or {cname_b!r} in {b.name}'s")
+                raise ContactSetupError(f"no curve {cname!r} in {a.name}'s outline or {cname_b!r} in "
+                                        f"{b.name}'s", k)
             pairs.append((a, b, ca[0], cb[0][1], cb[0][0]))
             continue
         found = [(c, f) for c, f in _shared(a, b) if cname is None or c.name == cname]
         if not found:
-            raise InputError(f"contact.interfaces[{k}]", f"beams {a.name} and {b.name} share no "
-                             "outline curve" + (f" named {cname!r}" if cname else "")
-                             + "; interfaces are curves used by both section outlines")
+            raise ContactSetupError(f"beams {a.name} and {b.name} share no outline curve"
+                                    + (f" named {cname!r}" if cname else "")
+                                    + "; interfaces are curves used by both section outlines", k)
         pairs += [(a, b, c, f, None) for c, f in found]
     return pairs
 
@@ -65,7 +73,7 @@ def _automatic_pairs(model) -> list:
                 a, b = first, second
             pairs += [(a, b, c, f, None) for c, f in _shared(a, b)]
     if not pairs:
-        raise InputError("contact", "no two beam outlines share a curve; give the neighbours a "
+        raise ContactSetupError("no two beam outlines share a curve; give the neighbours a "
                                     "common named curve or remove contact")
     return pairs
 
@@ -76,7 +84,7 @@ def find_interfaces(model, spec) -> list[Interface]:
     out = []
     for a, b, c, fb, cb in pairs:
         if a.n_elements != b.n_elements:
-            raise InputError("contact", f"interface {c.name}: beams {a.name} ({a.n_elements} "
+            raise ContactSetupError(f"interface {c.name}: beams {a.name} ({a.n_elements} "
                              f"elements) and {b.name} ({b.n_elements}) must have the same number "
                              "of elements so that the interface is conforming")
         out.append(Interface(f"{c.name} ({a.name}|{b.name})", a, b, c, fb, cb))

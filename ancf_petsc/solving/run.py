@@ -15,12 +15,12 @@ from petsc4py import PETSc
 
 from .. import status as st
 from ..config.specs import ModelSpec
-from ..contact import build_contact
 from ..errors import InputError
 from ..io.files import OutputError, prepare_output_dir
 from ..io.restart import read_restart
 from ..io.results import ResultsWriter
 from ..model.build import build_model
+from ..model.contact_setup import contact_for
 from ..parallel.partition import make_layout, partition_stats
 from ..petsc import logging
 from ..petsc.contact_reports import contact_fields, contact_gaps
@@ -115,7 +115,7 @@ class Run:
         logging.stage(logging.SETUP).push()
         try:
             self.model = build_model(spec)
-            self.contact = build_contact(self.model, spec.contact, say) if spec.contact else None
+            self.contact = contact_for(self.model, spec.contact, say) if spec.contact else None
             self.layout = make_layout(self.model, spec.partition, comm.size, comm.rank, self.contact,
                                       comm.tompi4py())
             self.partition = partition_stats(self.layout, self.model, self.contact)

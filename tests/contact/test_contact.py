@@ -169,3 +169,25 @@ def test_removed_penalty_keys_are_config_errors():
             parse_config(raw, base_dir=CONFIGS)
     with pytest.raises(ConfigError, match="contact.projection: a multiplier per point"):
         parse_config(achilles(contact={"projection": "pointwise"}), base_dir=CONFIGS)
+
+
+@pytest.mark.parametrize("case, key, words", [
+    ("no shared curve", "contact", "no two beam outlines share a curve"),
+    ("unknown curve", "contact.interfaces[0]", "share no outline curve named 'nosuch'"),
+    ("elements differ", "contact", "must have the same number of elements"),
+])
+def test_contact_setup_errors_name_their_config_key(case, key, words):
+    """The contact layer's setup errors reach the user as config errors naming the key
+    (model/contact_setup.py is the one boundary that knows the keys)."""
+    import ancf_petsc
+    from helpers import CONFIGS, two_beam_twisted
+    if case == "no shared curve":
+        raw = dict(two_beam_twisted(), contact={})
+    elif case == "unknown curve":
+        raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius", "curve": "nosuch"}]})
+    else:
+        raw = achilles()
+        raw["beams"][1]["elements"] = 3
+    spec = ancf_petsc.parse_config(raw, base_dir=CONFIGS)
+    with pytest.raises(ancf_petsc.ConfigError, match=rf"^{key.replace('[', '.').replace(']', '.')}: .*{words}"):
+        ancf_petsc.solve(spec, log=lambda *_: None)

@@ -1,0 +1,17 @@
+"""Contact for a model, with the contact layer's setup errors named by their config keys
+(``contact`` or ``contact.interfaces[k]``): the boundary between the config and the contact code."""
+from __future__ import annotations
+
+from ..config.specs import ContactSpec
+from ..config.values import ConfigError
+from ..contact import Contact, ContactSetupError, build_contact
+from .beams import Model
+
+
+def contact_for(model: Model, spec: ContactSpec, log=print) -> Contact:
+    """``contact.build_contact``; a ContactSetupError becomes a ConfigError naming the key."""
+    try:
+        return build_contact(model, spec, log)
+    except ContactSetupError as exc:
+        key = "contact" if exc.interface is None else f"contact.interfaces[{exc.interface}]"
+        raise ConfigError(key, str(exc)) from None

@@ -152,4 +152,3 @@ class ModelSpec:
     sections: Any = None                   # geometry.sections (config.sections.SectionsSpec)
     twist_rule: tuple = ("point",)         # twist-axis rule (model.build.resolve_twist_axis); twist_axis then
     twist_default: bool = False            # holds the resolved point; True: the rule was not given
-

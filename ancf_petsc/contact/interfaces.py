@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 
-
 class ContactSetupError(ValueError):
     """Contact cannot be set up as given; ``interface`` is the index of the interface concerned
     (``contact.interfaces[k]``) or None for the contact as a whole."""

@@ -62,4 +62,3 @@ def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
             return None
         counts.append(int(value.value))
     return counts[0], counts[1]
-

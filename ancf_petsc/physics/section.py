@@ -317,5 +317,3 @@ def make_outline(loop: Sequence[tuple[SplineCurve, bool]],
                   degree, loop=items, shape_params={"offset": offset}, notes=notes)
     sec._poly_cache = (poly - c_loc, sag)
     return sec
-
-

@@ -98,8 +98,9 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     read by MUMPS at its first symbolic factorisation): those stay for the run, like command-line
     ones (-ksp_view, -ksp_converged_reason are read at every solve), until ``LoadStepper.close``.
 
-    The SNES must carry ``prefix`` already (``snes.setOptionsPrefix``).  Returns the line-search type in effect (petsc4py 3.18 cannot query it from the SNES) and the
-    option names (with the prefix) left in the database.  A value or combination PETSc refuses raises
+    The SNES must carry ``prefix`` already (``snes.setOptionsPrefix``).  Returns the line-search
+    type in effect (petsc4py 3.18 cannot query it from the SNES) and the option names (with the
+    prefix) left in the database.  A value or combination PETSc refuses raises
     ``SolverOptionError`` (the same on every rank: the options are).
     """
     opts = PETSc.Options()
@@ -137,8 +138,6 @@ def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "") 
     pc, factor = factor_package(config_options, prefix)
     return (f"PETSc refused the solver options {solver_options(config_options, prefix)} on {ranks} "
             f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
-
-
 
 
 def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = "") -> dict:

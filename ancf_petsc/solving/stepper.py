@@ -1,9 +1,9 @@
 """SNES Newton with line search inside an adaptive load-stepping loop (paper §3, static case).
 
-The SNES's options are set up by ``options.py``.  Load stepping: from the last converged load factor λ the stepper tries an increment Δλ; on a
-converged SNES it accepts it (growing Δλ after easy steps), on divergence (including NaN
-residuals from inverted elements, J ≤ 0) it restores the last converged state and halves Δλ,
-at most ``max_cutbacks`` times in a row.  Requested levels are always hit exactly.  All
+The SNES's options are set up by ``options.py``.  Load stepping: from the last converged load
+factor λ the stepper tries an increment Δλ; on a converged SNES it accepts it (growing Δλ after
+easy steps), on divergence (including NaN residuals from inverted elements, J ≤ 0) it restores
+the last converged state and halves Δλ, at most ``max_cutbacks`` times in a row.  Requested levels are always hit exactly.  All
 decisions use the SNES converged reason, which is the same on every rank.
 """
 from __future__ import annotations
@@ -34,6 +34,7 @@ REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
 #: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
 UNCLEAN_STATE = -1001
 REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
+
 
 def reason_name(reason: int) -> str:
     return REASONS.get(reason, str(reason))
@@ -182,7 +183,8 @@ class LoadStepper:
             extra = f" ({pc.getFactorSolverType()})"
         rtol, atol, stol, maxit = self.snes.getTolerances()
         return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
-                f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} stol {stol:.1e} max_it {maxit}; "
+                f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
+                f"stol {stol:.1e} max_it {maxit}; "
                 f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}")
 
     def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float) -> tuple[int, int, float]:

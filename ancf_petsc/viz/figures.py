@@ -1,4 +1,5 @@
-"""Line charts of run results: load-elongation against the paper, convergence under refinement, slip and pressure along the tendon; and the small readers they use."""
+"""Line charts of run results: load-elongation against the paper, convergence under refinement, slip
+and pressure along the tendon; and the small readers they use."""
 from __future__ import annotations
 
 import csv

@@ -327,5 +327,3 @@ def render_pair(vtu_a: str, vtu_b: str, out_png: str, titles: tuple[str, str] = 
         mesh, fv = _prepare(path, color_by)
         panels.append((mesh, fv, read_surface(ref) if ref else None, title))
     return _render(panels, out_png, cmap, clim, view, section_scale, vertical)
-
-

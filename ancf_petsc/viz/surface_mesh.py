@@ -1,4 +1,5 @@
-"""The surfaces of a run's surface_NNNN.vtu as a mesh: per-beam grids of stations x ring points, the faces between beams, normals and the lines drawn on them."""
+"""The surfaces of a run's surface_NNNN.vtu as a mesh: per-beam grids of stations x ring points, the
+faces between beams, normals and the lines drawn on them."""
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,4 +1,5 @@
-"""Sweep vocabulary and small helpers: statuses, the sweep-file error, YAML loading, key paths into a config (``beams[0].material.mu``)."""
+"""Sweep vocabulary and small helpers: statuses, the sweep-file error, YAML loading, key paths into a
+config (``beams[0].material.mu``)."""
 from __future__ import annotations
 
 import copy
@@ -57,7 +58,6 @@ _Loader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
     list("-+0123456789."))
-
 
 
 # ------------------------------------------------------------------------------ key paths

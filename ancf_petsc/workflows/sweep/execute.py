@@ -1,4 +1,5 @@
-"""One run of a sweep as a child ancf-solve process: the command, its outcome classified from the exit code and summary.json, kill on timeout or cancel."""
+"""One run of a sweep as a child ancf-solve process: the command, its outcome classified from the exit
+code and summary.json, kill on timeout or cancel."""
 from __future__ import annotations
 
 import json

@@ -1,4 +1,5 @@
-"""A sweep's runs: the parameter values of each, its directory with the substituted config, and whether it is already done."""
+"""A sweep's runs: the parameter values of each, its directory with the substituted config, and whether
+it is already done."""
 from __future__ import annotations
 
 import copy

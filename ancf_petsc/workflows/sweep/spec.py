@@ -1,4 +1,5 @@
-"""The sweep file: base config, parameters (key paths and values), how runs are run, SLURM settings; every error names its key in the sweep file."""
+"""The sweep file: base config, parameters (key paths and values), how runs are run, SLURM settings;
+every error names its key in the sweep file."""
 from __future__ import annotations
 
 import copy

@@ -49,6 +49,9 @@ def run_column(root: str, psi: int, mode: str, repeat: int, out: str) -> dict:
                            cwd=root, capture_output=True, text=True, env=dict(os.environ, **ENV, PYTHONPATH=root))
         wall = time.perf_counter() - t0
         best = wall if best is None else min(best, wall)
+    if p.returncode not in (0,):
+        sys.exit(f"bench_contact: {root} ψ={psi} {mode} exited {p.returncode}: "
+                 f"{(p.stderr or p.stdout).strip().splitlines()[-1:]}")
     with open(os.path.join(out, f"psi{psi}_{mode}", "summary.json")) as fh:
         s = json.load(fh)
     jumps = [h[1] / h[0] for st in s["steps"] for h in st.get("newton_history", []) if len(h) > 1 and h[0] > 0]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Strong scaling and linear solvers on the 37-fascicle bundle (issue 4).
+"""Strong scaling and linear solvers on the 37-fascicle bundle (issues 4 and 16).
 
 Runs ``configs/bundle_hex37.yaml`` (37 twisted hexagonal fascicles, 16 elements each, 21 978 DOFs,
 90 sliding interfaces, METIS partition, two load levels) with ``ancf-solve`` under mpirun and
@@ -8,20 +8,29 @@ assembly, linear solve = KSPSolve + PCSetUp: PETSc events of the -log_view stage
 and Krylov work, and the speed-up and parallel efficiency of 2 ranks over 1, both on the wall
 clock of the whole command (mpirun, interpreter start-up and imports included) and on the run
 itself (set-up + load stepping + output, as ancf-solve reports it).  Every timed configuration is
-run ``--repeat`` times and the fastest is kept.  One table compares linear solvers: MUMPS LDLᵀ
-(the default), MUMPS LDLᵀ refactored every third Newton iteration inside GMRES, MUMPS LU, and GMRES
-with block Jacobi (ILU), ASM (overlap 1, ILU) and GAMG with the rigid-body near null space.
-Every run's probes are compared with the first run.  Each run's full -log_view is kept in
-<out>/<run>/log_view.txt.
+run ``--repeat`` times and the fastest is kept.  One table compares linear solvers: the
+fascicle-parallel solver (``solver.linear: fieldsplit``, petsc/fieldsplit.py; what ``auto`` picks
+here), MUMPS LDLᵀ of the whole Jacobian (``solver.linear: direct``), the same refactored every
+third Newton iteration inside GMRES, MUMPS LU, and GMRES with block Jacobi (ILU), ASM (overlap 1,
+ILU) and GAMG with the rigid-body near null space.  Every run's probes are compared with the
+first run.  Each run's full -log_view is kept in <out>/<run>/log_view.txt.
+
+``--messages`` instead runs both solvers of ``solver.linear`` at 2, 3 and 4 ranks
+(oversubscribed on a small machine: the counts do not depend on it) and tabulates PETSc's MPI
+message counts, volumes and reductions from -log_view: in all, per Newton iteration, and for
+the events that send them.  MUMPS's own messages (inside the factorisations and solves) are
+not in PETSc's log.
 
 Usage: python scripts/bench_scaling.py [--config configs/bundle_hex37.yaml] [--steps 0.5 1.0]
                                        [--out results/bench_scaling] [--quick] [--repeat 2]
+                                       [--messages [--ranks 2 3 4]]
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -33,8 +42,10 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
 KRYLOV = ["-ksp_type", "gmres", "-ksp_rtol", "1e-8", "-ksp_max_it", "300", "-ksp_gmres_restart", "300"]
+#: name → PETSc options, or a config ``solver.linear`` value (str)
 SOLVERS = {
-    "mumps-ldlt": ["-ksp_type", "preonly", "-pc_type", "cholesky", "-pc_factor_mat_solver_type", "mumps"],
+    "fieldsplit": "fieldsplit",
+    "mumps-ldlt": "direct",
     "mumps-ldlt-lagged": ["-ksp_type", "gmres", "-ksp_rtol", "1e-9", "-pc_type", "cholesky",
                           "-pc_factor_mat_solver_type", "mumps", "-snes_lag_preconditioner", "3"],
     "mumps-lu": ["-ksp_type", "preonly", "-pc_type", "lu", "-pc_factor_mat_solver_type", "mumps"],
@@ -43,14 +54,18 @@ SOLVERS = {
     "gmres+gamg(rbm)": KRYLOV + ["-pc_type", "gamg", "-pc_gamg_threshold", "0.01"],
 }
 #: the solvers timed at 1 and 2 ranks (the others only at 2, where they fail)
-SCALED = ("mumps-ldlt", "mumps-ldlt-lagged", "mumps-lu")
+SCALED = ("fieldsplit", "mumps-ldlt", "mumps-ldlt-lagged", "mumps-lu")
 
 
-def run(name: str, ranks: int, opts: list[str], base: dict, out: str, repeat: int = 1) -> dict:
-    """Solve ``base`` with ``ranks`` ranks ``repeat`` times; the fastest run's figures."""
+def run(name: str, ranks: int, opts, base: dict, out: str, repeat: int = 1) -> dict:
+    """Solve ``base`` with ``ranks`` ranks ``repeat`` times; the fastest run's figures.  ``opts``
+    is a list of PETSc options or a ``solver.linear`` value."""
     d = os.path.join(out, name)
     os.makedirs(d, exist_ok=True)
     raw = dict(base, output={"dir": d, "vtk": False})
+    if isinstance(opts, str):
+        raw["solver"] = dict(base.get("solver", {}), linear=opts)
+        opts = []
     cfg = os.path.join(d, "config.yaml")
     with open(cfg, "w") as fh:
         yaml.safe_dump(raw, fh, sort_keys=False)
@@ -75,7 +90,8 @@ def run(name: str, ranks: int, opts: list[str], base: dict, out: str, repeat: in
                "contact": t.get("contact_projection", 0.0) + t.get("contact_assembly", 0.0),
                "linear": t.get("linear_solve", np.nan), "newton": s.get("newton_iterations", 0),
                "krylov": int(np.sum(ksp_its)) if ksp_its else 0, "summary": s,
-               "failed_linear": p.stdout.count("Linear solve did not converge")}
+               "failed_linear": p.stdout.count("Linear solve did not converge"),
+               "log_view": os.path.join(d, "log_view.txt")}
         print(f"[bench] {name}: {row['status']}, wall {wall:.2f} s, run {row['total']:.2f} s", flush=True)
         if best is None or (row["status"] == "completed" and row["wall"] < best["wall"]):
             best = row
@@ -94,6 +110,69 @@ def probe_error(a: dict, ref: dict) -> float:
     return float(np.abs(ta - tr).max() / np.abs(tr).max()) if ta.shape == tr.shape else np.nan
 
 
+_EVENT = re.compile(r"^(?P<name>\S.*?)\s+(?P<count>\d+)\s+[\d.]+\s+(?P<time>[\d.e+-]+)\s+[\d.]+\s+"
+                    r"[\d.e+-]+\s+[\d.]+\s+(?P<mess>[\d.e+-]+)\s+(?P<len>[\d.e+-]+)\s+(?P<red>[\d.e+-]+)\s")
+
+
+#: the -log_view events that send PETSc's messages (the others nest them): the Jacobian's and
+#: S's off-rank entries (MatAssemblyBegin), vector scatters (the contact exchange, the
+#: multiplier gathers, the matrix-vector products), fascicle blocks with off-rank multiplier
+#: rows (MatCreateSubMats) and PetscSF set-ups
+SENDERS = ("MatAssemblyBegin", "VecScatterBegin", "MatCreateSubMats", "SFSetUp")
+
+
+def log_messages(path: str) -> dict:
+    """MPI traffic in a -log_view file: totals (messages, bytes, reductions over all ranks) and
+    per event (messages, bytes = messages × average length, reductions; summed over stages)."""
+    text = open(path).read()
+    tot = {}
+    for key, pat in (("messages", r"MPI Msg Count:\s+\S+\s+\S+\s+\S+\s+(\S+)"),
+                     ("bytes", r"MPI Msg Len \(bytes\):\s+\S+\s+\S+\s+\S+\s+(\S+)"),
+                     ("reductions", r"MPI Reductions:\s+(\S+)")):
+        m = re.search(pat, text)
+        tot[key] = float(m.group(1)) if m else 0.0
+    events = {}
+    body = text.split("Event                Count")[-1]
+    for line in body.splitlines():
+        m = _EVENT.match(line)
+        if not m or m.group("name").startswith(("---", "Event", "Memory")):
+            continue
+        e = events.setdefault(m.group("name"), {"messages": 0.0, "bytes": 0.0, "reductions": 0.0})
+        mess, avg = float(m.group("mess")), float(m.group("len"))
+        e["messages"] += mess
+        e["bytes"] += mess * avg
+        e["reductions"] += float(m.group("red"))
+    return {"total": tot, "events": events}
+
+
+def messages_table(base: dict, out: str, ranks: list[int]) -> list[dict]:
+    """Both solvers of ``solver.linear`` at ``ranks``: PETSc's MPI traffic (printed, returned)."""
+    rows = []
+    for name in ("fieldsplit", "mumps-ldlt"):
+        for n in ranks:
+            r = run(f"{name}_messages_n{n}", n, SOLVERS[name], base, out)
+            if r["status"] != "completed":
+                continue
+            m = log_messages(r["log_view"])
+            rows.append({"name": name, "ranks": n, "newton": r["newton"], **m})
+    print("\nPETSc MPI traffic (all ranks; MUMPS's own messages not included)")
+    hdr = (f"{'solver':12s} {'ranks':>5s} {'Newton':>6s} {'messages':>9s} {'MB':>8s} {'reductions':>10s} "
+           f"{'msg/it':>7s} {'MB/it':>7s} {'red/it':>7s}  largest senders (MB)")
+    print(hdr)
+    print("-" * len(hdr))
+    for r in rows:
+        t, it = r["total"], max(r["newton"], 1)
+        top = sorted(((k, v) for k, v in r["events"].items() if k in SENDERS),
+                     key=lambda kv: -kv[1]["bytes"])
+        tops = ", ".join(f"{k} {v['bytes'] / 1e6:.1f}" for k, v in top if v["bytes"] > 0)
+        print(f"{r['name']:12s} {r['ranks']:5d} {r['newton']:6d} {t['messages']:9.0f} {t['bytes'] / 1e6:8.1f} "
+              f"{t['reductions']:10.0f} {t['messages'] / it:7.0f} {t['bytes'] / 1e6 / it:7.2f} "
+              f"{t['reductions'] / it:7.0f}  {tops}")
+    with open(os.path.join(out, "bench_messages.json"), "w") as fh:
+        json.dump(rows, fh, indent=1)
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", default=os.path.join(ROOT, "configs", "bundle_hex37.yaml"))
@@ -101,12 +180,18 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "bench_scaling"))
     ap.add_argument("--quick", action="store_true", help="only the default solver")
     ap.add_argument("--repeat", type=int, default=2, help="runs per timed configuration (fastest kept)")
+    ap.add_argument("--messages", action="store_true", help="MPI traffic of both solvers at --ranks")
+    ap.add_argument("--ranks", type=int, nargs="+", default=[2, 3, 4])
     a = ap.parse_args(argv)
     base = yaml.safe_load(open(a.config))
     if a.steps:
         base["steps"] = a.steps
     base.setdefault("solver", {})["max_cutbacks"] = 1       # a failing solver stops early
-    print(f"[bench] {base['name']}: steps {base['steps']}, {os.cpu_count()} cores")
+    print(f"[bench] {base['name']}: steps {base['steps']}, {os.cpu_count()} cores, load average "
+          f"{os.getloadavg()[0]:.2f}")
+    if a.messages:
+        messages_table(base, a.out, a.ranks)
+        return 0
     scaled = SCALED[:1] if a.quick else SCALED
     rows = [run(f"{name}_n{n}", n, SOLVERS[name], base, a.out, a.repeat) for name in scaled for n in (1, 2)]
     if not a.quick:

@@ -10,7 +10,8 @@ sections, boundary conditions, loads, probes and contact) before validation, so 
   arcs, the arcs facing a neighbour are paired as a two-curve interface, and contact is unilateral
   (they may separate, not interpenetrate).
 
-Packing: 1, 7, 19, 37 fascicles = the centre plus 1, 2, 3 hexagonal rings.
+Packing: 1, 7, 19, 37, 61, 91, ... fascicles = the centre plus 0, 1, 2, ... hexagonal rings
+(1 + 3 r (r + 1) for r rings, up to ``MAX_RINGS``).
 """
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ import numpy as np
 from .specs import DEFAULT_AXIAL_POINTS
 from .values import ConfigError, integer, mapping, number, string, vector
 
-COUNTS = {1: 0, 7: 1, 19: 2, 37: 3}
+MAX_RINGS = 20
+COUNTS = {1 + 3 * r * (r + 1): r for r in range(MAX_RINGS + 1)}     # fascicles → rings
 SECTIONS = ("hexagon", "circle")
 KEYS_REQUIRED = ("count", "fascicle_section", "radius", "elements", "material", "force")
 KEYS_OPTIONAL = ("packing", "gap", "arc_deg", "cubature_degree", "axial_points", "pulled_end",
@@ -101,8 +103,9 @@ def expand_bundle(raw: dict) -> dict:
     b = mapping(raw["bundle"], "bundle", required=KEYS_REQUIRED, optional=KEYS_OPTIONAL)
     count = integer(b["count"], "bundle.count")
     if count not in COUNTS:
-        raise ConfigError("bundle.count", f"must be one of {', '.join(map(str, COUNTS))} (a full "
-                                          f"hexagonal patch); got {count}")
+        raise ConfigError("bundle.count", f"must be a full hexagonal patch, 1 + 3 r (r + 1) for r "
+                                          f"rings: {', '.join(map(str, list(COUNTS)[:7]))}, ... "
+                                          f"({max(COUNTS)} at most); got {count}")
     string(b.get("packing", "hexagonal"), "bundle.packing", ("hexagonal",))
     shape = string(b["fascicle_section"], "bundle.fascicle_section", SECTIONS)
     radius = number(b["radius"], "bundle.radius", positive=True, hint=" (fascicle radius in m)")

@@ -21,6 +21,7 @@ SOLVER_KEYS = {
     "predictor": (lambda v, p: string(v, p, ("none", "secant")), False),
     "easy_iterations": (lambda v, p: integer(v, p, lo=1), False),
     "matrix": (lambda v, p: string(v, p, ("auto", "aij", "sbaij")), False),
+    "linear": (lambda v, p: string(v, p, ("auto", "direct", "fieldsplit")), True),
     "stability_cutbacks": (lambda v, p: integer(v, p, lo=0, hi=20), False),
     "allow_unstable": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),

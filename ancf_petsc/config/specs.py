@@ -8,7 +8,7 @@ LOCKING = ("none", "ecm")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = ("neo-hookean", "svk")
 CONTACT_MODES = ("sliding", "unilateral")
-PARTITION_METHODS = ("blocks", "metis")
+PARTITION_METHODS = ("blocks", "metis", "beams")
 TWIST_RULES = ("centroid", "origin", "junction")
 #: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
 REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
@@ -108,6 +108,7 @@ class SolverSpec:
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solving.options.matrix_type)
+    linear: str = "auto"                  # linear solver: auto | direct | fieldsplit (petsc.fieldsplit.choose)
     allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 
@@ -147,7 +148,7 @@ class ModelSpec:
     contact: ContactSpec | None
     base_dir: str
     raw: dict = field(repr=False, default_factory=dict)
-    partition: str = "blocks"              # 'blocks' (contiguous per beam) or 'metis'
+    partition: str = "blocks"              # 'blocks' (contiguous per beam), 'metis' or 'beams' (whole beams)
     accuracy: AccuracySpec | None = None
     sections: Any = None                   # geometry.sections (config.sections.SectionsSpec)
     twist_rule: tuple = ("point",)         # twist-axis rule (model.build.resolve_twist_axis); twist_axis then

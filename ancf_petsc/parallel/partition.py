@@ -1,4 +1,5 @@
-"""Distribution of elements over MPI ranks: contiguous blocks or a METIS graph partition.
+"""Distribution of elements over MPI ranks: contiguous blocks, a METIS graph partition, or whole
+beams (METIS on the beam graph, for the fascicle-parallel solver, petsc/fieldsplit.py).
 
 The element graph has one vertex per element (weight: its Gauss points, the cost of eq. 9, plus
 ``CONTACT_COST`` per contact point it carries) and
@@ -10,6 +11,7 @@ with few cut couplings; ``layout_from_owner`` then renumbers the nodes rank by r
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..model.beams import Model
 from ..physics.element3363 import DOFS_PER_NODE
@@ -47,7 +49,6 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
         r, c, w = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
     else:
         r = c = w = np.zeros(0, dtype=np.int64)
-    import scipy.sparse as sp
     G = sp.coo_matrix((w.astype(np.int64), (r, c)), shape=(n_el, n_el)).tocsr()   # sums duplicates
     G.sort_indices()
     vw = np.concatenate([np.full(b.n_elements, len(b.section.weights) * b.axial_points)
@@ -74,15 +75,55 @@ def metis_owner(model: Model, size: int, contact=None) -> np.ndarray:
     return owner
 
 
+def beam_owner(model: Model, size: int, contact=None) -> np.ndarray:
+    """Element → rank with every beam whole on one rank: METIS (k-way, 1 % imbalance allowed)
+    on the beam graph contracted from ``element_graph`` (vertex weight: the beam's elements'
+    work; edge weight: the couplings between two beams).  Falls back to a greedy assignment of
+    the heaviest beams to the lightest rank when METIS leaves a rank empty or unbalanced."""
+    n_beams = len(model.beams)
+    elem_beam = model.element_beam()
+    if size == 1:
+        return np.zeros(model.n_elements, dtype=np.int64)
+    xadj, adjncy, ew, vw = element_graph(model, contact)
+    bw = np.bincount(elem_beam, weights=vw, minlength=n_beams).astype(np.int64)
+    rows = np.repeat(elem_beam, np.diff(xadj))
+    G = sp.coo_matrix((ew, (rows, elem_beam[adjncy])), shape=(n_beams, n_beams)).tocsr()
+    G.setdiag(0)
+    G.eliminate_zeros()
+    G.sort_indices()
+    owner = None
+    if n_beams > size:
+        import pymetis
+        adjacency = pymetis.CSRAdjacency(G.indptr.tolist(), G.indices.tolist())
+        _, parts = pymetis.part_graph(size, adjacency, vweights=bw.tolist(),
+                                      eweights=G.data.astype(np.int64).tolist(),
+                                      options=pymetis.Options(seed=1, ufactor=10))
+        owner = np.asarray(parts, dtype=np.int64)
+    # the heaviest rank may carry at most one beam more than a perfect balance
+    limit = bw.sum() / size + bw.max()
+    if owner is None or len(np.unique(owner)) < min(size, n_beams) or \
+            np.bincount(owner, weights=bw, minlength=size).max() > limit:
+        owner = np.zeros(n_beams, dtype=np.int64)
+        load = np.zeros(size)
+        for b in np.argsort(-bw, kind="stable"):
+            owner[b] = int(np.argmin(load))
+            load[owner[b]] += bw[b]
+    return owner[elem_beam]
+
+
+OWNERS = {"metis": metis_owner, "beams": beam_owner}
+
+
 def make_layout(model: Model, method: str, size: int, rank: int, contact=None, comm=None) -> Layout:
-    """Layout by ``method`` ('blocks' | 'metis'); METIS runs on rank 0 and is broadcast."""
+    """Layout by ``method`` ('blocks' | 'metis' | 'beams'); METIS runs on rank 0 and is
+    broadcast."""
     extra = None if contact is None else contact.space.node_element
     if method == "blocks" or size == 1:
         return block_layout(model.connectivity(), model.n_nodes, size, rank, extra)
-    owner = metis_owner(model, size, contact) if rank == 0 else None
+    owner = OWNERS[method](model, size, contact) if rank == 0 else None
     if comm is not None:
         owner = comm.bcast(owner, root=0)
-    return layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, "metis", extra)
+    return layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, method, extra)
 
 
 def partition_stats(layout: Layout, model: Model, contact=None) -> dict:

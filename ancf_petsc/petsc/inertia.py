@@ -40,8 +40,12 @@ def petsc_library():
 def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
     """(negative, null) pivots of the matrix last factored by ``ksp``'s MUMPS Cholesky (LDLᵀ)
     preconditioner — INFOG(12) and INFOG(28), the latter with null-pivot detection on
-    (ICNTL(24)) — or None when the preconditioner is not one (collective; same on every rank)."""
+    (ICNTL(24)) — or by the fascicle Schur preconditioner (``FascicleSchur.pivot_counts``);
+    None when the preconditioner is neither (collective; same on every rank)."""
     pc = ksp.getPC()
+    if pc.getType() == "python":                # the fascicle Schur solver (fieldsplit.py)
+        counts = getattr(pc.getPythonContext(), "pivot_counts", None)
+        return counts() if counts is not None else None
     if pc.getType() != "cholesky" or pc.getFactorSolverType() != "mumps":
         return None
     try:

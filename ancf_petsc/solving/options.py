@@ -38,6 +38,18 @@ DEFAULT_OPTIONS = {
 }
 #: preconditioners whose factorisation package defaults to MUMPS
 MUMPS_PCS = ("lu", "cholesky")
+#: ``solver.linear: fieldsplit`` (petsc/fieldsplit.py): flexible GMRES (right-preconditioned: it
+#: tests the true residual; it keeps the preconditioned vectors, whose large multiplier
+#: components make GMRES's recombination lose digits: 37 fascicles, true residual 2e-6 instead
+#: of 7e-10) around the exact inverse of the Jacobian without the contact curvature between
+#: fascicles; these replace the factorisation entries of DEFAULT_OPTIONS
+FIELDSPLIT_OPTIONS = {
+    "ksp_type": "fgmres",
+    "ksp_pc_side": "right",
+    "ksp_rtol": "1e-9",
+    "ksp_gmres_restart": "100",
+    "ksp_max_it": "100",
+}
 
 
 class SolverOptionError(ConfigError):
@@ -49,13 +61,17 @@ class SolverOptionError(ConfigError):
 SBAIJ_PCS = ("cholesky", "icc", "bjacobi", "asm", "jacobi", "none")
 
 
-def matrix_type(model, choice: str, config_options: dict, prefix: str = "") -> str:
+def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
+                linear: str = "direct") -> str:
     """The Jacobian's storage, 'aij' or 'sbaij' (``solver.matrix``; the options in effect are the
     command line's, then the config's ``petsc:``, then ``DEFAULT_OPTIONS``).
 
-    ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) on
-    3363 beams (3333 beams hold half of each node block at zero)."""
+    ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) or
+    the fascicle Schur solver (``linear`` 'fieldsplit') on 3363 beams (3333 beams hold half of
+    each node block at zero)."""
     pc, factor = factor_package(config_options, prefix)
+    if linear == "fieldsplit":
+        pc, factor = "cholesky", "mumps"        # symmetric sub-blocks and MUMPS on the multipliers
     full = node_blocks_fit(model)
     if choice == "auto":
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
@@ -140,11 +156,21 @@ def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "") 
             f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
 
 
-def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = "") -> dict:
+def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = "",
+                 linear: str = "direct") -> dict:
     """``DEFAULT_OPTIONS`` completed for this solve: MUMPS where it is the factorisation package,
-    its sequential root on a few ranks, and the absolute tolerance ``atol``."""
+    its sequential root on a few ranks, and the absolute tolerance ``atol``; for the fascicle
+    Schur solver (``linear`` 'fieldsplit') ``FIELDSPLIT_OPTIONS`` instead of the factorisation."""
     defaults = dict(DEFAULT_OPTIONS)
     _, factor = factor_package(config_options, prefix)
+    if linear == "fieldsplit":
+        defaults = {k: v for k, v in defaults.items()
+                    if k not in ("ksp_type", "pc_type") and not k.startswith("mat_mumps_")}
+        defaults.update(FIELDSPLIT_OPTIONS)
+        # a Krylov residual cannot fall below the rounding of J x: stop it well below the
+        # Newton tolerance instead of relative to a right-hand side that is already tiny
+        defaults["ksp_atol"] = f"{1e-2 * atol:.3e}"
+        factor = ""
     if factor == "mumps" and not PETSc.Options().hasName(prefix + "pc_factor_mat_solver_type") \
             and "pc_factor_mat_solver_type" not in config_options:
         defaults["pc_factor_mat_solver_type"] = "mumps"

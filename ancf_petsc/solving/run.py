@@ -28,6 +28,7 @@ from ..petsc.options import unused_command_line_options
 from ..petsc.problem import Problem
 from ..physics.element3363 import DOFS_PER_NODE
 from .interrupt import RunInterrupted
+from .linear import choose as choose_linear
 from .options import matrix_type
 from .stepper import LoadStepFailure, LoadStepper, PathState
 from .supports import free_rigid_motions
@@ -116,16 +117,21 @@ class Run:
         try:
             self.model = build_model(spec)
             self.contact = contact_for(self.model, spec.contact, say) if spec.contact else None
-            self.layout = make_layout(self.model, spec.partition, comm.size, comm.rank, self.contact,
+            prefix = spec.solver.options_prefix
+            self.linear = choose_linear(spec.solver.linear, self.model, self.contact, spec.petsc, prefix)
+            # the fascicle-parallel solver keeps every beam whole on one rank
+            method = "beams" if self.linear[0] == "fieldsplit" else spec.partition
+            self.layout = make_layout(self.model, method, comm.size, comm.rank, self.contact,
                                       comm.tompi4py())
             self.partition = partition_stats(self.layout, self.model, self.contact)
             self.problem = Problem(self.model, self.layout, comm, self.contact,
-                                   matrix_type(self.model, spec.solver.matrix, spec.petsc))
+                                   matrix_type(self.model, spec.solver.matrix, spec.petsc, prefix,
+                                               self.linear[0]))
             self.stepper = None
             if point is None:
                 _check_supports(self.problem)
             self.stepper = LoadStepper(self.problem, spec.solver, spec.petsc, say,
-                                       max_level=max(spec.steps))
+                                       max_level=max(spec.steps), linear=self.linear[0])
         except BaseException:
             self.destroy()
             raise
@@ -145,7 +151,7 @@ class Run:
         self.say("[ancf]   " + layout.summary() + (
             f", cut contact pairs {partition['cut_contact_pairs']}/{partition['contact_pairs']}"
             if "contact_pairs" in partition else "") + f", cut beam nodes {partition['cut_beam_nodes']}")
-        self.say("[ancf]   " + self.stepper.describe())
+        self.say("[ancf]   " + self.stepper.describe() + "; linear solver %s (%s)" % self.linear)
 
     def info(self, extra: dict | None) -> dict:
         """What summary.json records about the run besides its levels."""
@@ -153,6 +159,7 @@ class Run:
         return {"output_dir": os.path.abspath(spec.output.dir), "twist_deg": spec.twist_deg,
                 "dofs": model.n_dofs, "elements": model.n_elements, "ranks": self.comm.size,
                 "partition": self.partition, "solver": self.stepper.describe(),
+                "linear_solver": {"choice": self.linear[0], "rule": self.linear[1]},
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
                                       "points": int(len(b.section.weights))} for b in model.beams},
                 "elements_per_beam": {b.name: b.n_elements for b in model.beams},

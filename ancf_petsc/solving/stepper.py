@@ -91,9 +91,10 @@ class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES."""
 
     def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict,
-                 log: Callable[[str], None] = print, max_level: float = 1.0):
+                 log: Callable[[str], None] = print, max_level: float = 1.0, linear: str = "direct"):
         self.problem, self.spec, self.log = problem, spec, log
         self.prefix = spec.options_prefix
+        self.linear = linear                    # 'direct' | 'fieldsplit' (solving.linear.choose)
         self.snes = PETSc.SNES().create(comm=problem.comm)
         if self.prefix:
             self.snes.setOptionsPrefix(self.prefix)
@@ -114,8 +115,15 @@ class LoadStepper:
         self._kept_options: list[str] = []
         self.path: PathState | None = None      # where the load path is (``run``)
         self.linesearch, self._kept_options = configure_options(
-            self.snes, petsc_options, run_defaults(petsc_options, problem.comm.size, atol, self.prefix),
-            self.prefix)
+            self.snes, petsc_options,
+            run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear), self.prefix)
+        if linear == "fieldsplit":
+            # imported here: scipy.linalg is start-up time the direct solver does not need
+            from ..petsc.fascicles import fascicle_split
+            from ..petsc.fieldsplit import FascicleSchur
+            pc = self.snes.getKSP().getPC()
+            pc.setType(PETSc.PC.Type.PYTHON)
+            pc.setPythonContext(FascicleSchur(fascicle_split(problem), problem.comm, self.prefix))
         self._check_factorisation()
         self._history: list[float] = []
         self.snes.setMonitor(self._monitor)
@@ -141,9 +149,12 @@ class LoadStepper:
 
     def close(self, collective: bool = True) -> None:
         """Remove the options this stepper left in PETSc's database; config options PETSc never
-        read go to ``unused_config_options`` (collective unless ``collective`` is False)."""
+        read go to ``unused_config_options`` (collective unless ``collective`` is False).  The
+        fascicle Schur preconditioner's parallel objects are destroyed here, collectively."""
         opts = PETSc.Options()
         n = len(self.prefix)
+        if collective and self.linear == "fieldsplit":
+            self.snes.getKSP().getPC().setType(PETSc.PC.Type.NONE)
         if collective:
             mine = [k for k in self._kept_options if k[n:] in self.petsc_options]
             used = used_anywhere(mine, self.problem.comm)
@@ -181,6 +192,8 @@ class LoadStepper:
         extra = ""
         if pc.getType() in ("lu", "cholesky"):
             extra = f" ({pc.getFactorSolverType()})"
+        if self.linear == "fieldsplit":
+            extra = " (fascicle Schur: dense fascicle factors, MUMPS LDLT on the multipliers)"
         rtol, atol, stol, maxit = self.snes.getTolerances()
         return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
                 f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "

@@ -95,6 +95,7 @@ CASES += [
     ("bundle radius", _bundle(radius=-1.0), "bundle.radius", "> 0"),
     ("bundle missing", _bundle(force=None), "bundle", "force"),
     ("matrix format", _set(["solver"], {"matrix": "dense"}), "solver.matrix", "one of"),
+    ("linear solver", _set(["solver"], {"linear": "gmres"}), "solver.linear", "fieldsplit"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
 ]
 

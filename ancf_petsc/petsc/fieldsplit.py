@@ -1,0 +1,241 @@
+"""Fascicle-parallel linear solver: the saddle-point Jacobian split into fascicles | multipliers,
+reduced to a Schur complement on the contact multipliers (``solver.linear: fieldsplit``).
+
+With contact multipliers z (contact/multipliers.py) the Jacobian is
+
+    J = [[K, Bᵀ], [B, C]],   K = diag(K_1 … K_n) + K_×,   B = [B_1 … B_n],
+
+K_f the stiffness of fascicle (beam) f with the contact curvature −Σ τ ∇²g of its own points,
+K_× the contact curvature that couples two fascicles (A's and B's nodes of a contact point),
+B the constraint rows −k_s ∇ḡ (each multiplier couples the two fascicles of its interface) and
+C diagonal (0 for active multipliers, −k_s × share for inactive ones).  Without K_× the fascicles
+talk only through z, and block elimination (PCFIELDSPLIT's Schur factorisation) is exact:
+
+    S = C − Σ_f B_f K_f⁻¹ B_fᵀ,   S z = r_z − Σ_f B_f K_f⁻¹ r_f,   u_f = K_f⁻¹ (r_f − B_fᵀ z).
+
+``FascicleSchur`` is that exact inverse of J_bd = J − K_× as a PETSc preconditioner (PCPYTHON):
+each rank factors its own fascicles' K_f (dense, diagonally scaled Cholesky, LU where K_f is
+indefinite), adds B_f K_f⁻¹ B_fᵀ into the multiplier matrix S (AIJ, distributed like the
+multipliers) and MUMPS factors S (LDLᵀ) on all ranks.  A Krylov method (GMRES, right
+preconditioned) on the full J absorbs K_×; it is zero in an unloaded state, small beside K, and
+the residual falls by about 10× per iteration under load.
+
+Why it is cheaper than one LDLᵀ of J: K_f is a slender band (one fascicle), and S couples only
+multipliers that share a fascicle.  Its graph is the cross-section of the bundle with every
+interface a dense clique along the beam, which a nested dissection orders with fronts of the
+size of a few interfaces, against fronts of the bundle's whole cross-section for J
+(docs/parallel.md: 37 fascicles, 1.5e11 → 3.5e9 flops).
+
+Stability: by Haynsworth's inertia additivity the inertia of J_bd is that of the K_f plus that
+of S (``pivot_counts``): the stepper's count of negative tangent eigenvalues, for J_bd.
+
+Every fascicle must be whole on one rank (``parallel.partition.beam_owner``) and held by its own supports
+(K_f regular): ``solving.linear.choose`` takes this solver only then.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from petsc4py import PETSc
+
+from ..physics.element3363 import DOFS_PER_NODE
+from . import logging
+from .fascicles import FascicleFactor, FascicleSplit, fascicle_blocks
+
+INSERT = PETSc.InsertMode.INSERT_VALUES
+ADD = PETSc.InsertMode.ADD_VALUES
+FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
+
+#: options prefix of the multiplier (Schur complement) factorisation: -fascicle_schur_...
+SCHUR_PREFIX = "fascicle_schur_"
+#: MUMPS settings of the Schur factorisation.  No null-pivot detection (unlike the direct
+#: solver): S is nearly singular where constraints are nearly redundant (condition ~1e13 on 37
+#: fascicles), and a pivot MUMPS drops as null there leaves the preconditioner without a
+#: direction J has, so that GMRES stalls (37 fascicles: at 7e-5 instead of 11 iterations to 1e-9).
+#: Its delayed pivots outgrow MUMPS's default 20 % workspace margin on 2 ranks (INFOG(1) = −9):
+#: 100 %.
+SCHUR_MUMPS = {"icntl": {24: 0, 14: 100}, "cntl": {}}
+
+#: -log_view events of the solver's three phases
+FACTOR_EVENT, SCHUR_EVENT, APPLY_EVENT = "ANCF fascicle factor", "ANCF Schur assembly", "ANCF fascicle apply"
+
+
+class FascicleSchur:
+    """PCPYTHON context: the exact inverse of J without the contact curvature between fascicles
+    (module docstring).  ``setUp`` factors the local fascicles and the multiplier Schur
+    complement; ``apply`` is one block elimination.  Collective."""
+
+    def __init__(self, split: FascicleSplit, comm, prefix: str = ""):
+        self.split, self.comm = split, comm
+        self.prefix = prefix + SCHUR_PREFIX           # e.g. -left_fascicle_schur_mat_mumps_...
+        sp_ = split
+        # per fascicle: the node blocks of its nodes and of the multiplier nodes coupled to it
+        # (SBAIJ extracts whole blocks, symmetrically), and its DOFs' positions in them
+        self._is = []
+        self._pos = []
+        for u, m in zip(sp_.u_dofs, sp_.m_index):
+            dofs = np.concatenate([u, sp_.z_dofs[m]])
+            blocks = np.unique(dofs // DOFS_PER_NODE)
+            pos = (DOFS_PER_NODE * np.searchsorted(blocks, dofs // DOFS_PER_NODE)
+                   + dofs % DOFS_PER_NODE)
+            self._is.append(PETSc.IS().createBlock(DOFS_PER_NODE, blocks.astype(PETSc.IntType), comm=PETSc.COMM_SELF))
+            self._pos.append((pos[:len(u)], pos[len(u):]))
+        self._subs = None
+        self.factors: list[FascicleFactor] = []
+        self.Bt: list[np.ndarray] = []
+        r0, r1 = sp_.z_range
+        M = sp_.n_multipliers
+        self.S = PETSc.Mat().createAIJ(((r1 - r0, M), (r1 - r0, M)), comm=comm)
+        self._preallocate_schur()
+        self.zvec, self.zsol = self.S.createVecs()
+        self.zwork = self.zvec.duplicate()
+        # multipliers of the local fascicles, one after the other (a multiplier between two
+        # local fascicles twice): gathered from / added into the multiplier space
+        loc = np.concatenate(sp_.m_index) if sp_.m_index else np.zeros(0, dtype=np.int64)
+        self._slices = np.concatenate([[0], np.cumsum([len(m) for m in sp_.m_index])]).astype(int)
+        self.zloc = PETSc.Vec().createSeq(len(loc), comm=PETSc.COMM_SELF)
+        is_loc = PETSc.IS().createGeneral(loc.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.z_gather = PETSc.Scatter().create(self.zvec, is_loc, self.zloc, None)
+        is_loc.destroy()
+        self.ksp = PETSc.KSP().create(comm=comm)
+        self.ksp.setOptionsPrefix(self.prefix)
+        self.ksp.setOperators(self.S)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("cholesky")
+        pc.setFactorSolverType("mumps")
+        self.ksp.setFromOptions()
+        self._full_to_z = None
+        self._u_local = None
+        self._counts = (0, 0)
+        self.setups = 0
+
+    def _preallocate_schur(self) -> None:
+        """S's pattern: multipliers coupled when they share a fascicle (fixed for the run)."""
+        sp_ = self.split
+        M = sp_.n_multipliers
+        n_beams = int(sp_.z_beams.max()) + 1
+        rows = np.repeat(np.arange(M), 2)
+        inc = sp.csr_matrix((np.ones(2 * M), (rows, sp_.z_beams.ravel())), shape=(M, n_beams))
+        r0, r1 = sp_.z_range
+        pattern = (inc[r0:r1] @ inc.T).tocsr()
+        pattern.sort_indices()
+        self.S.setPreallocationCSR((pattern.indptr.astype(PETSc.IntType),
+                                    pattern.indices.astype(PETSc.IntType)))
+        self.S.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        self.S.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+
+    # ------------------------------------------------------------------ PCPYTHON interface
+    def setUp(self, pc: PETSc.PC) -> None:
+        _, P = pc.getOperators()
+        sp_ = self.split
+        if self._full_to_z is None:
+            r0, r1 = sp_.z_range
+            src = PETSc.IS().createGeneral(sp_.z_dofs[r0:r1].astype(PETSc.IntType), comm=self.comm)
+            dst = PETSc.IS().createStride(r1 - r0, r0, 1, comm=self.comm)
+            x = P.createVecLeft()
+            self._full_to_z = PETSc.Scatter().create(x, src, self.zvec, dst)
+            rstart = P.getOwnershipRange()[0]
+            self._u_local = [u - rstart for u in sp_.u_dofs]
+            for obj in (src, dst, x):
+                obj.destroy()
+        logging.event(FACTOR_EVENT).begin()
+        self._subs = P.createSubMatrices(self._is, submats=self._subs)
+        self.factors, self.Bt = [], []
+        blocks = []
+        for sub, (iu, im) in zip(self._subs, self._pos):
+            K, Bt = fascicle_blocks(sub, iu, im)
+            f = FascicleFactor(K)
+            self.factors.append(f)
+            self.Bt.append(Bt)
+            blocks.append(f.schur_block(Bt) if Bt.shape[1] else None)
+        logging.event(FACTOR_EVENT).end()
+        logging.event(SCHUR_EVENT).begin()
+        S = self.S
+        S.zeroEntries()
+        for m, blk in zip(sp_.m_index, blocks):
+            if blk is not None:
+                idx = m.astype(PETSc.IntType)
+                S.setValues(idx, idx, -blk, ADD)
+        S.assemble()
+        diag = P.getDiagonal()                         # C: the multipliers' own diagonal
+        self._full_to_z.scatter(diag, self.zwork, INSERT, FORWARD)
+        S.setDiagonal(self.zwork, ADD)
+        diag.destroy()
+
+        logging.event(SCHUR_EVENT).end()
+        local = np.array([sum(f.negative for f in self.factors), sum(f.null for f in self.factors)])
+        total = np.empty_like(local)
+        self.comm.tompi4py().Allreduce(local, total)
+        if self.setups == 0:
+            self._mumps_defaults()
+        self.ksp.setOperators(S)
+        self.ksp.setUp()
+        self._counts = (int(total[0]), int(total[1]))
+        self.setups += 1
+
+    def _mumps_defaults(self) -> None:
+        """Null-pivot detection (and, on a few ranks, a sequential root front: its inertia is
+        then complete) unless the command line sets them with the prefix."""
+        pc = self.ksp.getPC()
+        pc.setFactorSetUpSolverType()
+        F = pc.getFactorMatrix()
+        opts = PETSc.Options()
+        icntl = dict(SCHUR_MUMPS["icntl"])
+        if 1 < self.comm.size <= 4:
+            icntl[13] = 1
+        for k, v in icntl.items():
+            if not opts.hasName(f"{self.prefix}mat_mumps_icntl_{k}"):
+                F.setMumpsIcntl(k, v)
+        for k, v in SCHUR_MUMPS["cntl"].items():
+            if not opts.hasName(f"{self.prefix}mat_mumps_cntl_{k}"):
+                F.setMumpsCntl(k, v)
+
+    def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        logging.event(APPLY_EVENT).begin()
+        xa = x.getArray(readonly=True)
+        loc = np.empty(self._slices[-1])
+        for k, (f, Bt, u) in enumerate(zip(self.factors, self.Bt, self._u_local)):
+            loc[self._slices[k]:self._slices[k + 1]] = Bt.T @ f.solve(xa[u])
+        # t = r_z − Σ_f B_f K_f⁻¹ r_f
+        self._full_to_z.scatter(x, self.zvec, INSERT, FORWARD)
+        self.zloc.setArray(loc)
+        self.zwork.set(0.0)
+        self.z_gather.scatter(self.zloc, self.zwork, ADD, REVERSE)
+        self.zvec.axpy(-1.0, self.zwork)
+        self.ksp.solve(self.zvec, self.zsol)
+        # u_f = K_f⁻¹ (r_f − B_fᵀ z)
+        self.z_gather.scatter(self.zsol, self.zloc, INSERT, FORWARD)
+        zl = self.zloc.getArray(readonly=True)
+        x.copy(y)                                       # unused multiplier slots: identity rows
+        ya = y.getArray()
+        for k, (f, Bt, u) in enumerate(zip(self.factors, self.Bt, self._u_local)):
+            ya[u] = f.solve(xa[u] - Bt @ zl[self._slices[k]:self._slices[k + 1]])
+        del ya, xa
+        self._full_to_z.scatter(self.zsol, y, INSERT, REVERSE)
+        logging.event(APPLY_EVENT).end()
+
+    def view(self, pc: PETSc.PC, viewer) -> None:
+        n = self.comm.tompi4py().allreduce(len(self.factors))
+        viewer.printfASCII(f"  fascicle Schur: {n} fascicles factored densely, Schur complement on "
+                           f"{self.split.n_multipliers} multipliers (MUMPS LDLT, prefix "
+                           f"-{self.prefix})\n")
+
+    def destroy(self, pc: PETSc.PC) -> None:
+        for obj in [self.S, self.zvec, self.zsol, self.zwork, self.zloc, self.z_gather, self.ksp,
+                    self._full_to_z] + list(self._is) + list(self._subs or []):
+            if obj is not None:
+                obj.destroy()
+        self._subs, self._is, self._full_to_z = None, [], None
+
+    # ------------------------------------------------------------------ stability
+    def pivot_counts(self) -> tuple[int, int] | None:
+        """(negative, null) pivots of J_bd: those of the fascicle factors plus MUMPS's
+        INFOG(12)/INFOG(28) for S (collective; None before the first set-up or when MUMPS's
+        root front was factored by ScaLAPACK, whose pivots MUMPS does not count)."""
+        if self.setups == 0:
+            return None
+        F = self.ksp.getPC().getFactorMatrix()
+        if self.comm.size > 1 and F.getMumpsIcntl(13) != 1:
+            return None
+        return (self._counts[0] + int(F.getMumpsInfog(12)), self._counts[1] + int(F.getMumpsInfog(28)))

@@ -1,0 +1,192 @@
+"""The fascicle-parallel linear solver (petsc/fieldsplit.py, petsc/fascicles.py, solving/linear.py).
+
+Checked against things outside it: dense LAPACK/numpy (factors, inertia, Schur blocks), the
+exact inverse of the Jacobian without the inter-fascicle contact curvature (numpy on the
+assembled matrix), and the direct solver's answers on 1, 2 and 3 ranks."""
+import numpy as np
+import pytest
+
+from ancf_petsc.physics.element3363 import DOFS_PER_NODE
+
+from helpers import (CONFIGS, build_problem, load_raw, petsc_init, probes_table, read_summary,
+                     solve_cli, write_config)
+
+
+@pytest.mark.parametrize("kind", ["spd", "indefinite", "badly scaled"])
+def test_fascicle_factor_solves_and_counts_negative_eigenvalues(kind):
+    petsc_init()
+    from ancf_petsc.petsc.fascicles import FascicleFactor
+    rng = np.random.default_rng(3)
+    n = 60
+    A = rng.standard_normal((n, n))
+    A = A @ A.T + 0.5 * np.eye(n) if kind != "indefinite" else A + A.T
+    if kind == "badly scaled":                 # SI units: section modes ~1e15 softer
+        d = 10.0 ** rng.uniform(-8, 6, n)
+        A = A * np.sqrt(d)[:, None] * np.sqrt(d)[None, :]
+    f = FascicleFactor(A)
+    assert f.kind == ("lu" if kind == "indefinite" else "cholesky")
+    w = np.linalg.eigvalsh(A)
+    assert f.negative == int(np.sum(w < 0)) and f.null == 0
+    b = rng.standard_normal((n, 4))
+    x = f.solve(b)
+    assert np.abs(A @ x - b).max() <= 1e-8 * np.abs(b).max()
+    Bt = rng.standard_normal((n, 7))
+    ref = Bt.T @ np.linalg.solve(A, Bt)
+    assert np.abs(f.schur_block(Bt) - ref).max() <= 1e-8 * np.abs(ref).max()
+
+
+def _hex7_problem(loaded: bool):
+    """bundle_hex7 on one rank (whole-beam layout), Jacobian at q0 (no multipliers: no contact
+    curvature) or after one Newton step of the first load level (multipliers non-zero)."""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["output"] = {"dir": "unused", "vtk": False}
+    P, PETSc = build_problem(raw, "sbaij")
+    model, layout = P.model, P.layout
+    P.load_factor = 0.5
+    X, F = P.q0.copy(), P.F.duplicate()
+    P.residual(None, X, F)
+    P.jacobian(None, X, P.J, P.J)
+    if loaded:                                  # one Newton step with the direct solver
+        ksp = PETSc.KSP().create()
+        ksp.setOperators(P.J)
+        ksp.setType("preonly")
+        ksp.getPC().setType("cholesky")
+        ksp.getPC().setFactorSolverType("mumps")
+        dx = X.duplicate()
+        ksp.solve(F, dx)
+        X.axpy(-1.0, dx)
+        P.residual(None, X, F)
+        P.jacobian(None, X, P.J, P.J)
+        ksp.destroy()
+    return model, layout, P, F
+
+
+def _dense(P, model, layout):
+    """The Jacobian as a dense array and the beam of every DOF (−1: multiplier node)."""
+    from petsc4py import PETSc
+    A = P.J.convert("aij", PETSc.Mat())
+    J = A.convert("dense", PETSc.Mat()).getDenseArray().copy()
+    owner = np.full(P.n_blocks, -1)
+    for b in model.beams:
+        owner[layout.perm[b.node_offset + np.arange(b.n_nodes)]] = b.index
+    return J, np.repeat(owner, DOFS_PER_NODE)
+
+
+@pytest.mark.parametrize("loaded", [False, True], ids=["reference", "loaded"])
+def test_preconditioner_is_the_exact_inverse_without_contact_curvature_between_fascicles(loaded):
+    """PC(r) = J_bd⁻¹ r, J_bd = J without the blocks coupling two fascicles directly: those are
+    zero at q0 (no pressure) and non-zero under load; the multiplier Schur complement is
+    checked through the whole inverse (numpy, dense)."""
+    from petsc4py import PETSc
+    from ancf_petsc.petsc.fascicles import fascicle_split
+    from ancf_petsc.petsc.fieldsplit import FascicleSchur
+    model, layout, P, F = _hex7_problem(loaded)
+    J, beam_of = _dense(P, model, layout)
+    cross = (beam_of[:, None] >= 0) & (beam_of[None, :] >= 0) & (beam_of[:, None] != beam_of[None, :])
+    assert (np.abs(J[cross]).max() > 0) == loaded
+    Jbd = np.where(cross, 0.0, J)
+    ctx = FascicleSchur(fascicle_split(P), PETSc.COMM_WORLD)
+    pc = PETSc.PC().create()
+    pc.setOperators(P.J, P.J)
+    pc.setType(PETSc.PC.Type.PYTHON)
+    pc.setPythonContext(ctx)
+    pc.setUp()
+    y = F.duplicate()
+    pc.apply(F, y)
+    b = F.getArray()
+    ref = np.linalg.solve(Jbd, b)
+    assert np.linalg.norm(y.getArray() - ref) <= 1e-5 * np.linalg.norm(ref)
+    assert np.linalg.norm(Jbd @ y.getArray() - b) <= 1e-8 * np.linalg.norm(b)
+    # inertia of J_bd: its negative eigenvalues (numpy) are the factors' plus S's
+    neg, null = ctx.pivot_counts()
+    assert neg == int(np.sum(np.linalg.eigvalsh(Jbd) < 0)) and null == 0
+    pc.destroy()
+
+
+def test_whole_beam_partition_balances_fascicles():
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.parallel.partition import make_layout
+    raw = load_raw("bundle_hex37.yaml")
+    raw["bundle"]["elements"] = 2
+    spec = parse_config(raw, base_dir=CONFIGS)
+    model = build_model(spec)
+    contact = build_contact(model, spec.contact, lambda *a: None)
+    for size in (2, 3, 4):
+        lay = make_layout(model, "beams", size, 0, contact)
+        per_beam = [np.unique(lay.node_owner[b.node_offset + np.arange(b.n_nodes)]) for b in model.beams]
+        assert all(len(o) == 1 for o in per_beam)                       # whole beams
+        counts = np.bincount([o[0] for o in per_beam], minlength=size)
+        assert counts.max() - counts.min() <= 1, counts                # 37 equal fascicles
+
+
+def test_auto_rule_and_its_refusals():
+    """auto: direct for the 7-fascicle bundle (792 multipliers), fieldsplit for 19 fascicles
+    (2 772); direct when PETSc options choose the solver or a beam is not held by its own
+    supports (an Achilles soleus pinned at r only); an explicit fieldsplit that
+    cannot run is a config error naming solver.linear."""
+    petsc_init()
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.config.values import ConfigError
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.solving.linear import AUTO_MIN_MULTIPLIERS, choose
+
+    def scene(name, soleus_fix=None, **bundle):
+        raw = load_raw(name)
+        raw.get("bundle", {}).update(bundle)
+        if soleus_fix is not None:
+            raw["boundary_conditions"][0]["fix"] = soleus_fix
+        spec = parse_config(raw, base_dir=CONFIGS)
+        model = build_model(spec)
+        return model, (build_contact(model, spec.contact, lambda *a: None) if spec.contact else None)
+
+    m7, c7 = scene("bundle_hex37.yaml", count=7)
+    m19, c19 = scene("bundle_hex37.yaml", count=19)
+    assert c7.n_multipliers < AUTO_MIN_MULTIPLIERS <= c19.n_multipliers
+    assert choose("auto", m7, c7, {})[0] == "direct"
+    assert choose("auto", m19, c19, {})[0] == "fieldsplit"
+    assert choose("direct", m19, c19, {})[0] == "direct"
+    assert choose("fieldsplit", m7, c7, {})[0] == "fieldsplit"
+    linear, why = choose("auto", m19, c19, {"pc_type": "lu"})
+    assert linear == "direct" and "-pc_type" in why
+    # the Achilles subtendons ('reduced' supports hold r and the slopes): self-supported, and
+    # too few multipliers for auto; pinned at r only, the soleus is not held by its own supports
+    ma, ca = scene("achilles_type3_psi45.yaml")
+    assert choose("auto", ma, ca, {}) == ("direct", f"auto: {ca.n_multipliers} contact multipliers "
+                                                    f"< {AUTO_MIN_MULTIPLIERS}")
+    assert choose("fieldsplit", ma, ca, {})[0] == "fieldsplit"
+    mp, cp = scene("achilles_type3_psi45.yaml", soleus_fix={"r": "xyz"})
+    linear, why = choose("auto", mp, cp, {})
+    assert linear == "direct" and "beam soleus is not held by its own supports" in why
+    with pytest.raises(ConfigError) as err:
+        choose("fieldsplit", mp, cp, {})
+    assert str(err.value).startswith("solver.linear:")
+    mb, _ = scene("pretwisted_bar.yaml")
+    with pytest.raises(ConfigError):
+        choose("fieldsplit", mb, None, {})
+
+
+@pytest.mark.mpi
+def test_fieldsplit_gives_the_direct_answer_on_1_2_3_ranks(tmp_path):
+    """bundle_hex7 with solver.linear: fieldsplit on 1, 2 and 3 ranks (whole fascicles per
+    rank) equals the direct solver's serial answer to 1e-9 on every probe, with the same
+    stability verdict (no negative tangent eigenvalues)."""
+    tables, summaries = {}, {}
+    for name, n, linear in (("direct", 1, "direct"), ("fs1", 1, "fieldsplit"),
+                            ("fs2", 2, "fieldsplit"), ("fs3", 3, "fieldsplit")):
+        raw = load_raw("bundle_hex7.yaml")
+        raw["solver"] = {"linear": linear}
+        raw["output"] = {"dir": str(tmp_path / name), "vtk": False}
+        p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), ranks=n)
+        assert p.returncode == 0, p.stdout + p.stderr
+        s = read_summary(tmp_path / name)
+        assert s["status"] == "completed" and s["linear_solver"]["choice"] == linear
+        summaries[name], tables[name] = s, probes_table(s)
+    ref = tables["direct"]
+    for name in ("fs1", "fs2", "fs3"):
+        assert np.abs(tables[name] - ref).max() <= 1e-9 * np.abs(ref).max(), name
+        assert [st["negative_eigenvalues"] for st in summaries[name]["steps"]] == [0, 0]
+    assert summaries["fs3"]["partition"]["method"] == "beams"
+    assert summaries["fs3"]["partition"]["cut_beam_nodes"] == 0

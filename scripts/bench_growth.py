@@ -30,6 +30,15 @@ import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from logview import read_log_view  # noqa: E402
+
+#: -log_view events kept per run (seconds over the run, slowest rank): the projection
+#: (scripts/project_scaling.py) splits a Newton iteration into per-fascicle work and the
+#: multiplier Schur complement's factorisation (MatCholFctrNum) and solves (MatSolve)
+EVENTS = ("ANCF element kernels", "ANCF contact", "ANCF fascicle factor", "ANCF Schur assembly",
+          "ANCF fascicle apply", "MatCholFctrNum", "MatSolve", "MatMult", "KSPSolve", "PCSetUp",
+          "SNESFunctionEval", "SNESJacobianEval")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
 LABELS = {"direct": "MUMPS LDLᵀ of the whole Jacobian (direct)",
@@ -72,7 +81,9 @@ def run_one(count: int, solver: str, out: str, repeat: int, elements: int = 16) 
                "linear_per_iteration": t.get("linear_solve", np.nan) / its,
                "memory_mb": usage.ru_maxrss / 1024.0, "linear": s.get("linear_solver", {}),
                "probes": [st["probes"][k]["displacement"] for st in s["steps"] for k in sorted(st["probes"])],
-               "negative_eigenvalues": [st.get("negative_eigenvalues") for st in s["steps"]]}
+               "negative_eigenvalues": [st.get("negative_eigenvalues") for st in s["steps"]],
+               "events": {k: v["time"] for k, v in read_log_view(os.path.join(d, "log_view.txt"))["events"].items()
+                          if k in EVENTS}}
         row["unknowns"] = row["dofs"] + row["multipliers"]
         print(f"[growth] {count:3d} fascicles x {elements:2d} elements {solver:10s}: {row['status']}, {row['newton']} Newton, "
               f"{row['per_iteration']:.2f} s/iteration, {row['memory_mb']:.0f} MB, wall {wall:.1f} s",
@@ -128,7 +139,7 @@ def chart(rows: list, path: str) -> None:
                 continue
             x = np.array([r["unknowns"] for r in ok], dtype=float)
             y = np.array([r[key] for r in ok], dtype=float)
-            ax.loglog(x, y, marker=marker, label=f"{LABELS[solver]}: ∝ N^{fit(rows, key):.2f}")
+            ax.loglog(x, y, marker=marker, label=f"{LABELS[solver]}: ∝ N^{fit(ok, key):.2f}")
             for r, xi, yi in zip(ok, x, y):
                 ax.annotate(str(r["count"]), (xi, yi), textcoords="offset points", xytext=(4, -10),
                             fontsize=8)

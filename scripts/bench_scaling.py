@@ -30,13 +30,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import subprocess
 import sys
 import time
 
 import numpy as np
 import yaml
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from logview import read_log_view  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
@@ -110,39 +112,11 @@ def probe_error(a: dict, ref: dict) -> float:
     return float(np.abs(ta - tr).max() / np.abs(tr).max()) if ta.shape == tr.shape else np.nan
 
 
-_EVENT = re.compile(r"^(?P<name>\S.*?)\s+(?P<count>\d+)\s+[\d.]+\s+(?P<time>[\d.e+-]+)\s+[\d.]+\s+"
-                    r"[\d.e+-]+\s+[\d.]+\s+(?P<mess>[\d.e+-]+)\s+(?P<len>[\d.e+-]+)\s+(?P<red>[\d.e+-]+)\s")
-
-
 #: the -log_view events that send PETSc's messages (the others nest them): the Jacobian's and
 #: S's off-rank entries (MatAssemblyBegin), vector scatters (the contact exchange, the
 #: multiplier gathers, the matrix-vector products), fascicle blocks with off-rank multiplier
 #: rows (MatCreateSubMats) and PetscSF set-ups
 SENDERS = ("MatAssemblyBegin", "VecScatterBegin", "MatCreateSubMats", "SFSetUp")
-
-
-def log_messages(path: str) -> dict:
-    """MPI traffic in a -log_view file: totals (messages, bytes, reductions over all ranks) and
-    per event (messages, bytes = messages × average length, reductions; summed over stages)."""
-    text = open(path).read()
-    tot = {}
-    for key, pat in (("messages", r"MPI Msg Count:\s+\S+\s+\S+\s+\S+\s+(\S+)"),
-                     ("bytes", r"MPI Msg Len \(bytes\):\s+\S+\s+\S+\s+\S+\s+(\S+)"),
-                     ("reductions", r"MPI Reductions:\s+(\S+)")):
-        m = re.search(pat, text)
-        tot[key] = float(m.group(1)) if m else 0.0
-    events = {}
-    body = text.split("Event                Count")[-1]
-    for line in body.splitlines():
-        m = _EVENT.match(line)
-        if not m or m.group("name").startswith(("---", "Event", "Memory")):
-            continue
-        e = events.setdefault(m.group("name"), {"messages": 0.0, "bytes": 0.0, "reductions": 0.0})
-        mess, avg = float(m.group("mess")), float(m.group("len"))
-        e["messages"] += mess
-        e["bytes"] += mess * avg
-        e["reductions"] += float(m.group("red"))
-    return {"total": tot, "events": events}
 
 
 def messages_table(base: dict, out: str, ranks: list[int]) -> list[dict]:
@@ -153,7 +127,7 @@ def messages_table(base: dict, out: str, ranks: list[int]) -> list[dict]:
             r = run(f"{name}_messages_n{n}", n, SOLVERS[name], base, out)
             if r["status"] != "completed":
                 continue
-            m = log_messages(r["log_view"])
+            m = read_log_view(r["log_view"])
             rows.append({"name": name, "ranks": n, "newton": r["newton"], **m})
     print("\nPETSc MPI traffic (all ranks; MUMPS's own messages not included)")
     hdr = (f"{'solver':12s} {'ranks':>5s} {'Newton':>6s} {'messages':>9s} {'MB':>8s} {'reductions':>10s} "
@@ -178,7 +152,7 @@ def main(argv=None) -> int:
     ap.add_argument("--config", default=os.path.join(ROOT, "configs", "bundle_hex37.yaml"))
     ap.add_argument("--steps", type=float, nargs="+", default=None)
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "bench_scaling"))
-    ap.add_argument("--quick", action="store_true", help="only the default solver")
+    ap.add_argument("--quick", action="store_true", help="only the two solver.linear choices")
     ap.add_argument("--repeat", type=int, default=2, help="runs per timed configuration (fastest kept)")
     ap.add_argument("--messages", action="store_true", help="MPI traffic of both solvers at --ranks")
     ap.add_argument("--ranks", type=int, nargs="+", default=[2, 3, 4])
@@ -192,7 +166,7 @@ def main(argv=None) -> int:
     if a.messages:
         messages_table(base, a.out, a.ranks)
         return 0
-    scaled = SCALED[:1] if a.quick else SCALED
+    scaled = SCALED[:2] if a.quick else SCALED
     rows = [run(f"{name}_n{n}", n, SOLVERS[name], base, a.out, a.repeat) for name in scaled for n in (1, 2)]
     if not a.quick:
         for name in SOLVERS:

@@ -4,37 +4,24 @@ The default linear solver factors the symmetric Jacobian as LDLᵀ (MUMPS).  By 
 of inertia the number of negative pivots of that factorisation is the number of negative
 eigenvalues of the Jacobian, so every Newton iteration already knows whether the state it
 linearised at is a minimum of the total potential (stable) or a saddle (unstable).  MUMPS
-reports the count as INFOG(12); petsc4py 3.18 does not wrap ``MatMumpsGetInfog``, so it is called
-through ctypes from the PETSc library petsc4py itself loaded.
+reports the count as INFOG(12).
 
 Held DOFs carry unit diagonal rows, so the count is that of the free-DOF tangent.
 """
 from __future__ import annotations
 
-import ctypes
-import os
-
-import numpy as np
 from petsc4py import PETSc
 
-_LIB = None
-
-
-def petsc_library():
-    """The libpetsc that petsc4py runs on (already loaded)."""
-    global _LIB
-    if _LIB is None:
-        import petsc4py
-        base = os.path.join(petsc4py.get_config()["PETSC_DIR"], "lib")
-        names = sorted((f for f in os.listdir(base) if f.startswith("libpetsc") and ".so" in f), key=len)
-        if not names:
-            raise OSError(f"no libpetsc in {base}")
-        # RTLD_NOLOAD: the copy petsc4py loaded, with its symbols kept local (RTLD_GLOBAL would
-        # let them shadow later libraries': pymetis then called PT-Scotch's METIS shim and hung)
-        _LIB = ctypes.CDLL(os.path.join(base, names[0]), mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
-        _LIB.MatMumpsGetInfog.restype = ctypes.c_int
-        _LIB.MatMumpsGetIcntl.restype = ctypes.c_int
-    return _LIB
+def mumps_factor(ksp: PETSc.KSP) -> PETSc.Mat | None:
+    """The MUMPS factor matrix of ``ksp``'s LU/Cholesky preconditioner, None when there is none
+    (another preconditioner or package, or before the first factorisation)."""
+    pc = ksp.getPC()
+    if pc.getType() not in ("cholesky", "lu") or pc.getFactorSolverType() != "mumps":
+        return None
+    try:
+        return pc.getFactorMatrix()             # raises before the first factorisation
+    except PETSc.Error:
+        return None
 
 
 def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
@@ -46,23 +33,21 @@ def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
     if pc.getType() == "python":                # the fascicle Schur solver (fieldsplit.py)
         counts = getattr(pc.getPythonContext(), "pivot_counts", None)
         return counts() if counts is not None else None
-    if pc.getType() != "cholesky" or pc.getFactorSolverType() != "mumps":
+    factor = mumps_factor(ksp) if pc.getType() == "cholesky" else None
+    if factor is None:
         return None
-    try:
-        factor = pc.getFactorMatrix()          # raises before the first factorisation
-        lib = petsc_library()
-    except (PETSc.Error, OSError):
+    # a root front factored by ScaLAPACK (ICNTL(13) = 0, MUMPS's default on many ranks) leaves
+    # its pivots out of the count: only trust it with a sequential root
+    if ksp.getComm().getSize() > 1 and factor.getMumpsIcntl(13) != 1:
         return None
-    int_t = ctypes.c_int64 if np.dtype(PETSc.IntType).itemsize == 8 else ctypes.c_int32
-    handle, value = ctypes.c_void_p(factor.handle), int_t(0)
-    if ksp.getComm().getSize() > 1:
-        # a root front factored by ScaLAPACK (ICNTL(13) = 0, MUMPS's default on many ranks)
-        # leaves its pivots out of the count: only trust it with a sequential root
-        if lib.MatMumpsGetIcntl(handle, int_t(13), ctypes.byref(value)) != 0 or value.value != 1:
-            return None
-    counts = []
-    for k in (12, 28):
-        if lib.MatMumpsGetInfog(handle, int_t(k), ctypes.byref(value)) != 0:
-            return None
-        counts.append(int(value.value))
-    return counts[0], counts[1]
+    return int(factor.getMumpsInfog(12)), int(factor.getMumpsInfog(28))
+
+
+def mumps_error(ksp: PETSc.KSP) -> int | None:
+    """MUMPS's error code INFOG(1) (< 0) after a failed factorisation by ``ksp``'s preconditioner,
+    None when it did not fail or is not MUMPS."""
+    factor = mumps_factor(ksp)
+    if factor is None:
+        return None
+    code = int(factor.getMumpsInfog(1))
+    return code if code < 0 else None

@@ -4,6 +4,7 @@ names the option and what works instead.  The input-side checks are in config/pe
 from __future__ import annotations
 
 import ctypes
+import os
 import re
 
 import numpy as np
@@ -11,7 +12,23 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..config.petsc_options import PREFIX
-from .inertia import petsc_library
+
+_LIB = None
+
+
+def petsc_library():
+    """The libpetsc that petsc4py runs on (already loaded)."""
+    global _LIB
+    if _LIB is None:
+        import petsc4py
+        base = os.path.join(petsc4py.get_config()["PETSC_DIR"], "lib")
+        names = sorted((f for f in os.listdir(base) if f.startswith("libpetsc") and ".so" in f), key=len)
+        if not names:
+            raise OSError(f"no libpetsc in {base}")
+        # RTLD_NOLOAD: the copy petsc4py loaded, with its symbols kept local (RTLD_GLOBAL would
+        # let them shadow later libraries': pymetis then called PT-Scotch's METIS shim and hung)
+        _LIB = ctypes.CDLL(os.path.join(base, names[0]), mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+    return _LIB
 
 
 def options_used(names: list[str]) -> list[bool]:
@@ -87,3 +104,20 @@ def solver_hint(pc: str, factor: str, ranks: int, has_package=lambda name: True)
     if pc in ("lu", "cholesky", "ilu", "icc") and factor:
         return f"-pc_factor_mat_solver_type {factor} cannot do {pc} here: use {direct}"
     return f"use {direct}, or -ksp_type gmres with -pc_type gamg, hypre, bjacobi or asm"
+
+
+#: MUMPS errors (INFOG(1)) that a larger workspace margin (ICNTL(14), percent) cures
+MUMPS_WORKSPACE_ERRORS = (-8, -9, -11, -14, -15, -17, -20)
+
+
+def mumps_hint(infog1: int) -> str:
+    """What to do about MUMPS's error INFOG(1) = ``infog1``."""
+    if infog1 in MUMPS_WORKSPACE_ERRORS:
+        return (f"MUMPS's workspace estimate was too small (INFOG(1) = {infog1}; delayed pivots): "
+                "raise its margin, e.g. -mat_mumps_icntl_14 100 (percent)")
+    if infog1 == -19:
+        return ("-mat_mumps_icntl_23 caps MUMPS's working memory below what it needs "
+                "(INFOG(1) = -19): raise the cap or drop the option")
+    if infog1 == -13:
+        return "MUMPS could not allocate its workspace (INFOG(1) = -13): use more ranks or nodes"
+    return f"MUMPS failed with INFOG(1) = {infog1} (see the MUMPS user's guide)"

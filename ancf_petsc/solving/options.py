@@ -157,10 +157,12 @@ def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "") 
 
 
 def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = "",
-                 linear: str = "direct") -> dict:
+                 linear: str = "direct", saddle_point: bool = False) -> dict:
     """``DEFAULT_OPTIONS`` completed for this solve: MUMPS where it is the factorisation package,
-    its sequential root on a few ranks, and the absolute tolerance ``atol``; for the fascicle
-    Schur solver (``linear`` 'fieldsplit') ``FIELDSPLIT_OPTIONS`` instead of the factorisation."""
+    its sequential root on a few ranks, room for delayed pivots when the Jacobian is a
+    saddle-point matrix (contact multipliers), and the absolute tolerance ``atol``; for the
+    fascicle Schur solver (``linear`` 'fieldsplit') ``FIELDSPLIT_OPTIONS`` instead of the
+    factorisation."""
     defaults = dict(DEFAULT_OPTIONS)
     _, factor = factor_package(config_options, prefix)
     if linear == "fieldsplit":
@@ -181,5 +183,10 @@ def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = ""
         # root gives the stability check its negative-pivot count (inertia.py); more ranks
         # keep MUMPS's default
         defaults["mat_mumps_icntl_13"] = "1"
+    if factor == "mumps" and saddle_point:
+        # the zero multiplier block delays pivots beyond MUMPS's 20 % workspace margin: the
+        # 37-fascicle bundle on 2 ranks stopped with INFOG(1) = -9 (FACTOR_OUTMEMORY) at 20 %
+        # and runs from 35 % on
+        defaults["mat_mumps_icntl_14"] = "50"
     defaults["snes_atol"] = f"{atol:.3e}"
     return defaults

@@ -17,8 +17,8 @@ from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
 from ..petsc import logging
-from ..petsc.inertia import pivot_counts
-from ..petsc.options import petsc_message, solver_hint, used_anywhere
+from ..petsc.inertia import mumps_error, pivot_counts
+from ..petsc.options import mumps_hint, petsc_message, solver_hint, used_anywhere
 from ..petsc.problem import Problem
 from .interrupt import RunInterrupted, stop_requested
 from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
@@ -116,7 +116,8 @@ class LoadStepper:
         self.path: PathState | None = None      # where the load path is (``run``)
         self.linesearch, self._kept_options = configure_options(
             self.snes, petsc_options,
-            run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear), self.prefix)
+            run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear,
+                         saddle_point=problem.n_constraints > 0), self.prefix)
         if linear == "fieldsplit":
             # imported here: scipy.linalg is start-up time the direct solver does not need
             from ..petsc.fascicles import fascicle_split
@@ -214,7 +215,7 @@ class LoadStepper:
                 why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
                         "move or an integration rule with zero-energy modes)")
             raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
-                                  f" in the linear solver ({solver_options(self.petsc_options, self.prefix)}): "
+                                  f" in the linear solver ({self._solver_text()}): "
                                   f"{why}") from None
         self._ksp_reason = self.snes.getKSP().getConvergedReason()
         reason = self.snes.getConvergedReason()
@@ -236,9 +237,21 @@ class LoadStepper:
             return ""
         kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
                    if not k.startswith("_")}.get(self._ksp_reason, str(self._ksp_reason))
-        pc, factor = factor_package(self.petsc_options, self.prefix)
-        return (f" (the linear solver {solver_options(self.petsc_options, self.prefix)} stopped with {kreason}; "
-                f"{solver_hint(pc, factor, self.problem.comm.size, PETSc.Sys.hasExternalPackage)})")
+        infog1 = mumps_error(self.snes.getKSP())
+        if self.linear == "fieldsplit":
+            hint = "solver.linear: direct factors the whole Jacobian instead"
+        elif infog1 is not None:
+            hint = mumps_hint(infog1)
+        else:
+            pc, factor = factor_package(self.petsc_options, self.prefix)
+            hint = solver_hint(pc, factor, self.problem.comm.size, PETSc.Sys.hasExternalPackage)
+        return f" (the linear solver {self._solver_text()} stopped with {kreason}; {hint})"
+
+    def _solver_text(self) -> str:
+        """The linear solver in effect, for messages."""
+        if self.linear == "fieldsplit":
+            return "FGMRES with the fascicle Schur preconditioner, solver.linear: fieldsplit"
+        return solver_options(self.petsc_options, self.prefix)
 
     def _residual_small(self, fnorm: float, lam: float) -> bool:
         """A 'converged' SNES (e.g. on a tiny step) must also have a small residual."""

@@ -365,7 +365,7 @@ def test_option_tables_match_petsc():
     from petsc4py import PETSc
 
     from ancf_petsc.config import petsc_options as po
-    from ancf_petsc.petsc.inertia import petsc_library
+    from ancf_petsc.petsc.options import petsc_library
     names = lambda cls: sorted({getattr(cls, k) for k in dir(cls) if not k.startswith("_")
                                 and isinstance(getattr(cls, k), str)})
     assert sorted(po.KSP_TYPES) == names(PETSc.KSP.Type)

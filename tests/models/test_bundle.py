@@ -17,7 +17,8 @@ def _expand(**bundle):
     return expand_bundle(raw)
 
 
-@pytest.mark.parametrize("count,shared", [(7, 12), (19, 42), (37, 90)])
+# interior edges of a hexagonal patch of r rings, n = 1 + 3 r (r + 1) cells: 3 n − 3 (2 r + 1)
+@pytest.mark.parametrize("count,shared", [(7, 12), (19, 42), (37, 90), (61, 156), (91, 240)])
 def test_hexagons_tile_and_share_edges(count, shared):
     petsc_init()
     from ancf_petsc.config.parse import parse_config

@@ -190,3 +190,17 @@ def test_fieldsplit_gives_the_direct_answer_on_1_2_3_ranks(tmp_path):
         assert [st["negative_eigenvalues"] for st in summaries[name]["steps"]] == [0, 0]
     assert summaries["fs3"]["partition"]["method"] == "beams"
     assert summaries["fs3"]["partition"]["cut_beam_nodes"] == 0
+
+
+def test_a_failing_fieldsplit_solve_names_its_solver_and_the_alternative(tmp_path):
+    """A Krylov iteration cut short (-ksp_max_it 1) ends the run as DIVERGED_LINEAR_SOLVE with
+    the fascicle Schur solver named, not the direct solver's options, and solver.linear: direct
+    offered."""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["solver"] = {"linear": "fieldsplit", "max_cutbacks": 1}
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-ksp_max_it", "1"])
+    assert p.returncode == 3, p.stdout + p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert "DIVERGED_LINEAR_SOLVE" in line and "fascicle Schur" in line, line
+    assert "solver.linear: direct" in line and "-pc_type cholesky" not in line, line

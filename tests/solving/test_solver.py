@@ -191,3 +191,19 @@ def test_options_prefix_tunes_two_solves_in_one_process_apart(tmp_path):
         runs["b_"]["steps"][-1]["probes"]["tip"]["displacement"], rel=1e-8)
     assert not runs["b_"]["unused_petsc_options"], runs["b_"]["unused_petsc_options"]
     assert before - already == {"a_snes_linesearch_type"}      # the prefixed config options are gone
+
+
+def test_a_failed_mumps_factorisation_says_what_to_change(tmp_path):
+    """MUMPS's own error code (INFOG(1)) reaches the one-line failure with the option that
+    cures it: a working-memory cap that is too small (-mat_mumps_icntl_23 1, INFOG(1) = -19);
+    workspace-margin errors name ICNTL(14)."""
+    from ancf_petsc.petsc.options import mumps_hint
+    raw = load_raw("bundle_hex7.yaml")
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    raw["solver"] = {"max_cutbacks": 1}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-mat_mumps_icntl_23", "1"])
+    assert p.returncode == 3, p.stdout + p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert "INFOG(1) = -19" in line and "-mat_mumps_icntl_23" in line, line
+    for code in (-8, -9, -17, -20):
+        assert "-mat_mumps_icntl_14" in mumps_hint(code)

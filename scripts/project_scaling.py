@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""Projection of the fascicle-parallel solver to 64 ranks and a 1000-fascicle scene (issue 16).
+
+A model of one Newton iteration on P ranks for n fascicles with M contact multipliers, every
+coefficient measured on this machine, every assumption printed:
+
+    T(n, P) = a ⌈n / P⌉  +  S(M) / P^α  +  T_comm(n, P)
+
+* a: the work that belongs to one fascicle (its elements, contact points, dense factor, Schur
+  block and the block solves of every GMRES iteration), fitted as T₁ − S = a n over the one-rank
+  runs of scripts/bench_growth.py (7 … 91 fascicles).
+* S(M) = c M^p: the multiplier Schur complement's MUMPS factorisation and solves
+  (MatCholFctrNum + MatSolve in -log_view), fitted over the same runs.
+* α: MUMPS's parallel efficiency on S, from the same S events at 1 and 2 ranks on 37 fascicles
+  (scripts/bench_scaling.py --quick); held fixed beyond 2 ranks (the assumption that most limits
+  the projection: MUMPS's distributed factorisation usually scales worse on many ranks).
+* T_comm: PETSc's messages, volumes and reductions per Newton iteration measured at 2, 3 and 4
+  ranks (scripts/bench_scaling.py --messages): messages per rank taken at their 4-rank value
+  (a rank of a two-dimensional fascicle partition talks to a bounded number of neighbours),
+  bytes per rank scaled with the perimeter of a rank's patch of fascicles (√(n/P)), reductions
+  per iteration as measured, each log₂P latencies.  Network: ``--latency`` and ``--bandwidth``
+  (default 2 µs and 10 GB/s, an InfiniBand cluster).  MUMPS's own messages are not in PETSc's
+  log; they are inside α.
+
+Usage: python scripts/project_scaling.py [--growth results/bench_growth]
+                                         [--scaling results/bench_scaling]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from logview import read_log_view  # noqa: E402
+
+S_EVENTS = ("MatCholFctrNum", "MatSolve")
+
+
+def s_time(log: str) -> float:
+    """Seconds in the multiplier Schur complement's factorisation and solves (slowest rank)."""
+    ev = read_log_view(log)["events"]
+    return sum(ev.get(k, {}).get("time", 0.0) for k in S_EVENTS)
+
+
+def growth_fits(growth_dir: str) -> dict:
+    """a (s per fascicle per iteration), c and p of S(M) = c M^p, and the multipliers per
+    fascicle, from the fieldsplit rows of bench_growth.json."""
+    rows = [r for r in json.load(open(os.path.join(growth_dir, "bench_growth.json")))
+            if r["solver"] == "fieldsplit" and r["status"] == "completed"]
+    n = np.array([r["count"] for r in rows], float)
+    M = np.array([r["multipliers"] for r in rows], float)
+    its = np.array([r["newton"] for r in rows], float)
+    T1 = np.array([r["per_iteration"] for r in rows])
+    S = np.array([s_time(os.path.join(growth_dir, f"hex{r['count']}_e{r['elements']}_fieldsplit",
+                                      "log_view.txt")) for r in rows]) / its
+    a = float(np.linalg.lstsq(n[:, None], T1 - S, rcond=None)[0][0])
+    p, logc = np.polyfit(np.log(M), np.log(S), 1)
+    return {"a": a, "c": float(np.exp(logc)), "p": float(p), "m_per_fascicle": float(np.mean(M / n)),
+            "rows": [(int(k), int(m), t, s) for k, m, t, s in zip(n, M, T1, S)]}
+
+
+def mumps_alpha(scaling_dir: str) -> tuple[float, float, float]:
+    """α of the S parts from the fieldsplit runs at 1 and 2 ranks (bench_scaling.py --quick)."""
+    t = [s_time(os.path.join(scaling_dir, f"fieldsplit_n{k}", "log_view.txt")) for k in (1, 2)]
+    return math.log2(t[0] / t[1]), t[0], t[1]
+
+
+def comm_model(scaling_dir: str) -> dict:
+    """Messages and bytes per rank and reductions, per Newton iteration, at 4 ranks (37 fascicles)."""
+    rows = [r for r in json.load(open(os.path.join(scaling_dir, "bench_messages.json")))
+            if r["name"] == "fieldsplit"]
+    by = {r["ranks"]: r for r in rows}
+    r4 = by[max(by)]
+    it, P = max(r4["newton"], 1), r4["ranks"]
+    return {"ranks": P, "fascicles": 37,
+            "messages": r4["total"]["messages"] / P / it, "bytes": r4["total"]["bytes"] / P / it,
+            "reductions": r4["total"]["reductions"] / it,
+            "measured": {k: (v["total"]["messages"] / max(v["newton"], 1),
+                             v["total"]["bytes"] / max(v["newton"], 1),
+                             v["total"]["reductions"] / max(v["newton"], 1)) for k, v in sorted(by.items())}}
+
+
+def iteration_time(n: int, P: int, fit: dict, alpha: float, comm: dict, lat: float, bw: float) -> dict:
+    M = fit["m_per_fascicle"] * n
+    work = fit["a"] * math.ceil(n / P)
+    schur = fit["c"] * M ** fit["p"] / P ** alpha
+    t_comm = 0.0
+    if P > 1:
+        patch = math.sqrt((n / P) / (comm["fascicles"] / comm["ranks"]))
+        t_comm = (comm["messages"] * lat + comm["bytes"] * patch / bw
+                  + comm["reductions"] * math.log2(P) * lat)
+    return {"work": work, "schur": schur, "comm": t_comm, "total": work + schur + t_comm}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--growth", default=os.path.join(ROOT, "results", "bench_growth"))
+    ap.add_argument("--scaling", default=os.path.join(ROOT, "results", "bench_scaling"))
+    ap.add_argument("--fascicles", type=int, default=1027, help="strong-scaling scene (19 rings)")
+    ap.add_argument("--per-rank", type=int, default=16, help="fascicles per rank, weak scaling")
+    ap.add_argument("--latency", type=float, default=2e-6, help="s per message")
+    ap.add_argument("--bandwidth", type=float, default=10e9, help="bytes per s")
+    a = ap.parse_args(argv)
+    fit = growth_fits(a.growth)
+    alpha, s1, s2 = mumps_alpha(a.scaling)
+    comm = comm_model(a.scaling)
+    print("Measured (one Newton iteration):")
+    for k, m, t, s in fit["rows"]:
+        print(f"  {k:4d} fascicles, {m:6d} multipliers: {t:6.2f} s, of which Schur factor+solves {s:5.2f} s")
+    print(f"  per-fascicle work a = {fit['a'] * 1e3:.1f} ms; S(M) = {fit['c']:.2e} M^{fit['p']:.2f} s; "
+          f"{fit['m_per_fascicle']:.0f} multipliers per fascicle")
+    print(f"  Schur parts on 37 fascicles: {s1:.2f} s (1 rank) -> {s2:.2f} s (2 ranks): alpha = {alpha:.2f}")
+    print("  PETSc traffic per Newton iteration (37 fascicles; messages, MB, reductions): " + ", ".join(
+        f"{P} ranks {m:.0f} / {b / 1e6:.2f} / {r:.0f}" for P, (m, b, r) in comm["measured"].items()))
+    print(f"  network assumed: {a.latency * 1e6:.1f} us latency, {a.bandwidth / 1e9:.0f} GB/s")
+    ranks = [1, 2, 4, 8, 16, 32, 64]
+    print(f"\nStrong scaling, {a.fascicles} fascicles x 16 elements "
+          f"({a.fascicles * 17 * 18:,} beam DOFs, {fit['m_per_fascicle'] * a.fascicles:,.0f} multipliers), "
+          "projected seconds per Newton iteration:")
+    print("| ranks | fascicle work | Schur (MUMPS) | PETSc messages | total | speed-up | efficiency |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
+    t1 = iteration_time(a.fascicles, 1, fit, alpha, comm, a.latency, a.bandwidth)["total"]
+    for P in ranks:
+        t = iteration_time(a.fascicles, P, fit, alpha, comm, a.latency, a.bandwidth)
+        print(f"| {P} | {t['work']:.2f} | {t['schur']:.2f} | {t['comm']:.3f} | {t['total']:.2f} | "
+              f"{t1 / t['total']:.1f}x | {t1 / t['total'] / P:.0%} |")
+    print(f"\nWeak scaling, {a.per_rank} fascicles per rank, projected seconds per Newton iteration:")
+    print("| ranks | fascicles | multipliers | fascicle work | Schur (MUMPS) | PETSc messages | total | efficiency |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    base = iteration_time(a.per_rank, 1, fit, alpha, comm, a.latency, a.bandwidth)["total"]
+    for P in ranks:
+        n = a.per_rank * P
+        t = iteration_time(n, P, fit, alpha, comm, a.latency, a.bandwidth)
+        print(f"| {P} | {n} | {fit['m_per_fascicle'] * n:,.0f} | {t['work']:.2f} | {t['schur']:.2f} | "
+              f"{t['comm']:.3f} | {t['total']:.2f} | {base / t['total']:.0%} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

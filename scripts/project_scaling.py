@@ -120,26 +120,37 @@ def main(argv=None) -> int:
         f"{P} ranks {m:.0f} / {b / 1e6:.2f} / {r:.0f}" for P, (m, b, r) in comm["measured"].items()))
     print(f"  network assumed: {a.latency * 1e6:.1f} us latency, {a.bandwidth / 1e9:.0f} GB/s")
     ranks = [1, 2, 4, 8, 16, 32, 64]
-    print(f"\nStrong scaling, {a.fascicles} fascicles x 16 elements "
+    for label, al in ((f"measured alpha = {alpha:.2f}", alpha),
+                      ("if MUMPS scaled S as P^0.5 (an assumption, not measured)", 0.5),
+                      ("if S scaled perfectly (alpha = 1, the bound)", 1.0)):
+        strong_and_weak(a, fit, al, comm, ranks, label)
+    return 0
+
+
+def strong_and_weak(a, fit: dict, alpha: float, comm: dict, ranks: list, label: str) -> None:
+    """Print the strong- and weak-scaling tables for one Schur-complement efficiency."""
+    def t(n, P):
+        return iteration_time(n, P, fit, alpha, comm, a.latency, a.bandwidth)
+    print(f"\n#### {label}\n")
+    print(f"Strong scaling, {a.fascicles} fascicles x 16 elements "
           f"({a.fascicles * 17 * 18:,} beam DOFs, {fit['m_per_fascicle'] * a.fascicles:,.0f} multipliers), "
-          "projected seconds per Newton iteration:")
+          "projected seconds per Newton iteration:\n")
     print("| ranks | fascicle work | Schur (MUMPS) | PETSc messages | total | speed-up | efficiency |")
     print("|---:|---:|---:|---:|---:|---:|---:|")
-    t1 = iteration_time(a.fascicles, 1, fit, alpha, comm, a.latency, a.bandwidth)["total"]
+    t1 = t(a.fascicles, 1)["total"]
     for P in ranks:
-        t = iteration_time(a.fascicles, P, fit, alpha, comm, a.latency, a.bandwidth)
-        print(f"| {P} | {t['work']:.2f} | {t['schur']:.2f} | {t['comm']:.3f} | {t['total']:.2f} | "
-              f"{t1 / t['total']:.1f}x | {t1 / t['total'] / P:.0%} |")
-    print(f"\nWeak scaling, {a.per_rank} fascicles per rank, projected seconds per Newton iteration:")
+        r = t(a.fascicles, P)
+        print(f"| {P} | {r['work']:.2f} | {r['schur']:.2f} | {r['comm']:.3f} | {r['total']:.2f} | "
+              f"{t1 / r['total']:.1f}x | {t1 / r['total'] / P:.0%} |")
+    print(f"\nWeak scaling, {a.per_rank} fascicles per rank, projected seconds per Newton iteration:\n")
     print("| ranks | fascicles | multipliers | fascicle work | Schur (MUMPS) | PETSc messages | total | efficiency |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|")
-    base = iteration_time(a.per_rank, 1, fit, alpha, comm, a.latency, a.bandwidth)["total"]
+    base = t(a.per_rank, 1)["total"]
     for P in ranks:
         n = a.per_rank * P
-        t = iteration_time(n, P, fit, alpha, comm, a.latency, a.bandwidth)
-        print(f"| {P} | {n} | {fit['m_per_fascicle'] * n:,.0f} | {t['work']:.2f} | {t['schur']:.2f} | "
-              f"{t['comm']:.3f} | {t['total']:.2f} | {base / t['total']:.0%} |")
-    return 0
+        r = t(n, P)
+        print(f"| {P} | {n} | {fit['m_per_fascicle'] * n:,.0f} | {r['work']:.2f} | {r['schur']:.2f} | "
+              f"{r['comm']:.3f} | {r['total']:.2f} | {base / r['total']:.0%} |")
 
 
 if __name__ == "__main__":

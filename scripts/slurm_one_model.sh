@@ -34,6 +34,8 @@ export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 #   mpirun --map-by ppr:${SLURM_NTASKS_PER_NODE}:node --bind-to core
 # instead.  ancf-solve stops at the next safe point on the SIGTERM above, keeps every
 # converged load level in $OUT, and exits 143 (docs/running.md, "Signals").
-srun --kill-on-bad-exit=1 --cpu-bind=cores \
-    "$VENV/bin/ancf-solve" "$CONFIG" --output-dir "$OUT" \
+# ANCF_LAUNCH replaces srun, e.g. ANCF_LAUNCH="mpirun -n 2" bash scripts/slurm_one_model.sh ...
+# to try the script on a workstation (tests/workflows/test_slurm_one_model.py does).
+read -r -a LAUNCH <<< "${ANCF_LAUNCH:-srun --kill-on-bad-exit=1 --cpu-bind=cores}"
+"${LAUNCH[@]}" "$VENV/bin/ancf-solve" "$CONFIG" --output-dir "$OUT" \
     -log_view ":$OUT/log_view.txt" "$@"

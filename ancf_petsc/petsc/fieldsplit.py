@@ -53,8 +53,10 @@ SCHUR_PREFIX = "fascicle_schur_"
 #: fascicles), and a pivot MUMPS drops as null there leaves the preconditioner without a
 #: direction J has, so that GMRES stalls (37 fascicles: at 7e-5 instead of 11 iterations to 1e-9).
 #: Its delayed pivots outgrow MUMPS's default 20 % workspace margin on 2 ranks (INFOG(1) = −9):
-#: 100 %.  AMD ordering (ICNTL(7) = 0): 37 fascicles, 9 factorisations of S, 1.66 → 1.61 s on
-#: one rank and 2.19 → 1.53 s on two against MUMPS's automatic choice (best of three).
+#: 100 %.  AMD ordering (ICNTL(7) = 0): 37 fascicles, 9 factorisations of S on two ranks,
+#: 2.19 → 1.53 s against MUMPS's automatic choice (best of three).  On one rank PETSc 3.18 puts
+#: back MUMPS's automatic choice (AMF here, INFOG(7) = 2) unless -fascicle_schur_mat_mumps_icntl_7
+#: is given; AMD is no faster there (1.61 against 1.66 s).
 #: A factor of S lagged by one Newton iteration is no preconditioner: FGMRES then stalls at
 #: 100 iterations in the first increment.
 SCHUR_MUMPS = {"icntl": {24: 0, 14: 100, 7: 0}, "cntl": {}}

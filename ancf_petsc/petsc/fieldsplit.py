@@ -145,7 +145,11 @@ class FascicleSchur:
             for obj in (src, dst, x):
                 obj.destroy()
         logging.event(FACTOR_EVENT).begin()
-        self._subs = P.createSubMatrices(self._is, submats=self._subs)
+        # fresh sub-matrices every time: the contact pattern of J grows when projections move
+        # to other elements, and PETSc cannot reuse a sub-matrix whose pattern changed
+        for sub in self._subs or []:
+            sub.destroy()
+        self._subs = P.createSubMatrices(self._is)
         self.factors, self.Bt = [], []
         blocks = []
         for sub, (iu, im) in zip(self._subs, self._pos):

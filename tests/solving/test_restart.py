@@ -14,8 +14,9 @@ from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, read_summary, so
 from helpers import probes_table
 
 
-def _config(tmp_path, mode="sliding", name="c"):
+def _config(tmp_path, mode="sliding", name="c", linear="auto"):
     raw = load_raw("achilles_type3_psi45.yaml")
+    raw["solver"] = dict(raw.get("solver") or {}, linear=linear)
     for b in raw["beams"]:
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
     raw["contact"]["mode"] = mode
@@ -53,10 +54,11 @@ def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
 
 @pytest.mark.mpi
 @pytest.mark.slow
-@pytest.mark.parametrize("ranks,restart_ranks,mode", [(1, 1, "sliding"), (2, 2, "sliding"),
-                                                      (1, 2, "sliding"), (1, 1, "unilateral")])
-def test_killed_column_restarts_to_the_uninterrupted_answers(tmp_path, ranks, restart_ranks, mode):
-    cfg, _ = _config(tmp_path, mode)
+@pytest.mark.parametrize("ranks,restart_ranks,mode,linear", [
+    (1, 1, "sliding", "auto"), (2, 2, "sliding", "auto"), (1, 2, "sliding", "auto"),
+    (1, 1, "unilateral", "auto"), (1, 2, "sliding", "fieldsplit")])
+def test_killed_column_restarts_to_the_uninterrupted_answers(tmp_path, ranks, restart_ranks, mode, linear):
+    cfg, _ = _config(tmp_path, mode, linear=linear)
     p = solve_cli(cfg, extra=["--output-dir", str(tmp_path / "full"), "--quiet"])
     assert p.returncode == 0, p.stderr
     full = read_summary(tmp_path / "full")

@@ -37,12 +37,12 @@ def test_fascicle_factor_solves_and_counts_negative_eigenvalues(kind):
     assert np.abs(f.schur_block(Bt) - ref).max() <= 1e-8 * np.abs(ref).max()
 
 
-def _hex7_problem(loaded: bool):
+def _hex7_problem(loaded: bool, matrix: str = "sbaij"):
     """bundle_hex7 on one rank (whole-beam layout), Jacobian at q0 (no multipliers: no contact
     curvature) or after one Newton step of the first load level (multipliers non-zero)."""
     raw = load_raw("bundle_hex7.yaml")
     raw["output"] = {"dir": "unused", "vtk": False}
-    P, PETSc = build_problem(raw, "sbaij")
+    P, PETSc = build_problem(raw, matrix)
     model, layout = P.model, P.layout
     P.load_factor = 0.5
     X, F = P.q0.copy(), P.F.duplicate()
@@ -74,15 +74,16 @@ def _dense(P, model, layout):
     return J, np.repeat(owner, DOFS_PER_NODE)
 
 
+@pytest.mark.parametrize("matrix", ["sbaij", "aij"])
 @pytest.mark.parametrize("loaded", [False, True], ids=["reference", "loaded"])
-def test_preconditioner_is_the_exact_inverse_without_contact_curvature_between_fascicles(loaded):
+def test_preconditioner_is_the_exact_inverse_without_contact_curvature_between_fascicles(loaded, matrix):
     """PC(r) = J_bd⁻¹ r, J_bd = J without the blocks coupling two fascicles directly: those are
     zero at q0 (no pressure) and non-zero under load; the multiplier Schur complement is
     checked through the whole inverse (numpy, dense)."""
     from petsc4py import PETSc
     from ancf_petsc.petsc.fascicles import fascicle_split
     from ancf_petsc.petsc.fieldsplit import FascicleSchur
-    model, layout, P, F = _hex7_problem(loaded)
+    model, layout, P, F = _hex7_problem(loaded, matrix)
     J, beam_of = _dense(P, model, layout)
     cross = (beam_of[:, None] >= 0) & (beam_of[None, :] >= 0) & (beam_of[:, None] != beam_of[None, :])
     assert (np.abs(J[cross]).max() > 0) == loaded

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling verify verify-solid studies clean
+.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -36,6 +36,14 @@ bench: setup
 
 bench-scaling: setup
 	$(PY) scripts/bench_scaling.py
+
+# how cost grows with the scene (7..91 fascicles, both linear solvers; about 20 min), then the
+# MPI traffic at 2-4 ranks and the 64-rank projection from those measurements (docs/parallel.md)
+bench-growth: setup
+	$(PY) scripts/bench_growth.py
+	$(PY) scripts/bench_scaling.py --quick --repeat 3
+	$(PY) scripts/bench_scaling.py --messages
+	$(PY) scripts/project_scaling.py
 
 studies: setup
 	$(VENV)/bin/ancf-study configs/studies/bending_pareto.yaml

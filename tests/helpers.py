@@ -113,6 +113,25 @@ def probes_table(summary):
     return np.array(rows)
 
 
+def assert_same_as_serial(tables: dict, rtol: float = 1e-9) -> None:
+    """Every rank count's probe table (``probes_table``) equals the serial one, tables[1], to
+    ``rtol`` of its largest entry."""
+    scale = np.abs(tables[1]).max()
+    for n, table in tables.items():
+        assert table.shape == tables[1].shape, n
+        err = np.abs(table - tables[1]).max() / scale
+        assert err <= rtol, (n, err)
+
+
+def perturbed_state(P, rng, amplitude: float):
+    """P's state vector X set to q0 plus ``amplitude`` × N(0, 1) on the free DOFs; (X, free)."""
+    X = P.X
+    P.q0.copy(X)
+    free = ~P.fixed_mask
+    X.setArray(X.getArray() + amplitude * rng.standard_normal(X.getLocalSize()) * free)
+    return X, free
+
+
 #: the solver's one-line failure message (solver.LoadStepFailure), checked by tests as users read it
 FAILURE_MESSAGE = re.compile(r"^could not reach load factor \S+: SNES failed at load factor \S+ "
                              r"\(last converged \S+\) with [A-Z_]+"

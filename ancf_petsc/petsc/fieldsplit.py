@@ -41,6 +41,7 @@ from petsc4py import PETSc
 from ..physics.element3363 import DOFS_PER_NODE
 from . import logging
 from .fascicles import FascicleFactor, FascicleSplit, fascicle_blocks
+from .inertia import pivot_counts
 
 INSERT = PETSc.InsertMode.INSERT_VALUES
 ADD = PETSc.InsertMode.ADD_VALUES
@@ -239,12 +240,12 @@ class FascicleSchur:
 
     # ------------------------------------------------------------------ stability
     def pivot_counts(self) -> tuple[int, int] | None:
-        """(negative, null) pivots of J_bd: those of the fascicle factors plus MUMPS's
-        INFOG(12)/INFOG(28) for S (collective; None before the first set-up or when MUMPS's
-        root front was factored by ScaLAPACK, whose pivots MUMPS does not count)."""
+        """(negative, null) pivots of J_bd: those of the fascicle factors plus those of S's MUMPS
+        LDLᵀ (``inertia.pivot_counts``; collective, None before the first set-up or where MUMPS
+        does not count them)."""
         if self.setups == 0:
             return None
-        F = self.ksp.getPC().getFactorMatrix()
-        if self.comm.size > 1 and F.getMumpsIcntl(13) != 1:
+        counts = pivot_counts(self.ksp)
+        if counts is None:
             return None
-        return (self._counts[0] + int(F.getMumpsInfog(12)), self._counts[1] + int(F.getMumpsInfog(28)))
+        return self._counts[0] + counts[0], self._counts[1] + counts[1]

@@ -6,7 +6,7 @@ import pytest
 
 from ancf_petsc.physics import element3363 as el
 from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
-from helpers import build_problem as _problem, jacobian_and_difference, two_beam_twisted
+from helpers import build_problem as _problem, jacobian_and_difference, perturbed_state, two_beam_twisted
 
 
 def test_3333_shape_functions_are_the_linear_section_subset_of_3363():
@@ -28,10 +28,7 @@ def test_mixed_3363_3333_jacobian_matches_finite_differences(locking):
     assert P.blocks[1].rows.shape[1] == 27 and len(P.blocks[1].parts) == (3 if locking == "ecm" else 1)
     P.load_factor = 0.7
     rng = np.random.default_rng(1)
-    X = P.X
-    P.q0.copy(X)
-    free = ~P.fixed_mask
-    X.setArray(X.getArray() + 2e-3 * rng.standard_normal(X.getLocalSize()) * free)
+    X, free = perturbed_state(P, rng, 2e-3)
     P.jacobian(None, X, P.J, P.J)
     for _ in range(2):
         v = X.duplicate()

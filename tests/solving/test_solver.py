@@ -5,17 +5,14 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import FAILURE_MESSAGE, build_problem as _problem, jacobian_and_difference, load_raw, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
+from helpers import FAILURE_MESSAGE, build_problem as _problem, jacobian_and_difference, load_raw, perturbed_state, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
 
 
 def test_assembled_jacobian_matches_finite_differences():
     P, PETSc = _problem(two_beam_twisted())
     P.load_factor = 0.7
     rng = np.random.default_rng(0)
-    X = P.X
-    P.q0.copy(X)
-    free = ~P.fixed_mask
-    X.setArray(X.getArray() + 2e-3 * rng.standard_normal(X.getLocalSize()) * free)
+    X, free = perturbed_state(P, rng, 2e-3)
     J = P.J
     P.jacobian(None, X, J, J)
     for _ in range(3):
@@ -31,11 +28,8 @@ def test_assembled_jacobian_matches_finite_differences():
 def test_residual_is_gradient_of_objective():
     P, PETSc = _problem(two_beam_twisted())
     P.load_factor = 0.3
-    X = P.X
-    P.q0.copy(X)
     rng = np.random.default_rng(1)
-    free = ~P.fixed_mask
-    X.setArray(X.getArray() + 1e-3 * rng.standard_normal(X.getLocalSize()) * free)
+    X, free = perturbed_state(P, rng, 1e-3)
     F = X.duplicate()
     P.residual(None, X, F)
     v = X.duplicate()

@@ -13,7 +13,7 @@ setup(
     install_requires=["meshio>=5.3", "pymetis>=2023.1"],
     entry_points={
         "console_scripts": [
-            "ancf-solve=apps.ancf_solve:main",
+            "ancf-solve=apps.ancf_solve:cli",
             "ancf-report=apps.ancf_report:main",
             "ancf-sweep=apps.ancf_sweep:main",
             "ancf-study=apps.ancf_study:main",

@@ -120,6 +120,8 @@ def _main(argv: list[str], interrupt) -> int:
     from ancf_petsc.petsc.options import unused_line
     from ancf_petsc.api import solve
     from ancf_petsc.solving.options import SolverOptionError
+    from ancf_petsc.parallel.launch import freeze_imports
+    freeze_imports()
 
     interrupt.install()                  # again: PETSc installed its own SIGPIPE handler
     comm = PETSc.COMM_WORLD
@@ -167,5 +169,13 @@ def _main(argv: list[str], interrupt) -> int:
     return result.exit_code
 
 
+def cli() -> None:
+    """The ``ancf-solve`` command: ``main`` and a quick process exit (``launch.exit_process``);
+    an exception ``main`` lets through (a bug) ends the ordinary way, with its traceback."""
+    code = main()
+    from ancf_petsc.parallel.launch import exit_process
+    exit_process(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    cli()

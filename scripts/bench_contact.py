@@ -84,6 +84,9 @@ def main(argv=None) -> int:
             base_root = os.path.join(out, "baseline")
             subprocess.run(["git", "worktree", "add", "--detach", base_root, args.baseline], cwd=ROOT,
                            check=True, capture_output=True)
+            # byte-compiled like this tree (scripts/setup.sh), so that only the code differs
+            subprocess.run([sys.executable, "-m", "compileall", "-q", "ancf_petsc", "apps"], cwd=base_root,
+                           check=True, capture_output=True)
             try:
                 base = {f"ψ={p}° sliding": run_column(base_root, p, "sliding", args.repeat, out) for p in TWISTS}
             finally:

@@ -49,11 +49,13 @@ def parse_solver(value) -> SolverSpec:
 
 
 def parse_output(value, name: str) -> OutputSpec:
-    """``output``: directory (default results/<name>), VTK on/off and its samples per element edge."""
-    out = mapping(value, "output", optional=("dir", "vtk", "vtk_samples"))
+    """``output``: directory (default results/<name>), VTK on/off, its samples per element edge
+    and whether the VTUs are zlib-compressed."""
+    out = mapping(value, "output", optional=("dir", "vtk", "vtk_samples", "vtk_compress"))
     return OutputSpec(dir=string(out.get("dir", os.path.join("results", name)), "output.dir"),
                       vtk=boolean(out.get("vtk", True), "output.vtk"),
-                      vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64))
+                      vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64),
+                      vtk_compress=boolean(out.get("vtk_compress", False), "output.vtk_compress"))
 
 
 def parse_partition(value) -> str:

@@ -50,7 +50,9 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     P_s = int(pts.seg_size[segs].max())
     D = DOFS_PER_NODE * (2 * width + 6)
     Dq = D - Z
-    sel = np.flatnonzero(np.isin(srow, sk))             # positions in the local arrays
+    in_sk = np.zeros(len(c.segments), dtype=bool)
+    in_sk[sk] = True
+    sel = np.flatnonzero(in_sk[srow])                   # positions in the local arrays
     s_loc = np.searchsorted(sk, srow[sel])
     p_loc = c.local[sel] - pts.seg_start[segs[s_loc]]
     j = pr.eB[sel] - first_b[srow[sel]]

@@ -28,19 +28,22 @@ def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray
     m, my, mz = el.section_monomials(S[:, 0], S[:, 1])
     mt = my * S1[:, :1] + mz * S1[:, 1:]
     P = len(xi)
-    N = (L[:, :, None] * m[:, None, :]).reshape(P, SLOTS)
-    Nz = np.stack([(dL[:, :, None] * m[:, None, :]).reshape(P, SLOTS),
-                   (L[:, :, None] * mt[:, None, :]).reshape(P, SLOTS)], axis=-1)
     if S2 is None:
-        return N, Nz
+        # every (Lagrange factor) x (monomial factor) product in one broadcast: [L, dL] x [m, m_t]
+        prod = (np.stack([L, dL], 1)[:, :, None, :, None]
+                * np.stack([m, mt], 1)[:, None, :, None, :]).reshape(P, 2, 2, SLOTS)
+        return prod[:, 0, 0], np.stack([prod[:, 1, 0], prod[:, 0, 1]], -1)
     mtt = my * S2[:, :1] + mz * S2[:, 1:]
     mtt[:, 3] += S1[:, 0] ** 2                 # (y²/2)'' = y'² + y y''
     mtt[:, 4] += S1[:, 1] ** 2
     mtt[:, 5] += 2.0 * S1[:, 0] * S1[:, 1]     # (yz)'' = 2 y'z' + y''z + y z''
-    cross = (dL[:, :, None] * mt[:, None, :]).reshape(P, SLOTS)
-    Nzz = np.stack([np.stack([(DDL[None, :, None] * m[:, None, :]).reshape(P, SLOTS), cross], -1),
-                    np.stack([cross, (L[:, :, None] * mtt[:, None, :]).reshape(P, SLOTS)], -1)], -2)
-    return N, Nz, Nzz
+    # [L, dL, L''] x [m, m_t, m_tt]: N = L m, N_ξ = L' m, N_t = L m_t, N_ξξ = L'' m, N_ξt = L' m_t,
+    # N_tt = L m_tt
+    prod = (np.stack([L, dL, np.broadcast_to(DDL, L.shape)], 1)[:, :, None, :, None]
+            * np.stack([m, mt, mtt], 1)[:, None, :, None, :]).reshape(P, 3, 3, SLOTS)
+    Nz = np.stack([prod[:, 1, 0], prod[:, 0, 1]], -1)
+    Nzz = prod[:, [[2, 1], [1, 0]], [[0, 1], [1, 2]]].transpose(0, 3, 1, 2)
+    return prod[:, 0, 0], Nz, Nzz
 
 
 def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False):

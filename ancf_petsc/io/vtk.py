@@ -40,25 +40,24 @@ class SurfaceSampler:
             G, _ = el.reference_gradients(q0e, dN.reshape(E, M, SLOTS, 3))
             # drop the duplicated first station of every element but the first
             keep = np.concatenate([np.arange(M)] + [e * M + np.arange(m, M) for e in range(1, E)])
-            self.parts.append((beam, m, len(xi) - 1, N[keep], G.reshape(-1, SLOTS, 3)[keep], keep // M))
+            N, e_of = N[keep], keep // M
+            r0 = np.einsum("pa,pai->pi", N, q0e[e_of])          # reference points, once
+            self.parts.append((beam, m, len(xi) - 1, N, G.reshape(-1, SLOTS, 3)[keep], e_of, r0))
 
     def mesh(self, q: np.ndarray):
         """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
         pts, quads, caps = [], [], []
         data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
         offset = 0
-        for beam, m, S, N, G, e_of in self.parts:
+        for beam, m, S, N, G, e_of, r0 in self.parts:
             conn = beam.connectivity
             qe = q[conn].reshape(len(conn), SLOTS, 3)[e_of]
-            q0e = self.model.q0[conn].reshape(len(conn), SLOTS, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
-            r0 = np.einsum("pa,pai->pi", N, q0e)
             F = np.matmul(np.swapaxes(qe, 1, 2), G)
             n_st = beam.n_elements * S + 1
-            C = np.matmul(np.swapaxes(F, -1, -2), F)
             data["displacement"].append(r - r0)
-            data["E_xx"].append(0.5 * (C[:, 0, 0] - 1.0))
-            data["J"].append(np.linalg.det(F))
+            data["E_xx"].append(0.5 * (np.einsum("pi,pi->p", F[:, :, 0], F[:, :, 0]) - 1.0))  # ½(C_xx − 1)
+            data["J"].append(np.einsum("pi,pi->p", F[:, :, 0], np.cross(F[:, :, 1], F[:, :, 2])))
             data["beam"].append(np.full(len(r), float(beam.index)))
             st = np.arange(n_st - 1)[:, None]
             j = np.arange(m)[None, :]
@@ -89,20 +88,23 @@ def contact_cells(fields: dict) -> tuple:
 class VtkSeries:
     """VTU files ``<series>_NNNN.vtu`` and their ``<series>.pvd`` collections in one directory."""
 
-    def __init__(self, directory: str):
+    def __init__(self, directory: str, compress: bool = False):
         self.dir = directory
+        self.compression = "zlib" if compress else None
         self.entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
 
     def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
-        """One VTU of a time series and its .pvd collection (zlib-compressed binary, in single
-        precision: for display, results.h5 keeps double; half the size and the write time).
+        """One VTU of a time series and its .pvd collection (binary, zlib-compressed if asked,
+        in single precision: for display, results.h5 keeps double; half the size and the write
+        time).  Uncompressed by default: zlib makes a column's VTUs 0.42x the size but takes 85 %
+        of the write time (6.7 against 1.0 ms for a 3 672-point surface).
         A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
         data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
         try:
             meshio.write(path, meshio.Mesh(np.asarray(pts, dtype=np.float32), cells, point_data=data),
-                         binary=True)
+                         binary=True, compression=self.compression)
             size = os.path.getsize(path)
             rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
                              for t, f in self.entries[series] + [(lam, name)])

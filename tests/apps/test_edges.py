@@ -489,7 +489,7 @@ def _check_agreement(out_dir, n_levels=None):
 @pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [1, 2])
 def test_full_disk_on_a_small_tmpfs(tmp_path, ranks):
-    """A 150 KB file system: the run stops before the level that would not fit, exit 2, one line
+    """A 300 KB file system: the run stops before the level that would not fit, exit 2, one line
     naming the directory, and both result files agree on what converged."""
     mnt = tmp_path / "mnt"
     mnt.mkdir()
@@ -498,7 +498,7 @@ def test_full_disk_on_a_small_tmpfs(tmp_path, ranks):
     cfg = write_config(raw, tmp_path / "c.yaml")
     exe = os.path.join(VENV_BIN, "ancf-solve")
     keep = tmp_path / "kept"
-    p = _in_namespace(f"mount -t tmpfs -o size=150k tmpfs {mnt} && "
+    p = _in_namespace(f"mount -t tmpfs -o size=300k tmpfs {mnt} && "
                       f"mpirun --oversubscribe -n {ranks} {exe} {cfg} --quiet; rc=$?; "
                       f"cp -r {mnt}/out {keep}; exit $rc")
     if p is None:

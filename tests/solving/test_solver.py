@@ -140,6 +140,40 @@ def test_outputs_are_complete(tmp_path):
         assert np.allclose(q[tip, 0] - q0[tip, 0], step["probes"]["tip"]["displacement"], rtol=1e-12)
 
 
+def test_surface_fields_against_the_deformation_gradient_and_compressed_vtus(tmp_path):
+    """The VTU's J and E_xx are det F and ½(FᵀF − I)_xx of F = qᵀG at every surface point (checked
+    against numpy's LU determinant and the full FᵀF), and output.vtk_compress: true writes
+    zlib-compressed VTUs with the same data as the default raw ones."""
+    import meshio
+    from ancf_petsc.io.vtk import SurfaceSampler
+    from ancf_petsc.physics.element3363 import SLOTS
+    raw = load_raw("pretwisted_bar.yaml")
+    data = {}
+    for compress in (True, False):
+        raw["output"] = {"vtk_compress": compress}
+        run_inline(raw, tmp_path / str(compress))
+        vtu = tmp_path / str(compress) / "surface_0004.vtu"
+        assert ('compressor="vtkZLibDataCompressor"' in vtu.read_text(errors="ignore")) == compress
+        data[compress] = meshio.read(vtu).point_data
+    for key in ("displacement", "E_xx", "J"):
+        assert np.array_equal(data[True][key], data[False][key])
+    with h5py.File(tmp_path / "True" / "results.h5") as h5:
+        q = h5["steps/step_0004/nodal_vectors"][()]
+    P, _ = _problem(raw)
+    sampler = SurfaceSampler(P.model, 4)
+    _, _, _, fields = sampler.mesh(q)
+    J, Exx = [], []
+    for beam, _, _, _, G, e_of, _ in sampler.parts:
+        F = np.matmul(np.swapaxes(q[beam.connectivity].reshape(-1, SLOTS, 3)[e_of], 1, 2), G)
+        J.append(np.linalg.det(F))
+        Exx.append(0.5 * (np.matmul(np.swapaxes(F, 1, 2), F)[:, 0, 0] - 1.0))
+    J, Exx = np.concatenate(J), np.concatenate(Exx)
+    assert np.abs(J - 1.0).max() > 1e-3 and np.abs(Exx).max() > 1e-3          # really deformed
+    assert np.allclose(fields["J"], J, rtol=1e-12, atol=1e-14)
+    assert np.allclose(fields["E_xx"], Exx, rtol=1e-12, atol=1e-14)
+    assert np.allclose(data[False]["J"], J, rtol=1e-6) and np.allclose(data[False]["E_xx"], Exx, atol=1e-6)
+
+
 @pytest.mark.parametrize("config,tol", [("pretwisted_bar.yaml", 1e-6), ("achilles_type3_psi45.yaml", 1e-5)])
 def test_petsc_snes_test_jacobian_agrees(tmp_path, config, tol):
     """PETSc's own finite-difference check (-snes_test_jacobian) on the full assembled matrix."""

@@ -190,3 +190,39 @@ def test_the_37_fascicle_scene_has_tens_of_thousands_of_dofs():
     contact = build_contact(model, spec.contact, lambda *a: None)
     assert len(model.beams) == 37 and model.n_dofs == 21978
     assert len(contact.interfaces) == 90 and contact.points.n_segments == 90 * 16
+
+
+@pytest.mark.parametrize("matrix_type", ["aij", "sbaij"])
+def test_support_check_by_colour_equals_one_product_per_mode(matrix_type):
+    """The support check applies J to the rigid modes of all beams of one colour at once (beams
+    sharing an interface differ: 3 colours for 7 fascicles instead of 7 beams); its Gram matrix
+    equals the one from J applied to every beam's six unit modes separately."""
+    from helpers import build_problem
+    from ancf_petsc.physics.element3363 import DOFS_PER_NODE
+    from ancf_petsc.physics.rigid import rigid_modes
+    from ancf_petsc.solving.supports import beam_colours, rigid_mode_gram
+    P, PETSc = build_problem(load_raw("bundle_hex7.yaml"), matrix_type)
+    pairs = [(i.a.index, i.b.index) for i in P.contact.interfaces]
+    colours = beam_colours(len(P.model.beams), pairs)
+    assert colours.max() + 1 == 3 and all(colours[a] != colours[b] for a, b in pairs)
+    gram, labels = rigid_mode_gram(P)
+    assert len(labels) == 6 * len(P.model.beams)
+    # one product per beam and mode (the definition)
+    lo, hi = P.layout.owned_nodes
+    model_block = np.argsort(P.layout.perm)[lo:hi]
+    x = P.q0.getArray(readonly=True).reshape(-1, 6, 3)
+    held = P.fixed_mask[DOFS_PER_NODE * lo:DOFS_PER_NODE * hi]
+    constraint = np.repeat(~P.owned_physical, DOFS_PER_NODE) & ~held
+    scale = held + constraint / P.contact.stiffness
+    v, y = P.J.createVecs()
+    Y = []
+    for beam in P.model.beams:
+        mine = ((model_block >= beam.node_offset) & (model_block < beam.node_offset + beam.n_nodes))
+        for mode in rigid_modes(x):
+            col = (mode * mine[:, None, None]).ravel()
+            v.setArray(col / np.linalg.norm(col))
+            P.J.mult(v, y)
+            Y.append(y.getArray().copy() * scale)
+    Y = np.array(Y).T
+    assert np.abs(gram - Y.T @ Y).max() <= 1e-10 * np.abs(gram).max()
+    assert np.abs(gram).max() > 0.1                     # the supports and contact rows are in it

@@ -67,7 +67,7 @@ class ResultsWriter:
         self.summary = {"name": spec.name, "status": "running", **run_info, "steps": []}
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
         self.vtk = VtkSeries(self.dir, compress=spec.output.vtk_compress)
-        self._last_sizes = {"vtu": 0, "h5": 0}
+        self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
         self._on_root(lambda: self._create(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
@@ -179,6 +179,7 @@ class ResultsWriter:
         indented form, which grows with every level), indented once the run has ended."""
         self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
         text = json.dumps(self.summary, **({"indent": 1} if final else {"separators": (",", ":")}))
+        self._last_sizes["summary"] = len(text)
         try:
             atomic_write(self.summary_path, text)
         except OSError as exc:
@@ -193,7 +194,7 @@ class ResultsWriter:
     def _write_series(self, series: str, k: int, lam: float, mesh: tuple) -> None:
         """One VTU of ``series`` (``vtk.VtkSeries``); a failure is an OutputError."""
         try:
-            self._last_sizes["vtu"] = self.vtk.write(series, k, lam, *mesh)
+            self._last_sizes["vtu"] += self.vtk.write(series, k, lam, *mesh)
         except OSError as exc:
             self._release_reserve()
             raise OutputError(os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
@@ -222,7 +223,7 @@ class ResultsWriter:
             return
         free = st.f_bavail * st.f_frsize
         need = (max(self._last_sizes["h5"], q.nbytes) + self._last_sizes["vtu"]
-                + 2 * len(json.dumps(self.summary)) + 16 * 1024)
+                + 2 * self._last_sizes["summary"] + 16 * 1024)
         if free < need:
             raise OutputError(self.dir, f"no space left on device for level {k}: {free // 1024} KB "
                                         f"free, about {need // 1024} KB needed")
@@ -268,6 +269,7 @@ class ResultsWriter:
         self._last_sizes["h5"] = max(os.path.getsize(self.h5_path) - size0, q.nbytes)
         self._append(entry)
         if self.sampler is not None:
+            self._last_sizes["vtu"] = 0                  # the level's VTUs together
             self._write_series("surface", k, record.load_factor, surface_cells(self.sampler, q))
             if contact is not None:
                 self._write_series("contact", k, record.load_factor, contact_cells(contact))

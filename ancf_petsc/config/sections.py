@@ -163,7 +163,7 @@ def _outline(name: str, value, key: str, default_file: str | None, base_dir: str
     out = OutlineSource(name, kind, key, file=f)
     if kind in ("image", "nifti"):
         if "label" not in value:
-            raise ConfigError(key, f"a mask needs the label value of this subtendon, e.g. label: 2")
+            raise ConfigError(key, "a mask needs the label value of this subtendon, e.g. label: 2")
         out.label = integer(value["label"], key_path(key, "label"), lo=1)
     elif "label" in value:
         raise ConfigError(key_path(key, "label"), "label belongs to mask images (.png/.tif/.nii)")

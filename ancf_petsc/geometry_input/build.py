@@ -254,7 +254,7 @@ def _curve_loops(src: GeometrySource, opts: SectionsSpec, label: str) -> Station
             curves[cname] = SplineCurve(P, opts.spline_degree, cname)
         except SectionError as exc:
             raise src.err(f"curves.{cname}", str(exc)) from None
-    loops, ends = {}, {}
+    loops = {}
     for name, o in src.outlines.items():
         loop = []
         for ref in o.curves:
@@ -302,7 +302,6 @@ def _check_chain(loop, refs, name: str, src: GeometrySource) -> None:
         nxt = eff[(k + 1) % len(eff)]
         if np.linalg.norm(cv.end - nxt.start) <= tol:
             continue
-        prv = eff[k - 1]
         # which single reversal would close the chain here?
         for j, c in ((k, cv), ((k + 1) % len(eff), nxt)):
             r = c.reversed()

@@ -87,7 +87,7 @@ class ResultsWriter:
             raise OutputError(*err)
 
     def _create(self, layout, run_info: dict) -> None:
-        spec, model = self.model.spec, self.model
+        model = self.model
         prepare_output_dir(self.dir)
         for stale in os.listdir(self.dir):
             if stale.startswith(("surface", "contact")) or stale in ("results.h5", "summary.json", RESERVE):

@@ -238,7 +238,7 @@ def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
              f"{spec.scene.levels()[-1]:g}")
     png = pareto_chart(rows, os.path.join(spec.output, "pareto.png"), title, ref_text)
     log(f"[study] reference: {ref_text} = {ref:.10g}")
-    log(f"[study] Pareto front: " + "; ".join(f"{r.label} ({r.wall_time:.2f} s, {r.rel_error:.1e})"
+    log("[study] Pareto front: " + "; ".join(f"{r.label} ({r.wall_time:.2f} s, {r.rel_error:.1e})"
                                              for r in rows if r.pareto))
     log(f"[study] {len(rows)} runs in {time.perf_counter() - t0:.1f} s; {csv_path}, {png}")
     return {"reference": ref, "reference_text": ref_text, "reference_rows": ref_rows, "rows": rows,

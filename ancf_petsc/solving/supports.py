@@ -13,6 +13,7 @@ beam from moving into its neighbour, not from lifting off).
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 from petsc4py import PETSc
 
 from ..physics.element3363 import DOFS_PER_NODE
@@ -115,15 +116,20 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     for obj in (X, Vmat, JV):
         obj.destroy()
     del Vf
-    Y = np.zeros((len(nz), 6 * nb))
+    # Y: per row its beams' (at most two) six entries, sparse (rows × 6 n_beams)
+    i_list, j_list, v_list = [], [], []
     for k in range(2):                                   # each beam a row belongs to
         b = rows[nz, k]
         i = np.flatnonzero(b >= 0)
         for m in range(6):
-            Y[i, 6 * b[i] + m] = JVs[i, 6 * colours[b[i]] + m]
+            i_list.append(i)
+            j_list.append(6 * b[i] + m)
+            v_list.append(JVs[i, 6 * colours[b[i]] + m])
+    Y = sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
+                      shape=(len(nz), 6 * nb))
     labels = [(beam.name, "translation" if m < 3 else "rotation", m % 3)
               for beam in model.beams for m in range(6)]
-    return comm.allreduce(Y.T @ Y), labels
+    return comm.allreduce((Y.T @ Y).toarray()), labels
 
 
 def _summary(motions: list[tuple[tuple[str, ...], str]]) -> list[str]:

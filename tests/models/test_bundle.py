@@ -226,3 +226,48 @@ def test_support_check_by_colour_equals_one_product_per_mode(matrix_type):
     Y = np.array(Y).T
     assert np.abs(gram - Y.T @ Y).max() <= 1e-10 * np.abs(gram).max()
     assert np.abs(gram).max() > 0.1                     # the supports and contact rows are in it
+
+
+GRAM_SCRIPT = """
+import sys
+import numpy as np
+sys.path.insert(0, {tests!r})
+from helpers import CONFIGS, load_raw, petsc_init
+petsc_init()
+from petsc4py import PETSc
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.contact import build_contact
+from ancf_petsc.model.build import build_model
+from ancf_petsc.parallel.partition import make_layout
+from ancf_petsc.petsc.problem import Problem
+from ancf_petsc.solving.supports import rigid_mode_gram
+comm = PETSc.COMM_WORLD
+spec = parse_config(load_raw("bundle_hex7.yaml"), base_dir=CONFIGS)
+model = build_model(spec)
+contact = build_contact(model, spec.contact, lambda *_: None)
+layout = make_layout(model, "metis", comm.size, comm.rank, contact, comm.tompi4py())
+gram, _ = rigid_mode_gram(Problem(model, layout, comm, contact, "sbaij"))
+if comm.rank == 0:
+    np.save(sys.argv[1], gram)
+"""
+
+
+@pytest.mark.mpi
+def test_support_check_is_the_same_on_1_2_3_ranks(tmp_path):
+    """The Gram matrix of the support check (METIS partition, cut contact pairs) on 2 and 3
+    ranks equals the serial one."""
+    import subprocess
+    import sys
+    from helpers import MPI_ENV, ROOT
+    script = tmp_path / "gram.py"
+    script.write_text(GRAM_SCRIPT.format(tests=os.path.dirname(os.path.dirname(__file__))))
+    grams = {}
+    for n in (1, 2, 3):
+        out = tmp_path / f"gram{n}.npy"
+        p = subprocess.run(["mpirun", "--oversubscribe", "-n", str(n), sys.executable, str(script), str(out)],
+                           capture_output=True, text=True, cwd=ROOT, timeout=300,
+                           env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+        assert p.returncode == 0, p.stdout + p.stderr
+        grams[n] = np.load(out)
+    for n in (2, 3):
+        assert np.abs(grams[n] - grams[1]).max() <= 1e-12 * np.abs(grams[1]).max()

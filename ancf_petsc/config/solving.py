@@ -7,7 +7,7 @@ import re
 
 from .petsc_options import check_value
 from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
-from .values import ConfigError, boolean, integer, mapping, number, string
+from .values import ConfigError, boolean, integer, mapping, number, shown, string
 
 #: ``solver:`` keys → (validator, whether null means "the default")
 SOLVER_KEYS = {
@@ -55,7 +55,16 @@ def parse_output(value, name: str) -> OutputSpec:
     return OutputSpec(dir=string(out.get("dir", os.path.join("results", name)), "output.dir"),
                       vtk=boolean(out.get("vtk", True), "output.vtk"),
                       vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64),
-                      vtk_compress=boolean(out.get("vtk_compress", False), "output.vtk_compress"))
+                      vtk_compress=_auto_boolean(out.get("vtk_compress", "auto"), "output.vtk_compress"))
+
+
+def _auto_boolean(value, path: str) -> bool | None:
+    """true, false, or auto (None)."""
+    if value == "auto":
+        return None
+    if not isinstance(value, bool):
+        raise ConfigError(path, f"expected true, false or auto; got {shown(value)}")
+    return value
 
 
 def parse_partition(value) -> str:

@@ -118,7 +118,8 @@ class OutputSpec:
     dir: str
     vtk: bool = True
     vtk_samples: int = 4
-    vtk_compress: bool = False            # zlib in the VTUs: 0.4x the size, 6x the write time
+    vtk_compress: bool | None = None      # zlib in the VTUs (0.4x the size, 6x the write time);
+                                          # None (auto): from io.vtk.AUTO_COMPRESS_POINTS points on
 
 
 @dataclass

@@ -85,26 +85,33 @@ def contact_cells(fields: dict) -> tuple:
     return fields["x"], [("vertex", np.arange(len(fields["x"]))[:, None])], data
 
 
+#: surface points from which ``output.vtk_compress: auto`` compresses a VTU: zlib makes the files
+#: 0.42x the size but costs ~1.8 µs per point (85 % of the write: 6.7 against 1.0 ms for the
+#: Achilles surface of 3 672 points), noticeable beside the ~50 ms a level of such a model
+#: takes; from 20 000 points a level's solve takes seconds and the files' size matters more
+AUTO_COMPRESS_POINTS = 20_000
+
+
 class VtkSeries:
     """VTU files ``<series>_NNNN.vtu`` and their ``<series>.pvd`` collections in one directory."""
 
-    def __init__(self, directory: str, compress: bool = False):
+    def __init__(self, directory: str, compress: bool | None = None):
         self.dir = directory
-        self.compression = "zlib" if compress else None
+        self.compress = compress                 # None: by size (AUTO_COMPRESS_POINTS)
         self.entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
 
     def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
-        """One VTU of a time series and its .pvd collection (binary, zlib-compressed if asked,
-        in single precision: for display, results.h5 keeps double; half the size and the write
-        time).  Uncompressed by default: zlib makes a column's VTUs 0.42x the size but takes 85 %
-        of the write time (6.7 against 1.0 ms for a 3 672-point surface).
+        """One VTU of a time series and its .pvd collection (binary, in single precision: for
+        display, results.h5 keeps double; half the size and the write time), zlib-compressed if
+        asked or, by default, from ``AUTO_COMPRESS_POINTS`` points on.
         A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
         data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
+        compress = self.compress if self.compress is not None else len(pts) >= AUTO_COMPRESS_POINTS
         try:
             meshio.write(path, meshio.Mesh(np.asarray(pts, dtype=np.float32), cells, point_data=data),
-                         binary=True, compression=self.compression)
+                         binary=True, compression="zlib" if compress else None)
             size = os.path.getsize(path)
             rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
                              for t, f in self.entries[series] + [(lam, name)])

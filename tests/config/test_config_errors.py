@@ -58,6 +58,8 @@ CASES = [
      "components"),
     ("bad preset", _set(["boundary_conditions", 0, "fix"], "pinned"), "boundary_conditions[0].fix",
      "unknown preset"),
+    ("bad vtk_compress", _set(["output", "vtk_compress"], "yes"), "output.vtk_compress",
+     "expected true, false or auto"),
     ("steps order", _set(["steps"], [0.5, 0.2]), "steps", "increase"),
     ("negative step", _set(["steps"], [-0.5]), "steps[0]", "> 0"),
     ("both loads", _set(["loads", 0, "force"], [1, 0, 0]), "loads[0]", "exactly one"),

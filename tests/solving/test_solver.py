@@ -142,21 +142,26 @@ def test_outputs_are_complete(tmp_path):
 
 def test_surface_fields_against_the_deformation_gradient_and_compressed_vtus(tmp_path):
     """The VTU's J and E_xx are det F and ½(FᵀF − I)_xx of F = qᵀG at every surface point (checked
-    against numpy's LU determinant and the full FᵀF), and output.vtk_compress: true writes
-    zlib-compressed VTUs with the same data as the default raw ones."""
+    against numpy's LU determinant and the full FᵀF); output.vtk_compress: true writes
+    zlib-compressed VTUs with the same data as false, and auto compresses from
+    AUTO_COMPRESS_POINTS surface points on (this bar has fewer)."""
     import meshio
-    from ancf_petsc.io.vtk import SurfaceSampler
+    from ancf_petsc.io.vtk import AUTO_COMPRESS_POINTS, SurfaceSampler, VtkSeries
     from ancf_petsc.physics.element3363 import SLOTS
     raw = load_raw("pretwisted_bar.yaml")
     data = {}
-    for compress in (True, False):
+    for compress in (True, False, "auto"):
         raw["output"] = {"vtk_compress": compress}
         run_inline(raw, tmp_path / str(compress))
         vtu = tmp_path / str(compress) / "surface_0004.vtu"
-        assert ('compressor="vtkZLibDataCompressor"' in vtu.read_text(errors="ignore")) == compress
+        assert ('compressor="vtkZLibDataCompressor"' in vtu.read_text(errors="ignore")) == (compress is True)
         data[compress] = meshio.read(vtu).point_data
     for key in ("displacement", "E_xx", "J"):
         assert np.array_equal(data[True][key], data[False][key])
+    big = np.zeros((AUTO_COMPRESS_POINTS, 3))
+    for n, zlib in ((AUTO_COMPRESS_POINTS - 1, False), (AUTO_COMPRESS_POINTS, True)):
+        VtkSeries(str(tmp_path)).write("surface", n, 0.0, big[:n], [("vertex", np.arange(n)[:, None])], {})
+        assert ('compressor="vtkZLibDataCompressor"' in (tmp_path / f"surface_{n:04d}.vtu").read_text(errors="ignore")) == zlib
     with h5py.File(tmp_path / "True" / "results.h5") as h5:
         q = h5["steps/step_0004/nodal_vectors"][()]
     P, _ = _problem(raw)

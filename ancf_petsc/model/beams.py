@@ -100,6 +100,10 @@ class Model:
         """Beam index of every global element (n_elements,)."""
         return np.concatenate([np.full(b.n_elements, b.index) for b in self.beams])
 
+    def node_beam(self) -> np.ndarray:
+        """Beam index of every global node (n_nodes,)."""
+        return np.concatenate([np.full(b.n_nodes, b.index) for b in self.beams])
+
     def connectivity(self) -> np.ndarray:
         """Global node ids of every element (n_elements, 3)."""
         return np.concatenate([b.connectivity for b in self.beams])

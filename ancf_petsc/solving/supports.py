@@ -47,9 +47,9 @@ def _row_beams(P) -> tuple[np.ndarray, np.ndarray]:
     to both beams of its interface."""
     lo, hi = P.layout.owned_nodes
     model_block = np.argsort(P.layout.perm)[lo:hi]
+    physical = model_block < P.model.n_nodes              # the rest are multiplier nodes
     node_beam = np.full(len(model_block), -1)
-    for beam in P.model.beams:
-        node_beam[(model_block >= beam.node_offset) & (model_block < beam.node_offset + beam.n_nodes)] = beam.index
+    node_beam[physical] = P.model.node_beam()[model_block[physical]]
     owner = np.repeat(node_beam, DOFS_PER_NODE)
     out = np.full((len(owner), 2), -1)
     out[:, 0] = owner

@@ -74,8 +74,9 @@ def probe(summary: dict, name: str, step: int = -1, key: str = "displacement"):
     return summary["steps"][step]["probes"][name][key]
 
 
-def build_problem(raw, matrix_type: str = "aij"):
-    """A Problem (1 rank, blocks layout) of a raw config, and the PETSc module."""
+def build_problem(raw, matrix_type: str = "aij", partition: str = "blocks"):
+    """A Problem of a raw config on PETSc.COMM_WORLD (1 rank under pytest; scripts run by mpirun
+    get every rank), and the PETSc module."""
     petsc_init()
     from petsc4py import PETSc
     from ancf_petsc.petsc.problem import Problem
@@ -89,8 +90,9 @@ def build_problem(raw, matrix_type: str = "aij"):
     if spec.contact is not None:
         from ancf_petsc.contact import build_contact
         contact = build_contact(model, spec.contact, lambda *_: None)
-    layout = make_layout(model, "blocks", 1, 0, contact)
-    return Problem(model, layout, PETSc.COMM_WORLD, contact, matrix_type), PETSc
+    comm = PETSc.COMM_WORLD
+    layout = make_layout(model, partition, comm.size, comm.rank, contact, comm.tompi4py())
+    return Problem(model, layout, comm, contact, matrix_type), PETSc
 
 
 def two_beam_twisted():
@@ -111,6 +113,20 @@ def probes_table(summary):
         for name in sorted(step["probes"]):
             rows.append(step["probes"][name]["displacement"])
     return np.array(rows)
+
+
+def run_on_ranks(raw: dict, tmp_path, ranks=(1, 2, 3)) -> dict:
+    """``raw`` solved by ancf-solve on each rank count (output in n<ranks>, VTK on 2 ranks only):
+    {n: (process, summary)}, each run completed on n ranks."""
+    runs = {}
+    for n in ranks:
+        raw["output"] = {"dir": str(tmp_path / f"n{n}"), "vtk": n == 2}
+        p = solve_cli(write_config(raw, tmp_path / f"c{n}.yaml"), ranks=n)
+        assert p.returncode == 0, p.stdout + p.stderr
+        s = read_summary(tmp_path / f"n{n}")
+        assert s["status"] == "completed" and s["ranks"] == n
+        runs[n] = (p, s)
+    return runs
 
 
 def assert_same_as_serial(tables: dict, rtol: float = 1e-9) -> None:

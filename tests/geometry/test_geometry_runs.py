@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 import geometry_cases as gc
-from helpers import (CONFIGS, ROOT, assert_same_as_serial, load_raw, probe, probes_table, read_summary,
+from helpers import (CONFIGS, ROOT, assert_same_as_serial, load_raw, probe, probes_table, read_summary, run_on_ranks,
                      solve_cli, write_config)
 
 
@@ -89,14 +89,6 @@ def test_sections_varying_along_x_same_on_1_2_3_ranks(tmp_path):
     raw["steps"] = [1.0]
     for st in raw["geometry"]["sections"]["stations"]:       # the config is written elsewhere
         st["source"] = os.path.join(CONFIGS, st["source"])
-    tables = {}
-    for n in (1, 2, 3):
-        raw["output"] = {"dir": str(tmp_path / f"n{n}"), "vtk": n == 2}
-        p = solve_cli(write_config(raw, tmp_path / f"c{n}.yaml"), ranks=n)
-        assert p.returncode == 0, p.stdout + p.stderr
-        s = read_summary(tmp_path / f"n{n}")
-        assert s["status"] == "completed"
-        tables[n] = probes_table(s)
-        if n == 1:
-            assert "outlines registered (shift and rotation) and blended, section rotation +24." in p.stdout
-    assert_same_as_serial(tables)
+    runs = run_on_ranks(raw, tmp_path)
+    assert "outlines registered (shift and rotation) and blended, section rotation +24." in runs[1][0].stdout
+    assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})

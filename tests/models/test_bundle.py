@@ -232,22 +232,11 @@ GRAM_SCRIPT = """
 import sys
 import numpy as np
 sys.path.insert(0, {tests!r})
-from helpers import CONFIGS, load_raw, petsc_init
-petsc_init()
-from petsc4py import PETSc
-from ancf_petsc.config.parse import parse_config
-from ancf_petsc.contact import build_contact
-from ancf_petsc.model.build import build_model
-from ancf_petsc.parallel.partition import make_layout
-from ancf_petsc.petsc.problem import Problem
+from helpers import build_problem, load_raw
 from ancf_petsc.solving.supports import rigid_mode_gram
-comm = PETSc.COMM_WORLD
-spec = parse_config(load_raw("bundle_hex7.yaml"), base_dir=CONFIGS)
-model = build_model(spec)
-contact = build_contact(model, spec.contact, lambda *_: None)
-layout = make_layout(model, "metis", comm.size, comm.rank, contact, comm.tompi4py())
-gram, _ = rigid_mode_gram(Problem(model, layout, comm, contact, "sbaij"))
-if comm.rank == 0:
+P, PETSc = build_problem(load_raw("bundle_hex7.yaml"), "sbaij", partition="metis")
+gram, _ = rigid_mode_gram(P)
+if PETSc.COMM_WORLD.rank == 0:
     np.save(sys.argv[1], gram)
 """
 

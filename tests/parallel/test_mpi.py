@@ -1,8 +1,7 @@
 """-n 1, -n 2 and -n 3 --oversubscribe give the serial answer on every probe of every step."""
 import pytest
 
-from helpers import load_raw, read_summary, solve_cli, write_config
-from helpers import assert_same_as_serial, probes_table, two_beam_twisted
+from helpers import assert_same_as_serial, load_raw, probes_table, run_on_ranks, two_beam_twisted
 
 
 def _cases():
@@ -28,13 +27,5 @@ CASES = _cases()
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_ranks_agree_with_serial(tmp_path, name):
-    raw = CASES[name]
-    tables = {}
-    for n in (1, 2, 3):
-        raw["output"] = {"dir": str(tmp_path / f"n{n}"), "vtk": n == 2}
-        p = solve_cli(write_config(raw, tmp_path / f"c{n}.yaml"), ranks=n)
-        assert p.returncode == 0, p.stdout + p.stderr
-        s = read_summary(tmp_path / f"n{n}")
-        assert s["status"] == "completed" and s["ranks"] == n
-        tables[n] = probes_table(s)
-    assert_same_as_serial(tables)
+    runs = run_on_ranks(CASES[name], tmp_path)
+    assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})

@@ -117,6 +117,9 @@ class Model:
         for dN, wq, material in beam.parts():
             # per-element rules (sections varying along x) carry a leading element axis
             G, det = el.reference_gradients(q0e, dN[local] if dN.ndim == 4 else dN)
+            # stored shape-function-major, (E, S, P, 3) in memory: the kernels' stacked view
+            # (E, S, 3P) of the force and tangent products is then free (kernels._stack)
+            G = np.ascontiguousarray(G.transpose(0, 2, 1, 3)).transpose(0, 2, 1, 3)
             out.append((G, det * (wq[local] if wq.ndim == 2 else wq[None, :]), material))
         return out
 

@@ -293,7 +293,8 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     exchange = run.exchange_report()
     problem_writing = run.writer.finish(
         status, reason_code=code, message=message, timings=timings,
-        newton_iterations=stepper.newton_iterations, exchange=exchange,
+        newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.chord.count,
+        exchange=exchange,
         jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,
@@ -307,7 +308,8 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         say(f"[ancf] exchange: node blocks received per rank {exchange['ghost_nodes_per_rank']} of "
             f"{run.model.n_nodes}; rebuilt {exchange['rebuilds']} times (the set of projected-on "
             "elements changed)")
-    say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations, "
+    reuses = f" ({stepper.chord.count} with the last tangent)" if stepper.chord.count else ""
+    say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations{reuses}, "
         f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")
     return RunResult(status, message, run.writer.summary if comm.rank == 0 else None, records, code,
                      st.exit_code(status, code, signum), unused, spec.output.dir, inverted)

@@ -5,6 +5,7 @@ factor λ the stepper tries an increment Δλ; on a converged SNES it accepts it
 easy steps), on divergence (including NaN residuals from inverted elements, J ≤ 0) it restores
 the last converged state and halves Δλ, at most ``max_cutbacks`` times in a row.  Requested levels are always hit exactly.  All
 decisions use the SNES converged reason, which is the same on every rank.
+Near convergence a Newton step may reuse the last factored tangent (``chord.py``).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from ..petsc import logging
 from ..petsc.inertia import mumps_error, pivot_counts
 from ..petsc.options import mumps_hint, petsc_message, solver_hint, used_anywhere
 from ..petsc.problem import Problem
+from .chord import TangentReuse
 from .interrupt import RunInterrupted, stop_requested
 from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
                       solver_options)
@@ -66,9 +68,10 @@ class StepRecord:
     residual_norm: float
     wall_time: float
     iteration_history: list = field(default_factory=list)
-    # negative eigenvalues of the tangent of the last Newton iteration on the constraint
-    # surface (inertia of its LDLᵀ factor less one per contact constraint): 0 = a stable
-    # equilibrium, > 0 = a saddle; None when the PC is not MUMPS LDLᵀ
+    # negative eigenvalues of the last factored tangent on the constraint surface (inertia of
+    # its LDLᵀ factor less one per contact constraint): 0 = a stable equilibrium, > 0 = a saddle;
+    # None when the PC is not MUMPS LDLᵀ.  The tangent is that of the last Newton iterate, or of
+    # the one before after a chord step (solver.reuse_tangent), a step of ~‖F‖ / k away
     negative_eigenvalues: int | None = None
     increment: float = 0.0          # the load increment the next level starts with
     last_increment: float = 0.0     # the last accepted one (secant predictor)
@@ -99,7 +102,7 @@ class LoadStepper:
         if self.prefix:
             self.snes.setOptionsPrefix(self.prefix)
         self.snes.setFunction(problem.residual, problem.F)
-        self.snes.setJacobian(problem.jacobian, problem.J, problem.J)
+        self.snes.setJacobian(self._jacobian, problem.J, problem.J)
         if spec.merit == "energy" and problem.has_potential:
             # with contact multipliers the residual is the gradient of a Lagrangian (a saddle):
             # line searches then decrease ‖F‖²
@@ -129,6 +132,7 @@ class LoadStepper:
         self._history: list[float] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
+        self.chord = TangentReuse(spec.reuse_tangent)
         self._ksp_reason = 0
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
@@ -186,6 +190,13 @@ class LoadStepper:
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
 
+    def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
+        """SNES Jacobian callback: the problem's tangent, or none for a chord step.  P left
+        untouched keeps its state, so PCSetUp keeps its factor."""
+        rtol, atol, _, _ = snes.getTolerances()
+        if not self.chord.decide(self._history, atol, rtol):
+            self.problem.jacobian(snes, X, J, P)
+
     def describe(self) -> str:
         ksp = self.snes.getKSP()
         pc = ksp.getPC()
@@ -199,11 +210,13 @@ class LoadStepper:
         return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
                 f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
                 f"stol {stol:.1e} max_it {maxit}; "
-                f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}")
+                f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}"
+                + ("; chord steps near convergence" if self.spec.reuse_tangent else ""))
 
     def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float) -> tuple[int, int, float]:
         self.problem.load_factor = lam
         self._history = []
+        self.chord.start_solve()
         try:
             self.snes.solve(None, X)
         except PETSc.Error as exc:

@@ -1,12 +1,14 @@
 """Chord steps near convergence (``solver.reuse_tangent``): a Newton step that reuses the tangent
 factored at the previous iterate when that is predicted to converge.
 
-Near a solution Newton contracts quadratically, ‖F_{k+1}‖ ≈ M ‖F_k‖², with M ≈ ‖F_k‖ / ‖F_{k−1}‖²
-from the last step.  A step with the previous iterate's tangent leaves the residual that the
-tangent's change along the last step makes, ‖F_{k+1}‖ ≈ M ‖F_{k−1}‖ ‖F_k‖ = ‖F_k‖² / ‖F_{k−1}‖.
-When that estimate is below ``CHORD_MARGIN`` of the convergence tolerance the step reuses the
-factored tangent: the same iteration count without one assembly and factorisation, typically on
-the last step of a load level.  Never twice in a row, never on a level's first iteration.
+Near a solution a Newton step leaves the residual of the tangent's curvature, ‖F_{k+1}‖ ≈ ½ L ‖δ_k‖²
+(δ the step, ‖δ_k‖ ∝ ‖F_k‖), so the last step measured L ∝ 2 ‖F_k‖ / ‖F_{k−1}‖².  A step with the
+tangent factored at the previous iterate (a chord step) leaves instead the change of the tangent
+along the last step times this one, L ‖δ_{k−1}‖ ‖δ_k‖: about 2 ‖F_k‖² / ‖F_{k−1}‖.  When that
+estimate is below ``CHORD_MARGIN`` of the convergence tolerance the step reuses the factored
+tangent: one assembly and factorisation less, typically on the last step of a load level.  Never
+twice in a row, never on a level's first iteration.  Where the estimate was too hopeful the
+chord step does not converge and a Newton step follows: one residual evaluation more.
 """
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ class TangentReuse:
         """Whether this iteration reuses the tangent; ``history`` holds ‖F_0‖ … ‖F_k‖ of the
         solve so far."""
         reuse = (self.enabled and len(history) >= 2 and not self._reused and history[-2] > 0.0
-                 and history[-1] ** 2 / history[-2] <= CHORD_MARGIN * max(atol, rtol * history[0]))
+                 and 2.0 * history[-1] ** 2 / history[-2] <= CHORD_MARGIN * max(atol, rtol * history[0]))
         self._reused = reuse
         self.count += reuse
         return reuse

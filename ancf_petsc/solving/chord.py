@@ -16,7 +16,8 @@ evaluation more.
 from __future__ import annotations
 
 #: share of the convergence tolerance the chord step's estimated residual must stay below: with
-#: 0.1 the Table 1 columns keep their Newton counts, sliding and unilateral (docs/running.md)
+#: 0.1 the Table 1 columns keep their Newton counts (the unilateral ψ = 0° one takes one more)
+#: with 6-7 chord steps each when sliding (docs/running.md)
 CHORD_MARGIN = 0.1
 
 

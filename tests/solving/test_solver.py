@@ -272,3 +272,25 @@ def test_chord_steps_keep_every_newton_count_and_answer(tmp_path):
         for name in a["probes"]:
             assert np.allclose(b["probes"][name]["displacement"], a["probes"][name]["displacement"],
                                rtol=1e-9, atol=1e-9 * 6e-3)
+
+
+def test_chord_rule_from_the_third_iterate_never_twice_and_on_its_estimate():
+    """chord.TangentReuse: the estimate 2‖F_k‖²/‖F_k−1‖ against a tenth of the tolerance, only
+    from the third iterate of a solve, never twice in a row, off when disabled."""
+    from ancf_petsc.solving.chord import TangentReuse
+    atol, rtol = 4e-8, 1e-10
+    rule = TangentReuse(True)
+    rule.start_solve()
+    assert not rule.decide([1.0], atol, rtol)                       # first iteration
+    assert not rule.decide([1.0, 1e-5], atol, rtol)                 # second: ‖F_0‖ is the load's
+    assert not rule.decide([1.0, 1e-2, 1e-5], atol, rtol)           # estimate 2e-8 > 4e-9
+    assert rule.decide([1.0, 1e-2, 1e-6], atol, rtol)               # estimate 2e-10
+    assert not rule.decide([1.0, 1e-2, 1e-6, 1e-12], atol, rtol)    # not twice in a row
+    assert rule.decide([1.0, 1e-2, 1e-6, 1e-9, 1e-15], atol, rtol)  # after a Newton step again
+    assert rule.count == 2
+    rule.start_solve()
+    assert rule.decide([1.0, 1e-2, 1e-6], atol, rtol)               # a new solve
+    rule.start_solve()
+    assert rule.decide([1e6, 1e-2, 1e-5], atol, rtol)               # tolerance rtol ‖F_0‖ = 1e-4
+    off = TangentReuse(False)
+    assert not off.decide([1.0, 1e-2, 1e-6], atol, rtol) and off.count == 0

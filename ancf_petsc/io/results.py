@@ -71,7 +71,9 @@ class ResultsWriter:
         self._on_root(lambda: self._create(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
-        """Run ``action`` on rank 0; its file-system error is raised on every rank (collective)."""
+        """Run ``action`` on rank 0; its error is raised on every rank as an ``OutputError``
+        (collective).  Any exception counts, not only the OS's: h5py raises ValueError and
+        KeyError for a file another process changed, and one rank must never raise alone."""
         err = None
         if self.rank == 0:
             try:
@@ -81,6 +83,9 @@ class ResultsWriter:
             except OSError as exc:
                 self._release_reserve()
                 err = (exc.filename or self.dir, os_reason(exc))
+            except Exception as exc:           # noqa: BLE001 -- raised on every rank below
+                self._release_reserve()
+                err = (self.dir, f"{type(exc).__name__}: {exc}")
         if self.comm.size > 1:
             err = self.comm.tompi4py().bcast(err, root=0)
         if err:

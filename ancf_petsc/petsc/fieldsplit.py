@@ -115,6 +115,8 @@ class FascicleSchur:
         self._u_local = None
         self._counts = (0, 0)
         self.setups = 0
+        #: set per Newton iteration by the stepper: keep the last factors (``chord.TangentReuse``)
+        self.keep_factors = False
 
     def _preallocate_schur(self) -> None:
         """S's pattern: multipliers coupled when they share a fascicle (fixed for the run)."""
@@ -133,6 +135,8 @@ class FascicleSchur:
 
     # ------------------------------------------------------------------ PCPYTHON interface
     def setUp(self, pc: PETSc.PC) -> None:
+        if self.keep_factors and self.setups:
+            return              # the previous iterate's factors (solving/chord.py), still exact J
         _, P = pc.getOperators()
         sp_ = self.split
         if self._full_to_z is None:

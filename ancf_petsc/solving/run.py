@@ -275,9 +275,16 @@ def run_model(spec: ModelSpec, comm=None, log=print, info: dict | None = None,
             raise
         failure, signum, inverted = run.step_through(levels, start)
         run.stepper.close()
-        return _finish(run, failure, signum, inverted, time.perf_counter() - t_start, solver_events0)
-    finally:
-        run.destroy()
+        result = _finish(run, failure, signum, inverted, time.perf_counter() - t_start, solver_events0)
+    except BaseException:
+        # on several ranks the error may be this rank's alone: destroying the PETSc objects is
+        # collective (MUMPS, scatters) and would wait for ranks that never come; ancf-solve
+        # aborts MPI instead
+        if comm.size == 1:
+            run.destroy()
+        raise
+    run.destroy()
+    return result
 
 
 def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver_events0: float) -> RunResult:
@@ -294,6 +301,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     problem_writing = run.writer.finish(
         status, reason_code=code, message=message, timings=timings,
         newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.chord.count,
+        preconditioner_reuses=stepper.chord.kept,
         exchange=exchange,
         jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
@@ -308,7 +316,9 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         say(f"[ancf] exchange: node blocks received per rank {exchange['ghost_nodes_per_rank']} of "
             f"{run.model.n_nodes}; rebuilt {exchange['rebuilds']} times (the set of projected-on "
             "elements changed)")
-    reuses = f" ({stepper.chord.count} with the last tangent)" if stepper.chord.count else ""
+    reuses = ", ".join(f"{n} with the last {what}" for n, what in
+                       ((stepper.chord.count, "tangent"), (stepper.chord.kept, "preconditioner")) if n)
+    reuses = f" ({reuses})" if reuses else ""
     say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations{reuses}, "
         f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")
     return RunResult(status, message, run.writer.summary if comm.rank == 0 else None, records, code,

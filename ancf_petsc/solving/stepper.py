@@ -121,18 +121,20 @@ class LoadStepper:
             self.snes, petsc_options,
             run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear,
                          saddle_point=problem.n_constraints > 0), self.prefix)
+        schur = None
         if linear == "fieldsplit":
             # imported here: scipy.linalg is start-up time the direct solver does not need
             from ..petsc.fascicles import fascicle_split
             from ..petsc.fieldsplit import FascicleSchur
             pc = self.snes.getKSP().getPC()
             pc.setType(PETSc.PC.Type.PYTHON)
-            pc.setPythonContext(FascicleSchur(fascicle_split(problem), problem.comm, self.prefix))
+            schur = FascicleSchur(fascicle_split(problem), problem.comm, self.prefix)
+            pc.setPythonContext(schur)
         self._check_factorisation()
         self._history: list[float] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
-        self.chord = TangentReuse(spec.reuse_tangent)
+        self.chord = TangentReuse(spec.reuse_tangent, schur)
         self._ksp_reason = 0
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
@@ -191,11 +193,8 @@ class LoadStepper:
         self._history.append(float(fnorm))
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
-        """SNES Jacobian callback: the problem's tangent, or none for a chord step.  P left
-        untouched keeps its state, so PCSetUp keeps its factor."""
-        rtol, atol, _, _ = snes.getTolerances()
-        if not self.chord.decide(self._history, atol, rtol):
-            self.problem.jacobian(snes, X, J, P)
+        """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
+        self.chord.jacobian(snes, self._history, lambda: self.problem.jacobian(snes, X, J, P))
 
     def describe(self) -> str:
         ksp = self.snes.getKSP()

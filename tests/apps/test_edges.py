@@ -183,6 +183,49 @@ def test_a_bug_still_leaves_a_final_status(tmp_path, monkeypatch):
     assert s["message"] == "RuntimeError: simulated bug"
 
 
+ROOT_ONLY_FAILURE = """
+import sys
+sys.path.insert(0, {tests!r})
+from helpers import load_raw, petsc_init
+petsc_init()
+from petsc4py import PETSc
+from ancf_petsc.api import solve
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.io.results import ResultsWriter
+real = ResultsWriter._write_step
+
+def clash(self, record, *args):
+    if len(self.summary["steps"]) == 1:    # rank 0 writes, and h5py complains (ValueError)
+        raise ValueError("Unable to move link (an object with that name already exists)")
+    return real(self, record, *args)
+ResultsWriter._write_step = clash
+raw = load_raw("bundle_hex7.yaml")
+raw["output"] = {{"dir": sys.argv[1], "vtk": False}}
+res = solve(parse_config(raw, base_dir={configs!r}), PETSc.COMM_WORLD, log=lambda *_: None)
+with open(sys.argv[1] + f".rank{{PETSc.COMM_WORLD.rank}}", "w") as fh:
+    fh.write(f"{{res.status}} {{res.reason_code}} {{res.message}}")
+"""
+
+
+@pytest.mark.mpi
+def test_an_exception_in_rank_0s_file_writing_fails_every_rank(tmp_path):
+    """Only rank 0 writes the files.  An exception there that is not the OS's (h5py raises
+    ValueError when another process changed the file) must end the run on every rank as an
+    output error, with the converged levels kept, not leave rank 1 waiting (it hung before)."""
+    script = tmp_path / "clash.py"
+    script.write_text(ROOT_ONLY_FAILURE.format(tests=os.path.dirname(os.path.dirname(__file__)),
+                                               configs=CONFIGS))
+    p = subprocess.run(["mpirun", "--oversubscribe", "-n", "2", sys.executable, str(script),
+                        str(tmp_path / "out")], capture_output=True, text=True, cwd=ROOT,
+                       timeout=TIMEOUT, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode == 0, p.stdout + p.stderr
+    for rank in (0, 1):
+        line = (tmp_path / f"out.rank{rank}").read_text()
+        assert line.startswith("failed OUTPUT_ERROR ") and "ValueError: Unable to move link" in line
+    s = read_summary(tmp_path / "out")
+    assert (s["status"], s["reason_code"], len(s["steps"])) == ("failed", "OUTPUT_ERROR", 1)
+
+
 @pytest.mark.mpi
 def test_config_file_is_binary_or_a_directory(tmp_path):
     binary = tmp_path / "model.yaml"

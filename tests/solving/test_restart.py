@@ -24,9 +24,31 @@ def _config(tmp_path, mode="sliding", name="c", linear="auto"):
     return write_config(raw, tmp_path / f"{name}.yaml"), raw
 
 
+def _kill_writers(out, timeout=30.0):
+    """SIGKILL every process whose command line names ``out`` and wait until none is left: Open
+    MPI starts the ranks in process groups of their own, so killing mpirun's group can leave a
+    rank writing into ``out`` while the restart already runs there."""
+    mark = str(out).encode()
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        alive = []
+        for pid in (int(d) for d in os.listdir("/proc") if d.isdigit() and int(d) != os.getpid()):
+            try:
+                with open(f"/proc/{pid}/cmdline", "rb") as fh:
+                    if mark in fh.read():
+                        alive.append(pid)
+                        os.kill(pid, signal.SIGKILL)
+            except (OSError, ProcessLookupError):
+                pass
+        if not alive:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"processes writing into {out} survived SIGKILL for {timeout} s")
+
+
 def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
-    """Start ancf-solve, SIGKILL it (its whole process group) once ``after_levels`` levels are
-    in summary.json."""
+    """Start ancf-solve, SIGKILL it (every process writing into ``out``, and its process group)
+    once ``after_levels`` levels are in summary.json."""
     exe = os.path.join(VENV_BIN, "ancf-solve")
     cmd = [exe, cfg, "--output-dir", str(out), "--quiet"]
     if ranks > 1:
@@ -46,8 +68,13 @@ def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
                 break
             time.sleep(0.02)
     finally:
-        os.killpg(p.pid, signal.SIGKILL)
+        _kill_writers(out)                   # the ranks first: they are not in mpirun's group
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
         p.wait()
+        _kill_writers(out)
     s = read_summary(out)
     assert s["status"] == "running" and after_levels <= len(s["steps"]) < 13, (s["status"], len(s["steps"]))
 

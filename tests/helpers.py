@@ -44,14 +44,6 @@ def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | N
     return res.summary
 
 
-def event_count(name: str) -> int:
-    """How often the PETSc log event ``name`` ran in this process, over every stage of the
-    program (PETSc logging on: ``PETSc.Log.begin()``)."""
-    from ancf_petsc.petsc import logging
-    ids = sorted({0} | {logging.stage(s).id for s in logging.STAGES})
-    return sum(logging.event(name).getPerfInfo(i)["count"] for i in ids)
-
-
 def write_config(raw: dict, path) -> str:
     with open(path, "w") as fh:
         yaml.safe_dump(raw, fh, sort_keys=False)

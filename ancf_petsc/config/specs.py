@@ -103,7 +103,7 @@ class SolverSpec:
     growth: float = 2.0
     easy_iterations: int = 8
     predictor: str = "secant"              # none | secant (extrapolate the last increment)
-    reuse_tangent: bool = True            # chord steps near convergence (solving.stepper)
+    reuse_tangent: bool = True            # chord steps / kept fieldsplit factors (solving.chord)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)

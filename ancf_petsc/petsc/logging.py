@@ -28,8 +28,19 @@ def event(name: str) -> PETSc.Log.Event:
     return PETSc.Log.Event(name)
 
 
-def event_time(name: str) -> float:
-    """Seconds spent in event ``name``, summed over the main stage and the program's stages."""
+def _over_stages(name: str, key: str) -> float:
+    """``key`` ('time', 'count', ...) of event ``name``, summed over the main stage and the
+    program's stages."""
     ev = event(name)
     ids = sorted({0} | {stage(s).id for s in STAGES})
-    return float(sum(ev.getPerfInfo(i)["time"] for i in ids))
+    return sum(ev.getPerfInfo(i)[key] for i in ids)
+
+
+def event_time(name: str) -> float:
+    """Seconds spent in event ``name`` (every stage)."""
+    return float(_over_stages(name, "time"))
+
+
+def event_count(name: str) -> int:
+    """How often event ``name`` ran (every stage)."""
+    return int(_over_stages(name, "count"))

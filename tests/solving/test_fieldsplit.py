@@ -10,8 +10,8 @@ import pytest
 
 from ancf_petsc.physics.element3363 import DOFS_PER_NODE
 
-from helpers import (CONFIGS, build_problem, event_count, load_raw, petsc_init, probes_table,
-                     read_summary, run_inline, solve_cli, write_config)
+from helpers import (CONFIGS, build_problem, load_raw, petsc_init, probes_table, read_summary,
+                     run_inline, solve_cli, write_config)
 
 
 @pytest.mark.parametrize("kind", ["spd", "indefinite", "badly scaled"])
@@ -204,6 +204,7 @@ def test_kept_fascicle_factors_keep_the_newton_path(tmp_path):
     petsc_init()
     from petsc4py import PETSc
     from ancf_petsc.petsc.fieldsplit import FACTOR_EVENT
+    from ancf_petsc.petsc.logging import event_count
     PETSc.Log.begin()
     runs = {}
     for reuse in (False, True):

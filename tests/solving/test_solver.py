@@ -5,7 +5,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import FAILURE_MESSAGE, build_problem as _problem, event_count, jacobian_and_difference, load_raw, perturbed_state, petsc_init, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
+from helpers import FAILURE_MESSAGE, build_problem as _problem, jacobian_and_difference, load_raw, perturbed_state, petsc_init, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
 
 
 def test_assembled_jacobian_matches_finite_differences():
@@ -249,6 +249,7 @@ def test_chord_steps_keep_every_newton_count_and_answer(tmp_path):
     PETSc factored exactly the iterations less the reuses (PCSetUp kept the factor)."""
     petsc_init()
     from petsc4py import PETSc
+    from ancf_petsc.petsc.logging import event_count
     PETSc.Log.begin()
     raw = load_raw("achilles_type3_psi45.yaml")
     runs = {}

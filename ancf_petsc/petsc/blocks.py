@@ -64,15 +64,13 @@ def node_blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
 
 def zero_held(values: np.ndarray, held: np.ndarray | None) -> np.ndarray:
     """Zero the rows and columns of ``held`` (n, D) in ``values`` (n, D, D), in place (the
-    callers' blocks are fresh arrays, inserted once)."""
+    callers' blocks are fresh arrays, inserted once).  Boolean assignment through the array and
+    its transposed view writes only the held rows and columns (a copy of the blocks that have
+    any was 100× slower: 0.37 s of a 37-fascicle run)."""
     if held is None:
         return values
-    hit = np.flatnonzero(held.any(axis=1))
-    v = values[hit]
-    h = held[hit]
-    v[h] = 0.0                                        # rows
-    v.transpose(0, 2, 1)[h] = 0.0                     # columns
-    values[hit] = v
+    values[held] = 0.0                                # rows
+    values.transpose(0, 2, 1)[held] = 0.0             # columns
     return values
 
 

@@ -32,6 +32,7 @@ class FascicleSplit:
     z_dofs: np.ndarray        # (M,) PETSc DOF of every multiplier, in multiplier-space order
     z_range: tuple            # this rank's owned range of the multiplier space
     z_beams: np.ndarray       # (M, 2) the two beams (A, B) each multiplier couples
+    beam_rank: np.ndarray     # (n_beams,) the rank that holds each beam
 
     @property
     def n_multipliers(self) -> int:
@@ -46,8 +47,10 @@ def fascicle_split(problem) -> FascicleSplit:
         raise ValueError("the fascicle split needs contact multipliers")
     lo, hi = layout.owned_nodes
     beams, u_dofs = [], []
+    beam_rank = np.zeros(len(model.beams), dtype=np.int64)
     for beam in model.beams:
         owners = layout.node_owner[beam.node_offset + np.arange(beam.n_nodes)]
+        beam_rank[beam.index] = owners[0]
         if np.any(owners != owners[0]):
             raise ValueError(f"beam {beam.name} is split over ranks; the fascicle split needs "
                              "whole beams per rank (partition 'beams')")
@@ -63,7 +66,7 @@ def fascicle_split(problem) -> FascicleSplit:
     z_beams = ends[itf]
     r0, r1 = np.searchsorted(z_dofs, [DOFS_PER_NODE * lo, DOFS_PER_NODE * hi])
     m_index = [np.flatnonzero((z_beams[:, 0] == b) | (z_beams[:, 1] == b)) for b in beams]
-    return FascicleSplit(beams, u_dofs, m_index, z_dofs, (int(r0), int(r1)), z_beams)
+    return FascicleSplit(beams, u_dofs, m_index, z_dofs, (int(r0), int(r1)), z_beams, beam_rank)
 
 
 class FascicleFactor:

@@ -35,13 +35,12 @@ Every fascicle must be whole on one rank (``parallel.partition.beam_owner``) and
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from petsc4py import PETSc
 
 from ..physics.element3363 import DOFS_PER_NODE
 from . import logging
 from .fascicles import FascicleFactor, FascicleSplit, fascicle_blocks
-from .inertia import pivot_counts
+from .substructure import SubstructuredSchur
 
 INSERT = PETSc.InsertMode.INSERT_VALUES
 ADD = PETSc.InsertMode.ADD_VALUES
@@ -91,10 +90,9 @@ class FascicleSchur:
         self.Bt: list[np.ndarray] = []
         r0, r1 = sp_.z_range
         M = sp_.n_multipliers
-        self.S = PETSc.Mat().createAIJ(((r1 - r0, M), (r1 - r0, M)), comm=comm)
-        self._preallocate_schur()
-        self.zvec, self.zsol = self.S.createVecs()
-        self.zwork = self.zvec.duplicate()
+        self.zvec = PETSc.Vec().createMPI((r1 - r0, M), comm=comm)
+        self.zsol, self.zwork = self.zvec.duplicate(), self.zvec.duplicate()
+        self.schur = SubstructuredSchur(split, comm, self.prefix, SCHUR_MUMPS["icntl"])
         # multipliers of the local fascicles, one after the other (a multiplier between two
         # local fascicles twice): gathered from / added into the multiplier space
         loc = np.concatenate(sp_.m_index) if sp_.m_index else np.zeros(0, dtype=np.int64)
@@ -103,35 +101,12 @@ class FascicleSchur:
         is_loc = PETSc.IS().createGeneral(loc.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.z_gather = PETSc.Scatter().create(self.zvec, is_loc, self.zloc, None)
         is_loc.destroy()
-        self.ksp = PETSc.KSP().create(comm=comm)
-        self.ksp.setOptionsPrefix(self.prefix)
-        self.ksp.setOperators(self.S)
-        self.ksp.setType("preonly")
-        pc = self.ksp.getPC()
-        pc.setType("cholesky")
-        pc.setFactorSolverType("mumps")
-        self.ksp.setFromOptions()
         self._full_to_z = None
         self._u_local = None
         self._counts = (0, 0)
         self.setups = 0
         #: set per Newton iteration by the stepper: keep the last factors (``chord.TangentReuse``)
         self.keep_factors = False
-
-    def _preallocate_schur(self) -> None:
-        """S's pattern: multipliers coupled when they share a fascicle (fixed for the run)."""
-        sp_ = self.split
-        M = sp_.n_multipliers
-        n_beams = int(sp_.z_beams.max()) + 1
-        rows = np.repeat(np.arange(M), 2)
-        inc = sp.csr_matrix((np.ones(2 * M), (rows, sp_.z_beams.ravel())), shape=(M, n_beams))
-        r0, r1 = sp_.z_range
-        pattern = (inc[r0:r1] @ inc.T).tocsr()
-        pattern.sort_indices()
-        self.S.setPreallocationCSR((pattern.indptr.astype(PETSc.IntType),
-                                    pattern.indices.astype(PETSc.IntType)))
-        self.S.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
-        self.S.setOption(PETSc.Mat.Option.SYMMETRIC, True)
 
     # ------------------------------------------------------------------ PCPYTHON interface
     def setUp(self, pc: PETSc.PC) -> None:
@@ -165,45 +140,17 @@ class FascicleSchur:
             blocks.append(f.schur_block(Bt) if Bt.shape[1] else None)
         logging.event(FACTOR_EVENT).end()
         logging.event(SCHUR_EVENT).begin()
-        S = self.S
-        S.zeroEntries()
-        for m, blk in zip(sp_.m_index, blocks):
-            if blk is not None:
-                idx = m.astype(PETSc.IntType)
-                S.setValues(idx, idx, -blk, ADD)
-        S.assemble()
         diag = P.getDiagonal()                         # C: the multipliers' own diagonal
         self._full_to_z.scatter(diag, self.zwork, INSERT, FORWARD)
-        S.setDiagonal(self.zwork, ADD)
         diag.destroy()
+        self.schur.setup(blocks, self.zwork)
 
         logging.event(SCHUR_EVENT).end()
         local = np.array([sum(f.negative for f in self.factors), sum(f.null for f in self.factors)])
         total = np.empty_like(local)
         self.comm.tompi4py().Allreduce(local, total)
-        if self.setups == 0:
-            self._mumps_defaults()
-        self.ksp.setOperators(S)
-        self.ksp.setUp()
         self._counts = (int(total[0]), int(total[1]))
         self.setups += 1
-
-    def _mumps_defaults(self) -> None:
-        """Null-pivot detection (and, on a few ranks, a sequential root front: its inertia is
-        then complete) unless the command line sets them with the prefix."""
-        pc = self.ksp.getPC()
-        pc.setFactorSetUpSolverType()
-        F = pc.getFactorMatrix()
-        opts = PETSc.Options()
-        icntl = dict(SCHUR_MUMPS["icntl"])
-        if 1 < self.comm.size <= 4:
-            icntl[13] = 1
-        for k, v in icntl.items():
-            if not opts.hasName(f"{self.prefix}mat_mumps_icntl_{k}"):
-                F.setMumpsIcntl(k, v)
-        for k, v in SCHUR_MUMPS["cntl"].items():
-            if not opts.hasName(f"{self.prefix}mat_mumps_cntl_{k}"):
-                F.setMumpsCntl(k, v)
 
     def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
         logging.event(APPLY_EVENT).begin()
@@ -217,7 +164,7 @@ class FascicleSchur:
         self.zwork.set(0.0)
         self.z_gather.scatter(self.zloc, self.zwork, ADD, REVERSE)
         self.zvec.axpy(-1.0, self.zwork)
-        self.ksp.solve(self.zvec, self.zsol)
+        self.schur.solve(self.zvec, self.zsol)
         # u_f = K_f⁻¹ (r_f − B_fᵀ z)
         self.z_gather.scatter(self.zsol, self.zloc, INSERT, FORWARD)
         zl = self.zloc.getArray(readonly=True)
@@ -236,7 +183,8 @@ class FascicleSchur:
                            f"-{self.prefix})\n")
 
     def destroy(self, pc: PETSc.PC) -> None:
-        for obj in [self.S, self.zvec, self.zsol, self.zwork, self.zloc, self.z_gather, self.ksp,
+        self.schur.destroy()
+        for obj in [self.zvec, self.zsol, self.zwork, self.zloc, self.z_gather,
                     self._full_to_z] + list(self._is) + list(self._subs or []):
             if obj is not None:
                 obj.destroy()
@@ -249,7 +197,7 @@ class FascicleSchur:
         does not count them)."""
         if self.setups == 0:
             return None
-        counts = pivot_counts(self.ksp)
+        counts = self.schur.pivot_counts()
         if counts is None:
             return None
         return self._counts[0] + counts[0], self._counts[1] + counts[1]

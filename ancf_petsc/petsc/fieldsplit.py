@@ -42,10 +42,6 @@ from . import logging
 from .fascicles import FascicleFactor, FascicleSplit, fascicle_blocks
 from .substructure import SubstructuredSchur
 
-INSERT = PETSc.InsertMode.INSERT_VALUES
-ADD = PETSc.InsertMode.ADD_VALUES
-FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
-
 #: options prefix of the multiplier (Schur complement) factorisation: -fascicle_schur_...
 SCHUR_PREFIX = "fascicle_schur_"
 #: MUMPS settings of the Schur factorisation.  No null-pivot detection (unlike the direct
@@ -88,20 +84,7 @@ class FascicleSchur:
         self._subs = None
         self.factors: list[FascicleFactor] = []
         self.Bt: list[np.ndarray] = []
-        r0, r1 = sp_.z_range
-        M = sp_.n_multipliers
-        self.zvec = PETSc.Vec().createMPI((r1 - r0, M), comm=comm)
-        self.zsol, self.zwork = self.zvec.duplicate(), self.zvec.duplicate()
         self.schur = SubstructuredSchur(split, comm, self.prefix, SCHUR_MUMPS["icntl"])
-        # multipliers of the local fascicles, one after the other (a multiplier between two
-        # local fascicles twice): gathered from / added into the multiplier space
-        loc = np.concatenate(sp_.m_index) if sp_.m_index else np.zeros(0, dtype=np.int64)
-        self._slices = np.concatenate([[0], np.cumsum([len(m) for m in sp_.m_index])]).astype(int)
-        self.zloc = PETSc.Vec().createSeq(len(loc), comm=PETSc.COMM_SELF)
-        is_loc = PETSc.IS().createGeneral(loc.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
-        self.z_gather = PETSc.Scatter().create(self.zvec, is_loc, self.zloc, None)
-        is_loc.destroy()
-        self._full_to_z = None
         self._u_local = None
         self._counts = (0, 0)
         self.setups = 0
@@ -113,17 +96,12 @@ class FascicleSchur:
         if self.keep_factors and self.setups:
             return              # the previous iterate's factors (solving/chord.py), still exact J
         _, P = pc.getOperators()
-        sp_ = self.split
-        if self._full_to_z is None:
-            r0, r1 = sp_.z_range
-            src = PETSc.IS().createGeneral(sp_.z_dofs[r0:r1].astype(PETSc.IntType), comm=self.comm)
-            dst = PETSc.IS().createStride(r1 - r0, r0, 1, comm=self.comm)
-            x = P.createVecLeft()
-            self._full_to_z = PETSc.Scatter().create(x, src, self.zvec, dst)
+        if self._u_local is None:
             rstart = P.getOwnershipRange()[0]
-            self._u_local = [u - rstart for u in sp_.u_dofs]
-            for obj in (src, dst, x):
-                obj.destroy()
+            self._u_local = [u - rstart for u in self.split.u_dofs]
+            x = P.createVecLeft()
+            self.schur.create_gather(x)
+            x.destroy()
         logging.event(FACTOR_EVENT).begin()
         # fresh sub-matrices every time: the contact pattern of J grows when projections move
         # to other elements, and PETSc cannot reuse a sub-matrix whose pattern changed
@@ -141,10 +119,9 @@ class FascicleSchur:
         logging.event(FACTOR_EVENT).end()
         logging.event(SCHUR_EVENT).begin()
         diag = P.getDiagonal()                         # C: the multipliers' own diagonal
-        self._full_to_z.scatter(diag, self.zwork, INSERT, FORWARD)
+        c = self.schur.gather(diag)
         diag.destroy()
-        self.schur.setup(blocks, self.zwork)
-
+        self.schur.setup(blocks, c)
         logging.event(SCHUR_EVENT).end()
         local = np.array([sum(f.negative for f in self.factors), sum(f.null for f in self.factors)])
         total = np.empty_like(local)
@@ -155,25 +132,19 @@ class FascicleSchur:
     def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
         logging.event(APPLY_EVENT).begin()
         xa = x.getArray(readonly=True)
-        loc = np.empty(self._slices[-1])
-        for k, (f, Bt, u) in enumerate(zip(self.factors, self.Bt, self._u_local)):
-            loc[self._slices[k]:self._slices[k + 1]] = Bt.T @ f.solve(xa[u])
-        # t = r_z − Σ_f B_f K_f⁻¹ r_f
-        self._full_to_z.scatter(x, self.zvec, INSERT, FORWARD)
-        self.zloc.setArray(loc)
-        self.zwork.set(0.0)
-        self.z_gather.scatter(self.zloc, self.zwork, ADD, REVERSE)
-        self.zvec.axpy(-1.0, self.zwork)
-        self.schur.solve(self.zvec, self.zsol)
+        sc = self.schur
+        # t = r_z − Σ_f B_f K_f⁻¹ r_f, over this rank's multipliers (its part of the cut's)
+        t = sc.gather(x, once=True)
+        for f, Bt, u, pos in zip(self.factors, self.Bt, self._u_local, sc.positions):
+            t[pos] -= Bt.T @ f.solve(xa[u])
+        z = sc.solve(t)
         # u_f = K_f⁻¹ (r_f − B_fᵀ z)
-        self.z_gather.scatter(self.zsol, self.zloc, INSERT, FORWARD)
-        zl = self.zloc.getArray(readonly=True)
         x.copy(y)                                       # unused multiplier slots: identity rows
         ya = y.getArray()
-        for k, (f, Bt, u) in enumerate(zip(self.factors, self.Bt, self._u_local)):
-            ya[u] = f.solve(xa[u] - Bt @ zl[self._slices[k]:self._slices[k + 1]])
+        for f, Bt, u, pos in zip(self.factors, self.Bt, self._u_local, sc.positions):
+            ya[u] = f.solve(xa[u] - Bt @ z[pos])
         del ya, xa
-        self._full_to_z.scatter(self.zsol, y, INSERT, REVERSE)
+        sc.put(z, y)
         logging.event(APPLY_EVENT).end()
 
     def view(self, pc: PETSc.PC, viewer) -> None:
@@ -184,11 +155,9 @@ class FascicleSchur:
 
     def destroy(self, pc: PETSc.PC) -> None:
         self.schur.destroy()
-        for obj in [self.zvec, self.zsol, self.zwork, self.zloc, self.z_gather,
-                    self._full_to_z] + list(self._is) + list(self._subs or []):
-            if obj is not None:
-                obj.destroy()
-        self._subs, self._is, self._full_to_z = None, [], None
+        for obj in list(self._is) + list(self._subs or []):
+            obj.destroy()
+        self._subs, self._is = None, []
 
     # ------------------------------------------------------------------ stability
     def pivot_counts(self) -> tuple[int, int] | None:

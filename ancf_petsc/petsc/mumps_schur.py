@@ -208,9 +208,7 @@ class SchurFactor:
         return self.rhs[:self.n - self.n_schur].copy()
 
     def destroy(self) -> None:
+        """Free MUMPS's instance (before MPI is finalised; not left to garbage collection)."""
         if getattr(self, "_alive", False):
             self._run(-2)
             self._alive = False
-
-    def __del__(self):
-        self.destroy()

@@ -116,7 +116,9 @@ class SubstructuredSchur:
         self.g_once = on_rank[cut].min(axis=1) == rank
         order = np.argsort(self.ids, kind="stable")
         sorted_ids = self.ids[order]
-        self._positions = [order[np.searchsorted(sorted_ids, m)] for m in split.m_index]
+        #: per local fascicle: the positions of its multipliers among ``ids``
+        self.positions = [order[np.searchsorted(sorted_ids, m)] for m in split.m_index]
+        self._z_dofs = split.z_dofs[self.ids]
         self.pattern: RankPattern | None = None
         self.factor: SchurFactor | None = None
         self.local = PETSc.Vec().createSeq(len(self.ids), comm=SELF)
@@ -128,42 +130,67 @@ class SubstructuredSchur:
         self.failed = False
         self.setups = 0
 
+    # ------------------------------------------------------------------ the rank's multipliers
+    def create_gather(self, x: PETSc.Vec) -> None:
+        """The scatter between vectors laid out like ``x`` (the Jacobian's) and this rank's
+        multipliers ``ids`` (collective, once)."""
+        is_l = PETSc.IS().createGeneral(np.asarray(self._z_dofs, dtype=PETSc.IntType), comm=SELF)
+        self._gather = PETSc.Scatter().create(x, is_l, self.local, None)
+        is_l.destroy()
+
+    def gather(self, x: PETSc.Vec, once: bool = False) -> np.ndarray:
+        """x at this rank's multipliers (a copy); ``once``: the cut's entries only on the rank
+        that adds them to Σ's right-hand side (zero elsewhere)."""
+        self._gather.scatter(x, self.local, INSERT, FORWARD)
+        out = self.local.getArray(readonly=True).copy()
+        if once:
+            out[self.n_i:][~self.g_once] = 0.0
+        return out
+
+    def put(self, z: np.ndarray, y: PETSc.Vec) -> None:
+        """Write z (this rank's multipliers) into y (laid out like the Jacobian; the cut's
+        entries come from both of their ranks, equal)."""
+        self.local.setArray(z)
+        self._gather.scatter(self.local, y, INSERT, REVERSE)
+
     # ------------------------------------------------------------------ set-up
-    def setup(self, blocks: list, c_diag: PETSc.Vec) -> None:
+    def setup(self, blocks: list, c: np.ndarray) -> None:
         """Factor S: ``blocks`` are B_f K_f⁻¹ B_fᵀ of the local fascicles (dense; None for a
-        fascicle without multipliers), ``c_diag`` the multipliers' own diagonal C (multiplier
-        space, distributed)."""
-        if self._gather is None:
-            is_l = PETSc.IS().createGeneral(np.asarray(self.ids, dtype=PETSc.IntType), comm=SELF)
-            self._gather = PETSc.Scatter().create(c_diag, is_l, self.local, None)
-            is_l.destroy()
-        present = [k for k, b in enumerate(blocks) if b is not None]
-        if self.pattern is None:
-            self.pattern = RankPattern([self._positions[k] for k in present], self.n_i, len(self.ids))
-            if self.n_i:
-                icntl, cntl = mumps_controls(self.prefix, self.mumps)
-                self.factor = SchurFactor(self.pattern.indptr, self.pattern.indices, self.n_g,
-                                          icntl, cntl)
-            self.data = self.factor.values if self.factor else np.zeros(self.pattern.nnz)
-        self._gather.scatter(c_diag, self.local, INSERT, FORWARD)
-        c = self.local.getArray(readonly=True)
-        self.pattern.values([blocks[k] for k in present], c[:self.n_i], self.data)
-        local_schur, neg, null, failed = None, 0, 0, False
-        if self.factor is not None:
-            failed = not self.factor.factor()
-            if not failed:
-                neg, null = self.factor.negative_pivots, self.factor.null_pivots
-                if self.n_g:
-                    local_schur = self.factor.schur()
-        elif self.n_g:                                 # no interior: S_ΓΓ^r itself
-            local_schur = self.pattern.dense(self.data)
-        totals = np.array([neg, null, int(failed)], dtype=np.int64)
+        fascicle without multipliers), ``c`` the multipliers' own diagonal C at ``ids``."""
+        local_schur, neg, null, failed, error = None, 0, 0, False, ""
+        try:
+            local_schur, neg, null, failed = self._factor_rank(blocks, c[:self.n_i])
+        except Exception as exc:                       # never one rank alone: see below
+            failed, error = True, f"{type(exc).__name__}: {exc}"
+        totals = np.array([neg, null, int(failed), int(bool(error))], dtype=np.int64)
         self.mpi.Allreduce(MPI.IN_PLACE, totals)
+        if totals[3]:
+            errors = [e for e in self.mpi.allgather(error) if e]
+            raise RuntimeError(f"fascicle Schur solver: {errors[0]}")
         self.failed = bool(totals[2])
         self.counts = (int(totals[0]), int(totals[1]))
         if self.n_gamma and not self.failed:
             self._factor_interface(local_schur, c[self.n_i:])
         self.setups += 1
+
+    def _factor_rank(self, blocks: list, c_interior: np.ndarray) -> tuple:
+        """S^r assembled and factored on this rank: (its Schur complement on Γ_r or None,
+        negative and null pivots of S_II^r, whether the numeric factorisation failed)."""
+        present = [k for k, b in enumerate(blocks) if b is not None]
+        if self.pattern is None:
+            self.pattern = RankPattern([self.positions[k] for k in present], self.n_i, len(self.ids))
+            if self.n_i:
+                icntl, cntl = mumps_controls(self.prefix, self.mumps)
+                self.factor = SchurFactor(self.pattern.indptr, self.pattern.indices, self.n_g,
+                                          icntl, cntl)
+            self.data = self.factor.values if self.factor else np.zeros(self.pattern.nnz)
+        self.pattern.values([blocks[k] for k in present], c_interior, self.data)
+        if self.factor is None:                        # no interior: S_ΓΓ^r itself
+            return (self.pattern.dense(self.data) if self.n_g else None), 0, 0, False
+        if not self.factor.factor():
+            return None, 0, 0, True
+        schur = self.factor.schur() if self.n_g else None
+        return schur, self.factor.negative_pivots, self.factor.null_pivots, False
 
     def _factor_interface(self, local_schur: np.ndarray | None, c_g: np.ndarray) -> None:
         """Σ = C_Γ + Σ_r (S_ΓΓ − S_ΓI S_II⁻¹ S_IΓ)^r, summed over the ranks and factored densely
@@ -178,32 +205,29 @@ class SubstructuredSchur:
         self.sigma = FascicleFactor(-sigma)
 
     # ------------------------------------------------------------------ solve
-    def solve(self, t: PETSc.Vec, z: PETSc.Vec) -> None:
-        """z = S⁻¹ t (multiplier space, distributed): condense on every rank, sum and solve
-        the interface system, expand."""
+    def solve(self, t: np.ndarray) -> np.ndarray:
+        """z = S⁻¹ t over this rank's multipliers ``ids``: t complete on I_r, and on Γ_r this
+        rank's part of it (the parts add up over the ranks).  Condense on every rank, sum and
+        solve the interface system, expand.  Collective."""
         if self.failed:
-            z.set(np.nan)
-            return
+            return np.full(len(self.ids), np.nan)
         ni, f = self.n_i, self.factor
-        self._gather.scatter(t, self.local, INSERT, FORWARD)
-        tl = self.local.getArray(readonly=True).copy()
+        z = t.copy()
         if not self.n_gamma:
             if ni:
-                tl[:ni] = f.solve(tl[:ni])
-        else:
-            rhs = np.zeros(self.n_gamma)
-            if self.n_g:
-                if ni:
-                    rhs[self.g_ids] = f.condense(tl[:ni])          # −S_ΓI S_II⁻¹ t_I
-                once = self.g_ids[self.g_once]
-                rhs[once] += tl[ni:][self.g_once]
-            self.mpi.Allreduce(MPI.IN_PLACE, rhs)
-            zg = -self.sigma.solve(rhs)[self.g_ids]                # Σ⁻¹ = −(−Σ)⁻¹
+                z[:ni] = f.solve(t[:ni])
+            return z
+        rhs = np.zeros(self.n_gamma)
+        if self.n_g:
+            rhs[self.g_ids] = t[ni:]
             if ni:
-                tl[:ni] = f.expand(zg) if self.n_g else f.solve(tl[:ni])
-            tl[ni:] = zg
-        self.local.setArray(tl)
-        self._gather.scatter(self.local, z, INSERT, REVERSE)
+                rhs[self.g_ids] += f.condense(t[:ni])             # −S_ΓI S_II⁻¹ t_I
+        self.mpi.Allreduce(MPI.IN_PLACE, rhs)
+        zg = -self.sigma.solve(rhs)[self.g_ids]                    # Σ⁻¹ = −(−Σ)⁻¹
+        if ni:
+            z[:ni] = f.expand(zg) if self.n_g else f.solve(t[:ni])
+        z[ni:] = zg
+        return z
 
     def pivot_counts(self) -> tuple[int, int] | None:
         """(negative, null) pivots of S: those of every S_II^r plus Σ's (None before the first

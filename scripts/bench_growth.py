@@ -35,9 +35,11 @@ from logview import read_log_view  # noqa: E402
 
 #: -log_view events kept per run (seconds over the run, slowest rank): the projection
 #: (scripts/project_scaling.py) splits a Newton iteration into per-fascicle work and the
-#: multiplier Schur complement's factorisation (MatCholFctrNum) and solves (MatSolve)
+#: multiplier Schur complement's factorisation and solves (petsc/substructure.py's events;
+#: MatCholFctrNum and MatSolve are the direct solver's)
 EVENTS = ("ANCF element kernels", "ANCF contact", "ANCF fascicle factor", "ANCF Schur assembly",
-          "ANCF fascicle apply", "MatCholFctrNum", "MatSolve", "MatMult", "KSPSolve", "PCSetUp",
+          "ANCF fascicle apply", "ANCF Schur factor", "ANCF Schur solve", "MatCholFctrNum",
+          "MatSolve", "MatMult", "KSPSolve", "PCSetUp",
           "SNESFunctionEval", "SNESJacobianEval")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")

@@ -15,6 +15,12 @@ third Newton iteration inside GMRES, MUMPS LU, and GMRES with block Jacobi (ILU)
 ILU) and GAMG with the rigid-body near null space.  Every run's probes are compared with the
 first run.  Each run's full -log_view is kept in <out>/<run>/log_view.txt.
 
+The machine's own ceiling comes last (``--no-ceiling`` skips it): the first solver's 1-rank
+run alone and two copies of it side by side, interleaved.  Two copies share the cores' caches,
+memory bandwidth and clock as two ranks do, without any communication or imbalance, so
+2 × alone / side by side is the most a 2-rank run can gain on this machine; the 2-rank speed-up
+is also printed as a share of it.
+
 ``--messages`` instead runs both solvers of ``solver.linear`` at 2, 3 and 4 ranks
 (oversubscribed on a small machine: the counts do not depend on it) and tabulates PETSc's MPI
 message counts, volumes and reductions from -log_view: in all, per Newton iteration, and for
@@ -23,7 +29,7 @@ not in PETSc's log.
 
 Usage: python scripts/bench_scaling.py [--config configs/bundle_hex37.yaml] [--steps 0.5 1.0]
                                        [--out results/bench_scaling] [--quick] [--repeat 2]
-                                       [--messages [--ranks 2 3 4]]
+                                       [--messages [--ranks 2 3 4]] [--no-ceiling]
 """
 from __future__ import annotations
 
@@ -59,9 +65,9 @@ SOLVERS = {
 SCALED = ("fieldsplit", "mumps-ldlt", "mumps-ldlt-lagged", "mumps-lu")
 
 
-def run(name: str, ranks: int, opts, base: dict, out: str, repeat: int = 1) -> dict:
-    """Solve ``base`` with ``ranks`` ranks ``repeat`` times; the fastest run's figures.  ``opts``
-    is a list of PETSc options or a ``solver.linear`` value."""
+def command(name: str, ranks: int, opts, base: dict, out: str) -> tuple[list, str]:
+    """(the mpirun command line, its output directory) of one run: ``opts`` is a list of PETSc
+    options or a ``solver.linear`` value."""
     d = os.path.join(out, name)
     os.makedirs(d, exist_ok=True)
     raw = dict(base, output={"dir": d, "vtk": False})
@@ -72,8 +78,13 @@ def run(name: str, ranks: int, opts, base: dict, out: str, repeat: int = 1) -> d
     with open(cfg, "w") as fh:
         yaml.safe_dump(raw, fh, sort_keys=False)
     exe = os.path.join(ROOT, ".venv", "bin", "ancf-solve")
-    cmd = ["mpirun", "--oversubscribe", "-n", str(ranks), exe, cfg,
-           "-log_view", f":{os.path.join(d, 'log_view.txt')}", "-ksp_converged_reason"] + opts
+    return (["mpirun", "--oversubscribe", "-n", str(ranks), exe, cfg,
+             "-log_view", f":{os.path.join(d, 'log_view.txt')}", "-ksp_converged_reason"] + opts, d)
+
+
+def run(name: str, ranks: int, opts, base: dict, out: str, repeat: int = 1) -> dict:
+    """Solve ``base`` with ``ranks`` ranks ``repeat`` times; the fastest run's figures."""
+    cmd, d = command(name, ranks, opts, base, out)
     best = None
     for _ in range(repeat):
         t0 = time.perf_counter()
@@ -100,6 +111,36 @@ def run(name: str, ranks: int, opts, base: dict, out: str, repeat: int = 1) -> d
         if row["status"] != "completed":
             break
     return best
+
+
+def machine_ceiling(opts, base: dict, out: str, repeat: int) -> dict:
+    """The most any 2-rank run of ``base`` could gain on this machine: the 1-rank run alone and
+    two copies of it side by side (no communication, perfect balance; the two share the cores'
+    caches, memory bandwidth and clock as two ranks do), ``repeat`` times interleaved, fastest
+    kept.  Ceiling = 2 × alone / side by side."""
+    def timed(names):
+        cmds = [command(n, 1, opts, base, out) for n in names]
+        for c, _ in cmds:                   # mpirun binds each job's rank to core 0 otherwise
+            c[1:1] = ["--bind-to", "none"]
+        t0 = time.perf_counter()
+        procs = [subprocess.Popen(c, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=ENV, cwd=ROOT)
+                 for c, _ in cmds]
+        walls = []
+        for p in procs:
+            p.wait()
+            walls.append(time.perf_counter() - t0)
+        runs = [json.load(open(os.path.join(d, "summary.json")))["timings"]["total"] for _, d in cmds]
+        return max(walls), max(runs)
+    alone, pair = [], []
+    for _ in range(repeat):
+        alone.append(timed(["ceiling_alone"]))
+        pair.append(timed(["ceiling_a", "ceiling_b"]))
+        print(f"[bench] ceiling: alone wall {alone[-1][0]:.2f} s run {alone[-1][1]:.2f} s; side by side "
+              f"wall {pair[-1][0]:.2f} s run {pair[-1][1]:.2f} s", flush=True)
+    a_wall, a_run = min(w for w, _ in alone), min(r for _, r in alone)
+    p_wall, p_run = min(w for w, _ in pair), min(r for _, r in pair)
+    return {"alone_wall": a_wall, "alone_run": a_run, "pair_wall": p_wall, "pair_run": p_run,
+            "wall": 2 * a_wall / p_wall, "run": 2 * a_run / p_run}
 
 
 def probe_error(a: dict, ref: dict) -> float:
@@ -156,6 +197,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=2, help="runs per timed configuration (fastest kept)")
     ap.add_argument("--messages", action="store_true", help="MPI traffic of both solvers at --ranks")
     ap.add_argument("--ranks", type=int, nargs="+", default=[2, 3, 4])
+    ap.add_argument("--no-ceiling", action="store_true",
+                    help="skip the machine's ceiling (two 1-rank runs side by side)")
     a = ap.parse_args(argv)
     base = yaml.safe_load(open(a.config))
     if a.steps:
@@ -193,10 +236,20 @@ def main(argv=None) -> int:
               f"{s_run:.2f}x run ({s_run / 2:.0%}); per phase: elements "
               f"{n1['elements'] / max(n2['elements'], 1e-9):.2f}x, contact "
               f"{n1['contact'] / max(n2['contact'], 1e-9):.2f}x, linear {n1['linear'] / max(n2['linear'], 1e-9):.2f}x")
+    ceiling = None if a.no_ceiling else machine_ceiling(SOLVERS[scaled[0]], base, a.out, a.repeat)
+    if ceiling:
+        n1, n2 = (next(r for r in rows if r["name"] == f"{scaled[0]}_n{n}") for n in (1, 2))
+        print(f"\nmachine ceiling ({scaled[0]} on 1 rank, two copies side by side against one alone, "
+              f"best of {a.repeat}): run {ceiling['pair_run']:.2f} s against {ceiling['alone_run']:.2f} s, "
+              f"wall {ceiling['pair_wall']:.2f} s against {ceiling['alone_wall']:.2f} s: no 2-rank run "
+              f"can beat {ceiling['run']:.2f}x run, {ceiling['wall']:.2f}x wall here; {scaled[0]} reaches "
+              f"{n1['total'] / n2['total'] / ceiling['run']:.0%} of it (run), "
+              f"{n1['wall'] / n2['wall'] / ceiling['wall']:.0%} (wall)")
     print(f"\npartition at 2 ranks: {rows[1]['summary']['partition']}")
     print(f"exchange at 2 ranks: {rows[1]['summary'].get('exchange')}")
     with open(os.path.join(a.out, "bench_scaling.json"), "w") as fh:
-        json.dump([{k: v for k, v in r.items() if k != "summary"} for r in rows], fh, indent=1)
+        json.dump({"runs": [{k: v for k, v in r.items() if k != "summary"} for r in rows],
+                   "ceiling": ceiling}, fh, indent=1)
     return 0
 
 

@@ -10,7 +10,7 @@ coefficient measured on this machine, every assumption printed:
   block and the block solves of every GMRES iteration), fitted as T₁ − S = a n over the one-rank
   runs of scripts/bench_growth.py (7 … 91 fascicles).
 * S(M) = c M^p: the multiplier Schur complement's MUMPS factorisation and solves
-  (MatCholFctrNum + MatSolve in -log_view), fitted over the same runs.
+  ("ANCF Schur factor" + "ANCF Schur solve" in -log_view), fitted over the same runs.
 * α: MUMPS's parallel efficiency on S, from the same S events at 1 and 2 ranks on 37 fascicles
   (scripts/bench_scaling.py --quick); held fixed beyond 2 ranks (the assumption that most limits
   the projection: MUMPS's distributed factorisation usually scales worse on many ranks).
@@ -39,7 +39,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from logview import read_log_view  # noqa: E402
 
-S_EVENTS = ("MatCholFctrNum", "MatSolve")
+S_EVENTS = ("ANCF Schur factor", "ANCF Schur solve")
 
 
 def s_time(log: str) -> float:

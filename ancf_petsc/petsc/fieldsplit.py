@@ -15,10 +15,13 @@ talk only through z, and block elimination (PCFIELDSPLIT's Schur factorisation) 
 
 ``FascicleSchur`` is that exact inverse of J_bd = J − K_× as a PETSc preconditioner (PCPYTHON):
 each rank factors its own fascicles' K_f (dense, diagonally scaled Cholesky, LU where K_f is
-indefinite), adds B_f K_f⁻¹ B_fᵀ into the multiplier matrix S (AIJ, distributed like the
-multipliers) and MUMPS factors S (LDLᵀ) on all ranks.  A Krylov method (GMRES, right
-preconditioned) on the full J absorbs K_×; it is zero in an unloaded state, small beside K, and
-the residual falls by about 10× per iteration under load.
+indefinite) and forms their blocks B_f K_f⁻¹ B_fᵀ of S; S itself is factored by substructuring
+over the ranks (``substructure.SubstructuredSchur``: each rank's multipliers by its own MUMPS
+factor, only those on the cut between two ranks' fascicles together).  The preconditioner works
+in each rank's own multipliers (those of its fascicles, the cut's included): two scatters per
+application.  A Krylov method (FGMRES, right preconditioned) on the full J absorbs K_×; it is
+zero in an unloaded state, small beside K, and the residual falls by about 10× per iteration
+under load.
 
 Why it is cheaper than one LDLᵀ of J: K_f is a slender band (one fascicle), and S couples only
 multipliers that share a fascicle.  Its graph is the cross-section of the bundle with every
@@ -44,15 +47,14 @@ from .substructure import SubstructuredSchur
 
 #: options prefix of the multiplier (Schur complement) factorisation: -fascicle_schur_...
 SCHUR_PREFIX = "fascicle_schur_"
-#: MUMPS settings of the Schur factorisation.  No null-pivot detection (unlike the direct
-#: solver): S is nearly singular where constraints are nearly redundant (condition ~1e13 on 37
-#: fascicles), and a pivot MUMPS drops as null there leaves the preconditioner without a
-#: direction J has, so that GMRES stalls (37 fascicles: at 7e-5 instead of 11 iterations to 1e-9).
-#: Its delayed pivots outgrow MUMPS's default 20 % workspace margin on 2 ranks (INFOG(1) = −9):
-#: 100 %.  AMD ordering (ICNTL(7) = 0): 37 fascicles, 9 factorisations of S on two ranks,
-#: 2.19 → 1.53 s against MUMPS's automatic choice (best of three).  On one rank PETSc 3.18 puts
-#: back MUMPS's automatic choice (AMF here, INFOG(7) = 2) unless -fascicle_schur_mat_mumps_icntl_7
-#: is given; AMD is no faster there (1.61 against 1.66 s).
+#: MUMPS settings of the Schur factorisations (each rank's, and the interface's where it is
+#: distributed).  No null-pivot detection (unlike the direct solver): S is nearly singular where
+#: constraints are nearly redundant (condition ~1e13 on 37 fascicles), and a pivot MUMPS drops
+#: as null there leaves the preconditioner without a direction J has, so that GMRES stalls (37
+#: fascicles: at 7e-5 instead of 11 iterations to 1e-9).  Delayed pivots outgrew MUMPS's default
+#: 20 % workspace margin on 2 ranks (INFOG(1) = −9): 100 %.  AMD ordering (ICNTL(7) = 0): on the
+#: distributed S of 37 fascicles 2.19 → 1.53 s for 9 factorisations against MUMPS's automatic
+#: choice; on each rank's S^r the orderings AMD, AMF, PORD, QAMD take the same time.
 #: A factor of S lagged by one Newton iteration is no preconditioner: FGMRES then stalls at
 #: 100 iterations in the first increment.
 SCHUR_MUMPS = {"icntl": {24: 0, 14: 100, 7: 0}, "cntl": {}}
@@ -149,9 +151,12 @@ class FascicleSchur:
 
     def view(self, pc: PETSc.PC, viewer) -> None:
         n = self.comm.tompi4py().allreduce(len(self.factors))
+        sc = self.schur
+        cut = (f"; {sc.n_gamma} on the cut between ranks, {type(sc.interface).__name__}"
+               if sc.interface is not None else "")
         viewer.printfASCII(f"  fascicle Schur: {n} fascicles factored densely, Schur complement on "
-                           f"{self.split.n_multipliers} multipliers (MUMPS LDLT, prefix "
-                           f"-{self.prefix})\n")
+                           f"{self.split.n_multipliers} multipliers (MUMPS LDLT per rank{cut}; "
+                           f"prefix -{self.prefix})\n")
 
     def destroy(self, pc: PETSc.PC) -> None:
         self.schur.destroy()

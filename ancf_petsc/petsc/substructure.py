@@ -38,7 +38,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import logging
-from .fascicles import FascicleFactor, FascicleSplit
+from .fascicles import FascicleSplit
+from .interface_system import DenseInterface, DistributedInterface, interface_kind
 from .mumps_schur import SchurFactor
 
 INSERT = PETSc.InsertMode.INSERT_VALUES
@@ -47,6 +48,8 @@ SELF = PETSc.COMM_SELF
 #: -log_view events: S's factorisation (the ranks' MUMPS factors and the interface system) and
 #: its solves (condensation, interface, expansion)
 FACTOR_EVENT, SOLVE_EVENT = "ANCF Schur factor", "ANCF Schur solve"
+#: inside both: the interface system's set-up and solves (interface_system.py)
+INTERFACE_EVENT = "ANCF Schur interface"
 
 
 def mumps_controls(prefix: str, defaults: dict) -> tuple[dict, dict]:
@@ -134,7 +137,15 @@ class SubstructuredSchur:
         self.local = PETSc.Vec().createSeq(len(self.ids), comm=SELF)
         self._gather = None
         self.data: np.ndarray | None = None
-        self.sigma: FascicleFactor | None = None
+        r0, r1 = split.z_range
+        g_range = tuple(int(k) for k in np.searchsorted(gamma, [r0, r1]))
+        self.interface = None
+        if self.n_gamma:
+            if interface_kind(self.n_gamma, prefix) == "dense":
+                self.interface = DenseInterface(self.n_gamma, self.g_ids, self.mpi)
+            else:
+                self.interface = DistributedInterface(self.n_gamma, self.g_ids, g_range, comm,
+                                                      prefix, mumps)
         self._sigma_local = None                   # S_ΓΓ^r of a rank without interior rows
         self.counts = (0, 0)
         self.failed = False
@@ -206,16 +217,10 @@ class SubstructuredSchur:
         return schur, self.factor.negative_pivots, self.factor.null_pivots, False
 
     def _factor_interface(self, local_schur: np.ndarray | None, c_g: np.ndarray) -> None:
-        """Σ = C_Γ + Σ_r (S_ΓΓ − S_ΓI S_II⁻¹ S_IΓ)^r, summed over the ranks and factored densely
-        (as −Σ, which is positive definite where the fascicles are) on every rank."""
-        sigma = np.zeros((self.n_gamma, self.n_gamma))
-        g = self.g_ids
-        if self.n_g:
-            sigma[np.ix_(g, g)] = local_schur
-            once = g[self.g_once]
-            sigma[once, once] += c_g[self.g_once]
-        self.mpi.Allreduce(MPI.IN_PLACE, sigma)
-        self.sigma = FascicleFactor(-sigma)
+        """Σ = C_Γ + Σ_r (S_ΓΓ − S_ΓI S_II⁻¹ S_IΓ)^r over the ranks (interface_system.py)."""
+        logging.event(INTERFACE_EVENT).begin()
+        self.interface.set_up(local_schur, self.g_ids[self.g_once], c_g[self.g_once])
+        logging.event(INTERFACE_EVENT).end()
 
     # ------------------------------------------------------------------ solve
     def solve(self, t: np.ndarray) -> np.ndarray:
@@ -237,13 +242,12 @@ class SubstructuredSchur:
             if ni:
                 z[:ni] = f.solve(t[:ni])
             return z
-        rhs = np.zeros(self.n_gamma)
-        if self.n_g:
-            rhs[self.g_ids] = t[ni:]
-            if ni:
-                rhs[self.g_ids] += f.condense(t[:ni])             # −S_ΓI S_II⁻¹ t_I
-        self.mpi.Allreduce(MPI.IN_PLACE, rhs)
-        zg = -self.sigma.solve(rhs)[self.g_ids]                    # Σ⁻¹ = −(−Σ)⁻¹
+        part = t[ni:].copy()
+        if ni and self.n_g:
+            part += f.condense(t[:ni])                             # −S_ΓI S_II⁻¹ t_I
+        logging.event(INTERFACE_EVENT).begin()
+        zg = self.interface.solve(part)
+        logging.event(INTERFACE_EVENT).end()
         if ni:
             z[:ni] = f.expand(zg) if self.n_g else f.solve(t[:ni])
         z[ni:] = zg
@@ -255,9 +259,11 @@ class SubstructuredSchur:
         if self.setups == 0 or self.failed:
             return None
         neg, null = self.counts
-        if self.n_gamma:
-            f = self.sigma
-            neg, null = neg + self.n_gamma - f.negative - f.null, null + f.null
+        if self.interface is not None:
+            counts = self.interface.pivot_counts()
+            if counts is None:
+                return None
+            neg, null = neg + counts[0], null + counts[1]
         return neg, null
 
     def destroy(self) -> None:
@@ -266,4 +272,6 @@ class SubstructuredSchur:
                 obj.destroy()
         if self.factor is not None:
             self.factor.destroy()
-        self.factor = self._gather = None
+        if self.interface is not None:
+            self.interface.destroy()
+        self.factor = self._gather = self.interface = None

@@ -159,7 +159,7 @@ class Run:
         return {"output_dir": os.path.abspath(spec.output.dir), "twist_deg": spec.twist_deg,
                 "dofs": model.n_dofs, "elements": model.n_elements, "ranks": self.comm.size,
                 "partition": self.partition, "solver": self.stepper.describe(),
-                "linear_solver": {"choice": self.linear[0], "rule": self.linear[1]},
+                "linear_solver": self._linear_solver(),
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
                                       "points": int(len(b.section.weights))} for b in model.beams},
                 "elements_per_beam": {b.name: b.n_elements for b in model.beams},
@@ -167,6 +167,17 @@ class Run:
                 "twist_axis": list(spec.twist_axis), "geometry": model.geometry_report,
                 "contact_interfaces": [itf.name for itf in contact.interfaces] if contact else [],
                 **(extra or {})}
+
+    def _linear_solver(self) -> dict:
+        """The linear solver's choice and rule; with fieldsplit, its multipliers and how many of
+        them lie on the cut between ranks (the interface system, petsc/substructure.py)."""
+        out = {"choice": self.linear[0], "rule": self.linear[1]}
+        schur = self.stepper.fascicle_schur if self.stepper else None
+        if schur is not None:
+            sub = schur.schur
+            out.update(multipliers=schur.split.n_multipliers, cut_multipliers=sub.n_gamma,
+                       interface=type(sub.interface).__name__ if sub.interface else None)
+        return out
 
     def start(self) -> tuple[list[float], PathState | None]:
         """The levels still to reach and, for a restart, the load path to continue."""

@@ -134,6 +134,8 @@ class LoadStepper:
         self._history: list[float] = []
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
+        #: the fascicle Schur preconditioner (petsc/fieldsplit.py) with solver.linear: fieldsplit
+        self.fascicle_schur = schur
         self.chord = TangentReuse(spec.reuse_tangent, schur)
         self._ksp_reason = 0
         #: config ``petsc:`` options PETSc never read (known at ``close``)

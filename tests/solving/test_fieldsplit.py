@@ -117,6 +117,7 @@ from ancf_petsc.petsc.fieldsplit import FascicleSchur
 raw = load_raw("bundle_hex7.yaml")
 raw["output"] = {{"dir": "unused", "vtk": False}}
 P, PETSc = build_problem(raw, "sbaij", partition="beams")
+PETSc.Options().setValue("fascicle_schur_interface", sys.argv[2])
 mpi = PETSc.COMM_WORLD.tompi4py()
 P.load_factor = 0.5
 X, F = P.q0.copy(), P.F.duplicate()
@@ -147,6 +148,7 @@ r0 = A.getOwnershipRange()[0]
 rows = np.repeat(np.arange(r0, r0 + len(ia) - 1), np.diff(ia))
 parts = mpi.gather((rows, ja, a, F.getArray().copy(), y.getArray().copy()), root=0)
 cut = mpi.allreduce(ctx.schur.n_g)
+kind = type(ctx.schur.interface).__name__
 if mpi.rank == 0:
     n = P.J.getSize()[0]
     J = np.zeros((n, n))
@@ -164,25 +166,28 @@ if mpi.rank == 0:
     err = np.linalg.norm(yy - ref) / np.linalg.norm(ref)
     res = np.linalg.norm(Jbd @ yy - b) / np.linalg.norm(b)
     negative = int(np.sum(np.linalg.eigvalsh(Jbd) < 0))
+    assert kind == {{"dense": "DenseInterface", "mumps": "DistributedInterface"}}[sys.argv[2]], kind
     np.save(sys.argv[1], np.array([err, res, counts[0], negative, counts[1], cut]))
 pc.destroy()
 """
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("ranks", [2, 3])
-def test_substructured_schur_is_the_exact_inverse_on_several_ranks(tmp_path, ranks):
+@pytest.mark.parametrize("ranks,interface", [(2, "dense"), (3, "dense"), (2, "mumps"), (3, "mumps")])
+def test_substructured_schur_is_the_exact_inverse_on_several_ranks(tmp_path, ranks, interface):
     """On 2 and 3 ranks the multiplier Schur complement is split into every rank's interior
     multipliers and the cut between them (petsc/substructure.py: MUMPS condenses onto the cut,
-    the summed interface system is solved densely, MUMPS expands): the preconditioner is still
-    J_bd⁻¹ (bundle_hex7 after one Newton step, against numpy), and the negative pivots of the
-    fascicles, the interiors and the interface add up to J_bd's negative eigenvalues."""
+    the summed interface system is solved, densely on every rank or by MUMPS distributed, and
+    MUMPS expands): the preconditioner is still J_bd⁻¹ (bundle_hex7 after one Newton step,
+    against numpy), and the negative pivots of the fascicles, the interiors and the interface
+    add up to J_bd's negative eigenvalues."""
     import subprocess
     import sys
     script = tmp_path / "substructure.py"
     script.write_text(SUBSTRUCTURE_SCRIPT.format(tests=os.path.dirname(os.path.dirname(__file__))))
     out = tmp_path / "check.npy"
-    p = subprocess.run(["mpirun", "--oversubscribe", "-n", str(ranks), sys.executable, str(script), str(out)],
+    p = subprocess.run(["mpirun", "--oversubscribe", "-n", str(ranks), sys.executable, str(script), str(out),
+                        interface],
                        capture_output=True, text=True, cwd=ROOT, timeout=300,
                        env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
     assert p.returncode == 0, p.stdout + p.stderr

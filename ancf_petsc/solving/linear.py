@@ -13,8 +13,8 @@ from ..physics.rigid import rigid_modes
 
 #: ``solver.linear: auto`` takes the fascicle Schur solver from this many contact multipliers
 #: on; below, one LDLᵀ of the whole Jacobian is as fast (scripts/bench_growth.py: 7 fascicles,
-#: 792 multipliers, direct 0.13 s vs fieldsplit 0.15 s per Newton iteration; 19 fascicles,
-#: 2 772 multipliers, 1.10 s vs 0.51 s; log-log crossing at ~960 multipliers)
+#: 792 multipliers, direct 0.11 s vs fieldsplit 0.14 s per Newton iteration; 19 fascicles,
+#: 2 772 multipliers, 0.94 s vs 0.40 s; log-log crossing at ~1 040 multipliers)
 AUTO_MIN_MULTIPLIERS = 1000
 
 

@@ -57,7 +57,7 @@ SCHUR_PREFIX = "fascicle_schur_"
 #: choice; on each rank's S^r the orderings AMD, AMF, PORD, QAMD take the same time.
 #: A factor of S lagged by one Newton iteration is no preconditioner: FGMRES then stalls at
 #: 100 iterations in the first increment.
-SCHUR_MUMPS = {"icntl": {24: 0, 14: 100, 7: 0}, "cntl": {}}
+SCHUR_ICNTL = {24: 0, 14: 100, 7: 0}
 
 #: -log_view events of the solver's three phases
 FACTOR_EVENT, SCHUR_EVENT, APPLY_EVENT = "ANCF fascicle factor", "ANCF Schur assembly", "ANCF fascicle apply"
@@ -86,7 +86,7 @@ class FascicleSchur:
         self._subs = None
         self.factors: list[FascicleFactor] = []
         self.Bt: list[np.ndarray] = []
-        self.schur = SubstructuredSchur(split, comm, self.prefix, SCHUR_MUMPS["icntl"])
+        self.schur = SubstructuredSchur(split, comm, self.prefix, SCHUR_ICNTL)
         self._u_local = None
         self._counts = (0, 0)
         self.setups = 0

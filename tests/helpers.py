@@ -95,6 +95,63 @@ def build_problem(raw, matrix_type: str = "aij", partition: str = "blocks"):
     return Problem(model, layout, comm, contact, matrix_type), PETSc
 
 
+def hex7_problem(loaded: bool, matrix: str = "sbaij", partition: str = "blocks"):
+    """bundle_hex7 on PETSc.COMM_WORLD, Jacobian at q0 of the first load level (no multipliers:
+    no contact curvature) or after one Newton step with MUMPS (multipliers non-zero); returns
+    (Problem, PETSc, the residual F)."""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["output"] = {"dir": "unused", "vtk": False}
+    P, PETSc = build_problem(raw, matrix, partition)
+    P.load_factor = 0.5
+    X, F = P.q0.copy(), P.F.duplicate()
+    P.residual(None, X, F)
+    P.jacobian(None, X, P.J, P.J)
+    if loaded:
+        ksp = PETSc.KSP().create()
+        ksp.setOperators(P.J)
+        ksp.setType("preonly")
+        ksp.getPC().setType("cholesky")
+        ksp.getPC().setFactorSolverType("mumps")
+        dx = X.duplicate()
+        ksp.solve(F, dx)
+        X.axpy(-1.0, dx)
+        P.residual(None, X, F)
+        P.jacobian(None, X, P.J, P.J)
+        ksp.destroy()
+    return P, PETSc, F
+
+
+def apply_fascicle_schur(P, PETSc, F):
+    """The fascicle Schur preconditioner (petsc/fieldsplit.py) set up on P.J and applied to F:
+    (its context, the PC, the result y)."""
+    from ancf_petsc.petsc.fascicles import fascicle_split
+    from ancf_petsc.petsc.fieldsplit import FascicleSchur
+    ctx = FascicleSchur(fascicle_split(P), PETSc.COMM_WORLD)
+    pc = PETSc.PC().create()
+    pc.setOperators(P.J, P.J)
+    pc.setType(PETSc.PC.Type.PYTHON)
+    pc.setPythonContext(ctx)
+    pc.setUp()
+    y = F.duplicate()
+    pc.apply(F, y)
+    return ctx, pc, y
+
+
+def beam_of_dofs(P) -> np.ndarray:
+    """The beam of every PETSc DOF of ``P`` (−1: a multiplier node)."""
+    from ancf_petsc.physics.element3363 import DOFS_PER_NODE
+    owner = np.full(P.n_blocks, -1)
+    for b in P.model.beams:
+        owner[P.layout.perm[b.node_offset + np.arange(b.n_nodes)]] = b.index
+    return np.repeat(owner, DOFS_PER_NODE)
+
+
+def without_cross_fascicle_blocks(J: np.ndarray, beam_of: np.ndarray) -> np.ndarray:
+    """J_bd: J without the blocks that couple two different beams directly."""
+    cross = (beam_of[:, None] >= 0) & (beam_of[None, :] >= 0) & (beam_of[:, None] != beam_of[None, :])
+    return np.where(cross, 0.0, J)
+
+
 def two_beam_twisted():
     """configs/pretwisted_bar.yaml with a second, clamped SVK beam beside it."""
     raw = load_raw("pretwisted_bar.yaml")

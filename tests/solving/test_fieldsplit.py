@@ -8,10 +8,9 @@ import os
 import numpy as np
 import pytest
 
-from ancf_petsc.physics.element3363 import DOFS_PER_NODE
-
-from helpers import (CONFIGS, MPI_ENV, ROOT, build_problem, load_raw, petsc_init, probes_table, read_summary,
-                     run_inline, solve_cli, write_config)
+from helpers import (CONFIGS, MPI_ENV, ROOT, apply_fascicle_schur, beam_of_dofs, hex7_problem, load_raw,
+                     petsc_init, probes_table, read_summary, run_inline, solve_cli,
+                     without_cross_fascicle_blocks, write_config)
 
 
 @pytest.mark.parametrize("kind", ["spd", "indefinite", "badly scaled"])
@@ -37,65 +36,17 @@ def test_fascicle_factor_solves_and_counts_negative_eigenvalues(kind):
     assert np.abs(f.schur_block(Bt) - ref).max() <= 1e-8 * np.abs(ref).max()
 
 
-def _hex7_problem(loaded: bool, matrix: str = "sbaij"):
-    """bundle_hex7 on one rank (whole-beam layout), Jacobian at q0 (no multipliers: no contact
-    curvature) or after one Newton step of the first load level (multipliers non-zero)."""
-    raw = load_raw("bundle_hex7.yaml")
-    raw["output"] = {"dir": "unused", "vtk": False}
-    P, PETSc = build_problem(raw, matrix)
-    model, layout = P.model, P.layout
-    P.load_factor = 0.5
-    X, F = P.q0.copy(), P.F.duplicate()
-    P.residual(None, X, F)
-    P.jacobian(None, X, P.J, P.J)
-    if loaded:                                  # one Newton step with the direct solver
-        ksp = PETSc.KSP().create()
-        ksp.setOperators(P.J)
-        ksp.setType("preonly")
-        ksp.getPC().setType("cholesky")
-        ksp.getPC().setFactorSolverType("mumps")
-        dx = X.duplicate()
-        ksp.solve(F, dx)
-        X.axpy(-1.0, dx)
-        P.residual(None, X, F)
-        P.jacobian(None, X, P.J, P.J)
-        ksp.destroy()
-    return model, layout, P, F
-
-
-def _dense(P, model, layout):
-    """The Jacobian as a dense array and the beam of every DOF (−1: multiplier node)."""
-    from petsc4py import PETSc
-    A = P.J.convert("aij", PETSc.Mat())
-    J = A.convert("dense", PETSc.Mat()).getDenseArray().copy()
-    owner = np.full(P.n_blocks, -1)
-    for b in model.beams:
-        owner[layout.perm[b.node_offset + np.arange(b.n_nodes)]] = b.index
-    return J, np.repeat(owner, DOFS_PER_NODE)
-
-
 @pytest.mark.parametrize("matrix", ["sbaij", "aij"])
 @pytest.mark.parametrize("loaded", [False, True], ids=["reference", "loaded"])
 def test_preconditioner_is_the_exact_inverse_without_contact_curvature_between_fascicles(loaded, matrix):
     """PC(r) = J_bd⁻¹ r, J_bd = J without the blocks coupling two fascicles directly: those are
     zero at q0 (no pressure) and non-zero under load; the multiplier Schur complement is
     checked through the whole inverse (numpy, dense)."""
-    from petsc4py import PETSc
-    from ancf_petsc.petsc.fascicles import fascicle_split
-    from ancf_petsc.petsc.fieldsplit import FascicleSchur
-    model, layout, P, F = _hex7_problem(loaded, matrix)
-    J, beam_of = _dense(P, model, layout)
-    cross = (beam_of[:, None] >= 0) & (beam_of[None, :] >= 0) & (beam_of[:, None] != beam_of[None, :])
-    assert (np.abs(J[cross]).max() > 0) == loaded
-    Jbd = np.where(cross, 0.0, J)
-    ctx = FascicleSchur(fascicle_split(P), PETSc.COMM_WORLD)
-    pc = PETSc.PC().create()
-    pc.setOperators(P.J, P.J)
-    pc.setType(PETSc.PC.Type.PYTHON)
-    pc.setPythonContext(ctx)
-    pc.setUp()
-    y = F.duplicate()
-    pc.apply(F, y)
+    P, PETSc, F = hex7_problem(loaded, matrix)
+    J = P.J.convert("aij", PETSc.Mat()).convert("dense", PETSc.Mat()).getDenseArray().copy()
+    Jbd = without_cross_fascicle_blocks(J, beam_of_dofs(P))
+    assert (np.abs(J - Jbd).max() > 0) == loaded
+    ctx, pc, y = apply_fascicle_schur(P, PETSc, F)
     b = F.getArray()
     ref = np.linalg.solve(Jbd, b)
     assert np.linalg.norm(y.getArray() - ref) <= 1e-5 * np.linalg.norm(ref)
@@ -110,37 +61,11 @@ SUBSTRUCTURE_SCRIPT = """
 import sys
 import numpy as np
 sys.path.insert(0, {tests!r})
-from helpers import build_problem, load_raw
-from ancf_petsc.physics.element3363 import DOFS_PER_NODE
-from ancf_petsc.petsc.fascicles import fascicle_split
-from ancf_petsc.petsc.fieldsplit import FascicleSchur
-raw = load_raw("bundle_hex7.yaml")
-raw["output"] = {{"dir": "unused", "vtk": False}}
-P, PETSc = build_problem(raw, "sbaij", partition="beams")
+from helpers import apply_fascicle_schur, beam_of_dofs, hex7_problem, without_cross_fascicle_blocks
+P, PETSc, F = hex7_problem(True, "sbaij", partition="beams")   # multipliers, contact curvature
 PETSc.Options().setValue("fascicle_schur_interface", sys.argv[2])
 mpi = PETSc.COMM_WORLD.tompi4py()
-P.load_factor = 0.5
-X, F = P.q0.copy(), P.F.duplicate()
-P.residual(None, X, F)
-P.jacobian(None, X, P.J, P.J)
-ksp = PETSc.KSP().create()                  # one Newton step: multipliers and contact curvature
-ksp.setOperators(P.J)
-ksp.setType("preonly")
-ksp.getPC().setType("cholesky")
-ksp.getPC().setFactorSolverType("mumps")
-dx = X.duplicate()
-ksp.solve(F, dx)
-X.axpy(-1.0, dx)
-P.residual(None, X, F)
-P.jacobian(None, X, P.J, P.J)
-ctx = FascicleSchur(fascicle_split(P), PETSc.COMM_WORLD)
-pc = PETSc.PC().create()
-pc.setOperators(P.J, P.J)
-pc.setType(PETSc.PC.Type.PYTHON)
-pc.setPythonContext(ctx)
-pc.setUp()
-y = F.duplicate()
-pc.apply(F, y)
+ctx, pc, y = apply_fascicle_schur(P, PETSc, F)
 counts = ctx.pivot_counts()
 A = P.J.convert("aij", PETSc.Mat())
 ia, ja, a = A.getValuesCSR()
@@ -156,12 +81,7 @@ if mpi.rank == 0:
         J[r, c] = v
     b = np.concatenate([q[3] for q in parts])
     yy = np.concatenate([q[4] for q in parts])
-    owner = np.full(P.n_blocks, -1)
-    for beam in P.model.beams:
-        owner[P.layout.perm[beam.node_offset + np.arange(beam.n_nodes)]] = beam.index
-    beam_of = np.repeat(owner, DOFS_PER_NODE)
-    cross = (beam_of[:, None] >= 0) & (beam_of[None, :] >= 0) & (beam_of[:, None] != beam_of[None, :])
-    Jbd = np.where(cross, 0.0, J)
+    Jbd = without_cross_fascicle_blocks(J, beam_of_dofs(P))
     ref = np.linalg.solve(Jbd, b)
     err = np.linalg.norm(yy - ref) / np.linalg.norm(ref)
     res = np.linalg.norm(Jbd @ yy - b) / np.linalg.norm(b)

@@ -251,12 +251,13 @@ def test_a_failing_fieldsplit_solve_names_its_solver_and_the_alternative(tmp_pat
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("mode,ranks", [("sliding", 1), ("sliding", 2), ("unilateral", 1)])
+@pytest.mark.parametrize("mode,ranks", [("sliding", 1), ("sliding", 2), ("unilateral", 1), ("unilateral", 2)])
 def test_fieldsplit_follows_the_direct_solver_through_a_whole_achilles_column(tmp_path, mode, ranks):
     """The ψ = 45° column (13 levels) with the fascicle solver: through the contact-pattern
     growths of the Jacobian (projections moving to other elements) and, unilateral, the active
     set's changes of C, the same Newton iterations, stability verdicts and answers as the
-    direct solver (to 1e-9)."""
+    direct solver (to 1e-9).  On 2 ranks one rank holds a single subtendon: all its multipliers
+    lie on the cut (no interior block of S), and unilateral, C on the cut changes too."""
     runs = {}
     for linear in ("direct", "fieldsplit"):
         raw = load_raw("achilles_type3_psi45.yaml")

@@ -13,7 +13,7 @@ from helpers import (CONFIGS, MPI_ENV, ROOT, apply_fascicle_schur, beam_of_dofs,
                      without_cross_fascicle_blocks, write_config)
 
 
-@pytest.mark.parametrize("kind", ["spd", "indefinite", "badly scaled"])
+@pytest.mark.parametrize("kind", ["spd", "indefinite", "badly scaled", "banded"])
 def test_fascicle_factor_solves_and_counts_negative_eigenvalues(kind):
     petsc_init()
     from ancf_petsc.petsc.fascicles import FascicleFactor
@@ -24,8 +24,12 @@ def test_fascicle_factor_solves_and_counts_negative_eigenvalues(kind):
     if kind == "badly scaled":                 # SI units: section modes ~1e15 softer
         d = 10.0 ** rng.uniform(-8, 6, n)
         A = A * np.sqrt(d)[:, None] * np.sqrt(d)[None, :]
+    if kind == "banded":                       # a fascicle's K_f: half-bandwidth 5 here
+        i, j = np.indices((n, n))
+        A = np.where(np.abs(i - j) <= 5, A, 0.0) + 20.0 * np.eye(n)
     f = FascicleFactor(A)
     assert f.kind == ("lu" if kind == "indefinite" else "cholesky")
+    assert (f.band is not None) == (kind == "banded") and (kind != "banded" or len(f.band) == 6)
     w = np.linalg.eigvalsh(A)
     assert f.negative == int(np.sum(w < 0)) and f.null == 0
     b = rng.standard_normal((n, 4))

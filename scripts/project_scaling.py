@@ -79,7 +79,7 @@ def substructure_split(scaling_dir: str) -> dict:
     ls = s2["linear_solver"]
     ev = read_log_view(os.path.join(scaling_dir, "fieldsplit_n2", "log_view.txt"))["events"]
     M, cut, n = ls["multipliers"], ls["cut_multipliers"], len(s2["elements_per_beam"])
-    return {"s1": t[0], "s2": t[1], "newton": s2["newton_iterations"], "multipliers": M, "cut": cut,
+    return {"s1": t[0], "s2": t[1], "multipliers": M, "cut": cut,
             "fascicles": n, "kappa": cut / M / math.sqrt(2 / n),
             "sigma_dense": ev.get("ANCF Schur interface", {}).get("time", 0.0) / s2["newton_iterations"]}
 

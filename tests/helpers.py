@@ -141,8 +141,7 @@ def beam_of_dofs(P) -> np.ndarray:
     """The beam of every PETSc DOF of ``P`` (−1: a multiplier node)."""
     from ancf_petsc.physics.element3363 import DOFS_PER_NODE
     owner = np.full(P.n_blocks, -1)
-    for b in P.model.beams:
-        owner[P.layout.perm[b.node_offset + np.arange(b.n_nodes)]] = b.index
+    owner[P.layout.perm[:P.model.n_nodes]] = P.model.node_beam()
     return np.repeat(owner, DOFS_PER_NODE)
 
 

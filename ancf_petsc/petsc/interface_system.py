@@ -25,6 +25,7 @@ from petsc4py import PETSc
 from ..errors import InputError
 from .fascicles import FascicleFactor
 from .inertia import pivot_counts
+from .mumps_schur import mumps_controls
 
 ADD, INSERT = PETSc.InsertMode.ADD_VALUES, PETSc.InsertMode.INSERT_VALUES
 FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
@@ -110,9 +111,10 @@ class DistributedInterface:
         pc.setType("cholesky")
         pc.setFactorSolverType("mumps")
         self.ksp.setFromOptions()
-        self.prefix, self.mumps = prefix, dict(mumps)
+        defaults = dict(mumps)
         if 1 < comm.getSize() <= 4:
-            self.mumps[13] = 1               # a sequential root front: its inertia is complete
+            defaults[13] = 1                 # a sequential root front: its inertia is complete
+        self.icntl, _ = mumps_controls(prefix, defaults)  # PETSc reads the CNTLs itself
         self.set_ups = 0
 
     def set_up(self, local: np.ndarray | None, once: np.ndarray, c_once: np.ndarray) -> None:
@@ -121,18 +123,17 @@ class DistributedInterface:
         if local is not None:
             idx = np.asarray(self.g_ids, dtype=PETSc.IntType)
             S.setValues(idx, idx, local, ADD)
-        for i, v in zip(np.asarray(once, dtype=PETSc.IntType), c_once):
-            S.setValue(i, i, v, ADD)
+        if len(once):                        # (petsc4py divides by the row count)
+            d = np.asarray(once, dtype=PETSc.IntType)[:, None]
+            S.setValuesRCV(d, d, np.asarray(c_once, dtype=float)[:, None, None], ADD)
         S.assemble()
         self.ksp.setOperators(S)
         if self.set_ups == 0:
             pc = self.ksp.getPC()
             pc.setFactorSetUpSolverType()
             F = pc.getFactorMatrix()
-            opts = PETSc.Options()
-            for k, v in self.mumps.items():
-                if not opts.hasName(f"{self.prefix}mat_mumps_icntl_{k}"):
-                    F.setMumpsIcntl(k, v)
+            for k, v in self.icntl.items():
+                F.setMumpsIcntl(k, v)
         self.ksp.setUp()
         self.set_ups += 1
 

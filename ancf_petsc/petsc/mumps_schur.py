@@ -79,6 +79,22 @@ def _library() -> ctypes.CDLL:
     return _LIB
 
 
+def mumps_controls(prefix: str, defaults: dict) -> tuple[dict, dict]:
+    """(ICNTL, CNTL): ``defaults`` (ICNTL) overridden by -{prefix}mat_mumps_icntl_<k> and
+    -{prefix}mat_mumps_cntl_<k> from the command line, for the MUMPS instances of the fascicle
+    Schur solver (this module's, and PETSc's of a distributed interface system)."""
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    icntl, cntl = dict(defaults), {}
+    for k in range(1, 61):
+        if opts.hasName(f"{prefix}mat_mumps_icntl_{k}"):
+            icntl[k] = opts.getInt(f"{prefix}mat_mumps_icntl_{k}")
+    for k in range(1, 16):
+        if opts.hasName(f"{prefix}mat_mumps_cntl_{k}"):
+            cntl[k] = opts.getReal(f"{prefix}mat_mumps_cntl_{k}")
+    return icntl, cntl
+
+
 def _ptr(a: np.ndarray, kind):
     return a.ctypes.data_as(kind)
 
@@ -94,7 +110,7 @@ class SchurFactor:
     controls {k: value} (1-based k) set on top of MUMPS's defaults."""
 
     def __init__(self, indptr: np.ndarray, indices: np.ndarray, n_schur: int, icntl: dict,
-                 cntl: dict | None = None, comm_fortran: int | None = None):
+                 cntl: dict | None = None):
         n = len(indptr) - 1
         self.n, self.n_schur = n, n_schur
         rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
@@ -107,12 +123,10 @@ class SchurFactor:
         self.redrhs = np.zeros(max(n_schur, 1))
         self.schur_buffer = np.zeros(max(n_schur, 1) ** 2)
         self.listvar = np.arange(n - n_schur + 1, n + 1, dtype=np.intc)
-        if comm_fortran is None:
-            from mpi4py import MPI
-            comm_fortran = MPI.COMM_SELF.py2f()
+        from mpi4py import MPI
         lib = _library()
         self.id = DMUMPS_STRUC_C()
-        self.id.sym, self.id.par, self.id.job, self.id.comm_fortran = 2, 1, -1, comm_fortran
+        self.id.sym, self.id.par, self.id.job, self.id.comm_fortran = 2, 1, -1, MPI.COMM_SELF.py2f()
         lib.dmumps_c(ctypes.byref(self.id))
         version = self.id.version_number.decode(errors="replace").strip()
         if version != VERSION:

@@ -40,7 +40,7 @@ from petsc4py import PETSc
 from . import logging
 from .fascicles import FascicleSplit
 from .interface_system import DenseInterface, DistributedInterface, interface_kind
-from .mumps_schur import SchurFactor
+from .mumps_schur import SchurFactor, mumps_controls
 
 INSERT = PETSc.InsertMode.INSERT_VALUES
 FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
@@ -50,20 +50,6 @@ SELF = PETSc.COMM_SELF
 FACTOR_EVENT, SOLVE_EVENT = "ANCF Schur factor", "ANCF Schur solve"
 #: inside both: the interface system's set-up and solves (interface_system.py)
 INTERFACE_EVENT = "ANCF Schur interface"
-
-
-def mumps_controls(prefix: str, defaults: dict) -> tuple[dict, dict]:
-    """(ICNTL, CNTL) for a MUMPS instance PETSc does not own: ``defaults`` (ICNTL) overridden
-    by -{prefix}mat_mumps_icntl_<k> / -{prefix}mat_mumps_cntl_<k> from the command line."""
-    opts = PETSc.Options()
-    icntl, cntl = dict(defaults), {}
-    for k in range(1, 61):
-        if opts.hasName(f"{prefix}mat_mumps_icntl_{k}"):
-            icntl[k] = opts.getInt(f"{prefix}mat_mumps_icntl_{k}")
-    for k in range(1, 16):
-        if opts.hasName(f"{prefix}mat_mumps_cntl_{k}"):
-            cntl[k] = opts.getReal(f"{prefix}mat_mumps_cntl_{k}")
-    return icntl, cntl
 
 
 class RankPattern:
@@ -112,7 +98,7 @@ class SubstructuredSchur:
     Krylov method then stops with DIVERGED_NANORINF on all of them)."""
 
     def __init__(self, split: FascicleSplit, comm: PETSc.Comm, prefix: str, mumps: dict):
-        self.comm, self.mpi, self.prefix, self.mumps = comm, comm.tompi4py(), prefix, mumps
+        self.mpi, self.prefix, self.mumps = comm.tompi4py(), prefix, mumps
         rank = comm.getRank()
         on_rank = split.beam_rank[split.z_beams]                   # (M, 2) ranks of both beams
         interface = on_rank[:, 0] != on_rank[:, 1]
@@ -146,7 +132,6 @@ class SubstructuredSchur:
             else:
                 self.interface = DistributedInterface(self.n_gamma, self.g_ids, g_range, comm,
                                                       prefix, mumps)
-        self._sigma_local = None                   # S_ΓΓ^r of a rank without interior rows
         self.counts = (0, 0)
         self.failed = False
         self.setups = 0
@@ -179,6 +164,12 @@ class SubstructuredSchur:
         """Factor S: ``blocks`` are B_f K_f⁻¹ B_fᵀ of the local fascicles (dense; None for a
         fascicle without multipliers), ``c`` the multipliers' own diagonal C at ``ids``."""
         logging.event(FACTOR_EVENT).begin()
+        try:
+            self._setup(blocks, c)
+        finally:
+            logging.event(FACTOR_EVENT).end()
+
+    def _setup(self, blocks: list, c: np.ndarray) -> None:
         local_schur, neg, null, failed, error = None, 0, 0, False, ""
         try:
             local_schur, neg, null, failed = self._factor_rank(blocks, c[:self.n_i])
@@ -187,7 +178,6 @@ class SubstructuredSchur:
         totals = np.array([neg, null, int(failed), int(bool(error))], dtype=np.int64)
         self.mpi.Allreduce(MPI.IN_PLACE, totals)
         if totals[3]:
-            logging.event(FACTOR_EVENT).end()
             errors = [e for e in self.mpi.allgather(error) if e]
             raise RuntimeError(f"fascicle Schur solver: {errors[0]}")
         self.failed = bool(totals[2])
@@ -195,7 +185,6 @@ class SubstructuredSchur:
         if self.n_gamma and not self.failed:
             self._factor_interface(local_schur, c[self.n_i:])
         self.setups += 1
-        logging.event(FACTOR_EVENT).end()
 
     def _factor_rank(self, blocks: list, c_interior: np.ndarray) -> tuple:
         """S^r assembled and factored on this rank: (its Schur complement on Γ_r or None,

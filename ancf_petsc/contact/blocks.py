@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE
-from .gap import gap_gradient, gap_hessian_factors
-from .projection import Projection
+from .gap import gap_gradient, gap_hessian_factors, weight_gradient
+from .projection import subset
 from .state import ContactState
 
 EL = DOFS_PER_ELEMENT          # an element's 54 DOFs (3 nodes)
@@ -60,12 +60,26 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     # share end nodes, so element j starts 2 nodes after element j - 1
     cols = np.concatenate([np.broadcast_to(np.arange(EL), (len(sel), EL)),
                            EL + 2 * DOFS_PER_NODE * j[:, None] + np.arange(EL)], axis=1)
-    sub = _subset(pr, sel)
+    sub = subset(pr, sel)
     at = (s_loc[:, None], p_loc[:, None], cols)
-    V = np.zeros((n_s, P_s, Dq))                         # ∇g_p
-    V[at] = gap_gradient(sub) * sub.valid[:, None]
+    V = np.zeros((n_s, P_s, Dq))                         # ∇(w_p g_p)
+    grad = gap_gradient(sub)
+    V[at] = grad * sub.weight[:, None]
     K = np.zeros((n_s, D, D))
     tau = st.tau[sel]
+    fading = np.flatnonzero(np.any(sub.dweight != 0.0, axis=1))
+    if len(fading):
+        # points fading out past B's ends: ∇(w g) = w ∇g + g ∇w, and the curvature
+        # −π (∇w ∇gᵀ + ∇g ∇wᵀ) (the term g ∇²w is left out: g is the small local gap)
+        f_sub = subset(sub, fading)
+        gw = weight_gradient(f_sub)                                         # (F, 108)
+        rows_f = (s_loc[fading], p_loc[fading])
+        V[rows_f[0][:, None], rows_f[1][:, None], cols[fading]] += f_sub.g[:, None] * gw
+        pi = st.pi[sel][fading]
+        outer = -pi[:, None, None] * (gw[:, :, None] * grad[fading][:, None, :]
+                                      + grad[fading][:, :, None] * gw[:, None, :])
+        cf = cols[fading]
+        np.add.at(K, (rows_f[0][:, None, None], cf[:, :, None], cf[:, None, :]), outer)
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
         W, C = gap_hessian_factors(sub)
@@ -75,21 +89,22 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
         WCe[at] = np.matmul(W, C * tau[:, None, None])
         K[:, :Dq, :Dq] = np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
                                    We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
-    # constraint rows −k_s Φ_s ∇g (active multipliers), −k_s × (the segment's share of the
-    # function) on inactive diagonals
+    # constraint rows k_s ∂R/∂ḡ Φ_s ∇g, the multipliers' columns −k_s ω Φ_s ∇g of the forces and
+    # the diagonal k_s ∂R/∂z × (the segment's share of the function)
     m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad
     real = m_ids >= 0
-    act = np.zeros(m_ids.shape, dtype=bool)
-    act[real] = st.active[np.searchsorted(c.mults, m_ids[real])]
+    loc = np.searchsorted(c.mults, m_ids[real])
+    dRg, dRz, om = (np.zeros(m_ids.shape) for _ in range(3))
+    dRg[real], dRz[real], om[real] = st.rows.dR_dg[loc], st.rows.dR_dz[loc], st.rows.omega[loc]
     Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
-    Gc = -c.stiffness * np.matmul(Phi_s * act[:, :, None], V)          # (n_s, K, Dq)
+    Gc = -c.stiffness * np.matmul(Phi_s, V)          # (n_s, K, Dq)
     share = Phi_s.sum(axis=2)
     ss, kk = np.nonzero(real)
     second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]
     mrow = Dq + DOFS_PER_NODE * second + sp.slot[m_ids[ss, kk]]
-    K[ss, mrow, :Dq] = Gc[ss, kk]
-    K[ss, :Dq, mrow] = Gc[ss, kk]
-    K[ss, mrow, mrow] = np.where(act[ss, kk], 0.0, -c.stiffness * share[ss, kk])
+    K[ss, mrow, :Dq] = -dRg[ss, kk, None] * Gc[ss, kk]
+    K[ss, :Dq, mrow] = om[ss, kk, None] * Gc[ss, kk]
+    K[ss, mrow, mrow] = c.stiffness * dRz[ss, kk] * share[ss, kk]
     # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes
     els = c.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
     bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
@@ -106,9 +121,4 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     return rows, K
 
 
-def _subset(pr: Projection, sel: np.ndarray) -> Projection:
-    """The points ``sel`` (positions) of a projection."""
-    return Projection(idx=pr.idx[sel], eB=pr.eB[sel], xiB=pr.xiB[sel], tB=pr.tB[sel], d=pr.d[sel],
-                      n=pr.n[sel], g=pr.g[sel], valid=pr.valid[sel], NA=pr.NA[sel], NB=pr.NB[sel],
-                      NBz=pr.NBz[sel], Yz=pr.Yz[sel], Yzz=pr.Yzz[sel], in_window=pr.in_window,
-                      converged=pr.converged)
+

@@ -22,11 +22,12 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, reports
+from .gap import weight_gradient
 from .interfaces import ContactSetupError, find_interfaces
-from .laws import make_law
+from .laws import Phase, active_set_rows, make_law
 from .multipliers import build_space
 from .points import build_points
-from .projection import Projector
+from .projection import Projector, subset
 from .state import ContactState
 
 
@@ -68,6 +69,10 @@ class Contact:
         #: ``sum_over_ranks(values over self.mults)`` and ``all_ranks(flag)`` (both collective)
         self.sum_over_ranks = None
         self.all_ranks = None
+        #: ``reduce(values, 'max' | 'min')`` over the ranks (collective; set with the hooks above)
+        self.reduce = lambda values, op: values
+        #: status changes of the multipliers this rank evaluates, counted over the run
+        self.status_changes = 0
         #: the unilateral law's tolerance [m]: a penetration or a pull (z) smaller than this does
         #: not change a constraint's status (rounding of positions in a touching reference)
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
@@ -203,18 +208,23 @@ class Contact:
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
         pr = self.projector.project(idx, xA, x_of)
-        valid = pr.valid.astype(float)
-        sums = np.stack([self.Phi @ (pr.g * valid), self.Phi @ valid], axis=1)
+        weight = pr.weight
+        sums = np.stack([self.Phi @ (pr.g * weight), self.Phi @ weight], axis=1)
         if self.sum_over_ranks is not None:          # functions shared with another rank
             sums = self.sum_over_ranks(sums)
         gbar = sums[:, 0]
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
         z = xl.reshape(-1)[DOFS_PER_NODE * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
         prev = self.status[self.mults]
-        active = self.law.active(gbar, z, prev, self.tie_tolerance) & support
+        active = self.law.update(gbar, z, prev, self.tie_tolerance, self.mults, self.owned,
+                                 self.reduce) & support
+        self.status_changes += int(np.count_nonzero(active != prev))
         self.status[self.mults] = active
-        tau = self.stiffness * (self.Phi.T @ (z * active)) * valid
-        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos)
+        rows = active_set_rows(gbar, z, active, self.law.phase.probe)
+        pi = self.stiffness * (self.Phi.T @ (z * rows.load))     # w_p × pressure before the weight
+        tau = pi * weight
+        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, pi=pi, lpos=lpos,
+                          rows=rows)
         self._cache = None if self.missing else (xl.copy(), needed, st)
         if self.timers is not None:
             self.timers["contact_projection"] += time.perf_counter() - t0
@@ -231,11 +241,19 @@ class Contact:
             pos = st.lpos(self.conn[e])                                       # (P, 3)
             dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
             floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
+        fading = np.flatnonzero(np.any(pr.dweight != 0.0, axis=1) & (st.pi != 0.0))
+        if len(fading):
+            # a point fading out past B's ends: −π g ∇w of its weight w(ξ_B, t_B)
+            sub = subset(pr, fading)
+            f = -(st.pi[fading] * pr.g[fading])[:, None] * weight_gradient(sub)     # (F, 108)
+            for half, e in ((0, self.points.eA[pr.idx[fading]]), (1, pr.eB[fading])):
+                pos = st.lpos(self.conn[e])
+                dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
+                floc += np.bincount(dofs, f[:, 54 * half:54 * (half + 1)].ravel(), minlength=floc.size)
         # the constraint rows; a function shared with another rank: each adds its own points
         rows = DOFS_PER_NODE * st.lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]
-        own = self.Phi @ (pr.g * pr.valid) if self.sum_over_ranks is not None else st.gbar
         share = self.Phi @ np.ones(len(pr.g)) if self.sum_over_ranks is not None else 1.0
-        floc[rows] -= self.stiffness * np.where(st.active, own, st.z * share)
+        floc[rows] += self.stiffness * st.rows.R * share
         return bool(pr.in_window)
 
     def jacobian_blocks(self, xl: np.ndarray, needed: np.ndarray,
@@ -265,6 +283,15 @@ class Contact:
             raise ContactSetupError(f"the interfaces do not match in the reference configuration "
                                         f"(largest gap {gap.max():.3e} m); neighbours must share "
                                         "their interface curve and element boundaries")
+
+    def begin_phase(self, phase: Phase, previous: Phase | None = None) -> None:
+        """Start a phase of a Newton solve (laws.Phase); after a phase that held every
+        constraint, the status follows the multipliers' signs (a pull releases)."""
+        if previous is not None and previous.hold and self._cache is not None:
+            st = self._cache[2]
+            self.status[self.mults] = st.z > self.tie_tolerance
+        self.law.begin(phase)
+        self._cache = None
 
     def converged(self) -> bool:
         """Whether the last evaluation's projections all converged (this rank)."""

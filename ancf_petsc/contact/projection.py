@@ -16,7 +16,16 @@ import numpy as np
 from ..physics.element3363 import SLOTS
 from .surface import closest_parameter, section_shift, shape_on_curve
 
-CURVE_OVERHANG = 0.25                     # fraction of an interface curve it is extended by
+#: a point whose closest point lies past an end of B's interface curve (the spline's end piece
+#: continues smoothly) keeps its full weight up to CURVE_OVERHANG of the curve's length beyond
+#: it; its weight then falls smoothly (C¹) to zero at CURVE_FADE_END, so that no point leaves the
+#: contact at once (a point switching off at 1.25 made Newton cycle between two states: the
+#: bulk-modulus sweep of the paper's columns, K = 0.90 GPa at ψ = 0°)
+CURVE_OVERHANG = 0.25
+CURVE_FADE_END = 0.5
+#: likewise past B's beam ends (in element lengths): the end element's polynomial continues and
+#: the weight falls from 1 at the end to 0 at a quarter of an element beyond it
+END_FADE = 0.25
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
 MAX_ITERATIONS = 40
 
@@ -31,7 +40,10 @@ class Projection:
     d: np.ndarray          # (P, 3) x_A − Y
     n: np.ndarray          # (P, 3) B's unit outward normal
     g: np.ndarray          # (P,) signed gap d·n (> 0: apart)
-    valid: np.ndarray      # (P,) the closest point lies on B's surface (not past its ends)
+    valid: np.ndarray      # (P,) the point counts (weight > 0)
+    weight: np.ndarray     # (P,) its weight in the weighted gaps: 1 on B's surface, falling to 0
+                           #      past its ends (CURVE_OVERHANG ... CURVE_FADE_END, END_FADE)
+    dweight: np.ndarray    # (P, 2) ∂weight / ∂(ξ_B, t_B)
     NA: np.ndarray         # (P, 18) A's shape functions
     NB: np.ndarray         # (P, 18) B's shape functions at the closest point
     NBz: np.ndarray        # (P, 18, 2) their ζ derivatives
@@ -39,6 +51,29 @@ class Projection:
     Yzz: np.ndarray        # (P, 3, 2, 2) second derivatives
     in_window: bool        # every point stayed within its candidate B elements (search_margin)
     converged: bool        # every local Newton iteration converged
+
+
+def fade(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """1 − 3u² + 2u³ on [0, 1] (1 below, 0 above) and its derivative: a C¹ step from 1 to 0."""
+    v = np.clip(u, 0.0, 1.0)
+    return 1.0 - v * v * (3.0 - 2.0 * v), np.where((u > 0.0) & (u < 1.0), 6.0 * v * (v - 1.0), 0.0)
+
+
+def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
+               at_last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weight of points past B's ends and its derivative w.r.t. (ξ_B, t_B): ``at_first``/
+    ``at_last`` mark points on B's first/last element (ξ past −1/+1 there is past the beam)."""
+    # across: the overhang beyond [0, T] as a share of T
+    o_t = np.maximum(-tB, tB - t_end) / t_end
+    s_t = np.where(tB < 0.0, -1.0, 1.0) / t_end
+    w_t, d_t = fade((o_t - CURVE_OVERHANG) / (CURVE_FADE_END - CURVE_OVERHANG))
+    d_t = d_t * s_t / (CURVE_FADE_END - CURVE_OVERHANG)
+    # along: element lengths past the beam's end (ξ runs over 2 per element)
+    o_x = np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0)
+    s_x = np.where(at_last & (xiB > 1.0), 0.5, 0.0) + np.where(at_first & (xiB < -1.0), -0.5, 0.0)
+    w_x, d_x = fade(np.maximum(o_x, 0.0) / (2.0 * END_FADE))
+    d_x = d_x * s_x / END_FADE
+    return w_t * w_x, np.stack([w_t * d_x, d_t * w_x], axis=1)
 
 
 class Projector:
@@ -86,6 +121,18 @@ class Projector:
             hi[sel] = lo[sel] + width - 1
         return lo, hi
 
+    def window_around(self, eB: np.ndarray, itf_idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Candidate B elements [lo, hi] centred on the B elements ``eB``."""
+        lo, hi = np.empty(len(eB), dtype=np.int64), np.empty(len(eB), dtype=np.int64)
+        for k, itf in enumerate(self.interfaces):
+            sel = itf_idx == k
+            b = itf.b
+            width = self.window_width(itf)
+            first = np.clip(eB[sel] - b.element_offset - (width - 1) // 2, 0, b.n_elements - width)
+            lo[sel] = b.element_offset + first
+            hi[sel] = lo[sel] + width - 1
+        return lo, hi
+
     # ------------------------------------------------------------------ state
     def set_available(self, available: np.ndarray) -> None:
         """Elements whose node blocks are in the rank's local array."""
@@ -94,8 +141,11 @@ class Projector:
         self.missing = False
 
     def checkpoint(self) -> None:
-        """Remember the projections of a converged state (restored when a step is cut back)."""
+        """Remember the projections of a converged state (restored when a step is cut back);
+        every point's search window is centred on its partner element there, so that it may
+        slide ``search_margin`` of the beam per load step, however far it has slid before."""
         self._saved = (self.eB.copy(), self.xiB.copy(), self.tB.copy())
+        self.lo, self.hi = self.window_around(self.eB, self.points.itf)
 
     def restore(self) -> None:
         self.eB, self.xiB, self.tB = (a.copy() for a in self._saved)
@@ -132,8 +182,10 @@ class Projector:
         return Y, Yz, Yzz, NB, NBz
 
     def wrap(self, itf, eB, xiB, tB):
-        """Move points across B's element boundaries; clamp at beam and curve ends (invalid there)."""
-        valid = np.ones(len(eB), dtype=bool)
+        """Move points across B's element boundaries; past B's beam and curve ends the end
+        piece continues (up to the fade limits, clamped there): the weight says how far."""
+        P = len(eB)
+        weight, dweight = np.ones(P), np.zeros((P, 2))
         for k, inter in enumerate(self.interfaces):
             sel = itf == k
             b = inter.b
@@ -143,17 +195,12 @@ class Projector:
             shift = np.where(x == 1.0, 0, shift)
             e_new = np.minimum(np.maximum(e + shift, lo), hi)
             x = x - 2.0 * (e_new - e)
-            out = (x < -1.0 - 1e-12) | (x > 1.0 + 1e-12)
-            x = np.minimum(np.maximum(x, -1.0), 1.0)
-            # past an end of the interface curve the target surface continues smoothly (the
-            # spline's end piece is extrapolated), so a point whose partner slid off the curve end
-            # by a little stays in contact instead of switching off abruptly
-            t = tB[sel]
+            x = np.minimum(np.maximum(x, -1.0 - 2.0 * END_FADE), 1.0 + 2.0 * END_FADE)
             T = inter.curve_b.t_end
-            out |= (t < -CURVE_OVERHANG * T) | (t > (1.0 + CURVE_OVERHANG) * T)
-            t = np.minimum(np.maximum(t, -CURVE_OVERHANG * T), (1.0 + CURVE_OVERHANG) * T)
-            eB[sel], xiB[sel], tB[sel], valid[sel] = e_new, x, t, ~out
-        return eB, xiB, tB, valid
+            t = np.minimum(np.maximum(tB[sel], -CURVE_FADE_END * T), (1.0 + CURVE_FADE_END) * T)
+            w, dw = end_weight(x, t, np.full(len(t), T), e_new == lo, e_new == hi)
+            eB[sel], xiB[sel], tB[sel], weight[sel], dweight[sel] = e_new, x, t, w, dw
+        return eB, xiB, tB, weight, dweight
 
     # ------------------------------------------------------------------ Newton on ζ
     @staticmethod
@@ -188,6 +235,7 @@ class Projector:
         itf = self.points.itf[idx]
         eB, xiB, tB = self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy()
         valid = np.ones(len(idx), dtype=bool)
+        weight, dweight = np.ones(len(idx)), np.zeros((len(idx), 2))
         converged = True
         tol_t = PROJECTION_TOL * self.t_end[idx]
         pinned = np.zeros(len(idx), dtype=bool)
@@ -206,7 +254,8 @@ class Projector:
                 break
             xiB += np.clip(dz[:, 0], -1.0, 1.0)
             tB += dz[:, 1]
-            eB, xiB, tB, valid = self.wrap(itf, eB, xiB, tB)
+            eB, xiB, tB, weight, dweight = self.wrap(itf, eB, xiB, tB)
+            valid = weight > 0.0
             miss = ~self.available[eB]
             if np.any(miss):
                 self.missing = True
@@ -230,5 +279,15 @@ class Projector:
         n[self.flip[idx]] *= -1.0
         g = np.einsum("pi,pi->p", d, n)
         return Projection(idx=idx, eB=eB, xiB=xiB, tB=tB, d=d, n=n, g=g, valid=valid,
+                          weight=weight, dweight=dweight,
                           NA=self.points.NA[idx], NB=NB, NBz=NBz, Yz=Yz, Yzz=Yzz,
                           in_window=in_window, converged=converged)
+
+
+def subset(pr: Projection, sel: np.ndarray) -> Projection:
+    """The points ``sel`` (positions) of a projection."""
+    return Projection(idx=pr.idx[sel], eB=pr.eB[sel], xiB=pr.xiB[sel], tB=pr.tB[sel], d=pr.d[sel],
+                      n=pr.n[sel], g=pr.g[sel], valid=pr.valid[sel], weight=pr.weight[sel],
+                      dweight=pr.dweight[sel], NA=pr.NA[sel], NB=pr.NB[sel], NBz=pr.NBz[sel],
+                      Yz=pr.Yz[sel], Yzz=pr.Yzz[sel], in_window=pr.in_window,
+                      converged=pr.converged)

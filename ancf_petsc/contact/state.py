@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .laws import Rows
 from .projection import Projection
 
 
@@ -16,5 +17,7 @@ class ContactState:
     gbar: np.ndarray       # (M_loc,) weighted gaps ḡ [m]
     z: np.ndarray          # (M_loc,) scaled multipliers [m]
     active: np.ndarray     # (M_loc,) bool
-    tau: np.ndarray        # (P_loc,) w_p × pressure [N/m... × m² = N]
+    tau: np.ndarray        # (P_loc,) w_p × pressure [N/m... × m² = N], times the point's weight
+    pi: np.ndarray         # (P_loc,) the same before the point's weight (projection.end_weight)
     lpos: object           # PETSc node id → position in the local array
+    rows: Rows             # the law's constraint rows (laws.Rows)

@@ -8,6 +8,7 @@ not hold, the exchange is rebuilt and the evaluation repeated (``evaluate``; col
 from __future__ import annotations
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..parallel.layout import Layout
@@ -112,6 +113,12 @@ class GhostExchange:
             self.scatter.scatter(work, self.floc, INSERT, PETSc.ScatterMode.FORWARD)
             out[:, c] = self.floc.getArray(readonly=True)[pos]
         work.destroy()
+        return out
+
+    def reduce(self, values: np.ndarray, op: str) -> np.ndarray:
+        """Element-wise 'max', 'min' or 'sum' of ``values`` over the ranks."""
+        out = np.empty_like(values)
+        self.comm.tompi4py().Allreduce(values, out, op={"max": MPI.MAX, "min": MPI.MIN, "sum": MPI.SUM}[op])
         return out
 
     def all_ranks(self, flag: bool) -> bool:

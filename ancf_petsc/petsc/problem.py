@@ -18,6 +18,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from ..contact.laws import NEWTON
 from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
@@ -75,6 +76,7 @@ class Problem:
             # the law's decision) needs both ranks' points
             contact.sum_over_ranks = self.exchange.sum_over_ranks
             contact.all_ranks = self.exchange.all_ranks
+            contact.reduce = self.exchange.reduce
         self.q0 = self.global_vector(q0_model)
         fext = np.zeros(N)
         fext[:model.n_dofs] = model.f_ext
@@ -305,6 +307,20 @@ class Problem:
         """After SNES converged: did the last residual use converged contact projections? (collective)"""
         ok = self.contact is None or self.contact.converged()
         return bool(self.comm.tompi4py().allreduce(int(not ok)) == 0)
+
+    def solve_phases(self, from_rest: bool) -> list:
+        """The SNES solves of one load increment (``contact.laws.Phase``): the contact law's,
+        or one Newton solve."""
+        return [NEWTON] if self.contact is None else self.contact.law.phases(from_rest)
+
+    def begin_phase(self, phase, previous) -> None:
+        if self.contact is not None:
+            self.contact.begin_phase(phase, previous)
+
+    def status_changes(self) -> int:
+        """Contact status changes so far, summed over the ranks (collective)."""
+        n = 0 if self.contact is None else self.contact.status_changes
+        return int(self.comm.tompi4py().allreduce(n))
 
     def checkpoint(self) -> None:
         """Called at every converged state: history the residual depends on (contact projections)."""

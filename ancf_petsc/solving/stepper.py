@@ -18,6 +18,7 @@ from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
 from ..petsc import logging
+from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.inertia import mumps_error, pivot_counts
 from ..petsc.options import mumps_hint, petsc_message, solver_hint, used_anywhere
 from ..petsc.problem import Problem
@@ -26,6 +27,8 @@ from .interrupt import RunInterrupted, stop_requested
 from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
                       solver_options)
 
+import os as _os
+_TRACE = bool(_os.environ.get("ANCF_TRACE_PHASES"))
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
 #: a converged step whose state is less stable than the last accepted one (more negative
@@ -131,12 +134,17 @@ class LoadStepper:
             schur = FascicleSchur(fascicle_split(problem), problem.comm, self.prefix)
             pc.setPythonContext(schur)
         self._check_factorisation()
-        self._history: list[float] = []
+        self._history: list[float] = []        # residual norms of the current SNES solve
+        self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
         self.newton_iterations = 0
         #: the fascicle Schur preconditioner (petsc/fieldsplit.py) with solver.linear: fieldsplit
         self.fascicle_schur = schur
         self.chord = TangentReuse(spec.reuse_tangent, schur)
+        #: the complementarity predictor of a unilateral law's first increment (up to
+        #: complementarity.MAX_MULTIPLIERS multipliers)
+        self.predictor = (ComplementarityPredictor(problem)
+                          if ComplementarityPredictor.applies(problem) else None)
         self._ksp_reason = 0
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
@@ -214,8 +222,40 @@ class LoadStepper:
                 f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}"
                 + ("; chord steps near convergence" if self.spec.reuse_tangent else ""))
 
-    def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float) -> tuple[int, int, float]:
-        self.problem.load_factor = lam
+    def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
+                  from_rest: bool = False) -> tuple[int, int, float]:
+        """Newton at load factor ``lam`` from ``X``: one SNES solve per phase of the contact law
+        (``contact.laws.Phase``; one plain solve without contact), a phase taking further rounds
+        of iterations while its active set still changes.  Returns the last solve's reason, the
+        iterations of all of them and the final residual norm; ``history`` the residuals."""
+        P = self.problem
+        P.load_factor = lam
+        self.history = []
+        its, previous = 0, None
+        if from_rest and self.predictor is not None:
+            # the contact state of the touching, pressure-free start from the linearised
+            # complementarity problem (one factorisation: counted as a Newton iteration)
+            its += int(self.predictor.predict(X))
+        for phase in P.solve_phases(from_rest):
+            P.begin_phase(phase, previous)
+            for round_ in range(phase.extra_rounds + 1):
+                changes = P.status_changes()
+                reason, n = self._snes_solve(X, target, lam, reached)
+                its += n
+                if _TRACE:
+                    print(f"   lam {lam:.4g} {phase.name} round {round_}: {n} its, reason {reason}, "
+                          f"{P.status_changes() - changes} changes", flush=True)
+                if (reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
+                        or P.status_changes() == changes):
+                    break
+            if reason <= 0:
+                break
+            previous = phase
+        self.newton_iterations += its
+        return reason, its, self.snes.getFunctionNorm()
+
+    def _snes_solve(self, X: PETSc.Vec, target: float, lam: float, reached: float) -> tuple[int, int]:
+        """One SNES solve from ``X``: its reason and iterations."""
         self._history = []
         self.chord.start_solve()
         try:
@@ -232,11 +272,8 @@ class LoadStepper:
                                   f" in the linear solver ({self._solver_text()}): "
                                   f"{why}") from None
         self._ksp_reason = self.snes.getKSP().getConvergedReason()
-        reason = self.snes.getConvergedReason()
-        its = self.snes.getIterationNumber()
-        self.newton_iterations += its
-        fnorm = self.snes.getFunctionNorm()
-        return reason, its, fnorm
+        self.history += self._history
+        return self.snes.getConvergedReason(), self.snes.getIterationNumber()
 
     def _stop_if_requested(self, target: float, level: float) -> None:
         """Between Newton solves: stop on every rank if any rank got SIGTERM/SIGINT (collective)."""
@@ -294,8 +331,10 @@ class LoadStepper:
     def initial_path(self, first_level: float) -> PathState:
         """The path at the reference state, with the first increment."""
         X = self.problem.q0.copy()
-        dlam = first_level if self.spec.initial_increment is None else min(first_level,
-                                                                          self.spec.initial_increment)
+        c = self.problem.contact
+        share = None if c is None else c.law.first_increment
+        dlam = (first_level * (share or 1.0) if self.spec.initial_increment is None
+                else min(first_level, self.spec.initial_increment))
         if self.spec.max_increment is not None:
             dlam = min(dlam, self.spec.max_increment)
         dX = X.duplicate()
@@ -319,9 +358,10 @@ class LoadStepper:
                 X.copy(X_prev)
                 if self.spec.predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
-                reason, its, fnorm = self._solve_at(path.lam + step, X, target, path.lam)
+                reason, its, fnorm = self._solve_at(path.lam + step, X, target, path.lam,
+                                                    from_rest=path.lam == 0.0)
                 tally["its"] += its
-                history.append(list(self._history))
+                history.append(list(self.history))
                 self._check_budget(path, X_prev, target, step)
                 reason, neg = self._judge(path, reason, fnorm, step, tally)
                 if reason > 0:

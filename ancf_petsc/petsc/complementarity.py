@@ -1,0 +1,191 @@
+"""The linearised contact complementarity problem solved exactly: a predictor of the active set
+and of the Newton step for unilateral contact (a Josephy–Newton step).
+
+At a state X the unilateral conditions linearise to a complementarity problem in the new scaled
+multipliers z⁺ (contact/multipliers.py):
+
+    K Δq − Gᵀ Δz = −F_q,     w = c + G Δq ≥ 0,   z⁺ = z + Δz ≥ 0,   w · z⁺ = 0,
+
+with K the tangent of the bodies (every multiplier acting, no constraint), G = k_s ∂ḡ/∂q the
+constraint gradients and c = k_s ḡ.  Eliminating Δq gives LCP(S, d): w = d + S z⁺ with the
+Schur complement S = G K⁻¹ Gᵀ (symmetric, positive definite for a stable tangent and independent
+constraints) and d = c + G K⁻¹(−F_q) − S z.  It is the dual of a strictly convex quadratic
+programme, solved here with non-negative least squares (Lawson–Hanson, finite) on a Cholesky
+factor of S, so that no active-set guessing inside Newton's iteration is needed where the
+guessing is hard: from the exactly touching, pressure-free reference, S is ill-conditioned
+(condition 1e10–1e12 on the paper's tendon: the unloaded neighbours are compliant cantilevers)
+and the primal–dual active set rule needs 12–38 exact iterations at any constant, and cycles on
+bundle_hex7 (scripts/bench_contact.py --lcp).
+
+S costs one factorisation of K (MUMPS, the model's matrix assembled in the probe phase) and one
+solve per multiplier, so the predictor is used up to ``MAX_MULTIPLIERS``.  Collective: every rank
+gets the same S, d (sums over ranks) and the same solution.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as la
+import scipy.optimize as so
+from petsc4py import PETSc
+
+from ..contact.laws import HELD, PROBE
+from ..physics.element3363 import DOFS_PER_NODE
+
+#: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
+MAX_MULTIPLIERS = 2500
+#: relative regularisation of S before its Cholesky factor (redundant constraints)
+REGULARISATION = 1e-12
+
+
+def multiplier_dofs(problem) -> np.ndarray:
+    """Global PETSc DOF of every multiplier (model order of contact.space)."""
+    c, lay = problem.contact, problem.layout
+    return DOFS_PER_NODE * lay.perm[problem.model.n_nodes + c.space.node] + c.space.slot
+
+
+def _owned_values(vec: PETSc.Vec, dofs: np.ndarray, comm) -> np.ndarray:
+    """vec[dofs] on every rank."""
+    lo, hi = vec.getOwnershipRange()
+    out = np.zeros(len(dofs))
+    mine = (dofs >= lo) & (dofs < hi)
+    out[mine] = vec.getArray(readonly=True)[dofs[mine] - lo]
+    return comm.allreduce(out)
+
+
+class ComplementarityPredictor:
+    """Solves the linearised complementarity problem at a state (module docstring)."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self.comm = problem.comm.tompi4py()
+        self.dofs = multiplier_dofs(problem)
+        self.ksp = PETSc.KSP().create(comm=problem.comm)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("cholesky")
+        pc.setFactorSolverType("mumps")
+        self.ksp.setOptionsPrefix("ancf_lcp_")
+        self.solves = 0
+
+    @staticmethod
+    def applies(problem) -> bool:
+        c = problem.contact
+        return (c is not None and c.law.decides_activity
+                and c.n_multipliers <= MAX_MULTIPLIERS)
+
+    def destroy(self) -> None:
+        self.ksp.destroy()
+
+    def _columns(self, J: PETSc.Mat) -> PETSc.Mat:
+        """The multipliers' columns of J as a dense N × M matrix (rows distributed like J,
+        columns in model order of the multipliers): one product J e_k per multiplier."""
+        M = len(self.dofs)
+        e, col = J.createVecs()
+        B = PETSc.Mat().createDense((col.getSizes(), (None, M)), comm=J.comm)
+        B.setUp()
+        arr = B.getDenseArray()                              # local rows × all M columns
+        for k in range(M):
+            e.set(0.0)
+            if e.getOwnershipRange()[0] <= self.dofs[k] < e.getOwnershipRange()[1]:
+                e.setValue(int(self.dofs[k]), 1.0)
+            e.assemble()
+            J.mult(e, col)
+            arr[:, k] = col.getArray(readonly=True)
+        del arr
+        B.assemble()
+        e.destroy()
+        col.destroy()
+        return B
+
+    def predict(self, X: PETSc.Vec) -> bool:
+        """Replace X by the Josephy–Newton step from X and set the contact status from the
+        solution; False (X unchanged) when a factorisation failed."""
+        P, c = self.problem, self.problem.contact
+        law_phase = c.law.phase
+        status = c.status.copy()
+        F = P.F.duplicate()
+        B = Xs = y = rhs = None
+        try:
+            # held: the constraint gradients (columns −Gᵀ), c = k_s ḡ and F_q with every z
+            c.begin_phase(HELD)
+            P.residual(None, X, F)
+            P.jacobian(None, X, P.J, P.J)
+            B = self._columns(P.J)
+            cvec = -_owned_values(F, self.dofs, self.comm)
+            rhs = F.copy()
+            rhs.scale(-1.0)
+            self._set_owned(rhs, np.zeros(len(self.dofs)))          # a probe's z rows: 0
+            # probe: K with every multiplier acting on the bodies, z rows decoupled
+            c.begin_phase(PROBE)
+            P.jacobian(None, X, P.J, P.J)
+            self.ksp.getPC().reset()                                 # the pattern may have grown
+            self.ksp.setOperators(P.J)
+            self.ksp.setFromOptions()
+            self.ksp.setUp()
+            Xs = B.duplicate()
+            self.ksp.getPC().getFactorMatrix().matSolve(B, Xs)      # K⁻¹(−Gᵀ)
+            y = X.duplicate()
+            self.ksp.solve(rhs, y)                                   # −K⁻¹ F_q
+        except PETSc.Error:
+            for obj in (B, Xs, y, rhs, F):
+                if obj is not None:
+                    obj.destroy()
+            c.status[:] = status
+            c.begin_phase(law_phase)
+            return False
+        self.solves += 1
+        Bl, Xl = B.getDenseArray(readonly=True), Xs.getDenseArray(readonly=True)
+        S = self.comm.allreduce(Bl.T @ Xl)
+        S = 0.5 * (S + S.T)
+        Bty = self.comm.allreduce(Bl.T @ y.getArray(readonly=True))
+        z = _owned_values(X, self.dofs, self.comm)
+        d = cvec - Bty - S @ z
+        try:
+            z_new = self._solve_lcp(S, d)
+        except np.linalg.LinAlgError:            # S not positive definite: no convex LCP
+            for obj in (B, Xs, y, rhs, F):
+                obj.destroy()
+            c.status[:] = status
+            c.begin_phase(law_phase)
+            return False
+        dz = z_new - z
+        # the step: Δq = y − Xs Δz on the beams' DOFs, Δz on the multipliers
+        step = y.duplicate()
+        dzv = self._dense_vec(Xs, dz)
+        Xs.mult(dzv, step)
+        step.aypx(-1.0, y)
+        self._set_owned(step, dz)
+        X.axpy(1.0, step)
+        for obj in (B, Xs, y, F, rhs, step, dzv):
+            obj.destroy()
+        c.status[:] = z_new > c.tie_tolerance
+        c.begin_phase(law_phase)
+        return True
+
+    def _set_owned(self, vec: PETSc.Vec, values: np.ndarray) -> None:
+        """vec[dof_k] = values[k] for the multipliers this rank owns."""
+        lo, hi = vec.getOwnershipRange()
+        mine = (self.dofs >= lo) & (self.dofs < hi)
+        arr = vec.getArray()
+        arr[self.dofs[mine] - lo] = values[mine]
+        del arr
+
+    def _dense_vec(self, A: PETSc.Mat, values: np.ndarray) -> PETSc.Vec:
+        """A vector conforming to A's columns holding ``values`` (every rank has all of them)."""
+        v = A.createVecRight()
+        lo, hi = v.getOwnershipRange()
+        v.setArray(values[lo:hi])
+        return v
+
+    @staticmethod
+    def _solve_lcp(S: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on the
+        Cholesky factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²)."""
+        M = len(d)
+        if M == 0:
+            return np.zeros(0)
+        reg = REGULARISATION * max(float(np.max(np.diag(S))), 1e-300)
+        L = la.cholesky(S + reg * np.eye(M), lower=True)
+        b = -la.solve_triangular(L, d, lower=True)
+        z, _ = so.nnls(L.T, b, maxiter=50 * M)
+        return z

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE
-from .gap import gap_gradient, gap_hessian_factors, weight_gradient
+from .gap import gap_gradient, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
 
@@ -64,22 +64,9 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     at = (s_loc[:, None], p_loc[:, None], cols)
     V = np.zeros((n_s, P_s, Dq))                         # ∇(w_p g_p)
     grad = gap_gradient(sub)
-    V[at] = grad * sub.weight[:, None]
+    V[at] = grad * st.weight[sel][:, None]
     K = np.zeros((n_s, D, D))
     tau = st.tau[sel]
-    fading = np.flatnonzero(np.any(sub.dweight != 0.0, axis=1))
-    if len(fading):
-        # points fading out past B's ends: ∇(w g) = w ∇g + g ∇w, and the curvature
-        # −π (∇w ∇gᵀ + ∇g ∇wᵀ) (the term g ∇²w is left out: g is the small local gap)
-        f_sub = subset(sub, fading)
-        gw = weight_gradient(f_sub)                                         # (F, 108)
-        rows_f = (s_loc[fading], p_loc[fading])
-        V[rows_f[0][:, None], rows_f[1][:, None], cols[fading]] += f_sub.g[:, None] * gw
-        pi = st.pi[sel][fading]
-        outer = -pi[:, None, None] * (gw[:, :, None] * grad[fading][:, None, :]
-                                      + grad[fading][:, :, None] * gw[:, None, :])
-        cf = cols[fading]
-        np.add.at(K, (rows_f[0][:, None, None], cf[:, :, None], cf[:, None, :]), outer)
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
         W, C = gap_hessian_factors(sub)

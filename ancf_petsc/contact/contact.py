@@ -22,13 +22,17 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, reports
-from .gap import weight_gradient
 from .interfaces import ContactSetupError, find_interfaces
 from .laws import Phase, active_set_rows, make_law
 from .multipliers import build_space
 from .points import build_points
-from .projection import Projector, subset
+from .projection import Projector
 from .state import ContactState
+
+
+#: a change of a point's weight (``refresh_weights``) beyond this asks for another Newton solve
+#: (a weight off by 1e-6 moves a weighted gap by 1e-6 of the point's local gap, ~1e-11 m)
+WEIGHT_TOL = 1e-6
 
 
 def reference_stiffness(interfaces) -> float:
@@ -78,6 +82,12 @@ class Contact:
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
+        #: every point's weight in the weighted gaps during a Newton solve: that of its partner's
+        #: place when the solve started (projection.end_weight: 1 on B's surface, falling to 0
+        #: past its ends), brought up to date between solves until it no longer changes
+        #: (``refresh_weights``), so that Newton sees no switch and the tangent stays exact
+        self.weights = np.ones(self.points.n_points)
+        self._saved_weights = self.weights.copy()
         self._cache = None
         # the rank's numbering (``set_numbering``): PETSc block of every element node, multiplier
         # and segment multiplier node; the local segments, points and multipliers, which of those
@@ -208,7 +218,7 @@ class Contact:
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
         pr = self.projector.project(idx, xA, x_of)
-        weight = pr.weight
+        weight = self.weights[idx] * (pr.weight > 0.0)
         sums = np.stack([self.Phi @ (pr.g * weight), self.Phi @ weight], axis=1)
         if self.sum_over_ranks is not None:          # functions shared with another rank
             sums = self.sum_over_ranks(sums)
@@ -221,10 +231,9 @@ class Contact:
         self.status_changes += int(np.count_nonzero(active != prev))
         self.status[self.mults] = active
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
-        pi = self.stiffness * (self.Phi.T @ (z * rows.load))     # w_p × pressure before the weight
-        tau = pi * weight
-        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, pi=pi, lpos=lpos,
-                          rows=rows)
+        tau = self.stiffness * (self.Phi.T @ (z * rows.load)) * weight
+        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos,
+                          rows=rows, weight=weight)
         self._cache = None if self.missing else (xl.copy(), needed, st)
         if self.timers is not None:
             self.timers["contact_projection"] += time.perf_counter() - t0
@@ -241,15 +250,6 @@ class Contact:
             pos = st.lpos(self.conn[e])                                       # (P, 3)
             dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
             floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
-        fading = np.flatnonzero(np.any(pr.dweight != 0.0, axis=1) & (st.pi != 0.0))
-        if len(fading):
-            # a point fading out past B's ends: −π g ∇w of its weight w(ξ_B, t_B)
-            sub = subset(pr, fading)
-            f = -(st.pi[fading] * pr.g[fading])[:, None] * weight_gradient(sub)     # (F, 108)
-            for half, e in ((0, self.points.eA[pr.idx[fading]]), (1, pr.eB[fading])):
-                pos = st.lpos(self.conn[e])
-                dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
-                floc += np.bincount(dofs, f[:, 54 * half:54 * (half + 1)].ravel(), minlength=floc.size)
         # the constraint rows; a function shared with another rank: each adds its own points
         rows = DOFS_PER_NODE * st.lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]
         share = self.Phi @ np.ones(len(pr.g)) if self.sum_over_ranks is not None else 1.0
@@ -301,6 +301,7 @@ class Contact:
         """A restart's projection state (points, 3) and multiplier status (multipliers,)."""
         if projection is not None:
             self.projector.set_state(projection)
+            self.weights = self.projector.weights_of_state()
         if status is not None:
             self.status = np.asarray(status, dtype=bool).copy()
         self._cache = None
@@ -309,11 +310,28 @@ class Contact:
     def checkpoint(self) -> None:
         self.projector.checkpoint()
         self._saved_status = self.status.copy()
+        self._saved_weights = self.weights.copy()
 
     def restore(self) -> None:
         self._cache = None
         self.projector.restore()
         self.status = self._saved_status.copy()
+        self.weights = self._saved_weights.copy()
+
+    def refresh_weights(self) -> bool:
+        """After a converged solve: bring the points' weights up to their partners' places in
+        the last evaluation; True (on every rank) when one changed by more than WEIGHT_TOL, so
+        that the state must be solved again (collective)."""
+        st = self._cache[2] if self._cache is not None else None
+        change = 0.0
+        if st is not None:
+            new = st.pr.weight
+            change = float(np.max(np.abs(new - self.weights[st.pr.idx]), initial=0.0))
+            self.weights[st.pr.idx] = new
+        changed = bool(self.reduce(np.array([change]), "max")[0] > WEIGHT_TOL)
+        if changed:
+            self._cache = None                  # the residual at this state changed
+        return changed
 
     # ---------------------------------------------------------------- reports
     def describe(self) -> list[str]:

@@ -55,19 +55,3 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
     W[:, SLOTS:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
     return W.reshape(P, 108, 4), C
 
-
-def projection_gradient(pr) -> np.ndarray:
-    """∇ζ of the closest point ζ = (ξ_B, t_B), (P, 108, 2): the linearised projection
-    H Δζ = (U + g V)ᵀ Δq (module docstring), so ∇ζ = (U + g V) H⁻¹."""
-    W, _ = gap_hessian_factors(pr)
-    T = pr.Yz
-    a = np.matmul(T.transpose(0, 2, 1), T)
-    b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
-    Hi = _inverse2(a - pr.g[:, None, None] * b)
-    UgV = W[..., :2] + pr.g[:, None, None] * W[..., 2:]
-    return np.matmul(UgV, Hi)
-
-
-def weight_gradient(pr) -> np.ndarray:
-    """∇w (P, 108) of the points' weights w(ξ_B, t_B) (projection.end_weight)."""
-    return np.einsum("pqa,pa->pq", projection_gradient(pr), pr.dweight)

@@ -41,9 +41,8 @@ class Projection:
     n: np.ndarray          # (P, 3) B's unit outward normal
     g: np.ndarray          # (P,) signed gap d·n (> 0: apart)
     valid: np.ndarray      # (P,) the point counts (weight > 0)
-    weight: np.ndarray     # (P,) its weight in the weighted gaps: 1 on B's surface, falling to 0
-                           #      past its ends (CURVE_OVERHANG ... CURVE_FADE_END, END_FADE)
-    dweight: np.ndarray    # (P, 2) ∂weight / ∂(ξ_B, t_B)
+    weight: np.ndarray     # (P,) the weight of its partner's place: 1 on B's surface, falling to
+                           #      0 past its ends (CURVE_OVERHANG ... CURVE_FADE_END, END_FADE)
     NA: np.ndarray         # (P, 18) A's shape functions
     NB: np.ndarray         # (P, 18) B's shape functions at the closest point
     NBz: np.ndarray        # (P, 18, 2) their ζ derivatives
@@ -53,27 +52,21 @@ class Projection:
     converged: bool        # every local Newton iteration converged
 
 
-def fade(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """1 − 3u² + 2u³ on [0, 1] (1 below, 0 above) and its derivative: a C¹ step from 1 to 0."""
+def fade(u: np.ndarray) -> np.ndarray:
+    """1 − 3u² + 2u³ on [0, 1], 1 below, 0 above: a C¹ step from 1 to 0."""
     v = np.clip(u, 0.0, 1.0)
-    return 1.0 - v * v * (3.0 - 2.0 * v), np.where((u > 0.0) & (u < 1.0), 6.0 * v * (v - 1.0), 0.0)
+    return 1.0 - v * v * (3.0 - 2.0 * v)
 
 
 def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
-               at_last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Weight of points past B's ends and its derivative w.r.t. (ξ_B, t_B): ``at_first``/
-    ``at_last`` mark points on B's first/last element (ξ past −1/+1 there is past the beam)."""
-    # across: the overhang beyond [0, T] as a share of T
+               at_last: np.ndarray) -> np.ndarray:
+    """Weight of a partner place (ξ_B, t_B): 1 on B's surface, falling past the curve's ends
+    (overhang as a share of the curve's length T) and past the beam's ends (``at_first``/
+    ``at_last``: on B's first/last element, in element lengths)."""
     o_t = np.maximum(-tB, tB - t_end) / t_end
-    s_t = np.where(tB < 0.0, -1.0, 1.0) / t_end
-    w_t, d_t = fade((o_t - CURVE_OVERHANG) / (CURVE_FADE_END - CURVE_OVERHANG))
-    d_t = d_t * s_t / (CURVE_FADE_END - CURVE_OVERHANG)
-    # along: element lengths past the beam's end (ξ runs over 2 per element)
-    o_x = np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0)
-    s_x = np.where(at_last & (xiB > 1.0), 0.5, 0.0) + np.where(at_first & (xiB < -1.0), -0.5, 0.0)
-    w_x, d_x = fade(np.maximum(o_x, 0.0) / (2.0 * END_FADE))
-    d_x = d_x * s_x / END_FADE
-    return w_t * w_x, np.stack([w_t * d_x, d_t * w_x], axis=1)
+    o_x = np.maximum(np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0), 0.0)
+    return (fade((o_t - CURVE_OVERHANG) / (CURVE_FADE_END - CURVE_OVERHANG))
+            * fade(o_x / (2.0 * END_FADE)))
 
 
 class Projector:
@@ -154,6 +147,10 @@ class Projector:
         """(P, 3) [e_B, ξ_B, t_B] of every point (for restart files)."""
         return np.column_stack([self.eB, self.xiB, self.tB])
 
+    def weights_of_state(self) -> np.ndarray:
+        """The weight of every point's partner place in the projection state."""
+        return self.wrap(self.points.itf, self.eB.copy(), self.xiB.copy(), self.tB.copy())[3]
+
     def set_state(self, state: np.ndarray) -> None:
         self.eB = state[:, 0].astype(np.int64)
         self.xiB, self.tB = state[:, 1].copy(), state[:, 2].copy()
@@ -184,8 +181,7 @@ class Projector:
     def wrap(self, itf, eB, xiB, tB):
         """Move points across B's element boundaries; past B's beam and curve ends the end
         piece continues (up to the fade limits, clamped there): the weight says how far."""
-        P = len(eB)
-        weight, dweight = np.ones(P), np.zeros((P, 2))
+        weight = np.ones(len(eB))
         for k, inter in enumerate(self.interfaces):
             sel = itf == k
             b = inter.b
@@ -198,9 +194,9 @@ class Projector:
             x = np.minimum(np.maximum(x, -1.0 - 2.0 * END_FADE), 1.0 + 2.0 * END_FADE)
             T = inter.curve_b.t_end
             t = np.minimum(np.maximum(tB[sel], -CURVE_FADE_END * T), (1.0 + CURVE_FADE_END) * T)
-            w, dw = end_weight(x, t, np.full(len(t), T), e_new == lo, e_new == hi)
-            eB[sel], xiB[sel], tB[sel], weight[sel], dweight[sel] = e_new, x, t, w, dw
-        return eB, xiB, tB, weight, dweight
+            eB[sel], xiB[sel], tB[sel] = e_new, x, t
+            weight[sel] = end_weight(x, t, np.full(len(t), T), e_new == lo, e_new == hi)
+        return eB, xiB, tB, weight
 
     # ------------------------------------------------------------------ Newton on ζ
     @staticmethod
@@ -235,7 +231,7 @@ class Projector:
         itf = self.points.itf[idx]
         eB, xiB, tB = self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy()
         valid = np.ones(len(idx), dtype=bool)
-        weight, dweight = np.ones(len(idx)), np.zeros((len(idx), 2))
+        weight = np.ones(len(idx))
         converged = True
         tol_t = PROJECTION_TOL * self.t_end[idx]
         pinned = np.zeros(len(idx), dtype=bool)
@@ -254,7 +250,7 @@ class Projector:
                 break
             xiB += np.clip(dz[:, 0], -1.0, 1.0)
             tB += dz[:, 1]
-            eB, xiB, tB, weight, dweight = self.wrap(itf, eB, xiB, tB)
+            eB, xiB, tB, weight = self.wrap(itf, eB, xiB, tB)
             valid = weight > 0.0
             miss = ~self.available[eB]
             if np.any(miss):
@@ -279,7 +275,7 @@ class Projector:
         n[self.flip[idx]] *= -1.0
         g = np.einsum("pi,pi->p", d, n)
         return Projection(idx=idx, eB=eB, xiB=xiB, tB=tB, d=d, n=n, g=g, valid=valid,
-                          weight=weight, dweight=dweight,
+                          weight=weight,
                           NA=self.points.NA[idx], NB=NB, NBz=NBz, Yz=Yz, Yzz=Yzz,
                           in_window=in_window, converged=converged)
 
@@ -288,6 +284,6 @@ def subset(pr: Projection, sel: np.ndarray) -> Projection:
     """The points ``sel`` (positions) of a projection."""
     return Projection(idx=pr.idx[sel], eB=pr.eB[sel], xiB=pr.xiB[sel], tB=pr.tB[sel], d=pr.d[sel],
                       n=pr.n[sel], g=pr.g[sel], valid=pr.valid[sel], weight=pr.weight[sel],
-                      dweight=pr.dweight[sel], NA=pr.NA[sel], NB=pr.NB[sel], NBz=pr.NBz[sel],
+                      NA=pr.NA[sel], NB=pr.NB[sel], NBz=pr.NBz[sel],
                       Yz=pr.Yz[sel], Yzz=pr.Yzz[sel], in_window=pr.in_window,
                       converged=pr.converged)

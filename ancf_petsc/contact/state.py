@@ -17,7 +17,7 @@ class ContactState:
     gbar: np.ndarray       # (M_loc,) weighted gaps ḡ [m]
     z: np.ndarray          # (M_loc,) scaled multipliers [m]
     active: np.ndarray     # (M_loc,) bool
-    tau: np.ndarray        # (P_loc,) w_p × pressure [N/m... × m² = N], times the point's weight
-    pi: np.ndarray         # (P_loc,) the same before the point's weight (projection.end_weight)
+    tau: np.ndarray        # (P_loc,) w_p × pressure [N], times the point's weight
+    weight: np.ndarray     # (P_loc,) the points' weights in this evaluation (Contact.weights)
     lpos: object           # PETSc node id → position in the local array
     rows: Rows             # the law's constraint rows (laws.Rows)

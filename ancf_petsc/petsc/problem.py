@@ -317,6 +317,10 @@ class Problem:
         if self.contact is not None:
             self.contact.begin_phase(phase, previous)
 
+    def refresh_contact(self) -> bool:
+        """After a converged solve: whether the contact points' weights changed (collective)."""
+        return self.contact is not None and self.contact.refresh_weights()
+
     def status_changes(self) -> int:
         """Contact status changes so far, summed over the ranks (collective)."""
         n = 0 if self.contact is None else self.contact.status_changes

@@ -35,6 +35,9 @@ REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
 #: tangent eigenvalues) is cut back, at most ``solver.stability_cutbacks`` times per load level;
 #: then the less stable state is accepted (a genuine loss of stability)
 UNSTABLE_STEP = -1000
+#: Newton solves after the first at most, to bring contact points' weights up to date
+#: (Contact.refresh_weights); a weight that still changes then fails the step
+MAX_WEIGHT_UPDATES = 5
 REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
 #: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
 UNCLEAN_STATE = -1001
@@ -251,6 +254,14 @@ class LoadStepper:
             if reason <= 0:
                 break
             previous = phase
+        for _ in range(MAX_WEIGHT_UPDATES):
+            # contact points whose partners moved past B's ends changed weight: solve again
+            if reason <= 0 or not P.refresh_contact():
+                break
+            reason, n = self._snes_solve(X, target, lam, reached)
+            its += n
+            if _TRACE:
+                print(f"   lam {lam:.4g} weights changed: {n} its, reason {reason}", flush=True)
         self.newton_iterations += its
         return reason, its, self.snes.getFunctionNorm()
 

@@ -218,7 +218,7 @@ class Contact:
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
         pr = self.projector.project(idx, xA, x_of)
-        weight = self.weights[idx] * (pr.weight > 0.0)
+        weight = np.minimum(self.weights[idx], pr.weight)
         sums = np.stack([self.Phi @ (pr.g * weight), self.Phi @ weight], axis=1)
         if self.sum_over_ranks is not None:          # functions shared with another rank
             sums = self.sum_over_ranks(sums)

@@ -33,6 +33,8 @@ from ..physics.element3363 import DOFS_PER_NODE
 
 #: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
 MAX_MULTIPLIERS = 2500
+#: halvings of the predicted step before it is dropped (the status is kept)
+MAX_HALVINGS = 8
 #: relative regularisation of S before its Cholesky factor (redundant constraints)
 REGULARISATION = 1e-12
 
@@ -155,11 +157,24 @@ class ComplementarityPredictor:
         Xs.mult(dzv, step)
         step.aypx(-1.0, y)
         self._set_owned(step, dz)
-        X.axpy(1.0, step)
-        for obj in (B, Xs, y, F, rhs, step, dzv):
-            obj.destroy()
         c.status[:] = z_new > c.tie_tolerance
         c.begin_phase(law_phase)
+        # the step as far as it leaves a state the residual is defined at (no inverted element,
+        # every projection found): a large first increment's linearised step may not
+        alpha = 1.0
+        for _ in range(MAX_HALVINGS + 1):
+            X.axpy(alpha, step)
+            P.residual(None, X, F)
+            if not (P.inverted or P.contact_failed):
+                break
+            X.axpy(-alpha, step)
+            c.projector.restore()              # the failed trial's projections are no start
+            alpha *= 0.5
+        else:
+            alpha = 0.0
+        c.status[:] = z_new > c.tie_tolerance        # the residual evaluations keep the status
+        for obj in (B, Xs, y, F, rhs, step, dzv):
+            obj.destroy()
         return True
 
     def _set_owned(self, vec: PETSc.Vec, values: np.ndarray) -> None:

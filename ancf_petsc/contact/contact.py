@@ -77,15 +77,20 @@ class Contact:
         self.reduce = lambda values, op: values
         #: status changes of the multipliers this rank evaluates, counted over the run
         self.status_changes = 0
+        #: the law may change the status at the next evaluation: once per Newton iteration (set
+        #: by each Jacobian), so that a line search's trial points (bt, l2, cp) compare one
+        #: residual function; with the full step (basic) every iterate decides
+        self.allow_update = True
         #: the unilateral law's tolerance [m]: a penetration or a pull (z) smaller than this does
         #: not change a constraint's status (rounding of positions in a touching reference)
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
-        #: every point's weight in the weighted gaps during a Newton solve: that of its partner's
-        #: place when the solve started (projection.end_weight: 1 on B's surface, falling to 0
-        #: past its ends), brought up to date between solves until it no longer changes
-        #: (``refresh_weights``), so that Newton sees no switch and the tangent stays exact
+        #: the weight of every point's partner place at the last update (projection.end_weight:
+        #: 1 on B's surface, falling smoothly to 0 past its ends).  A point with weight 1 there
+        #: follows its partner during a Newton solve; a point partly off keeps its weight for the
+        #: solve (a constant: the tangent stays exact), brought up to date between solves until
+        #: it no longer changes (``refresh_weights``): no switch anywhere
         self.weights = np.ones(self.points.n_points)
         self._saved_weights = self.weights.copy()
         self._cache = None
@@ -218,7 +223,11 @@ class Contact:
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
         pr = self.projector.project(idx, xA, x_of)
-        weight = np.minimum(self.weights[idx], pr.weight)
+        # a point fully on B's surface at the last update follows its partner's place (its
+        # weight falls smoothly as it slides past B's ends: no wild iterate acts through a far
+        # extrapolation); one that was partly off keeps that weight for the solve
+        frozen = self.weights[idx]
+        weight = np.where(frozen < 1.0, frozen * (pr.weight > 0.0), pr.weight)
         sums = np.stack([self.Phi @ (pr.g * weight), self.Phi @ weight], axis=1)
         if self.sum_over_ranks is not None:          # functions shared with another rank
             sums = self.sum_over_ranks(sums)
@@ -226,8 +235,12 @@ class Contact:
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
         z = xl.reshape(-1)[DOFS_PER_NODE * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
         prev = self.status[self.mults]
-        active = self.law.update(gbar, z, prev, self.tie_tolerance, self.mults, self.owned,
-                                 self.reduce) & support
+        if self.allow_update:
+            active = self.law.update(gbar, z, prev, self.tie_tolerance, self.mults, self.owned,
+                                     self.reduce) & support
+            self.allow_update = False
+        else:
+            active = prev & support
         self.status_changes += int(np.count_nonzero(active != prev))
         self.status[self.mults] = active
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
@@ -292,6 +305,7 @@ class Contact:
             self.status[self.mults] = st.z > self.tie_tolerance
         self.law.begin(phase)
         self._cache = None
+        self.allow_update = True
 
     def converged(self) -> bool:
         """Whether the last evaluation's projections all converged (this rank)."""

@@ -21,8 +21,8 @@ from .surface import closest_parameter, section_shift, shape_on_curve
 #: it; its weight then falls smoothly (C¹) to zero at CURVE_FADE_END, so that no point leaves the
 #: contact at once (a point switching off at 1.25 made Newton cycle between two states: the
 #: bulk-modulus sweep of the paper's columns, K = 0.90 GPa at ψ = 0°)
-CURVE_OVERHANG = 0.2
-CURVE_FADE_END = 0.25
+CURVE_OVERHANG = 0.25
+CURVE_FADE_END = 0.3
 #: likewise past B's beam ends (in element lengths): the end element's polynomial continues and
 #: the weight falls from 1 at the end to 0 at a quarter of an element beyond it
 END_FADE = 0.25

@@ -321,6 +321,12 @@ class Problem:
         """After a converged solve: whether the contact points' weights changed (collective)."""
         return self.contact is not None and self.contact.refresh_weights()
 
+    def next_iterate(self) -> None:
+        """A Newton iteration's Jacobian was taken (or reused): the next evaluation may
+        change the contact status (Contact.allow_update)."""
+        if self.contact is not None:
+            self.contact.allow_update = True
+
     def status_changes(self) -> int:
         """Contact status changes so far, summed over the ranks (collective)."""
         n = 0 if self.contact is None else self.contact.status_changes

@@ -208,6 +208,7 @@ class LoadStepper:
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
         self.chord.jacobian(snes, self._history, lambda: self.problem.jacobian(snes, X, J, P))
+        self.problem.next_iterate()
 
     def describe(self) -> str:
         ksp = self.snes.getKSP()

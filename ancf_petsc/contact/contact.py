@@ -207,7 +207,8 @@ class Contact:
         reused (the projection state is its result, so nothing else changes).  With the
         parallel hooks set (``sum_over_ranks``) this is collective: every rank calls it."""
         c = self._cache
-        hit = c is not None and c[1] is needed and np.array_equal(c[0], xl)
+        hit = (c is not None and c[1] is needed and np.array_equal(c[0], xl)
+               and not (self.allow_update and self.law.decides_activity))
         if self.all_ranks is not None:
             hit = self.all_ranks(hit)
         if hit:

@@ -48,6 +48,7 @@ class Problem:
         self.load_factor = 0.0
         self.timers = {"element_kernels": 0.0, "element_assembly": 0.0, "contact_projection": 0.0,
                        "contact_assembly": 0.0}
+        self._status_frozen = False             # contact status kept during SNES solves
         self.inverted = False                   # the last residual met det F <= 0
         self.contact_failed = False             # the last residual's contact projection failed
         lo, hi = layout.owned_nodes
@@ -323,9 +324,25 @@ class Problem:
 
     def next_iterate(self) -> None:
         """A Newton iteration's Jacobian was taken (or reused): the next evaluation may
-        change the contact status (Contact.allow_update)."""
-        if self.contact is not None:
+        change the contact status (Contact.allow_update), unless it is frozen."""
+        if self.contact is not None and not self._status_frozen:
             self.contact.allow_update = True
+
+    def freeze_status(self, frozen: bool) -> None:
+        """Keep the contact status during SNES solves (changed by ``update_status`` only)."""
+        self._status_frozen = frozen
+
+    def decides_activity(self) -> bool:
+        return self.contact is not None and self.contact.law.decides_activity
+
+    def update_status(self, X: PETSc.Vec) -> int:
+        """Let the law update the contact status at X; the number of changes (collective)."""
+        before = self.status_changes()
+        self.contact.allow_update = True
+        F = self.F.duplicate()
+        self.residual(None, X, F)
+        F.destroy()
+        return self.status_changes() - before
 
     def status_changes(self) -> int:
         """Contact status changes so far, summed over the ranks (collective)."""

@@ -24,20 +24,16 @@ from ..petsc.options import mumps_hint, petsc_message, solver_hint, used_anywher
 from ..petsc.problem import Problem
 from .chord import TangentReuse
 from .interrupt import RunInterrupted, stop_requested
+from .newton import PhasedNewton
 from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
                       solver_options)
 
-import os as _os
-_TRACE = bool(_os.environ.get("ANCF_TRACE_PHASES"))
 REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
            for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
 #: a converged step whose state is less stable than the last accepted one (more negative
 #: tangent eigenvalues) is cut back, at most ``solver.stability_cutbacks`` times per load level;
 #: then the less stable state is accepted (a genuine loss of stability)
 UNSTABLE_STEP = -1000
-#: Newton solves after the first at most, to bring contact points' weights up to date
-#: (Contact.refresh_weights); a weight that still changes then fails the step
-MAX_WEIGHT_UPDATES = 5
 REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
 #: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
 UNCLEAN_STATE = -1001
@@ -228,41 +224,14 @@ class LoadStepper:
 
     def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
                   from_rest: bool = False) -> tuple[int, int, float]:
-        """Newton at load factor ``lam`` from ``X``: one SNES solve per phase of the contact law
-        (``contact.laws.Phase``; one plain solve without contact), a phase taking further rounds
-        of iterations while its active set still changes.  Returns the last solve's reason, the
-        iterations of all of them and the final residual norm; ``history`` the residuals."""
-        P = self.problem
-        P.load_factor = lam
+        """Newton at load factor ``lam`` from ``X`` (``newton.PhasedNewton``: the contact law's
+        phases).  Returns the last solve's reason, the iterations of all of them and the final
+        residual norm; ``history`` the residuals."""
+        self.problem.load_factor = lam
         self.history = []
-        its, previous = 0, None
-        if from_rest and self.predictor is not None:
-            # the contact state of the touching, pressure-free start from the linearised
-            # complementarity problem (one factorisation: counted as a Newton iteration)
-            its += int(self.predictor.predict(X))
-        for phase in P.solve_phases(from_rest):
-            P.begin_phase(phase, previous)
-            for round_ in range(phase.extra_rounds + 1):
-                changes = P.status_changes()
-                reason, n = self._snes_solve(X, target, lam, reached)
-                its += n
-                if _TRACE:
-                    print(f"   lam {lam:.4g} {phase.name} round {round_}: {n} its, reason {reason}, "
-                          f"{P.status_changes() - changes} changes", flush=True)
-                if (reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
-                        or P.status_changes() == changes):
-                    break
-            if reason <= 0:
-                break
-            previous = phase
-        for _ in range(MAX_WEIGHT_UPDATES):
-            # contact points whose partners moved past B's ends changed weight: solve again
-            if reason <= 0 or not P.refresh_contact():
-                break
-            reason, n = self._snes_solve(X, target, lam, reached)
-            its += n
-            if _TRACE:
-                print(f"   lam {lam:.4g} weights changed: {n} its, reason {reason}", flush=True)
+        newton = PhasedNewton(self.problem, lambda Y: self._snes_solve(Y, target, lam, reached),
+                              self.predictor, self.linesearch)
+        reason, its = newton.solve(X, lam, from_rest)
         self.newton_iterations += its
         return reason, its, self.snes.getFunctionNorm()
 

@@ -1,0 +1,92 @@
+"""The Newton solves of one load increment: the contact law's phases around SNES.
+
+Without contact, or with sliding contact, an increment is one SNES solve.  A law that decides
+which constraints are active (unilateral) solves an increment in phases (``contact.laws``):
+bands of tolerated violations, then the exact rule, each phase taking extra rounds of
+``snes_max_it`` iterations while its active set still changes.  Two ways to change the status:
+
+* with the full Newton step (``-snes_linesearch_type basic``, the default), at every iterate
+  (a primal–dual active set inside Newton's iteration);
+* with a line search (bt, l2, cp), only between SNES solves: each solve keeps its active set,
+  so that the line search compares one smooth residual, and the status is updated at the
+  converged state and solved again until it no longer changes (at most ``MAX_STATUS_UPDATES``).
+
+From rest, the complementarity predictor (petsc/complementarity.py) sets the first status.
+After the phases, contact points whose partners slid past B's ends get their new weights
+(Contact.refresh_weights) and the state is solved again until the weights settle.
+"""
+from __future__ import annotations
+
+import os
+from typing import Callable
+
+from petsc4py import PETSc
+
+#: Newton solves after the first at most, to bring contact points' weights up to date
+MAX_WEIGHT_UPDATES = 5
+#: status updates between converged solves at most (line-search mode)
+MAX_STATUS_UPDATES = 40
+TRACE = bool(os.environ.get("ANCF_TRACE_PHASES"))
+
+
+class PhasedNewton:
+    """Runs the SNES solves of one increment (module docstring).  ``snes_solve(X)`` is one SNES
+    solve returning (reason, iterations); ``predictor`` the complementarity predictor or None."""
+
+    def __init__(self, problem, snes_solve: Callable, predictor=None, line_search: str = "basic"):
+        self.problem = problem
+        self.snes_solve = snes_solve
+        self.predictor = predictor
+        self.between_solves = line_search != "basic"
+
+    def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
+        """(reason of the last solve, Newton iterations of all of them)."""
+        P = self.problem
+        its, previous, reason = 0, None, 0
+        P.freeze_status(self.between_solves)
+        if from_rest and self.predictor is not None:
+            # the contact state of the touching, pressure-free start from the linearised
+            # complementarity problem (one factorisation: counted as a Newton iteration)
+            its += int(self.predictor.predict(X))
+        for phase in P.solve_phases(from_rest):
+            P.begin_phase(phase, previous)
+            reason, n = self._phase(X, lam, phase)
+            its += n
+            if reason <= 0:
+                break
+            previous = phase
+        for _ in range(MAX_WEIGHT_UPDATES):
+            # contact points whose partners moved past B's ends changed weight: solve again
+            if reason <= 0 or not P.refresh_contact():
+                break
+            reason, n = self.snes_solve(X)
+            its += n
+            self._trace(lam, "weights changed", n, reason)
+        return reason, its
+
+    def _phase(self, X, lam: float, phase) -> tuple[int, int]:
+        P, its = self.problem, 0
+        if self.between_solves and P.decides_activity():
+            for update in range(MAX_STATUS_UPDATES):
+                reason, n = self.snes_solve(X)
+                its += n
+                changes = P.update_status(X) if reason > 0 else 0
+                self._trace(lam, f"{phase.name} update {update}", n, reason, changes)
+                if reason <= 0 or changes == 0:
+                    return reason, its
+            return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, its
+        for round_ in range(phase.extra_rounds + 1):
+            changes = P.status_changes()
+            reason, n = self.snes_solve(X)
+            its += n
+            self._trace(lam, f"{phase.name} round {round_}", n, reason, P.status_changes() - changes)
+            if (reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
+                    or P.status_changes() == changes):
+                break
+        return reason, its
+
+    @staticmethod
+    def _trace(lam, what, n, reason, changes=None) -> None:
+        if TRACE:
+            extra = "" if changes is None else f", {changes} status changes"
+            print(f"   load factor {lam:.6g} {what}: {n} Newton its, reason {reason}{extra}", flush=True)

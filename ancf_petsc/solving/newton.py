@@ -70,9 +70,13 @@ class PhasedNewton:
             for update in range(MAX_STATUS_UPDATES):
                 reason, n = self.snes_solve(X)
                 its += n
-                changes = P.update_status(X) if reason > 0 else 0
+                # a solve that stalls (line search, iterations) may stall on a wrong active
+                # set: the status at its last iterate decides whether to go on
+                stalled = reason in (PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH,
+                                     PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
+                changes = P.update_status(X) if reason > 0 or stalled else 0
                 self._trace(lam, f"{phase.name} update {update}", n, reason, changes)
-                if reason <= 0 or changes == 0:
+                if changes == 0:
                     return reason, its
             return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, its
         for round_ in range(phase.extra_rounds + 1):

@@ -28,11 +28,7 @@ from .multipliers import build_space
 from .points import build_points
 from .projection import Projector
 from .state import ContactState
-
-
-#: a change of a point's weight (``refresh_weights``) beyond this asks for another Newton solve
-#: (a weight off by 1e-6 moves a weighted gap by 1e-6 of the point's local gap, ~1e-11 m)
-WEIGHT_TOL = 1e-6
+from .weights import WEIGHT_TOL, PointWeights
 
 
 def reference_stiffness(interfaces) -> float:
@@ -86,13 +82,8 @@ class Contact:
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
-        #: the weight of every point's partner place at the last update (projection.end_weight:
-        #: 1 on B's surface, falling smoothly to 0 past its ends).  A point with weight 1 there
-        #: follows its partner during a Newton solve; a point partly off keeps its weight for the
-        #: solve (a constant: the tangent stays exact), brought up to date between solves until
-        #: it no longer changes (``refresh_weights``): no switch anywhere
-        self.weights = np.ones(self.points.n_points)
-        self._saved_weights = self.weights.copy()
+        #: the points' weights when their partners slide past B's ends (weights.py)
+        self.weights = PointWeights(self.points.n_points)
         self._cache = None
         # the rank's numbering (``set_numbering``): PETSc block of every element node, multiplier
         # and segment multiplier node; the local segments, points and multipliers, which of those
@@ -104,7 +95,7 @@ class Contact:
         self.Phi = None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
-        self._check_reference_gaps()
+        check_reference_gaps(self)
 
     # ---------------------------------------------------------------- numbering and layout
     @property
@@ -224,11 +215,7 @@ class Contact:
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
         pr = self.projector.project(idx, xA, x_of)
-        # a point fully on B's surface at the last update follows its partner's place (its
-        # weight falls smoothly as it slides past B's ends: no wild iterate acts through a far
-        # extrapolation); one that was partly off keeps that weight for the solve
-        frozen = self.weights[idx]
-        weight = np.where(frozen < 1.0, frozen * (pr.weight > 0.0), pr.weight)
+        weight = self.weights.effective(idx, pr.weight)
         sums = np.stack([self.Phi @ (pr.g * weight), self.Phi @ weight], axis=1)
         if self.sum_over_ranks is not None:          # functions shared with another rank
             sums = self.sum_over_ranks(sums)
@@ -236,7 +223,7 @@ class Contact:
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
         z = xl.reshape(-1)[DOFS_PER_NODE * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
         prev = self.status[self.mults]
-        if self.allow_update:
+        if self.allow_update or not self.law.decides_activity:
             active = self.law.update(gbar, z, prev, self.tie_tolerance, self.mults, self.owned,
                                      self.reduce) & support
             self.allow_update = False
@@ -276,28 +263,6 @@ class Contact:
         return blocks.jacobian_blocks(self, self.evaluate(xl, needed), fixed_mask)
 
     # ---------------------------------------------------------------- checks
-    def _check_reference_gaps(self) -> None:
-        """The reference configuration must be gap-free (sliding) or not penetrating
-        (unilateral): evaluated with every point local, then the projection state is reset."""
-        n_blocks = self.model.n_nodes + self.space.n_nodes
-        xl = np.zeros((n_blocks, 6, 3))
-        xl[:self.model.n_nodes] = self.model.q0
-        st = self.evaluate(xl, np.arange(n_blocks))
-        size = max(np.sqrt(b.section.area) for b in self.model.beams)
-        g = st.pr.g[st.pr.valid]
-        self.projector.restore()
-        self._cache = None
-        if self.law.name == "unilateral":
-            if not st.pr.in_window or np.min(g, initial=0.0) < -1e-9 * size:
-                raise ContactSetupError("the bodies interpenetrate in the reference configuration "
-                                            f"(gap {np.min(g):.3e} m); separate them")
-            return
-        gap = np.linalg.norm(st.pr.d, axis=1)
-        if not st.pr.in_window or gap.max() > 1e-9 * size:
-            raise ContactSetupError(f"the interfaces do not match in the reference configuration "
-                                        f"(largest gap {gap.max():.3e} m); neighbours must share "
-                                        "their interface curve and element boundaries")
-
     def begin_phase(self, phase: Phase, previous: Phase | None = None) -> None:
         """Start a phase of a Newton solve (laws.Phase); after a phase that held every
         constraint, the status follows the multipliers' signs (a pull releases)."""
@@ -316,7 +281,7 @@ class Contact:
         """A restart's projection state (points, 3) and multiplier status (multipliers,)."""
         if projection is not None:
             self.projector.set_state(projection)
-            self.weights = self.projector.weights_of_state()
+            self.weights.set(self.projector.weights_of_state())
         if status is not None:
             self.status = np.asarray(status, dtype=bool).copy()
         self._cache = None
@@ -325,24 +290,20 @@ class Contact:
     def checkpoint(self) -> None:
         self.projector.checkpoint()
         self._saved_status = self.status.copy()
-        self._saved_weights = self.weights.copy()
+        self.weights.checkpoint()
 
     def restore(self) -> None:
         self._cache = None
         self.projector.restore()
         self.status = self._saved_status.copy()
-        self.weights = self._saved_weights.copy()
+        self.weights.restore()
 
     def refresh_weights(self) -> bool:
         """After a converged solve: bring the points' weights up to their partners' places in
         the last evaluation; True (on every rank) when one changed by more than WEIGHT_TOL, so
         that the state must be solved again (collective)."""
         st = self._cache[2] if self._cache is not None else None
-        change = 0.0
-        if st is not None:
-            new = st.pr.weight
-            change = float(np.max(np.abs(new - self.weights[st.pr.idx]), initial=0.0))
-            self.weights[st.pr.idx] = new
+        change = 0.0 if st is None else self.weights.refresh(st.pr.idx, st.pr.weight)
         changed = bool(self.reduce(np.array([change]), "max")[0] > WEIGHT_TOL)
         if changed:
             self._cache = None                  # the residual at this state changed
@@ -372,6 +333,28 @@ class Contact:
     def point_fields(self, xl: np.ndarray, needed: np.ndarray, q0_of) -> dict:
         """Per local point and owned multiplier fields for the output (``reports.point_fields``)."""
         return reports.point_fields(self, self.evaluate(xl, needed), q0_of)
+
+
+def check_reference_gaps(contact) -> None:
+    """The reference configuration must be gap-free (sliding) or not penetrating
+    (unilateral): evaluated with every point local, then the projection state is reset."""
+    n_blocks = contact.model.n_nodes + contact.space.n_nodes
+    xl = np.zeros((n_blocks, 6, 3))
+    xl[:contact.model.n_nodes] = contact.model.q0
+    st = contact.evaluate(xl, np.arange(n_blocks))
+    size = max(np.sqrt(b.section.area) for b in contact.model.beams)
+    g = st.pr.g[st.pr.valid]
+    contact.restore()
+    if contact.law.decides_activity:          # unilateral: touching or apart
+        if not st.pr.in_window or np.min(g, initial=0.0) < -1e-9 * size:
+            raise ContactSetupError("the bodies interpenetrate in the reference configuration "
+                                f"(gap {np.min(g):.3e} m); separate them")
+        return
+    gap = np.linalg.norm(st.pr.d, axis=1)
+    if not st.pr.in_window or gap.max() > 1e-9 * size:
+        raise ContactSetupError(f"the interfaces do not match in the reference configuration "
+                                f"(largest gap {gap.max():.3e} m); neighbours must share "
+                                "their interface curve and element boundaries")
 
 
 def build_contact(model, spec, log=print) -> Contact:

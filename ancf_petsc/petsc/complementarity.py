@@ -68,6 +68,7 @@ class ComplementarityPredictor:
         pc.setFactorSolverType("mumps")
         self.ksp.setOptionsPrefix("ancf_lcp_")
         self.solves = 0
+        self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
 
     @staticmethod
     def applies(problem) -> bool:
@@ -101,12 +102,32 @@ class ComplementarityPredictor:
 
     def predict(self, X: PETSc.Vec) -> bool:
         """Replace X by the Josephy–Newton step from X and set the contact status from the
-        solution; False (X unchanged) when a factorisation failed."""
+        solution; False (X and the status unchanged) when a factorisation failed or S is not
+        positive definite."""
+        c = self.problem.contact
+        law_phase, status = c.law.phase, c.status.copy()
+        vecs = []
+        try:
+            lcp = self._linearised(X, vecs)
+            z_new = self._solve_lcp(lcp[0], lcp[1]) if lcp is not None else None
+        except np.linalg.LinAlgError:            # S not positive definite: no convex LCP
+            z_new = None
+        c.begin_phase(law_phase)
+        if z_new is None:
+            c.status[:] = status
+        else:
+            self._step(X, z_new, *vecs[:3])
+            self.solves += 1
+        for v in vecs:
+            v.destroy()
+        return z_new is not None
+
+    def _linearised(self, X: PETSc.Vec, vecs: list):
+        """(S, d) of the LCP at X, or None if a factorisation failed; ``vecs`` receives the
+        objects the step needs (B = −Gᵀ, Xs = K⁻¹B, y = −K⁻¹F_q, then work vectors)."""
         P, c = self.problem, self.problem.contact
-        law_phase = c.law.phase
-        status = c.status.copy()
         F = P.F.duplicate()
-        B = Xs = y = rhs = None
+        vecs.append(F)
         try:
             # held: the constraint gradients (columns −Gᵀ), c = k_s ḡ and F_q with every z
             c.begin_phase(HELD)
@@ -115,6 +136,7 @@ class ComplementarityPredictor:
             B = self._columns(P.J)
             cvec = -_owned_values(F, self.dofs, self.comm)
             rhs = F.copy()
+            vecs.append(rhs)
             rhs.scale(-1.0)
             self._set_owned(rhs, np.zeros(len(self.dofs)))          # a probe's z rows: 0
             # probe: K with every multiplier acting on the bodies, z rows decoupled
@@ -124,43 +146,32 @@ class ComplementarityPredictor:
             self.ksp.setOperators(P.J)
             self.ksp.setFromOptions()
             self.ksp.setUp()
-            Xs = B.duplicate()
+            Xs, y = B.duplicate(), X.duplicate()
+            vecs[:0] = [B, Xs, y]
             self.ksp.getPC().getFactorMatrix().matSolve(B, Xs)      # K⁻¹(−Gᵀ)
-            y = X.duplicate()
             self.ksp.solve(rhs, y)                                   # −K⁻¹ F_q
         except PETSc.Error:
-            for obj in (B, Xs, y, rhs, F):
-                if obj is not None:
-                    obj.destroy()
-            c.status[:] = status
-            c.begin_phase(law_phase)
-            return False
-        self.solves += 1
+            return None
         Bl, Xl = B.getDenseArray(readonly=True), Xs.getDenseArray(readonly=True)
         S = self.comm.allreduce(Bl.T @ Xl)
-        S = 0.5 * (S + S.T)
         Bty = self.comm.allreduce(Bl.T @ y.getArray(readonly=True))
         z = _owned_values(X, self.dofs, self.comm)
-        d = cvec - Bty - S @ z
-        try:
-            z_new = self._solve_lcp(S, d)
-        except np.linalg.LinAlgError:            # S not positive definite: no convex LCP
-            for obj in (B, Xs, y, rhs, F):
-                obj.destroy()
-            c.status[:] = status
-            c.begin_phase(law_phase)
-            return False
-        dz = z_new - z
-        # the step: Δq = y − Xs Δz on the beams' DOFs, Δz on the multipliers
-        step = y.duplicate()
+        S = 0.5 * (S + S.T)
+        self._z = z
+        return S, cvec - Bty - S @ z
+
+    def _step(self, X: PETSc.Vec, z_new: np.ndarray, B, Xs, y) -> None:
+        """X += (Δq = y − Xs Δz, Δz), as far as it leaves a state the residual is defined at
+        (no inverted element, every projection found: a large first increment's linearised
+        step may not), halving it up to MAX_HALVINGS times; the status from z_new."""
+        P, c = self.problem, self.problem.contact
+        dz = z_new - self._z
+        step, F = y.duplicate(), y.duplicate()
         dzv = self._dense_vec(Xs, dz)
         Xs.mult(dzv, step)
         step.aypx(-1.0, y)
         self._set_owned(step, dz)
         c.status[:] = z_new > c.tie_tolerance
-        c.begin_phase(law_phase)
-        # the step as far as it leaves a state the residual is defined at (no inverted element,
-        # every projection found): a large first increment's linearised step may not
         alpha = 1.0
         for _ in range(MAX_HALVINGS + 1):
             X.axpy(alpha, step)
@@ -170,12 +181,9 @@ class ComplementarityPredictor:
             X.axpy(-alpha, step)
             c.projector.restore()              # the failed trial's projections are no start
             alpha *= 0.5
-        else:
-            alpha = 0.0
-        c.status[:] = z_new > c.tie_tolerance        # the residual evaluations keep the status
-        for obj in (B, Xs, y, F, rhs, step, dzv):
-            obj.destroy()
-        return True
+        c.status[:] = z_new > c.tie_tolerance  # the residual evaluations keep the status
+        for v in (step, F, dzv):
+            v.destroy()
 
     def _set_owned(self, vec: PETSc.Vec, values: np.ndarray) -> None:
         """vec[dof_k] = values[k] for the multipliers this rank owns."""

@@ -18,7 +18,6 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from ..contact.laws import NEWTON
 from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
@@ -48,7 +47,6 @@ class Problem:
         self.load_factor = 0.0
         self.timers = {"element_kernels": 0.0, "element_assembly": 0.0, "contact_projection": 0.0,
                        "contact_assembly": 0.0}
-        self._status_frozen = False             # contact status kept during SNES solves
         self.inverted = False                   # the last residual met det F <= 0
         self.contact_failed = False             # the last residual's contact projection failed
         lo, hi = layout.owned_nodes
@@ -308,46 +306,6 @@ class Problem:
         """After SNES converged: did the last residual use converged contact projections? (collective)"""
         ok = self.contact is None or self.contact.converged()
         return bool(self.comm.tompi4py().allreduce(int(not ok)) == 0)
-
-    def solve_phases(self, from_rest: bool) -> list:
-        """The SNES solves of one load increment (``contact.laws.Phase``): the contact law's,
-        or one Newton solve."""
-        return [NEWTON] if self.contact is None else self.contact.law.phases(from_rest)
-
-    def begin_phase(self, phase, previous) -> None:
-        if self.contact is not None:
-            self.contact.begin_phase(phase, previous)
-
-    def refresh_contact(self) -> bool:
-        """After a converged solve: whether the contact points' weights changed (collective)."""
-        return self.contact is not None and self.contact.refresh_weights()
-
-    def next_iterate(self) -> None:
-        """A Newton iteration's Jacobian was taken (or reused): the next evaluation may
-        change the contact status (Contact.allow_update), unless it is frozen."""
-        if self.contact is not None and not self._status_frozen:
-            self.contact.allow_update = True
-
-    def freeze_status(self, frozen: bool) -> None:
-        """Keep the contact status during SNES solves (changed by ``update_status`` only)."""
-        self._status_frozen = frozen
-
-    def decides_activity(self) -> bool:
-        return self.contact is not None and self.contact.law.decides_activity
-
-    def update_status(self, X: PETSc.Vec) -> int:
-        """Let the law update the contact status at X; the number of changes (collective)."""
-        before = self.status_changes()
-        self.contact.allow_update = True
-        F = self.F.duplicate()
-        self.residual(None, X, F)
-        F.destroy()
-        return self.status_changes() - before
-
-    def status_changes(self) -> int:
-        """Contact status changes so far, summed over the ranks (collective)."""
-        n = 0 if self.contact is None else self.contact.status_changes
-        return int(self.comm.tompi4py().allreduce(n))
 
     def checkpoint(self) -> None:
         """Called at every converged state: history the residual depends on (contact projections)."""

@@ -22,6 +22,8 @@ from typing import Callable
 
 from petsc4py import PETSc
 
+from ..contact.laws import NEWTON
+
 #: Newton solves after the first at most, to bring contact points' weights up to date
 MAX_WEIGHT_UPDATES = 5
 #: status updates between converged solves at most (line-search mode)
@@ -29,27 +31,72 @@ MAX_STATUS_UPDATES = 40
 TRACE = bool(os.environ.get("ANCF_TRACE_PHASES"))
 
 
+class ContactSteps:
+    """The contact law's part in one increment's solves, on the problem's contact (none: one
+    plain Newton solve).  Collective where it says so."""
+
+    def __init__(self, problem):
+        self.problem, self.contact = problem, problem.contact
+        self.frozen = False            # the status is kept during SNES solves (line searches)
+
+    def phases(self, from_rest: bool) -> list:
+        return [NEWTON] if self.contact is None else self.contact.law.phases(from_rest)
+
+    def begin(self, phase, previous) -> None:
+        if self.contact is not None:
+            self.contact.begin_phase(phase, previous)
+
+    @property
+    def decides_activity(self) -> bool:
+        return self.contact is not None and self.contact.law.decides_activity
+
+    def next_iterate(self) -> None:
+        """A Newton iteration's Jacobian was taken (or reused): the next evaluation may change
+        the status (Contact.allow_update), unless it is kept during solves."""
+        if self.contact is not None and not self.frozen:
+            self.contact.allow_update = True
+
+    def refresh_weights(self) -> bool:
+        """After a converged solve: did a contact point's weight change? (collective)"""
+        return self.contact is not None and self.contact.refresh_weights()
+
+    def status_changes(self) -> int:
+        """Status changes so far, summed over the ranks (collective)."""
+        n = 0 if self.contact is None else self.contact.status_changes
+        return int(self.problem.comm.tompi4py().allreduce(n))
+
+    def update_status(self, X: PETSc.Vec) -> int:
+        """Let the law update the status at X: the number of changes (collective)."""
+        before = self.status_changes()
+        self.contact.allow_update = True
+        F = self.problem.F.duplicate()
+        self.problem.residual(None, X, F)
+        F.destroy()
+        return self.status_changes() - before
+
+
 class PhasedNewton:
     """Runs the SNES solves of one increment (module docstring).  ``snes_solve(X)`` is one SNES
     solve returning (reason, iterations); ``predictor`` the complementarity predictor or None."""
 
-    def __init__(self, problem, snes_solve: Callable, predictor=None, line_search: str = "basic"):
-        self.problem = problem
+    def __init__(self, steps: ContactSteps, snes_solve: Callable, predictor=None,
+                 line_search: str = "basic"):
+        self.steps = steps
         self.snes_solve = snes_solve
         self.predictor = predictor
         self.between_solves = line_search != "basic"
 
     def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
         """(reason of the last solve, Newton iterations of all of them)."""
-        P = self.problem
+        P = self.steps
         its, previous, reason = 0, None, 0
-        P.freeze_status(self.between_solves)
+        P.frozen = self.between_solves
         if from_rest and self.predictor is not None:
             # the contact state of the touching, pressure-free start from the linearised
             # complementarity problem (one factorisation: counted as a Newton iteration)
             its += int(self.predictor.predict(X))
-        for phase in P.solve_phases(from_rest):
-            P.begin_phase(phase, previous)
+        for phase in P.phases(from_rest):
+            P.begin(phase, previous)
             reason, n = self._phase(X, lam, phase)
             its += n
             if reason <= 0:
@@ -57,7 +104,7 @@ class PhasedNewton:
             previous = phase
         for _ in range(MAX_WEIGHT_UPDATES):
             # contact points whose partners moved past B's ends changed weight: solve again
-            if reason <= 0 or not P.refresh_contact():
+            if reason <= 0 or not P.refresh_weights():
                 break
             reason, n = self.snes_solve(X)
             its += n
@@ -65,8 +112,8 @@ class PhasedNewton:
         return reason, its
 
     def _phase(self, X, lam: float, phase) -> tuple[int, int]:
-        P, its = self.problem, 0
-        if self.between_solves and P.decides_activity():
+        P, its = self.steps, 0
+        if self.between_solves and P.decides_activity:
             for update in range(MAX_STATUS_UPDATES):
                 reason, n = self.snes_solve(X)
                 its += n

@@ -30,7 +30,8 @@ from ..physics.element3363 import DOFS_PER_NODE
 from .interrupt import RunInterrupted
 from .linear import choose as choose_linear
 from .options import matrix_type
-from .stepper import LoadStepFailure, LoadStepper, PathState
+from .records import LoadStepFailure, PathState
+from .stepper import LoadStepper
 from .supports import free_rigid_motions
 
 

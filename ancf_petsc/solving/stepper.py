@@ -10,7 +10,6 @@ Near convergence a Newton step may reuse the last factored tangent (``chord.py``
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -19,78 +18,16 @@ from petsc4py import PETSc
 from ..config.specs import SolverSpec
 from ..petsc import logging
 from ..petsc.complementarity import ComplementarityPredictor
-from ..petsc.inertia import mumps_error, pivot_counts
-from ..petsc.options import mumps_hint, petsc_message, solver_hint, used_anywhere
+from ..petsc.inertia import pivot_counts
+from ..petsc.options import petsc_message, used_anywhere
 from ..petsc.problem import Problem
+from . import solver_messages
 from .chord import TangentReuse
 from .interrupt import RunInterrupted, stop_requested
-from .newton import PhasedNewton
-from .options import (SolverOptionError, configure_options, factor_package, refused, run_defaults,
-                      solver_options)
-
-REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
-           for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
-#: a converged step whose state is less stable than the last accepted one (more negative
-#: tangent eigenvalues) is cut back, at most ``solver.stability_cutbacks`` times per load level;
-#: then the less stable state is accepted (a genuine loss of stability)
-UNSTABLE_STEP = -1000
-REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
-#: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
-UNCLEAN_STATE = -1001
-REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
-
-
-def reason_name(reason: int) -> str:
-    return REASONS.get(reason, str(reason))
-
-
-class LoadStepFailure(Exception):
-    """A requested load level could not be reached; raised identically on every rank.
-    ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...)."""
-
-    def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
-                 detail: str = ""):
-        msg = (f"could not reach load factor {target:g}: SNES failed at load factor {attempted:.6g} "
-               f"(last converged {reached:.6g}) with {reason}{detail}")
-        if inverted:
-            msg += " (an element was inverted, J <= 0)"
-        super().__init__(msg)
-        self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
-        self.code = reason.split()[0] if reason else "FAILED"
-        self.inverted = inverted
-
-
-@dataclass
-class StepRecord:
-    load_factor: float
-    iterations: int           # Newton iterations summed over the sub-steps of this level
-    substeps: int
-    cutbacks: int
-    reason: str               # reason of the final sub-step
-    residual_norm: float
-    wall_time: float
-    iteration_history: list = field(default_factory=list)
-    # negative eigenvalues of the last factored tangent on the constraint surface (inertia of
-    # its LDLᵀ factor less one per contact constraint): 0 = a stable equilibrium, > 0 = a saddle;
-    # None when the PC is not MUMPS LDLᵀ.  The tangent is that of the last Newton iterate, or of
-    # the one before after a chord step (solver.reuse_tangent), a step of ~‖F‖ / k away
-    negative_eigenvalues: int | None = None
-    increment: float = 0.0          # the load increment the next level starts with
-    last_increment: float = 0.0     # the last accepted one (secant predictor)
-
-
-@dataclass
-class PathState:
-    """Where the load path is: the state, the last accepted increment of it and of the load,
-    the next increment, and the stability of the last accepted state.  Everything a restart
-    needs to continue exactly as an uninterrupted run would."""
-    X: PETSc.Vec
-    dX_last: PETSc.Vec
-    lam: float
-    dlam: float
-    dlam_last: float
-    accepted_negative: int = 0
-
+from .newton import ContactSteps, PhasedNewton
+from .options import SolverOptionError, configure_options, refused, run_defaults
+from .records import (UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
+                      reason_name)
 
 class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES."""
@@ -140,11 +77,12 @@ class LoadStepper:
         #: the fascicle Schur preconditioner (petsc/fieldsplit.py) with solver.linear: fieldsplit
         self.fascicle_schur = schur
         self.chord = TangentReuse(spec.reuse_tangent, schur)
+        self.contact_steps = ContactSteps(problem)
         #: the complementarity predictor of a unilateral law's first increment (up to
         #: complementarity.MAX_MULTIPLIERS multipliers)
         self.predictor = (ComplementarityPredictor(problem)
                           if ComplementarityPredictor.applies(problem) else None)
-        self._ksp_reason = 0
+        self.ksp_reason = 0
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
 
@@ -204,23 +142,11 @@ class LoadStepper:
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
         self.chord.jacobian(snes, self._history, lambda: self.problem.jacobian(snes, X, J, P))
-        self.problem.next_iterate()
+        self.contact_steps.next_iterate()
 
     def describe(self) -> str:
-        ksp = self.snes.getKSP()
-        pc = ksp.getPC()
-        ls = self.linesearch
-        extra = ""
-        if pc.getType() in ("lu", "cholesky"):
-            extra = f" ({pc.getFactorSolverType()})"
-        if self.linear == "fieldsplit":
-            extra = " (fascicle Schur: dense fascicle factors, MUMPS LDLT on the multipliers)"
-        rtol, atol, stol, maxit = self.snes.getTolerances()
-        return (f"SNES {self.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
-                f"{pc.getType()}{extra} on {self.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
-                f"stol {stol:.1e} max_it {maxit}; "
-                f"rounding floor |F(q0,0)| {self.rounding_floor:.1e}"
-                + ("; chord steps near convergence" if self.spec.reuse_tangent else ""))
+        """The solver in one line (the run's header)."""
+        return solver_messages.describe(self)
 
     def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
                   from_rest: bool = False) -> tuple[int, int, float]:
@@ -229,7 +155,7 @@ class LoadStepper:
         residual norm; ``history`` the residuals."""
         self.problem.load_factor = lam
         self.history = []
-        newton = PhasedNewton(self.problem, lambda Y: self._snes_solve(Y, target, lam, reached),
+        newton = PhasedNewton(self.contact_steps, lambda Y: self._snes_solve(Y, target, lam, reached),
                               self.predictor, self.linesearch)
         reason, its = newton.solve(X, lam, from_rest)
         self.newton_iterations += its
@@ -250,9 +176,9 @@ class LoadStepper:
                 why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
                         "move or an integration rule with zero-energy modes)")
             raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
-                                  f" in the linear solver ({self._solver_text()}): "
+                                  f" in the linear solver ({solver_messages.solver_text(self)}): "
                                   f"{why}") from None
-        self._ksp_reason = self.snes.getKSP().getConvergedReason()
+        self.ksp_reason = self.snes.getKSP().getConvergedReason()
         self.history += self._history
         return self.snes.getConvergedReason(), self.snes.getIterationNumber()
 
@@ -262,28 +188,6 @@ class LoadStepper:
         if signum:
             raise RunInterrupted(signum, f"on the way to load factor {target:g} (last converged "
                                          f"level {level:g})")
-
-    def _linear_solver_detail(self, reason: int) -> str:
-        """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
-        if reason != PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
-            return ""
-        kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
-                   if not k.startswith("_")}.get(self._ksp_reason, str(self._ksp_reason))
-        infog1 = mumps_error(self.snes.getKSP())
-        if self.linear == "fieldsplit":
-            hint = "solver.linear: direct factors the whole Jacobian instead"
-        elif infog1 is not None:
-            hint = mumps_hint(infog1)
-        else:
-            pc, factor = factor_package(self.petsc_options, self.prefix)
-            hint = solver_hint(pc, factor, self.problem.comm.size, PETSc.Sys.hasExternalPackage)
-        return f" (the linear solver {self._solver_text()} stopped with {kreason}; {hint})"
-
-    def _solver_text(self) -> str:
-        """The linear solver in effect, for messages."""
-        if self.linear == "fieldsplit":
-            return "FGMRES with the fascicle Schur preconditioner, solver.linear: fieldsplit"
-        return solver_options(self.petsc_options, self.prefix)
 
     def _residual_small(self, fnorm: float, lam: float) -> bool:
         """A 'converged' SNES (e.g. on a tiny step) must also have a small residual."""
@@ -418,4 +322,4 @@ class LoadStepper:
         if tally["consecutive"] > self.spec.max_cutbacks or path.dlam < self.spec.min_increment:
             P.load_factor = path.lam
             raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                  self._linear_solver_detail(reason))
+                                  solver_messages.linear_solver_detail(self, reason))

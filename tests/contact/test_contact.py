@@ -39,6 +39,7 @@ MODES = {"sliding": {"mode": "sliding"},
 
 
 def _active(P, X):
+    P.contact.allow_update = True    # the law may change the status at this evaluation
     return P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).active
 
 

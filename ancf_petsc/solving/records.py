@@ -1,0 +1,70 @@
+"""What the load stepper reports: SNES reason names, the failure of a load level, the record of
+a converged level and the state of the load path (everything a restart needs)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from petsc4py import PETSc
+
+REASONS = {getattr(PETSc.SNES.ConvergedReason, k): k
+           for k in dir(PETSc.SNES.ConvergedReason) if not k.startswith("_")}
+#: a converged step whose state is less stable than the last accepted one (more negative
+#: tangent eigenvalues) is cut back, at most ``solver.stability_cutbacks`` times per load level;
+#: then the less stable state is accepted (a genuine loss of stability)
+UNSTABLE_STEP = -1000
+REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
+#: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
+UNCLEAN_STATE = -1001
+REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
+
+
+def reason_name(reason: int) -> str:
+    return REASONS.get(reason, str(reason))
+
+
+class LoadStepFailure(Exception):
+    """A requested load level could not be reached; raised identically on every rank.
+    ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...)."""
+
+    def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
+                 detail: str = ""):
+        msg = (f"could not reach load factor {target:g}: SNES failed at load factor {attempted:.6g} "
+               f"(last converged {reached:.6g}) with {reason}{detail}")
+        if inverted:
+            msg += " (an element was inverted, J <= 0)"
+        super().__init__(msg)
+        self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
+        self.code = reason.split()[0] if reason else "FAILED"
+        self.inverted = inverted
+
+
+@dataclass
+class StepRecord:
+    load_factor: float
+    iterations: int           # Newton iterations summed over the sub-steps of this level
+    substeps: int
+    cutbacks: int
+    reason: str               # reason of the final sub-step
+    residual_norm: float
+    wall_time: float
+    iteration_history: list = field(default_factory=list)
+    # negative eigenvalues of the last factored tangent on the constraint surface (inertia of
+    # its LDLᵀ factor less one per contact constraint): 0 = a stable equilibrium, > 0 = a saddle;
+    # None when the PC is not MUMPS LDLᵀ.  The tangent is that of the last Newton iterate, or of
+    # the one before after a chord step (solver.reuse_tangent), a step of ~‖F‖ / k away
+    negative_eigenvalues: int | None = None
+    increment: float = 0.0          # the load increment the next level starts with
+    last_increment: float = 0.0     # the last accepted one (secant predictor)
+
+
+@dataclass
+class PathState:
+    """Where the load path is: the state, the last accepted increment of it and of the load,
+    the next increment, and the stability of the last accepted state.  Everything a restart
+    needs to continue exactly as an uninterrupted run would."""
+    X: PETSc.Vec
+    dX_last: PETSc.Vec
+    lam: float
+    dlam: float
+    dlam_last: float
+    accepted_negative: int = 0

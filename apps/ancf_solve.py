@@ -23,6 +23,13 @@ def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
         if arg == "-help":
             petsc.append(arg)
             continue
+        if arg.startswith("-") and not arg.startswith("--") and len(arg) > 1:
+            # one of the program's own options written with one dash would go to PETSc, and a
+            # restart meant for DIR would start afresh: refuse it before anything is written
+            name = arg[1:].split("=", 1)[0].replace("_", "-")
+            if "--" + name in OPTIONS:
+                return [], [], (f"{arg.split('=', 1)[0]}: ancf-solve's own options take two dashes "
+                                f"(--{name}); one dash is for PETSc options such as -snes_monitor")
         if arg.startswith("--") and len(arg) > 2:
             name = arg.split("=", 1)[0]
             if name not in OPTIONS and name != "--":

@@ -25,15 +25,12 @@ def main(argv: list[str] | None = None) -> int:
     from mpi4py import MPI  # noqa: F401  (before petsc4py)
     import petsc4py
     petsc4py.init([sys.argv[0]] + petsc_args)
-    import yaml
 
-    from ancf_petsc.workflows.study import StudyError
+    from ancf_petsc.workflows.study import StudyError, read_yaml
     log = (lambda msg: print(msg, flush=True))
     try:
-        if not os.path.isfile(args.study):
-            raise StudyError("", f"{args.study}: no such file")
-        with open(args.study) as fh:
-            kind = (yaml.safe_load(fh) or {}).get("kind", "pareto")
+        doc = read_yaml(args.study)
+        kind = doc.get("kind", "pareto") if isinstance(doc, dict) else "pareto"
         if kind == "pareto":
             from ancf_petsc.workflows.study import load_study, run_study
             spec = load_study(args.study)
@@ -50,9 +47,6 @@ def main(argv: list[str] | None = None) -> int:
             raise StudyError("kind", f"must be pareto or stability; got {kind!r}")
     except StudyError as exc:
         print(f"ancf-study: {args.study}: {exc}", file=sys.stderr)
-        return 2
-    except yaml.YAMLError as exc:
-        print(f"ancf-study: {args.study}: not valid YAML ({str(exc).splitlines()[0]})", file=sys.stderr)
         return 2
     return 0
 

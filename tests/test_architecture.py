@@ -16,7 +16,7 @@ from helpers import ROOT
 PACKAGE = os.path.join(ROOT, "ancf_petsc")
 #: layer of each top-level component of ancf_petsc (sub-package or root module)
 LAYERS = [
-    ("errors", "version", "status"),          # vocabulary shared by everything
+    ("errors", "version", "status", "yamlio"),  # vocabulary shared by everything; YAML input
     ("physics",),                             # element 3363, sections and cubature, materials, kernels
     ("contact",),                             # contact points, projection, multipliers, laws
     ("config",),                              # YAML → validated ModelSpec (key-path errors)

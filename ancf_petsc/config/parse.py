@@ -13,6 +13,8 @@ from typing import Any
 
 import yaml
 
+from .. import yamlio
+
 from .beams import check_imported_loops, parse_beams
 from .bundle import expand_bundle
 from .conditions import beam_ref, parse_boundary_conditions, parse_loads, parse_probes, parse_steps
@@ -93,9 +95,7 @@ def load_config(path: str) -> ModelSpec:
     if not os.path.isfile(path):
         raise ConfigError("", f"{path}: no such config file")
     try:
-        with open(path, "rb") as fh:
-            text = fh.read().decode("utf-8")
-        raw = yaml.safe_load(text)
+        raw = yamlio.load(yamlio.read_text(path))
     except UnicodeDecodeError as exc:
         raise ConfigError("", f"{path}: not a text (UTF-8) YAML file: byte 0x{exc.object[exc.start]:02x} "
                               f"at offset {exc.start}") from None

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import yaml
 
+from .. import yamlio
+
 from .values import ConfigError, integer, key_path, mapping, number, sequence, shown, string
 
 __all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS",
@@ -269,12 +271,15 @@ def _load_file(f: str, key: str, base_dir: str) -> GeometrySource:
     if not os.path.isfile(path):
         raise ConfigError(key, f"geometry file not found: {path} (paths are relative to the config file)")
     try:
-        with open(path) as fh:
-            data = yaml.safe_load(fh)
+        data = yamlio.load(yamlio.read_text(path))
+    except UnicodeDecodeError:
+        raise ConfigError(key, f"{os.path.basename(path)}: not a text (UTF-8) YAML file") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark else ""
-        raise ConfigError(key, f"{os.path.basename(path)}: YAML syntax error{where}") from None
+        problem = getattr(exc, "problem", None) or ""
+        raise ConfigError(key, f"{os.path.basename(path)}: YAML syntax error{where}"
+                               + (f": {problem}" if problem else "")) from None
     return _source(data, key, path, os.path.dirname(path))
 
 

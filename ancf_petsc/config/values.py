@@ -1,6 +1,8 @@
 """Validators for config values: each checks one value and names its key path in the error."""
 from __future__ import annotations
 
+import reprlib
+
 import math
 
 from ..errors import InputError
@@ -16,8 +18,14 @@ def key_path(path: str, key) -> str:
     return f"{path}.{key}" if path else str(key)
 
 
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxdict, _REPR.maxtuple, _REPR.maxstring, _REPR.maxother = 3, 6, 6, 6, 60, 60
+
+
 def shown(v) -> str:
-    s = repr(v)
+    """A value for a message, at most ~60 characters: a deeply nested or aliased value (a YAML
+    alias "bomb") is shown by its first elements only, never built in full."""
+    s = _REPR.repr(v)
     return s if len(s) < 60 else s[:57] + "..."
 
 

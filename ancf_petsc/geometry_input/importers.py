@@ -56,10 +56,14 @@ def read_point_list(path: str) -> RawOutline:
         raise OutlineReadError(f"cannot read {_name(path)} ({exc.strerror})") from None
     if low.endswith((".yaml", ".yml")):
         import yaml
+
+        from .. import yamlio
         try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError:
-            raise OutlineReadError(f"{_name(path)} is not valid YAML") from None
+            data = yamlio.load(text)
+        except yaml.YAMLError as exc:
+            problem = getattr(exc, "problem", None)
+            raise OutlineReadError(f"{_name(path)} is not valid YAML"
+                                   + (f" ({problem})" if problem else "")) from None
         if isinstance(data, dict) and "points" in data:
             data = data["points"]
         try:

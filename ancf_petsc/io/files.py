@@ -3,8 +3,11 @@ output directory check, and OS errors turned into one-line ``OutputError``s."""
 from __future__ import annotations
 
 import errno
+import json
 import os
+import socket
 import threading
+import time
 
 #: errno values that mean the disk (or quota) is full
 NO_SPACE = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
@@ -74,3 +77,92 @@ def prepare_output_dir(path: str) -> None:
         remove_quietly(probe)
         raise OutputError(path, f"cannot write in the output directory: {os_reason(exc)}") from None
     remove_quietly(probe)
+
+
+#: the lock file that marks an output directory in use by a run
+LOCK_NAME = ".ancf-lock"
+
+
+def _proc_stat(pid: int) -> list[str] | None:
+    """/proc/<pid>/stat after the command name (state first), or None."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+
+
+def _process_start(pid: int) -> str | None:
+    """The start time of process ``pid`` (clock ticks since boot), or None."""
+    stat = _proc_stat(pid)
+    return stat[19] if stat and len(stat) > 19 else None
+
+
+def _alive(pid: int, start: str | None) -> bool:
+    """Whether ``pid`` still runs and is the process that wrote the lock (same start time; a
+    killed process not yet reaped, a zombie, has ended)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    stat = _proc_stat(pid)
+    if stat and stat[0] in ("Z", "X"):
+        return False
+    now = _process_start(pid)
+    return start is None or now is None or now == start
+
+
+class DirectoryLock:
+    """An output directory's lock (rank 0): created exclusively with the holder's pid, host and
+    start, removed by ``release``.  A lock whose process is gone (same host) is stale and taken
+    over; ``stale`` then describes the one removed."""
+
+    def __init__(self, directory: str):
+        self.path = os.path.join(directory, LOCK_NAME)
+        self.stale: str | None = None
+        self.held = False
+
+    def acquire(self) -> None:
+        """Take the lock or raise OutputError naming the run that holds it."""
+        me = {"pid": os.getpid(), "host": socket.gethostname(), "start": _process_start(os.getpid()),
+              "since": time.strftime("%Y-%m-%d %H:%M:%S")}
+        for _ in range(2):
+            try:
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = self._holder()
+                if holder is None or (holder.get("host") == me["host"]
+                                      and not _alive(int(holder.get("pid", -1)), holder.get("start"))):
+                    self.stale = ("a stale lock" if holder is None else
+                                  f"the stale lock of pid {holder.get('pid')} (since {holder.get('since')}, "
+                                  "no longer running)")
+                    remove_quietly(self.path)
+                    continue
+                raise OutputError(os.path.dirname(self.path) or ".",
+                                  f"in use by another run (pid {holder.get('pid')} on {holder.get('host')}, "
+                                  f"since {holder.get('since')}); choose another output directory, or "
+                                  f"remove {self.path} if that run is gone") from None
+            except OSError as exc:
+                raise OutputError(self.path, f"cannot create the lock file: {os_reason(exc)}") from None
+            with os.fdopen(fd, "w") as fh:
+                json.dump(me, fh)
+            self.held = True
+            return
+        raise OutputError(self.path, "could not take the lock (another run took it meanwhile)")
+
+    def _holder(self) -> dict | None:
+        try:
+            with open(self.path) as fh:
+                return json.load(fh)
+        except (OSError, ValueError):
+            return None
+
+    def release(self) -> None:
+        """Remove the lock if this process holds it."""
+        if self.held:
+            holder = self._holder()
+            if holder is not None and holder.get("pid") == os.getpid():
+                remove_quietly(self.path)
+            self.held = False

@@ -4,8 +4,15 @@ Every converged level stores what the load stepping needs to go on exactly as an
 run would (results.py): the nodal vectors, the contact multipliers, the projection state of every
 contact point and the status of every multiplier, the last accepted increment of the state and
 of the load, and the next load increment.  All of it is in model order, so a restart may use
-another number of ranks.  The model must be the one that wrote the file: the config's model
-keys are compared, and the first difference is named.
+another number of ranks.
+
+The model must be the one that wrote the file.  Not its YAML text (``units: SI`` left out,
+``1.031e+08`` for ``103.1e6``, ``node: -1`` for ``last``, another path to the same file are the
+same model; a section file whose pixel scale changed between the kill and the restart is not):
+the resolved model is compared, item by item (``fingerprint``: reference nodal vectors, every
+beam's connectivity, nodes, section rule and material, the supported DOFs, the loads and the
+contact spec), and the first difference is named.  The converged levels must be the first
+levels of the config's steps.
 """
 from __future__ import annotations
 
@@ -36,6 +43,78 @@ class RestartPoint:
     projection: np.ndarray | None  # (points, 3) e_B, ξ_B, t_B
     status: np.ndarray | None      # (multipliers,) active
     summary: dict                 # summary.json with the steps up to ``step``
+    fingerprint: dict | None = None   # the stored model's (None: written before fingerprints)
+    stored_config: dict | None = None  # its config (runs without a fingerprint)
+    levels: tuple = ()            # the converged load factors, in order
+
+
+def fingerprint(model) -> dict[str, np.ndarray]:
+    """What defines the discrete model, as named arrays (a restart compares them)."""
+    spec = model.spec
+    out = {"reference_nodal_vectors": np.asarray(model.q0, dtype=float),
+           "supported_dofs": np.asarray(model.fixed_dofs, dtype=float),
+           "loads": np.asarray(model.f_ext, dtype=float),
+           "length": np.array([spec.length]), "twist_deg": np.array([spec.twist_deg])}
+    for b in model.beams:
+        m = b.material
+        params = [float(v) for k, v in sorted(vars(m).items()) if isinstance(v, (int, float))]
+        out.update({f"beams/{b.name}/elements": np.array([float(b.n_elements)]),
+                    f"beams/{b.name}/element_axial_points_locking": np.array(
+                        [float(b.element), b.axial_points, ["none", "ecm"].index(b.locking)]),
+                    f"beams/{b.name}/material": np.array(params),
+                    f"beams/{b.name}/x_nodes": np.asarray(b.x_nodes),
+                    f"beams/{b.name}/section_points": np.asarray(b.yz, dtype=float),
+                    f"beams/{b.name}/section_weights": np.asarray(b.wq, dtype=float),
+                    f"beams/{b.name}/connectivity": np.asarray(b.connectivity, dtype=float)})
+    c = spec.contact
+    if c is not None:
+        words = json.dumps({"mode": c.mode, "projection": list(c.projection), "axial_points": c.axial_points,
+                            "curve_points": c.curve_points, "per_element": c.per_element,
+                            "interfaces": [list(map(str, i)) for i in (c.interfaces or [])]
+                            if not isinstance(c.interfaces, str) else c.interfaces}, sort_keys=True)
+        out["contact"] = np.frombuffer(words.encode(), dtype=np.uint8).astype(float)
+    return out
+
+
+def model_difference(stored: dict, now: dict) -> str | None:
+    """The first item that differs between two fingerprints, with what changed (None: same);
+    a beam's items first (in this model's order), then the model-wide ones."""
+    keys = [k for k in now if k.startswith("beams/")] + [k for k in now if not k.startswith("beams/")]
+    for key in keys + [k for k in stored if k not in now]:
+        if key not in stored or key not in now:
+            return f"{key} ({'added' if key in now else 'removed'})"
+        a, b = np.asarray(stored[key]), np.asarray(now[key])
+        if a.shape != b.shape:
+            return f"{key} (shape {a.shape} → {b.shape})"
+        if not np.allclose(a, b, rtol=1e-12, atol=1e-300 + 1e-12 * float(np.max(np.abs(a), initial=0.0))):
+            if key.endswith("section_weights"):
+                return f"{key} (section area {a.sum():.6g} → {b.sum():.6g} of the rule's units)"
+            k = int(np.argmax(np.abs(a - b)))
+            if a.size == 1:
+                return f"{key} ({a.ravel()[0]:.9g} → {b.ravel()[0]:.9g})"
+            return f"{key} (largest change at entry {k}: {a.ravel()[k]:.9g} → {b.ravel()[k]:.9g})"
+    return None
+
+
+def check_same_run(point: RestartPoint, model, steps: list, directory: str = "") -> None:
+    """InputError naming the first difference between the restart's run and this model and
+    steps (fingerprint of the resolved model; the converged levels must start the steps)."""
+    if point.fingerprint is not None:
+        differs = model_difference(point.fingerprint, fingerprint(model))
+    else:                                         # written before fingerprints: the YAML keys
+        raw = model.spec.raw
+        differs = _first_difference({k: point.stored_config.get(k) for k in MODEL_KEYS},
+                                    {k: raw.get(k) for k in MODEL_KEYS})
+    if differs:
+        raise InputError("--restart", f"{directory} was written by another model: {differs} "
+                                      "differs; restart with the config (and data files) that made it")
+    for k, lam in enumerate(point.levels):
+        if k >= len(steps) or abs(steps[k] - lam) > 1e-12 * max(1.0, abs(lam)):
+            now = f"{steps[k]:g}" if k < len(steps) else "none (the config has fewer levels)"
+            raise InputError("--restart", f"the config's steps differ from the run's converged "
+                                          f"levels at step {k + 1}: {lam:g} was solved, the config asks "
+                                          f"for {now}; restart with the steps that made them, or "
+                                          "run afresh into another directory")
 
 
 def _first_difference(old, new, path: str = "") -> str | None:
@@ -60,10 +139,17 @@ def _first_difference(old, new, path: str = "") -> str | None:
     return None if old == new else path
 
 
-def read_restart(directory: str, raw: dict) -> RestartPoint:
-    """The last converged level of the run in ``directory``; ``raw`` is the config of the
-    continuing run (its model keys must equal the stored ones).  InputError with one line when
-    the directory has no usable results or was made by another model."""
+def _datasets(group) -> dict:
+    """Every dataset under an h5py group, by its path inside it."""
+    out = {}
+    group.visititems(lambda name, obj: out.__setitem__(name, obj[()]) if hasattr(obj, "shape") else None)
+    return out
+
+
+def read_restart(directory: str) -> RestartPoint:
+    """The last converged level of the run in ``directory`` (``check_same_run`` compares it
+    with the continuing run's model).  InputError with one line when the directory has no
+    usable results."""
     import h5py
     path = os.path.join(directory, "results.h5")
     if not os.path.isfile(path):
@@ -87,6 +173,7 @@ def read_restart(directory: str, raw: dict) -> RestartPoint:
             if "restart" not in g:
                 raise InputError("--restart", f"{path}: written without restart data (an older version)")
             r = g["restart"]
+            fp = h5["model/fingerprint"] if "fingerprint" in h5["model"] else None
             point = RestartPoint(step=k, load_factor=float(g.attrs["load_factor"]),
                                  blocks=r["blocks"][()], increment_blocks=r["increment_blocks"][()],
                                  increment=float(r.attrs["increment"]),
@@ -94,13 +181,13 @@ def read_restart(directory: str, raw: dict) -> RestartPoint:
                                  accepted_negative=int(r.attrs["accepted_negative"]),
                                  projection=g["contact/projection"][()] if "contact" in g else None,
                                  status=g["contact/multiplier_active"][()] if "contact" in g else None,
-                                 summary={})
+                                 summary={},
+                                 fingerprint=None if fp is None else _datasets(fp),
+                                 stored_config=stored,
+                                 levels=tuple(float(steps[f"step_{i:04d}"].attrs["load_factor"])
+                                              for i in range(1, k + 1)))
     except (OSError, KeyError) as exc:
         raise InputError("--restart", f"{path}: not a readable results file ({exc})") from None
-    differs = _first_difference({k: stored.get(k) for k in MODEL_KEYS}, {k: raw.get(k) for k in MODEL_KEYS})
-    if differs:
-        raise InputError("--restart", f"{directory} was written by another model: {differs} differs "
-                                      "from the config's; restart with the config that made it")
     summary["steps"] = summary.get("steps", [])[:point.step]
     point.summary = summary
     return point

@@ -32,6 +32,7 @@ from ..model.beams import Model
 from ..physics import element3363 as el
 from ..version import version_info
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
+from .restart import fingerprint
 from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 
 #: space set aside for the final summary.json (released on a write error and at the end)
@@ -126,6 +127,9 @@ class ResultsWriter:
         g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
         g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
         g.create_dataset("reference_nodal_vectors", data=model.q0)
+        fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
+        for key, arr in fingerprint(model).items():
+            fp.create_dataset(key, data=arr)
         part = g.create_group("partition")
         part.create_dataset("element_rank", data=layout.elem_owner)
         part.create_dataset("node_rank", data=layout.node_owner)

@@ -100,6 +100,8 @@ def load_sections_file(path: str | Path,
     degree ``spline_degree`` (Sec. 2.2) shared by every loop that uses it."""
     import yaml
 
+    from .. import yamlio
+
     p = Path(path)
     try:
         text = p.read_text()
@@ -107,7 +109,7 @@ def load_sections_file(path: str | Path,
         raise SectionError(f"cannot read the sections file '{p}' ({exc.strerror}); "
                            "check the path") from None
     try:
-        data = yaml.safe_load(text)
+        data = yamlio.load(text)
     except yaml.YAMLError as exc:
         raise SectionError(f"the sections file '{p}' is not valid YAML ({exc}); "
                            "fix its syntax") from None

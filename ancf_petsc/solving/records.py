@@ -16,6 +16,10 @@ REASONS[UNSTABLE_STEP] = "UNSTABLE_STATE"
 #: SNES converged, but a contact projection of the final state did not (or the residual was NaN)
 UNCLEAN_STATE = -1001
 REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
+#: SNES stopped on the step length (CONVERGED_SNORM_RELATIVE) with the residual above the
+#: absolute tolerance: not converged (a line search that no longer moves)
+STALLED_STEP = -1002
+REASONS[STALLED_STEP] = "STALLED_ABOVE_TOLERANCE"
 
 
 def reason_name(reason: int) -> str:

@@ -16,8 +16,8 @@ from petsc4py import PETSc
 from .. import status as st
 from ..config.specs import ModelSpec
 from ..errors import InputError
-from ..io.files import OutputError, prepare_output_dir
-from ..io.restart import read_restart
+from ..io.files import DirectoryLock, OutputError, prepare_output_dir
+from ..io.restart import check_same_run, read_restart
 from ..io.results import ResultsWriter
 from ..model.build import build_model
 from ..model.contact_setup import contact_for
@@ -53,18 +53,24 @@ def serial_comm():
     return PETSc.COMM_SELF
 
 
-def check_output_dir(path: str, comm) -> None:
-    """Fail fast (before the model is built) if ``path`` cannot hold results; collective."""
-    err = None
+def check_output_dir(path: str, comm, say=lambda *_: None) -> DirectoryLock | None:
+    """Fail fast (before the model is built) if ``path`` cannot hold results or another run
+    holds it; takes its lock (rank 0: returned, released by the caller).  Collective."""
+    err, lock = None, None
     if comm.rank == 0:
         try:
             prepare_output_dir(path)
+            lock = DirectoryLock(path)
+            lock.acquire()
+            if lock.stale:
+                say(f"[ancf] {path}: removed {lock.stale}")
         except OutputError as exc:
             err = (exc.path, exc.reason)
     if comm.size > 1:
         err = comm.tompi4py().bcast(err, root=0)
     if err:
         raise OutputError(*err)
+    return lock
 
 
 def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> tuple[str, str, str]:
@@ -89,7 +95,7 @@ def _read_restart(directory: str, spec: ModelSpec, comm):
     point, err = None, None
     if comm.rank == 0:
         try:
-            point = read_restart(directory, spec.raw)
+            point = read_restart(directory)
         except InputError as exc:
             err = (exc.path, str(exc).split(": ", 1)[1] if ": " in str(exc) else str(exc))
     if comm.size > 1:
@@ -117,6 +123,8 @@ class Run:
         logging.stage(logging.SETUP).push()
         try:
             self.model = build_model(spec)
+            if point is not None:
+                check_same_run(point, self.model, list(spec.steps), spec.output.dir)
             self.contact = contact_for(self.model, spec.contact, say) if spec.contact else None
             prefix = spec.solver.options_prefix
             self.linear = choose_linear(spec.solver.linear, self.model, self.contact, spec.petsc, prefix)
@@ -270,8 +278,18 @@ def run_model(spec: ModelSpec, comm=None, log=print, info: dict | None = None,
     point = None
     if restart is not None:
         spec.output.dir = restart
-        point = _read_restart(restart, spec, comm)
-    check_output_dir(spec.output.dir, comm)
+    lock = check_output_dir(spec.output.dir, comm, say)
+    try:
+        if restart is not None:
+            point = _read_restart(restart, spec, comm)
+        return _run(spec, comm, say, info, point)
+    finally:
+        if lock is not None:
+            lock.release()
+
+
+def _run(spec: ModelSpec, comm, say, info: dict | None, point) -> RunResult:
+    """``run_model`` with the output directory held."""
     PETSc.Log.begin()                 # event timings for the summary (cheap)
     # PETSc's event times add up over the process: this run's share is the difference
     solver_events0 = logging.event_time("KSPSolve") + logging.event_time("PCSetUp")

@@ -26,7 +26,7 @@ from .chord import TangentReuse
 from .interrupt import RunInterrupted, stop_requested
 from .newton import ContactSteps, PhasedNewton
 from .options import SolverOptionError, configure_options, refused, run_defaults
-from .records import (UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
+from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
                       reason_name)
 
 class LoadStepper:
@@ -83,6 +83,7 @@ class LoadStepper:
         self.predictor = (ComplementarityPredictor(problem)
                           if ComplementarityPredictor.applies(problem) else None)
         self.ksp_reason = 0
+        self.stalled_at = 0.0                    # |F| of the last step-length stop (messages)
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
 
@@ -189,10 +190,15 @@ class LoadStepper:
             raise RunInterrupted(signum, f"on the way to load factor {target:g} (last converged "
                                          f"level {level:g})")
 
-    def _residual_small(self, fnorm: float, lam: float) -> bool:
-        """A 'converged' SNES (e.g. on a tiny step) must also have a small residual."""
+    def _residual_small(self, reason: int, fnorm: float) -> bool:
+        """A level is accepted at the stated tolerances only: the residual tests (FNORM_ABS,
+        FNORM_RELATIVE) pass, and a solve that stopped on the step length (SNORM_RELATIVE: a
+        line search that no longer moves) counts only with |F| at the absolute tolerance."""
         rtol, atol, stol, maxit = self.snes.getTolerances()
-        return fnorm <= max(atol, 1e-6 * lam * self.problem.fext.norm())
+        if reason in (PETSc.SNES.ConvergedReason.CONVERGED_FNORM_ABS,
+                      PETSc.SNES.ConvergedReason.CONVERGED_FNORM_RELATIVE):
+            return True
+        return fnorm <= atol
 
     def run(self, levels: list[float], on_level: Callable[[StepRecord], None],
             start: PathState | None = None) -> list[StepRecord]:
@@ -277,8 +283,9 @@ class LoadStepper:
         the last accepted one (``UNSTABLE_STEP``, at most ``stability_cutbacks`` per level: a
         stable path does not step onto a saddle, another branch may have been reached)."""
         P = self.problem
-        if reason > 0 and not self._residual_small(fnorm, path.lam + step):
-            reason = PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH   # stalled, not converged
+        if reason > 0 and not self._residual_small(reason, fnorm):
+            reason = STALLED_STEP                       # a step-length stop above the tolerance
+            self.stalled_at = fnorm
         converged = reason > 0 and np.isfinite(fnorm) and P.state_is_clean()
         if reason > 0 and not converged:
             reason = UNCLEAN_STATE
@@ -315,6 +322,9 @@ class LoadStepper:
         tally["consecutive"] += reason != UNSTABLE_STEP      # bounded by stability_cutbacks
         path.dlam = 0.5 * step
         why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+        if reason == STALLED_STEP:
+            why = (f" (stopped on the step length with |F| {self.stalled_at:.2e} above the "
+                   f"tolerance {self.snes.getTolerances()[1]:.1e})")
         if reason == UNSTABLE_STEP:
             why = f" ({neg} negative tangent eigenvalue(s), the last state had {path.accepted_negative})"
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}{why}; "

@@ -38,10 +38,9 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-import yaml
 
 from .refinement import Discretisation, apply, quantity
-from .study import Scene, StudyError, _expect, parse_discretisation, parse_scene, solve_raw
+from .study import Scene, StudyError, _expect, parse_discretisation, parse_scene, read_yaml, solve_raw
 
 AXES = ("increment", "linesearch", "bulk_ratio", "contact", "element")
 PHYSICAL = ("bulk_ratio", "contact")     # change the model: one reference per value
@@ -183,8 +182,7 @@ def default_strategy_converged(result: dict) -> bool:
 
 def load_stability(path: str) -> StabilitySpec:
     """Read and check a stability file."""
-    with open(path) as fh:
-        doc = yaml.safe_load(fh)
+    doc = read_yaml(path)
     _expect(isinstance(doc, dict), "", "expected a mapping")
     for key in doc:
         _expect(key in KEYS, key, f"unknown key; allowed: {', '.join(KEYS)}")

@@ -38,6 +38,7 @@ from typing import Any, Callable
 
 import yaml
 
+from .. import yamlio
 from ..config.specs import DEFAULT_AXIAL_POINTS
 from ..errors import InputError
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
@@ -49,6 +50,28 @@ STUDY_KEYS = ("kind", "name", "base", "probe", "component", "level", "grid", "re
 
 class StudyError(InputError):
     """A study-file problem: ``path`` is the key path in the study file."""
+
+
+def read_yaml(path: str, key: str = "") -> Any:
+    """A YAML file's document; every problem (missing, a directory, binary, bad or repeated
+    keys) is one StudyError naming ``key`` and, for a file a key names, the file (the
+    study file itself is named by the caller)."""
+    where = f"{path}: " if key else ""
+    if os.path.isdir(path):
+        raise StudyError(key, f"{where}is a directory, not a YAML file")
+    if not os.path.isfile(path):
+        raise StudyError(key, f"{where}no such file")
+    try:
+        return yamlio.load(yamlio.read_text(path))
+    except UnicodeDecodeError:
+        raise StudyError(key, f"{where}not a text (UTF-8) YAML file") from None
+    except OSError as exc:
+        raise StudyError(key, f"{where}cannot read: {exc.strerror}") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise StudyError(key, f"{where}YAML syntax error{at}: {problem}") from None
 
 
 @dataclass
@@ -254,8 +277,7 @@ def _expect(cond: bool, path: str, message: str) -> None:
 def load_base(path: str, key: str = "base") -> tuple[dict, str]:
     """The base config of a study file: (raw YAML, its directory)."""
     _expect(os.path.isfile(path), key, f"file not found: {path} (relative to the study file)")
-    with open(path) as fh:
-        raw = yaml.safe_load(fh)
+    raw = read_yaml(path, key)
     _expect(isinstance(raw, dict) and "beams" in raw and "steps" in raw, key,
             f"{path} is not a model config (no beams/steps)")
     return raw, os.path.dirname(os.path.abspath(path))
@@ -322,8 +344,7 @@ def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
 
 def load_study(path: str) -> StudySpec:
     """Read and check a study file (``kind: pareto``)."""
-    with open(path) as fh:
-        doc = yaml.safe_load(fh)
+    doc = read_yaml(path)
     _expect(isinstance(doc, dict), "", f"{path}: expected a mapping")
     for key in doc:
         _expect(key in STUDY_KEYS, key, f"unknown key; allowed: {', '.join(STUDY_KEYS)}")

@@ -9,6 +9,7 @@ import ctypes
 import errno
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -743,3 +744,59 @@ def test_a_singular_tangent_is_reported_as_unstable(tmp_path):
     res = run_model(spec, PETSc.COMM_WORLD, lambda *_: None)
     assert (res.status, res.exit_code) == ("unstable", 4)
     assert all(r.negative_eigenvalues > 0 for r in res.records)
+
+
+def test_a_second_run_into_the_same_output_directory_is_refused(tmp_path):
+    """Two runs into one directory mixed their results (issue 25): the second is refused up
+    front naming the holder's pid and host (exit 2), the first completes and releases the lock;
+    a lock left by a process that is gone is detected and taken over."""
+    out = tmp_path / "shared"
+    env = dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT)
+    exe = os.path.join(VENV_BIN, "ancf-solve")
+    first = subprocess.Popen([exe, os.path.join(CONFIGS, "achilles_type3_psi45.yaml"),
+                              "--output-dir", str(out), "--quiet"], cwd=ROOT, env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        t0 = time.time()
+        while not (out / ".ancf-lock").exists() and time.time() - t0 < 60:
+            time.sleep(0.02)
+        assert (out / ".ancf-lock").exists()
+        p = solve_cli(write_config(tiny(), tmp_path / "b.yaml"), extra=["--output-dir", str(out)])
+        lines = solver_lines(p.stderr)
+        assert p.returncode == 2 and len(lines) == 1, p.stderr
+        assert f"pid {first.pid} on " in lines[0] and "in use by another run" in lines[0]
+    finally:
+        first.communicate(timeout=TIMEOUT)
+    assert first.returncode == 0 and not (out / ".ancf-lock").exists()
+    assert read_summary(out)["name"] == "achilles_type3_psi45"
+    # a stale lock: its process no longer runs
+    (out / ".ancf-lock").write_text(json.dumps({"pid": 2 ** 22 + 17, "host": os.uname().nodename,
+                                                "start": None, "since": "earlier"}))
+    p = solve_cli(write_config(tiny(), tmp_path / "c.yaml"), extra=["--output-dir", str(out)])
+    assert p.returncode == 0 and "removed the stale lock of pid" in p.stdout
+    assert not (out / ".ancf-lock").exists()
+
+
+def test_own_options_with_one_dash_are_refused_before_anything_is_written(tmp_path):
+    """``-restart DIR`` went to PETSc and a fresh run overwrote the interrupted one (issue 25)."""
+    cfg = write_config(tiny(), tmp_path / "t.yaml")
+    for args in (["-restart", str(tmp_path / "r")], ["-output-dir", str(tmp_path / "o")], ["-quiet"],
+                 ["-output_dir", str(tmp_path / "o")]):
+        p = solve_cli(cfg, extra=args, cwd=str(tmp_path))
+        lines = solver_lines(p.stderr)
+        assert p.returncode == 2 and len(lines) == 1 and "take two dashes" in lines[0], p.stderr
+    assert not os.path.exists(tmp_path / "results")      # nothing written
+
+
+def test_a_level_is_accepted_only_at_the_stated_tolerance(tmp_path):
+    """``-snes_linesearch_type bt`` ended levels of the pretwisted bar on the step-length test
+    with |F| up to 420 × the printed tolerance, reported converged: now such a stop is cut back
+    and every reported level has |F| at the tolerance."""
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["output"] = {"dir": str(tmp_path / "bt"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "bt.yaml"), extra=["-snes_linesearch_type", "bt"])
+    assert p.returncode == 0, p.stderr
+    s = read_summary(tmp_path / "bt")
+    atol = float(re.search(r"atol ([0-9.e+-]+)", p.stdout).group(1))
+    assert all(st["reason"].startswith("CONVERGED_FNORM") for st in s["steps"])
+    assert all(st["residual_norm"] <= atol for st in s["steps"] if st["reason"] == "CONVERGED_FNORM_ABS")

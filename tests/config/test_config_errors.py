@@ -143,3 +143,44 @@ def test_cli_config_error_under_mpi_is_one_line(tmp_path):
     p = solve_cli(cfg, ranks=2)
     assert p.returncode == 2 and "Traceback" not in p.stderr
     assert sum("config error" in ln for ln in p.stderr.splitlines()) == 1, p.stderr
+
+
+def test_repeated_keys_are_an_error_naming_both_lines(tmp_path):
+    """Appending ``steps: [1.0]`` and ``loads: []`` gave a zero-load run reported completed
+    (PyYAML keeps the last value): now one line naming the key and both lines, exit 2."""
+    with open(f"{CONFIGS}/uniaxial_neohookean.yaml") as fh:
+        text = fh.read()
+    first = 1 + next(i for i, ln in enumerate(text.splitlines()) if ln.startswith("steps:"))
+    cfg = tmp_path / "twice.yaml"
+    cfg.write_text(text + "\nsteps: [1.0]\nloads: []\n")
+    p = solve_cli(str(cfg))
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode == 2 and len(lines) == 1, p.stderr
+    assert "duplicate key 'steps'" in lines[0] and f"first at line {first}" in lines[0]
+
+
+def test_an_alias_bomb_is_shown_by_its_first_elements():
+    """A 400-byte YAML document whose aliases expand to 9^10 values under ``name``: the error
+    message shows a few elements (building the whole value took ~1 GB)."""
+    items = ["&a [x,x,x,x,x,x,x,x,x]"] + [f"&{n} [" + ",".join([f"*{p}"] * 9) + "]"
+                                           for p, n in zip("abcdefghij", "bcdefghijk")]
+    from ancf_petsc import yamlio
+    raw = yamlio.load("name: [" + ", ".join(items) + "]\ngeometry: {length: 1}\nbeams: []\nsteps: [1]\n")
+    with pytest.raises(ConfigError) as err:
+        parse_config(raw)
+    assert len(str(err.value)) < 200 and "name" in str(err.value)
+
+
+@pytest.mark.parametrize("program", ["ancf-study", "ancf-sweep"])
+def test_study_and_sweep_files_that_are_not_yaml_text(tmp_path, program):
+    """A binary file or a directory given as a study/sweep file: one line, exit 2 (a
+    UnicodeDecodeError traceback before)."""
+    import os
+    import subprocess
+    from helpers import MPI_ENV, ROOT, VENV_BIN
+    for arg, words in (("/bin/ls", "not a text (UTF-8) YAML file"), (str(tmp_path), "is a directory")):
+        p = subprocess.run([os.path.join(VENV_BIN, program), arg], capture_output=True, text=True,
+                           cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=120)
+        lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+        assert p.returncode == 2 and len(lines) == 1 and words in lines[0], p.stderr
+        assert lines[0].count(arg) == 1

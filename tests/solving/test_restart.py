@@ -113,7 +113,8 @@ def test_restart_refuses_another_model(tmp_path):
     p = solve_cli(write_config(raw, tmp_path / "other.yaml"), ranks=2, extra=["--restart", str(tmp_path / "run")])
     lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
     assert p.returncode == 2 and len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
-    assert "beams[1].elements differs" in lines[0] and str(tmp_path / "run") in lines[0]
+    assert "beams/medial_gastrocnemius/elements (4 → 8)" in lines[0]
+    assert str(tmp_path / "run") in lines[0]
     p = solve_cli(cfg, extra=["--restart", str(tmp_path / "nowhere")])
     assert p.returncode == 2 and "results.h5: no such file" in p.stderr
 
@@ -143,3 +144,57 @@ def test_unsupported_models_are_refused_before_solving(tmp_path):
             assert p.returncode == 2 and len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
             assert "boundary_conditions: nothing holds" in lines[0] and all(w in lines[0] for w in words), lines[0]
         assert not (tmp_path / name / "results.h5").exists()
+
+
+def _short_run(tmp_path, raw, name="run"):
+    raw = dict(raw, steps=raw["steps"][:3])
+    p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), extra=["--output-dir", str(tmp_path / name),
+                                                                       "--quiet"])
+    assert p.returncode == 0, p.stderr
+    return raw
+
+
+@pytest.mark.slow
+def test_restart_compares_the_resolved_model_not_its_text(tmp_path):
+    """Issue 25: a section file whose pixel scale changed between the kill and the restart (the
+    same YAML) is refused; the same model written differently (``units`` left out, a number
+    written another way, ``node: -1`` for ``last``, another path to the same data file) is
+    accepted; changed steps before the restart point are refused, more levels after it are
+    solved."""
+    import shutil
+    import yaml
+    data = tmp_path / "data"
+    data.mkdir()
+    shutil.copy(os.path.join(CONFIGS, "data", "achilles_type3_sections.yaml"), data / "sections.yaml")
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = "data/sections.yaml"
+    raw["output"] = {"vtk": False}
+    raw = _short_run(tmp_path, raw)
+    # the same model, written differently
+    same = json.loads(json.dumps(raw))
+    same.pop("units", None)
+    same["beams"][0]["material"]["mu"] = float("1.031e+08")
+    same["loads"][0]["node"] = -1
+    for b in same["beams"]:
+        b["section"]["file"] = str(data / "sections.yaml")
+    same["steps"] = raw["steps"] + [45]
+    cfg = write_config(same, tmp_path / "same.yaml")
+    p = solve_cli(cfg, extra=["--restart", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    s = read_summary(tmp_path / "run")
+    assert [st["load_factor"] for st in s["steps"]] == raw["steps"] + [45]
+    # steps that differ before the restart point
+    other = dict(same, steps=[10, 25, 30, 45, 60])
+    p = solve_cli(write_config(other, tmp_path / "other.yaml"), extra=["--restart", str(tmp_path / "run")])
+    assert p.returncode == 2 and "differ from the run's converged levels at step 2: 20 was solved" in p.stderr
+    # the section data file changed (pixel scale +25 % in length: areas +56 %)
+    with open(data / "sections.yaml") as fh:
+        sec = yaml.safe_load(fh)
+    sec["scale_m_per_px"] = 1.25 * float(sec["scale_m_per_px"])
+    with open(data / "sections.yaml", "w") as fh:
+        yaml.safe_dump(sec, fh)
+    p = solve_cli(cfg, extra=["--restart", str(tmp_path / "run")])
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
+    assert p.returncode == 2 and len(lines) == 1, p.stderr
+    assert "written by another model" in lines[0] and "beams/soleus/" in lines[0]

@@ -10,6 +10,8 @@ from typing import Any
 
 import yaml
 
+from ... import yamlio
+
 from ...errors import InputError
 
 SWEEP_KEYS = ("base", "name", "mode", "parameters", "run", "output", "slurm")
@@ -50,7 +52,7 @@ class SweepError(InputError):
         self.message = message
 
 
-class _Loader(yaml.SafeLoader):
+class _Loader(yamlio.StrictLoader):
     """SafeLoader that also reads ``1e6`` and ``0.86e9`` as floats (YAML 1.2 style)."""
 
 
@@ -134,14 +136,17 @@ def set_key_path(raw: Any, tokens: tuple[Token, ...], value: Any) -> None:
     node[tokens[-1]] = copy.deepcopy(value)
 
 
-def _load_yaml(path: str, key: str, loader: type = yaml.SafeLoader) -> Any:
+def _load_yaml(path: str, key: str, loader: type = yamlio.StrictLoader) -> Any:
     """Load a YAML file; errors name ``key`` (and the path, unless it is the sweep file itself)."""
     where = f"{path}: " if key else ""
+    if os.path.isdir(path):
+        raise SweepError(key, f"{path}: is a directory, not a YAML file" if key else "is a directory, not a sweep file")
     if not os.path.isfile(path):
         raise SweepError(key, f"no such file: {path}" if key else "no such file")
     try:
-        with open(path) as fh:
-            return yaml.load(fh, Loader=loader)  # noqa: S506 (SafeLoader subclasses only)
+        return yamlio.load(yamlio.read_text(path), loader)
+    except UnicodeDecodeError:
+        raise SweepError(key, f"{where}not a text (UTF-8) YAML file") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""

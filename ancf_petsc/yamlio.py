@@ -1,0 +1,45 @@
+"""YAML input for every file the program reads: a mapping that repeats a key is an error naming
+both lines (PyYAML would keep the last one silently: ``steps: [1.0]`` appended to a config
+replaced its levels), and a file that is not UTF-8 text says so."""
+from __future__ import annotations
+
+from typing import Any
+
+import yaml
+from yaml.constructor import ConstructorError
+
+
+class StrictLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses a mapping with a repeated key."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen: dict = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    first = seen.setdefault(key, key_node.start_mark.line + 1)
+                except TypeError:              # an unhashable key: PyYAML's own error follows
+                    continue
+                if first != key_node.start_mark.line + 1:
+                    raise ConstructorError(
+                        None, None, f"duplicate key {key!r} (first at line {first}); a mapping "
+                        "holds each key once: remove one of them", key_node.start_mark)
+        return super().construct_mapping(node, deep=deep)
+
+
+def load(stream: Any, loader: type = StrictLoader) -> Any:
+    """One YAML document from a string or a file object (``loader``: StrictLoader or a subclass)."""
+    return yaml.load(stream, Loader=loader)  # noqa: S506 (SafeLoader subclasses only)
+
+
+def read_text(path: str) -> str:
+    """A file's text, or UnicodeDecodeError for a binary file (a NUL byte counts as binary)."""
+    with open(path, "rb") as fh:
+        data = fh.read()
+    if b"\0" in data:
+        raise UnicodeDecodeError("utf-8", data, data.index(b"\0"), data.index(b"\0") + 1,
+                                 "NUL byte: a binary file")
+    return data.decode("utf-8")

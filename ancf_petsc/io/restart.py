@@ -79,7 +79,13 @@ def fingerprint(model) -> dict[str, np.ndarray]:
 def model_difference(stored: dict, now: dict) -> str | None:
     """The first item that differs between two fingerprints, with what changed (None: same);
     a beam's items first (in this model's order), then the model-wide ones."""
-    keys = [k for k in now if k.startswith("beams/")] + [k for k in now if not k.startswith("beams/")]
+    fields = ("elements", "element_axial_points_locking", "material", "x_nodes", "section_points",
+              "section_weights", "connectivity")
+
+    def order(key: str):
+        beam, _, field = key.rpartition("/")
+        return (0, beam, fields.index(field) if field in fields else len(fields)) if beam else (1, "", 0)
+    keys = sorted(now, key=order)
     for key in keys + [k for k in stored if k not in now]:
         if key not in stored or key not in now:
             return f"{key} ({'added' if key in now else 'removed'})"

@@ -61,21 +61,24 @@ def figures(inputs: PaperInputs, t1: Table1, out: str, t2rows: dict | None = Non
         made.append(viz.plot_convergence(ours, theirs, os.path.join(out, "convergence.png"),
                                               title="Soleus elongation at 400 N vs elements per subtendon",
                                               flagged=unstable))
-    vtus = {}
+    vtus, drawn = {}, {}
     for p in (15, 45):
         s = t1.summaries.get(p)
-        if s:
+        if s and s.get("steps"):
             run_dir = s.get("output_dir") or ""
             last = os.path.join(run_dir, f"surface_{len(s['steps']):04d}.vtu")
             if os.path.exists(last):
                 vtus[p] = (last, os.path.join(run_dir, "surface_0000.vtu"))
+                f = s["steps"][-1]["load_factor"]   # the level drawn: the last one the run reached
+                drawn[p] = f"{f:g} N" + ("" if s.get("status") == "completed" else
+                                         f" (the last level reached; the run ended {s.get('status')})")
     if len(vtus) == 2:
         made.append(viz.render_pair(vtus[15][0], vtus[45][0], os.path.join(out, "figure5.png"),
-                                         titles=("(a) ψ = 15°, 400 N", "(b) ψ = 45°, 400 N"),
+                                         titles=(f"(a) ψ = 15°, {drawn[15]}", f"(b) ψ = 45°, {drawn[45]}"),
                                          view=FIGURE5_VIEW, reference_vtu=(vtus[15][1], vtus[45][1])))
     for p, (last, ref) in vtus.items():
         made.append(viz.render_surfaces(last, os.path.join(out, f"figure5_psi{p}.png"),
-                                             title=f"ψ = {p}°, soleus at 400 N", view=FIGURE5_VIEW,
+                                             title=f"ψ = {p}°, soleus at {drawn[p]}", view=FIGURE5_VIEW,
                                              reference_vtu=ref))
     for m in made:
         log(f"[report] wrote {m}")

@@ -110,3 +110,33 @@ def test_table1_paths_are_stable(table1):
     negative tangent eigenvalue; docs/paper.md "Table 2" for the coarse meshes where this fails)."""
     for psi, s in table1.summaries.items():
         assert [st["negative_eigenvalues"] for st in s["steps"]] == [0] * 13, psi
+
+
+@pytest.mark.slow
+def test_report_on_existing_runs_says_what_was_run(tmp_path):
+    """``ancf-report --existing`` (issue 25): an interrupted paper column is compared on the levels
+    it reached and the rest named as not reached (no nan rows, no 13-level claims); a run at
+    ψ = 30° and a run of another model are listed with their own levels, not compared with the
+    paper (they crashed or printed −24 % "errors")."""
+    import subprocess
+    from helpers import MPI_ENV, ROOT, VENV_BIN
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    cut = dict(raw, solver={"max_newton_iterations": 25})
+    psi30 = dict(raw, geometry=dict(raw["geometry"], twist_deg=30), steps=[10, 20])
+    bar = load_raw("uniaxial_neohookean.yaml")
+    runs = []
+    for name, r in (("cut", cut), ("psi30", psi30), ("bar", bar)):
+        p = solve_cli(write_config(r, tmp_path / f"{name}.yaml"), extra=["--output-dir", str(tmp_path / name), "--quiet"])
+        assert p.returncode in (0, 3), p.stderr
+        runs.append(str(tmp_path / name))
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", *runs, "--out", str(tmp_path / "rep")],
+                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+    assert p.returncode == 0, p.stderr
+    text = open(tmp_path / "rep" / "report.md").read()
+    assert "nan" not in text and "13 load levels" not in text
+    assert "ψ = 45°: not reached 80, 90, 100, 150, 200, 300, 400 N (the run ended failed)" in text
+    assert "over the 6 of 13 entries reached" in text
+    assert f"**{runs[1]}** is not compared with the paper: ψ = 30.0° is not one of" in text
+    assert f"**{runs[2]}** is not compared with the paper" in text

@@ -1,0 +1,128 @@
+"""``ancf-report --existing DIR ...``: a report on runs that were made already, saying what was run.
+
+A run is compared with the paper's Table 1 only when it *is* the paper's model: its resolved
+model (results.h5 ``/model/fingerprint``, io/restart.py) equals that of the paper's config at its
+pretwist.  Anything else (a subject's own tendon, ψ = 30°, another element count, a bundle) gets
+its own table of the levels it reached, without a comparison.  An interrupted or failed run is
+reported as such: the levels reached, the levels not reached, the level a figure draws.
+"""
+from __future__ import annotations
+
+import json
+import os
+
+import h5py
+
+from ..config.parse import load_config
+from ..errors import InputError
+from ..io.restart import fingerprint, model_difference
+from ..model.build import build_model
+from .inputs import TWISTS, PaperInputs
+
+__all__ = ["ExistingRun", "levels_missing", "paper_summaries", "read_existing", "runs_markdown"]
+
+
+class ExistingRun:
+    """One run directory: its summary, whether it is the paper's model and why not."""
+
+    def __init__(self, directory: str, inputs: PaperInputs):
+        self.dir = directory
+        path = os.path.join(directory, "summary.json")
+        if not os.path.exists(path):
+            raise InputError("--existing", f"{path}: no summary.json (run ancf-solve first)")
+        try:
+            with open(path) as fh:
+                self.summary = json.load(fh)
+        except (OSError, ValueError) as exc:
+            raise InputError("--existing", f"{path}: not a readable summary ({exc})") from None
+        s = self.summary
+        self.name = s.get("name", os.path.basename(directory))
+        self.status = s.get("status", "unknown")
+        self.twist = s.get("twist_deg")
+        self.levels = [st["load_factor"] for st in s.get("steps", [])]
+        self.why_not = self._paper_difference(inputs)
+
+    @property
+    def is_paper(self) -> bool:
+        return self.why_not is None
+
+    @property
+    def psi(self) -> int | None:
+        return int(round(self.twist)) if self.twist is not None else None
+
+    def _paper_difference(self, inputs: PaperInputs) -> str | None:
+        """None when the run's model is the paper's at its pretwist, else what differs."""
+        if self.twist is None or not any(abs(self.twist - p) < 1e-9 for p in TWISTS):
+            return f"ψ = {self.twist}° is not one of the paper's {', '.join(f'{p}°' for p in TWISTS)}"
+        h5 = os.path.join(self.dir, "results.h5")
+        try:
+            with h5py.File(h5, "r") as f:
+                if "fingerprint" not in f["model"]:
+                    return "results.h5 has no model fingerprint (written by an older version)"
+                stored = {}
+                f["model/fingerprint"].visititems(
+                    lambda n, o: stored.__setitem__(n, o[()]) if hasattr(o, "shape") else None)
+        except (OSError, KeyError) as exc:
+            return f"{h5}: not readable ({exc})"
+        paper = fingerprint(build_model(load_config(
+            os.path.join(inputs.configs, f"achilles_type3_psi{self.psi}.yaml"))))
+        differs = model_difference(paper, stored)
+        return None if differs is None else f"its model differs from the paper's: {differs}"
+
+    def ended(self) -> str:
+        """How the run ended, in words."""
+        s = self.summary
+        text = f"{self.status}"
+        if self.status != "completed":
+            text += f" ({s.get('reason_code', '')}: {s.get('message', '')})"
+        return text
+
+
+def read_existing(dirs: list[str], inputs: PaperInputs) -> list[ExistingRun]:
+    return [ExistingRun(d, inputs) for d in dirs]
+
+
+def runs_markdown(runs: list[ExistingRun]) -> str:
+    """What each run is and how it ended, then the levels of the runs that are not the
+    paper's model (those are compared in Table 1)."""
+    lines = ["| run | model | ψ | status | levels reached |", "|---|---|---:|---|---:|"]
+    for r in runs:
+        lines.append(f"| {r.dir} | {r.name}{'' if r.is_paper else ' (not the paper’s model)'} | "
+                     f"{r.twist:g} | {r.ended()} | {len(r.levels)} |")
+    for r in runs:
+        if r.is_paper:
+            continue
+        lines += ["", f"**{r.dir}** is not compared with the paper: {r.why_not}.", ""]
+        probes = sorted({p for st in r.summary.get("steps", []) for p in st.get("probes", {})})
+        if not probes:
+            lines.append("No converged level.")
+            continue
+        lines += ["| load factor | " + " | ".join(f"{p} u_x [mm]" for p in probes) + " |",
+                  "|---:|" + "---:|" * len(probes)]
+        for st in r.summary["steps"]:
+            cells = [f"{1e3 * st['probes'][p]['displacement'][0]:.5f}" if p in st["probes"] else ""
+                     for p in probes]
+            lines.append(f"| {st['load_factor']:g} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def paper_summaries(runs: list[ExistingRun]) -> dict[int, dict]:
+    """ψ → summary of the runs that are the paper's model (the last one given per ψ)."""
+    out = {}
+    for r in runs:
+        if r.is_paper:
+            out[r.psi] = dict(r.summary, output_dir=r.summary.get("output_dir") or os.path.abspath(r.dir))
+    return out
+
+
+def levels_missing(t1, summaries: dict) -> str:
+    """The Table 1 levels a paper run did not reach, per column (empty when every one did)."""
+    parts = []
+    for p, s in summaries.items():
+        reached = {round(st["load_factor"], 9) for st in s.get("steps", [])}
+        missing = [f for f in t1.loads if round(float(f), 9) not in reached]
+        if missing:
+            parts.append(f"ψ = {p}°: not reached {', '.join(f'{f:g}' for f in missing)} N "
+                         f"(the run ended {s.get('status')})")
+    return "; ".join(parts)
+

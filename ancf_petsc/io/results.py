@@ -38,6 +38,8 @@ from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 #: space set aside for the final summary.json (released on a write error and at the end)
 RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
+#: the "frame" attribute of /model/beams/<name>/section_points and section_outline
+CENTROID_FRAME = "section centroid, m (add the beam group's centroid attribute for the tendon frame)"
 
 
 def plain(obj):
@@ -140,9 +142,11 @@ class ResultsWriter:
             b = g.create_group(f"beams/{beam.name}")
             b.create_dataset("connectivity", data=beam.connectivity)
             b.create_dataset("x_nodes", data=beam.x_nodes)
-            b.create_dataset("section_points", data=beam.section.points)
-            b.create_dataset("section_weights", data=beam.section.weights)
-            b.create_dataset("section_outline", data=beam.section.boundary_polyline(8))
+            # (y, z) relative to the section's area centroid (the beam axis), not the tendon frame
+            b.create_dataset("section_points", data=beam.section.points).attrs["frame"] = CENTROID_FRAME
+            b.create_dataset("section_weights", data=beam.section.weights).attrs["units"] = "m^2"
+            b.create_dataset("section_outline", data=beam.section.boundary_polyline(8)
+                             ).attrs["frame"] = CENTROID_FRAME
             b.attrs["centroid"] = beam.section.centroid
             b.attrs["area"] = beam.section.area
         steps = h5.create_group("steps")

@@ -104,10 +104,10 @@ def _main(argv: list[str], interrupt) -> int:
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0
     petsc_args = petsc_help + petsc_args
-    from ancf_petsc.config.petsc_options import check_command_line
-    problem = check_command_line(petsc_args)
+    from ancf_petsc.config.options_files import check_all_options
+    problem = check_all_options(petsc_args, OPTIONS)   # command line, options files, PETSC_OPTIONS
     if problem:
-        _error(f"PETSc option {problem}")
+        _error(problem)
         return 2
     if petsc_help:
         # PETSc prints its help during PetscInitialize, under its own SIGPIPE handler (which
@@ -118,7 +118,11 @@ def _main(argv: list[str], interrupt) -> int:
 
     from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
     import petsc4py
-    petsc4py.init([sys.argv[0]] + petsc_args)
+    try:
+        petsc4py.init([sys.argv[0]] + petsc_args)
+    except Exception:                    # PETSc printed its reason (a case the checks above miss)
+        _error("PETSc did not start with these options (PETSc's reason is above)")
+        return 2
     from petsc4py import PETSc
 
     from ancf_petsc.config.values import ConfigError

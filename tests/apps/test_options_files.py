@@ -1,0 +1,60 @@
+"""PETSc options read from files get the command line's checks (issue 25): a missing options file
+or a bad value inside one is one line naming the file, its line and the option, exit 2, before
+PETSc starts (no PETSc banner, no traceback, nothing written)."""
+from __future__ import annotations
+
+import pytest
+
+from helpers import solve_cli, write_config
+from test_edges import TIMEOUT, assert_one_line, tiny
+
+from ancf_petsc.config.options_files import check_all_options
+
+OWN = ("--output-dir", "--restart", "--quiet")
+
+
+def _opts(tmp_path, text: str, name: str = "o.opts") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.mark.parametrize("text,words", [
+    ("-snes_rtol abc\n", ("-snes_rtol abc", "o.opts line 1", "expected a number")),
+    ("# tuned\n-ksp_type gmres\n-pc_type LU  # comment\n", ("o.opts line 3", "lower case: lu")),
+    ("-snes_max_it 1e2\n", ("-snes_max_it 1e2", "expected an integer")),
+    ("-snes_rtol 1e-8 -ksp_type gmres\n", ("o.opts line 1", "one option per line")),
+    ("snes_rtol 1e-8\n", ("'snes_rtol' is not an option",)),
+    ("alias -tol -snes_rtol\n-tol x\n", ("-snes_rtol x", "line 2")),
+    ("-restart out\n", ("-restart out", "two dashes (--restart)")),
+])
+def test_options_file_values_are_checked(tmp_path, text, words):
+    line = check_all_options(["-options_file", _opts(tmp_path, text)], OWN, environ={})
+    assert line is not None
+    for w in words:
+        assert w in line, line
+
+
+def test_good_files_nested_files_and_the_environment(tmp_path):
+    inner = _opts(tmp_path, "-snes_max_it 2.5\n", "inner.opts")
+    outer = _opts(tmp_path, f"-snes_rtol 1e-9\t\r\n-options_file {inner}\n", "outer.opts")
+    assert "inner.opts line 1" in check_all_options(["-options_file", outer], OWN, environ={})
+    good = _opts(tmp_path, "-snes_rtol 1e-9 # fine\n\n-snes_monitor\n-ksp_type gmres\n")
+    assert check_all_options(["-options_file", good], OWN, environ={}) is None
+    line = check_all_options([], OWN, environ={"PETSC_OPTIONS": "-snes_max_it 1.5"})
+    assert "PETSC_OPTIONS" in line and "-snes_max_it 1.5" in line
+    assert "needs the path" in check_all_options(["-options_file"], OWN, environ={})
+    assert "is a directory" in check_all_options(["-options_file", str(tmp_path)], OWN, environ={})
+
+
+@pytest.mark.parametrize("case", ["missing", "bad value"])
+def test_options_file_problems_on_the_command_line(tmp_path, case):
+    raw = tiny()
+    raw["output"]["dir"] = str(tmp_path / "out")
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    path = str(tmp_path / "none.opts") if case == "missing" else _opts(tmp_path, "-snes_rtol abc\n")
+    p = solve_cli(cfg, extra=["--quiet", "-options_file", path], timeout=TIMEOUT)
+    words = ("-options_file", "no such file") if case == "missing" else ("o.opts line 1", "-snes_rtol abc")
+    line = assert_one_line(p, 2, *words)
+    assert "default" not in line and "refused the solver" not in line
+    assert not (tmp_path / "out").exists()

@@ -19,7 +19,7 @@ from . import polyline as pl
 from .fit import corners, fit_curve
 from .importers import (OutlineReadError, label_image, mask_outline, nifti_slice, read_point_list,
                         read_svg_path)
-from .merge import MergeError, merge_outlines
+from .merge import MergeError, gap_closed, merge_outlines, unmerged_borders
 
 __all__ = ["Station", "build_station", "AREA_LIMITS"]
 
@@ -238,11 +238,40 @@ def _report(st, raw, smooth, merged, curves_of, sigma, tol, fit_tol, label) -> l
             d, _, _ = dist.query(seg.sides[side])
             moves.append(f"{side} moved <= {d.max() * 1e3:.3f} mm (rms {np.sqrt(np.mean(d ** 2)) * 1e3:.3f})")
         length = float(np.linalg.norm(np.diff(S, axis=0), axis=1).sum())
-        lines.append(f"  interface {seg.name}: {length * 1e3:.3f} mm long, " + ", ".join(moves))
+        lines.append(f"  interface {seg.name}: {length * 1e3:.3f} mm long, traces up to "
+                     f"{gap_closed(seg, smooth) * 1e3:.3f} mm apart merged, " + ", ".join(moves))
+    lines += _unmerged_warnings(merged, smooth, tol)
     free = [n for n in st.loops if all(len(merged.segments[s].owners) == 1 for s, _ in merged.loops[n])]
     if free:
         lines.append(f"  no neighbour within the merge tolerance: {', '.join(free)}")
     return lines
+
+
+def _unmerged_warnings(merged, smooth, tol: float) -> list[str]:
+    """Warnings for a border split into pieces or left partly unmerged by the merge tolerance."""
+    out = []
+    pieces: dict[tuple[str, ...], int] = {}
+    for seg in merged.segments:
+        if seg.is_interface:
+            key = tuple(sorted(seg.owners))
+            pieces[key] = pieces.get(key, 0) + 1
+    for (a, b), n in pieces.items():
+        if n > 1:
+            out.append(f"  warning: the border {a}/{b} was merged in {n} separate pieces (free surface "
+                       "between them): the traces drift apart by more than the merge tolerance "
+                       f"{tol * 1e3:.3g} mm; raise geometry.sections.merge_tolerance or check the tracing")
+    done = set()
+    for u in sorted(unmerged_borders(merged, smooth, tol), key=lambda u: -u.length):
+        pair = tuple(sorted((u.owner, u.neighbour)))
+        if pair in done:
+            continue
+        done.add(pair)
+        out.append(f"  warning: {u.length * 1e3:.3f} mm of {u.owner}'s free surface runs "
+                   f"{u.gap_min * 1e3:.3f}-{u.gap_max * 1e3:.3f} mm (median {u.gap_median * 1e3:.3f} mm) from "
+                   f"{u.neighbour}, just beyond the merge tolerance {tol * 1e3:.3g} mm: the border is partly "
+                   f"unmerged (no contact there); if it is one border, raise geometry.sections.merge_tolerance "
+                   f"to about {2e3 * u.gap_median:.2g} mm, or check the tracing")
+    return out
 
 
 def _curve_loops(src: GeometrySource, opts: SectionsSpec, label: str) -> Station:

@@ -31,7 +31,14 @@ from scipy.spatial import cKDTree
 from ..physics.spline import SectionError
 from .polyline import PolylineDistance, densify, inside
 
-__all__ = ["Segment", "Merged", "MergeError", "merge_outlines"]
+__all__ = ["Segment", "Merged", "MergeError", "merge_outlines", "Unmerged", "unmerged_borders",
+           "gap_closed"]
+
+# a free run of A is a border left partly unmerged with B when it stays within NEAR_TOLS merge
+# tolerances of B over at least RUN_TOLS tolerances of arc length: a flank that leaves a junction at
+# an angle of more than ~30 degrees gets that close over a shorter length only
+NEAR_TOLS = 5.0
+RUN_TOLS = 10.0
 
 
 class MergeError(SectionError):
@@ -54,6 +61,18 @@ class Segment:
     @property
     def is_interface(self) -> bool:
         return len(self.owners) == 2
+
+
+@dataclass
+class Unmerged:
+    """A stretch of ``owner``'s free surface running along ``neighbour`` just beyond the merge
+    tolerance: most likely one border whose two traces drifted apart (issue 25, item 9)."""
+    owner: str
+    neighbour: str
+    length: float                 # arc length of the stretch [m]
+    gap_max: float                # largest distance to the neighbour on it [m]
+    gap_min: float
+    gap_median: float
 
 
 @dataclass
@@ -261,3 +280,41 @@ def _assemble(names, D, V, dist, pairs, tol, h) -> Merged:
             loop.append((len(segments) - 1, False))
         loops[a] = loop
     return Merged(segments, loops, J, jloops)
+
+
+def gap_closed(seg: Segment, outlines: dict[str, np.ndarray]) -> float:
+    """Largest distance between the two traces that an interface ``seg`` replaced [m]."""
+    a, b = seg.owners
+    d, _, _ = PolylineDistance(outlines[b]).query(seg.sides[a])
+    return float(d.max()) if d.size else 0.0
+
+
+def unmerged_borders(merged: Merged, outlines: dict[str, np.ndarray], tol: float) -> list[Unmerged]:
+    """Free-surface stretches that run within NEAR_TOLS * tol of a neighbour over at least
+    RUN_TOLS * tol of arc length (longest stretch per owner and neighbour)."""
+    dist = {n: PolylineDistance(P) for n, P in outlines.items()}
+    found: dict[tuple[str, str], Unmerged] = {}
+    for seg in merged.segments:
+        if seg.is_interface:
+            continue
+        a, P = seg.owners[0], seg.points
+        step = np.linalg.norm(np.diff(P, axis=0), axis=1)
+        for b in outlines:
+            if b == a:
+                continue
+            d, _, _ = dist[b].query(P)
+            near = d < NEAR_TOLS * tol
+            both = near[1:] & near[:-1]                 # segment pieces with both ends near
+            if not both.any():
+                continue
+            # contiguous runs of near pieces: (start piece, end piece)
+            edges = np.diff(np.r_[0, both.astype(int), 0])
+            for s0, s1 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+                length = float(step[s0:s1].sum())
+                if length < RUN_TOLS * tol:
+                    continue
+                dd = d[s0:s1 + 1]
+                key = (a, b)
+                if key not in found or found[key].length < length:
+                    found[key] = Unmerged(a, b, length, float(dd.max()), float(dd.min()), float(np.median(dd)))
+    return list(found.values())

@@ -209,6 +209,24 @@ def test_merge_of_neighbours_traced_apart(seed):
     assert len(st.junctions) == 4 and all(len(j) == 2 for j in st.junction_loops)
     moved = [ln for ln in st.report if ln.startswith("  interface")]
     assert len(moved) == 2 and all("moved <=" in ln for ln in moved)
+    assert all("mm apart merged" in ln for ln in moved)
+    assert not any("warning" in ln for ln in st.report), st.report      # fully merged: no warning
+
+
+@pytest.mark.parametrize("shift", [0.08, 0.15])
+def test_border_just_beyond_the_tolerance_is_reported_unmerged(shift):
+    """Issue 25, item 9: a border whose traces are a little further apart than the merge
+    tolerance is not silently left as two free surfaces: the header names it and the fix."""
+    st, _ = _strip_station(0, shift_right=shift)
+    warn = [ln for ln in st.report if "warning" in ln]
+    assert warn, st.report
+    assert any("partly unmerged" in ln and "right" in ln and "middle" in ln
+               and "geometry.sections.merge_tolerance" in ln for ln in warn), warn
+
+
+def test_far_neighbours_get_no_unmerged_warning():
+    st, _ = _strip_station(0, shift_right=1.0)
+    assert not any("warning" in ln for ln in st.report), st.report
 
 
 def test_gap_wider_than_tolerance_stays_free():

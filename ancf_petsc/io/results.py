@@ -306,6 +306,8 @@ class ResultsWriter:
         for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
                     "multiplier_pressure", "multiplier_active"):
             c.create_dataset(key, data=contact[key])
+        if "weight" in contact:           # 0: out of contact (gap, pressure, slip written as 0)
+            c.create_dataset("weight", data=contact["weight"])
         c.create_dataset("multiplier_blocks", data=multipliers)
 
     def _append(self, entry: dict) -> None:

@@ -82,6 +82,8 @@ def contact_cells(fields: dict) -> tuple:
     """(points, cells, point data) of the contact points (``contact_reports.contact_fields``)."""
     data = {"gap": fields["gap"], "pressure": fields["pressure"], "slip": fields["slip"],
             "slip_axial": fields["slip"][:, 0], "interface": fields["interface"].astype(float)}
+    if "weight" in fields:                 # 0: out of contact (past B's curve or beam end)
+        data["weight"] = fields["weight"]
     return fields["x"], [("vertex", np.arange(len(fields["x"]))[:, None])], data
 
 

@@ -40,8 +40,13 @@ def contact_fields(problem: Problem, X: PETSc.Vec) -> dict | None:
 
     def q0_of(els):
         return q0[conn[els]].reshape(len(els), SLOTS, 3)
-    local = problem.exchange.evaluate(
-        X, lambda xl: problem.contact.point_fields(xl, problem.exchange.needed, q0_of))
+    def fields(xl):
+        out = problem.contact.point_fields(xl, problem.exchange.needed, q0_of)
+        # the weight each point has in the weighted gaps: 0 for a point whose partner place is
+        # past B's curve or beam end (its gap, pressure and slip are then written as 0)
+        out["weight"] = problem.contact.weights.values[out["id"]].copy()
+        return out
+    local = problem.exchange.evaluate(X, fields)
     parts = problem.comm.tompi4py().gather(local, root=0)
     if problem.comm.rank != 0:
         return None

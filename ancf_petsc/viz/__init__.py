@@ -1,9 +1,9 @@
 """Figures from run outputs (matplotlib, Agg canvas only; no PETSc): shaded 3D renders of the
 surfaces (render.py), line charts of results (figures.py) and study charts (charts.py)."""
-from .figures import (curve_from_summary, plot_convergence, plot_load_elongation, plot_slip, read_csv_table,
-                      save_figure)
+from .figures import (counted_points, curve_from_summary, plot_convergence, plot_load_elongation,
+                      plot_slip, read_csv_table, save_figure)
 from .render import render_pair, render_surfaces
 from .surface_mesh import SurfaceMesh, field_values, read_surface
 
-__all__ = ["SurfaceMesh", "curve_from_summary", "field_values", "plot_convergence", "plot_load_elongation",
+__all__ = ["SurfaceMesh", "counted_points", "curve_from_summary", "field_values", "plot_convergence", "plot_load_elongation",
            "plot_slip", "read_csv_table", "read_surface", "render_pair", "render_surfaces", "save_figure"]

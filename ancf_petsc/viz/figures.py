@@ -138,28 +138,50 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
     return save_figure(fig, out_png)
 
 
+def counted_points(level: dict) -> np.ndarray:
+    """Which contact points count (weight > 0) at a level from ``io.reader.read_contact``.  A point
+    whose partner place lies past the end of its interface curve or past B's beam end (beyond the
+    fade bands of ``contact.projection.end_weight``) has weight 0: it is out of contact, and its
+    gap, pressure and slip are written as exactly 0.  Files without ``weight`` (before issue 25):
+    the points with all three exactly 0."""
+    if "weight" in level:
+        return np.asarray(level["weight"]) > 0.0
+    return ~((level["gap"] == 0.0) & (level["pressure"] == 0.0) & np.all(level["slip"] == 0.0, axis=1))
+
+
 def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tuple[int, ...],
               length: float, title: str = "") -> str:
     """Axial slip (top) and contact pressure (bottom) of the contact points along the tendon,
-    one colour per load level, one marker per interface: ``levels`` from ``io.reader.read_contact``."""
+    one colour per load level, one marker per interface: ``levels`` from ``io.reader.read_contact``.
+    Points out of contact (``counted_points``) have no slip: they are marked by a cross along the
+    top edge of both panels at their x (not as zero slip), explained below the figure."""
     fig = Figure(figsize=(8.0, 6.0))
     FigureCanvasAgg(fig)
     ax_s = fig.add_subplot(2, 1, 1)
     ax_p = fig.add_subplot(2, 1, 2, sharex=ax_s)
     cmap = colormaps["viridis"]
     markers = ("o", "s", "^", "D")
+    out = []                                      # (load, x) of the points out of contact
     for i, lev in enumerate(levels):
         c = cmap(i / max(len(levels) - 1, 1))
+        counts = counted_points(lev)
         for j, k in enumerate(interfaces):
-            sel = lev["interface"] == k
+            sel = (lev["interface"] == k) & counts
             x = MM * lev["x0"][sel, 0]
             order = np.argsort(x)
             label = f"{lev['load_factor']:g} N" if j == 0 else None
             ax_s.plot(x[order], MM * lev["slip"][sel, 0][order], markers[j % 4], color=c, ms=3,
                       label=label)
             ax_p.plot(x[order], 1e-6 * lev["pressure"][sel][order], markers[j % 4], color=c, ms=3)
+            gone = (lev["interface"] == k) & ~counts
+            for ax in (ax_s, ax_p):
+                ax.plot(MM * lev["x0"][gone, 0], np.ones(gone.sum()), "X", color=c, mec="k", ms=8,
+                        transform=ax.get_xaxis_transform(), clip_on=False, zorder=5)[0].set_in_layout(False)
+            out += [(lev["load_factor"], x0) for x0 in MM * lev["x0"][gone, 0]]
     for j, k in enumerate(interfaces):
         ax_s.plot([], [], markers[j % 4], color="0.4", ms=4, label=names[k])
+    if out:
+        ax_s.plot([], [], "X", color="0.6", mec="k", ms=7, label="out of contact\n(weight 0, no slip)")
     ax_s.set_ylabel("axial slip of the soleus past\nthe point [mm]")
     ax_p.set_ylabel("contact pressure [MPa]\n(> 0 presses, < 0 holds)")
     ax_p.set_xlabel("x along the tendon [mm] (0: supports, L: loaded end)")
@@ -171,4 +193,10 @@ def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tu
     if title:
         ax_s.set_title(title, fontsize=10)
     fig.tight_layout()
+    if out:                                      # the caption, below the figure
+        at = ", ".join(f"{x:.1f} mm at {f:g} N" for f, x in out)
+        fig.text(0.01, 0.0, f"X on the top edge: {len(out)} point(s) out of contact ({at}): the partner "
+                 "place lies past the end of the interface curve or of the beam,\nso the point has "
+                 "weight 0 and no slip, gap or pressure (results.h5 writes them as 0, with weight 0).",
+                 fontsize=7, va="top")
     return save_figure(fig, out_png)

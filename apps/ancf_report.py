@@ -80,11 +80,8 @@ def main(argv: list[str] | None = None) -> int:
             sections.append(("No penalty in the answer: the multipliers' unit k_s over two decades",
                              rp.scaling_markdown(rows)))
         if args.fit_bulk_modulus:
-            k, sse = rp.fit_bulk_modulus(inputs, out, jobs=args.jobs, log=log)
-            sections.append(("Bulk modulus fitted to Table 1, psi = 0",
-                             "\n".join([f"K = {k / 1e9:.4f} GPa (least squares on the relative errors)"]
-                                       + [f"- K = {kk / 1e9:.2f} GPa: sum of squared relative errors "
-                                          f"{v:.3e}" for kk, v in sse.items()])))
+            fit = rp.fit_bulk_modulus(inputs, out, jobs=args.jobs, log=log)
+            sections.append(("Bulk modulus fitted to Table 1, psi = 0", rp.fit_markdown(fit)))
         if args.figures and t1 is not None:
             rp.figures(inputs, t1, out, t2, log)
     except InputError as exc:

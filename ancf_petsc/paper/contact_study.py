@@ -2,6 +2,8 @@
 the former penalty space solved exactly (docs/contact.md), and the bulk-modulus fit."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..workflows import sweep as sw
@@ -90,25 +92,74 @@ def laws_markdown(sliding: Table1, unilateral: Table1) -> str:
     return "\n".join(lines)
 
 
-def fit_bulk_modulus(inputs: PaperInputs, out: str, candidates=(0.70e9, 0.80e9, 0.90e9, 1.0e9), jobs: int = 1, log=print):
-    """Least-squares K on the relative errors of Table 1's ψ = 0 column (parabola through the
-    sums of squares of the candidates)."""
-    params = {"geometry.twist_deg": [0] * len(candidates)}
+@dataclass
+class BulkFit:
+    """The least-squares bulk modulus and every column it solved (issue 25, item 10)."""
+    k: float                                    # minimiser [Pa]
+    sse: float                                  # sum of squared relative errors at k
+    evaluations: list[tuple[float, float]]     # (K, sum of squares) in the order solved
+    errors: np.ndarray                          # relative errors of the column at k
+    bounds: tuple[float, float]
+
+
+def _column_errors(inputs: PaperInputs, out: str, ks: list[float], jobs: int, log) -> list[np.ndarray]:
+    """Relative errors of Table 1's ψ = 0 column at each K (one sweep); a column
+    that does not reach 400 N is an error naming K and where it stopped, never a missing point."""
+    tag = "_".join(f"{k / 1e9:.6g}".replace(".", "p") for k in ks)
+    params = {"geometry.twist_deg": [0] * len(ks)}
     for b in range(BEAMS):
-        params[f"beams[{b}].material.bulk_modulus"] = list(candidates)
-    sweep = make_sweep(inputs, out, "fit_bulk_modulus", params, jobs=jobs)
-    states = execute(sweep, log)
-    paper = read_paper(inputs.table1_csv)
-    sse = {}
-    for k, st in zip(candidates, states):
+        params[f"beams[{b}].material.bulk_modulus"] = list(ks)
+    states = execute(make_sweep(inputs, out, f"fit_bulk_modulus_{tag}", params, jobs=jobs), log)
+    paper = read_paper(inputs.table1_csv)["psi0_mm"]
+    found = []
+    for k, st in zip(ks, states):
         s = summary_of(st)
         lf, el = elongations(s) if s else (np.array([]), np.array([]))
-        # a column that stopped short (a limit point) has no sum: NaN, left out of the fit
-        sse[k] = float(np.sum((el / paper["psi0_mm"] - 1.0) ** 2)) if len(el) == len(paper["psi0_mm"]) \
-            else float("nan")
-    ok = [k for k in candidates if np.isfinite(sse[k])]
-    if len(ok) < 3:
-        raise sw.SweepError("fit_bulk_modulus", f"only {len(ok)} of the K candidates reached 400 N; "
-                                                "three are needed for the parabola")
-    c = np.polyfit(np.array(ok), np.array([sse[k] for k in ok]), 2)
-    return float(-c[1] / (2 * c[0])), sse
+        if len(el) != len(paper):
+            last = f"last converged level {lf[-1]:g} N" if len(lf) else "no level converged"
+            raise sw.SweepError("fit_bulk_modulus", f"the psi = 0 column with K = {k / 1e9:.4g} GPa did not "
+                                f"reach 400 N ({st.status}, {last}; run directory {st.run.dir}); "
+                                "the fit needs every column it asks for")
+        found.append(el / paper - 1.0)
+    return found
+
+
+def fit_bulk_modulus(inputs: PaperInputs, out: str, grid=(0.6e9, 0.8e9, 1.0e9, 1.2e9, 1.4e9),
+                     xtol: float = 2e6, jobs: int = 1, log=print) -> BulkFit:
+    """Least-squares K on the relative errors of Table 1's ψ = 0 column: the columns of a coarse
+    grid (solved together) bracket the minimum, bounded Brent (scipy) finds it to ``xtol``."""
+    from scipy.optimize import minimize_scalar
+    ks = sorted(grid)
+    errors = dict(zip(ks, _column_errors(inputs, out, ks, jobs, log)))
+    evaluations = [(k, float(np.sum(errors[k] ** 2))) for k in ks]
+    best = int(np.argmin([v for _, v in evaluations]))
+    if best in (0, len(ks) - 1):
+        raise sw.SweepError("fit_bulk_modulus", f"the least squares are smallest at the end of the grid "
+                            f"(K = {ks[best] / 1e9:.3g} GPa): the minimum lies outside "
+                            f"{ks[0] / 1e9:.3g}-{ks[-1] / 1e9:.3g} GPa; widen the grid")
+    bounds = (ks[best - 1], ks[best + 1])
+    cache = dict(evaluations)
+
+    def f(k: float) -> float:
+        k = float(round(k / 1e5) * 1e5)          # 0.1 MPa: reuse a run asked for twice
+        if k not in cache:
+            errors[k] = _column_errors(inputs, out, [k], 1, log)[0]
+            cache[k] = float(np.sum(errors[k] ** 2))
+            evaluations.append((k, cache[k]))
+        return cache[k]
+
+    res = minimize_scalar(f, bounds=bounds, method="bounded", options={"xatol": xtol})
+    k = float(round(res.x / 1e5) * 1e5)
+    f(k)
+    return BulkFit(k, cache[k], evaluations, errors[k], bounds)
+
+
+def fit_markdown(fit: BulkFit) -> str:
+    """The fit, every column it solved, and the errors of the column at the minimiser."""
+    lines = [f"K = {fit.k / 1e9:.4f} GPa minimises the sum of squared relative errors of Table 1's "
+             f"psi = 0 column ({fit.sse:.3e}; largest error {100 * np.abs(fit.errors).max():.2f} %), "
+             f"bounded Brent between {fit.bounds[0] / 1e9:.2g} and {fit.bounds[1] / 1e9:.2g} GPa "
+             f"after a coarse grid; {len(fit.evaluations)} columns solved, all to 400 N.", "",
+             "| K [GPa] | sum of squared relative errors |", "|---|---|"]
+    lines += [f"| {k / 1e9:.4f} | {v:.4e} |" for k, v in sorted(fit.evaluations)]
+    return "\n".join(lines)

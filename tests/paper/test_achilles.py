@@ -140,3 +140,40 @@ def test_report_on_existing_runs_says_what_was_run(tmp_path):
     assert "over the 6 of 13 entries reached" in text
     assert f"**{runs[1]}** is not compared with the paper: ψ = 30.0° is not one of" in text
     assert f"**{runs[2]}** is not compared with the paper" in text
+
+
+def _fake_columns(monkeypatch, k_best: float, fail_at: float | None = None):
+    """Replace the column runs by errors that grow linearly with K - k_best (a parabola in K)."""
+    from ancf_petsc.paper import contact_study as cs
+    from ancf_petsc.workflows.sweep import SweepError
+    asked = []
+
+    def columns(inputs, out, ks, jobs, log):
+        asked.extend(ks)
+        if fail_at is not None and any(abs(k - fail_at) < 1.0 for k in ks):
+            raise SweepError("fit_bulk_modulus", f"the psi = 0 column with K = {fail_at / 1e9:.4g} GPa did not "
+                             "reach 400 N")
+        return [np.linspace(-1.0, 1.0, 13) * 0.01 + 0.02 * (k - k_best) / 1e9 for k in ks]
+    monkeypatch.setattr(cs, "_column_errors", columns)
+    return asked
+
+
+def test_bulk_modulus_fit_finds_the_minimiser_with_an_optimiser(monkeypatch, tmp_path):
+    """Issue 25, item 10: a real optimiser (bounded Brent after a bracketing grid), not a parabola
+    through four points that may extrapolate outside the K values it ran."""
+    asked = _fake_columns(monkeypatch, 0.7321e9)
+    fit = rp.fit_bulk_modulus(None, str(tmp_path))
+    assert fit.k == pytest.approx(0.7321e9, abs=3e6)
+    assert fit.bounds[0] <= fit.k <= fit.bounds[1]
+    assert len(fit.evaluations) == len(set(asked)) and len(asked) < 25
+    assert "0.73" in rp.fit_markdown(fit) and "all to 400 N" in rp.fit_markdown(fit)
+
+
+def test_bulk_modulus_fit_reports_a_failed_column_and_an_unbracketed_minimum(monkeypatch, tmp_path):
+    from ancf_petsc.workflows.sweep import SweepError
+    _fake_columns(monkeypatch, 0.75e9, fail_at=0.8e9)
+    with pytest.raises(SweepError, match="K = 0.8 GPa did not reach 400 N"):
+        rp.fit_bulk_modulus(None, str(tmp_path))
+    _fake_columns(monkeypatch, 2.0e9)
+    with pytest.raises(SweepError, match="outside 0.6-1.4 GPa; widen the grid"):
+        rp.fit_bulk_modulus(None, str(tmp_path))

@@ -5,8 +5,9 @@
 Runs a parameter sweep over a base config (format: ancf_petsc/workflows/sweep.py), locally with N
 concurrent ancf-solve processes, or writes a SLURM job-array script (resources from the sweep
 file's ``slurm:`` or the options above; docs/running.md). Completed runs are skipped.
-Exit codes: 0 all runs completed, 1 some did not, 2 bad sweep file (one line, no traceback),
-130 interrupted.
+Exit codes (docs/running.md, "Sweeps run locally"): 0 all runs completed, 1 some did not (or a
+file-system error of the sweep), 2 bad sweep file or option (one line, no traceback), 130
+interrupted (the runs are stopped at their next safe point and recorded as interrupted).
 """
 from __future__ import annotations
 
@@ -26,14 +27,20 @@ def _positive(text: str) -> int:
     return value
 
 
-def _interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt
-
-
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+    """The ``ancf-sweep`` command; a Ctrl-C at any point (also while importing) exits 130."""
+    try:
+        return _main(sys.argv[1:] if argv is None else argv)
+    except KeyboardInterrupt:
+        print("ancf-sweep: interrupted", file=sys.stderr, flush=True)
+        return 130
+
+
+def _main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(
         prog="ancf-sweep", allow_abbrev=False,
+        epilog="Exit codes: 0 all runs completed, 1 some did not, 2 bad sweep file or option, "
+               "130 interrupted. See docs/running.md.",
         description="Run ancf-solve over a grid or list of parameter values of a base config, "
                     "then collect every run into <output>/results.csv and <output>/failed.txt.")
     parser.add_argument("sweep", help="sweep file (YAML: base, parameters, mode, run, output, name)")
@@ -100,8 +107,8 @@ def main(argv: list[str] | None = None) -> int:
             col = collect(sweep)
             say(f"[sweep] {col.summary_line()}")
             say(f"[sweep] results: {col.csv_path}")
-            if any(s.status in FAILED_STATUSES for s in col.states):
-                say(f"[sweep] failed runs and reasons: {col.failed_path}")
+            if any(s.status in FAILED_STATUSES + ("missing",) for s in col.states):
+                say(f"[sweep] failed or missing runs and reasons: {col.failed_path}")
             return 0 if col.all_completed() else 1
         if args.slurm:
             script, runs_txt = write_slurm(sweep, force=args.force)
@@ -111,8 +118,9 @@ def main(argv: list[str] | None = None) -> int:
             return 0
 
         # SIGTERM (kill, a job scheduler) stops the runs like Ctrl-C: they run in their own
-        # sessions and would otherwise outlive the sweep
-        previous = signal.signal(signal.SIGTERM, _interrupt)
+        # sessions and would otherwise outlive the sweep; the signal is forwarded to them
+        from ancf_petsc.workflows.sweep.processes import raise_interrupted
+        previous = signal.signal(signal.SIGTERM, raise_interrupted)
         try:
             report = run_sweep(sweep, force=args.force, log=say)
         finally:

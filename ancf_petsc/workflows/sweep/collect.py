@@ -124,6 +124,8 @@ def collect(sweep: Sweep) -> Collection:
             w.writerow(row)
     os.replace(tmp, csv_path)
     failed_path = os.path.join(sweep.output, "failed.txt")
-    lines = [f"{s.run.run_id}\t{s.status}\t{s.reason}" for s in states if s.status in FAILED_STATUSES]
+    # every run that did not reach a final good status: failed ones and those never run
+    lines = [f"{s.run.run_id}\t{s.status}\t{s.reason}" for s in states
+             if s.status in FAILED_STATUSES + ("missing",)]
     atomic_write(failed_path, "".join(ln + "\n" for ln in lines))
     return Collection(states, csv_path, failed_path)

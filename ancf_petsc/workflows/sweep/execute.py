@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from ...io.files import atomic_write, remove_quietly
 from ...status import EXIT_FAILED, EXIT_INPUT, EXIT_UNSTABLE
 from .base import _read_json, _read_text
+from .processes import Active, stop_processes
 from .spec import RunSpec, Sweep
 
 
@@ -184,37 +185,15 @@ def _child_env() -> dict[str, str]:
 
 def _kill(proc: subprocess.Popen) -> None:
     """Terminate the run's process group (it was started in its own session), then kill it."""
-    for sig, grace in ((signal.SIGTERM, 5.0), (signal.SIGKILL, 10.0)):
-        try:
-            os.killpg(proc.pid, sig)
-        except (ProcessLookupError, PermissionError):
-            pass
-        try:
-            proc.wait(timeout=grace)
-            return
-        except subprocess.TimeoutExpired:
-            continue
+    stop_processes([proc], signal.SIGTERM, grace=5.0)
 
 
-class _Active:
-    """The processes currently running, so an interrupt can stop them."""
-
-    def __init__(self) -> None:
-        self.lock = threading.Lock()
-        self.procs: set[subprocess.Popen] = set()
-        self.cancelled = threading.Event()
-
-    def cancel(self) -> None:
-        self.cancelled.set()
-        with self.lock:
-            procs = list(self.procs)
-        for p in procs:
-            _kill(p)
-
-
-def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Outcome:
-    """Run one prepared run directory; writes log.txt and run.json, returns the outcome."""
-    active = active or _Active()
+def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Outcome | None:
+    """Run one prepared run directory; writes log.txt and run.json, returns the outcome (None:
+    not started, the sweep is being stopped)."""
+    active = active or Active()
+    if active.cancelled.is_set():
+        return None
     cmd = solve_command(sweep, run)              # decides on a restart from summary.json
     if "--restart" not in cmd:
         remove_quietly(os.path.join(run.dir, "summary.json"))
@@ -228,14 +207,16 @@ def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Ou
     with open(os.path.join(run.dir, "log.txt"), "wb", buffering=0) as log:
         log.write(("$ " + shlex.join(cmd) + "\n").encode())
         try:
-            proc = subprocess.Popen(cmd, cwd=run.dir, env=_child_env(), stdin=subprocess.DEVNULL,
-                                    stdout=log, stderr=subprocess.PIPE, start_new_session=True)
+            proc = active.start(cmd, cwd=run.dir, env=_child_env(), stdin=subprocess.DEVNULL,
+                                stdout=log, stderr=subprocess.PIPE)
         except OSError as exc:
             msg = f"cannot start {cmd[0]}: {exc.strerror}"
             log.write((msg + "\n").encode())
             return record_outcome(run.dir, None, time.monotonic() - t0, verdict=("crashed", msg))
-        with active.lock:
-            active.procs.add(proc)
+        if proc is None:                         # stopped between the check above and now
+            log.write(b"not started: ancf-sweep was interrupted\n")
+            remove_quietly(os.path.join(run.dir, "run.json"))
+            return None
 
         def pump() -> None:
             for raw in proc.stderr:             # type: ignore[union-attr]
@@ -252,12 +233,16 @@ def execute_run(sweep: Sweep, run: RunSpec, active: _Active | None = None) -> Ou
             _kill(proc)
             rc = proc.returncode
         finally:
-            with active.lock:
-                active.procs.discard(proc)
+            active.finished(proc)
         reader.join(timeout=10.0)
     wall = time.monotonic() - t0
     if active.cancelled.is_set() and not timed_out and rc != 0:
+        # stopped by the sweep: at its next safe point (exit 130/143, converged levels kept) or,
+        # past the grace period, killed; either way it is continued by the next ancf-sweep
+        summary = _read_json(os.path.join(run.dir, "summary.json")) or {}
+        how = "stopped at a safe point" if summary.get("status") == "interrupted" \
+            else f"killed ({_signal_name(rc) if rc is not None and rc < 0 else f'exit code {rc}'})"
         return record_outcome(run.dir, rc, wall,
-                              verdict=("crashed", "interrupted (ancf-sweep stopped)"))
+                              verdict=("interrupted", f"ancf-sweep was interrupted; the run {how}"))
     return record_outcome(run.dir, rc, wall, stderr_lines, timed_out=timed_out,
                           timeout=sweep.timeout)

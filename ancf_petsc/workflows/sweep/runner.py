@@ -2,12 +2,15 @@
 from __future__ import annotations
 
 import os
+import signal
 import threading
+import time
 from dataclasses import dataclass
 from typing import Callable
 
 from .base import FINAL_STATUSES
-from .execute import Outcome, _Active, execute_run
+from .execute import Outcome, execute_run
+from .processes import Active, shielded
 from .expand import expand, prepare_run
 from .spec import RunSpec, Sweep
 
@@ -71,13 +74,13 @@ def run_sweep(sweep: Sweep, force: bool = False,
             todo.append(run)
     lock = threading.Lock()
     queue = list(reversed(todo))
-    active = _Active()
+    active = Active()
 
     def say(line: str) -> None:
         with lock:
             log(line)
 
-    def worker() -> None:
+    def work() -> None:
         while not active.cancelled.is_set():
             with lock:
                 if not queue:
@@ -89,21 +92,45 @@ def run_sweep(sweep: Sweep, force: bool = False,
                 outcome = execute_run(sweep, run, active)
             except OSError as exc:
                 outcome = Outcome("crashed", f"ancf-sweep: {exc}", None, None)
+            if outcome is None:                 # not started: the sweep is being stopped
+                return
             with lock:
                 report.outcomes[run.run_id] = outcome
             say(progress_line(run, n, outcome))
 
-    threads = [threading.Thread(target=worker, daemon=True)
-               for _ in range(max(1, min(sweep.jobs, len(todo))))] if todo else []
-    for t in threads:
-        t.start()
+    # the main thread polls an Event per worker instead of Thread.join: a Ctrl-C that interrupts
+    # Thread.join can leave the thread marked as finished (CPython 3.11), and the sweep would
+    # then exit before the interrupted runs are recorded
+    finished = [threading.Event() for _ in range(max(1, min(sweep.jobs, len(todo))) if todo else 0)]
+
+    def worker(done: threading.Event) -> None:
+        try:
+            work()
+        finally:
+            done.set()
+
+    for done in finished:
+        threading.Thread(target=worker, args=(done,), daemon=True).start()
     try:
-        while any(t.is_alive() for t in threads):
-            for t in threads:
-                t.join(timeout=0.2)
-    except KeyboardInterrupt:
+        _wait_all(finished)
+    except KeyboardInterrupt as exc:
+        # forward the signal to every run and wait for them (no ancf-solve outlives the sweep)
         report.interrupted = True
-        active.cancel()
-        for t in threads:
-            t.join(timeout=30.0)
+        with shielded():
+            with active.lock:
+                n_running = len(active.procs)
+            if n_running:
+                say(f"[sweep] stopping {n_running} run(s) at their next safe point "
+                    "(converged levels are kept)")
+            active.cancel(getattr(exc, "signum", signal.SIGINT))
+            _wait_all(finished, limit=60.0)
     return report
+
+
+def _wait_all(events: list[threading.Event], limit: float | None = None) -> None:
+    """Until every event is set (or ``limit`` seconds), by polling: a signal stays harmless."""
+    t0 = time.monotonic()
+    while not all(e.is_set() for e in events):
+        if limit is not None and time.monotonic() - t0 > limit:
+            return
+        time.sleep(0.05)

@@ -1,4 +1,5 @@
 """ancf-solve CONFIG.yaml [--output-dir DIR | --restart DIR] [--quiet] [PETSc options ...]
+ancf-solve --check CONFIG.yaml [--output PNG]     (the model built and drawn, not solved)
 
 Exit codes (docs/running.md): 0 completed; 2 config, command-line, PETSc-option or file-system
 error (one line, no traceback); 3 a load level was not reached (every converged level is on
@@ -12,7 +13,7 @@ import difflib
 import os
 import sys
 
-OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help")
+OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help", "--check", "--output")
 
 
 def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
@@ -61,6 +62,12 @@ def _parser() -> argparse.ArgumentParser:
                              "converged level; the config must describe the same model")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     parser.add_argument("--version", action="store_true", help="print the version and exit")
+    parser.add_argument("--check", action="store_true",
+                        help="build the model without solving: print each beam's area and centroid "
+                             "and each shared border's length, draw the sections, borders, contact "
+                             "interfaces and twist axis (docs/geometry.md)")
+    parser.add_argument("--output", metavar="PNG",
+                        help="with --check: the picture (default: OUTPUT_DIR/geometry.png)")
     return parser
 
 
@@ -109,6 +116,8 @@ def _main(argv: list[str], interrupt) -> int:
     if problem:
         _error(problem)
         return 2
+    if args.check or args.output:
+        return _check(args, interrupt.SafePrinter(quiet=args.quiet))
     if petsc_help:
         # PETSc prints its help during PetscInitialize, under its own SIGPIPE handler (which
         # aborts): without PETSc's handlers, `ancf-solve CONFIG -help | head` ends quietly
@@ -178,6 +187,65 @@ def _main(argv: list[str], interrupt) -> int:
         elif result.status != "completed":
             _error(f"{result.message}; converged steps are in {spec.output.dir}")
     return result.exit_code
+
+
+def _check(args, say) -> int:
+    """--check: the model built and drawn on rank 0, no PETSc and no solve; every rank exits
+    with rank 0's code."""
+    if not args.check:
+        _error("--output PNG names the picture of --check; the results directory is --output-dir")
+        return 2
+    if args.restart:
+        _error("--check builds the model only; leave out --restart")
+        return 2
+    if args.output is not None and not args.output.lower().endswith(".png"):
+        _error(f"--output {args.output}: the picture is a PNG; give a file name ending in .png")
+        return 2
+    from ancf_petsc.parallel.launch import prepare_environment
+    prepare_environment()
+    from mpi4py import MPI
+    comm = MPI.COMM_WORLD
+    code = _check_model(args, say) if comm.rank == 0 else None
+    return comm.bcast(code, root=0) if comm.size > 1 else code
+
+
+def _check_model(args, say) -> int:
+    from ancf_petsc.config.parse import load_config
+    from ancf_petsc.errors import InputError
+    from ancf_petsc.io.files import OutputError, os_reason, prepare_output_dir
+    png = args.output
+    try:
+        spec = load_config(args.config)
+        if args.output_dir:
+            spec.output.dir = args.output_dir
+        if png is None:
+            prepare_output_dir(spec.output.dir)
+            png = os.path.join(spec.output.dir, "geometry.png")
+        from ancf_petsc.viz.geometry_check import check_geometry
+        lines = check_geometry(spec, png)
+    except InputError as exc:
+        _error(f"config error: {exc}")
+        return 2
+    except OutputError as exc:
+        _error(f"output error: {exc}")
+        return 2
+    except OSError as exc:
+        _error(f"--output {png}: cannot write the picture: {os_reason(exc)}")
+        return 2
+    except Exception:                    # a bug: shown, and the other ranks not left waiting
+        import traceback
+        traceback.print_exc()
+        sys.stderr.flush()
+        from mpi4py import MPI
+        if MPI.COMM_WORLD.size > 1:
+            MPI.COMM_WORLD.Abort(1)
+        return 1
+    say(f"[ancf] check {spec.name}: {len(spec.beams)} beam(s), L = {spec.length:g} m, model built, "
+        "not solved")
+    for line in lines:
+        say("[ancf]   " + line)
+    say(f"[ancf] picture: {png}")
+    return 0
 
 
 def cli() -> None:

@@ -30,6 +30,7 @@ import yaml
 
 from ..model.beams import Model
 from ..physics import element3363 as el
+from ..status import OUTPUT_ERROR
 from ..version import version_info
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
 from .restart import fingerprint
@@ -71,7 +72,7 @@ class ResultsWriter:
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
         self.vtk = VtkSeries(self.dir, compress=spec.output.vtk_compress)
         self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
-        self._on_root(lambda: self._create(layout, run_info) if restart is None else self._resume())
+        self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
         """Run ``action`` on rank 0; its error is raised on every rank as an ``OutputError``
@@ -93,6 +94,35 @@ class ResultsWriter:
             err = self.comm.tompi4py().bcast(err, root=0)
         if err:
             raise OutputError(*err)
+
+    def _create_or_fail(self, layout, run_info: dict) -> None:
+        """``_create``; if it fails (a full disk before level 1), the files that exist say
+        ``failed`` with ``OUTPUT_ERROR`` (never ``running``), as far as the disk lets them."""
+        try:
+            self._create(layout, run_info)
+        except OutputError as exc:
+            self._fail_early(f"output error: {exc}")
+            raise
+        except OSError as exc:
+            self._fail_early(f"output error: {exc.filename or self.dir}: {os_reason(exc)}")
+            raise
+
+    def _fail_early(self, message: str) -> None:
+        """Best effort after a failed start: summary.json and results.h5 (if any) say ``failed``."""
+        self._release_reserve()
+        self.summary.update(status="failed", reason_code=OUTPUT_ERROR, message=message,
+                            steps=[])
+        try:
+            atomic_write(self.summary_path, json.dumps(self.summary, indent=1))
+        except OSError:
+            pass                                   # no room even for that: the exit code says it
+        if os.path.exists(self.h5_path):
+            try:
+                with h5py.File(self.h5_path, "a") as h5:
+                    h5.attrs["status"] = "failed"
+                    h5.attrs["reason_code"] = OUTPUT_ERROR
+            except (OSError, RuntimeError):
+                remove_quietly(self.h5_path)      # a results.h5 that cannot say failed goes
 
     def _create(self, layout, run_info: dict) -> None:
         model = self.model

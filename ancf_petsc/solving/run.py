@@ -31,6 +31,7 @@ from .interrupt import RunInterrupted
 from .linear import choose as choose_linear
 from .options import matrix_type
 from .records import LoadStepFailure, PathState
+from .restart_check import check_restart_state
 from .stepper import LoadStepper
 from .supports import free_rigid_motions
 
@@ -125,7 +126,10 @@ class Run:
             self.model = build_model(spec)
             if point is not None:
                 check_same_run(point, self.model, list(spec.steps), spec.output.dir)
-            self.contact = contact_for(self.model, spec.contact, say) if spec.contact else None
+            # the contact's lines follow the model header (``describe``): the header comes first
+            self.contact_lines: list[str] = []
+            self.contact = contact_for(self.model, spec.contact, self.contact_lines.append) \
+                if spec.contact else None
             prefix = spec.solver.options_prefix
             self.linear = choose_linear(spec.solver.linear, self.model, self.contact, spec.petsc, prefix)
             # the fascicle-parallel solver keeps every beam whole on one rank
@@ -157,6 +161,8 @@ class Run:
                  f"{model.n_dofs} DOFs, {self.comm.size} rank(s)")
         for line in model.describe():
             self.say("[ancf]   " + line)
+        for line in self.contact_lines:
+            self.say(line)
         self.say("[ancf]   " + layout.summary() + (
             f", cut contact pairs {partition['cut_contact_pairs']}/{partition['contact_pairs']}"
             if "contact_pairs" in partition else "") + f", cut beam nodes {partition['cut_beam_nodes']}")
@@ -199,6 +205,7 @@ class Run:
                          dX_last=self.problem.global_vector(point.increment_blocks.ravel()),
                          lam=point.load_factor, dlam=point.increment, dlam_last=point.last_increment,
                          accepted_negative=point.accepted_negative)
+        check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
         levels = [f for f in self.spec.steps if f > point.load_factor * (1.0 + 1e-12)]
         self.say(f"[ancf] restart from step {point.step} (load factor {point.load_factor:g}) of "
                  f"{self.spec.output.dir}: {len(levels)} level(s) to go")

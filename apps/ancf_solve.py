@@ -110,6 +110,10 @@ def _main(argv: list[str], interrupt) -> int:
         args, petsc_args = parser.parse_known_args(ours)
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0
+    for name in ("output_dir", "restart"):
+        if getattr(args, name) == "":    # else silently the config's output.dir
+            _error(f"--{name.replace('_', '-')}: an empty path; give a directory")
+            return 2
     petsc_args = petsc_help + petsc_args
     from ancf_petsc.config.options_files import check_all_options
     problem = check_all_options(petsc_args, OPTIONS)   # command line, options files, PETSC_OPTIONS

@@ -92,6 +92,11 @@ def load_config(path: str) -> ModelSpec:
     """Read and validate a YAML config file; raises ConfigError (never a traceback-worthy error)."""
     if os.path.isdir(path):
         raise ConfigError("", f"{path}: is a directory, not a config file")
+    if os.path.exists(path) and not os.path.isfile(path):
+        # a pipe (/dev/stdin, <(...)), a terminal or a socket: every MPI rank reads the config
+        # and relative paths in it are resolved from its directory, so it must be a file
+        raise ConfigError("", f"{path}: a pipe or device, not a config file: pipes are not "
+                              "supported (every rank reads the config); write it to a file first")
     if not os.path.isfile(path):
         raise ConfigError("", f"{path}: no such config file")
     try:

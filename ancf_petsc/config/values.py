@@ -32,7 +32,8 @@ def shown(v) -> str:
 def mapping(value, path: str, required: tuple = (), optional: tuple = ()) -> dict:
     """Check a mapping with exactly the given keys (required ones present, no unknown ones)."""
     if not isinstance(value, dict):
-        raise ConfigError(path, f"expected a mapping with keys {', '.join(required + optional)}; "
+        keys = list(dict.fromkeys(required + optional))        # each key once, required first
+        raise ConfigError(path, f"expected a mapping with keys {', '.join(keys)}; "
                                 f"got {type(value).__name__} {shown(value)}")
     allowed = set(required) | set(optional)
     for key in value:

@@ -73,22 +73,29 @@ def read_point_list(path: str) -> RawOutline:
         if P.ndim != 2 or P.shape[1] != 2:
             raise OutlineReadError(f"{_name(path)} must hold a list of [u, v] pairs (or points: [...])")
     else:
+        # MATLAB ends each row with ';' ("1.5, 2.0;" or "1.5 2.0;"): a row terminator, not a column
+        lines = [ln.rstrip() for ln in text.splitlines()]
+        lines = [ln[:-1] if ln.endswith(";") else ln for ln in lines]
         try:
-            dialect = csv.Sniffer().sniff(text[:4096], delimiters=",;\t ")
+            dialect = csv.Sniffer().sniff("\n".join(lines)[:4096], delimiters=",;\t ")
             delim = dialect.delimiter
         except csv.Error:
             delim = ","
-        rows = []
-        for k, row in enumerate(csv.reader(text.splitlines(), delimiter=delim)):
+        rows, header = [], None
+        for k, row in enumerate(csv.reader(lines, delimiter=delim)):
             row = [c.strip() for c in row if c.strip()]
             if not row or row[0].startswith("#"):
                 continue
             try:
                 vals = [float(c) for c in row[:2]]
             except ValueError:
-                if not rows:
-                    continue                       # a header line
-                raise OutlineReadError(f"{_name(path)} line {k + 1}: {row!r} is not two numbers") from None
+                if not rows and header is None:
+                    header = k                     # one header line, before the numbers
+                    continue
+                raise OutlineReadError(
+                    f"{_name(path)} line {k + 1}: {row!r} is not two numbers u, v (one header "
+                    "line is allowed, before the numbers; columns separated by a comma, "
+                    "semicolon, tab or spaces)") from None
             if len(vals) != 2:
                 raise OutlineReadError(f"{_name(path)} line {k + 1}: expected two columns u, v")
             rows.append(vals)

@@ -57,9 +57,31 @@ def remove_quietly(*paths: str) -> None:
             pass
 
 
+def _dangling_link(path: str) -> str | None:
+    """``path`` or the first of its parents that is a symbolic link to nothing, else None."""
+    parts = os.path.normpath(path).split(os.sep)
+    for k in range(1, len(parts) + 1):
+        head = os.sep.join(parts[:k]) or os.sep
+        if os.path.islink(head) and not os.path.exists(head):
+            return head
+        if not os.path.lexists(head):
+            return None
+    return None
+
+
 def prepare_output_dir(path: str) -> None:
     """Create ``path`` if needed and check that files can be written in it (rank 0 only);
     raises ``OutputError`` naming the path and the reason."""
+    if not path:
+        raise OutputError("''", "the output directory is an empty path (give output.dir or "
+                                "--output-dir a directory)")
+    if os.path.realpath(path) == os.path.realpath(os.sep):
+        raise OutputError(path, "is the root directory: give the results a directory of their "
+                                "own (output.dir / --output-dir)")
+    dangling = _dangling_link(path)
+    if dangling:
+        raise OutputError(dangling, f"is a dangling symbolic link (to {os.readlink(dangling)}): "
+                                    "create its target or choose another output.dir / --output-dir")
     if os.path.exists(path) and not os.path.isdir(path):
         raise OutputError(path, "exists and is not a directory (choose another output.dir / --output-dir)")
     try:

@@ -29,6 +29,7 @@ import numpy as np
 import yaml
 
 from ..model.beams import Model
+from ..model.plausibility import strain_warning
 from ..physics import element3363 as el
 from ..status import OUTPUT_ERROR
 from ..version import version_info
@@ -68,7 +69,8 @@ class ResultsWriter:
         self.dir = spec.output.dir
         self.h5_path = os.path.join(self.dir, "results.h5")
         self.summary_path = os.path.join(self.dir, "summary.json")
-        self.summary = {"name": spec.name, "status": "running", **run_info, "steps": []}
+        self.summary = {"name": spec.name, "status": "running", **run_info,
+                        "warnings": list(model.warnings), "steps": []}   # + the first level's strain
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
         self.vtk = VtkSeries(self.dir, compress=spec.output.vtk_compress)
         self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
@@ -190,6 +192,7 @@ class ResultsWriter:
         self.summary["version"] = version_info()
         self.summary["restarted_from"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["steps"] = list(point.summary.get("steps", []))
+        self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
         loads = [0.0] + [st["load_factor"] for st in self.summary["steps"]]
         for series in self.vtk.entries:
             for k in range(len(loads)):
@@ -282,6 +285,10 @@ class ResultsWriter:
                  "newton_history": record.iteration_history}
         if extra:
             entry.update(extra)
+        if k == 1:                          # a first level strained beyond belief: wrong units?
+            note = strain_warning(self.model, q, record.load_factor)
+            if note:
+                self.summary["warnings"].append(note)
         self._check_space(k, q)
         name = f"step_{k:04d}"
         size0 = os.path.getsize(self.h5_path)
@@ -298,9 +305,9 @@ class ResultsWriter:
                 g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
                     else record.negative_eigenvalues
                 if contact is not None:
-                    self._write_contact(g, contact, path["blocks"][self.model.n_nodes:])
+                    write_contact_group(g, contact, path["blocks"][self.model.n_nodes:])
                 if path is not None:
-                    self._write_restart(g, record, path)
+                    write_restart_group(g, record, path)
                 steps.move(name + ".partial", name)
                 steps.attrs["converged"] = k
                 steps.attrs["last_load_factor"] = record.load_factor
@@ -317,28 +324,6 @@ class ResultsWriter:
             if contact is not None:
                 self._write_series("contact", k, record.load_factor, contact_cells(contact))
         self._write_summary()
-
-    @staticmethod
-    def _write_restart(g, record, path: dict) -> None:
-        """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
-        r = g.create_group("restart")
-        r.create_dataset("blocks", data=path["blocks"])
-        r.create_dataset("increment_blocks", data=path["increment_blocks"])
-        r.attrs["increment"] = record.increment
-        r.attrs["last_increment"] = record.last_increment
-        r.attrs["accepted_negative"] = path["accepted_negative"]
-
-    @staticmethod
-    def _write_contact(g, contact: dict, multipliers: np.ndarray) -> None:
-        """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
-        c = g.create_group("contact")
-        c.attrs["units"] = "SI: m, Pa; slip = reference position of the point minus its partner's on B"
-        for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
-                    "multiplier_pressure", "multiplier_active"):
-            c.create_dataset(key, data=contact[key])
-        if "weight" in contact:           # 0: out of contact (gap, pressure, slip written as 0)
-            c.create_dataset("weight", data=contact["weight"])
-        c.create_dataset("multiplier_blocks", data=multipliers)
 
     def _append(self, entry: dict) -> None:
         self.summary["steps"].append(entry)
@@ -380,3 +365,25 @@ class ResultsWriter:
         except (OSError, RuntimeError):
             pass                                   # results.h5 keeps its levels; the summary has the status
         return problem
+
+
+def write_restart_group(g, record, path: dict) -> None:
+    """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
+    r = g.create_group("restart")
+    r.create_dataset("blocks", data=path["blocks"])
+    r.create_dataset("increment_blocks", data=path["increment_blocks"])
+    r.attrs["increment"] = record.increment
+    r.attrs["last_increment"] = record.last_increment
+    r.attrs["accepted_negative"] = path["accepted_negative"]
+
+
+def write_contact_group(g, contact: dict, multipliers: np.ndarray) -> None:
+    """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
+    c = g.create_group("contact")
+    c.attrs["units"] = "SI: m, Pa; slip = reference position of the point minus its partner's on B"
+    for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
+                "multiplier_pressure", "multiplier_active"):
+        c.create_dataset(key, data=contact[key])
+    if "weight" in contact:           # 0: out of contact (gap, pressure, slip written as 0)
+        c.create_dataset("weight", data=contact["weight"])
+    c.create_dataset("multiplier_blocks", data=multipliers)

@@ -83,6 +83,7 @@ class Model:
     f_ext: np.ndarray              # (n_dofs,) external generalised forces at load factor 1
     probes: dict[str, tuple[int, int]]   # name → (global node, vector slot)
     geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
+    warnings: list = field(default_factory=list)          # implausible sizes (plausibility.py)
 
     @property
     def n_nodes(self) -> int:
@@ -124,7 +125,7 @@ class Model:
         return out
 
     def describe(self) -> list[str]:
-        lines = list(self.geometry_report)
+        lines = list(self.geometry_report) + list(self.warnings)
         for b in self.beams:
             lock = ", Poisson part on the axis (ecm)" if b.locking == "ecm" else ""
             per = (f"up to {b.points_per_element // b.axial_points} section points, varying along x"

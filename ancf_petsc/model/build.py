@@ -18,6 +18,7 @@ from ..physics.section import Section, make_circle, make_ellipse, make_outline, 
 from ..physics.sections_file import inline_loop, load_sections_file
 from ..physics.spline import SectionError
 from .beams import Beam, Model
+from .plausibility import size_warnings
 
 _SECTIONS_FILE_CACHE: dict = {}
 
@@ -240,4 +241,4 @@ def build_model(spec: ModelSpec) -> Model:
     probes = {p.name: (beams[p.beam].node_offset + p.node, el.VECTOR_INDEX[p.vector])
               for p in spec.probes}
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, f_ext=f_ext, probes=probes,
-                 geometry_report=report)
+                 geometry_report=report, warnings=size_warnings(spec, beams))

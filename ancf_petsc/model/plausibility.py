@@ -1,0 +1,84 @@
+"""Plausibility of a model's sizes and of its first converged level: lengths written in
+millimetres where the config means metres (``length: 70`` for 0.07) solve for hundreds of Newton
+iterations and fail without a word.  Each check gives one warning line naming the key and the
+likely unit mistake; the model is built and solved as given."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+__all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "size_warnings",
+           "strain_warning"]
+
+#: a tendon, fascicle or bar longer than this [m] is most likely given in mm
+MAX_LENGTH = 5.0
+#: a section wider than this [m] is most likely given in mm
+MAX_WIDTH = 0.5
+#: plausible range of a beam's length over the square root of its section area
+SLENDERNESS = (1.0, 1000.0)
+#: an axial strain beyond this (either sign) at the first converged level suggests wrong units
+MAX_FIRST_STRAIN = 0.5
+
+
+def _section_key(spec, i: int) -> str:
+    """The config key a beam's section dimensions come from."""
+    bs = spec.beams[i].section
+    if bs.curves is not None:            # inline outlines; a bundle's fascicles are written so
+        bundle = re.fullmatch(r"fascicle\d+", spec.beams[i].name) is not None
+        return "bundle.radius" if bundle else f"beams[{i}].section.curves"
+    if bs.shape == "outline" and bs.file is None:
+        return "geometry.sections"
+    return f"beams[{i}].section" + (".file" if bs.file else "")
+
+
+def size_warnings(spec, beams) -> list[str]:
+    """Warnings (one line each) for a length or section sizes that look like millimetres
+    (SI units: metres), else for a beam length / sqrt(area) outside ``SLENDERNESS``."""
+    out = []
+    L = spec.length
+    if L > MAX_LENGTH:
+        out.append(f"warning: geometry.length is {L:g} m (longer than {MAX_LENGTH:g} m): lengths are in "
+                   f"metres (units: SI); if you meant {L:g} mm, write length: {L * 1e-3:g}")
+    wide = [(i, b, 2.0 * float(np.max(b.section.extent))) for i, b in enumerate(beams)
+            if 2.0 * float(np.max(b.section.extent)) > MAX_WIDTH]
+    if wide:
+        i, b, w = wide[0]
+        more = f" (and {len(wide) - 1} more beam(s))" if len(wide) > 1 else ""
+        out.append(f"warning: {_section_key(spec, i)}: the section of beam {b.name} is {w:g} m wide"
+                   f"{more} (more than {MAX_WIDTH:g} m): section sizes are in metres (units: SI); "
+                   f"if they are millimetres, divide them by 1000")
+    if out:
+        return out
+    lo, hi = SLENDERNESS
+    for i, b in enumerate(beams):
+        s = L / np.sqrt(b.section.area)
+        if not lo <= s <= hi:
+            short = s < lo
+            out.append(f"warning: beam {b.name}: length / sqrt(section area) = {s:.3g} (plausible "
+                       f"{lo:g} to {hi:g}): geometry.length {L:g} m against a section of "
+                       f"{b.section.area * 1e6:.4g} mm^2; check the units (metres) of "
+                       + (f"{_section_key(spec, i)} (too large?)" if short else
+                          f"geometry.length (too long?) and {_section_key(spec, i)}"))
+            break
+    return out
+
+
+def strain_warning(model, q: np.ndarray, load_factor: float) -> str | None:
+    """A warning when some beam's axis (its nodes' r) is stretched or shortened by more than
+    ``MAX_FIRST_STRAIN`` at the first converged level (nodal vectors ``q``, (n_nodes, 6, 3))."""
+    worst, where = 0.0, None
+    for b in model.beams:
+        nodes = b.node_offset + np.arange(b.n_nodes)
+        d = np.linalg.norm(np.diff(q[nodes, 0], axis=0), axis=1)
+        d0 = np.linalg.norm(np.diff(model.q0[nodes, 0], axis=0), axis=1)
+        e = d / d0 - 1.0
+        k = int(np.argmax(np.abs(e)))
+        if abs(e[k]) > abs(worst):
+            worst, where = float(e[k]), b.name
+    if abs(worst) <= MAX_FIRST_STRAIN:
+        return None
+    return (f"warning: at the first converged level (load factor {load_factor:g}) beam {where}'s axis "
+            f"is {abs(worst) * 100:.0f} % {'longer' if worst > 0 else 'shorter'} (axial strain beyond "
+            f"{MAX_FIRST_STRAIN * 100:.0f} %): check the units (SI: N in loads, Pa in materials, "
+            "e.g. mu: 103.1e6 not 103.1; m in geometry)")

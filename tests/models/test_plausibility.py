@@ -1,0 +1,92 @@
+"""Issue 25: lengths in mm by mistake (``length: 70`` for 0.07) gave no warning, 552 Newton
+iterations and exit 3.  Implausible sizes are named in the run header; a first level strained
+beyond 50 % is named on stderr at the end of the run (and in summary.json)."""
+import glob
+import os
+
+import pytest
+import yaml
+
+from helpers import CONFIGS, load_raw, run_inline, solve_cli
+
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.model.build import build_model
+
+
+def _warnings(raw):
+    return [line for line in build_model(parse_config(raw, base_dir=CONFIGS)).describe()
+            if line.startswith("warning")]
+
+
+@pytest.mark.parametrize("path", sorted(glob.glob(os.path.join(CONFIGS, "*.yaml"))))
+def test_shipped_configs_give_no_warning(path):
+    assert _warnings(load_raw(os.path.basename(path))) == []
+
+
+def test_length_in_mm_is_named():
+    raw = load_raw("achilles_type3_psi0.yaml")
+    raw["geometry"]["length"] = 70
+    (w,) = _warnings(raw)
+    assert "geometry.length is 70 m" in w and "write length: 0.07" in w
+
+
+def test_section_in_mm_is_named():
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["section"]["semi_axes"] = [6, 4]            # mm meant
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: beams[0].section: the section of beam bar is 12 m wide")
+    assert "divide them by 1000" in w
+
+
+def test_bundle_radius_in_mm_is_named():
+    raw = load_raw("bundle_hex7.yaml")
+    raw["bundle"]["radius"] = 0.6
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: bundle.radius: the section of beam fascicle0 is 1.2 m wide (and 6 more")
+
+
+def test_implausible_slenderness_is_named():
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["geometry"]["length"] = 0.0001                         # 0.1 mm long, 12 mm wide
+    (w,) = _warnings(raw)
+    assert "length / sqrt(section area) = 0.0115" in w and "beams[0].section (too large?)" in w
+
+
+def test_mm_length_warning_is_in_the_run_header(tmp_path):
+    """--check prints the run's model header: the warning is there, once, on rank 0's stdout."""
+    raw = load_raw("achilles_type3_psi0.yaml")
+    raw["geometry"]["length"] = 70
+    raw["beams"] = [dict(b, section=dict(b["section"], file=os.path.join(CONFIGS, b["section"]["file"])))
+                    for b in raw["beams"]]
+    path = tmp_path / "mm.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    p = solve_cli(str(path), extra=["--check", "--output", str(tmp_path / "g.png")])
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.count("[ancf]   warning: geometry.length is 70 m") == 1
+
+
+def test_first_level_strain_is_named(tmp_path):
+    """A shear modulus 10 x too small: 60 % axial strain at the first level."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.2]
+    raw["beams"][0]["material"].update(mu=1.0e5, bulk_modulus=5.0e6)
+    (w,) = run_inline(raw, tmp_path / "soft")["warnings"]
+    assert w.startswith("warning: at the first converged level (load factor 0.2) beam bar's axis is 60 % longer")
+    raw["beams"][0]["material"].update(mu=1.0e6, bulk_modulus=5.0e7)
+    assert run_inline(raw, tmp_path / "right")["warnings"] == []
+
+
+def test_first_level_strain_warning_on_stderr(tmp_path):
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.2]
+    raw["beams"][0]["material"].update(mu=1.0e5, bulk_modulus=5.0e6)
+    path = tmp_path / "soft.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    p = solve_cli(str(path), extra=["--output-dir", str(tmp_path / "out"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    assert p.stderr.count("ancf-solve: warning: at the first converged level") == 1
+
+
+def test_paper_column_runs_without_warnings(tmp_path):
+    s = run_inline(load_raw("achilles_type3_psi0.yaml"), tmp_path / "psi0")
+    assert s["status"] == "completed" and s["warnings"] == []

@@ -183,6 +183,8 @@ def _main(argv: list[str], interrupt) -> int:
                 source = "config" if name.startswith("petsc.") else ""
                 option = "-" + name[len("petsc."):] if source else name
                 print(unused_line(option, source), file=sys.stderr, flush=True)
+        for note in (result.summary or {}).get("warnings", []):   # e.g. a first level strained > 50 %
+            print(f"ancf-solve: {note}", file=sys.stderr, flush=True)
         if result.status == "unstable":
             _error(f"unstable: {result.message}; results in {spec.output.dir}")
         elif result.status == "interrupted":

@@ -113,7 +113,8 @@ def _main(argv: list[str]) -> int:
         if args.slurm:
             script, runs_txt = write_slurm(sweep, force=args.force)
             say(f"[sweep] wrote {script} (array 0-{len(runs) - 1}) and {runs_txt}")
-            say(f"[sweep] submit: sbatch {script}")
+            say(f"[sweep] submit: cd {os.path.dirname(script)} && sbatch sweep.slurm "
+                "(every path in it is relative to that directory)")
             say(f"[sweep] afterwards: ancf-sweep {args.sweep} --collect")
             return 0
 

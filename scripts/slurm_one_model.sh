@@ -18,7 +18,21 @@ set -euo pipefail
 
 CONFIG=${1:?usage: sbatch [--nodes N --ntasks-per-node M] slurm_one_model.sh CONFIG.yaml [PETSc options]}
 shift
-VENV=${ANCF_VENV:-$(cd "$(dirname "$0")/.." && pwd)/.venv}
+# The environment: ANCF_VENV, else the .venv of the directory sbatch was run from (the project;
+# under sbatch "$0" is SLURM's copy of this script in its spool directory, which says nothing
+# about where the project is), else the .venv beside this script (run with bash directly).
+if [ -n "${ANCF_VENV:-}" ]; then
+  VENV=$ANCF_VENV
+elif [ -n "${SLURM_SUBMIT_DIR:-}" ] && [ -x "$SLURM_SUBMIT_DIR/.venv/bin/ancf-solve" ]; then
+  VENV=$SLURM_SUBMIT_DIR/.venv
+else
+  VENV=$(cd "$(dirname "$0")/.." && pwd)/.venv
+fi
+if [ ! -x "$VENV/bin/ancf-solve" ]; then
+  echo "slurm_one_model.sh: no ancf-solve in $VENV/bin: submit from the project directory" \
+       "(cd ancf-petsc && sbatch scripts/slurm_one_model.sh ...) or set ANCF_VENV=/path/to/.venv" >&2
+  exit 2
+fi
 OUT=${OUT:-results/$(basename "${CONFIG%.*}")_${SLURM_JOB_ID:-local}}
 mkdir -p "$OUT"
 

@@ -175,7 +175,7 @@ def test_slurm_script(tmp_path):
     assert "#SBATCH --time=00:04:00" in script               # run.timeout 120 s + 2 min
     assert "#SBATCH --output=" in script and "ancf-sweep" in script and "--collect" in script
     assert 'VENV="${ANCF_VENV:-' in script                   # the environment is configurable
-    assert (out_dir / "runs.txt").read_text().splitlines() == [r.dir for r in runs]
+    assert (out_dir / "runs.txt").read_text().splitlines() == [r.run_id for r in runs]
     assert all(os.path.isfile(os.path.join(r.dir, "config.yaml")) for r in runs)
     assert os.path.realpath(out_dir / "tasks" / "2") == os.path.realpath(runs[2].dir)
     assert subprocess.run(["bash", "-n", str(out_dir / "sweep.slurm")]).returncode == 0

@@ -64,7 +64,10 @@ def expand(sweep: Sweep) -> list[RunSpec]:
 
 
 def run_config(sweep: Sweep, run: RunSpec) -> dict:
-    """The run's model config: base + values, output.dir = run dir, absolute section files."""
+    """The run's model config: base + values, output.dir = run dir (every launch passes the run
+    directory on the command line too), and the base's data files (``beams[].section.file``,
+    ``file`` and ``source`` under ``geometry.sections``) relative to the run directory, where
+    config.yaml lives: a sweep directory moved with its data keeps working (``_relocate``)."""
     raw = copy.deepcopy(sweep.base_raw)
     for p in sweep.parameters:
         set_key_path(raw, p.tokens, run.params[p.path])
@@ -74,10 +77,33 @@ def run_config(sweep: Sweep, run: RunSpec) -> dict:
     out["dir"] = run.dir
     for beam in raw.get("beams") or []:
         sec = beam.get("section") if isinstance(beam, dict) else None
-        f = sec.get("file") if isinstance(sec, dict) else None
-        if isinstance(f, str) and f and not os.path.isabs(f):
-            sec["file"] = os.path.normpath(os.path.join(sweep.base_dir, f))
+        if isinstance(sec, dict):
+            _relocate(sec, ("file",), sweep.base_dir, run.dir)
+    geo = raw.get("geometry")
+    if isinstance(geo, dict) and geo.get("sections") is not None:
+        geo["sections"] = _relocated_tree(geo["sections"], sweep.base_dir, run.dir)
     return raw
+
+
+def _relocate(mapping: dict, keys: tuple, base_dir: str, run_dir: str) -> None:
+    """A relative file path of the base config, made relative to the run directory instead
+    (absolute if the two share no directory but the root: no relative path survives a move)."""
+    for key in keys:
+        f = mapping.get(key)
+        if isinstance(f, str) and f and not os.path.isabs(f):
+            path = os.path.normpath(os.path.join(base_dir, f))
+            shared = os.path.commonpath([path, os.path.abspath(run_dir)]) != os.sep
+            mapping[key] = os.path.relpath(path, run_dir) if shared else path
+
+
+def _relocated_tree(value: Any, base_dir: str, run_dir: str) -> Any:
+    """``_relocate`` of every ``file`` / ``source`` in a ``geometry.sections`` value."""
+    if isinstance(value, dict):
+        value = {k: _relocated_tree(v, base_dir, run_dir) for k, v in value.items()}
+        _relocate(value, ("file", "source"), base_dir, run_dir)
+    elif isinstance(value, list):
+        value = [_relocated_tree(v, base_dir, run_dir) for v in value]
+    return value
 
 
 def config_text(sweep: Sweep, run: RunSpec) -> str:

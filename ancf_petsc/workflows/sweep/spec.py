@@ -51,6 +51,7 @@ _SLURM_TIME = re.compile(r"(\d+-)?\d+(:\d{1,2}){0,2}|\d+-\d+")
 
 
 _SLURM_MEM = re.compile(r"\d+[KMGT]?B?", re.IGNORECASE)
+_SLURM_NAME = re.compile(r"[A-Za-z0-9_.\-]+(?:,[A-Za-z0-9_.\-]+)*")
 
 
 def slurm_spec(value: Any, here: str, path: str = "slurm") -> SlurmSpec:
@@ -77,7 +78,13 @@ def slurm_spec(value: Any, here: str, path: str = "slurm") -> SlurmSpec:
                                              f"1-12:00:00; got {sl.time!r}")
     for key in ("partition", "account"):
         if value.get(key) is not None:
-            setattr(sl, key, _str(value[key], f"{path}.{key}"))
+            text = _str(value[key], f"{path}.{key}")
+            if not _SLURM_NAME.fullmatch(text):
+                # written into '#SBATCH --partition=...' verbatim: a blank would end the option
+                raise SweepError(f"{path}.{key}", f"a SLURM {key} name (several: comma-separated), "
+                                 f"letters, digits, '_', '-', '.' only, e.g. short or short,long; "
+                                 f"got {text!r}")
+            setattr(sl, key, text)
     if value.get("venv") is not None:
         sl.venv = os.path.normpath(os.path.join(here, _str(value["venv"], f"{path}.venv")))
     if value.get("logs") is not None:

@@ -82,9 +82,13 @@ def model_difference(stored: dict, now: dict) -> str | None:
     fields = ("elements", "element_axial_points_locking", "material", "x_nodes", "section_points",
               "section_weights", "connectivity")
 
+    beams: dict[str, int] = {}
+    for key in now:                               # beams in the order the model has them
+        beams.setdefault(key.rpartition("/")[0], len(beams))
+
     def order(key: str):
         beam, _, field = key.rpartition("/")
-        return (0, beam, fields.index(field) if field in fields else len(fields)) if beam else (1, "", 0)
+        return (0, beams[beam], fields.index(field) if field in fields else len(fields)) if beam else (1, 0, 0)
     keys = sorted(now, key=order)
     for key in keys + [k for k in stored if k not in now]:
         if key not in stored or key not in now:

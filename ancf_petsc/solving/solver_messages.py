@@ -27,6 +27,34 @@ def describe(stepper) -> str:
             + ("; chord steps near convergence" if stepper.spec.reuse_tangent else ""))
 
 
+#: what works on the saddle-point Jacobian of a model with contact multipliers (measured on
+#: configs/achilles_type3_psi45.yaml, docs/running.md)
+SADDLE_POINT_HINT = ("a contact model's Jacobian is a saddle-point matrix (a zero block for the "
+                     "multipliers): only a pivoting direct solver factors it, the default (-pc_type cholesky, "
+                     "MUMPS LDLᵀ) or -pc_type lu (MUMPS); Krylov methods with gamg, hypre, bjacobi, asm, ilu or "
+                     "jacobi and the factorisations of PETSc and SuperLU_DIST fail on it")
+
+
+def failure_detail(stepper, reason: int) -> str:
+    """What to try after a failed level: the linear solver's reason and what works, a
+    preconditioner that solves nothing, or a Newton budget too small for an active set."""
+    if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
+        return linear_solver_detail(stepper, reason)
+    if reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT:
+        return ""
+    ksp = stepper.snes.getKSP()
+    if ksp.getType() == "preonly" and ksp.getPC().getType() == "none":
+        return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
+                "itself; drop -pc_type none" + ("" if stepper.problem.contact is None else
+                                               f"; {SADDLE_POINT_HINT}") + ")")
+    contact = stepper.problem.contact
+    if contact is not None and contact.law.name == "unilateral":
+        maxit = stepper.snes.getTolerances()[3]
+        return (f" (unilateral contact changes its active set within a level and may need more than "
+                f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
+    return ""
+
+
 def linear_solver_detail(stepper, reason: int) -> str:
     """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
     if reason != PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
@@ -38,6 +66,8 @@ def linear_solver_detail(stepper, reason: int) -> str:
         hint = "solver.linear: direct factors the whole Jacobian instead"
     elif infog1 is not None:
         hint = mumps_hint(infog1)
+    elif stepper.problem.contact is not None:
+        hint = SADDLE_POINT_HINT
     else:
         pc, factor = factor_package(stepper.petsc_options, stepper.prefix)
         hint = solver_hint(pc, factor, stepper.problem.comm.size, PETSc.Sys.hasExternalPackage)

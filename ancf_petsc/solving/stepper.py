@@ -332,4 +332,4 @@ class LoadStepper:
         if tally["consecutive"] > self.spec.max_cutbacks or path.dlam < self.spec.min_increment:
             P.load_factor = path.lam
             raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                  solver_messages.linear_solver_detail(self, reason))
+                                  solver_messages.failure_detail(self, reason))

@@ -290,3 +290,23 @@ def test_chord_rule_from_the_third_iterate_never_twice_and_on_its_estimate():
     assert rule.decide([1e6, 1e-2, 1e-5], atol, rtol)               # tolerance rtol ‖F_0‖ = 1e-4
     off = TangentReuse(False)
     assert not off.decide([1.0, 1e-2, 1e-6], atol, rtol) and off.count == 0
+
+
+@pytest.mark.parametrize("mode, extra, expect", [
+    ("sliding", ["-ksp_type", "gmres", "-pc_type", "bjacobi"], "saddle-point matrix"),
+    ("sliding", ["-pc_type", "none"], "solves nothing"),
+    ("unilateral", ["-snes_max_it", "1"], "try -snes_max_it 4"),
+])
+def test_failure_hints_for_contact_models(tmp_path, mode, extra, expect):
+    """Issue 25: a contact model is not told to use gmres with gamg/bjacobi (they fail on its
+    saddle-point Jacobian); -pc_type none and a short Newton budget under unilateral contact get
+    a hint of their own."""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["contact"]["mode"] = mode
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    raw["solver"] = {"max_cutbacks": 0}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=extra)
+    assert p.returncode == 3, p.stdout + p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert expect in line, line
+    assert "-ksp_type gmres with -pc_type gamg" not in line

@@ -66,8 +66,10 @@ class shielded:
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
+    def __init__(self) -> None:
+        self.previous: dict = {}
+
     def __enter__(self) -> "shielded":
-        self.previous = {}
         if threading.current_thread() is threading.main_thread():
             self.previous = {s: signal.signal(s, signal.SIG_IGN) for s in self.SIGNALS}
         return self

@@ -62,16 +62,7 @@ def run_sweep(sweep: Sweep, force: bool = False,
     """Run every run not already completed, ``sweep.jobs`` at a time; one line per start/end."""
     runs = expand(sweep)
     n = len(runs)
-    os.makedirs(sweep.output, exist_ok=True)
-    todo: list[RunSpec] = []
-    report = SweepReport(runs, {}, [])
-    for run in runs:
-        done = prepare_run(sweep, run)
-        if done and not force:
-            report.skipped.append(run.run_id)
-            log(progress_line(run, n, event="skipped (already done)"))
-        else:
-            todo.append(run)
+    report, todo = _skip_done(sweep, runs, force, log)
     lock = threading.Lock()
     queue = list(reversed(todo))
     active = Active()
@@ -125,6 +116,22 @@ def run_sweep(sweep: Sweep, force: bool = False,
             active.cancel(getattr(exc, "signum", signal.SIGINT))
             _wait_all(finished, limit=60.0)
     return report
+
+
+def _skip_done(sweep: Sweep, runs: list[RunSpec], force: bool,
+               log: Callable[[str], None]) -> tuple[SweepReport, list[RunSpec]]:
+    """Prepare every run's directory; the report (completed runs skipped) and the runs to do."""
+    os.makedirs(sweep.output, exist_ok=True)
+    todo: list[RunSpec] = []
+    report = SweepReport(runs, {}, [])
+    for run in runs:
+        done = prepare_run(sweep, run)
+        if done and not force:
+            report.skipped.append(run.run_id)
+            log(progress_line(run, len(runs), event="skipped (already done)"))
+        else:
+            todo.append(run)
+    return report, todo
 
 
 def _wait_all(events: list[threading.Event], limit: float | None = None) -> None:

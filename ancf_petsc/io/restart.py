@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from ..contact.interfaces import ContactSetupError, find_interfaces
 from ..errors import InputError
 
 #: config keys that define the model (a restart must not change them; steps, solver, petsc,
@@ -70,10 +71,18 @@ def fingerprint(model) -> dict[str, np.ndarray]:
     if c is not None:
         words = json.dumps({"mode": c.mode, "projection": list(c.projection), "axial_points": c.axial_points,
                             "curve_points": c.curve_points, "per_element": c.per_element,
-                            "interfaces": [list(map(str, i)) for i in (c.interfaces or [])]
-                            if not isinstance(c.interfaces, str) else c.interfaces}, sort_keys=True)
+                            "interfaces": _resolved_interfaces(model, c)}, sort_keys=True)
         out["contact"] = np.frombuffer(words.encode(), dtype=np.uint8).astype(float)
     return out
+
+
+def _resolved_interfaces(model, contact) -> list[str]:
+    """The interfaces contact will use ("curve (A|B)", sorted): ``auto`` and the same pairs
+    written out are one model."""
+    try:
+        return sorted(i.name for i in find_interfaces(model, contact))
+    except ContactSetupError:           # reported by the contact setup itself
+        return [repr(i) for i in (contact.interfaces or [])]
 
 
 def model_difference(stored: dict, now: dict) -> str | None:

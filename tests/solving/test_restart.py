@@ -176,6 +176,10 @@ def test_restart_compares_the_resolved_model_not_its_text(tmp_path):
     same.pop("units", None)
     same["beams"][0]["material"]["mu"] = float("1.031e+08")
     same["loads"][0]["node"] = -1
+    same.setdefault("contact", {})["interfaces"] = [        # what interfaces: auto finds, written out
+        {"a": "medial_gastrocnemius", "b": "soleus", "curve": "mg_sol"},
+        {"a": "lateral_gastrocnemius", "b": "soleus"},
+        {"a": "lateral_gastrocnemius", "b": "medial_gastrocnemius", "curve": "lg_mg"}]
     for b in same["beams"]:
         b["section"]["file"] = str(data / "sections.yaml")
     same["steps"] = raw["steps"] + [45]

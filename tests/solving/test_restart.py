@@ -158,8 +158,8 @@ def _short_run(tmp_path, raw, name="run"):
 def test_restart_compares_the_resolved_model_not_its_text(tmp_path):
     """Issue 25: a section file whose pixel scale changed between the kill and the restart (the
     same YAML) is refused; the same model written differently (``units`` left out, a number
-    written another way, ``node: -1`` for ``last``, another path to the same data file) is
-    accepted; changed steps before the restart point are refused, more levels after it are
+    written another way, ``node: -1`` for ``last``, ``interfaces: auto`` written out, another
+    path to the same data file) is accepted; changed steps before the restart point are refused, more levels after it are
     solved."""
     import shutil
     import yaml

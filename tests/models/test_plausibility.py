@@ -85,6 +85,11 @@ def test_first_level_strain_warning_on_stderr(tmp_path):
     p = solve_cli(str(path), extra=["--output-dir", str(tmp_path / "out"), "--quiet"])
     assert p.returncode == 0, p.stderr
     assert p.stderr.count("ancf-solve: warning: at the first converged level") == 1
+    # and right after the first level's progress line, not only at the end
+    p = solve_cli(str(path), extra=["--output-dir", str(tmp_path / "out2")])
+    lines = p.stdout.splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("[ancf] step 1/"))
+    assert lines[k + 1].startswith("[ancf]   warning: at the first converged level"), lines[k:k + 2]
 
 
 def test_paper_column_runs_without_warnings(tmp_path):

@@ -4,7 +4,8 @@ from __future__ import annotations
 import os
 
 from ..physics.element3363 import ELEMENT_TYPES
-from .specs import DEFAULT_AXIAL_POINTS, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec, SectionSpec
+from .specs import (DEFAULT_AXIAL_POINTS, FIBRE_FOLLOW, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec,
+                    SectionSpec)
 from .values import ConfigError, boolean, integer, key_path, mapping, number, sequence, string, vector
 
 
@@ -98,11 +99,22 @@ def _outline(value, path: str, base_dir: str, s: SectionSpec, common: tuple) -> 
         s.compress = boolean(value["compress"], key_path(path, "compress"))
 
 
+GOH_KEYS = ("k1", "k2", "kappa", "fibres")
+
+
 def parse_material(value, path: str) -> dict:
-    """``beams[i].material``: neo-Hookean (mu, K or the paper's c10, d; eq. 14) or SVK."""
+    """``beams[i].material``: neo-Hookean (mu, K or the paper's c10, d; eq. 14), SVK, or GOH
+    (a neo-Hookean matrix given the same way, plus k1, k2, kappa, fibres)."""
     model = string(mapping(value, path, required=("model",),
-                           optional=("mu", "bulk_modulus", "c10", "d", "E", "nu"))["model"],
+                           optional=("mu", "bulk_modulus", "c10", "d", "E", "nu") + GOH_KEYS)["model"],
                    key_path(path, "model"), MATERIAL_MODELS)
+    if model != "goh" and any(k in value for k in GOH_KEYS):
+        extra = ", ".join(k for k in GOH_KEYS if k in value)
+        raise ConfigError(path, f"{extra}: fibre parameters belong to model: goh, not {model}")
+    if model == "goh":
+        matrix = {k: v for k, v in value.items() if k not in GOH_KEYS}
+        spec = parse_material(dict(matrix, model="neo-hookean"), path)
+        return dict(spec, model="goh", **_goh(value, path))
     ours, papers = [k for k in ("mu", "bulk_modulus") if k in value], [k for k in ("c10", "d") if k in value]
     if model == "neo-hookean" and ours and papers:
         raise ConfigError(path, f"give either mu and bulk_modulus or the paper's c10 and d "
@@ -125,9 +137,40 @@ def parse_material(value, path: str) -> dict:
         mu = 2.0 * number(value["c10"], key_path(path, "c10"), positive=True, hint=" (Pa)")
         K = number(value["d"], key_path(path, "d"), positive=True, hint=" (Pa)")
     else:
-        raise ConfigError(path, "neo-hookean needs 'mu' and 'bulk_modulus' (or the paper's "
+        raise ConfigError(path, "neo-hookean (and goh's matrix) needs 'mu' and 'bulk_modulus' (or the paper's "
                                 "'c10' and 'd', with mu = 2 c10, bulk_modulus = d)")
     return {"model": model, "mu": mu, "bulk_modulus": K}
+
+
+def _goh(value, path: str) -> dict:
+    """The fibre part of ``model: goh`` (physics/goh.py): k1, k2, kappa and the fibre field."""
+    if "k1" not in value or "k2" not in value:
+        raise ConfigError(path, "goh needs k1 (fibre stiffness, Pa) and k2 (dimensionless) besides "
+                                "the matrix's mu and bulk_modulus (or c10 and d)")
+    k1 = number(value["k1"], key_path(path, "k1"), nonneg=True,
+                hint=" (fibre stiffness in Pa; 0 switches the fibres off)")
+    k2 = number(value["k2"], key_path(path, "k2"), positive=True,
+                hint=" (dimensionless stiffening exponent; for a nearly linear fibre give a small k2)")
+    kappa = number(value.get("kappa", 0.0), key_path(path, "kappa"), lo=0.0, hi=1.0 / 3.0,
+                   hint=" (fibre dispersion: 0 aligned, 1/3 isotropic)")
+    fp = key_path(path, "fibres")
+    f = value.get("fibres", {})
+    mapping(f, fp, optional=("follow", "extra_twist_deg", "angle_deg"))
+    follow = string(f.get("follow", "twist"), key_path(fp, "follow"), FIBRE_FOLLOW)
+    extra = number(f.get("extra_twist_deg", 0.0), key_path(fp, "extra_twist_deg"), lo=-720.0, hi=720.0,
+                   hint=" (fibre twist about the beam's axis over the length, degrees)")
+    ap = key_path(fp, "angle_deg")
+    raw = f.get("angle_deg", 0.0)
+    if isinstance(raw, list):
+        items = sequence(raw, ap)
+        if len(items) > 4:
+            raise ConfigError(ap, f"at most 4 fibre families; got {len(items)}")
+        angles = tuple(number(a, key_path(ap, i), lo=-90.0, hi=90.0, hint=" (degrees)")
+                       for i, a in enumerate(items))
+    else:
+        angles = (number(raw, ap, lo=-90.0, hi=90.0, hint=" (degrees; a list gives one family each)"),)
+    return {"k1": k1, "k2": k2, "kappa": kappa,
+            "fibres": {"follow": follow, "extra_twist_deg": extra, "angles_deg": list(angles)}}
 
 
 def _axial_points(value, path: str) -> int:

@@ -6,7 +6,8 @@ from typing import Any
 
 LOCKING = ("none", "ecm")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
-MATERIAL_MODELS = ("neo-hookean", "svk")
+MATERIAL_MODELS = ("neo-hookean", "svk", "goh")
+FIBRE_FOLLOW = ("twist", "axis")
 CONTACT_MODES = ("sliding", "unilateral")
 PARTITION_METHODS = ("blocks", "metis", "beams")
 TWIST_RULES = ("centroid", "origin", "junction")

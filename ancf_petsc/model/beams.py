@@ -38,6 +38,10 @@ class Beam:
     # sections that vary along x (geometry.sections with stations): dN (E, P, S, 3), wq (E, P),
     # yz (E, P, 2), wq_axis (E, na) per element; ``ring_at(x)`` the outline (beam coordinates)
     ring_at: object = field(repr=False, default=None)
+    # fibre directions of a fibre-reinforced law (GOH), (families, E, P, 3) at the Gauss points
+    # and (families, E, na, 3) on the axis (``locking: ecm``); set once (model/fibre_setup.py)
+    fibres: np.ndarray = field(repr=False, default=None)
+    fibres_axis: np.ndarray = field(repr=False, default=None)
 
     @property
     def vectors(self) -> tuple[int, ...]:
@@ -52,12 +56,19 @@ class Beam:
         linearly in y, z under bending:  Π = ∫ Ψ₀ dV + ∫ A [Ψ − Ψ₀]_axis dx, with Ψ₀ the same
         material at ν = 0 (``material.poisson_free()``) over the full section rule and the
         difference Ψ − Ψ₀ on the beam axis (one point per axial station, weight = area).  A
-        homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν))."""
+        homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν)).
+        A fibre-reinforced law comes bound to its fibre directions at each part's points (all
+        elements; ``Model.element_data`` takes a rank's)."""
+        mat, on_axis = self._bound(self.material, self.fibres), self._bound(self.material, self.fibres_axis)
         if self.locking == "ecm":
             free = self.material.poisson_free()
-            return [(self.dN, self.wq, free), (self.dN_axis, self.wq_axis, self.material),
-                    (self.dN_axis, -self.wq_axis, free)]
-        return [(self.dN, self.wq, self.material)]
+            return [(self.dN, self.wq, self._bound(free, self.fibres)), (self.dN_axis, self.wq_axis, on_axis),
+                    (self.dN_axis, -self.wq_axis, self._bound(free, self.fibres_axis))]
+        return [(self.dN, self.wq, mat)]
+
+    @staticmethod
+    def _bound(material, directions):
+        return material if directions is None else material.with_directions(directions)
 
     @property
     def n_nodes(self) -> int:
@@ -121,7 +132,7 @@ class Model:
             # stored shape-function-major, (E, S, P, 3) in memory: the kernels' stacked view
             # (E, S, 3P) of the force and tangent products is then free (kernels._stack)
             G = np.ascontiguousarray(G.transpose(0, 2, 1, 3)).transpose(0, 2, 1, 3)
-            out.append((G, det * (wq[local] if wq.ndim == 2 else wq[None, :]), material))
+            out.append((G, det * (wq[local] if wq.ndim == 2 else wq[None, :]), material.take(local)))
         return out
 
     def describe(self) -> list[str]:

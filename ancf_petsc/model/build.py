@@ -13,11 +13,12 @@ from ..physics import element3363 as el
 from ..physics.cubature import gauss_legendre
 from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.geometry import reference_nodal_vectors
-from ..physics.materials import make_material
+from ..physics.laws import make_material
 from ..physics.section import Section, make_circle, make_ellipse, make_outline, make_rectangle
 from ..physics.sections_file import inline_loop, load_sections_file
 from ..physics.spline import SectionError
 from .beams import Beam, Model
+from .fibre_setup import set_fibre_directions
 from .plausibility import size_warnings
 
 _SECTIONS_FILE_CACHE: dict = {}
@@ -209,6 +210,7 @@ def build_model(spec: ModelSpec) -> Model:
     for beam in beams:
         q0_parts.append(reference_nodal_vectors(beam.x_nodes, beam.section.centroid, spec.length,
                                                 spec.twist_deg, spec.twist_axis))
+        set_fibre_directions(beam, spec.length, spec.twist_deg, spec.twist_axis)
     q0 = np.concatenate(q0_parts)
 
     fixed = set()

@@ -54,7 +54,8 @@ CHUNK_POINTS = 400
 def internal_force_and_tangent(qe, G, w, material) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Internal forces (E, 54), tangents (E, 54, 54) and min J per element (E,).
 
-    Elements are processed in chunks of about ``CHUNK_POINTS`` Gauss points.
+    Elements are processed in chunks of about ``CHUNK_POINTS`` Gauss points (a law with data
+    per point, e.g. GOH's fibre directions, gives the chunk's with ``material.take``).
     """
     E, Np = w.shape
     step = max(1, CHUNK_POINTS // Np)
@@ -64,7 +65,7 @@ def internal_force_and_tangent(qe, G, w, material) -> tuple[np.ndarray, np.ndarr
     f, K, J = np.empty((E, D)), np.empty((E, D, D)), np.empty(E)
     for s in range(0, E, step):
         sl = slice(s, s + step)
-        f[sl], K[sl], J[sl] = _force_and_tangent(qe[sl], G[sl], w[sl], material)
+        f[sl], K[sl], J[sl] = _force_and_tangent(qe[sl], G[sl], w[sl], material.take(sl))
     return f, K, J
 
 

@@ -101,6 +101,10 @@ class NeoHookean:
         E = self.young
         return NeoHookean(0.5 * E, E / 3.0)
 
+    def take(self, rows) -> "NeoHookean":
+        """The law for a chunk of elements: an isotropic law has no per-point data."""
+        return self
+
     def describe(self) -> str:
         nu = (3 * self.K - 2 * self.mu) / (2 * (3 * self.K + self.mu))
         return (f"neo-Hookean  mu={self.mu:.6g} Pa  K={self.K:.6g} Pa  "
@@ -157,6 +161,10 @@ class StVenantKirchhoff:
         """The same E with ν = 0: used by ``locking: ecm``."""
         return StVenantKirchhoff(self.E, 0.0)
 
+    def take(self, rows) -> "StVenantKirchhoff":
+        """The law for a chunk of elements: an isotropic law has no per-point data."""
+        return self
+
     def describe(self) -> str:
         return f"St. Venant-Kirchhoff  E={self.E:.6g} Pa  nu={self.nu:.4g}"
 
@@ -188,10 +196,3 @@ class StVenantKirchhoff:
                              outer=[([(lam, 0)], [(None, 0)])],
                              cross=[([(mu, 0)], [(None, 0)])])
         return np.matmul(F, S), J, terms
-
-
-def make_material(spec: dict):
-    """Material from a validated config mapping (see ``config/beams.py``)."""
-    if spec["model"] == "neo-hookean":
-        return NeoHookean(spec["mu"], spec["bulk_modulus"])
-    return StVenantKirchhoff(spec["E"], spec["nu"])

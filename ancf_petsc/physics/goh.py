@@ -1,0 +1,151 @@
+"""Fibre-reinforced hyperelastic law of Gasser, Ogden & Holzapfel (2006) with a neo-Hookean matrix.
+
+    Ψ = μ/2 (Ī₁ − 3) + K/2 (J − 1)²  +  Σ_families k1/(2 k2) (exp(k2 Ē_i²) − 1)   (Ē_i > 0 only)
+    Ē_i = κ (I₁ − 3) + (1 − 3κ)(I4_i − 1) = H_i : C − 1,   H_i = κ I + (1 − 3κ) a0_i ⊗ a0_i,
+
+with C = FᵀF, I4_i = a0_i · C a0_i, a0_i the unit fibre direction of family i in the reference
+configuration (one per Gauss point, ``with_directions``) and κ ∈ [0, 1/3] the dispersion (0:
+aligned fibres, 1/3: isotropic).  The matrix is the decoupled neo-Hookean of ``materials.py``
+(the paper's eqs. 18, 23, 24, μ = 2 c10, K = d).
+
+**The fibre term is not split** into isochoric and volumetric parts: it uses I₁ and I4 of C, not
+of C̄ = J^(−2/3) C.  With the split (Ī4), a fibre-reinforced body under hydrostatic stress deforms
+as F = λI: Ī₁ = 3, Ī4 = 1, the fibres carry nothing and a sphere stays a sphere whatever k1, and a
+load along the fibres changes the volume through the volumetric term alone (Sansour 2008; Vergori
+et al. 2013; Annaidh et al. 2013 — the paper's ref. [19]; the remedy used here is Nolan et al.
+2014's "modified anisotropic" form).  Unsplit, the fibres resist any stretch along them,
+including the one of a dilatation (tests/physics/test_goh.py).
+
+**Fibres carry no compression: the switch is Ē_i > 0**, not I4_i > 1.  With κ > 0, Ē_i can be
+positive at I4_i < 1 (the dispersed fibres off-axis are stretched); at the switch Ē = 0 the fibre
+stress ψ'(Ē) ∂Ē/∂F = k1 Ē e^(k2Ē²) 2FH vanishes, so stress is continuous (the tangent jumps by
+at most 4k1 (FH)⊗(FH), as in any tension-only law).  A switch at I4 = 1 with κ > 0 would make the
+stress jump by 2k1 κ(I₁ − 3) 2FH, which Newton does not like.  For κ = 0 both switches agree.
+
+Stress and tangent in the dyadic form of ``materials.TangentTerms`` (δ_ik S_jl, outer products):
+
+    P  = P_matrix + Σ 2ψ'_i F H_i,        ψ' = k1 Ē e^(k2 Ē²),  ψ'' = k1 e^(k2 Ē²)(1 + 2 k2 Ē²)
+    𝔸 = 𝔸_matrix + Σ [δ_ik (2ψ'_i H_i)_jl + 4ψ''_i (F H_i) ⊗ (F H_i)]
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .materials import NeoHookean, TangentTerms
+
+
+class GOH:
+    """GOH law; ``with_directions`` binds the fibre field a0 (families, ..., 3) to the points.
+
+    ``fibres`` is the recipe of the field (follow, extra_twist_deg, angles_deg; ``fibres.py``).
+    The stress functions take F (..., 3, 3) whose leading axes match a0's (or broadcast)."""
+
+    name = "goh"
+
+    def __init__(self, mu: float, bulk_modulus: float, k1: float, k2: float, kappa: float = 0.0,
+                 fibres: dict | None = None, directions: np.ndarray | None = None):
+        self.mu, self.K = float(mu), float(bulk_modulus)
+        self.k1, self.k2, self.kappa = float(k1), float(k2), float(kappa)
+        self.fibres = dict(fibres or {"follow": "twist", "extra_twist_deg": 0.0, "angles_deg": (0.0,)})
+        self.extra_twist_deg = float(self.fibres["extra_twist_deg"])   # numbers for restart checks
+        self.follow_axis = float(self.fibres["follow"] == "axis")
+        self.matrix = NeoHookean(mu, bulk_modulus)
+        self.a0 = None if directions is None else np.asarray(directions, dtype=float)
+
+    @property
+    def families(self) -> int:
+        return len(self.fibres["angles_deg"])
+
+    @property
+    def young(self) -> float:
+        """Small-strain Young's modulus of the matrix (fibres add nothing at zero strain)."""
+        return self.matrix.young
+
+    def with_directions(self, a0: np.ndarray) -> "GOH":
+        """The same law bound to unit fibre directions a0 (families, ..., 3)."""
+        a0 = np.asarray(a0, dtype=float)
+        if a0.shape[0] != self.families or a0.shape[-1] != 3:
+            raise ValueError(f"fibre directions must be ({self.families}, ..., 3); got {a0.shape}")
+        return GOH(self.mu, self.K, self.k1, self.k2, self.kappa, self.fibres, a0)
+
+    def take(self, rows) -> "GOH":
+        """The law bound to the directions of elements ``rows`` (kernels process elements in chunks)."""
+        return self if self.a0 is None else self.with_directions(self.a0[:, rows])
+
+    def poisson_free(self) -> "GOH":
+        """Matrix at ν = 0 with the same fibres (``locking: ecm``): the fibre energy cancels in
+        the axis correction Ψ − Ψ₀, so it is integrated over the full section."""
+        m = self.matrix.poisson_free()
+        return GOH(m.mu, m.K, self.k1, self.k2, self.kappa, self.fibres, self.a0)
+
+    def describe(self) -> str:
+        f = self.fibres
+        extra = f", extra twist {f['extra_twist_deg']:g} deg" if f["extra_twist_deg"] else ""
+        angles = ", ".join(f"{a:g}" for a in f["angles_deg"])
+        return (f"GOH  mu={self.mu:.6g} Pa  K={self.K:.6g} Pa  k1={self.k1:.6g} Pa  k2={self.k2:.6g}  "
+                f"kappa={self.kappa:.4g}; fibres follow {f['follow']}{extra}, at {angles} deg "
+                f"(I4 not split, tension only)")
+
+    # ------------------------------------------------------------------ fibre kinematics
+    def _fibres(self, F: np.ndarray):
+        """Per family: Fa0 (..., 3), FH (..., 3, 3), Ē (...) and the switch Ē > 0."""
+        if self.a0 is None:
+            raise ValueError("GOH needs fibre directions at the points (GOH.with_directions)")
+        I1 = np.einsum("...ij,...ij->...", F, F)
+        out = []
+        for a0 in self.a0:
+            a0 = np.broadcast_to(a0, F.shape[:-1])
+            Fa = np.einsum("...ij,...j->...i", F, a0)
+            I4 = np.einsum("...i,...i->...", Fa, Fa)
+            E = self.kappa * (I1 - 3.0) + (1.0 - 3.0 * self.kappa) * (I4 - 1.0)
+            on = E > 0.0
+            E = np.where(on, E, 0.0)
+            FH = self.kappa * F + (1.0 - 3.0 * self.kappa) * Fa[..., :, None] * a0[..., None, :]
+            out.append((a0, Fa, I4, FH, E, on))
+        return out
+
+    def _exp(self, E):
+        with np.errstate(over="ignore"):
+            return np.exp(self.k2 * E * E)
+
+    def fibre_stretch(self, F: np.ndarray) -> np.ndarray:
+        """√I4 of every family (families, ...)."""
+        return np.stack([np.sqrt(I4) for _, _, I4, _, _, _ in self._fibres(F)])
+
+    def energy(self, F: np.ndarray) -> np.ndarray:
+        W = self.matrix.energy(F)
+        for _, _, _, _, E, _ in self._fibres(F):
+            W = W + self.k1 / (2.0 * self.k2) * (self._exp(E) - 1.0)
+        return W
+
+    def stress(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        P, J = self.matrix.stress(F)
+        for _, _, _, FH, E, _ in self._fibres(F):
+            P = P + (2.0 * self.k1 * E * self._exp(E))[..., None, None] * FH
+        return P, J
+
+    def fibre_cauchy_stress(self, F: np.ndarray) -> np.ndarray:
+        """Cauchy normal stress along each deformed fibre, n·σn with n = Fa0/|Fa0| and σ = PFᵀ/J
+        (families, ...): the stress a fibre-aligned cut carries, matrix included."""
+        P, J = self.stress(F)
+        sigma = np.matmul(P, np.swapaxes(F, -1, -2)) / J[..., None, None]
+        out = []
+        for _, Fa, I4, _, _, _ in self._fibres(F):
+            out.append(np.einsum("...i,...ij,...j->...", Fa, sigma, Fa) / I4)
+        return np.stack(out)
+
+    def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+        P, J, terms = self.matrix.stress_and_tangent(F)
+        iso = terms.iso[..., None, None] * np.eye(3)          # μJ^(−2/3) δ_ik δ_jl → δ_ik S_jl
+        for a0, _, _, FH, E, on in self._fibres(F):
+            ex = self._exp(E)
+            d1 = self.k1 * E * ex                              # ψ'
+            d2 = np.where(on, self.k1 * ex * (1.0 + 2.0 * self.k2 * E * E), 0.0)   # ψ''
+            P = P + (2.0 * d1)[..., None, None] * FH
+            H = self.kappa * np.eye(3) + (1.0 - 3.0 * self.kappa) * a0[..., :, None] * a0[..., None, :]
+            iso = iso + (2.0 * d1)[..., None, None] * H
+            k = len(terms.basis)
+            terms.basis.append(FH)
+            terms.outer.append(([(4.0 * d2, k)], [(None, k)]))
+        terms.iso = iso
+        return P, J, terms

@@ -1,0 +1,249 @@
+"""GOH fibre-reinforced law (physics/goh.py) and its fibre field (physics/fibres.py): exact
+homogeneous solutions written here from the strain energy by hand, finite differences of the
+element residual, the fibre field's geometry, config errors."""
+import copy
+
+import numpy as np
+import pytest
+from scipy.optimize import root
+
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.config.values import ConfigError
+from ancf_petsc.model.build import build_model
+from ancf_petsc.physics import kernels
+from ancf_petsc.physics.fibres import fibre_directions
+from ancf_petsc.physics.goh import GOH
+from ancf_petsc.physics.materials import NeoHookean
+from helpers import CONFIGS, load_raw, run_inline
+
+MU, K, K1, K2 = 1.0e6, 50.0e6, 2.0e6, 5.0
+
+
+def goh_material(kappa=0.0, follow="axis", angle=0.0, extra=0.0):
+    return {"model": "goh", "mu": MU, "bulk_modulus": K, "k1": K1, "k2": K2, "kappa": kappa,
+            "fibres": {"follow": follow, "angle_deg": angle, "extra_twist_deg": extra}}
+
+
+# ------------------------------------------------------------- exact homogeneous solutions
+def principal_stress(lam, fibre_axis, kappa, split=False):
+    """P_i = ∂W/∂λ_i of W(λ1, λ2, λ3) for F = diag(λ) and fibres along e_{fibre_axis}, written
+    out by hand (independent of physics/goh.py).  ``split``: the isochoric fibre term (Ī1, Ī4)
+    that the law does not use, for comparison."""
+    lam = np.asarray(lam, dtype=float)
+    J = np.prod(lam)
+    I1 = np.sum(lam ** 2)
+    Jm = J ** (-2.0 / 3.0)
+    P = 0.5 * MU * (Jm * 2.0 * lam - (2.0 / 3.0) * I1 * Jm / lam) + K * (J - 1.0) * J / lam
+    if split:     # Ē(Ī1, Ī4), Ī = J^(-2/3) I: ∂Ī/∂λ_i = J^(-2/3)(∂I/∂λ_i − (2/3) I/λ_i)
+        I4 = lam[fibre_axis] ** 2
+        E = kappa * (Jm * I1 - 3.0) + (1.0 - 3.0 * kappa) * (Jm * I4 - 1.0)
+        dI4 = np.zeros(3)
+        dI4[fibre_axis] = 2.0 * lam[fibre_axis]
+        dE = kappa * Jm * (2.0 * lam - (2.0 / 3.0) * I1 / lam) \
+            + (1.0 - 3.0 * kappa) * Jm * (dI4 - (2.0 / 3.0) * I4 / lam)
+    else:
+        E = kappa * (I1 - 3.0) + (1.0 - 3.0 * kappa) * (lam[fibre_axis] ** 2 - 1.0)
+        dE = 2.0 * kappa * lam
+        dE[fibre_axis] += 2.0 * (1.0 - 3.0 * kappa) * lam[fibre_axis]
+    if E > 0.0:
+        P = P + K1 * E * np.exp(K2 * E * E) * dE
+    return P
+
+
+def uniaxial_exact(axial_stress, fibre_axis, kappa):
+    """Stretches (λ1, λ2, λ3) with P11 = s, P22 = P33 = 0 (root finding)."""
+    def eqs(v):
+        P = principal_stress(v, fibre_axis, kappa)
+        return [(P[0] - axial_stress) / MU, P[1] / MU, P[2] / MU]
+    sol = root(eqs, [1.0 + axial_stress / (3 * MU), 1.0, 1.0], method="hybr", tol=1e-15)
+    assert np.max(np.abs(eqs(sol.x))) < 1e-12, sol.message
+    return sol.x
+
+
+def axial_stress_at(lam, fibre_axis, kappa):
+    """P11 of uniaxial tension at axial stretch λ (lateral stress-free)."""
+    sol = root(lambda v: principal_stress([lam, *v], fibre_axis, kappa)[1:] / MU, [1.0, 1.0],
+               method="hybr", tol=1e-15)
+    return principal_stress([lam, *sol.x], fibre_axis, kappa)[0]
+
+
+def _one_element_run(tmp_path, material, stretch, fibre_axis, kappa, name):
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["material"] = material
+    raw["output"]["vtk"] = False
+    raw["steps"] = [0.5, 1.0]
+    area = np.pi * 0.006 * 0.004            # the degree-6 cubature of the ellipse is exact
+    s = axial_stress_at(stretch, fibre_axis, kappa)
+    raw["loads"][0]["traction_force"] = [float(s * area), 0.0, 0.0]
+    return run_inline(raw, tmp_path / name), s, raw
+
+
+@pytest.mark.parametrize("kappa", [0.0, 0.2])
+@pytest.mark.parametrize("direction", ["along", "across"])
+def test_uniaxial_tension_matches_exact_solution(tmp_path, kappa, direction):
+    """One 3363 element, uniform dead traction, fibres along x (follow: axis) or across along
+    the section's y (angle 90): the homogeneous exact solution to 1e-8."""
+    fibre_axis, angle = (0, 0.0) if direction == "along" else (1, 90.0)
+    summary, s, raw = _one_element_run(tmp_path, goh_material(kappa, angle=angle), 1.12,
+                                       fibre_axis, kappa, "run")
+    assert summary["status"] == "completed"
+    L = raw["geometry"]["length"]
+    for step in summary["steps"]:
+        lam = uniaxial_exact(step["load_factor"] * s, fibre_axis, kappa)
+        u = step["probes"]["tip"]["displacement"]
+        assert abs(u[0] / ((lam[0] - 1.0) * L) - 1.0) < 1e-8, (u, lam)
+        assert abs(u[1]) < 1e-12 and abs(u[2]) < 1e-12
+
+
+@pytest.mark.parametrize("kappa", [0.0, 0.2])
+def test_fibres_carry_no_compression(tmp_path, kappa):
+    """Compression along the fibres: exactly the matrix's (neo-Hookean) stress and tangent at the
+    material, and the neo-Hookean run's answer to round-off (the tangent's form differs)."""
+    rng = np.random.default_rng(7)
+    F = np.diag([0.85, 1.08, 1.09]) + 0.01 * rng.standard_normal((40, 3, 3))
+    law = GOH(MU, K, K1, K2, kappa).with_directions(np.array([[1.0, 0.0, 0.0]]))
+    assert np.array_equal(law.stress(F)[0], NeoHookean(MU, K).stress(F)[0])
+    P, _, terms = law.stress_and_tangent(F)
+    _, _, nh = NeoHookean(MU, K).stress_and_tangent(F)
+    assert np.array_equal(terms.full(), nh.full())
+
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["output"]["vtk"] = False
+    raw["loads"][0]["traction_force"] = [-20.0, 0.0, 0.0]
+    raw["steps"] = [0.5, 1.0]
+    runs = {}
+    for name, mat in (("nh", {"model": "neo-hookean", "mu": MU, "bulk_modulus": K}),
+                      ("goh", goh_material(kappa))):
+        raw["beams"][0]["material"] = mat
+        runs[name] = run_inline(copy.deepcopy(raw), tmp_path / name)
+    for a, b in zip(runs["nh"]["steps"], runs["goh"]["steps"]):
+        ua, ub = (np.array(s["probes"]["tip"]["displacement"]) for s in (a, b))
+        assert np.abs(ua - ub).max() <= 1e-13 * np.abs(ua).max()
+    assert runs["goh"]["steps"][-1]["probes"]["tip"]["displacement"][0] < -1e-3
+
+
+def test_hydrostatic_tension_is_not_isotropic_without_the_split():
+    """All-round Cauchy tension σ = p I on a fibre-reinforced cube: the law (fibre term not split)
+    stretches less along the fibres, a sphere becomes an ellipsoid; the split form (Ī4) would
+    keep F = λI, Ī4 = 1, and the fibres would not notice (checked with the hand-written energy).
+    Under all-round compression the fibres are off (Ē < 0): isotropic, as tension-only fibres are."""
+    law = GOH(MU, K, K1, K2, 0.1).with_directions(np.array([[1.0, 0.0, 0.0]]))
+    p = 0.3 * MU
+
+    def eqs(v, split=None):
+        lam = np.array([v[0], v[1], v[1]])
+        Jl = np.prod(lam)
+        P = principal_stress(lam, 0, 0.1, split) if split is not None \
+            else np.diag(law.stress(np.diag(lam)[None])[0][0])
+        return [(P[0] - p * Jl / lam[0]) / MU, (P[1] - p * Jl / lam[1]) / MU]
+
+    ours = root(eqs, [1.0, 1.0], tol=1e-14).x
+    hand = root(lambda v: eqs(v, False), [1.0, 1.0], tol=1e-14).x
+    split = root(lambda v: eqs(v, True), [1.0, 1.0], tol=1e-14).x
+    assert np.allclose(ours, hand, rtol=1e-10)
+    assert ours[1] / ours[0] > 1.001            # fibres resist: stretched less along them
+    assert abs(split[1] / split[0] - 1.0) < 1e-12
+    p = -0.3 * MU
+    comp = root(eqs, [1.0, 1.0], tol=1e-14).x
+    assert abs(comp[1] / comp[0] - 1.0) < 1e-12 and comp[0] < 1.0
+
+
+# ------------------------------------------------------------------------ fibre field
+def test_fibre_direction_is_the_material_line_tangent():
+    """follow: twist gives d place(x, P)/dx normalised: inclined by atan(ρψ/L)."""
+    from ancf_petsc.physics.geometry import place
+    rng = np.random.default_rng(2)
+    L, psi, axis = 0.07, 45.0, np.array([0.002, -0.001])
+    x = rng.uniform(0, L, 20)
+    P = rng.uniform(-0.01, 0.01, (20, 2))
+    a0 = fibre_directions(x, P, L, psi, axis, centroid=(0.0, 0.0))[0]
+    h = 1e-6
+    t = (place(x + h, P, L, psi, axis) - place(x - h, P, L, psi, axis)) / (2 * h)
+    assert np.allclose(a0, t / np.linalg.norm(t, axis=1, keepdims=True), atol=1e-9)
+    rho = np.linalg.norm(P - axis, axis=1)
+    assert np.allclose(np.arccos(a0[:, 0]), np.arctan(rho * np.deg2rad(psi) / L), atol=1e-12)
+    axial = fibre_directions(x, P, L, psi, axis, (0.0, 0.0), follow="axis")[0]
+    assert np.allclose(axial, [1.0, 0.0, 0.0])
+    # extra twist about the centroid c: the helix angle grows with the distance from c
+    c = np.array([0.004, 0.0])
+    extra = fibre_directions(x, P, L, 0.0, axis, c, follow="axis", extra_twist_deg=30.0)[0]
+    assert np.allclose(np.arccos(extra[:, 0]),
+                       np.arctan(np.linalg.norm(P - c, axis=1) * np.deg2rad(30.0) / L), atol=1e-12)
+    # a fixed angle: 90 deg without twist is the section's y axis, 30 deg is 30 deg off x
+    turned = fibre_directions(x, P, L, 0.0, axis, c, follow="axis", angles_deg=(90.0, 30.0))
+    assert np.allclose(turned[0], [0.0, 1.0, 0.0]) and np.allclose(turned[1, :, 0], np.cos(np.pi / 6))
+
+
+# -------------------------------------------------------------------- FD of the residual
+def _model(twist_deg, angle, kappa):
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["geometry"]["twist_deg"] = twist_deg
+    raw["beams"][0]["elements"] = 3
+    raw["beams"][0]["material"] = goh_material(kappa, follow="twist", angle=angle)
+    return build_model(parse_config(raw, base_dir=CONFIGS))
+
+
+@pytest.mark.parametrize("twist_deg", [0.0, 60.0])
+@pytest.mark.parametrize("angle", [0.0, 30.0, 90.0])
+def test_tangent_matches_finite_differences_of_the_residual(monkeypatch, twist_deg, angle):
+    """Element tangents (three elements, processed in chunks of one) against central differences
+    of the element residual ≤ 1e-6, in a stretched state where every fibre is in tension."""
+    monkeypatch.setattr(kernels, "CHUNK_POINTS", 1)
+    model = _model(twist_deg, angle, 0.15)
+    beam = model.beams[0]
+    (G, w, mat), = model.element_data(beam, np.arange(beam.n_elements))
+    assert mat.a0.shape == (1,) + w.shape + (3,)
+    q0e = model.q0[beam.connectivity].reshape(beam.n_elements, 18, 3)
+    rng = np.random.default_rng(11)
+    q = q0e * np.array([1.06, 1.05, 1.04]) + 2e-3 * rng.standard_normal(q0e.shape) \
+        * np.abs(q0e).max(axis=(0, 1))
+    Fg = kernels.deformation_gradient(q, G)
+    assert np.all(mat._fibres(Fg)[0][5])           # all fibres on: no kink inside the differences
+    f, Kt, _ = kernels.internal_force_and_tangent(q, G, w, mat)
+    assert np.allclose(f, kernels.internal_force(q, G, w, mat)[0], rtol=1e-13, atol=1e-13 * np.abs(f).max())
+    h = 1e-7 * np.abs(q0e).max()
+    Kfd = np.zeros_like(Kt)
+    flat = q.reshape(len(q), 54)
+    for j in range(54):
+        dq = np.zeros(54)
+        dq[j] = h
+        fp = kernels.internal_force((flat + dq).reshape(-1, 18, 3), G, w, mat)[0]
+        fm = kernels.internal_force((flat - dq).reshape(-1, 18, 3), G, w, mat)[0]
+        Kfd[:, :, j] = (fp - fm) / (2 * h)
+    err = np.abs(Kt - Kfd).max() / np.abs(Kt).max()
+    assert err <= 1e-6, err
+    assert np.allclose(Kt, np.swapaxes(Kt, 1, 2), atol=1e-11 * np.abs(Kt).max())
+
+
+def test_model_fibres_follow_the_pretwist_at_the_gauss_points():
+    model = _model(60.0, 0.0, 0.0)
+    beam = model.beams[0]
+    a0 = beam.fibres[0]                                            # (E, P, 3)
+    P = beam.section.centroid + beam.yz                            # tendon frame, at x = 0
+    rho = np.linalg.norm(P - np.asarray(model.spec.twist_axis), axis=1)
+    assert np.allclose(np.arccos(a0[..., 0]), np.arctan(rho * np.deg2rad(60.0) / 0.1)[None, :])
+
+
+# ------------------------------------------------------------------------ config errors
+@pytest.mark.parametrize("change,path,words", [
+    ({"k1": -1.0}, "beams[0].material.k1", ">= 0"),
+    ({"k2": 0.0}, "beams[0].material.k2", "> 0"),
+    ({"kappa": 0.4}, "beams[0].material.kappa", "<= 0.333333"),
+    ({"kappa": -0.1}, "beams[0].material.kappa", ">= 0"),
+    ({"fibres": {"follow": "helix"}}, "beams[0].material.fibres.follow", "twist, axis"),
+    ({"fibres": {"angle_deg": 120}}, "beams[0].material.fibres.angle_deg", "<= 90"),
+    ({"fibres": {"pitch": 3}}, "beams[0].material.fibres.pitch", "allowed here"),
+])
+def test_bad_goh_values_are_refused_with_key_path(change, path, words):
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["beams"][0]["material"] = dict(goh_material(0.1, follow="twist"), **change)
+    with pytest.raises(ConfigError) as exc:
+        parse_config(raw, base_dir=CONFIGS)
+    assert exc.value.path == path and words in str(exc.value)
+
+
+def test_fibre_keys_on_an_isotropic_law_are_refused():
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["beams"][0]["material"]["k1"] = 1.0e6
+    with pytest.raises(ConfigError, match="model: goh"):
+        parse_config(raw, base_dir=CONFIGS)

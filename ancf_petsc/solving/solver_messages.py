@@ -48,7 +48,7 @@ def failure_detail(stepper, reason: int) -> str:
                 "itself; drop -pc_type none" + ("" if stepper.problem.contact is None else
                                                f"; {SADDLE_POINT_HINT}") + ")")
     contact = stepper.problem.contact
-    if contact is not None and contact.law.name == "unilateral":
+    if contact is not None and contact.law.decides_activity:
         maxit = stepper.snes.getTolerances()[3]
         return (f" (unilateral contact changes its active set within a level and may need more than "
                 f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")

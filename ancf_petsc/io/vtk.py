@@ -8,6 +8,7 @@ import meshio
 import numpy as np
 
 from ..model.beams import Model
+from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
 from ..physics.element3363 import SLOTS
 from .files import atomic_write, remove_quietly
@@ -42,14 +43,28 @@ class SurfaceSampler:
             keep = np.concatenate([np.arange(M)] + [e * M + np.arange(m, M) for e in range(1, E)])
             N, e_of = N[keep], keep // M
             r0 = np.einsum("pa,pai->pi", N, q0e[e_of])          # reference points, once
-            self.parts.append((beam, m, len(xi) - 1, N, G.reshape(-1, SLOTS, 3)[keep], e_of, r0))
+            self.parts.append((beam, m, len(xi) - 1, N, G.reshape(-1, SLOTS, 3)[keep], e_of, r0,
+                               self._fibre_law(beam, xi, m, YZ, keep)))
+
+    def _fibre_law(self, beam, xi, m, YZ, keep):
+        """A fibre-reinforced beam's law bound to its fibre directions at the sample points."""
+        if beam.fibres is None:
+            return None
+        spec = self.model.spec
+        x0, h = beam.x_nodes[0:-1:2], beam.x_nodes[2] - beam.x_nodes[0]
+        x = x0[:, None] + 0.5 * (np.repeat(xi, m)[None, :] + 1.0) * h                   # (E, M)
+        a0 = directions_at(beam, x, np.asarray(YZ), spec.length, spec.twist_deg, spec.twist_axis)
+        return beam.material.with_directions(a0.reshape(a0.shape[0], -1, 3)[:, keep])
 
     def mesh(self, q: np.ndarray):
         """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
         pts, quads, caps = [], [], []
         data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
+        fibres = any(p[-1] is not None for p in self.parts)
+        if fibres:   # first fibre family: stretch √I4 and Cauchy normal stress along it [Pa]
+            data.update(fibre_stretch=[], fibre_stress=[])
         offset = 0
-        for beam, m, S, N, G, e_of, r0 in self.parts:
+        for beam, m, S, N, G, e_of, r0, law in self.parts:
             conn = beam.connectivity
             qe = q[conn].reshape(len(conn), SLOTS, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
@@ -59,6 +74,10 @@ class SurfaceSampler:
             data["E_xx"].append(0.5 * (np.einsum("pi,pi->p", F[:, :, 0], F[:, :, 0]) - 1.0))  # ½(C_xx − 1)
             data["J"].append(np.einsum("pi,pi->p", F[:, :, 0], np.cross(F[:, :, 1], F[:, :, 2])))
             data["beam"].append(np.full(len(r), float(beam.index)))
+            if fibres:
+                nan = np.full(len(r), np.nan)
+                data["fibre_stretch"].append(nan if law is None else law.fibre_stretch(F)[0])
+                data["fibre_stress"].append(nan if law is None else law.fibre_cauchy_stress(F)[0])
             st = np.arange(n_st - 1)[:, None]
             j = np.arange(m)[None, :]
             a = st * m + j

@@ -19,7 +19,9 @@ including the one of a dilatation (tests/physics/test_goh.py).
 **Fibres carry no compression: the switch is Ē_i > 0**, not I4_i > 1.  With κ > 0, Ē_i can be
 positive at I4_i < 1 (the dispersed fibres off-axis are stretched); at the switch Ē = 0 the fibre
 stress ψ'(Ē) ∂Ē/∂F = k1 Ē e^(k2Ē²) 2FH vanishes, so stress is continuous (the tangent jumps by
-at most 4k1 (FH)⊗(FH), as in any tension-only law).  A switch at I4 = 1 with κ > 0 would make the
+at most 4k1 (FH)⊗(FH), as in any tension-only law).  At Ē = 0 exactly (the reference state) the
+tangent is the tension side's: the first Newton step of a pulled tendon then sees the fibres'
+stiffness (with the compression side's, zero, it sees only the soft matrix and overshoots).  A switch at I4 = 1 with κ > 0 would make the
 stress jump by 2k1 κ(I₁ − 3) 2FH, which Newton does not like.  For κ = 0 both switches agree.
 
 Stress and tangent in the dyadic form of ``materials.TangentTerms`` (δ_ik S_jl, outer products):
@@ -98,7 +100,7 @@ class GOH:
             Fa = np.einsum("...ij,...j->...i", F, a0)
             I4 = np.einsum("...i,...i->...", Fa, Fa)
             E = self.kappa * (I1 - 3.0) + (1.0 - 3.0 * self.kappa) * (I4 - 1.0)
-            on = E > 0.0
+            on = E >= 0.0                  # tangent at Ē = 0: the tension side's (see below)
             E = np.where(on, E, 0.0)
             FH = self.kappa * F + (1.0 - 3.0 * self.kappa) * Fa[..., :, None] * a0[..., None, :]
             out.append((a0, Fa, I4, FH, E, on))
@@ -135,17 +137,28 @@ class GOH:
         return np.stack(out)
 
     def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+        """P and 𝔸 with the matrix's terms plus, per family, with H = κI + (1 − 3κ) a0 ⊗ a0:
+        δ_ik 2ψ'H_jl = 2ψ'κ δ_ik δ_jl (added to ``iso``) + 2ψ'(1 − 3κ) δ_ik a0_j a0_l
+        (``rank_one``), and 4ψ'' FH ⊗ FH with FH = κF + (1 − 3κ) Fa0 ⊗ a0 written on the
+        matrix's basis tensor F and the pair (Fa0, a0), so the kernel adds no 3×3 product."""
         P, J, terms = self.matrix.stress_and_tangent(F)
-        iso = terms.iso[..., None, None] * np.eye(3)          # μJ^(−2/3) δ_ik δ_jl → δ_ik S_jl
-        for a0, _, _, FH, E, on in self._fibres(F):
+        k_F = 1
+        assert terms.basis[k_F] is F                          # NeoHookean's basis: [F⁻ᵀ, F]
+        iso = terms.iso
+        c = 1.0 - 3.0 * self.kappa
+        for a0, Fa, _, FH, E, on in self._fibres(F):
             ex = self._exp(E)
             d1 = self.k1 * E * ex                              # ψ'
             d2 = np.where(on, self.k1 * ex * (1.0 + 2.0 * self.k2 * E * E), 0.0)   # ψ''
             P = P + (2.0 * d1)[..., None, None] * FH
-            H = self.kappa * np.eye(3) + (1.0 - 3.0 * self.kappa) * a0[..., :, None] * a0[..., None, :]
-            iso = iso + (2.0 * d1)[..., None, None] * H
+            iso = iso + 2.0 * self.kappa * d1
+            terms.rank_one.append((2.0 * c * d1, a0))
             k = len(terms.basis)
-            terms.basis.append(FH)
-            terms.outer.append(([(4.0 * d2, k)], [(None, k)]))
+            terms.basis.append((Fa, a0))
+            if self.kappa:
+                fh = [(self.kappa * np.ones_like(E), k_F), (c * np.ones_like(E), k)]
+                terms.outer.append(([(4.0 * self.kappa * d2, k_F), (4.0 * c * d2, k)], fh))
+            else:
+                terms.outer.append(([(4.0 * d2, k)], [(None, k)]))
         terms.iso = iso
         return P, J, terms

@@ -79,6 +79,31 @@ def _force_and_tangent(qe, G, w, material):
     return f, contract_tangent(terms, G, w), np.min(J, axis=1)
 
 
+def _times_gradients(B, G: np.ndarray, along) -> np.ndarray:
+    """(B G_a) (E, P, S, 3) for a 3×3 field B, or for a pair (u, v) meaning u ⊗ v: u (v · G_a)."""
+    if isinstance(B, tuple):
+        u, v = B
+        return along(v)[..., None] * u[:, :, None, :]
+    return np.matmul(G, np.swapaxes(B, -1, -2))
+
+
+def _identity_part(terms: TangentTerms, G: np.ndarray, w: np.ndarray, along):
+    """The terms with δ_ik, Σ_p w G_aj S_jl G_bl (E, S, S): ``iso`` and ``rank_one``, or None."""
+    Ks = None
+    if terms.iso is not None:
+        wcol = w[..., None, None]
+        if terms.iso.ndim == 2:      # scalar field c: δ_ik c δ_jl
+            right = (wcol * terms.iso[..., None, None]) * G
+        else:                         # δ_ik S_jl
+            right = np.matmul(G, np.swapaxes(terms.iso, -1, -2)) * wcol
+        Ks = np.matmul(_stack(G), _stack(right).transpose(0, 2, 1))
+    for c, a in terms.rank_one:      # δ_ik c (G_a · a)(G_b · a)
+        Ga = along(a)
+        K1 = np.matmul(Ga.transpose(0, 2, 1), (w * c)[..., None] * Ga)
+        Ks = K1 if Ks is None else Ks + K1
+    return Ks
+
+
 def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.ndarray:
     """K[(a,i),(b,k)] = Σ_p w G_aj 𝔸_ijkl G_bl for the dyadic form of 𝔸 (see materials.py).
 
@@ -89,33 +114,45 @@ def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.nd
     E, Np = w.shape
     S = G.shape[2]
     D = 3 * S
-    BG = [np.matmul(G, np.swapaxes(B, -1, -2)) for B in terms.basis]   # (E, P, 18, 3) each
+    projections = {}
 
-    def side(sd, weight=None):
-        out = None
-        for c, k in sd:
+    def along(a):
+        """G_a · a (E, P, S), once per direction array (a fibre's a0 serves two terms)."""
+        if id(a) not in projections:
+            projections[id(a)] = np.matmul(G, a[..., None])[..., 0]
+        return projections[id(a)]
+
+    BG = [_times_gradients(B, G, along) for B in terms.basis]            # (E, P, 18, 3) each
+
+    def side(sd, weight=None, out=None):
+        """Σ c (B_k G_a) (× weight) as (E, P, D), written into ``out`` if given."""
+        out = np.empty((E, Np, D)) if out is None else out
+        for n, (c, k) in enumerate(sd):
             coef = c if weight is None else (weight if c is None else c * weight)
-            term = BG[k] if coef is None else coef[..., None, None] * BG[k]
-            out = term if out is None else out + term
-        return out.reshape(E, Np, D)
+            src = BG[k].reshape(E, Np, D)
+            if coef is None:
+                out[...] = src if n == 0 else out + src
+            elif n == 0:
+                np.multiply(coef[..., None], src, out=out)
+            else:
+                out += coef[..., None] * src
+        return out
 
     Kf = np.zeros((E, D, D))
-    if terms.outer:
-        left = np.concatenate([side(X) for X, _ in terms.outer], axis=1)
-        right = np.concatenate([side(Y, w) for _, Y in terms.outer], axis=1)
+    if terms.outer:          # all outer terms in one GEMM, inner dimension (term, point)
+        m = len(terms.outer)
+        left, right = np.empty((E, m * Np, D)), np.empty((E, m * Np, D))
+        for t, (X, Y) in enumerate(terms.outer):
+            side(X, out=left[:, t * Np:(t + 1) * Np])
+            side(Y, w, out=right[:, t * Np:(t + 1) * Np])
         Kf += np.matmul(left.transpose(0, 2, 1), right)
     for U, V in terms.cross:
         M = np.matmul(side(V).transpose(0, 2, 1), side(U, w)).reshape(E, S, 3, S, 3)
         Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, D, D)
     K = Kf.reshape(E, S, 3, S, 3)
-    if terms.iso is not None:
-        wcol = w[..., None, None]
-        if terms.iso.ndim == 2:      # scalar field c: δ_ik c δ_jl
-            right = (wcol * terms.iso[..., None, None]) * G
-        else:                         # δ_ik S_jl
-            right = np.matmul(G, np.swapaxes(terms.iso, -1, -2)) * wcol
-        Ks = np.matmul(_stack(G), _stack(right).transpose(0, 2, 1))
-        idx = np.arange(3)
+    idx = np.arange(3)
+    Ks = _identity_part(terms, G, w, along)
+    if Ks is not None:
         K[:, :, idx, :, idx] += Ks[None]
     if terms.gram is not None:       # (G_a · G_b) B_ik
         GG = np.matmul(G, np.swapaxes(G, -1, -2)).reshape(E, Np, S * S)

@@ -6,11 +6,13 @@ so that the element kernel can contract it with the shape-function gradients as 
 instead of forming the 81-component tensor at every Gauss point:
 
     𝔸_ijkl = δ_ik S_jl            (``iso``; S a scalar multiple of I or a 3×3 field)
+           + Σ δ_ik c a_j a_l     (``rank_one`` pairs (c, a): a scalar times a direction's dyad)
            + B_ik δ_jl            (``gram``)
            + Σ X_ij Y_kl          (``outer`` pairs (X, Y))
            + Σ U_il V_kj          (``cross`` pairs (U, V))
 
-All arrays are batched over a leading point axis (n, 3, 3).  The paper works with S : δE
+All arrays are batched over a leading point axis (n, 3, 3).  A basis tensor may be given as a
+pair (u, v) of vectors, meaning u ⊗ v (a fibre's F a0 ⊗ a0): the kernel then needs no product.  The paper works with S : δE
 (eq. 14); P : δF is the same virtual work.
 """
 from __future__ import annotations
@@ -51,25 +53,33 @@ class TangentTerms:
     each basis tensor with the shape-function gradients only once.
     """
 
-    basis: list = field(default_factory=list)            # [(n, 3, 3)]
+    basis: list = field(default_factory=list)            # [(n, 3, 3) or (u (n, 3), v (n, 3))]
     iso: np.ndarray | None = None    # (n,) scalar multiple of I, or (n, 3, 3)
     gram: np.ndarray | None = None   # (n, 3, 3)
     outer: list[tuple[Side, Side]] = field(default_factory=list)
     cross: list[tuple[Side, Side]] = field(default_factory=list)
+    rank_one: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)   # [(c (n,), a (n, 3))]
+
+    def base(self, k: int) -> np.ndarray:
+        """Basis tensor k as a 3×3 field (a pair (u, v) is u ⊗ v)."""
+        B = self.basis[k]
+        return B[0][..., :, None] * B[1][..., None, :] if isinstance(B, tuple) else B
 
     def tensor(self, side: Side) -> np.ndarray:
         """The 3×3 field Σ c_k B_k of one side."""
         return sum(B if c is None else c[..., None, None] * B
-                   for c, B in ((c, self.basis[k]) for c, k in side))
+                   for c, B in ((c, self.base(k)) for c, k in side))
 
     def full(self) -> np.ndarray:
         """The 81-component tangent (n, 3, 3, 3, 3); for tests and diagnostics only."""
-        n = self.basis[0].shape[0]
+        n = self.base(0).shape[0]
         A = np.zeros((n, 3, 3, 3, 3))
         eye = np.eye(3)
         if self.iso is not None:
             S = self.iso[:, None, None] * eye if self.iso.ndim == 1 else self.iso
             A += np.einsum("ik,njl->nijkl", eye, S)
+        for c, a in self.rank_one:
+            A += np.einsum("ik,n,nj,nl->nijkl", eye, c, a, a)
         if self.gram is not None:
             A += np.einsum("nik,jl->nijkl", self.gram, eye)
         for X, Y in self.outer:

@@ -95,6 +95,26 @@ def test_uniaxial_tension_matches_exact_solution(tmp_path, kappa, direction):
         assert abs(u[1]) < 1e-12 and abs(u[2]) < 1e-12
 
 
+def test_vtu_carries_fibre_stretch_and_stress(tmp_path):
+    """Uniaxial tension along the fibres: the surface VTU's fibre stretch is λ and its fibre
+    stress the Cauchy σ11 = P11 λ / J of the exact solution (single-precision output)."""
+    import glob
+
+    import meshio
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["material"] = goh_material(0.2)
+    raw["steps"] = [1.0]
+    s = axial_stress_at(1.1, 0, 0.2)
+    raw["loads"][0]["traction_force"] = [float(s * np.pi * 0.006 * 0.004), 0.0, 0.0]
+    raw["output"]["vtk"] = True
+    assert run_inline(raw, tmp_path)["status"] == "completed"
+    last = sorted(glob.glob(str(tmp_path / "**" / "surface_*.vtu"), recursive=True))[-1]
+    data = meshio.read(last).point_data
+    lam = uniaxial_exact(s, 0, 0.2)
+    assert np.allclose(data["fibre_stretch"], lam[0], rtol=1e-6)
+    assert np.allclose(data["fibre_stress"], s * lam[0] / np.prod(lam), rtol=1e-5)
+
+
 @pytest.mark.parametrize("kappa", [0.0, 0.2])
 def test_fibres_carry_no_compression(tmp_path, kappa):
     """Compression along the fibres: exactly the matrix's (neo-Hookean) stress and tangent at the

@@ -67,6 +67,8 @@ def fingerprint(model) -> dict[str, np.ndarray]:
                     f"beams/{b.name}/section_points": np.asarray(b.yz, dtype=float),
                     f"beams/{b.name}/section_weights": np.asarray(b.wq, dtype=float),
                     f"beams/{b.name}/connectivity": np.asarray(b.connectivity, dtype=float)})
+        if getattr(b, "fibres", None) is not None:          # fibre directions per Gauss point
+            out[f"beams/{b.name}/fibres"] = np.asarray(b.fibres, dtype=float)
     c = spec.contact
     if c is not None:
         words = json.dumps({"mode": c.mode, "projection": list(c.projection), "axial_points": c.axial_points,
@@ -88,8 +90,8 @@ def _resolved_interfaces(model, contact) -> list[str]:
 def model_difference(stored: dict, now: dict) -> str | None:
     """The first item that differs between two fingerprints, with what changed (None: same);
     a beam's items first (in this model's order), then the model-wide ones."""
-    fields = ("elements", "element_axial_points_locking", "material", "x_nodes", "section_points",
-              "section_weights", "connectivity")
+    fields = ("elements", "element_axial_points_locking", "material", "fibres", "x_nodes",
+              "section_points", "section_weights", "connectivity")
 
     beams: dict[str, int] = {}
     for key in now:                               # beams in the order the model has them

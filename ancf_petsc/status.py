@@ -25,6 +25,7 @@ NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
 OUTPUT_ERROR = "OUTPUT_ERROR"
 PETSC_ERROR = "PETSC_ERROR"
 INTERNAL_ERROR = "INTERNAL_ERROR"         # a bug (exit code 1, with a traceback)
+CONFIG_ERROR = "CONFIG_ERROR"             # an input error before any level (exit code 2; no summary)
 
 
 def signal_reason(signum: int) -> str:

@@ -5,7 +5,7 @@ import reprlib
 
 import math
 
-from ..errors import InputError
+from ..errors import MISSING_KEY, UNKNOWN_KEY, InputError
 
 #: a config problem: ``path`` is the key path (e.g. ``beams[0].material.mu``); see errors.py
 ConfigError = InputError
@@ -39,10 +39,10 @@ def mapping(value, path: str, required: tuple = (), optional: tuple = ()) -> dic
     for key in value:
         if key not in allowed:
             raise ConfigError(key_path(path, key), "unknown key; allowed here: "
-                              + ", ".join(sorted(allowed)))
+                              + ", ".join(sorted(allowed)), UNKNOWN_KEY)
     for key in required:
         if key not in value or value[key] is None:
-            raise ConfigError(key_path(path, key), "missing value (required)")
+            raise ConfigError(key_path(path, key), "missing value (required)", MISSING_KEY)
     return value
 
 

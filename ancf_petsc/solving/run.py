@@ -98,7 +98,7 @@ def _read_restart(directory: str, spec: ModelSpec, comm):
         try:
             point = read_restart(directory)
         except InputError as exc:
-            err = (exc.path, str(exc).split(": ", 1)[1] if ": " in str(exc) else str(exc))
+            err = (exc.path, exc.message, exc.kind)
     if comm.size > 1:
         point, err = comm.tompi4py().bcast((point, err), root=0)
     if err:

@@ -18,7 +18,7 @@ from petsc4py import PETSc
 from ..config.specs import SolverSpec
 from ..petsc import logging
 from ..petsc.complementarity import ComplementarityPredictor
-from ..petsc.inertia import pivot_counts
+from ..petsc.inertia import mumps_error, pivot_counts
 from ..petsc.options import petsc_message, used_anywhere
 from ..petsc.problem import Problem
 from . import solver_messages
@@ -173,7 +173,7 @@ class LoadStepper:
             # a package that cannot handle this matrix); the same on every rank for these
             self.problem.load_factor = reached
             why = petsc_message(exc)
-            if "MUMPS" in why:
+            if mumps_error(self.snes.getKSP()) is not None:
                 why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
                         "move or an integration rule with zero-energy modes)")
             raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,

@@ -140,7 +140,7 @@ def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> di
                "value": value, "rel_error": abs(value - ref) / abs(ref) if ok else math.nan,
                "message": "" if ok else res.message,
                "short": "" if ok else short_reason(res.reason_code, res.inverted),
-               "clean_message": ok or ("\n" not in res.message and res.reason_code != "INTERNAL_ERROR")}
+               "reason_code": "" if ok else res.reason_code}
         out.append(row)
         what = (f"{row['iterations']} its, error {row['rel_error']:.1e}" if ok
                 else f"FAILED {row['short']} after {row['iterations']} its")

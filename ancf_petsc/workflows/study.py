@@ -41,6 +41,7 @@ import yaml
 from .. import yamlio
 from ..config.specs import DEFAULT_AXIAL_POINTS
 from ..errors import InputError
+from ..status import CONFIG_ERROR, EXIT_INPUT
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")
@@ -140,7 +141,7 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
         spec = parse_config(raw, base_dir=base_dir)
         res = run_model(spec, comm, log=lambda *_: None)
     except ConfigError as exc:
-        return RunResult("config_error", str(exc), None, []), None
+        return RunResult("config_error", str(exc), None, [], reason_code=CONFIG_ERROR, exit_code=EXIT_INPUT), None
     return res, res.summary
 
 

@@ -47,10 +47,6 @@ STATUS_ORDER = FINAL_STATUSES + ("running", "missing")
 class SweepError(InputError):
     """A problem with a sweep file; ``path`` is the key in the sweep file (e.g. ``run.jobs``)."""
 
-    def __init__(self, path: str, message: str):
-        super().__init__(path, message)
-        self.message = message
-
 
 class _Loader(yamlio.StrictLoader):
     """SafeLoader that also reads ``1e6`` and ``0.86e9`` as floats (YAML 1.2 style)."""

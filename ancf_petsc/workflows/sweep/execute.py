@@ -1,10 +1,10 @@
 """One run of a sweep as a child ancf-solve process: the command, its outcome classified from the exit
-code and summary.json, kill on timeout or cancel."""
+code and summary.json (never from its stderr, which goes to log.txt for people), kill on timeout
+or cancel."""
 from __future__ import annotations
 
 import json
 import os
-import re
 import shlex
 import signal
 import socket
@@ -14,9 +14,10 @@ import threading
 import time
 from dataclasses import dataclass
 
+from ...errors import InputError
 from ...io.files import atomic_write, remove_quietly
-from ...status import EXIT_FAILED, EXIT_INPUT, EXIT_UNSTABLE
-from .base import _read_json, _read_text
+from ...status import CONFIG_ERROR, EXIT_INPUT, EXIT_UNSTABLE
+from .base import _read_json
 from .processes import Active, stop_processes
 from .spec import RunSpec, Sweep
 
@@ -64,26 +65,6 @@ def solve_command(sweep: Sweep, run: RunSpec) -> list[str]:
     return cmd
 
 
-_PY_EXC = re.compile(r"^[A-Za-z_][\w.]*(Error|Exception|Interrupt|Exit|Warning)\b")
-
-
-def failure_reason(lines: list[str]) -> str:
-    """The one-line reason in ancf-solve's stderr (MPI launcher noise and paths trimmed)."""
-    lines = [ln.strip() for ln in lines if ln.strip()]
-    for ln in reversed(lines):
-        if ln.startswith("ancf-solve:"):
-            msg = ln[len("ancf-solve:"):].strip()
-            return re.sub(r"; (converged steps are in|results in|\d+ converged level\(s\) kept in) .*$",
-                          "", msg)
-    for ln in reversed(lines):
-        if _PY_EXC.match(ln):
-            return ln
-    for ln in reversed(lines):
-        if re.search(r"[A-Za-z0-9]", ln):
-            return ln
-    return ""
-
-
 def _signal_name(returncode: int) -> str:
     try:
         return signal.Signals(-returncode).name
@@ -91,12 +72,28 @@ def _signal_name(returncode: int) -> str:
         return f"signal {-returncode}"
 
 
-def classify(run_dir: str, returncode: int | None, stderr_lines: list[str],
-             timed_out: bool = False, timeout: float | None = None) -> tuple[str, str]:
-    """(status, reason) of a finished attempt from its exit code, stderr and summary.json."""
+def input_problem(run_dir: str) -> str:
+    """Why ancf-solve refused the run's config.yaml (exit code 2 before summary.json): the same
+    checks run here, and the error's key path and message are read as data."""
+    from ...config.parse import load_config
+    from ...model.build import build_model
+    try:
+        build_model(load_config(os.path.join(run_dir, "config.yaml")))
+    except InputError as exc:
+        return f"config error: {exc.path}: {exc.message}" if exc.path else f"config error: {exc.message}"
+    except Exception:               # noqa: BLE001 - any other failure: the log has it
+        pass
+    return f"input error (exit code {EXIT_INPUT}); see log.txt"
+
+
+def classify(run_dir: str, returncode: int | None, timed_out: bool = False,
+             timeout: float | None = None) -> tuple[str, str]:
+    """(status, reason) of a finished attempt from summary.json's ``status`` and ``message`` and
+    the exit code; stderr is never read.  An attempt without a final summary is classified by its
+    exit code alone (a config error's reason from ``input_problem``)."""
     summary = _read_json(os.path.join(run_dir, "summary.json")) or {}
     sstat = summary.get("status")
-    reason = failure_reason(stderr_lines)
+    message = str(summary.get("message") or "")
     if timed_out:
         steps = summary.get("steps") or []
         last = f"; last converged load factor {steps[-1].get('load_factor'):g}" if steps else ""
@@ -104,25 +101,24 @@ def classify(run_dir: str, returncode: int | None, stderr_lines: list[str],
     if returncode == 0 and sstat == "completed":
         return "completed", ""
     if returncode == EXIT_UNSTABLE and sstat == "unstable":
-        return "unstable", str(summary.get("message") or reason)
-    if sstat == "interrupted" or returncode in (128 + signal.SIGTERM, 128 + signal.SIGINT):
-        return "interrupted", reason or str(summary.get("message") or "interrupted")
-    if returncode == EXIT_INPUT and summary.get("reason_code") == "OUTPUT_ERROR":
-        return "failed", reason or str(summary.get("message") or "output error")
-    if returncode == EXIT_INPUT:
-        return "config_error", reason or "config error (exit code 2)"
-    if sstat == "failed" or returncode == EXIT_FAILED:
-        return "failed", reason or str(summary.get("message") or "a load level was not reached")
+        return "unstable", message or "unstable"
+    if sstat == "interrupted":
+        return "interrupted", message or "interrupted"
+    if sstat == "failed":
+        return "failed", message or f"a load level was not reached (exit code {returncode})"
+    if returncode in (128 + signal.SIGTERM, 128 + signal.SIGINT):
+        return "interrupted", f"interrupted (exit code {returncode}) before summary.json said so"
+    if returncode == EXIT_INPUT and sstat is None:
+        return "config_error", input_problem(run_dir)
     if returncode is not None and returncode < 0:
-        sig = f"killed by {_signal_name(returncode)}"
-        return "crashed", f"{sig}: {reason}" if reason else sig
+        return "crashed", f"killed by {_signal_name(returncode)}"
     if returncode == 0:
         return "crashed", f"exit code 0 but summary.json says status {sstat!r}"
-    return "crashed", reason or f"exit code {returncode}"
+    return "crashed", f"exit code {returncode}" + (f"; summary.json says status {sstat!r}" if sstat else "")
 
 
 #: reason codes of sweep statuses that ancf-solve does not report itself
-SWEEP_CODES = {"config_error": "CONFIG_ERROR", "timeout": "TIMEOUT", "crashed": "CRASHED"}
+SWEEP_CODES = {"config_error": CONFIG_ERROR, "timeout": "TIMEOUT", "crashed": "CRASHED"}
 
 
 def reason_code(run_dir: str, status: str) -> str:
@@ -135,17 +131,14 @@ def reason_code(run_dir: str, status: str) -> str:
 
 
 def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
-                   stderr_lines: list[str] | None = None, timed_out: bool = False,
-                   timeout: float | None = None, extra: dict | None = None,
+                   timed_out: bool = False, timeout: float | None = None, extra: dict | None = None,
                    verdict: tuple[str, str] | None = None) -> Outcome:
     """Classify a finished attempt (unless ``verdict`` gives (status, reason)) and write
-    ``run.json``; ``stderr_lines`` defaults to the lines of log.txt."""
+    ``run.json``."""
     if verdict is not None:
         status, reason = verdict
     else:
-        if stderr_lines is None:
-            stderr_lines = last_attempt((_read_text(os.path.join(run_dir, "log.txt")) or "").splitlines())
-        status, reason = classify(run_dir, returncode, stderr_lines, timed_out, timeout)
+        status, reason = classify(run_dir, returncode, timed_out, timeout)
     record = _read_json(os.path.join(run_dir, "run.json")) or {}
     record.update(extra or {})
     record.update({"status": status, "reason": reason, "reason_code": reason_code(run_dir, status),
@@ -159,16 +152,10 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
 ATTEMPT_HEADER = "=== ancf-sweep attempt"
 
 
-def last_attempt(lines: list[str]) -> list[str]:
-    """The lines of the last attempt in a log that resubmissions append to."""
-    starts = [i for i, ln in enumerate(lines) if ln.startswith(ATTEMPT_HEADER)]
-    return lines[starts[-1] + 1:] if starts else lines
-
-
 def finish_slurm_task(run_dir: str, returncode: int, wall_time: float,
                       timeout: float | None = None) -> Outcome:
     """Record a run executed by the SLURM script (exit code 124 of ``timeout`` = time limit)."""
-    return record_outcome(run_dir, returncode, wall_time, None,
+    return record_outcome(run_dir, returncode, wall_time,
                           timed_out=timeout is not None and returncode == 124, timeout=timeout,
                           extra={"host": socket.gethostname(),
                                  "slurm_job": os.environ.get("SLURM_ARRAY_JOB_ID"),
@@ -202,7 +189,6 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
         {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
          "host": socket.gethostname(), "sweep_pid": os.getpid(), "ranks": sweep.ranks,
          "command": shlex.join(cmd)}, indent=1) + "\n")
-    stderr_lines: list[str] = []
     t0 = time.monotonic()
     with open(os.path.join(run.dir, "log.txt"), "wb", buffering=0) as log:
         log.write(("$ " + shlex.join(cmd) + "\n").encode())
@@ -221,7 +207,6 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
         def pump() -> None:
             for raw in proc.stderr:             # type: ignore[union-attr]
                 log.write(raw)
-                stderr_lines.append(raw.decode(errors="replace"))
 
         reader = threading.Thread(target=pump, daemon=True)
         reader.start()
@@ -244,5 +229,4 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
             else f"killed ({_signal_name(rc) if rc is not None and rc < 0 else f'exit code {rc}'})"
         return record_outcome(run.dir, rc, wall,
                               verdict=("interrupted", f"ancf-sweep was interrupted; the run {how}"))
-    return record_outcome(run.dir, rc, wall, stderr_lines, timed_out=timed_out,
-                          timeout=sweep.timeout)
+    return record_outcome(run.dir, rc, wall, timed_out=timed_out, timeout=sweep.timeout)

@@ -11,6 +11,7 @@ from typing import Any
 
 from ...config.parse import parse_config
 from ...config.values import ConfigError
+from ...errors import UNKNOWN_KEY
 from .base import (LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, _int, _load_yaml,
                    _Loader, _path_exists, _str, format_key_path, parse_key_path, set_key_path)
 
@@ -167,8 +168,8 @@ def _check_against_schema(sweep_base: dict, base_dir: str, param: Parameter, key
         parse_config(raw, base_dir=base_dir)
     except ConfigError as exc:
         p = exc.path
-        if "unknown key" in str(exc) and (param.path == p or param.path.startswith(p + ".")
-                                          or param.path.startswith(p + "[")):
+        if exc.kind == UNKNOWN_KEY and (param.path == p or param.path.startswith(p + ".")
+                                        or param.path.startswith(p + "[")):
             raise SweepError(key, f"not in the base config, and not a config key ({exc})") from None
 
 

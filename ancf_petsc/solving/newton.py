@@ -22,7 +22,7 @@ from typing import Callable
 
 from petsc4py import PETSc
 
-from ..contact.laws import NEWTON
+from ..contact.laws import HELD, NEWTON
 
 #: Newton solves after the first at most, to bring contact points' weights up to date
 MAX_WEIGHT_UPDATES = 5
@@ -91,11 +91,16 @@ class PhasedNewton:
         P = self.steps
         its, previous, reason = 0, None, 0
         P.frozen = self.between_solves
+        phases = P.phases(from_rest)
         if from_rest and self.predictor is not None:
             # the contact state of the touching, pressure-free start from the linearised
             # complementarity problem (one factorisation: counted as a Newton iteration)
             its += int(self.predictor.predict(X))
-        for phase in P.phases(from_rest):
+        elif from_rest and P.decides_activity:
+            # too many multipliers for the predictor: solve the increment with every constraint
+            # held first (the sliding problem); the phases then release the ones that pull
+            phases = [HELD] + phases
+        for phase in phases:
             P.begin(phase, previous)
             reason, n = self._phase(X, lam, phase)
             its += n

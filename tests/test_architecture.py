@@ -298,3 +298,57 @@ def test_the_text_rule_catches_what_it_forbids():
            "    if '\\n' not in run.message: pass\n"
            "    [ln for ln in lines if ln.startswith('ancf-solve:')]\n")
     assert len(_text_reads(ast.parse(src))) == 5
+
+
+# ------------------------------------------------------------ one registry per vocabulary (issue 29)
+def _vocabularies() -> dict[str, tuple[set, set]]:
+    """vocabulary → (its names, read from the registry; the modules that own them)."""
+    from ancf_petsc.contact.laws import LAWS
+    from ancf_petsc.physics.element3363 import ELEMENTS
+    from ancf_petsc.physics.laws import MATERIALS
+    return {"contact law": (set(LAWS), {"contact/laws.py"}),
+            "element": (set(ELEMENTS), {"physics/element3363.py"}),
+            "material": (set(MATERIALS), {"physics/laws.py", "physics/materials.py", "physics/goh.py"})}
+
+
+def _spelt(tree: ast.AST, names: set) -> list[tuple[int, str]]:
+    """(line, what) of every ``== "name"`` / ``in ("a", "b")`` test on a registry name and every
+    literal list that spells two or more of them (a second copy of the vocabulary)."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare) and any(isinstance(o, (ast.Eq, ast.NotEq, ast.In, ast.NotIn))
+                                                 for o in node.ops):
+            for x in [node.left] + node.comparators:
+                if isinstance(x, ast.Constant) and x.value in names:
+                    out.append((node.lineno, f"compares with {x.value!r}"))
+        elif isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            hits = [e.value for e in node.elts
+                    if isinstance(e, ast.Constant) and isinstance(e.value, str) and e.value in names]
+            if len(hits) >= 2:
+                out.append((node.lineno, f"spells the vocabulary {hits}"))
+    return out
+
+
+def test_registry_names_are_not_spelt_outside_their_module():
+    """Contact laws (contact/laws.py LAWS), elements (physics/element3363.py ELEMENTS) and
+    materials (physics/laws.py MATERIALS) are named in code only by their registry: no
+    ``law == "unilateral"`` or ``("3363", "3333")`` elsewhere; behaviour lives in the law,
+    element or material (e.g. ``ElementType.default_locking``)."""
+    found = []
+    for what, (names, owners) in _vocabularies().items():
+        for name, path in MODULES.items():
+            rel = os.path.relpath(path, PACKAGE)
+            if rel not in owners:
+                found += [f"{rel}:{ln}: {what}: {msg}" for ln, msg in _spelt(ast.parse(open(path).read()), names)]
+    assert not found, "\n".join(found)
+
+
+def test_config_vocabularies_are_the_registries():
+    from ancf_petsc.config.beams import MATERIAL_PARSERS
+    from ancf_petsc.config.specs import CONTACT_MODES, MATERIAL_MODELS
+    from ancf_petsc.contact.laws import LAWS
+    from ancf_petsc.physics.element3363 import ELEMENT_TYPES, ELEMENTS
+    from ancf_petsc.physics.laws import MATERIALS
+    assert CONTACT_MODES == tuple(LAWS) and MATERIAL_MODELS == tuple(MATERIALS)
+    assert set(MATERIAL_PARSERS) == set(MATERIALS) and ELEMENT_TYPES == tuple(ELEMENTS)
+    assert all(e.name == name for name, e in ELEMENTS.items())

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import os
 
-from ..physics.element3363 import ELEMENT_TYPES
+from ..physics.element3363 import DEFAULT_ELEMENT, ELEMENT_TYPES, ELEMENTS
+from ..physics.goh import GOH
+from ..physics.materials import NeoHookean, StVenantKirchhoff
 from .specs import (DEFAULT_AXIAL_POINTS, FIBRE_FOLLOW, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec,
                     SectionSpec)
 from .values import ConfigError, boolean, integer, key_path, mapping, number, sequence, string, vector
@@ -25,9 +27,9 @@ def parse_beams(value, base_dir: str) -> list[BeamSpec]:
             material=parse_material(b["material"], f"{p}.material"),
             elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
             axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points")))
-        beams[-1].element = string(str(b.get("element", "3363")), f"{p}.element", ELEMENT_TYPES)
-        default_locking = "ecm" if beams[-1].element == "3333" else "none"
-        beams[-1].locking = string(b.get("locking", default_locking), f"{p}.locking", LOCKING)
+        beams[-1].element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", ELEMENT_TYPES)
+        beams[-1].locking = string(b.get("locking", ELEMENTS[beams[-1].element].default_locking),
+                                   f"{p}.locking", LOCKING)
     return beams
 
 
@@ -108,24 +110,37 @@ def parse_material(value, path: str) -> dict:
     model = string(mapping(value, path, required=("model",),
                            optional=("mu", "bulk_modulus", "c10", "d", "E", "nu") + GOH_KEYS)["model"],
                    key_path(path, "model"), MATERIAL_MODELS)
-    if model != "goh" and any(k in value for k in GOH_KEYS):
+    return MATERIAL_PARSERS[model](value, path)
+
+
+def _no_fibres(value, path: str) -> None:
+    if any(k in value for k in GOH_KEYS):
         extra = ", ".join(k for k in GOH_KEYS if k in value)
-        raise ConfigError(path, f"{extra}: fibre parameters belong to model: goh, not {model}")
-    if model == "goh":
-        matrix = {k: v for k, v in value.items() if k not in GOH_KEYS}
-        spec = parse_material(dict(matrix, model="neo-hookean"), path)
-        return dict(spec, model="goh", **_goh(value, path))
+        raise ConfigError(path, f"{extra}: fibre parameters belong to model: {GOH.name}, not {value['model']}")
+
+
+def _goh_material(value, path: str) -> dict:
+    matrix = {k: v for k, v in value.items() if k not in GOH_KEYS}
+    return dict(_neo_hookean(matrix, path), model=GOH.name, **_goh(value, path))
+
+
+def _svk(value, path: str) -> dict:
+    _no_fibres(value, path)
+    mapping(value, path, required=("model", "E", "nu"))
+    nu = number(value["nu"], key_path(path, "nu"), lo=-0.999, hint=" (Poisson ratio)")
+    if nu >= 0.5:
+        raise ConfigError(key_path(path, "nu"), f"must be < 0.5 for St. Venant-Kirchhoff; got {nu:g}")
+    return {"model": StVenantKirchhoff.name, "E": number(value["E"], key_path(path, "E"), positive=True,
+                                                         hint=" (Young's modulus in Pa)"), "nu": nu}
+
+
+def _neo_hookean(value, path: str) -> dict:
+    """The neo-Hookean law (also GOH's matrix, ``value`` without the fibre keys)."""
+    _no_fibres(value, path)
     ours, papers = [k for k in ("mu", "bulk_modulus") if k in value], [k for k in ("c10", "d") if k in value]
-    if model == "neo-hookean" and ours and papers:
+    if ours and papers:
         raise ConfigError(path, f"give either mu and bulk_modulus or the paper's c10 and d "
                                 f"(mu = 2 c10, bulk_modulus = d), not both; got {', '.join(ours + papers)}")
-    if model == "svk":
-        mapping(value, path, required=("model", "E", "nu"))
-        nu = number(value["nu"], key_path(path, "nu"), lo=-0.999, hint=" (Poisson ratio)")
-        if nu >= 0.5:
-            raise ConfigError(key_path(path, "nu"), f"must be < 0.5 for St. Venant-Kirchhoff; got {nu:g}")
-        return {"model": model, "E": number(value["E"], key_path(path, "E"), positive=True,
-                                            hint=" (Young's modulus in Pa)"), "nu": nu}
     if "mu" in value or "bulk_modulus" in value:
         mapping(value, path, required=("model", "mu", "bulk_modulus"))
         mu = number(value["mu"], key_path(path, "mu"), positive=True, hint=" (shear modulus in Pa)")
@@ -139,7 +154,7 @@ def parse_material(value, path: str) -> dict:
     else:
         raise ConfigError(path, "neo-hookean (and goh's matrix) needs 'mu' and 'bulk_modulus' (or the paper's "
                                 "'c10' and 'd', with mu = 2 c10, bulk_modulus = d)")
-    return {"model": model, "mu": mu, "bulk_modulus": K}
+    return {"model": NeoHookean.name, "mu": mu, "bulk_modulus": K}
 
 
 def _goh(value, path: str) -> dict:
@@ -171,6 +186,10 @@ def _goh(value, path: str) -> dict:
         angles = (number(raw, ap, lo=-90.0, hi=90.0, hint=" (degrees; a list gives one family each)"),)
     return {"k1": k1, "k2": k2, "kappa": kappa,
             "fibres": {"follow": follow, "extra_twist_deg": extra, "angles_deg": list(angles)}}
+
+
+#: how each material of the registry (physics/laws.py ``MATERIALS``) is read from a config
+MATERIAL_PARSERS = {NeoHookean.name: _neo_hookean, StVenantKirchhoff.name: _svk, GOH.name: _goh_material}
 
 
 def _axial_points(value, path: str) -> int:

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from ..contact.laws import SlidingLaw, UnilateralLaw
 from .specs import DEFAULT_AXIAL_POINTS
 from .values import ConfigError, integer, mapping, number, string, vector
 
@@ -150,7 +151,7 @@ def expand_bundle(raw: dict) -> dict:
     if count > 1:
         contact = dict(out.get("contact") or {})
         if shape == "circle":
-            contact.setdefault("mode", "unilateral")
+            contact.setdefault("mode", UnilateralLaw.name)
             # closing contact from a touching start: the bt line search halves the iterations
             # (157 against 290 with basic on bundle_circle7)
             petsc = dict(out.get("petsc") or {})
@@ -161,7 +162,7 @@ def expand_bundle(raw: dict) -> dict:
         else:
             # two points per edge and a gap linear along it: one mid-edge point per edge would
             # leave each hexagon free to spin about its own axis (mid-edge points move tangentially)
-            contact.setdefault("mode", "sliding")
+            contact.setdefault("mode", SlidingLaw.name)
             contact.setdefault("curve_points", 2)
             contact.setdefault("projection", {"axial": contact.get("axial_points", 3) - 1, "curve": 1})
         out["contact"] = contact

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from ..physics.element3363 import DOFS_PER_NODE
 from .conditions import beam_ref
-from .specs import CONTACT_MODES, REMOVED_CONTACT_KEYS, ContactSpec
+from .specs import CONTACT_MODES, DEFAULT_CONTACT_MODE, REMOVED_CONTACT_KEYS, ContactSpec
 from .values import ConfigError, boolean, integer, mapping, number, sequence, string
 
 
@@ -18,7 +18,7 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
     mapping(value, p, optional=("mode", "interfaces", "axial_points", "curve_points", "search_margin",
                                 "projection", "scaling"))
     c = ContactSpec()
-    c.mode = string(value.get("mode", "sliding"), f"{p}.mode", CONTACT_MODES)
+    c.mode = string(value.get("mode", DEFAULT_CONTACT_MODE), f"{p}.mode", CONTACT_MODES)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
     c.curve_points = integer(value.get("curve_points", 2), f"{p}.curve_points", lo=1, hi=10)
     c.search_margin = number(value.get("search_margin", 0.1), f"{p}.search_margin", positive=True, hi=1.0)

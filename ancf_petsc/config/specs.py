@@ -4,11 +4,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..contact.laws import LAWS, SlidingLaw
+from ..physics.element3363 import DEFAULT_ELEMENT
+from ..physics.laws import MATERIALS
+
 LOCKING = ("none", "ecm")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
-MATERIAL_MODELS = ("neo-hookean", "svk", "goh")
+MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws.py)
 FIBRE_FOLLOW = ("twist", "axis")
-CONTACT_MODES = ("sliding", "unilateral")
+CONTACT_MODES = tuple(LAWS)                 # the registry's names (contact/laws.py)
+DEFAULT_CONTACT_MODE = SlidingLaw.name
 PARTITION_METHODS = ("blocks", "metis", "beams")
 TWIST_RULES = ("centroid", "origin", "junction")
 #: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
@@ -51,7 +56,7 @@ class BeamSpec:
     material: dict
     elements: int
     axial_points: int = DEFAULT_AXIAL_POINTS
-    element: str = "3363"                 # element type, see element3363.ELEMENT_VECTORS
+    element: str = DEFAULT_ELEMENT        # element type, see element3363.ELEMENTS
     locking: str = "none"                 # 'ecm': Poisson-locking remedy (model.Beam.parts)
 
 
@@ -82,7 +87,7 @@ class ProbeSpec:
 
 @dataclass
 class ContactSpec:
-    mode: str = "sliding"                  # sliding | unilateral (contact/laws.py)
+    mode: str = DEFAULT_CONTACT_MODE       # a name of contact/laws.py LAWS
     interfaces: list = field(default_factory=list)   # [(beam_a, beam_b, curve name or None)]
     axial_points: int = 3
     curve_points: int = 2

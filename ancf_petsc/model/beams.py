@@ -27,7 +27,7 @@ class Beam:
     element_offset: int
     x_nodes: np.ndarray
     axial_points: int
-    element: str = "3363"                                  # '3363' | '3333' (element3363.py)
+    element: str = el.DEFAULT_ELEMENT                      # a name of element3363.ELEMENTS
     locking: str = "none"                                  # 'none' | 'ecm' (see ``parts``)
     xi: np.ndarray = field(repr=False, default=None)      # (P,) ξ of the element's Gauss points
     yz: np.ndarray = field(repr=False, default=None)      # (P, 2) section coordinates

@@ -57,7 +57,7 @@ def scaling_markdown(rows: list[dict]) -> str:
     for r in rows:
         lines.append(f"| {r['mode']} | {r['space']} | {r['scaling']:g} | {r['e10']:.6f} | "
                      f"{r['e400']:.6f} | {r['iterations']} |")
-    for mode in ("sliding", "unilateral"):
+    for mode in dict.fromkeys(r["mode"] for r in rows):
         d10, d400 = scaling_spread(rows, mode)
         lines.append(f"\n{mode}: over two decades of k_s the elongation changes by {100 * d10:.1e} % "
                      f"(10 N) and {100 * d400:.1e} % (400 N).")

@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config.specs import DEFAULT_CONTACT_MODE
 from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
 from .runs import elongations, execute, make_sweep, summary_of
 
@@ -62,7 +63,7 @@ def table1(inputs: PaperInputs, out: str, ranks: int = 1, jobs: int = 1, log=pri
     """Table 1: the three pretwist columns at the paper's 13 load levels, with contact ``mode``."""
     params = {"geometry.twist_deg": list(TWISTS)}
     name = "table1"
-    if mode != "sliding":
+    if mode != DEFAULT_CONTACT_MODE:
         params["contact.mode"] = [mode] * len(TWISTS)
         name = f"table1_{mode}"
     sweep = make_sweep(inputs, out, name, params, ranks=ranks, jobs=jobs)

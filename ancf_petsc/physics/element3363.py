@@ -33,6 +33,8 @@ one code path; its element kernels run on the 27 active DOFs only (``ELEMENT_VEC
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 NODES_PER_ELEMENT = 3
@@ -44,9 +46,25 @@ DOFS_PER_ELEMENT = 3 * SLOTS                  # 54
 VECTOR_INDEX = {name: k for k, name in enumerate(VECTORS)}
 #: index of the paper's N-function (1-based, node 1) carried by each slot of a node
 PAPER_FUNCTION = (1, 2, 3, 5, 6, 4)
+
+
+@dataclass(frozen=True)
+class ElementType:
+    """One element of the three-node family: the nodal vectors (slots of a node) it interpolates
+    with and the volumetric-locking remedy a beam of it gets unless the config says otherwise
+    (``none`` | ``ecm``, config ``beams[i].locking``)."""
+    name: str
+    vectors: tuple[int, ...]
+    default_locking: str = "none"
+
+
+#: the element registry: every reader of element names (config, workflows, charts) reads it
+ELEMENTS = {e.name: e for e in (ElementType("3363", (0, 1, 2, 3, 4, 5)),
+                                ElementType("3333", (0, 1, 2), default_locking="ecm"))}
+DEFAULT_ELEMENT = "3363"
 #: nodal vectors (slots of a node) each element type interpolates with
-ELEMENT_VECTORS = {"3363": (0, 1, 2, 3, 4, 5), "3333": (0, 1, 2)}
-ELEMENT_TYPES = tuple(ELEMENT_VECTORS)
+ELEMENT_VECTORS = {name: e.vectors for name, e in ELEMENTS.items()}
+ELEMENT_TYPES = tuple(ELEMENTS)
 
 
 def lagrange(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -69,7 +87,7 @@ def section_monomials(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def shape_functions(xi: np.ndarray, y: np.ndarray, z: np.ndarray,
-                    vectors: tuple[int, ...] = ELEMENT_VECTORS["3363"]) -> tuple[np.ndarray, np.ndarray]:
+                    vectors: tuple[int, ...] = ELEMENT_VECTORS[DEFAULT_ELEMENT]) -> tuple[np.ndarray, np.ndarray]:
     """Shape functions N (n, S) and their derivatives dN (n, S, 3) w.r.t. (ξ, y, z) (eq. 6).
 
     Points are given pointwise (xi, y, z of equal length n).  ``vectors`` selects the nodal

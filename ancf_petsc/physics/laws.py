@@ -5,12 +5,17 @@ from .goh import GOH
 from .materials import NeoHookean, StVenantKirchhoff
 
 
+#: the material registry, by config name (``beams[i].material.model``): how each law is built from
+#: a validated config mapping (config/beams.py ``MATERIAL_PARSERS`` validates one per name)
+MATERIALS = {
+    NeoHookean.name: lambda spec: NeoHookean(spec["mu"], spec["bulk_modulus"]),
+    StVenantKirchhoff.name: lambda spec: StVenantKirchhoff(spec["E"], spec["nu"]),
+    GOH.name: lambda spec: GOH(spec["mu"], spec["bulk_modulus"], spec["k1"], spec["k2"], spec["kappa"],
+                               spec["fibres"]),
+}
+
+
 def make_material(spec: dict):
     """Material from a validated config mapping; a GOH law still needs its fibre directions
     (``GOH.with_directions``, set up per Gauss point by the model)."""
-    if spec["model"] == "neo-hookean":
-        return NeoHookean(spec["mu"], spec["bulk_modulus"])
-    if spec["model"] == "goh":
-        return GOH(spec["mu"], spec["bulk_modulus"], spec["k1"], spec["k2"], spec["kappa"],
-                   spec["fibres"])
-    return StVenantKirchhoff(spec["E"], spec["nu"])
+    return MATERIALS[spec["model"]](spec)

@@ -13,6 +13,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FuncFormatter, LogLocator, NullFormatter
 
+from ..physics.element3363 import ELEMENTS
 from .figures import save_figure
 
 ERROR_FLOOR = 1e-16       # exact answers (e.g. uniaxial tension) are drawn at this error
@@ -231,8 +232,10 @@ def axis_words(key: str, value=None) -> str:
         return f"{value} contact"
     if key == "element":
         text = str(value)
-        return "element " + (text.replace("-none", " without ecm") if text.endswith("-none")
-                             else text + (" (ecm)" if text == "3333" else ""))
+        element, _, locking = text.partition("-")
+        remedy = ELEMENTS[element].default_locking if element in ELEMENTS else "none"
+        return "element " + (f"{element} without {remedy}" if locking == "none" and remedy != "none"
+                             else text + (f" ({remedy})" if not locking and remedy != "none" else ""))
     return f"{name} = {value}"
 
 

@@ -39,6 +39,10 @@ from dataclasses import dataclass
 from typing import Callable
 
 
+from ..config.specs import LOCKING
+from ..contact.laws import LAWS
+from ..physics.element3363 import ELEMENTS
+from ..physics.materials import NeoHookean
 from .refinement import Discretisation, apply, quantity
 from .study import Scene, StudyError, _expect, parse_discretisation, parse_scene, read_yaml, solve_raw
 
@@ -78,7 +82,7 @@ def cell_config(scene: Scene, cell: dict, max_it: int, max_newton: int | None = 
             beam.update(_element(cell["element"]))
         mat = beam["material"]
         if "bulk_ratio" in cell:
-            if mat.get("model") != "neo-hookean" or "mu" not in mat:
+            if mat.get("model") != NeoHookean.name or "mu" not in mat:
                 raise StudyError("axes.bulk_ratio", f"beam {beam['name']}: needs a neo-hookean "
                                                     "material given by mu and bulk_modulus")
             mat["bulk_modulus"] = float(cell["bulk_ratio"]) * float(mat["mu"])
@@ -200,12 +204,13 @@ def load_stability(path: str) -> StabilitySpec:
         elif key == "linesearch":
             _expect(all(v in LINESEARCHES for v in vals), kp, f"expected values from {', '.join(LINESEARCHES)}")
         elif key == "contact":
-            _expect(all(v in ("sliding", "unilateral") for v in vals), kp, "expected sliding or unilateral")
+            _expect(all(v in LAWS for v in vals), kp, f"expected {' or '.join(LAWS)}")
         elif key == "element":
             axes[key] = vals = [str(v) for v in vals]
-            _expect(all(_element(v)["element"] in ("3363", "3333")
-                        and _element(v).get("locking", "none") in ("none", "ecm") for v in vals),
-                    kp, "expected 3363, 3333, 3333-none or 3333-ecm")
+            _expect(all(_element(v)["element"] in ELEMENTS
+                        and _element(v).get("locking", LOCKING[0]) in LOCKING for v in vals),
+                    kp, f"expected an element type ({', '.join(ELEMENTS)}), optionally with a locking "
+                        f"remedy: {', '.join(f'{e}-{lock}' for e in ELEMENTS for lock in LOCKING)}")
         else:
             _expect(all(isinstance(v, (int, float)) and v > 0 for v in vals), kp, "expected positive numbers")
     if "contact" in axes:

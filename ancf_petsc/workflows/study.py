@@ -40,6 +40,7 @@ import yaml
 
 from .. import yamlio
 from ..config.specs import DEFAULT_AXIAL_POINTS
+from ..physics.element3363 import DEFAULT_ELEMENT
 from ..errors import InputError
 from ..status import CONFIG_ERROR, EXIT_INPUT
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
@@ -148,7 +149,7 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
 def _discretisation_of(raw: dict) -> tuple[str, int, int, int | None]:
     """(element, elements, axial points, cubature degree) of the first beam of a raw config."""
     b = raw["beams"][0]
-    return (str(b.get("element", "3363")), int(b["elements"]), int(b.get("axial_points", DEFAULT_AXIAL_POINTS)),
+    return (str(b.get("element", DEFAULT_ELEMENT)), int(b["elements"]), int(b.get("axial_points", DEFAULT_AXIAL_POINTS)),
             b["section"].get("cubature_degree"))
 
 

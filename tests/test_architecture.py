@@ -230,7 +230,7 @@ TEXT_READERS = {
     "petsc/options.py:petsc_message": "PETSc's error: the last line of its text is the reason",
     "config/parse.py:load_config": "PyYAML's first line when its error has no .problem",
     "workflows/study.py:read_yaml": "PyYAML's first line when its error has no .problem",
-    "workflows/sweep/base.py:_load_yaml": "PyYAML's first line when its error has no .problem",
+    "workflows/sweep/base.py:load_yaml": "PyYAML's first line when its error has no .problem",
 }
 _TEXT_METHODS = {"split", "rsplit", "splitlines", "startswith", "endswith", "find", "rfind", "index",
                  "partition", "rpartition", "count"}
@@ -352,3 +352,61 @@ def test_config_vocabularies_are_the_registries():
     assert CONTACT_MODES == tuple(LAWS) and MATERIAL_MODELS == tuple(MATERIALS)
     assert set(MATERIAL_PARSERS) == set(MATERIALS) and ELEMENT_TYPES == tuple(ELEMENTS)
     assert all(e.name == name for name, e in ELEMENTS.items())
+
+
+# ---------------------------------------------------------------- public names (issue 29, point 7)
+def test_every_package_declares_its_public_names():
+    """``__all__`` in every package ``__init__``; each entry is a name the ``__init__`` binds
+    or a sub-module of the package."""
+    bad = []
+    for name, path in MODULES.items():
+        if not path.endswith("__init__.py"):
+            continue
+        tree = ast.parse(open(path).read())
+        declared = [n for n in tree.body if isinstance(n, ast.Assign)
+                    and any(isinstance(t, ast.Name) and t.id == "__all__" for t in n.targets)]
+        if not declared:
+            bad.append(f"{name}: no __all__")
+            continue
+        bound = {a.asname or a.name for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
+                 for a in n.names}
+        bound |= {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}
+        bound |= {n.name for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+        here = os.path.dirname(path)
+        try:
+            entries = ast.literal_eval(declared[0].value)
+        except ValueError:                  # the root package: names served lazily (PEP 562)
+            continue
+        for entry in entries:
+            if entry not in bound and not os.path.exists(os.path.join(here, entry + ".py")) \
+                    and not os.path.exists(os.path.join(here, entry, "__init__.py")):
+                bad.append(f"{name}: __all__ names {entry!r}, which it neither binds nor has as a module")
+    assert not bad, "\n".join(bad)
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def test_no_private_name_is_imported_from_another_module():
+    """``from .x import _y`` (or ``x._y`` on an imported module) reaches into another module's
+    insides: make ``_y`` public (it is shared) or keep it where it is used."""
+    bad = []
+    for name, path in MODULES.items():
+        rel = os.path.relpath(path, PACKAGE)
+        tree = ast.parse(open(path).read())
+        modules = {a.asname or a.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                   for a in node.names if _is_package_module(name, path, node, a.name)}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                bad += [f"{rel}:{node.lineno}: imports {a.name}" for a in node.names if _private(a.name)]
+            elif isinstance(node, ast.Attribute) and _private(node.attr) and isinstance(node.value, ast.Name) \
+                    and node.value.id in modules:
+                bad.append(f"{rel}:{node.lineno}: reads {node.value.id}.{node.attr}")
+    assert not bad, "\n".join(bad)
+
+
+def _is_package_module(name: str, path: str, node: ast.ImportFrom, imported: str) -> bool:
+    """``from <package> import <imported>`` names one of the package's own modules."""
+    return any(i.endswith("." + imported) and i in MODULES
+               for i, ln in _imports(name, path) if ln == node.lineno)

@@ -132,7 +132,7 @@ def _plausible(areas: dict[str, float], src: GeometrySource) -> None:
                   f"{' and pixel_size' if src.units == 'px' else ''}{hint}")
 
 
-def _fit_segment(Q: np.ndarray, closed: bool, degree: int, tol: float, name: str,
+def fit_segment(Q: np.ndarray, closed: bool, degree: int, tol: float, name: str,
                  max_spacing: float, traced: np.ndarray | None = None) -> list[SplineCurve]:
     """Curves through an open polyline Q (or closed: Q[0] == Q[-1]), broken at sharp corners;
     ``traced`` marks the traced points (see fit.fit_curve)."""
@@ -198,7 +198,7 @@ def build_station(src: GeometrySource, opts: SectionsSpec, label: str = "") -> S
         closed = len(seg.owners) == 1 and np.allclose(seg.points[0], seg.points[-1]) and \
             len(merged.loops[owner]) == 1
         try:
-            curves_of.append(_fit_segment(seg.points, closed, opts.spline_degree, fit_tol, seg.name,
+            curves_of.append(fit_segment(seg.points, closed, opts.spline_degree, fit_tol, seg.name,
                                           MAX_SPACING * perim[owner], seg.traced))
         except SectionError as exc:
             raise src.err(f"outlines.{owner}", str(exc)) from None

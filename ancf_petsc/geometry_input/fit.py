@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.spline import SplineCurve
-from .polyline import PolylineDistance, _arclength, douglas_peucker
+from .polyline import PolylineDistance, arclength, douglas_peucker
 
 __all__ = ["FittedCurve", "fit_curve", "corners"]
 
@@ -106,7 +106,7 @@ def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
     Q that were traced (the others were added on the chords between them)."""
     Q = np.asarray(Q, dtype=float)
     traced = np.ones(len(Q), dtype=bool) if traced is None else np.asarray(traced, dtype=bool)
-    s = _arclength(Q)
+    s = arclength(Q)
     # a spline follows a smooth trace far closer than the chords Douglas-Peucker measures: start
     # coarse for splines (CHORD_FACTOR x tol) and let the refinement add points where needed
     idx = douglas_peucker(Q, tol * (CHORD_FACTOR if degree > 1 else 1.0))

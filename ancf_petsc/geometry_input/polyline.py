@@ -62,14 +62,14 @@ def densify(P: np.ndarray, h: float, closed: bool = True,
     return (out, is_vertex) if vertices else out
 
 
-def _arclength(Q: np.ndarray) -> np.ndarray:
+def arclength(Q: np.ndarray) -> np.ndarray:
     return np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
 
 
 def resample(P: np.ndarray, n: int, closed: bool = True) -> np.ndarray:
     """``n`` points equally spaced in arc length, starting at P[0] (and ending at P[-1] if open)."""
     Q = np.vstack([P, P[:1]]) if closed else P
-    s = _arclength(Q)
+    s = arclength(Q)
     t = np.linspace(0.0, s[-1], n + 1 if closed else n)
     t = t[:-1] if closed else t
     return np.column_stack([np.interp(t, s, Q[:, 0]), np.interp(t, s, Q[:, 1])])

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..physics.spline import SplineCurve
 from . import polyline as pl
-from .build import Station, _fit_segment
+from .build import Station, fit_segment
 
 __all__ = ["SectionField", "match_rings", "RING"]
 
@@ -57,7 +57,7 @@ def match_rings(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     frac = float(np.clip(0.5 * (y0 - y2) / den, -0.5, 0.5)) if den < 0 else 0.0
     # re-sample B starting at arc-length position (j + frac) / n of its perimeter
     Q = np.vstack([B, B[:1]])
-    s = pl._arclength(Q)
+    s = pl.arclength(Q)
     t = (s[-1] * ((np.arange(n) + j + frac) / n)) % s[-1]
     return np.column_stack([np.interp(t, s, Q[:, 0]), np.interp(t, s, Q[:, 1])])
 
@@ -180,12 +180,12 @@ class SectionField:
                 Pb = pl.resample((cb.reversed() if fb else cb).sample(16), n, closed=False)
                 blend = (1.0 - s) * Pa + s * Pb
                 name_k = ca.name.lstrip("-")
-                out += [(c, False) for c in _fit_segment(blend, False, self.degree, self.fit_tolerance,
+                out += [(c, False) for c in fit_segment(blend, False, self.degree, self.fit_tolerance,
                                                          name_k, np.inf)]
         else:
             ring = self.ring_at(name, x)
             Q = np.vstack([ring, ring[:1]])
-            out = [(c, False) for c in _fit_segment(Q, True, self.degree, self.fit_tolerance, name,
+            out = [(c, False) for c in fit_segment(Q, True, self.degree, self.fit_tolerance, name,
                                                     pl.perimeter(ring) / 12.0)]
         self._cache[key] = out
         return out

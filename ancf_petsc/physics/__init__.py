@@ -5,3 +5,7 @@ materials (``materials``: neo-Hookean, eq. 14; St. Venant-Kirchhoff), the vector
 kernels (``kernels``: internal forces and tangents over elements x Gauss points), the pretwisted
 reference geometry (``geometry``), rigid modes (``rigid``) and exact solutions for verification
 (``reference_solutions``)."""
+
+#: the sub-modules (imported on use: a plain import of the package loads none of them)
+__all__ = ["cubature", "element3363", "fibres", "geometry", "goh", "kernels", "laws", "materials",
+           "polygon", "reference_solutions", "rigid", "section", "sections_file", "spline"]

@@ -44,7 +44,7 @@ from ..contact.laws import LAWS
 from ..physics.element3363 import ELEMENTS
 from ..physics.materials import NeoHookean
 from .refinement import Discretisation, apply, quantity
-from .study import Scene, StudyError, _expect, parse_discretisation, parse_scene, read_yaml, solve_raw
+from .study import Scene, StudyError, expect, parse_discretisation, parse_scene, read_yaml, solve_raw
 
 AXES = ("increment", "linesearch", "bulk_ratio", "contact", "element")
 PHYSICAL = ("bulk_ratio", "contact")     # change the model: one reference per value
@@ -187,39 +187,39 @@ def default_strategy_converged(result: dict) -> bool:
 def load_stability(path: str) -> StabilitySpec:
     """Read and check a stability file."""
     doc = read_yaml(path)
-    _expect(isinstance(doc, dict), "", "expected a mapping")
+    expect(isinstance(doc, dict), "", "expected a mapping")
     for key in doc:
-        _expect(key in KEYS, key, f"unknown key; allowed: {', '.join(KEYS)}")
+        expect(key in KEYS, key, f"unknown key; allowed: {', '.join(KEYS)}")
     here = os.path.dirname(os.path.abspath(path))
     scene = parse_scene(doc, here)
     axes = doc.get("axes")
-    _expect(isinstance(axes, dict) and axes, "axes", f"expected a mapping of lists over {', '.join(AXES)}")
+    expect(isinstance(axes, dict) and axes, "axes", f"expected a mapping of lists over {', '.join(AXES)}")
     for key, vals in axes.items():
         kp = f"axes.{key}"
-        _expect(key in AXES, kp, f"unknown key; allowed here: {', '.join(AXES)}")
-        _expect(isinstance(vals, list) and vals, kp, "expected a non-empty list")
+        expect(key in AXES, kp, f"unknown key; allowed here: {', '.join(AXES)}")
+        expect(isinstance(vals, list) and vals, kp, "expected a non-empty list")
         if key == "increment":
-            _expect(all(v == ADAPTIVE or (isinstance(v, (int, float)) and 0 < v <= 1) for v in vals),
+            expect(all(v == ADAPTIVE or (isinstance(v, (int, float)) and 0 < v <= 1) for v in vals),
                     kp, "expected 'adaptive' or fractions 0 < f <= 1 of the last load level")
         elif key == "linesearch":
-            _expect(all(v in LINESEARCHES for v in vals), kp, f"expected values from {', '.join(LINESEARCHES)}")
+            expect(all(v in LINESEARCHES for v in vals), kp, f"expected values from {', '.join(LINESEARCHES)}")
         elif key == "contact":
-            _expect(all(v in LAWS for v in vals), kp, f"expected {' or '.join(LAWS)}")
+            expect(all(v in LAWS for v in vals), kp, f"expected {' or '.join(LAWS)}")
         elif key == "element":
             axes[key] = vals = [str(v) for v in vals]
-            _expect(all(_element(v)["element"] in ELEMENTS
+            expect(all(_element(v)["element"] in ELEMENTS
                         and _element(v).get("locking", LOCKING[0]) in LOCKING for v in vals),
                     kp, f"expected an element type ({', '.join(ELEMENTS)}), optionally with a locking "
                         f"remedy: {', '.join(f'{e}-{lock}' for e in ELEMENTS for lock in LOCKING)}")
         else:
-            _expect(all(isinstance(v, (int, float)) and v > 0 for v in vals), kp, "expected positive numbers")
+            expect(all(isinstance(v, (int, float)) and v > 0 for v in vals), kp, "expected positive numbers")
     if "contact" in axes:
-        _expect(scene.raw.get("contact") is not None, "axes.contact", "the base config has no contact")
+        expect(scene.raw.get("contact") is not None, "axes.contact", "the base config has no contact")
     ref = Discretisation(**parse_discretisation(doc.get("reference", {}), "reference"))
     max_it = doc.get("max_it", 50)
-    _expect(isinstance(max_it, int) and max_it >= 1, "max_it", "expected an integer >= 1")
+    expect(isinstance(max_it, int) and max_it >= 1, "max_it", "expected an integer >= 1")
     max_newton = doc.get("max_newton")
-    _expect(max_newton is None or (isinstance(max_newton, int) and max_newton >= 1), "max_newton",
+    expect(max_newton is None or (isinstance(max_newton, int) and max_newton >= 1), "max_newton",
             "expected an integer >= 1 (Newton iterations per cell)")
     name = str(doc.get("name", os.path.splitext(os.path.basename(path))[0]))
     output = os.path.normpath(os.path.join(here, str(doc.get("output", os.path.join("studies", name)))))

@@ -271,35 +271,35 @@ def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
 
 
 # ------------------------------------------------------------------------------ study files
-def _expect(cond: bool, path: str, message: str) -> None:
+def expect(cond: bool, path: str, message: str) -> None:
     if not cond:
         raise StudyError(path, message)
 
 
 def load_base(path: str, key: str = "base") -> tuple[dict, str]:
     """The base config of a study file: (raw YAML, its directory)."""
-    _expect(os.path.isfile(path), key, f"file not found: {path} (relative to the study file)")
+    expect(os.path.isfile(path), key, f"file not found: {path} (relative to the study file)")
     raw = read_yaml(path, key)
-    _expect(isinstance(raw, dict) and "beams" in raw and "steps" in raw, key,
+    expect(isinstance(raw, dict) and "beams" in raw and "steps" in raw, key,
             f"{path} is not a model config (no beams/steps)")
     return raw, os.path.dirname(os.path.abspath(path))
 
 
 def parse_scene(doc: dict, here: str) -> Scene:
     """The ``base``, ``probe``, ``component`` and ``level`` keys of a study file."""
-    _expect("base" in doc, "base", "missing value (required): the model config to study")
+    expect("base" in doc, "base", "missing value (required): the model config to study")
     raw, base_dir = load_base(os.path.join(here, str(doc["base"])))
     probes = [p.get("name") for p in raw.get("probes", []) if isinstance(p, dict)]
     probe = doc.get("probe")
-    _expect(probe in probes, "probe", f"no probe {probe!r} in the base config (have: "
+    expect(probe in probes, "probe", f"no probe {probe!r} in the base config (have: "
                                       f"{', '.join(map(str, probes)) or 'none'})")
     component = doc.get("component", "norm")
-    _expect(component in COMPONENTS, "component", f"must be one of {', '.join(COMPONENTS)}; "
+    expect(component in COMPONENTS, "component", f"must be one of {', '.join(COMPONENTS)}; "
                                                   f"got {component!r}")
     level = doc.get("level")
     if level is not None:
         steps = [float(s) for s in raw["steps"]]
-        _expect(isinstance(level, (int, float)) and any(math.isclose(level, s, rel_tol=1e-12)
+        expect(isinstance(level, (int, float)) and any(math.isclose(level, s, rel_tol=1e-12)
                                                         for s in steps),
                 "level", f"must be one of the base config's steps ({', '.join(f'{s:g}' for s in steps)})")
         level = float(level)
@@ -307,7 +307,7 @@ def parse_scene(doc: dict, here: str) -> Scene:
 
 
 def _int_list(value: Any, path: str, lo: int = 1) -> list[int]:
-    _expect(isinstance(value, list) and value and all(isinstance(v, int) and not isinstance(v, bool)
+    expect(isinstance(value, list) and value and all(isinstance(v, int) and not isinstance(v, bool)
                                                       and v >= lo for v in value),
             path, f"expected a non-empty list of integers >= {lo}; got {value!r}")
     return list(value)
@@ -315,9 +315,9 @@ def _int_list(value: Any, path: str, lo: int = 1) -> list[int]:
 
 def parse_discretisation(value: Any, path: str, extra: tuple = ()) -> dict:
     """A mapping of single discretisation values (``reference:``)."""
-    _expect(isinstance(value, dict), path, f"expected a mapping with keys {', '.join(GRID_KEYS + extra)}")
+    expect(isinstance(value, dict), path, f"expected a mapping with keys {', '.join(GRID_KEYS + extra)}")
     for key in value:
-        _expect(key in GRID_KEYS + extra, f"{path}.{key}",
+        expect(key in GRID_KEYS + extra, f"{path}.{key}",
                 f"unknown key; allowed here: {', '.join(GRID_KEYS + extra)}")
     out = {}
     for key in GRID_KEYS:
@@ -328,15 +328,15 @@ def parse_discretisation(value: Any, path: str, extra: tuple = ()) -> dict:
 
 def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
     from ..physics.element3363 import ELEMENT_TYPES
-    _expect(isinstance(value, dict) and value, path,
+    expect(isinstance(value, dict) and value, path,
             f"expected a mapping of lists over {', '.join(GRID_KEYS)}")
     out = {}
     for key, vals in value.items():
         kp = f"{path}.{key}"
-        _expect(key in GRID_KEYS, kp, f"unknown key; allowed here: {', '.join(GRID_KEYS)}")
+        expect(key in GRID_KEYS, kp, f"unknown key; allowed here: {', '.join(GRID_KEYS)}")
         if key == "element":
             vals = [str(v) for v in vals] if isinstance(vals, list) else vals
-            _expect(isinstance(vals, list) and vals and all(v in ELEMENT_TYPES for v in vals), kp,
+            expect(isinstance(vals, list) and vals and all(v in ELEMENT_TYPES for v in vals), kp,
                     f"expected a list of element types from {', '.join(ELEMENT_TYPES)}; got {vals!r}")
             out[key] = vals
         else:
@@ -347,19 +347,19 @@ def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
 def load_study(path: str) -> StudySpec:
     """Read and check a study file (``kind: pareto``)."""
     doc = read_yaml(path)
-    _expect(isinstance(doc, dict), "", f"{path}: expected a mapping")
+    expect(isinstance(doc, dict), "", f"{path}: expected a mapping")
     for key in doc:
-        _expect(key in STUDY_KEYS, key, f"unknown key; allowed: {', '.join(STUDY_KEYS)}")
+        expect(key in STUDY_KEYS, key, f"unknown key; allowed: {', '.join(STUDY_KEYS)}")
     here = os.path.dirname(os.path.abspath(path))
     scene = parse_scene(doc, here)
-    _expect("grid" in doc, "grid", "missing value (required): lists of elements, axial_points, "
+    expect("grid" in doc, "grid", "missing value (required): lists of elements, axial_points, "
                                    "cubature_degree and/or element to try")
     grid = parse_grid(doc["grid"])
     ref = parse_discretisation(doc.get("reference", {}), "reference", ("richardson",))
     extrapolate = doc.get("reference", {}).get("richardson", False)
-    _expect(isinstance(extrapolate, bool), "reference.richardson", "expected true or false")
+    expect(isinstance(extrapolate, bool), "reference.richardson", "expected true or false")
     repeats = doc.get("repeats", 1)
-    _expect(isinstance(repeats, int) and repeats >= 1, "repeats", "expected an integer >= 1")
+    expect(isinstance(repeats, int) and repeats >= 1, "repeats", "expected an integer >= 1")
     name = doc.get("name", os.path.splitext(os.path.basename(path))[0])
     output = os.path.normpath(os.path.join(here, str(doc.get("output", os.path.join("studies", name)))))
     return StudySpec(name=str(name), scene=scene, grid=grid, reference=Discretisation(**ref),

@@ -48,11 +48,11 @@ class SweepError(InputError):
     """A problem with a sweep file; ``path`` is the key in the sweep file (e.g. ``run.jobs``)."""
 
 
-class _Loader(yamlio.StrictLoader):
+class SweepLoader(yamlio.StrictLoader):
     """SafeLoader that also reads ``1e6`` and ``0.86e9`` as floats (YAML 1.2 style)."""
 
 
-_Loader.add_implicit_resolver(
+SweepLoader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
     list("-+0123456789."))
@@ -96,7 +96,7 @@ def _kind(value: Any) -> str:
     return f"the value {value!r}"
 
 
-def _path_exists(raw: Any, tokens: tuple[Token, ...]) -> bool:
+def path_exists(raw: Any, tokens: tuple[Token, ...]) -> bool:
     """True if ``tokens`` addresses a value of ``raw``; False if only mapping keys are missing
     (they can be created); raises ValueError for indices out of range or wrong container types."""
     node = raw
@@ -132,7 +132,7 @@ def set_key_path(raw: Any, tokens: tuple[Token, ...], value: Any) -> None:
     node[tokens[-1]] = copy.deepcopy(value)
 
 
-def _load_yaml(path: str, key: str, loader: type = yamlio.StrictLoader) -> Any:
+def load_yaml(path: str, key: str, loader: type = yamlio.StrictLoader) -> Any:
     """Load a YAML file; errors name ``key`` (and the path, unless it is the sweep file itself)."""
     where = f"{path}: " if key else ""
     if os.path.isdir(path):
@@ -152,19 +152,19 @@ def _load_yaml(path: str, key: str, loader: type = yamlio.StrictLoader) -> Any:
         raise SweepError(key, f"{where}cannot read: {exc.strerror}") from None
 
 
-def _int(value: Any, path: str, lo: int = 1) -> int:
+def as_int(value: Any, path: str, lo: int = 1) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < lo:
         raise SweepError(path, f"expected an integer >= {lo}; got {value!r}")
     return value
 
 
-def _str(value: Any, path: str) -> str:
+def as_str(value: Any, path: str) -> str:
     if not isinstance(value, str) or not value.strip():
         raise SweepError(path, f"expected a non-empty string; got {value!r}")
     return value
 
 
-def _read_text(path: str) -> str | None:
+def read_text(path: str) -> str | None:
     try:
         with open(path) as fh:
             return fh.read()
@@ -172,7 +172,7 @@ def _read_text(path: str) -> str | None:
         return None
 
 
-def _read_json(path: str) -> dict | None:
+def read_json(path: str) -> dict | None:
     try:
         with open(path) as fh:
             data = json.load(fh)

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...io.files import atomic_write
-from .base import DONE_STATUSES, FAILED_STATUSES, FINAL_STATUSES, STATUS_ORDER, _read_json
+from .base import DONE_STATUSES, FAILED_STATUSES, FINAL_STATUSES, STATUS_ORDER, read_json
 from .execute import reason_code
 from .expand import expand
 from .spec import RunSpec, Sweep
@@ -30,8 +30,8 @@ class RunState:
 
 def run_state(run: RunSpec) -> RunState:
     """Combine summary.json (solver) and run.json (sweep) of one run directory."""
-    summary = _read_json(os.path.join(run.dir, "summary.json"))
-    record = _read_json(os.path.join(run.dir, "run.json"))
+    summary = read_json(os.path.join(run.dir, "summary.json"))
+    record = read_json(os.path.join(run.dir, "run.json"))
     st = RunState(run, "missing")
     sstat = summary.get("status") if summary else None
     rstat = record.get("status") if record else None

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from ...errors import InputError
 from ...io.files import atomic_write, remove_quietly
 from ...status import CONFIG_ERROR, EXIT_INPUT, EXIT_UNSTABLE
-from .base import _read_json
+from .base import read_json
 from .processes import Active, stop_processes
 from .spec import RunSpec, Sweep
 
@@ -49,7 +49,7 @@ RESTARTABLE = ("interrupted", "running")
 
 def can_restart(run_dir: str) -> bool:
     """The run in ``run_dir`` stopped early with converged levels on disk (same config)."""
-    summary = _read_json(os.path.join(run_dir, "summary.json"))
+    summary = read_json(os.path.join(run_dir, "summary.json"))
     return (summary is not None and summary.get("status") in RESTARTABLE and bool(summary.get("steps"))
             and os.path.exists(os.path.join(run_dir, "results.h5")))
 
@@ -91,7 +91,7 @@ def classify(run_dir: str, returncode: int | None, timed_out: bool = False,
     """(status, reason) of a finished attempt from summary.json's ``status`` and ``message`` and
     the exit code; stderr is never read.  An attempt without a final summary is classified by its
     exit code alone (a config error's reason from ``input_problem``)."""
-    summary = _read_json(os.path.join(run_dir, "summary.json")) or {}
+    summary = read_json(os.path.join(run_dir, "summary.json")) or {}
     sstat = summary.get("status")
     message = str(summary.get("message") or "")
     if timed_out:
@@ -126,7 +126,7 @@ def reason_code(run_dir: str, status: str) -> str:
     NEWTON_BUDGET_EXCEEDED, OUTPUT_ERROR, SIGTERM, ...) or the sweep's own (``SWEEP_CODES``)."""
     if status in SWEEP_CODES:
         return SWEEP_CODES[status]
-    summary = _read_json(os.path.join(run_dir, "summary.json")) or {}
+    summary = read_json(os.path.join(run_dir, "summary.json")) or {}
     return str(summary.get("reason_code") or ("COMPLETED" if status == "completed" else ""))
 
 
@@ -139,7 +139,7 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
         status, reason = verdict
     else:
         status, reason = classify(run_dir, returncode, timed_out, timeout)
-    record = _read_json(os.path.join(run_dir, "run.json")) or {}
+    record = read_json(os.path.join(run_dir, "run.json")) or {}
     record.update(extra or {})
     record.update({"status": status, "reason": reason, "reason_code": reason_code(run_dir, status),
                    "wall_time": wall_time,
@@ -224,7 +224,7 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
     if active.cancelled.is_set() and not timed_out and rc != 0:
         # stopped by the sweep: at its next safe point (exit 130/143, converged levels kept) or,
         # past the grace period, killed; either way it is continued by the next ancf-sweep
-        summary = _read_json(os.path.join(run.dir, "summary.json")) or {}
+        summary = read_json(os.path.join(run.dir, "summary.json")) or {}
         how = "stopped at a safe point" if summary.get("status") == "interrupted" \
             else f"killed ({_signal_name(rc) if rc is not None and rc < 0 else f'exit code {rc}'})"
         return record_outcome(run.dir, rc, wall,

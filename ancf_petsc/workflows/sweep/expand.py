@@ -13,7 +13,7 @@ from typing import Any
 import yaml
 
 from ...io.files import atomic_write, remove_quietly
-from .base import DONE_STATUSES, _read_json, _read_text, set_key_path
+from .base import DONE_STATUSES, read_json, read_text, set_key_path
 from .spec import RunSpec, Sweep
 
 
@@ -117,9 +117,9 @@ def config_text(sweep: Sweep, run: RunSpec) -> str:
 def is_done(sweep: Sweep, run: RunSpec) -> bool:
     """Completed (or unstable: a rerun gives the same), with exactly the config this sweep would
     write now."""
-    summary = _read_json(os.path.join(run.dir, "summary.json"))
+    summary = read_json(os.path.join(run.dir, "summary.json"))
     return (summary is not None and summary.get("status") in DONE_STATUSES
-            and _read_text(os.path.join(run.dir, "config.yaml")) == config_text(sweep, run))
+            and read_text(os.path.join(run.dir, "config.yaml")) == config_text(sweep, run))
 
 
 def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
@@ -130,7 +130,7 @@ def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     os.makedirs(run.dir, exist_ok=True)
     cfg_path = os.path.join(run.dir, "config.yaml")
     text = config_text(sweep, run)
-    old = _read_text(cfg_path)
+    old = read_text(cfg_path)
     if old != text:
         if old is not None:
             remove_quietly(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))

@@ -12,8 +12,8 @@ from typing import Any
 from ...config.parse import parse_config
 from ...config.values import ConfigError
 from ...errors import UNKNOWN_KEY
-from .base import (LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, _int, _load_yaml,
-                   _Loader, _path_exists, _str, format_key_path, parse_key_path, set_key_path)
+from .base import (LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, as_int, load_yaml,
+                   SweepLoader, path_exists, as_str, format_key_path, parse_key_path, set_key_path)
 
 
 # --------------------------------------------------------------------------- sweep spec
@@ -65,9 +65,9 @@ def slurm_spec(value: Any, here: str, path: str = "slurm") -> SlurmSpec:
             raise SweepError(f"{path}.{k}", "unknown key; allowed: " + ", ".join(SLURM_KEYS))
     sl = SlurmSpec()
     if value.get("throttle") is not None:
-        sl.throttle = _int(value["throttle"], f"{path}.throttle")
+        sl.throttle = as_int(value["throttle"], f"{path}.throttle")
     if value.get("cpus_per_task") is not None:
-        sl.cpus_per_task = _int(value["cpus_per_task"], f"{path}.cpus_per_task")
+        sl.cpus_per_task = as_int(value["cpus_per_task"], f"{path}.cpus_per_task")
     if value.get("mem") is not None:
         sl.mem = str(value["mem"])
         if not _SLURM_MEM.fullmatch(sl.mem):
@@ -79,7 +79,7 @@ def slurm_spec(value: Any, here: str, path: str = "slurm") -> SlurmSpec:
                                              f"1-12:00:00; got {sl.time!r}")
     for key in ("partition", "account"):
         if value.get(key) is not None:
-            text = _str(value[key], f"{path}.{key}")
+            text = as_str(value[key], f"{path}.{key}")
             if not _SLURM_NAME.fullmatch(text):
                 # written into '#SBATCH --partition=...' verbatim: a blank would end the option
                 raise SweepError(f"{path}.{key}", f"a SLURM {key} name (several: comma-separated), "
@@ -87,7 +87,7 @@ def slurm_spec(value: Any, here: str, path: str = "slurm") -> SlurmSpec:
                                  f"got {text!r}")
             setattr(sl, key, text)
     if value.get("venv") is not None:
-        sl.venv = os.path.normpath(os.path.join(here, _str(value["venv"], f"{path}.venv")))
+        sl.venv = os.path.normpath(os.path.join(here, as_str(value["venv"], f"{path}.venv")))
     if value.get("logs") is not None:
         if value["logs"] not in LOG_MODES:
             raise SweepError(f"{path}.logs", f"must be one of {', '.join(LOG_MODES)}; got {value['logs']!r}")
@@ -199,7 +199,7 @@ def _labels(params: list[Parameter]) -> None:
 def load_sweep(path: str) -> Sweep:
     """Read and validate a sweep file; every problem raises :class:`SweepError` naming its key."""
     path = os.path.abspath(path)
-    raw = _load_yaml(path, "", _Loader)
+    raw = load_yaml(path, "", SweepLoader)
     if not isinstance(raw, dict):
         raise SweepError("", f"expected a mapping with keys {', '.join(SWEEP_KEYS)}")
     for k in raw:
@@ -208,16 +208,16 @@ def load_sweep(path: str) -> Sweep:
     here = os.path.dirname(path)
     if raw.get("base") is None:
         raise SweepError("base", "missing: the base config file (relative to the sweep file)")
-    base = os.path.normpath(os.path.join(here, _str(raw["base"], "base")))
+    base = os.path.normpath(os.path.join(here, as_str(raw["base"], "base")))
     stem = os.path.splitext(os.path.basename(path))[0]
-    name = _str(raw.get("name", stem), "name")
+    name = as_str(raw.get("name", stem), "name")
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._\-]*", name):
         raise SweepError("name", f"use letters, digits, '.', '_' and '-' only (it names the output "
                                  f"directory and the SLURM job); got {name!r}")
     mode = raw.get("mode", "grid")
     if mode not in MODES:
         raise SweepError("mode", f"must be one of {', '.join(MODES)}; got {mode!r}")
-    output = os.path.normpath(os.path.join(here, _str(raw.get("output", os.path.join("sweeps", name)),
+    output = os.path.normpath(os.path.join(here, as_str(raw.get("output", os.path.join("sweeps", name)),
                                                       "output")))
 
     run = raw.get("run", {}) or {}
@@ -226,8 +226,8 @@ def load_sweep(path: str) -> Sweep:
     for k in run:
         if k not in RUN_KEYS:
             raise SweepError(f"run.{k}", "unknown key; allowed: " + ", ".join(RUN_KEYS))
-    ranks = _int(run.get("ranks", 1), "run.ranks")
-    jobs = _int(run.get("jobs", 1), "run.jobs")
+    ranks = as_int(run.get("ranks", 1), "run.ranks")
+    jobs = as_int(run.get("jobs", 1), "run.jobs")
     petsc = _petsc_args(run.get("petsc", []) or [])
     timeout = run.get("timeout")
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
@@ -244,7 +244,7 @@ def load_sweep(path: str) -> Sweep:
     slurm = slurm_spec(raw.get("slurm"), here)
 
     # base config: must itself be valid, so that every later config error is the sweep's doing
-    base_raw = _load_yaml(base, "base")
+    base_raw = load_yaml(base, "base")
     if not isinstance(base_raw, dict):
         raise SweepError("base", f"{base}: not a model config (expected a mapping)")
     try:
@@ -278,7 +278,7 @@ def load_sweep(path: str) -> Sweep:
             raise SweepError(where, "empty list of values")
         p = Parameter(norm, tokens, values)
         try:
-            exists = _path_exists(base_raw, tokens)
+            exists = path_exists(base_raw, tokens)
         except ValueError as exc:
             raise SweepError(where, f"{exc} ({base})") from None
         if not exists:

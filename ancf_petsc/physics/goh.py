@@ -28,6 +28,10 @@ Stress and tangent in the dyadic form of ``materials.TangentTerms`` (δ_ik S_jl,
 
     P  = P_matrix + Σ 2ψ'_i F H_i,        ψ' = k1 Ē e^(k2 Ē²),  ψ'' = k1 e^(k2 Ē²)(1 + 2 k2 Ē²)
     𝔸 = 𝔸_matrix + Σ [δ_ik (2ψ'_i H_i)_jl + 4ψ''_i (F H_i) ⊗ (F H_i)]
+
+F H_i = κ F + (1 − 3κ) Fa0_i ⊗ a0_i is never formed as a 3×3 field: the stress adds its two parts,
+the tangent's last term is a ``square`` on F and the pair (Fa0, a0), whose product with the
+gradients the kernel forms once for both sides.
 """
 from __future__ import annotations
 
@@ -90,40 +94,49 @@ class GOH:
 
     # ------------------------------------------------------------------ fibre kinematics
     def _fibres(self, F: np.ndarray):
-        """Per family: Fa0 (..., 3), FH (..., 3, 3), Ē (...) and the switch Ē > 0."""
+        """Per family: a0 (..., 3), Fa0 (..., 3), I4 (...), Ē (...) (0 where off) and the switch."""
         if self.a0 is None:
             raise ValueError("GOH needs fibre directions at the points (GOH.with_directions)")
-        I1 = np.einsum("...ij,...ij->...", F, F)
+        c = 1.0 - 3.0 * self.kappa
+        I1 = np.einsum("...ij,...ij->...", F, F) if self.kappa else None
         out = []
         for a0 in self.a0:
-            a0 = np.broadcast_to(a0, F.shape[:-1])
+            if a0.shape != F.shape[:-1]:
+                a0 = np.broadcast_to(a0, F.shape[:-1])
             Fa = np.einsum("...ij,...j->...i", F, a0)
             I4 = np.einsum("...i,...i->...", Fa, Fa)
-            E = self.kappa * (I1 - 3.0) + (1.0 - 3.0 * self.kappa) * (I4 - 1.0)
+            E = I4 - 1.0 if c == 1.0 else self.kappa * (I1 - 3.0) + c * (I4 - 1.0)
             on = E >= 0.0                  # tangent at Ē = 0: the tension side's (see below)
-            E = np.where(on, E, 0.0)
-            FH = self.kappa * F + (1.0 - 3.0 * self.kappa) * Fa[..., :, None] * a0[..., None, :]
-            out.append((a0, Fa, I4, FH, E, on))
+            out.append((a0, Fa, I4, np.where(on, E, 0.0), on))
         return out
 
     def _exp(self, E):
         with np.errstate(over="ignore"):
             return np.exp(self.k2 * E * E)
 
+    def _add_times_FH(self, P: np.ndarray, s: np.ndarray, F: np.ndarray, Fa: np.ndarray,
+                      a0: np.ndarray) -> None:
+        """P += s F H = s κ F + s (1 − 3κ) Fa0 ⊗ a0 (..., 3, 3), in place, without forming H
+        (the dyad as a (3 × 1)(1 × 3) matmul: 2x faster than the broadcast product)."""
+        sFa = (s * (1.0 - 3.0 * self.kappa))[..., None] * Fa
+        P += np.matmul(sFa[..., :, None], a0[..., None, :])
+        if self.kappa:
+            P += (s * self.kappa)[..., None, None] * F
+
     def fibre_stretch(self, F: np.ndarray) -> np.ndarray:
         """√I4 of every family (families, ...)."""
-        return np.stack([np.sqrt(I4) for _, _, I4, _, _, _ in self._fibres(F)])
+        return np.stack([np.sqrt(I4) for _, _, I4, _, _ in self._fibres(F)])
 
     def energy(self, F: np.ndarray) -> np.ndarray:
         W = self.matrix.energy(F)
-        for _, _, _, _, E, _ in self._fibres(F):
+        for _, _, _, E, _ in self._fibres(F):
             W = W + self.k1 / (2.0 * self.k2) * (self._exp(E) - 1.0)
         return W
 
     def stress(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         P, J = self.matrix.stress(F)
-        for _, _, _, FH, E, _ in self._fibres(F):
-            P = P + (2.0 * self.k1 * E * self._exp(E))[..., None, None] * FH
+        for a0, Fa, _, E, _ in self._fibres(F):
+            self._add_times_FH(P, 2.0 * self.k1 * E * self._exp(E), F, Fa, a0)
         return P, J
 
     def fibre_cauchy_stress(self, F: np.ndarray) -> np.ndarray:
@@ -132,33 +145,29 @@ class GOH:
         P, J = self.stress(F)
         sigma = np.matmul(P, np.swapaxes(F, -1, -2)) / J[..., None, None]
         out = []
-        for _, Fa, I4, _, _, _ in self._fibres(F):
+        for _, Fa, I4, _, _ in self._fibres(F):
             out.append(np.einsum("...i,...ij,...j->...", Fa, sigma, Fa) / I4)
         return np.stack(out)
 
     def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
         """P and 𝔸 with the matrix's terms plus, per family, with H = κI + (1 − 3κ) a0 ⊗ a0:
         δ_ik 2ψ'H_jl = 2ψ'κ δ_ik δ_jl (added to ``iso``) + 2ψ'(1 − 3κ) δ_ik a0_j a0_l
-        (``rank_one``), and 4ψ'' FH ⊗ FH with FH = κF + (1 − 3κ) Fa0 ⊗ a0 written on the
-        matrix's basis tensor F and the pair (Fa0, a0), so the kernel adds no 3×3 product."""
+        (``rank_one``), and 4ψ'' FH ⊗ FH as a ``square`` (the kernel forms FH G_a once), FH =
+        κF + (1 − 3κ) Fa0 ⊗ a0 written on the matrix's basis tensor F and the pair
+        ((1 − 3κ) Fa0, a0), so neither side needs a 3×3 product."""
         P, J, terms = self.matrix.stress_and_tangent(F)
         k_F = 1
         assert terms.basis[k_F] is F                          # NeoHookean's basis: [F⁻ᵀ, F]
-        iso = terms.iso
         c = 1.0 - 3.0 * self.kappa
-        for a0, Fa, _, FH, E, on in self._fibres(F):
+        for a0, Fa, _, E, on in self._fibres(F):
             ex = self._exp(E)
             d1 = self.k1 * E * ex                              # ψ'
             d2 = np.where(on, self.k1 * ex * (1.0 + 2.0 * self.k2 * E * E), 0.0)   # ψ''
-            P = P + (2.0 * d1)[..., None, None] * FH
-            iso = iso + 2.0 * self.kappa * d1
+            self._add_times_FH(P, 2.0 * d1, F, Fa, a0)
+            if self.kappa:
+                terms.iso = terms.iso + 2.0 * self.kappa * d1
             terms.rank_one.append((2.0 * c * d1, a0))
             k = len(terms.basis)
-            terms.basis.append((Fa, a0))
-            if self.kappa:
-                fh = [(self.kappa * np.ones_like(E), k_F), (c * np.ones_like(E), k)]
-                terms.outer.append(([(4.0 * self.kappa * d2, k_F), (4.0 * c * d2, k)], fh))
-            else:
-                terms.outer.append(([(4.0 * d2, k)], [(None, k)]))
-        terms.iso = iso
+            terms.basis.append((Fa if c == 1.0 else c * Fa, a0))
+            terms.squares.append((4.0 * d2, [(self.kappa, k_F), (None, k)] if self.kappa else [(None, k)]))
         return P, J, terms

@@ -9,6 +9,8 @@ instead of forming the 81-component tensor at every Gauss point:
            + Σ δ_ik c a_j a_l     (``rank_one`` pairs (c, a): a scalar times a direction's dyad)
            + B_ik δ_jl            (``gram``)
            + Σ X_ij Y_kl          (``outer`` pairs (X, Y))
+           + Σ c T_ij T_kl        (``squares`` (c, T): one tensor on both sides, multiplied with
+                                   the gradients once; a fibre's 4ψ'' FH ⊗ FH)
            + Σ U_il V_kj          (``cross`` pairs (U, V))
 
 All arrays are batched over a leading point axis (n, 3, 3).  A basis tensor may be given as a
@@ -41,12 +43,12 @@ def det_and_inverse_transpose(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return det, H
 
 
-Side = list  # [(coefficient (n,) or None, basis index)]: the tensor Σ c_k B_k
+Side = list  # [(coefficient (n,), a number or None, basis index)]: the tensor Σ c_k B_k
 
 
 @dataclass
 class TangentTerms:
-    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ U_il V_kj (see module docstring).
+    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ c T_ij T_kl + Σ U_il V_kj (module docstring).
 
     X, Y, U, V are linear combinations of a few ``basis`` tensors (e.g. F⁻ᵀ and F), written as
     sides ``[(c, k), ...]`` meaning Σ c B_k (c None = 1), so that the element kernel multiplies
@@ -58,6 +60,7 @@ class TangentTerms:
     gram: np.ndarray | None = None   # (n, 3, 3)
     outer: list[tuple[Side, Side]] = field(default_factory=list)
     cross: list[tuple[Side, Side]] = field(default_factory=list)
+    squares: list[tuple[np.ndarray, Side]] = field(default_factory=list)             # [(c (n,), T)]
     rank_one: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)   # [(c (n,), a (n, 3))]
 
     def base(self, k: int) -> np.ndarray:
@@ -67,7 +70,7 @@ class TangentTerms:
 
     def tensor(self, side: Side) -> np.ndarray:
         """The 3×3 field Σ c_k B_k of one side."""
-        return sum(B if c is None else c[..., None, None] * B
+        return sum(B if c is None else np.multiply(np.asarray(c)[..., None, None], B)
                    for c, B in ((c, self.base(k)) for c, k in side))
 
     def full(self) -> np.ndarray:
@@ -84,6 +87,9 @@ class TangentTerms:
             A += np.einsum("nik,jl->nijkl", self.gram, eye)
         for X, Y in self.outer:
             A += np.einsum("nij,nkl->nijkl", self.tensor(X), self.tensor(Y))
+        for c, T in self.squares:
+            T = self.tensor(T)
+            A += np.einsum("n,nij,nkl->nijkl", c, T, T)
         for U, V in self.cross:
             A += np.einsum("nil,nkj->nijkl", self.tensor(U), self.tensor(V))
         return A

@@ -1,7 +1,10 @@
-"""A pretwisted GOH beam (helical fibres, two families) solved on 1 and 2 ranks: the same answer."""
+"""GOH runs: a pretwisted beam (helical fibres, two families) and the Achilles tendon with contact
+solved on 1 and 2 ranks (the same answer); restart."""
+import os
+
 import pytest
 
-from helpers import assert_same_as_serial, load_raw, probes_table, run_on_ranks
+from helpers import CONFIGS, assert_same_as_serial, load_raw, probes_table, run_on_ranks
 
 
 @pytest.mark.mpi
@@ -17,6 +20,26 @@ def test_goh_pretwisted_bar_ranks_agree_with_serial(tmp_path):
     tables = {n: probes_table(s) for n, (_, s) in runs.items()}
     assert_same_as_serial(tables)
     assert abs(tables[1][-1]).max() > 1e-3          # the bar did move (mm scale)
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_goh_achilles_with_contact_ranks_agree_with_serial(tmp_path):
+    """configs/achilles_type3_psi45_goh.yaml (three GOH subtendons, sliding contact on their three
+    interfaces) with 2 elements each, to 20 N: the same probes and contact gaps on 2 ranks as on 1."""
+    raw = load_raw("achilles_type3_psi45_goh.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 2
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"] = [10, 20]
+    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2))
+    tables = {n: probes_table(s) for n, (_, s) in runs.items()}
+    assert_same_as_serial(tables)
+    assert tables[1][-1].max() > 1e-4               # the soleus did stretch (0.3 mm at 20 N)
+    contact = {n: s["steps"][-1]["contact"] for n, (_, s) in runs.items()}
+    assert len(contact[1]) == 3 and contact[2].keys() == contact[1].keys()
+    for name, c in contact[1].items():             # every interface closed on both rank counts
+        assert c["open_share"] == contact[2][name]["open_share"] == 0.0, name
 
 
 def test_goh_restart_continues_and_refuses_other_fibres(tmp_path):

@@ -104,14 +104,53 @@ def _identity_part(terms: TangentTerms, G: np.ndarray, w: np.ndarray, along):
     return Ks
 
 
+def _side(BG: list, sd, weight=None, out=None) -> np.ndarray:
+    """Σ c (B_k G_a) (× weight) as (E, P, D) from the products BG (each (E, P, D)), into ``out``
+    if given; a coefficient is an array over the points, a number, or None (1)."""
+    out = np.empty(BG[0].shape) if out is None else out
+    for n, (c, k) in enumerate(sd):
+        coef = c if weight is None else (weight if c is None else c * weight)
+        src = BG[k]
+        if coef is not None:
+            coef = np.asarray(coef)[..., None] if np.ndim(coef) else coef   # a number as is
+        if coef is None:
+            if n == 0:
+                out[...] = src
+            else:
+                out += src
+        elif n == 0:
+            np.multiply(coef, src, out=out)
+        else:
+            out += coef * src
+    return out
+
+
+def _outer_gemm(terms: TangentTerms, BG: list, w: np.ndarray) -> np.ndarray | None:
+    """Σ X ⊗ Y + Σ c T ⊗ T as (E, D, D) in one GEMM whose inner dimension stacks (term, point);
+    a square's T G_a is formed once (c on the left, w on the right).  None if there are none."""
+    n_outer = len(terms.outer)
+    m = n_outer + len(terms.squares)
+    if not m:
+        return None
+    E, Np, D = BG[0].shape
+    left, right = np.empty((E, m * Np, D)), np.empty((E, m * Np, D))
+    for t, (X, Y) in enumerate(terms.outer):
+        _side(BG, X, out=left[:, t * Np:(t + 1) * Np])
+        _side(BG, Y, w, out=right[:, t * Np:(t + 1) * Np])
+    for t, (c, T) in enumerate(terms.squares, start=n_outer):
+        blk_l, blk_r = left[:, t * Np:(t + 1) * Np], right[:, t * Np:(t + 1) * Np]
+        _side(BG, T, out=blk_r)                                      # T G_a, once
+        np.multiply(c[..., None], blk_r, out=blk_l)
+        blk_r *= w[..., None]
+    return np.matmul(left.transpose(0, 2, 1), right)
+
+
 def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.ndarray:
     """K[(a,i),(b,k)] = Σ_p w G_aj 𝔸_ijkl G_bl for the dyadic form of 𝔸 (see materials.py).
 
     Each basis tensor B is multiplied with the gradients once, (B G_a)_i; every outer term
-    X ⊗ Y then contributes Σ_p (X G_a)_i w (Y G_b)_k, and all of them go into one GEMM whose
-    inner dimension stacks (term, point).  A square c T ⊗ T is one more block of that GEMM with
-    T G_a formed once (c on the left, w on the right).  Cross terms U ⊠ V give
-    Σ_p (U G_b)_i w (V G_a)_k.
+    X ⊗ Y then contributes Σ_p (X G_a)_i w (Y G_b)_k, and all of them, with the squares, go into
+    one GEMM (``_outer_gemm``).  Cross terms U ⊠ V give Σ_p (U G_b)_i w (V G_a)_k.
     """
     E, Np = w.shape
     S = G.shape[2]
@@ -124,43 +163,12 @@ def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.nd
             projections[id(a)] = np.matmul(G, a[..., None])[..., 0]
         return projections[id(a)]
 
-    BG = [_times_gradients(B, G, along) for B in terms.basis]            # (E, P, 18, 3) each
-
-    def side(sd, weight=None, out=None):
-        """Σ c (B_k G_a) (× weight) as (E, P, D), written into ``out`` if given."""
-        out = np.empty((E, Np, D)) if out is None else out
-        for n, (c, k) in enumerate(sd):
-            coef = c if weight is None else (weight if c is None else c * weight)
-            src = BG[k].reshape(E, Np, D)
-            if coef is not None:
-                coef = np.asarray(coef)[..., None] if np.ndim(coef) else coef   # a number as is
-            if coef is None:
-                if n == 0:
-                    out[...] = src
-                else:
-                    out += src
-            elif n == 0:
-                np.multiply(coef, src, out=out)
-            else:
-                out += coef * src
-        return out
-
-    Kf = np.zeros((E, D, D))
-    n_outer = len(terms.outer)
-    if n_outer or terms.squares:     # all outer terms and squares in one GEMM, inner (term, point)
-        m = n_outer + len(terms.squares)
-        left, right = np.empty((E, m * Np, D)), np.empty((E, m * Np, D))
-        for t, (X, Y) in enumerate(terms.outer):
-            side(X, out=left[:, t * Np:(t + 1) * Np])
-            side(Y, w, out=right[:, t * Np:(t + 1) * Np])
-        for t, (c, T) in enumerate(terms.squares, start=n_outer):
-            blk_l, blk_r = left[:, t * Np:(t + 1) * Np], right[:, t * Np:(t + 1) * Np]
-            side(T, out=blk_r)                                       # T G_a, once
-            np.multiply(c[..., None], blk_r, out=blk_l)
-            blk_r *= w[..., None]
-        Kf += np.matmul(left.transpose(0, 2, 1), right)
+    BG = [_times_gradients(B, G, along).reshape(E, Np, D) for B in terms.basis]
+    Kf = _outer_gemm(terms, BG, w)
+    if Kf is None:
+        Kf = np.zeros((E, D, D))
     for U, V in terms.cross:
-        M = np.matmul(side(V).transpose(0, 2, 1), side(U, w)).reshape(E, S, 3, S, 3)
+        M = np.matmul(_side(BG, V).transpose(0, 2, 1), _side(BG, U, w)).reshape(E, S, 3, S, 3)
         Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, D, D)
     K = Kf.reshape(E, S, 3, S, 3)
     idx = np.arange(3)

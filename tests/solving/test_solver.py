@@ -168,7 +168,7 @@ def test_surface_fields_against_the_deformation_gradient_and_compressed_vtus(tmp
     sampler = SurfaceSampler(P.model, 4)
     _, _, _, fields = sampler.mesh(q)
     J, Exx = [], []
-    for beam, _, _, _, G, e_of, _ in sampler.parts:
+    for beam, _, _, _, G, e_of, *_ in sampler.parts:
         F = np.matmul(np.swapaxes(q[beam.connectivity].reshape(-1, SLOTS, 3)[e_of], 1, 2), G)
         J.append(np.linalg.det(F))
         Exx.append(0.5 * (np.matmul(np.swapaxes(F, 1, 2), F)[:, 0, 0] - 1.0))

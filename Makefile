@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid studies clean
+.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid verify-solid-contact studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -58,6 +58,12 @@ verify: setup
 verify-solid: setup
 	bash scripts/setup_solid.sh
 	$(PY) scripts/verify_solid.py
+
+verify-solid-contact: setup
+	bash scripts/setup_solid.sh
+	$(PY) scripts/verify_solid_contact.py
+	$(PY) scripts/verify_solid_contact.py --merge --no-selftest --no-free --no-checks --laws unilateral \
+		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10
 
 clean:
 	rm -rf results .pytest_cache

@@ -43,3 +43,11 @@ def read_text(path: str) -> str:
         raise UnicodeDecodeError("utf-8", data, data.index(b"\0"), data.index(b"\0") + 1,
                                  "NUL byte: a binary file")
     return data.decode("utf-8")
+
+
+def syntax_error(exc: yaml.YAMLError) -> str:
+    """One line for a YAML syntax error: where (line, column) and PyYAML's problem."""
+    mark = getattr(exc, "problem_mark", None)
+    at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    return f"YAML syntax error{at}: {problem}"

@@ -228,9 +228,7 @@ def test_object_state_is_declared_in_init():
 TEXT_READERS = {
     "io/files.py:os_reason": "h5py gives the errno only inside its message text",
     "petsc/options.py:petsc_message": "PETSc's error: the last line of its text is the reason",
-    "config/parse.py:load_config": "PyYAML's first line when its error has no .problem",
-    "workflows/study.py:read_yaml": "PyYAML's first line when its error has no .problem",
-    "workflows/sweep/base.py:load_yaml": "PyYAML's first line when its error has no .problem",
+    "yamlio.py:syntax_error": "PyYAML's first line when its error has no .problem",
 }
 _TEXT_METHODS = {"split", "rsplit", "splitlines", "startswith", "endswith", "find", "rfind", "index",
                  "partition", "rpartition", "count"}

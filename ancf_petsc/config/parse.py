@@ -107,10 +107,7 @@ def load_config(path: str) -> ModelSpec:
     except OSError as exc:
         raise ConfigError("", f"{path}: cannot read: {exc.strerror}") from None
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError("", f"{path}: YAML syntax error{where}: {problem}") from None
+        raise ConfigError("", f"{path}: {yamlio.syntax_error(exc)}") from None
     if raw is None:
         raise ConfigError("", f"{path}: the file is empty")
     return parse_config(raw, base_dir=os.path.dirname(os.path.abspath(path)), source=path)

@@ -70,10 +70,7 @@ def read_yaml(path: str, key: str = "") -> Any:
     except OSError as exc:
         raise StudyError(key, f"{where}cannot read: {exc.strerror}") from None
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise StudyError(key, f"{where}YAML syntax error{at}: {problem}") from None
+        raise StudyError(key, f"{where}{yamlio.syntax_error(exc)}") from None
 
 
 @dataclass

@@ -144,10 +144,7 @@ def load_yaml(path: str, key: str, loader: type = yamlio.StrictLoader) -> Any:
     except UnicodeDecodeError:
         raise SweepError(key, f"{where}not a text (UTF-8) YAML file") from None
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise SweepError(key, f"{where}YAML syntax error{at}: {problem}") from None
+        raise SweepError(key, f"{where}{yamlio.syntax_error(exc)}") from None
     except OSError as exc:
         raise SweepError(key, f"{where}cannot read: {exc.strerror}") from None
 

@@ -11,7 +11,9 @@ bands of tolerated violations, then the exact rule, each phase taking extra roun
   so that the line search compares one smooth residual, and the status is updated at the
   converged state and solved again until it no longer changes (at most ``MAX_STATUS_UPDATES``).
 
-From rest, the complementarity predictor (petsc/complementarity.py) sets the first status.
+From rest, the complementarity predictor (petsc/complementarity.py) sets the first status; above
+its size the increment is first solved with every constraint held (the sliding problem), whose
+multipliers' signs start the phases.
 After the phases, contact points whose partners slid past B's ends get their new weights
 (Contact.refresh_weights) and the state is solved again until the weights settle.
 """

@@ -258,8 +258,9 @@ def _unmerged_warnings(merged, smooth, tol: float) -> list[str]:
     for (a, b), n in pieces.items():
         if n > 1:
             out.append(f"  warning: the border {a}/{b} was merged in {n} separate pieces (free surface "
-                       "between them): the traces drift apart by more than the merge tolerance "
-                       f"{tol * 1e3:.3g} mm; raise geometry.sections.merge_tolerance or check the tracing")
+                       "between them): if it is one border, its traces drift apart by more than the "
+                       f"merge tolerance {tol * 1e3:.3g} mm; raise geometry.sections.merge_tolerance or "
+                       "check the tracing")
     done = set()
     for u in sorted(unmerged_borders(merged, smooth, tol), key=lambda u: -u.length):
         pair = tuple(sorted((u.owner, u.neighbour)))

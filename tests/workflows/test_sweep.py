@@ -214,7 +214,10 @@ def test_slurm_numbered_logs_and_environment(tmp_path):
     script = (tmp_path / "num" / "sweep.slurm").read_text()
     assert "#SBATCH --array=0-0\n" in script                # a throttle above the task count is dropped
     assert "#SBATCH --time=1-00:00:00" in script and "--mem" not in script
-    assert f'VENV="${{ANCF_VENV:-{os.path.join(ROOT, ".venv")}}}"' in script
+    venv, out = os.path.join(ROOT, ".venv"), str(tmp_path / "num")
+    if os.path.commonpath([venv, out]) != os.sep:       # the checkout and the sweep share a tree
+        venv = "$SWEEP_OUTPUT/" + os.path.relpath(venv, out)
+    assert f'VENV="${{ANCF_VENV:-{venv}}}"' in script
     rc, _, err = run_main([path, "--slurm", "--time", "two hours"])
     assert rc == 2 and err.startswith("ancf-sweep: ") and "--time: expected SLURM's time syntax" in err
     if shutil.which("srun"):
@@ -301,8 +304,10 @@ def test_key_paths_ids_and_data_files(tmp_path):
     assert runs[1].run_id == "run_0001__beams0.material.mu=1e+08__twist_deg=45"
     assert runs[1].params["beams[0].material.mu"] == 1e8          # 1e8 read as a number
     cfg = run_config(sweep, runs[1])
-    for beam in cfg["beams"]:
-        assert os.path.isabs(beam["section"]["file"]) and os.path.isfile(beam["section"]["file"])
+    for beam in cfg["beams"]:              # absolute, or relative to the run directory when
+        f = beam["section"]["file"]          # the data and the sweep share a tree (a move keeps it)
+        assert os.path.isfile(os.path.normpath(os.path.join(runs[1].dir, f))), f
+        assert os.path.isabs(f) == (os.path.commonpath([CONFIGS, runs[1].dir]) == os.sep), f
     assert cfg["beams"][1]["material"]["mu"] == 3e8 and cfg["output"]["dir"] == runs[1].dir
     with pytest.raises(SweepError, match="loads"):
         (tmp_path / "b.yaml").write_text(f"base: {base}\nparameters:\n  loads[0].force[3]: [1]\n")

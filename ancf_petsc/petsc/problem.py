@@ -29,6 +29,14 @@ from .exchange import GhostExchange
 from .pattern import JacobianPattern
 
 
+#: largest node move of one Newton step, in section sizes (precheck); full Newton steps with
+#: contact are held to fewer (solving/stepper.py): a step of several sections makes the
+#: closest-point pairing meaningless (the paper's tendon in fixed steps of 100 N from rest
+#: wandered to |F| ~ 1e8 and failed with 10)
+MAX_STEP_SECTIONS = 10.0
+MAX_STEP_SECTIONS_CONTACT = 2.0
+
+
 class Problem:
     """PETSc residual/Jacobian of a model on a layout; ``load_factor`` scales the external loads."""
 
@@ -44,6 +52,7 @@ class Problem:
                              "parallel.partition.make_layout(..., contact)")
         self.matrix_type = matrix_type
         self.model, self.layout, self.comm, self.contact = model, layout, comm, contact
+        self.step_sections = MAX_STEP_SECTIONS          # precheck's largest step (section sizes)
         self.load_factor = 0.0
         self.timers = {"element_kernels": 0.0, "element_assembly": 0.0, "contact_projection": 0.0,
                        "contact_assembly": 0.0}
@@ -257,15 +266,15 @@ class Problem:
         return val if np.isfinite(val) else -np.inf
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec, j_min: float = 0.1, halvings: int = 12) -> bool:
-        """Line-search pre-check (collective).  A Newton step that moves a node by more than ten
-        section sizes is scaled down to that first (a near-singular tangent gives absurd steps);
-        then the step X − Y is halved until no Gauss point has det F below ``j_min``.  If that
-        fails, Y is filled with NaN so that SNES reports a domain failure and the load step is
-        cut back.  Returns whether Y was changed."""
+        """Line-search pre-check (collective).  A Newton step that moves a node by more than
+        ``step_sections`` section sizes is scaled down to that first (a near-singular tangent
+        gives absurd steps); then the step X − Y is halved until no Gauss point has det F below
+        ``j_min``.  If that fails, Y is filled with NaN so that SNES reports a domain failure and
+        the load step is cut back.  Returns whether Y was changed."""
         comm = self.comm.tompi4py()
         size = min(np.sqrt(b.section.area) for b in self.model.beams)
         y = Y.getArray(readonly=True).reshape(-1, 6, 3)[self.owned_physical]
-        big = comm.allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (10.0 * size)
+        big = comm.allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (self.step_sections * size)
         changed = False
         if big > 1.0:
             Y.scale(1.0 / big)

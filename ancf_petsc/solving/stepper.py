@@ -20,7 +20,7 @@ from ..petsc import logging
 from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.inertia import mumps_error, pivot_counts
 from ..petsc.options import petsc_message, used_anywhere
-from ..petsc.problem import Problem
+from ..petsc.problem import MAX_STEP_SECTIONS_CONTACT, Problem
 from . import solver_messages
 from .chord import TangentReuse
 from .interrupt import RunInterrupted, stop_requested
@@ -60,6 +60,9 @@ class LoadStepper:
             self.snes, petsc_options,
             run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear,
                          saddle_point=problem.n_constraints > 0), self.prefix)
+        if problem.contact is not None and self.linesearch == "basic":
+            # full Newton steps with contact: the pairing holds for steps small beside a section
+            problem.step_sections = MAX_STEP_SECTIONS_CONTACT
         schur = None
         if linear == "fieldsplit":
             # imported here: scipy.linalg is start-up time the direct solver does not need

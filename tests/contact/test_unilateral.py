@@ -192,3 +192,19 @@ def test_bulk_modulus_sweep_does_not_make_newton_cycle(psi, K, tmp_path):
     assert s["status"] == "completed"
     assert sum(st["cutbacks"] for st in s["steps"]) == 0
     assert s["newton_iterations"] <= 70
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("share", [0.25, 1.0])
+def test_sliding_full_newton_from_rest_in_large_steps(share, tmp_path):
+    """The paper's tendon (sliding) in fixed steps of 0.25 x 400 N and in one step, full Newton:
+    the first steps from rest wandered to |F| ~ 1e8 and failed (NaN) before full Newton steps
+    with contact were held to 2 section sizes; the answer is the adaptive path's."""
+    adaptive = run_inline(_achilles(45, 4, 3, mode="sliding", steps=[400]), tmp_path / "adaptive")
+    s = run_inline(_achilles(45, 4, 3, mode="sliding", steps=[400], solver={
+        "initial_increment": 400 * share, "max_increment": 400 * share, "max_cutbacks": 0, "growth": 1.0},
+        petsc={"snes_max_it": 50}), tmp_path / "fixed")
+    assert s["status"] == "completed"
+    u0 = np.array(adaptive["steps"][-1]["probes"]["soleus"]["displacement"])
+    u1 = np.array(s["steps"][-1]["probes"]["soleus"]["displacement"])
+    assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()

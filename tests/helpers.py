@@ -65,6 +65,15 @@ def solve_cli(config_path: str, ranks: int = 1, extra: list | None = None, cwd: 
                           timeout=timeout)
 
 
+def solved_config(tmp_path_factory, name: str, timeout: float = 300):
+    """configs/<name> solved by ancf-solve into a fresh temporary directory (module fixtures)."""
+    out = tmp_path_factory.mktemp(os.path.splitext(name)[0])
+    proc = solve_cli(os.path.join(CONFIGS, name), extra=["--output-dir", str(out), "--quiet"],
+                     timeout=timeout)
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
 def read_summary(out_dir) -> dict:
     with open(os.path.join(out_dir, "summary.json")) as fh:
         return json.load(fh)

@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, solve_cli
+from helpers import CONFIGS, solved_config
 
 matplotlib = pytest.importorskip("matplotlib")
 from matplotlib import image as mpimg  # noqa: E402
@@ -17,11 +17,7 @@ PAPER_CSV = os.path.join(CONFIGS, "data", "paper_table1_elongation.csv")
 @pytest.fixture(scope="module")
 def bar_run(tmp_path_factory):
     """configs/pretwisted_bar.yaml solved by ancf-solve (4 load levels, ~1 s)."""
-    out = tmp_path_factory.mktemp("bar")
-    proc = solve_cli(os.path.join(CONFIGS, "pretwisted_bar.yaml"),
-                     extra=["--output-dir", str(out), "--quiet"], timeout=120)
-    assert proc.returncode == 0, proc.stderr
-    return out
+    return solved_config(tmp_path_factory, "pretwisted_bar.yaml", timeout=120)
 
 
 def assert_picture(path, min_ink=0.05):

@@ -10,7 +10,7 @@ import os
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, solve_cli
+from helpers import CONFIGS, solved_config
 
 pytest.importorskip("matplotlib")
 
@@ -22,11 +22,7 @@ from ancf_petsc.io.reader import read_contact  # noqa: E402
 @pytest.fixture(scope="module")
 def psi45(tmp_path_factory):
     """configs/achilles_type3_psi45.yaml solved (13 levels, ~6 s)."""
-    out = tmp_path_factory.mktemp("psi45")
-    proc = solve_cli(os.path.join(CONFIGS, "achilles_type3_psi45.yaml"),
-                     extra=["--output-dir", str(out), "--quiet"], timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return out
+    return solved_config(tmp_path_factory, "achilles_type3_psi45.yaml")
 
 
 def test_exact_zeros_are_the_weightless_points(psi45):

@@ -240,9 +240,8 @@ class Run:
                      f"Newton {rec.iterations} in {rec.substeps} substep(s)  {rec.reason}  "
                      f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s{unstable}  {probes}")
             if k == 1:                      # the first level's plausibility warning, right away
-                for note in self.writer.summary.get("warnings", []):
-                    if note.startswith("warning: at the first converged level"):
-                        self.say(f"[ancf]   {note}")
+                for note in self.writer.summary["warnings"][len(self.model.warnings):]:
+                    self.say(f"[ancf]   {note}")
 
     def step_through(self, levels: list[float], start: PathState | None) -> tuple[tuple | None, int, bool]:
         """Step through ``levels``: (failure (status, code, message) or None, signal, inverted)."""

@@ -130,28 +130,27 @@ def fit_bulk_modulus(inputs: PaperInputs, out: str, grid=(0.6e9, 0.8e9, 1.0e9, 1
     grid (solved together) bracket the minimum, bounded Brent (scipy) finds it to ``xtol``."""
     from scipy.optimize import minimize_scalar
     ks = sorted(grid)
-    errors = dict(zip(ks, _column_errors(inputs, out, ks, jobs, log)))
-    evaluations = [(k, float(np.sum(errors[k] ** 2))) for k in ks]
-    best = int(np.argmin([v for _, v in evaluations]))
+    errors = dict(zip(ks, _column_errors(inputs, out, ks, jobs, log)))   # K → errors, in solve order
+
+    def sse(k: float) -> float:
+        return float(np.sum(errors[k] ** 2))
+
+    best = int(np.argmin([sse(k) for k in ks]))
     if best in (0, len(ks) - 1):
         raise sw.SweepError("fit_bulk_modulus", f"the least squares are smallest at the end of the grid "
                             f"(K = {ks[best] / 1e9:.3g} GPa): the minimum lies outside "
                             f"{ks[0] / 1e9:.3g}-{ks[-1] / 1e9:.3g} GPa; widen the grid")
     bounds = (ks[best - 1], ks[best + 1])
-    cache = dict(evaluations)
 
     def f(k: float) -> float:
         k = float(round(k / 1e5) * 1e5)          # 0.1 MPa: reuse a run asked for twice
-        if k not in cache:
+        if k not in errors:
             errors[k] = _column_errors(inputs, out, [k], 1, log)[0]
-            cache[k] = float(np.sum(errors[k] ** 2))
-            evaluations.append((k, cache[k]))
-        return cache[k]
+        return sse(k)
 
     res = minimize_scalar(f, bounds=bounds, method="bounded", options={"xatol": xtol})
     k = float(round(res.x / 1e5) * 1e5)
-    f(k)
-    return BulkFit(k, cache[k], evaluations, errors[k], bounds)
+    return BulkFit(k, f(k), [(kk, sse(kk)) for kk in errors], errors[k], bounds)
 
 
 def fit_markdown(fit: BulkFit) -> str:

@@ -58,6 +58,7 @@ verify: setup
 verify-solid: setup
 	bash scripts/setup_solid.sh
 	$(PY) scripts/verify_solid.py
+	$(PY) scripts/verify_solid_fibres.py
 
 verify-solid-contact: setup
 	bash scripts/setup_solid.sh

@@ -303,9 +303,21 @@ class Newton:
         return False, self.max_it
 
 
-def solve_solid(case: Case, sec, msh, quad_degree: int = 2) -> dict:
-    """Clamped root, dead end traction F/A, neo-Hookean; load levels as the ANCF run (with
-    cut-backs).  Returns the end-centroid displacement, DOFs and Newton iterations."""
+def neo_hookean(case: Case, msh, F):
+    """The ANCF neo-Hookean energy density Ψ = μ/2 (J^(-2/3) I1 − 3) + K/2 (J − 1)² (UFL)."""
+    import ufl
+    from petsc4py import PETSc
+    from dolfinx import fem
+    mu = fem.Constant(msh, PETSc.ScalarType(case.material["mu"]))
+    K = fem.Constant(msh, PETSc.ScalarType(case.material["bulk_modulus"]))
+    J, I1 = ufl.det(F), ufl.tr(F.T * F)
+    return mu / 2 * (J ** (-2.0 / 3.0) * I1 - 3) + K / 2 * (J - 1) ** 2
+
+
+def solve_solid(case: Case, sec, msh, quad_degree: int = 2, energy=neo_hookean, post=None) -> dict:
+    """Clamped root, dead end traction F/A, energy density ``energy(case, msh, F)`` (default
+    neo-Hookean); load levels as the ANCF run (with cut-backs).  Returns the end-centroid
+    displacement, DOFs and Newton iterations, and what ``post(u, ds(end face))`` adds."""
     import ufl
     from petsc4py import PETSc
     from dolfinx import fem, geometry, mesh as dmesh
@@ -320,25 +332,28 @@ def solve_solid(case: Case, sec, msh, quad_degree: int = 2) -> dict:
         raise SolidError(f"solid {case.key}: end faces not found")
     tags = dmesh.meshtags(msh, 2, tip, np.full(len(tip), 2, dtype=np.int32))
     bc = fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), fem.locate_dofs_topological(V, 2, root), V)
-    mu = fem.Constant(msh, PETSc.ScalarType(case.material["mu"]))
-    K = fem.Constant(msh, PETSc.ScalarType(case.material["bulk_modulus"]))
     t = fem.Constant(msh, np.zeros(3, dtype=PETSc.ScalarType))
-    F = ufl.Identity(3) + ufl.grad(u)
-    J, I1 = ufl.det(F), ufl.tr(F.T * F)
-    psi = mu / 2 * (J ** (-2.0 / 3.0) * I1 - 3) + K / 2 * (J - 1) ** 2
+    psi = energy(case, msh, ufl.Identity(3) + ufl.grad(u))
     md = {"quadrature_degree": quad_degree}
     dx = ufl.Measure("dx", domain=msh, metadata=md)
     ds = ufl.Measure("ds", domain=msh, subdomain_data=tags, metadata=md)
     area = fem.assemble_scalar(fem.form(1.0 * ds(2)))     # the mesh's end face: total force = F
     traction = np.asarray(case.force, dtype=float) / area
-    energy = psi * dx - ufl.dot(t, u) * ds(2)
-    residual = ufl.derivative(energy, u, v)
-    E_form, F_form = fem.form(energy), fem.form(residual)
+    potential = psi * dx - ufl.dot(t, u) * ds(2)
+    residual = ufl.derivative(potential, u, v)
+    E_form, F_form = fem.form(potential), fem.form(residual)
     J_form = fem.form(ufl.derivative(residual, u, du))
     newton = Newton(u, [bc], E_form, F_form, J_form, rtol=1e-9,
                     atol=1e-11 * float(np.linalg.norm(case.force)))
+    # end-face centroid in the reference configuration: a + R(psi)(c - a)
+    from ancf_petsc.physics.geometry import place
+    pt = place(np.array([L]), sec.centroid[None, :], L, case.twist_deg, case.twist_axis)
+    tree = geometry.BoundingBoxTree(msh, msh.topology.dim)
+    cells = geometry.compute_colliding_cells(msh, geometry.compute_collisions(tree, pt), pt)
+    if len(cells.links(0)) == 0:
+        raise SolidError(f"solid {case.key}: end centroid {pt[0]} not found in the mesh")
     u_ok = u.vector.copy()                      # last converged state
-    lam, dlam, its, cutbacks = 0.0, case.steps[0], 0, 0
+    lam, dlam, its, cutbacks, levels = 0.0, case.steps[0], 0, 0, []
     for level in case.steps:
         while lam < level - 1e-12:
             trial = min(lam + dlam, level)
@@ -355,18 +370,13 @@ def solve_solid(case: Case, sec, msh, quad_degree: int = 2) -> dict:
                 cutbacks += 1
                 if cutbacks > 12:
                     raise SolidError(f"solid {case.key}: Newton failed at load factor {trial:.4g}")
-    u.x.scatter_forward()
-    # end-face centroid in the reference configuration: a + R(psi)(c - a)
-    from ancf_petsc.physics.geometry import place
-    pt = place(np.array([L]), sec.centroid[None, :], L, case.twist_deg, case.twist_axis)
-    tree = geometry.BoundingBoxTree(msh, msh.topology.dim)
-    cells = geometry.compute_colliding_cells(msh, geometry.compute_collisions(tree, pt), pt)
-    if len(cells.links(0)) == 0:
-        raise SolidError(f"solid {case.key}: end centroid {pt[0]} not found in the mesh")
-    disp = u.eval(pt, cells.links(0)[:1])
+        u.x.scatter_forward()
+        levels.append({"load": level, "u": np.asarray(u.eval(pt, cells.links(0)[:1]), dtype=float).ravel()})
+        if post is not None:
+            levels[-1].update(post(u, ds(2)))
     ndofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-    return {"u": np.asarray(disp, dtype=float).ravel(), "dofs": int(ndofs), "its": its,
-            "face_area": float(area)}
+    return {**levels[-1], "dofs": int(ndofs), "its": its, "face_area": float(area),
+            "cutbacks": cutbacks, "levels": levels}
 
 
 def run_solid(case: Case, sec, h: float, repeats: int, max_repeat_time: float,

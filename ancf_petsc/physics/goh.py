@@ -19,10 +19,14 @@ including the one of a dilatation (tests/physics/test_goh.py).
 **Fibres carry no compression: the switch is Ē_i > 0**, not I4_i > 1.  With κ > 0, Ē_i can be
 positive at I4_i < 1 (the dispersed fibres off-axis are stretched); at the switch Ē = 0 the fibre
 stress ψ'(Ē) ∂Ē/∂F = k1 Ē e^(k2Ē²) 2FH vanishes, so stress is continuous (the tangent jumps by
-at most 4k1 (FH)⊗(FH), as in any tension-only law).  At Ē = 0 exactly (the reference state) the
-tangent is the tension side's: the first Newton step of a pulled tendon then sees the fibres'
-stiffness (with the compression side's, zero, it sees only the soft matrix and overshoots).  A switch at I4 = 1 with κ > 0 would make the
-stress jump by 2k1 κ(I₁ − 3) 2FH, which Newton does not like.  For κ = 0 both switches agree.
+at most 4k1 (FH)⊗(FH), as in any tension-only law).  At Ē = 0 (the reference state) the tangent
+is the tension side's: the first Newton step of a pulled tendon then sees the fibres' stiffness
+(with the compression side's, zero, it sees only the soft matrix and overshoots).  "Ē = 0" is
+|Ē| <= ``E_ROUNDING``: F of the reference state is I only to rounding, and Ē there is ±1e-15, so
+an exact test switched the fibres of 40-50 % of the Gauss points off in the first tangent
+(docs/fibres.md: with a soft matrix the first step then overshoots by 100x).  A switch at I4 = 1
+with κ > 0 would make the stress jump by 2k1 κ(I₁ − 3) 2FH, which Newton does not like.  For
+κ = 0 both switches agree.
 
 Stress and tangent in the dyadic form of ``materials.TangentTerms`` (δ_ik S_jl, outer products):
 
@@ -38,6 +42,9 @@ from __future__ import annotations
 import numpy as np
 
 from .materials import NeoHookean, TangentTerms
+
+#: |Ē| below this is Ē = 0 for the switch's tangent (Ē of the reference state is ±1e-15: rounding)
+E_ROUNDING = 1e-12
 
 
 class GOH:
@@ -106,8 +113,8 @@ class GOH:
             Fa = np.einsum("...ij,...j->...i", F, a0)
             I4 = np.einsum("...i,...i->...", Fa, Fa)
             E = I4 - 1.0 if c == 1.0 else self.kappa * (I1 - 3.0) + c * (I4 - 1.0)
-            on = E >= 0.0                  # tangent at Ē = 0: the tension side's (see below)
-            out.append((a0, Fa, I4, np.where(on, E, 0.0), on))
+            on = E >= -E_ROUNDING          # tangent at Ē = 0: the tension side's (see below)
+            out.append((a0, Fa, I4, np.maximum(E, 0.0), on))
         return out
 
     def _exp(self, E):

@@ -67,9 +67,10 @@ def axial_stress_at(lam, fibre_axis, kappa):
     return principal_stress([lam, *sol.x], fibre_axis, kappa)[0]
 
 
-def _one_element_run(tmp_path, material, stretch, fibre_axis, kappa, name):
+def _one_element_run(tmp_path, material, stretch, fibre_axis, kappa, name, element=3363):
     raw = load_raw("uniaxial_neohookean.yaml")
     raw["beams"][0]["material"] = material
+    raw["beams"][0]["element"] = element
     raw["output"]["vtk"] = False
     raw["steps"] = [0.5, 1.0]
     area = np.pi * 0.006 * 0.004            # the degree-6 cubature of the ellipse is exact
@@ -78,14 +79,15 @@ def _one_element_run(tmp_path, material, stretch, fibre_axis, kappa, name):
     return run_inline(raw, tmp_path / name), s, raw
 
 
-@pytest.mark.parametrize("kappa", [0.0, 0.2])
+@pytest.mark.parametrize("kappa,element", [(0.0, 3363), (0.2, 3363), (0.2, 3333)])
 @pytest.mark.parametrize("direction", ["along", "across"])
-def test_uniaxial_tension_matches_exact_solution(tmp_path, kappa, direction):
-    """One 3363 element, uniform dead traction, fibres along x (follow: axis) or across along
-    the section's y (angle 90): the homogeneous exact solution to 1e-8."""
+def test_uniaxial_tension_matches_exact_solution(tmp_path, kappa, direction, element):
+    """One element (3363, or 3333 with its default ``locking: ecm``), uniform dead traction,
+    fibres along x (follow: axis) or across along the section's y (angle 90): the homogeneous
+    exact solution to 1e-8."""
     fibre_axis, angle = (0, 0.0) if direction == "along" else (1, 90.0)
     summary, s, raw = _one_element_run(tmp_path, goh_material(kappa, angle=angle), 1.12,
-                                       fibre_axis, kappa, "run")
+                                       fibre_axis, kappa, "run", element)
     assert summary["status"] == "completed"
     L = raw["geometry"]["length"]
     for step in summary["steps"]:
@@ -140,6 +142,28 @@ def test_fibres_carry_no_compression(tmp_path, kappa):
         ua, ub = (np.array(s["probes"]["tip"]["displacement"]) for s in (a, b))
         assert np.abs(ua - ub).max() <= 1e-13 * np.abs(ua).max()
     assert runs["goh"]["steps"][-1]["probes"]["tip"]["displacement"][0] < -1e-3
+
+
+def test_the_reference_state_has_the_tension_sides_tangent_despite_rounding():
+    """F of the reference state is I only to rounding, so Ē there is ±1e-15.  The tangent must
+    still be the tension side's at every point (an exact Ē >= 0 test switched the fibres of
+    40-50 % of a tendon's Gauss points off in the first Newton step: docs/fibres.md)."""
+    rng = np.random.default_rng(3)
+    a0 = rng.standard_normal((1, 64, 3))
+    a0 /= np.linalg.norm(a0, axis=-1, keepdims=True)
+    F = np.eye(3) + 2e-16 * rng.standard_normal((64, 3, 3))
+    for kappa in (0.0, 0.2):
+        law = GOH(MU, K, K1, K2, kappa).with_directions(a0)
+        I4 = (np.einsum("pij,pj->pi", F, a0[0]) ** 2).sum(-1)
+        E = kappa * (np.einsum("pij,pij->p", F, F) - 3) + (1 - 3 * kappa) * (I4 - 1)
+        assert (E < 0).any() and np.abs(E).max() < 1e-14        # the rounding this is about
+        eye = np.broadcast_to(np.eye(3), F.shape).copy()
+        H = kappa * eye + (1 - 3 * kappa) * np.einsum("pi,pj->pij", a0[0], a0[0])
+        expected = NeoHookean(MU, K).stress_and_tangent(eye)[2].full() \
+            + 4 * K1 * np.einsum("pij,pkl->pijkl", H, H)        # ψ'(0) = 0, ψ''(0) = k1
+        noisy = law.stress_and_tangent(F)[2].full()
+        assert np.abs(noisy - expected).max() <= 1e-12 * np.abs(expected).max()
+        assert np.abs(law.stress(F)[0]).max() < 1e-6 * MU                # and no fibre stress
 
 
 def test_hydrostatic_tension_is_not_isotropic_without_the_split():
@@ -242,6 +266,41 @@ def test_model_fibres_follow_the_pretwist_at_the_gauss_points():
     P = beam.section.centroid + beam.yz                            # tendon frame, at x = 0
     rho = np.linalg.norm(P - np.asarray(model.spec.twist_axis), axis=1)
     assert np.allclose(np.arccos(a0[..., 0]), np.arctan(rho * np.deg2rad(60.0) / 0.1)[None, :])
+
+
+def test_fibres_on_imported_sections_that_vary_along_x(tmp_path):
+    """configs/geometry_stations_demo.yaml (three outlines from two NIfTI slices, the far one
+    smaller and turned: per-element section rules) with GOH and a pretwist: every Gauss point's
+    fibre is the material line's tangent at that point (a central difference of
+    ``geometry.place``), and the model runs.  The sections' measured turn changes the integration
+    domain, not the material lines (docs/geometry.md), so the fibres follow the pretwist only."""
+    from ancf_petsc.physics.fibres import gauss_point_stations
+    from ancf_petsc.physics.geometry import place
+    raw = load_raw("geometry_stations_demo.yaml")
+    raw["geometry"]["twist_deg"] = 30.0
+    for b in raw["beams"]:
+        b["material"] = dict(goh_material(0.0, follow="twist", extra=10.0), mu=float(b["material"]["mu"]),
+                             bulk_modulus=float(b["material"]["bulk_modulus"]), k1=50.0e6)
+    model = build_model(parse_config(copy.deepcopy(raw), base_dir=CONFIGS))
+    L, psi, axis = model.spec.length, 30.0, np.asarray(model.spec.twist_axis)
+    for beam in model.beams:
+        assert beam.yz.ndim == 3                                   # per-element rules
+        x = gauss_point_stations(beam.x_nodes, beam.xi)            # (E, P)
+        P = beam.section.centroid + beam.yz                        # tendon frame at x = 0
+        h, pts, xs = 1e-6 * L, P.reshape(-1, 2), x.ravel()
+        t = (place(xs + h, pts, L, psi, axis) - place(xs - h, pts, L, psi, axis)) / (2 * h)
+        # plus the extra twist: rate 10°/L about the beam's axis (its centroid c), turned by ψx/L
+        lever = np.deg2rad(10.0) / L * (pts - beam.section.centroid)
+        th = np.deg2rad(psi) * xs / L
+        Rl = np.stack([np.cos(th) * lever[:, 0] - np.sin(th) * lever[:, 1],
+                       np.sin(th) * lever[:, 0] + np.cos(th) * lever[:, 1]], -1)
+        t += np.column_stack([np.zeros(len(xs)), -Rl[:, 1], Rl[:, 0]])
+        t /= np.linalg.norm(t, axis=1, keepdims=True)
+        assert np.abs(beam.fibres[0].reshape(-1, 3) - t).max() < 1e-8
+    raw["output"] = {"vtk": False}
+    raw["steps"] = [0.5, 1.0]
+    s = run_inline(raw, tmp_path / "run")
+    assert s["status"] == "completed" and s["steps"][-1]["probes"]["soleus"]["displacement"][0] > 0
 
 
 # ------------------------------------------------------------------------ config errors

@@ -1,0 +1,221 @@
+#!/usr/bin/env python3
+"""The GOH parameter sets of the paper's authors' public code in this model (issue 26): why the
+full published set failed, and which sets converge.
+
+Measures, on the soleus of configs/achilles_type3_psi45_goh.yaml (alone: no contact, ``fix:
+reduced``) and on the whole ψ = 45° column:
+
+1. ``reference``: Ē at the Gauss points of the unloaded soleus (it is ±1e-15: F = I to rounding)
+   and the first Newton step from rest at 1 N with the published matrix, with the switch's
+   tangent taken at Ē >= -E_ROUNDING (today) and at Ē >= 0 exactly (before: ``E_ROUNDING = 0``).
+2. ``bulk``: the lone soleus with the published μ, k1, k2 through Table 1's 13 levels for
+   K/μ = 3268 (the source's penalty 1e8 (J − 1)²), 49.67 (ν = 0.49) and 8.34 (the paper's
+   Achilles ratio), 2 and 3 axial Gauss points, 4 and 8 elements; where each stops.
+3. ``eigen``: the lowest eigenvalue of the Jacobi-scaled tangent D^-1/2 K D^-1/2 (free DOFs)
+   along the load path, K/μ = 3268 against 49.67.
+4. ``sets``: every set of the authors' code with K = 49.67 μ: the lone soleus (3 axial points)
+   and the column with sliding and with unilateral contact (4 elements).
+
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets]
+"""
+from __future__ import annotations
+
+import copy
+import os
+import sys
+import tempfile
+import time
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+
+CONFIGS = os.path.join(ROOT, "configs")
+LEVELS = [10, 20, 30, 40, 45, 60, 80, 90, 100, 150, 200, 300, 400]
+NU49 = 49.67                                   # K/μ at small-strain ν = 0.49
+#: (c10 [Pa], k1 [Pa], k2), κ = 0, one fibre family: Leonid1991/Tendon-model ProblemData.m (eb74128)
+#: and LUT-CoSmart/ANCF-Beam-based-Solver Materials.m (ed5e49d), read with `fetch`
+SETS = {"tendon_model_2023": (30.6e3, 3.7859e6, 7.8085), "solver_default_2025": (7.64e3, 996.6e3, 524.6),
+        "alex": (53.6e3, 75.351e6, 23.926), "amir": (9.67e6, 135.5e6, 131.0),
+        "optimized_SEE": (53.6e3, 8409291.05908193, 4.78018491589778)}
+PUBLISHED = dict(mu=2 * 30.6e3, K=2.0e8, k1=3.7859e6, k2=7.8085)     # K: the source's 1e8 (J - 1)^2
+
+
+def column(mu: float, K: float, k1: float, k2: float, mode: str | None, elements: int = 4,
+           axial_points: int = 3, steps=LEVELS) -> dict:
+    """configs/achilles_type3_psi45_goh.yaml with this GOH law; ``mode`` None: the soleus alone."""
+    with open(os.path.join(CONFIGS, "achilles_type3_psi45_goh.yaml")) as fh:
+        raw = yaml.safe_load(fh)
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        b["material"].update(mu=mu, bulk_modulus=K, k1=k1, k2=k2)
+        b["elements"], b["axial_points"] = elements, axial_points
+    if mode is None:
+        raw["beams"] = raw["beams"][:1]
+        raw["boundary_conditions"] = raw["boundary_conditions"][:1]
+        raw["probes"] = raw["probes"][:1]
+        raw.pop("contact")
+    else:
+        raw["contact"]["mode"] = mode
+    raw["steps"] = list(steps)
+    raw["output"] = {"dir": tempfile.mkdtemp(prefix="goh_sets_"), "vtk": False}
+    return raw
+
+
+def solve(raw: dict) -> dict:
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.run import run_model
+    t0 = time.perf_counter()
+    res = run_model(parse_config(copy.deepcopy(raw), base_dir=CONFIGS), log=lambda *_: None)
+    s = res.summary
+    steps = s["steps"]
+    return {"status": s["status"], "levels": len(steps), "wall": time.perf_counter() - t0,
+            "last": steps[-1]["load_factor"] if steps else 0.0, "message": s.get("message", ""),
+            "cutbacks": sum(st["cutbacks"] for st in steps), "newton": sum(st["iterations"] for st in steps),
+            "soleus_mm": 1e3 * steps[-1]["probes"]["soleus"]["displacement"][0] if steps else float("nan"),
+            "dir": raw["output"]["dir"]}
+
+
+def _run(raw: dict):
+    """A Run (model, problem) of ``raw`` without solving."""
+    from petsc4py import PETSc
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.run import Run
+    return Run(parse_config(copy.deepcopy(raw), base_dir=CONFIGS), PETSc.COMM_WORLD, lambda *_: None)
+
+
+def fibre_strains(problem, X) -> np.ndarray:
+    """Ē (not clipped) at every Gauss point of the fibre-reinforced parts at state X."""
+    from ancf_petsc.physics import kernels
+    xl = problem.exchange.local_state(X)
+    out = []
+    for blk in problem.blocks:
+        for G, _, mat in blk.parts:
+            F = kernels.deformation_gradient(blk.element_vectors(xl), G)
+            Fa = np.einsum("...ij,...j->...i", F, mat.a0[0])
+            out.append((np.einsum("...i,...i->...", Fa, Fa) - 1.0).ravel())
+    return np.concatenate(out)
+
+
+def first_step(raw: dict, load: float) -> dict:
+    """One full Newton step from rest at ``load`` [N]: the end node's move and what follows."""
+    from petsc4py import PETSc
+    run = _run(raw)
+    try:
+        pb = run.problem
+        X, F = pb.q0.copy(), pb.F.duplicate()
+        pb.load_factor = load
+        pb.residual(None, X, F)
+        pb.jacobian(None, X, pb.J, pb.J)
+        ksp = PETSc.KSP().create()
+        ksp.setOperators(pb.J)
+        ksp.setType("preonly")
+        ksp.getPC().setType("cholesky")
+        ksp.getPC().setFactorSolverType("mumps")
+        dX = X.duplicate()
+        ksp.solve(F, dX)
+        X.axpy(-1.0, dX)
+        F1 = F.duplicate()
+        pb.residual(None, X, F1)
+        move = -dX.getArray().reshape(-1, 6, 3)[-1, 0]
+        out = {"rest_E": fibre_strains(pb, pb.q0), "move_mm": 1e3 * move, "residual": F1.norm(),
+               "max_E": float(np.nanmax(fibre_strains(pb, X)))}
+        ksp.destroy()
+        return out
+    finally:
+        run.destroy()
+
+
+def reference() -> None:
+    from ancf_petsc.physics import goh
+    raw = column(**PUBLISHED, mode=None, axial_points=2)
+    for psi in (0, 45):
+        r = dict(raw, geometry=dict(raw["geometry"], twist_deg=psi))
+        for tol, when in ((goh.E_ROUNDING, "today"), (0.0, "before")):
+            goh.E_ROUNDING, keep = tol, goh.E_ROUNDING
+            try:
+                s = first_step(r, 1.0)
+            finally:
+                goh.E_ROUNDING = keep
+            E = s["rest_E"]
+            print(f"psi {psi}: unloaded soleus, Ē in [{E.min():.2e}, {E.max():.2e}], {100 * (E < 0).mean():.1f} % "
+                  f"of the points below 0; switch {when} (tangent on at Ē >= -{tol:g}): first Newton step "
+                  f"at 1 N moves the end node by {np.array2string(s['move_mm'], precision=3)} mm, then "
+                  f"|F| = {s['residual']:.3g} N, max Ē {s['max_E']:.3g}", flush=True)
+
+
+def bulk() -> None:
+    base = {k: PUBLISHED[k] for k in ("mu", "k1", "k2")}
+    for ratio in (PUBLISHED["K"] / PUBLISHED["mu"], NU49, 8.34):
+        for ap, ne in ((2, 4), (3, 4), (3, 8), (2, 8)):
+            s = solve(column(**base, K=ratio * PUBLISHED["mu"], mode=None, elements=ne, axial_points=ap))
+            print(f"lone soleus K/mu {ratio:.4g}, {ne} el., {ap} axial points: {s['status']}, last level "
+                  f"{s['last']:g} N ({s['levels']}/13), {s['cutbacks']} cut-backs, {s['newton']} Newton, "
+                  f"{s['wall']:.1f} s {s['message'][:95] if s['status'] != 'completed' else ''}", flush=True)
+
+
+def lowest_scaled_eigenvalues(raw: dict, out_dir: str) -> list[tuple[float, float]]:
+    """(level, lowest eigenvalue of D^-1/2 K D^-1/2 on the free DOFs) at every converged level."""
+    import h5py
+    run = _run(raw)
+    try:
+        pb = run.problem
+        free = np.setdiff1d(np.arange(pb.model.n_dofs), pb.model.fixed_dofs)
+        out = []
+        with h5py.File(os.path.join(out_dir, "results.h5"), "r") as h5:
+            for k in range(1, int(h5["steps"].attrs["converged"]) + 1):
+                X = pb.q0.duplicate()
+                X.setArray(h5[f"steps/step_{k:04d}/nodal_vectors"][:].ravel())
+                pb.jacobian(None, X, pb.J, pb.J)
+                M = pb.J.copy()
+                M.convert("seqaij")
+                A = M.convert("dense").getDenseArray()
+                A = np.triu(A) + np.triu(A, 1).T if np.allclose(np.tril(A, -1), 0.0) else 0.5 * (A + A.T)
+                A = A[np.ix_(free, free)]
+                d = 1.0 / np.sqrt(np.abs(np.diag(A)))
+                out.append((raw["steps"][k - 1], float(np.linalg.eigvalsh(d[:, None] * A * d[None, :])[0])))
+        return out
+    finally:
+        run.destroy()
+
+
+def eigen() -> None:
+    steps = [1, 2, 5, 8, 9, 9.3, 9.4, 9.45, 9.47]
+    for ratio in (PUBLISHED["K"] / PUBLISHED["mu"], NU49):
+        raw = column(**dict(PUBLISHED, K=ratio * PUBLISHED["mu"]), mode=None, axial_points=2, steps=steps)
+        s = solve(raw)
+        ev = lowest_scaled_eigenvalues(raw, s["dir"])
+        print(f"lone soleus K/mu {ratio:.4g}, 4 el., 2 axial points ({s['status']}): lowest scaled eigenvalue "
+              + ", ".join(f"{lv:g} N: {v:.2e}" for lv, v in ev), flush=True)
+
+
+def sets() -> None:
+    for name, (c10, k1, k2) in SETS.items():
+        law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+        for mode in (None, "sliding", "unilateral"):
+            s = solve(column(**law, mode=mode))
+            print(f"{name}: {mode or 'lone soleus'}: {s['status']}, last level {s['last']:g} N "
+                  f"({s['levels']}/13), {s['cutbacks']} cut-backs, {s['newton']} Newton, soleus "
+                  f"{s['soleus_mm']:.3f} mm, {s['wall']:.1f} s {s['message'][:110] if s['status'] != 'completed' else ''}",
+                  flush=True)
+
+
+def main(argv: list[str]) -> int:
+    from mpi4py import MPI  # noqa: F401
+    import petsc4py
+    petsc4py.init([])
+    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets}
+    for name in argv or list(parts):
+        if name not in parts:
+            print(f"goh_published_sets: unknown part {name!r}; choose from {list(parts)}", file=sys.stderr)
+            return 2
+        print(f"## {name}", flush=True)
+        parts[name]()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -26,6 +26,11 @@ deformed end face, S = ∫ s sᵀ dA, T = ∫ (x − x̄) sᵀ dA (s = in-plane 
 centroid).  For a section whose third moments vanish (an ellipse about its centroid) the fit of the
 3363 element's quadratic section field is exactly [r_y r_z], so both measure the same thing.
 
+Cases: three laws (GOH with helical fibres; the controls GOH with fibres along x and the matrix
+alone) x three matrix compressibilities K/μ = 50, 8.34, 2.17; ANCF at 4, 8, 16 elements, and at 8,
+16 elements with the volumetric term on a degree-2 section rule (``reduced_volumetric_rule``: a
+locking diagnosis, not a model option); the solid on three or four meshes.
+
 Reference: Richardson extrapolation of the finest three solid meshes (verify_solid.richardson),
 separately for the displacement and for the rotation; errors |u − u_ref| / |u_ref| and
 |θ − θ_ref| / |θ_ref|.  Writes docs/solid_fibres.csv, the marked block ``solid_fibres`` of
@@ -73,7 +78,7 @@ STATIONS = 8                       # rotation along x at x = k L / 8 (nodes of e
 OUTSIDE_TOL = 0.03                 # largest violation of a point's reference coordinates accepted
 SAMPLE_SCALE = 0.95                # solid sections sampled at the section rule's points x 0.95
 H = (2.83e-3, 2e-3, 1.41e-3)       # solid mesh sizes [m], coarse to fine
-H_INCOMPRESSIBLE = (1e-3,)           # one more at the largest K/mu (P2 tets converge slowly there)
+H_INCOMPRESSIBLE = (1e-3,)         # one more at the largest K/mu (P2 tets converge slowly there)
 H_QUICK = (4e-3, 2.83e-3, 2e-3)
 #: matrix bulk modulus over mu: the tests' nearly incompressible matrix (nu = 0.49), the Achilles
 #: columns' (0.86 GPa / 103.1 MPa, nu = 0.44) and a compressible one (nu = 0.3)
@@ -106,7 +111,7 @@ def make_case(law: Law, ratio: float, quick: bool = False) -> vs.Case:
     """The bar of ``law`` with bulk modulus ratio * mu as a verify_solid Case (section centred
     on the twist axis, fibres with the matrix)."""
     mat = {**copy.deepcopy(law.material), "bulk_modulus": ratio * MU}
-    h = H_QUICK if quick else H + H_INCOMPRESSIBLE if ratio == max(BULK_RATIOS) else H
+    h = H_QUICK if quick else (H + H_INCOMPRESSIBLE if ratio == max(BULK_RATIOS) else H)
     return vs.Case(case_key(law.key, ratio), law.label, copy.deepcopy(SECTION), mat, (FORCE, 0.0, 0.0),
                    h=h, h_quick=H_QUICK, length=LENGTH, twist_deg=TWIST,
                    twist_axis=(0.0, 0.0), steps=STEPS)

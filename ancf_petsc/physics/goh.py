@@ -24,9 +24,9 @@ is the tension side's: the first Newton step of a pulled tendon then sees the fi
 (with the compression side's, zero, it sees only the soft matrix and overshoots).  "Ē = 0" is
 |Ē| <= ``E_ROUNDING``: F of the reference state is I only to rounding, and Ē there is ±1e-15, so
 an exact test switched the fibres of 40-50 % of the Gauss points off in the first tangent
-(docs/fibres.md: with a soft matrix the first step then overshoots by 100x).  A switch at I4 = 1
-with κ > 0 would make the stress jump by 2k1 κ(I₁ − 3) 2FH, which Newton does not like.  For
-κ = 0 both switches agree.
+(docs/fibres.md: with the published soft matrix the first step moved 14-29x too far).  A switch
+at I4 = 1 with κ > 0 would make the stress jump by 2k1 κ(I₁ − 3) 2FH, which Newton does not
+like.  For κ = 0 both switches agree.
 
 Stress and tangent in the dyadic form of ``materials.TangentTerms`` (δ_ik S_jl, outer products):
 

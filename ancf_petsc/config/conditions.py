@@ -47,14 +47,71 @@ def _fix(value, path: str) -> list[tuple[int, int]]:
     return sorted(dofs)
 
 
+def _curve(value, path: str) -> tuple:
+    """``[[λ₀, m₀], [λ₁, m₁], ...]``: a multiplier piecewise linear in the load factor."""
+    pts = []
+    for i, pair in enumerate(sequence(value, path)):
+        p = key_path(path, i)
+        if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+            raise ConfigError(p, f"expected [load factor, multiplier]; got {shown(pair)}")
+        pts.append((number(pair[0], key_path(p, 0), nonneg=True), number(pair[1], key_path(p, 1))))
+    if len(pts) < 2 or any(b[0] <= a[0] for a, b in zip(pts, pts[1:])):
+        raise ConfigError(path, "give at least two [load factor, multiplier] points with the load "
+                                "factors increasing")
+    return tuple(pts)
+
+
+def check_curves(spec) -> None:
+    """Every requested load factor lies within every curve (no extrapolation)."""
+    lo, hi = min(spec.steps), max(spec.steps)
+    for item in list(spec.loads) + list(spec.boundary_conditions):
+        if item.curve is not None and not (item.curve[0][0] <= lo and hi <= item.curve[-1][0]):
+            raise ConfigError(f"{item.path}.curve", f"covers load factors {item.curve[0][0]:g} .. "
+                              f"{item.curve[-1][0]:g}, the steps run {lo:g} .. {hi:g}; extend it")
+
+
+def _displacement(value, path: str) -> list[tuple[int, int, float]]:
+    """``{r: {x: 0.006}}``: components held at their reference value plus the load factor times
+    the given displacement [m for r; the slopes' values are dimensionless]."""
+    mapping(value, path, optional=VECTORS)
+    out = []
+    for name, comps in value.items():
+        cp = key_path(path, name)
+        mapping(comps, cp, optional=("x", "y", "z"))
+        out += [(VECTORS.index(name), "xyz".index(c), number(v, key_path(cp, c)))
+                for c, v in comps.items()]
+    if not out:
+        raise ConfigError(path, "prescribes nothing; give e.g. {r: {x: 0.006}}")
+    return sorted(out)
+
+
 def parse_boundary_conditions(value, names: list[str], n_nodes: list[int]) -> list[BCSpec]:
-    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced)."""
+    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced) and
+    prescribed displacements (``displacement``, ramped with the load factor)."""
     bcs = []
     for i, bc in enumerate(sequence(value, "boundary_conditions", nonempty=False)):
         p = f"boundary_conditions[{i}]"
-        mapping(bc, p, required=("beam", "node", "fix"))
+        mapping(bc, p, required=("beam", "node"), optional=("fix", "displacement", "name", "curve"))
+        if "curve" in bc and "displacement" not in bc:
+            raise ConfigError(f"{p}.curve", "a curve says how a displacement follows the load "
+                                            "factor; this support prescribes none")
+        if "fix" not in bc and "displacement" not in bc:
+            raise ConfigError(p, "give fix (components held in place), displacement (components "
+                                 "moved with the load factor), or both")
         bi = beam_ref(bc["beam"], f"{p}.beam", names)
-        bcs.append(BCSpec(bi, node_ref(bc["node"], f"{p}.node", n_nodes[bi]), _fix(bc["fix"], f"{p}.fix"), p))
+        node = node_ref(bc["node"], f"{p}.node", n_nodes[bi])
+        fixed = _fix(bc["fix"], f"{p}.fix") if "fix" in bc else []
+        moved = _displacement(bc["displacement"], f"{p}.displacement") if "displacement" in bc else []
+        both = sorted(set(fixed) & {(v, c) for v, c, _ in moved})
+        if both:
+            v, c = both[0]
+            raise ConfigError(f"{p}.displacement.{VECTORS[v]}.{'xyz'[c]}", "this component is also in "
+                              "fix; a component is either held in place or moved, remove it from one")
+        name = string(bc.get("name", f"{names[bi]}.{node}"), f"{p}.name")
+        if name in [b.name for b in bcs]:
+            raise ConfigError(f"{p}.name", f"duplicate support name {name!r}")
+        curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None
+        bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve))
     return bcs
 
 
@@ -63,7 +120,7 @@ def parse_loads(value, names: list[str], n_nodes: list[int]) -> list[LoadSpec]:
     loads = []
     for i, ld in enumerate(sequence(value, "loads", nonempty=False)):
         p = f"loads[{i}]"
-        mapping(ld, p, required=("beam", "node"), optional=("force", "traction_force"))
+        mapping(ld, p, required=("beam", "node"), optional=("force", "traction_force", "curve"))
         if ("force" in ld) == ("traction_force" in ld):
             raise ConfigError(p, "give exactly one of 'force' (point force on r) or "
                                  "'traction_force' (total force spread over the end section)")
@@ -72,7 +129,8 @@ def parse_loads(value, names: list[str], n_nodes: list[int]) -> list[LoadSpec]:
         kind = "force" if "force" in ld else "traction_force"
         if kind == "traction_force" and node not in (0, n_nodes[bi] - 1):
             raise ConfigError(f"{p}.node", "a traction_force acts on an end section: use first or last")
-        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p))
+        curve = _curve(ld["curve"], f"{p}.curve") if "curve" in ld else None
+        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p, curve))
     return loads
 
 

@@ -1,10 +1,62 @@
 """``contact:`` of a config: the law, the interfaces and the pressure space (docs/contact.md)."""
 from __future__ import annotations
 
+from ..contact.friction import CoulombFriction
+from ..contact.elastic_interface import ElasticMatrix
 from ..physics.element3363 import DOFS_PER_NODE
 from .conditions import beam_ref
-from .specs import CONTACT_MODES, DEFAULT_CONTACT_MODE, REMOVED_CONTACT_KEYS, ContactSpec
+from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, REMOVED_CONTACT_KEYS, TANGENTIAL_LAW_NAMES, ContactSpec,
+                    TangentialSpec)
 from .values import ConfigError, boolean, integer, mapping, number, sequence, string
+
+
+def _elastic(value: dict, p: str, t: TangentialSpec) -> None:
+    """k_t [Pa/m] as ``stiffness``, or as ``shear_modulus`` / ``thickness`` of the matrix layer."""
+    if "stiffness" in value and ("shear_modulus" in value or "thickness" in value):
+        raise ConfigError(p, "give the matrix as stiffness (k_t = G / thickness, Pa/m) or as "
+                             "shear_modulus and thickness, not both")
+    if "stiffness" in value:
+        t.stiffness = number(value["stiffness"], f"{p}.stiffness", positive=True,
+                             hint=" (k_t = G / thickness of the interface matrix, Pa/m)")
+        return
+    if "shear_modulus" not in value or "thickness" not in value:
+        raise ConfigError(f"{p}.stiffness", "missing value (required): give stiffness (Pa/m), or "
+                                            "shear_modulus (Pa) and thickness (m) of the matrix layer")
+    G = number(value["shear_modulus"], f"{p}.shear_modulus", positive=True, hint=" (Pa)")
+    h = number(value["thickness"], f"{p}.thickness", positive=True, hi=1e-2,
+               hint=" (m; interfascicular matrix layers are ~1e-5 m)")
+    t.stiffness = G / h
+
+
+def _coulomb(value: dict, p: str, t: TangentialSpec) -> None:
+    """The friction coefficient μ (> 0; law none is μ = 0) and an optional stick stiffness."""
+    if "friction" not in value:
+        raise ConfigError(f"{p}.friction", "missing value (required): the friction coefficient mu")
+    t.friction = number(value["friction"], f"{p}.friction", positive=True, hi=10.0,
+                        hint=" (Coulomb's coefficient mu; frictionless is law: none)")
+    if value.get("stick_stiffness") is not None:
+        t.stick_stiffness = number(value["stick_stiffness"], f"{p}.stick_stiffness", positive=True,
+                                   hint=" (Pa/m; default 100 E/h of the softer beam)")
+
+
+#: per tangential law: its keys and their reader (the laws are contact/tangential.py TANGENTIAL_LAWS)
+TANGENTIAL_PARSERS = {ElasticMatrix.law: (("stiffness", "shear_modulus", "thickness"), _elastic),
+                      CoulombFriction.law: (("friction", "stick_stiffness"), _coulomb)}
+
+
+def parse_tangential(value, p: str = "contact.tangential") -> TangentialSpec:
+    """``contact.tangential``: {law: none | elastic | coulomb, and the law's values}."""
+    keys = tuple(k for ks, _ in TANGENTIAL_PARSERS.values() for k in ks)
+    mapping(value, p, required=("law",), optional=keys)
+    t = TangentialSpec(law=string(value["law"], f"{p}.law", TANGENTIAL_LAW_NAMES))
+    own, reader = TANGENTIAL_PARSERS.get(t.law, ((), None))
+    for key in value:
+        if key != "law" and key not in own:
+            raise ConfigError(f"{p}.{key}", f"not a value of law {t.law}; its values: "
+                                            + (", ".join(own) if own else "none"))
+    if reader is not None:
+        reader(value, p, t)
+    return t
 
 
 def parse_contact(value, names: list[str]) -> ContactSpec:
@@ -16,7 +68,7 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
                 raise ConfigError(f"{p}.{key}", "contact is enforced exactly by Lagrange multipliers "
                                                 "(no penalty, nothing to tune); remove this key")
     mapping(value, p, optional=("mode", "interfaces", "axial_points", "curve_points", "search_margin",
-                                "projection", "scaling"))
+                                "projection", "scaling", "tangential"))
     c = ContactSpec()
     c.mode = string(value.get("mode", DEFAULT_CONTACT_MODE), f"{p}.mode", CONTACT_MODES)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
@@ -24,6 +76,8 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
     c.search_margin = number(value.get("search_margin", 0.1), f"{p}.search_margin", positive=True, hi=1.0)
     c.scaling = number(value.get("scaling", 1.0), f"{p}.scaling", positive=True,
                        hint=" (a factor on the multipliers' unit k_s; it does not change the answer)")
+    if value.get("tangential") is not None:
+        c.tangential = parse_tangential(value["tangential"])
     proj = value.get("projection", None)
     if proj == "pointwise":
         raise ConfigError(f"{p}.projection", "a multiplier per point over-constrains the quadratic "

@@ -17,7 +17,7 @@ from .. import yamlio
 
 from .beams import check_imported_loops, parse_beams
 from .bundle import expand_bundle
-from .conditions import beam_ref, parse_boundary_conditions, parse_loads, parse_probes, parse_steps
+from .conditions import beam_ref, check_curves, parse_boundary_conditions, parse_loads, parse_probes, parse_steps
 from .contact import parse_contact
 from .sections import parse_sections
 from .solving import parse_accuracy, parse_output, parse_partition, parse_petsc, parse_solver
@@ -52,7 +52,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         beam_ref(twist_rule[1], "geometry.twist_axis.centroid_of", names)
     steps = parse_steps(raw["steps"])
     probes = parse_probes(raw.get("probes", []), names, n_nodes)
-    return ModelSpec(
+    spec = ModelSpec(
         name=name, length=length, twist_deg=twist, twist_axis=axis, beams=beams,
         boundary_conditions=parse_boundary_conditions(raw.get("boundary_conditions", []), names, n_nodes),
         loads=parse_loads(raw.get("loads", []), names, n_nodes), steps=steps, probes=probes,
@@ -62,6 +62,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         base_dir=base_dir, raw=raw, partition=parse_partition(raw.get("partition")),
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
         sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo)
+    check_curves(spec)
+    return spec
 
 
 def _name(value) -> str:

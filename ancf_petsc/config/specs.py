@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..contact.laws import LAWS, SlidingLaw
+from ..contact.tangential import TANGENTIAL_LAWS
 from ..physics.element3363 import DEFAULT_ELEMENT
 from ..physics.laws import MATERIALS
 
@@ -13,6 +14,7 @@ SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws.py)
 FIBRE_FOLLOW = ("twist", "axis")
 CONTACT_MODES = tuple(LAWS)                 # the registry's names (contact/laws.py)
+TANGENTIAL_LAW_NAMES = tuple(TANGENTIAL_LAWS)   # contact.tangential.law (contact/tangential.py)
 DEFAULT_CONTACT_MODE = SlidingLaw.name
 PARTITION_METHODS = ("blocks", "metis", "beams")
 TWIST_RULES = ("centroid", "origin", "junction")
@@ -64,8 +66,12 @@ class BeamSpec:
 class BCSpec:
     beam: int
     node: int
-    dofs: list[tuple[int, int]]           # (vector slot 0..5, component 0..2)
+    dofs: list[tuple[int, int]]           # (vector slot 0..5, component 0..2), held at the reference
     path: str = ""
+    #: prescribed displacements at load factor 1, ramped with it: (vector slot, component, value)
+    displacement: list[tuple[int, int, float]] = field(default_factory=list)
+    name: str = ""                        # the support's name in the reported reactions
+    curve: tuple | None = None            # ((λ, m), ...): displacement × m(λ) (None: × λ)
 
 
 @dataclass
@@ -75,6 +81,7 @@ class LoadSpec:
     kind: str                             # 'force' | 'traction_force'
     force: tuple[float, float, float]
     path: str = ""
+    curve: tuple | None = None            # ((λ, m), ...): force × m(λ) (None: × λ)
 
 
 @dataclass
@@ -83,6 +90,15 @@ class ProbeSpec:
     beam: int
     node: int
     vector: str = "r"
+
+
+@dataclass
+class TangentialSpec:
+    """``contact.tangential``: the interface's tangential law (contact/tangential.py) and its values."""
+    law: str = TANGENTIAL_LAW_NAMES[0]     # a name of TANGENTIAL_LAWS; the first is frictionless
+    stiffness: float | None = None         # elastic matrix: k_t = G / thickness [Pa/m]
+    friction: float | None = None          # Coulomb: the friction coefficient μ
+    stick_stiffness: float | None = None   # Coulomb: k_pen [Pa/m] (None: friction.STICK_FACTOR E/h)
 
 
 @dataclass
@@ -98,6 +114,7 @@ class ContactSpec:
     projection: tuple[int, int] = (2, 1)
     per_element: bool = False             # pressure discontinuous between A elements
     scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
+    tangential: TangentialSpec | None = None   # interface shear (None: frictionless)
 
 
 @dataclass

@@ -1,6 +1,7 @@
-"""The contact part of the Jacobian as dense blocks with their DOF indices (eqs. 26-29): per
-segment of contact points, the gap Hessian term −Σ τ ∇²g over A's and B's nodes and the
-constraint rows −k_s Φ ∇g of its multipliers.  The assembly layer inserts them."""
+"""The normal constraints' part of the residual and the Jacobian (eqs. 26-29): the contact forces
+τ_p n_p and the constraint rows k_s R_k, and per segment of contact points the gap Hessian term
+−Σ τ ∇²g over A's and B's nodes and the constraint rows −k_s Φ ∇g of its multipliers, as dense
+blocks with their DOF indices for the assembly layer to insert."""
 from __future__ import annotations
 
 import numpy as np
@@ -15,6 +16,22 @@ Z = 2 * DOFS_PER_NODE          # the segment's two multiplier nodes
 
 #: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
 CHUNK_POINTS = 2048
+
+
+def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
+    """Add −τ_p N_A n_p on A, τ_p N_B n_p on B and the constraint rows k_s R_k to the local
+    residual ``floc`` of the ``Contact`` c at its evaluation st."""
+    pr = st.pr
+    traction = st.tau[:, None] * pr.n                                  # τ_p n_p
+    for e, N, sign in ((c.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
+        f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
+        pos = st.lpos(c.conn[e])                                          # (P, 3)
+        dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
+        floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
+    # the constraint rows; a function shared with another rank: each adds its own points
+    rows = DOFS_PER_NODE * st.lpos(c.mult_block[c.mults]) + c.space.slot[c.mults]
+    share = c.Phi @ np.ones(len(pr.g)) if c.sum_over_ranks is not None else 1.0
+    floc[rows] += c.stiffness * st.rows.R * share
 
 
 def jacobian_blocks(c, st: ContactState, fixed_mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -2,7 +2,9 @@
 
 The contact term of the virtual work (eq. 12) is −Σ_k z_k δc_k with c_k = k_s ḡ_k the scaled
 weighted gaps and z_k the scaled multipliers (multipliers.py); the contact law (laws.py) says
-which constraints are active.  The residual rows are
+which constraints are active.  Further *terms* (``terms``: the interface shear of a tangential
+law, shear.py) add their own forces, Jacobian blocks, couplings, history and reported fields
+through one protocol, so that a new term needs no change here.  The residual rows are
 
     q:  f_int − f_ext − Σ_p τ_p ∇g_p,   τ_p = k_s Σ_k z_k Φ_kp  (= w_p × contact pressure)
     z:  −c_k (active)  or  −k_s z_k (inactive)
@@ -21,30 +23,16 @@ import time
 import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
-from . import blocks, reports
-from .interfaces import ContactSetupError, find_interfaces
+from . import blocks, couplings, reports
+from .interfaces import find_interfaces
 from .laws import Phase, active_set_rows, make_law
-from .multipliers import build_space
+from .multipliers import build_space, reference_stiffness
 from .points import build_points
 from .projection import Projector
+from .reference_gaps import check_reference_gaps
+from .tangential import make_terms
 from .state import ContactState
 from .weights import WEIGHT_TOL, PointWeights
-
-
-def reference_stiffness(interfaces) -> float:
-    """k_s = E_min h [N/m]: E the small-strain Young's modulus of the softer beam, h = min(element
-    length, √area).  It only scales the multiplier unknowns (the constraint rows then have the
-    size of the stiffness rows); the answer does not depend on it."""
-    best = np.inf
-    for itf in interfaces:
-        for beam in (itf.a, itf.b):
-            mat = beam.material
-            E = getattr(mat, "E", None)
-            if E is None:
-                E = 9.0 * mat.K * mat.mu / (3.0 * mat.K + mat.mu)
-            h = min(beam.x_nodes[2] - beam.x_nodes[0], np.sqrt(beam.section.area))
-            best = min(best, E * h)
-    return float(best)
 
 
 class Contact:
@@ -57,28 +45,20 @@ class Contact:
         self.space = build_space(self.points, interfaces, spec.projection,
                                  reference_stiffness(interfaces) * spec.scaling, spec.per_element)
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
+        #: contact terms beside the normal constraints (a tangential law's interface shear)
+        self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
         self.timers: dict | None = None
-        # multiplier nodes of each segment's functions: its own A element's and the previous
-        # element's (whose end function it shares), −1 where there is only one
-        sm = self.space.seg_mults
-        nodes = np.where(sm >= 0, self.space.node[np.maximum(sm, 0)], -1)
-        first = nodes[:, 0]
-        last = np.max(nodes, axis=1)
-        self.seg_mnodes = np.stack([first, np.where(last != first, last, -1)], axis=1)
-        #: set by a parallel assembly for laws that need whole weighted gaps (unilateral):
-        #: ``sum_over_ranks(values over self.mults)`` and ``all_ranks(flag)`` (both collective)
-        self.sum_over_ranks = None
-        self.all_ranks = None
-        #: ``reduce(values, 'max' | 'min')`` over the ranks (collective; set with the hooks above)
+        self.seg_mnodes = self.space.segment_nodes()
+        #: set by a parallel assembly (collective): ``sum_over_ranks(values over self.mults)``
+        #: (whole weighted gaps), ``all_ranks(flag)``, ``reduce(values, 'max' | 'min' | 'sum')``
+        self.sum_over_ranks = self.all_ranks = None
         self.reduce = lambda values, op: values
         #: status changes of the multipliers this rank evaluates, counted over the run
         self.status_changes = 0
-        #: the law may change the status at the next evaluation: once per Newton iteration (set
-        #: by each Jacobian), so that a line search's trial points (bt, l2, cp) compare one
-        #: residual function; with the full step (basic) every iterate decides
+        #: the law may change the status at the next evaluation: set by each Jacobian, so that a
+        #: line search's trial points compare one residual function (basic: every iterate decides)
         self.allow_update = True
-        #: the unilateral law's tolerance [m]: a penetration or a pull (z) smaller than this does
-        #: not change a constraint's status (rounding of positions in a touching reference)
+        #: the unilateral law's tolerance [m]: a smaller penetration or pull (z) changes no status
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
@@ -89,10 +69,8 @@ class Contact:
         # and segment multiplier node; the local segments, points and multipliers, which of those
         # multipliers this rank reports, and Φ restricted to them
         empty = np.zeros(0, dtype=np.int64)
-        self.conn, self.mult_block, self.seg_blocks = empty, empty, empty
-        self.segments, self.local, self.mults = empty, empty, empty
-        self.owned = np.zeros(0, dtype=bool)
-        self.Phi = None
+        self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
+        self.owned, self.Phi = np.zeros(0, dtype=bool), None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
         check_reference_gaps(self)
@@ -149,7 +127,7 @@ class Contact:
         """Node blocks (PETSc numbering) the local evaluation reads: the A and B elements of the
         local points, any B element a projection wanted but did not have, the multiplier nodes."""
         els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local],
-                              self.projector.wanted])
+                              self.projector.wanted] + [t.required_elements(self) for t in self.terms])
         return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]))
 
     def set_available(self, needed: np.ndarray) -> None:
@@ -167,28 +145,12 @@ class Contact:
         return self.projector.eB[self.local].copy()
 
     def node_couplings(self) -> tuple[np.ndarray, np.ndarray]:
-        """Node-block couplings (PETSc numbering) of the local segments now: per segment its A
-        nodes, the nodes of every B element its points project onto and its multiplier node,
-        all with all.  Couplings that sliding creates later are added when they first occur."""
-        if len(self.local) == 0:
-            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-        seg = self.points.seg[self.local]
-        seg_b = np.unique(np.stack([seg, self.projector.eB[self.local]], 1), axis=0)
-        e_a = self.points.seg_eA[seg_b[:, 0]]
-        group = np.concatenate([self.conn[e_a], self.conn[seg_b[:, 1]], self.seg_blocks[seg_b[:, 0]]],
-                               axis=1)                                         # (pairs, 8), −1 unused
-        a = np.repeat(group, 8, axis=1).ravel()
-        b = np.tile(group, (1, 8)).ravel()
-        ok = (a >= 0) & (b >= 0)
-        rows, cols = [a[ok]], [b[ok]]
-        # a segment on several B elements also couples those elements with each other
-        first = np.searchsorted(seg_b[:, 0], seg_b[:, 0])
-        for i in np.flatnonzero(first != np.arange(len(seg_b))):
-            others = self.conn[seg_b[first[i]:i, 1]].ravel()
-            mine = self.conn[seg_b[i, 1]]
-            rows += [np.repeat(mine, len(others)), np.tile(others, 3)]
-            cols += [np.tile(others, 3), np.repeat(mine, len(others))]
-        return np.concatenate(rows), np.concatenate(cols)
+        """Node-block couplings of the local segments now (``couplings.node_couplings``)."""
+        return couplings.node_couplings(self)
+
+    def coupling_graph(self) -> couplings.ContactGraph:
+        """The element pairs the contact couples and its work per element (for partitions)."""
+        return couplings.coupling_graph(self)
 
     # ---------------------------------------------------------------- evaluation
     def evaluate(self, xl: np.ndarray, needed: np.ndarray) -> ContactState:
@@ -235,6 +197,7 @@ class Contact:
         tau = self.stiffness * (self.Phi.T @ (z * rows.load)) * weight
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos,
                           rows=rows, weight=weight)
+        st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}
         self._cache = None if self.missing else (xl.copy(), needed, st)
         if self.timers is not None:
             self.timers["contact_projection"] += time.perf_counter() - t0
@@ -244,23 +207,28 @@ class Contact:
         """Add the contact forces and the constraint rows to the local residual ``floc``;
         False when a point slid out of its search window."""
         st = self.evaluate(xl, needed)
-        pr = st.pr
-        traction = st.tau[:, None] * pr.n                                  # τ_p n_p
-        for e, N, sign in ((self.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
-            f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
-            pos = st.lpos(self.conn[e])                                       # (P, 3)
-            dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
-            floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
-        # the constraint rows; a function shared with another rank: each adds its own points
-        rows = DOFS_PER_NODE * st.lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]
-        share = self.Phi @ np.ones(len(pr.g)) if self.sum_over_ranks is not None else 1.0
-        floc[rows] += self.stiffness * st.rows.R * share
-        return bool(pr.in_window)
+        blocks.add_normal_forces(self, st, floc)
+        for term in self.terms:
+            term.add_forces(self, st, floc)
+        return bool(st.pr.in_window)
 
     def jacobian_blocks(self, xl: np.ndarray, needed: np.ndarray,
                         fixed_mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The contact blocks of the Jacobian at the local state (``blocks.jacobian_blocks``)."""
-        return blocks.jacobian_blocks(self, self.evaluate(xl, needed), fixed_mask)
+        """The contact blocks of the Jacobian at the local state (``blocks.jacobian_blocks``
+        and each term's)."""
+        st = self.evaluate(xl, needed)
+        return blocks.jacobian_blocks(self, st, fixed_mask) + [
+            b for t in self.terms for b in t.jacobian_blocks(self, st, fixed_mask)]
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether the Jacobian is symmetric (every term's law is)."""
+        return all(t.symmetric for t in self.terms)
+
+    @property
+    def solver_defaults(self) -> dict:
+        """PETSc option defaults the terms' laws ask for (e.g. a line search)."""
+        return {k: v for t in self.terms for k, v in t.options.items()}
 
     # ---------------------------------------------------------------- checks
     def begin_phase(self, phase: Phase, previous: Phase | None = None) -> None:
@@ -277,26 +245,35 @@ class Contact:
         """Whether the last evaluation's projections all converged (this rank)."""
         return self._cache is not None and self._cache[2].pr.converged
 
-    def restore_state(self, projection: np.ndarray | None, status: np.ndarray | None) -> None:
-        """A restart's projection state (points, 3) and multiplier status (multipliers,)."""
+    def restore_state(self, projection: np.ndarray | None, status: np.ndarray | None,
+                      fields: dict | None = None) -> None:
+        """A restart's projection state (points, 3), multiplier status (multipliers,) and the
+        terms' state (``fields``: the written level's contact fields, every point)."""
         if projection is not None:
             self.projector.set_state(projection)
             self.weights.set(self.projector.weights_of_state())
         if status is not None:
             self.status = np.asarray(status, dtype=bool).copy()
+        for term in self.terms:
+            term.set_state(fields)
         self._cache = None
         self.checkpoint()
 
     def checkpoint(self) -> None:
-        self.projector.checkpoint()
+        """A converged state: the terms keep their history (from the last evaluation, the
+        converged state's), then every state is saved for a cut-back."""
+        if self._cache is not None:
+            for term in self.terms:
+                term.accept(self, self._cache[2])
         self._saved_status = self.status.copy()
-        self.weights.checkpoint()
+        for part in [self.projector, self.weights] + self.terms:
+            part.checkpoint()
 
     def restore(self) -> None:
         self._cache = None
-        self.projector.restore()
         self.status = self._saved_status.copy()
-        self.weights.restore()
+        for part in [self.projector, self.weights] + self.terms:
+            part.restore()
 
     def refresh_weights(self) -> bool:
         """After a converged solve: bring the points' weights up to their partners' places in
@@ -309,57 +286,10 @@ class Contact:
             self._cache = None                  # the residual at this state changed
         return changed
 
-    # ---------------------------------------------------------------- reports
-    def describe(self) -> list[str]:
-        ka, kc = self.space.degrees
-        lines = [f"contact: {self.law.describe()}; Lagrange multipliers (pressure of degree {ka} "
-                 f"along the beam x {kc} across the interface per element, {self.n_multipliers} in "
-                 f"all); {self.points.n_points} points ({self.spec.axial_points} axial x "
-                 f"{self.spec.curve_points} per curve piece); unknowns scaled by k_s = "
-                 f"{self.stiffness:.4g} N/m"]
-        for itf in self.interfaces:
-            lines.append(f"  interface {itf.name}: {itf.n_points} points on {itf.a.name}, "
-                         f"projected onto {itf.b.name}")
-        return lines
-
-    def gap_sums(self, xl: np.ndarray, needed: np.ndarray) -> np.ndarray:
-        """Per interface the local parts of ``reports.GAP_COLUMNS`` at the local state."""
-        return reports.gap_sums(self, self.evaluate(xl, needed))
-
-    def gap_report(self, sums: np.ndarray) -> dict:
-        """Per-interface statistics from (rank-combined) ``gap_sums``."""
-        return reports.gap_report(self.interfaces, sums)
-
-    def point_fields(self, xl: np.ndarray, needed: np.ndarray, q0_of) -> dict:
-        """Per local point and owned multiplier fields for the output (``reports.point_fields``)."""
-        return reports.point_fields(self, self.evaluate(xl, needed), q0_of)
-
-
-def check_reference_gaps(contact) -> None:
-    """The reference configuration must be gap-free (sliding) or not penetrating
-    (unilateral): evaluated with every point local, then the projection state is reset."""
-    n_blocks = contact.model.n_nodes + contact.space.n_nodes
-    xl = np.zeros((n_blocks, 6, 3))
-    xl[:contact.model.n_nodes] = contact.model.q0
-    st = contact.evaluate(xl, np.arange(n_blocks))
-    size = max(np.sqrt(b.section.area) for b in contact.model.beams)
-    g = st.pr.g[st.pr.valid]
-    contact.restore()
-    if contact.law.decides_activity:          # unilateral: touching or apart
-        if not st.pr.in_window or np.min(g, initial=0.0) < -1e-9 * size:
-            raise ContactSetupError("the bodies interpenetrate in the reference configuration "
-                                f"(gap {np.min(g):.3e} m); separate them")
-        return
-    gap = np.linalg.norm(st.pr.d, axis=1)
-    if not st.pr.in_window or gap.max() > 1e-9 * size:
-        raise ContactSetupError(f"the interfaces do not match in the reference configuration "
-                                f"(largest gap {gap.max():.3e} m); neighbours must share "
-                                "their interface curve and element boundaries")
-
 
 def build_contact(model, spec, log=print) -> Contact:
     """Contact from the spec; prints the interfaces and the multiplier space."""
     contact = Contact(model, spec, find_interfaces(model, spec))
-    for line in contact.describe():
+    for line in reports.describe(contact):
         log("[ancf]   " + line)
     return contact

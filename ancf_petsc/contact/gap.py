@@ -13,6 +13,9 @@ tangents' variation), the metric a = TᵀT, the curvature b_αβ = n·Y_,αβ, H
 
 It follows from δg = nᵀD δq, the rotation of the normal δn = −a^{αβ}(n·δT_α) T_β and the
 linearised projection H Δζ = (U + g V) Δq.  No division by g: the formula holds on the surface.
+The same two give the normal's gradient (``normal_gradient``, for a tangential law):
+
+    ∇n = −T a⁻¹ (V + b H⁻¹ (U + g V)),   U = [u₁ u₂]ᵀ, V = [v₁ v₂]ᵀ (2 × 108).
 """
 from __future__ import annotations
 
@@ -55,3 +58,16 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
     W[:, SLOTS:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
     return W.reshape(P, 108, 4), C
 
+
+
+def normal_gradient(pr) -> np.ndarray:
+    """∇n of every point (P, 3, 108): B's unit normal at the closest point, as the point and
+    B's surface move (the closest point moving with them)."""
+    T = pr.Yz                                                        # (P, 3, 2)
+    a = np.matmul(T.transpose(0, 2, 1), T)
+    b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
+    Hi = _inverse2(a - pr.g[:, None, None] * b)
+    W, _ = gap_hessian_factors(pr)
+    U, V = W[:, :, :2].transpose(0, 2, 1), W[:, :, 2:].transpose(0, 2, 1)     # (P, 2, 108)
+    M = V + b @ Hi @ (U + pr.g[:, None, None] * V)
+    return -(T @ _inverse2(a)) @ M

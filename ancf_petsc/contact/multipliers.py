@@ -65,11 +65,38 @@ class MultiplierSpace:
     def n_nodes(self) -> int:
         return len(self.node_element)
 
+    def segment_nodes(self) -> np.ndarray:
+        """(S, 2) the multiplier nodes of each segment's functions: its own A element's and the
+        previous element's (whose end function it shares), −1 where there is only one."""
+        sm = self.seg_mults
+        nodes = np.where(sm >= 0, self.node[np.maximum(sm, 0)], -1)
+        first, last = nodes[:, 0], np.max(nodes, axis=1)
+        return np.stack([first, np.where(last != first, last, -1)], axis=1)
+
     def padding(self) -> np.ndarray:
         """(nodes, 18) True for the slots no multiplier uses."""
         used = np.zeros((self.n_nodes, SLOTS), dtype=bool)
         used[self.node, self.slot] = True
         return ~used
+
+
+def reference_modulus(beam) -> float:
+    """E [Pa]: the beam's small-strain Young's modulus (from μ and K where no E is given)."""
+    mat = beam.material
+    E = getattr(mat, "E", None)
+    return float(9.0 * mat.K * mat.mu / (3.0 * mat.K + mat.mu) if E is None else E)
+
+
+def reference_size(beam) -> float:
+    """h [m] = min(element length, √area): the length over which a contact force spreads."""
+    return float(min(beam.x_nodes[2] - beam.x_nodes[0], np.sqrt(beam.section.area)))
+
+
+def reference_stiffness(interfaces) -> float:
+    """k_s = E_min h [N/m]: E the small-strain Young's modulus of the softer beam, h = min(element
+    length, √area).  It only scales the multiplier unknowns (the constraint rows then have the
+    size of the stiffness rows); the answer does not depend on it."""
+    return min(reference_modulus(b) * reference_size(b) for itf in interfaces for b in (itf.a, itf.b))
 
 
 def _axial_functions(xi: np.ndarray, degree: int, per_element: bool) -> tuple[np.ndarray, int]:

@@ -12,9 +12,30 @@ GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "s
                ("max_pressure", "max"), ("normal_force", "sum"), ("points", "sum"))
 
 
+def describe(c) -> list[str]:
+    """The ``Contact`` c in the run's header: laws, multipliers, points, interfaces."""
+    ka, kc = c.space.degrees
+    laws = "; ".join([c.law.describe()] + [t.describe() for t in c.terms])
+    lines = [f"contact: {laws}; Lagrange multipliers (pressure of degree {ka} along the beam x {kc} "
+             f"across the interface per element, {c.n_multipliers} in all); {c.points.n_points} points "
+             f"({c.spec.axial_points} axial x {c.spec.curve_points} per curve piece); unknowns scaled "
+             f"by k_s = {c.stiffness:.4g} N/m"]
+    for itf in c.interfaces:
+        lines.append(f"  interface {itf.name}: {itf.n_points} points on {itf.a.name}, "
+                     f"projected onto {itf.b.name}")
+    return lines
+
+
+def report_columns(c) -> tuple:
+    """Per-interface statistics of ``gap_sums`` of the ``Contact`` c: (name, how ranks combine
+    it), ``GAP_COLUMNS`` then each term's."""
+    return GAP_COLUMNS + tuple(col for t in c.terms for col in t.columns)
+
+
 def gap_sums(c, st: ContactState) -> np.ndarray:
-    """Per interface (rows) the local parts of ``GAP_COLUMNS`` of the ``Contact`` c at its state st."""
-    out = np.zeros((len(c.interfaces), len(GAP_COLUMNS)))
+    """Per interface (rows) the local parts of ``report_columns`` of the ``Contact`` c at its
+    evaluation st."""
+    out = np.zeros((len(c.interfaces), len(report_columns(c))))
     if len(c.local) == 0:
         return out
     pr = st.pr
@@ -30,7 +51,8 @@ def gap_sums(c, st: ContactState) -> np.ndarray:
         out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[v], initial=0.0),
                   float(np.sum(pr.g[v] ** 2)), v.sum(),
                   np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
-                  lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()]
+                  lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()] + [
+                  x for t in c.terms for x in t.sums(c, st, on)]
     return out
 
 
@@ -39,11 +61,11 @@ def pressure_coefficients(c, st: ContactState) -> np.ndarray:
     return c.stiffness * st.z * st.active / c.space.area[c.mults]
 
 
-def gap_report(interfaces, sums: np.ndarray) -> dict:
+def gap_report(contact, sums: np.ndarray) -> dict:
     """Per-interface statistics from (rank-combined) ``gap_sums``."""
     out = {}
-    for k, itf in enumerate(interfaces):
-        c = dict(zip([n for n, _ in GAP_COLUMNS], sums[k]))
+    for k, itf in enumerate(contact.interfaces):
+        c = dict(zip([n for n, _ in report_columns(contact)], sums[k]))
         nv = c["valid_points"]
         out[itf.name] = {"max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
                          "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
@@ -51,11 +73,14 @@ def gap_report(interfaces, sums: np.ndarray) -> dict:
                          "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
                          "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
                          "points": int(c["points"])}
+        for term in contact.terms:
+            out[itf.name].update(term.report(c))
     return out
 
 
 def point_fields(c, st: ContactState, q0_of) -> dict:
-    """Per local point: id, interface, current and reference position on A, gap, pressure,
+    """Per local point: id, interface, current and reference position on A, its reference area
+    w_p [m²] (pressure × area × weight is the point's force), gap, pressure,
     slip (the reference position of the point minus that of its partner on B: how far B's
     material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
     multiplier: id, pressure coefficient λ [Pa] and status.  ``q0_of(elements)`` gives
@@ -68,7 +93,9 @@ def point_fields(c, st: ContactState, q0_of) -> dict:
         X0A = X0B = np.zeros((0, 3))
     pressure = np.where(pr.valid, st.tau / c.points.w[idx], 0.0)
     own = c.owned
-    return {"id": idx, "interface": c.points.itf[idx], "x": st.xA, "x0": X0A,
+    terms = {k: v for t in c.terms for k, v in t.fields(c, st).items()}
+    return terms | {"id": idx, "interface": c.points.itf[idx], "x": st.xA, "x0": X0A,
+                    "area": c.points.w[idx],
             "gap": pr.g * pr.valid, "pressure": pressure,
             "slip": (X0A - X0B) * pr.valid[:, None],
             "projection": np.column_stack([pr.eB, pr.xiB, pr.tB]) if len(idx) else np.zeros((0, 3)),

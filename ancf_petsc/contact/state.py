@@ -1,7 +1,7 @@
 """What one evaluation of the contact at a state found (local points and multipliers)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -21,3 +21,4 @@ class ContactState:
     weight: np.ndarray     # (P_loc,) the points' weights in this evaluation (Contact.weights)
     lpos: object           # PETSc node id → position in the local array
     rows: Rows             # the law's constraint rows (laws.Rows)
+    terms: dict = field(default_factory=dict)   # each contact term's evaluation (Contact.terms)

@@ -9,6 +9,8 @@ import socket
 import threading
 import time
 
+import numpy as np
+
 #: errno values that mean the disk (or quota) is full
 NO_SPACE = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
@@ -188,3 +190,16 @@ class DirectoryLock:
             if holder is not None and holder.get("pid") == os.getpid():
                 remove_quietly(self.path)
             self.held = False
+
+
+def plain(obj):
+    """Config data → plain Python types (numpy scalars/arrays become floats/lists)."""
+    if isinstance(obj, dict):
+        return {str(k): plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return plain(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj

@@ -24,6 +24,7 @@ import numpy as np
 import yaml
 
 from ..contact.interfaces import ContactSetupError, find_interfaces
+from ..contact.tangential import TANGENTIAL_LAWS
 from ..errors import InputError
 
 #: config keys that define the model (a restart must not change them; steps, solver, petsc,
@@ -47,6 +48,7 @@ class RestartPoint:
     fingerprint: dict | None = None   # the stored model's (None: written before fingerprints)
     stored_config: dict | None = None  # its config (runs without a fingerprint)
     levels: tuple = ()            # the converged load factors, in order
+    contact_fields: dict | None = None   # the level's contact fields (a contact term's state)
 
 
 def fingerprint(model) -> dict[str, np.ndarray]:
@@ -56,6 +58,10 @@ def fingerprint(model) -> dict[str, np.ndarray]:
            "supported_dofs": np.asarray(model.fixed_dofs, dtype=float),
            "loads": np.asarray(model.f_ext, dtype=float),
            "length": np.array([spec.length]), "twist_deg": np.array([spec.twist_deg])}
+    if np.any(model.prescribed):                  # displacement control (absent: as before)
+        out["prescribed_displacements"] = np.asarray(model.prescribed, dtype=float)
+    for k, g in enumerate(g for g in model.loading if g.curve is not None):
+        out[f"load_curve_{k}"] = np.concatenate([np.ravel(g.curve.points), g.forces, g.moves])
     for b in model.beams:
         m = b.material
         params = [float(v) for k, v in sorted(vars(m).items()) if isinstance(v, (int, float))]
@@ -71,9 +77,12 @@ def fingerprint(model) -> dict[str, np.ndarray]:
             out[f"beams/{b.name}/fibres"] = np.asarray(b.fibres, dtype=float)
     c = spec.contact
     if c is not None:
-        words = json.dumps({"mode": c.mode, "projection": list(c.projection), "axial_points": c.axial_points,
-                            "curve_points": c.curve_points, "per_element": c.per_element,
-                            "interfaces": _resolved_interfaces(model, c)}, sort_keys=True)
+        words = {"mode": c.mode, "projection": list(c.projection), "axial_points": c.axial_points,
+                 "curve_points": c.curve_points, "per_element": c.per_element,
+                 "interfaces": _resolved_interfaces(model, c)}
+        if c.tangential is not None and TANGENTIAL_LAWS[c.tangential.law] is not None:   # frictionless: as before
+            words["tangential"] = vars(c.tangential)
+        words = json.dumps(words, sort_keys=True)
         out["contact"] = np.frombuffer(words.encode(), dtype=np.uint8).astype(float)
     return out
 
@@ -206,7 +215,9 @@ def read_restart(directory: str) -> RestartPoint:
                                  fingerprint=None if fp is None else _datasets(fp),
                                  stored_config=stored,
                                  levels=tuple(float(steps[f"step_{i:04d}"].attrs["load_factor"])
-                                              for i in range(1, k + 1)))
+                                              for i in range(1, k + 1)),
+                                 contact_fields=({key: v[()] for key, v in g["contact"].items()}
+                                                 if "contact" in g else None))
     except (OSError, KeyError) as exc:
         raise InputError("--restart", f"{path}: not a readable results file ({exc})") from None
     summary["steps"] = summary.get("steps", [])[:point.step]

@@ -26,35 +26,18 @@ import time
 
 import h5py
 import numpy as np
-import yaml
 
 from ..model.beams import Model
 from ..model.plausibility import strain_warning
-from ..physics import element3363 as el
 from ..status import OUTPUT_ERROR
 from ..version import version_info
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
-from .restart import fingerprint
+from .groups import truncate_levels, write_level_group, write_model_group
 from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 
 #: space set aside for the final summary.json (released on a write error and at the end)
 RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
-#: the "frame" attribute of /model/beams/<name>/section_points and section_outline
-CENTROID_FRAME = "section centroid, m (add the beam group's centroid attribute for the tendon frame)"
-
-
-def plain(obj):
-    """Config data → plain Python types (numpy scalars/arrays become floats/lists)."""
-    if isinstance(obj, dict):
-        return {str(k): plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return plain(obj.tolist())
-    if isinstance(obj, np.generic):
-        return obj.item()
-    return obj
 
 
 class ResultsWriter:
@@ -142,48 +125,13 @@ class ResultsWriter:
                                         f"{os_reason(exc)}") from None
         try:
             with h5py.File(self.h5_path, "w") as h5:
-                self._write_model(h5, layout, run_info)
+                write_model_group(h5, self.model, layout, run_info, self.summary["version"])
         except (OSError, RuntimeError) as exc:
             self._release_reserve()
             raise OutputError(self.h5_path, f"cannot write: {os_reason(exc)}") from None
         if self.sampler is not None:
             self._write_series("surface", 0, 0.0, surface_cells(self.sampler, model.q0))
         self._write_summary()
-
-    def _write_model(self, h5, layout, run_info: dict) -> None:
-        spec, model = self.model.spec, self.model
-        info = self.summary["version"]
-        h5.attrs["ancf_version"] = info["version"]
-        h5.attrs["ancf_git"] = info["git"] or ""
-        h5.attrs["status"] = "running"
-        g = h5.create_group("model")
-        g.attrs["name"] = spec.name
-        g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
-        g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
-        g.create_dataset("reference_nodal_vectors", data=model.q0)
-        fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
-        for key, arr in fingerprint(model).items():
-            fp.create_dataset(key, data=arr)
-        part = g.create_group("partition")
-        part.create_dataset("element_rank", data=layout.elem_owner)
-        part.create_dataset("node_rank", data=layout.node_owner)
-        part.create_dataset("petsc_node_of_model_node", data=layout.perm)
-        for key, val in (run_info.get("partition") or {}).items():
-            part.attrs[key] = val
-        for beam in model.beams:
-            b = g.create_group(f"beams/{beam.name}")
-            b.create_dataset("connectivity", data=beam.connectivity)
-            b.create_dataset("x_nodes", data=beam.x_nodes)
-            # (y, z) relative to the section's area centroid (the beam axis), not the tendon frame
-            b.create_dataset("section_points", data=beam.section.points).attrs["frame"] = CENTROID_FRAME
-            b.create_dataset("section_weights", data=beam.section.weights).attrs["units"] = "m^2"
-            b.create_dataset("section_outline", data=beam.section.boundary_polyline(8)
-                             ).attrs["frame"] = CENTROID_FRAME
-            b.attrs["centroid"] = beam.section.centroid
-            b.attrs["area"] = beam.section.area
-        steps = h5.create_group("steps")
-        steps.attrs["converged"] = 0
-        steps.attrs["last_load_factor"] = 0.0
 
     def _resume(self) -> None:
         """Continue the files of ``self.restart`` (a ``restart.RestartPoint``): the levels after
@@ -193,26 +141,8 @@ class ResultsWriter:
         self.summary["restarted_from"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["steps"] = list(point.summary.get("steps", []))
         self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
-        loads = [0.0] + [st["load_factor"] for st in self.summary["steps"]]
-        for series in self.vtk.entries:
-            for k in range(len(loads)):
-                if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
-                    self.vtk.entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
-        for name in os.listdir(self.dir):
-            stem = name.split("_")[-1].split(".")[0]
-            if name.startswith(("surface_", "contact_")) and stem.isdigit() and int(stem) > point.step:
-                os.remove(os.path.join(self.dir, name))
-        try:
-            with h5py.File(self.h5_path, "a") as h5:
-                steps = h5["steps"]
-                for name in list(steps):
-                    if name.endswith(".partial") or int(name.split("_")[1]) > point.step:
-                        del steps[name]
-                steps.attrs["converged"] = point.step
-                steps.attrs["last_load_factor"] = point.load_factor
-                h5.attrs["status"] = "running"
-        except (OSError, RuntimeError) as exc:
-            raise OutputError(self.h5_path, f"cannot continue: {os_reason(exc)}") from None
+        self.vtk.resume([0.0] + [st["load_factor"] for st in self.summary["steps"]])
+        truncate_levels(self.h5_path, point.step, point.load_factor)
         with open(os.path.join(self.dir, RESERVE), "wb") as fh:
             fh.write(b"\0" * RESERVE_BYTES)
         self._write_summary()
@@ -296,18 +226,7 @@ class ResultsWriter:
             with h5py.File(self.h5_path, "a") as h5:
                 steps = h5["steps"]
                 g = steps.create_group(name + ".partial")      # renamed once complete
-                g.create_dataset("nodal_vectors", data=q)
-                g.attrs["load_factor"] = record.load_factor
-                g.attrs["snes_iterations"] = record.iterations
-                g.attrs["snes_reason"] = record.reason
-                g.attrs["substeps"] = record.substeps
-                g.attrs["wall_time"] = record.wall_time
-                g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
-                    else record.negative_eigenvalues
-                if contact is not None:
-                    write_contact_group(g, contact, path["blocks"][self.model.n_nodes:])
-                if path is not None:
-                    write_restart_group(g, record, path)
+                write_level_group(g, record, q, extra, contact, path, self.model.n_nodes)
                 steps.move(name + ".partial", name)
                 steps.attrs["converged"] = k
                 steps.attrs["last_load_factor"] = record.load_factor
@@ -365,25 +284,3 @@ class ResultsWriter:
         except (OSError, RuntimeError):
             pass                                   # results.h5 keeps its levels; the summary has the status
         return problem
-
-
-def write_restart_group(g, record, path: dict) -> None:
-    """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
-    r = g.create_group("restart")
-    r.create_dataset("blocks", data=path["blocks"])
-    r.create_dataset("increment_blocks", data=path["increment_blocks"])
-    r.attrs["increment"] = record.increment
-    r.attrs["last_increment"] = record.last_increment
-    r.attrs["accepted_negative"] = path["accepted_negative"]
-
-
-def write_contact_group(g, contact: dict, multipliers: np.ndarray) -> None:
-    """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
-    c = g.create_group("contact")
-    c.attrs["units"] = "SI: m, Pa; slip = reference position of the point minus its partner's on B"
-    for key in ("x", "x0", "gap", "pressure", "slip", "interface", "projection",
-                "multiplier_pressure", "multiplier_active"):
-        c.create_dataset(key, data=contact[key])
-    if "weight" in contact:           # 0: out of contact (gap, pressure, slip written as 0)
-        c.create_dataset("weight", data=contact["weight"])
-    c.create_dataset("multiplier_blocks", data=multipliers)

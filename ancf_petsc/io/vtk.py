@@ -97,13 +97,19 @@ def surface_cells(sampler: SurfaceSampler, q: np.ndarray) -> tuple:
     return pts, [("quad", quads)] + [("polygon", c[None, :]) for c in caps], data
 
 
+#: point fields that are no data to look at (ids, positions, the projection; ``shear_*`` and
+#: ``multiplier_*`` are a term's restart state and the multipliers)
+NOT_DRAWN = ("id", "x", "x0", "projection", "area")
+
+
 def contact_cells(fields: dict) -> tuple:
-    """(points, cells, point data) of the contact points (``contact_reports.contact_fields``)."""
-    data = {"gap": fields["gap"], "pressure": fields["pressure"], "slip": fields["slip"],
-            "slip_axial": fields["slip"][:, 0], "interface": fields["interface"].astype(float)}
-    if "weight" in fields:                 # 0: out of contact (past B's curve or beam end)
-        data["weight"] = fields["weight"]
-    return fields["x"], [("vertex", np.arange(len(fields["x"]))[:, None])], data
+    """(points, cells, point data) of the contact points (``contact_reports.contact_fields``):
+    every per-point field (gap, pressure, slip, a term's shear stress, ...), and the axial slip."""
+    n = len(fields["x"])
+    data = {k: np.asarray(v, dtype=float) for k, v in fields.items()       # not the restart state
+            if k not in NOT_DRAWN and not k.startswith(("multiplier", "shear_")) and len(v) == n}
+    data["slip_axial"] = fields["slip"][:, 0]
+    return fields["x"], [("vertex", np.arange(n)[:, None])], data
 
 
 #: surface points from which ``output.vtk_compress: auto`` compresses a VTU: zlib makes the files
@@ -144,3 +150,16 @@ class VtkSeries:
             raise
         self.entries[series].append((lam, name))
         return size
+
+    def resume(self, loads: list[float]) -> None:
+        """Continue the series of a restarted run whose levels 0 … n have load factors ``loads``:
+        their files are listed again, the VTUs of later levels removed."""
+        for series in self.entries:
+            for k in range(len(loads)):
+                if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
+                    self.entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
+        for name in os.listdir(self.dir):
+            stem = name.split("_")[-1].split(".")[0]
+            if name.startswith(tuple(f"{series}_" for series in self.entries)) and stem.isdigit() \
+                    and int(stem) >= len(loads):
+                os.remove(os.path.join(self.dir, name))

@@ -86,15 +86,34 @@ class Beam:
 
 
 @dataclass
+class Support:
+    """A boundary condition: its name, node and held DOFs (global ids), for its reaction."""
+    name: str
+    node: int
+    dofs: np.ndarray
+
+
+@dataclass
 class Model:
     spec: ModelSpec
     beams: list[Beam]
     q0: np.ndarray                 # (n_nodes, 6, 3) reference nodal vectors
     fixed_dofs: np.ndarray         # sorted global DOF ids held at their reference value
-    f_ext: np.ndarray              # (n_dofs,) external generalised forces at load factor 1
+    loading: list                  # LoadGroups (loading.py): forces and prescribed displacements
     probes: dict[str, tuple[int, int]]   # name → (global node, vector slot)
     geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
     warnings: list = field(default_factory=list)          # implausible sizes (plausibility.py)
+    supports: list = field(default_factory=list)         # the boundary conditions (Support)
+
+    @property
+    def f_ext(self) -> np.ndarray:
+        """(n_dofs,) every external generalised force at multiplier 1 (its curve's)."""
+        return sum(g.forces for g in self.loading)
+
+    @property
+    def prescribed(self) -> np.ndarray:
+        """(n_dofs,) every prescribed displacement at multiplier 1 (0: held in place)."""
+        return sum(g.moves for g in self.loading)
 
     @property
     def n_nodes(self) -> int:

@@ -17,8 +17,9 @@ from ..physics.laws import make_material
 from ..physics.section import Section, make_circle, make_ellipse, make_outline, make_rectangle
 from ..physics.sections_file import inline_loop, load_sections_file
 from ..physics.spline import SectionError
-from .beams import Beam, Model
+from .beams import Beam, Model, Support
 from .fibre_setup import set_fibre_directions
+from .loading import LoadCurve, LoadGroup, group_for
 from .plausibility import size_warnings
 
 _SECTIONS_FILE_CACHE: dict = {}
@@ -219,16 +220,25 @@ def build_model(spec: ModelSpec) -> Model:
         nodes = beam.node_offset + np.arange(beam.n_nodes)
         fixed.update((DOFS_PER_NODE * nodes[:, None] + (3 * np.array(held, dtype=int)[:, None] + np.arange(3)).ravel())
                      .ravel().tolist())
+    n_dofs = DOFS_PER_NODE * q0.shape[0]
+    loading = [LoadGroup(None, np.zeros(n_dofs), np.zeros(n_dofs))]      # the λ-proportional one
+    supports = []
     for bc in spec.boundary_conditions:
         node = beams[bc.beam].node_offset + bc.node
-        fixed.update(DOFS_PER_NODE * node + 3 * v + c for v, c in bc.dofs)
+        dofs = [DOFS_PER_NODE * node + 3 * v + c for v, c in bc.dofs]
+        group = group_for(loading, None if bc.curve is None else LoadCurve(bc.curve), n_dofs)
+        for v, c, value in bc.displacement:
+            dofs.append(DOFS_PER_NODE * node + 3 * v + c)
+            group.moves[dofs[-1]] = value
+        fixed.update(dofs)
+        supports.append(Support(bc.name, node, np.array(sorted(dofs), dtype=np.int64)))
     fixed_dofs = np.array(sorted(fixed), dtype=np.int64)
 
-    f_ext = np.zeros(DOFS_PER_NODE * q0.shape[0])
     for ld in spec.loads:
         beam = beams[ld.beam]
         node = beam.node_offset + ld.node
         force = np.asarray(ld.force)
+        f_ext = group_for(loading, None if ld.curve is None else LoadCurve(ld.curve), n_dofs).forces
         if ld.kind == "force":
             f_ext[DOFS_PER_NODE * node:DOFS_PER_NODE * node + 3] += force
         else:
@@ -242,5 +252,5 @@ def build_model(spec: ModelSpec) -> Model:
 
     probes = {p.name: (beams[p.beam].node_offset + p.node, el.VECTOR_INDEX[p.vector])
               for p in spec.probes}
-    return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, f_ext=f_ext, probes=probes,
-                 geometry_report=report, warnings=size_warnings(spec, beams))
+    return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,
+                 geometry_report=report, warnings=size_warnings(spec, beams), supports=supports)

@@ -38,10 +38,9 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
             a, b = np.meshgrid(els, els)
             off = a != b
             rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), DOFS_PER_NODE))
-    if contact is not None:
-        eA, eB = contact.points.eA, contact.projector.eB
-        pair = np.unique(np.stack([eA, eB], 1), axis=0, return_counts=True)
-        (pa, pb), cnt = pair[0].T, pair[1]
+    graph = None if contact is None else contact.coupling_graph()
+    if graph is not None:
+        (pa, pb), cnt = graph.pairs.T, graph.counts
         keep = pa != pb
         rows += [pa[keep], pb[keep]]; cols += [pb[keep], pa[keep]]
         wts += [DOFS_PER_NODE * cnt[keep], DOFS_PER_NODE * cnt[keep]]
@@ -53,9 +52,9 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
     G.sort_indices()
     vw = np.concatenate([np.full(b.n_elements, len(b.section.weights) * b.axial_points)
                          for b in model.beams])
-    if contact is not None:
+    if graph is not None:
         # a contact point (projection + Hessian) costs about as much as CONTACT_COST Gauss points
-        vw = vw + CONTACT_COST * np.bincount(contact.points.eA, minlength=n_el)
+        vw = vw + CONTACT_COST * graph.points_per_element
     return G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data.astype(np.int64), vw
 
 
@@ -117,7 +116,7 @@ OWNERS = {"metis": metis_owner, "beams": beam_owner}
 def make_layout(model: Model, method: str, size: int, rank: int, contact=None, comm=None) -> Layout:
     """Layout by ``method`` ('blocks' | 'metis' | 'beams'); METIS runs on rank 0 and is
     broadcast."""
-    extra = None if contact is None else contact.space.node_element
+    extra = None if contact is None else contact.coupling_graph().multiplier_node_element
     if method == "blocks" or size == 1:
         return block_layout(model.connectivity(), model.n_nodes, size, rank, extra)
     owner = OWNERS[method](model, size, contact) if rank == 0 else None
@@ -140,9 +139,10 @@ def partition_stats(layout: Layout, model: Model, contact=None) -> dict:
     out = {"method": layout.method, "elements_per_rank": np.bincount(own, minlength=layout.size).tolist(),
            "nodes_per_rank": np.diff(layout.ranges).tolist(), "cut_beam_nodes": cut_nodes}
     if contact is not None:
-        eA, eB = contact.points.eA, contact.projector.eB
-        pairs = np.unique(np.stack([eA, eB], 1), axis=0)
+        graph = contact.coupling_graph()
+        pairs = graph.pairs
         out["contact_pairs"] = int(len(pairs))
-        out["cut_contact_pairs"] = int(np.sum(own[pairs[:, 0]] != own[pairs[:, 1]]))
-        out["cut_contact_points"] = int(np.sum(own[eA] != own[eB]))
+        cut = own[pairs[:, 0]] != own[pairs[:, 1]]
+        out["cut_contact_pairs"] = int(np.sum(cut))
+        out["cut_contact_points"] = int(np.sum(graph.counts[cut]))
     return out

@@ -50,6 +50,16 @@ class ElementBlock:
 MATRIX_TYPES = ("aij", "sbaij")
 
 
+def check_matrix_type(model: Model, matrix_type: str) -> None:
+    """ValueError unless ``matrix_type`` is one of MATRIX_TYPES and fits the model (SBAIJ node
+    blocks need all six nodal vectors on every beam)."""
+    if matrix_type not in MATRIX_TYPES:
+        raise ValueError(f"matrix_type must be one of {MATRIX_TYPES}, not {matrix_type!r}")
+    if matrix_type == "sbaij" and not node_blocks_fit(model):
+        raise ValueError("SBAIJ node blocks need every beam to use all six nodal vectors "
+                         "(element 3363); use matrix_type 'aij'")
+
+
 def node_blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """Node ids (n, D/18) of DOF index blocks (n, D) made of whole 18-DOF nodes, and a mask
     (n, D) of the held DOFs (−1) of nodes that have free DOFs (None when there are none).
@@ -79,10 +89,18 @@ def node_blocks_fit(model: Model) -> bool:
     return all(len(b.vectors) == 6 for b in model.beams)
 
 
-def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, values: np.ndarray) -> None:
+def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, *values: np.ndarray) -> None:
     """Add dense blocks ``values`` (n, D, D) at DOF indices ``rows`` (n, D; −1 = dropped) to an
     AIJ or SBAIJ ``mat``.  For SBAIJ the DOFs must come as whole nodes (18 consecutive indices
-    18 k … 18 k + 17, held ones −1); its lower triangle is ignored (the blocks are symmetric)."""
+    18 k … 18 k + 17, held ones −1); its lower triangle is ignored (the blocks are symmetric).
+    ``insert_node_blocks(mat, rows, columns, values)``: rectangular blocks (n, R, C), AIJ only."""
+    if len(values) == 2:
+        if mat.getType().endswith("sbaij"):
+            raise ValueError("rectangular blocks (an unsymmetric Jacobian) need an AIJ matrix")
+        cols, vals = values
+        mat.setValuesRCV(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType), vals, ADD)
+        return
+    values = values[0]
     if mat.getType().endswith("sbaij"):
         node, held = node_blocks(rows)
         mat.setValuesBlockedRCV(node, node, zero_held(values, held), ADD)

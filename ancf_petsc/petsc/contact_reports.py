@@ -7,7 +7,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from ..contact import GAP_COLUMNS
+from ..contact import reports
 from ..physics.element3363 import SLOTS
 from .problem import Problem
 
@@ -18,15 +18,16 @@ def contact_gaps(problem: Problem, X: PETSc.Vec) -> dict | None:
     if problem.contact is None:
         return None
     needed = problem.exchange.needed
-    local = problem.exchange.evaluate(X, lambda xl: problem.contact.gap_sums(xl, needed))
+    c = problem.contact
+    local = problem.exchange.evaluate(X, lambda xl: reports.gap_sums(c, c.evaluate(xl, needed)))
     comm = problem.comm.tompi4py()
     out = np.empty_like(local)
     for op, mpi_op in (("max", MPI.MAX), ("sum", MPI.SUM)):
-        cols = [k for k, (_, how) in enumerate(GAP_COLUMNS) if how == op]
+        cols = [k for k, (_, how) in enumerate(reports.report_columns(c)) if how == op]
         part = np.empty((len(local), len(cols)))
         comm.Allreduce(np.ascontiguousarray(local[:, cols]), part, op=mpi_op)
         out[:, cols] = part
-    return problem.contact.gap_report(out)
+    return reports.gap_report(c, out)
 
 
 def contact_fields(problem: Problem, X: PETSc.Vec) -> dict | None:
@@ -41,7 +42,7 @@ def contact_fields(problem: Problem, X: PETSc.Vec) -> dict | None:
     def q0_of(els):
         return q0[conn[els]].reshape(len(els), SLOTS, 3)
     def fields(xl):
-        out = problem.contact.point_fields(xl, problem.exchange.needed, q0_of)
+        out = reports.point_fields(problem.contact, problem.contact.evaluate(xl, problem.exchange.needed), q0_of)
         # the weight each point has in the weighted gaps: 0 for a point whose partner place is
         # past B's curve or beam end (its gap, pressure and slip are then written as 0)
         out["weight"] = problem.contact.weights.values[out["id"]].copy()

@@ -20,9 +20,13 @@ class GhostExchange:
     """Global vector ↔ this rank's local node array (collective methods unless noted)."""
 
     def __init__(self, X: PETSc.Vec, layout: Layout, fixed_mask: np.ndarray, q0_model: np.ndarray,
-                 blocks: list[ElementBlock], contact=None):
+                 blocks: list[ElementBlock], contact=None, moved_model: list | None = None):
         self.X, self.layout, self.fixed_mask, self.contact = X, layout, fixed_mask, contact
         self.q0_model = q0_model                # reference state of every block, model order
+        #: prescribed displacements at multiplier 1 per load group (model order; displacement
+        #: control) and the groups' multipliers now: held DOFs are at q0 + Σ m_g moved_g
+        self.moved_model = list(moved_model or [])
+        self.multipliers = np.zeros(len(self.moved_model))
         self.blocks = blocks
         self.comm = X.getComm()
         conn = np.concatenate([b.nodes.ravel() for b in blocks]) if blocks else np.zeros(0, np.int64)
@@ -33,7 +37,8 @@ class GhostExchange:
         self.xloc: PETSc.Vec | None = None
         self.floc: PETSc.Vec | None = None
         self.held_local = np.zeros(0, dtype=np.int64)    # held DOFs in the local array …
-        self.held_values = np.zeros(0)                   # … and their prescribed values
+        self.held_values = np.zeros(0)                   # … their reference values …
+        self.held_moves = np.zeros((0, 0))               # … and prescribed displacements
         self.rebuilds = 0                       # how often contact pairs changed the exchange
         self.build(contact.required_nodes() if contact is not None else np.zeros(0, dtype=np.int64))
 
@@ -58,6 +63,8 @@ class GhostExchange:
         held = self.fixed_mask[(DOFS_PER_NODE * self.needed[:, None] + np.arange(DOFS_PER_NODE))]
         self.held_local = np.flatnonzero(held.ravel())
         self.held_values = self.q0_model.reshape(-1, DOFS_PER_NODE)[model_node].ravel()[self.held_local]
+        self.held_moves = np.array([m.reshape(-1, DOFS_PER_NODE)[model_node].ravel()[self.held_local]
+                                    for m in self.moved_model]).reshape(len(self.moved_model), -1)
         for blk in self.blocks:
             blk.lnodes = np.searchsorted(self.needed, blk.nodes)
         if self.contact is not None:
@@ -88,7 +95,7 @@ class GhostExchange:
         """The needed node blocks of X (n, 6, 3), with held DOFs at their prescribed values."""
         self.scatter.scatter(X, self.xloc, INSERT, PETSc.ScatterMode.FORWARD)
         xl = self.xloc.getArray().reshape(-1, 6, 3)
-        xl.reshape(-1)[self.held_local] = self.held_values
+        xl.reshape(-1)[self.held_local] = self.held_values + self.multipliers @ self.held_moves
         return xl
 
     def add_to(self, local: np.ndarray, F: PETSc.Vec) -> None:

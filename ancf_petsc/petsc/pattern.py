@@ -120,7 +120,7 @@ class JacobianPattern:
         indices[indptr[held]] = rows[held]
         J.setPreallocationCSR((indptr.astype(PETSc.IntType), indices))
         J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
-        J.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        J.setOption(PETSc.Mat.Option.SYMMETRIC, self.contact is None or self.contact.symmetric)
 
     def _sbaij(self, J: PETSc.Mat) -> None:
         """(Re)set an SBAIJ J's pattern: the node blocks of ``node_pattern`` on or above the

@@ -38,3 +38,24 @@ def elastica_tip(alpha: float, rtol: float = 1e-12) -> tuple[float, float]:
     k0 = brentq(lambda k: shoot(k)[1], 0.0, alpha * 1.0000001 + 1e-12, xtol=1e-15, rtol=1e-15)
     end = shoot(k0)
     return end[2] - 1.0, end[3]
+
+
+def shear_lag_transfer(x: np.ndarray, length: float, ea_core: float, ea_outer: float,
+                       k_line: float, force: float) -> np.ndarray:
+    """Axial force in each outer bar of a symmetric sandwich (shear-lag theory, small strain).
+
+    A core bar (axial stiffness ``ea_core``) between two outer bars (``ea_outer`` each), all
+    held at x = 0, joined along their length by two interfaces that carry k_line (u_core −
+    u_outer) per unit length [N/m²]; the core is pulled by ``force`` at x = L, the outer ends
+    are free.  The slip s = u_core − u_outer solves s'' = s/ℓ², ℓ = (k_line (2/EA_c + 1/EA_o))^(−1/2),
+    s(0) = 0, s'(L) = F/EA_c, and the outer bar carries
+
+        N_o(x) = k_line ℓ² F/EA_c (cosh(L/ℓ) − cosh(x/ℓ)) / cosh(L/ℓ),
+
+    which tends to the bonded share F EA_o / (EA_c + 2 EA_o) at the root as k_line → ∞.
+    """
+    ell = 1.0 / np.sqrt(k_line * (2.0 / ea_core + 1.0 / ea_outer))
+    x = np.asarray(x, dtype=float)
+    # cosh(x/ℓ) / cosh(L/ℓ) with exponentials of non-positive arguments (no overflow for L ≫ ℓ)
+    ratio = np.exp((x - length) / ell) * (1.0 + np.exp(-2.0 * x / ell)) / (1.0 + np.exp(-2.0 * length / ell))
+    return k_line * ell ** 2 * force / ea_core * (1.0 - ratio)

@@ -41,6 +41,8 @@ def _why_not_fieldsplit(model, contact, petsc_options: dict, prefix: str) -> str
     chosen = [k for k in ("pc_type", "ksp_type") if opts.hasName(prefix + k) or k in petsc_options]
     if contact is None or contact.n_multipliers == 0:
         return "it needs contact multipliers (the fascicles' coupling)"
+    if not contact.symmetric:
+        return "its factorisations are LDLᵀ, and the friction of contact.tangential makes the Jacobian unsymmetric"
     if len(model.beams) < 2:
         return "it needs at least two beams"
     if chosen:

@@ -61,43 +61,57 @@ class SolverOptionError(ConfigError):
 SBAIJ_PCS = ("cholesky", "icc", "bjacobi", "asm", "jacobi", "none")
 
 
+#: factorisations that assume a symmetric matrix (refused when the Jacobian is not)
+SYMMETRIC_PCS = ("cholesky", "icc")
+
+
 def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
-                linear: str = "direct") -> str:
+                linear: str = "direct", symmetric: bool = True) -> str:
     """The Jacobian's storage, 'aij' or 'sbaij' (``solver.matrix``; the options in effect are the
     command line's, then the config's ``petsc:``, then ``DEFAULT_OPTIONS``).
 
     ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) or
     the fascicle Schur solver (``linear`` 'fieldsplit') on 3363 beams (3333 beams hold half of
-    each node block at zero)."""
-    pc, factor = factor_package(config_options, prefix)
+    each node block at zero).  An unsymmetric Jacobian (``symmetric`` False: Coulomb friction
+    at an interface) takes AIJ and refuses a symmetric factorisation."""
+    pc, factor = factor_package(config_options, prefix, symmetric)
+    if not symmetric and pc in SYMMETRIC_PCS:
+        raise ConfigError("petsc.pc_type", f"{pc} factors a symmetric matrix, but the friction of "
+                                           "contact.tangential makes the Jacobian unsymmetric; use lu")
     if linear == "fieldsplit":
         pc, factor = "cholesky", "mumps"        # symmetric sub-blocks and MUMPS on the multipliers
     full = node_blocks_fit(model)
     if choice == "auto":
-        return "sbaij" if (pc == "cholesky" and factor == "mumps" and full) else "aij"
+        return "sbaij" if (pc == "cholesky" and factor == "mumps" and full and symmetric) else "aij"
     if choice == "sbaij":
         if not full:
             raise ConfigError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
                                                "half of each node block); use aij or auto")
-        if pc not in SBAIJ_PCS:
-            raise ConfigError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij; "
-                                               f"use aij or auto")
+        if pc not in SBAIJ_PCS or not symmetric:
+            raise ConfigError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij"
+                              + ("" if symmetric else " (an unsymmetric Jacobian: contact.tangential "
+                                 "friction)") + "; use aij or auto")
     return choice
 
 
-def option_in_effect(key: str, config_options: dict, prefix: str = "") -> str:
-    """The value of a PETSc option: command line, else config ``petsc:``, else ``DEFAULT_OPTIONS``."""
+def default_options(symmetric: bool = True) -> dict:
+    """``DEFAULT_OPTIONS``, with LU instead of LDLᵀ for an unsymmetric Jacobian."""
+    return DEFAULT_OPTIONS if symmetric else DEFAULT_OPTIONS | {"pc_type": "lu"}
+
+
+def option_in_effect(key: str, config_options: dict, prefix: str = "", symmetric: bool = True) -> str:
+    """The value of a PETSc option: command line, else config ``petsc:``, else the defaults."""
     opts = PETSc.Options()
     if opts.hasName(prefix + key):
         return str(opts.getString(prefix + key, ""))
-    return str(config_options.get(key, DEFAULT_OPTIONS.get(key, "")))
+    return str(config_options.get(key, default_options(symmetric).get(key, "")))
 
 
-def factor_package(config_options: dict, prefix: str = "") -> tuple[str, str]:
+def factor_package(config_options: dict, prefix: str = "", symmetric: bool = True) -> tuple[str, str]:
     """(pc_type, factorisation package) in effect.  The package defaults to MUMPS for LU and
     Cholesky only: ILU, ICC and the block preconditioners keep PETSc's own default."""
-    pc = option_in_effect("pc_type", config_options, prefix)
-    factor = option_in_effect("pc_factor_mat_solver_type", config_options, prefix)
+    pc = option_in_effect("pc_type", config_options, prefix, symmetric)
+    factor = option_in_effect("pc_factor_mat_solver_type", config_options, prefix, symmetric)
     if not factor and pc in MUMPS_PCS:
         factor = "mumps"
     return pc, factor
@@ -108,7 +122,7 @@ DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
 
 
 def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
-                      prefix: str = "") -> tuple[str, list[str]]:
+                      prefix: str = "", symmetric: bool = True) -> tuple[str, list[str]]:
     """setFromOptions with command line > config ``petsc:`` > defaults; leaves the DB as found
     except for the config's options and the default factorisation options (``DEFERRED_OPTIONS``,
     read by MUMPS at its first symbolic factorisation): those stay for the run, like command-line
@@ -134,7 +148,8 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     except PETSc.Error as exc:
         for key in kept:
             opts.delValue(key)
-        raise SolverOptionError("", refused(exc, config_options, snes.getComm().getSize(), prefix)) from None
+        raise SolverOptionError("", refused(exc, config_options, snes.getComm().getSize(), prefix,
+                                            symmetric)) from None
     finally:
         for key in inserted:
             if key not in kept:
@@ -142,29 +157,32 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     return linesearch, kept
 
 
-def solver_options(config_options: dict, prefix: str = "") -> str:
+def solver_options(config_options: dict, prefix: str = "", symmetric: bool = True) -> str:
     """``-ksp_type gmres -pc_type ilu`` as in effect (for messages)."""
-    pc, factor = factor_package(config_options, prefix)
+    pc, factor = factor_package(config_options, prefix, symmetric)
     text = f"-{prefix}ksp_type {option_in_effect('ksp_type', config_options, prefix)} -{prefix}pc_type {pc}"
     return text + (f" -{prefix}pc_factor_mat_solver_type {factor}" if factor else "")
 
 
-def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "") -> str:
+def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "",
+            symmetric: bool = True) -> str:
     """One line: PETSc's reason, the options in effect and what works instead."""
-    pc, factor = factor_package(config_options, prefix)
-    return (f"PETSc refused the solver options {solver_options(config_options, prefix)} on {ranks} "
+    pc, factor = factor_package(config_options, prefix, symmetric)
+    return (f"PETSc refused the solver options {solver_options(config_options, prefix, symmetric)} on {ranks} "
             f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
 
 
 def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = "",
-                 linear: str = "direct", saddle_point: bool = False) -> dict:
+                 linear: str = "direct", saddle_point: bool = False, symmetric: bool = True,
+                 law_defaults: dict | None = None) -> dict:
     """``DEFAULT_OPTIONS`` completed for this solve: MUMPS where it is the factorisation package,
     its sequential root on a few ranks, room for delayed pivots when the Jacobian is a
     saddle-point matrix (contact multipliers), and the absolute tolerance ``atol``; for the
     fascicle Schur solver (``linear`` 'fieldsplit') ``FIELDSPLIT_OPTIONS`` instead of the
-    factorisation."""
-    defaults = dict(DEFAULT_OPTIONS)
-    _, factor = factor_package(config_options, prefix)
+    factorisation; LU for an unsymmetric Jacobian (``symmetric`` False); the options the
+    model's laws ask for (``law_defaults``, e.g. a line search for friction) over the rest."""
+    defaults = dict(default_options(symmetric)) | (law_defaults or {})
+    _, factor = factor_package(config_options, prefix, symmetric)
     if linear == "fieldsplit":
         defaults = {k: v for k, v in defaults.items()
                     if k not in ("ksp_type", "pc_type") and not k.startswith("mat_mumps_")}

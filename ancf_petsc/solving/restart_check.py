@@ -41,8 +41,8 @@ def check_restart_state(problem, stepper, point, X, directory: str) -> None:
     fnorm = stored_residual(problem, X, point.load_factor)
     steps = point.summary.get("steps") or []
     recorded = steps[-1].get("residual_norm") if steps else None
-    _, atol, _, _ = stepper.snes.getTolerances()
-    bound = allowed_residual(atol, recorded, stepper.rounding_floor)
+    _, atol, _, _ = stepper.solver.snes.getTolerances()
+    bound = allowed_residual(atol, recorded, stepper.solver.rounding_floor)
     if math.isfinite(fnorm) and fnorm <= bound:
         return
     what = ("an element of it is inverted (J <= 0)" if not math.isfinite(fnorm)

@@ -16,6 +16,7 @@ from petsc4py import PETSc
 from .. import status as st
 from ..config.specs import ModelSpec
 from ..errors import InputError
+from ..io.derived import displacement_differences, interface_pairs
 from ..io.files import DirectoryLock, OutputError, prepare_output_dir
 from ..io.restart import check_same_run, read_restart
 from ..io.results import ResultsWriter
@@ -26,6 +27,7 @@ from ..petsc import logging
 from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..petsc.options import unused_command_line_options
 from ..petsc.problem import Problem
+from ..petsc.reactions import reactions as support_reactions
 from ..physics.element3363 import DOFS_PER_NODE
 from .interrupt import RunInterrupted
 from .linear import choose as choose_linear
@@ -139,7 +141,7 @@ class Run:
             self.partition = partition_stats(self.layout, self.model, self.contact)
             self.problem = Problem(self.model, self.layout, comm, self.contact,
                                    matrix_type(self.model, spec.solver.matrix, spec.petsc, prefix,
-                                               self.linear[0]))
+                                               self.linear[0], self.contact is None or self.contact.symmetric))
             self.stepper = None
             if point is None:
                 _check_supports(self.problem)
@@ -187,7 +189,7 @@ class Run:
         """The linear solver's choice and rule; with fieldsplit, its multipliers and how many of
         them lie on the cut between ranks (the interface system, petsc/substructure.py)."""
         out = {"choice": self.linear[0], "rule": self.linear[1]}
-        schur = self.stepper.fascicle_schur if self.stepper else None
+        schur = self.stepper.solver.fascicle_schur if self.stepper else None
         if schur is not None:
             sub = schur.schur
             out.update(multipliers=schur.split.n_multipliers, cut_multipliers=sub.n_gamma,
@@ -200,7 +202,7 @@ class Run:
         if point is None:
             return list(self.spec.steps), None
         if self.contact is not None:
-            self.contact.restore_state(point.projection, point.status)
+            self.contact.restore_state(point.projection, point.status, point.contact_fields)
         path = PathState(X=self.problem.global_vector(point.blocks.ravel()),
                          dX_last=self.problem.global_vector(point.increment_blocks.ravel()),
                          lam=point.load_factor, dlam=point.increment, dlam_last=point.last_increment,
@@ -222,10 +224,17 @@ class Run:
             q = None if blocks is None else blocks[:self.model.n_nodes]
             gaps = contact_gaps(problem, problem.X)        # collective: every rank its own points
             fields = contact_fields(problem, problem.X)
+            reactions = support_reactions(problem, problem.X)
+            extra = {"reactions": {s.name: r.tolist() for s, r in zip(self.model.supports, reactions)}}
+            if gaps is not None:
+                extra["contact"] = gaps
+                if q is not None:          # rank 0
+                    extra["displacement_differences"] = displacement_differences(
+                        self.model, q, interface_pairs(self.contact.interfaces))
             path = None if blocks is None else {
                 "blocks": blocks.reshape(-1, DOFS_PER_NODE), "increment_blocks": increment.reshape(-1, DOFS_PER_NODE),
                 "accepted_negative": stepper.path.accepted_negative}
-            self.writer.write_step(rec, q, {"contact": gaps} if gaps is not None else None, fields, path)
+            self.writer.write_step(rec, q, extra, fields, path)
             self.converged.append(rec)
             self.timings["output"] += time.perf_counter() - t0
         finally:
@@ -332,7 +341,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     spec, comm, say, stepper = run.spec, run.comm, run.say, run.stepper
     records = run.converged
     status, code, message = final_status(records, failure, spec.solver.allow_unstable)
-    unused = [f"petsc.{k}" for k in stepper.unused_config_options] + unused_command_line_options(comm)
+    unused = [f"petsc.{k}" for k in stepper.solver.unused_config_options] + unused_command_line_options(comm)
     timings = dict(run.timings, total=total)
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
     timings.update(run.problem.timers)
@@ -340,8 +349,8 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     exchange = run.exchange_report()
     problem_writing = run.writer.finish(
         status, reason_code=code, message=message, timings=timings,
-        newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.chord.count,
-        preconditioner_reuses=stepper.chord.kept,
+        newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.solver.chord.count,
+        preconditioner_reuses=stepper.solver.chord.kept,
         exchange=exchange,
         jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
@@ -357,7 +366,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
             f"{run.model.n_nodes}; rebuilt {exchange['rebuilds']} times (the set of projected-on "
             "elements changed)")
     reuses = ", ".join(f"{n} with the last {what}" for n, what in
-                       ((stepper.chord.count, "tangent"), (stepper.chord.kept, "preconditioner")) if n)
+                       ((stepper.solver.chord.count, "tangent"), (stepper.solver.chord.kept, "preconditioner")) if n)
     reuses = f" ({reuses})" if reuses else ""
     say(f"[ancf] {status}: {message}; {stepper.newton_iterations} Newton iterations{reuses}, "
         f"{timings['total']:.2f} s (setup {timings['setup']:.2f} s); results in {spec.output.dir}")

@@ -1,4 +1,4 @@
-"""The load stepper's messages: its solver in one line, the linear solver in effect, and why a
+"""The load solver's messages: its solver in one line, the linear solver in effect, and why a
 linear solve failed with what works instead."""
 from __future__ import annotations
 
@@ -9,22 +9,22 @@ from ..petsc.options import mumps_hint, solver_hint
 from .options import factor_package, solver_options
 
 
-def describe(stepper) -> str:
+def describe(solver) -> str:
     """The solver in one line (the run's header)."""
-    ksp = stepper.snes.getKSP()
+    ksp = solver.snes.getKSP()
     pc = ksp.getPC()
-    ls = stepper.linesearch
+    ls = solver.linesearch
     extra = ""
     if pc.getType() in ("lu", "cholesky"):
         extra = f" ({pc.getFactorSolverType()})"
-    if stepper.linear == "fieldsplit":
+    if solver.linear == "fieldsplit":
         extra = " (fascicle Schur: dense fascicle factors, MUMPS LDLT on the multipliers)"
-    rtol, atol, stol, maxit = stepper.snes.getTolerances()
-    return (f"SNES {stepper.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
-            f"{pc.getType()}{extra} on {stepper.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
+    rtol, atol, stol, maxit = solver.snes.getTolerances()
+    return (f"SNES {solver.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
+            f"{pc.getType()}{extra} on {solver.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
             f"stol {stol:.1e} max_it {maxit}; "
-            f"rounding floor |F(q0,0)| {stepper.rounding_floor:.1e}"
-            + ("; chord steps near convergence" if stepper.spec.reuse_tangent else ""))
+            f"rounding floor |F(q0,0)| {solver.rounding_floor:.1e}"
+            + ("; chord steps near convergence" if solver.spec.reuse_tangent else ""))
 
 
 #: what works on the saddle-point Jacobian of a model with contact multipliers (measured on
@@ -35,47 +35,47 @@ SADDLE_POINT_HINT = ("a contact model's Jacobian is a saddle-point matrix (a zer
                      "jacobi and the factorisations of PETSc and SuperLU_DIST fail on it")
 
 
-def failure_detail(stepper, reason: int) -> str:
+def failure_detail(solver, reason: int) -> str:
     """What to try after a failed level: the linear solver's reason and what works, a
     preconditioner that solves nothing, or a Newton budget too small for an active set."""
     if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
-        return linear_solver_detail(stepper, reason)
+        return linear_solver_detail(solver, reason)
     if reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT:
         return ""
-    ksp = stepper.snes.getKSP()
+    ksp = solver.snes.getKSP()
     if ksp.getType() == "preonly" and ksp.getPC().getType() == "none":
         return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
-                "itself; drop -pc_type none" + ("" if stepper.problem.contact is None else
+                "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
                                                f"; {SADDLE_POINT_HINT}") + ")")
-    contact = stepper.problem.contact
+    contact = solver.problem.contact
     if contact is not None and contact.law.decides_activity:
-        maxit = stepper.snes.getTolerances()[3]
+        maxit = solver.snes.getTolerances()[3]
         return (f" (unilateral contact changes its active set within a level and may need more than "
                 f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
     return ""
 
 
-def linear_solver_detail(stepper, reason: int) -> str:
+def linear_solver_detail(solver, reason: int) -> str:
     """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
     if reason != PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
         return ""
     kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
-               if not k.startswith("_")}.get(stepper.ksp_reason, str(stepper.ksp_reason))
-    infog1 = mumps_error(stepper.snes.getKSP())
-    if stepper.linear == "fieldsplit":
+               if not k.startswith("_")}.get(solver.ksp_reason, str(solver.ksp_reason))
+    infog1 = mumps_error(solver.snes.getKSP())
+    if solver.linear == "fieldsplit":
         hint = "solver.linear: direct factors the whole Jacobian instead"
     elif infog1 is not None:
         hint = mumps_hint(infog1)
-    elif stepper.problem.contact is not None:
+    elif solver.problem.contact is not None:
         hint = SADDLE_POINT_HINT
     else:
-        pc, factor = factor_package(stepper.petsc_options, stepper.prefix)
-        hint = solver_hint(pc, factor, stepper.problem.comm.size, PETSc.Sys.hasExternalPackage)
-    return f" (the linear solver {solver_text(stepper)} stopped with {kreason}; {hint})"
+        pc, factor = factor_package(solver.petsc_options, solver.prefix, solver.problem.symmetric)
+        hint = solver_hint(pc, factor, solver.problem.comm.size, PETSc.Sys.hasExternalPackage)
+    return f" (the linear solver {solver_text(solver)} stopped with {kreason}; {hint})"
 
 
-def solver_text(stepper) -> str:
+def solver_text(solver) -> str:
     """The linear solver in effect, for messages."""
-    if stepper.linear == "fieldsplit":
+    if solver.linear == "fieldsplit":
         return "FGMRES with the fascicle Schur preconditioner, solver.linear: fieldsplit"
-    return solver_options(stepper.petsc_options, stepper.prefix)
+    return solver_options(solver.petsc_options, solver.prefix, solver.problem.symmetric)

@@ -1,0 +1,174 @@
+"""Reference partners: what a tangential interface law (elastic matrix, friction) shares.
+
+Every contact point p on A keeps its *reference partner* on B: the place Y_B(ζ₀) = N_B(ζ₀) q_B it
+matched in the reference configuration (element e_B0, ξ₀, t₀ of the exactly touching
+interface).  A law acts on the relative displacement of the two material points,
+
+    d_p = x_A(p) − Y_B(ζ₀) = N_A q_A − N_B(ζ₀) q_B0,    ∇d = [N_A ⊗ I, −N_B(ζ₀) ⊗ I],
+
+(linear in the nodal vectors of A's element and the partner's), with the points' weights
+ω_p = w_p × weight (reference area, faded past B's ends).  ``PartnerTerm`` holds the partners,
+the law's history (checkpointed with the converged increments, written for a restart), the
+reported fields and statistics, and the block helpers; a law (elastic_interface.py,
+friction.py) adds its forces and Jacobian blocks.  ``Contact.terms`` holds such terms.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..physics.element3363 import DOFS_PER_NODE, SLOTS
+from .multipliers import reference_modulus, reference_size
+
+
+def node_dofs(nodes: np.ndarray) -> np.ndarray:
+    """DOF ids (n, 18 k) of node groups (n, k), −1 for the unused (−1) nodes."""
+    rows = (DOFS_PER_NODE * nodes[:, :, None] + np.arange(DOFS_PER_NODE)).reshape(len(nodes), -1)
+    return np.where(np.repeat(nodes, DOFS_PER_NODE, axis=1) >= 0, rows, -1)
+
+
+def drop_held(dofs: np.ndarray, fixed_mask: np.ndarray) -> np.ndarray:
+    """DOF ids with the held ones (and −1) as −1 (dropped when inserted)."""
+    out = dofs.copy()
+    ok = out >= 0
+    out[ok] = np.where(fixed_mask[out[ok]], -1, out[ok])
+    return out
+
+
+def per_segment_sum(srow: np.ndarray, n_s: int, values: np.ndarray) -> np.ndarray:
+    """Σ over each segment's points of ``values`` (P, ...) → (n_s, ...); the points are stored
+    segment by segment (``srow`` non-decreasing)."""
+    start = np.searchsorted(srow, np.arange(n_s))
+    out = np.zeros((n_s,) + values.shape[1:])
+    has = np.diff(np.append(start, len(srow))) > 0
+    out[has] = np.add.reduceat(values, start[has], axis=0)
+    return out
+
+
+def segment_outer(srow: np.ndarray, n_s: int, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """Σ over each segment's points of left_p ⊗ right_p: (n_s, X, Y) from (P, X) and (P, Y), as
+    one batched product over zero-padded segments (points stored segment by segment)."""
+    count = np.bincount(srow, minlength=n_s)
+    at = (srow, np.arange(len(srow)) - np.concatenate([[0], np.cumsum(count)[:-1]])[srow])
+    L = np.zeros((n_s, count.max(initial=1), left.shape[1]))
+    R = np.zeros((n_s, count.max(initial=1), right.shape[1]))
+    L[at], R[at] = left, right
+    return np.matmul(L.transpose(0, 2, 1), R)
+
+
+def reference_scale(interfaces) -> float:
+    """E/h [Pa/m] of the softest beam of the interfaces (h = min(element length, √area)): the
+    stiffness per area of an interface as stiff as the beams next to it."""
+    return min(reference_modulus(b) / reference_size(b) for i in interfaces for b in (i.a, i.b))
+
+
+class PartnerTerm:
+    """A tangential law at the contact points: reference partners, history, fields (a base)."""
+    name = "shear"
+    symmetric = True
+    #: the law's history per point, each (P, 3) (names)
+    history: tuple = ()
+    #: PETSc option defaults the law asks for (the command line and config override them)
+    options: dict = {}
+    #: per-interface statistics of ``sums``: (name, how ranks combine it)
+    columns = (("max_tangential_slip", "max"), ("max_shear_stress", "max"), ("shear_force_x", "sum"),
+               ("shear_force_y", "sum"), ("shear_force_z", "sum"), ("stick_area", "sum"),
+               ("shear_area", "sum"))
+
+    def __init__(self, model, points, projector):
+        self.points = points
+        self.eB0 = projector.eB.copy()              # the projector starts at the partners
+        conn = model.connectivity()
+
+        def q0_of(els):
+            return model.q0[conn[els]].reshape(len(els), SLOTS, 3)
+        _, _, _, self.NB0, self.NB0z = projector.surface(q0_of, points.itf, self.eB0, projector.xiB, projector.tB)
+        #: B's outward normal is T_t × T_ξ, flipped where B runs its curve backwards
+        self.flip = projector.flip
+        self.state = {name: np.zeros((points.n_points, 3)) for name in self.history}
+        self._saved = self._copy()
+
+    # ------------------------------------------------------------------ kinematics
+    def relative(self, c, st, x_of) -> np.ndarray:
+        """d of the local points (P, 3)."""
+        return st.xA - np.einsum("pa,pai->pi", self.NB0[c.local], x_of(self.eB0[c.local]))
+
+    def grad_d(self, c) -> np.ndarray:
+        """[N_A, −N_B(ζ₀)] of the local points (P, 36): ∇d = that ⊗ I over (A, partner)."""
+        return np.concatenate([c.points.NA[c.local], -self.NB0[c.local]], axis=1)
+
+    def add_point_forces(self, c, st, floc: np.ndarray, force: np.ndarray) -> None:
+        """Add per-point forces over (A's element, the partner's): ``force`` (P, 36, 3)."""
+        idx = c.local
+        for e, f in ((c.points.eA[idx], force[:, :SLOTS]), (self.eB0[idx], force[:, SLOTS:])):
+            pos = st.lpos(c.conn[e])                                          # (P, 3)
+            dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
+            floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
+
+    def segment_nodes(self, c) -> np.ndarray:
+        """(local segments, 6): A's nodes and the partner element's (PETSc numbering); every
+        point of a segment has its partner on the same B element (conforming interfaces)."""
+        segs = c.segments
+        return np.concatenate([c.conn[c.points.seg_eA[segs]], c.conn[self.eB0[c.points.seg_start[segs]]]], axis=1)
+
+    def couplings(self, c) -> list[np.ndarray]:
+        """Node-block groups (PETSc numbering, −1 unused) the term couples, all with all."""
+        return [self.segment_nodes(c)]
+
+    def required_elements(self, c) -> np.ndarray:
+        """Elements whose nodes the local evaluation reads: the partners'."""
+        return self.eB0[c.local]
+
+    # ------------------------------------------------------------------ state
+    def accept(self, c, st) -> None:
+        """A converged state: the law's history of the local points from it (``kept``)."""
+        for key, value in self.kept(st.terms[self.name]).items():
+            self.state[key][c.local] = value
+
+    def kept(self, ev) -> dict:
+        """The history a converged evaluation leaves (none)."""
+        return {}
+
+    def _copy(self) -> dict:
+        return {k: v.copy() for k, v in self.state.items()}
+
+    def checkpoint(self) -> None:
+        self._saved = self._copy()
+
+    def restore(self) -> None:
+        self.state = {k: v.copy() for k, v in self._saved.items()}
+
+    def set_state(self, fields: dict) -> None:
+        """A restart's history (every point: ``fields`` of the written level)."""
+        for key in self.state:
+            self.state[key] = np.asarray(fields["shear_" + key], dtype=float).copy()
+        self.checkpoint()
+
+    # ------------------------------------------------------------------ reports
+    def fields(self, c, st) -> dict[str, np.ndarray]:
+        """Per local point: tangential slip s [m] from the reference partner (the part of d in
+        B's tangent plane at the point's closest point), interface stress σ [Pa] (on B, in the
+        direction of A's relative motion), stick (1) or not (0), and the history a restart
+        needs (``shear_*``)."""
+        ev, n = st.terms[self.name], st.pr.n
+        slip = ev.d - np.einsum("pi,pi->p", ev.d, n)[:, None] * n
+        out = {"tangential_slip": slip, "shear_stress": ev.sigma, "stick": ev.stick.astype(np.int8)}
+        return out | {"shear_" + k: v[c.local] for k, v in self.state.items()}
+
+    def sums(self, c, st, on: np.ndarray) -> list[float]:
+        """The local parts of ``columns`` over the local points ``on`` (bool) of one interface."""
+        ev, n = st.terms[self.name], st.pr.n[on]
+        d = ev.d[on]
+        slip = np.linalg.norm(d - np.einsum("pi,pi->p", d, n)[:, None] * n, axis=1)
+        sigma = ev.sigma[on]
+        force = ev.omega[on] @ sigma if on.any() else np.zeros(3)
+        return [slip.max(initial=0.0), np.linalg.norm(sigma, axis=1).max(initial=0.0), *force,
+                float(ev.omega[on] @ ev.stick[on]), float(ev.omega[on].sum())]
+
+    @staticmethod
+    def report(values: dict) -> dict:
+        """Per-interface entries of the summary from the combined ``columns``."""
+        area = values["shear_area"]
+        return {"max_tangential_slip": values["max_tangential_slip"],
+                "max_shear_stress": values["max_shear_stress"],
+                "shear_force": [values["shear_force_x"], values["shear_force_y"], values["shear_force_z"]],
+                "stick_share": values["stick_area"] / area if area else 0.0}

@@ -1,0 +1,113 @@
+"""The groups of results.h5 (written by results.ResultsWriter on rank 0): ``/model`` (config,
+reference nodal vectors, fingerprint, partition, sections) and per converged level
+``/steps/step_NNNN`` with its nodal vectors, record, contact fields, reactions and restart data."""
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import yaml
+
+from ..physics import element3363 as el
+from .files import OutputError, os_reason, plain
+from .restart import fingerprint
+
+#: the "frame" attribute of /model/beams/<name>/section_points and section_outline
+CENTROID_FRAME = "section centroid, m (add the beam group's centroid attribute for the tendon frame)"
+
+
+def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
+    """The file's attributes and ``/model``: config, reference nodal vectors, the fingerprint a
+    restart compares, the partition, the beams' connectivity and sections; an empty ``/steps``."""
+    spec = model.spec
+    h5.attrs["ancf_version"] = info["version"]
+    h5.attrs["ancf_git"] = info["git"] or ""
+    h5.attrs["status"] = "running"
+    g = h5.create_group("model")
+    g.attrs["name"] = spec.name
+    g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
+    g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
+    g.create_dataset("reference_nodal_vectors", data=model.q0)
+    fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
+    for key, arr in fingerprint(model).items():
+        fp.create_dataset(key, data=arr)
+    part = g.create_group("partition")
+    part.create_dataset("element_rank", data=layout.elem_owner)
+    part.create_dataset("node_rank", data=layout.node_owner)
+    part.create_dataset("petsc_node_of_model_node", data=layout.perm)
+    for key, val in (run_info.get("partition") or {}).items():
+        part.attrs[key] = val
+    for beam in model.beams:
+        b = g.create_group(f"beams/{beam.name}")
+        b.create_dataset("connectivity", data=beam.connectivity)
+        b.create_dataset("x_nodes", data=beam.x_nodes)
+        # (y, z) relative to the section's area centroid (the beam axis), not the tendon frame
+        b.create_dataset("section_points", data=beam.section.points).attrs["frame"] = CENTROID_FRAME
+        b.create_dataset("section_weights", data=beam.section.weights).attrs["units"] = "m^2"
+        b.create_dataset("section_outline", data=beam.section.boundary_polyline(8)
+                         ).attrs["frame"] = CENTROID_FRAME
+        b.attrs["centroid"] = beam.section.centroid
+        b.attrs["area"] = beam.section.area
+    steps = h5.create_group("steps")
+    steps.attrs["converged"] = 0
+    steps.attrs["last_load_factor"] = 0.0
+
+
+def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dict | None,
+                      path: dict | None, n_nodes: int) -> None:
+    """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the contact
+    fields, the supports' reactions and what a restart needs."""
+    g.create_dataset("nodal_vectors", data=q)
+    g.attrs["load_factor"] = record.load_factor
+    g.attrs["snes_iterations"] = record.iterations
+    g.attrs["snes_reason"] = record.reason
+    g.attrs["substeps"] = record.substeps
+    g.attrs["wall_time"] = record.wall_time
+    g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
+        else record.negative_eigenvalues
+    if contact is not None:
+        write_contact_group(g, contact, path["blocks"][n_nodes:])
+    if extra and "reactions" in extra:       # force of each support on r [N]
+        r = g.create_dataset("reactions", data=np.array(list(extra["reactions"].values())))
+        r.attrs["supports"] = list(extra["reactions"])
+    for pair, d in (extra or {}).get("displacement_differences", {}).items():   # io/derived.py
+        g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
+    if path is not None:
+        write_restart_group(g, record, path)
+
+
+def write_restart_group(g, record, path: dict) -> None:
+    """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
+    r = g.create_group("restart")
+    r.create_dataset("blocks", data=path["blocks"])
+    r.create_dataset("increment_blocks", data=path["increment_blocks"])
+    r.attrs["increment"] = record.increment
+    r.attrs["last_increment"] = record.last_increment
+    r.attrs["accepted_negative"] = path["accepted_negative"]
+
+
+def write_contact_group(g, contact: dict, multipliers: np.ndarray) -> None:
+    """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
+    c = g.create_group("contact")
+    c.attrs["units"] = ("SI: m, Pa; slip = reference position of the point minus its partner's on B; "
+                        "tangential_slip = the point's tangential displacement from its reference partner")
+    # every field the contact and its terms report (contact.reports.point_fields); the points
+    # and multipliers are in id order, so the ids themselves are not stored
+    for key, value in contact.items():
+        if key not in ("id", "multiplier_id"):
+            c.create_dataset(key, data=value)
+    c.create_dataset("multiplier_blocks", data=multipliers)
+
+
+def truncate_levels(h5_path: str, step: int, load_factor: float) -> None:
+    """Continue results.h5 after level ``step`` (a restart): the later and partial levels go."""
+    try:
+        with h5py.File(h5_path, "a") as h5:
+            steps = h5["steps"]
+            for name in list(steps):
+                if name.endswith(".partial") or int(name.split("_")[1]) > step:
+                    del steps[name]
+            steps.attrs["converged"] = step
+            steps.attrs["last_load_factor"] = load_factor
+            h5.attrs["status"] = "running"
+    except (OSError, RuntimeError) as exc:
+        raise OutputError(h5_path, f"cannot continue: {os_reason(exc)}") from None

@@ -1,0 +1,69 @@
+"""Load-step control: how the load factor λ advances from one converged state to the next.
+
+Pure Python (no PETSc, no MPI): the first increment, the next sub-step (capped by
+``solver.max_increment``, landing exactly on every requested level), growth after easy steps,
+halving after a failed one (at most ``solver.max_cutbacks`` in a row, not below
+``solver.min_increment``), retries with smaller steps when a step lands on a less stable state
+(at most ``solver.stability_cutbacks`` per level) and the Newton budget of the whole run.  The
+SNES side (stepper.py) asks it at every sub-step."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class LevelTally:
+    """What reaching one requested level took."""
+    its: int = 0            # Newton iterations of its sub-steps
+    substeps: int = 0       # accepted sub-steps
+    cutbacks: int = 0       # halvings (failures and stability retries)
+    consecutive: int = 0    # failures since the last accepted sub-step
+    stability: int = 0      # retries because a step landed on a less stable state
+
+
+class LoadControl:
+    """The increments of one run, from ``solver`` (a config.specs.SolverSpec)."""
+
+    def __init__(self, solver):
+        self.spec = solver
+
+    def first_increment(self, first_level: float, share: float | None) -> float:
+        """From rest: ``initial_increment``, else the first level (× the contact law's share of
+        it for the first increment, e.g. unilateral contact), capped by ``max_increment``."""
+        dlam = (first_level * (share or 1.0) if self.spec.initial_increment is None
+                else min(first_level, self.spec.initial_increment))
+        return dlam if self.spec.max_increment is None else min(dlam, self.spec.max_increment)
+
+    def step(self, lam: float, dlam: float, target: float) -> float:
+        """The next sub-step from λ with increment ``dlam``: not past ``target`` or the cap."""
+        step = min(dlam, target - lam)
+        return step if self.spec.max_increment is None else min(step, self.spec.max_increment)
+
+    def after_success(self, step: float, dlam: float, its: int) -> float:
+        """The next increment after a converged sub-step of ``its`` Newton iterations: grown by
+        ``growth`` after an easy full-size one (a sub-step shortened to hit a level keeps it)."""
+        if its <= self.spec.easy_iterations and step >= dlam * (1 - 1e-12):
+            return step * self.spec.growth
+        return dlam
+
+    def wants_stability_retry(self, negative: int | None, accepted: int, tally: LevelTally) -> bool:
+        """Whether a converged sub-step with ``negative`` tangent eigenvalues (the last accepted
+        state had ``accepted``) is retried with a smaller step: a stable path does not step onto a
+        saddle, another branch may have been reached; counted in ``tally``."""
+        if negative is not None and negative > accepted and tally.stability < self.spec.stability_cutbacks:
+            tally.stability += 1
+            return True
+        return False
+
+    def after_failure(self, step: float, stability: bool, tally: LevelTally) -> tuple[float, bool]:
+        """The increment after a failed (or stability-retried) sub-step and whether to give up:
+        more than ``max_cutbacks`` failures in a row, or below ``min_increment``."""
+        tally.cutbacks += 1
+        tally.consecutive += not stability                 # retries are bounded on their own
+        dlam = 0.5 * step
+        return dlam, tally.consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment
+
+    def over_budget(self, newton_iterations: int) -> bool:
+        """Whether the run has spent more Newton iterations than ``max_newton_iterations``."""
+        budget = self.spec.max_newton_iterations
+        return budget is not None and newton_iterations > budget

@@ -1,0 +1,174 @@
+"""The SNES of a solve: one Newton solver for a Problem, its PETSc options and callbacks.
+
+``SNESSolver`` creates the SNES with the residual and Jacobian of the Problem, puts the options in
+(command line > config ``petsc:`` > the defaults of options.py and of the model's laws, e.g. a
+line search for friction), sets the line-search pre-check, the energy merit where there is a
+potential, the fascicle Schur preconditioner (``solver.linear: fieldsplit``) and chord steps near
+convergence (chord.py), and counts the tangent's negative eigenvalues (its inertia).  ``solve``
+is one SNES solve from a state; the load stepping around it is stepper.py.
+"""
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+from ..config.specs import SolverSpec
+from ..petsc.inertia import mumps_error, pivot_counts
+from ..petsc.options import petsc_message, used_anywhere
+from ..petsc.potential import rounding_floor
+from ..petsc.problem import Problem
+from ..petsc.step_limits import MAX_STEP_SECTIONS_CONTACT
+from . import solver_messages
+from .chord import TangentReuse
+from .newton import ContactSteps
+from .options import SolverOptionError, configure_options, refused, run_defaults
+from .records import LoadStepFailure
+
+
+class SNESSolver:
+    """One SNES for ``problem`` (its options, callbacks, preconditioner and counters)."""
+
+    def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict, max_level: float = 1.0,
+                 linear: str = "direct"):
+        self.problem, self.spec = problem, spec
+        self.prefix = spec.options_prefix
+        self.linear = linear                    # 'direct' | 'fieldsplit' (solving.linear.choose)
+        self.snes = PETSc.SNES().create(comm=problem.comm)
+        if self.prefix:
+            self.snes.setOptionsPrefix(self.prefix)
+        self.snes.setFunction(problem.residual, problem.F)
+        self.snes.setJacobian(self._jacobian, problem.J, problem.J)
+        if spec.merit == "energy" and problem.has_potential:
+            # with contact multipliers the residual is the gradient of a Lagrangian (a saddle):
+            # line searches then decrease ‖F‖²
+            self.snes.setObjective(problem.objective)
+        if spec.min_det_f > 0.0:
+            problem.limits.j_min = spec.min_det_f
+            self.snes.setLineSearchPreCheck(problem.limits.precheck)
+        # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
+        # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic)
+        fnorm = problem.loads.scale(max_level)
+        self.rounding_floor = rounding_floor(problem)
+        atol = max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30)
+        self.petsc_options = petsc_options
+        self._kept_options: list[str] = []
+        self.linesearch, self._kept_options = configure_options(
+            self.snes, petsc_options,
+            run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear,
+                         saddle_point=problem.n_constraints > 0, symmetric=problem.symmetric,
+                         law_defaults=problem.solver_defaults), self.prefix,
+            problem.symmetric)
+        if problem.contact is not None and self.linesearch == "basic":
+            # full Newton steps with contact: the pairing holds for steps small beside a section
+            problem.limits.sections = MAX_STEP_SECTIONS_CONTACT
+        schur = None
+        if linear == "fieldsplit":
+            # imported here: scipy.linalg is start-up time the direct solver does not need
+            from ..petsc.fascicles import fascicle_split
+            from ..petsc.fieldsplit import FascicleSchur
+            pc = self.snes.getKSP().getPC()
+            pc.setType(PETSc.PC.Type.PYTHON)
+            schur = FascicleSchur(fascicle_split(problem), problem.comm, self.prefix)
+            pc.setPythonContext(schur)
+        self._check_factorisation()
+        self._history: list[float] = []        # residual norms of the current SNES solve
+        self.history: list[float] = []         # ... of all solves of the current increment
+        self.snes.setMonitor(self._monitor)
+        #: the fascicle Schur preconditioner (petsc/fieldsplit.py) with solver.linear: fieldsplit
+        self.fascicle_schur = schur
+        self.chord = TangentReuse(spec.reuse_tangent, schur)
+        self.contact_steps = ContactSteps(problem)
+        self.ksp_reason = 0
+        self.stalled_at = 0.0                    # |F| of the last step-length stop (messages)
+        #: config ``petsc:`` options PETSc never read (known at ``close``)
+        self.unused_config_options: list[str] = []
+
+    def _check_factorisation(self) -> None:
+        """Create the factor matrix now (no numbers yet), so that a package that cannot factor
+        this matrix type on this many ranks is refused before the first load level."""
+        ksp = self.snes.getKSP()
+        pc = ksp.getPC()
+        if pc.getType() not in ("lu", "cholesky", "ilu", "icc"):
+            return
+        ksp.setOperators(self.problem.J, self.problem.J)
+        try:
+            pc.setFactorSetUpSolverType()
+        except PETSc.Error as exc:
+            self.close()
+            raise SolverOptionError("", refused(exc, self.petsc_options, self.problem.comm.size,
+                                                self.prefix, self.problem.symmetric)) from None
+
+    def close(self, collective: bool = True) -> None:
+        """Remove the options this stepper left in PETSc's database; config options PETSc never
+        read go to ``unused_config_options`` (collective unless ``collective`` is False).  The
+        fascicle Schur preconditioner's parallel objects are destroyed here, collectively."""
+        opts = PETSc.Options()
+        n = len(self.prefix)
+        if collective and self.linear == "fieldsplit":
+            self.snes.getKSP().getPC().setType(PETSc.PC.Type.NONE)
+        if collective:
+            mine = [k for k in self._kept_options if k[n:] in self.petsc_options]
+            used = used_anywhere(mine, self.problem.comm)
+            self.unused_config_options = [k[n:] for k, u in zip(mine, used) if not u]
+        for key in self._kept_options:
+            opts.delValue(key)
+        self._kept_options = []
+
+    def destroy(self) -> None:
+        """Free the SNES (with its KSP, PC and factor); not collective."""
+        self.snes.destroy()
+
+    def negative_eigenvalues(self) -> int | None:
+        """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ
+        inertia less one per contact constraint (a saddle-point matrix with m independent
+        constraints has m negative eigenvalues besides those of the constrained tangent), plus
+        the null pivots (a singular tangent: a mechanism the supports leave free)."""
+        counts = pivot_counts(self.snes.getKSP())
+        if counts is None:
+            return None
+        negative, null = counts
+        return negative - self.problem.n_constraints + null
+
+    def _monitor(self, snes, its, fnorm):
+        self._history.append(float(fnorm))
+
+    def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
+        """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
+        self.chord.jacobian(snes, self._history, lambda: self.problem.jacobian(snes, X, J, P))
+        self.contact_steps.next_iterate()
+
+    def describe(self) -> str:
+        """The solver in one line (the run's header)."""
+        return solver_messages.describe(self)
+
+    def solve(self, X: PETSc.Vec, target: float, lam: float, reached: float) -> tuple[int, int]:
+        """One SNES solve from ``X`` at load factor ``lam`` (on the way from ``reached`` to the
+        level ``target``, for messages): its reason and iterations."""
+        self._history = []
+        self.chord.start_solve()
+        try:
+            self.snes.solve(None, X)
+        except PETSc.Error as exc:
+            # an error inside PETSc or an external package (a factorisation MUMPS gave up on,
+            # a package that cannot handle this matrix); the same on every rank for these
+            self.problem.load_factor = reached
+            why = petsc_message(exc)
+            if mumps_error(self.snes.getKSP()) is not None:
+                why += (" (MUMPS could not factor the tangent: it is singular, e.g. a model free to "
+                        "move or an integration rule with zero-energy modes)")
+            raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
+                                  f" in the linear solver ({solver_messages.solver_text(self)}): "
+                                  f"{why}") from None
+        self.ksp_reason = self.snes.getKSP().getConvergedReason()
+        self.history += self._history
+        return self.snes.getConvergedReason(), self.snes.getIterationNumber()
+
+    def residual_small(self, reason: int, fnorm: float) -> bool:
+        """A level is accepted at the stated tolerances only: the residual tests (FNORM_ABS,
+        FNORM_RELATIVE) pass, and a solve that stopped on the step length (SNORM_RELATIVE: a
+        line search that no longer moves) counts only with |F| at the absolute tolerance."""
+        rtol, atol, stol, maxit = self.snes.getTolerances()
+        if reason in (PETSc.SNES.ConvergedReason.CONVERGED_FNORM_ABS,
+                      PETSc.SNES.ConvergedReason.CONVERGED_FNORM_RELATIVE):
+            return True
+        return fnorm <= atol
+

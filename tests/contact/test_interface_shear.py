@@ -1,0 +1,257 @@
+"""Interface shear (issue 27): the elastic interface matrix against the closed-form shear-lag
+solution and its two limits, Coulomb friction against mu N and its hysteresis, consistent
+tangents (finite differences), and the config keys."""
+import numpy as np
+import pytest
+
+from helpers import CONFIGS, build_problem, load_raw, run_inline
+from ancf_petsc.io.reader import read_contact
+from ancf_petsc.physics.reference_solutions import shear_lag_transfer
+
+E, B, T, L, F = 1.0e6, 2e-3, 2e-3, 0.05, 5e-4          # configs/shear_lag_sandwich.yaml
+EA = E * B * T
+
+
+def sandwich(k_t: float | None) -> dict:
+    raw = load_raw("shear_lag_sandwich.yaml")
+    if k_t is None:
+        del raw["contact"]["tangential"]
+    else:
+        raw["contact"]["tangential"]["stiffness"] = k_t
+    return raw
+
+
+def outer_force(out_dir, x: np.ndarray) -> np.ndarray:
+    """Axial force the top strip has taken up beyond each x: −Σ ω σ_x over its interface
+    points past x (ω = reference area × weight; σ acts on the core, the strip gets −σ)."""
+    c = read_contact(f"{out_dir}/results.h5", 1)
+    top = c["interface"] == 1                     # upper_interface (top|core)
+    omega = (c["area"] * c["weight"])[top]
+    fx = -omega * c["shear_stress"][top, 0]
+    x0 = c["x0"][top, 0]
+    return np.array([fx[x0 > xe].sum() for xe in x])
+
+
+@pytest.mark.parametrize("k_t", [1.0e6, 1.0e7])
+def test_sandwich_follows_the_shear_lag_solution(k_t, tmp_path):
+    """The force the outer bar takes up along the bar, at every element boundary, within 1 % of
+    the closed form (shear-lag lengths 26 and 8.2 mm on 3.1 mm elements, L = 50 mm)."""
+    s = run_inline(sandwich(k_t), tmp_path)
+    assert s["status"] == "completed"
+    x = np.linspace(0.0, L, 17)[:-1]
+    exact = shear_lag_transfer(x, L, EA, EA, k_t * B, F)
+    beam = outer_force(tmp_path, x)
+    err = np.abs(beam - exact).max() / exact[0]
+    assert err < 0.01, (err, beam, exact)
+    # the support of the outer strip carries what the interface passed on
+    root = -s["steps"][-1]["reactions"]["top.0"][0]
+    assert abs(root - exact[0]) < 0.01 * exact[0]
+
+
+def test_sandwich_limits_are_sliding_and_bonded(tmp_path):
+    """k_t → 0 gives frictionless sliding, k_t → ∞ the bonded load share EA_o/(EA_c + 2 EA_o)
+    at the outer strip's root, each within 0.1 %."""
+    sliding = run_inline(sandwich(None), tmp_path / "sliding")
+    soft = run_inline(sandwich(1e-2), tmp_path / "soft")
+    u0 = sliding["steps"][-1]["probes"]["core"]["displacement"][0]
+    assert abs(soft["steps"][-1]["probes"]["core"]["displacement"][0] - u0) < 1e-3 * abs(u0)
+    # shear-lag length 2.6 mm; the stiff layer leaves a residual floor near 1e-9 N with these
+    # 5e-4 N loads (well above the default 1e-10 of the load): absolute tolerance 1e-12 N·20
+    bonded = run_inline(sandwich(1e8), tmp_path / "bonded", petsc={"snes_atol": "2e-11"})
+    share = -bonded["steps"][-1]["reactions"]["top.0"][0]
+    assert abs(share - F / 3.0) < 1e-3 * F / 3.0, share
+
+
+def _grip_forces(summary) -> np.ndarray:
+    return np.array([st["reactions"]["grip"][0] for st in summary["steps"]])
+
+
+@pytest.fixture(scope="module")
+def pressed(tmp_path_factory):
+    """configs/friction_pressed_strips.yaml with the default stick stiffness and ×0.1, ×0.01."""
+    out = {}
+    for factor in (1.0, 0.1, 0.01):
+        raw = load_raw("friction_pressed_strips.yaml")
+        if factor != 1.0:
+            from ancf_petsc.contact.friction import STICK_FACTOR
+            # E/h of the strips: E = 1 MPa, h = min(element length 5 mm, √area 2.24 mm)
+            raw["contact"]["tangential"]["stick_stiffness"] = factor * STICK_FACTOR * E / np.sqrt(5e-6)
+        out[factor] = run_inline(raw, tmp_path_factory.mktemp(f"pressed{factor:g}"))
+        assert out[factor]["status"] == "completed", out[factor].get("message")
+    return out
+
+
+def test_friction_slides_at_mu_n_and_shows_the_hysteresis(pressed):
+    """Sliding carries mu N (exact: every point slides with p > 0), sticking less; on every
+    reversal of the pull the force goes through the stick range to the other sign."""
+    muN = 0.5 * 0.01
+    steps = pressed[1.0]["steps"]
+    lam = np.array([st["load_factor"] for st in steps])
+    R = _grip_forces(pressed[1.0])
+    sliding_out = (lam >= 1.25) & (lam <= 2.0)
+    sliding_back = (lam >= 2.25) & (lam <= 3.0)
+    assert np.allclose(R[sliding_out], muN, rtol=1e-4) and np.allclose(R[sliding_back], -muN, rtol=1e-4)
+    assert np.all(np.abs(R) <= muN * (1 + 1e-4))
+    assert 0.0 < R[lam == 1.05][0] < muN                      # sticking at the start of the pull
+    # the loop: the same pull displacement carries opposite forces going out and coming back
+    u = np.array([st["probes"]["grip"]["displacement"][0] for st in steps])
+    out = lam == 1.5
+    back = np.isclose(lam, 2.25)
+    assert np.isclose(u[out][0], u[back][0], atol=1e-9) and R[out][0] > 0 > R[back][0]
+
+
+def test_friction_answers_do_not_depend_on_the_stick_stiffness(pressed):
+    """Two decades of the regularisation (×0.01 … ×1 of the default k): sliding carries mu N
+    whatever k; the sticking levels move as 1/k (the elastic part σ/k of a sticking point's
+    motion), so that the default's distance from the k → ∞ limit, extrapolated from ×0.1 and
+    ×1, is below 0.1 % of mu N at every level."""
+    muN = 0.5 * 0.01
+    R1, R01, R001 = (_grip_forces(pressed[f]) for f in (1.0, 0.1, 0.01))
+    lam = np.array([st["load_factor"] for st in pressed[1.0]["steps"]])
+    sliding = np.abs(R1) > (1.0 - 1e-6) * muN
+    for R in (R01, R001):
+        assert np.allclose(R[sliding], R1[sliding], rtol=1e-5, atol=0.0)
+    limit = R1 + (R1 - R01) / 9.0                   # first order in 1/k
+    assert np.abs(R1 - limit).max() < 1e-3 * muN
+    # 1/k: ten times softer moves a sticking level ten times as far
+    moved = np.abs(R01 - R1) > 1e-5 * muN
+    ratio = np.abs(R001 - R1)[moved] / np.abs(R01 - R1)[moved]
+    assert moved.sum() >= 6 and np.all((ratio > 4.0) & (ratio < 20.0)), (lam[moved], ratio)
+
+
+def _achilles(tangential, elements=2, mode="sliding"):
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["elements"] = elements
+    raw["contact"] = {"mode": mode, "tangential": tangential}
+    return raw
+
+
+def _state(P, seed, history):
+    """A deformed state with multipliers and, for friction, a history that leaves some points
+    sticking and others sliding."""
+    rng = np.random.default_rng(seed)
+    P.load_factor = 50.0
+    X = P.q0.copy()
+    free = ~P.fixed_mask
+    q = X.getArray().reshape(-1, 6, 3)
+    noise = rng.standard_normal(q.shape)
+    noise[:, 1:3] *= 20.0
+    noise[:, 3:] *= 200.0
+    noise[~P.owned_physical] = 5.0 * rng.standard_normal(q[~P.owned_physical].shape)
+    X.setArray(X.getArray() + 2e-6 * noise.ravel() * free)
+    if history:
+        c = P.contact
+        term = c.terms[0]
+        ev = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).terms["shear"]
+        # the increment started here (anchor = d) with stresses in the tangent plane, half the
+        # cone's radius (sticking) or twice it (sliding)
+        n = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).pr.n
+        u = rng.standard_normal(ev.d.shape)
+        u -= np.einsum("pi,pi->p", u, n)[:, None] * n
+        size = 0.3 * np.maximum(ev.pressure, 0.0) * rng.choice([0.5, 2.0], len(ev.d))
+        term.state["anchor"][c.local] = ev.d
+        term.state["traction"][c.local] = size[:, None] * u / np.linalg.norm(u, axis=1)[:, None]
+        c._cache = None
+    return X, free
+
+
+# friction with a stick stiffness of E/h (its default is 100 E/h): the probes of the finite
+# differences then stay on one side of every point's stick-slip boundary
+@pytest.mark.parametrize("tangential, history", [
+    ({"law": "elastic", "stiffness": 1e10}, False),
+    ({"law": "coulomb", "friction": 0.3}, False),
+    ({"law": "coulomb", "friction": 0.3, "stick_stiffness": 7.4e10}, True),
+    ({"law": "coulomb", "friction": 3.0, "stick_stiffness": 7.4e10}, True)])
+def test_shear_jacobian_matches_finite_differences(tangential, history):
+    """J v against central differences of F at deformed states with pressures of both signs
+    (friction: sticking and sliding points, the normal's rotation included); the elastic
+    matrix's Jacobian is symmetric."""
+    P, PETSc = build_problem(_achilles(tangential))
+    X, free = _state(P, 3, history)
+    st = P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+    stick = st.terms["shear"].stick
+    if tangential["law"] == "coulomb" and history:
+        assert 0 < stick.sum() < len(stick)
+    P.jacobian(None, X, P.J, P.J)
+    rng = np.random.default_rng(7)
+    h = 1e-7
+    for _ in range(3):
+        v = X.duplicate()
+        v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
+        Jv, Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.duplicate(), X.copy(), X.copy()
+        P.J.mult(v, Jv)
+        Xp.axpy(h, v)
+        Xm.axpy(-h, v)
+        P.residual(None, Xp, Fp)
+        P.residual(None, Xm, Fm)
+        fd = (Fp.getArray() - Fm.getArray()) / (2 * h)
+        err = np.abs(Jv.getArray() - fd)[free].max() / np.abs(Jv.getArray()).max()
+        assert err < 1e-6, err
+    if tangential["law"] == "elastic":
+        Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()
+        assert np.abs(Jd - Jd.T).max() <= 1e-9 * np.abs(Jd).max()
+
+
+def test_displacement_control_gives_the_state_of_the_force(tmp_path):
+    """The paper's tendon (ψ = 45°, 2 elements) pulled to 400 N, and stretched instead by the
+    soleus end displacement that force produced: the same state to 1e-8 and the grip's
+    reaction is the force."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 2
+    raw["steps"] = [100.0, 400.0]
+    force = run_inline(raw, tmp_path / "force")
+    ux = force["steps"][-1]["probes"]["soleus"]["displacement"][0]
+    raw["loads"] = []
+    raw["boundary_conditions"].append({"beam": "soleus", "node": "last", "name": "grip",
+                                       "displacement": {"r": {"x": ux}}})
+    raw["steps"] = [0.25, 1.0]
+    moved = run_inline(raw, tmp_path / "moved")
+    from ancf_petsc.io.reader import read_results
+    a = read_results(str(tmp_path / "force")).nodal_vectors(2)
+    b = read_results(str(tmp_path / "moved")).nodal_vectors(2)
+    assert np.abs(a - b).max() <= 1e-8 * np.abs(a).max()
+    assert abs(moved["steps"][-1]["reactions"]["grip"][0] - 400.0) < 1e-8 * 400.0
+
+
+@pytest.mark.parametrize("contact, key, words", [
+    ({"tangential": {"law": "friction"}}, "contact.tangential.law", "elastic"),
+    ({"tangential": {"law": "coulomb"}}, "contact.tangential.friction", "missing"),
+    ({"tangential": {"law": "coulomb", "friction": -0.1}}, "contact.tangential.friction", "> 0"),
+    ({"tangential": {"law": "coulomb", "friction": 0.3, "stiffness": 1e6}}, "contact.tangential.stiffness",
+     "not a value of law coulomb"),
+    ({"tangential": {"law": "elastic"}}, "contact.tangential.stiffness", "thickness"),
+    ({"tangential": {"law": "elastic", "stiffness": 1e6, "thickness": 3e-5}}, "contact.tangential", "not both"),
+])
+def test_tangential_config_errors_name_the_key(contact, key, words):
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.errors import InputError
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["contact"] = dict(raw["contact"], **contact)
+    with pytest.raises(InputError) as info:
+        parse_config(raw, base_dir=CONFIGS)
+    assert info.value.path == key and words in info.value.message, (info.value.path, info.value.message)
+
+
+@pytest.mark.parametrize("bc, key, words", [
+    ({"beam": "soleus", "node": "last"}, "boundary_conditions[3]", "fix"),
+    ({"beam": "soleus", "node": "last", "fix": {"r": "x"}, "displacement": {"r": {"x": 1e-3}}},
+     "boundary_conditions[3].displacement.r.x", "also in fix"),
+    ({"beam": "soleus", "node": "last", "displacement": {"r": {"w": 1e-3}}},
+     "boundary_conditions[3].displacement.r.w", "unknown key"),
+    ({"beam": "soleus", "node": "last", "fix": {"r": "y"}, "curve": [[0, 0], [1, 1]]},
+     "boundary_conditions[3].curve", "prescribes none"),
+    ({"beam": "soleus", "node": "last", "displacement": {"r": {"x": 1e-3}}, "curve": [[0, 0], [0, 1]]},
+     "boundary_conditions[3].curve", "increasing"),
+    ({"beam": "soleus", "node": "last", "displacement": {"r": {"x": 1e-3}}, "curve": [[0, 0], [100, 1]]},
+     "boundary_conditions[3].curve", "extend it"),
+])
+def test_displacement_config_errors_name_the_key(bc, key, words):
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.errors import InputError
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["boundary_conditions"].append(bc)
+    with pytest.raises(InputError) as info:
+        parse_config(raw, base_dir=CONFIGS)
+    assert info.value.path == key and words in info.value.message, (info.value.path, info.value.message)

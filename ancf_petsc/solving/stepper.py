@@ -29,6 +29,13 @@ from .options import SolverOptionError, configure_options, refused, run_defaults
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
                       reason_name)
 
+
+def absolute_tolerance(load_norm: float, rounding_floor: float) -> float:
+    """The absolute tolerance of a run: 1e-10 of the largest load, at least 20 x the residual's
+    rounding floor."""
+    return max(1e-10 * load_norm, 20.0 * rounding_floor, 1e-30)
+
+
 class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES."""
 
@@ -50,9 +57,9 @@ class LoadStepper:
             self.snes.setLineSearchPreCheck(problem.precheck, kargs={"j_min": spec.min_det_f})
         # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
         # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic)
-        fnorm = problem.fext.norm() * max_level
+        self.load_norm = problem.fext.norm() * max_level
         self.rounding_floor = problem.reference_residual_norm()
-        atol = max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30)
+        atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._kept_options: list[str] = []
         self.path: PathState | None = None      # where the load path is (``run``)
@@ -90,6 +97,12 @@ class LoadStepper:
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
 
+    def release_path(self) -> None:
+        """Free the load path's vectors (before another ``run`` of this stepper starts a path)."""
+        for v in (self.path.X, self.path.dX_last) if self.path is not None else ():
+            v.destroy()
+        self.path = None
+
     def _check_factorisation(self) -> None:
         """Create the factor matrix now (no numbers yet), so that a package that cannot factor
         this matrix type on this many ranks is refused before the first load level."""
@@ -123,10 +136,7 @@ class LoadStepper:
 
     def destroy(self) -> None:
         """Free the SNES (with its KSP, PC and factor) and the path's vectors; not collective."""
-        if self.path is not None:
-            for v in (self.path.X, self.path.dX_last):
-                v.destroy()
-            self.path = None
+        self.release_path()
         self.snes.destroy()
 
     def negative_eigenvalues(self) -> int | None:
@@ -152,8 +162,8 @@ class LoadStepper:
         """The solver in one line (the run's header)."""
         return solver_messages.describe(self)
 
-    def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
-                  from_rest: bool = False) -> tuple[int, int, float]:
+    def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
+                 from_rest: bool = False) -> tuple[int, int, float]:
         """Newton at load factor ``lam`` from ``X`` (``newton.PhasedNewton``: the contact law's
         phases).  Returns the last solve's reason, the iterations of all of them and the final
         residual norm; ``history`` the residuals."""
@@ -193,7 +203,7 @@ class LoadStepper:
             raise RunInterrupted(signum, f"on the way to load factor {target:g} (last converged "
                                          f"level {level:g})")
 
-    def _residual_small(self, reason: int, fnorm: float) -> bool:
+    def residual_small(self, reason: int, fnorm: float) -> bool:
         """A level is accepted at the stated tolerances only: the residual tests (FNORM_ABS,
         FNORM_RELATIVE) pass, and a solve that stopped on the step length (SNORM_RELATIVE: a
         line search that no longer moves) counts only with |F| at the absolute tolerance."""
@@ -252,8 +262,8 @@ class LoadStepper:
                 X.copy(X_prev)
                 if self.spec.predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
-                reason, its, fnorm = self._solve_at(path.lam + step, X, target, path.lam,
-                                                    from_rest=path.lam == 0.0)
+                reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
+                                                   from_rest=path.lam == 0.0)
                 tally["its"] += its
                 history.append(list(self.history))
                 self._check_budget(path, X_prev, target, step)
@@ -286,7 +296,7 @@ class LoadStepper:
         the last accepted one (``UNSTABLE_STEP``, at most ``stability_cutbacks`` per level: a
         stable path does not step onto a saddle, another branch may have been reached)."""
         P = self.problem
-        if reason > 0 and not self._residual_small(reason, fnorm):
+        if reason > 0 and not self.residual_small(reason, fnorm):
             reason = STALLED_STEP                       # a step-length stop above the tolerance
             self.stalled_at = fnorm
         converged = reason > 0 and np.isfinite(fnorm) and P.state_is_clean()

@@ -60,6 +60,7 @@ class SampleOutcome:
     fallbacks: int = 0                        # warm levels solved again by load stepping
     rebuilt: bool = False                     # the run was (re)built for this sample
     wall_time: float = 0.0
+    cpu_time: float = 0.0                     # this process's CPU seconds for the sample
 
 
 def changed_paths(a, b, prefix: tuple = ()) -> list[tuple]:
@@ -192,7 +193,7 @@ class SampleSolver:
     def solve(self, spec: ModelSpec, start: list[LevelState | None] | None = None) -> SampleOutcome:
         """Solve ``spec`` at its load levels (``spec.steps``), cold or from ``start`` (one state
         or None per level).  Raises ``RunInterrupted`` on a signal and input errors of the spec."""
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         rebuilt = self._prepare(spec)
         run = self.run
         run.stepper.newton_iterations = 0       # solver.max_newton_iterations is per sample
@@ -216,7 +217,7 @@ class SampleSolver:
         for name in run.model.probes:
             out.displacements[name] = np.array(out.displacements.get(name, [])).reshape(-1, 3)
             out.values[name] = np.array(out.values.get(name, [])).reshape(-1, 3)
-        out.wall_time = time.perf_counter() - t0
+        out.wall_time, out.cpu_time = time.perf_counter() - t0, time.process_time() - c0
         return out
 
     def _warm(self, levels: list[float], start: list, records: list, out: SampleOutcome) -> None:

@@ -11,8 +11,8 @@ import numpy as np
 from ...solving.spread import agree, world
 from .errors import CalibrationError
 from .evaluate import Evaluator
-from .identify import (Profile, Uncertainty, at_bounds, interval, relative_width, uncertainty,
-                       verdict)
+from .identify import (Profile, Uncertainty, at_bounds, interval, profile_width, relative_width,
+                       uncertainty, verdict)
 from .log import SampleLog
 from .optimise import LocalFit, global_fit, local_fit, start_points
 from .parameters import describe, from_u
@@ -99,7 +99,7 @@ def analyse(ev: Evaluator, spec: FitSpec, result: LocalFit, say) -> tuple[Uncert
         if spec.identifiability.profiles and unc is not None:
             prof = profile(ev, spec, u, 2.0 * result.best.cost, unc.s2, i, se_u, say)
         t95 = unc.t95 if unc is not None else np.inf
-        w = relative_width(par, values[i], se_u, t95)
+        w = relative_width(par, values[i], se_u, t95) if prof is None else profile_width(par, values[i], prof)
         v, why = verdict(w, prof)
         out.append(ParameterResult(par.name, float(values[i]), float(abs(par.dp_du(values[i])) * se_u),
                                    interval(par, u[i], se_u, t95), float(w), v, why, bounds[i],

@@ -72,7 +72,8 @@ class Evaluator:
                         model={k: v.tolist() for k, v in model.items()}, inverted=out.inverted,
                         levels_reached=len(out.load_factors), newton_iterations=out.newton_iterations,
                         start=how if start is not None else "cold", warm_levels=out.warm_levels,
-                        fallbacks=out.fallbacks, rebuilt=out.rebuilt, wall_time=out.wall_time)
+                        fallbacks=out.fallbacks, rebuilt=out.rebuilt, wall_time=out.wall_time,
+                        cpu_time=out.cpu_time)
         complete = out.status == "completed" and len(out.states) == len(spec.levels)
         return sample, (out.states if complete else None)
 

@@ -14,11 +14,16 @@ whole bounds when the error is infinite), the other parameters fitted again (``r
 freedom); a side is *closed* when the profile crosses 3.84 inside the bounds.
 
 The linearised 95 % interval is u ± t SE_u, t the 97.5 % quantile of Student's t with m − n
-degrees of freedom (s² is estimated from m − n residuals; t → 1.96 for many data).  The verdict,
-with w its relative half-width (t SE_p / |p|, or 10^(t SE_u) − 1 for a log-scaled parameter):
+degrees of freedom (s² is estimated from m − n residuals; t → 1.96 for many data).
+
+The verdict uses w, the relative half-width of the 95 % interval: the profile's when there is one
+(it follows the model's curvature and the bounds of the other parameters, which the linearisation
+does not: a parameter correlated with an undetermined one gets a large linearised error but may
+be pinned within the bounds), else the linearised one (t SE_p / |p|); for a log-scaled parameter
+the larger factor − 1:
   * determined        w ≤ 0.25 and the profile (when computed) closed on both sides;
-  * not determined    w > 1 (infinite included), or the profile open on both sides (flat: it never
-                      reaches 3.84 inside the bounds);
+  * not determined    the profile open on both sides (flat: it never reaches 3.84 inside the
+                      bounds), or w > 1 (infinite included);
   * weakly determined otherwise.
 """
 from __future__ import annotations
@@ -107,32 +112,53 @@ def profile_grid(par: Parameter, u: float, se_u: float, span: float, points: int
     return [x for x in left if x < u], [x for x in right if x > u]
 
 
+def _crossing(v: np.ndarray, d: np.ndarray) -> float | None:
+    """Where Δχ² first reaches 3.84 going outwards along (v, d) (v from the optimum out), by
+    linear interpolation; None if it never does."""
+    for k in range(1, len(v)):
+        if d[k] >= CHI2_95:
+            t = (CHI2_95 - d[k - 1]) / (d[k] - d[k - 1]) if d[k] > d[k - 1] else 1.0
+            return float(v[k - 1] + t * (v[k] - v[k - 1]))
+    return None
+
+
 def close_profile(prof: Profile, p_hat: float) -> Profile:
-    """Which sides cross 3.84, and the interval where the profile stays below it."""
+    """Which sides cross 3.84, and the 95 % interval where the profile stays below it (to the
+    profile's last point on a side that does not cross)."""
     v, d = np.array(prof.values), np.array(prof.delta)
-    order = np.argsort(v)
-    v, d = v[order], d[order]
-    below, above = v < p_hat, v > p_hat
-    prof.closed = (bool(np.any(d[below] >= CHI2_95)), bool(np.any(d[above] >= CHI2_95)))
-    inside = v[d < CHI2_95]
-    prof.interval = (float(inside.min()), float(inside.max())) if len(inside) else (p_hat, p_hat)
+    sides = []
+    for sel, order in ((v < p_hat, -1), (v > p_hat, 1)):
+        vs, ds = v[sel], d[sel]
+        k = np.argsort(order * vs)
+        vs, ds = np.concatenate([[p_hat], vs[k]]), np.concatenate([[0.0], ds[k]])
+        sides.append((_crossing(vs, ds), vs[-1]))
+    prof.closed = (sides[0][0] is not None, sides[1][0] is not None)
+    prof.interval = tuple(c if c is not None else edge for c, edge in sides)
     return prof
 
 
+def profile_width(par: Parameter, p_hat: float, prof: Profile) -> float:
+    """w from the profile's 95 % interval: its larger relative half-width (log-scaled: the
+    larger factor − 1); infinite when it reaches p = 0."""
+    lo, hi = prof.interval
+    if par.log:
+        return max(hi / p_hat, p_hat / lo) - 1.0 if lo > 0 else np.inf
+    return max(p_hat - lo, hi - p_hat) / abs(p_hat) if p_hat != 0 else np.inf
+
+
 def verdict(w: float, prof: Profile | None) -> tuple[str, str]:
-    """The verdict and its reason (module docstring)."""
-    both_open = prof is not None and not any(prof.closed)
-    closed = prof is None or all(prof.closed)
+    """The verdict and its reason (module docstring); ``w`` from the profile when there is one."""
+    if prof is not None and not any(prof.closed):
+        return NOT, "the profile stays below Δχ² = 3.84 on both sides within the bounds"
     if not np.isfinite(w):
         return NOT, "the Jacobian does not see it (infinite standard error)"
+    how = "profile" if prof is not None else "linearised"
     if w > 1.0:
-        return NOT, f"95 % interval ±{100 * w:.0f} %"
-    if both_open:
-        return NOT, "the profile stays below Δχ² = 3.84 on both sides within the bounds"
-    if w <= 0.25 and closed:
-        return DETERMINED, f"95 % interval ±{100 * w:.2g} %"
-    side = "" if closed else "; the profile is open on one side"
-    return WEAK, f"95 % interval ±{100 * w:.2g} %{side}"
+        return NOT, f"{how} 95 % interval ±{100 * w:.3g} %"
+    if w <= 0.25 and (prof is None or all(prof.closed)):
+        return DETERMINED, f"{how} 95 % interval ±{100 * w:.2g} %"
+    side = "" if prof is None or all(prof.closed) else "; the profile is open on one side"
+    return WEAK, f"{how} 95 % interval ±{100 * w:.2g} %{side}"
 
 
 def at_bounds(params: list[Parameter], u: np.ndarray, tol: float = 1e-6) -> list[bool]:

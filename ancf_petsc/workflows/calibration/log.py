@@ -109,7 +109,7 @@ class SampleLog:
         new = self.samples[self.resumed:]
         t = np.array([s.wall_time for s in new]) if new else np.zeros(0)
         return {"samples": len(self.samples), "solved_now": len(new), "resumed": self.resumed,
-                "solve_time": float(t.sum()),
+                "solve_time": float(t.sum()), "cpu_time": float(sum(s.cpu_time for s in new)),
                 "starts": {k: sum(s.start == k for s in new) for k in ("cold", "nearest", "affine")},
                 "fallback_levels": int(sum(s.fallbacks for s in new)),
                 "newton_iterations": int(sum(s.newton_iterations for s in new))}

@@ -24,6 +24,15 @@ def _finite(x):
     return x
 
 
+def _span(interval, closed=(True, True)) -> str:
+    """[lo, hi] for a table; an open side (the profile never crossed 3.84) as its edge with ≤/≥,
+    an unbounded one as ∞."""
+    lo, hi = interval
+    a = f"{lo:.4g}" if np.isfinite(lo) and lo > -1e300 else "−∞"
+    b = f"{hi:.4g}" if np.isfinite(hi) else "∞"
+    return f"[{'≤' if not closed[0] else ''}{a}, {'≥' if not closed[1] else ''}{b}]"
+
+
 def summary(res: CalibrationResult, log: SampleLog) -> dict:
     spec, best, unc = res.spec, res.best, res.uncertainty
     params = [{"name": p.name, "keys": spec.parameters[i].key_text(), "value": p.value, "start": p.start,
@@ -44,9 +53,10 @@ def summary(res: CalibrationResult, log: SampleLog) -> dict:
         "wall_time": res.wall_time, "starts": res.starts,
         "rules": {"chi2_95": CHI2_95, "rcond": RCOND,
                   "determined": "w <= 0.25 and the profile closed on both sides",
-                  "not determined": "w > 1, or infinite, or the profile open on both sides",
-                  "w": "t SE / |p| (log-scaled: 10^(t SE_log10) - 1), t: Student's 97.5 % quantile "
-                       "with m - n degrees of freedom", "t95": None if unc is None else unc.t95}}
+                  "not determined": "the profile open on both sides, or w > 1 (or infinite)",
+                  "w": "relative half-width of the profile's 95 % interval where computed, else of "
+                       "the linearised one (t SE / |p|; t: Student's 97.5 % quantile, m - n dof); "
+                       "log-scaled: the larger factor - 1", "t95": None if unc is None else unc.t95}}
 
 
 def markdown(res: CalibrationResult, log: SampleLog) -> str:
@@ -60,21 +70,23 @@ def markdown(res: CalibrationResult, log: SampleLog) -> str:
                                                 f", s² = χ²/(m − n) = {unc.s2:.4g} ({unc.dof} dof)")
              + f"; {tp.get('samples', 0)} samples ({tp.get('resumed', 0)} read from the log), "
              f"{log.counts()}.", "",
-             "| parameter | start | fitted | SE | 95 % interval | w | verdict |", "|---|---:|---:|---:|---|---:|---|"]
+             "| parameter | start | fitted | SE | 95 % interval, linearised | 95 % interval, profile | w | verdict |",
+             "|---|---:|---:|---:|---|---|---:|---|"]
     for p in res.parameters:
-        lo, hi = p.interval
         bound = " (at a bound)" if p.at_bound else ""
+        prof = "—" if p.profile is None else _span(p.profile.interval, p.profile.closed)
         lines.append(f"| {p.name} | {p.start:.4g} | {p.value:.5g}{bound} | {p.se:.3g} | "
-                     f"[{lo:.4g}, {hi:.4g}] | {p.width:.3g} | {p.verdict}: {p.reason} |")
+                     f"{_span(p.interval)} | {prof} | {p.width:.3g} | {p.verdict}: {p.reason} |")
     if unc is not None and len(res.parameters) > 1:
         names = [p.name for p in res.parameters]
         lines += ["", "Correlations:", "", "| | " + " | ".join(names) + " |",
                   "|---|" + "---:|" * len(names)]
         for n, row in zip(names, unc.corr):
             lines.append(f"| {n} | " + " | ".join(f"{c:+.3f}" for c in row) + " |")
-    lines += ["", "Verdict: w is the relative half-width of the linearised 95 % interval; "
-              "determined: w ≤ 0.25 and the profile crosses Δχ² = 3.84 on both sides; not determined: "
-              "w > 1 or the profile flat on both sides within the bounds; else weakly determined.",
+    lines += ["", "Verdict: w is the relative half-width of the 95 % interval (the profile's where "
+              "computed, else the linearised one; log-scaled: the larger factor − 1); determined: "
+              "w ≤ 0.25 and the profile crosses Δχ² = 3.84 on both sides; not determined: the profile "
+              "flat on both sides within the bounds, or w > 1; else weakly determined.",
               "", "![fit](fit.png)"] + (["", "![profiles](profiles.png)"]
                                        if any(p.profile for p in res.parameters) else [])
     return "\n".join(lines) + "\n"

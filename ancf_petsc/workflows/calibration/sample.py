@@ -41,6 +41,7 @@ class Sample:
     fallbacks: int = 0
     rebuilt: bool = False
     wall_time: float = 0.0
+    cpu_time: float = 0.0
     rank: int = 0
     extra: dict = field(default_factory=dict)
 

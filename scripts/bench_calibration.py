@@ -18,7 +18,8 @@ Prints, for Table 1's ψ = 0 column (configs/achilles_type3_psi0.yaml, 13 levels
    any number of ranks) under ``mpirun -n 1`` and ``-n 2``, and the machine's ceiling measured as
    scripts/bench_scaling.py does: two copies of the 1-rank run side by side; then the trf fit's
    time to its optimum on 1 and 2 ranks;
-6. ``--twin N``: the full-size synthetic twin (N noise draws; docs/calibration.md).
+6. ``--twin N``: the full-size synthetic twin (N noise draws; docs/calibration.md);
+   ``--optimisers``: trf against differential evolution on the twin and the Table 1 fit.
 
 Rates are per minute of wall time and per minute of CPU time (a shared machine inflates wall
 times; CPU time is the per-core figure).  Every figure is the median of ``--repeat`` runs.
@@ -247,20 +248,89 @@ def twin(out: str, draws: int) -> dict:
             "joint95": int(within.all(axis=1).sum()), "samples": samples, "wall": wall}
 
 
+def optimisers(out: str) -> dict:
+    """trf against differential evolution (+ trf polish) on two fits: the full-size twin (one
+    noise draw, starts 30 % / -20 % / 25 % off) and the Table 1 fit; samples and final cost."""
+    from ancf_petsc.workflows.calibration import load_fit
+    from ancf_petsc.workflows.calibration.calibrate import run_calibration
+    from ancf_petsc.workflows.calibration.twin import draw, exact_data, with_data
+    rows = {}
+    twin_spec = load_fit(TWIN)
+    exact = exact_data(twin_spec, [p.start for p in twin_spec.parameters])
+    twin_spec = with_data(twin_spec, draw(twin_spec, exact, np.random.default_rng(0)))
+    for p, x in zip(twin_spec.parameters, (1.3, 0.8, 1.25)):
+        p.start *= x
+    for name, spec in (("twin", twin_spec), ("table1", load_fit(FIT))):
+        spec.identifiability.profiles = False
+        for method in ("trf", "differential_evolution"):
+            spec.optimizer.method = method
+            spec.optimizer.popsize, spec.optimizer.generations = 5, 20
+            spec.output = os.path.join(out, f"opt_{name}_{method}")
+            t = time.process_time()
+            res = run_calibration(spec, fresh=True, say=lambda *_: None)
+            cpu = time.process_time() - t
+            n = res.throughput["samples"]
+            rows[f"{name}/{method}"] = {"samples": n, "cost": res.best.cost, "cpu": cpu,
+                                        "values": list(res.best.parameters.values())}
+            print(f"[bench] optimiser {name:7s} {method:22s}: {n:4d} samples, cost {res.best.cost:.6g}, "
+                  f"CPU {cpu:.0f} s; " + ", ".join(f"{v:.5g}" for v in res.best.parameters.values()), flush=True)
+    return rows
+
+
+def write_twin_data() -> str:
+    """configs/data/twin_achilles_mu.csv: the twin's exact data, made by the program at the
+    paper's moduli (the twin fit file's starts)."""
+    from ancf_petsc.workflows.calibration import load_fit
+    from ancf_petsc.workflows.calibration.twin import exact_data
+    path = os.path.join(ROOT, "configs", "data", "twin_achilles_mu.csv")
+    head = ("# Synthetic twin data (docs/calibration.md): the paper's psi = 0 column solved by this program at\n"
+            "# mu = 103.1 / 143.2 / 226.7 MPa (configs/achilles_type3_psi0.yaml); no noise (the benchmark adds it).\n"
+            "# Written by: python scripts/bench_calibration.py --write-twin-data\n")
+    levels = [10, 20, 30, 40, 45, 60, 80, 90, 100, 150, 200, 300, 400]
+    if not os.path.exists(path):                     # the fit file needs the levels to load
+        with open(path, "w") as fh:
+            fh.write(head + "load_N,soleus_x_mm,lateral_y_mm,medial_y_mm\n"
+                     + "".join(f"{x},0,0,0\n" for x in levels))
+    spec = load_fit(TWIN)
+    exact = exact_data(spec, [p.start for p in spec.parameters])
+    with open(path, "w") as fh:
+        fh.write(head + "load_N,soleus_x_mm,lateral_y_mm,medial_y_mm\n")
+        for k, x in enumerate(levels):
+            fh.write(f"{x},{exact['soleus_elongation'][k] * 1e3:.9f},{exact['lateral_gastrocnemius_y'][k] * 1e3:.9f},"
+                     f"{exact['medial_gastrocnemius_y'][k] * 1e3:.9f}\n")
+    print(f"[bench] wrote {path}")
+    return path
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "bench_calibration"))
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--skip-ranks", action="store_true")
     ap.add_argument("--twin", type=int, default=0, help="noise draws of the full-size twin (0: none)")
+    ap.add_argument("--write-twin-data", action="store_true", help="write the twin's data file and stop")
+    ap.add_argument("--only-twin", action="store_true", help="the twin alone (with --twin N)")
+    ap.add_argument("--optimisers", action="store_true", help="trf against differential evolution, then stop")
     a = ap.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
     os.environ.update({k: v for k, v in ENV.items() if k.startswith(("OPENBLAS", "OMP"))})
     import petsc4py
     petsc4py.init([])
     from ancf_petsc import yamlio
+    if a.write_twin_data:
+        write_twin_data()
+        return 0
     raw = yamlio.load(open(CONFIG).read())
     print(f"[bench] {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
+    if a.optimisers:
+        with open(os.path.join(a.out, "optimisers.json"), "w") as fh:
+            json.dump(optimisers(a.out), fh, indent=1, default=float)
+        return 0
+    if a.only_twin:
+        res = {"twin": twin(a.out, a.twin)}
+        with open(os.path.join(a.out, "twin.json"), "w") as fh:
+            json.dump(res, fh, indent=1, default=float)
+        return 0
     res = {"date": time.strftime("%Y-%m-%d"), "load": os.getloadavg()[0],
            "process": process_runs(a.out, a.repeat), "rebuilt": rebuilt_runs(raw, a.out, a.repeat),
            "reused": reused_runs(raw, max(a.repeat, 5)), "warm": warm_fit(a.out)}

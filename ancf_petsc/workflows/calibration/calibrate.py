@@ -90,7 +90,7 @@ def analyse(ev: Evaluator, spec: FitSpec, result: LocalFit, say) -> tuple[Uncert
     params = spec.parameters
     u = result.u
     values = from_u(params, u)
-    unc = uncertainty(result.jac, result.best.r) if result.jac is not None else None
+    unc = uncertainty(result.jac, result.best.r, spec.absolute_sigma) if result.jac is not None else None
     bounds = at_bounds(params, u)
     out = []
     for i, par in enumerate(params):

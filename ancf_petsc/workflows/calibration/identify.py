@@ -3,7 +3,9 @@ the optimum, profiles of the objective along each parameter, and a verdict per p
 
 With weighted residuals r (in σ) and their Jacobian J in the optimiser's coordinates u, the
 covariance of the estimate is  Cov(u) = s² (Jᵀ J)⁻¹ = s² (Jᵀ W J)⁻¹ in unweighted terms, with
-s² = Σ r² / (m − n) (m data, n parameters: the misfit the σ did not explain scales the errors).
+s² = Σ r² / (m − n) (m data, n parameters: the misfit the σ did not explain scales the errors),
+or s² = 1 with ``objective.absolute_sigma`` (the σ are the data's known errors, as scipy's
+curve_fit(absolute_sigma=True); needed when there are no more data than parameters).
 It is taken through the singular values of J: a direction J does not see (a singular value below
 ``RCOND`` of the largest) has infinite variance, and every parameter with a part in it an
 infinite standard error.  Standard errors of p follow to first order (dp/du).
@@ -14,7 +16,8 @@ whole bounds when the error is infinite), the other parameters fitted again (``r
 freedom); a side is *closed* when the profile crosses 3.84 inside the bounds.
 
 The linearised 95 % interval is u ± t SE_u, t the 97.5 % quantile of Student's t with m − n
-degrees of freedom (s² is estimated from m − n residuals; t → 1.96 for many data).
+degrees of freedom (s² is estimated from m − n residuals; t → 1.96 for many data, and 1.96 with
+absolute σ).
 
 The verdict uses w, the relative half-width of the 95 % interval: the profile's when there is one
 (it follows the model's curvature and the bounds of the other parameters, which the linearisation
@@ -49,17 +52,19 @@ class Uncertainty:
     se_u: np.ndarray
     singular_values: np.ndarray
 
+    absolute: bool = False                   # s² = 1: the σ are the data's errors
+
     @property
     def t95(self) -> float:
-        """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom."""
-        return float(student_t.ppf(0.975, self.dof))
+        """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (normal: absolute σ)."""
+        return float(student_t.ppf(0.975, np.inf if self.absolute else self.dof))
 
 
-def uncertainty(J: np.ndarray, r: np.ndarray) -> Uncertainty:
+def uncertainty(J: np.ndarray, r: np.ndarray, absolute: bool = False) -> Uncertainty:
     """Cov(u) = s² (JᵀJ)⁻¹ through the SVD of J (module docstring)."""
     m, n = J.shape
     dof = max(m - n, 1)
-    s2 = float(np.sum(r ** 2)) / dof
+    s2 = 1.0 if absolute else float(np.sum(r ** 2)) / dof
     _, S, Vt = np.linalg.svd(J, full_matrices=False)
     V = Vt.T
     null = S <= RCOND * (S[0] if len(S) and S[0] > 0 else 1.0)
@@ -74,7 +79,7 @@ def uncertainty(J: np.ndarray, r: np.ndarray) -> Uncertainty:
     reg = (V / (S ** 2 + eps2)) @ V.T
     d = np.sqrt(np.diag(reg))
     corr = reg / np.outer(d, d)
-    return Uncertainty(s2, dof, cov, corr, np.sqrt(var), S)
+    return Uncertainty(s2, dof, cov, corr, np.sqrt(var), S, absolute)
 
 
 def relative_width(par: Parameter, p: float, se_u: float, t95: float) -> float:

@@ -41,25 +41,31 @@ def plot_fit(res, path: str) -> str:
 
 
 def plot_profiles(res, path: str) -> str:
-    params = [p for p in res.parameters if p.profile is not None]
+    params = [(p, par) for p, par in zip(res.parameters, res.spec.parameters) if p.profile is not None]
     fig = Figure(figsize=(4.2 * len(params), 3.6))
     FigureCanvasAgg(fig)
     axes = fig.subplots(1, len(params), squeeze=False)[0]
-    for ax, p in zip(axes, params):
+    for ax, (p, par) in zip(axes, params):
         v = np.array(p.profile.values + [p.value])
         d = np.array(p.profile.delta + [0.0])
         order = np.argsort(v)
         ok = np.array([s == "completed" for s in p.profile.status] + [True])[order]
         ax.plot(v[order], d[order], "-", color="tab:blue", lw=1.2)
-        ax.plot(v[order][ok], d[order][ok], "o", ms=4, color="tab:blue")
-        ax.plot(v[order][~ok], d[order][~ok], "x", ms=6, color="tab:red", label="failed sample")
+        ax.plot(v[order][ok], d[order][ok], "o", ms=4, color="tab:blue", label="profile (others re-fitted)")
+        if not ok.all():
+            ax.plot(v[order][~ok], d[order][~ok], "x", ms=6, color="tab:red", label="failed sample")
         ax.axhline(CHI2_95, color="k", ls="--", lw=0.8, label="95 % (Δχ² = 3.84)")
-        if np.all(np.isfinite(p.interval)):
-            ax.axvspan(*p.interval, color="tab:green", alpha=0.12, label="linearised 95 % interval")
+        lo, hi = np.clip(p.interval, v.min(), v.max())
+        if hi > lo:
+            ax.axvspan(lo, hi, color="tab:green", alpha=0.12, label="linearised 95 % interval")
+        if par.log:
+            ax.set_xscale("log")
         ax.set_yscale("symlog", linthresh=1.0)
-        ax.set_xlabel(p.name)
+        ax.set_ylim(bottom=-0.1)
+        ax.set_xlabel(f"{p.name}" + (f" [{par.unit}]" if par.unit else ""))
         ax.set_ylabel("Δχ²")
         ax.set_title(p.verdict, fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
+    fig.tight_layout()
     return save_figure(fig, path)

@@ -66,8 +66,8 @@ def markdown(res: CalibrationResult, log: SampleLog) -> str:
              f"Model `{os.path.relpath(spec.model_path, os.path.dirname(spec.file))}`, "
              f"{n_data(spec)} data points in {len(spec.data)} set(s), {len(spec.parameters)} parameter(s); "
              f"{spec.optimizer.method}: {res.fit.status} ({res.fit.message}).", "",
-             f"χ² = {2 * res.best.cost:.4g}" + ("" if unc is None else
-                                                f", s² = χ²/(m − n) = {unc.s2:.4g} ({unc.dof} dof)")
+             f"χ² = {2 * res.best.cost:.4g}" + ("" if unc is None else ", s² = 1 (absolute σ)" if unc.absolute
+                                                else f", s² = χ²/(m − n) = {unc.s2:.4g} ({unc.dof} dof)")
              + f"; {tp.get('samples', 0)} samples ({tp.get('resumed', 0)} read from the log), "
              f"{log.counts()}.", "",
              "| parameter | start | fitted | SE | 95 % interval, linearised | 95 % interval, profile | w | verdict |",

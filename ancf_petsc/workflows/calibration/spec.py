@@ -75,6 +75,7 @@ class FitSpec:
     levels: list[float]                  # load factors solved: every data set's levels
     loss: str = "linear"
     penalty: float = 1e3                 # residual (in sigmas) of a level a failed sample missed
+    absolute_sigma: bool = False         # the sigmas are the data's errors: s² = 1 (identify.py)
     optimizer: OptimizerSpec = field(default_factory=OptimizerSpec)
     identifiability: IdentifiabilitySpec = field(default_factory=IdentifiabilitySpec)
     output: str = ""
@@ -244,7 +245,13 @@ def load_fit(path: str) -> FitSpec:
     params = _parameters(doc, raw, os.path.dirname(model_path))
     data = parse_data(doc.get("data"), here, raw)
     levels = sorted({float(x) for d in data for x in d.all_levels})
-    obj = _options(doc, "objective", ("loss", "penalty"))
+    obj = _options(doc, "objective", ("loss", "penalty", "absolute_sigma"))
+    absolute = obj.get("absolute_sigma", False)
+    expect(isinstance(absolute, bool), "objective.absolute_sigma", "expected true or false")
+    n_data = sum(len(d.levels) for d in data)
+    expect(absolute or n_data > len(params), "objective.absolute_sigma",
+           f"{n_data} data point(s) for {len(params)} parameter(s) leave no residual to estimate the "
+           "errors from: set absolute_sigma: true (the sigmas are the data's errors) or add data")
     loss = obj.get("loss", "linear")
     expect(loss in LOSSES, "objective.loss", f"must be one of {', '.join(LOSSES)}; got {loss!r}")
     penalty = number(obj.get("penalty", 1e3), "objective.penalty", positive=True)
@@ -252,6 +259,6 @@ def load_fit(path: str) -> FitSpec:
     expect(isinstance(output, str) and output, "output", "expected a directory (relative to the fit file)")
     return FitSpec(file=path, name=name, model_path=model_path, model_raw=raw,
                    model_dir=os.path.dirname(model_path), parameters=params, data=data, levels=levels,
-                   loss=loss, penalty=penalty, optimizer=_optimizer(doc),
+                   loss=loss, penalty=penalty, absolute_sigma=absolute, optimizer=_optimizer(doc),
                    identifiability=_identifiability(doc), output=os.path.normpath(os.path.join(here, output)),
                    slurm=slurm_spec(doc.get("slurm"), here))

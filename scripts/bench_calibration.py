@@ -37,6 +37,7 @@ import os
 import subprocess
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -45,6 +46,7 @@ sys.path.insert(0, ROOT)
 CONFIG = os.path.join(ROOT, "configs", "achilles_type3_psi0.yaml")
 FIT = os.path.join(ROOT, "configs", "fits", "table1_psi0_mu.yaml")
 TWIN = os.path.join(ROOT, "configs", "fits", "twin_achilles_mu.yaml")
+BAR_TWIN = os.path.join(ROOT, "configs", "fits", "bar_twin.yaml")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
 BIN = os.path.join(ROOT, ".venv", "bin")
@@ -214,37 +216,44 @@ def ranks_runs(out: str, repeat: int) -> dict:
             "trf_rel_difference": float(np.max(np.abs(p1 / p2 - 1)))}
 
 
-def twin(out: str, draws: int) -> dict:
-    """The full-size twin: ``draws`` noise draws of configs/fits/twin_achilles_mu.yaml's data."""
+def twin(out: str, draws: int, path: str = TWIN, factors=(1.3, 0.8, 1.25)) -> dict:
+    """A synthetic twin: ``draws`` noise draws of the data of ``path`` (the full-size one by
+    default, its truth the fit file's starts, each fit started ``factors`` away; the small one
+    with ``--bar-twin``: truth 1.2 / 3.6 MPa, started from the fit file's starts)."""
     from ancf_petsc.workflows.calibration import load_fit
     from ancf_petsc.workflows.calibration.calibrate import run_calibration
     from ancf_petsc.workflows.calibration.parameters import to_u
     from ancf_petsc.workflows.calibration.twin import coverage, draw, exact_data, with_data
-    spec = load_fit(TWIN)
+    spec = load_fit(path)
     spec.identifiability.profiles = False
-    true = np.array([p.start for p in spec.parameters])     # the twin file starts at the truth
+    true = np.array([p.start for p in spec.parameters]) if factors else np.array([1.2e6, 3.6e6])
     exact = exact_data(spec, true)
     rng = np.random.default_rng(0)
     fitted, se, t0, samples = [], [], time.perf_counter(), 0
     for k in range(draws):
         s = with_data(spec, draw(spec, exact, rng), os.path.join(out, "twin", str(k)))
-        for p, x in zip(s.parameters, (1.3, 0.8, 1.25)):   # start away from the truth
-            p.start = p.start * x
+        if factors:                                            # start away from the truth
+            s.parameters = [replace(p, start=p.start * x) for p, x in zip(spec.parameters, factors)]
         res = run_calibration(s, fresh=True, say=lambda *_: None)
         fitted.append(res.fit.u)
         se.append(res.uncertainty.se_u)
         samples += res.throughput["samples"]
-        print(f"[bench] twin draw {k}: " + ", ".join(f"{p.name} {p.value:.4g} ± {p.se:.2g}" for p in res.parameters),
-              flush=True)
+        if factors or k < 3:
+            print(f"[bench] twin draw {k}: " + ", ".join(f"{p.name} {p.value:.4g} ± {p.se:.2g}"
+                                                       for p in res.parameters), flush=True)
     u_true = to_u(spec.parameters, true)
     t95 = res.uncertainty.t95
     within = coverage(u_true, np.array(fitted), np.array(se), t95)
     within1 = coverage(u_true, np.array(fitted), np.array(se), 1.0)
     wall = time.perf_counter() - t0
+    z = (np.array(fitted) - u_true) / np.array(se)
+    print(f"[bench] twin: z-scores (fitted - true) / SE: mean {np.round(z.mean(axis=0), 3).tolist()}, "
+          f"standard deviation {np.round(z.std(axis=0), 3).tolist()}; first 20 draws within 95 %: "
+          f"{within[:20].sum(axis=0).tolist()}")
     print(f"[bench] twin: {draws} draws, {samples} samples in {wall:.0f} s; true value within the 95 % "
           f"interval (t = {t95:.2f}) per parameter {within.sum(axis=0).tolist()} of {draws}, all at once "
           f"{int(within.all(axis=1).sum())}; within 1 SE {within1.sum(axis=0).tolist()}")
-    return {"draws": draws, "within95": within.sum(axis=0).tolist(), "within1se": within1.sum(axis=0).tolist(),
+    return {"draws": draws, "within95": within.sum(axis=0).tolist(), "z_std": z.std(axis=0).tolist(), "within1se": within1.sum(axis=0).tolist(),
             "joint95": int(within.all(axis=1).sum()), "samples": samples, "wall": wall}
 
 
@@ -258,8 +267,8 @@ def optimisers(out: str) -> dict:
     twin_spec = load_fit(TWIN)
     exact = exact_data(twin_spec, [p.start for p in twin_spec.parameters])
     twin_spec = with_data(twin_spec, draw(twin_spec, exact, np.random.default_rng(0)))
-    for p, x in zip(twin_spec.parameters, (1.3, 0.8, 1.25)):
-        p.start *= x
+    twin_spec.parameters = [replace(p, start=p.start * x)
+                            for p, x in zip(twin_spec.parameters, (1.3, 0.8, 1.25))]
     for name, spec in (("twin", twin_spec), ("table1", load_fit(FIT))):
         spec.identifiability.profiles = False
         for method in ("trf", "differential_evolution"):
@@ -311,6 +320,7 @@ def main(argv=None) -> int:
     ap.add_argument("--write-twin-data", action="store_true", help="write the twin's data file and stop")
     ap.add_argument("--only-twin", action="store_true", help="the twin alone (with --twin N)")
     ap.add_argument("--optimisers", action="store_true", help="trf against differential evolution, then stop")
+    ap.add_argument("--bar-twin", type=int, default=0, help="the small twin's draws (configs/fits/bar_twin.yaml), then stop")
     a = ap.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
     os.environ.update({k: v for k, v in ENV.items() if k.startswith(("OPENBLAS", "OMP"))})
@@ -322,6 +332,10 @@ def main(argv=None) -> int:
         return 0
     raw = yamlio.load(open(CONFIG).read())
     print(f"[bench] {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
+    if a.bar_twin:
+        with open(os.path.join(a.out, "bar_twin.json"), "w") as fh:
+            json.dump(twin(a.out, a.bar_twin, BAR_TWIN, None), fh, indent=1, default=float)
+        return 0
     if a.optimisers:
         with open(os.path.join(a.out, "optimisers.json"), "w") as fh:
             json.dump(optimisers(a.out), fh, indent=1, default=float)

@@ -7,19 +7,14 @@ import os
 import numpy as np
 import yaml
 
-#: the bar: K / mu = 3 (compressible), so that elongation and lateral contraction together
-#: determine both moduli
-BAR = {
-    "name": "bar",
-    "geometry": {"length": 0.1},
-    "beams": [{"name": "bar", "section": {"shape": "ellipse", "semi_axes": [0.006, 0.004], "cubature_degree": 4},
-               "material": {"model": "neo-hookean", "mu": 1.2e6, "bulk_modulus": 3.6e6}, "elements": 1}],
-    "boundary_conditions": [{"beam": "bar", "node": "first", "fix": "reduced"}],
-    "loads": [{"beam": "bar", "node": "last", "traction_force": [45.0, 0.0, 0.0]}],
-    "steps": [1.0],
-    "probes": [{"name": "tip", "beam": "bar", "node": "last"},
-               {"name": "tip_ry", "beam": "bar", "node": "last", "vector": "r_y"}],
-}
+from helpers import CONFIGS
+
+#: the bar of the small twin (configs/calibration_bar.yaml): K / mu = 3 (compressible), so that
+#: elongation and lateral contraction together determine both moduli
+BAR = {k: v for k, v in yaml.safe_load(open(os.path.join(CONFIGS, "calibration_bar.yaml"))).items()
+       if k not in ("output", "units")}
+#: the small twin's fit file (mu and K from elongation and lateral stretch)
+BAR_TWIN = os.path.join(CONFIGS, "fits", "bar_twin.yaml")
 LEVELS = [0.1 * k for k in range(1, 11)]
 TRUE = (1.2e6, 3.6e6)
 

@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from calibration_cases import BAR, MU, K, TRUE, bar_case, write_yaml
+from calibration_cases import BAR, BAR_TWIN, MU, K, TRUE, bar_case, write_yaml
 from helpers import petsc_init
 
 petsc_init()
@@ -36,7 +36,7 @@ def test_the_twin_recovers_its_parameters_within_the_reported_errors(tmp_path):
       parameter.  With honest errors 18 or more happen with probability 0.92 and 16 or more with
       0.98: this seed gives 16 (mu) and 18 (K); over 100 draws 93 % and 94 % (docs/calibration.md).
     """
-    spec = load_fit(bar_case(str(tmp_path), identifiability={"profiles": False}))
+    spec = load_fit(BAR_TWIN)                      # configs/fits/bar_twin.yaml
     exact = exact_data(spec, TRUE)
     ref = run_calibration(with_data(spec, exact, str(tmp_path / "exact")), fresh=True, say=lambda *_: None)
     J = ref.fit.jac

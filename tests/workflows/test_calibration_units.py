@@ -155,3 +155,5 @@ def test_verdicts_follow_the_stated_rule():
     assert verdict(0.5, closed)[0] == WEAK
     assert verdict(0.1, flat)[0] == NOT and verdict(1.5, closed)[0] == NOT
     assert CHI2_95 == pytest.approx(3.8415, abs=1e-4)
+    failed = close_profile(Profile([1.0, 1.5, 3.0], [1e6, 0.5, 9.0], ["failed", "completed", "completed"]), 2.0)
+    assert failed.closed == (False, True) and failed.interval[0] == 1.5     # a failure proves nothing

@@ -117,26 +117,29 @@ def profile_grid(par: Parameter, u: float, se_u: float, span: float, points: int
     return [x for x in left if x < u], [x for x in right if x > u]
 
 
-def _crossing(v: np.ndarray, d: np.ndarray) -> float | None:
-    """Where Δχ² first reaches 3.84 going outwards along (v, d) (v from the optimum out), by
-    linear interpolation; None if it never does."""
+def _side(v: np.ndarray, d: np.ndarray, ok: np.ndarray) -> tuple[float | None, float]:
+    """Going outwards along (v, d) from the optimum (v[0]): where Δχ² first reaches 3.84 (linear
+    interpolation; None if it does not) and the last point reached.  A sample that failed says
+    nothing about the data: the side ends, open, before it."""
     for k in range(1, len(v)):
+        if not ok[k]:
+            return None, float(v[k - 1])
         if d[k] >= CHI2_95:
             t = (CHI2_95 - d[k - 1]) / (d[k] - d[k - 1]) if d[k] > d[k - 1] else 1.0
-            return float(v[k - 1] + t * (v[k] - v[k - 1]))
-    return None
+            return float(v[k - 1] + t * (v[k] - v[k - 1])), float(v[k])
+    return None, float(v[-1])
 
 
 def close_profile(prof: Profile, p_hat: float) -> Profile:
     """Which sides cross 3.84, and the 95 % interval where the profile stays below it (to the
-    profile's last point on a side that does not cross)."""
+    last point of a side that does not cross: the bounds, the span, or a failed sample)."""
     v, d = np.array(prof.values), np.array(prof.delta)
+    ok = np.array([s == "completed" for s in prof.status], dtype=bool)
     sides = []
     for sel, order in ((v < p_hat, -1), (v > p_hat, 1)):
-        vs, ds = v[sel], d[sel]
-        k = np.argsort(order * vs)
-        vs, ds = np.concatenate([[p_hat], vs[k]]), np.concatenate([[0.0], ds[k]])
-        sides.append((_crossing(vs, ds), vs[-1]))
+        k = np.argsort(order * v[sel])
+        sides.append(_side(np.concatenate([[p_hat], v[sel][k]]), np.concatenate([[0.0], d[sel][k]]),
+                           np.concatenate([[True], ok[sel][k]])))
     prof.closed = (sides[0][0] is not None, sides[1][0] is not None)
     prof.interval = tuple(c if c is not None else edge for c, edge in sides)
     return prof

@@ -117,16 +117,22 @@ def profile_grid(par: Parameter, u: float, se_u: float, span: float, points: int
     return [x for x in left if x < u], [x for x in right if x > u]
 
 
+def crossing(d0: float, d1: float) -> float:
+    """Where between two profile points (Δχ² = d0 < 3.84 <= d1) the profile crosses 3.84, as a
+    fraction of the way: linear in √Δχ², exact for a profile quadratic about the optimum."""
+    a, b = np.sqrt(max(d0, 0.0)), np.sqrt(d1)
+    return float((np.sqrt(CHI2_95) - a) / (b - a)) if b > a else 1.0
+
+
 def _side(v: np.ndarray, d: np.ndarray, ok: np.ndarray) -> tuple[float | None, float]:
-    """Going outwards along (v, d) from the optimum (v[0]): where Δχ² first reaches 3.84 (linear
-    interpolation; None if it does not) and the last point reached.  A sample that failed says
+    """Going outwards along (v, d) from the optimum (v[0]): where Δχ² first reaches 3.84
+    (``crossing``; None if it does not) and the last point reached.  A sample that failed says
     nothing about the data: the side ends, open, before it."""
     for k in range(1, len(v)):
         if not ok[k]:
             return None, float(v[k - 1])
         if d[k] >= CHI2_95:
-            t = (CHI2_95 - d[k - 1]) / (d[k] - d[k - 1]) if d[k] > d[k - 1] else 1.0
-            return float(v[k - 1] + t * (v[k] - v[k - 1])), float(v[k])
+            return float(v[k - 1] + crossing(d[k - 1], d[k]) * (v[k] - v[k - 1])), float(v[k])
     return None, float(v[-1])
 
 

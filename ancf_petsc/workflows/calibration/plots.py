@@ -58,7 +58,7 @@ def plot_profiles(res, path: str) -> str:
         lo, hi = np.clip(p.interval, v.min(), v.max())
         if hi > lo:
             ax.axvspan(lo, hi, color="tab:green", alpha=0.12, label="linearised 95 % interval")
-        if par.log:
+        if par.log and v.max() > 10 * v.min():     # a narrow range reads better on a linear axis
             ax.set_xscale("log")
         ax.set_yscale("symlog", linthresh=1.0)
         ax.set_ylim(bottom=-0.1)

@@ -24,6 +24,17 @@ import sys
 PROG = "ancf-fit"
 
 
+def _count(text: str) -> int:
+    """A non-negative integer option (--task, --ranks)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0; got {value}")
+    return value
+
+
 def _args(argv: list[str]):
     ap = argparse.ArgumentParser(prog=PROG, allow_abbrev=False, description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -32,10 +43,10 @@ def _args(argv: list[str]):
     ap.add_argument("--fresh", action="store_true", help="start over: ignore (and replace) the log")
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
     what = ap.add_mutually_exclusive_group()
-    what.add_argument("--task", type=int, help="one start of a multi-start fit (a SLURM array task)")
+    what.add_argument("--task", type=_count, help="one start of a multi-start fit (a SLURM array task)")
     what.add_argument("--slurm", action="store_true", help="write <output>/fit.slurm and stop")
     what.add_argument("--collect", action="store_true", help="gather the starts' logs, then analyse")
-    ap.add_argument("--ranks", type=int, default=1, help="MPI ranks per array task (with --slurm)")
+    ap.add_argument("--ranks", type=_count, default=1, help="MPI ranks per array task (with --slurm)")
     args, rest = ap.parse_known_args(argv)
     unknown = [a for a in rest if a.startswith("--")]
     if unknown:
@@ -87,6 +98,7 @@ def _run(spec, args, say) -> int:
     from ancf_petsc.workflows.calibration.slurm import merge_starts, write_slurm
 
     starts = spec.optimizer.starts
+    expect(args.ranks >= 1, "--ranks", f"expected ranks >= 1; got {args.ranks}")
     if args.slurm:
         script = write_slurm(spec, args.fit, args.ranks)
         say(f"[fit] wrote {script}: submit with cd {spec.output} && sbatch fit.slurm, "

@@ -320,6 +320,7 @@ def main(argv=None) -> int:
     ap.add_argument("--write-twin-data", action="store_true", help="write the twin's data file and stop")
     ap.add_argument("--only-twin", action="store_true", help="the twin alone (with --twin N)")
     ap.add_argument("--optimisers", action="store_true", help="trf against differential evolution, then stop")
+    ap.add_argument("--only-ranks", action="store_true", help="the 1 against 2 ranks part alone")
     ap.add_argument("--bar-twin", type=int, default=0, help="the small twin's draws (configs/fits/bar_twin.yaml), then stop")
     a = ap.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
@@ -332,6 +333,10 @@ def main(argv=None) -> int:
         return 0
     raw = yamlio.load(open(CONFIG).read())
     print(f"[bench] {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
+    if a.only_ranks:
+        with open(os.path.join(a.out, "ranks.json"), "w") as fh:
+            json.dump(ranks_runs(a.out, a.repeat), fh, indent=1, default=float)
+        return 0
     if a.bar_twin:
         with open(os.path.join(a.out, "bar_twin.json"), "w") as fh:
             json.dump(twin(a.out, a.bar_twin, BAR_TWIN, None), fh, indent=1, default=float)

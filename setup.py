@@ -17,6 +17,7 @@ setup(
             "ancf-report=apps.ancf_report:main",
             "ancf-sweep=apps.ancf_sweep:main",
             "ancf-study=apps.ancf_study:main",
+            "ancf-fit=apps.ancf_fit:cli",
         ]
     },
 )

@@ -126,3 +126,15 @@ def element_blocks(model: Model, layout: Layout, fixed_mask: np.ndarray) -> list
         rows = np.where(fixed_mask[rows], -1, rows).astype(PETSc.IntType)
         out.append(ElementBlock(beam, parts, cn, rows, node_dofs))
     return out
+
+
+def refresh_parts(blocks: list[ElementBlock], model: Model, layout: Layout, beams: list[int]) -> None:
+    """After the material laws of ``beams`` (indices) changed in place in the model (same mesh):
+    their element blocks' quadrature parts again (``Model.element_data``).  The matrix, its
+    pattern and the solver's symbolic factorisation are untouched (not collective)."""
+    local_el = layout.local_elements
+    elem_beam = model.element_beam()
+    for blk in blocks:
+        if blk.beam.index in beams:
+            mine = local_el[elem_beam[local_el] == blk.beam.index]
+            blk.parts = model.element_data(blk.beam, mine - blk.beam.element_offset)

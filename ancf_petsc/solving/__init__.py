@@ -4,5 +4,5 @@ its PETSc objects destroyed at the end), ``supports`` (rigid motions left free),
 (signals between Newton solves)."""
 
 #: the sub-modules (imported on use: a plain import of the package loads none of them)
-__all__ = ["chord", "interrupt", "linear", "newton", "options", "records", "restart_check", "run",
-           "solver_messages", "stepper", "supports"]
+__all__ = ["chord", "interrupt", "linear", "newton", "options", "records", "restart_check", "run", "samples",
+           "solver_messages", "spread", "stepper", "supports"]

@@ -24,6 +24,12 @@ from .options import SolverOptionError, configure_options, refused, run_defaults
 from .records import LoadStepFailure
 
 
+def absolute_tolerance(load_norm: float, floor: float) -> float:
+    """The absolute tolerance of a run: 1e-10 of the largest load, at least 20 x the residual's
+    rounding floor."""
+    return max(1e-10 * load_norm, 20.0 * floor, 1e-30)
+
+
 class SNESSolver:
     """One SNES for ``problem`` (its options, callbacks, preconditioner and counters)."""
 
@@ -46,9 +52,9 @@ class SNESSolver:
             self.snes.setLineSearchPreCheck(problem.limits.precheck)
         # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
         # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic)
-        fnorm = problem.loads.scale(max_level)
+        self.load_norm = problem.loads.scale(max_level)
         self.rounding_floor = rounding_floor(problem)
-        atol = max(1e-10 * fnorm, 20.0 * self.rounding_floor, 1e-30)
+        atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._kept_options: list[str] = []
         self.linesearch, self._kept_options = configure_options(

@@ -52,16 +52,19 @@ class LoadStepper:
         """Remove the solver's options from PETSc's database (``SNESSolver.close``)."""
         self.solver.close(collective)
 
+    def release_path(self) -> None:
+        """Free the load path's vectors (before another ``run`` of this stepper starts a path)."""
+        for v in (self.path.X, self.path.dX_last) if self.path is not None else ():
+            v.destroy()
+        self.path = None
+
     def destroy(self) -> None:
         """Free the SNES and the path's vectors; not collective."""
-        if self.path is not None:
-            for v in (self.path.X, self.path.dX_last):
-                v.destroy()
-            self.path = None
+        self.release_path()
         self.solver.destroy()
 
-    def _solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
-                  from_rest: bool = False) -> tuple[int, int, float]:
+    def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
+                 from_rest: bool = False) -> tuple[int, int, float]:
         """Newton at load factor ``lam`` from ``X`` (``newton.PhasedNewton``: the contact law's
         phases).  Returns the last solve's reason, the iterations of all of them and the final
         residual norm; ``history`` the residuals."""
@@ -126,7 +129,7 @@ class LoadStepper:
                 X.copy(X_prev)
                 if self.spec.predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
-                reason, its, fnorm = self._solve_at(path.lam + step, X, target, path.lam,
+                reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
                                                     from_rest=path.lam == 0.0)
                 tally.its += its
                 history.append(list(self.history))

@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""Between sliding and bonded (issue 27): the paper's tendon (psi = 45 deg, Table 1's levels) with
+every interface law — frictionless sliding, the elastic interfascicular matrix over several
+stiffnesses k_t, Coulomb friction over several coefficients mu (on the sliding and on the
+unilateral normal law), and the bonded tendon (k_t -> infinity) — loaded by the soleus alone and
+by all three muscles equally.  Per run: status, Newton iterations, cut-backs, wall time, the
+soleus elongation and the displacement of each gastrocnemius against the soleus (summary.json
+``displacement_differences``) at every level.
+
+    OPENBLAS_NUM_THREADS=1 python scripts/interface_study.py [--elements 4 8] [--jobs 2]
+        [--out DIR] [--csv docs/interface_study.csv] [--figure docs/figures/nonuniformity.png]
+
+Every run is one ancf-solve process (1 rank), as a user runs it.  The CSV has one row per run and
+level; the figure draws the soleus's displacement against the medial gastrocnemius at the far end
+against the load for each law (4 elements)."""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+LOADINGS = {"soleus": "achilles_type3_psi45.yaml", "equal": "achilles_psi45_equal_muscles.yaml"}
+#: (label, contact mode, tangential law or None)
+LAWS = [("sliding", "sliding", None)]
+LAWS += [(f"elastic k_t={k:.0e}", "sliding", {"law": "elastic", "stiffness": k}) for k in (1e8, 1e9, 1e10, 1e11)]
+LAWS += [("bonded (k_t=1e14)", "sliding", {"law": "elastic", "stiffness": 1e14})]
+LAWS += [(f"coulomb mu={mu:g}", "sliding", {"law": "coulomb", "friction": mu}) for mu in (0.03, 0.3)]
+LAWS += [("unilateral", "unilateral", None)]
+LAWS += [(f"unilateral, coulomb mu={mu:g}", "unilateral", {"law": "coulomb", "friction": mu})
+         for mu in (0.03, 0.3, 3.0)]
+
+
+def config(loading: str, mode: str, tangential, elements: int, out: str) -> dict:
+    with open(os.path.join(ROOT, "configs", LOADINGS[loading])) as fh:
+        raw = yaml.safe_load(fh)
+    for b in raw["beams"]:
+        b["elements"] = elements
+        b["section"]["file"] = os.path.join(ROOT, "configs", b["section"]["file"])
+    raw["contact"] = {"mode": mode}
+    if tangential is not None:
+        raw["contact"]["tangential"] = tangential
+    raw["output"] = {"dir": out, "vtk": False}
+    return raw
+
+
+def run(case: tuple, out: str) -> dict:
+    loading, (label, mode, tangential), elements = case
+    tag = f"{loading}_{elements}_{label}".replace(" ", "_").replace("=", "").replace(",", "").replace("(", "").replace(")", "")
+    directory = os.path.join(out, tag)
+    path = directory + ".yaml"
+    with open(path, "w") as fh:
+        yaml.safe_dump(config(loading, mode, tangential, elements, directory), fh, sort_keys=False)
+    t = time.perf_counter()
+    p = subprocess.run([os.path.join(ROOT, ".venv", "bin", "ancf-solve"), path, "--quiet"],
+                       capture_output=True, text=True, env=ENV)
+    wall = time.perf_counter() - t
+    try:
+        with open(os.path.join(directory, "summary.json")) as fh:
+            s = json.load(fh)
+    except (OSError, ValueError):
+        s = {"status": "no summary", "steps": [], "message": p.stderr.strip()[-300:]}
+    return {"loading": loading, "law": label, "elements": elements, "status": s["status"],
+            "message": s.get("message", ""), "wall_s": wall, "steps": s["steps"]}
+
+
+def rows_of(r: dict) -> list[dict]:
+    out = []
+    for st in r["steps"]:
+        dd = st.get("displacement_differences", {})
+        row = {"loading": r["loading"], "law": r["law"], "elements": r["elements"], "status": r["status"],
+               "load_N": st["load_factor"], "newton": st["iterations"], "cutbacks": st["cutbacks"],
+               "soleus_mm": 1e3 * st["probes"]["soleus"]["displacement"][0]}
+        for pair, d in dd.items():
+            row[f"end_{pair}_mm"] = 1e3 * d["end"]
+        out.append(row)
+    return out
+
+
+def figure(results: list[dict], path: str, elements: int) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=False)
+    for ax, loading in zip(axes, LOADINGS):
+        for r in results:
+            if r["loading"] != loading or r["elements"] != elements or not r["steps"]:
+                continue
+            load = [st["load_factor"] for st in r["steps"]]
+            key = next((k for k in r["steps"][0].get("displacement_differences", {}) if k.startswith("medial")), None)
+            if key is None:
+                continue
+            # the soleus against the medial gastrocnemius (deep minus superficial), mm
+            du = [-1e3 * st["displacement_differences"][key]["end"] for st in r["steps"]]
+            style = "--" if r["law"].startswith("unilateral") else "-"
+            ax.plot(load, du, style, marker=".", label=r["law"] + ("" if r["status"] == "completed" else " (failed)"))
+        ax.set_title(f"{loading} loading, psi = 45 deg, {elements} elements")
+        ax.set_xlabel("tendon force [N]")
+        ax.set_ylabel("soleus minus medial gastrocnemius, end displacement [mm]")
+        ax.grid(True, alpha=0.3)
+    axes[1].legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap.add_argument("--elements", type=int, nargs="+", default=[4, 8])
+    ap.add_argument("--loadings", nargs="+", default=list(LOADINGS), choices=list(LOADINGS))
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default="/tmp/ancf-interface-study")
+    ap.add_argument("--csv", default=None)
+    ap.add_argument("--figure", default=None)
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS]
+    with ThreadPoolExecutor(args.jobs) as pool:
+        results = list(pool.map(lambda c: run(c, args.out), cases))
+    print("| loading | law | elements | status | Newton | cut-backs | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for r in results:
+        rows = rows_of(r)
+        last = rows[-1] if rows else {}
+        mg = next((v for k, v in last.items() if k.startswith("end_medial")), float("nan"))
+        print(f"| {r['loading']} | {r['law']} | {r['elements']} | {r['status']} | "
+              f"{sum(x['newton'] for x in rows)} | {sum(x['cutbacks'] for x in rows)} | {r['wall_s']:.1f} | "
+              f"{last.get('soleus_mm', float('nan')):.4f} | {-mg:.4f} |"
+              + ("" if r["status"] == "completed" else f" {r['message'][:80]}"))
+    if args.csv:
+        rows = [row for r in results for row in rows_of(r)]
+        keys = sorted({k for row in rows for k in row}, key=lambda k: list(rows[0]).index(k) if k in rows[0] else 99)
+        with open(args.csv, "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=keys)
+            w.writeheader()
+            w.writerows(rows)
+    if args.figure:
+        figure(results, args.figure, min(args.elements))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,105 @@
+"""Many solves of one model in one process (solving/samples.py, issue 28): material parameters
+changed in place give a fresh build's answers; warm starts change the cost, not the answer
+(beyond the solver's tolerance); a warm start that does not converge falls back to load
+stepping; other changes rebuild the run.  Table 1's psi = 0 column (sliding contact)."""
+from __future__ import annotations
+
+import copy
+import os
+
+import numpy as np
+import pytest
+
+from helpers import CONFIGS, petsc_init
+
+petsc_init()
+
+from ancf_petsc import yamlio  # noqa: E402
+from ancf_petsc.config import parse_config  # noqa: E402
+from ancf_petsc.solving.run import run_model, serial_comm  # noqa: E402
+from ancf_petsc.solving.samples import SampleSolver, changed_paths  # noqa: E402
+
+RAW = yamlio.load(open(os.path.join(CONFIGS, "achilles_type3_psi0.yaml")).read())
+
+
+def spec_of(scale=(1.0, 1.0, 1.0), **top):
+    raw = copy.deepcopy(RAW)
+    for b, s in zip(raw["beams"], scale):
+        b["material"]["mu"] = float(b["material"]["mu"]) * s
+    raw.update(top)
+    return parse_config(raw, base_dir=CONFIGS)
+
+
+NEAR = (1.02, 0.99, 1.01)
+
+
+@pytest.fixture(scope="module")
+def solved():
+    """One solver: the paper's moduli cold, then x (1.1, 0.9, 1.05) in place cold, then the
+    moduli x NEAR cold and warm-started from the first column's states."""
+    solver = SampleSolver()
+    base = solver.solve(spec_of())
+    cold = solver.solve(spec_of((1.1, 0.9, 1.05)))
+    near_cold = solver.solve(spec_of(NEAR))
+    warm = solver.solve(spec_of(NEAR), start=base.states)
+    yield solver, base, cold, (near_cold, warm)
+    solver.destroy()
+
+
+def test_a_material_change_in_place_gives_a_fresh_builds_answer(solved, tmp_path):
+    solver, base, cold, _ = solved
+    assert solver.builds == 1 and not cold.rebuilt and base.rebuilt
+    fresh = SampleSolver()
+    ref = fresh.solve(spec_of((1.1, 0.9, 1.05)))
+    fresh.destroy()
+    for name in ref.displacements:
+        assert np.abs(cold.displacements[name] - ref.displacements[name]).max() < 1e-13
+    assert cold.newton_iterations == ref.newton_iterations
+    spec = spec_of((1.1, 0.9, 1.05))
+    spec.output.dir = str(tmp_path / "run")
+    spec.output.vtk = False
+    res = run_model(spec, serial_comm(), log=lambda *_: None)          # ancf-solve's path
+    last = res.summary["steps"][-1]["probes"]["soleus"]["displacement"]
+    assert np.abs(np.array(last) - cold.displacements["soleus"][-1]).max() < 1e-13
+
+
+def test_warm_starts_change_the_cost_not_the_answer(solved):
+    _, base, _, (cold, warm) = solved
+    assert warm.status == "completed" and warm.warm_levels == 13 and warm.fallbacks == 0
+    assert warm.newton_iterations < cold.newton_iterations
+    # the tolerance |F| <= 4e-8 N over a stiffness of ~6e4 N/m: ~1e-12 m; allow 1e-10 m
+    for name in cold.displacements:
+        assert np.abs(warm.displacements[name] - cold.displacements[name]).max() < 1e-10
+    assert np.abs(cold.displacements["soleus"] - base.displacements["soleus"]).max() > 5e-5
+
+
+def test_a_warm_start_that_fails_falls_back_to_load_stepping(solved):
+    solver, base, _, (cold, _) = solved
+    bad = copy.deepcopy(base.states)
+    for s in bad[6:]:
+        s.x[:27, 0, 0] += 5e-3                  # every node moved 5 mm along the tendon
+    out = solver.solve(spec_of(NEAR), start=bad)
+    assert out.status == "completed" and out.fallbacks >= 1 and out.warm_levels >= 6
+    for name in cold.displacements:
+        assert np.abs(out.displacements[name] - cold.displacements[name]).max() < 1e-10
+
+
+def test_other_changes_rebuild_the_run():
+    solver = SampleSolver()
+    try:
+        a = solver.solve(spec_of(steps=[10, 20]))
+        b = solver.solve(spec_of(steps=[10, 20], geometry=dict(RAW["geometry"], twist_deg=15)))
+        assert a.rebuilt and b.rebuilt and solver.builds == 2
+        assert a.load_factors == [10.0, 20.0] and a.displacements["soleus"].shape == (2, 3)
+    finally:
+        solver.destroy()
+
+
+def test_changed_paths_of_config_trees():
+    a = {"beams": [{"material": {"mu": 1.0}}, {"material": {"mu": 2.0}}], "steps": [1, 2]}
+    b = copy.deepcopy(a)
+    b["beams"][1]["material"]["mu"] = 3.0
+    b["new"] = 1
+    assert changed_paths(a, b) == [("beams", 1, "material", "mu"), ("new",)]
+    b["steps"] = [1]
+    assert ("steps",) in changed_paths(a, b)

@@ -1,0 +1,159 @@
+"""Calibration pieces without solves: the fit file's errors (key path and fix, one line, exit 2),
+the quantities, the warm-start library's prediction, the standard errors and verdicts."""
+from __future__ import annotations
+
+import os
+import subprocess
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+import yaml
+
+from calibration_cases import MU, K, bar_case
+from helpers import MPI_ENV, ROOT, VENV_BIN
+
+from ancf_petsc.workflows.calibration import CalibrationError, load_fit
+from ancf_petsc.workflows.calibration.identify import (CHI2_95, DETERMINED, NOT, WEAK, Profile,
+                                                        close_profile, uncertainty, verdict)
+from ancf_petsc.workflows.calibration.library import StateLibrary
+from ancf_petsc.workflows.calibration.parameters import Parameter, apply
+from ancf_petsc.workflows.calibration.quantities import evaluate
+
+
+def _edit(path, change) -> str:
+    doc = yaml.safe_load(open(path))
+    change(doc)
+    with open(path, "w") as fh:
+        yaml.safe_dump(doc, fh, sort_keys=False)
+    return path
+
+
+BAD = [
+    ("unknown top key", lambda d: d.update(optimiser={}), "optimiser", "unknown key"),
+    ("bad key path", lambda d: d["parameters"][0].update(key="beams[0]..mu"), "parameters[0].key", "bad key path"),
+    ("index out of range", lambda d: d["parameters"][0].update(key="beams[3].material.mu"),
+     "parameters[0].key", "out of range"),
+    ("bounds inverted", lambda d: d["parameters"][0].update(bounds=[1e7, 1e6]), "parameters[0].bounds", "lower"),
+    ("log of a negative bound", lambda d: d["parameters"][0].update(bounds=[-1.0, 1e7]),
+     "parameters[0].bounds", "lower > 0"),
+    ("start outside", lambda d: d["parameters"][0].update(start=1.0), "parameters[0].start", "outside"),
+    ("config refuses a bound", lambda d: d["parameters"][0].update(bounds=[-1e6, 1e7], log=False),
+     "parameters[0]", "refuses"),
+    ("factor on a missing key", lambda d: d["parameters"][0].update(key="contact.friction", factor=True),
+     "parameters[0].key", "not in the model config"),
+    ("no such column", lambda d: d["data"][0].update(value="u_m"), "data[0].value", "no column"),
+    ("no such probe", lambda d: d["data"][0].update(probe="tipp"), "data[0].probe", "no probe"),
+    ("unknown quantity", lambda d: d["data"][0].update(quantity="strain"), "data[0].quantity", "must be one of"),
+    ("two sigmas", lambda d: d["data"][0].update(relative_sigma=0.1), "data[0]", "one uncertainty"),
+    ("key of another quantity", lambda d: d["data"][0].update(component="x"), "data[0].component",
+     "not a key of quantity elongation"),
+    ("method", lambda d: d.update(optimizer={"method": "nelder-mead"}), "optimizer.method", "must be one of"),
+]
+
+
+@pytest.mark.parametrize("name,change,key,words", BAD, ids=[b[0] for b in BAD])
+def test_bad_fit_files_name_the_key(tmp_path, name, change, key, words):
+    path = _edit(bar_case(str(tmp_path)), change)
+    with pytest.raises(CalibrationError) as info:
+        load_fit(path)
+    assert info.value.path == key and words in info.value.message, (info.value.path, info.value.message)
+
+
+def test_a_bad_fit_file_is_one_line_and_exit_2(tmp_path):
+    path = _edit(bar_case(str(tmp_path)), lambda d: d["parameters"][0].update(bounds=[1e7, 1e6]))
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-fit"), path], capture_output=True, text=True,
+                       env=dict(os.environ, **MPI_ENV), cwd=ROOT, timeout=120)
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and "parameters[0].bounds:" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_the_fit_file_reads_parameters_data_and_levels(tmp_path):
+    spec = load_fit(bar_case(str(tmp_path), parameters=(MU, dict(K, factor=True, bounds=[0.5, 2.0],
+                                                                 start=1.0, log=False))))
+    assert [p.name for p in spec.parameters] == ["mu", "K"]
+    assert spec.parameters[1].base == (3.6e6,)
+    raw = apply(spec.model_raw, spec.parameters, [1.5e6, 2.0])
+    assert raw["beams"][0]["material"]["mu"] == 1.5e6 and raw["beams"][0]["material"]["bulk_modulus"] == 7.2e6
+    assert spec.levels == pytest.approx([0.1 * k for k in range(1, 11)])
+    assert spec.config([1.5e6, 2.0])["steps"] == spec.levels
+    d = spec.data[0]
+    assert d.values[0] == pytest.approx(1e-3) and d.sigmas[0] == 5e-5
+
+
+def test_parameters_map_to_the_optimisers_coordinates_and_back():
+    p = Parameter("mu", [("a",)], 1e5, 1e7, 1e6, log=True)
+    assert p.to_u(1e6) == pytest.approx(6.0) and p.from_u(p.to_u(3.3e6)) == pytest.approx(3.3e6)
+    q = Parameter("f", [("b",)], -2.0, 4.0, 1.0)
+    assert q.scale == 4.0 and q.from_u(q.to_u(-1.5)) == pytest.approx(-1.5)
+    assert q.dp_du(1.0) == 4.0 and p.dp_du(1e6) == pytest.approx(1e6 * np.log(10))
+
+
+def test_quantities_from_probe_displacements():
+    solved = [10.0, 20.0, 40.0]
+    disp = {"a": np.array([[1.0, 2, 0], [2.0, 4, 0], [4.5, 9, 0]]), "b": np.array([[0.5, 0, 0], [1.0, 1, 0], [np.nan] * 3])}
+    lv = np.array([10.0, 20.0, 40.0])
+    assert evaluate("elongation", {"probes": ["a"]}, disp, lv, solved) == pytest.approx([1, 2, 4.5])
+    assert evaluate("probe", {"probes": ["a"], "component": "norm"}, disp, lv[:1], solved) == pytest.approx([5 ** 0.5])
+    diff = evaluate("difference", {"probes": ["a", "b"], "component": "x"}, disp, lv, solved)
+    assert diff[:2] == pytest.approx([0.5, 1.0]) and np.isnan(diff[2])        # b did not reach 40
+    k = evaluate("stiffness", {"probes": ["a"], "force": 2.0, "lower": 10.0}, disp, np.array([20.0, 40.0]), solved)
+    assert k == pytest.approx([2.0 * 10 / 1.0, 2.0 * 30 / 3.5])
+    mean = evaluate("elongation", {"probes": ["a", "b"]}, disp, lv[:2], solved)
+    assert mean == pytest.approx([0.75, 1.5])
+
+
+@dataclass
+class _State:                       # the fields of solving.samples.LevelState
+    x: np.ndarray
+    projection: None = None
+    status: None = None
+
+
+def test_the_library_predicts_states_that_are_linear_in_the_parameters():
+    """States affine in u are predicted exactly from a point and its finite-difference cloud;
+    far away the sample is solved cold; a lone close neighbour is used as it is."""
+    A, b = np.random.default_rng(0).normal(size=(2, 50, 3)), np.ones(50)
+
+    def states(u):
+        return [_State(A[k] @ u + b) for k in range(2)]
+    lib = StateLibrary()
+    u0 = np.array([6.0, 6.5, 7.0])
+    lib.add(u0, states(u0))
+    one, how = lib.start_for(u0 + 1e-5)
+    assert how == "nearest" and one[0].x is lib.states[0][0].x
+    for e in np.eye(3):
+        lib.add(u0 + 1e-5 * e, states(u0 + 1e-5 * e))
+    target = u0 + np.array([0.04, -0.02, 0.03])
+    pred, how = lib.start_for(target)
+    assert how == "affine"
+    assert max(np.abs(p.x - s.x).max() for p, s in zip(pred, states(target))) < 1e-8
+    assert lib.start_for(u0 + 0.5)[1] == "cold"
+
+
+def test_standard_errors_of_a_linear_model_and_a_parameter_it_cannot_see():
+    rng = np.random.default_rng(1)
+    J = rng.normal(size=(30, 2))
+    r = rng.normal(size=30)
+    unc = uncertainty(J, r)
+    s2 = r @ r / 28
+    assert unc.s2 == pytest.approx(s2)
+    assert unc.se_u == pytest.approx(np.sqrt(np.diag(s2 * np.linalg.inv(J.T @ J))))
+    J2 = np.column_stack([J[:, 0], np.zeros(30)])              # the second parameter is invisible
+    unc2 = uncertainty(J2, r)
+    assert np.isfinite(unc2.se_u[0]) and np.isinf(unc2.se_u[1])
+    assert verdict(np.inf, None)[0] == NOT
+
+
+def test_verdicts_follow_the_stated_rule():
+    closed = close_profile(Profile([1.0, 3.0], [5.0, 6.0], ["completed"] * 2), 2.0)
+    flat = close_profile(Profile([1.0, 3.0], [0.1, 0.2], ["completed"] * 2), 2.0)
+    one_side = close_profile(Profile([1.0, 3.0], [0.1, 9.0], ["completed"] * 2), 2.0)
+    assert closed.closed == (True, True) and flat.closed == (False, False)
+    assert verdict(0.1, closed)[0] == DETERMINED
+    assert verdict(0.1, one_side)[0] == WEAK
+    assert verdict(0.5, closed)[0] == WEAK
+    assert verdict(0.1, flat)[0] == NOT and verdict(1.5, closed)[0] == NOT
+    assert CHI2_95 == pytest.approx(3.8415, abs=1e-4)
+    failed = close_profile(Profile([1.0, 1.5, 3.0], [1e6, 0.5, 9.0], ["failed", "completed", "completed"]), 2.0)
+    assert failed.closed == (False, True) and failed.interval[0] == 1.5     # a failure proves nothing

@@ -85,6 +85,7 @@ class ComplementarityPredictor:
         self.solves = 0
         self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
         self._select = None                       # E: the multipliers' columns (``_columns``)
+        self._zero_rows = True                    # the matrix type can zero rows and columns
 
     @staticmethod
     def applies(problem) -> bool:
@@ -153,11 +154,10 @@ class ComplementarityPredictor:
             vecs.append(rhs)
             rhs.scale(-1.0)
             self._set_owned(rhs, np.zeros(len(self.dofs)))          # a probe's z rows: 0
-            # probe: K with every multiplier acting on the bodies, z rows decoupled
-            c.begin_phase(PROBE)
-            P.jacobian(self.snes, X, P.J, P.J)
+            K = self._probe_matrix(X)
+            vecs.append(K)
             self.ksp.getPC().reset()                                 # the pattern may have grown
-            self.ksp.setOperators(P.J)
+            self.ksp.setOperators(K)
             self.ksp.setFromOptions()
             self.ksp.setUp()
             Xs, y = B.duplicate(), X.duplicate()
@@ -173,6 +173,25 @@ class ComplementarityPredictor:
         S = 0.5 * (S + S.T)
         self._z = z
         return S, cvec - Bty - S @ z
+
+    def _probe_matrix(self, X: PETSc.Vec) -> PETSc.Mat:
+        """K with every multiplier acting on the bodies and the z rows decoupled (the probe
+        phase): the held Jacobian in P.J with the multipliers' rows and columns replaced by
+        −k_s on the diagonal (its q block is the same), or, where the matrix type cannot zero
+        rows and columns (MPISBAIJ), assembled in the probe phase."""
+        P, c = self.problem, self.problem.contact
+        if self._zero_rows:
+            K = P.J.duplicate(copy=True)
+            try:
+                K.zeroRowsColumns(self.dofs.astype(PETSc.IntType), diag=-c.stiffness)
+                return K
+            except PETSc.Error:                   # the same type on every rank: all fail
+                K.destroy()
+                self._zero_rows = False
+        c.begin_phase(PROBE)
+        P.jacobian(self.snes, X, P.J, P.J)
+        P.J.assemble()
+        return P.J.duplicate(copy=True)
 
     def _step(self, X: PETSc.Vec, z_new: np.ndarray, B, Xs, y) -> None:
         """X += (Δq = y − Xs Δz, Δz), as far as it leaves a state the residual is defined at

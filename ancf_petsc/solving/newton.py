@@ -16,9 +16,9 @@ Measured over the unilateral grid (scripts/bench_contact_grid.py, docs/contact.m
 the contact state of an increment in one prediction in most increments and two in the others,
 where the status rule inside Newton's iteration took several phases of several iterations each.
 
-Where there is no prediction (S too far from positive definite, a failed factorisation), where
-its solve fails (it is restarted from the increment's start) and past ``MAX_PREDICTIONS``, the
-increment is solved in the law's phases (``contact.laws``): bands of tolerated violations, then
+Where there is no prediction (S too far from positive definite, a failed factorisation) and the
+kept status does not pass the check, where a solve fails (restarted from the predicted state)
+and past ``MAX_PREDICTIONS``, the increment is solved in the law's phases (``contact.laws``): bands of tolerated violations, then
 the exact rule, each phase taking extra rounds of ``snes_max_it`` iterations while its active set
 still changes.  Two ways to change the status there:
 
@@ -151,16 +151,17 @@ class PhasedNewton:
         P, c = self.steps, self.steps.contact
         its = 0
         for k in range(MAX_PREDICTIONS):
-            start, status = X.copy(), c.status.copy()
+            status = c.status.copy()
             ok = self.predictor.predict(X)
             predicted = int((status != c.status).sum())          # this rank's, for the trace
             its += int(ok)
+            start, status = X.copy(), c.status.copy()
             P.keep_status(CHECK)
             reason, n = self.snes_solve(X)
             its += n
             what = f"prediction {k} ({predicted} changes)" if ok else f"no prediction {k}"
             if reason <= 0:
-                # the predicted state did not converge: the phases from the increment's start
+                # the predicted state's solve failed: the phases from the prediction
                 self._trace(lam, what, n, reason)
                 start.copy(X)
                 start.destroy()

@@ -215,7 +215,7 @@ class LoadStepper:
         """Reach every level in ``levels`` (increasing); call ``on_level`` after each one.
         ``start``: continue a path (a restart) instead of starting from the reference state."""
         P = self.problem
-        self.path = path = start or self.initial_path(levels[0])
+        self.path = path = start or self.initial_path(levels[0], levels[-1])
         path.X.copy(P.X)
         P.checkpoint()
         records = []
@@ -229,15 +229,21 @@ class LoadStepper:
             logging.stage(logging.SOLVE).pop()
         return records
 
-    def initial_path(self, first_level: float) -> PathState:
-        """The path at the reference state, with the first increment."""
+    def initial_path(self, first_level: float, last_level: float | None = None) -> PathState:
+        """The path at the reference state, with the first increment: the first level, or for
+        a law with a ``first_increment`` share (unilateral) that share of the first level
+        without the complementarity predictor (the held start) and at most that share of the
+        last level with it (one step from rest to a far level lands on another equilibrium of
+        the unilateral problem: docs/contact.md, stability map)."""
         X = self.problem.q0.copy()
         c = self.problem.contact
-        # a law's smaller first increment serves the held start (no predictor): with the
-        # predictor the first level is one increment (docs/contact.md)
-        share = None if c is None or self.predictor is not None else c.law.first_increment
-        dlam = (first_level * (share or 1.0) if self.spec.initial_increment is None
-                else min(first_level, self.spec.initial_increment))
+        share = None if c is None else c.law.first_increment
+        dlam = first_level
+        if share is not None:
+            dlam = (first_level * share if self.predictor is None
+                    else min(first_level, share * (last_level or first_level)))
+        if self.spec.initial_increment is not None:
+            dlam = min(first_level, self.spec.initial_increment)
         if self.spec.max_increment is not None:
             dlam = min(dlam, self.spec.max_increment)
         dX = X.duplicate()

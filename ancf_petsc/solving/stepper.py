@@ -36,6 +36,23 @@ from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailur
 STRETCH = 1.5
 
 
+def first_increment(spec: SolverSpec, share: float | None, first_level: float, last_level: float,
+                    predicted: bool) -> float:
+    """The first load increment from rest: the first level, or for a law with a
+    ``first_increment`` share (unilateral) that share of the first level without the
+    complementarity predictor (the held start) and at most that share of the last level with it
+    (one step from rest to a far level lands on another equilibrium of the unilateral problem:
+    docs/contact.md, stability map); ``solver.initial_increment`` and ``max_increment`` bound it."""
+    dlam = first_level
+    if share is not None:
+        dlam = min(first_level, share * last_level) if predicted else first_level * share
+    if spec.initial_increment is not None:
+        dlam = min(first_level, spec.initial_increment)
+    if spec.max_increment is not None:
+        dlam = min(dlam, spec.max_increment)
+    return dlam
+
+
 class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES."""
 
@@ -230,22 +247,11 @@ class LoadStepper:
         return records
 
     def initial_path(self, first_level: float, last_level: float | None = None) -> PathState:
-        """The path at the reference state, with the first increment: the first level, or for
-        a law with a ``first_increment`` share (unilateral) that share of the first level
-        without the complementarity predictor (the held start) and at most that share of the
-        last level with it (one step from rest to a far level lands on another equilibrium of
-        the unilateral problem: docs/contact.md, stability map)."""
+        """The path at the reference state, with the first increment (``first_increment``)."""
         X = self.problem.q0.copy()
         c = self.problem.contact
-        share = None if c is None else c.law.first_increment
-        dlam = first_level
-        if share is not None:
-            dlam = (first_level * share if self.predictor is None
-                    else min(first_level, share * (last_level or first_level)))
-        if self.spec.initial_increment is not None:
-            dlam = min(first_level, self.spec.initial_increment)
-        if self.spec.max_increment is not None:
-            dlam = min(dlam, self.spec.max_increment)
+        dlam = first_increment(self.spec, None if c is None else c.law.first_increment,
+                               first_level, last_level or first_level, self.predictor is not None)
         dX = X.duplicate()
         dX.set(0.0)
         return PathState(X=X, dX_last=dX, lam=0.0, dlam=dlam, dlam_last=0.0)

@@ -4,7 +4,7 @@ the soleus elongation of contact-discretisation variants against the solid refer
 docs/solid_contact.csv (read from the CSV: no dolfinx, nothing solid is solved).
 
     python scripts/solid_contact_variants.py                     # every variant, 4/8/16 el, ψ 0/15/45
-    python scripts/solid_contact_variants.py --variants default,free --elements 4
+    python scripts/solid_contact_variants.py --variants "default;free" --elements 4
 
 Each ANCF column is the one of scripts/verify_solid_contact.py (``tendon_config``: clamped roots,
 end traction on the soleus, 2 axial Gauss points), run in this process with the variant's
@@ -79,11 +79,11 @@ def reference(rows: list, law: str) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--variants", default=";".join(VARIANTS), help="names separated by ;")
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--psi", default="0,15,45")
     args = ap.parse_args(argv)
-    names = [v.strip() for v in args.variants.split(",") if v.strip()]
+    names = [v.strip() for v in args.variants.split(";") if v.strip()]
     unknown = [v for v in names if v not in VARIANTS]
     if unknown:
         print(f"solid_contact_variants: unknown variants {unknown}; known: {', '.join(VARIANTS)}",

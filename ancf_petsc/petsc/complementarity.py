@@ -131,7 +131,14 @@ class ComplementarityPredictor:
         if z_new is None:
             c.status[:] = status
         else:
-            self._step(X, z_new, *vecs[:3])
+            # active where it presses, inactive where it opens; a degenerate constraint (both
+            # within the tie tolerance) keeps its status: the exact rule accepts it either way,
+            # and a status set by the sign of rounding made predictions and checks alternate
+            # (the paper's ψ = 45° column with k_s x 10: 79 instead of 54 Newton iterations)
+            w = (lcp[1] + lcp[0] @ z_new) / c.stiffness
+            keep = self._global_status(status)
+            active = np.where(z_new > c.tie_tolerance, True, np.where(w > c.tie_tolerance, False, keep))
+            self._step(X, z_new, active, *vecs[:3])
             self.solves += 1
         for v in vecs:
             v.destroy()
@@ -193,7 +200,15 @@ class ComplementarityPredictor:
         P.J.assemble()
         return P.J.duplicate(copy=True)
 
-    def _step(self, X: PETSc.Vec, z_new: np.ndarray, B, Xs, y) -> None:
+    def _global_status(self, status: np.ndarray) -> np.ndarray:
+        """The status of every multiplier on every rank (each rank knows its own)."""
+        c = self.problem.contact
+        mine = np.zeros(len(status), dtype=np.int64)
+        own = c.mults[c.owned]
+        mine[own] = status[own]
+        return self.comm.allreduce(mine) > 0
+
+    def _step(self, X: PETSc.Vec, z_new: np.ndarray, active: np.ndarray, B, Xs, y) -> None:
         """X += (Δq = y − Xs Δz, Δz), as far as it leaves a state the residual is defined at
         (no inverted element, every projection found: a large first increment's linearised
         step may not), halving it up to MAX_HALVINGS times; the status from z_new."""
@@ -204,7 +219,7 @@ class ComplementarityPredictor:
         Xs.mult(dzv, step)
         step.aypx(-1.0, y)
         self._set_owned(step, dz)
-        c.status[:] = z_new > c.tie_tolerance
+        c.status[:] = active
         alpha = 1.0
         for _ in range(MAX_HALVINGS + 1):
             X.axpy(alpha, step)
@@ -214,7 +229,7 @@ class ComplementarityPredictor:
             X.axpy(-alpha, step)
             c.projector.restore()              # the failed trial's projections are no start
             alpha *= 0.5
-        c.status[:] = z_new > c.tie_tolerance  # the residual evaluations keep the status
+        c.status[:] = active                   # the residual evaluations keep the status
         for v in (step, F, dzv):
             v.destroy()
 

@@ -18,9 +18,10 @@ where the status rule inside Newton's iteration took several phases of several i
 
 Where there is no prediction (S too far from positive definite, a failed factorisation) and the
 kept status does not pass the check, where a solve fails (restarted from the predicted state)
-and past ``MAX_PREDICTIONS``, the increment is solved in the law's phases (``contact.laws``): bands of tolerated violations, then
-the exact rule, each phase taking extra rounds of ``snes_max_it`` iterations while its active set
-still changes.  Two ways to change the status there:
+and past ``MAX_PREDICTIONS``, the increment is solved in the law's phases (``contact.laws``):
+bands of tolerated violations, then the exact rule, each phase taking extra rounds of
+``snes_max_it`` iterations while its active set still changes.  Two ways to change the status
+there:
 
 * with the full Newton step (``-snes_linesearch_type basic``, the default), at every iterate
   (a primal–dual active set inside Newton's iteration);

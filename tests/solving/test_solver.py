@@ -310,3 +310,17 @@ def test_failure_hints_for_contact_models(tmp_path, mode, extra, expect):
     line = p.stderr.strip().splitlines()[-1]
     assert expect in line, line
     assert "-ksp_type gmres with -pc_type gamg" not in line
+
+
+@pytest.mark.parametrize("last,substeps", [(2.5, 1), (2.6, 2)])
+def test_the_rest_of_the_way_to_a_level_up_to_stretch_increments_is_one_step(last, substeps, tmp_path):
+    """No sliver step: from 1.0 with increments of 1.0 (no growth) the level 2.5 is reached in
+    one step (1.5 increments, ``load_control.STRETCH``), 2.6 in an increment and the rest."""
+    from ancf_petsc.solving.load_control import STRETCH
+    assert STRETCH == 1.5
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.1, 0.1 * last]
+    raw["solver"] = {"initial_increment": 0.1, "growth": 1.0}
+    s = run_inline(raw, tmp_path)
+    assert s["status"] == "completed"
+    assert [st["substeps"] for st in s["steps"]] == [1, substeps]

@@ -46,6 +46,14 @@ def det_and_inverse_transpose(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return det, H
 
 
+def determinant(F: np.ndarray) -> np.ndarray:
+    """det F of a batch of 3×3 matrices by the first row's cofactors (no LAPACK call per matrix)."""
+    a = F
+    return (a[..., 0, 0] * (a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1])
+            + a[..., 0, 1] * (a[..., 1, 2] * a[..., 2, 0] - a[..., 1, 0] * a[..., 2, 2])
+            + a[..., 0, 2] * (a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0]))
+
+
 Side = list  # [(coefficient (n,), a number or None, basis index)]: the tensor Σ c_k B_k
 
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .materials import det_and_inverse_transpose
+from .materials import determinant
 
 #: the pressure space's degree in (y, z) per station: {1, y, z} (docs/fibres.md: why not 0 or 2)
 PRESSURE_DEGREE = 1
@@ -89,7 +89,7 @@ class ProjectedDilatation:
         """θ (E, P), J (E, P), Wφ = w Φ (E, P, m) and M⁻¹ (E, m, m)."""
         if self.w is None or self.w.shape != F.shape[:2]:
             raise ValueError("ProjectedDilatation needs the weights of F's elements (ProjectedDilatation.on)")
-        J, _ = det_and_inverse_transpose(F)
+        J = determinant(F)
         Wphi = self.w[..., None] * self.basis
         c = np.matmul(self.Minv, np.matmul(np.swapaxes(Wphi, -1, -2), J[..., None]))
         return np.matmul(self.basis, c)[..., 0], J, Wphi, self.Minv

@@ -9,7 +9,7 @@ from ..contact.tangential import TANGENTIAL_LAWS
 from ..physics.element3363 import DEFAULT_ELEMENT
 from ..physics.laws import MATERIALS
 
-LOCKING = ("none", "ecm")
+LOCKING = ("none", "ecm", "mixed")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws.py)
 FIBRE_FOLLOW = ("twist", "axis")
@@ -59,7 +59,7 @@ class BeamSpec:
     elements: int
     axial_points: int = DEFAULT_AXIAL_POINTS
     element: str = DEFAULT_ELEMENT        # element type, see element3363.ELEMENTS
-    locking: str = "none"                 # 'ecm': Poisson-locking remedy (model.Beam.parts)
+    locking: str = "none"                 # 'ecm' (Poisson), 'mixed' (volumetric): remedies, model.Beam.parts
 
 
 @dataclass

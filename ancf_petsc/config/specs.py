@@ -131,8 +131,8 @@ class SolverSpec:
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
-    matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solving.options.matrix_type)
-    linear: str = "auto"                  # linear solver: auto | direct | fieldsplit (petsc.fieldsplit.choose)
+    matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (linalg.options.matrix_type)
+    linear: str = "auto"                  # linear solver: auto | direct | fieldsplit (linalg.choice.choose)
     allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 

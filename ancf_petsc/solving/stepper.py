@@ -17,7 +17,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
-from ..petsc import logging
+from ..linalg import logging
 from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.problem import Problem
 from . import solver_messages

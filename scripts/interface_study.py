@@ -53,11 +53,17 @@ def config(loading: str, mode: str, tangential, elements: int, out: str) -> dict
     return raw
 
 
-def run(case: tuple, out: str) -> dict:
+def run(case: tuple, out: str, reuse: bool = False) -> dict:
     loading, (label, mode, tangential), elements = case
     tag = f"{loading}_{elements}_{label}".replace(" ", "_").replace("=", "").replace(",", "").replace("(", "").replace(")", "")
     directory = os.path.join(out, tag)
     path = directory + ".yaml"
+    if reuse and os.path.exists(os.path.join(directory, "summary.json")):
+        with open(os.path.join(directory, "summary.json")) as fh:
+            s = json.load(fh)
+        return {"loading": loading, "law": label, "elements": elements, "status": s["status"],
+                "message": s.get("message", ""), "wall_s": s.get("timings", {}).get("total", float("nan")),
+                "steps": s["steps"]}
     with open(path, "w") as fh:
         yaml.safe_dump(config(loading, mode, tangential, elements, directory), fh, sort_keys=False)
     t = time.perf_counter()
@@ -90,7 +96,8 @@ def figure(results: list[dict], path: str, elements: int) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=False)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=False)
+    colour = {law[0]: plt.cm.tab10(i % 10) for i, law in enumerate(LAWS)}
     for ax, loading in zip(axes, LOADINGS):
         for r in results:
             if r["loading"] != loading or r["elements"] != elements or not r["steps"]:
@@ -102,12 +109,13 @@ def figure(results: list[dict], path: str, elements: int) -> None:
             # the soleus against the medial gastrocnemius (deep minus superficial), mm
             du = [-1e3 * st["displacement_differences"][key]["end"] for st in r["steps"]]
             style = "--" if r["law"].startswith("unilateral") else "-"
-            ax.plot(load, du, style, marker=".", label=r["law"] + ("" if r["status"] == "completed" else " (failed)"))
+            ax.plot(load, du, style, marker=".", color=colour[r["law"]],
+                    label=r["law"] + ("" if r["status"] == "completed" else f" ({r['status']})"))
         ax.set_title(f"{loading} loading, psi = 45 deg, {elements} elements")
         ax.set_xlabel("tendon force [N]")
-        ax.set_ylabel("soleus minus medial gastrocnemius, end displacement [mm]")
+        ax.set_ylabel("soleus - medial gastrocnemius at x = L [mm]")
         ax.grid(True, alpha=0.3)
-    axes[1].legend(fontsize=7, loc="upper left")
+        ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     fig.savefig(path, dpi=130)
 
@@ -120,11 +128,12 @@ def main() -> int:
     ap.add_argument("--out", default="/tmp/ancf-interface-study")
     ap.add_argument("--csv", default=None)
     ap.add_argument("--figure", default=None)
+    ap.add_argument("--reuse", action="store_true", help="read the runs already in --out (their summary.json) instead of solving again")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS]
     with ThreadPoolExecutor(args.jobs) as pool:
-        results = list(pool.map(lambda c: run(c, args.out), cases))
+        results = list(pool.map(lambda c: run(c, args.out, args.reuse), cases))
     print("| loading | law | elements | status | Newton | cut-backs | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in results:

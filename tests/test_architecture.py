@@ -18,6 +18,7 @@ PACKAGE = os.path.join(ROOT, "ancf_petsc")
 LAYERS = [
     ("errors", "version", "status", "yamlio"),  # vocabulary shared by everything; YAML input
     ("physics",),                             # element 3363, sections and cubature, materials, kernels
+    ("linalg",),                              # PETSc options, linear solvers, log events (one home)
     ("contact",),                             # contact points, projection, multipliers, laws
     ("config",),                              # YAML → validated ModelSpec (key-path errors)
     ("geometry_input", "model"),              # measured outlines; ModelSpec → Model
@@ -30,7 +31,7 @@ LAYERS = [
 ]
 LAYER = {c: k for k, names in enumerate(LAYERS) for c in names}
 #: components that may import petsc4py / mpi4py (api only to initialise PETSc on first use)
-PETSC_COMPONENTS = {"petsc", "solving", "api"}
+PETSC_COMPONENTS = {"linalg", "petsc", "solving", "api"}
 #: functions longer than 60 lines, each with the reason it stays in one piece
 LONG_FUNCTIONS = {
     "workflows/sweep/slurm.py:write_slurm": "one bash script, written line by line in order",
@@ -148,10 +149,33 @@ def test_no_import_cycles():
 
 
 def test_petsc_lives_in_one_layer():
-    """petsc4py and mpi4py are imported only by the PETSc layer and the solving layer on it."""
+    """petsc4py and mpi4py are imported only by linalg (options, linear solvers), the PETSc
+    layer and the solving layer on it."""
     outside = [f"{m}:{ln} imports {i}" for m, p in MODULES.items() for i, ln in _imports(m, p)
                if i.split(".")[0] in ("petsc4py", "mpi4py") and _component(m) not in PETSC_COMPONENTS]
     assert not outside, "\n".join(outside)
+
+
+def test_the_options_database_is_read_in_one_place():
+    """PETSc's options database (``PETSc.Options()``) is read and written only by
+    ``linalg/database.py`` (issue 29, point 5): the rest asks ``database.option``."""
+    found = []
+    for path in list(MODULES.values()) + [os.path.join(ROOT, "apps", f) for f in os.listdir(os.path.join(ROOT, "apps"))
+                                          if f.endswith(".py")]:
+        if os.path.relpath(path, PACKAGE) == os.path.join("linalg", "database.py"):
+            continue
+        for node in ast.walk(ast.parse(open(path).read())):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "Options" \
+                    and isinstance(node.func.value, ast.Name) and node.func.value.id == "PETSc":
+                found.append(f"{os.path.relpath(path, ROOT)}:{node.lineno}")
+    assert not found, found
+
+
+def test_linear_solver_and_options_raise_input_errors_not_config_errors():
+    """linalg and solving sit on errors.InputError, not on the config layer's ConfigError."""
+    found = [f"{m}:{ln}" for m, p in MODULES.items() if _component(m) in ("linalg", "solving")
+             for i, ln in _imports(m, p) if i == "ancf_petsc.config.values"]
+    assert not found, found
 
 
 def test_importing_the_package_loads_neither_petsc_nor_mpi():
@@ -228,7 +252,7 @@ def test_object_state_is_declared_in_init():
 #: reason codes and summary.json fields)
 TEXT_READERS = {
     "io/files.py:os_reason": "h5py gives the errno only inside its message text",
-    "petsc/options.py:petsc_message": "PETSc's error: the last line of its text is the reason",
+    "linalg/diagnostics.py:petsc_message": "PETSc's error: the last line of its text is the reason",
     "yamlio.py:syntax_error": "PyYAML's first line when its error has no .problem",
 }
 _TEXT_METHODS = {"split", "rsplit", "splitlines", "startswith", "endswith", "find", "rfind", "index",

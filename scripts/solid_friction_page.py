@@ -41,7 +41,7 @@ def checks_md(rows: list, psi: float) -> list:
         pairs.append((f"mesh: h {1e3 * hs[1]:.2f} → {1e3 * hs[0]:.2f} mm", runs[hs[1]], runs[hs[0]]))
     coarse = runs[hs[-1]] if hs else {}
     variants = sorted({r["variant"] for r in rows if r["model"] == SOLID and r["variant"] != BASE
-                       and num(r["psi_deg"]) == psi})
+                       and rep.ZONE not in r["variant"] and num(r["psi_deg"]) == psi})
     for v in variants:
         other = rep.solid_runs(rows, psi, v)
         for h, lv in other.items():
@@ -77,7 +77,7 @@ def ancf_md(rows: list, psi: float) -> list:
     L = ["| stick stiffness | elements | levels reached | soleus, relative | medial, relative | lateral, relative "
          "| medial / u_soleus | lateral / u_soleus | within 1 % |",
          "|---|---:|---|---:|---:|---:|---:|---:|---|"]
-    for (v, ne) in sorted(cols, key=lambda k: (k[0] != "stick default", -num(k[0].split()[-1]) if k[0] != "stick default" else 0, k[1])):
+    for (v, ne) in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])):
         e, col = errs.get((v, ne), {}), cols[(v, ne)]
         reached = max(col["levels"], default=0.0)
         status = f"all {len(ref)}" if not col["failed"] and len(e) == len(ref) else \
@@ -91,6 +91,42 @@ def ancf_md(rows: list, psi: float) -> list:
             verdict += " (not all levels)"
         L.append(f"| {v.replace('stick ', '')} | {ne} | {status} | {pct(worst['soleus'])} | {pct(worst['medial'], 0)} | "
                  f"{pct(worst['lateral'], 0)} | {pct(worsta['medial'])} | {pct(worsta['lateral'])} | {verdict} |")
+    return L
+
+
+def worst(e: dict) -> tuple:
+    """Signed worst over the levels of a column's errors: (relative, against u_soleus) per body."""
+    return ({b: max((e[F][b][0] for F in e), key=abs, default=float("nan")) for b in BODIES},
+            {b: max((e[F][b][1] for F in e), key=abs, default=float("nan")) for b in BODIES})
+
+
+def zone_md(rows: list, psi: float) -> list:
+    """The free-zone diagnostic: each ANCF column without friction below x = zone against the
+    solid run with the same zone (coarse mesh), beside the same column with friction everywhere
+    against the plain solid on that mesh."""
+    zcols = rep.ancf_columns(rows, psi, zone=True)
+    if not zcols:
+        return []
+    plain = rep.ancf_columns(rows, psi)
+    L = ["| stick stiffness | elements | friction near the clamp | levels | solid | soleus, relative "
+         "| medial / u_soleus | lateral / u_soleus | friction on the gastrocnemii from the soleus at 100 N, "
+         "solid / ANCF [N] |", "|---|---:|---|---:|---|---:|---:|---:|---:|"]
+    for (v, ne) in sorted(zcols, key=lambda k: (rep.stick_order(k[0]), k[1])):
+        base, zone = v.split(rep.ZONE)
+        for label, col, variant in (("everywhere", plain.get((base, ne)), BASE),
+                                    (f"none below x = {zone}", zcols[(v, ne)], f"{BASE}{rep.ZONE}{zone}")):
+            runs = rep.solid_runs(rows, psi, variant)
+            h = max(runs, default=None)
+            if col is None or h is None:
+                continue
+            e = rep.errors(col["levels"], runs[h])
+            rel, ab = worst(e)
+            f = [num(r["fx_mg_sol_N"]) + num(r["fx_lg_sol_N"]) for r in (runs[h].get(100.0), col["levels"].get(100.0))
+                 if r is not None]
+            reached = f"{len(e)}" + ("" if not col["failed"] else f" (to {max(col['levels'], default=0):g} N)")
+            L.append(f"| {base.replace('stick ', '')} | {ne} | {label} | {reached} | {variant}, h {1e3 * h:.2f} mm | "
+                     f"{pct(rel['soleus'])} | {pct(ab['medial'])} | {pct(ab['lateral'])} | "
+                     + (" / ".join(f"{x:.1f}" for x in f) if len(f) == 2 else "—") + " |")
     return L
 
 
@@ -113,24 +149,35 @@ def per_load_md(rows: list, psi: float, key) -> list:
     return L
 
 
+NEAR = 10e-3     # [m] the clamp zone of the profile table
+
+
 def profiles_md(prof: list) -> list:
-    """Totals over each interface: compressive and tensile normal force, friction force."""
+    """Per interface: compressive and tensile normal force, friction force, within NEAR of the
+    clamp and beyond."""
     if not prof:
         return []
-    keys = sorted({(p["model"], p["variant"], p["resolution"], num(p["load_N"])) for p in prof},
-                  key=lambda k: (k[0] != SOLID, k[1], num(k[2].split()[-2]) if k[0] == SOLID else -num(k[2].split()[0])))
-    L = ["| model | variant | load [N] | " + " | ".join(f"{i}: Q⁺ / Q⁻ / F_x [N]" for i in IFACES) + " |",
+
+    def order(k):
+        res = k[2].split()
+        return (k[0] != SOLID, k[1].split(",")[0], num(res[0]) if k[0] == ANCF else -num(res[1]), k[3])
+    keys = sorted({(p["model"], p["variant"], p["resolution"], num(p["load_N"])) for p in prof}, key=order)
+    L = ["| model | variant | load [N] | " + " | ".join(f"{i}: Q⁺ / Q⁻ / F_x [N], x < {NEAR * 1e3:g} mm · beyond"
+                                                    for i in IFACES) + " |",
          "|---|---|---:|" + "---:|" * len(IFACES)]
     for k in keys:
         cells = []
         for i in IFACES:
             pr = [p for p in prof if (p["model"], p["variant"], p["resolution"], num(p["load_N"])) == k
                   and p["interface"] == i]
-            w = [num(p["x_hi_m"]) - num(p["x_lo_m"]) for p in pr]
-            qp = sum(num(p["q_plus_N_per_m"]) * d for p, d in zip(pr, w))
-            qm = sum(num(p["q_minus_N_per_m"]) * d for p, d in zip(pr, w))
-            fx = sum(num(p["fx_N_per_m"]) * d for p, d in zip(pr, w))
-            cells.append(f"{qp:.0f} / {qm:.0f} / {fx:+.1f}")
+            part = []
+            for near in (True, False):
+                sel = [p for p in pr if (num(p["x_lo_m"]) < NEAR - 1e-12) == near]
+                w = [num(p["x_hi_m"]) - num(p["x_lo_m"]) for p in sel]
+                q = [sum(num(p[c]) * d for p, d in zip(sel, w)) for c in ("q_plus_N_per_m", "q_minus_N_per_m",
+                                                                          "fx_N_per_m")]
+                part.append(f"{q[0]:.0f} / {q[1]:.0f} / {q[2]:+.1f}")
+            cells.append(" · ".join(part))
         L.append(f"| {k[0]} {k[2]} | {k[1]} | {k[3]:g} | " + " | ".join(cells) + " |")
     return L
 
@@ -179,13 +226,21 @@ def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
               "for the soleus and for each gastrocnemius, relative or against the soleus elongation:", ""]
         L += ancf_md(rows, psi) + [""]
         cols = rep.ancf_columns(rows, psi)
-        best = sorted(cols, key=lambda k: (-len(cols[k]["levels"]), k[1]))
-        if best:
-            L += [f"Per level, {best[0][0]}, {best[0][1]} elements:", ""] + per_load_md(rows, psi, best[0]) + [""]
+        full = [k for k in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])) if not cols[k]["failed"]]
+        for key in full or sorted(cols, key=lambda k: (-len(cols[k]["levels"]), k[1]))[:1]:
+            L += [f"Per level, {key[0]}, {key[1]} elements:", ""] + per_load_md(rows, psi, key) + [""]
+        zm = zone_md(rows, psi)
+        if zm:
+            L += ["**Diagnostic: no friction near the clamp.**  The same columns with the Coulomb law switched off "
+                  "at the contact points (beams) and slave points (solid) below the given x, each model against the "
+                  "solid run with the same change on the coarse mesh (h = 2.00 mm; the first row of each pair: "
+                  "friction everywhere, against the plain solid on that mesh).  Worst error over the levels:", ""]
+            L += zm + [""]
     if prof:
         L += ["### Where the friction comes from", "",
               "Normal force carried in compression (Q⁺ = ∫ p⁺ dA, Coulomb's bound is μ Q⁺) and in tension "
-              "(Q⁻ = ∫ p⁻ dA) on each interface, and the friction force F_x on the body named first, ψ = 45°:", ""]
+              "(Q⁻ = ∫ p⁻ dA) on each interface, and the friction force F_x on the body named first, ψ = 45°, "
+              "within 10 mm of the clamped roots and beyond (`docs/solid_friction_profiles.csv`, 2.5 mm bins):", ""]
         L += profiles_md(prof) + [""]
     L += ["![solid vs ANCF with friction](figures/solid_friction.png)", ""]
     fd = fd_md(rows)
@@ -267,17 +322,23 @@ def plot(path: str, rows: list, prof: list, psi: float = 45.0) -> None:
 
 
 def _plot_profiles(ax, prof: list) -> None:
-    """Cumulative compressive normal force ∫_0^x q⁺ over the three interfaces, per model."""
-    keys = sorted({(p["model"], p["variant"], p["resolution"], num(p["load_N"])) for p in prof})
+    """Cumulative compressive normal force ∫_0^x q⁺ over the three interfaces at the highest
+    profiled load, per model (dashed: frictionless)."""
+    if not prof:
+        return
+    top = max(num(p["load_N"]) for p in prof)
+    keys = sorted({(p["model"], p["variant"], p["resolution"]) for p in prof if num(p["load_N"]) == top})
+    colors = {"4 el.": "C0", "8 el.": "C1", "16 el.": "C2"}
     for k in keys:
-        pr = [p for p in prof if (p["model"], p["variant"], p["resolution"], num(p["load_N"])) == k]
+        pr = [p for p in prof if (p["model"], p["variant"], p["resolution"]) == k and num(p["load_N"]) == top]
         x = sorted({num(p["x_lo_m"]) for p in pr})
         q = [sum(num(p["q_plus_N_per_m"]) * (num(p["x_hi_m"]) - num(p["x_lo_m"])) for p in pr
                  if num(p["x_lo_m"]) == xx) for xx in x]
-        sty = {"color": "k", "lw": 2} if k[0] == SOLID else {"lw": 1, "marker": "."}
-        ax.plot(1e3 * (np.array(x) + 1.25e-3), np.cumsum(q), label=f"{k[0]} {k[2]}, {k[1]}, {k[3]:g} N", **sty)
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("∫₀ˣ Q⁺ over the interfaces [N]")
+        sty = {"color": "k" if k[0] == SOLID else colors.get(k[2], "C3"), "lw": 2 if k[0] == SOLID else 1,
+               "ls": "--" if k[1] == "mu 0" else "-", "marker": None if k[0] == SOLID else "."}
+        ax.plot(1e3 * (np.array(x) + 1.25e-3), np.cumsum(q), label=f"{k[0]} {k[2]}, {k[1]}", **sty)
+    ax.set_xlabel("x [mm] (clamped roots at 0)")
+    ax.set_ylabel(f"∫₀ˣ Q⁺ over the three interfaces at {top:g} N [N]")
     ax.set_yscale("symlog", linthresh=10)
     ax.grid(True, lw=0.3)
     ax.legend(fontsize=6.5)

@@ -13,6 +13,7 @@ import numpy as np
 
 SOLID, ANCF, CHECK = "solid P2 tet", "ANCF 2pt", "check"
 BASE = "stick 100"                   # the solid's reference variant
+ZONE = ", no friction x < "          # a free-zone diagnostic's variant: "<variant>, no friction x < 10 mm"
 IFACES = ("mg_sol", "lg_sol", "lg_mg")
 BODIES = ("soleus", "medial", "lateral")
 FIELDS = (["psi_deg", "mu", "model", "variant", "resolution", "h_m", "elements", "dofs", "load_N"]
@@ -100,6 +101,8 @@ def solid_rows(run: dict, psi: float, mu: float, variant: str) -> list:
 def ancf_rows(run: dict, mu: float) -> list:
     rows = []
     variant = "stick default" if run["stick"] is None else f"stick {run['stick']:.3g}"
+    if run.get("zone"):
+        variant += f"{ZONE}{run['zone'] * 1e3:g} mm"
     res = f"{run['elements']} el."
     for lv in run["levels"]:
         fr = lv["friction"]
@@ -178,11 +181,12 @@ def differences(a: dict, b: dict) -> dict:
     return out
 
 
-def ancf_columns(rows: list, psi: float) -> dict:
-    """{(variant, elements): {"levels": {load: row}, "failed": note or ""}}."""
+def ancf_columns(rows: list, psi: float, zone: bool = False) -> dict:
+    """{(variant, elements): {"levels": {load: row}, "failed": note or ""}} of the plain columns
+    (``zone``: of the free-zone diagnostics instead)."""
     out = {}
     for r in rows:
-        if r["model"] != ANCF or num(r["psi_deg"]) != psi:
+        if r["model"] != ANCF or num(r["psi_deg"]) != psi or (ZONE in r["variant"]) != zone:
             continue
         col = out.setdefault((r["variant"], int(num(r["elements"]))), {"levels": {}, "failed": ""})
         if r["load_N"]:
@@ -192,18 +196,27 @@ def ancf_columns(rows: list, psi: float) -> dict:
     return out
 
 
+def errors(levels: dict, ref: dict) -> dict:
+    """{load: {body: (relative, against the soleus elongation)}} of a column {load: row} against
+    a solid run {load: row}, at the loads both have."""
+    e = {}
+    for F, r in levels.items():
+        if F not in ref:
+            continue
+        us = abs(num(ref[F]["soleus_ux_m"]))
+        e[F] = {b: ((num(r[f"{b}_ux_m"]) - num(ref[F][f"{b}_ux_m"])) / abs(num(ref[F][f"{b}_ux_m"])),
+                    (num(r[f"{b}_ux_m"]) - num(ref[F][f"{b}_ux_m"])) / us) for b in BODIES}
+    return e
+
+
 def ancf_errors(rows: list, psi: float) -> dict:
     """Per ANCF column: the errors against the reference at every reached level,
     {(variant, elements): {load: {body: (relative, against the soleus elongation)}}}."""
-    ref = reference(rows, psi)
-    out = {}
-    for key, col in ancf_columns(rows, psi).items():
-        e = {}
-        for F, r in col["levels"].items():
-            if F not in ref:
-                continue
-            us = abs(ref[F]["soleus"][0])
-            e[F] = {b: ((num(r[f"{b}_ux_m"]) - ref[F][b][0]) / abs(ref[F][b][0]),
-                        (num(r[f"{b}_ux_m"]) - ref[F][b][0]) / us) for b in BODIES}
-        out[key] = e
-    return out
+    ref = {F: v["row"] for F, v in reference(rows, psi).items()}
+    return {key: errors(col["levels"], ref) for key, col in ancf_columns(rows, psi).items()}
+
+
+def stick_order(variant: str) -> tuple:
+    """Sort key of the ANCF variants: the default first, then stiff to soft."""
+    word = variant.split(ZONE)[0].split()[-1]
+    return (0, 0.0) if word == "default" else (1, -num(word))

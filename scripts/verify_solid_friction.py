@@ -19,6 +19,8 @@ Usage (``make verify-solid-friction``; about 2 h on one shared core):
   python scripts/verify_solid_friction.py --selftest         # the friction tangent against FD
   python scripts/verify_solid_friction.py --no-solid --merge # ANCF columns only (CSV kept)
   python scripts/verify_solid_friction.py --replot           # figure and page section from the CSV
+  python scripts/verify_solid_friction.py --free-zone 0.01 --no-selftest --ancf-sticks default,7.3e10
+                                                             # diagnostic: no friction within 10 mm of the clamp
 Writes docs/solid_friction.csv, docs/figures/solid_friction.png and the section "Against a 3D
 solid with friction" of docs/interface.md (between its markers; the rest of the page is kept).
 """
@@ -44,6 +46,13 @@ import verify_solid_contact as vsc  # noqa: E402
 
 LOADS = vsc.LOADS                   # Table 1's levels [N]
 IFACES = [n for n, _, _ in vsc.INTERFACES]
+#: the beam model's config key of the Coulomb stick stiffness (contact.tangential.<key>)
+STICK_KEY = "stick_stiffness"
+
+
+def zone_label(variant: str, zone: float) -> str:
+    """The variant of a free-zone diagnostic run (rep.ZONE marks it)."""
+    return f"{variant}{rep.ZONE}{zone * 1e3:g} mm" if zone else variant
 
 
 def ancf_config(psi: float, elements: int, mu: float, stick: float | None, out: str) -> dict:
@@ -51,23 +60,28 @@ def ancf_config(psi: float, elements: int, mu: float, stick: float | None, out: 
     raw = vsc.tendon_config(psi, elements, "sliding", out)
     raw["contact"]["tangential"] = {"law": "coulomb", "friction": mu}
     if stick is not None:
-        raw["contact"]["tangential"]["stick_stiffness"] = stick
+        raw["contact"]["tangential"][STICK_KEY] = stick
     return raw
 
 
-def run_ancf(psi: float, elements: int, mu: float, stick: float | None, tmp: str) -> dict:
-    """One ANCF column in-process: per level the probes' u_x, iterations and shear forces."""
+def run_ancf(psi: float, elements: int, mu: float, stick: float | None, tmp: str, zone: float = 0.0) -> dict:
+    """One ANCF column in-process: per level the probes' u_x, iterations and shear forces
+    (``zone`` > 0, a diagnostic: no friction at contact points below x = zone [m])."""
+    import contextlib
+
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
-    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{stick}")
+    from solid_friction_profiles import BeamFreeZone
+    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{stick}_{zone:g}")
     t0 = time.perf_counter()
     try:
-        res = run_model(parse_config(ancf_config(psi, elements, mu, stick, out), base_dir=vsc.CONFIGS),
-                        log=lambda *_: None)
+        with BeamFreeZone(zone, elements) if zone else contextlib.nullcontext():
+            res = run_model(parse_config(ancf_config(psi, elements, mu, stick, out), base_dir=vsc.CONFIGS),
+                            log=lambda *_: None)
         status, message, s = res.status, str(res.message), res.summary
     except Exception as exc:   # record and go on
         status, message, s = "failed", f"{type(exc).__name__}: {exc}", None
-    rec = {"psi": psi, "elements": elements, "stick": stick, "ok": status == "completed",
+    rec = {"psi": psi, "elements": elements, "stick": stick, "zone": zone, "ok": status == "completed",
            "msg": "" if status == "completed" else message, "wall": time.perf_counter() - t0,
            "levels": [], "dofs": int(s["dofs"]) if s else 0,
            "k": None}
@@ -85,10 +99,11 @@ def run_ancf(psi: float, elements: int, mu: float, stick: float | None, tmp: str
 
 
 def run_solid(secs, psi: float, h: float, mu: float, stick: float, slip: str = "partner",
-              max_increment: float = 50.0, loads=LOADS, log=print) -> dict:
-    """One solid run with friction (verify_solid_contact.run_solid with FrictionProblem)."""
+              max_increment: float = 50.0, loads=LOADS, log=print, free_zone: float = 0.0) -> dict:
+    """One solid run with friction (verify_solid_contact.run_solid with FrictionProblem;
+    ``free_zone`` > 0, a diagnostic: no friction at slave points below x = free_zone [m])."""
     return vsc.run_solid(secs, psi, "sliding", h, loads=list(loads), max_increment=max_increment, log=log,
-                         problem_class=sf.FrictionProblem, mu=mu, stick=stick, slip=slip)
+                         problem_class=sf.FrictionProblem, mu=mu, stick=stick, slip=slip, free_zone=free_zone)
 
 
 # ============================================================================================
@@ -199,6 +214,8 @@ def main(argv=None) -> int:
     ap.add_argument("--ancf-sticks", default="default,7.3e11,7.3e10",
                     help="ANCF stick stiffnesses [Pa/m] ('default': friction.STICK_FACTOR E/h)")
     ap.add_argument("--max-increment", type=float, default=50.0, help="largest solid load increment [N]")
+    ap.add_argument("--free-zone", type=float, default=0.0,
+                    help="a diagnostic [m]: the runs without friction below x = this (solid: coarsest mesh only)")
     ap.add_argument("--selftest", action="store_true", help="only the FD check of the friction tangent")
     ap.add_argument("--no-selftest", action="store_true")
     ap.add_argument("--no-checks", action="store_true", help="skip the regularisation/slip/increment checks")
@@ -234,14 +251,16 @@ def main(argv=None) -> int:
     psis = [float(p) for p in args.psi.split(",") if p.strip()]
     hs = [float(h) for h in args.h.split(",")]
     mu = args.mu
+    zone = args.free_zone
     for psi in psis:
-        for h in (hs if psi == psis[0] else [float(x) for x in args.h_more.split(",")]):
+        for h in (hs if psi == psis[0] else [float(x) for x in args.h_more.split(",")])[:1 if zone else None]:
             if args.no_solid:
                 break
-            print(f"[solid] psi {psi:g}, mu {mu:g}, h {h * 1e3:.2f} mm, stick {args.stick:g}", flush=True)
-            r = run_solid(secs, psi, h, mu, args.stick, max_increment=args.max_increment)
-            save(rep.solid_rows(r, psi, mu, f"stick {args.stick:g}"))
-        if not args.no_checks and not args.no_solid and psi == psis[0]:
+            print(f"[solid] psi {psi:g}, mu {mu:g}, h {h * 1e3:.2f} mm, stick {args.stick:g}"
+                  + (f", no friction below x = {zone * 1e3:g} mm" if zone else ""), flush=True)
+            r = run_solid(secs, psi, h, mu, args.stick, max_increment=args.max_increment, free_zone=zone)
+            save(rep.solid_rows(r, psi, mu, zone_label(f"stick {args.stick:g}", zone)))
+        if not args.no_checks and not args.no_solid and not zone and psi == psis[0]:
             h = hs[0]
             for label, kw in ((f"stick {10 * args.stick:g}", {"stick": 10 * args.stick}),
                               ("slip closest", {"slip": "closest"}),
@@ -255,13 +274,13 @@ def main(argv=None) -> int:
             for stick in args.ancf_sticks.split(","):
                 k = None if stick == "default" else float(stick)
                 for ne in [int(e) for e in args.elements.split(",")]:
-                    a = run_ancf(psi, ne, mu, k, tmp)
+                    a = run_ancf(psi, ne, mu, k, tmp, zone)
                     last = a["levels"][-1] if a["levels"] else None
                     print(f"[ancf] psi {psi:g}, {ne} el., stick {stick}: "
                           + (f"{last['load']:g} N, soleus u_x {1e3 * last['u']['soleus']:.5f} mm" if last else "")
                           + (f", {a['wall']:.0f} s" if a["ok"] else f" FAILED ({a['msg']})"), flush=True)
                     save(rep.ancf_rows(a, mu))
-    levels = [float(F) for F in args.profiles.split(",") if F.strip()]
+    levels = [float(F) for F in args.profiles.split(",") if F.strip()] if not zone else []
     if levels:
         profiles(secs, args, levels, psis[0])
     page.finish(paths, rows, {"argv": " ".join(sys.argv[1:]), "total": time.perf_counter() - t_start})

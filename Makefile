@@ -67,10 +67,12 @@ verify-solid-contact: setup
 		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10
 
 # the three subtendons as 3D solids with Coulomb friction (mu = 0.3) against the beams with
-# contact.tangential coulomb (docs/interface.md, "Against a 3D solid with friction"; a few hours)
+# contact.tangential coulomb (docs/interface.md, "Against a 3D solid with friction"; a few hours),
+# then the diagnostic without friction within 10 mm of the clamped roots (both models)
 verify-solid-friction: setup
 	bash scripts/setup_solid.sh
-	$(PY) scripts/verify_solid_friction.py
+	$(PY) scripts/verify_solid_friction.py --profiles 10,100
+	$(PY) scripts/verify_solid_friction.py --merge --no-selftest --free-zone 0.01 --ancf-sticks default,7.3e10
 
 clean:
 	rm -rf results .pytest_cache

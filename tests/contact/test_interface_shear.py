@@ -269,18 +269,17 @@ def _reaction_table(summary) -> np.ndarray:
 @pytest.mark.parametrize("name, levels", [("friction_pressed_strips.yaml", 30), ("shear_lag_sandwich.yaml", None)])
 def test_tangential_laws_give_the_serial_answer_on_2_and_3_ranks(tmp_path, name, levels):
     """Friction (its return mapping and history at every point, the pressure of multipliers
-    shared by two ranks) and the elastic matrix on 1, 2 and 3 ranks: the same probes and axial
-    reactions at every level.  (Across the interfaces the supports' reactions are not unique
-    where both bodies are clamped: constraints there repeat the supports, and their
-    multipliers split the normal force between the two supports as the factorisation chooses;
-    the sum is unique.)"""
+    shared by two ranks) and the elastic matrix on 1, 2 and 3 ranks: the same probes and
+    reactions at every level, every component (the sandwich's bodies are all clamped at x = 0:
+    with the ends' pressure functions kept they repeated the supports and the
+    normal reactions differed by 1.5e-3 between rank counts; folded, by 2e-13)."""
     from helpers import assert_same_as_serial, probes_table, run_on_ranks
     raw = load_raw(name)
     if levels:
         raw["steps"] = raw["steps"][:levels]               # out, then back past the turn
     runs = run_on_ranks(raw, tmp_path, ranks=(1, 2, 3))
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
-    assert_same_as_serial({n: _reaction_table(s)[:, :, 0] for n, (_, s) in runs.items()})
+    assert_same_as_serial({n: _reaction_table(s) for n, (_, s) in runs.items()})
 
 
 @pytest.mark.mpi

@@ -94,8 +94,9 @@ def find_interfaces(model, spec) -> list[Interface]:
     return out
 
 
-def supported_ends(model, interfaces) -> np.ndarray:
-    """(n_interfaces, 2) bool: True where the interface's first / last end lies at nodes of A and
+def supported_ends(model, interfaces, rule: str = "merge") -> np.ndarray:
+    """(n_interfaces, 2) bool, all False for ``rule`` keep (``contact.projection.supported_ends``);
+    for merge True where the interface's first / last end lies at nodes of A and
     B whose every DOF is held or prescribed (``fix: clamped``): the gap there is the supports',
     and a pressure function of its own would repeat them (multipliers.py).  Not where a section
     may stretch (``fix: reduced``): that end's constraint still holds the two bodies' different
@@ -104,7 +105,7 @@ def supported_ends(model, interfaces) -> np.ndarray:
     held[model.fixed_dofs] = True
     node_held = held.reshape(-1, DOFS_PER_NODE).all(axis=1)
     out = np.zeros((len(interfaces), 2), dtype=bool)
-    for k, itf in enumerate(interfaces):
+    for k, itf in enumerate(interfaces if rule == "merge" else ()):
         for j, end in enumerate((0, -1)):
             a, b = itf.a, itf.b
             na, nb = a.node_offset + np.arange(a.n_nodes)[end], b.node_offset + np.arange(b.n_nodes)[end]

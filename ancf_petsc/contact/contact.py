@@ -24,7 +24,7 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, couplings, reports
-from .interfaces import find_interfaces
+from .interfaces import find_interfaces, supported_ends
 from .laws import Phase, active_set_rows, make_law
 from .multipliers import build_space, reference_stiffness
 from .points import build_points
@@ -42,8 +42,8 @@ class Contact:
         self.model, self.spec, self.interfaces = model, spec, interfaces
         self.law = make_law(spec.mode)
         self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
-        self.space = build_space(self.points, interfaces, spec.projection,
-                                 reference_stiffness(interfaces) * spec.scaling, spec.per_element)
+        self.space = build_space(self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
+                                 spec.per_element, merged=supported_ends(model, interfaces, spec.supported_ends))
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         #: contact terms beside the normal constraints (a tangential law's interface shear)
         self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)

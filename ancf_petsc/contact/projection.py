@@ -1,8 +1,8 @@
 """Closest-point projection of A's contact points onto B's surface (paper eqs. 26–27).
 
-Each point x_A is projected onto B's swept interface surface Y(e_B, ξ_B, t_B) by Newton on
-ζ = (ξ_B, t_B), for all points at once, following the point across B's element boundaries as the
-bodies slide.  The result is a ``Projection``: the closest points, the distance vector
+Each point x_A is projected onto B's swept interface surface Y(e_B, ξ_B, t_B) by a safeguarded
+Newton iteration on ζ = (ξ_B, t_B) (descent.py), for all points at once, following the point
+across B's element boundaries as the bodies slide.  The result is a ``Projection``: the closest points, the distance vector
 d = x_A − Y, B's unit outward normal n, the signed gap g = d·n and the shape-function data the
 gap derivatives (gap.py) need.  The projection state (e_B, ξ_B, t_B) of the last evaluation is
 the starting point of the next; ``checkpoint``/``restore`` keep it across a cut-back load step.
@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.element3363 import SLOTS
+from .descent import Backtracking, newton_step
 from .surface import closest_parameter, section_shift, shape_on_curve
 
 #: a point whose closest point lies past an end of B's interface curve (the spline's end piece
@@ -199,35 +200,15 @@ class Projector:
         return eB, xiB, tB, weight
 
     # ------------------------------------------------------------------ Newton on ζ
-    @staticmethod
-    def _newton_step(Yz, Yzz, d, pinned):
-        """Step dζ of the closest-point Newton iteration (Levenberg-damped where φ_ζζ is not
-        positive definite, far from the surface); pinned points move in t only."""
-        r = -np.einsum("pik,pi->pk", Yz, d)                                     # φ_ζ
-        H = np.einsum("pik,pil->pkl", Yz, Yz) - np.einsum("pikl,pi->pkl", Yzz, d)
-        det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0]
-        bad = (det <= 0.0) | (H[:, 0, 0] <= 0.0) | (H[:, 1, 1] <= 0.0)
-        if np.any(bad):
-            shift = np.abs(H[bad]).max(axis=(1, 2))
-            H[bad, 0, 0] += shift
-            H[bad, 1, 1] += shift
-            det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0]
-        dz = np.empty((len(d), 2))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            dz[:, 0] = -(H[:, 1, 1] * r[:, 0] - H[:, 0, 1] * r[:, 1]) / det
-            dz[:, 1] = -(-H[:, 1, 0] * r[:, 0] + H[:, 0, 0] * r[:, 1]) / det
-            dz[pinned, 0] = 0.0
-            dz[pinned, 1] = -r[pinned, 1] / H[pinned, 1, 1]
-        return dz
-
     def project(self, idx: np.ndarray, xA: np.ndarray, x_of) -> Projection:
         """Project the points ``idx`` (positions ``xA``) onto B; updates the state of those points.
 
-        A point whose closest point sits on a boundary between two B elements (the surface is
-        only C0 in ξ there) makes Newton jump back and forth: it is pinned to the boundary and
-        only t is solved for.  A point sliding onto a B element this rank does not hold stays at
-        the boundary and the element is recorded in ``wanted`` (the caller exchanges it and
-        projects again)."""
+        Each step is Newton's or Gauss–Newton's, halved while it raises the distance
+        (descent.py).  A point whose closest point sits on a boundary between two B elements (the
+        surface is only C0 in ξ there) makes Newton jump back and forth: it is pinned to the
+        boundary and only t is solved for.  A point sliding onto a B element this rank does not
+        hold stays at the boundary and the element is recorded in ``wanted`` (the caller
+        exchanges it and projects again)."""
         itf = self.points.itf[idx]
         eB, xiB, tB = self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy()
         valid = np.ones(len(idx), dtype=bool)
@@ -235,36 +216,38 @@ class Projector:
         converged = True
         tol_t = PROJECTION_TOL * self.t_end[idx]
         pinned = np.zeros(len(idx), dtype=bool)
-        e_prev2, e_prev = np.full(len(idx), -1), eB.copy()
+        search = Backtracking(eB, xiB, tB, self.t_end[idx])
         for it in range(MAX_ITERATIONS):
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
             d = xA - Y
-            dz = self._newton_step(Yz, Yzz, d, pinned)
+            worse = search.worse(d, valid)          # never on the first pass (φ of the start: ∞)
+            dz, r = newton_step(Yz, Yzz, d, pinned)
             stuck = ~np.all(np.isfinite(dz), axis=1)
             if np.any(stuck):
                 # degenerate local problem (only in wild intermediate iterates, far from the
                 # surface): keep the point where it is; such a state is never accepted
-                dz[stuck] = 0.0
+                dz[stuck], r[stuck] = 0.0, 0.0
                 converged = False
-            if it > 0 and np.all((np.abs(dz[:, 0]) < PROJECTION_TOL) & (np.abs(dz[:, 1]) < tol_t) | ~valid):
+            small = (np.abs(dz[:, 0]) < PROJECTION_TOL) & (np.abs(dz[:, 1]) < tol_t)
+            if it > 0 and np.all(small & ~worse | ~valid):
                 break
-            xiB += np.clip(dz[:, 0], -1.0, 1.0)
-            tB += dz[:, 1]
+            search.accept(~worse, eB, xiB, tB, d, dz, r)
+            eB, xiB, tB = search.trial()
             eB, xiB, tB, weight = self.wrap(itf, eB, xiB, tB)
             valid = weight > 0.0
             miss = ~self.available[eB]
             if np.any(miss):
                 self.missing = True
                 self.wanted = np.union1d(self.wanted, eB[miss])
-                xiB[miss] = np.where(eB[miss] > e_prev[miss], 1.0, -1.0)
-                eB[miss] = e_prev[miss]
-            bounce = (eB == e_prev2) & (eB != e_prev) & ~pinned
+                xiB[miss] = np.where(eB[miss] > search.e[miss], 1.0, -1.0)
+                eB[miss] = search.e[miss]
+            bounce = search.full & (eB == search.e_back) & (eB != search.e) & ~pinned
             if np.any(bounce):
                 # stay on the element with the lower index, at its ξ = +1 end
-                low = np.minimum(eB[bounce], e_prev[bounce])
+                low = np.minimum(eB[bounce], search.e[bounce])
                 eB[bounce], xiB[bounce] = low, 1.0
                 pinned |= bounce
-            e_prev2, e_prev = e_prev, eB.copy()
+                search.restart(bounce)
         else:
             converged = False
         self.eB[idx], self.xiB[idx], self.tB[idx] = eB, xiB, tB

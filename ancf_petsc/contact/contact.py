@@ -125,8 +125,10 @@ class Contact:
 
     def required_nodes(self) -> np.ndarray:
         """Node blocks (PETSc numbering) the local evaluation reads: the A and B elements of the
-        local points, any B element a projection wanted but did not have, the multiplier nodes."""
-        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local],
+        local points, the B elements across a boundary next to their partners (``neighbours``),
+        any B element a projection wanted but did not have, the multiplier nodes."""
+        nb = self.projector.neighbours(self.local)
+        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], nb[nb >= 0],
                               self.projector.wanted] + [t.required_elements(self) for t in self.terms])
         return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]))
 

@@ -221,8 +221,8 @@ class Projector:
         point of its own (two minima 3.6e-4 apart in ξ, distances 4.83 and 4.74 μm, measured on
         a soft GOH column): which one the descent found then depended on where it started, i.e.
         on the iterate before, and Newton on the beams cycled between the two residuals.  So a
-        point ending within NEIGHBOUR_BAND of a boundary descends again from the same place on
-        the element across it, and the nearer of the two results is taken (the first on a tie):
+        point ending within NEIGHBOUR_BAND of a boundary descends again from the mirror image of
+        its place in the element across it, and the nearer of the two results is taken (the first on a tie):
         the projection is a function of the state.  A second start on an element this rank does
         not hold asks for it (``wanted``; ``neighbours`` are among the elements it reads)."""
         itf = self.points.itf[idx]
@@ -236,7 +236,7 @@ class Projector:
             self.wanted = np.union1d(self.wanted, other[absent])
         two = np.flatnonzero((other >= 0) & ~absent)
         if len(two):
-            g = self.descend(itf[two], T[two], xA[two], x_of, other[two], f.xiB[two] - 2.0 * np.sign(f.xiB[two]),
+            g = self.descend(itf[two], T[two], xA[two], x_of, other[two], -f.xiB[two],
                              f.tB[two].copy())
             slack = ROUNDING * T[two] * (np.sqrt(2.0 * f.phi[two]) + ROUNDING * T[two])
             better = g.done & g.valid & (g.phi < f.phi[two] - slack)

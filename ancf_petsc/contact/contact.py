@@ -124,13 +124,11 @@ class Contact:
         return DOFS_PER_NODE * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
-        """Node blocks (PETSc numbering) the local evaluation reads: the A and B elements of the
-        local points, the B elements across a boundary next to their partners (``neighbours``),
-        any B element a projection wanted but did not have, the multiplier nodes."""
-        nb = self.projector.neighbours(self.local)
-        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], nb[nb >= 0],
-                              self.projector.wanted] + [t.required_elements(self) for t in self.terms])
-        return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]))
+        """Node blocks (PETSc numbering) the local evaluation reads: the local points' A and B elements,
+        those across a near boundary (``neighbours``), wanted ones, the multiplier nodes."""
+        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], self.projector.wanted,
+                              self.projector.neighbours(self.local)] + [t.required_elements(self) for t in self.terms])
+        return np.unique(np.concatenate([self.conn[els[els >= 0]].ravel(), self.mult_block[self.mults]]))
 
     def set_available(self, needed: np.ndarray) -> None:
         """Record which elements have every node block in the rank's local array ``needed``."""

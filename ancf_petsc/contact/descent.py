@@ -53,6 +53,7 @@ class Backtracking:
         self.e, self.xi, self.t = eB.copy(), xiB.copy(), tB.copy()
         self.e_back = np.full(P, -1)            # the element of the start before (bounce test)
         self.phi = np.full(P, np.inf)
+        self.phi_now = np.full(P, np.inf)         # φ at the points' current places
         self.slack = np.zeros(P)
         self.descent = np.zeros(P)              # φ_ζ·dζ of the step (≤ 0)
         self.dz = np.zeros((P, 2))
@@ -62,7 +63,7 @@ class Backtracking:
     def worse(self, d: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """Points whose last step raised φ above the Armijo line of its start (beyond rounding)."""
         phi = 0.5 * np.einsum("pi,pi->p", d, d)
-        self._phi_now = phi
+        self.phi_now = phi
         return valid & (phi > self.phi + ARMIJO * self.alpha * self.descent + self.slack)
 
     def accept(self, ok: np.ndarray, eB, xiB, tB, d: np.ndarray, dz: np.ndarray, r: np.ndarray) -> None:
@@ -70,7 +71,7 @@ class Backtracking:
         they are; the others halve theirs."""
         self.e_back[ok] = self.e[ok]
         self.e[ok], self.xi[ok], self.t[ok] = eB[ok], xiB[ok], tB[ok]
-        self.phi[ok] = self._phi_now[ok]
+        self.phi[ok] = self.phi_now[ok]
         self.slack[ok] = ROUNDING * self.length[ok] * (np.linalg.norm(d[ok], axis=1) + ROUNDING * self.length[ok])
         step = np.column_stack([np.clip(dz[ok, 0], -1.0, 1.0), dz[ok, 1]])
         self.dz[ok] = step

@@ -4,8 +4,9 @@ Each point x_A is projected onto B's swept interface surface Y(e_B, ξ_B, t_B) b
 Newton iteration on ζ = (ξ_B, t_B) (descent.py), for all points at once, following the point
 across B's element boundaries as the bodies slide.  The result is a ``Projection``: the closest
 points, the distance vector d = x_A − Y, B's unit outward normal n, the signed gap g = d·n and
-the shape-function data the gap derivatives (gap.py) need.  The projection state (e_B, ξ_B, t_B) of the last evaluation is
-the starting point of the next; ``checkpoint``/``restore`` keep it across a cut-back load step.
+the shape-function data the gap derivatives (gap.py) need.  The projection state (e_B, ξ_B, t_B)
+of the last evaluation is the starting point of the next; ``checkpoint``/``restore`` keep it
+across a cut-back load step.
 """
 from __future__ import annotations
 

@@ -276,15 +276,15 @@ class Contact:
             part.restore()
 
     def refresh_weights(self) -> bool:
-        """After a converged solve: bring the points' weights up to their partners' places in
-        the last evaluation; True (on every rank) when one changed by more than WEIGHT_TOL, so
-        that the state must be solved again (collective)."""
+        """After a converged solve: the weights brought up to the last evaluation; True (solve again,
+        collective) if one changed by > WEIGHT_TOL or a projection did not converge (descent.py)."""
         st = self._cache[2] if self._cache is not None else None
         change = 0.0 if st is None else self.weights.refresh(st.pr.idx, st.pr.weight)
-        changed = bool(self.reduce(np.array([change]), "max")[0] > WEIGHT_TOL)
-        if changed:
-            self._cache = None                  # the residual at this state changed
-        return changed
+        lost = float(st is not None and not st.pr.converged and not self.projector.metric_steps)
+        change, lost = self.reduce(np.array([change, lost]), "max")
+        self.projector.metric_steps |= bool(lost)
+        self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
+        return bool(change > WEIGHT_TOL or lost)
 
 
 def build_contact(model, spec, log=print) -> Contact:

@@ -4,10 +4,17 @@ The closest point of x_A on B's surface Y(ζ), ζ = (ξ_B, t_B), minimises φ(ζ
 Newton's step solves H dζ = −φ_ζ with φ_ζ = −Y_ζᵀ d and H = Y_ζᵀ Y_ζ − Y_ζζ·d (d = x_A − Y).
 H is positive definite near the surface; it is not where the point lies farther from B than B's
 radius of curvature on its concave side (a subtendon pulled away from its neighbour, a point past
-the neighbour's end).  There the step is Gauss–Newton's, G dζ = −φ_ζ with the surface metric
-G = Y_ζᵀ Y_ζ: a descent direction in the surface's own lengths, whatever the units of ξ and t
-(a Levenberg shift by max|H| made the ξ step ~|Y_t|²/|Y_ξ|² ≈ 10⁴ times too short, and such a point
-crept 4e-7 in ξ per iteration until the iteration limit: measured on soft GOH columns).
+the neighbour's end).  There the step is damped by a Levenberg shift of max|H| on both diagonal
+entries.  That shift mixes units: |Y_t|² ≈ 1 against |Y_ξ|² ≈ 1e-4 m², so it all but freezes ξ,
+and a point in a converged state crept 4e-7 in ξ per iteration until the iteration limit
+(measured on soft GOH columns: "projection not converged" at an equilibrium).  With ``metric``
+the step is Gauss–Newton's there, G dζ = −φ_ζ with the surface metric G = Y_ζᵀ Y_ζ: a descent
+direction that does not depend on how ξ and t are scaled, which converges.  The frozen ξ is
+kept for the iterates of a Newton solve: wild iterates put points centimetres from B, and
+following their true closest points there cost the refined unilateral columns 24 Newton
+iterations instead of 17 and made a fixed 100 N increment fail (tests/contact/test_unilateral.py);
+``Projector.metric_steps`` asks for Gauss–Newton once a converged solve left a projection
+unconverged (``Contact.refresh_weights``), and the state is solved again.
 
 ``Backtracking`` keeps φ from rising: a step after which φ lies above the Armijo line of its
 start (beyond rounding) is halved and retried from that start, so that no point cycles between
@@ -25,16 +32,23 @@ ARMIJO = 1e-4
 ROUNDING = 1e-12
 
 
-def newton_step(Yz: np.ndarray, Yzz: np.ndarray, d: np.ndarray, pinned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def newton_step(Yz: np.ndarray, Yzz: np.ndarray, d: np.ndarray, pinned: np.ndarray,
+                metric: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Step dζ (P, 2) of the closest-point iteration and φ_ζ (P, 2): Newton's where H is positive
-    definite, Gauss–Newton's elsewhere; pinned points (on a C0 element boundary) move in t only."""
+    definite, elsewhere Gauss–Newton's (``metric``) or Levenberg-damped by max|H|; pinned points
+    (on a C0 element boundary) move in t only."""
     r = -np.einsum("pik,pi->pk", Yz, d)                                     # φ_ζ
     G = np.einsum("pik,pil->pkl", Yz, Yz)
     H = G - np.einsum("pikl,pi->pkl", Yzz, d)
     det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0]
     bad = (det <= 0.0) | (H[:, 0, 0] <= 0.0) | (H[:, 1, 1] <= 0.0)
     if np.any(bad):
-        H[bad] = G[bad]
+        if metric:
+            H[bad] = G[bad]
+        else:
+            shift = np.abs(H[bad]).max(axis=(1, 2))
+            H[bad, 0, 0] += shift
+            H[bad, 1, 1] += shift
         det = H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0]
     dz = np.empty((len(d), 2))
     with np.errstate(divide="ignore", invalid="ignore"):

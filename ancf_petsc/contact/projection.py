@@ -98,6 +98,8 @@ class Projector:
         self.available = np.ones(model.n_elements, dtype=bool)
         self.wanted = np.zeros(0, dtype=np.int64)
         self.missing = False
+        #: Gauss–Newton steps where H is indefinite (descent.py), until the next checkpoint
+        self.metric_steps = False
         self._saved = None
         self.checkpoint()
 
@@ -145,9 +147,11 @@ class Projector:
         slide ``search_margin`` of the beam per load step, however far it has slid before."""
         self._saved = (self.eB.copy(), self.xiB.copy(), self.tB.copy())
         self.lo, self.hi = self.window_around(self.eB, self.points.itf)
+        self.metric_steps = False
 
     def restore(self) -> None:
         self.eB, self.xiB, self.tB = (a.copy() for a in self._saved)
+        self.metric_steps = False
 
     def state(self) -> np.ndarray:
         """(P, 3) [e_B, ξ_B, t_B] of every point (for restart files)."""
@@ -270,7 +274,7 @@ class Projector:
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
             d = xA - Y
             worse = search.worse(d, valid)          # never on the first pass (φ of the start: ∞)
-            dz, r = newton_step(Yz, Yzz, d, pinned)
+            dz, r = newton_step(Yz, Yzz, d, pinned, self.metric_steps)
             stuck = ~np.all(np.isfinite(dz), axis=1)
             # a degenerate local problem (only in wild intermediate iterates, far from the
             # surface) keeps the point where it is; such a state is never accepted

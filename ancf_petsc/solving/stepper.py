@@ -204,10 +204,6 @@ class LoadStepper:
             why = f" ({neg} negative tangent eigenvalue(s), the last state had {path.accepted_negative})"
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}{why}; "
                  f"retry with increment {path.dlam:.4g}")
-        if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
-            # a factorisation that failed on a wild iterate (MUMPS's workspace estimate, INFOG(1)
-            # = -9) failed again on every retry, even at the last converged state: start afresh
-            self.solver.snes.getKSP().getPC().reset()
         if give_up:
             P.load_factor = path.lam
             raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,

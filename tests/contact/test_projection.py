@@ -86,7 +86,9 @@ def test_points_moved_far_find_the_nearest_surface_point(shift):
     tendon and 3.5 mm across, i.e. outside and deep inside B, where the closest-point Hessian
     is indefinite), projected from their reference partners in one evaluation: every projection
     converges, and every partner place on B is as near as the nearest point an independent
-    minimiser finds on B's surface (sampling + L-BFGS-B, every element)."""
+    minimiser finds on B's surface (sampling + L-BFGS-B, every element).  With the Levenberg
+    steps of a solve's iterates (``metric_steps`` off) two of the three moves do not converge,
+    as with the former projector: the case ``Contact.refresh_weights`` re-solves."""
     model, contact = _contact()
     pj, pts = contact.projector, contact.points
     conn = model.connectivity()
@@ -95,6 +97,7 @@ def test_points_moved_far_find_the_nearest_surface_point(shift):
         return model.q0[conn[els]].reshape(len(els), SLOTS, 3)
     idx = np.arange(pts.n_points)
     xA = np.einsum("pa,pai->pi", pts.NA, x_of(pts.eA)) + np.asarray(shift)
+    pj.metric_steps = True           # as after a converged solve left a projection unconverged
     pr = pj.project(idx, xA, x_of)
     assert pr.converged
     found = np.linalg.norm(pr.d, axis=1)

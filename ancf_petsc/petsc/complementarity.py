@@ -224,7 +224,9 @@ class ComplementarityPredictor:
         for _ in range(MAX_HALVINGS + 1):
             X.axpy(alpha, step)
             P.residual(None, X, F)
-            if not (P.inverted or P.contact_failed):
+            # the flags are this rank's: every rank must take the same branch (else one halves
+            # and evaluates again while the other waits in the SNES: a hang on 2 ranks)
+            if not self.comm.allreduce(int(P.inverted or P.contact_failed)):
                 break
             X.axpy(-alpha, step)
             c.projector.restore()              # the failed trial's projections are no start

@@ -44,6 +44,22 @@ def test_goh_achilles_with_contact_ranks_agree_with_serial(tmp_path):
         assert c["open_share"] == contact[2][name]["open_share"] == 0.0, name
 
 
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_a_predictor_step_that_inverts_an_element_on_one_rank_is_halved_on_every_rank(tmp_path):
+    """configs/achilles_type3_psi45_goh_optimized_see.yaml (soft GOH matrix, unilateral contact)
+    to its first level, 10 N: its first increments are cut back, and the complementarity
+    predictor's step inverts an element on one rank only.  Each rank used to decide from its own
+    flag whether to halve the step, so on 2 ranks one evaluated again while the other waited in
+    the SNES: a hang.  Now 2 ranks complete with the serial answer."""
+    raw = load_raw("achilles_type3_psi45_goh_optimized_see.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"] = [10]
+    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2))
+    assert runs[1][1]["steps"][0]["cutbacks"] > 0              # the hard first level
+    assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
+
 def test_goh_restart_continues_and_refuses_other_fibres(tmp_path):
     """A GOH run restarted with more levels gives the uninterrupted answer; changed fibre angles
     are another model (the fibre directions are in the restart fingerprint)."""

@@ -26,7 +26,7 @@ from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, couplings, reports
 from .interfaces import find_interfaces
 from .laws import Phase, active_set_rows, make_law
-from .multipliers import build_space, reference_stiffness
+from .multipliers import build_space, reference_stiffness, with_tangential
 from .points import build_points
 from .projection import Projector
 from .reference_gaps import check_reference_gaps
@@ -47,6 +47,8 @@ class Contact:
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         #: contact terms beside the normal constraints (a tangential law's interface shear)
         self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
+        if any(t.multipliers for t in self.terms):       # tangential multipliers (friction)
+            self.space = with_tangential(self.space)
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()
         #: set by a parallel assembly (collective): ``sum_over_ranks(values over self.mults)``
@@ -112,6 +114,8 @@ class Contact:
         self.owned = (np.ones(len(self.mults), dtype=bool) if owned_elements is None
                       else owned_elements[sp.element[self.mults]])
         self.Phi = sp.Phi[self.mults][:, self.local].tocsr()
+        for term in self.terms:
+            term.set_numbering(self, perm)
         self._cache = None
 
     def set_layout(self, layout) -> None:
@@ -128,7 +132,8 @@ class Contact:
         local points, any B element a projection wanted but did not have, the multiplier nodes."""
         els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local],
                               self.projector.wanted] + [t.required_elements(self) for t in self.terms])
-        return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]))
+        return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]
+                                        + [t.required_blocks(self) for t in self.terms]))
 
     def set_available(self, needed: np.ndarray) -> None:
         """Record which elements have every node block in the rank's local array ``needed``."""
@@ -196,9 +201,9 @@ class Contact:
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
         tau = self.stiffness * (self.Phi.T @ (z * rows.load)) * weight
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos,
-                          rows=rows, weight=weight)
+                          rows=rows, weight=weight, xl=xl.copy())
         st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}
-        self._cache = None if self.missing else (xl.copy(), needed, st)
+        self._cache = None if self.missing else (st.xl, needed, st)
         if self.timers is not None:
             self.timers["contact_projection"] += time.perf_counter() - t0
         return st

@@ -65,6 +65,7 @@ class FrictionEvaluation:
     R: np.ndarray
     share: np.ndarray
     dRdn: np.ndarray
+    positive: np.ndarray
 
 
 def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray) -> tuple:
@@ -92,7 +93,7 @@ class CoulombFriction(PartnerTerm):
     history = ("anchor",)
     #: the semi-smooth Newton steps are taken whole (a line search on |F| stalls at the kinks
     #: of the projection); the multipliers' status needs no extra solves
-    options = {"snes_max_it": "50"}
+    options = {"snes_max_it": "50", "snes_linesearch_type": "l2"}
 
     def __init__(self, coefficient: float, augmentation: float, model, points, projector):
         super().__init__(model, points, projector)
@@ -101,12 +102,6 @@ class CoulombFriction(PartnerTerm):
         self.n_nodes = model.n_nodes
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
         self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
-        self.frozen = False
-        self.penalty = True
-        self.hist = np.zeros((0, 3))
-        M = 0
-        self.status = np.zeros(M, dtype=np.int8)
-        self.fdir = np.zeros((M, 3))
 
     @classmethod
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
@@ -139,27 +134,26 @@ class CoulombFriction(PartnerTerm):
         d = self.relative(c, st, x_of)
         du = d - self.state["anchor"][idx]
         u = du - np.einsum("pi,pi->p", n, du)[:, None] * n
-        sums = np.hstack([c.Phi @ (w[:, None] * u), c.Phi @ (w[:, None] * n)])
+        wp = self.points.w[idx]
+        zl = st.z * st.rows.load
+        positive = c.Phi.T @ zl > 0.0                  # the points that press (p > 0)
+        sums = np.hstack([c.Phi @ (w[:, None] * u), c.Phi @ (w[:, None] * n),
+                          c.Phi @ (w * positive * (c.Phi.T @ zl) / wp)[:, None]])
         if c.sum_over_ranks is not None:
             sums = c.sum_over_ranks(sums)
-        U, m = sums[:, :3], sums[:, 3:]
+        U, m = sums[:, :3], sums[:, 3:6]
+        zhat = c.space.area[c.mults] * sums[:, 6]      # ∫ φ_k p⁺ dA / k_s
         mnorm = np.linalg.norm(m, axis=1)
         nbar = np.where(mnorm[:, None] > 0.0, m / np.where(mnorm > 0.0, mnorm, 1.0)[:, None], EYE[0])
         y = st.xl.reshape(-1)[self.local_positions(c, st)]
-        bound = self.mu * np.maximum(st.z * st.rows.load, 0.0)
+        bound = self.mu * zhat
         if c.law.phase.probe:                       # the bodies alone: friction held, rows decoupled
             bound = np.zeros_like(bound)
-        if len(self.hist) != c.space.n_multipliers:
-            self.hist = np.zeros((c.space.n_multipliers, 3))
-        a = (self.hist[c.mults] if self.penalty else y) + self.augmentation * U
-        if self.frozen:
-            proj, S, dRdn, direction, m_stick, slide = self._frozen_map(c, a, nbar, st.z * st.rows.load)
-        else:
-            proj, S, direction, m_stick, slide = return_map(a, nbar, bound)
-            na = np.einsum("ki,ki->k", nbar, a)
-            dRdn = S @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
+        a = y + self.augmentation * U
+        proj, S, direction, m_stick, slide = return_map(a, nbar, bound)
+        na = np.einsum("ki,ki->k", nbar, a)
+        dRdn = S @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
         Y = c.Phi.T @ y
-        wp = self.points.w[idx]
         sigma = c.stiffness * (Y - np.einsum("pi,pi->p", n, Y)[:, None] * n) / wp[:, None]
         # a point sticks where most of its functions (by their weight at the point) stick
         on = c.Phi.T @ m_stick.astype(float)
@@ -168,73 +162,7 @@ class CoulombFriction(PartnerTerm):
         return FrictionEvaluation(d=d, du=du, sigma=sigma, Y=Y, stick=on > 0.5, omega=wp * w,
                                   pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, S=S,
                                   direction=direction, bound=bound, m_stick=m_stick, slide=slide,
-                                  R=y - proj, share=share, dRdn=dRdn)
-
-    def _frozen_map(self, c, a, nbar, zl):
-        """The law with each function's status (0 free, 1 stick, 2 slide) and slide direction
-        kept: (projection, S, ∂R/∂n̄, direction, stick, slide)."""
-        if len(self.status) != c.space.n_multipliers:
-            self.status = np.zeros(c.space.n_multipliers, dtype=np.int8)
-            self.fdir = np.zeros((c.space.n_multipliers, 3))
-        k = self.status[c.mults]
-        stick, slide = k == 1, k == 2
-        bound = self.mu * zl                        # kept sliding: linear in z (no kink at 0)
-        e = self.fdir[c.mults]
-        ne = np.einsum("ki,ki->k", nbar, e)
-        Pe = e - ne[:, None] * nbar
-        size = np.linalg.norm(Pe, axis=1)
-        ehat = np.where(slide[:, None], Pe / np.where(size > 0, size, 1.0)[:, None], 0.0)
-        trial = a - np.einsum("ki,ki->k", nbar, a)[:, None] * nbar
-        proj = np.where(stick[:, None], trial, bound[:, None] * ehat)
-        S = stick[:, None, None] * EYE
-        na = np.einsum("ki,ki->k", nbar, a)
-        dRdn = S @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
-        # slide: −b ∂ê/∂n̄ = −b (I − ê êᵀ)/|P̄e| (−(n̄·e) I − n̄ eᵀ)
-        G = (EYE - ehat[:, :, None] * ehat[:, None, :]) @ (ne[:, None, None] * EYE + nbar[:, :, None] * e[:, None, :])
-        dRdn = dRdn + np.where(slide, bound / np.where(size > 0, size, 1.0), 0.0)[:, None, None] * G
-        return proj, S, dRdn, ehat, stick, slide
-
-    def update_status(self, c, st, tol: float = 1e-3) -> int:
-        """New statuses and slide directions from the evaluation ``st``: the number of changes
-        among the owned functions."""
-        ev = st.terms[self.name]
-        k = self.status[c.mults].copy()
-        e = self.fdir[c.mults].copy()
-        nb = ev.nbar
-        def tang(v):
-            return v - np.einsum("ki,ki->k", nb, v)[:, None] * nb
-        Py, PU = tang(ev.y), tang(ev.a - ev.y)
-        b = ev.bound
-        new = np.zeros_like(k)
-        ne = e.copy()
-        on = b > 0
-        nu = np.linalg.norm(PU, axis=1)
-        fresh = on & (k == 0)
-        new[fresh & (nu == 0)] = 1
-        m = fresh & (nu > 0)                 # starts sliding with the slip it has (bounded force)
-        new[m] = 2
-        ne[m] = PU[m] / nu[m, None]
-        held = on & (k == 1)
-        big = np.linalg.norm(Py, axis=1) > b * (1 + 1e-9)
-        new[held & ~big] = 1
-        m = held & big
-        new[m] = 2
-        ne[m] = Py[m] / np.linalg.norm(Py[m], axis=1)[:, None]
-        sl = on & (k == 2)
-        ehat = tang(e)
-        ehat /= np.maximum(np.linalg.norm(ehat, axis=1), 1e-300)[:, None]
-        rev = sl & (np.einsum("ki,ki->k", PU, ehat) < 0)
-        new[rev] = 1
-        keep = sl & ~rev
-        new[keep] = 2
-        upd = keep & (nu > 0)
-        ne[upd] = PU[upd] / nu[upd, None]
-        angle = np.zeros(len(k))
-        angle[upd] = np.arccos(np.clip(np.einsum("ki,ki->k", ne[upd], ehat[upd]), -1, 1))
-        changed = (new != k) | (angle > tol)
-        self.status[c.mults] = new
-        self.fdir[c.mults] = ne
-        return int(np.count_nonzero(changed & c.owned))
+                                  R=y - proj, share=share, dRdn=dRdn, positive=positive)
 
     def kept(self, ev: FrictionEvaluation) -> dict:
         """The next increment's slips start from this state's relative displacements."""

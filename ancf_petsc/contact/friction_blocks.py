@@ -33,7 +33,7 @@ def _per_pair(srow: np.ndarray, eB: np.ndarray, values: np.ndarray) -> tuple[np.
 
 def _points(term, c, st):
     """Per local point: its segment row, the local index of each of its segment's functions
-    (P, K) and Φ_kp ω'_p (P, K; 0 for a missing function)."""
+    (P, K), Φ_kp ω'_p and Φ_kp (P, K; 0 for a missing function); each segment's local indices."""
     pts, sp, idx = c.points, c.space, c.local
     srow = np.searchsorted(c.segments, pts.seg[idx])
     sm = sp.seg_mults[c.segments]
@@ -41,8 +41,8 @@ def _points(term, c, st):
     kloc = np.searchsorted(c.mults, np.maximum(sm, 0))
     kloc = np.where(real, np.minimum(kloc, len(c.mults) - 1), 0)
     p_loc = idx - pts.seg_start[pts.seg[idx]]
-    phi = sp.dense[pts.seg[idx], :, p_loc] * st.weight[:, None] * real[srow]
-    return srow, sm, kloc[srow], phi
+    phi0 = sp.dense[pts.seg[idx], :, p_loc] * real[srow]
+    return srow, sm, kloc[srow], phi0 * st.weight[:, None], phi0, kloc
 
 
 def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
@@ -52,7 +52,7 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     if len(c.local) == 0:
         return []
     ev, ks = st.terms[term.name], c.stiffness
-    srow, sm, kp, phi = _points(term, c, st)
+    srow, sm, kp, phi, phi0, kseg = _points(term, c, st)
     n_s, K, P = len(c.segments), sm.shape[1], len(c.local)
     n = st.pr.n
     Pn = EYE - n[:, :, None] * n[:, None, :]
@@ -83,11 +83,14 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     cols = node_dofs(np.concatenate([c.conn[c.points.seg_eA[c.segments[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1))
     rows = np.concatenate([rows_y[pair[:, 0]], qrows[pair[:, 0]]], axis=1)
     out.append((rows, drop_held(cols, fixed_mask), Kn))
-    # each multiplier's own rows: ∂R/∂y, ∂R/∂z (each rank its share)
-    load = st.rows.load
-    dRdz = -term.mu * load[:, None] * ev.direction
-    own = np.concatenate([(EYE if term.penalty else EYE - ev.S @ Pbar) + 0 * ev.S, dRdz[:, :, None]], axis=2)
-    zdof = DOFS_PER_NODE * c.mult_block[c.mults] + c.space.slot[c.mults]
+    # the bounds μ ẑ_k = μ ∫ φ_k p⁺ dA / k_s of the sliding functions through the pressures z_j
+    wp = term.points.w[c.local]
+    left = c.space.area[sm[srow]] * phi * (ev.positive / wp)[:, None]
+    Gz = segment_outer(srow, n_s, left, phi0 * st.rows.load[kp])                 # (n_s, K, K)
+    Vz = -ks * term.mu * ev.direction[kseg][:, :, :, None] * Gz[:, :, None, :]   # (n_s, K, 3, K)
+    zcols = np.where(sm >= 0, DOFS_PER_NODE * c.mult_block[np.maximum(sm, 0)] + c.space.slot[np.maximum(sm, 0)], -1)
+    out.append((rows_y, zcols, Vz.reshape(n_s, 3 * K, K)))
+    # each multiplier's own rows: ∂R/∂y (each rank its share)
     ydof = term.tdof[c.mults]
-    out.append((ydof, np.concatenate([ydof, zdof[:, None]], axis=1), ks * ev.share[:, None, None] * own))
+    out.append((ydof, ydof, ks * ev.share[:, None, None] * (EYE - ev.S @ Pbar)))
     return out

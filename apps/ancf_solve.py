@@ -141,9 +141,10 @@ def _main(argv: list[str], interrupt) -> int:
     from ancf_petsc.config.values import ConfigError
     from ancf_petsc.config.parse import load_config
     from ancf_petsc.io.files import OutputError
-    from ancf_petsc.petsc.options import unused_line
+    from ancf_petsc.linalg.database import option
+    from ancf_petsc.linalg.diagnostics import unused_line
     from ancf_petsc.api import solve
-    from ancf_petsc.solving.options import SolverOptionError
+    from ancf_petsc.linalg.options import SolverOptionError
     from ancf_petsc.parallel.launch import freeze_imports
     freeze_imports()
 
@@ -177,8 +178,7 @@ def _main(argv: list[str], interrupt) -> int:
             comm.tompi4py().Abort(1)
         return 1
     if rank == 0:
-        opts = PETSc.Options()
-        if not opts.hasName("options_left"):   # else PETSc reports (or was told not to)
+        if option("options_left") is None:   # else PETSc reports (or was told not to)
             for name in result.unused_options:
                 source = "config" if name.startswith("petsc.") else ""
                 option = "-" + name[len("petsc."):] if source else name

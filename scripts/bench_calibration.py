@@ -120,7 +120,7 @@ def reused_runs(raw: dict, repeat: int) -> dict:
 def warm_fit(out: str) -> dict:
     """The Table 1 fit (fit phase only) in this process: every sample, by start kind."""
     from ancf_petsc.config import parse_config
-    from ancf_petsc.petsc import logging
+    from ancf_petsc.linalg import logging
     from ancf_petsc.solving.samples import SampleSolver
     from ancf_petsc.workflows.calibration import load_fit
     from ancf_petsc.workflows.calibration.calibrate import run_calibration

@@ -35,7 +35,7 @@ from logview import read_log_view  # noqa: E402
 
 #: -log_view events kept per run (seconds over the run, slowest rank): the projection
 #: (scripts/project_scaling.py) splits a Newton iteration into per-fascicle work and the
-#: multiplier Schur complement's factorisation and solves (petsc/substructure.py's events;
+#: multiplier Schur complement's factorisation and solves (linalg/substructure.py's events;
 #: MatCholFctrNum and MatSolve are the direct solver's)
 EVENTS = ("ANCF element kernels", "ANCF contact", "ANCF fascicle factor", "ANCF Schur assembly",
           "ANCF fascicle apply", "ANCF Schur factor", "ANCF Schur solve", "MatCholFctrNum",

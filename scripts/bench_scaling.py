@@ -9,7 +9,7 @@ and Krylov work, and the speed-up and parallel efficiency of 2 ranks over 1, bot
 clock of the whole command (mpirun, interpreter start-up and imports included) and on the run
 itself (set-up + load stepping + output, as ancf-solve reports it).  Every timed configuration is
 run ``--repeat`` times and the fastest is kept.  One table compares linear solvers: the
-fascicle-parallel solver (``solver.linear: fieldsplit``, petsc/fieldsplit.py; what ``auto`` picks
+fascicle-parallel solver (``solver.linear: fieldsplit``, linalg/fieldsplit.py; what ``auto`` picks
 here), MUMPS LDLᵀ of the whole Jacobian (``solver.linear: direct``), the same refactored every
 third Newton iteration inside GMRES, MUMPS LU, and GMRES with block Jacobi (ILU), ASM (overlap 1,
 ILU) and GAMG with the rigid-body near null space.  Every run's probes are compared with the

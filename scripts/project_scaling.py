@@ -12,7 +12,7 @@ coefficient measured on this machine, every assumption printed:
 * S(M) = c M^p: one sequential MUMPS factorisation of a multiplier Schur complement and its
   solves ("ANCF Schur factor" + "ANCF Schur solve" in -log_view), fitted over the same runs
   (on one rank that is all of S).  On P ranks every rank factors its own S^r
-  (petsc/substructure.py) of M_r = (M + n_Γ) / P multipliers, all ranks at once.
+  (linalg/substructure.py) of M_r = (M + n_Γ) / P multipliers, all ranks at once.
 * n_Γ = κ M √(P / n): the multipliers on the cut between the ranks' patches of fascicles (a
   compact patch's perimeter over its area), κ from the measured 2-rank cut of 37 fascicles.
 * Σ(n_Γ, P): the interface system.  Up to 2 000 cut multipliers dense on every rank, measured

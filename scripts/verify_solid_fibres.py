@@ -27,8 +27,9 @@ centroid).  For a section whose third moments vanish (an ellipse about its centr
 3363 element's quadratic section field is exactly [r_y r_z], so both measure the same thing.
 
 Cases: three laws (GOH with helical fibres; the controls GOH with fibres along x and the matrix
-alone) x three matrix compressibilities K/μ = 50, 8.34, 2.17; ANCF at 4, 8, 16 elements, and at 8,
-16 elements with the volumetric term on a degree-2 section rule (``reduced_volumetric_rule``: a
+alone) x three matrix compressibilities K/μ = 50, 8.34, 2.17; ANCF at 4, 8, 16 elements without and
+with the element's volumetric-locking remedy ``locking: mixed`` (ancf_petsc/physics/mixed.py), and at
+8, 16 elements with the volumetric term on a degree-2 section rule (``reduced_volumetric_rule``: a
 locking diagnosis, not a model option); the solid on three or four meshes.
 
 Reference: Richardson extrapolation of the finest three solid meshes (verify_solid.richardson),
@@ -38,6 +39,7 @@ docs/fibres.md and docs/figures/solid_fibres.png.
 
 Usage: python scripts/verify_solid_fibres.py [--quick] [--out docs]
        python scripts/verify_solid_fibres.py --replot      # block + figure from the CSV (no dolfinx)
+       python scripts/verify_solid_fibres.py --ancf-only   # ANCF runs again, the CSV's solid rows kept
 """
 from __future__ import annotations
 
@@ -86,6 +88,9 @@ BULK_RATIOS = (50.0, 8.34, 2.1667)
 #: section rule degree of the volumetric term in the locking diagnosis (``reduced_volumetric_rule``)
 VOLUMETRIC_DEGREE = 2
 ANCF, ANCF_VOL = "ANCF", f"ANCF, K/2 (J-1)^2 on a degree-{VOLUMETRIC_DEGREE} section rule"
+#: the remedy: ``locking: mixed`` (ancf_petsc/physics/mixed.py)
+ANCF_MIXED = "ANCF, locking: mixed"
+ANCF_MODELS = (ANCF, ANCF_VOL, ANCF_MIXED)
 
 
 @dataclass
@@ -138,8 +143,8 @@ def section_rotation_deg(q: np.ndarray, q0: np.ndarray) -> np.ndarray:
 
 
 def ancf_volumetric_share(raw: dict, q: np.ndarray) -> float:
-    """Share of the volumetric energy K/2 (J − 1)² in the strain energy at nodal vectors q,
-    over the beam's own Gauss points."""
+    """Share of the volumetric energy K/2 (J − 1)² (``locking: mixed``: K/2 (θ − 1)², θ the
+    projected dilatation) in the strain energy at nodal vectors q, over the beam's own Gauss points."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
     from ancf_petsc.physics.kernels import deformation_gradient
@@ -148,7 +153,7 @@ def ancf_volumetric_share(raw: dict, q: np.ndarray) -> float:
     local = np.arange(b.n_elements)
     G, w, material = model.element_data(b, local)[0]
     F = deformation_gradient(q[b.connectivity][:, :, list(b.vectors)].reshape(len(local), -1, 3), G)
-    J = np.linalg.det(F)
+    J = material.dilatation(F) if hasattr(material, "dilatation") else np.linalg.det(F)
     return float(np.sum(w * 0.5 * raw["beams"][0]["material"]["bulk_modulus"] * (J - 1.0) ** 2)
                  / np.sum(w * material.energy(F)))
 
@@ -186,7 +191,7 @@ def reduced_volumetric_rule(degree: int = VOLUMETRIC_DEGREE):
 def run_ancf(case: vs.Case, elements: int, tmp: str, model: str = ANCF) -> dict:
     """ANCF 3363, 2 axial Gauss points: end-centroid displacement and end-section rotation at
     every level; at the last, the rotation at the stations and the volumetric energy share
-    (``model`` ANCF_VOL: under ``reduced_volumetric_rule``, no share)."""
+    (``model`` ANCF_VOL: under ``reduced_volumetric_rule``, no share; ANCF_MIXED: ``locking: mixed``)."""
     with reduced_volumetric_rule() if model == ANCF_VOL else contextlib.nullcontext():
         return _run_ancf(case, elements, tmp, model)
 
@@ -195,8 +200,10 @@ def _run_ancf(case: vs.Case, elements: int, tmp: str, model: str) -> dict:
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
-    out_dir = os.path.join(tmp, f"{case.key}_{elements}_{model == ANCF_VOL:d}")
+    out_dir = os.path.join(tmp, f"{case.key}_{elements}_{ANCF_MODELS.index(model):d}")
     raw = vs.ancf_config(case, elements, 2, out_dir)
+    if model == ANCF_MIXED:
+        raw["beams"][0]["locking"] = "mixed"
     t0 = time.perf_counter()
     res = run_model(parse_config(raw, base_dir=vs.CONFIGS), log=lambda *_: None)
     wall = time.perf_counter() - t0
@@ -210,7 +217,7 @@ def _run_ancf(case: vs.Case, elements: int, tmp: str, model: str) -> dict:
     levels = [{"load": lvl * FORCE, "u": q[-1, 0] - q0[-1, 0], "rot": section_rotation_deg(q[-1:], q0[-1:])[0]}
               for lvl, q in zip(case.steps, qs)]
     levels[-1]["along"] = section_rotation_deg(qs[-1][every::every], q0[every::every])
-    if model == ANCF:
+    if model != ANCF_VOL:
         levels[-1]["vol_share"] = ancf_volumetric_share(raw, qs[-1])
     return {**levels[-1], "model": model, "res": f"{elements} el.",
             "dofs": int(res.summary["dofs"]),
@@ -434,7 +441,8 @@ def runs_of(rows: list[dict]) -> dict:
         runs = list(c.pop("runs").values())
         c["ancf"] = [r for r in runs if r["model"] == ANCF]
         c["vol"] = [r for r in runs if r["model"] == ANCF_VOL]
-        c["solid"] = sorted((r for r in runs if r["model"] not in (ANCF, ANCF_VOL)), key=lambda r: r["dofs"])
+        c["mixed"] = [r for r in runs if r["model"] == ANCF_MIXED]
+        c["solid"] = sorted((r for r in runs if r["model"] not in ANCF_MODELS), key=lambda r: r["dofs"])
         ref_u, unc_u, _ = vs.richardson(c["solid"])
         ref_r, unc_r, _ = vs.richardson([{"u": np.array([r["rot"]]), "dofs": r["dofs"]} for r in c["solid"]])
         c.update(ref_u=ref_u, unc_u=unc_u, ref_rot=float(ref_r[0]), unc_rot=unc_r)
@@ -474,37 +482,43 @@ def render_block(rows: list[dict]) -> str:
              "of the finest three meshes (uncertainty: its distance from the finest). Errors against the reference; "
              "rotation = end-section rotation about x (negative: untwist).", "",
              f"| law | K/μ | solid: u_x [mm] | solid: rotation [°] | ANCF {mid} el.: u / rotation error | "
-             f"ANCF {fine} el.: u / rotation error | volumetric share of the energy, ANCF {fine} el. / finest "
-             f"solid | diagnosis: ANCF {fine} el. with K/2 (J−1)² on a degree-{VOLUMETRIC_DEGREE} section rule: "
-             "u / rotation error |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
+             f"ANCF {fine} el.: u / rotation error | **locking: mixed**, {mid} el.: u / rotation error | "
+             f"**locking: mixed**, {fine} el.: u / rotation error | rotation ANCF / solid − 1, {fine} el.: "
+             f"none / mixed | volumetric share of the energy, {fine} el.: none / mixed / finest solid | "
+             f"diagnosis: ANCF {fine} el. with K/2 (J−1)² on a degree-{VOLUMETRIC_DEGREE} section rule: "
+             "u / rotation error |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for c in cases.values():
         a, b = _ancf(c, mid), _ancf(c, fine)
+        ma, mb = _ancf(c, mid, "mixed"), _ancf(c, fine, "mixed")
         vb = _ancf(c, fine, "vol")
         lines.append(f"| {c['law']} | {c['ratio']:g} | {1e3 * c['ref_u'][0]:.4f} (± {_pct(c['unc_u'])}) | "
                      f"{c['ref_rot']:+.3f} (± {_pct(c['unc_rot'])}) | {_pct(a['err_u'])} / {_pct(a['err_rot'])} | "
                      f"{_pct(b['err_u'])} / {_pct(b['err_rot'])} | "
-                     f"{100 * b['vol_share']:.2f} % / {100 * c['solid'][-1]['vol_share']:.2f} % | "
-                     f"{_pct(vb['err_u'])} / {_pct(vb['err_rot'])} |")
+                     f"{_pct(ma['err_u'])} / {_pct(ma['err_rot'])} | {_pct(mb['err_u'])} / {_pct(mb['err_rot'])} | "
+                     f"{100 * (b['rot'] / c['ref_rot'] - 1):+.2f} % / {100 * (mb['rot'] / c['ref_rot'] - 1):+.2f} % | "
+                     f"{100 * b['vol_share']:.2f} % / {100 * mb['vol_share']:.2f} % / "
+                     f"{100 * c['solid'][-1]['vol_share']:.2f} % | {_pct(vb['err_u'])} / {_pct(vb['err_rot'])} |")
     for key, c in cases.items():
         if c["law"] != "goh_twist":
             continue
         lines += ["", f"Runs of {key} (GOH, helical fibres, K/μ = {c['ratio']:g}), end values at {FORCE:g} N:", "",
                   "| model | resolution | DOFs | Newton its | u_x [mm] | rotation [°] | u error | rotation error | "
                   "fibre field vs ANCF's |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
-        for r in c["ancf"] + c["vol"] + c["solid"]:
+        for r in c["ancf"] + c["mixed"] + c["vol"] + c["solid"]:
             fe = "" if math.isnan(r["field_err"]) else f"{r['field_err']:.1e}"
             lines.append(f"| {r['model']} | {r['res']} | {r['dofs']} | {r['its']} | {1e3 * r['u'][0]:.4f} | "
                          f"{r['rot']:+.4f} | {_pct(r['err_u'])} | {_pct(r['err_rot'])} | {fe} |")
     ref = [k for k, c in cases.items() if c["ratio"] == max(BULK_RATIOS)]
     lines += ["", f"Section rotation [°] along the bar at {FORCE:g} N, K/μ = {max(BULK_RATIOS):g}: ANCF {fine} el. "
-              "(r_y, r_z at the node) / finest solid (least-squares fit over the section rule's points):", "",
-              "| x/L | " + " | ".join(f"{cases[k]['law']} ANCF | solid" for k in ref) + " |",
-              "|---:|" + "---:|---:|" * len(ref)]
+              "(r_y, r_z at the node) without and with `locking: mixed` / finest solid (least-squares fit over "
+              "the section rule's points):", "",
+              "| x/L | " + " | ".join(f"{cases[k]['law']} ANCF | mixed | solid" for k in ref) + " |",
+              "|---:|" + "---:|---:|---:|" * len(ref)]
     for i in range(STATIONS):
         cells = []
         for k in ref:
-            a, s = _ancf(cases[k], fine), cases[k]["solid"][-1]
-            cells.append(f"{a['along'][i]:+.3f} | {s['along'][i]:+.3f}")
+            a, m, s = _ancf(cases[k], fine), _ancf(cases[k], fine, "mixed"), cases[k]["solid"][-1]
+            cells.append(f"{a['along'][i]:+.3f} | {m['along'][i]:+.3f} | {s['along'][i]:+.3f}")
         lines.append(f"| {(i + 1) / STATIONS:.3f} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -532,8 +546,11 @@ def plot(path: str, rows: list[dict]) -> None:
     for key, c in cases.items():
         col = colours[c["law"]]
         if c["ratio"] == max(BULK_RATIOS):
-            a, s = _ancf(c, fine), c["solid"][-1]
+            a, s, m = _ancf(c, fine), c["solid"][-1], _ancf(c, fine, "mixed")
             ax[0].plot([0] + a["loads"], [0] + a["rots"], "-", color=col, label=f"{c['law']}: ANCF {fine} el.")
+            ax[0].plot([0] + m["loads"], [0] + m["rots"], "--", color=col,
+                       label=f"{c['law']}: ANCF {fine} el., locking: mixed")
+            ax[1].plot([0] + m["x"], [0] + m["along"], "--", color=col)
             ax[0].plot([0] + s["loads"], [0] + s["rots"], "o", color=col, mfc="none",
                        label=f"{c['law']}: solid {s['res']}")
             ax[1].plot([0] + a["x"], [0] + a["along"], "-", color=col)
@@ -547,6 +564,8 @@ def plot(path: str, rows: list[dict]) -> None:
                      label=f"{law.key}: displacement")
         ax[2].loglog(ratios, [100 * _ancf(c, fine, "vol")["err_rot"] for c in cs], "^:", color=col,
                      label=f"{law.key}: rotation, vol. term degree {VOLUMETRIC_DEGREE}")
+        ax[2].loglog(ratios, [100 * _ancf(c, fine, "mixed")["err_rot"] for c in cs], "D-.", color=col, lw=2,
+                     label=f"{law.key}: rotation, locking: mixed")
     ax[2].axhline(1.0, color="k", lw=0.8, ls=":")
     ax[0].set(xlabel="end force [N]", ylabel="end-section rotation about x [deg]",
               title=f"untwist under tension, K/μ = {max(BULK_RATIOS):g}")
@@ -575,6 +594,13 @@ def write_outputs(out: str, rows: list[dict], doc: str) -> None:
         fh.write(replace_block(text, render_block(rows)))
 
 
+def ancf_runs(case: vs.Case, tmp: str) -> list[dict]:
+    """The ANCF runs of one case: plain and ``locking: mixed`` at every element count, the
+    degree-2 diagnosis at the two finest."""
+    runs = [run_ancf(case, n, tmp, model) for model in (ANCF, ANCF_MIXED) for n in ELEMENTS]
+    return runs + [run_ancf(case, n, tmp, ANCF_VOL) for n in ELEMENTS[-2:]]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarse meshes, K/mu = 50 only (smoke run)")
@@ -582,11 +608,16 @@ def main(argv=None) -> int:
     ap.add_argument("--doc", default=DOC, help="the page with the marked block (default docs/fibres.md)")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
     ap.add_argument("--replot", action="store_true", help="block and figure from <out>/solid_fibres.csv")
+    ap.add_argument("--ancf-only", action="store_true",
+                    help="run the ANCF models again and keep the solid rows of <out>/solid_fibres.csv (no dolfinx)")
     args = ap.parse_args(argv)
     if args.replot:
         write_outputs(args.out, read_csv(os.path.join(args.out, CSV_NAME)), args.doc)
         return 0
-    vs._import_stack()
+    solid_rows = [d for d in read_csv(os.path.join(args.out, CSV_NAME)) if d["model"] not in ANCF_MODELS] \
+        if args.ancf_only else None
+    if not args.ancf_only:
+        vs._import_stack()
     t_start = time.perf_counter()
     rows = []
     ratios = BULK_RATIOS[:1] if args.quick else BULK_RATIOS
@@ -594,17 +625,18 @@ def main(argv=None) -> int:
         for ratio in ratios:
             for law in LAWS:
                 case = make_case(law, ratio, args.quick)
+                runs = ancf_runs(case, tmp)
+                if solid_rows is not None:
+                    rows += csv_rows(case, law.key, ratio, runs) + [d for d in solid_rows if d["case"] == case.key]
+                    continue
                 sec = vs.ancf_section(case)
-                runs = [run_ancf(case, n, tmp) for n in ELEMENTS]
-                runs += [run_ancf(case, n, tmp, ANCF_VOL) for n in ELEMENTS[-2:]]
                 for h in case.h:
                     runs.append(run_solid(case, sec, h, args.quad_degree))
-                    r = runs[-1]
+                    r, a, m = runs[-1], runs[len(ELEMENTS) - 1], runs[2 * len(ELEMENTS) - 1]
                     print(f"[solid] {case.key} {r['res']}: {r['dofs']} DOFs, {r['wall']:.1f} s, {r['its']} its, "
                           f"u_x {1e3 * r['u'][0]:.4f} mm, rotation {r['rot']:+.4f} deg "
-                          f"(ANCF {ELEMENTS[-1]} el.: {1e3 * runs[len(ELEMENTS) - 1]['u'][0]:.4f} mm, "
-                          f"{runs[len(ELEMENTS) - 1]['rot']:+.4f} deg; {ANCF_VOL}: "
-                          f"{runs[len(ELEMENTS) + 1]['rot']:+.4f} deg)", flush=True)
+                          f"(ANCF {ELEMENTS[-1]} el.: {1e3 * a['u'][0]:.4f} mm, {a['rot']:+.4f} deg; "
+                          f"{ANCF_MIXED}: {1e3 * m['u'][0]:.4f} mm, {m['rot']:+.4f} deg)", flush=True)
                 rows += csv_rows(case, law.key, ratio, runs)
     write_csv(os.path.join(args.out, CSV_NAME), rows)
     write_outputs(args.out, rows, args.doc)

@@ -131,10 +131,10 @@ def hex7_problem(loaded: bool, matrix: str = "sbaij", partition: str = "blocks")
 
 
 def apply_fascicle_schur(P, PETSc, F):
-    """The fascicle Schur preconditioner (petsc/fieldsplit.py) set up on P.J and applied to F:
+    """The fascicle Schur preconditioner (linalg/fieldsplit.py) set up on P.J and applied to F:
     (its context, the PC, the result y)."""
-    from ancf_petsc.petsc.fascicles import fascicle_split
-    from ancf_petsc.petsc.fieldsplit import FascicleSchur
+    from ancf_petsc.linalg.fascicles import fascicle_split
+    from ancf_petsc.linalg.fieldsplit import FascicleSchur
     ctx = FascicleSchur(fascicle_split(P), PETSc.COMM_WORLD)
     pc = PETSc.PC().create()
     pc.setOperators(P.J, P.J)

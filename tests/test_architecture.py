@@ -18,7 +18,8 @@ PACKAGE = os.path.join(ROOT, "ancf_petsc")
 LAYERS = [
     ("errors", "version", "status", "yamlio"),  # vocabulary shared by everything; YAML input
     ("physics",),                             # element 3363, sections and cubature, materials, kernels
-    ("contact",),                             # contact points, projection, multipliers, laws
+    ("linalg",),                              # PETSc options, linear solvers, log events (one home)
+    ("contact", "outline_formats"),           # contact points, projection, multipliers, laws; outline files
     ("config",),                              # YAML → validated ModelSpec (key-path errors)
     ("geometry_input", "model"),              # measured outlines; ModelSpec → Model
     ("io", "parallel"),                       # results on disk; layouts and partitions
@@ -30,7 +31,7 @@ LAYERS = [
 ]
 LAYER = {c: k for k, names in enumerate(LAYERS) for c in names}
 #: components that may import petsc4py / mpi4py (api only to initialise PETSc on first use)
-PETSC_COMPONENTS = {"petsc", "solving", "api"}
+PETSC_COMPONENTS = {"linalg", "petsc", "solving", "api"}
 #: functions longer than 60 lines, each with the reason it stays in one piece
 LONG_FUNCTIONS = {
     "workflows/sweep/slurm.py:write_slurm": "one bash script, written line by line in order",
@@ -148,10 +149,33 @@ def test_no_import_cycles():
 
 
 def test_petsc_lives_in_one_layer():
-    """petsc4py and mpi4py are imported only by the PETSc layer and the solving layer on it."""
+    """petsc4py and mpi4py are imported only by linalg (options, linear solvers), the PETSc
+    layer and the solving layer on it."""
     outside = [f"{m}:{ln} imports {i}" for m, p in MODULES.items() for i, ln in _imports(m, p)
                if i.split(".")[0] in ("petsc4py", "mpi4py") and _component(m) not in PETSC_COMPONENTS]
     assert not outside, "\n".join(outside)
+
+
+def test_the_options_database_is_read_in_one_place():
+    """PETSc's options database (``PETSc.Options()``) is read and written only by
+    ``linalg/database.py`` (issue 29, point 5): the rest asks ``database.option``."""
+    found = []
+    for path in list(MODULES.values()) + [os.path.join(ROOT, "apps", f) for f in os.listdir(os.path.join(ROOT, "apps"))
+                                          if f.endswith(".py")]:
+        if os.path.relpath(path, PACKAGE) == os.path.join("linalg", "database.py"):
+            continue
+        for node in ast.walk(ast.parse(open(path).read())):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "Options" \
+                    and isinstance(node.func.value, ast.Name) and node.func.value.id == "PETSc":
+                found.append(f"{os.path.relpath(path, ROOT)}:{node.lineno}")
+    assert not found, found
+
+
+def test_linear_solver_and_options_raise_input_errors_not_config_errors():
+    """linalg and solving sit on errors.InputError, not on the config layer's ConfigError."""
+    found = [f"{m}:{ln}" for m, p in MODULES.items() if _component(m) in ("linalg", "solving")
+             for i, ln in _imports(m, p) if i == "ancf_petsc.config.values"]
+    assert not found, found
 
 
 def test_importing_the_package_loads_neither_petsc_nor_mpi():
@@ -228,7 +252,7 @@ def test_object_state_is_declared_in_init():
 #: reason codes and summary.json fields)
 TEXT_READERS = {
     "io/files.py:os_reason": "h5py gives the errno only inside its message text",
-    "petsc/options.py:petsc_message": "PETSc's error: the last line of its text is the reason",
+    "linalg/diagnostics.py:petsc_message": "PETSc's error: the last line of its text is the reason",
     "yamlio.py:syntax_error": "PyYAML's first line when its error has no .problem",
 }
 _TEXT_METHODS = {"split", "rsplit", "splitlines", "startswith", "endswith", "find", "rfind", "index",
@@ -306,8 +330,10 @@ def _vocabularies() -> dict[str, tuple[set, set]]:
     from ancf_petsc.physics.element3363 import ELEMENTS
     from ancf_petsc.physics.laws import MATERIALS
     from ancf_petsc.contact.tangential import TANGENTIAL_LAWS
+    from ancf_petsc.outline_formats import FORMATS
     tangential = {name for name, cls in TANGENTIAL_LAWS.items() if cls is not None}   # not "none"
     return {"contact law": (set(LAWS), {"contact/laws.py"}),
+            "geometry importer": (set(FORMATS), OUTLINE_FORMAT_MODULES),
             "tangential law": (tangential, {"contact/tangential.py", "contact/elastic_interface.py",
                                             "contact/friction.py"}),
             "element": (set(ELEMENTS), {"physics/element3363.py"}),
@@ -333,8 +359,9 @@ def _spelt(tree: ast.AST, names: set) -> list[tuple[int, str]]:
 
 
 def test_registry_names_are_not_spelt_outside_their_module():
-    """Contact laws (contact/laws.py LAWS), elements (physics/element3363.py ELEMENTS) and
-    materials (physics/laws.py MATERIALS) are named in code only by their registry: no
+    """Contact laws (contact/laws.py LAWS), elements (physics/element3363.py ELEMENTS),
+    materials (physics/laws.py MATERIALS) and geometry importers (outline_formats FORMATS)
+    are named in code only by their registry: no
     ``law == "unilateral"`` or ``("3363", "3333")`` elsewhere; behaviour lives in the law,
     element or material (e.g. ``ElementType.default_locking``)."""
     found = []
@@ -346,6 +373,100 @@ def test_registry_names_are_not_spelt_outside_their_module():
     assert not found, "\n".join(found)
 
 
+#: the modules of the outline-format registry (one per format, plus their shared helpers)
+OUTLINE_FORMAT_MODULES = {os.path.relpath(p, PACKAGE) for m, p in MODULES.items()
+                          if _component(m) == "outline_formats"}
+
+
+def _extensions_spelt(tree: ast.AST, extensions: set) -> list[tuple[int, str]]:
+    """(line, what) of every outline file extension in a literal list, an ``endswith`` /
+    ``startswith`` or a comparison: a second copy of the extension → format table."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            elts = node.elts
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                and node.func.attr in ("endswith", "startswith"):
+            elts = node.args
+        elif isinstance(node, ast.Compare):
+            elts = [node.left] + node.comparators
+        else:
+            continue
+        hits = [e.value for e in elts if isinstance(e, ast.Constant) and isinstance(e.value, str)
+                and e.value.lower() in extensions]
+        if hits:
+            out.append((node.lineno, f"spells the outline file extension(s) {hits}"))
+    return out
+
+
+def test_outline_formats_are_named_only_by_their_registry():
+    """A geometry importer is one module of ``outline_formats/``: no format name
+    (``kind == "nifti"``) and no extension (``endswith((".nii", ".nii.gz"))``) anywhere else;
+    config validation, the build and the docs read ``FORMATS``."""
+    from ancf_petsc.outline_formats import FORMATS
+    extensions = {e for f in FORMATS.values() for e in f.extensions}
+    found = []
+    for name, path in MODULES.items():
+        rel = os.path.relpath(path, PACKAGE)
+        if rel not in OUTLINE_FORMAT_MODULES:
+            found += [f"{rel}:{ln}: {msg}" for ln, msg in _extensions_spelt(ast.parse(open(path).read()), extensions)]
+    assert not found, "\n".join(found)
+    src = ('if low.endswith((".nii", ".nii.gz")): kind = "nifti"\n'
+           'POINT_EXT = (".csv", ".txt")\nif kind in ("svg", "nifti"): pass\nif ext == ".svg": pass\n'
+           'mask = name.endswith(".png")\n')
+    tree = ast.parse(src)
+    assert len(_extensions_spelt(tree, extensions)) == 4 and len(_spelt(tree, set(FORMATS))) == 1
+
+
+def test_every_outline_format_module_registers_one_importer():
+    """Each module of ``outline_formats/`` binds ``IMPORTER`` (a format) or is a helper that
+    defines none; the registry holds exactly the modules' importers, with their extensions
+    claimed once and their keys typed."""
+    import importlib
+    from ancf_petsc.outline_formats import FORMATS, Importer
+    bound = []
+    for m in MODULES:
+        if _component(m) == "outline_formats" and m.count(".") == 2:
+            imp = getattr(importlib.import_module(m), "IMPORTER", None)
+            if imp is not None:
+                bound.append(imp)
+    assert sorted(f.name for f in bound) == sorted(FORMATS) and all(isinstance(f, Importer) for f in bound)
+    exts = [e for f in FORMATS.values() for e in f.extensions]
+    assert len(exts) == len(set(exts)) and all(e.startswith(".") and e == e.lower() for e in exts)
+    assert all(k.type in (int, str) for f in FORMATS.values() for k in f.keys)
+
+
+def _field_lists(tree: ast.AST, names: set) -> list[tuple[int, str]]:
+    """(line, what) of every literal list, tuple, set or dict (keys) that spells two or more
+    output field names: a second copy of the field vocabulary (single names are also config
+    keys, e.g. a support's ``displacement``, and are not counted)."""
+    out = [(ln, msg) for ln, msg in _spelt(tree, names) if msg.startswith("spells")]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Dict):
+            hits = [k.value for k in node.keys if isinstance(k, ast.Constant) and k.value in names]
+            if len(hits) >= 2:
+                out.append((node.lineno, f"spells the vocabulary {hits} as keys"))
+    return out
+
+
+def test_output_fields_are_listed_only_by_their_registry():
+    """The surface VTU's point fields (io/surface_fields.py SURFACE_FIELDS: label, unit, factor,
+    the function, where it applies) are listed nowhere else: no label table in viz, no
+    ``{"displacement": [], "E_xx": [], ...}`` in the writer."""
+    from ancf_petsc.io.surface_fields import SURFACE_FIELDS
+    names = set(SURFACE_FIELDS)
+    found = []
+    for name, path in MODULES.items():
+        rel = os.path.relpath(path, PACKAGE)
+        if rel != "io/surface_fields.py":
+            found += [f"{rel}:{ln}: {msg}" for ln, msg in _field_lists(ast.parse(open(path).read()), names)]
+    assert not found, "\n".join(found)
+    old = ('FIELD_LABELS = {"E_xx": ("strain", "%", 100.0), "J": ("J", "-", 1.0)}\n'
+           'data = {"displacement": [], "E_xx": [], "J": [], "beam": []}\n'
+           'if mode == "displacement": pass\n')
+    assert len(_field_lists(ast.parse(old), names)) == 2
+
+
 def test_config_vocabularies_are_the_registries():
     from ancf_petsc.config.beams import MATERIAL_PARSERS
     from ancf_petsc.config.contact import TANGENTIAL_PARSERS
@@ -354,6 +475,9 @@ def test_config_vocabularies_are_the_registries():
     from ancf_petsc.contact.laws import LAWS
     from ancf_petsc.physics.element3363 import ELEMENT_TYPES, ELEMENTS
     from ancf_petsc.physics.laws import MATERIALS
+    from ancf_petsc.config.sections import OUTLINE_KEYS
+    from ancf_petsc.outline_formats import FORMATS
+    assert set(OUTLINE_KEYS) == {"points", "file", "curves"} | {k.name for f in FORMATS.values() for k in f.keys}
     assert CONTACT_MODES == tuple(LAWS) and MATERIAL_MODELS == tuple(MATERIALS)
     assert TANGENTIAL_LAW_NAMES == tuple(TANGENTIAL_LAWS)
     assert set(TANGENTIAL_PARSERS) == {n for n, cls in TANGENTIAL_LAWS.items() if cls is not None}

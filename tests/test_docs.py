@@ -72,3 +72,39 @@ def test_readme_python_api_example_runs(tmp_path):
     assert first == "completed 0"
     level, disp = second.split(" ", 1)
     assert float(level) == 1.0 and disp.startswith("[") and float(disp.strip("[]").split()[0]) > 0.0
+
+
+def _table_rows(path: str, heading: str) -> list[list[str]]:
+    """The cells of the first table after ``heading`` in a docs page."""
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    part = text[text.index(heading):]
+    rows = re.findall(r"^\|(.+)\|\s*$", part[:part.index("\n\n", part.index("|"))], re.M)
+    return [[c.strip() for c in re.split(r"(?<!\\)\|", r)] for r in rows[2:]]
+
+
+def test_surface_field_table_is_the_registry():
+    """docs/running.md lists exactly the registry's fields, in order, with their chart unit and
+    where they apply; the README's outputs table names every one."""
+    from ancf_petsc.io.surface_fields import SURFACE_FIELDS
+    rows = _table_rows(os.path.join(DOCS, "running.md"), "### Surface point fields")
+    assert [r[0].strip("`") for r in rows] == list(SURFACE_FIELDS)
+    for r in rows:
+        f = SURFACE_FIELDS[r[0].strip("`")]
+        assert r[2].endswith(f"[{f.unit}]") and r[3] == f.where, r
+    with open(README, encoding="utf-8") as fh:
+        outputs = [ln for ln in fh if ln.startswith("| `surface_NNNN.vtu`")][0]
+    assert all(f"`{name}`" in outputs for name in SURFACE_FIELDS), outputs
+
+
+def test_geometry_guide_names_every_outline_format():
+    """docs/geometry.md's table of sources names every extension of every outline format
+    (outline_formats.FORMATS) and the per-outline keys each reads."""
+    from ancf_petsc.outline_formats import FORMATS
+    rows = _table_rows(os.path.join(DOCS, "geometry.md"), "### Sources of an outline")
+    text = "\n".join(" | ".join(r) for r in rows)
+    for f in FORMATS.values():
+        for e in f.extensions:
+            assert e in text, f"docs/geometry.md: no source row names {e} ({f.title})"
+        for k in f.keys:
+            assert f"{k.name}:" in text, f"docs/geometry.md: no source row shows {k.name}: ({f.title})"

@@ -5,6 +5,7 @@ import os
 
 from ..physics.element3363 import DEFAULT_ELEMENT, ELEMENT_TYPES, ELEMENTS
 from ..physics.goh import GOH
+from ..physics.laws import VOLUMETRIC_LAWS
 from ..physics.materials import NeoHookean, StVenantKirchhoff
 from .specs import (DEFAULT_AXIAL_POINTS, FIBRE_FOLLOW, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec,
                     SectionSpec)
@@ -30,6 +31,10 @@ def parse_beams(value, base_dir: str) -> list[BeamSpec]:
         beams[-1].element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", ELEMENT_TYPES)
         beams[-1].locking = string(b.get("locking", ELEMENTS[beams[-1].element].default_locking),
                                    f"{p}.locking", LOCKING)
+        if beams[-1].locking == "mixed" and beams[-1].material["model"] not in VOLUMETRIC_LAWS:
+            raise ConfigError(f"{p}.locking", f"'mixed' projects the volumetric term K/2 (J - 1)^2 of "
+                              f"{' or '.join(VOLUMETRIC_LAWS)}; {beams[-1].material['model']!r} has none: "
+                              "use 'none'")
     return beams
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 
-from .petsc_options import check_value, command_line_options
+from ..linalg.option_syntax import check_value, command_line_options
 
 #: options whose value is a file of options (``-options_file_yaml``: only checked for existence)
 FILE_OPTIONS = ("options_file", "options_file_yaml")

@@ -1,12 +1,12 @@
 """``geometry.sections`` of a config → a validated :class:`SectionsSpec` (no file is opened here
-except the YAML geometry files themselves; images, SVGs and point lists are read at build time).
+except the YAML geometry files themselves; outline files are read at build time).
 
 A geometry description says what it is: ``units`` (m, mm, um, or px with ``pixel_size``) and
 ``axes`` (which tendon axes the file's first and second coordinates point along; ``image`` means
 columns to the right = y and rows downwards = -z).  It holds geometry only: one ``outlines`` entry
-per subtendon, taken from inline points, a point-list file (CSV/YAML), an SVG path, a label in a
-mask image (PNG/TIFF) or a NIfTI label volume slice, or a loop of named ``curves``.  The user
-guide is docs/geometry.md.
+per subtendon, taken from inline points, a loop of named ``curves``, or a file of one of the
+formats of ``outline_formats`` (its extension says which; the keys that format reads are checked
+here).  The user guide is docs/geometry.md.
 """
 from __future__ import annotations
 
@@ -18,36 +18,33 @@ import numpy as np
 import yaml
 
 from .. import yamlio
+from ..outline_formats import FORMATS, Importer, format_of, known_types, outline_keys
 
 from .values import ConfigError, integer, key_path, mapping, number, sequence, shown, string
 
-__all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS",
-           "POINT_EXT", "IMAGE_EXT", "NIFTI_EXT", "SVG_EXT"]
+__all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS"]
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
-POINT_EXT = (".csv", ".txt", ".yaml", ".yml")
-IMAGE_EXT = (".png", ".tif", ".tiff")
-NIFTI_EXT = (".nii", ".nii.gz")
-SVG_EXT = (".svg",)
 AXIS_NAMES = ("y", "-y", "z", "-z")
 NOT_GEOMETRY = ("length", "length_m", "material", "materials", "c10", "c10_MPa", "mu",
                 "bulk_modulus", "twist_deg", "twist_axis", "triple_point_px", "scale_m_per_px")
 FILE_KEYS = ("units", "pixel_size", "axes", "source", "slice", "outlines", "curves", "description")
-OUTLINE_KEYS = ("points", "file", "label", "path", "curves")
+#: an outline's keys: inline points or curves, or a file and the keys its format reads
+OUTLINE_KEYS = ("points", "file", "curves") + tuple(outline_keys())
 OPTION_KEYS = ("merge_tolerance", "smoothing", "fit_tolerance", "spline_degree")
 
 
 @dataclass
 class OutlineSource:
-    """Where one subtendon's outline comes from (``kind``: points | list | svg | image | nifti |
-    curves); ``key`` is its key path for error messages."""
+    """Where one subtendon's outline comes from: inline ``points``, a loop of named ``curves``,
+    or a ``file`` of the format ``kind`` (a name of outline_formats.FORMATS) with the values of
+    the keys that format reads (``keys``); ``key`` is its key path for error messages."""
     name: str
-    kind: str
+    kind: str                                 # "points", "curves" or a format's name
     key: str
     points: list | None = None
     file: str | None = None
-    label: int | None = None
-    path_id: str | None = None
+    keys: dict = field(default_factory=dict)
     curves: list[str] | None = None
 
 
@@ -127,18 +124,34 @@ def _pairs(value, key: str) -> list[list[float]]:
     return out
 
 
-def _kind_of(path: str, key: str) -> str:
-    low = path.lower()
-    if low.endswith(POINT_EXT):
-        return "list"
-    if low.endswith(SVG_EXT):
-        return "svg"
-    if low.endswith(IMAGE_EXT):
-        return "image"
-    if low.endswith(NIFTI_EXT):
-        return "nifti"
-    raise ConfigError(key, f"unknown file type {shown(os.path.basename(path))}; use .csv/.txt/.yaml "
-                           "(point list), .svg, .png/.tif/.tiff (label mask) or .nii/.nii.gz (NIfTI)")
+def _format_of(path: str, key: str) -> Importer:
+    fmt = format_of(path)
+    if fmt is None:
+        raise ConfigError(key, f"unknown file type {shown(os.path.basename(path))}; use {known_types()}")
+    return fmt
+
+
+def _one_source_hint() -> str:
+    return ", ".join(f"{k} for {' and '.join(f.title + 's' for f in fs)}" for k, fs in outline_keys().items())
+
+
+def _format_keys(fmt: Importer, value: dict, key: str) -> dict:
+    """The validated values of the per-outline keys ``fmt`` reads; a key of another format is
+    an error naming the formats it belongs to."""
+    for k, owners in outline_keys().items():
+        if k in value and fmt not in owners:
+            exts = "/".join(e for f in owners for e in f.extensions)
+            raise ConfigError(key_path(key, k), f"{k} belongs to {' and '.join(f.title + 's' for f in owners)} "
+                                                f"({exts}), not to a {fmt.title}")
+    out = {}
+    for k in fmt.keys:
+        if k.name not in value:
+            if k.required:
+                raise ConfigError(key, f"a {fmt.title} needs {k.meaning}")
+            continue
+        kp = key_path(key, k.name)
+        out[k.name] = integer(value[k.name], kp, lo=k.minimum) if k.type is int else string(value[k.name], kp)
+    return out
 
 
 def _outline(name: str, value, key: str, default_file: str | None, base_dir: str) -> OutlineSource:
@@ -146,9 +159,8 @@ def _outline(name: str, value, key: str, default_file: str | None, base_dir: str
         value = {"points": value}
     mapping(value, key, optional=OUTLINE_KEYS)
     given = [k for k in ("points", "curves") if k in value]
-    if len(given) > 1 or (given and any(k in value for k in ("file", "label", "path"))):
-        raise ConfigError(key, "give one source: points, curves, or a file (with label for masks, "
-                               "path for SVG)")
+    if len(given) > 1 or (given and any(k in value for k in ("file",) + tuple(outline_keys()))):
+        raise ConfigError(key, f"give one source: points, curves, or a file (with {_one_source_hint()})")
     if "points" in value:
         return OutlineSource(name, "points", key, points=_pairs(value["points"], key_path(key, "points")))
     if "curves" in value:
@@ -161,20 +173,8 @@ def _outline(name: str, value, key: str, default_file: str | None, base_dir: str
     if not os.path.isfile(f):
         raise ConfigError(key_path(key, "file") if "file" in value else key,
                           f"file not found: {f} (paths are relative to the file that names them)")
-    kind = _kind_of(f, key_path(key, "file"))
-    out = OutlineSource(name, kind, key, file=f)
-    if kind in ("image", "nifti"):
-        if "label" not in value:
-            raise ConfigError(key, "a mask needs the label value of this subtendon, e.g. label: 2")
-        out.label = integer(value["label"], key_path(key, "label"), lo=1)
-    elif "label" in value:
-        raise ConfigError(key_path(key, "label"), "label belongs to mask images (.png/.tif/.nii)")
-    if kind == "svg":
-        if "path" in value:
-            out.path_id = string(value["path"], key_path(key, "path"))
-    elif "path" in value:
-        raise ConfigError(key_path(key, "path"), "path (an SVG element id) belongs to .svg files")
-    return out
+    fmt = _format_of(f, key_path(key, "file"))
+    return OutlineSource(name, fmt.name, key, file=f, keys=_format_keys(fmt, value, key))
 
 
 def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
@@ -218,7 +218,7 @@ def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
             default_file = _abs(string(value["source"], key_path(inner, "source")), base_dir)
             if not os.path.isfile(default_file):
                 raise ConfigError(key_path(inner, "source"), f"file not found: {default_file}")
-            _kind_of(default_file, key_path(inner, "source"))
+            _format_of(default_file, key_path(inner, "source"))
         raw_out = value["outlines"]
         if not isinstance(raw_out, dict) or not raw_out:
             raise ConfigError(key_path(inner, "outlines"), "expected a mapping subtendon name -> source, "
@@ -253,12 +253,15 @@ def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
             ax = value["slice"]["axis"]
             ax = {"i": 0, "j": 1, "k": 2}.get(ax, ax)
             slc = (integer(ax, key_path(sk, "axis"), lo=0, hi=2), integer(value["slice"]["index"], key_path(sk, "index"), lo=0))
-        if "nifti" in kinds and slc is None:
-            raise ConfigError(key_path(inner, "slice"), "a NIfTI volume needs the slice: {axis: 2, index: 40} "
+        formats = [FORMATS.get(k) for k in kinds]
+        sliced = [f for f in formats if f is not None and f.needs_slice]
+        if sliced and slc is None:
+            raise ConfigError(key_path(inner, "slice"), f"a {sliced[0].title} needs the slice: {{axis: 2, index: 40}} "
                                                      "(axis 0/1/2 or i/j/k, 0-based index)")
-        if scale is None and kinds != {"nifti"}:
-            raise ConfigError(key_path(inner, "pixel_size"), "pixel_size: header reads the voxel size of a "
-                                                          "NIfTI file; give the size for other sources")
+        if scale is None and not all(f is not None and f.header_scale for f in formats):
+            headers = " or ".join(f.title for f in FORMATS.values() if f.header_scale)
+            raise ConfigError(key_path(inner, "pixel_size"), f"pixel_size: header reads the voxel size from the "
+                                                          f"header of a {headers}; give the size for other sources")
     except ConfigError as exc:
         if where == "config":
             raise

@@ -5,7 +5,7 @@ import math
 import os
 import re
 
-from .petsc_options import check_value
+from ..linalg.option_syntax import check_value
 from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
 from .values import ConfigError, boolean, integer, mapping, number, shown, string
 

@@ -9,7 +9,7 @@ from ..contact.tangential import TANGENTIAL_LAWS
 from ..physics.element3363 import DEFAULT_ELEMENT
 from ..physics.laws import MATERIALS
 
-LOCKING = ("none", "ecm")
+LOCKING = ("none", "ecm", "mixed")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws.py)
 FIBRE_FOLLOW = ("twist", "axis")
@@ -59,7 +59,7 @@ class BeamSpec:
     elements: int
     axial_points: int = DEFAULT_AXIAL_POINTS
     element: str = DEFAULT_ELEMENT        # element type, see element3363.ELEMENTS
-    locking: str = "none"                 # 'ecm': Poisson-locking remedy (model.Beam.parts)
+    locking: str = "none"                 # 'ecm' (Poisson), 'mixed' (volumetric): remedies, model.Beam.parts
 
 
 @dataclass
@@ -131,8 +131,8 @@ class SolverSpec:
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
-    matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (solving.options.matrix_type)
-    linear: str = "auto"                  # linear solver: auto | direct | fieldsplit (petsc.fieldsplit.choose)
+    matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (linalg.options.matrix_type)
+    linear: str = "auto"                  # linear solver: auto | direct | fieldsplit (linalg.choice.choose)
     allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 

@@ -23,14 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.element3363 import DOFS_PER_ELEMENT, SLOTS
-from .partners import PartnerTerm, drop_held, node_dofs, per_segment_sum
+from .partners import PartnerTerm, drop_held, node_dofs, segment_outer
 
 EL = DOFS_PER_ELEMENT
 LEVI_CIVITA = np.zeros((3, 3, 3))
 LEVI_CIVITA[0, 1, 2] = LEVI_CIVITA[1, 2, 0] = LEVI_CIVITA[2, 0, 1] = 1.0
 LEVI_CIVITA[0, 2, 1] = LEVI_CIVITA[2, 1, 0] = LEVI_CIVITA[1, 0, 2] = -1.0
-#: points per batch of the per-point 108 × 108 Hessians (bounds the temporaries' memory)
-CHUNK_POINTS = 256
 
 
 @dataclass
@@ -106,46 +104,55 @@ class ElasticMatrix(PartnerTerm):
             return []
         ev = st.terms[self.name]
         srow = np.searchsorted(c.segments, c.points.seg[c.local])
-        NAB = self.grad_d(c)
-        K = np.zeros((len(c.segments), 2 * EL, 2 * EL))
-        for start in range(0, len(c.local), CHUNK_POINTS):
-            sel = slice(start, start + CHUNK_POINTS)
-            H = self._point_hessians(ev, NAB[sel], sel)
-            K += per_segment_sum(srow[sel], len(c.segments), H)
-        return [(drop_held(node_dofs(self.segment_nodes(c)), fixed_mask), K)]
+        K = self._segment_hessians(ev, self.grad_d(c), srow, len(c.segments))
+        return [(drop_held(node_dofs(self.segment_nodes(c)), fixed_mask), K.reshape(-1, 2 * EL, 2 * EL))]
 
-    def _point_hessians(self, ev: MatrixEvaluation, NAB: np.ndarray, sel) -> np.ndarray:
-        """∇²Π of the points ``sel`` (P, 108, 108) over (A's element, the partner's)."""
-        Dn, n, d = self._normal_terms(ev, sel)
+    def _segment_hessians(self, ev: MatrixEvaluation, NAB: np.ndarray, srow: np.ndarray, n_s: int) -> np.ndarray:
+        """Σ_p ∇²Π_p per segment (n_s, 36, 3, 36, 3) over (A's element, the partner's): every
+        term a sum of outer products, formed as batched products over the segments' points
+        (``segment_outer``), never as a 108 × 108 matrix per point."""
+        Dn, n, d = self._normal_terms(ev, slice(None))
         p = len(NAB)
+        w = self.stiffness * ev.omega                                          # k_t ω
         cn = np.einsum("pi,pi->p", n, d)
+        wc = w * cn
         grad_c = NAB[:, :, None] * n[:, None, :]                              # (P, 36, 3)
         grad_c[:, SLOTS:] += np.einsum("piaj,pi->paj", Dn, d)
-        grad_n = np.zeros((p, 3, 2 * SLOTS, 3))
-        grad_n[:, :, SLOTS:] = Dn
-        # ∇dᵀ∇d = (N ⊗ N) ⊗ I;  ∇dᵀ∇n: [(a, j), (b, l)] = N_a ∂n_j/∂q_bl
-        H = (NAB[:, :, None, None, None] * NAB[:, None, None, :, None]
-             * np.eye(3)[None, None, :, None, :])
-        cross = NAB[:, :, None, None, None] * grad_n[:, None]                  # (P, a, j, b, l)
-        second = cross + cross.transpose(0, 3, 4, 1, 2)
-        second[:, SLOTS:, :, SLOTS:, :] += self._d_hessian_n(ev, d, n, Dn, sel)
-        H -= grad_c[:, :, :, None, None] * grad_c[:, None, None, :, :] + cn[:, None, None, None, None] * second
-        return (self.stiffness * ev.omega[sel])[:, None, None] * H.reshape(p, 2 * EL, 2 * EL)
+        K = np.zeros((n_s, 2 * SLOTS, 3, 2 * SLOTS, 3))
+        # ∇dᵀ∇d = (N ⊗ N) ⊗ I
+        NN = segment_outer(srow, n_s, w[:, None] * NAB, NAB)
+        K += NN[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
+        # − ∇c ∇cᵀ
+        K -= segment_outer(srow, n_s, w[:, None] * grad_c.reshape(p, -1),
+                           grad_c.reshape(p, -1)).reshape(K.shape)
+        # − c (∇dᵀ∇n + ∇nᵀ∇d): [(a, j), (b, l)] = N_a ∂n_j/∂q_bl, b over the partner's slots
+        cross = segment_outer(srow, n_s, wc[:, None] * NAB, Dn.reshape(p, -1)).reshape(n_s, 2 * SLOTS, 3, SLOTS, 3)
+        K[:, :, :, SLOTS:, :] -= cross
+        K[:, SLOTS:, :, :, :] -= cross.transpose(0, 3, 4, 1, 2)
+        K[:, SLOTS:, :, SLOTS:, :] -= self._segment_d_hessian_n(ev, wc, d, n, Dn, srow, n_s)
+        return K
 
-    def _d_hessian_n(self, ev, d, n, Dn, sel) -> np.ndarray:
-        """Σ_i d_i ∂²n_i/∂q_aj∂q_bl over the partner's slots (P, 18, 3, 18, 3), from
-        ∂²n = [P ∂²m − ∂_b n (n·∂_a m) − ∂_a n (n·∂_b m) − n (∂_b n·∂_a m)] / |m| and
-        ∂²m_i/∂q_aj∂q_bl = ε_ijl (N_a,t N_b,ξ − N_b,t N_a,ξ)."""
-        Nz, sign, rho, M = ev.Nz[sel], ev.sign[sel], ev.rho[sel], ev.M[sel]
+    def _segment_d_hessian_n(self, ev, wc, d, n, Dn, srow, n_s) -> np.ndarray:
+        """Σ_p w_p c_p Σ_i d_i ∂²n_i/∂q_aj∂q_bl per segment over the partner's slots
+        (n_s, 18, 3, 18, 3), from ∂²n = [P ∂²m − ∂_b n (n·∂_a m) − ∂_a n (n·∂_b m) −
+        n (∂_b n·∂_a m)] / |m| and ∂²m_i/∂q_aj∂q_bl = ε_ijl (N_a,t N_b,ξ − N_b,t N_a,ξ)."""
+        Nz, sign, rho, M = ev.Nz, ev.sign, ev.rho, ev.M
+        p = len(d)
+        f = wc / rho
         Pd = d - np.einsum("pi,pi->p", n, d)[:, None] * n
         A = sign[:, None, None] * (Nz[:, :, None, 1] * Nz[:, None, :, 0] - Nz[:, None, :, 1] * Nz[:, :, None, 0])
         E = np.einsum("ijl,pi->pjl", LEVI_CIVITA, Pd)
-        out = A[:, :, None, :, None] * E[:, None, :, None, :]
-        g = np.einsum("piaj,pi->paj", Dn, d)                                   # d·∂n/∂q_aj
-        h = np.einsum("pi,piaj->paj", n, M)                                    # n·∂m/∂q_aj
-        out -= g[:, None, None, :, :] * h[:, :, :, None, None] + g[:, :, :, None, None] * h[:, None, None, :, :]
-        out -= np.einsum("p,pibl,piaj->pajbl", np.einsum("pi,pi->p", n, d), Dn, M)
-        return out / rho[:, None, None, None, None]
+        out = segment_outer(srow, n_s, f[:, None] * A.reshape(p, -1), E.reshape(p, -1))
+        out = out.reshape(n_s, SLOTS, SLOTS, 3, 3).transpose(0, 1, 3, 2, 4)
+        g = np.einsum("piaj,pi->paj", Dn, d).reshape(p, -1)                    # d·∂n/∂q_aj
+        h = np.einsum("pi,piaj->paj", n, M).reshape(p, -1)                     # n·∂m/∂q_aj
+        hg = segment_outer(srow, n_s, f[:, None] * h, g)
+        out -= (hg + hg.transpose(0, 2, 1)).reshape(out.shape)
+        # Σ_i (n·d) ∂n_i/∂q_bl ∂m_i/∂q_aj: the component i as extra rows of each point
+        rows = np.repeat(srow, 3)
+        fM = (f * np.einsum("pi,pi->p", n, d))[:, None, None] * M.reshape(p, 3, -1)
+        out -= segment_outer(rows, n_s, fM.reshape(3 * p, -1), Dn.reshape(3 * p, -1)).reshape(out.shape)
+        return out
 
     def describe(self) -> str:
         return f"elastic interface matrix (shear-lag), k_t = {self.stiffness:.4g} Pa/m"

@@ -125,8 +125,10 @@ class SlidingLaw:
 class UnilateralLaw:
     name = "unilateral"
     decides_activity = True
-    #: from rest the contact state is found in a quarter of the first level (the soleus untwists
-    #: and lifts off by 0.9 mm at 10 N at ψ = 45°: the full level failed at 8–16 elements)
+    #: without the complementarity predictor (above its size: the held start) the contact state
+    #: is found in a quarter of the first level (the soleus untwists and lifts off by 0.9 mm at
+    #: 10 N at ψ = 45°: the full level failed at 8–16 elements); with it, in the whole first
+    #: level but at most a quarter of the last (solving/stepper.py ``initial_path``)
     first_increment = 0.25
 
     def __init__(self):

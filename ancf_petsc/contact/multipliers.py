@@ -133,12 +133,14 @@ def _axial_functions(xi: np.ndarray, degree: int, per_element: bool) -> tuple[np
 
 
 def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
-                per_element: bool = False) -> MultiplierSpace:
+                per_element: bool = False, group: int = 1) -> MultiplierSpace:
     """Multipliers of ``degrees`` (axial, curve) on every interface of ``points``; with
     ``per_element`` the pressure is discontinuous between A elements.  That space repeats
     constraints (in the reference state its gaps vanish together with the continuous ones, so
     some multipliers are not unique) and needs the factorisation's null-pivot detection; it is
-    the space of the former penalty formulation, kept to compare with it."""
+    the space of the former penalty formulation, kept to compare with it.  ``group`` > 1 spans
+    the axial functions over groups of that many A elements (the space of a coarser mesh on
+    this one's displacements: scripts/solid_contact_variants.py; no config key)."""
     ka, kc = degrees
     S = points.n_segments
     K = (ka + 1) * (kc + 1)
@@ -156,10 +158,17 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
         ax, step = _axial_functions(xi, ka, per_element)
         phi = (ax[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)   # (n, na·nc)
         na, nc = ax.shape[1], dc + 1
-        n_axial = step * (len(segs) - 1) + na
+        if len(segs) % group:
+            raise ValueError(f"{len(segs)} elements do not fall into groups of {group}")
+        n_axial = step * (len(segs) // group - 1) + na
         for e, s in enumerate(segs):
-            # the segment's functions: axial dofs e·step … e·step + na − 1, all across dofs
-            ids = first + ((e * step + np.arange(na))[:, None] * nc + np.arange(nc)).ravel()
+            if group > 1:                # the group's functions at the segment's points
+                ax_g, _ = _axial_functions((e % group + 0.5 * (xi + 1.0)) * 2.0 / group - 1.0, ka,
+                                           per_element)
+                phi = (ax_g[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)
+            # the segment's functions: axial dofs g·step … g·step + na − 1 (g = e // group), all
+            # across dofs
+            ids = first + (((e // group) * step + np.arange(na))[:, None] * nc + np.arange(nc)).ravel()
             seg_mults[s, :len(ids)] = ids
             sl = points.seg_start[s] + np.arange(n)
             rows.append(np.repeat(ids, n))
@@ -170,7 +179,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
         m_here = n_axial * nc
         axial_dof = np.arange(m_here) // nc
         shared = step < na                                          # neighbours share an end
-        owner = (np.maximum(axial_dof - 1, 0) if shared else axial_dof) // step
+        owner = (np.maximum(axial_dof - 1, 0) if shared else axial_dof) // step * group
         owner = np.minimum(owner, len(segs) - 1)                      # lowest element it lives on
         itf_of.append(np.full(m_here, k))
         elem_of.append(points.seg_eA[segs][owner])

@@ -1,7 +1,7 @@
 """One measured cross-section (a :class:`~.spec.GeometrySource`) → spline loops per subtendon.
 
-Steps (docs/geometry.md): read each outline in its file's coordinates (``importers``); apply the
-declared units and axes; check it (closed, simple, a plausible size); make it counter-clockwise;
+Steps (docs/geometry.md): read each outline in its file's coordinates (``outline_formats``);
+apply the declared units and axes; check it (closed, simple, a plausible size); make it counter-clockwise;
 smooth it (Gaussian along the arc, ``smoothing``); merge the borders of neighbours traced apart
 (``merge``); fit interpolating splines with few control points (``fit``, ``fit_tolerance``).  Loops
 of named curves (Type III style) are taken exactly as given, interfaces shared by name.
@@ -17,8 +17,7 @@ from ..config.sections import UNITS, GeometrySource, SectionsSpec
 from ..physics.spline import SectionError, SplineCurve
 from . import polyline as pl
 from .fit import corners, fit_curve
-from .importers import (OutlineReadError, label_image, mask_outline, nifti_slice, read_point_list,
-                        read_svg_path)
+from ..outline_formats import FORMATS, OutlineReadError
 from .merge import MergeError, gap_closed, merge_outlines, unmerged_borders
 
 __all__ = ["Station", "build_station", "AREA_LIMITS"]
@@ -56,33 +55,17 @@ def _fmt_mm(p) -> str:
 
 
 def _read(src: GeometrySource, name: str):
-    """(points in file units, closed flag, scale (u, v) [m/unit], pixel flag, notes)."""
+    """(points in file units, closed flag, scale (u, v) [m/unit], pixel flag, notes): inline
+    points as given, a file by its format (outline_formats)."""
     o = src.outlines[name]
-    scale, pixel = src.scale, False
+    if o.points is not None:
+        return np.array(o.points, dtype=float), False, src.scale, False, []
+    fmt = FORMATS[o.kind]
     try:
-        if o.kind == "points":
-            return np.array(o.points, dtype=float), False, scale, False, []
-        if o.kind == "list":
-            r = read_point_list(o.file)
-        elif o.kind == "svg":
-            r = read_svg_path(o.file, o.path_id)
-        elif o.kind == "image":
-            lab = label_image(o.file)
-            r = mask_outline(lab, o.label, o.file.split("/")[-1])
-            r.points = r.points[:, ::-1].copy()          # (row, col) → (u, v) = (col, row)
-            pixel = True
-        else:
-            axis, index = src.slice
-            lab, hdr_scale, what = nifti_slice(o.file, axis, index)
-            r = mask_outline(lab, o.label, what)
-            pixel = True
-            if scale is None:
-                if hdr_scale is None:
-                    raise OutlineReadError(f"{what}: the header has no spatial unit; give pixel_size")
-                scale = hdr_scale
+        r = fmt.read(o.file, o.keys, src)
     except OutlineReadError as exc:
         raise src.err(f"outlines.{name}", str(exc)) from None
-    return r.points, r.closed, scale, pixel, r.notes
+    return r.points, r.closed, (r.scale if r.scale is not None else src.scale), fmt.pixels, r.notes
 
 
 def _to_tendon(P: np.ndarray, scale, axes: np.ndarray) -> np.ndarray:

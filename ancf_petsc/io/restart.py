@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from ..config.specs import LOCKING
 from ..contact.interfaces import ContactSetupError, find_interfaces
 from ..contact.tangential import TANGENTIAL_LAWS
 from ..errors import InputError
@@ -67,7 +68,7 @@ def fingerprint(model) -> dict[str, np.ndarray]:
         params = [float(v) for k, v in sorted(vars(m).items()) if isinstance(v, (int, float))]
         out.update({f"beams/{b.name}/elements": np.array([float(b.n_elements)]),
                     f"beams/{b.name}/element_axial_points_locking": np.array(
-                        [float(b.element), b.axial_points, ["none", "ecm"].index(b.locking)]),
+                        [float(b.element), b.axial_points, LOCKING.index(b.locking)]),
                     f"beams/{b.name}/material": np.array(params),
                     f"beams/{b.name}/x_nodes": np.asarray(b.x_nodes),
                     f"beams/{b.name}/section_points": np.asarray(b.yz, dtype=float),

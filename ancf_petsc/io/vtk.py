@@ -12,6 +12,7 @@ from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
 from ..physics.element3363 import SLOTS
 from .files import atomic_write, remove_quietly
+from .surface_fields import SampledState, fields_for
 
 
 class SurfaceSampler:
@@ -57,27 +58,17 @@ class SurfaceSampler:
         return beam.material.with_directions(a0.reshape(a0.shape[0], -1, 3)[:, keep])
 
     def mesh(self, q: np.ndarray):
-        """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q."""
-        pts, quads, caps = [], [], []
-        data = {"displacement": [], "E_xx": [], "J": [], "beam": []}
-        fibres = any(p[-1] is not None for p in self.parts)
-        if fibres:   # first fibre family: stretch √I4 and Cauchy normal stress along it [Pa]
-            data.update(fibre_stretch=[], fibre_stress=[])
+        """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q: the
+        fields of ``surface_fields.SURFACE_FIELDS`` that apply to these beams."""
+        quads, caps, states = [], [], []
         offset = 0
         for beam, m, S, N, G, e_of, r0, law in self.parts:
             conn = beam.connectivity
             qe = q[conn].reshape(len(conn), SLOTS, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
             F = np.matmul(np.swapaxes(qe, 1, 2), G)
+            states.append(SampledState(r, r0, F, beam.index, law))
             n_st = beam.n_elements * S + 1
-            data["displacement"].append(r - r0)
-            data["E_xx"].append(0.5 * (np.einsum("pi,pi->p", F[:, :, 0], F[:, :, 0]) - 1.0))  # ½(C_xx − 1)
-            data["J"].append(np.einsum("pi,pi->p", F[:, :, 0], np.cross(F[:, :, 1], F[:, :, 2])))
-            data["beam"].append(np.full(len(r), float(beam.index)))
-            if fibres:
-                nan = np.full(len(r), np.nan)
-                data["fibre_stretch"].append(nan if law is None else law.fibre_stretch(F)[0])
-                data["fibre_stress"].append(nan if law is None else law.fibre_cauchy_stress(F)[0])
             st = np.arange(n_st - 1)[:, None]
             j = np.arange(m)[None, :]
             a = st * m + j
@@ -85,10 +76,9 @@ class SurfaceSampler:
             quads.append(offset + np.stack([a, b, b + m, a + m], axis=-1).reshape(-1, 4))
             caps.append(offset + np.arange(m)[::-1])
             caps.append(offset + (n_st - 1) * m + np.arange(m))
-            pts.append(r)
             offset += len(r)
-        return (np.concatenate(pts), np.concatenate(quads), caps,
-                {k: np.concatenate(v) for k, v in data.items()})
+        data = {f.name: np.concatenate([f.values(s) for s in states]) for f in fields_for(states)}
+        return np.concatenate([s.r for s in states]), np.concatenate(quads), caps, data
 
 
 def surface_cells(sampler: SurfaceSampler, q: np.ndarray) -> tuple:

@@ -13,6 +13,7 @@ import numpy as np
 from ..config.specs import ModelSpec
 from ..physics import element3363 as el
 from ..physics.element3363 import DOFS_PER_NODE
+from ..physics.mixed import ProjectedDilatation, pressure_basis
 from ..physics.section import Section
 
 
@@ -28,7 +29,7 @@ class Beam:
     x_nodes: np.ndarray
     axial_points: int
     element: str = el.DEFAULT_ELEMENT                      # a name of element3363.ELEMENTS
-    locking: str = "none"                                  # 'none' | 'ecm' (see ``parts``)
+    locking: str = "none"                                  # 'none' | 'ecm' | 'mixed' (see ``parts``)
     xi: np.ndarray = field(repr=False, default=None)      # (P,) ξ of the element's Gauss points
     yz: np.ndarray = field(repr=False, default=None)      # (P, 2) section coordinates
     wq: np.ndarray = field(repr=False, default=None)      # (P,) axial × section weights
@@ -58,8 +59,16 @@ class Beam:
         difference Ψ − Ψ₀ on the beam axis (one point per axial station, weight = area).  A
         homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν)).
         A fibre-reinforced law comes bound to its fibre directions at each part's points (all
-        elements; ``Model.element_data`` takes a rank's)."""
-        mat, on_axis = self._bound(self.material, self.fibres), self._bound(self.material, self.fibres_axis)
+        elements; ``Model.element_data`` takes a rank's).
+
+        ``locking: mixed`` (volumetric locking of the quadratic section, 3363): the law's
+        K/2 (J − 1)² on the dilatation projected per axial station onto {1, y, z}, the condensed
+        three-field functional of physics/mixed.py; one part, whose law ``element_data`` binds to
+        the elements' weights."""
+        mat = self._bound(self.material, self.fibres)
+        if self.locking == "mixed":
+            return [(self.dN, self.wq, ProjectedDilatation(mat, pressure_basis(self.yz, self.wq, self.axial_points)))]
+        on_axis = self._bound(self.material, self.fibres_axis)
         if self.locking == "ecm":
             free = self.material.poisson_free()
             return [(self.dN, self.wq, self._bound(free, self.fibres)), (self.dN_axis, self.wq_axis, on_axis),
@@ -151,13 +160,17 @@ class Model:
             # stored shape-function-major, (E, S, P, 3) in memory: the kernels' stacked view
             # (E, S, 3P) of the force and tangent products is then free (kernels._stack)
             G = np.ascontiguousarray(G.transpose(0, 2, 1, 3)).transpose(0, 2, 1, 3)
-            out.append((G, det * (wq[local] if wq.ndim == 2 else wq[None, :]), material.take(local)))
+            w = det * (wq[local] if wq.ndim == 2 else wq[None, :])
+            law = material.take(local)
+            out.append((G, w, law.on(w) if isinstance(law, ProjectedDilatation) else law))
         return out
 
     def describe(self) -> list[str]:
         lines = list(self.geometry_report) + list(self.warnings)
         for b in self.beams:
-            lock = ", Poisson part on the axis (ecm)" if b.locking == "ecm" else ""
+            lock = {"ecm": ", Poisson part on the axis (ecm)",
+                    "mixed": ", volumetric term on the dilatation projected on {1, y, z} per axial point (mixed)"
+                    }.get(b.locking, "")
             per = (f"up to {b.points_per_element // b.axial_points} section points, varying along x"
                    if b.ring_at is not None else f"{len(b.section.weights)} section")
             lines.append(f"beam {b.name}: {b.n_elements} elements {b.element} x {b.points_per_element} "

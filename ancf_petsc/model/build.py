@@ -20,7 +20,7 @@ from ..physics.spline import SectionError
 from .beams import Beam, Model, Support
 from .fibre_setup import set_fibre_directions
 from .loading import LoadCurve, LoadGroup, group_for
-from .plausibility import size_warnings
+from .plausibility import point_force_warnings, size_warnings
 
 _SECTIONS_FILE_CACHE: dict = {}
 
@@ -252,5 +252,6 @@ def build_model(spec: ModelSpec) -> Model:
 
     probes = {p.name: (beams[p.beam].node_offset + p.node, el.VECTOR_INDEX[p.vector])
               for p in spec.probes}
+    warnings = size_warnings(spec, beams) + point_force_warnings(spec, beams)
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,
-                 geometry_report=report, warnings=size_warnings(spec, beams), supports=supports)
+                 geometry_report=report, warnings=warnings, supports=supports)

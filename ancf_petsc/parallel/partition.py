@@ -1,5 +1,5 @@
 """Distribution of elements over MPI ranks: contiguous blocks, a METIS graph partition, or whole
-beams (METIS on the beam graph, for the fascicle-parallel solver, petsc/fieldsplit.py).
+beams (METIS on the beam graph, for the fascicle-parallel solver, linalg/fieldsplit.py).
 
 The element graph has one vertex per element (weight: its Gauss points, the cost of eq. 9, plus
 ``CONTACT_COST`` per contact point it carries) and

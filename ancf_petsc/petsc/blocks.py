@@ -1,6 +1,6 @@
 """Element blocks and node-block insertion into PETSc matrices (AIJ or SBAIJ).
 
-The Jacobian is AIJ, or SBAIJ with 18 × 18 node blocks (``solving.options.matrix_type``): the upper
+The Jacobian is AIJ, or SBAIJ with 18 × 18 node blocks (``linalg.options.matrix_type``): the upper
 triangle of node blocks, inserted one block at a time (``insert_node_blocks``).  That is ~15×
 faster than AIJ's entry-by-entry insertion of the same dense element and contact blocks and halves
 the stored entries; MUMPS's LDLᵀ takes SBAIJ directly, but PETSc's LU, ILU and GAMG do not.
@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from petsc4py import PETSc
 
+from ..linalg.options import node_blocks_fit
 from ..model.beams import Beam, Model
 from ..parallel.layout import Layout
 from ..physics.element3363 import DOFS_PER_NODE
@@ -82,11 +83,6 @@ def zero_held(values: np.ndarray, held: np.ndarray | None) -> np.ndarray:
     values[held] = 0.0                                # rows
     values.transpose(0, 2, 1)[held] = 0.0             # columns
     return values
-
-
-def node_blocks_fit(model: Model) -> bool:
-    """Whether every node's 18 DOFs are active (all beams 3363), as SBAIJ node blocks need."""
-    return all(len(b.vectors) == 6 for b in model.beams)
 
 
 def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, *values: np.ndarray) -> None:

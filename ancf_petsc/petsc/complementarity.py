@@ -17,6 +17,15 @@ guessing is hard: from the exactly touching, pressure-free reference, S is ill-c
 and the primal–dual active set rule needs 12–38 exact iterations at any constant, and cycles on
 bundle_hex7 (scripts/bench_contact.py --lcp).
 
+The predictor is solved at the start of every load increment (at the secant predictor's state)
+and again at a converged state whose status the exact rule would change (solving/newton.py): a
+Josephy–Newton iteration whose inner solves keep the status.  Away from rest the tangent of the
+bodies alone can be indefinite (a neighbour pressed by its contact forces and free of its
+constraints buckles), and so can S.  S is then replaced by its nearest positive semidefinite
+matrix (its negative eigenvalues set to zero) when that changes it by at most ``INDEFINITE_SHARE``
+of its norm (the paper's tendon and the second subject: 1e-5 … 5e-3); otherwise there is no
+prediction (bundle_circle7: the negative part dominates) and the law's phases decide the status.
+
 S costs one factorisation of K (MUMPS, the model's matrix assembled in the probe phase) and one
 solve per multiplier, so the predictor is used up to ``MAX_MULTIPLIERS``.  Collective: every rank
 gets the same S, d (sums over ranks) and the same solution.
@@ -37,6 +46,9 @@ MAX_MULTIPLIERS = 2500
 MAX_HALVINGS = 8
 #: relative regularisation of S before its Cholesky factor (redundant constraints)
 REGULARISATION = 1e-12
+#: an indefinite S is replaced by its nearest positive semidefinite matrix when its most negative
+#: eigenvalue is at most this share of its largest (module docstring)
+INDEFINITE_SHARE = 1e-2
 
 
 def multiplier_dofs(problem) -> np.ndarray:
@@ -55,10 +67,13 @@ def _owned_values(vec: PETSc.Vec, dofs: np.ndarray, comm) -> np.ndarray:
 
 
 class ComplementarityPredictor:
-    """Solves the linearised complementarity problem at a state (module docstring)."""
+    """Solves the linearised complementarity problem at a state (module docstring).  ``snes``:
+    the Newton solver that factors the same matrix (its preconditioner is reset when the
+    predictor's assembly grows the contact pattern, as the SNES's own assembly does: a MUMPS
+    factorisation on the old symbolic analysis corrupts memory)."""
 
-    def __init__(self, problem):
-        self.problem = problem
+    def __init__(self, problem, snes: PETSc.SNES | None = None):
+        self.problem, self.snes = problem, snes
         self.comm = problem.comm.tompi4py()
         self.dofs = multiplier_dofs(problem)
         self.ksp = PETSc.KSP().create(comm=problem.comm)
@@ -69,6 +84,8 @@ class ComplementarityPredictor:
         self.ksp.setOptionsPrefix("ancf_lcp_")
         self.solves = 0
         self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
+        self._select = None                       # E: the multipliers' columns (``_columns``)
+        self._zero_rows = True                    # the matrix type can zero rows and columns
 
     @staticmethod
     def applies(problem) -> bool:
@@ -78,45 +95,50 @@ class ComplementarityPredictor:
 
     def destroy(self) -> None:
         self.ksp.destroy()
+        if self._select is not None:
+            self._select.destroy()
 
     def _columns(self, J: PETSc.Mat) -> PETSc.Mat:
         """The multipliers' columns of J as a dense N × M matrix (rows distributed like J,
-        columns in model order of the multipliers): one product J e_k per multiplier."""
-        M = len(self.dofs)
-        e, col = J.createVecs()
-        B = PETSc.Mat().createDense((col.getSizes(), (None, M)), comm=J.comm)
-        B.setUp()
-        arr = B.getDenseArray()                              # local rows × all M columns
-        for k in range(M):
-            e.set(0.0)
-            if e.getOwnershipRange()[0] <= self.dofs[k] < e.getOwnershipRange()[1]:
-                e.setValue(int(self.dofs[k]), 1.0)
-            e.assemble()
-            J.mult(e, col)
-            arr[:, k] = col.getArray(readonly=True)
-        del arr
-        B.assemble()
-        e.destroy()
-        col.destroy()
-        return B
+        columns in model order of the multipliers): J times the dense selection matrix E."""
+        if self._select is None:
+            M = len(self.dofs)
+            E = PETSc.Mat().createDense((J.getSizes()[1], (None, M)), comm=J.comm)
+            E.setUp()
+            lo, hi = J.getOwnershipRange()
+            mine = (self.dofs >= lo) & (self.dofs < hi)
+            arr = E.getDenseArray()
+            arr[:] = 0.0
+            arr[self.dofs[mine] - lo, np.flatnonzero(mine)] = 1.0
+            del arr
+            E.assemble()
+            self._select = E
+        return J.matMult(self._select)
 
     def predict(self, X: PETSc.Vec) -> bool:
         """Replace X by the Josephy–Newton step from X and set the contact status from the
-        solution; False (X and the status unchanged) when a factorisation failed or S is not
-        positive definite."""
+        solution; False (X and the status unchanged) when a factorisation failed or S is too
+        far from positive definite (``INDEFINITE_SHARE``)."""
         c = self.problem.contact
         law_phase, status = c.law.phase, c.status.copy()
         vecs = []
         try:
             lcp = self._linearised(X, vecs)
             z_new = self._solve_lcp(lcp[0], lcp[1]) if lcp is not None else None
-        except np.linalg.LinAlgError:            # S not positive definite: no convex LCP
+        except np.linalg.LinAlgError:            # S far from positive definite: no convex LCP
             z_new = None
         c.begin_phase(law_phase)
         if z_new is None:
             c.status[:] = status
         else:
-            self._step(X, z_new, *vecs[:3])
+            # active where it presses, inactive where it opens; a degenerate constraint (both
+            # within the tie tolerance) keeps its status: the exact rule accepts it either way,
+            # and a status set by the sign of rounding made predictions and checks alternate
+            # (the paper's ψ = 45° column with k_s x 10: 79 instead of 54 Newton iterations)
+            w = (lcp[1] + lcp[0] @ z_new) / c.stiffness
+            keep = self._global_status(status)
+            active = np.where(z_new > c.tie_tolerance, True, np.where(w > c.tie_tolerance, False, keep))
+            self._step(X, z_new, active, *vecs[:3])
             self.solves += 1
         for v in vecs:
             v.destroy()
@@ -132,18 +154,17 @@ class ComplementarityPredictor:
             # held: the constraint gradients (columns −Gᵀ), c = k_s ḡ and F_q with every z
             c.begin_phase(HELD)
             P.residual(None, X, F)
-            P.jacobian(None, X, P.J, P.J)
+            P.jacobian(self.snes, X, P.J, P.J)
             B = self._columns(P.J)
             cvec = -_owned_values(F, self.dofs, self.comm)
             rhs = F.copy()
             vecs.append(rhs)
             rhs.scale(-1.0)
             self._set_owned(rhs, np.zeros(len(self.dofs)))          # a probe's z rows: 0
-            # probe: K with every multiplier acting on the bodies, z rows decoupled
-            c.begin_phase(PROBE)
-            P.jacobian(None, X, P.J, P.J)
+            K = self._probe_matrix(X)
+            vecs.append(K)
             self.ksp.getPC().reset()                                 # the pattern may have grown
-            self.ksp.setOperators(P.J)
+            self.ksp.setOperators(K)
             self.ksp.setFromOptions()
             self.ksp.setUp()
             Xs, y = B.duplicate(), X.duplicate()
@@ -160,7 +181,34 @@ class ComplementarityPredictor:
         self._z = z
         return S, cvec - Bty - S @ z
 
-    def _step(self, X: PETSc.Vec, z_new: np.ndarray, B, Xs, y) -> None:
+    def _probe_matrix(self, X: PETSc.Vec) -> PETSc.Mat:
+        """K with every multiplier acting on the bodies and the z rows decoupled (the probe
+        phase): the held Jacobian in P.J with the multipliers' rows and columns replaced by
+        −k_s on the diagonal (its q block is the same), or, where the matrix type cannot zero
+        rows and columns (MPISBAIJ), assembled in the probe phase."""
+        P, c = self.problem, self.problem.contact
+        if self._zero_rows:
+            K = P.J.duplicate(copy=True)
+            try:
+                K.zeroRowsColumns(self.dofs.astype(PETSc.IntType), diag=-c.stiffness)
+                return K
+            except PETSc.Error:                   # the same type on every rank: all fail
+                K.destroy()
+                self._zero_rows = False
+        c.begin_phase(PROBE)
+        P.jacobian(self.snes, X, P.J, P.J)
+        P.J.assemble()
+        return P.J.duplicate(copy=True)
+
+    def _global_status(self, status: np.ndarray) -> np.ndarray:
+        """The status of every multiplier on every rank (each rank knows its own)."""
+        c = self.problem.contact
+        mine = np.zeros(len(status), dtype=np.int64)
+        own = c.mults[c.owned]
+        mine[own] = status[own]
+        return self.comm.allreduce(mine) > 0
+
+    def _step(self, X: PETSc.Vec, z_new: np.ndarray, active: np.ndarray, B, Xs, y) -> None:
         """X += (Δq = y − Xs Δz, Δz), as far as it leaves a state the residual is defined at
         (no inverted element, every projection found: a large first increment's linearised
         step may not), halving it up to MAX_HALVINGS times; the status from z_new."""
@@ -171,7 +219,7 @@ class ComplementarityPredictor:
         Xs.mult(dzv, step)
         step.aypx(-1.0, y)
         self._set_owned(step, dz)
-        c.status[:] = z_new > c.tie_tolerance
+        c.status[:] = active
         alpha = 1.0
         for _ in range(MAX_HALVINGS + 1):
             X.axpy(alpha, step)
@@ -181,7 +229,7 @@ class ComplementarityPredictor:
             X.axpy(-alpha, step)
             c.projector.restore()              # the failed trial's projections are no start
             alpha *= 0.5
-        c.status[:] = z_new > c.tie_tolerance  # the residual evaluations keep the status
+        c.status[:] = active                   # the residual evaluations keep the status
         for v in (step, F, dzv):
             v.destroy()
 
@@ -202,13 +250,22 @@ class ComplementarityPredictor:
 
     @staticmethod
     def _solve_lcp(S: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on the
-        Cholesky factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²)."""
+        """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on a
+        factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²): Cholesky's, or, for an indefinite S within
+        INDEFINITE_SHARE of positive semidefinite, L = V Λ₊^½ of its nearest positive
+        semidefinite matrix (LinAlgError when it is farther)."""
         M = len(d)
         if M == 0:
             return np.zeros(0)
         reg = REGULARISATION * max(float(np.max(np.diag(S))), 1e-300)
-        L = la.cholesky(S + reg * np.eye(M), lower=True)
-        b = -la.solve_triangular(L, d, lower=True)
+        try:
+            L = la.cholesky(S + reg * np.eye(M), lower=True)
+            b = -la.solve_triangular(L, d, lower=True)
+        except np.linalg.LinAlgError:
+            lam, V = la.eigh(S)
+            if -lam[0] > INDEFINITE_SHARE * lam[-1]:
+                raise
+            L = V * np.sqrt(np.maximum(lam, reg))
+            b = -la.solve(L, d)
         z, _ = so.nnls(L.T, b, maxiter=50 * M)
         return z

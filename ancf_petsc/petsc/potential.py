@@ -8,7 +8,7 @@ from petsc4py import PETSc
 
 from ..physics import kernels
 from ..physics.rigid import rigid_modes
-from . import logging
+from ..linalg import logging
 
 
 def total_potential(problem, X: PETSc.Vec) -> float:

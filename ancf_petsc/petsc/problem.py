@@ -24,7 +24,7 @@ from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
 from ..physics.element3363 import DOFS_PER_NODE
-from . import logging
+from ..linalg import logging
 from .blocks import ADD, INSERT, check_matrix_type, element_blocks, insert_node_blocks
 from .exchange import GhostExchange
 from .loading import AppliedLoads, every_block, held_dofs

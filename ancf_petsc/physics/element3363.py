@@ -52,7 +52,7 @@ PAPER_FUNCTION = (1, 2, 3, 5, 6, 4)
 class ElementType:
     """One element of the three-node family: the nodal vectors (slots of a node) it interpolates
     with and the volumetric-locking remedy a beam of it gets unless the config says otherwise
-    (``none`` | ``ecm``, config ``beams[i].locking``)."""
+    (``none`` | ``ecm`` | ``mixed``, config ``beams[i].locking``; model.Beam.parts)."""
     name: str
     vectors: tuple[int, ...]
     default_locking: str = "none"

@@ -54,6 +54,7 @@ class GOH:
     The stress functions take F (..., 3, 3) whose leading axes match a0's (or broadcast)."""
 
     name = "goh"
+    volumetric_term = True          # the matrix's K/2 (J − 1)² (``locking: mixed`` projects it)
 
     def __init__(self, mu: float, bulk_modulus: float, k1: float, k2: float, kappa: float = 0.0,
                  fibres: dict | None = None, directions: np.ndarray | None = None):
@@ -134,14 +135,15 @@ class GOH:
         """√I4 of every family (families, ...)."""
         return np.stack([np.sqrt(I4) for _, _, I4, _, _ in self._fibres(F)])
 
-    def energy(self, F: np.ndarray) -> np.ndarray:
-        W = self.matrix.energy(F)
+    def energy(self, F: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """Ψ per point (``theta``: the matrix's volumetric term on a dilatation field, physics/mixed.py)."""
+        W = self.matrix.energy(F, theta)
         for _, _, _, E, _ in self._fibres(F):
             W = W + self.k1 / (2.0 * self.k2) * (self._exp(E) - 1.0)
         return W
 
-    def stress(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        P, J = self.matrix.stress(F)
+    def stress(self, F: np.ndarray, theta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        P, J = self.matrix.stress(F, theta)
         for a0, Fa, _, E, _ in self._fibres(F):
             self._add_times_FH(P, 2.0 * self.k1 * E * self._exp(E), F, Fa, a0)
         return P, J
@@ -156,13 +158,14 @@ class GOH:
             out.append(np.einsum("...i,...ij,...j->...", Fa, sigma, Fa) / I4)
         return np.stack(out)
 
-    def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+    def stress_and_tangent(self, F: np.ndarray, theta: np.ndarray | None = None
+                           ) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
         """P and 𝔸 with the matrix's terms plus, per family, with H = κI + (1 − 3κ) a0 ⊗ a0:
         δ_ik 2ψ'H_jl = 2ψ'κ δ_ik δ_jl (added to ``iso``) + 2ψ'(1 − 3κ) δ_ik a0_j a0_l
         (``rank_one``), and 4ψ'' FH ⊗ FH as a ``square`` (the kernel forms FH G_a once), FH =
         κF + (1 − 3κ) Fa0 ⊗ a0 written on the matrix's basis tensor F and the pair
         ((1 − 3κ) Fa0, a0), so neither side needs a 3×3 product."""
-        P, J, terms = self.matrix.stress_and_tangent(F)
+        P, J, terms = self.matrix.stress_and_tangent(F, theta)
         k_F = 1
         assert terms.basis[k_F] is F                          # NeoHookean's basis: [F⁻ᵀ, F]
         c = 1.0 - 3.0 * self.kappa

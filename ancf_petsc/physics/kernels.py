@@ -167,6 +167,10 @@ def contract_tangent(terms: TangentTerms, G: np.ndarray, w: np.ndarray) -> np.nd
     Kf = _outer_gemm(terms, BG, w)
     if Kf is None:
         Kf = np.zeros((E, D, D))
+    for C, Q, X in terms.projected:  # Σ_kl b_k C_kl b_l, b_k = Σ_p Q_pk (X G_a)_p: (E, m, D)
+        XG = BG[X[0][1]] if len(X) == 1 and X[0][0] is None else _side(BG, X)     # no copy of one basis
+        b = np.matmul(np.swapaxes(Q, -1, -2), XG)
+        Kf += np.matmul(np.swapaxes(b, -1, -2), np.matmul(C, b))
     for U, V in terms.cross:
         M = np.matmul(_side(BG, V).transpose(0, 2, 1), _side(BG, U, w)).reshape(E, S, 3, S, 3)
         Kf += M.transpose(0, 1, 4, 3, 2).reshape(E, D, D)

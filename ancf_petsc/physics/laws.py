@@ -15,6 +15,10 @@ MATERIALS = {
 }
 
 
+#: the laws with a decoupled volumetric term K/2 (J − 1)², the term ``locking: mixed`` projects
+VOLUMETRIC_LAWS = tuple(law.name for law in (NeoHookean, StVenantKirchhoff, GOH) if law.volumetric_term)
+
+
 def make_material(spec: dict):
     """Material from a validated config mapping; a GOH law still needs its fibre directions
     (``GOH.with_directions``, set up per Gauss point by the model)."""

@@ -13,6 +13,9 @@ instead of forming the 81-component tensor at every Gauss point:
                                    the gradients once; a fibre's 4ψ'' FH ⊗ FH)
            + Σ U_il V_kj          (``cross`` pairs (U, V))
 
+and one term that couples the points of an element (``projected``, a projected dilatation,
+physics/mixed.py): K_ab += Σ_kl b_ka C_kl b_lb with b_ka = Σ_p Q_pk (X G_a)_p.
+
 All arrays are batched over a leading point axis (n, 3, 3).  A basis tensor may be given as a
 pair (u, v) of vectors, meaning u ⊗ v (a fibre's F a0 ⊗ a0): the kernel then needs no product.  The paper works with S : δE
 (eq. 14); P : δF is the same virtual work.
@@ -43,12 +46,21 @@ def det_and_inverse_transpose(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return det, H
 
 
+def determinant(F: np.ndarray) -> np.ndarray:
+    """det F of a batch of 3×3 matrices by the first row's cofactors (no LAPACK call per matrix)."""
+    a = F
+    return (a[..., 0, 0] * (a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1])
+            + a[..., 0, 1] * (a[..., 1, 2] * a[..., 2, 0] - a[..., 1, 0] * a[..., 2, 2])
+            + a[..., 0, 2] * (a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0]))
+
+
 Side = list  # [(coefficient (n,), a number or None, basis index)]: the tensor Σ c_k B_k
 
 
 @dataclass
 class TangentTerms:
-    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ c T_ij T_kl + Σ U_il V_kj (module docstring).
+    """𝔸 = δ_ik S_jl + B_ik δ_jl + Σ X_ij Y_kl + Σ c T_ij T_kl + Σ U_il V_kj (module docstring),
+    and the element-level ``projected`` terms (C (E, m, m), Q (E, P, m), side X).
 
     X, Y, U, V are linear combinations of a few ``basis`` tensors (e.g. F⁻ᵀ and F), written as
     sides ``[(c, k), ...]`` meaning Σ c B_k (c None = 1), so that the element kernel multiplies
@@ -62,6 +74,7 @@ class TangentTerms:
     cross: list[tuple[Side, Side]] = field(default_factory=list)
     squares: list[tuple[np.ndarray, Side]] = field(default_factory=list)             # [(c (n,), T)]
     rank_one: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)   # [(c (n,), a (n, 3))]
+    projected: list[tuple[np.ndarray, np.ndarray, Side]] = field(default_factory=list)   # [(C, Q, X)]
 
     def base(self, k: int) -> np.ndarray:
         """Basis tensor k as a 3×3 field (a pair (u, v) is u ⊗ v)."""
@@ -74,7 +87,10 @@ class TangentTerms:
                    for c, B in ((c, self.base(k)) for c, k in side))
 
     def full(self) -> np.ndarray:
-        """The 81-component tangent (n, 3, 3, 3, 3); for tests and diagnostics only."""
+        """The 81-component tangent (n, 3, 3, 3, 3) of the pointwise terms; for tests and
+        diagnostics only (a ``projected`` term couples points: it has no such form)."""
+        if self.projected:
+            raise ValueError("a projected term couples the points of an element: no pointwise tangent")
         n = self.base(0).shape[0]
         A = np.zeros((n, 3, 3, 3, 3))
         eye = np.eye(3)
@@ -102,6 +118,7 @@ class NeoHookean:
     """
 
     name = "neo-hookean"
+    volumetric_term = True          # a decoupled K/2 (J − 1)² (``locking: mixed`` projects it)
 
     def __init__(self, mu: float, bulk_modulus: float):
         self.mu = float(mu)
@@ -133,25 +150,39 @@ class NeoHookean:
             Jm = np.where(J > 0.0, np.abs(J) ** (-2.0 / 3.0), np.nan)
         return J, H, I1, Jm
 
-    def energy(self, F: np.ndarray) -> np.ndarray:
+    def energy(self, F: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """Ψ per point; with ``theta`` the volumetric term is K/2 (θ − 1)² of that dilatation
+        field instead of J's (``locking: mixed``, physics/mixed.py)."""
         J, _, I1, Jm = self._invariants(F)
-        return 0.5 * self.mu * (Jm * I1 - 3.0) + 0.5 * self.K * (J - 1.0) ** 2
+        return 0.5 * self.mu * (Jm * I1 - 3.0) + 0.5 * self.K * ((J if theta is None else theta) - 1.0) ** 2
 
-    def stress(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """P = μ J^(−2/3) (F − I₁/3 F⁻ᵀ) + K (J − 1) J F⁻ᵀ, and J."""
+    def _volumetric(self, J: np.ndarray, theta: np.ndarray | None):
+        """(pJ, coefficient of F⁻ᵀ ⊗ F⁻ᵀ, of F⁻ᵀ ⊠ F⁻ᵀ) of the volumetric term: p = U'(J) = K (J − 1)
+        with U''J² + pJ on the outer product; with a dilatation field θ, p = K (θ − 1) and no U''
+        term (its pointwise part is not there: physics/mixed.py couples the points)."""
+        if theta is None:
+            pJ = self.K * (J - 1.0) * J
+            return pJ, self.K * (2.0 * J - 1.0) * J, -self.K * (J * J - J)
+        pJ = self.K * (theta - 1.0) * J
+        return pJ, pJ, -pJ
+
+    def stress(self, F: np.ndarray, theta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """P = μ J^(−2/3) (F − I₁/3 F⁻ᵀ) + p J F⁻ᵀ, p = K (J − 1) (or K (θ − 1)), and J."""
         J, H, I1, Jm = self._invariants(F)
         P = (self.mu * Jm)[..., None, None] * (F - (I1 / 3.0)[..., None, None] * H) \
-            + (self.K * (J - 1.0) * J)[..., None, None] * H
+            + self._volumetric(J, theta)[0][..., None, None] * H
         return P, J
 
-    def stress_and_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+    def stress_and_tangent(self, F: np.ndarray, theta: np.ndarray | None = None
+                           ) -> tuple[np.ndarray, np.ndarray, TangentTerms]:
+        """P, J and 𝔸 (``theta``: see ``_volumetric``)."""
         J, H, I1, Jm = self._invariants(F)
         muJm = self.mu * Jm
-        P = muJm[..., None, None] * (F - (I1 / 3.0)[..., None, None] * H) \
-            + (self.K * (J - 1.0) * J)[..., None, None] * H
-        c1 = (2.0 / 9.0) * muJm * I1 + self.K * (2.0 * J - 1.0) * J
+        pJ, c_vol, g_vol = self._volumetric(J, theta)
+        P = muJm[..., None, None] * (F - (I1 / 3.0)[..., None, None] * H) + pJ[..., None, None] * H
+        c1 = (2.0 / 9.0) * muJm * I1 + c_vol
         c2 = -(2.0 / 3.0) * muJm
-        gamma = muJm * I1 / 3.0 - self.K * (J * J - J)
+        gamma = muJm * I1 / 3.0 + g_vol
         # basis 0 = F⁻ᵀ, 1 = F:  (c1 H + c2 F) ⊗ H + c2 H ⊗ F,  γ H ⊠ H
         terms = TangentTerms(basis=[H, F], iso=muJm,
                              outer=[([(c1, 0), (c2, 1)], [(None, 0)]), ([(c2, 0)], [(None, 1)])],
@@ -163,6 +194,7 @@ class StVenantKirchhoff:
     """St. Venant–Kirchhoff, Ψ = λ/2 (tr E)² + μ E:E with E = ½(FᵀF − I) (eq. 15); for verification."""
 
     name = "svk"
+    volumetric_term = False         # no decoupled K/2 (J − 1)²: ``locking: mixed`` does not apply
 
     def __init__(self, E: float, nu: float):
         self.E, self.nu = float(E), float(nu)

@@ -23,15 +23,15 @@ from ..io.results import ResultsWriter
 from ..model.build import build_model
 from ..model.contact_setup import contact_for
 from ..parallel.partition import make_layout, partition_stats
-from ..petsc import logging
+from ..linalg import logging
 from ..petsc.contact_reports import contact_fields, contact_gaps
-from ..petsc.options import unused_command_line_options
+from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
 from ..petsc.reactions import reactions as support_reactions
 from ..physics.element3363 import DOFS_PER_NODE
 from .interrupt import RunInterrupted
-from .linear import choose as choose_linear
-from .options import matrix_type
+from ..linalg.choice import choose as choose_linear
+from ..linalg.options import matrix_type
 from .records import LoadStepFailure, PathState
 from .restart_check import check_restart_state
 from .stepper import LoadStepper
@@ -187,7 +187,7 @@ class Run:
 
     def _linear_solver(self) -> dict:
         """The linear solver's choice and rule; with fieldsplit, its multipliers and how many of
-        them lie on the cut between ranks (the interface system, petsc/substructure.py)."""
+        them lie on the cut between ranks (the interface system, linalg/substructure.py)."""
         out = {"choice": self.linear[0], "rule": self.linear[1]}
         schur = self.stepper.solver.fascicle_schur if self.stepper else None
         if schur is not None:

@@ -17,6 +17,7 @@ disk.  Serial: every sample is solved on a communicator of one rank (one sample 
 from __future__ import annotations
 
 import time
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,13 +26,14 @@ from petsc4py import PETSc
 
 from .. import status as st
 from ..config.specs import ModelSpec
+from ..linalg.database import option, own_prefix
 from ..model.fibre_setup import set_fibre_directions
 from ..petsc.blocks import refresh_parts
+from ..petsc.potential import rounding_floor
 from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.laws import make_material
 from .records import LoadStepFailure, PathState, StepRecord, reason_name
 from .run import Run, serial_comm
-from ..petsc.potential import rounding_floor
 from .snes_solver import absolute_tolerance
 from .stepper import LoadStepper
 
@@ -112,7 +114,7 @@ def refresh_tolerance(stepper: LoadStepper) -> None:
     the stiffness) and the absolute tolerance again, as a new run would set them; an snes_atol
     given on the command line or in ``petsc:`` stays (collective)."""
     key, S = "snes_atol", stepper.solver
-    if PETSc.Options().hasName(S.prefix + key) or key in S.petsc_options:
+    if option(key, S.prefix) is not None or key in S.petsc_options:
         return
     S.rounding_floor = rounding_floor(stepper.problem)
     atol = absolute_tolerance(S.load_norm, S.rounding_floor)
@@ -158,6 +160,7 @@ class SampleSolver:
         self.raw: dict | None = None            # the config the run holds now
         self.initial_contact = None             # (projection, status) of the reference
         self.builds = 0                         # how often a run was built
+        self.options = ExitStack()              # the run's options prefix (``_prepare``)
 
     def destroy(self) -> None:
         """Free the run's PETSc objects."""
@@ -165,6 +168,7 @@ class SampleSolver:
             self.run.stepper.close()
             self.run.destroy()
             self.run = None
+        self.options.close()
 
     def _prepare(self, spec: ModelSpec) -> bool:
         """The run for ``spec``: the current one updated in place when it can be, else a new
@@ -186,6 +190,8 @@ class SampleSolver:
                 self.raw = spec.raw
                 return False
             self.destroy()
+        # the run's PETSc options under its own prefix while it lives (linalg.database.own_prefix)
+        self.options.enter_context(own_prefix(spec.solver, "sample"))
         self.run = Run(spec, self.comm, self.log)
         self.raw, self.builds = spec.raw, self.builds + 1
         c = self.run.contact

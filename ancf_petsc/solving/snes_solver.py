@@ -12,15 +12,16 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
-from ..petsc.inertia import mumps_error, pivot_counts
-from ..petsc.options import petsc_message, used_anywhere
+from ..linalg.database import remove
+from ..linalg.diagnostics import petsc_message, used_anywhere
+from ..linalg.inertia import mumps_error, pivot_counts
 from ..petsc.potential import rounding_floor
 from ..petsc.problem import Problem
 from ..petsc.step_limits import MAX_STEP_SECTIONS_CONTACT
 from . import solver_messages
 from .chord import TangentReuse
 from .newton import ContactSteps
-from .options import SolverOptionError, configure_options, refused, run_defaults
+from ..linalg.options import SolverOptionError, configure_options, refused, run_defaults
 from .records import LoadStepFailure
 
 
@@ -37,7 +38,7 @@ class SNESSolver:
                  linear: str = "direct"):
         self.problem, self.spec = problem, spec
         self.prefix = spec.options_prefix
-        self.linear = linear                    # 'direct' | 'fieldsplit' (solving.linear.choose)
+        self.linear = linear                    # 'direct' | 'fieldsplit' (linalg.choice.choose)
         self.snes = PETSc.SNES().create(comm=problem.comm)
         if self.prefix:
             self.snes.setOptionsPrefix(self.prefix)
@@ -69,8 +70,8 @@ class SNESSolver:
         schur = None
         if linear == "fieldsplit":
             # imported here: scipy.linalg is start-up time the direct solver does not need
-            from ..petsc.fascicles import fascicle_split
-            from ..petsc.fieldsplit import FascicleSchur
+            from ..linalg.fascicles import fascicle_split
+            from ..linalg.fieldsplit import FascicleSchur
             pc = self.snes.getKSP().getPC()
             pc.setType(PETSc.PC.Type.PYTHON)
             schur = FascicleSchur(fascicle_split(problem), problem.comm, self.prefix)
@@ -79,7 +80,7 @@ class SNESSolver:
         self._history: list[float] = []        # residual norms of the current SNES solve
         self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
-        #: the fascicle Schur preconditioner (petsc/fieldsplit.py) with solver.linear: fieldsplit
+        #: the fascicle Schur preconditioner (linalg/fieldsplit.py) with solver.linear: fieldsplit
         self.fascicle_schur = schur
         self.chord = TangentReuse(spec.reuse_tangent, schur)
         self.contact_steps = ContactSteps(problem)
@@ -107,7 +108,6 @@ class SNESSolver:
         """Remove the options this stepper left in PETSc's database; config options PETSc never
         read go to ``unused_config_options`` (collective unless ``collective`` is False).  The
         fascicle Schur preconditioner's parallel objects are destroyed here, collectively."""
-        opts = PETSc.Options()
         n = len(self.prefix)
         if collective and self.linear == "fieldsplit":
             self.snes.getKSP().getPC().setType(PETSc.PC.Type.NONE)
@@ -116,7 +116,7 @@ class SNESSolver:
             used = used_anywhere(mine, self.problem.comm)
             self.unused_config_options = [k[n:] for k, u in zip(mine, used) if not u]
         for key in self._kept_options:
-            opts.delValue(key)
+            remove(key)
         self._kept_options = []
 
     def destroy(self) -> None:

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from petsc4py import PETSc
 
-from ..petsc.inertia import mumps_error
-from ..petsc.options import mumps_hint, solver_hint
-from .options import factor_package, solver_options
+from ..linalg.inertia import mumps_error
+from ..linalg.diagnostics import mumps_hint, solver_hint
+from ..linalg.options import factor_package, solver_options
 
 
 def describe(solver) -> str:

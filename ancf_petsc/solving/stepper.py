@@ -3,7 +3,8 @@
 From the last converged load factor λ the stepper tries an increment Δλ (load_control.py); on a
 converged solve it accepts it (growing Δλ after easy steps), on divergence (including NaN
 residuals from inverted elements, J ≤ 0) it restores the last converged state and halves Δλ, at
-most ``max_cutbacks`` times in a row.  Requested levels are always hit exactly.  All decisions use
+most ``max_cutbacks`` times in a row (the rest of the way to a level in one step when that is at
+most ``load_control.STRETCH`` increments).  Requested levels are always hit exactly.  All decisions use
 the SNES converged reason, which is the same on every rank.  The SNES and its options are
 snes_solver.py; an increment's Newton solves (the contact law's phases) are newton.py.
 """
@@ -16,7 +17,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
-from ..petsc import logging
+from ..linalg import logging
 from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.problem import Problem
 from . import solver_messages
@@ -38,9 +39,9 @@ class LoadStepper:
         self.solver = SNESSolver(problem, spec, petsc_options, max_level, linear)
         self.path: PathState | None = None      # where the load path is (``run``)
         self.newton_iterations = 0
-        #: the complementarity predictor of a unilateral law's first increment (up to
-        #: complementarity.MAX_MULTIPLIERS multipliers)
-        self.predictor = (ComplementarityPredictor(problem)
+        #: the complementarity predictor of a unilateral law's increments (up to
+        #: complementarity.MAX_MULTIPLIERS multipliers; solving/newton.py)
+        self.predictor = (ComplementarityPredictor(problem, self.solver.snes)
                           if ComplementarityPredictor.applies(problem) else None)
         self.history: list[float] = []         # residual norms of the solves of an increment
 
@@ -91,7 +92,7 @@ class LoadStepper:
         """Reach every level in ``levels`` (increasing); call ``on_level`` after each one.
         ``start``: continue a path (a restart) instead of starting from the reference state."""
         P = self.problem
-        self.path = path = start or self.initial_path(levels[0])
+        self.path = path = start or self.initial_path(levels[0], levels[-1])
         path.X.copy(P.X)
         P.checkpoint()
         records = []
@@ -105,11 +106,12 @@ class LoadStepper:
             logging.stage(logging.SOLVE).pop()
         return records
 
-    def initial_path(self, first_level: float) -> PathState:
-        """The path at the reference state, with the first increment."""
+    def initial_path(self, first_level: float, last_level: float | None = None) -> PathState:
+        """The path at the reference state, with the first increment (``LoadControl``)."""
         X = self.problem.q0.copy()
         c = self.problem.contact
-        dlam = self.control.first_increment(first_level, None if c is None else c.law.first_increment)
+        dlam = self.control.first_increment(first_level, None if c is None else c.law.first_increment,
+                                            last_level, self.predictor is not None)
         dX = X.duplicate()
         dX.set(0.0)
         return PathState(X=X, dX_last=dX, lam=0.0, dlam=dlam, dlam_last=0.0)

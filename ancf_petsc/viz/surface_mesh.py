@@ -6,16 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..io.surface_fields import SURFACE_FIELDS
+
 MM = 1.0e3  # model units are metres; figures are in millimetres
-
-
-# field name -> (label, unit, factor from the stored value to the displayed one)
-FIELD_LABELS: dict[str, tuple[str, str, float]] = {
-    "E_xx": ("axial Green-Lagrange strain $E_{xx}$", "%", 100.0),
-    "J": ("volume ratio $J$", "-", 1.0),
-    "displacement": ("displacement magnitude $|u|$", "mm", MM),
-    "beam": ("beam index", "-", 1.0),
-}
 
 
 _COMPONENTS = {"x": 0, "y": 1, "z": 2}
@@ -73,7 +66,9 @@ def read_surface(vtu_path: str) -> SurfaceMesh:
 
 
 def field_values(mesh: SurfaceMesh, color_by: str) -> tuple[np.ndarray, str]:
-    """Point values of ``color_by`` in display units and the colour-bar label.
+    """Point values of ``color_by`` in display units and the colour-bar label
+    (``io.surface_fields.SURFACE_FIELDS``: label, unit, factor; a field it does not know is
+    drawn as stored).
 
     Scalar fields as stored (scaled, e.g. strain in %); a vector field gives its magnitude, or a
     component with the suffix ``_x``, ``_y``, ``_z`` (e.g. ``displacement_x``).
@@ -85,9 +80,12 @@ def field_values(mesh: SurfaceMesh, color_by: str) -> tuple[np.ndarray, str]:
     if name not in data or (comp is not None and data[name].ndim != 2):
         avail = sorted(data) + [f"{k}_{c}" for k in sorted(data) if data[k].ndim == 2
                                 for c in _COMPONENTS]
+        known = SURFACE_FIELDS.get(name)
+        why = f"; {name} is written for {known.where} only" if known and name not in data else ""
         raise ValueError(f"color_by={color_by!r}: no such point field in {mesh.path}; "
-                         f"available: {', '.join(avail)}")
-    label, unit, factor = FIELD_LABELS.get(name, (name, "-", 1.0))
+                         f"available: {', '.join(avail)}{why}")
+    known = SURFACE_FIELDS.get(name)
+    label, unit, factor = (known.label, known.unit, known.factor) if known else (name, "-", 1.0)
     v = data[name]
     if v.ndim == 2:
         if comp is None:

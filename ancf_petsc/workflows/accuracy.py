@@ -61,6 +61,7 @@ def element_counts(spec: ModelSpec) -> list[int]:
 
 def select_and_run(spec: ModelSpec, comm, log, run_model):
     """Run the ladder, choose the element count, then ``run_model`` the chosen model (collective)."""
+    from ..linalg.database import own_prefix
     acc = spec.accuracy
     say = log if comm.rank == 0 else (lambda *_: None)
     level = acc.level if acc.level is not None else max(spec.steps)
@@ -76,7 +77,8 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
                             source=f"accuracy rung {n}")
         say(f"[accuracy]   solving with {n} elements per beam ...")
         t1 = time.perf_counter()
-        res = run_model(rung, comm, quiet)
+        with own_prefix(rung.solver, "rung"):     # a rung's PETSc options apart from the others'
+            res = run_model(rung, comm, quiet)
         if res.status == "interrupted" or res.reason_code == "OUTPUT_ERROR":
             return res                              # stop the ladder: a signal, or a full disk
         results.append(res)

@@ -128,6 +128,7 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
     """
     from ..config.parse import parse_config
     from ..config.values import ConfigError
+    from ..linalg.database import own_prefix
     from ..solving.run import RunResult, run_model, serial_comm
     raw = copy.deepcopy(raw)
     raw["output"] = {"dir": out_dir, "vtk": False}
@@ -137,7 +138,8 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
     comm = serial_comm() if comm is None else comm
     try:
         spec = parse_config(raw, base_dir=base_dir)
-        res = run_model(spec, comm, log=lambda *_: None)
+        with own_prefix(spec.solver, "study"):          # this solve's PETSc options apart
+            res = run_model(spec, comm, log=lambda *_: None)
     except ConfigError as exc:
         return RunResult("config_error", str(exc), None, [], reason_code=CONFIG_ERROR, exit_code=EXIT_INPUT), None
     return res, res.summary

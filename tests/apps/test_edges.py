@@ -325,7 +325,7 @@ import petsc4py
 petsc4py.init([])
 from petsc4py import PETSc
 from ancf_petsc.config.parse import ConfigError, load_config
-from ancf_petsc.config.petsc_options import command_line_options
+from ancf_petsc.linalg.option_syntax import command_line_options
 from ancf_petsc.solving.run import run_model
 cfg, out, sets = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 results = []
@@ -408,8 +408,8 @@ def test_option_tables_match_petsc():
     petsc_init()
     from petsc4py import PETSc
 
-    from ancf_petsc.config import petsc_options as po
-    from ancf_petsc.petsc.options import petsc_library
+    from ancf_petsc.linalg import option_syntax as po
+    from ancf_petsc.linalg.diagnostics import petsc_library
     names = lambda cls: sorted({getattr(cls, k) for k in dir(cls) if not k.startswith("_")
                                 and isinstance(getattr(cls, k), str)})
     assert sorted(po.KSP_TYPES) == names(PETSc.KSP.Type)

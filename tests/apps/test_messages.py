@@ -75,14 +75,15 @@ def test_the_first_line_of_a_contact_run_is_the_model_header(tmp_path):
 @pytest.mark.parametrize("text", ["0.0, 0.0;\n1.0, 0.0;\n1.0, 1.0;\n0.0, 1.0;\n",
                                   "0 0;\n1 0;\n1 1;\n0 1;\n", "u;v\n0;0;\n1;0;\n1;1;\n0;1;\n"])
 def test_matlab_row_ends_in_a_csv_outline_are_read(tmp_path, text):
-    from ancf_petsc.geometry_input.importers import read_point_list
+    from ancf_petsc.outline_formats.point_list import read_point_list
     (tmp_path / "o.csv").write_text(text)
     assert read_point_list(str(tmp_path / "o.csv")).points.tolist() == \
         [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
 
 
 def test_rejected_csv_lines_are_named(tmp_path):
-    from ancf_petsc.geometry_input.importers import OutlineReadError, read_point_list
+    from ancf_petsc.outline_formats import OutlineReadError
+    from ancf_petsc.outline_formats.point_list import read_point_list
     (tmp_path / "o.csv").write_text("0|0\n1|0\n1|1\n0|1\n")
     with pytest.raises(OutlineReadError) as info:
         read_point_list(str(tmp_path / "o.csv"))

@@ -192,3 +192,37 @@ def test_contact_setup_errors_name_their_config_key(case, key, words):
     spec = ancf_petsc.parse_config(raw, base_dir=CONFIGS)
     with pytest.raises(ancf_petsc.ConfigError, match=rf"^{key.replace('[', '.').replace(']', '.')}: .*{words}"):
         ancf_petsc.solve(spec, log=lambda *_: None)
+
+
+def _axial_coordinate(points):
+    """s ∈ [0, 1] along A of every contact point (its segment's place on its interface)."""
+    s = np.empty(points.n_points)
+    for k in np.unique(points.seg_itf):
+        segs = np.flatnonzero(points.seg_itf == k)
+        for e, sg in enumerate(segs):
+            sl = points.seg_start[sg] + np.arange(points.seg_size[sg])
+            s[sl] = (e + 0.5 * (points.xi[sl] + 1.0)) / len(segs)
+    return s
+
+
+def test_grouped_multiplier_space_is_the_coarse_meshs_space():
+    """``build_space(group=G)`` on E·G elements spans the functions of the E-element space (the
+    diagnostic of scripts/solid_contact_variants.py): the same multipliers with the same
+    moments ∫φ_k s^i τ^j dA (s along A, τ across; exact quadrature on both meshes)."""
+    from ancf_petsc.contact.multipliers import build_space
+    # ψ = 0: the straight prisms are exact on both meshes (a pretwist is interpolated, and the
+    # area weights of the two meshes then differ by ~1e-5)
+    coarse, _ = _problem(achilles(psi=0.0, elements=2, contact={"mode": "sliding"}))
+    fine, _ = _problem(achilles(psi=0.0, elements=8, contact={"mode": "sliding"}))
+    cf, ff = coarse.contact, fine.contact
+    grouped = build_space(ff.points, ff.interfaces, ff.spec.projection, ff.stiffness, group=4)
+    assert grouped.n_multipliers == cf.space.n_multipliers < ff.space.n_multipliers
+
+    def moments(space, points):
+        W = space.Phi.multiply(space.area[:, None]).tocsr()          # w_p φ_k(p)
+        s = _axial_coordinate(points)
+        return np.stack([W @ (s ** i * points.tau ** j) for i in range(3) for j in range(2)], axis=1)
+
+    assert np.allclose(moments(grouped, ff.points), moments(cf.space, cf.points), rtol=1e-9, atol=0)
+    with pytest.raises(ValueError):
+        build_space(ff.points, ff.interfaces, ff.spec.projection, ff.stiffness, group=3)

@@ -67,10 +67,13 @@ def axial_stress_at(lam, fibre_axis, kappa):
     return principal_stress([lam, *sol.x], fibre_axis, kappa)[0]
 
 
-def _one_element_run(tmp_path, material, stretch, fibre_axis, kappa, name, element=3363):
+def one_element_run(tmp_path, material, stretch, fibre_axis, kappa, name, element=3363, locking=None):
+    """One element in uniaxial dead traction at the axial stress of ``stretch`` (exact solution)."""
     raw = load_raw("uniaxial_neohookean.yaml")
     raw["beams"][0]["material"] = material
     raw["beams"][0]["element"] = element
+    if locking is not None:
+        raw["beams"][0]["locking"] = locking
     raw["output"]["vtk"] = False
     raw["steps"] = [0.5, 1.0]
     area = np.pi * 0.006 * 0.004            # the degree-6 cubature of the ellipse is exact
@@ -86,7 +89,7 @@ def test_uniaxial_tension_matches_exact_solution(tmp_path, kappa, direction, ele
     fibres along x (follow: axis) or across along the section's y (angle 90): the homogeneous
     exact solution to 1e-8."""
     fibre_axis, angle = (0, 0.0) if direction == "along" else (1, 90.0)
-    summary, s, raw = _one_element_run(tmp_path, goh_material(kappa, angle=angle), 1.12,
+    summary, s, raw = one_element_run(tmp_path, goh_material(kappa, angle=angle), 1.12,
                                        fibre_axis, kappa, "run", element)
     assert summary["status"] == "completed"
     L = raw["geometry"]["length"]

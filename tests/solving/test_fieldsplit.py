@@ -1,4 +1,4 @@
-"""The fascicle-parallel linear solver (petsc/fieldsplit.py, petsc/fascicles.py, solving/linear.py).
+"""The fascicle-parallel linear solver (linalg/fieldsplit.py, linalg/fascicles.py, linalg/choice.py).
 
 Checked against things outside it: dense LAPACK/numpy (factors, inertia, Schur blocks), the
 exact inverse of the Jacobian without the inter-fascicle contact curvature (numpy on the
@@ -16,7 +16,7 @@ from helpers import (CONFIGS, MPI_ENV, ROOT, apply_fascicle_schur, beam_of_dofs,
 @pytest.mark.parametrize("kind", ["spd", "indefinite", "badly scaled", "banded"])
 def test_fascicle_factor_solves_and_counts_negative_eigenvalues(kind):
     petsc_init()
-    from ancf_petsc.petsc.fascicles import FascicleFactor
+    from ancf_petsc.linalg.fascicles import FascicleFactor
     rng = np.random.default_rng(3)
     n = 60
     A = rng.standard_normal((n, n))
@@ -100,7 +100,7 @@ pc.destroy()
 @pytest.mark.parametrize("ranks,interface", [(2, "dense"), (3, "dense"), (2, "mumps"), (3, "mumps")])
 def test_substructured_schur_is_the_exact_inverse_on_several_ranks(tmp_path, ranks, interface):
     """On 2 and 3 ranks the multiplier Schur complement is split into every rank's interior
-    multipliers and the cut between them (petsc/substructure.py: MUMPS condenses onto the cut,
+    multipliers and the cut between them (linalg/substructure.py: MUMPS condenses onto the cut,
     the summed interface system is solved, densely on every rank or by MUMPS distributed, and
     MUMPS expands): the preconditioner is still J_bd⁻¹ (bundle_hex7 after one Newton step,
     against numpy), and the negative pivots of the fascicles, the interiors and the interface
@@ -149,7 +149,7 @@ def test_auto_rule_and_its_refusals():
     from ancf_petsc.config.values import ConfigError
     from ancf_petsc.contact import build_contact
     from ancf_petsc.model.build import build_model
-    from ancf_petsc.solving.linear import AUTO_MIN_MULTIPLIERS, choose
+    from ancf_petsc.linalg.choice import AUTO_MIN_MULTIPLIERS, choose
 
     def scene(name, soleus_fix=None, **bundle):
         raw = load_raw(name)
@@ -218,8 +218,8 @@ def test_kept_fascicle_factors_keep_the_newton_path(tmp_path):
     kept set-ups and the chord steps."""
     petsc_init()
     from petsc4py import PETSc
-    from ancf_petsc.petsc.fieldsplit import FACTOR_EVENT
-    from ancf_petsc.petsc.logging import event_count
+    from ancf_petsc.linalg.fieldsplit import FACTOR_EVENT
+    from ancf_petsc.linalg.logging import event_count
     PETSc.Log.begin()
     runs = {}
     for reuse in (False, True):

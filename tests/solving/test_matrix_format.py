@@ -80,7 +80,7 @@ def test_matrix_format_choice():
     from ancf_petsc.config.values import ConfigError
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
-    from ancf_petsc.solving.options import matrix_type
+    from ancf_petsc.linalg.options import matrix_type
     m3363 = build_model(parse_config(load_raw("achilles_type3_psi0.yaml"), base_dir=CONFIGS))
     mixed = two_beam_twisted()
     mixed["beams"][1].update({"element": 3333})

@@ -1,4 +1,4 @@
-"""MUMPS called directly (petsc/mumps_schur.py): the structure mirrors the installed header, the
+"""MUMPS called directly (linalg/mumps_schur.py): the structure mirrors the installed header, the
 Schur complement, condensation and expansion, and the inertia, against numpy."""
 import numpy as np
 import pytest
@@ -18,7 +18,7 @@ def _matrix(n: int, seed: int) -> np.ndarray:
 
 
 def _factor(A: np.ndarray, n_schur: int):
-    from ancf_petsc.petsc.mumps_schur import SchurFactor
+    from ancf_petsc.linalg.mumps_schur import SchurFactor
     U = sp.csr_matrix(np.triu(A))
     U.sort_indices()
     f = SchurFactor(U.indptr, U.indices, n_schur, {7: 0, 14: 100, 24: 0})
@@ -30,7 +30,7 @@ def test_structure_matches_the_installed_header():
     """MUMPS writes its version into the mirrored structure at initialisation; a wrong layout
     would put it elsewhere (SchurFactor refuses then)."""
     petsc_init()
-    from ancf_petsc.petsc.mumps_schur import VERSION
+    from ancf_petsc.linalg.mumps_schur import VERSION
     f, _ = _factor(_matrix(10, 0), 3)
     assert f.id.version_number.decode() == VERSION
     assert f.id.sym == 2 and f.id.n == 10
@@ -71,7 +71,7 @@ def test_a_failed_factorisation_is_reported_not_raised():
     """INFOG(1) < 0 in the numeric phase (here MUMPS's working memory capped at 1 MB by
     ICNTL(23)) comes back as False and ``failed``: the caller makes every rank's solve NaN."""
     petsc_init()
-    from ancf_petsc.petsc.mumps_schur import SchurFactor
+    from ancf_petsc.linalg.mumps_schur import SchurFactor
     U = sp.csr_matrix(np.triu(_matrix(400, 5)))
     U.sort_indices()
     f = SchurFactor(U.indptr, U.indices, 20, {7: 0, 24: 0, 23: 1})
@@ -82,7 +82,7 @@ def test_a_failed_factorisation_is_reported_not_raised():
 
 def test_only_the_upper_triangle_is_accepted():
     petsc_init()
-    from ancf_petsc.petsc.mumps_schur import SchurFactor
+    from ancf_petsc.linalg.mumps_schur import SchurFactor
     L = sp.csr_matrix(np.tril(_matrix(8, 4)))
     with pytest.raises(ValueError, match="upper triangle"):
         SchurFactor(L.indptr, L.indices, 2, {})

@@ -230,7 +230,7 @@ def test_a_failed_mumps_factorisation_says_what_to_change(tmp_path):
     """MUMPS's own error code (INFOG(1)) reaches the one-line failure with the option that
     cures it: a working-memory cap that is too small (-mat_mumps_icntl_23 1, INFOG(1) = -19);
     workspace-margin errors name ICNTL(14)."""
-    from ancf_petsc.petsc.options import mumps_hint
+    from ancf_petsc.linalg.diagnostics import mumps_hint
     raw = load_raw("bundle_hex7.yaml")
     raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
     raw["solver"] = {"max_cutbacks": 1}
@@ -249,7 +249,7 @@ def test_chord_steps_keep_every_newton_count_and_answer(tmp_path):
     PETSc factored exactly the iterations less the reuses (PCSetUp kept the factor)."""
     petsc_init()
     from petsc4py import PETSc
-    from ancf_petsc.petsc.logging import event_count
+    from ancf_petsc.linalg.logging import event_count
     PETSc.Log.begin()
     raw = load_raw("achilles_type3_psi45.yaml")
     runs = {}
@@ -310,3 +310,54 @@ def test_failure_hints_for_contact_models(tmp_path, mode, extra, expect):
     line = p.stderr.strip().splitlines()[-1]
     assert expect in line, line
     assert "-ksp_type gmres with -pc_type gamg" not in line
+
+
+@pytest.mark.parametrize("last,substeps", [(2.5, 1), (2.6, 2)])
+def test_the_rest_of_the_way_to_a_level_up_to_stretch_increments_is_one_step(last, substeps, tmp_path):
+    """No sliver step: from 1.0 with increments of 1.0 (no growth) the level 2.5 is reached in
+    one step (1.5 increments, ``load_control.STRETCH``), 2.6 in an increment and the rest."""
+    from ancf_petsc.solving.load_control import STRETCH
+    assert STRETCH == 1.5
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.1, 0.1 * last]
+    raw["solver"] = {"initial_increment": 0.1, "growth": 1.0}
+    s = run_inline(raw, tmp_path)
+    assert s["status"] == "completed"
+    assert [st["substeps"] for st in s["steps"]] == [1, substeps]
+
+
+def test_a_workflows_solves_each_get_their_own_options_prefix(tmp_path):
+    """In-process solves of a workflow (here ancf-study's ``solve_raw``) run under their own
+    prefix (linalg.database.own_prefix): the solver options given without a prefix still reach
+    every solve, the config's ``petsc:`` options reach only their solve, and nothing is left in
+    the database afterwards; a prefix the config gives is kept."""
+    from petsc4py import PETSc
+
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.linalg.database import own_prefix, option_names
+    from ancf_petsc.workflows.study import solve_raw
+    from helpers import CONFIGS
+
+    raw = load_raw("bending_neohookean.yaml")
+    opts = PETSc.Options()
+    already = set(opts.getAll())
+    opts["snes_linesearch_type"] = "bt"                  # as if on the command line
+    try:
+        first, s1 = solve_raw(dict(raw, petsc={"snes_max_it": 20}), CONFIGS, str(tmp_path / "1"))
+        second, s2 = solve_raw(raw, CONFIGS, str(tmp_path / "2"))
+        after = set(option_names())
+    finally:
+        opts.delValue("snes_linesearch_type")
+    assert first.status == second.status == "completed"
+    assert "line search bt" in s1["solver"] and "line search bt" in s2["solver"]
+    assert "max_it 20" in s1["solver"] and "max_it 20" not in s2["solver"]
+    assert after - already == {"snes_linesearch_type"}
+    spec = parse_config(dict(raw, solver={"options_prefix": "mine_"}), base_dir=CONFIGS)
+    with own_prefix(spec.solver, "study") as prefix:
+        assert prefix == "mine_"
+    spec = parse_config(raw, base_dir=CONFIGS)
+    with own_prefix(spec.solver, "study") as p1:
+        pass
+    with own_prefix(spec.solver, "study") as p2:
+        pass
+    assert p1 != p2 and p1.startswith("study") and spec.solver.options_prefix == ""

@@ -21,20 +21,23 @@ from ancf_petsc.workflows.calibration.log import SampleLog  # noqa: E402
 from ancf_petsc.workflows.calibration.parameters import to_u  # noqa: E402
 from ancf_petsc.workflows.calibration.twin import coverage, draw, exact_data, with_data  # noqa: E402
 
-DRAWS = 20
+#: noise draws: the issue's "90 % of 20 draws" is a statement about coverage; 20 draws cannot
+#: test it (honest 95 % intervals give 18 or more of 20 with probability 0.92 only), 100 can
+#: (90 or more of 100 with probability 0.99)
+DRAWS = 100
 
 
 def test_the_twin_recovers_its_parameters_within_the_reported_errors(tmp_path):
     """Data from mu = 1.2 MPa, K = 3.6 MPa plus Gaussian noise of the data's sigma (elongation
-    50 um, lateral stretch 5e-4; 10 levels each), 20 draws from a fixed seed (0, not chosen).
+    50 um, lateral stretch 5e-4; 10 levels each), 100 draws from a fixed seed (0, not chosen).
 
     * Every fit lands where linear theory puts it, u - u_true = (J^T J)^-1 J^T eps (J at the
       truth, eps the weighted noise), to 10 % of a standard error (the rest is the model's
       curvature), so the scatter of the estimates is the noise's, not the optimiser's; and the
       reported standard errors equal the truth's s (J^T J)^-1 to 5 %.
-    * The true value lies in the reported 95 % interval (Student's t) in >= 16 of 20 draws per
-      parameter.  With honest errors 18 or more happen with probability 0.92 and 16 or more with
-      0.98: this seed gives 16 (mu) and 18 (K); over 100 draws 93 % and 94 % (docs/calibration.md).
+    * The true value lies in the reported 95 % interval (Student's t) in >= 90 % of the draws
+      per parameter (this seed: 93 % for mu, 94 % for K; its first 20 draws give 16 and 18 of
+      20, docs/calibration.md).
     """
     spec = load_fit(BAR_TWIN)                      # configs/fits/bar_twin.yaml
     exact = exact_data(spec, TRUE)
@@ -58,7 +61,7 @@ def test_the_twin_recovers_its_parameters_within_the_reported_errors(tmp_path):
         fitted.append(res.fit.u)
         se.append(res.uncertainty.se_u)
     within = coverage(u_true, np.array(fitted), np.array(se), res.uncertainty.t95)
-    assert np.all(within.sum(axis=0) >= 16), within.sum(axis=0)
+    assert np.all(within.sum(axis=0) >= 0.9 * DRAWS), within.sum(axis=0)
 
 
 def test_the_bulk_modulus_from_elongation_alone_is_not_determined(tmp_path):

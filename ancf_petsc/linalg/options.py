@@ -11,9 +11,14 @@ from __future__ import annotations
 
 from petsc4py import PETSc
 
-from ..config.values import ConfigError
-from ..petsc.blocks import node_blocks_fit
-from ..petsc.options import petsc_message, solver_hint
+from ..errors import InputError
+from .database import insert, option, remove
+from .diagnostics import petsc_message, solver_hint
+
+def node_blocks_fit(model) -> bool:
+    """Whether every node's 18 DOFs are active (all beams 3363), as SBAIJ node blocks need."""
+    return all(len(b.vectors) == 6 for b in model.beams)
+
 
 DEFAULT_OPTIONS = {
     "snes_type": "newtonls",
@@ -38,7 +43,7 @@ DEFAULT_OPTIONS = {
 }
 #: preconditioners whose factorisation package defaults to MUMPS
 MUMPS_PCS = ("lu", "cholesky")
-#: ``solver.linear: fieldsplit`` (petsc/fieldsplit.py): flexible GMRES (right-preconditioned: it
+#: ``solver.linear: fieldsplit`` (linalg/fieldsplit.py): flexible GMRES (right-preconditioned: it
 #: tests the true residual; it keeps the preconditioned vectors, whose large multiplier
 #: components make GMRES's recombination lose digits: 37 fascicles, true residual 2e-6 instead
 #: of 7e-10) around the exact inverse of the Jacobian without the contact curvature between
@@ -52,7 +57,7 @@ FIELDSPLIT_OPTIONS = {
 }
 
 
-class SolverOptionError(ConfigError):
+class SolverOptionError(InputError):
     """PETSc refused the solver the options ask for (exit 2, one line naming the options)."""
 
 
@@ -76,7 +81,7 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
     at an interface) takes AIJ and refuses a symmetric factorisation."""
     pc, factor = factor_package(config_options, prefix, symmetric)
     if not symmetric and pc in SYMMETRIC_PCS:
-        raise ConfigError("petsc.pc_type", f"{pc} factors a symmetric matrix, but the friction of "
+        raise InputError("petsc.pc_type", f"{pc} factors a symmetric matrix, but the friction of "
                                            "contact.tangential makes the Jacobian unsymmetric; use lu")
     if linear == "fieldsplit":
         pc, factor = "cholesky", "mumps"        # symmetric sub-blocks and MUMPS on the multipliers
@@ -85,10 +90,10 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full and symmetric) else "aij"
     if choice == "sbaij":
         if not full:
-            raise ConfigError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
+            raise InputError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
                                                "half of each node block); use aij or auto")
         if pc not in SBAIJ_PCS or not symmetric:
-            raise ConfigError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij"
+            raise InputError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij"
                               + ("" if symmetric else " (an unsymmetric Jacobian: contact.tangential "
                                  "friction)") + "; use aij or auto")
     return choice
@@ -101,9 +106,9 @@ def default_options(symmetric: bool = True) -> dict:
 
 def option_in_effect(key: str, config_options: dict, prefix: str = "", symmetric: bool = True) -> str:
     """The value of a PETSc option: command line, else config ``petsc:``, else the defaults."""
-    opts = PETSc.Options()
-    if opts.hasName(prefix + key):
-        return str(opts.getString(prefix + key, ""))
+    value = option(key, prefix)
+    if value is not None:
+        return value
     return str(config_options.get(key, default_options(symmetric).get(key, "")))
 
 
@@ -133,27 +138,26 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     prefix) left in the database.  A value or combination PETSc refuses raises
     ``SolverOptionError`` (the same on every rank: the options are).
     """
-    opts = PETSc.Options()
     inserted = []
     for source in (config_options, defaults):
         for key, value in source.items():
-            if not opts.hasName(prefix + key):
-                opts.setValue(prefix + key, value)
+            if option(key, prefix) is None:
+                insert(prefix + key, value)
                 inserted.append(prefix + key)
     n = len(prefix)
     kept = [k for k in inserted if k[n:] in config_options or k[n:].startswith(DEFERRED_OPTIONS)]
     try:
         snes.setFromOptions()
-        linesearch = opts.getString(prefix + "snes_linesearch_type", "bt")  # PETSc's own default
+        linesearch = option("snes_linesearch_type", prefix) or "bt"        # PETSc's own default
     except PETSc.Error as exc:
         for key in kept:
-            opts.delValue(key)
+            remove(key)
         raise SolverOptionError("", refused(exc, config_options, snes.getComm().getSize(), prefix,
                                             symmetric)) from None
     finally:
         for key in inserted:
             if key not in kept:
-                opts.delValue(key)
+                remove(key)
     return linesearch, kept
 
 
@@ -191,7 +195,7 @@ def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = ""
         # Newton tolerance instead of relative to a right-hand side that is already tiny
         defaults["ksp_atol"] = f"{1e-2 * atol:.3e}"
         factor = ""
-    if factor == "mumps" and not PETSc.Options().hasName(prefix + "pc_factor_mat_solver_type") \
+    if factor == "mumps" and option("pc_factor_mat_solver_type", prefix) is None \
             and "pc_factor_mat_solver_type" not in config_options:
         defaults["pc_factor_mat_solver_type"] = "mumps"
     if factor == "mumps" and 1 < ranks <= 4:

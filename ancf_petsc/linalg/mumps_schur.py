@@ -83,15 +83,16 @@ def mumps_controls(prefix: str, defaults: dict) -> tuple[dict, dict]:
     """(ICNTL, CNTL): ``defaults`` (ICNTL) overridden by -{prefix}mat_mumps_icntl_<k> and
     -{prefix}mat_mumps_cntl_<k> from the command line, for the MUMPS instances of the fascicle
     Schur solver (this module's, and PETSc's of a distributed interface system)."""
-    from petsc4py import PETSc
-    opts = PETSc.Options()
+    from .database import option
     icntl, cntl = dict(defaults), {}
     for k in range(1, 61):
-        if opts.hasName(f"{prefix}mat_mumps_icntl_{k}"):
-            icntl[k] = opts.getInt(f"{prefix}mat_mumps_icntl_{k}")
+        value = option(f"mat_mumps_icntl_{k}", prefix)
+        if value is not None:
+            icntl[k] = int(value)
     for k in range(1, 16):
-        if opts.hasName(f"{prefix}mat_mumps_cntl_{k}"):
-            cntl[k] = opts.getReal(f"{prefix}mat_mumps_cntl_{k}")
+        value = option(f"mat_mumps_cntl_{k}", prefix)
+        if value is not None:
+            cntl[k] = float(value)
     return icntl, cntl
 
 

@@ -33,7 +33,7 @@ Stability: by Haynsworth's inertia additivity the inertia of J_bd is that of the
 of S (``pivot_counts``): the stepper's count of negative tangent eigenvalues, for J_bd.
 
 Every fascicle must be whole on one rank (``parallel.partition.beam_owner``) and held by its own supports
-(K_f regular): ``solving.linear.choose`` takes this solver only then.
+(K_f regular): ``choice.choose`` takes this solver only then.
 """
 from __future__ import annotations
 

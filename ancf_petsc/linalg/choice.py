@@ -1,15 +1,15 @@
 """Which linear solver a run uses (``solver.linear``): one LDLᵀ factorisation of the whole
 Jacobian (``direct``, MUMPS) or the fascicle-parallel Schur solver (``fieldsplit``,
-petsc/fieldsplit.py), and the rule ``auto`` follows (docs/parallel.md, "Which solver").
+linalg/fieldsplit.py), and the rule ``auto`` follows (docs/parallel.md, "Which solver").
 """
 from __future__ import annotations
 
 import numpy as np
-from petsc4py import PETSc
 
-from ..config.values import ConfigError
+from ..errors import InputError
 from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.rigid import rigid_modes
+from .database import option
 
 #: ``solver.linear: auto`` takes the fascicle Schur solver from this many contact multipliers
 #: on; below, one LDLᵀ of the whole Jacobian is as fast (scripts/bench_growth.py: 7 fascicles,
@@ -37,8 +37,7 @@ def not_self_supported(model) -> list[str]:
 
 def _why_not_fieldsplit(model, contact, petsc_options: dict, prefix: str) -> str | None:
     """Why the fascicle Schur solver cannot run on this model (None: it can)."""
-    opts = PETSc.Options()
-    chosen = [k for k in ("pc_type", "ksp_type") if opts.hasName(prefix + k) or k in petsc_options]
+    chosen = [k for k in ("pc_type", "ksp_type") if option(k, prefix) is not None or k in petsc_options]
     if contact is None or contact.n_multipliers == 0:
         return "it needs contact multipliers (the fascicles' coupling)"
     if not contact.symmetric:
@@ -57,14 +56,14 @@ def choose(choice: str, model, contact, petsc_options: dict, prefix: str = "") -
     """The linear solver for ``solver.linear`` = ``choice`` (auto | direct | fieldsplit) and why:
     ('direct' | 'fieldsplit', reason).  ``fieldsplit`` needs contact multipliers between at
     least two beams, each held by its own supports, and no PC/KSP chosen through PETSc options;
-    ``auto`` takes it from ``AUTO_MIN_MULTIPLIERS`` multipliers on.  Raises ConfigError when
+    ``auto`` takes it from ``AUTO_MIN_MULTIPLIERS`` multipliers on.  Raises InputError when
     ``fieldsplit`` is asked for and cannot run (the same on every rank)."""
     if choice == "direct":
         return "direct", "solver.linear: direct"
     why_not = _why_not_fieldsplit(model, contact, petsc_options, prefix)
     if choice == "fieldsplit":
         if why_not:
-            raise ConfigError("solver.linear", f"fieldsplit cannot run here: {why_not}; use direct or auto")
+            raise InputError("solver.linear", f"fieldsplit cannot run here: {why_not}; use direct or auto")
         return "fieldsplit", "solver.linear: fieldsplit"
     if why_not:
         return "direct", f"auto: direct, fieldsplit not possible: {why_not}"

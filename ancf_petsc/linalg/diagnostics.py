@@ -1,6 +1,6 @@
 """PETSc options after the run and PETSc errors: options PETSc never used (its own
 ``PetscOptionsUsed`` flags, reduced over the ranks), and PETSc errors turned into one line that
-names the option and what works instead.  The input-side checks are in config/petsc_options.py."""
+names the option and what works instead.  The input-side checks are in option_syntax.py."""
 from __future__ import annotations
 
 import ctypes
@@ -9,9 +9,9 @@ import re
 
 import numpy as np
 from mpi4py import MPI
-from petsc4py import PETSc
 
-from ..config.petsc_options import PREFIX
+from .database import option_names
+from .option_syntax import PREFIX
 
 _LIB = None
 
@@ -53,7 +53,7 @@ HINTS = {"mat_type": "the Jacobian's format is solver.matrix in the config (auto
 def unused_command_line_options(comm) -> list[str]:
     """Options in PETSc's database (command line, PETSC_OPTIONS, .petscrc) that no PETSc object
     ever read, as ``-name``; collective (an option read on any rank counts as used)."""
-    names = sorted(PETSc.Options().getAll())
+    names = option_names()
     names = [n for n in names if n not in READ_AT_FINALIZE]
     return [f"-{n}" for n, u in zip(names, used_anywhere(names, comm)) if not u]
 

@@ -5,7 +5,7 @@ mirrors PETSc 3.18's ``PetscOptionsStringToReal/Int/Bool`` (strtod/strtol over t
 plus the words DEFAULT and DECIDE) and its type registries (case-sensitive names, e.g. ``lu``;
 case-insensitive enum values, e.g. ``nonzero``).  tests/apps/test_edges.py checks these tables against
 the PETSc library itself.  Options not in the tables are passed on unchecked; a misspelt one is
-caught after the run by ``petsc.options.unused_command_line_options`` (PETSc's own
+caught after the run by ``diagnostics.unused_command_line_options`` (PETSc's own
 ``PetscOptionsUsed`` flags).
 """
 from __future__ import annotations

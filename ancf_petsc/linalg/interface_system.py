@@ -23,6 +23,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..errors import InputError
+from .database import option
 from .fascicles import FascicleFactor
 from .inertia import pivot_counts
 from .mumps_schur import mumps_controls
@@ -37,12 +38,10 @@ KINDS = ("dense", "mumps")
 
 def interface_kind(n_gamma: int, prefix: str) -> str:
     """'dense' or 'mumps' for an interface of n_Γ multipliers (option -<prefix>interface)."""
-    opts = PETSc.Options()
-    name = f"{prefix}interface"
-    if opts.hasName(name):
-        kind = opts.getString(name)
+    kind = option("interface", prefix)
+    if kind is not None:
         if kind not in KINDS:
-            raise InputError("", f"-{name} {kind}: expected {' or '.join(KINDS)}")
+            raise InputError("", f"-{prefix}interface {kind}: expected {' or '.join(KINDS)}")
         return kind
     return "dense" if n_gamma <= DENSE_MAX else "mumps"
 

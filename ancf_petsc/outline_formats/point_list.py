@@ -1,0 +1,91 @@
+"""Point lists: a CSV/TXT file (two numeric columns u, v; an optional header row; comma,
+semicolon, tab or space separated; MATLAB's ';' row ends) or a YAML file (a list of [u, v] pairs,
+or {points: ...}), in the description's units."""
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+
+from .base import Description, Importer, OutlineReadError, RawOutline, file_name
+
+__all__ = ["IMPORTER", "PointList", "read_point_list"]
+
+YAML_EXT = (".yaml", ".yml")
+
+
+def _yaml_points(text: str, path: str) -> np.ndarray:
+    import yaml
+
+    from .. import yamlio
+    try:
+        data = yamlio.load(text)
+    except yaml.YAMLError as exc:
+        problem = getattr(exc, "problem", None)
+        raise OutlineReadError(f"{file_name(path)} is not valid YAML"
+                               + (f" ({problem})" if problem else "")) from None
+    if isinstance(data, dict) and "points" in data:
+        data = data["points"]
+    try:
+        P = np.array(data, dtype=float)
+    except (TypeError, ValueError):
+        P = np.zeros((0, 0))
+    if P.ndim != 2 or P.shape[1] != 2:
+        raise OutlineReadError(f"{file_name(path)} must hold a list of [u, v] pairs (or points: [...])")
+    return P
+
+
+def _csv_points(text: str, path: str) -> np.ndarray:
+    # MATLAB ends each row with ';' ("1.5, 2.0;" or "1.5 2.0;"): a row terminator, not a column
+    lines = [ln.rstrip() for ln in text.splitlines()]
+    lines = [ln[:-1] if ln.endswith(";") else ln for ln in lines]
+    try:
+        delim = csv.Sniffer().sniff("\n".join(lines)[:4096], delimiters=",;\t ").delimiter
+    except csv.Error:
+        delim = ","
+    rows, header = [], None
+    for k, row in enumerate(csv.reader(lines, delimiter=delim)):
+        row = [c.strip() for c in row if c.strip()]
+        if not row or row[0].startswith("#"):
+            continue
+        try:
+            vals = [float(c) for c in row[:2]]
+        except ValueError:
+            if not rows and header is None:
+                header = k                     # one header line, before the numbers
+                continue
+            raise OutlineReadError(
+                f"{file_name(path)} line {k + 1}: {row!r} is not two numbers u, v (one header "
+                "line is allowed, before the numbers; columns separated by a comma, "
+                "semicolon, tab or spaces)") from None
+        if len(vals) != 2:
+            raise OutlineReadError(f"{file_name(path)} line {k + 1}: expected two columns u, v")
+        rows.append(vals)
+    return np.array(rows, dtype=float).reshape(-1, 2)
+
+
+def read_point_list(path: str) -> RawOutline:
+    """Points from a CSV/TXT or YAML file (see the module docstring); at least 3, all finite."""
+    try:
+        with open(path, newline="") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise OutlineReadError(f"cannot read {file_name(path)} ({exc.strerror})") from None
+    P = _yaml_points(text, path) if path.lower().endswith(YAML_EXT) else _csv_points(text, path)
+    if len(P) < 3:
+        raise OutlineReadError(f"{file_name(path)} has {len(P)} points; an outline needs at least 3")
+    if not np.all(np.isfinite(P)):
+        raise OutlineReadError(f"{file_name(path)} has non-finite coordinates")
+    return RawOutline(P, closed=False)
+
+
+class PointList(Importer):
+    name = "point_list"
+    title = "point list"
+    extensions = (".csv", ".txt") + YAML_EXT
+
+    def read(self, path: str, keys: dict, desc: Description) -> RawOutline:
+        return read_point_list(path)
+
+
+IMPORTER = PointList()

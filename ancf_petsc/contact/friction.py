@@ -68,12 +68,14 @@ class FrictionEvaluation:
     positive: np.ndarray
 
 
-def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray) -> tuple:
+def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held: bool = True) -> tuple:
     """proj_{|·| ≤ bound}(P̄ a) per multiplier and its derivative S with respect to P̄ a:
-    (projection, S, direction, stick, slide)."""
+    (projection, S, direction, stick, slide).  At the kink a = 0 with no bound (at rest) the
+    generalised derivative taken is the sticking one (``held``): Newton's first step from rest
+    then holds the interface instead of letting it slide freely."""
     trial = a - np.einsum("ki,ki->k", nbar, a)[:, None] * nbar
     size = np.linalg.norm(trial, axis=1)
-    stick = (size <= bound) & (bound > 0.0)
+    stick = ((size <= bound) & (bound > 0.0)) | (held & (bound == 0.0) & (size <= 1e-12))
     slide = (bound > 0.0) & ~stick
     direction = np.zeros_like(trial)
     direction[slide] = trial[slide] / size[slide, None]
@@ -91,9 +93,10 @@ class CoulombFriction(PartnerTerm):
     multipliers = True
     #: per point: the relative displacement d₀ [m] of the last accepted increment
     history = ("anchor",)
-    #: the semi-smooth Newton steps are taken whole (a line search on |F| stalls at the kinks
-    #: of the projection); the multipliers' status needs no extra solves
-    options = {"snes_max_it": "50", "snes_linesearch_type": "l2"}
+    #: the semi-smooth Newton iteration takes the l2 line search (bt stalls at the kinks of the
+    #: projection); from rest at mu = 3 it needs up to ~100 iterations to settle the statuses
+    #: (a cut-back cannot help there: Coulomb's law is homogeneous in the load)
+    options = {"snes_max_it": "200", "snes_linesearch_type": "l2"}
 
     def __init__(self, coefficient: float, augmentation: float, model, points, projector):
         super().__init__(model, points, projector)
@@ -147,10 +150,11 @@ class CoulombFriction(PartnerTerm):
         nbar = np.where(mnorm[:, None] > 0.0, m / np.where(mnorm > 0.0, mnorm, 1.0)[:, None], EYE[0])
         y = st.xl.reshape(-1)[self.local_positions(c, st)]
         bound = self.mu * zhat
-        if c.law.phase.probe:                       # the bodies alone: friction held, rows decoupled
+        probe = c.law.phase.probe                   # the bodies alone: friction held, rows decoupled
+        if probe:
             bound = np.zeros_like(bound)
         a = y + self.augmentation * U
-        proj, S, direction, m_stick, slide = return_map(a, nbar, bound)
+        proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=not probe)
         na = np.einsum("ki,ki->k", nbar, a)
         dRdn = S @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
         Y = c.Phi.T @ y

@@ -57,7 +57,8 @@ class FrictionEvaluation:
     a: np.ndarray
     nbar: np.ndarray
     mnorm: np.ndarray
-    S: np.ndarray
+    T: np.ndarray
+    g: np.ndarray
     direction: np.ndarray
     bound: np.ndarray
     m_stick: np.ndarray
@@ -155,8 +156,9 @@ class CoulombFriction(PartnerTerm):
             bound = np.zeros_like(bound)
         a = y + self.augmentation * U
         proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=not probe)
+        R, T, g = y - proj, -S, -direction
         na = np.einsum("ki,ki->k", nbar, a)
-        dRdn = S @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
+        dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
         Y = c.Phi.T @ y
         sigma = c.stiffness * (Y - np.einsum("pi,pi->p", n, Y)[:, None] * n) / wp[:, None]
         # a point sticks where most of its functions (by their weight at the point) stick
@@ -164,9 +166,9 @@ class CoulombFriction(PartnerTerm):
         pressure = c.stiffness * (c.Phi.T @ (st.z * st.rows.load)) / wp
         share = c.Phi @ np.ones(len(idx)) if c.sum_over_ranks is not None else np.ones(len(c.mults))
         return FrictionEvaluation(d=d, du=du, sigma=sigma, Y=Y, stick=on > 0.5, omega=wp * w,
-                                  pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, S=S,
+                                  pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, T=T, g=g,
                                   direction=direction, bound=bound, m_stick=m_stick, slide=slide,
-                                  R=y - proj, share=share, dRdn=dRdn, positive=positive)
+                                  R=R, share=share, dRdn=dRdn, positive=positive)
 
     def kept(self, ev: FrictionEvaluation) -> dict:
         """The next increment's slips start from this state's relative displacements."""

@@ -57,7 +57,7 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     n = st.pr.n
     Pn = EYE - n[:, :, None] * n[:, None, :]
     Pbar = EYE - ev.nbar[:, :, None] * ev.nbar[:, None, :]
-    A = -term.augmentation * ev.S @ Pbar                                      # ∂R/∂U (M, 3, 3)
+    A = term.augmentation * ev.T @ Pbar                                      # ∂R/∂U (M, 3, 3)
     Bm = ev.dRdn @ Pbar / np.where(ev.mnorm > 0.0, ev.mnorm, 1.0)[:, None, None]
     NAB = term.grad_d(c)                                                      # (P, 36)
     rows_y = np.where((sm >= 0)[:, :, None], term.tdof[np.maximum(sm, 0)], -1).reshape(n_s, 3 * K)
@@ -87,10 +87,10 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     wp = term.points.w[c.local]
     left = c.space.area[sm[srow]] * phi * (ev.positive / wp)[:, None]
     Gz = segment_outer(srow, n_s, left, phi0 * st.rows.load[kp])                 # (n_s, K, K)
-    Vz = -ks * term.mu * ev.direction[kseg][:, :, :, None] * Gz[:, :, None, :]   # (n_s, K, 3, K)
+    Vz = ks * term.mu * ev.g[kseg][:, :, :, None] * Gz[:, :, None, :]   # (n_s, K, 3, K)
     zcols = np.where(sm >= 0, DOFS_PER_NODE * c.mult_block[np.maximum(sm, 0)] + c.space.slot[np.maximum(sm, 0)], -1)
     out.append((rows_y, zcols, Vz.reshape(n_s, 3 * K, K)))
     # each multiplier's own rows: ∂R/∂y (each rank its share)
     ydof = term.tdof[c.mults]
-    out.append((ydof, ydof, ks * ev.share[:, None, None] * (EYE - ev.S @ Pbar)))
+    out.append((ydof, ydof, ks * ev.share[:, None, None] * (EYE + ev.T @ Pbar)))
     return out

@@ -42,13 +42,11 @@ class Contact:
         self.model, self.spec, self.interfaces = model, spec, interfaces
         self.law = make_law(spec.mode)
         self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
-        self.space = build_space(self.points, interfaces, spec.projection,
-                                 reference_stiffness(interfaces) * spec.scaling, spec.per_element)
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         #: contact terms beside the normal constraints (a tangential law's interface shear)
         self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
-        if any(t.multipliers for t in self.terms):       # tangential multipliers (friction)
-            self.space = with_tangential(self.space)
+        self.space = with_tangential(build_space(self.points, interfaces, spec.projection, reference_stiffness(
+            interfaces) * spec.scaling, spec.per_element), any(t.multipliers for t in self.terms))
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()
         #: set by a parallel assembly (collective): ``sum_over_ranks(values over self.mults)``
@@ -67,9 +65,8 @@ class Contact:
         #: the points' weights when their partners slide past B's ends (weights.py)
         self.weights = PointWeights(self.points.n_points)
         self._cache = None
-        # the rank's numbering (``set_numbering``): PETSc block of every element node, multiplier
-        # and segment multiplier node; the local segments, points and multipliers, which of those
-        # multipliers this rank reports, and Φ restricted to them
+        # the rank's numbering (``set_numbering``): PETSc blocks of the nodes, multipliers, segment
+        # multiplier nodes; the local segments, points, multipliers, those it reports, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
         self.owned, self.Phi = np.zeros(0, dtype=bool), None
@@ -97,9 +94,8 @@ class Contact:
 
     def set_numbering(self, perm: np.ndarray, local_segments: np.ndarray,
                       owned_elements: np.ndarray | None = None) -> None:
-        """Block numbering ``perm`` (model block id → PETSc block id, multiplier nodes after the
-        physical ones), the segments this rank evaluates (bool per segment) and the elements it
-        owns (bool per element; default all), whose multipliers it reports."""
+        """Block numbering ``perm`` (model block → PETSc block, multiplier nodes after the physical
+        ones), the segments this rank evaluates and the elements whose multipliers it reports."""
         pts, sp = self.points, self.space
         self.conn = perm[self.model.connectivity()]
         self.projector.conn = self.conn
@@ -162,8 +158,7 @@ class Contact:
         """Project the local points at the local state ``xl`` (n, 6, 3) and apply the law.
 
         SNES evaluates the Jacobian at the state of the residual before it: that evaluation is
-        reused (the projection state is its result, so nothing else changes).  With the
-        parallel hooks set (``sum_over_ranks``) this is collective: every rank calls it."""
+        reused.  With the parallel hooks set (``sum_over_ranks``) every rank calls it."""
         c = self._cache
         hit = (c is not None and c[1] is needed and np.array_equal(c[0], xl)
                and not (self.allow_update and self.law.decides_activity))

@@ -14,17 +14,22 @@ increment of the function
 ω' the points' weights) as the Alart–Curnier equation (Alart & Curnier 1991; the mortar form of
 Gitterle, Popp, Gee & Wall, IJNME 84, 2010, eq. 43):
 
-    R_k = y_k − proj_{|·| ≤ μ z_k⁺} (P̄_k (y_k + c U_k)),    P̄_k = I − n̄_k n̄_kᵀ,
+    R_k = y_k − proj_{|·| ≤ μ ẑ_k} (P̄_k (y_k + c U_k)),    P̄_k = I − n̄_k n̄_kᵀ,
 
 zero where the function sticks (P̄ U = 0 exactly: no stick stiffness, no regularisation; the
-normal part of y vanishes) and where it slips (|y| = μ z⁺ against the slip).  With the Bernstein
-functions (non-negative, summing to one) |t(x)| ≤ μ Σ φ_k λ_k⁺ everywhere.  z⁺ is the scaled
-pressure multiplier where it loads the bodies (unilateral: active), so an interface that is open
-or pulled carries none.  c (``augmentation``, 1 by default: the stiffness k_s / A_k of the
+normal part of y vanishes) and where it slips (|y| = μ ẑ against the slip).  The bound is the
+function's share of the pressing normal force, ẑ_k = ∫ φ_k p⁺ dA / k_s = A_k Σ_p Φ_kp ω'_p
+(Φᵀz)_p⁺ / w_p, not z_k⁺: the Bernstein coefficients z_k of a positive pressure oscillate in
+sign (the pressed strips: z_k from −84 to 219 Pa where p is 57 … 158 Pa), and Σ_k μ z_k⁺ let
+the strips carry 1.18 μN.  Σ_k ẑ_k is the pressing normal force, so a sliding interface carries
+μN exactly where p ≥ 0.  The sliding law's pulled parts (p < 0) and an open unilateral interface
+carry none.  c (``augmentation``, 1 by default, in units of k_s / A_k: the stiffness of the
 structure under a function's traction) only steers the semi-smooth Newton iteration; the answer
-does not depend on it.  The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the
-generalised derivative of R and of the forces, with the rotation of n and n̄ (gap.normal_gradient),
-unsymmetric (MUMPS LU).
+does not depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN).  At rest (no
+pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
+The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the generalised derivative of
+R and of the forces, with the rotation of n and n̄ (gap.normal_gradient) and the bounds' coupling
+to the pressures, unsymmetric (MUMPS LU).
 """
 from __future__ import annotations
 
@@ -180,7 +185,8 @@ class CoulombFriction(PartnerTerm):
         ev = st.terms[self.name]
         force = ev.omega[:, None] * ev.sigma
         self.add_point_forces(c, st, floc, self.grad_d(c)[:, :, None] * force[:, None, :])
-        floc[self.local_positions(c, st)] += c.stiffness * ev.share[:, None] * ev.R
+        pos = self.local_positions(c, st)
+        floc[pos] += c.stiffness * ev.share[:, None] * ev.R
 
     def jacobian_blocks(self, c, st, fixed_mask: np.ndarray) -> list:
         """The generalised Jacobian's blocks (friction_blocks.py)."""

@@ -1,10 +1,11 @@
 """The Jacobian blocks of Coulomb friction with tangential multipliers (friction.py).
 
-With R_k = y_k − proj(P̄_k a_k), a = y + c U, the generalised derivatives (S = ∂proj/∂(P̄ a):
-I sticking, μz⁺/|P̄a| (I − t̂t̂ᵀ) slipping, 0 without pressure):
+With R_k = y_k − proj(P̄_k a_k), a = y + c U, bound b_k = μ ẑ_k, the generalised derivatives
+(T = −∂proj/∂(P̄ a): −I sticking, −b/|P̄a| (I − t̂t̂ᵀ) slipping, 0 without pressure; g = ∂R/∂b =
+−t̂ slipping):
 
-    ∂R/∂y = I − S P̄,   ∂R/∂z = −μ t̂ (slipping),   ∂R/∂U = −c S P̄,
-    ∂R/∂n̄ = S ((n̄·a) I + n̄ aᵀ),   ∂n̄/∂m = P̄ / |m|,
+    ∂R/∂y = I + T P̄,   ∂R/∂U = c T P̄,   ∂R/∂n̄ = −T ((n̄·a) I + n̄ aᵀ),   ∂n̄/∂m = P̄ / |m|,
+    ∂R_k/∂z_j = μ g_k ∂ẑ_k/∂z_j,   ∂ẑ_k/∂z_j = A_k Σ_p Φ_kp ω'_p [p_p > 0] Φ_jp / w_p (per segment),
     ∂U_k/∂q = Σ_p Φ_kp ω'_p (P_p ∇d_p + D_p ∇n_p),   D = −(n·Δd) I − n Δdᵀ,   ∂m_k/∂q = Σ_p Φ_kp ω'_p ∇n_p,
 
 and of the forces f_p = k_s ω'_p P_p Y_p (Y_p = Σ_k Φ_kp y_k) on (A, partner) through ∇dᵀ:

@@ -88,10 +88,12 @@ class MultiplierSpace:
         return ~used
 
 
-def with_tangential(space: MultiplierSpace) -> MultiplierSpace:
+def with_tangential(space: MultiplierSpace, wanted: bool = True) -> MultiplierSpace:
     """The space with a tangential multiplier vector (3 components) per pressure function,
     in multiplier nodes after the normal ones: each A element's, in multiplier order, 6 to a
-    node (the element owns them, as it owns its pressure functions)."""
+    node (the element owns them, as it owns its pressure functions); ``space`` if not wanted."""
+    if not wanted:
+        return space
     tnode = np.empty((space.n_multipliers, 3), dtype=np.int64)
     tslot = np.empty((space.n_multipliers, 3), dtype=np.int64)
     nodes = list(space.node_element)

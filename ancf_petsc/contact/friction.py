@@ -49,8 +49,9 @@ class FrictionEvaluation:
     """Friction at the local points (P) and the local multipliers (M, ``Contact.mults``).
     Points: d, Δd = d − d₀ (P, 3), the traction σ [Pa] (P, 3), the weighted tangential
     multipliers Y = Σ_k Φ_kp y_k (P, 3), stick (P,), ω (P,) [m²], pressure (P,) [Pa].
-    Multipliers: y, U, a = y + c U, n̄ (M, 3), |m| (M,), ∂proj/∂trial S (M, 3, 3), the slip
-    direction (M, 3), bound μ z⁺ (M,) [m], stick and slide (M,), R (M, 3), this rank's share."""
+    Multipliers: y, a = y + c U, n̄ (M, 3), |m| (M,), T = −∂proj/∂trial (M, 3, 3), g = ∂R/∂bound
+    and the slip direction (M, 3), bound μ ẑ (M,) [m], stick and slide (M,), R (M, 3), this
+    rank's share, ∂R/∂n̄ (M, 3, 3); whether each point presses (P,)."""
     d: np.ndarray
     du: np.ndarray
     sigma: np.ndarray

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid verify-solid-contact studies clean
+.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid verify-solid-contact verify-solid-friction studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -65,6 +65,14 @@ verify-solid-contact: setup
 	$(PY) scripts/verify_solid_contact.py
 	$(PY) scripts/verify_solid_contact.py --merge --no-selftest --no-free --no-checks --laws unilateral \
 		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10
+
+# the three subtendons as 3D solids with Coulomb friction (mu = 0.3) against the beams with
+# contact.tangential coulomb (docs/interface.md, "Against a 3D solid with friction"; a few hours),
+# then the diagnostic without friction within 10 mm of the clamped roots (both models)
+verify-solid-friction: setup
+	bash scripts/setup_solid.sh
+	$(PY) scripts/verify_solid_friction.py --profiles 10,100
+	$(PY) scripts/verify_solid_friction.py --merge --no-selftest --free-zone 0.01 --ancf-sticks default,7.3e10
 
 clean:
 	rm -rf results .pytest_cache

@@ -34,6 +34,9 @@ import verify_solid_contact as vsc  # noqa: E402
 VARIANTS = {
     "default": ({}, None, "sliding"),
     "free": ({}, None, None),
+    # the clamped roots' pressure functions kept (the default before 2026-11-26: they repeat the
+    # supports; docs/contact.md, "Supported ends")
+    "supported ends kept": ({"projection": {"supported_ends": "keep"}}, None, "sliding"),
     "projection 1,1": ({"projection": {"axial": 1, "curve": 1}}, None, "sliding"),
     "projection 2,0": ({"projection": {"axial": 2, "curve": 0}}, None, "sliding"),
     "projection 2,2": ({"curve_points": 3, "projection": {"axial": 2, "curve": 2}}, None, "sliding"),

@@ -690,6 +690,9 @@ class Problem:
     dirichlet: [(facet tag, components)]; tractions: {facet tag: total force per unit load
     factor (3,)}; interfaces: [(name, slave facet tag, master facet tag)]; law: None, 'sliding'
     or 'unilateral'."""
+    #: the factorisation of the Newton matrix (MUMPS): LDLᵀ of the symmetric saddle-point system
+    #: (a subclass with an unsymmetric term, such as friction, uses "lu")
+    factor = "cholesky"
 
     def __init__(self, msh, ct, ft, materials: dict, dirichlet, tractions: dict, interfaces=(),
                  law: str | None = "sliding", quad_degree: int = 2, rule_points: int = 3,
@@ -942,12 +945,12 @@ class Problem:
         Jm.sort_indices()
         A = PETSc.Mat().createAIJ(size=Jm.shape, csr=(Jm.indptr.astype(PETSc.IntType),
                                                       Jm.indices.astype(PETSc.IntType), Jm.data))
-        A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        A.setOption(PETSc.Mat.Option.SYMMETRIC, self.factor == "cholesky")
         A.assemble()
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         ksp.setType("preonly")
         pc = ksp.getPC()
-        pc.setType("cholesky")
+        pc.setType(self.factor)
         pc.setFactorSolverType("mumps")
         ksp.setOperators(A)
         ksp.setUp()
@@ -1318,9 +1321,10 @@ def centroid_points(secs, psi: float, bodies=(0, 1, 2)) -> np.ndarray:
 
 
 def tendon_problem(secs, psi: float, h: float, law: str | None, bodies=(0, 1, 2), loads_on=(0,),
-                   layered: bool = True, **kw):
+                   layered: bool = True, problem_class=None, **kw):
     """Mesh (timed) and Problem of the tendon: clamped roots, end traction 1 N x load factor on
-    the end faces of ``loads_on``, contact on the interfaces between the chosen bodies."""
+    the end faces of ``loads_on``, contact on the interfaces between the chosen bodies
+    (``problem_class``: a Problem subclass taking the same arguments, e.g. with friction)."""
     t0 = time.perf_counter()
     msh, ct, ft = tendon_mesh(secs, h, psi, bodies, layered)
     t_mesh = time.perf_counter() - t0
@@ -1331,7 +1335,7 @@ def tendon_problem(secs, psi: float, h: float, law: str | None, bodies=(0, 1, 2)
     if law:
         ifs = [(cv, interface_tag(secs, s, cv), interface_tag(secs, m, cv)) for cv, s, m in INTERFACES
                if s in bodies and m in bodies]
-    P = Problem(msh, ct, ft, mats, dirich, tr, ifs, law=law if ifs else None, **kw)
+    P = (problem_class or Problem)(msh, ct, ft, mats, dirich, tr, ifs, law=law if ifs else None, **kw)
     return P, t_mesh
 
 

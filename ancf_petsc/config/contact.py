@@ -5,8 +5,8 @@ from ..contact.friction import CoulombFriction
 from ..contact.elastic_interface import ElasticMatrix
 from ..physics.element3363 import DOFS_PER_NODE
 from .conditions import beam_ref
-from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, REMOVED_CONTACT_KEYS, TANGENTIAL_LAW_NAMES, ContactSpec,
-                    TangentialSpec)
+from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, REMOVED_CONTACT_KEYS, SUPPORTED_END_RULES,
+                    TANGENTIAL_LAW_NAMES, ContactSpec, TangentialSpec)
 from .values import ConfigError, boolean, integer, mapping, number, sequence, string
 
 
@@ -87,10 +87,13 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
         c.projection = (c.axial_points - 1, 1)
     else:
         pp = f"{p}.projection"
-        mapping(proj, pp, required=("axial", "curve"), optional=("per_element",))
-        c.projection = (integer(proj["axial"], f"{pp}.axial", lo=0, hi=c.axial_points - 1),
-                        integer(proj["curve"], f"{pp}.curve", lo=0, hi=8))
+        mapping(proj, pp, optional=("axial", "curve", "per_element", "supported_ends"))
+        c.projection = (integer(proj.get("axial", c.axial_points - 1), f"{pp}.axial", lo=0,
+                                hi=c.axial_points - 1),
+                        integer(proj.get("curve", 1), f"{pp}.curve", lo=0, hi=8))
         c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
+        c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",
+                                  SUPPORTED_END_RULES)
     if (c.projection[0] + 1) * (c.projection[1] + 1) > DOFS_PER_NODE:
         raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + 1) pressure functions per element "
                                              "must not exceed 18 (one node block)")

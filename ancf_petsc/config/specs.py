@@ -13,6 +13,7 @@ LOCKING = ("none", "ecm", "mixed")
 SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws.py)
 FIBRE_FOLLOW = ("twist", "axis")
+SUPPORTED_END_RULES = ("merge", "keep")     # contact.projection.supported_ends
 CONTACT_MODES = tuple(LAWS)                 # the registry's names (contact/laws.py)
 TANGENTIAL_LAW_NAMES = tuple(TANGENTIAL_LAWS)   # contact.tangential.law (contact/tangential.py)
 DEFAULT_CONTACT_MODE = SlidingLaw.name
@@ -113,6 +114,9 @@ class ContactSpec:
     # (axial_points − 1), linear across (1): docs/contact.md, "Which pressure space"
     projection: tuple[int, int] = (2, 1)
     per_element: bool = False             # pressure discontinuous between A elements
+    # the end functions at supported ends (both bodies clamped): folded into their neighbours
+    # (merge) or kept (docs/contact.md, "Supported ends")
+    supported_ends: str = "merge"
     scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
     tangential: TangentialSpec | None = None   # interface shear (None: frictionless)
 

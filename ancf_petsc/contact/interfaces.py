@@ -8,6 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
+from ..physics.element3363 import DOFS_PER_NODE
+
 
 class ContactSetupError(ValueError):
     """Contact cannot be set up as given; ``interface`` is the index of the interface concerned
@@ -87,4 +91,24 @@ def find_interfaces(model, spec) -> list[Interface]:
                              f"elements) and {b.name} ({b.n_elements}) must have the same number "
                              "of elements so that the interface is conforming")
         out.append(Interface(f"{c.name} ({a.name}|{b.name})", a, b, c, fb, cb))
+    return out
+
+
+def supported_ends(model, interfaces, rule: str = "merge") -> np.ndarray:
+    """(n_interfaces, 2) bool, all False for ``rule`` keep (``contact.projection.supported_ends``);
+    for merge True where the interface's first / last end lies at nodes of A and
+    B whose every DOF is held or prescribed (``fix: clamped``): the gap there is the supports',
+    and a pressure function of its own would repeat them (multipliers.py).  Not where a section
+    may stretch (``fix: reduced``): that end's constraint still holds the two bodies' different
+    contraction (docs/contact.md, "Supported ends": folding it there moves Table 1 by 1.7 %)."""
+    held = np.zeros(DOFS_PER_NODE * model.n_nodes, dtype=bool)
+    held[model.fixed_dofs] = True
+    node_held = held.reshape(-1, DOFS_PER_NODE).all(axis=1)
+    out = np.zeros((len(interfaces), 2), dtype=bool)
+    for k, itf in enumerate(interfaces if rule == "merge" else ()):
+        for j, end in enumerate((0, -1)):
+            a, b = itf.a, itf.b
+            na, nb = a.node_offset + np.arange(a.n_nodes)[end], b.node_offset + np.arange(b.n_nodes)[end]
+            out[k, j] = (node_held[na] and node_held[nb]
+                         and np.isclose(a.x_nodes[end], b.x_nodes[end], rtol=0, atol=1e-12))
     return out

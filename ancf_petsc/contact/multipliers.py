@@ -15,6 +15,13 @@ held at zero (sliding) or non-negative with λ_k ≥ 0 (unilateral).  Bernstein 
 non-negative and sum to one, so λ_k ≥ 0 means p_h ≥ 0 everywhere and ḡ_k ≥ 0 is a weighted
 non-penetration condition.
 
+**Supported ends** (Wohlmuth 2000, crosspoints; Puso & Laursen 2004; Popp et al. 2012): where both
+bodies of an interface are held at an end node (every DOF supported, e.g. ``fix: clamped``), the
+gap there is fixed by the supports, and the end's axial function repeats them (2E + 1 functions
+of degree 2 on a trace with 2E free nodal values): its multipliers are ill-determined and take
+large self-equilibrated values next to the supports.  ``merged`` ends fold that function into its
+neighbour, φ₁ ← φ₁ + φ₀ (non-negative, the partition of unity kept), for every function across.
+
 Unknowns: z_k = λ_k A_k / k_s [m] with k_s = E h [N/m] a reference stiffness, so that the
 constraint rows k_s ∂ḡ/∂q are of the size of the stiffness rows.  A multiplier belongs to the
 lowest A element its function lives on (as a node does); each element's multipliers are packed
@@ -134,15 +141,53 @@ def _axial_functions(xi: np.ndarray, degree: int, per_element: bool) -> tuple[np
     return bernstein(xi, degree), degree + 1 if per_element else degree
 
 
+def _fold_ends(n_axial: int, nc: int, ends) -> np.ndarray:
+    """(n_axial·nc,) the local function each of an interface's functions is folded into: itself,
+    or for a merged end (``ends`` = (first, last)) the end axial function's neighbour along."""
+    into = np.arange(n_axial * nc)
+    if ends is not None and n_axial >= 2:
+        if ends[0]:
+            into[:nc] += nc
+        if ends[1] and n_axial >= 3:
+            into[-nc:] -= nc
+    return into
+
+
+def _merge(into: np.ndarray, rows: np.ndarray, seg_mults: np.ndarray, dense: np.ndarray,
+           element: np.ndarray) -> tuple:
+    """Fold each function k into ``into[k]`` (φ_into ← φ_into + φ_k) and number the remaining
+    ones consecutively: the rows of w_p φ_k(p), each segment's list (the folded entries' values
+    added to their survivor's, the −1 padding moved last), the owning A element (the lowest of
+    the two) and which of the old functions remain."""
+    keep = into == np.arange(len(into))
+    new = np.cumsum(keep) - 1
+    final = new[into]
+    owner = np.full(int(keep.sum()), np.iinfo(np.int64).max)
+    np.minimum.at(owner, final, element)
+    folded = np.any((seg_mults >= 0) & ~keep[np.maximum(seg_mults, 0)], axis=1)
+    seg_mults = np.where(seg_mults >= 0, final[np.maximum(seg_mults, 0)], -1)
+    dense = dense.copy()
+    for s in np.flatnonzero(folded):          # the segments at merged ends (two per interface)
+        ids = [m for m in dict.fromkeys(seg_mults[s].tolist()) if m >= 0]
+        vals = [dense[s, seg_mults[s] == m].sum(axis=0) for m in ids]
+        seg_mults[s], dense[s] = -1, 0.0
+        seg_mults[s, :len(ids)], dense[s, :len(ids)] = ids, vals
+    return final[rows], seg_mults, dense, owner, keep
+
+
 def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
-                per_element: bool = False, group: int = 1) -> MultiplierSpace:
+                per_element: bool = False, group: int = 1,
+                merged: np.ndarray | None = None) -> MultiplierSpace:
     """Multipliers of ``degrees`` (axial, curve) on every interface of ``points``; with
     ``per_element`` the pressure is discontinuous between A elements.  That space repeats
     constraints (in the reference state its gaps vanish together with the continuous ones, so
     some multipliers are not unique) and needs the factorisation's null-pivot detection; it is
     the space of the former penalty formulation, kept to compare with it.  ``group`` > 1 spans
     the axial functions over groups of that many A elements (the space of a coarser mesh on
-    this one's displacements: scripts/solid_contact_variants.py; no config key)."""
+    this one's displacements: scripts/solid_contact_variants.py; no config key).  ``merged``
+    (n_interfaces, 2) bool: fold the first / last axial function of those interfaces into its
+    neighbour (supported ends: interfaces.supported_ends; only for axial degree ≥ 2, the
+    trace space and richer: a linear space has fewer functions than the trace has values)."""
     ka, kc = degrees
     S = points.n_segments
     K = (ka + 1) * (kc + 1)
@@ -150,6 +195,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     seg_mults = np.full((S, K), -1, dtype=np.int64)
     dense = np.zeros((S, K, P_max))
     rows, cols, vals, itf_of, elem_of = [], [], [], [], []
+    into = []                      # per interface: the function each one is folded into
     first = 0
     for k, itf in enumerate(interfaces):
         segs = np.flatnonzero(points.seg_itf == k)         # one per A element, in order
@@ -185,15 +231,20 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
         owner = np.minimum(owner, len(segs) - 1)                      # lowest element it lives on
         itf_of.append(np.full(m_here, k))
         elem_of.append(points.seg_eA[segs][owner])
+        into.append(first + _fold_ends(n_axial, nc, None if merged is None or ka < 2 else merged[k]))
         first += m_here
-    M = first
-    W = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+    element, interface = np.concatenate(elem_of), np.concatenate(itf_of)
+    rows, keep = np.concatenate(rows), np.ones(first, dtype=bool)
+    if merged is not None and np.any(merged) and ka >= 2:
+        rows, seg_mults, dense, element, keep = _merge(np.concatenate(into), rows, seg_mults, dense, element)
+        interface = interface[keep]
+    M = int(keep.sum())
+    W = sp.csr_matrix((np.concatenate(vals), (rows, np.concatenate(cols))),
                       shape=(M, points.n_points))
     area = np.asarray(W.sum(axis=1)).ravel()
     Phi = sp.diags(1.0 / area) @ W
     dense /= np.where(seg_mults >= 0, area[seg_mults], 1.0)[:, :, None]
     # pack each A element's multipliers into nodes of 18 slots, interface by interface
-    element, interface = np.concatenate(elem_of), np.concatenate(itf_of)
     node = np.empty(M, dtype=np.int64)
     slot = np.empty(M, dtype=np.int64)
     node_element = []

@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 
 from ..config.specs import LOCKING
-from ..contact.interfaces import ContactSetupError, find_interfaces
+from ..contact.interfaces import ContactSetupError, find_interfaces, supported_ends
 from ..contact.tangential import TANGENTIAL_LAWS
 from ..errors import InputError
 
@@ -81,11 +81,25 @@ def fingerprint(model) -> dict[str, np.ndarray]:
         words = {"mode": c.mode, "projection": list(c.projection), "axial_points": c.axial_points,
                  "curve_points": c.curve_points, "per_element": c.per_element,
                  "interfaces": _resolved_interfaces(model, c)}
+        folded = _folded_ends(model, c)
+        if folded:                        # pressure functions folded at clamped ends (else: as before)
+            words["supported_ends"] = folded
         if c.tangential is not None and TANGENTIAL_LAWS[c.tangential.law] is not None:   # frictionless: as before
             words["tangential"] = vars(c.tangential)
         words = json.dumps(words, sort_keys=True)
         out["contact"] = np.frombuffer(words.encode(), dtype=np.uint8).astype(float)
     return out
+
+
+def _folded_ends(model, contact) -> list[str]:
+    """The interface ends whose end pressure function is folded into its neighbour
+    ("name first|last"; contact/interfaces.supported_ends): it changes the multiplier space."""
+    try:
+        interfaces = find_interfaces(model, contact)
+    except ContactSetupError:           # reported by the contact setup itself
+        return []
+    ends = supported_ends(model, interfaces, contact.supported_ends)
+    return [f"{i.name} {('first', 'last')[j]}" for i, row in zip(interfaces, ends) for j in range(2) if row[j]]
 
 
 def _resolved_interfaces(model, contact) -> list[str]:
@@ -115,6 +129,8 @@ def model_difference(stored: dict, now: dict) -> str | None:
         if key not in stored or key not in now:
             return f"{key} ({'added' if key in now else 'removed'})"
         a, b = np.asarray(stored[key]), np.asarray(now[key])
+        if key == "contact" and not np.array_equal(a, b):
+            return f"contact ({_words_difference(a, b)})"
         if a.shape != b.shape:
             return f"{key} (shape {a.shape} → {b.shape})"
         if not np.allclose(a, b, rtol=1e-12, atol=1e-300 + 1e-12 * float(np.max(np.abs(a), initial=0.0))):
@@ -125,6 +141,13 @@ def model_difference(stored: dict, now: dict) -> str | None:
                 return f"{key} ({a.ravel()[0]:.9g} → {b.ravel()[0]:.9g})"
             return f"{key} (largest change at entry {k}: {a.ravel()[k]:.9g} → {b.ravel()[k]:.9g})"
     return None
+
+
+def _words_difference(a: np.ndarray, b: np.ndarray) -> str:
+    """The contact settings that differ between two fingerprints' ``contact`` words."""
+    sa, sb = (json.loads(bytes(x.astype(np.uint8)).decode()) for x in (a, b))
+    keys = sorted(k for k in set(sa) | set(sb) if sa.get(k) != sb.get(k))
+    return ", ".join(f"{k}: {sa.get(k, 'absent')} → {sb.get(k, 'absent')}" for k in keys)
 
 
 def check_same_run(point: RestartPoint, model, steps: list, directory: str = "") -> None:

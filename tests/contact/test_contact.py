@@ -35,7 +35,17 @@ def perturbed_state(P, scale, seed, multipliers=0.0):
 
 MODES = {"sliding": {"mode": "sliding"},
          "sliding-linear": {"mode": "sliding", "curve_points": 2, "projection": {"axial": 2, "curve": 1}},
-         "unilateral": {"mode": "unilateral"}}
+         "unilateral": {"mode": "unilateral"},
+         # clamped roots: the supported ends' functions folded into their neighbours
+         "sliding-clamped": {"mode": "sliding"},
+         "unilateral-clamped": {"mode": "unilateral"}}
+
+
+def clamped(raw):
+    """The config with every support clamped (the 3D solid comparisons' supports)."""
+    for bc in raw["boundary_conditions"]:
+        bc["fix"] = "clamped"
+    return raw
 
 
 def _active(P, X):
@@ -47,11 +57,13 @@ def _active(P, X):
 def test_contact_jacobian_matches_finite_differences(mode):
     """J v against central differences of F along random directions (nodal vectors and
     multipliers), at a deformed state with non-zero pressures; J is symmetric."""
-    P, PETSc = _problem(achilles(contact=MODES[mode]))
+    raw = achilles(contact=MODES[mode])
+    P, PETSc = _problem(clamped(raw) if mode.endswith("clamped") else raw)
+    assert P.contact.space.n_multipliers == 3 * (5 - mode.endswith("clamped")) * 2
     P.load_factor = 50.0
     X, free = perturbed_state(P, 2e-6, 3, multipliers=1e-5)
     act = _active(P, X)
-    if mode == "unilateral":
+    if mode.startswith("unilateral"):
         # a state the law keeps: pressure where the bodies penetrate, random pulls elsewhere
         # (released, and not penetrating: they stay released)
         c = P.contact
@@ -137,9 +149,10 @@ def test_reference_state_is_gap_free_and_stress_free():
                                                  (4, {"axial": 0, "curve": 0})])
 def test_multiplier_space_is_the_trace_space_and_has_full_rank(elements, projection):
     """Continuous piecewise-Bernstein functions along A (one per node for degree 2) times
-    Bernstein across: (degree·E + 1)(curve + 1) multipliers per interface, Φ's rows sum to one,
-    and the constraint gradients are independent at the reference state (a per-element space
-    would repeat what continuity says, and its multipliers would not be unique)."""
+    Bernstein across: (degree·E + 1)(curve + 1) multipliers per interface (the paper's supports
+    let the sections stretch: no end is folded), Φ's rows sum to one, and the constraint
+    gradients are independent at the reference state (a per-element space would repeat what
+    continuity says, and its multipliers would not be unique)."""
     P, PETSc = _problem(achilles(elements=elements, contact={"mode": "sliding", "curve_points": 2,
                                                              "projection": projection}))
     c, sp = P.contact, P.contact.space
@@ -158,6 +171,43 @@ def test_multiplier_space_is_the_trace_space_and_has_full_rank(elements, project
     # a repeated constraint gives ~1e-16; linear across the interface is only weakly
     # controlled next to the supported sections (~5e-6), the mean across is better (~1e-4)
     assert sv[-1] > 1e-8 * sv[0], sv[-1] / sv[0]
+
+
+def _constraint_conditioning(P, PETSc) -> float:
+    """σ_min / σ_max of the constraint gradients over the free DOFs at the reference state."""
+    P.jacobian(None, P.q0, P.J, P.J)
+    Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()
+    m = P.layout.petsc_dofs(P.contact.multiplier_dofs())
+    q = np.flatnonzero(~P.fixed_mask[:18 * P.model.n_nodes])
+    sv = np.linalg.svd(Jd[np.ix_(m, q)], compute_uv=False)
+    return sv[-1] / sv[0]
+
+
+@pytest.mark.parametrize("projection,keep_max,merge_min", [({"axial": 2, "curve": 1}, 3e-7, 1e-4),
+                                                           ({"axial": 2, "curve": 0}, 1e-3, 3e-2)])
+def test_clamped_ends_fold_the_function_that_repeats_the_supports(projection, keep_max, merge_min):
+    """Both bodies clamped at x = 0: the trace space's end function nearly repeats the supports
+    (σ_min/σ_max 1e-7 linear across, 2e-4 mean across); folded into its neighbour (φ₁ + φ₀ ≥ 0,
+    the partition of unity kept) the constraints are independent (2e-4, 0.1): one function fewer
+    per interface and function across at the clamped end, none at the free far end.  With the
+    paper's supports (``reduced``: the sections may stretch) nothing is folded."""
+    from ancf_petsc.contact.interfaces import supported_ends
+    rates = {}
+    for ends in ("keep", "merge"):
+        raw = achilles(elements=4, contact={"mode": "sliding", "projection": dict(projection, supported_ends=ends)})
+        reduced, _ = _problem(raw)
+        assert supported_ends(reduced.model, reduced.contact.interfaces).sum() == 0
+        for bc in raw["boundary_conditions"]:
+            bc["fix"] = "clamped"
+        P, PETSc = _problem(raw)
+        assert supported_ends(P.model, P.contact.interfaces).tolist() == [[True, False]] * 3
+        sp = P.contact.space
+        assert sp.n_multipliers == 3 * (9 - (ends == "merge")) * (projection["curve"] + 1)
+        assert np.allclose(np.asarray(sp.Phi.sum(axis=1)).ravel(), 1.0)
+        assert np.isclose(sp.area.sum(), P.contact.points.w.sum())
+        assert sp.Phi.data.min() > -1e-15                      # non-negative functions
+        rates[ends] = _constraint_conditioning(P, PETSc)
+    assert rates["keep"] < keep_max and rates["merge"] > merge_min, rates
 
 
 def test_removed_penalty_keys_are_config_errors():
@@ -215,7 +265,9 @@ def test_grouped_multiplier_space_is_the_coarse_meshs_space():
     coarse, _ = _problem(achilles(psi=0.0, elements=2, contact={"mode": "sliding"}))
     fine, _ = _problem(achilles(psi=0.0, elements=8, contact={"mode": "sliding"}))
     cf, ff = coarse.contact, fine.contact
-    grouped = build_space(ff.points, ff.interfaces, ff.spec.projection, ff.stiffness, group=4)
+    from ancf_petsc.contact.interfaces import supported_ends
+    grouped = build_space(ff.points, ff.interfaces, ff.spec.projection, ff.stiffness, group=4,
+                          merged=supported_ends(fine.model, ff.interfaces))
     assert grouped.n_multipliers == cf.space.n_multipliers < ff.space.n_multipliers
 
     def moments(space, points):

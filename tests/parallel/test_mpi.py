@@ -1,7 +1,9 @@
 """-n 1, -n 2 and -n 3 --oversubscribe give the serial answer on every probe of every step."""
+import os
+
 import pytest
 
-from helpers import assert_same_as_serial, load_raw, probes_table, run_on_ranks, two_beam_twisted
+from helpers import CONFIGS, assert_same_as_serial, load_raw, probes_table, run_on_ranks, two_beam_twisted
 
 
 def _cases():
@@ -16,8 +18,17 @@ def _cases():
     mixed["beams"][1].update({"element": 3333, "section": dict(mixed["beams"][1]["section"], cubature_degree=3)})
     mixed["probes"] = two["probes"]
     mixed["loads"] = two["loads"]
+    # the three subtendons with clamped roots: the roots' pressure functions folded into their
+    # neighbours (contact/multipliers.py), multipliers shared by elements on two ranks
+    tendon = load_raw("achilles_type3_psi45.yaml")
+    for b in tendon["beams"]:
+        b["elements"] = 4
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    for bc in tendon["boundary_conditions"]:
+        bc["fix"] = "clamped"
+    tendon["steps"] = [10.0, 100.0]
     return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
-            "two-beams-3363-3333": mixed}
+            "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon}
 
 
 CASES = _cases()

@@ -202,3 +202,21 @@ def test_restart_compares_the_resolved_model_not_its_text(tmp_path):
     lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
     assert p.returncode == 2 and len(lines) == 1, p.stderr
     assert "written by another model" in lines[0] and "beams/soleus/" in lines[0]
+
+
+def test_restart_refuses_a_run_with_another_pressure_space_at_clamped_ends(tmp_path):
+    """The clamped sandwich run with the pressure functions kept at its clamped ends
+    (``supported_ends: keep``) is another multiplier space than the default's folded one: a
+    restart names the setting (its stored state would not be an equilibrium of this model)."""
+    raw = load_raw("shear_lag_sandwich.yaml")
+    raw["steps"] = [0.5]
+    raw["contact"].setdefault("projection", {})["supported_ends"] = "keep"
+    p = solve_cli(write_config(raw, tmp_path / "keep.yaml"),
+                  extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    raw["steps"] = [0.5, 1.0]
+    raw["contact"]["projection"].pop("supported_ends")
+    p = solve_cli(write_config(raw, tmp_path / "merge.yaml"), extra=["--restart", str(tmp_path / "run")])
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
+    assert p.returncode == 2 and len(lines) == 1, p.stderr
+    assert "written by another model" in lines[0] and "supported_ends: absent →" in lines[0], lines[0]

@@ -126,11 +126,11 @@ class Contact:
         return DOFS_PER_NODE * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
-        """Node blocks (PETSc numbering) the local evaluation reads: the A and B elements of the
-        local points, any B element a projection wanted but did not have, the multiplier nodes."""
-        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local],
-                              self.projector.wanted] + [t.required_elements(self) for t in self.terms])
-        return np.unique(np.concatenate([self.conn[els].ravel(), self.mult_block[self.mults]]
+        """Node blocks (PETSc numbering) the local evaluation reads: the local points' A and B elements,
+        those across a near boundary (``neighbours``), wanted ones, the multiplier nodes."""
+        els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], self.projector.wanted,
+                              self.projector.neighbours(self.local)] + [t.required_elements(self) for t in self.terms])
+        return np.unique(np.concatenate([self.conn[els[els >= 0]].ravel(), self.mult_block[self.mults]]
                                         + [t.required_blocks(self) for t in self.terms]))
 
     def set_available(self, needed: np.ndarray) -> None:
@@ -278,15 +278,15 @@ class Contact:
             part.restore()
 
     def refresh_weights(self) -> bool:
-        """After a converged solve: bring the points' weights up to their partners' places in
-        the last evaluation; True (on every rank) when one changed by more than WEIGHT_TOL, so
-        that the state must be solved again (collective)."""
+        """After a converged solve: the weights brought up to the last evaluation; True (solve again,
+        collective) if one changed by > WEIGHT_TOL or a projection did not converge (descent.py)."""
         st = self._cache[2] if self._cache is not None else None
         change = 0.0 if st is None else self.weights.refresh(st.pr.idx, st.pr.weight)
-        changed = bool(self.reduce(np.array([change]), "max")[0] > WEIGHT_TOL)
-        if changed:
-            self._cache = None                  # the residual at this state changed
-        return changed
+        lost = float(st is not None and not st.pr.converged and not self.projector.metric_steps)
+        change, lost = self.reduce(np.array([change, lost]), "max")
+        self.projector.metric_steps |= bool(lost)
+        self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
+        return bool(change > WEIGHT_TOL or lost)
 
 
 def build_contact(model, spec, log=print) -> Contact:

@@ -67,8 +67,7 @@ class Contact:
         #: the points' weights when their partners slide past B's ends (weights.py)
         self.weights = PointWeights(self.points.n_points)
         self._cache = None
-        # the rank's numbering (``set_numbering``): PETSc blocks of the nodes, multipliers, segment
-        # multiplier nodes; the local segments, points, multipliers, those it reports, Φ of them
+        # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
         self.owned, self.Phi = np.zeros(0, dtype=bool), None
@@ -126,8 +125,7 @@ class Contact:
         return DOFS_PER_NODE * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
-        """Node blocks (PETSc numbering) the local evaluation reads: the local points' A and B elements,
-        those across a near boundary (``neighbours``), wanted ones, the multiplier nodes."""
+        """Node blocks (PETSc) read locally: A, B, neighbouring and wanted elements', multipliers'."""
         els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], self.projector.wanted,
                               self.projector.neighbours(self.local)] + [t.required_elements(self) for t in self.terms])
         return np.unique(np.concatenate([self.conn[els[els >= 0]].ravel(), self.mult_block[self.mults]]

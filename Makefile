@@ -72,7 +72,7 @@ verify-solid-contact: setup
 verify-solid-friction: setup
 	bash scripts/setup_solid.sh
 	$(PY) scripts/verify_solid_friction.py --profiles 10,100
-	$(PY) scripts/verify_solid_friction.py --merge --no-selftest --free-zone 0.01 --ancf-sticks default,7.3e10
+	$(PY) scripts/verify_solid_friction.py --merge --no-selftest --free-zone 0.01 --ancf-augmentations default
 
 clean:
 	rm -rf results .pytest_cache

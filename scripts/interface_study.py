@@ -9,6 +9,7 @@ soleus elongation and the displacement of each gastrocnemius against the soleus 
 
     OPENBLAS_NUM_THREADS=1 python scripts/interface_study.py [--elements 4 8] [--jobs 2]
         [--out DIR] [--csv docs/interface_study.csv] [--figure docs/figures/nonuniformity.png]
+        [--timeout SECONDS] [--reuse]
 
 Every run is one ancf-solve process (1 rank), as a user runs it.  The CSV has one row per run and
 level; the figure draws the soleus's displacement against the medial gastrocnemius at the far end
@@ -34,7 +35,7 @@ LOADINGS = {"soleus": "achilles_type3_psi45.yaml", "equal": "achilles_psi45_equa
 LAWS = [("sliding", "sliding", None)]
 LAWS += [(f"elastic k_t={k:.0e}", "sliding", {"law": "elastic", "stiffness": k}) for k in (1e8, 1e9, 1e10, 1e11)]
 LAWS += [("bonded (k_t=1e14)", "sliding", {"law": "elastic", "stiffness": 1e14})]
-LAWS += [(f"coulomb mu={mu:g}", "sliding", {"law": "coulomb", "friction": mu}) for mu in (0.03, 0.3)]
+LAWS += [(f"coulomb mu={mu:g}", "sliding", {"law": "coulomb", "friction": mu}) for mu in (0.03, 0.3, 3.0)]
 LAWS += [("unilateral", "unilateral", None)]
 LAWS += [(f"unilateral, coulomb mu={mu:g}", "unilateral", {"law": "coulomb", "friction": mu})
          for mu in (0.03, 0.3, 3.0)]
@@ -53,7 +54,7 @@ def config(loading: str, mode: str, tangential, elements: int, out: str) -> dict
     return raw
 
 
-def run(case: tuple, out: str, reuse: bool = False) -> dict:
+def run(case: tuple, out: str, reuse: bool = False, timeout: float | None = None) -> dict:
     loading, (label, mode, tangential), elements = case
     tag = f"{loading}_{elements}_{label}".replace(" ", "_").replace("=", "").replace(",", "").replace("(", "").replace(")", "")
     directory = os.path.join(out, tag)
@@ -61,20 +62,27 @@ def run(case: tuple, out: str, reuse: bool = False) -> dict:
     if reuse and os.path.exists(os.path.join(directory, "summary.json")):
         with open(os.path.join(directory, "summary.json")) as fh:
             s = json.load(fh)
-        return {"loading": loading, "law": label, "elements": elements, "status": s["status"],
+        return {"loading": loading, "law": label, "elements": elements,
+                "status": "stopped" if s["status"] == "running" else s["status"],
                 "message": s.get("message", ""), "wall_s": s.get("timings", {}).get("total", float("nan")),
                 "steps": s["steps"]}
     with open(path, "w") as fh:
         yaml.safe_dump(config(loading, mode, tangential, elements, directory), fh, sort_keys=False)
     t = time.perf_counter()
-    p = subprocess.run([os.path.join(ROOT, ".venv", "bin", "ancf-solve"), path, "--quiet"],
-                       capture_output=True, text=True, env=ENV)
+    try:
+        p = subprocess.run([os.path.join(ROOT, ".venv", "bin", "ancf-solve"), path, "--quiet"],
+                           capture_output=True, text=True, env=ENV, timeout=timeout)
+        stderr = p.stderr
+    except subprocess.TimeoutExpired:
+        stderr = f"stopped after {timeout:g} s"
     wall = time.perf_counter() - t
     try:
         with open(os.path.join(directory, "summary.json")) as fh:
             s = json.load(fh)
     except (OSError, ValueError):
-        s = {"status": "no summary", "steps": [], "message": p.stderr.strip()[-300:]}
+        s = {"status": "no summary", "steps": [], "message": stderr.strip()[-300:]}
+    if s["status"] == "running":               # stopped by the timeout: the levels it reached
+        s = dict(s, status="stopped", message=stderr.strip()[-300:])
     return {"loading": loading, "law": label, "elements": elements, "status": s["status"],
             "message": s.get("message", ""), "wall_s": wall, "steps": s["steps"]}
 
@@ -128,12 +136,13 @@ def main() -> int:
     ap.add_argument("--out", default="/tmp/ancf-interface-study")
     ap.add_argument("--csv", default=None)
     ap.add_argument("--figure", default=None)
+    ap.add_argument("--timeout", type=float, default=None, help="stop a run after this many seconds (reported as stopped)")
     ap.add_argument("--reuse", action="store_true", help="read the runs already in --out (their summary.json) instead of solving again")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS]
     with ThreadPoolExecutor(args.jobs) as pool:
-        results = list(pool.map(lambda c: run(c, args.out, args.reuse), cases))
+        results = list(pool.map(lambda c: run(c, args.out, args.reuse, args.timeout), cases))
     print("| loading | law | elements | status | Newton | cut-backs | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in results:

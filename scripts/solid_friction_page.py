@@ -74,7 +74,7 @@ def ancf_md(rows: list, psi: float) -> list:
     errs = rep.ancf_errors(rows, psi)
     cols = rep.ancf_columns(rows, psi)
     ref = rep.reference(rows, psi)
-    L = ["| stick stiffness | elements | levels reached | soleus, relative | medial, relative | lateral, relative "
+    L = ["| augmentation c | elements | levels reached | soleus, relative | medial, relative | lateral, relative "
          "| medial / u_soleus | lateral / u_soleus | within 1 % |",
          "|---|---:|---|---:|---:|---:|---:|---:|---|"]
     for (v, ne) in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])):
@@ -89,7 +89,7 @@ def ancf_md(rows: list, psi: float) -> list:
         verdict = "relative: yes" if ok_rel else ("against u_soleus only" if ok_abs else "no")
         if col["failed"] or len(e) < len(ref):
             verdict += " (not all levels)"
-        L.append(f"| {v.replace('stick ', '')} | {ne} | {status} | {pct(worst['soleus'])} | {pct(worst['medial'], 0)} | "
+        L.append(f"| {rep.variant_value(v)} | {ne} | {status} | {pct(worst['soleus'])} | {pct(worst['medial'], 0)} | "
                  f"{pct(worst['lateral'], 0)} | {pct(worsta['medial'])} | {pct(worsta['lateral'])} | {verdict} |")
     return L
 
@@ -108,7 +108,7 @@ def zone_md(rows: list, psi: float) -> list:
     if not zcols:
         return []
     plain = rep.ancf_columns(rows, psi)
-    L = ["| stick stiffness | elements | friction near the clamp | levels | solid | soleus, relative "
+    L = ["| augmentation c | elements | friction near the clamp | levels | solid | soleus, relative "
          "| medial / u_soleus | lateral / u_soleus | friction on the gastrocnemii from the soleus at 100 N, "
          "solid / ANCF [N] |", "|---|---:|---|---:|---|---:|---:|---:|---:|"]
     for (v, ne) in sorted(zcols, key=lambda k: (rep.stick_order(k[0]), k[1])):
@@ -124,7 +124,7 @@ def zone_md(rows: list, psi: float) -> list:
             f = [num(r["fx_mg_sol_N"]) + num(r["fx_lg_sol_N"]) for r in (runs[h].get(100.0), col["levels"].get(100.0))
                  if r is not None]
             reached = f"{len(e)}" + ("" if not col["failed"] else f" (to {max(col['levels'], default=0):g} N)")
-            L.append(f"| {base.replace('stick ', '')} | {ne} | {label} | {reached} | {variant}, h {1e3 * h:.2f} mm | "
+            L.append(f"| {rep.variant_value(base)} | {ne} | {label} | {reached} | {variant}, h {1e3 * h:.2f} mm | "
                      f"{pct(rel['soleus'])} | {pct(ab['medial'])} | {pct(ab['lateral'])} | "
                      + (" / ".join(f"{x:.1f}" for x in f) if len(f) == 2 else "—") + " |")
     return L
@@ -212,8 +212,9 @@ def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
           "k = 100 μ_max/h (Pa/m); consistent unsymmetric tangent, MUMPS LU; Table 1's 13 load levels, every "
           "converged increment accepted into the history (as ancf-solve does).  The beams: "
           "`verify_solid_contact.tendon_config` (`fix: clamped`, `traction_force` on the soleus' last node, "
-          "2 axial points) with `contact.tangential: {law: coulomb, friction: 0.3}`, at the default stick "
-          "stiffness (100 E/h) and softer ones.  Quantities: u_x at the end-section centroids (the soleus' is its "
+          "2 axial points) with `contact.tangential: {law: coulomb, friction: 0.3}` (tangential multipliers, "
+          "exact stick: `docs/interface.md`, first sections), at the default augmentation c (1) and at c = 10 and "
+          "0.1 (c only steers the semi-smooth Newton iteration; the answer must not depend on it).  Quantities: u_x at the end-section centroids (the soleus' is its "
           "elongation; the gastrocnemii move by tens of µm).", ""]
     for psi in psis:
         L += [f"### ψ = {psi:g}°", "", "**The solid's own checks.**  Largest change over the load levels, "
@@ -232,7 +233,8 @@ def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
         zm = zone_md(rows, psi)
         if zm:
             L += ["**Diagnostic: no friction near the clamp.**  The same columns with the Coulomb law switched off "
-                  "at the contact points (beams) and slave points (solid) below the given x, each model against the "
+                  "below the given x: for the beams, no friction carried by the tangential multiplier functions "
+                  "whose support is centred there (their bound set to zero), for the solid at its slave points there, each model against the "
                   "solid run with the same change on the coarse mesh (h = 2.00 mm; the first row of each pair: "
                   "friction everywhere, against the plain solid on that mesh).  Worst error over the levels:", ""]
             L += zm + [""]

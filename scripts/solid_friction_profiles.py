@@ -52,14 +52,14 @@ def solid_profile(secs, psi: float, h: float, mu: float, level: float, stick: fl
     return rows
 
 
-def ancf_profile(psi: float, elements: int, mu: float, level: float, stick, tmp: str) -> list:
+def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: str) -> list:
     """The ANCF column (verify_solid_friction.ancf_config; μ = 0: frictionless) to ``level``."""
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     from verify_solid_friction import ancf_config
-    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{stick}")
-    raw = ancf_config(psi, elements, mu, stick, out)
+    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{aug}")
+    raw = ancf_config(psi, elements, mu, aug, out)
     if mu == 0.0:
         del raw["contact"]["tangential"]
     raw["steps"] = [float(F) for F in vsc.LOADS if F <= level]
@@ -76,7 +76,7 @@ def ancf_profile(psi: float, elements: int, mu: float, level: float, stick, tmp:
         # force on the solid's slave body: the beams' slave A on mg_sol, lg_sol; B on lg_mg
         fx = (1.0 if name == "lg_mg" else -1.0) * area[m] * sigma[m]
         for lo, hi, qp, qm, fxb in binned(x0[m], p[m] * area[m], fx):
-            rows.append({"model": rep.ANCF, "variant": f"mu {mu:g}" + ("" if stick is None else f", stick {stick:g}"),
+            rows.append({"model": rep.ANCF, "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}"),
                          "resolution": f"{elements} el.", "interface": name, "load_N": level, "x_lo_m": lo,
                          "x_hi_m": hi, "q_plus_N_per_m": qp, "q_minus_N_per_m": qm, "fx_N_per_m": fxb})
     return rows
@@ -98,30 +98,39 @@ def write(path: str, rows: list) -> None:
 
 
 class BeamFreeZone:
-    """A diagnostic for the beams: no friction at contact points whose reference x is below
-    ``zone`` [m] (the Coulomb law's evaluation wrapped; every beam has ``elements`` elements
-    over ``length``).  Use as a context manager around run_model."""
+    """A diagnostic for the beams: no friction below x = ``zone`` [m] of the reference
+    configuration.  The Coulomb law holds per tangential multiplier function (friction.py), so
+    the functions whose support is centred below ``zone`` (the mean reference x of their contact
+    points, weighted by the points' weights) get the bound μ ẑ_k = 0 in the return mapping (and
+    no derivative of it): their y_k go to zero.  Every beam has ``elements`` elements over
+    ``length``.  Use as a context manager around run_model (serial runs)."""
 
     def __init__(self, zone: float, elements: int, length: float = vsc.LENGTH):
         self.zone, self.elements, self.length = zone, elements, length
 
     def __enter__(self):
         from ancf_petsc.contact import friction as fm
-        self.cls, self.orig = fm.CoulombFriction, fm.CoulombFriction.evaluate
-        zone, E, L, orig = self.zone, self.elements, self.length, self.orig
+        self.fm, self.orig, self.orig_map = fm, fm.CoulombFriction.evaluate, fm.return_map
+        zone, E, L, orig, orig_map = self.zone, self.elements, self.length, self.orig, self.orig_map
 
         def evaluate(law, c, st, x_of):
-            ev = orig(law, c, st, x_of)
-            pts = law.points
+            pts, wp = law.points, law.points.w[c.local]
             x = (pts.eA[c.local] % E + 0.5 * (pts.xi[c.local] + 1.0)) * L / E
-            m = x < zone
-            for a in (ev.sigma, ev.dsigma_dd, ev.dsigma_dn, ev.dsigma_dp):
-                a[m] = 0.0
-            ev.stick[m] = False
+            weight = c.Phi @ wp
+            centre = (c.Phi @ (wp * x)) / np.where(weight > 0.0, weight, 1.0)
+            free = (weight > 0.0) & (centre < zone)
+            fm.return_map = lambda a, nbar, bound, held=True: orig_map(a, nbar, np.where(free, 0.0, bound), held)
+            try:
+                ev = orig(law, c, st, x_of)
+            finally:
+                fm.return_map = orig_map
+            ev.bound[free] = 0.0
+            ev.g[free] = 0.0
             return ev
-        self.cls.evaluate = evaluate
+        fm.CoulombFriction.evaluate = evaluate
         return self
 
     def __exit__(self, *exc):
-        self.cls.evaluate = self.orig
+        self.fm.CoulombFriction.evaluate = self.orig
+        self.fm.return_map = self.orig_map
         return False

@@ -98,9 +98,19 @@ def solid_rows(run: dict, psi: float, mu: float, variant: str) -> list:
     return rows
 
 
+def ancf_variant(aug: float | None) -> str:
+    """The ANCF variant label of the Coulomb law's augmentation factor c (None: the default)."""
+    return "augmentation default" if aug is None else f"augmentation {aug:.3g}"
+
+
+def variant_value(variant: str) -> str:
+    """The variant's value alone (its word before the free-zone suffix): 'default', '10', ..."""
+    return variant.split(ZONE)[0].split()[-1]
+
+
 def ancf_rows(run: dict, mu: float) -> list:
     rows = []
-    variant = "stick default" if run["stick"] is None else f"stick {run['stick']:.3g}"
+    variant = ancf_variant(run["augmentation"])
     if run.get("zone"):
         variant += f"{ZONE}{run['zone'] * 1e3:g} mm"
     res = f"{run['elements']} el."
@@ -217,6 +227,6 @@ def ancf_errors(rows: list, psi: float) -> dict:
 
 
 def stick_order(variant: str) -> tuple:
-    """Sort key of the ANCF variants: the default first, then stiff to soft."""
-    word = variant.split(ZONE)[0].split()[-1]
+    """Sort key of the ANCF variants: the default first, then large to small."""
+    word = variant_value(variant)
     return (0, 0.0) if word == "default" else (1, -num(word))

@@ -85,20 +85,20 @@ def pressure(elements: list, loads: list) -> None:
                     print(f"| ANCF {e} el. | {rule} | {F:g} | " + " | ".join(cells) + " |", flush=True)
 
 
-def friction(elements: list, sticks: list) -> None:
+def friction(elements: list, augs: list) -> None:
     from verify_solid_friction import run_ancf
     ref = {F: v["row"] for F, v in rep.reference(rep.read_csv(os.path.join(vsc.ROOT, "docs", "solid_friction.csv")),
                                                    45.0).items()}
-    print("| ends | stick | elements | levels reached | Newton its | soleus, relative | medial / u_soleus "
+    print("| ends | augmentation c | elements | levels reached | Newton its | soleus, relative | medial / u_soleus "
           "| lateral / u_soleus | friction on the gastrocnemii from the soleus at 100 N [N] (solid "
           f"{sum(rep.num(ref[100.0][f'fx_{i}_N']) for i in ('mg_sol', 'lg_sol')):.1f}) |")
     print("|---|---|---:|---|---:|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory(prefix="supported_ends_") as tmp:
         for e in elements:
-            for stick in sticks:
+            for aug in augs:
                 for rule in RULES:
                     with supported_ends(rule):
-                        run = run_ancf(45.0, e, 0.3, stick, os.path.join(tmp, rule))
+                        run = run_ancf(45.0, e, 0.3, aug, os.path.join(tmp, rule))
                     lv = run["levels"]
                     worst = {}
                     for L in lv:
@@ -119,7 +119,7 @@ def friction(elements: list, sticks: list) -> None:
                                f"to {lv[-1]['load']:g} N" if lv else "none") + ("" if run["ok"] else f" ({run['msg'][:40]})")
                     its = sum(L["its"] for L in lv)
                     w = [f"{100 * worst[k]:+.2f} %" if k in worst else "—" for k in ("soleus", "medial", "lateral")]
-                    print(f"| {rule} | {'default' if stick is None else f'{stick:.1e}'} | {e} | {reached} | {its} | "
+                    print(f"| {rule} | {'default' if aug is None else f'{aug:g}'} | {e} | {reached} | {its} | "
                           + " | ".join(w) + f" | {f100} |", flush=True)
 
 
@@ -128,13 +128,13 @@ def main(argv=None) -> int:
     ap.add_argument("part", choices=("pressure", "friction"))
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--loads", default="10,100", help="pressure: load levels [N]")
-    ap.add_argument("--sticks", default="default,7.3e10", help="friction: stick stiffnesses [Pa/m]")
+    ap.add_argument("--augmentations", default="default,0.1", help="friction: the Coulomb law's augmentation c")
     args = ap.parse_args(argv)
     elements = [int(e) for e in args.elements.split(",")]
     if args.part == "pressure":
         pressure(elements, [float(F) for F in args.loads.split(",")])
     else:
-        friction(elements, [None if s == "default" else float(s) for s in args.sticks.split(",")])
+        friction(elements, [None if s == "default" else float(s) for s in args.augmentations.split(",")])
     return 0
 
 

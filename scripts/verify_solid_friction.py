@@ -11,15 +11,16 @@ the friction history (as ancf-solve does).
 
 ANCF: the same tendon in-process (``verify_solid_contact.tendon_config``: ``fix: clamped``,
 ``traction_force`` at the soleus' last node, 2 axial points) with ``contact: {mode: sliding,
-tangential: {law: coulomb, friction: μ}}`` at 4/8/16 elements, at the default stick stiffness
-and at softer ones (the regularisation is part of what is measured).
+tangential: {law: coulomb, friction: μ}}`` at 4/8/16 elements (tangential multipliers, exact
+stick: no stick stiffness), at the default augmentation c and at c x 10 and c / 10 (c only steers
+the semi-smooth Newton iteration: the answer must not depend on it, and that is measured).
 
 Usage (``make verify-solid-friction``; about 2 h on one shared core):
   python scripts/verify_solid_friction.py                    # FD check, solid study, checks, ANCF
   python scripts/verify_solid_friction.py --selftest         # the friction tangent against FD
   python scripts/verify_solid_friction.py --no-solid --merge # ANCF columns only (CSV kept)
   python scripts/verify_solid_friction.py --replot           # figure and page section from the CSV
-  python scripts/verify_solid_friction.py --free-zone 0.01 --no-selftest --ancf-sticks default,7.3e10
+  python scripts/verify_solid_friction.py --free-zone 0.01 --no-selftest --ancf-augmentations default
                                                              # diagnostic: no friction within 10 mm of the clamp
 Writes docs/solid_friction.csv, docs/figures/solid_friction.png and the section "Against a 3D
 solid with friction" of docs/interface.md (between its markers; the rest of the page is kept).
@@ -46,8 +47,8 @@ import verify_solid_contact as vsc  # noqa: E402
 
 LOADS = vsc.LOADS                   # Table 1's levels [N]
 IFACES = [n for n, _, _ in vsc.INTERFACES]
-#: the beam model's config key of the Coulomb stick stiffness (contact.tangential.<key>)
-STICK_KEY = "stick_stiffness"
+#: the beam model's config key of the Coulomb law's augmentation factor c (contact.tangential.<key>)
+AUG_KEY = "augmentation"
 
 
 def zone_label(variant: str, zone: float) -> str:
@@ -55,16 +56,16 @@ def zone_label(variant: str, zone: float) -> str:
     return f"{variant}{rep.ZONE}{zone * 1e3:g} mm" if zone else variant
 
 
-def ancf_config(psi: float, elements: int, mu: float, stick: float | None, out: str) -> dict:
+def ancf_config(psi: float, elements: int, mu: float, aug: float | None, out: str) -> dict:
     """verify_solid_contact's frictionless comparison config with Coulomb friction added."""
     raw = vsc.tendon_config(psi, elements, "sliding", out)
     raw["contact"]["tangential"] = {"law": "coulomb", "friction": mu}
-    if stick is not None:
-        raw["contact"]["tangential"][STICK_KEY] = stick
+    if aug is not None:
+        raw["contact"]["tangential"][AUG_KEY] = aug
     return raw
 
 
-def run_ancf(psi: float, elements: int, mu: float, stick: float | None, tmp: str, zone: float = 0.0) -> dict:
+def run_ancf(psi: float, elements: int, mu: float, aug: float | None, tmp: str, zone: float = 0.0) -> dict:
     """One ANCF column in-process: per level the probes' u_x, iterations and shear forces
     (``zone`` > 0, a diagnostic: no friction at contact points below x = zone [m])."""
     import contextlib
@@ -72,16 +73,16 @@ def run_ancf(psi: float, elements: int, mu: float, stick: float | None, tmp: str
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     from solid_friction_profiles import BeamFreeZone
-    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{stick}_{zone:g}")
+    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{aug}_{zone:g}")
     t0 = time.perf_counter()
     try:
         with BeamFreeZone(zone, elements) if zone else contextlib.nullcontext():
-            res = run_model(parse_config(ancf_config(psi, elements, mu, stick, out), base_dir=vsc.CONFIGS),
+            res = run_model(parse_config(ancf_config(psi, elements, mu, aug, out), base_dir=vsc.CONFIGS),
                             log=lambda *_: None)
         status, message, s = res.status, str(res.message), res.summary
     except Exception as exc:   # record and go on
         status, message, s = "failed", f"{type(exc).__name__}: {exc}", None
-    rec = {"psi": psi, "elements": elements, "stick": stick, "zone": zone, "ok": status == "completed",
+    rec = {"psi": psi, "elements": elements, "augmentation": aug, "zone": zone, "ok": status == "completed",
            "msg": "" if status == "completed" else message, "wall": time.perf_counter() - t0,
            "levels": [], "dofs": int(s["dofs"]) if s else 0,
            "k": None}
@@ -174,8 +175,8 @@ def _sliding_state(P) -> np.ndarray:
 
 def profiles(secs, args, levels: list, psi: float) -> None:
     """Pressure and friction along the tendon (solid_friction_profiles.py): the solid on the
-    coarsest mesh, frictionless and with μ; the ANCF columns (default stick stiffness, then the
-    softer ones where it fails), frictionless and with μ; written to solid_friction_profiles.csv."""
+    coarsest mesh, frictionless and with μ; the ANCF columns (default augmentation, then the
+    others where it fails), frictionless and with μ; written to solid_friction_profiles.csv."""
     import solid_friction_profiles as pf
     path = os.path.join(args.out, "solid_friction_profiles.csv")
     rows = []
@@ -187,9 +188,9 @@ def profiles(secs, args, levels: list, psi: float) -> None:
                     print(f"[profile] solid, mu {mu:g}, h {h * 1e3:.2f} mm, {F:g} N", flush=True)
                     rows += pf.solid_profile(secs, psi, h, mu, F, args.stick)
                 for ne in [int(e) for e in args.elements.split(",")]:
-                    for stick in (args.ancf_sticks.split(",") if mu else ["default"]):
-                        got = pf.ancf_profile(psi, ne, mu, F, None if stick == "default" else float(stick), tmp)
-                        print(f"[profile] ANCF {ne} el., mu {mu:g}, stick {stick}: "
+                    for aug in (args.ancf_augmentations.split(",") if mu else ["default"]):
+                        got = pf.ancf_profile(psi, ne, mu, F, None if aug == "default" else float(aug), tmp)
+                        print(f"[profile] ANCF {ne} el., mu {mu:g}, augmentation {aug}: "
                               + ("done" if got else "did not reach the level"), flush=True)
                         rows += got
                         if got:
@@ -211,8 +212,8 @@ def main(argv=None) -> int:
     ap.add_argument("--h-more", default="2e-3,1.4e-3", help="solid mesh sizes at the other pretwists")
     ap.add_argument("--stick", type=float, default=100.0, help="solid stick stiffness k in mu_max/h")
     ap.add_argument("--elements", default="4,8,16", help="ANCF elements per subtendon")
-    ap.add_argument("--ancf-sticks", default="default,7.3e11,7.3e10",
-                    help="ANCF stick stiffnesses [Pa/m] ('default': friction.STICK_FACTOR E/h)")
+    ap.add_argument("--ancf-augmentations", default="default,10,0.1",
+                    help="ANCF augmentation factors c of contact.tangential ('default': the law's, 1)")
     ap.add_argument("--max-increment", type=float, default=50.0, help="largest solid load increment [N]")
     ap.add_argument("--free-zone", type=float, default=0.0,
                     help="a diagnostic [m]: the runs without friction below x = this (solid: coarsest mesh only)")
@@ -271,12 +272,12 @@ def main(argv=None) -> int:
         if args.no_ancf:
             continue
         with tempfile.TemporaryDirectory(prefix="solid_friction_") as tmp:
-            for stick in args.ancf_sticks.split(","):
-                k = None if stick == "default" else float(stick)
+            for aug in args.ancf_augmentations.split(","):
+                c = None if aug == "default" else float(aug)
                 for ne in [int(e) for e in args.elements.split(",")]:
-                    a = run_ancf(psi, ne, mu, k, tmp, zone)
+                    a = run_ancf(psi, ne, mu, c, tmp, zone)
                     last = a["levels"][-1] if a["levels"] else None
-                    print(f"[ancf] psi {psi:g}, {ne} el., stick {stick}: "
+                    print(f"[ancf] psi {psi:g}, {ne} el., augmentation {aug}: "
                           + (f"{last['load']:g} N, soleus u_x {1e3 * last['u']['soleus']:.5f} mm" if last else "")
                           + (f", {a['wall']:.0f} s" if a["ok"] else f" FAILED ({a['msg']})"), flush=True)
                     save(rep.ancf_rows(a, mu))

@@ -70,23 +70,23 @@ def test_the_solid_study_is_complete(rep):
     assert max(d[f"{b}_abs"] for b in rep.BODIES) < 1e-4
 
 
-@pytest.mark.parametrize("stick, elements, zone", [(None, 4, 0.0), (7.3e11, 4, 0.0), (7.3e10, 8, 0.0),
-                                                    (None, 4, 0.01)])
-def test_the_ancf_columns_are_todays(rep, stick, elements, zone):
+@pytest.mark.parametrize("aug, elements, zone", [(None, 4, 0.0), (10.0, 4, 0.0), (0.1, 8, 0.0), (None, 4, 0.01)])
+def test_the_ancf_columns_are_todays(rep, aug, elements, zone):
     """Each kind of column to the first level (10 N): the CSV's u_x of the three ends, to 1e-6
-    (zone: the diagnostic without friction within 10 mm of the clamp)."""
+    (aug: the Coulomb law's augmentation c, None the default; zone: the diagnostic without
+    friction within 10 mm of the clamp)."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     drv = _load("verify_solid_friction")
     pf = _load("solid_friction_profiles")
     rows = rep.read_csv(CSV)
-    variant = drv.zone_label("stick default" if stick is None else f"stick {stick:.3g}", zone)
+    variant = drv.zone_label(rep.ancf_variant(aug), zone)
     want = [r for r in rows if r["model"] == rep.ANCF and r["variant"] == variant
             and r["resolution"] == f"{elements} el." and float(r["psi_deg"]) == 45.0 and r["load_N"]
             and float(r["load_N"]) == 10.0]
     assert len(want) == 1
     with tempfile.TemporaryDirectory() as tmp:
-        raw = drv.ancf_config(45.0, elements, 0.3, stick, tmp)
+        raw = drv.ancf_config(45.0, elements, 0.3, aug, tmp)
         raw["steps"] = [10.0]
         with pf.BeamFreeZone(zone, elements) if zone else contextlib.nullcontext():
             res = run_model(parse_config(raw, base_dir=drv.vsc.CONFIGS), log=lambda *_: None)

@@ -29,19 +29,20 @@ def _elastic(value: dict, p: str, t: TangentialSpec) -> None:
 
 
 def _coulomb(value: dict, p: str, t: TangentialSpec) -> None:
-    """The friction coefficient μ (> 0; law none is μ = 0) and an optional stick stiffness."""
+    """The friction coefficient μ (> 0; law none is μ = 0) and an optional augmentation."""
     if "friction" not in value:
         raise ConfigError(f"{p}.friction", "missing value (required): the friction coefficient mu")
     t.friction = number(value["friction"], f"{p}.friction", positive=True, hi=10.0,
                         hint=" (Coulomb's coefficient mu; frictionless is law: none)")
-    if value.get("stick_stiffness") is not None:
-        t.stick_stiffness = number(value["stick_stiffness"], f"{p}.stick_stiffness", positive=True,
-                                   hint=" (Pa/m; default 100 E/h of the softer beam)")
+    if value.get("augmentation") is not None:
+        t.augmentation = number(value["augmentation"], f"{p}.augmentation", positive=True, hi=1e6,
+                                hint=" (the stick test's stiffness in units of k_s / A; default 1; "
+                                     "it steers Newton's iteration, not the answer)")
 
 
 #: per tangential law: its keys and their reader (the laws are contact/tangential.py TANGENTIAL_LAWS)
 TANGENTIAL_PARSERS = {ElasticMatrix.law: (("stiffness", "shear_modulus", "thickness"), _elastic),
-                      CoulombFriction.law: (("friction", "stick_stiffness"), _coulomb)}
+                      CoulombFriction.law: (("friction", "augmentation"), _coulomb)}
 
 
 def parse_tangential(value, p: str = "contact.tangential") -> TangentialSpec:

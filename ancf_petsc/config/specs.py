@@ -99,7 +99,7 @@ class TangentialSpec:
     law: str = TANGENTIAL_LAW_NAMES[0]     # a name of TANGENTIAL_LAWS; the first is frictionless
     stiffness: float | None = None         # elastic matrix: k_t = G / thickness [Pa/m]
     friction: float | None = None          # Coulomb: the friction coefficient μ
-    stick_stiffness: float | None = None   # Coulomb: k_pen [Pa/m] (None: friction.STICK_FACTOR E/h)
+    augmentation: float | None = None      # Coulomb: the stick test's c in units of k_s / A (None: 1)
 
 
 @dataclass

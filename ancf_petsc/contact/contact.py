@@ -26,7 +26,7 @@ from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, couplings, reports
 from .interfaces import find_interfaces, supported_ends
 from .laws import Phase, active_set_rows, make_law
-from .multipliers import build_space, reference_stiffness
+from .multipliers import build_space, reference_stiffness, with_tangential
 from .points import build_points
 from .projection import Projector
 from .reference_gaps import check_reference_gaps
@@ -42,11 +42,13 @@ class Contact:
         self.model, self.spec, self.interfaces = model, spec, interfaces
         self.law = make_law(spec.mode)
         self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
-        self.space = build_space(self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
-                                 spec.per_element, merged=supported_ends(model, interfaces, spec.supported_ends))
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         #: contact terms beside the normal constraints (a tangential law's interface shear)
         self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
+        self.space = with_tangential(build_space(
+            self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
+            spec.per_element, merged=supported_ends(model, interfaces, spec.supported_ends)),
+            any(t.multipliers for t in self.terms))
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()
         #: set by a parallel assembly (collective): ``sum_over_ranks(values over self.mults)``
@@ -65,9 +67,7 @@ class Contact:
         #: the points' weights when their partners slide past B's ends (weights.py)
         self.weights = PointWeights(self.points.n_points)
         self._cache = None
-        # the rank's numbering (``set_numbering``): PETSc block of every element node, multiplier
-        # and segment multiplier node; the local segments, points and multipliers, which of those
-        # multipliers this rank reports, and Φ restricted to them
+        # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
         self.owned, self.Phi = np.zeros(0, dtype=bool), None
@@ -95,9 +95,8 @@ class Contact:
 
     def set_numbering(self, perm: np.ndarray, local_segments: np.ndarray,
                       owned_elements: np.ndarray | None = None) -> None:
-        """Block numbering ``perm`` (model block id → PETSc block id, multiplier nodes after the
-        physical ones), the segments this rank evaluates (bool per segment) and the elements it
-        owns (bool per element; default all), whose multipliers it reports."""
+        """Block numbering ``perm`` (model block → PETSc block, multiplier nodes after the physical
+        ones), the segments this rank evaluates and the elements whose multipliers it reports."""
         pts, sp = self.points, self.space
         self.conn = perm[self.model.connectivity()]
         self.projector.conn = self.conn
@@ -112,6 +111,8 @@ class Contact:
         self.owned = (np.ones(len(self.mults), dtype=bool) if owned_elements is None
                       else owned_elements[sp.element[self.mults]])
         self.Phi = sp.Phi[self.mults][:, self.local].tocsr()
+        for term in self.terms:
+            term.set_numbering(self, perm)
         self._cache = None
 
     def set_layout(self, layout) -> None:
@@ -124,11 +125,11 @@ class Contact:
         return DOFS_PER_NODE * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
-        """Node blocks (PETSc numbering) the local evaluation reads: the local points' A and B elements,
-        those across a near boundary (``neighbours``), wanted ones, the multiplier nodes."""
+        """Node blocks (PETSc) read locally: A, B, neighbouring and wanted elements', multipliers'."""
         els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], self.projector.wanted,
                               self.projector.neighbours(self.local)] + [t.required_elements(self) for t in self.terms])
-        return np.unique(np.concatenate([self.conn[els[els >= 0]].ravel(), self.mult_block[self.mults]]))
+        return np.unique(np.concatenate([self.conn[els[els >= 0]].ravel(), self.mult_block[self.mults]]
+                                        + [t.required_blocks(self) for t in self.terms]))
 
     def set_available(self, needed: np.ndarray) -> None:
         """Record which elements have every node block in the rank's local array ``needed``."""
@@ -157,8 +158,7 @@ class Contact:
         """Project the local points at the local state ``xl`` (n, 6, 3) and apply the law.
 
         SNES evaluates the Jacobian at the state of the residual before it: that evaluation is
-        reused (the projection state is its result, so nothing else changes).  With the
-        parallel hooks set (``sum_over_ranks``) this is collective: every rank calls it."""
+        reused.  With the parallel hooks set (``sum_over_ranks``) every rank calls it."""
         c = self._cache
         hit = (c is not None and c[1] is needed and np.array_equal(c[0], xl)
                and not (self.allow_update and self.law.decides_activity))
@@ -196,9 +196,9 @@ class Contact:
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
         tau = self.stiffness * (self.Phi.T @ (z * rows.load)) * weight
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos,
-                          rows=rows, weight=weight)
+                          rows=rows, weight=weight, xl=xl.copy())
         st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}
-        self._cache = None if self.missing else (xl.copy(), needed, st)
+        self._cache = None if self.missing else (st.xl, needed, st)
         if self.timers is not None:
             self.timers["contact_projection"] += time.perf_counter() - t0
         return st

@@ -1,18 +1,35 @@
-"""Coulomb friction between subtendons: a tangential law (issue 27).
+"""Coulomb friction between subtendons with tangential multipliers: exact stick (issue 27).
 
-Stick while |σ| < μ p⁺, slip against the slip increment otherwise; p⁺ = max(p, 0) with p the
-contact pressure at the point (p = k_s Σ_k z_k Φ_kp / w_p, multipliers.py): a pulled interface,
-under the sliding law, carries no friction, and an open one, under the unilateral law, has no
-pressure.  The incremental return mapping (Wriggers, Computational Contact Mechanics, 2006, §5.2;
-Laursen 2002, §5) from the stress σ₀ and the relative displacement d₀ (partners.py) of the last
-accepted increment:
+The tangential traction is a field of the pressure's functions (multipliers.py), t(x) =
+Σ_k φ_k(x) λ_T,k, unknown like the pressure p(x) = Σ_k φ_k(x) λ_k and scaled like it:
+λ_T,k = k_s y_k / A_k with y_k [m] three more unknowns per function (``with_tangential``).  At
+a contact point it acts in B's tangent plane at the closest point, σ_p = (I − n nᵀ) t(x_p), and
+adds ω N_Aᵀσ on A and −ω N_B(ζ₀)ᵀσ on the reference partner (partners.py).  Coulomb's law holds
+per function, in the weighted (mortar) sense of the normal constraints, with the weighted slip
+increment of the function
 
-    σ = proj_{|σ| ≤ μ p⁺} (P (σ₀ + k (d − d₀))),   P = I − n nᵀ,
+    U_k = Σ_p Φ_kp ω'_p (I − n_p n_pᵀ)(d_p − d₀_p),    n̄_k = m_k / |m_k|,  m_k = Σ_p Φ_kp ω'_p n_p
 
-n B's unit normal at the point's current closest point.  Stick is regularised by the stiffness k
-per area (a sticking point moves by σ/k).  The virtual work adds ω N_Aᵀ σ on A and −ω N_B(ζ₀)ᵀ σ on
-the partner; the Jacobian ω ∇dᵀ (∂σ/∂d ∇d + ∂σ/∂n ∇n + ∂σ/∂p ∂p/∂z) is consistent (the rotation
-of the normal with ∇n from gap.normal_gradient) and not symmetric (MUMPS LU).
+(d the relative displacement of the point and its partner, d₀ at the last accepted increment,
+ω' the points' weights) as the Alart–Curnier equation (Alart & Curnier 1991; the mortar form of
+Gitterle, Popp, Gee & Wall, IJNME 84, 2010, eq. 43):
+
+    R_k = y_k − proj_{|·| ≤ μ ẑ_k} (P̄_k (y_k + c U_k)),    P̄_k = I − n̄_k n̄_kᵀ,
+
+zero where the function sticks (P̄ U = 0 exactly: no stick stiffness, no regularisation; the
+normal part of y vanishes) and where it slips (|y| = μ ẑ against the slip).  The bound is the
+function's share of the pressing normal force, ẑ_k = ∫ φ_k p⁺ dA / k_s = A_k Σ_p Φ_kp ω'_p
+(Φᵀz)_p⁺ / w_p, not z_k⁺: the Bernstein coefficients z_k of a positive pressure oscillate in
+sign (the pressed strips: z_k from −84 to 219 Pa where p is 57 … 158 Pa), and Σ_k μ z_k⁺ let
+the strips carry 1.18 μN.  Σ_k ẑ_k is the pressing normal force, so a sliding interface carries
+μN exactly where p ≥ 0.  The sliding law's pulled parts (p < 0) and an open unilateral interface
+carry none.  c (``augmentation``, 1 by default, in units of k_s / A_k: the stiffness of the
+structure under a function's traction) only steers the semi-smooth Newton iteration; the answer
+does not depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN).  At rest (no
+pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
+The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the generalised derivative of
+R and of the forces, with the rotation of n and n̄ (gap.normal_gradient) and the bounds' coupling
+to the pressures, unsymmetric (MUMPS LU).
 """
 from __future__ import annotations
 
@@ -20,143 +37,181 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE, SLOTS
-from .gap import normal_gradient
-from .partners import PartnerTerm, drop_held, node_dofs, segment_outer
+from ..physics.element3363 import DOFS_PER_NODE
+from . import friction_blocks
+from .partners import PartnerTerm
 
-EL = DOFS_PER_ELEMENT
-#: default stick stiffness k: this many times E/h of the softest beam (partners.reference_scale)
-STICK_FACTOR = 100.0
+EYE = np.eye(3)
 
 
 @dataclass
 class FrictionEvaluation:
-    """Friction at the local points: d (P, 3), σ (P, 3) [Pa], ∂σ/∂d, ∂σ/∂n (P, 3, 3), ∂σ/∂p
-    (P, 3), stick (P,), the weights ω (P,) [m²] and pressures p (P,) [Pa]."""
+    """Friction at the local points (P) and the local multipliers (M, ``Contact.mults``).
+    Points: d, Δd = d − d₀ (P, 3), the traction σ [Pa] (P, 3), the weighted tangential
+    multipliers Y = Σ_k Φ_kp y_k (P, 3), stick (P,), ω (P,) [m²], pressure (P,) [Pa].
+    Multipliers: y, a = y + c U, n̄ (M, 3), |m| (M,), T = −∂proj/∂trial (M, 3, 3), g = ∂R/∂bound
+    and the slip direction (M, 3), bound μ ẑ (M,) [m], stick and slide (M,), R (M, 3), this
+    rank's share, ∂R/∂n̄ (M, 3, 3); whether each point presses (P,)."""
     d: np.ndarray
+    du: np.ndarray
     sigma: np.ndarray
-    dsigma_dd: np.ndarray
-    dsigma_dn: np.ndarray
-    dsigma_dp: np.ndarray
+    Y: np.ndarray
     stick: np.ndarray
     omega: np.ndarray
     pressure: np.ndarray
+    y: np.ndarray
+    a: np.ndarray
+    nbar: np.ndarray
+    mnorm: np.ndarray
+    T: np.ndarray
+    g: np.ndarray
+    direction: np.ndarray
+    bound: np.ndarray
+    m_stick: np.ndarray
+    slide: np.ndarray
+    R: np.ndarray
+    share: np.ndarray
+    dRdn: np.ndarray
+    positive: np.ndarray
+
+
+def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held: bool = True) -> tuple:
+    """proj_{|·| ≤ bound}(P̄ a) per multiplier and its derivative S with respect to P̄ a:
+    (projection, S, direction, stick, slide).  At the kink a = 0 with no bound (at rest) the
+    generalised derivative taken is the sticking one (``held``): Newton's first step from rest
+    then holds the interface instead of letting it slide freely."""
+    trial = a - np.einsum("ki,ki->k", nbar, a)[:, None] * nbar
+    size = np.linalg.norm(trial, axis=1)
+    stick = ((size <= bound) & (bound > 0.0)) | (held & (bound == 0.0) & (size <= 1e-12))
+    slide = (bound > 0.0) & ~stick
+    direction = np.zeros_like(trial)
+    direction[slide] = trial[slide] / size[slide, None]
+    proj = np.where(stick[:, None], trial, bound[:, None] * direction)
+    ratio = np.where(slide, bound / np.where(slide, size, 1.0), 0.0)
+    S = (stick[:, None, None] * EYE
+         + ratio[:, None, None] * (EYE - direction[:, :, None] * direction[:, None, :]))
+    return proj, S, direction, stick, slide
 
 
 class CoulombFriction(PartnerTerm):
-    """Coulomb friction |σ| ≤ μ p⁺, stick regularised by a stiffness k [Pa/m]."""
+    """Coulomb friction |t| ≤ μ p⁺ with tangential multipliers (module docstring)."""
     law = "coulomb"
     symmetric = False
-    #: per point: the stress σ₀ [Pa] and relative displacement d₀ [m] of the last increment
-    history = ("traction", "anchor")
-    #: full Newton steps cycle between slip directions from a state with no slip yet (the
-    #: paper's tendon at 10 N, mu = 0.1 and 0.3, at every cut-back: the problem is scale-free
-    #: there); the backtracking line search on |F| converges, in up to ~25 iterations from rest
-    options = {"snes_linesearch_type": "bt", "snes_max_it": "50"}
+    multipliers = True
+    #: per point: the relative displacement d₀ [m] of the last accepted increment
+    history = ("anchor",)
+    #: the semi-smooth Newton iteration takes the l2 line search (bt stalls at the kinks of the
+    #: projection); from rest at mu = 3 it needs up to ~100 iterations to settle the statuses
+    #: (a cut-back cannot help there: Coulomb's law is homogeneous in the load)
+    options = {"snes_max_it": "200", "snes_linesearch_type": "l2"}
 
-    def __init__(self, coefficient: float, stick_stiffness: float, model, points, projector):
+    def __init__(self, coefficient: float, augmentation: float, model, points, projector):
         super().__init__(model, points, projector)
         self.mu = float(coefficient)
-        self.stick_stiffness = float(stick_stiffness)
+        self.augmentation = float(augmentation)
+        self.n_nodes = model.n_nodes
+        self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
+        self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
 
     @classmethod
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
-        """From ``contact.tangential`` (``friction`` μ, ``stick_stiffness`` k [Pa/m], by default
-        ``STICK_FACTOR`` × ``reference`` = E/h of the softest beam)."""
-        k = spec.stick_stiffness if spec.stick_stiffness is not None else STICK_FACTOR * reference
-        return cls(spec.friction, k, model, points, projector)
+        """From ``contact.tangential`` (``friction`` μ, ``augmentation`` c's factor, default 1)."""
+        aug = spec.augmentation if spec.augmentation is not None else 1.0
+        return cls(spec.friction, aug, model, points, projector)
 
+    # ------------------------------------------------------------------ numbering
+    def set_numbering(self, c, perm: np.ndarray) -> None:
+        """The PETSc DOFs of the tangential multipliers (block numbering ``perm``)."""
+        sp = c.space
+        self.tdof = DOFS_PER_NODE * perm[self.n_nodes + sp.tnode] + sp.tslot
+        sm = sp.seg_mults
+        blocks = perm[self.n_nodes + sp.tnode[np.maximum(sm, 0)]]                # (S, K, 3)
+        self.seg_tblocks = np.where((sm >= 0)[:, :, None], blocks, -1).reshape(len(sm), -1)
+
+    def required_blocks(self, c) -> np.ndarray:
+        """The node blocks of the local multipliers' tangential components."""
+        return np.unique(self.tdof[c.mults] // DOFS_PER_NODE)
+
+    def local_positions(self, c, st) -> np.ndarray:
+        """Positions of the local y_k (M, 3) in the local DOF array."""
+        return DOFS_PER_NODE * st.lpos(self.tdof[c.mults] // DOFS_PER_NODE) + self.tdof[c.mults] % DOFS_PER_NODE
+
+    # ------------------------------------------------------------------ evaluation
     def evaluate(self, c, st, x_of) -> FrictionEvaluation:
-        """The return mapping at the local points of the ``Contact`` c in its evaluation ``st``."""
-        idx, k, n = c.local, self.stick_stiffness, st.pr.n
+        """The law at the local points and multipliers of the ``Contact`` c in its evaluation
+        ``st`` (collective with the parallel hooks set: the weighted slips span ranks)."""
+        idx, n, w = c.local, st.pr.n, st.weight
         d = self.relative(c, st, x_of)
-        pressure = c.stiffness * (c.Phi.T @ (st.z * st.rows.load)) / self.points.w[idx]
-        a = self.state["traction"][idx] + k * (d - self.state["anchor"][idx])
-        na = np.einsum("pi,pi->p", n, a)
-        trial = a - na[:, None] * n
-        size = np.linalg.norm(trial, axis=1)
-        bound = self.mu * np.maximum(pressure, 0.0)
-        stick = (size <= bound) & (bound > 0.0)
-        slide = ~stick & (size > 0.0) & (bound > 0.0)
-        direction = np.zeros_like(trial)
-        direction[slide] = trial[slide] / size[slide, None]
-        sigma = np.where(stick[:, None], trial, bound[:, None] * direction)
-        # S = ∂σ/∂σ*: I (stick), μp⁺/|σ*| (I − t̂ t̂ᵀ) (slip), 0 (no pressure)
-        ratio = np.where(slide, bound / np.where(slide, size, 1.0), 0.0)
-        eye = np.eye(3)[None]
-        S = (stick[:, None, None] * eye
-             + ratio[:, None, None] * (eye - direction[:, :, None] * direction[:, None, :]))
-        P = eye - n[:, :, None] * n[:, None, :]
-        dtrial_dn = -(na[:, None, None] * eye + n[:, :, None] * a[:, None, :])  # ∂(P a)/∂n
-        return FrictionEvaluation(d=d, sigma=sigma, dsigma_dd=k * S @ P, dsigma_dn=S @ dtrial_dn,
-                                  dsigma_dp=self.mu * direction * (pressure > 0.0)[:, None], stick=stick,
-                                  omega=self.points.w[idx] * st.weight, pressure=pressure)
+        du = d - self.state["anchor"][idx]
+        u = du - np.einsum("pi,pi->p", n, du)[:, None] * n
+        wp = self.points.w[idx]
+        zl = st.z * st.rows.load
+        positive = c.Phi.T @ zl > 0.0                  # the points that press (p > 0)
+        sums = np.hstack([c.Phi @ (w[:, None] * u), c.Phi @ (w[:, None] * n),
+                          c.Phi @ (w * positive * (c.Phi.T @ zl) / wp)[:, None]])
+        if c.sum_over_ranks is not None:
+            sums = c.sum_over_ranks(sums)
+        U, m = sums[:, :3], sums[:, 3:6]
+        zhat = c.space.area[c.mults] * sums[:, 6]      # ∫ φ_k p⁺ dA / k_s
+        mnorm = np.linalg.norm(m, axis=1)
+        nbar = np.where(mnorm[:, None] > 0.0, m / np.where(mnorm > 0.0, mnorm, 1.0)[:, None], EYE[0])
+        y = st.xl.reshape(-1)[self.local_positions(c, st)]
+        bound = self.mu * zhat
+        probe = c.law.phase.probe                   # the bodies alone: friction held, rows decoupled
+        if probe:
+            bound = np.zeros_like(bound)
+        a = y + self.augmentation * U
+        proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=not probe)
+        R, T, g = y - proj, -S, -direction
+        na = np.einsum("ki,ki->k", nbar, a)
+        dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
+        Y = c.Phi.T @ y
+        sigma = c.stiffness * (Y - np.einsum("pi,pi->p", n, Y)[:, None] * n) / wp[:, None]
+        # a point sticks where most of its functions (by their weight at the point) stick
+        on = c.Phi.T @ m_stick.astype(float)
+        pressure = c.stiffness * (c.Phi.T @ (st.z * st.rows.load)) / wp
+        share = c.Phi @ np.ones(len(idx)) if c.sum_over_ranks is not None else np.ones(len(c.mults))
+        return FrictionEvaluation(d=d, du=du, sigma=sigma, Y=Y, stick=on > 0.5, omega=wp * w,
+                                  pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, T=T, g=g,
+                                  direction=direction, bound=bound, m_stick=m_stick, slide=slide,
+                                  R=R, share=share, dRdn=dRdn, positive=positive)
 
     def kept(self, ev: FrictionEvaluation) -> dict:
-        """The next increment starts from this state's stresses and relative displacements."""
-        return {"traction": ev.sigma, "anchor": ev.d}
+        """The next increment's slips start from this state's relative displacements."""
+        return {"anchor": ev.d}
 
     def add_forces(self, c, st, floc: np.ndarray) -> None:
-        """ω N_Aᵀ σ on A's DOFs and −ω N_B(ζ₀)ᵀ σ on the partners'."""
+        """ω N_Aᵀ σ on A's DOFs, −ω N_B(ζ₀)ᵀ σ on the partners' and k_s R_k on the rows of y_k
+        (each rank its share of a function living on two ranks)."""
         ev = st.terms[self.name]
         force = ev.omega[:, None] * ev.sigma
         self.add_point_forces(c, st, floc, self.grad_d(c)[:, :, None] * force[:, None, :])
+        pos = self.local_positions(c, st)
+        floc[pos] += c.stiffness * ev.share[:, None] * ev.R
 
     def jacobian_blocks(self, c, st, fixed_mask: np.ndarray) -> list:
-        """Dense blocks, rows over A's element and the partner's (108): per local segment
-        ∂/∂(A, partner) (square); per segment and B element of the closest points ∂/∂(A, that
-        element) through the normal; per segment ∂/∂z through the pressure.  Square blocks are
-        (rows, values), the others (rows, columns, values)."""
-        if len(c.local) == 0:
-            return []
-        ev, pts, segs = st.terms[self.name], c.points, c.segments
-        srow = np.searchsorted(segs, pts.seg[c.local])
-        NAB = self.grad_d(c)                                                  # (P, 36)
-        rows = node_dofs(self.segment_nodes(c))                               # (n_s, 108)
-        wN = ev.omega[:, None] * NAB
-        # Σ_p ω N_a (∂σ/∂d)_ij N_b per segment: one (36·3·3 × P)(P × 36) product
-        left = (wN[:, :, None, None] * ev.dsigma_dd[:, None]).reshape(len(NAB), -1)
-        Kdd = segment_outer(srow, len(segs), left, NAB)                        # (n_s, [a i j], b)
-        Kdd = Kdd.reshape(-1, 2 * SLOTS, 3, 3, 2 * SLOTS).transpose(0, 1, 2, 4, 3).reshape(-1, 2 * EL, 2 * EL)
-        out = [(drop_held(rows, fixed_mask), Kdd)]
-        # ω (N ⊗ I)ᵀ (∂σ/∂n) ∇n per (segment, B element of the closest point)
-        pair, inv = np.unique(np.stack([srow, st.pr.eB], 1), axis=0, return_inverse=True)
-        inv = inv.ravel()
-        grad = ev.dsigma_dn @ normal_gradient(st.pr)                          # (P, 3, 108)
-        blocks = (wN[:, :, None, None] * grad[:, None]).reshape(len(NAB), 2 * EL, 2 * EL)
-        order = np.argsort(inv, kind="stable")
-        Kdn = np.add.reduceat(blocks[order], np.searchsorted(inv[order], np.arange(len(pair))), axis=0)
-        cols = node_dofs(np.concatenate([c.conn[pts.seg_eA[segs[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1))
-        out.append((drop_held(rows[pair[:, 0]], fixed_mask), drop_held(cols, fixed_mask), Kdn))
-        out.append(self._pressure_block(c, st, ev, srow, wN, rows, fixed_mask))
-        return out
-
-    def _pressure_block(self, c, st, ev, srow, wN, rows, fixed_mask):
-        """ω (N ⊗ I)ᵀ (∂σ/∂p) ∂p/∂z_k per segment, ∂p/∂z_k = k_s Φ_kp load_k / w_p, over the
-        segment's multiplier nodes (the functions living on it)."""
-        pts, sp, idx, segs = c.points, c.space, c.local, c.segments
-        m_ids = sp.seg_mults[segs]                                            # (n_s, K)
-        real = m_ids >= 0
-        load = np.zeros(m_ids.shape)
-        load[real] = st.rows.load[np.searchsorted(c.mults, m_ids[real])]
-        p_loc = idx - pts.seg_start[pts.seg[idx]]
-        col = (c.stiffness / pts.w[idx])[:, None] * sp.dense[pts.seg[idx], :, p_loc] * load[srow]
-        G = (wN[:, :, None] * ev.dsigma_dp[:, None, :]).reshape(len(idx), 2 * EL)
-        Kz = segment_outer(srow, len(segs), G, col)                            # (n_s, 108, K)
-        K = np.zeros((len(segs), 2 * EL, 2 * DOFS_PER_NODE))
-        ss, kk = np.nonzero(real)
-        second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]
-        K[ss, :, DOFS_PER_NODE * second + sp.slot[m_ids[ss, kk]]] = Kz[ss, :, kk]
-        return drop_held(rows, fixed_mask), drop_held(node_dofs(c.seg_blocks[segs]), fixed_mask), K
+        """The generalised Jacobian's blocks (friction_blocks.py)."""
+        return friction_blocks.jacobian_blocks(self, c, st, fixed_mask)
 
     def couplings(self, c) -> list[np.ndarray]:
-        """A's nodes, the partner's, the B elements of the closest points and the multiplier
-        nodes of each local segment, all with all."""
+        """Per (local segment, B element of its closest points): A's nodes, the partner's, that
+        element's, the segment's pressure and tangential multiplier nodes, all with all."""
         nodes = self.segment_nodes(c)
         srow = np.searchsorted(c.segments, c.points.seg[c.local])
         pair = np.unique(np.stack([srow, c.projected_elements()], 1), axis=0)
-        return [np.concatenate([nodes[pair[:, 0]], c.conn[pair[:, 1]], c.seg_blocks[c.segments[pair[:, 0]]]], axis=1)]
+        seg = c.segments[pair[:, 0]]
+        return [np.concatenate([nodes[pair[:, 0]], c.conn[pair[:, 1]], c.seg_blocks[seg],
+                                self.seg_tblocks[seg]], axis=1)]
+
+    # ------------------------------------------------------------------ reports
+    def fields(self, c, st) -> dict[str, np.ndarray]:
+        """The base's per-point fields and per owned multiplier the tangential traction
+        coefficient λ_T = k_s y / A_k [Pa] and whether the function sticks."""
+        ev, own = st.terms[self.name], c.owned
+        lam = c.stiffness * ev.y / c.space.area[c.mults][:, None]
+        return super().fields(c, st) | {"multiplier_shear": lam[own],
+                                        "multiplier_stick": ev.m_stick[own].astype(np.int8)}
 
     def describe(self) -> str:
-        return (f"Coulomb friction, mu = {self.mu:g} (stick regularised by k = "
-                f"{self.stick_stiffness:.4g} Pa/m)")
+        return (f"Coulomb friction, mu = {self.mu:g} (tangential multipliers, exact stick; "
+                f"augmentation {self.augmentation:g})")

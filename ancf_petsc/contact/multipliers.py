@@ -27,11 +27,14 @@ constraint rows k_s ∂ḡ/∂q are of the size of the stiffness rows.  A multip
 lowest A element its function lives on (as a node does); each element's multipliers are packed
 per interface into *multiplier nodes* of 18 slots (the Jacobian's node blocks); unused slots are
 held at zero like supported DOFs.
+
+A friction law (friction.py) adds a tangential multiplier vector per pressure function
+(``with_tangential``): three more slots per function, packed per A element into nodes of their own.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -63,6 +66,9 @@ class MultiplierSpace:
     dense: np.ndarray         # (S, K, P) Φ of those multipliers over the segment's own points
     degrees: tuple[int, int]
     stiffness: float          # k_s [N/m]
+    #: (M, 3) node and slot of each function's tangential multiplier components (friction)
+    tnode: np.ndarray | None = None
+    tslot: np.ndarray | None = None
 
     @property
     def n_multipliers(self) -> int:
@@ -84,7 +90,27 @@ class MultiplierSpace:
         """(nodes, 18) True for the slots no multiplier uses."""
         used = np.zeros((self.n_nodes, SLOTS), dtype=bool)
         used[self.node, self.slot] = True
+        if self.tnode is not None:
+            used[self.tnode, self.tslot] = True
         return ~used
+
+
+def with_tangential(space: MultiplierSpace, wanted: bool = True) -> MultiplierSpace:
+    """The space with a tangential multiplier vector (3 components) per pressure function,
+    in multiplier nodes after the normal ones: each A element's, in multiplier order, 6 to a
+    node (the element owns them, as it owns its pressure functions); ``space`` if not wanted."""
+    if not wanted:
+        return space
+    tnode = np.empty((space.n_multipliers, 3), dtype=np.int64)
+    tslot = np.empty((space.n_multipliers, 3), dtype=np.int64)
+    nodes = list(space.node_element)
+    for e in np.unique(space.element):
+        idx = np.flatnonzero(space.element == e)
+        k = np.arange(3 * len(idx))
+        tnode[idx] = (len(nodes) + k // SLOTS).reshape(-1, 3)
+        tslot[idx] = (k % SLOTS).reshape(-1, 3)
+        nodes += [e] * -(-len(k) // SLOTS)
+    return replace(space, node_element=np.asarray(nodes, dtype=np.int64), tnode=tnode, tslot=tslot)
 
 
 def reference_modulus(beam) -> float:

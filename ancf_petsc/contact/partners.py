@@ -69,6 +69,8 @@ class PartnerTerm:
     history: tuple = ()
     #: PETSc option defaults the law asks for (the command line and config override them)
     options: dict = {}
+    #: whether the law has unknowns of its own (tangential multipliers in the multiplier space)
+    multipliers = False
     #: per-interface statistics of ``sums``: (name, how ranks combine it)
     columns = (("max_tangential_slip", "max"), ("max_shear_stress", "max"), ("shear_force_x", "sum"),
                ("shear_force_y", "sum"), ("shear_force_z", "sum"), ("stick_area", "sum"),
@@ -117,6 +119,13 @@ class PartnerTerm:
     def required_elements(self, c) -> np.ndarray:
         """Elements whose nodes the local evaluation reads: the partners'."""
         return self.eB0[c.local]
+
+    def required_blocks(self, c) -> np.ndarray:
+        """Node blocks of the law's own unknowns the local evaluation reads (none)."""
+        return np.zeros(0, dtype=np.int64)
+
+    def set_numbering(self, c, perm: np.ndarray) -> None:
+        """The ``Contact`` c's block numbering ``perm`` changed (the law's unknowns follow it)."""
 
     # ------------------------------------------------------------------ state
     def accept(self, c, st) -> None:

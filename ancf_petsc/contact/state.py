@@ -21,4 +21,5 @@ class ContactState:
     weight: np.ndarray     # (P_loc,) the points' weights in this evaluation (Contact.weights)
     lpos: object           # PETSc node id → position in the local array
     rows: Rows             # the law's constraint rows (laws.Rows)
+    xl: np.ndarray         # the local state (n, 6, 3) it was evaluated at
     terms: dict = field(default_factory=dict)   # each contact term's evaluation (Contact.terms)

@@ -66,18 +66,20 @@ def _grip_forces(summary) -> np.ndarray:
     return np.array([st["reactions"]["grip"][0] for st in summary["steps"]])
 
 
+#: the strips' augmentation c (configs/friction_pressed_strips.yaml) and two decades below it
+AUGMENTATIONS = (0.1, 0.01, 0.001)
+
+
 @pytest.fixture(scope="module")
 def pressed(tmp_path_factory):
-    """configs/friction_pressed_strips.yaml with the default stick stiffness and ×0.1, ×0.01."""
+    """configs/friction_pressed_strips.yaml with its augmentation c and c/10, c/100."""
     out = {}
-    for factor in (1.0, 0.1, 0.01):
+    for c in AUGMENTATIONS:
         raw = load_raw("friction_pressed_strips.yaml")
-        if factor != 1.0:
-            from ancf_petsc.contact.friction import STICK_FACTOR
-            # E/h of the strips: E = 1 MPa, h = min(element length 5 mm, √area 2.24 mm)
-            raw["contact"]["tangential"]["stick_stiffness"] = factor * STICK_FACTOR * E / np.sqrt(5e-6)
-        out[factor] = run_inline(raw, tmp_path_factory.mktemp(f"pressed{factor:g}"))
-        assert out[factor]["status"] == "completed", out[factor].get("message")
+        assert raw["contact"]["tangential"]["augmentation"] == AUGMENTATIONS[0]
+        raw["contact"]["tangential"]["augmentation"] = c
+        out[c] = run_inline(raw, tmp_path_factory.mktemp(f"pressed{c:g}"))
+        assert out[c]["status"] == "completed", out[c].get("message")
     return out
 
 
@@ -85,9 +87,9 @@ def test_friction_slides_at_mu_n_and_shows_the_hysteresis(pressed):
     """Sliding carries mu N (exact: every point slides with p > 0), sticking less; on every
     reversal of the pull the force goes through the stick range to the other sign."""
     muN = 0.5 * 0.01
-    steps = pressed[1.0]["steps"]
+    steps = pressed[AUGMENTATIONS[0]]["steps"]
     lam = np.array([st["load_factor"] for st in steps])
-    R = _grip_forces(pressed[1.0])
+    R = _grip_forces(pressed[AUGMENTATIONS[0]])
     sliding_out = (lam >= 1.25) & (lam <= 2.0)
     sliding_back = (lam >= 2.25) & (lam <= 3.0)
     assert np.allclose(R[sliding_out], muN, rtol=1e-4) and np.allclose(R[sliding_back], -muN, rtol=1e-4)
@@ -100,23 +102,16 @@ def test_friction_slides_at_mu_n_and_shows_the_hysteresis(pressed):
     assert np.isclose(u[out][0], u[back][0], atol=1e-9) and R[out][0] > 0 > R[back][0]
 
 
-def test_friction_answers_do_not_depend_on_the_stick_stiffness(pressed):
-    """Two decades of the regularisation (×0.01 … ×1 of the default k): sliding carries mu N
-    whatever k; the sticking levels move as 1/k (the elastic part σ/k of a sticking point's
-    motion), so that the default's distance from the k → ∞ limit, extrapolated from ×0.1 and
-    ×1, is below 0.1 % of mu N at every level."""
+def test_friction_answers_do_not_depend_on_the_augmentation(pressed):
+    """Stick is exact (tangential multipliers): two decades of the augmentation c, which only
+    steers Newton's iteration, give the same grip force at every level, sticking or sliding,
+    to 0.1 % of mu N (measured: 4e-9), each level reached without a cut-back."""
     muN = 0.5 * 0.01
-    R1, R01, R001 = (_grip_forces(pressed[f]) for f in (1.0, 0.1, 0.01))
-    lam = np.array([st["load_factor"] for st in pressed[1.0]["steps"]])
-    sliding = np.abs(R1) > (1.0 - 1e-6) * muN
-    for R in (R01, R001):
-        assert np.allclose(R[sliding], R1[sliding], rtol=1e-5, atol=0.0)
-    limit = R1 + (R1 - R01) / 9.0                   # first order in 1/k
-    assert np.abs(R1 - limit).max() < 1e-3 * muN
-    # 1/k: ten times softer moves a sticking level ten times as far
-    moved = np.abs(R01 - R1) > 1e-5 * muN
-    ratio = np.abs(R001 - R1)[moved] / np.abs(R01 - R1)[moved]
-    assert moved.sum() >= 6 and np.all((ratio > 4.0) & (ratio < 20.0)), (lam[moved], ratio)
+    R = {c: _grip_forces(pressed[c]) for c in AUGMENTATIONS}
+    for c in AUGMENTATIONS[1:]:
+        assert np.abs(R[c] - R[AUGMENTATIONS[0]]).max() < 1e-3 * muN, c
+    for c in AUGMENTATIONS:
+        assert sum(st["cutbacks"] for st in pressed[c]["steps"]) == 0, c
 
 
 def _achilles(tangential, elements=2, mode="sliding", fix=None):
@@ -130,8 +125,8 @@ def _achilles(tangential, elements=2, mode="sliding", fix=None):
 
 
 def _state(P, seed, history):
-    """A deformed state with multipliers and, for friction, a history that leaves some points
-    sticking and others sliding."""
+    """A deformed state with multipliers and, for friction, an increment begun nearby (anchor)
+    and tangential multipliers of half or twice their bound: some functions stick, others slide."""
     rng = np.random.default_rng(seed)
     P.load_factor = 50.0
     X = P.q0.copy()
@@ -145,40 +140,45 @@ def _state(P, seed, history):
     if history:
         c = P.contact
         term = c.terms[0]
-        ev = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).terms["shear"]
-        # the increment started here (anchor = d) with stresses in the tangent plane, half the
-        # cone's radius (sticking) or twice it (sliding)
-        n = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).pr.n
-        u = rng.standard_normal(ev.d.shape)
-        u -= np.einsum("pi,pi->p", u, n)[:, None] * n
-        size = 0.3 * np.maximum(ev.pressure, 0.0) * rng.choice([0.5, 2.0], len(ev.d))
-        term.state["anchor"][c.local] = ev.d
-        term.state["traction"][c.local] = size[:, None] * u / np.linalg.norm(u, axis=1)[:, None]
+        st = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+        ev = st.terms["shear"]
+        # the increment started 0.1 µm of tangential slip away
+        n = st.pr.n
+        s = rng.standard_normal(ev.d.shape)
+        s -= np.einsum("pi,pi->p", s, n)[:, None] * n
+        term.state["anchor"][c.local] = ev.d - 1e-7 * s / np.linalg.norm(s, axis=1)[:, None]
+        # y in the tangent plane of n̄ with |y| half or twice the bound μ ẑ
+        u = rng.standard_normal(ev.y.shape)
+        u -= np.einsum("ki,ki->k", u, ev.nbar)[:, None] * ev.nbar
+        size = ev.bound * rng.choice([0.5, 2.0], len(ev.y))
+        y = size[:, None] * u / np.linalg.norm(u, axis=1)[:, None]
+        X.getArray()[term.tdof[c.mults].ravel()] = y.ravel()           # serial: global = local
         c._cache = None
     return X, free
 
 
-# friction with a stick stiffness of E/h (its default is 100 E/h): the probes of the finite
-# differences then stay on one side of every point's stick-slip boundary
 @pytest.mark.parametrize("tangential, history", [
     ({"law": "elastic", "stiffness": 1e10}, False),
     ({"law": "coulomb", "friction": 0.3}, False),
-    ({"law": "coulomb", "friction": 0.3, "stick_stiffness": 7.4e10}, True),
-    ({"law": "coulomb", "friction": 3.0, "stick_stiffness": 7.4e10}, True),
-    ({"law": "coulomb", "friction": 0.3, "stick_stiffness": 7.4e10}, "clamped")])
+    ({"law": "coulomb", "friction": 0.3}, True),
+    ({"law": "coulomb", "friction": 3.0, "augmentation": 10.0}, True),
+    ({"law": "coulomb", "friction": 0.3}, "clamped")])
 def test_shear_jacobian_matches_finite_differences(tangential, history):
     """J v against central differences of F at deformed states with pressures of both signs
-    (friction: sticking and sliding points, the normal's rotation included); the elastic
-    matrix's Jacobian is symmetric."""
+    (friction: sticking and sliding functions, the normal's rotation and the bounds' coupling
+    to the pressures included; also with clamped roots, whose end pressure functions are
+    folded); the elastic matrix's Jacobian is symmetric."""
     P, PETSc = build_problem(_achilles(tangential, fix="clamped" if history == "clamped" else None))
     X, free = _state(P, 3, history)
     st = P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
-    stick = st.terms["shear"].stick
     if tangential["law"] == "coulomb" and history:
-        assert 0 < stick.sum() < len(stick)
+        ev = st.terms["shear"]
+        assert ev.m_stick.sum() > 0 and ev.slide.sum() > 0
     P.jacobian(None, X, P.J, P.J)
     rng = np.random.default_rng(7)
-    h = 1e-7
+    # a sliding function's direction turns fast: its rows' central differences err as h²
+    # (measured 8e-4 / 8e-6 / 2e-7 at h = 1e-6 / 1e-7 / 1e-8), so the finer step there
+    h = 1e-8 if history else 1e-7
     for _ in range(3):
         v = X.duplicate()
         v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
@@ -226,6 +226,7 @@ def test_displacement_control_gives_the_state_of_the_force(tmp_path):
      "not a value of law coulomb"),
     ({"tangential": {"law": "elastic"}}, "contact.tangential.stiffness", "thickness"),
     ({"tangential": {"law": "elastic", "stiffness": 1e6, "thickness": 3e-5}}, "contact.tangential", "not both"),
+    ({"tangential": {"law": "coulomb", "friction": 0.3, "augmentation": 0}}, "contact.tangential.augmentation", "> 0"),
 ])
 def test_tangential_config_errors_name_the_key(contact, key, words):
     from ancf_petsc.config.parse import parse_config

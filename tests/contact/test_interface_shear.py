@@ -4,7 +4,7 @@ tangents (finite differences), and the config keys."""
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, build_problem, load_raw, run_inline
+from helpers import CONFIGS, build_problem, jacobian_and_difference, load_raw, run_inline
 from ancf_petsc.io.reader import read_contact
 from ancf_petsc.physics.reference_solutions import shear_lag_transfer
 
@@ -182,14 +182,8 @@ def test_shear_jacobian_matches_finite_differences(tangential, history):
     for _ in range(3):
         v = X.duplicate()
         v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
-        Jv, Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.duplicate(), X.copy(), X.copy()
-        P.J.mult(v, Jv)
-        Xp.axpy(h, v)
-        Xm.axpy(-h, v)
-        P.residual(None, Xp, Fp)
-        P.residual(None, Xm, Fm)
-        fd = (Fp.getArray() - Fm.getArray()) / (2 * h)
-        err = np.abs(Jv.getArray() - fd)[free].max() / np.abs(Jv.getArray()).max()
+        jv, fd, _, _ = jacobian_and_difference(P, X, v, h)
+        err = np.abs(jv - fd)[free].max() / np.abs(jv).max()
         assert err < 1e-6, err
     if tangential["law"] == "elastic":
         Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()

@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -239,3 +240,18 @@ def jacobian_and_difference(P, X, v, h: float = 1e-7):
     P.residual(None, Xp, Fp)
     P.residual(None, Xm, Fm)
     return Jv.getArray().copy(), (Fp.getArray() - Fm.getArray()) / (2 * h), Xp, Xm
+
+def assert_jacobian_and_gradient(P, X, free, rng, gradient_rel: float, samples: int = 2, h: float = 1e-7):
+    """For a Problem whose Jacobian was assembled at X: J v against central differences of the
+    residual (1e-6 of max |J v| on the free DOFs) and the residual against the central difference
+    of the objective (the line-search merit) to ``gradient_rel``, for ``samples`` random free v."""
+    for _ in range(samples):
+        v = X.duplicate()
+        v.setArray(rng.standard_normal(X.getLocalSize()) * free)
+        jv, fd, Xp, Xm = jacobian_and_difference(P, X, v, h)
+        assert np.abs(jv - fd)[free].max() <= 1e-6 * np.abs(jv).max()
+        dE = (P.objective(None, Xp) - P.objective(None, Xm)) / (2 * h)
+        F = X.duplicate()
+        P.residual(None, X, F)
+        assert dE == pytest.approx(F.dot(v), rel=gradient_rel)
+

@@ -76,17 +76,18 @@ def test_fibre_exponent_is_k2_times_the_clipped_fibre_strain_squared():
 
 
 @pytest.mark.mpi
-def test_limited_steps_give_the_serial_answer_on_two_ranks(tmp_path):
+def test_limited_steps_give_the_serial_answer_on_two_and_three_ranks(tmp_path):
     """The lone soleus with solver_default_2025 to 20 N: its first level is cut back and its
-    Newton steps and predictors are held by the exponent limit, decided over every rank; 2 ranks
-    (two elements each) take the same increments and iterations and reach the serial answer."""
+    Newton steps and predictors are held by the exponent limit, decided over every rank; 2 and 3
+    ranks (2 + 2 and an uneven split of the 4 elements) take the same increments and iterations
+    and reach the serial answer."""
     from helpers import assert_same_as_serial, probes_table, run_on_ranks
     raw = _lone_soleus()
     raw["steps"] = [10.0, 20.0]
-    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2))
+    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2, 3))
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
     steps = {n: [(st["cutbacks"], st["iterations"]) for st in s["steps"]] for n, (_, s) in runs.items()}
-    assert steps[2] == steps[1] and steps[1][0][0] > 0
+    assert steps[3] == steps[2] == steps[1] and steps[1][0][0] > 0
 
 
 def test_lone_soleus_of_the_stiffest_published_set_reaches_400_newtons(tmp_path):

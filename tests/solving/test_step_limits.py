@@ -47,11 +47,11 @@ def test_first_newton_step_of_a_strongly_stiffening_law_is_held_to_a_bounded_exp
     assert P.limits.fibres
     full = Y.copy()
     P.limits.sections = np.inf                  # the exponent alone (no section-size scaling)
-    P.limits.precheck(X, full.copy())           # runs without a NaN step
     trial = X.copy()
     trial.axpy(-1.0, full)
     F1 = X.duplicate()
-    P.residual(None, trial, F1)
+    with np.errstate(all="ignore"):             # the overflow is the point
+        P.residual(None, trial, F1)
     assert not np.isfinite(F1.norm())           # the plain Newton step: overflow
     changed = P.limits.precheck(X, Y)
     assert changed and np.isfinite(Y.norm())

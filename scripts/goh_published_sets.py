@@ -15,12 +15,17 @@ reduced``) and on the whole ψ = 45° column:
    along the load path, K/μ = 3268 against 49.67.
 4. ``sets``: every set of the authors' code with K = 49.67 μ: the lone soleus (3 axial points)
    and the column with sliding and with unilateral contact (4 elements).
+5. ``fold``: the lone soleus with solver_default_2025 along a continuous path from rest
+   (increments of at most 1 N): the lowest scaled tangent eigenvalue as the path nears its limit
+   point, and the same soleus with the default increments (its first level lands on another
+   stable branch).
 
-Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets]
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold]
 """
 from __future__ import annotations
 
 import copy
+import json
 import os
 import sys
 import tempfile
@@ -203,11 +208,34 @@ def sets() -> None:
                   flush=True)
 
 
+def fold() -> None:
+    c10, k1, k2 = SETS["solver_default_2025"]
+    law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+    steps = LEVELS[:8] + [95, 99, 99.4, 99.49, 99.5, 99.501, 100]
+    raw = column(**law, mode=None, steps=steps)
+    raw["solver"] = {"max_increment": 1.0, "initial_increment": 1.0}
+    s = solve(raw)
+    print(f"solver_default_2025, lone soleus, increments <= 1 N: {s['status']}, last level {s['last']:g} N, "
+          f"{s['newton']} Newton {s['message'][:100] if s['status'] != 'completed' else ''}", flush=True)
+    ev = lowest_scaled_eigenvalues(raw, s["dir"])
+    print("  lowest scaled eigenvalue: " + ", ".join(f"{lv:g} N: {v:.2e}" for lv, v in ev[7:]), flush=True)
+    for name, r in (("increments <= 1 N", raw), ("default increments", column(**law, mode=None))):
+        r = copy.deepcopy(r)
+        r["steps"] = r["steps"][:1]
+        s1 = solve(r)
+        with open(os.path.join(s1["dir"], "summary.json")) as fh:
+            u = json.load(fh)["steps"][0]["probes"]["soleus"]["displacement"]
+        print(f"  {name}: soleus end at 10 N (mm) {np.array2string(1e3 * np.array(u), precision=4)}", flush=True)
+    s = solve(column(**law, mode=None))
+    print(f"  default increments to 400 N: {s['status']}, last level {s['last']:g} N, {s['cutbacks']} cut-backs, "
+          f"{s['newton']} Newton, soleus {s['soleus_mm']:.3f} mm", flush=True)
+
+
 def main(argv: list[str]) -> int:
     from mpi4py import MPI  # noqa: F401
     import petsc4py
     petsc4py.init([])
-    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets}
+    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold}
     for name in argv or list(parts):
         if name not in parts:
             print(f"goh_published_sets: unknown part {name!r}; choose from {list(parts)}", file=sys.stderr)

@@ -1,7 +1,10 @@
 """Limits on a Newton step before the line search takes it (SNES line-search pre-check): a step
 that moves a node by more than a few section sizes is scaled down (a near-singular tangent gives
 absurd steps; with contact the closest-point pairing holds only for steps small beside a
-section), then halved until no Gauss point has det F below a floor (inverted elements)."""
+section), then halved until no Gauss point has det F below a floor (inverted elements) and no
+fibre law's exponent k2 Ē² grows by more than ``MAX_EXPONENT_GROWTH`` (a strongly stiffening
+law: Newton's linear step overshoots on the exponential).  The load predictor of an increment is
+held to the same exponent growth (``limit_predictor``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -16,6 +19,13 @@ from ..physics import kernels
 #: failed with 10)
 MAX_STEP_SECTIONS = 10.0
 MAX_STEP_SECTIONS_CONTACT = 2.0
+#: largest growth of a fibre law's exponent k2 Ē² at any Gauss point in one Newton step or load
+#: predictor: the fibres' stiffness e^(k2 Ē²) grows by at most e^8 ≈ 3e3 per step.  With k2 =
+#: 524.6 (the GOH set solver_default_2025) the first Newton step from rest stretched fibres to
+#: Ē = 0.83, e^(k2 Ē²) ~ 1e157 (|F| overflow), and a secant predictor to |F| ~ 1e21 N, from which
+#: Newton removes ~1 from the exponent per iteration (docs/fibres.md, "The published parameter
+#: sets"); 2 and 8 both ran that lone soleus to 400 N, 8 with fewer Newton iterations
+MAX_EXPONENT_GROWTH = 8.0
 
 
 def min_jacobian(problem, X: PETSc.Vec) -> float:
@@ -29,20 +39,47 @@ def min_jacobian(problem, X: PETSc.Vec) -> float:
     return val if np.isfinite(val) else -np.inf
 
 
+def fibre_exponents(problem, X: PETSc.Vec) -> np.ndarray:
+    """k2 Ē² at every Gauss point of this rank's parts with a fibre law (``fibre_exponent``), in a
+    fixed order (empty without fibres)."""
+    xl = problem.exchange.local_state(X)
+    out = [np.zeros(0)]
+    for blk in problem.blocks:
+        for G, _, material in blk.parts:
+            if hasattr(material, "fibre_exponent"):
+                F = kernels.deformation_gradient(blk.element_vectors(xl), G)
+                out.append(material.fibre_exponent(F).ravel())
+    return np.concatenate(out)
+
+
 class StepLimits:
     """The pre-check of ``problem``'s Newton steps: at most ``sections`` section sizes per node,
-    det F ≥ ``j_min`` (halved up to ``halvings`` times)."""
+    det F ≥ ``j_min`` and fibre exponents growing by at most ``MAX_EXPONENT_GROWTH`` (halved up
+    to ``halvings`` times)."""
 
     def __init__(self, problem, j_min: float = 0.1, halvings: int = 12):
         self.problem, self.j_min, self.halvings = problem, j_min, halvings
         self.sections = MAX_STEP_SECTIONS
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
+        local = any(hasattr(m, "fibre_exponent") for blk in problem.blocks for _, _, m in blk.parts)
+        self.fibres = bool(problem.comm.tompi4py().allreduce(int(local), op=MPI.MAX))
+
+    def exponent_growth(self, start: np.ndarray | None, trial: PETSc.Vec) -> float:
+        """Largest growth of k2 Ē² from ``start`` (``fibre_exponents`` at the step's start) to
+        the state ``trial``, over every rank (collective; 0 without fibres)."""
+        if start is None:
+            return 0.0
+        with np.errstate(invalid="ignore"):
+            local = float(np.max(fibre_exponents(self.problem, trial) - start, initial=0.0))
+        local = local if not np.isnan(local) else np.inf
+        return self.problem.comm.tompi4py().allreduce(local, op=MPI.MAX)
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
         """Line-search pre-check (collective): scale the step X − Y down to ``sections``
-        section sizes, then halve it until no Gauss point has det F below ``j_min``; if that
-        fails, Y is filled with NaN so that SNES reports a domain failure and the load step is
-        cut back.  Returns whether Y was changed."""
+        section sizes, then halve it until no Gauss point has det F below ``j_min`` and no fibre
+        exponent grows by more than ``MAX_EXPONENT_GROWTH``; if that fails, Y is filled with NaN
+        so that SNES reports a domain failure and the load step is cut back.  Returns whether Y
+        was changed."""
         P = self.problem
         y = Y.getArray(readonly=True).reshape(-1, 6, 3)[P.owned_physical]
         big = P.comm.tompi4py().allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (
@@ -51,12 +88,14 @@ class StepLimits:
         if big > 1.0:
             Y.scale(1.0 / big)
             changed = True
+        start = fibre_exponents(P, X) if self.fibres else None
         trial = X.duplicate()
         try:
             for _ in range(self.halvings):
                 X.copy(trial)
                 trial.axpy(-1.0, Y)
-                if min_jacobian(P, trial) >= self.j_min:
+                if (min_jacobian(P, trial) >= self.j_min
+                        and self.exponent_growth(start, trial) <= MAX_EXPONENT_GROWTH):
                     return changed
                 Y.scale(0.5)
                 changed = True
@@ -64,3 +103,17 @@ class StepLimits:
             return True
         finally:
             trial.destroy()
+
+    def limit_predictor(self, X0: PETSc.Vec, X: PETSc.Vec) -> int:
+        """Halve the load predictor's move X − X0 (X0 the converged state) until no fibre exponent
+        grows by more than ``MAX_EXPONENT_GROWTH`` (at most ``halvings`` times; collective).
+        Returns the number of halvings."""
+        if not self.fibres:
+            return 0
+        start = fibre_exponents(self.problem, X0)
+        n = 0
+        while n < self.halvings and self.exponent_growth(start, X) > MAX_EXPONENT_GROWTH:
+            X.axpy(1.0, X0)
+            X.scale(0.5)                # X0 + (X − X0)/2
+            n += 1
+        return n

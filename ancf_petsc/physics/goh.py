@@ -131,6 +131,12 @@ class GOH:
         if self.kappa:
             P += (s * self.kappa)[..., None, None] * F
 
+    def fibre_exponent(self, F: np.ndarray) -> np.ndarray:
+        """k2 Ē² per point, the largest of the families (Ē clipped at 0): the fibres' stiffness
+        ψ'' grows like e^(k2 Ē²), and the Newton steps are held to a bounded growth of it
+        (petsc/step_limits.py)."""
+        return np.max([self.k2 * E * E for _, _, _, E, _ in self._fibres(F)], axis=0)
+
     def fibre_stretch(self, F: np.ndarray) -> np.ndarray:
         """√I4 of every family (families, ...)."""
         return np.stack([np.sqrt(I4) for _, _, I4, _, _ in self._fibres(F)])

@@ -131,6 +131,7 @@ class LoadStepper:
                 X.copy(X_prev)
                 if self.spec.predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
+                    self.problem.limits.limit_predictor(X_prev, X)    # fibre exponents (step_limits)
                 reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
                                                     from_rest=path.lam == 0.0)
                 tally.its += its

@@ -45,10 +45,13 @@ def _children(tag: str) -> list[str]:
 def test_ctrl_c_stops_the_runs_and_records_them_as_interrupted(tmp_path):
     sweep = _slow_sweep(tmp_path)
     first = tmp_path / "out" / "run_0000__mu=1e+06"
-    # its own process group, as a shell's foreground job: Ctrl-C signals the whole group
+    # its own process group, as a shell's foreground job: Ctrl-C signals the whole group; and
+    # SIGINT at its default, as a shell sets it for a foreground job (a test suite started in the
+    # background of a non-interactive shell inherits it ignored)
     proc = subprocess.Popen([os.path.join(VENV_BIN, "ancf-sweep"), sweep], cwd=str(tmp_path),
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT), start_new_session=True)
+                            env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT), start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         t0 = time.monotonic()
         while time.monotonic() - t0 < TIMEOUT:

@@ -151,7 +151,7 @@ def across_md(rows: list) -> list:
     def key(r):
         return (r["model"], r["variant"], r["resolution"])
     xs = sorted({rep.num(r["x_c_m"]) for r in rows})
-    keys = list(dict.fromkeys(key(r) for r in rows))
+    keys = sorted(dict.fromkeys(key(r) for r in rows), key=lambda k: k[0] != rep.SOLID)   # the solid first
     L = ["| model | variant | " + " | ".join(f"x = {1e3 * x:g} mm: " + " · ".join(rep.IFACES) for x in xs) + " |",
          "|---|---|" + "---:|" * len(xs)]
     for k in keys:

@@ -142,14 +142,13 @@ def write(rows: list, path: str = CSV) -> None:
 
 
 def key(r: dict) -> tuple:
+    """A run's rows share (model, variant, resolution)."""
     return (r["model"], r["variant"], r["resolution"])
 
 
 def across_md(rows: list) -> list:
     """Per model and axial window, the mean compressive and tensile pressure Σ w p± / Σ w [kPa]
     of each interface (docs/solid_friction_across.csv, scripts/solid_friction_across.py)."""
-    def key(r):
-        return (r["model"], r["variant"], r["resolution"])
     xs = sorted({rep.num(r["x_c_m"]) for r in rows})
     keys = sorted(dict.fromkeys(key(r) for r in rows), key=lambda k: k[0] != rep.SOLID)   # the solid first
     L = ["| model | variant | " + " | ".join(f"x = {1e3 * x:g} mm: " + " · ".join(rep.IFACES) for x in xs) + " |",

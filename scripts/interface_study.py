@@ -9,7 +9,7 @@ soleus elongation and the displacement of each gastrocnemius against the soleus 
 
     OPENBLAS_NUM_THREADS=1 python scripts/interface_study.py [--elements 4 8] [--jobs 2]
         [--out DIR] [--csv docs/interface_study.csv] [--figure docs/figures/nonuniformity.png]
-        [--timeout SECONDS] [--reuse]
+        [--timeout SECONDS] [--reuse] [--laws LAW ...] [--loadings soleus equal]
 
 Every run is one ancf-solve process (1 rank), as a user runs it.  The CSV has one row per run and
 level; the figure draws the soleus's displacement against the medial gastrocnemius at the far end
@@ -132,6 +132,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(allow_abbrev=False)
     ap.add_argument("--elements", type=int, nargs="+", default=[4, 8])
     ap.add_argument("--loadings", nargs="+", default=list(LOADINGS), choices=list(LOADINGS))
+    ap.add_argument("--laws", nargs="+", default=[law[0] for law in LAWS], choices=[law[0] for law in LAWS],
+                    metavar="LAW", help="the laws to run (labels: " + "; ".join(law[0] for law in LAWS) + ")")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="/tmp/ancf-interface-study")
     ap.add_argument("--csv", default=None)
@@ -140,7 +142,7 @@ def main() -> int:
     ap.add_argument("--reuse", action="store_true", help="read the runs already in --out (their summary.json) instead of solving again")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS]
+    cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS if law[0] in args.laws]
     with ThreadPoolExecutor(args.jobs) as pool:
         results = list(pool.map(lambda c: run(c, args.out, args.reuse, args.timeout), cases))
     print("| loading | law | elements | status | Newton | cut-backs | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")

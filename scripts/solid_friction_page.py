@@ -7,6 +7,7 @@ import os
 
 import numpy as np
 
+import solid_friction_across
 import solid_friction_report as rep
 from solid_friction_report import ANCF, BASE, BODIES, CHECK, IFACES, SOLID, num
 
@@ -74,9 +75,11 @@ def ancf_md(rows: list, psi: float) -> list:
     errs = rep.ancf_errors(rows, psi)
     cols = rep.ancf_columns(rows, psi)
     ref = rep.reference(rows, psi)
-    L = ["| augmentation c | elements | levels reached | soleus, relative | medial, relative | lateral, relative "
-         "| medial / u_soleus | lateral / u_soleus | within 1 % |",
-         "|---|---:|---|---:|---:|---:|---:|---:|---|"]
+    fs100 = friction_on_gastrocnemii(ref[100.0]["row"]) if 100.0 in ref else float("nan")
+    L = ["| pressure space | augmentation c | elements | levels reached | soleus, relative | medial, relative "
+         "| lateral, relative | medial / u_soleus | lateral / u_soleus | within 1 % | friction on the gastrocnemii "
+         "from the soleus at 100 N (solid " + (f"{fs100:.1f}" if np.isfinite(fs100) else "—") + ") [N] |",
+         "|---|---|---:|---|---:|---:|---:|---:|---:|---|---:|"]
     for (v, ne) in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])):
         e, col = errs.get((v, ne), {}), cols[(v, ne)]
         reached = max(col["levels"], default=0.0)
@@ -89,9 +92,16 @@ def ancf_md(rows: list, psi: float) -> list:
         verdict = "relative: yes" if ok_rel else ("against u_soleus only" if ok_abs else "no")
         if col["failed"] or len(e) < len(ref):
             verdict += " (not all levels)"
-        L.append(f"| {rep.variant_value(v)} | {ne} | {status} | {pct(worst['soleus'])} | {pct(worst['medial'], 0)} | "
-                 f"{pct(worst['lateral'], 0)} | {pct(worsta['medial'])} | {pct(worsta['lateral'])} | {verdict} |")
+        f100 = friction_on_gastrocnemii(col["levels"][100.0]) if 100.0 in col["levels"] else float("nan")
+        L.append(f"| {rep.variant_space(v)} | {rep.variant_value(v)} | {ne} | {status} | {pct(worst['soleus'])} | "
+                 f"{pct(worst['medial'], 0)} | {pct(worst['lateral'], 0)} | {pct(worsta['medial'])} | "
+                 f"{pct(worsta['lateral'])} | {verdict} | " + (f"{f100:.1f}" if np.isfinite(f100) else "—") + " |")
     return L
+
+
+def friction_on_gastrocnemii(r: dict) -> float:
+    """The x-friction on the two gastrocnemii from the soleus [N] of a CSV row."""
+    return num(r["fx_mg_sol_N"]) + num(r["fx_lg_sol_N"])
 
 
 def worst(e: dict) -> tuple:
@@ -160,7 +170,7 @@ def profiles_md(prof: list) -> list:
 
     def order(k):
         res = k[2].split()
-        return (k[0] != SOLID, k[1].split(",")[0], num(res[0]) if k[0] == ANCF else -num(res[1]), k[3])
+        return (k[0] != SOLID, k[1].split(",")[0], rep.SPACE in k[1], num(res[0]) if k[0] == ANCF else -num(res[1]), k[3])
     keys = sorted({(p["model"], p["variant"], p["resolution"], num(p["load_N"])) for p in prof}, key=order)
     L = ["| model | variant | load [N] | " + " | ".join(f"{i}: Q⁺ / Q⁻ / F_x [N], x < {NEAR * 1e3:g} mm · beyond"
                                                     for i in IFACES) + " |",
@@ -182,6 +192,12 @@ def profiles_md(prof: list) -> list:
     return L
 
 
+def spaces_keys(keys: dict) -> str:
+    """A SPACES entry as the contact keys a user writes: 'curve_points: 3, projection: {...}'."""
+    return ", ".join(f"{k}: " + ("{" + ", ".join(f"{a}: {b}" for a, b in v.items()) + "}" if isinstance(v, dict) else f"{v}")
+                     for k, v in keys.items())
+
+
 def fd_md(rows: list) -> list:
     L = []
     for r in rows:
@@ -190,7 +206,7 @@ def fd_md(rows: list) -> list:
     return L
 
 
-def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
+def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | None = None) -> str:
     """The whole section (from its heading to the end marker's line, exclusive)."""
     psis = sorted({num(r["psi_deg"]) for r in rows if r["model"] == SOLID}, key=lambda p: -p)
     mus = sorted({num(r["mu"]) for r in rows if r["model"] == SOLID})
@@ -214,7 +230,10 @@ def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
           "`verify_solid_contact.tendon_config` (`fix: clamped`, `traction_force` on the soleus' last node, "
           "2 axial points) with `contact.tangential: {law: coulomb, friction: 0.3}` (tangential multipliers, "
           "exact stick: `docs/interface.md`, first sections), at the default augmentation c (1) and at c = 10 and "
-          "0.1 (c only steers the semi-smooth Newton iteration; the answer must not depend on it).  Quantities: u_x at the end-section centroids (the soleus' is its "
+          "0.1 (c only steers the semi-smooth Newton iteration; the answer must not depend on it); in the default "
+          "pressure (and tangential multiplier) space, quadratic along × linear across, and in the richer ones of "
+          "`docs/solid_contact.md`: " + "; ".join(f"{n}: `{spaces_keys(k)}`" for n, k in rep.SPACES.items())
+          + " (`--ancf-spaces`).  Quantities: u_x at the end-section centroids (the soleus' is its "
           "elongation; the gastrocnemii move by tens of µm).", ""]
     for psi in psis:
         L += [f"### ψ = {psi:g}°", "", "**The solid's own checks.**  Largest change over the load levels, "
@@ -227,7 +246,8 @@ def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
               "for the soleus and for each gastrocnemius, relative or against the soleus elongation:", ""]
         L += ancf_md(rows, psi) + [""]
         cols = rep.ancf_columns(rows, psi)
-        full = [k for k in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])) if not cols[k]["failed"]]
+        full = [k for k in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])) if not cols[k]["failed"]
+                and (rep.variant_space(k[0]) == rep.DEFAULT_SPACE or rep.variant_value(k[0]) == "default")]
         for key in full or sorted(cols, key=lambda k: (-len(cols[k]["levels"]), k[1]))[:1]:
             L += [f"Per level, {key[0]}, {key[1]} elements:", ""] + per_load_md(rows, psi, key) + [""]
         zm = zone_md(rows, psi)
@@ -244,6 +264,14 @@ def section(rows: list, prof: list, meta: dict, notes: str = "") -> str:
               "(Q⁻ = ∫ p⁻ dA) on each interface, and the friction force F_x on the body named first, ψ = 45°, "
               "within 10 mm of the clamped roots and beyond (`docs/solid_friction_profiles.csv`, 2.5 mm bins):", ""]
         L += profiles_md(prof) + [""]
+    if across:
+        F = num(across[0]["load_N"])
+        L += [f"**Across the interface** (`scripts/solid_friction_across.py`, `docs/solid_friction_across.csv`): "
+              f"the mean compressive / tensile pressure Σ w p⁺ / Σ w and Σ w p⁻ / Σ w [kPa] over the contact "
+              f"points within 3.5 mm of x at {F:g} N (μ Σ w p⁺ / Σ w is the mean friction bound per area); the "
+              "distributions across the strip are drawn in the second figure (s: arc length along the interface "
+              "curve from the triple point where the three subtendons meet):", ""]
+        L += solid_friction_across.across_md(across) + ["", "![pressure across the interfaces](figures/solid_friction_across.png)", ""]
     L += ["![solid vs ANCF with friction](figures/solid_friction.png)", ""]
     fd = fd_md(rows)
     if fd:
@@ -355,4 +383,9 @@ def finish(paths, rows: list, meta: dict) -> None:
     plot(paths.png, rows, prof)
     notes = os.path.join(os.path.dirname(paths.csv), "solid_friction.notes")
     text = open(notes, encoding="utf-8").read() if os.path.exists(notes) else ""
-    write_page(paths.md, section(rows, prof, meta, text))
+    write_page(paths.md, section(rows, prof, meta, text, read_profiles(across_csv(paths.csv))))
+
+
+def across_csv(csv_path: str) -> str:
+    """docs/solid_friction_across.csv beside docs/solid_friction.csv."""
+    return os.path.join(os.path.dirname(csv_path), "solid_friction_across.csv")

@@ -52,14 +52,15 @@ def solid_profile(secs, psi: float, h: float, mu: float, level: float, stick: fl
     return rows
 
 
-def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: str) -> list:
-    """The ANCF column (verify_solid_friction.ancf_config; μ = 0: frictionless) to ``level``."""
+def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: str, space: str | None = None) -> list:
+    """The ANCF column (verify_solid_friction.ancf_config; μ = 0: frictionless; ``space`` a
+    rep.SPACES name, None the default pressure space) to ``level``."""
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     from verify_solid_friction import ancf_config
-    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{aug}")
-    raw = ancf_config(psi, elements, mu, aug, out)
+    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{aug}_{space}".replace(" ", "_"))
+    raw = ancf_config(psi, elements, mu, aug, out, space)
     if mu == 0.0:
         del raw["contact"]["tangential"]
     raw["steps"] = [float(F) for F in vsc.LOADS if F <= level]
@@ -76,7 +77,8 @@ def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: s
         # force on the solid's slave body: the beams' slave A on mg_sol, lg_sol; B on lg_mg
         fx = (1.0 if name == "lg_mg" else -1.0) * area[m] * sigma[m]
         for lo, hi, qp, qm, fxb in binned(x0[m], p[m] * area[m], fx):
-            rows.append({"model": rep.ANCF, "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}"),
+            rows.append({"model": rep.ANCF, "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}")
+                         + (f"{rep.SPACE}{space}" if space else ""),
                          "resolution": f"{elements} el.", "interface": name, "load_N": level, "x_lo_m": lo,
                          "x_hi_m": hi, "q_plus_N_per_m": qp, "q_minus_N_per_m": qm, "fx_N_per_m": fxb})
     return rows

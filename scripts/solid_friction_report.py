@@ -14,6 +14,12 @@ import numpy as np
 SOLID, ANCF, CHECK = "solid P2 tet", "ANCF 2pt", "check"
 BASE = "stick 100"                   # the solid's reference variant
 ZONE = ", no friction x < "          # a free-zone diagnostic's variant: "<variant>, no friction x < 10 mm"
+SPACE = ", pressure "                # a pressure-space variant: "<variant>, pressure quadratic across"
+#: the beams' contact pressure (and tangential multiplier) spaces beside the default (quadratic
+#: along x linear across, 3 x 2 points): name -> contact keys (docs/solid_contact.md's variants)
+SPACES = {"quadratic across": {"curve_points": 3, "projection": {"axial": 2, "curve": 2}},
+          "cubic along": {"axial_points": 4, "projection": {"axial": 3, "curve": 1}}}
+DEFAULT_SPACE = "quadratic along × linear across"
 IFACES = ("mg_sol", "lg_sol", "lg_mg")
 BODIES = ("soleus", "medial", "lateral")
 FIELDS = (["psi_deg", "mu", "model", "variant", "resolution", "h_m", "elements", "dofs", "load_N"]
@@ -98,19 +104,26 @@ def solid_rows(run: dict, psi: float, mu: float, variant: str) -> list:
     return rows
 
 
-def ancf_variant(aug: float | None) -> str:
-    """The ANCF variant label of the Coulomb law's augmentation factor c (None: the default)."""
-    return "augmentation default" if aug is None else f"augmentation {aug:.3g}"
+def ancf_variant(aug: float | None, space: str | None = None) -> str:
+    """The ANCF variant label of the Coulomb law's augmentation factor c (None: the default) and
+    of the pressure space (a SPACES name; None: the default)."""
+    return ("augmentation default" if aug is None else f"augmentation {aug:.3g}") + (f"{SPACE}{space}" if space else "")
 
 
 def variant_value(variant: str) -> str:
-    """The variant's value alone (its word before the free-zone suffix): 'default', '10', ..."""
-    return variant.split(ZONE)[0].split()[-1]
+    """The augmentation's value alone (before the space and free-zone suffixes): 'default', '10', ..."""
+    return variant.split(ZONE)[0].split(SPACE)[0].split()[-1]
+
+
+def variant_space(variant: str) -> str:
+    """The pressure space of a variant (a SPACES name, or DEFAULT_SPACE)."""
+    head = variant.split(ZONE)[0]
+    return head.split(SPACE)[1] if SPACE in head else DEFAULT_SPACE
 
 
 def ancf_rows(run: dict, mu: float) -> list:
     rows = []
-    variant = ancf_variant(run["augmentation"])
+    variant = ancf_variant(run["augmentation"], run.get("space"))
     if run.get("zone"):
         variant += f"{ZONE}{run['zone'] * 1e3:g} mm"
     res = f"{run['elements']} el."
@@ -227,6 +240,8 @@ def ancf_errors(rows: list, psi: float) -> dict:
 
 
 def stick_order(variant: str) -> tuple:
-    """Sort key of the ANCF variants: the default first, then large to small."""
-    word = variant_value(variant)
-    return (0, 0.0) if word == "default" else (1, -num(word))
+    """Sort key of the ANCF variants: the default space first, then augmentation default, then
+    large to small."""
+    word, space = variant_value(variant), variant_space(variant)
+    rank = 0 if space == DEFAULT_SPACE else 1 + list(SPACES).index(space) if space in SPACES else 9
+    return (rank, 0, 0.0) if word == "default" else (rank, 1, -num(word))

@@ -13,13 +13,16 @@ ANCF: the same tendon in-process (``verify_solid_contact.tendon_config``: ``fix:
 ``traction_force`` at the soleus' last node, 2 axial points) with ``contact: {mode: sliding,
 tangential: {law: coulomb, friction: μ}}`` at 4/8/16 elements (tangential multipliers, exact
 stick: no stick stiffness), at the default augmentation c and at c x 10 and c / 10 (c only steers
-the semi-smooth Newton iteration: the answer must not depend on it, and that is measured).
+the semi-smooth Newton iteration: the answer must not depend on it, and that is measured), in the
+default pressure space or in richer ones (``--ancf-spaces``, solid_friction_report.SPACES).
 
 Usage (``make verify-solid-friction``; about 2 h on one shared core):
   python scripts/verify_solid_friction.py                    # FD check, solid study, checks, ANCF
   python scripts/verify_solid_friction.py --selftest         # the friction tangent against FD
   python scripts/verify_solid_friction.py --no-solid --merge # ANCF columns only (CSV kept)
   python scripts/verify_solid_friction.py --replot           # figure and page section from the CSV
+  python scripts/verify_solid_friction.py --no-solid --merge --no-selftest --ancf-spaces "quadratic across"
+                                                             # the beams with a richer pressure space
   python scripts/verify_solid_friction.py --free-zone 0.01 --no-selftest --ancf-augmentations default
                                                              # diagnostic: no friction within 10 mm of the clamp
 Writes docs/solid_friction.csv, docs/figures/solid_friction.png and the section "Against a 3D
@@ -56,33 +59,39 @@ def zone_label(variant: str, zone: float) -> str:
     return f"{variant}{rep.ZONE}{zone * 1e3:g} mm" if zone else variant
 
 
-def ancf_config(psi: float, elements: int, mu: float, aug: float | None, out: str) -> dict:
-    """verify_solid_contact's frictionless comparison config with Coulomb friction added."""
+def ancf_config(psi: float, elements: int, mu: float, aug: float | None, out: str, space: str | None = None) -> dict:
+    """verify_solid_contact's frictionless comparison config with Coulomb friction added (and the
+    contact keys of the pressure space ``space``, a rep.SPACES name; None: the default)."""
     raw = vsc.tendon_config(psi, elements, "sliding", out)
     raw["contact"]["tangential"] = {"law": "coulomb", "friction": mu}
     if aug is not None:
         raw["contact"]["tangential"][AUG_KEY] = aug
+    if space:
+        raw["contact"].update(rep.SPACES[space])
     return raw
 
 
-def run_ancf(psi: float, elements: int, mu: float, aug: float | None, tmp: str, zone: float = 0.0) -> dict:
+def run_ancf(psi: float, elements: int, mu: float, aug: float | None, tmp: str, zone: float = 0.0,
+             space: str | None = None) -> dict:
     """One ANCF column in-process: per level the probes' u_x, iterations and shear forces
-    (``zone`` > 0, a diagnostic: no friction at contact points below x = zone [m])."""
+    (``zone`` > 0, a diagnostic: no friction at contact points below x = zone [m]; ``space``:
+    the pressure space, a rep.SPACES name, None the default)."""
     import contextlib
 
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     from solid_friction_profiles import BeamFreeZone
-    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{aug}_{zone:g}")
+    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{aug}_{zone:g}_{space}".replace(" ", "_"))
     t0 = time.perf_counter()
     try:
         with BeamFreeZone(zone, elements) if zone else contextlib.nullcontext():
-            res = run_model(parse_config(ancf_config(psi, elements, mu, aug, out), base_dir=vsc.CONFIGS),
+            res = run_model(parse_config(ancf_config(psi, elements, mu, aug, out, space), base_dir=vsc.CONFIGS),
                             log=lambda *_: None)
         status, message, s = res.status, str(res.message), res.summary
     except Exception as exc:   # record and go on
         status, message, s = "failed", f"{type(exc).__name__}: {exc}", None
-    rec = {"psi": psi, "elements": elements, "augmentation": aug, "zone": zone, "ok": status == "completed",
+    rec = {"psi": psi, "elements": elements, "augmentation": aug, "zone": zone, "space": space,
+           "ok": status == "completed",
            "msg": "" if status == "completed" else message, "wall": time.perf_counter() - t0,
            "levels": [], "dofs": int(s["dofs"]) if s else 0,
            "k": None}
@@ -187,10 +196,10 @@ def profiles(secs, args, levels: list, psi: float) -> None:
                 if not args.no_solid:
                     print(f"[profile] solid, mu {mu:g}, h {h * 1e3:.2f} mm, {F:g} N", flush=True)
                     rows += pf.solid_profile(secs, psi, h, mu, F, args.stick)
-                for ne in [int(e) for e in args.elements.split(",")]:
+                for space, ne in ((s, e) for s in spaces(args) for e in [int(e) for e in args.elements.split(",")]):
                     for aug in (args.ancf_augmentations.split(",") if mu else ["default"]):
-                        got = pf.ancf_profile(psi, ne, mu, F, None if aug == "default" else float(aug), tmp)
-                        print(f"[profile] ANCF {ne} el., mu {mu:g}, augmentation {aug}: "
+                        got = pf.ancf_profile(psi, ne, mu, F, None if aug == "default" else float(aug), tmp, space)
+                        print(f"[profile] ANCF {ne} el., mu {mu:g}, augmentation {aug}, pressure {space or 'default'}: "
                               + ("done" if got else "did not reach the level"), flush=True)
                         rows += got
                         if got:
@@ -199,6 +208,12 @@ def profiles(secs, args, levels: list, psi: float) -> None:
         keys = {(r["model"], r["variant"], r["resolution"], float(r["load_N"])) for r in rows}
         rows = [r for r in pf.read(path) if (r["model"], r["variant"], r["resolution"], float(r["load_N"])) not in keys] + rows
     pf.write(path, rows)
+
+
+def spaces(args) -> list:
+    """The pressure spaces of the ANCF columns (None: the default; else rep.SPACES names)."""
+    names = [n.strip() for n in args.ancf_spaces.split(";") if n.strip()]
+    return [None if n == "default" else n for n in names]
 
 
 # ============================================================================================
@@ -214,6 +229,9 @@ def main(argv=None) -> int:
     ap.add_argument("--elements", default="4,8,16", help="ANCF elements per subtendon")
     ap.add_argument("--ancf-augmentations", default="default,10,0.1",
                     help="ANCF augmentation factors c of contact.tangential ('default': the law's, 1)")
+    ap.add_argument("--ancf-spaces", default="default",
+                    help="ANCF pressure spaces separated by ';': 'default' (quadratic along × linear across) and/or "
+                         + ", ".join(f"'{n}'" for n in rep.SPACES))
     ap.add_argument("--max-increment", type=float, default=50.0, help="largest solid load increment [N]")
     ap.add_argument("--free-zone", type=float, default=0.0,
                     help="a diagnostic [m]: the runs without friction below x = this (solid: coarsest mesh only)")
@@ -228,6 +246,11 @@ def main(argv=None) -> int:
     ap.add_argument("--replot", action="store_true", help="figure and page section from the CSV")
     ap.add_argument("--out", default=os.path.join(vsc.ROOT, "docs"))
     args = ap.parse_args(argv)
+    unknown = [n for n in spaces(args) if n is not None and n not in rep.SPACES]
+    if unknown:
+        print(f"verify_solid_friction: --ancf-spaces: unknown {unknown}; known: default, {', '.join(rep.SPACES)}",
+              file=sys.stderr)
+        return 2
     paths = rep.Paths(args.out)
     if args.replot:
         page.finish(paths, rep.read_csv(paths.csv), {})
@@ -272,12 +295,12 @@ def main(argv=None) -> int:
         if args.no_ancf:
             continue
         with tempfile.TemporaryDirectory(prefix="solid_friction_") as tmp:
-            for aug in args.ancf_augmentations.split(","):
+            for space, aug in ((s, a) for s in spaces(args) for a in args.ancf_augmentations.split(",")):
                 c = None if aug == "default" else float(aug)
                 for ne in [int(e) for e in args.elements.split(",")]:
-                    a = run_ancf(psi, ne, mu, c, tmp, zone)
+                    a = run_ancf(psi, ne, mu, c, tmp, zone, space)
                     last = a["levels"][-1] if a["levels"] else None
-                    print(f"[ancf] psi {psi:g}, {ne} el., augmentation {aug}: "
+                    print(f"[ancf] psi {psi:g}, {ne} el., augmentation {aug}, pressure {space or 'default'}: "
                           + (f"{last['load']:g} N, soleus u_x {1e3 * last['u']['soleus']:.5f} mm" if last else "")
                           + (f", {a['wall']:.0f} s" if a["ok"] else f" FAILED ({a['msg']})"), flush=True)
                     save(rep.ancf_rows(a, mu))

@@ -8,6 +8,7 @@ import os
 import sys
 import tempfile
 
+import numpy as np
 import pytest
 
 from helpers import ROOT
@@ -24,7 +25,10 @@ def _load(name):
     if SCRIPTS not in sys.path:
         sys.path.insert(0, SCRIPTS)
     spec = importlib.util.spec_from_file_location(name, os.path.join(SCRIPTS, f"{name}.py"))
+    if name in sys.modules:                 # imported already (by another script module)
+        return sys.modules[name]
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod                 # a dataclass looks its module up there
     spec.loader.exec_module(mod)
     return mod
 
@@ -46,7 +50,8 @@ def _tables(text: str) -> list:
 def test_the_section_is_that_of_the_csv(page, rep):
     rows = rep.read_csv(CSV)
     prof = page.read_profiles(os.path.join(DOCS, "solid_friction_profiles.csv"))
-    regenerated = _tables(page.section(rows, prof, {}))
+    across = page.read_profiles(page.across_csv(CSV))
+    regenerated = _tables(page.section(rows, prof, {}, across=across))
     with open(MD, encoding="utf-8") as fh:
         text = fh.read()
     assert page.HEAD in text and rep.BEGIN in text and rep.END in text
@@ -70,23 +75,24 @@ def test_the_solid_study_is_complete(rep):
     assert max(d[f"{b}_abs"] for b in rep.BODIES) < 1e-4
 
 
-@pytest.mark.parametrize("aug, elements, zone", [(None, 4, 0.0), (10.0, 4, 0.0), (0.1, 8, 0.0), (None, 4, 0.01)])
-def test_the_ancf_columns_are_todays(rep, aug, elements, zone):
+@pytest.mark.parametrize("aug, elements, zone, space", [(None, 4, 0.0, None), (10.0, 4, 0.0, None), (0.1, 8, 0.0, None),
+                                                        (None, 4, 0.01, None), (None, 4, 0.0, "quadratic across")])
+def test_the_ancf_columns_are_todays(rep, aug, elements, zone, space):
     """Each kind of column to the first level (10 N): the CSV's u_x of the three ends, to 1e-6
     (aug: the Coulomb law's augmentation c, None the default; zone: the diagnostic without
-    friction within 10 mm of the clamp)."""
+    friction within 10 mm of the clamp; space: the pressure space, None the default)."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     drv = _load("verify_solid_friction")
     pf = _load("solid_friction_profiles")
     rows = rep.read_csv(CSV)
-    variant = drv.zone_label(rep.ancf_variant(aug), zone)
+    variant = drv.zone_label(rep.ancf_variant(aug, space), zone)
     want = [r for r in rows if r["model"] == rep.ANCF and r["variant"] == variant
             and r["resolution"] == f"{elements} el." and float(r["psi_deg"]) == 45.0 and r["load_N"]
             and float(r["load_N"]) == 10.0]
     assert len(want) == 1
     with tempfile.TemporaryDirectory() as tmp:
-        raw = drv.ancf_config(45.0, elements, 0.3, aug, tmp)
+        raw = drv.ancf_config(45.0, elements, 0.3, aug, tmp, space)
         raw["steps"] = [10.0]
         with pf.BeamFreeZone(zone, elements) if zone else contextlib.nullcontext():
             res = run_model(parse_config(raw, base_dir=drv.vsc.CONFIGS), log=lambda *_: None)
@@ -125,3 +131,44 @@ def test_the_beams_pressures_near_the_clamp_are_todays(rep):
     solid = sum(near(prof, rep.SOLID, "h 2.00 mm").values())
     assert sum(want.values()) <= solid + 1.0, (sum(want.values()), solid)
     assert sum(kept.values()) > 10.0 * solid, (sum(kept.values()), solid)
+
+
+def test_the_pressure_across_is_todays():
+    """docs/solid_friction_across.csv: the frictionless 4-element beams' pressure across the
+    interfaces at 100 N is today's (every window and bin, to 1e-6 of the largest force); and the
+    page's reading of the stored runs holds: on lg_sol and lg_mg the quadratic-across beams
+    (16 el., μ = 0.3) press more than three times as hard as either solid mesh, the default
+    beams no harder than the coarse solid plus 10 kPa."""
+    across = _load("solid_friction_across")
+    rows = across.read()
+
+    def sel(model, variant, resolution):
+        return {(r["interface"], round(float(r["x_c_m"]), 6), round(float(r["s_lo_m"]), 7)):
+                (float(r["force_plus_N"]), float(r["force_minus_N"]), float(r["weight_m2"]))
+                for r in rows if (r["model"], r["variant"], r["resolution"]) == (model, variant, resolution)}
+    rep = across.rep
+    want = sel(rep.ANCF, "mu 0", "4 el.")
+    with tempfile.TemporaryDirectory() as tmp:
+        pts = across.ancf_points(45.0, 4, 0.0, 100.0, tmp, None)
+    secs = across.vsc.tendon_sections()
+    centres = sorted({float(r["x_c_m"]) for r in rows})
+    got = across.binned_rows(pts, across.across_coordinates(secs), centres, {})
+    got = {(r["interface"], round(r["x_c_m"], 6), round(r["s_lo_m"], 7)):
+           (r["force_plus_N"], r["force_minus_N"], r["weight_m2"]) for r in got}
+    assert got.keys() == want.keys()
+    scale = max(max(abs(v[0]), abs(v[1])) for v in want.values())
+    for k in want:
+        assert np.allclose(got[k][:2], want[k][:2], rtol=0, atol=1e-6 * scale), k
+        assert got[k][2] == pytest.approx(want[k][2], rel=1e-6), k
+
+    def mean_plus(part, itf, x):
+        v = [f for (i, xc, _), f in part.items() if i == itf and xc == round(x, 6)]
+        return sum(f[0] for f in v) / sum(f[2] for f in v)
+    quad = sel(rep.ANCF, f"mu 0.3{rep.SPACE}quadratic across", "16 el.")
+    default = sel(rep.ANCF, "mu 0.3", "16 el.")
+    solids = [sel(rep.SOLID, "mu 0.3", f"h {h} mm") for h in ("2.00", "1.40")]
+    for itf in ("lg_sol", "lg_mg"):
+        for x in centres:
+            ps = [mean_plus(s, itf, x) for s in solids]
+            assert mean_plus(quad, itf, x) > 3.0 * max(ps), (itf, x)
+            assert mean_plus(default, itf, x) < ps[0] + 10e3, (itf, x)

@@ -90,6 +90,14 @@ class ContactSteps:
         """After a converged solve: did a contact point's weight change? (collective)"""
         return self.contact is not None and self.contact.refresh_weights()
 
+    def residual_norm(self, X: PETSc.Vec) -> float:
+        """|F(X)| with the contact weights as they are now (collective)."""
+        F = self.problem.F.duplicate()
+        self.problem.residual(None, X, F)
+        norm = F.norm()
+        F.destroy()
+        return norm
+
     def status_changes(self) -> int:
         """Status changes so far, summed over the ranks (collective)."""
         n = 0 if self.contact is None else self.contact.status_changes
@@ -115,6 +123,8 @@ class PhasedNewton:
         self.snes_solve = snes_solve
         self.predictor = predictor
         self.between_solves = line_search != "basic"
+        #: |F| with the state's own contact weights when their updates did not settle, else None
+        self.unsettled: float | None = None
 
     def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
         """(reason of the last solve, Newton iterations of all of them)."""
@@ -138,10 +148,14 @@ class PhasedNewton:
         for _ in range(MAX_WEIGHT_UPDATES):
             # contact points whose partners moved past B's ends changed weight: solve again
             if reason <= 0 or not P.refresh_weights():
-                break
+                return reason, its
             reason, n = self.snes_solve(X)
             its += n
             self._trace(lam, "weights changed", n, reason)
+        if reason > 0 and P.refresh_weights():
+            # the weights' fixed point did not settle: the last solve's weights are not those of
+            # its state; the residual with the state's own weights is what the level reports
+            self.unsettled = P.residual_norm(X)
         return reason, its
 
     def _predicted(self, X: PETSc.Vec, lam: float) -> tuple[int | None, int]:

@@ -23,7 +23,7 @@ from ..petsc.problem import Problem
 from . import solver_messages
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
-from .newton import PhasedNewton
+from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
                       reason_name)
 from .snes_solver import SNESSolver
@@ -78,7 +78,14 @@ class LoadStepper:
         reason, its = newton.solve(X, lam, from_rest)
         self.history = S.history
         self.newton_iterations += its
-        return reason, its, S.snes.getFunctionNorm()
+        fnorm = S.snes.getFunctionNorm()
+        if newton.unsettled is not None:
+            # a level accepted with its weights' last update unsettled reports the residual
+            # with the state's own weights (contact/weights.py), never the stale one
+            fnorm = max(fnorm, newton.unsettled)
+            self.log(f"  contact weights not settled at load factor {lam:.6g} after "
+                     f"{MAX_WEIGHT_UPDATES} updates: |F| with the state's own weights {fnorm:.2e}")
+        return reason, its, fnorm
 
     def _stop_if_requested(self, target: float, level: float) -> None:
         """Between Newton solves: stop on every rank if any rank got SIGTERM/SIGINT (collective)."""

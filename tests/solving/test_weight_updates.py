@@ -1,0 +1,62 @@
+"""Contact weights whose fixed point does not settle (contact/weights.py, solving/newton.py): a
+level accepted after the last weight update reports the residual with the state's own weights,
+never the converged residual of the stale ones."""
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+from ancf_petsc.contact.laws import NEWTON
+from ancf_petsc.solving.newton import MAX_WEIGHT_UPDATES, PhasedNewton
+
+CONVERGED = PETSc.SNES.ConvergedReason.CONVERGED_FNORM_ABS
+
+
+class _Steps:
+    """A contact law's part whose weights change ``changes`` times (no statuses)."""
+
+    decides_activity = False
+
+    def __init__(self, changes: int):
+        self.changes, self.refreshes, self.frozen = changes, 0, False
+
+    def phases(self, from_rest):
+        return [NEWTON]
+
+    def begin(self, phase, previous):
+        pass
+
+    def status_changes(self):
+        return 0
+
+    def refresh_weights(self):
+        self.refreshes += 1
+        return self.refreshes <= self.changes
+
+    def residual_norm(self, X):
+        return 3.5e-4
+
+
+def _solve(changes: int):
+    steps, solves = _Steps(changes), []
+    newton = PhasedNewton(steps, lambda X: (solves.append(1), (CONVERGED, 2))[1])
+    reason, its = newton.solve(None, 1.0, False)
+    return newton, steps, reason, its, len(solves)
+
+
+def test_weights_that_settle_report_nothing():
+    newton, steps, reason, its, solves = _solve(changes=2)
+    assert reason == CONVERGED and newton.unsettled is None
+    assert solves == 3 and its == 6 and steps.refreshes == 3
+
+
+def test_weights_that_never_settle_report_the_residual_with_their_own_weights():
+    newton, steps, reason, its, solves = _solve(changes=10 ** 6)
+    assert solves == 1 + MAX_WEIGHT_UPDATES
+    # one refresh per update, then the check of the last solve's state
+    assert steps.refreshes == MAX_WEIGHT_UPDATES + 1
+    assert newton.unsettled == 3.5e-4
+
+
+def test_weights_that_settle_at_the_last_update_report_nothing():
+    newton, steps, reason, its, solves = _solve(changes=MAX_WEIGHT_UPDATES)
+    assert solves == 1 + MAX_WEIGHT_UPDATES and newton.unsettled is None

@@ -86,22 +86,13 @@ def solid_points(secs, psi: float, h: float, mu: float, level: float) -> dict:
 
 
 def ancf_points(psi: float, elements: int, mu: float, level: float, tmp: str, space: str | None) -> dict:
-    """The same for the beams (verify_solid_friction.ancf_config; μ = 0: frictionless)."""
-    import h5py
-    from ancf_petsc.config.parse import parse_config
-    from ancf_petsc.solving.run import run_model
-    from verify_solid_friction import ancf_config
+    """The same for the beams (solid_friction_profiles.ancf_contact; μ = 0: frictionless)."""
+    from solid_friction_profiles import ancf_contact
     out = os.path.join(tmp, f"across_{elements}_{mu:g}_{space}".replace(" ", "_"))
-    raw = ancf_config(psi, elements, mu, None, out, space)
-    if mu == 0.0:
-        del raw["contact"]["tangential"]
-    raw["steps"] = [float(F) for F in vsc.LOADS if F <= level]
-    res = run_model(parse_config(raw, base_dir=vsc.CONFIGS), log=lambda *_: None)
-    if res.status != "completed":
+    pts = ancf_contact(psi, elements, mu, level, None, out, space)
+    if pts is None:
         return {}
-    with h5py.File(os.path.join(out, "results.h5"), "r") as f:
-        g = f["steps"][sorted(f["steps"])[-1]]["contact"]
-        itf, x0, p, area = g["interface"][:], g["x0"][:], g["pressure"][:], g["area"][:]
+    itf, x0, p, area = pts["interface"], pts["x0"], pts["pressure"], pts["area"]
     return {name: {"x": x0[itf == i, 0], "P": untwist(x0[itf == i], psi), "p": p[itf == i], "w": area[itf == i]}
             for i, name in enumerate(rep.IFACES)}
 

@@ -52,26 +52,39 @@ def solid_profile(secs, psi: float, h: float, mu: float, level: float, stick: fl
     return rows
 
 
-def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: str, space: str | None = None) -> list:
+def ancf_contact(psi: float, elements: int, mu: float, level: float, aug, out: str,
+                 space: str | None = None) -> dict | None:
     """The ANCF column (verify_solid_friction.ancf_config; μ = 0: frictionless; ``space`` a
-    rep.SPACES name, None the default pressure space) to ``level``."""
+    rep.SPACES name, None the default pressure space) to ``level``, written to ``out``: the last
+    level's contact points (interface, x0, pressure, area, shear_stress or zeros), None if the run
+    did not complete."""
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     from verify_solid_friction import ancf_config
-    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{aug}_{space}".replace(" ", "_"))
     raw = ancf_config(psi, elements, mu, aug, out, space)
     if mu == 0.0:
         del raw["contact"]["tangential"]
     raw["steps"] = [float(F) for F in vsc.LOADS if F <= level]
     res = run_model(parse_config(raw, base_dir=vsc.CONFIGS), log=lambda *_: None)
     if res.status != "completed":
-        return []
-    rows = []
+        return None
     with h5py.File(os.path.join(out, "results.h5"), "r") as f:
         g = f["steps"][sorted(f["steps"])[-1]]["contact"]
-        itf, x0, p, area = g["interface"][:], g["x0"][:, 0], g["pressure"][:], g["area"][:]
-        sigma = g["shear_stress"][:, 0] if "shear_stress" in g else np.zeros(len(p))
+        pts = {k: g[k][:] for k in ("interface", "x0", "pressure", "area")}
+        pts["shear_stress"] = g["shear_stress"][:] if "shear_stress" in g else np.zeros((len(pts["pressure"]), 3))
+    return pts
+
+
+def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: str, space: str | None = None) -> list:
+    """The ANCF column's profiles (``ancf_contact``) to ``level``."""
+    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{aug}_{space}".replace(" ", "_"))
+    pts = ancf_contact(psi, elements, mu, level, aug, out, space)
+    if pts is None:
+        return []
+    rows = []
+    itf, x0, p, area = pts["interface"], pts["x0"][:, 0], pts["pressure"], pts["area"]
+    sigma = pts["shear_stress"][:, 0]
     for i, name in enumerate(rep.IFACES):
         m = itf == i
         # force on the solid's slave body: the beams' slave A on mg_sol, lg_sol; B on lg_mg

@@ -227,6 +227,10 @@ def test_displacement_control_gives_the_state_of_the_force(tmp_path):
     ({"tangential": {"law": "elastic"}}, "contact.tangential.stiffness", "thickness"),
     ({"tangential": {"law": "elastic", "stiffness": 1e6, "thickness": 3e-5}}, "contact.tangential", "not both"),
     ({"tangential": {"law": "coulomb", "friction": 0.3, "augmentation": 0}}, "contact.tangential.augmentation", "> 0"),
+    ({"tangential": {"law": "coulomb", "friction": 0.3, "supported_ends": "fold"}},
+     "contact.tangential.supported_ends", "merge"),
+    ({"tangential": {"law": "elastic", "stiffness": 1e6, "supported_ends": "merge"}},
+     "contact.tangential.supported_ends", "not a value of law elastic"),
 ])
 def test_tangential_config_errors_name_the_key(contact, key, words):
     from ancf_petsc.config.parse import parse_config

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, couplings, reports
-from .interfaces import find_interfaces, supported_ends
+from .interfaces import find_interfaces, held_ends, supported_ends
 from .laws import Phase, active_set_rows, make_law
 from .multipliers import build_space, reference_stiffness, with_tangential
 from .points import build_points
@@ -48,8 +48,7 @@ class Contact:
         self.space = with_tangential(build_space(
             self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
             spec.per_element, merged=supported_ends(model, interfaces, spec.supported_ends)),
-            any(t.multipliers for t in self.terms),
-            supported_ends(model, interfaces, getattr(spec.tangential, "supported_ends", "keep"), 3))
+            any(t.multipliers for t in self.terms), held_ends(model, interfaces, spec.tangential))
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()
         #: set by a parallel assembly (collective): ``sum_over_ranks(values over self.mults)``
@@ -71,7 +70,7 @@ class Contact:
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
-        self.owned, self.Phi, self.tPhi = np.zeros(0, dtype=bool), None, None
+        self.owned, self.Phi = np.zeros(0, dtype=bool), None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
         check_reference_gaps(self)
@@ -112,8 +111,6 @@ class Contact:
         self.owned = (np.ones(len(self.mults), dtype=bool) if owned_elements is None
                       else owned_elements[sp.element[self.mults]])
         self.Phi = sp.Phi[self.mults][:, self.local].tocsr()
-        #: the tangential functions' Φ (friction: multipliers.fold_tangential)
-        self.tPhi = self.Phi if sp.tPhi is None or sp.tPhi is sp.Phi else sp.tPhi[self.mults][:, self.local].tocsr()
         for term in self.terms:
             term.set_numbering(self, perm)
         self._cache = None

@@ -113,6 +113,7 @@ class CoulombFriction(PartnerTerm):
         self.n_nodes = model.n_nodes
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
         self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
+        self.tPhi = None
 
     @classmethod
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
@@ -124,6 +125,8 @@ class CoulombFriction(PartnerTerm):
     def set_numbering(self, c, perm: np.ndarray) -> None:
         """The PETSc DOFs of the tangential multipliers (block numbering ``perm``)."""
         sp = c.space
+        #: the tangential functions' Φ over the local multipliers and points (fold_tangential)
+        self.tPhi = c.Phi if sp.tPhi is sp.Phi else sp.tPhi[c.mults][:, c.local].tocsr()
         self.tdof = DOFS_PER_NODE * perm[self.n_nodes + sp.tnode] + sp.tslot
         sm = sp.seg_mults
         blocks = perm[self.n_nodes + sp.tnode[np.maximum(sm, 0)]]                # (S, K, 3)
@@ -148,7 +151,7 @@ class CoulombFriction(PartnerTerm):
         wp = self.points.w[idx]
         zl = st.z * st.rows.load
         positive = c.Phi.T @ zl > 0.0                  # the points that press (p > 0)
-        tPhi = c.tPhi                                  # the tangential functions (folded ends)
+        tPhi = self.tPhi                               # the tangential functions (folded ends)
         sums = np.hstack([tPhi @ (w[:, None] * u), tPhi @ (w[:, None] * n),
                           tPhi @ (w * positive * (c.Phi.T @ zl) / wp)[:, None]])
         if c.sum_over_ranks is not None:

@@ -114,3 +114,10 @@ def supported_ends(model, interfaces, rule: str = "merge", held_slots: int = DOF
             out[k, j] = (node_held[na] and node_held[nb]
                          and np.isclose(a.x_nodes[end], b.x_nodes[end], rtol=0, atol=1e-12))
     return out
+
+
+def held_ends(model, interfaces, tangential) -> np.ndarray:
+    """(n_interfaces, 2) bool: the ends whose tangential functions are folded
+    (``contact.tangential.supported_ends: merge``, ``tangential`` its spec or None): where the
+    positions r of both bodies' end nodes are held (``fix: clamped`` or ``reduced``)."""
+    return supported_ends(model, interfaces, getattr(tangential, "supported_ends", "keep"), 3)

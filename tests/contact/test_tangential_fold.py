@@ -2,10 +2,12 @@
 merge``): with every function sticking (at rest) exact stick repeats the supports at the roots,
 and the Jacobian is singular; folded, its smallest singular value is that of frictionless
 sliding (singular value decomposition of the assembled Jacobian, scripts/friction_stick_rank.py)."""
+import os
+
 import numpy as np
 import pytest
 
-from helpers import build_problem, load_raw
+from helpers import CONFIGS, build_problem, load_raw
 
 
 def _at_rest(tangential, elements: int = 2):
@@ -53,3 +55,23 @@ def test_fold_sums_the_root_functions(spectra):
     np.testing.assert_allclose(rows[~sp.tdrop], 1.0, rtol=1e-12)
     kept = spectra["keep"][0].contact.space
     assert not kept.tdrop.any() and kept.tPhi is kept.Phi
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_folded_friction_gives_the_serial_answer_on_2_and_3_ranks(tmp_path):
+    """μ = 3 on the folded space, equal loading, 2 elements, 10 and 30 N on 1, 2 and 3 ranks:
+    the same probes at every level (the folded functions' vectors and their neighbours live on
+    the root segment, whose rank evaluates both)."""
+    from helpers import assert_same_as_serial, probes_table, run_on_ranks
+    raw = load_raw("achilles_psi45_equal_muscles.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 2
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["contact"] = {"mode": "sliding",
+                      "tangential": {"law": "coulomb", "friction": 3.0, "supported_ends": "merge"}}
+    raw["steps"] = [10.0, 30.0]
+    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2, 3))
+    for _, s in runs.values():
+        assert s["status"] == "completed" and sum(st["cutbacks"] for st in s["steps"]) == 0
+    assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})

@@ -13,7 +13,9 @@ The script prints, for the paper's tendon (ψ = 45°, ``--elements``, the equal-
 rest), the smallest singular values of the Jacobian (and relative to the largest) with every function
 sticking, and for comparison without friction (sliding) and with the bonded elastic matrix
 (k_t = 1e14 Pa/m, the same tie by a penalty), and where the near-null vectors live (interface,
-A element of the multipliers carrying them).
+A element of the multipliers carrying them).  ``--tangential-ends merge`` folds the root
+functions' tangential vectors into their neighbours' (``contact.tangential.supported_ends``; the
+folded vectors are held at zero by rows k_s y = 0).
 
     OPENBLAS_NUM_THREADS=1 python scripts/friction_stick_rank.py [--elements 4]
 """
@@ -32,7 +34,7 @@ CASES = [("Coulomb mu = 3, every function sticking (at rest)", {"law": "coulomb"
          ("bonded elastic matrix k_t = 1e14 Pa/m", {"law": "elastic", "stiffness": 1e14})]
 
 
-def problem(tangential, elements: int):
+def problem(tangential, elements: int, ends: str = "keep"):
     from petsc4py import PETSc
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.contact import build_contact
@@ -43,6 +45,8 @@ def problem(tangential, elements: int):
         raw = yaml.safe_load(fh)
     for b in raw["beams"]:
         b["elements"] = elements
+    if tangential and tangential["law"] == "coulomb":
+        tangential = tangential | {"supported_ends": ends}
     raw["contact"] = {"mode": "sliding"} | ({"tangential": tangential} if tangential else {})
     spec = parse_config(raw, base_dir=os.path.join(ROOT, "configs"))
     model = build_model(spec)
@@ -53,13 +57,16 @@ def problem(tangential, elements: int):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(allow_abbrev=False)
     ap.add_argument("--elements", type=int, default=4)
+    ap.add_argument("--tangential-ends", choices=("keep", "merge"), default="keep",
+                    help="contact.tangential.supported_ends of the Coulomb case (merge: the root "
+                         "functions' tangential vectors folded into their neighbours')")
     args = ap.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     import petsc4py
     petsc4py.init([sys.argv[0]])
     from petsc4py import PETSc
     for label, tangential in CASES:
-        P = problem(tangential, args.elements)
+        P = problem(tangential, args.elements, args.tangential_ends)
         P.load_factor = 10.0
         P.jacobian(None, P.q0, P.J, P.J)
         J = P.J.convert("dense", PETSc.Mat()).getDenseArray()

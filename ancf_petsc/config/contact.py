@@ -38,11 +38,13 @@ def _coulomb(value: dict, p: str, t: TangentialSpec) -> None:
         t.augmentation = number(value["augmentation"], f"{p}.augmentation", positive=True, hi=1e6,
                                 hint=" (the stick test's stiffness in units of k_s / A; default 1; "
                                      "it steers Newton's iteration, not the answer)")
+    t.supported_ends = string(value.get("supported_ends", t.supported_ends), f"{p}.supported_ends",
+                              SUPPORTED_END_RULES)
 
 
 #: per tangential law: its keys and their reader (the laws are contact/tangential.py TANGENTIAL_LAWS)
 TANGENTIAL_PARSERS = {ElasticMatrix.law: (("stiffness", "shear_modulus", "thickness"), _elastic),
-                      CoulombFriction.law: (("friction", "augmentation"), _coulomb)}
+                      CoulombFriction.law: (("friction", "augmentation", "supported_ends"), _coulomb)}
 
 
 def parse_tangential(value, p: str = "contact.tangential") -> TangentialSpec:

@@ -100,6 +100,9 @@ class TangentialSpec:
     stiffness: float | None = None         # elastic matrix: k_t = G / thickness [Pa/m]
     friction: float | None = None          # Coulomb: the friction coefficient μ
     augmentation: float | None = None      # Coulomb: the stick test's c in units of k_s / A (None: 1)
+    # Coulomb: the end tangential functions where both bodies' positions are held, folded into
+    # their neighbours (merge) or kept (contact/multipliers.py fold_tangential)
+    supported_ends: str = "keep"
 
 
 @dataclass

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, couplings, reports
-from .interfaces import find_interfaces, supported_ends
+from .interfaces import find_interfaces, held_ends, supported_ends
 from .laws import Phase, active_set_rows, make_law
 from .multipliers import build_space, reference_stiffness, with_tangential
 from .points import build_points
@@ -48,7 +48,7 @@ class Contact:
         self.space = with_tangential(build_space(
             self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
             spec.per_element, merged=supported_ends(model, interfaces, spec.supported_ends)),
-            any(t.multipliers for t in self.terms))
+            any(t.multipliers for t in self.terms), held_ends(model, interfaces, spec.tangential))
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()
         #: set by a parallel assembly (collective): ``sum_over_ranks(values over self.mults)``

@@ -75,11 +75,12 @@ class FrictionEvaluation:
     positive: np.ndarray
 
 
-def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held: bool = True) -> tuple:
+def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held=True) -> tuple:
     """proj_{|·| ≤ bound}(P̄ a) per multiplier and its derivative S with respect to P̄ a:
     (projection, S, direction, stick, slide).  At the kink a = 0 with no bound (at rest) the
     generalised derivative taken is the sticking one (``held``): Newton's first step from rest
-    then holds the interface instead of letting it slide freely."""
+    then holds the interface instead of letting it slide freely (``held``: bool or per multiplier;
+    without a bound and not held, R = y: the vector is held at zero)."""
     trial = a - np.einsum("ki,ki->k", nbar, a)[:, None] * nbar
     size = np.linalg.norm(trial, axis=1)
     stick = ((size <= bound) & (bound > 0.0)) | (held & (bound == 0.0) & (size <= 1e-12))
@@ -112,6 +113,7 @@ class CoulombFriction(PartnerTerm):
         self.n_nodes = model.n_nodes
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
         self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
+        self.tPhi = None
 
     @classmethod
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
@@ -123,6 +125,8 @@ class CoulombFriction(PartnerTerm):
     def set_numbering(self, c, perm: np.ndarray) -> None:
         """The PETSc DOFs of the tangential multipliers (block numbering ``perm``)."""
         sp = c.space
+        #: the tangential functions' Φ over the local multipliers and points (fold_tangential)
+        self.tPhi = c.Phi if sp.tPhi is sp.Phi else sp.tPhi[c.mults][:, c.local].tocsr()
         self.tdof = DOFS_PER_NODE * perm[self.n_nodes + sp.tnode] + sp.tslot
         sm = sp.seg_mults
         blocks = perm[self.n_nodes + sp.tnode[np.maximum(sm, 0)]]                # (S, K, 3)
@@ -147,12 +151,13 @@ class CoulombFriction(PartnerTerm):
         wp = self.points.w[idx]
         zl = st.z * st.rows.load
         positive = c.Phi.T @ zl > 0.0                  # the points that press (p > 0)
-        sums = np.hstack([c.Phi @ (w[:, None] * u), c.Phi @ (w[:, None] * n),
-                          c.Phi @ (w * positive * (c.Phi.T @ zl) / wp)[:, None]])
+        tPhi = self.tPhi                               # the tangential functions (folded ends)
+        sums = np.hstack([tPhi @ (w[:, None] * u), tPhi @ (w[:, None] * n),
+                          tPhi @ (w * positive * (c.Phi.T @ zl) / wp)[:, None]])
         if c.sum_over_ranks is not None:
             sums = c.sum_over_ranks(sums)
         U, m = sums[:, :3], sums[:, 3:6]
-        zhat = c.space.area[c.mults] * sums[:, 6]      # ∫ φ_k p⁺ dA / k_s
+        zhat = c.space.tarea[c.mults] * sums[:, 6]     # ∫ φ_k p⁺ dA / k_s
         mnorm = np.linalg.norm(m, axis=1)
         nbar = np.where(mnorm[:, None] > 0.0, m / np.where(mnorm > 0.0, mnorm, 1.0)[:, None], EYE[0])
         y = st.xl.reshape(-1)[self.local_positions(c, st)]
@@ -161,14 +166,15 @@ class CoulombFriction(PartnerTerm):
         if probe:
             bound = np.zeros_like(bound)
         a = y + self.augmentation * U
-        proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=not probe)
+        held = ~c.space.tdrop[c.mults] & (not probe)    # a folded function's y is held at zero
+        proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=held)
         R, T, g = y - proj, -S, -direction
         na = np.einsum("ki,ki->k", nbar, a)
         dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
-        Y = c.Phi.T @ y
+        Y = tPhi.T @ y
         sigma = c.stiffness * (Y - np.einsum("pi,pi->p", n, Y)[:, None] * n) / wp[:, None]
         # a point sticks where most of its functions (by their weight at the point) stick
-        on = c.Phi.T @ m_stick.astype(float)
+        on = tPhi.T @ m_stick.astype(float)
         pressure = c.stiffness * (c.Phi.T @ (st.z * st.rows.load)) / wp
         share = c.Phi @ np.ones(len(idx)) if c.sum_over_ranks is not None else np.ones(len(c.mults))
         return FrictionEvaluation(d=d, du=du, sigma=sigma, Y=Y, stick=on > 0.5, omega=wp * w,
@@ -208,7 +214,8 @@ class CoulombFriction(PartnerTerm):
         """The base's per-point fields and per owned multiplier the tangential traction
         coefficient λ_T = k_s y / A_k [Pa] and whether the function sticks."""
         ev, own = st.terms[self.name], c.owned
-        lam = c.stiffness * ev.y / c.space.area[c.mults][:, None]
+        area = c.space.tarea[c.mults]
+        lam = c.stiffness * ev.y / np.where(area > 0.0, area, 1.0)[:, None]
         return super().fields(c, st) | {"multiplier_shear": lam[own],
                                         "multiplier_stick": ev.m_stick[own].astype(np.int8)}
 

@@ -34,7 +34,8 @@ def _per_pair(srow: np.ndarray, eB: np.ndarray, values: np.ndarray) -> tuple[np.
 
 def _points(term, c, st):
     """Per local point: its segment row, the local index of each of its segment's functions
-    (P, K), Φ_kp ω'_p and Φ_kp (P, K; 0 for a missing function); each segment's local indices."""
+    (P, K), the tangential functions' Φ_kp ω'_p, the pressure's Φ_kp (P, K; 0 for a missing
+    function); each segment's local indices."""
     pts, sp, idx = c.points, c.space, c.local
     srow = np.searchsorted(c.segments, pts.seg[idx])
     sm = sp.seg_mults[c.segments]
@@ -43,7 +44,8 @@ def _points(term, c, st):
     kloc = np.where(real, np.minimum(kloc, len(c.mults) - 1), 0)
     p_loc = idx - pts.seg_start[pts.seg[idx]]
     phi0 = sp.dense[pts.seg[idx], :, p_loc] * real[srow]
-    return srow, sm, kloc[srow], phi0 * st.weight[:, None], phi0, kloc
+    phit = sp.tdense[pts.seg[idx], :, p_loc] * real[srow]
+    return srow, sm, kloc[srow], phit * st.weight[:, None], phi0, kloc
 
 
 def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
@@ -86,7 +88,7 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     out.append((rows, drop_held(cols, fixed_mask), Kn))
     # the bounds μ ẑ_k = μ ∫ φ_k p⁺ dA / k_s of the sliding functions through the pressures z_j
     wp = term.points.w[c.local]
-    left = c.space.area[sm[srow]] * phi * (ev.positive / wp)[:, None]
+    left = c.space.tarea[sm[srow]] * phi * (ev.positive / wp)[:, None]
     Gz = segment_outer(srow, n_s, left, phi0 * st.rows.load[kp])                 # (n_s, K, K)
     Vz = ks * term.mu * ev.g[kseg][:, :, :, None] * Gz[:, :, None, :]   # (n_s, K, 3, K)
     zcols = np.where(sm >= 0, DOFS_PER_NODE * c.mult_block[np.maximum(sm, 0)] + c.space.slot[np.maximum(sm, 0)], -1)

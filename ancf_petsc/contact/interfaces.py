@@ -94,16 +94,18 @@ def find_interfaces(model, spec) -> list[Interface]:
     return out
 
 
-def supported_ends(model, interfaces, rule: str = "merge") -> np.ndarray:
+def supported_ends(model, interfaces, rule: str = "merge", held_slots: int = DOFS_PER_NODE) -> np.ndarray:
     """(n_interfaces, 2) bool, all False for ``rule`` keep (``contact.projection.supported_ends``);
     for merge True where the interface's first / last end lies at nodes of A and
     B whose every DOF is held or prescribed (``fix: clamped``): the gap there is the supports',
     and a pressure function of its own would repeat them (multipliers.py).  Not where a section
     may stretch (``fix: reduced``): that end's constraint still holds the two bodies' different
-    contraction (docs/contact.md, "Supported ends": folding it there moves Table 1 by 1.7 %)."""
+    contraction (docs/contact.md, "Supported ends": folding it there moves Table 1 by 1.7 %).
+    ``held_slots`` 3: where the nodes' positions r are held (``fix: reduced`` too; the tangential
+    functions' rule, ``contact.tangential.supported_ends``)."""
     held = np.zeros(DOFS_PER_NODE * model.n_nodes, dtype=bool)
     held[model.fixed_dofs] = True
-    node_held = held.reshape(-1, DOFS_PER_NODE).all(axis=1)
+    node_held = held.reshape(-1, DOFS_PER_NODE)[:, :held_slots].all(axis=1)
     out = np.zeros((len(interfaces), 2), dtype=bool)
     for k, itf in enumerate(interfaces if rule == "merge" else ()):
         for j, end in enumerate((0, -1)):
@@ -112,3 +114,10 @@ def supported_ends(model, interfaces, rule: str = "merge") -> np.ndarray:
             out[k, j] = (node_held[na] and node_held[nb]
                          and np.isclose(a.x_nodes[end], b.x_nodes[end], rtol=0, atol=1e-12))
     return out
+
+
+def held_ends(model, interfaces, tangential) -> np.ndarray:
+    """(n_interfaces, 2) bool: the ends whose tangential functions are folded
+    (``contact.tangential.supported_ends: merge``, ``tangential`` its spec or None): where the
+    positions r of both bodies' end nodes are held (``fix: clamped`` or ``reduced``)."""
+    return supported_ends(model, interfaces, getattr(tangential, "supported_ends", "keep"), 3)

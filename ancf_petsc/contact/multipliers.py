@@ -30,6 +30,10 @@ held at zero like supported DOFs.
 
 A friction law (friction.py) adds a tangential multiplier vector per pressure function
 (``with_tangential``): three more slots per function, packed per A element into nodes of their own.
+Its functions are the pressure's, except at ends where both bodies' positions are held
+(``contact.tangential.supported_ends: merge``, issue 27): there the end axial function's
+tangential vector is folded into its neighbour's (one vector for φ₀ + φ₁, the bound summed), the
+folded vector held at zero, as exact stick there repeats the supports.
 """
 from __future__ import annotations
 
@@ -69,6 +73,14 @@ class MultiplierSpace:
     #: (M, 3) node and slot of each function's tangential multiplier components (friction)
     tnode: np.ndarray | None = None
     tslot: np.ndarray | None = None
+    #: (n_interfaces,) the functions across each interface (axial-major numbering)
+    n_across: np.ndarray | None = None
+    #: the tangential functions (friction): Φ (M, P), A_k (M,), per segment Φ (S, K, P) and the
+    #: folded (held at zero) ones (M,); the pressure's unless folded (``with_tangential``)
+    tPhi: sp.csr_matrix | None = None
+    tarea: np.ndarray | None = None
+    tdense: np.ndarray | None = None
+    tdrop: np.ndarray | None = None
 
     @property
     def n_multipliers(self) -> int:
@@ -95,10 +107,13 @@ class MultiplierSpace:
         return ~used
 
 
-def with_tangential(space: MultiplierSpace, wanted: bool = True) -> MultiplierSpace:
+def with_tangential(space: MultiplierSpace, wanted: bool = True,
+                    folded: np.ndarray | None = None) -> MultiplierSpace:
     """The space with a tangential multiplier vector (3 components) per pressure function,
     in multiplier nodes after the normal ones: each A element's, in multiplier order, 6 to a
-    node (the element owns them, as it owns its pressure functions); ``space`` if not wanted."""
+    node (the element owns them, as it owns its pressure functions); ``space`` if not wanted.
+    ``folded`` (n_interfaces, 2) bool: fold the first / last end's tangential functions into
+    their neighbours (``fold_tangential``)."""
     if not wanted:
         return space
     tnode = np.empty((space.n_multipliers, 3), dtype=np.int64)
@@ -110,7 +125,39 @@ def with_tangential(space: MultiplierSpace, wanted: bool = True) -> MultiplierSp
         tnode[idx] = (len(nodes) + k // SLOTS).reshape(-1, 3)
         tslot[idx] = (k % SLOTS).reshape(-1, 3)
         nodes += [e] * -(-len(k) // SLOTS)
-    return replace(space, node_element=np.asarray(nodes, dtype=np.int64), tnode=tnode, tslot=tslot)
+    return fold_tangential(replace(space, node_element=np.asarray(nodes, dtype=np.int64), tnode=tnode,
+                                   tslot=tslot), folded)
+
+
+def fold_tangential(space: MultiplierSpace, folded: np.ndarray | None) -> MultiplierSpace:
+    """The tangential functions: the pressure's, with the end axial function of each ``folded``
+    (interface, end) added to its neighbour along (φ₁ ← φ₁ + φ₀ for every function across; its
+    A_k, Φ and so its bound ∫ φ p⁺ dA summed) and the end's own emptied (dropped, its vector
+    held at zero).  Both live on the end segment, so the segments' lists stay as they are."""
+    M = space.n_multipliers
+    into = np.arange(M)
+    for k in np.flatnonzero(np.any(folded, axis=1)) if folded is not None and space.degrees[0] >= 1 else ():
+        ids, nc = np.flatnonzero(space.interface == k), int(space.n_across[k])
+        if folded[k, 0] and len(ids) >= 2 * nc:
+            into[ids[:nc]] = ids[nc:2 * nc]
+        if folded[k, 1] and len(ids) >= 3 * nc:
+            into[ids[-nc:]] = ids[-2 * nc:-nc]
+    drop = into != np.arange(M)
+    if not drop.any():
+        return replace(space, tPhi=space.Phi, tarea=space.area, tdense=space.dense, tdrop=drop)
+    C = sp.csr_matrix((np.ones(M), (into, np.arange(M))), shape=(M, M))
+    W = C @ sp.diags(space.area) @ space.Phi                     # rows w_p φ_k(p), folded
+    tarea = np.asarray(W.sum(axis=1)).ravel()
+    tPhi = (sp.diags(np.where(drop, 0.0, 1.0 / np.where(drop, 1.0, tarea))) @ W).tocsr()
+    sm = space.seg_mults
+    real = sm >= 0
+    wd = space.dense * np.where(real, space.area[np.maximum(sm, 0)], 0.0)[:, :, None]
+    for s, j in zip(*np.nonzero(real & drop[np.maximum(sm, 0)])):   # two per folded end
+        wd[s, np.flatnonzero(sm[s] == into[sm[s, j]])[0]] += wd[s, j]
+        wd[s, j] = 0.0
+    scale = np.where(real & ~drop[np.maximum(sm, 0)], tarea[np.maximum(sm, 0)], np.inf)
+    return replace(space, tPhi=tPhi, tarea=np.where(drop, 0.0, tarea), tdense=wd / scale[:, :, None],
+                   tdrop=drop)
 
 
 def reference_modulus(beam) -> float:
@@ -196,6 +243,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     dense = np.zeros((S, K, P_max))
     rows, cols, vals, itf_of, elem_of = [], [], [], [], []
     into = []                      # per interface: the function each one is folded into
+    n_across = []
     first = 0
     for k, itf in enumerate(interfaces):
         segs = np.flatnonzero(points.seg_itf == k)         # one per A element, in order
@@ -206,6 +254,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
         ax, step = _axial_functions(xi, ka, per_element)
         phi = (ax[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)   # (n, na·nc)
         na, nc = ax.shape[1], dc + 1
+        n_across.append(nc)
         if len(segs) % group:
             raise ValueError(f"{len(segs)} elements do not fall into groups of {group}")
         n_axial = step * (len(segs) // group - 1) + na
@@ -259,4 +308,5 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
             fill += len(idx)
     return MultiplierSpace(Phi=Phi.tocsr(), area=area, interface=interface, element=element,
                            node=node, slot=slot, node_element=np.asarray(node_element, dtype=np.int64),
-                           seg_mults=seg_mults, dense=dense, degrees=degrees, stiffness=float(stiffness))
+                           seg_mults=seg_mults, dense=dense, degrees=degrees, stiffness=float(stiffness),
+                           n_across=np.asarray(n_across, dtype=np.int64))

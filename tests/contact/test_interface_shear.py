@@ -162,13 +162,19 @@ def _state(P, seed, history):
     ({"law": "coulomb", "friction": 0.3}, False),
     ({"law": "coulomb", "friction": 0.3}, True),
     ({"law": "coulomb", "friction": 3.0, "augmentation": 10.0}, True),
-    ({"law": "coulomb", "friction": 0.3}, "clamped")])
+    ({"law": "coulomb", "friction": 0.3}, "clamped"),
+    ({"law": "coulomb", "friction": 0.3, "supported_ends": "merge"}, True),
+    ({"law": "coulomb", "friction": 3.0, "augmentation": 10.0, "supported_ends": "merge"}, True),
+    ({"law": "coulomb", "friction": 0.3, "supported_ends": "merge"}, "clamped")])
 def test_shear_jacobian_matches_finite_differences(tangential, history):
     """J v against central differences of F at deformed states with pressures of both signs
     (friction: sticking and sliding functions, the normal's rotation and the bounds' coupling
     to the pressures included; also with clamped roots, whose end pressure functions are
-    folded); the elastic matrix's Jacobian is symmetric."""
+    folded, and with the roots' tangential functions folded, ``supported_ends: merge``); the
+    elastic matrix's Jacobian is symmetric."""
     P, PETSc = build_problem(_achilles(tangential, fix="clamped" if history == "clamped" else None))
+    if tangential.get("supported_ends") == "merge":        # the roots' functions are folded
+        assert P.contact.space.tdrop.sum() == 2 * len(P.contact.interfaces)
     X, free = _state(P, 3, history)
     st = P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
     if tangential["law"] == "coulomb" and history:
@@ -221,6 +227,10 @@ def test_displacement_control_gives_the_state_of_the_force(tmp_path):
     ({"tangential": {"law": "elastic"}}, "contact.tangential.stiffness", "thickness"),
     ({"tangential": {"law": "elastic", "stiffness": 1e6, "thickness": 3e-5}}, "contact.tangential", "not both"),
     ({"tangential": {"law": "coulomb", "friction": 0.3, "augmentation": 0}}, "contact.tangential.augmentation", "> 0"),
+    ({"tangential": {"law": "coulomb", "friction": 0.3, "supported_ends": "fold"}},
+     "contact.tangential.supported_ends", "merge"),
+    ({"tangential": {"law": "elastic", "stiffness": 1e6, "supported_ends": "merge"}},
+     "contact.tangential.supported_ends", "not a value of law elastic"),
 ])
 def test_tangential_config_errors_name_the_key(contact, key, words):
     from ancf_petsc.config.parse import parse_config

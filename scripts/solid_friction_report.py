@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import verify_solid_contact as vsc
+
 SOLID, ANCF, CHECK = "solid P2 tet", "ANCF 2pt", "check"
 BASE = "stick 100"                   # the solid's reference variant
 ZONE = ", no friction x < "          # a free-zone diagnostic's variant: "<variant>, no friction x < 10 mm"
@@ -59,18 +61,7 @@ def read_csv(path: str) -> list:
 
 
 def write_csv(path: str, rows: list) -> None:
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=FIELDS, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            d = {}
-            for k in FIELDS:
-                v = r.get(k, "")
-                if isinstance(v, (float, np.floating)):
-                    v = "" if not np.isfinite(v) else (f"{v:.10e}" if k.endswith(("_m", "_N", "_Pa")) or k == "value"
-                                                       else f"{v:.6g}")
-                d[k] = v
-            w.writerow(d)
+    vsc.write_rows(path, FIELDS, rows, lambda k: k.endswith(("_m", "_N", "_Pa")) or k == "value")
 
 
 def row_key(r: dict) -> tuple:

@@ -1732,19 +1732,24 @@ def reference_rows(rows: list) -> list:
     return out
 
 
-def write_csv(path: str, rows: list) -> None:
+def write_rows(path: str, fields: tuple, rows: list, precise) -> None:
+    """``rows`` as CSV with the columns ``fields``: floats with 11 digits where ``precise(field)``,
+    6 elsewhere, empty where not finite."""
     with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=CSV_FIELDS, extrasaction="ignore")
+        w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
         for r in rows:
             d = {}
-            for k in CSV_FIELDS:
+            for k in fields:
                 v = r.get(k, "")
-                if isinstance(v, float):
-                    v = "" if not np.isfinite(v) else (f"{v:.10e}" if k.endswith("_m") or k == "uncertainty_rel"
-                                                       else f"{v:.6g}")
+                if isinstance(v, (float, np.floating)):
+                    v = "" if not np.isfinite(v) else (f"{v:.10e}" if precise(k) else f"{v:.6g}")
                 d[k] = v
             w.writerow(d)
+
+
+def write_csv(path: str, rows: list) -> None:
+    write_rows(path, CSV_FIELDS, rows, lambda k: k.endswith("_m") or k == "uncertainty_rel")
 
 
 def read_csv(path: str) -> list:

@@ -40,7 +40,6 @@ def checks_md(rows: list, psi: float) -> list:
     pairs = []
     if len(hs) > 1:
         pairs.append((f"mesh: h {1e3 * hs[1]:.2f} → {1e3 * hs[0]:.2f} mm", runs[hs[1]], runs[hs[0]]))
-    coarse = runs[hs[-1]] if hs else {}
     variants = sorted({r["variant"] for r in rows if r["model"] == SOLID and r["variant"] != BASE
                        and rep.ZONE not in r["variant"] and num(r["psi_deg"]) == psi})
     for v in variants:
@@ -309,14 +308,12 @@ def plot(path: str, rows: list, prof: list, psi: float = 45.0) -> None:
     ref = rep.reference(rows, psi)
     if not ref:
         return
-    F = np.array(sorted(ref))
-    us = np.array([ref[f]["soleus"][0] for f in F])
     for i, h in enumerate(sorted(runs, reverse=True)):
         lv = runs[h]
         Fs = np.array(sorted(lv))
         sty = dict(color="k", lw=2.2 - 0.8 * i, ls="-" if i else "--", label=f"solid h {1e3 * h:.2f} mm")
-        ax[0, 0].plot(Fs, [0.0 * f for f in Fs] if False else
-                      [100 * (num(lv[f]["soleus_ux_m"]) / ref[f]["soleus"][0] - 1) if f in ref else np.nan for f in Fs], **sty)
+        ax[0, 0].plot(Fs, [100 * (num(lv[f]["soleus_ux_m"]) / ref[f]["soleus"][0] - 1) if f in ref else np.nan
+                           for f in Fs], **sty)
         ax[0, 1].plot(Fs, [1e6 * num(lv[f]["medial_ux_m"]) for f in Fs], **sty)
         ax[0, 1].plot(Fs, [1e6 * num(lv[f]["lateral_ux_m"]) for f in Fs], **(sty | {"label": None, "color": "0.5"}))
         ax[1, 0].plot(Fs, [num(lv[f]["fx_mg_sol_N"]) + num(lv[f]["fx_lg_sol_N"]) for f in Fs], **sty)

@@ -679,7 +679,7 @@ def summary_table(results: dict) -> list[str]:
              "speed-up, equal accuracy | vs finest solid | goal (equal accuracy) | goal (vs finest) |",
              "|---|---|---:|---|---:|---:|---:|---|---|"]
     for key, (_, _, _, _, _, g) in results.items():
-        a, s, f = g["ancf"], g["solid"], g["finest"]
+        a, s = g["ancf"], g["solid"]
         anc = f"{a['model']}, {a['res']} ({100 * a['err']:.2f} %)" if a else "none"
         sol = f"{s['res']} ({100 * s['err']:.2f} %)" if s else "none"
         lines.append(f"| {key} | {anc} | {a['wall']:.3f} | " if a else f"| {key} | none | | ")

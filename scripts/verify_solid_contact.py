@@ -56,7 +56,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import math
 import os
 import sys
@@ -1563,7 +1562,7 @@ def selftest_fd(secs, h: float, psi: float, log=print) -> list:
             d = np.concatenate([du, dz])
             Jd = Jm @ d
             fun = lambda e: P.residual(u + e * du, z + e * dz)      # noqa: E731
-            zc, dzc = z, dz
+            dzc = dz
         else:
             # λ such that about half of the constraints press (augmented-Lagrangian inner problem)
             gb = P.contact(u, np.zeros(P.nc), False)["gbar"]
@@ -1573,7 +1572,7 @@ def selftest_fd(secs, h: float, psi: float, log=print) -> list:
             A11, A21, Dd = Jm[:n, :n], Jm[n:, :n], Jm.diagonal()[n:]
             Jd = A11 @ du - A21.T @ ((A21 @ du) / Dd)            # Schur complement: the penalty Hessian
             fun = lambda e: P.residual_alm(u + e * du)[:3]         # noqa: E731
-            zc, dzc = c["z"], None
+            dzc = None
         active = c["active"]
         rec = {"law": law, "h": h, "ndof": P.ndof, "nc": P.nc, "active": int(active.sum()),
                "border": int(sum(e["border"].sum() for e in c["evs"]))}

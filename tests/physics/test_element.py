@@ -58,7 +58,6 @@ def test_reference_configuration_is_stress_free_and_volume_exact():
 def test_element_force_and_tangent_by_finite_differences(mat):
     q0, G, w, _ = straight_element()
     rng = np.random.default_rng(5)
-    scale = np.abs(q0).max(axis=0, keepdims=True) + 0.01
     q = (q0 + 0.03 * rng.standard_normal(q0.shape) * np.where(np.abs(q0) > 0, 1.0, 0.05))[None]
     f, K, Jmin = kernels.internal_force_and_tangent(q, G, w, mat)
     assert Jmin[0] > 0

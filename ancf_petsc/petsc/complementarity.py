@@ -82,7 +82,8 @@ class ComplementarityPredictor:
         self.ksp = PETSc.KSP().create(comm=problem.comm)
         self.ksp.setType("preonly")
         pc = self.ksp.getPC()
-        pc.setType("cholesky")
+        # K's fade-weight terms (contact.fade: newton) make it unsymmetric: LU then
+        pc.setType("cholesky" if problem.symmetric else "lu")
         pc.setFactorSolverType("mumps")
         self.ksp.setOptionsPrefix("ancf_lcp_")
         self.solves = 0

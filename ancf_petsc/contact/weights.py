@@ -85,13 +85,11 @@ class PointWeights:
         return np.where(kept < 1.0, kept * (current > 0.0), current)
 
     def refresh(self, idx: np.ndarray, current: np.ndarray) -> float:
-        """Update the points ``idx`` to ``current``; the largest change (newton: 0, every
-        evaluation had its own weights)."""
-        if self.differentiated:
-            return 0.0
+        """Update the points ``idx`` to ``current`` (what the output reports); the largest change
+        (newton: 0, every evaluation had its own weights)."""
         change = float(np.max(np.abs(current - self.values[idx]), initial=0.0))
         self.values[idx] = current
-        return change
+        return 0.0 if self.differentiated else change
 
     def set(self, values: np.ndarray) -> None:
         """Weights of a restored state (a restart), also as the checkpoint."""

@@ -10,7 +10,8 @@ through one protocol, so that a new term needs no change here.  The residual row
     z:  −c_k (active)  or  −k_s z_k (inactive)
 
 and the Jacobian is the symmetric saddle-point matrix [[K − Σ τ ∇²g, −∇cᵀ], [−∇c, 0]] that
-MUMPS LDLᵀ factors as it is.  No penalty: the answer does not depend on k_s.
+MUMPS LDLᵀ factors as it is (unsymmetric, LU, with friction or with the fade weights
+differentiated: ``contact.fade: newton``, weights.py).  No penalty: the answer does not depend on k_s.
 
 ``Contact`` works on a rank's local array of node blocks (PETSc numbering, see ``set_layout``);
 it never touches PETSc objects: it adds to local force arrays and returns dense blocks with their

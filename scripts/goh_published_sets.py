@@ -15,12 +15,14 @@ reduced``) and on the whole ψ = 45° column:
    along the load path, K/μ = 3268 against 49.67.
 4. ``sets``: every set of the authors' code with K = 49.67 μ: the lone soleus (3 axial points)
    and the column with sliding and with unilateral contact (4 elements).
-5. ``fold``: the lone soleus with solver_default_2025 along a continuous path from rest
+5. ``fade``: the columns that met the fade weights (``FADE_RUNS``) with ``contact.fade: newton``
+   (``fade set:mode ...``: chosen ones).
+6. ``fold``: the lone soleus with solver_default_2025 along a continuous path from rest
    (increments of at most 1 N): the lowest scaled tangent eigenvalue as the path nears its limit
    point, and the same soleus with the default increments (its first level lands on another
    stable branch).
 
-Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold]
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade]
 """
 from __future__ import annotations
 
@@ -208,6 +210,26 @@ def sets() -> None:
                   flush=True)
 
 
+#: the columns whose runs met the fade weights (docs/fibres.md "Which sets run")
+FADE_RUNS = [("tendon_model_2023", "unilateral"), ("alex", "unilateral"),
+             ("solver_default_2025", "unilateral"), ("tendon_model_2023", "sliding"),
+             ("alex", "sliding"), ("optimized_SEE", "sliding"), ("solver_default_2025", "sliding")]
+
+
+def fade(runs=None) -> None:
+    """The columns of ``FADE_RUNS`` (or ``runs``: "set:mode" words) with ``contact.fade:
+    newton`` (the fade weights differentiated in Newton's iteration, contact/weights.py)."""
+    chosen = [tuple(r.split(":")) for r in runs] if runs else FADE_RUNS
+    for name, mode in chosen:
+        c10, k1, k2 = SETS[name]
+        raw = column(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2, mode=mode)
+        raw["contact"]["fade"] = "newton"
+        s = solve(raw)
+        print(f"{name}: {mode}, fade newton: {s['status']}, last level {s['last']:g} N ({s['levels']}/13), "
+              f"{s['cutbacks']} cut-backs, {s['newton']} Newton, soleus {s['soleus_mm']:.5f} mm, "
+              f"{s['wall']:.1f} s {s['message'][:110] if s['status'] != 'completed' else ''}", flush=True)
+
+
 def fold() -> None:
     c10, k1, k2 = SETS["solver_default_2025"]
     law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
@@ -235,7 +257,11 @@ def main(argv: list[str]) -> int:
     from mpi4py import MPI  # noqa: F401
     import petsc4py
     petsc4py.init([])
-    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold}
+    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade}
+    if argv[:1] == ["fade"] and len(argv) > 1:          # fade set:mode ...
+        print("## fade", flush=True)
+        fade(argv[1:])
+        return 0
     for name in argv or list(parts):
         if name not in parts:
             print(f"goh_published_sets: unknown part {name!r}; choose from {list(parts)}", file=sys.stderr)

@@ -5,8 +5,8 @@ from ..contact.friction import CoulombFriction
 from ..contact.elastic_interface import ElasticMatrix
 from ..physics.element3363 import DOFS_PER_NODE
 from .conditions import beam_ref
-from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, REMOVED_CONTACT_KEYS, SUPPORTED_END_RULES,
-                    TANGENTIAL_LAW_NAMES, ContactSpec, TangentialSpec)
+from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, FADE_RULES, REMOVED_CONTACT_KEYS,
+                    SUPPORTED_END_RULES, TANGENTIAL_LAW_NAMES, ContactSpec, TangentialSpec)
 from .values import ConfigError, boolean, integer, mapping, number, sequence, string
 
 
@@ -71,7 +71,7 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
                 raise ConfigError(f"{p}.{key}", "contact is enforced exactly by Lagrange multipliers "
                                                 "(no penalty, nothing to tune); remove this key")
     mapping(value, p, optional=("mode", "interfaces", "axial_points", "curve_points", "search_margin",
-                                "projection", "scaling", "tangential"))
+                                "projection", "scaling", "tangential", "fade"))
     c = ContactSpec()
     c.mode = string(value.get("mode", DEFAULT_CONTACT_MODE), f"{p}.mode", CONTACT_MODES)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
@@ -81,6 +81,11 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
                        hint=" (a factor on the multipliers' unit k_s; it does not change the answer)")
     if value.get("tangential") is not None:
         c.tangential = parse_tangential(value["tangential"])
+    c.fade = string(value.get("fade", c.fade), f"{p}.fade", FADE_RULES)
+    if c.fade == "newton" and c.tangential is not None and c.tangential.law != TANGENTIAL_LAW_NAMES[0]:
+        raise ConfigError(f"{p}.fade", "newton differentiates the fade weights of the normal "
+                                       "constraints only, not a tangential law's; use settle "
+                                       "with contact.tangential")
     proj = value.get("projection", None)
     if proj == "pointwise":
         raise ConfigError(f"{p}.projection", "a multiplier per point over-constrains the quadratic "

@@ -14,6 +14,7 @@ SECTION_SHAPES = ("ellipse", "circle", "rectangle", "outline")
 MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws.py)
 FIBRE_FOLLOW = ("twist", "axis")
 SUPPORTED_END_RULES = ("merge", "keep")     # contact.projection.supported_ends
+FADE_RULES = ("settle", "newton")           # contact.fade (contact/weights.py)
 CONTACT_MODES = tuple(LAWS)                 # the registry's names (contact/laws.py)
 TANGENTIAL_LAW_NAMES = tuple(TANGENTIAL_LAWS)   # contact.tangential.law (contact/tangential.py)
 DEFAULT_CONTACT_MODE = SlidingLaw.name
@@ -121,6 +122,9 @@ class ContactSpec:
     # (merge) or kept (docs/contact.md, "Supported ends")
     supported_ends: str = "merge"
     scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
+    # the fade weights of points past B's ends: settled between Newton solves, or differentiated
+    # inside them (Newton on the state and the weights together; contact/weights.py)
+    fade: str = "settle"
     tangential: TangentialSpec | None = None   # interface shear (None: frictionless)
 
 

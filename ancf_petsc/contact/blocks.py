@@ -1,7 +1,12 @@
 """The normal constraints' part of the residual and the Jacobian (eqs. 26-29): the contact forces
 τ_p n_p and the constraint rows k_s R_k, and per segment of contact points the gap Hessian term
 −Σ τ ∇²g over A's and B's nodes and the constraint rows −k_s Φ ∇g of its multipliers, as dense
-blocks with their DOF indices for the assembly layer to insert."""
+blocks with their DOF indices for the assembly layer to insert.
+
+With the fade weights differentiated (``contact.fade: newton``, weights.py) w_p = w(ζ_p(q)), so
+the constraint rows take ∇ḡ = Φ (w ∇g + g ∇w) and the forces −Σ τ_p ∇g_p, τ_p = p_p w_p
+(p_p = k_s (Φᵀ z·load)_p), gain −Σ p_p ∇g_p ∇w_pᵀ; the multipliers' columns stay −k_s Φ w ∇g:
+the Jacobian of the same residual, unsymmetric where a point is partly weighted."""
 from __future__ import annotations
 
 import numpy as np
@@ -10,6 +15,7 @@ from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE
 from .gap import gap_gradient, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
+from .weights import weight_gradient
 
 EL = DOFS_PER_ELEMENT          # an element's 54 DOFs (3 nodes)
 Z = 2 * DOFS_PER_NODE          # the segment's two multiplier nodes
@@ -79,10 +85,19 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
                            EL + 2 * DOFS_PER_NODE * j[:, None] + np.arange(EL)], axis=1)
     sub = subset(pr, sel)
     at = (s_loc[:, None], p_loc[:, None], cols)
-    V = np.zeros((n_s, P_s, Dq))                         # ∇(w_p g_p)
+    V = np.zeros((n_s, P_s, Dq))                         # ∇(w_p g_p) at fixed w: w_p ∇g_p
     grad = gap_gradient(sub)
     V[at] = grad * st.weight[sel][:, None]
     K = np.zeros((n_s, D, D))
+    Vg = V
+    if c.weights.differentiated:
+        gw = weight_gradient(c.projector, sub)              # ∇w_p (0 off the fade bands)
+        if np.any(gw != 0.0):
+            Vg = V.copy()                                   # ∇(w_p g_p) with w = w(ζ(q))
+            Vg[at] += sub.g[:, None] * gw
+            Pe, Ge = np.zeros((n_s, P_s, Dq)), np.zeros((n_s, P_s, Dq))
+            Pe[at], Ge[at] = grad * st.pressure[sel][:, None], gw
+            K[:, :Dq, :Dq] -= np.matmul(Pe.transpose(0, 2, 1), Ge)     # −Σ p_p ∇g_p ∇w_pᵀ
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
@@ -91,8 +106,8 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
         We[at] = W
         WCe = np.zeros((n_s, P_s, Dq, 4))
         WCe[at] = np.matmul(W, C * tau[:, None, None])
-        K[:, :Dq, :Dq] = np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
-                                   We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+        K[:, :Dq, :Dq] += np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
+                                    We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
     # constraint rows k_s ∂R/∂ḡ Φ_s ∇g, the multipliers' columns −k_s ω Φ_s ∇g of the forces and
     # the diagonal k_s ∂R/∂z × (the segment's share of the function)
     m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad
@@ -102,11 +117,12 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     dRg[real], dRz[real], om[real] = st.rows.dR_dg[loc], st.rows.dR_dz[loc], st.rows.omega[loc]
     Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
     Gc = -c.stiffness * np.matmul(Phi_s, V)          # (n_s, K, Dq)
+    Gr = Gc if Vg is V else -c.stiffness * np.matmul(Phi_s, Vg)
     share = Phi_s.sum(axis=2)
     ss, kk = np.nonzero(real)
     second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]
     mrow = Dq + DOFS_PER_NODE * second + sp.slot[m_ids[ss, kk]]
-    K[ss, mrow, :Dq] = -dRg[ss, kk, None] * Gc[ss, kk]
+    K[ss, mrow, :Dq] = -dRg[ss, kk, None] * Gr[ss, kk]
     K[ss, :Dq, mrow] = om[ss, kk, None] * Gc[ss, kk]
     K[ss, mrow, mrow] = c.stiffness * dRz[ss, kk] * share[ss, kk]
     # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes

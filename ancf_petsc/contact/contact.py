@@ -10,7 +10,8 @@ through one protocol, so that a new term needs no change here.  The residual row
     z:  −c_k (active)  or  −k_s z_k (inactive)
 
 and the Jacobian is the symmetric saddle-point matrix [[K − Σ τ ∇²g, −∇cᵀ], [−∇c, 0]] that
-MUMPS LDLᵀ factors as it is.  No penalty: the answer does not depend on k_s.
+MUMPS LDLᵀ factors as it is (unsymmetric, LU, with friction or with the fade weights
+differentiated: ``contact.fade: newton``, weights.py).  No penalty: the answer does not depend on k_s.
 
 ``Contact`` works on a rank's local array of node blocks (PETSc numbering, see ``set_layout``);
 it never touches PETSc objects: it adds to local force arrays and returns dense blocks with their
@@ -64,8 +65,8 @@ class Contact:
         self.tie_tolerance = 1e-9 * min(np.sqrt(b.section.area) for b in model.beams)
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
-        #: the points' weights when their partners slide past B's ends (weights.py)
-        self.weights = PointWeights(self.points.n_points)
+        #: the points' weights past B's ends (weights.py; ``contact.fade: newton`` differentiates them)
+        self.weights = PointWeights(self.points.n_points, differentiated=spec.fade == "newton")
         self._cache = None
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
@@ -194,9 +195,9 @@ class Contact:
         self.status_changes += int(np.count_nonzero(active != prev))
         self.status[self.mults] = active
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
-        tau = self.stiffness * (self.Phi.T @ (z * rows.load)) * weight
-        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=tau, lpos=lpos,
-                          rows=rows, weight=weight, xl=xl.copy())
+        pressure = self.stiffness * (self.Phi.T @ (z * rows.load))
+        st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=pressure * weight,
+                          pressure=pressure, lpos=lpos, rows=rows, weight=weight, xl=xl.copy())
         st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}
         self._cache = None if self.missing else (st.xl, needed, st)
         if self.timers is not None:
@@ -222,8 +223,8 @@ class Contact:
 
     @property
     def symmetric(self) -> bool:
-        """Whether the Jacobian is symmetric (every term's law is)."""
-        return all(t.symmetric for t in self.terms)
+        """Whether the Jacobian is symmetric (every term's law is; fade weights not differentiated)."""
+        return not self.weights.differentiated and all(t.symmetric for t in self.terms)
 
     @property
     def solver_defaults(self) -> dict:
@@ -277,7 +278,7 @@ class Contact:
 
     def refresh_weights(self) -> bool:
         """After a converged solve: the weights brought up to the last evaluation; True (solve again,
-        collective) if one changed by > WEIGHT_TOL or a projection did not converge (descent.py)."""
+        collective) if one changed by > WEIGHT_TOL (settle) or a projection did not converge (descent.py)."""
         st = self._cache[2] if self._cache is not None else None
         change = 0.0 if st is None else self.weights.refresh(st.pr.idx, st.pr.weight)
         lost = float(st is not None and not st.pr.converged and not self.projector.metric_steps)

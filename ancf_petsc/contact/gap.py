@@ -15,7 +15,10 @@ It follows from δg = nᵀD δq, the rotation of the normal δn = −a^{αβ}(n�
 linearised projection H Δζ = (U + g V) Δq.  No division by g: the formula holds on the surface.
 The same two give the normal's gradient (``normal_gradient``, for a tangential law):
 
-    ∇n = −T a⁻¹ (V + b H⁻¹ (U + g V)),   U = [u₁ u₂]ᵀ, V = [v₁ v₂]ᵀ (2 × 108).
+    ∇n = −T a⁻¹ (V + b H⁻¹ (U + g V)),   U = [u₁ u₂]ᵀ, V = [v₁ v₂]ᵀ (2 × 108),
+
+and the partner place's (``closest_point_gradient``, for the fade weights, contact/weights.py):
+∂ζ/∂q = H⁻¹ (U + g V).
 """
 from __future__ import annotations
 
@@ -60,14 +63,27 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
 
 
 
-def normal_gradient(pr) -> np.ndarray:
-    """∇n of every point (P, 3, 108): B's unit normal at the closest point, as the point and
-    B's surface move (the closest point moving with them)."""
+def _projection_parts(pr):
+    """a, b, H⁻¹ and U, V (P, 2, 108) of the linearised projection H Δζ = (U + g V) Δq."""
     T = pr.Yz                                                        # (P, 3, 2)
     a = np.matmul(T.transpose(0, 2, 1), T)
     b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
     Hi = _inverse2(a - pr.g[:, None, None] * b)
     W, _ = gap_hessian_factors(pr)
     U, V = W[:, :, :2].transpose(0, 2, 1), W[:, :, 2:].transpose(0, 2, 1)     # (P, 2, 108)
+    return a, b, Hi, U, V
+
+
+def normal_gradient(pr) -> np.ndarray:
+    """∇n of every point (P, 3, 108): B's unit normal at the closest point, as the point and
+    B's surface move (the closest point moving with them)."""
+    a, b, Hi, U, V = _projection_parts(pr)
     M = V + b @ Hi @ (U + pr.g[:, None, None] * V)
-    return -(T @ _inverse2(a)) @ M
+    return -(pr.Yz @ _inverse2(a)) @ M
+
+
+def closest_point_gradient(pr) -> np.ndarray:
+    """∂ζ/∂q = H⁻¹ (U + g V) of every point (P, 2, 108): how its partner place (ξ_B, t_B) moves
+    with A's and B's nodal vectors (the linearised projection)."""
+    _, _, Hi, U, V = _projection_parts(pr)
+    return Hi @ (U + pr.g[:, None, None] * V)

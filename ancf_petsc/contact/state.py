@@ -18,6 +18,7 @@ class ContactState:
     z: np.ndarray          # (M_loc,) scaled multipliers [m]
     active: np.ndarray     # (M_loc,) bool
     tau: np.ndarray        # (P_loc,) w_p × pressure [N], times the point's weight
+    pressure: np.ndarray   # (P_loc,) k_s (Φᵀ z·load)_p: τ_p without the point's weight [N]
     weight: np.ndarray     # (P_loc,) the points' weights in this evaluation (Contact.weights)
     lpos: object           # PETSc node id → position in the local array
     rows: Rows             # the law's constraint rows (laws.Rows)

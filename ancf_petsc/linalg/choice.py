@@ -41,7 +41,8 @@ def _why_not_fieldsplit(model, contact, petsc_options: dict, prefix: str) -> str
     if contact is None or contact.n_multipliers == 0:
         return "it needs contact multipliers (the fascicles' coupling)"
     if not contact.symmetric:
-        return "its factorisations are LDLᵀ, and the friction of contact.tangential makes the Jacobian unsymmetric"
+        return ("its factorisations are LDLᵀ, and the Jacobian is unsymmetric (friction of "
+                "contact.tangential or contact.fade: newton)")
     if len(model.beams) < 2:
         return "it needs at least two beams"
     if chosen:

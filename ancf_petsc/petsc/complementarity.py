@@ -32,6 +32,12 @@ tangential multipliers (their rows make K unsymmetric and the Coulomb status is 
 the paper's tendon, equal loading, mu = 3 took 4576 Newton iterations and 4 cut-backs at 10 N
 with the predictor, 526 and none without.  Collective: every rank
 gets the same S, d (sums over ranks) and the same solution.
+
+With the fade weights differentiated (``contact.fade: newton``) K is unsymmetric (LU here) and the
+constraint rows carry g ∇w, the multipliers' columns not: S is still formed from the columns
+(the frozen-weight linearisation).  S from the rows (G K⁻¹ Bᵀ, its symmetric part for the LCP,
+with or without the unsymmetric solve on the predicted active set) was tried and not kept: the
+alex GOH column then stopped at 98.9 N instead of reaching 400 N (measured 2026-11-26).
 """
 from __future__ import annotations
 
@@ -82,7 +88,8 @@ class ComplementarityPredictor:
         self.ksp = PETSc.KSP().create(comm=problem.comm)
         self.ksp.setType("preonly")
         pc = self.ksp.getPC()
-        pc.setType("cholesky")
+        # K's fade-weight terms (contact.fade: newton) make it unsymmetric: LU then
+        pc.setType("cholesky" if problem.symmetric else "lu")
         pc.setFactorSolverType("mumps")
         self.ksp.setOptionsPrefix("ancf_lcp_")
         self.solves = 0

@@ -22,6 +22,8 @@ EXIT_UNSTABLE = 4            # every level converged, but some are unstable equi
 #: level reports as they are
 COMPLETED = "COMPLETED"
 NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
+#: completed, but some levels were accepted with their contact weights unsettled
+WEIGHTS_UNSETTLED = "WEIGHTS_UNSETTLED"
 OUTPUT_ERROR = "OUTPUT_ERROR"
 PETSC_ERROR = "PETSC_ERROR"
 INTERNAL_ERROR = "INTERNAL_ERROR"         # a bug (exit code 1, with a traceback)

@@ -212,6 +212,7 @@ class ResultsWriter:
                  "cutbacks": record.cutbacks, "reason": record.reason,
                  "residual_norm": record.residual_norm, "wall_time": record.wall_time,
                  "negative_eigenvalues": record.negative_eigenvalues,
+                 "weights_unsettled": record.weights_unsettled,
                  "newton_history": record.iteration_history}
         if extra:
             entry.update(extra)

@@ -59,6 +59,8 @@ class StepRecord:
     negative_eigenvalues: int | None = None
     increment: float = 0.0          # the load increment the next level starts with
     last_increment: float = 0.0     # the last accepted one (secant predictor)
+    #: a sub-step was accepted with its contact weights unsettled (residual_norm: with its own)
+    weights_unsettled: bool = False
 
 
 @dataclass

@@ -86,6 +86,12 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
                 f"{len(unstable)} of {len(records)} levels are unstable equilibria (negative tangent "
                 f"eigenvalues at load factor {', '.join(f'{x:g}' for x in unstable)}): a buckled "
                 "or under-supported model; set solver.allow_unstable: true to accept them")
+    unsettled = [r.load_factor for r in records if r.weights_unsettled]
+    if unsettled:
+        return ("completed", st.WEIGHTS_UNSETTLED,
+                f"completed, but with contact weights not settled at {len(unsettled)} of {len(records)} "
+                f"levels (load factor {', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is "
+                "|F| with the state's own weights): contact.fade: newton solves for them")
     return "completed", st.COMPLETED, "completed"
 
 

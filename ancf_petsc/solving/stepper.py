@@ -44,6 +44,7 @@ class LoadStepper:
         self.predictor = (ComplementarityPredictor(problem, self.solver.snes)
                           if ComplementarityPredictor.applies(problem) else None)
         self.history: list[float] = []         # residual norms of the solves of an increment
+        self.unsettled = False                  # the last solve's contact weights did not settle
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -79,12 +80,14 @@ class LoadStepper:
         self.history = S.history
         self.newton_iterations += its
         fnorm = S.snes.getFunctionNorm()
+        self.unsettled = newton.unsettled is not None
         if newton.unsettled is not None:
             # a level accepted with its weights' last update unsettled reports the residual
             # with the state's own weights (contact/weights.py), never the stale one
             fnorm = max(fnorm, newton.unsettled)
             self.log(f"  contact weights not settled at load factor {lam:.6g} after "
-                     f"{MAX_WEIGHT_UPDATES} updates: |F| with the state's own weights {fnorm:.2e}")
+                     f"{MAX_WEIGHT_UPDATES} updates: |F| with the state's own weights {fnorm:.2e} "
+                     "(contact.fade: newton solves for them)")
         return reason, its, fnorm
 
     def _stop_if_requested(self, target: float, level: float) -> None:
@@ -146,6 +149,7 @@ class LoadStepper:
                 self._check_budget(path, X_prev, target, step)
                 reason, neg = self._judge(path, reason, fnorm, step, tally)
                 if reason > 0:
+                    tally.unsettled |= self.unsettled
                     self._accept(path, X_prev, step, its, neg, tally)
                 else:
                     self._cut_back(path, X_prev, target, step, reason, neg, tally)
@@ -155,7 +159,8 @@ class LoadStepper:
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
                           residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
                           iteration_history=history, negative_eigenvalues=self.solver.negative_eigenvalues(),
-                          increment=path.dlam, last_increment=path.dlam_last)
+                          increment=path.dlam, last_increment=path.dlam_last,
+                          weights_unsettled=tally.unsettled)
 
     def _check_budget(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float) -> None:
         if self.control.over_budget(self.newton_iterations):

@@ -60,3 +60,22 @@ def test_weights_that_never_settle_report_the_residual_with_their_own_weights():
 def test_weights_that_settle_at_the_last_update_report_nothing():
     newton, steps, reason, its, solves = _solve(changes=MAX_WEIGHT_UPDATES)
     assert solves == 1 + MAX_WEIGHT_UPDATES and newton.unsettled is None
+
+
+def _record(lam: float, unsettled: bool):
+    from ancf_petsc.solving.records import StepRecord
+    return StepRecord(load_factor=lam, iterations=3, substeps=1, cutbacks=0, reason="CONVERGED_FNORM_ABS",
+                      residual_norm=1e-9, wall_time=0.0, negative_eigenvalues=0,
+                      weights_unsettled=unsettled)
+
+
+def test_a_run_with_unsettled_levels_says_so_in_its_reason_and_message():
+    from ancf_petsc import status
+    from ancf_petsc.solving.run import final_status
+    settled = [_record(0.5, False), _record(1.0, False)]
+    assert final_status(settled, None, False) == ("completed", status.COMPLETED, "completed")
+    state, code, message = final_status([_record(0.5, False), _record(0.875, True), _record(1.0, True)],
+                                        None, False)
+    assert (state, code) == ("completed", status.WEIGHTS_UNSETTLED)
+    assert "2 of 3 levels" in message and "0.875, 1" in message and "contact.fade: newton" in message
+    assert status.exit_code(state, code) == status.EXIT_OK

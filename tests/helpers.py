@@ -241,6 +241,41 @@ def jacobian_and_difference(P, X, v, h: float = 1e-7):
     P.residual(None, Xm, Fm)
     return Jv.getArray().copy(), (Fp.getArray() - Fm.getArray()) / (2 * h), Xp, Xm
 
+
+def contact_evaluation(P, X):
+    """The contact's evaluation at X, the law free to change the status (``Contact.evaluate``)."""
+    P.contact.allow_update = True
+    return P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+
+
+def press_where_penetrating(P, X, st) -> None:
+    """A state a unilateral law keeps (one rank): the multipliers pressing where the bodies
+    penetrate at the evaluation ``st``, their random pulls elsewhere, every status active."""
+    c = P.contact
+    assert len(P.exchange.needed) == P.n_blocks        # one rank: local positions are global ones
+    x = X.getArray()
+    pos = c.multiplier_positions(P.exchange.needed)
+    x[pos] = np.where(st.gbar < 0, np.abs(st.z), st.z)
+    X.setArray(x)
+    c.status[:] = True
+
+
+def assert_contact_jacobian(P, X, free, act, h: float, samples: int = 3):
+    """J (assembled here at X) times random free directions against central differences of F
+    (1e-6 of max |J v|), the active set ``act`` unchanged within each probe; J as a dense array."""
+    from petsc4py import PETSc
+    P.jacobian(None, X, P.J, P.J)
+    rng = np.random.default_rng(7)
+    for _ in range(samples):
+        v = X.duplicate()
+        v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
+        jv, fd, Xp, Xm = jacobian_and_difference(P, X, v, h)
+        for Y in (Xp, Xm):
+            assert np.array_equal(contact_evaluation(P, Y).active, act)
+        err = np.abs(jv - fd)[free].max() / np.abs(jv).max()
+        assert err < 1e-6, err
+    return P.J.convert("dense", PETSc.Mat()).getDenseArray()
+
 def assert_jacobian_and_gradient(P, X, free, rng, gradient_rel: float, samples: int = 2, h: float = 1e-7):
     """For a Problem whose Jacobian was assembled at X: J v against central differences of the
     residual (1e-6 of max |J v| on the free DOFs) and the residual against the central difference

@@ -5,7 +5,7 @@ import pytest
 
 from helpers import load_raw
 from ancf_petsc.petsc.contact_reports import contact_gaps
-from helpers import build_problem as _problem
+from helpers import assert_contact_jacobian, build_problem as _problem, contact_evaluation, press_where_penetrating
 
 
 def achilles(psi=45.0, elements=2, contact=None):
@@ -49,8 +49,7 @@ def clamped(raw):
 
 
 def _active(P, X):
-    P.contact.allow_update = True    # the law may change the status at this evaluation
-    return P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed).active
+    return contact_evaluation(P, X).active
 
 
 @pytest.mark.parametrize("mode", list(MODES))
@@ -66,37 +65,11 @@ def test_contact_jacobian_matches_finite_differences(mode):
     if mode.startswith("unilateral"):
         # a state the law keeps: pressure where the bodies penetrate, random pulls elsewhere
         # (released, and not penetrating: they stay released)
-        c = P.contact
-        st = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
-        pos = c.multiplier_positions(P.exchange.needed)
-        x = X.getArray()
-        assert len(P.exchange.needed) == P.n_blocks        # one rank: local positions are global ones
-        x[pos] = np.where(st.gbar < 0, np.abs(st.z), st.z)
-        X.setArray(x)
-        c.status[:] = True
+        press_where_penetrating(P, X, contact_evaluation(P, X))
         act = _active(P, X)
         assert 0 < act.sum() < len(act)         # both kinds of multiplier are present
         assert np.array_equal(_active(P, X), act)
-    P.jacobian(None, X, P.J, P.J)
-    rng = np.random.default_rng(7)
-    h = 1e-6
-    for _ in range(3):
-        v = X.duplicate()
-        v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
-        Jv = X.duplicate()
-        P.J.mult(v, Jv)
-        Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.copy(), X.copy()
-        Xp.axpy(h, v)
-        Xm.axpy(-h, v)
-        for Y in (Xp, Xm):               # the active set does not change within the probe
-            assert np.array_equal(_active(P, Y), act)
-        P.residual(None, Xp, Fp)
-        P.residual(None, Xm, Fm)
-        fd = (Fp.getArray() - Fm.getArray()) / (2 * h)
-        jv = Jv.getArray()
-        err = np.abs(jv - fd)[free].max() / np.abs(jv).max()
-        assert err < 1e-6, err
-    Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()
+    Jd = assert_contact_jacobian(P, X, free, act, h=1e-6)
     assert np.abs(Jd - Jd.T).max() <= 1e-9 * np.abs(Jd).max()
 
 

@@ -8,7 +8,7 @@ import pytest
 from ancf_petsc.contact.projection import end_weight
 from ancf_petsc.contact.weights import end_weight_slope
 from contact.test_contact import achilles, perturbed_state
-from helpers import build_problem
+from helpers import assert_contact_jacobian, build_problem, contact_evaluation, press_where_penetrating
 
 
 def test_weight_slope_is_the_derivative_of_the_end_weight():
@@ -44,11 +44,6 @@ def fade_state(P, seed=3):
     return X, free
 
 
-def _evaluate(P, X):
-    P.contact.allow_update = True
-    return P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
-
-
 @pytest.mark.parametrize("mode", ["sliding", "unilateral"])
 def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode):
     """J v against central differences of F (nodal vectors and multipliers) at a state where
@@ -59,41 +54,18 @@ def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode):
     assert not c.symmetric and not P.symmetric
     P.load_factor = 50.0
     X, free = fade_state(P)
-    st = _evaluate(P, X)
+    st = contact_evaluation(P, X)
     part = (st.weight > 0.0) & (st.weight < 1.0)
     T = c.projector.t_end[st.pr.idx]
     o_t = np.maximum(-st.pr.tB, st.pr.tB - T) / T
     assert part.sum() >= 15 and np.any(part & (o_t > 0.25)) and np.any(part & (o_t <= 0.25))
     assert np.count_nonzero(st.pressure[part]) >= 10
     if mode == "unilateral":
-        pos = c.multiplier_positions(P.exchange.needed)
-        x = X.getArray()
-        x[pos] = np.where(st.gbar < 0, np.abs(st.z), st.z)
-        X.setArray(x)
-        c.status[:] = True
-    act = _evaluate(P, X).active
+        press_where_penetrating(P, X, st)
+    act = contact_evaluation(P, X).active
     if mode == "unilateral":
         assert 0 < act.sum() < len(act)
-    P.jacobian(None, X, P.J, P.J)
-    rng = np.random.default_rng(7)
-    h = 1e-7
-    for _ in range(3):
-        v = X.duplicate()
-        v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
-        Jv = X.duplicate()
-        P.J.mult(v, Jv)
-        Fp, Fm, Xp, Xm = X.duplicate(), X.duplicate(), X.copy(), X.copy()
-        Xp.axpy(h, v)
-        Xm.axpy(-h, v)
-        for Y in (Xp, Xm):
-            assert np.array_equal(_evaluate(P, Y).active, act)
-        P.residual(None, Xp, Fp)
-        P.residual(None, Xm, Fm)
-        fd = (Fp.getArray() - Fm.getArray()) / (2 * h)
-        jv = Jv.getArray()
-        err = np.abs(jv - fd)[free].max() / np.abs(jv).max()
-        assert err < 1e-6, err
-    Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()
+    Jd = assert_contact_jacobian(P, X, free, act, h=1e-7)
     assert np.abs(Jd - Jd.T).max() > 1e-3 * np.abs(Jd).max()
 
 

@@ -230,6 +230,25 @@ class Contact:
         """PETSc option defaults the terms' laws ask for (e.g. a line search)."""
         return {k: v for t in self.terms for k, v in t.options.items()}
 
+    @property
+    def bounded(self) -> bool:
+        """Whether a term's bounds follow the state (friction: ``hold_bounds``)."""
+        return any(t.bounded for t in self.terms)
+
+    def hold_bounds(self) -> float:
+        """Tresca's problem: every bounded term's bounds held at the last evaluation's; the
+        largest change since the last hold relative to the largest bound, over the terms and
+        the ranks (inf the first time; collective)."""
+        change = max([t.hold_bounds() for t in self.terms if t.bounded], default=0.0)
+        self._cache = None
+        return float(self.reduce(np.array([change]), "max")[0])
+
+    def release_bounds(self) -> None:
+        """The bounds follow the state again."""
+        for t in self.terms:
+            t.release_bounds()
+        self._cache = None
+
     # ---------------------------------------------------------------- checks
     def begin_phase(self, phase: Phase, previous: Phase | None = None) -> None:
         """Start a phase of a Newton solve (laws.Phase); after a phase that held every

@@ -33,6 +33,20 @@ Above the predictor's size the first increment from rest is first solved with ev
 held (the sliding problem), whose multipliers' signs start the phases.
 After the solves, contact points whose partners slid past B's ends get their new weights
 (Contact.refresh_weights) and the state is solved again until the weights settle.
+
+**Friction's bounds** (issue 27): where the semi-smooth iteration for Coulomb's law fails, the
+increment is solved again from its start as a fixed point of Tresca problems (Nečas, Jarušek &
+Haslinger 1980; Haslinger, Hlaváček & Nečas 1996, the existence proof for small μ): each solve
+holds the bounds μ ẑ_k at the last state's (``Contact.hold_bounds``: a given slip resistance,
+no coupling of the bounds to the pressures), the next holds them at that solution's, until
+they change by less than ``BOUND_TOL``; then Coulomb's own iteration runs from there, so an
+accepted state satisfies Coulomb's law exactly as a plainly converged one does.  Why: at a
+function on the stick–slip boundary whose sliding branch is softened by its bound's coupling to
+the pressures, the two branches of the generalised Jacobian have determinants of opposite sign
+(measured: the paper's tendon, equal loading, μ = 0.3, the fold, 92.5 N); the piecewise
+smooth residual has no zero near the boundary and the full-step iteration cycles between the two
+branches' zeros, each outside its own branch, while the increment's solution lies elsewhere.
+Tresca's problem has no such coupling (its branches agree in sign there).
 """
 from __future__ import annotations
 
@@ -50,6 +64,10 @@ MAX_STATUS_UPDATES = 40
 #: predictions (Josephy–Newton steps) of one increment at most before the phases take over
 MAX_PREDICTIONS = 8
 TRACE = bool(os.environ.get("ANCF_TRACE_PHASES"))
+#: Tresca solves of a failed friction increment at most, and the bounds' relative change below
+#: which Coulomb's own iteration takes over (module docstring)
+MAX_BOUND_UPDATES = 60
+BOUND_TOL = 1e-9
 #: the rule that checks a predicted state (the exact one, block principal pivoting)
 CHECK = Phase("exact", pivoting=True)
 
@@ -75,6 +93,11 @@ class ContactSteps:
         self.frozen = True
         self.contact.begin_phase(phase)
         self.contact.allow_update = False
+
+    @property
+    def bounded(self) -> bool:
+        """Whether the contact has bounds that follow the state (friction's)."""
+        return self.contact is not None and self.contact.bounded
 
     @property
     def decides_activity(self) -> bool:
@@ -125,12 +148,15 @@ class PhasedNewton:
         self.between_solves = line_search != "basic"
         #: |F| with the state's own contact weights when their updates did not settle, else None
         self.unsettled: float | None = None
+        #: Tresca solves of the increment (friction's bounds held; 0: none were needed)
+        self.bound_updates = 0
 
     def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
         """(reason of the last solve, Newton iterations of all of them)."""
         P = self.steps
         P.frozen = self.between_solves
         its, solved = 0, None
+        start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:
             solved, its = self._predicted(X, lam)
         if solved is not None:
@@ -144,6 +170,12 @@ class PhasedNewton:
                 phases = [HELD] + phases
             reason, n = self._phases(X, lam, phases)
             its += n
+            if reason <= 0 and start is not None:
+                start.copy(X)
+                reason, n = self._bounds_fixed_point(X, lam, phases)
+                its += n
+        if start is not None:
+            start.destroy()
         P.frozen = self.between_solves
         for _ in range(MAX_WEIGHT_UPDATES):
             # contact points whose partners moved past B's ends changed weight: solve again
@@ -191,6 +223,30 @@ class PhasedNewton:
             if not ok:
                 return None, its
         return None, its
+
+    def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:
+        """Friction's bounds (module docstring): Tresca solves from X (the increment's start),
+        then Coulomb's; (reason, iterations).  Collective."""
+        P, c, its = self.steps, self.steps.contact, 0
+        c.restore()                                  # statuses and projections of the start
+        try:
+            for k in range(MAX_BOUND_UPDATES):
+                P.residual_norm(X)                   # the bounds at X
+                change = c.hold_bounds()
+                self._trace(lam, f"bounds held ({change:.1e} relative change)", 0, 0)
+                if change <= BOUND_TOL:
+                    break
+                self.bound_updates += 1
+                reason, n = self._phases(X, lam, phases)
+                its += n
+                self._trace(lam, f"Tresca solve {k}", n, reason)
+                if reason <= 0:
+                    break
+        finally:
+            c.release_bounds()
+        reason, n = self._phases(X, lam, phases)
+        self._trace(lam, "Coulomb after the fixed point", n, reason)
+        return reason, its + n
 
     def _phases(self, X, lam: float, phases: list) -> tuple[int, int]:
         P, its, previous, reason = self.steps, 0, None, 0

@@ -76,6 +76,10 @@ class LoadStepper:
         newton = PhasedNewton(S.contact_steps, lambda Y: S.solve(Y, target, lam, reached),
                               self.predictor, S.linesearch)
         reason, its = newton.solve(X, lam, from_rest)
+        if newton.bound_updates:
+            self.log(f"  load factor {lam:.6g}: friction's semi-smooth iteration failed; solved again "
+                     f"through {newton.bound_updates} Tresca problems (bounds held): "
+                     f"{'converged' if reason > 0 else 'failed'}, {its} Newton iterations in all")
         self.history = S.history
         self.newton_iterations += its
         fnorm = S.snes.getFunctionNorm()

@@ -230,25 +230,6 @@ class Contact:
         """PETSc option defaults the terms' laws ask for (e.g. a line search)."""
         return {k: v for t in self.terms for k, v in t.options.items()}
 
-    @property
-    def bounded(self) -> bool:
-        """Whether a term's bounds follow the state (friction: ``hold_bounds``)."""
-        return any(t.bounded for t in self.terms)
-
-    def hold_bounds(self) -> float:
-        """Tresca's problem: every bounded term's bounds held at the last evaluation's; the
-        largest change since the last hold relative to the largest bound, over the terms and
-        the ranks (inf the first time; collective)."""
-        change = max([t.hold_bounds() for t in self.terms if t.bounded], default=0.0)
-        self._cache = None
-        return float(self.reduce(np.array([change]), "max")[0])
-
-    def release_bounds(self) -> None:
-        """The bounds follow the state again."""
-        for t in self.terms:
-            t.release_bounds()
-        self._cache = None
-
     # ---------------------------------------------------------------- checks
     def begin_phase(self, phase: Phase, previous: Phase | None = None) -> None:
         """Start a phase of a Newton solve (laws.Phase); after a phase that held every
@@ -304,6 +285,18 @@ class Contact:
         self.projector.metric_steps |= bool(lost)
         self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
         return bool(change > WEIGHT_TOL or lost)
+
+
+def hold_bounds(contact: Contact, hold: bool = True) -> float:
+    """Tresca's problem (solving/newton.py, "Friction's bounds"): every bounded term's bounds held
+    at the last evaluation's (``hold``), or following the state again; the largest change of a
+    held bound since the last hold relative to the largest, over the terms and the ranks (inf
+    the first time; collective when holding)."""
+    changes = [t.hold_bounds() if hold else t.release_bounds() for t in contact.terms if t.bounded]
+    contact._cache = None                                 # the residual changed
+    if not hold:
+        return 0.0
+    return float(contact.reduce(np.array([max(changes, default=0.0)]), "max")[0])
 
 
 def build_contact(model, spec, log=print) -> Contact:

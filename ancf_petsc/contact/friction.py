@@ -29,7 +29,9 @@ does not depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN).  At 
 pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
 The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the generalised derivative of
 R and of the forces, with the rotation of n and n̄ (gap.normal_gradient) and the bounds' coupling
-to the pressures, unsymmetric (MUMPS LU).
+to the pressures, unsymmetric (MUMPS LU).  ``hold_bounds`` turns the law into Tresca's for a
+while: the bounds μ ẑ_k held at the last evaluation's (no coupling to the pressures), the
+fixed point by which a failed increment is solved again (solving/newton.py).
 """
 from __future__ import annotations
 

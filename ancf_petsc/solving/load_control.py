@@ -26,6 +26,7 @@ class LevelTally:
     cutbacks: int = 0       # halvings (failures and stability retries)
     consecutive: int = 0    # failures since the last accepted sub-step
     stability: int = 0      # retries because a step landed on a less stable state
+    tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
 
 
 class LoadControl:

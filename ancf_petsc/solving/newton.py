@@ -37,7 +37,7 @@ After the solves, contact points whose partners slid past B's ends get their new
 **Friction's bounds** (issue 27): where the semi-smooth iteration for Coulomb's law fails, the
 increment is solved again from its start as a fixed point of Tresca problems (Nečas, Jarušek &
 Haslinger 1980; Haslinger, Hlaváček & Nečas 1996, the existence proof for small μ): each solve
-holds the bounds μ ẑ_k at the last state's (``Contact.hold_bounds``: a given slip resistance,
+holds the bounds μ ẑ_k at the last state's (``contact.hold_bounds``: a given slip resistance,
 no coupling of the bounds to the pressures), the next holds them at that solution's, until
 they change by less than ``BOUND_TOL``; then Coulomb's own iteration runs from there, so an
 accepted state satisfies Coulomb's law exactly as a plainly converged one does.  Why: at a
@@ -55,6 +55,7 @@ from typing import Callable
 
 from petsc4py import PETSc
 
+from ..contact import hold_bounds
 from ..contact.laws import HELD, NEWTON, Phase
 
 #: Newton solves after the first at most, to bring contact points' weights up to date
@@ -97,7 +98,7 @@ class ContactSteps:
     @property
     def bounded(self) -> bool:
         """Whether the contact has bounds that follow the state (friction's)."""
-        return self.contact is not None and self.contact.bounded
+        return self.contact is not None and any(t.bounded for t in self.contact.terms)
 
     @property
     def decides_activity(self) -> bool:
@@ -232,7 +233,7 @@ class PhasedNewton:
         try:
             for k in range(MAX_BOUND_UPDATES):
                 P.residual_norm(X)                   # the bounds at X
-                change = c.hold_bounds()
+                change = hold_bounds(c)
                 self._trace(lam, f"bounds held ({change:.1e} relative change)", 0, 0)
                 if change <= BOUND_TOL:
                     break
@@ -243,7 +244,7 @@ class PhasedNewton:
                 if reason <= 0:
                     break
         finally:
-            c.release_bounds()
+            hold_bounds(c, False)
         reason, n = self._phases(X, lam, phases)
         self._trace(lam, "Coulomb after the fixed point", n, reason)
         return reason, its + n

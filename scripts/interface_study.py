@@ -10,6 +10,7 @@ soleus elongation and the displacement of each gastrocnemius against the soleus 
     OPENBLAS_NUM_THREADS=1 python scripts/interface_study.py [--elements 4 8] [--jobs 2]
         [--out DIR] [--csv docs/interface_study.csv] [--figure docs/figures/nonuniformity.png]
         [--timeout SECONDS] [--reuse] [--laws LAW ...] [--loadings soleus equal]
+        [--supported-ends keep|merge]
 
 Every run is one ancf-solve process (1 rank), as a user runs it.  The CSV has one row per run and
 level; the figure draws the soleus's displacement against the medial gastrocnemius at the far end
@@ -41,7 +42,7 @@ LAWS += [(f"unilateral, coulomb mu={mu:g}", "unilateral", {"law": "coulomb", "fr
          for mu in (0.03, 0.3, 3.0)]
 
 
-def config(loading: str, mode: str, tangential, elements: int, out: str) -> dict:
+def config(loading: str, mode: str, tangential, elements: int, out: str, ends: str | None = None) -> dict:
     with open(os.path.join(ROOT, "configs", LOADINGS[loading])) as fh:
         raw = yaml.safe_load(fh)
     for b in raw["beams"]:
@@ -49,12 +50,15 @@ def config(loading: str, mode: str, tangential, elements: int, out: str) -> dict
         b["section"]["file"] = os.path.join(ROOT, "configs", b["section"]["file"])
     raw["contact"] = {"mode": mode}
     if tangential is not None:
-        raw["contact"]["tangential"] = tangential
+        raw["contact"]["tangential"] = dict(tangential)
+        if ends is not None and tangential["law"] == "coulomb":    # friction's held roots folded or kept
+            raw["contact"]["tangential"]["supported_ends"] = ends
     raw["output"] = {"dir": out, "vtk": False}
     return raw
 
 
-def run(case: tuple, out: str, reuse: bool = False, timeout: float | None = None) -> dict:
+def run(case: tuple, out: str, reuse: bool = False, timeout: float | None = None,
+        ends: str | None = None) -> dict:
     loading, (label, mode, tangential), elements = case
     tag = f"{loading}_{elements}_{label}".replace(" ", "_").replace("=", "").replace(",", "").replace("(", "").replace(")", "")
     directory = os.path.join(out, tag)
@@ -67,7 +71,7 @@ def run(case: tuple, out: str, reuse: bool = False, timeout: float | None = None
                 "message": s.get("message", ""), "wall_s": s.get("timings", {}).get("total", float("nan")),
                 "steps": s["steps"]}
     with open(path, "w") as fh:
-        yaml.safe_dump(config(loading, mode, tangential, elements, directory), fh, sort_keys=False)
+        yaml.safe_dump(config(loading, mode, tangential, elements, directory, ends), fh, sort_keys=False)
     t = time.perf_counter()
     try:
         p = subprocess.run([os.path.join(ROOT, ".venv", "bin", "ancf-solve"), path, "--quiet"],
@@ -140,11 +144,13 @@ def main() -> int:
     ap.add_argument("--figure", default=None)
     ap.add_argument("--timeout", type=float, default=None, help="stop a run after this many seconds (reported as stopped)")
     ap.add_argument("--reuse", action="store_true", help="read the runs already in --out (their summary.json) instead of solving again")
+    ap.add_argument("--supported-ends", choices=("keep", "merge"), default=None,
+                    help="contact.tangential.supported_ends of the friction rows (default: the config's default)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS if law[0] in args.laws]
     with ThreadPoolExecutor(args.jobs) as pool:
-        results = list(pool.map(lambda c: run(c, args.out, args.reuse, args.timeout), cases))
+        results = list(pool.map(lambda c: run(c, args.out, args.reuse, args.timeout, args.supported_ends), cases))
     print("| loading | law | elements | status | Newton | cut-backs | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in results:

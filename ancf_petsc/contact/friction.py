@@ -29,7 +29,9 @@ does not depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN).  At 
 pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
 The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the generalised derivative of
 R and of the forces, with the rotation of n and n̄ (gap.normal_gradient) and the bounds' coupling
-to the pressures, unsymmetric (MUMPS LU).
+to the pressures, unsymmetric (MUMPS LU).  ``hold_bounds`` turns the law into Tresca's for a
+while: the bounds μ ẑ_k held at the last evaluation's (no coupling to the pressures), the
+fixed point by which a failed increment is solved again (solving/newton.py).
 """
 from __future__ import annotations
 
@@ -99,6 +101,7 @@ class CoulombFriction(PartnerTerm):
     law = "coulomb"
     symmetric = False
     multipliers = True
+    bounded = True
     #: per point: the relative displacement d₀ [m] of the last accepted increment
     history = ("anchor",)
     #: the semi-smooth Newton iteration takes the l2 line search (bt stalls at the kinks of the
@@ -114,6 +117,10 @@ class CoulombFriction(PartnerTerm):
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
         self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
         self.tPhi = None
+        #: the local multipliers' bounds μ ẑ of the last evaluation (M,) and, while Tresca's
+        #: problem is solved (``hold_bounds``), the bounds held fixed (else None)
+        self.live_bound = np.zeros(0)
+        self.held_bound: np.ndarray | None = None
 
     @classmethod
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
@@ -161,14 +168,16 @@ class CoulombFriction(PartnerTerm):
         mnorm = np.linalg.norm(m, axis=1)
         nbar = np.where(mnorm[:, None] > 0.0, m / np.where(mnorm > 0.0, mnorm, 1.0)[:, None], EYE[0])
         y = st.xl.reshape(-1)[self.local_positions(c, st)]
-        bound = self.mu * zhat
+        self.live_bound = self.mu * zhat
+        held_bound = self.held_bound is not None   # Tresca's problem: the bounds do not follow z
+        bound = self.held_bound if held_bound else self.live_bound
         probe = c.law.phase.probe                   # the bodies alone: friction held, rows decoupled
         if probe:
             bound = np.zeros_like(bound)
         a = y + self.augmentation * U
         held = ~c.space.tdrop[c.mults] & (not probe)    # a folded function's y is held at zero
         proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=held)
-        R, T, g = y - proj, -S, -direction
+        R, T, g = y - proj, -S, (0.0 if held_bound else -1.0) * direction
         na = np.einsum("ki,ki->k", nbar, a)
         dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
         Y = tPhi.T @ y
@@ -181,6 +190,21 @@ class CoulombFriction(PartnerTerm):
                                   pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, T=T, g=g,
                                   direction=direction, bound=bound, m_stick=m_stick, slide=slide,
                                   R=R, share=share, dRdn=dRdn, positive=positive)
+
+    def hold_bounds(self) -> float:
+        """Tresca's problem (the bounds μ ẑ held at the last evaluation's; module docstring):
+        the largest change of a bound since the last hold relative to the largest (inf the
+        first time; 0 without local multipliers), this rank's."""
+        new, old = self.live_bound.copy(), self.held_bound
+        self.held_bound = new
+        if old is None or len(old) != len(new):
+            return float("inf") if len(new) else 0.0
+        top = np.abs(new).max() if len(new) else 0.0
+        return float(np.abs(new - old).max() / top) if top > 0.0 else 0.0
+
+    def release_bounds(self) -> None:
+        """Coulomb's law again: the bounds follow the pressures."""
+        self.held_bound = None
 
     def kept(self, ev: FrictionEvaluation) -> dict:
         """The next increment's slips start from this state's relative displacements."""

@@ -2,7 +2,7 @@
 
 With R_k = y_k − proj(P̄_k a_k), a = y + c U, bound b_k = μ ẑ_k, the generalised derivatives
 (T = −∂proj/∂(P̄ a): −I sticking, −b/|P̄a| (I − t̂t̂ᵀ) slipping, 0 without pressure; g = ∂R/∂b =
-−t̂ slipping):
+−t̂ slipping, 0 while the bounds are held):
 
     ∂R/∂y = I + T P̄,   ∂R/∂U = c T P̄,   ∂R/∂n̄ = −T ((n̄·a) I + n̄ aᵀ),   ∂n̄/∂m = P̄ / |m|,
     ∂R_k/∂z_j = μ g_k ∂ẑ_k/∂z_j,   ∂ẑ_k/∂z_j = A_k Σ_p Φ_kp ω'_p [p_p > 0] Φ_jp / w_p (per segment),

@@ -71,6 +71,8 @@ class PartnerTerm:
     options: dict = {}
     #: whether the law has unknowns of its own (tangential multipliers in the multiplier space)
     multipliers = False
+    #: whether the law's bounds follow the state (friction's μ ẑ: ``hold_bounds``)
+    bounded = False
     #: per-interface statistics of ``sums``: (name, how ranks combine it)
     columns = (("max_tangential_slip", "max"), ("max_shear_stress", "max"), ("shear_force_x", "sum"),
                ("shear_force_y", "sum"), ("shear_force_z", "sum"), ("stick_area", "sum"),
@@ -126,6 +128,15 @@ class PartnerTerm:
 
     def set_numbering(self, c, perm: np.ndarray) -> None:
         """The ``Contact`` c's block numbering ``perm`` changed (the law's unknowns follow it)."""
+
+    def hold_bounds(self) -> float | None:
+        """Hold the law's state-dependent bounds at the last evaluation's (friction: Tresca's
+        problem); the largest change since the last hold, relative to the largest bound (inf the
+        first time), this rank's; None for a law without such bounds."""
+        return None
+
+    def release_bounds(self) -> None:
+        """The bounds follow the state again (``hold_bounds``)."""
 
     # ------------------------------------------------------------------ state
     def accept(self, c, st) -> None:

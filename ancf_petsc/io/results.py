@@ -209,7 +209,8 @@ class ResultsWriter:
         k = len(self.summary["steps"]) + 1
         entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
                  "iterations": record.iterations, "substeps": record.substeps,
-                 "cutbacks": record.cutbacks, "reason": record.reason,
+                 "cutbacks": record.cutbacks, "tresca_solves": record.tresca_solves,
+                 "reason": record.reason,
                  "residual_norm": record.residual_norm, "wall_time": record.wall_time,
                  "negative_eigenvalues": record.negative_eigenvalues,
                  "weights_unsettled": record.weights_unsettled,

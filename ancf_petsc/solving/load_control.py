@@ -27,6 +27,7 @@ class LevelTally:
     consecutive: int = 0    # failures since the last accepted sub-step
     stability: int = 0      # retries because a step landed on a less stable state
     unsettled: bool = False  # a sub-step accepted with its contact weights unsettled
+    tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
 
 
 class LoadControl:

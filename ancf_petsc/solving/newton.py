@@ -33,6 +33,20 @@ Above the predictor's size the first increment from rest is first solved with ev
 held (the sliding problem), whose multipliers' signs start the phases.
 After the solves, contact points whose partners slid past B's ends get their new weights
 (Contact.refresh_weights) and the state is solved again until the weights settle.
+
+**Friction's bounds** (issue 27): where the semi-smooth iteration for Coulomb's law fails, the
+increment is solved again from its start as a fixed point of Tresca problems (Nečas, Jarušek &
+Haslinger 1980; Haslinger, Hlaváček & Nečas 1996, the existence proof for small μ): each solve
+holds the bounds μ ẑ_k at the last state's (``contact.hold_bounds``: a given slip resistance,
+no coupling of the bounds to the pressures), the next holds them at that solution's, until
+they change by less than ``BOUND_TOL``; then Coulomb's own iteration runs from there, so an
+accepted state satisfies Coulomb's law exactly as a plainly converged one does.  Why: at a
+function on the stick–slip boundary whose sliding branch is softened by its bound's coupling to
+the pressures, the two branches of the generalised Jacobian have determinants of opposite sign
+(measured: the paper's tendon, equal loading, μ = 0.3, the fold, 92.5 N); the piecewise
+smooth residual has no zero near the boundary and the full-step iteration cycles between the two
+branches' zeros, each outside its own branch, while the increment's solution lies elsewhere.
+Tresca's problem has no such coupling (its branches agree in sign there).
 """
 from __future__ import annotations
 
@@ -41,6 +55,7 @@ from typing import Callable
 
 from petsc4py import PETSc
 
+from ..contact import hold_bounds
 from ..contact.laws import HELD, NEWTON, Phase
 
 #: Newton solves after the first at most, to bring contact points' weights up to date
@@ -50,8 +65,23 @@ MAX_STATUS_UPDATES = 40
 #: predictions (Josephy–Newton steps) of one increment at most before the phases take over
 MAX_PREDICTIONS = 8
 TRACE = bool(os.environ.get("ANCF_TRACE_PHASES"))
+#: Tresca solves of a failed friction increment at most, and the bounds' relative change below
+#: which Coulomb's own iteration takes over (module docstring)
+MAX_BOUND_UPDATES = 60
+BOUND_TOL = 1e-9
+#: ... and gives up when ``STALL_WINDOW`` updates did not halve the smallest change (measured:
+#: about 0.55 per update where it helps, with plateaus of 3–4 updates; 0.2–0.3 without
+#: shrinking at μ = 3 from rest on the unilateral law)
+STALL_WINDOW, STALL_FACTOR = 6, 0.5
 #: the rule that checks a predicted state (the exact one, block principal pivoting)
 CHECK = Phase("exact", pivoting=True)
+
+
+def contracting(changes: list[float]) -> bool:
+    """Whether the fixed point's relative bound changes (inf first) still shrink: the smallest
+    of the last ``STALL_WINDOW`` below ``STALL_FACTOR`` times the smallest before them."""
+    return (len(changes) <= STALL_WINDOW
+            or min(changes[-STALL_WINDOW:]) <= STALL_FACTOR * min(changes[:-STALL_WINDOW]))
 
 
 class ContactSteps:
@@ -75,6 +105,11 @@ class ContactSteps:
         self.frozen = True
         self.contact.begin_phase(phase)
         self.contact.allow_update = False
+
+    @property
+    def bounded(self) -> bool:
+        """Whether the contact has bounds that follow the state (friction's)."""
+        return self.contact is not None and any(t.bounded for t in self.contact.terms)
 
     @property
     def decides_activity(self) -> bool:
@@ -125,12 +160,15 @@ class PhasedNewton:
         self.between_solves = line_search != "basic"
         #: |F| with the state's own contact weights when their updates did not settle, else None
         self.unsettled: float | None = None
+        #: Tresca solves of the increment (friction's bounds held; 0: none were needed)
+        self.bound_updates = 0
 
     def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
         """(reason of the last solve, Newton iterations of all of them)."""
         P = self.steps
         P.frozen = self.between_solves
         its, solved = 0, None
+        start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:
             solved, its = self._predicted(X, lam)
         if solved is not None:
@@ -144,6 +182,12 @@ class PhasedNewton:
                 phases = [HELD] + phases
             reason, n = self._phases(X, lam, phases)
             its += n
+            if reason <= 0 and start is not None:
+                start.copy(X)
+                reason, n = self._bounds_fixed_point(X, lam, phases)
+                its += n
+        if start is not None:
+            start.destroy()
         P.frozen = self.between_solves
         for _ in range(MAX_WEIGHT_UPDATES):
             # contact points whose partners moved past B's ends changed weight: solve again
@@ -191,6 +235,34 @@ class PhasedNewton:
             if not ok:
                 return None, its
         return None, its
+
+    def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:
+        """Friction's bounds (module docstring): Tresca solves from X (the increment's start),
+        then Coulomb's; (reason, iterations).  Gives up (a failure: the stepper cuts back) when
+        a Tresca solve fails or the bounds stop contracting.  Collective."""
+        P, c, its, changes = self.steps, self.steps.contact, 0, []
+        reason = PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
+        c.restore()                                  # statuses and projections of the start
+        try:
+            for k in range(MAX_BOUND_UPDATES):
+                P.residual_norm(X)                   # the bounds at X
+                changes.append(hold_bounds(c))
+                self._trace(lam, f"bounds held ({changes[-1]:.1e} relative change)", 0, 0)
+                if changes[-1] <= BOUND_TOL or not contracting(changes):
+                    break
+                self.bound_updates += 1
+                reason, n = self._phases(X, lam, phases)
+                its += n
+                self._trace(lam, f"Tresca solve {k}", n, reason)
+                if reason <= 0:
+                    return reason, its
+        finally:
+            hold_bounds(c, False)
+        if not contracting(changes):
+            return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, its
+        reason, n = self._phases(X, lam, phases)
+        self._trace(lam, "Coulomb after the fixed point", n, reason)
+        return reason, its + n
 
     def _phases(self, X, lam: float, phases: list) -> tuple[int, int]:
         P, its, previous, reason = self.steps, 0, None, 0

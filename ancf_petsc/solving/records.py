@@ -57,6 +57,9 @@ class StepRecord:
     # None when the PC is not MUMPS LDLᵀ.  The tangent is that of the last Newton iterate, or of
     # the one before after a chord step (solver.reuse_tangent), a step of ~‖F‖ / k away
     negative_eigenvalues: int | None = None
+    #: Tresca solves of friction's fixed point in its sub-steps (solving/newton.py: increments
+    #: whose semi-smooth iteration failed, solved again with the bounds held); 0 normally
+    tresca_solves: int = 0
     increment: float = 0.0          # the load increment the next level starts with
     last_increment: float = 0.0     # the last accepted one (secant predictor)
     #: a sub-step was accepted with its contact weights unsettled (residual_norm: with its own)

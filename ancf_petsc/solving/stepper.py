@@ -45,6 +45,7 @@ class LoadStepper:
                           if ComplementarityPredictor.applies(problem) else None)
         self.history: list[float] = []         # residual norms of the solves of an increment
         self.unsettled = False                  # the last solve's contact weights did not settle
+        self.tresca_solves = 0                  # friction's fixed point in the last solve_at
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -77,6 +78,11 @@ class LoadStepper:
         newton = PhasedNewton(S.contact_steps, lambda Y: S.solve(Y, target, lam, reached),
                               self.predictor, S.linesearch)
         reason, its = newton.solve(X, lam, from_rest)
+        self.tresca_solves = newton.bound_updates
+        if newton.bound_updates:
+            self.log(f"  load factor {lam:.6g}: friction's semi-smooth iteration failed; solved again "
+                     f"through {newton.bound_updates} Tresca problems (bounds held): "
+                     f"{'converged' if reason > 0 else 'failed'}, {its} Newton iterations in all")
         self.history = S.history
         self.newton_iterations += its
         fnorm = S.snes.getFunctionNorm()
@@ -145,6 +151,7 @@ class LoadStepper:
                 reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
                                                     from_rest=path.lam == 0.0)
                 tally.its += its
+                tally.tresca_solves += self.tresca_solves
                 history.append(list(self.history))
                 self._check_budget(path, X_prev, target, step)
                 reason, neg = self._judge(path, reason, fnorm, step, tally)
@@ -157,6 +164,7 @@ class LoadStepper:
             X_prev.destroy()
         return StepRecord(load_factor=target, iterations=tally.its, substeps=tally.substeps,
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
+                          tresca_solves=tally.tresca_solves,
                           residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
                           iteration_history=history, negative_eigenvalues=self.solver.negative_eigenvalues(),
                           increment=path.dlam, last_increment=path.dlam_last,

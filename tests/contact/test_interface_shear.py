@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from helpers import CONFIGS, build_problem, jacobian_and_difference, load_raw, run_inline
+from ancf_petsc.contact import hold_bounds
 from ancf_petsc.io.reader import read_contact
 from ancf_petsc.physics.reference_solutions import shear_lag_transfer
 
@@ -194,6 +195,37 @@ def test_shear_jacobian_matches_finite_differences(tangential, history):
     if tangential["law"] == "elastic":
         Jd = P.J.convert("dense", PETSc.Mat()).getDenseArray()
         assert np.abs(Jd - Jd.T).max() <= 1e-9 * np.abs(Jd).max()
+
+
+def test_friction_jacobian_with_the_bounds_held_matches_finite_differences():
+    """Tresca's problem (the bounds μ ẑ held at a state's, ``contact.hold_bounds``; the fixed
+    point of solving/newton.py): J v against central differences of F with the bounds held, at
+    a state where functions stick and slide (folded roots); the bounds' coupling to the
+    pressures is gone from J (the pressures' columns of the sliding rows change)."""
+    P, PETSc = build_problem(_achilles({"law": "coulomb", "friction": 0.3, "supported_ends": "merge"}))
+    X, free = _state(P, 3, True)
+    F = P.F.duplicate()
+    P.residual(None, X, F)                              # the bounds at X
+    P.jacobian(None, X, P.J, P.J)
+    coulomb = P.J.convert("dense", PETSc.Mat()).getDenseArray().copy()
+    assert hold_bounds(P.contact) == float("inf")       # the first hold
+    try:
+        st = P.contact.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+        ev = st.terms["shear"]
+        assert ev.slide.sum() > 0 and ev.m_stick.sum() > 0
+        P.jacobian(None, X, P.J, P.J)
+        tresca = P.J.convert("dense", PETSc.Mat()).getDenseArray()
+        assert np.abs(tresca - coulomb).max() > 1e-3 * np.abs(coulomb).max()
+        rng = np.random.default_rng(11)
+        for _ in range(3):
+            v = X.duplicate()
+            v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-3)
+            jv, fd, _, _ = jacobian_and_difference(P, X, v, 1e-8)
+            assert np.abs(jv - fd)[free].max() / np.abs(jv).max() < 1e-6
+        P.residual(None, X, F)
+        assert hold_bounds(P.contact) == 0.0            # held at the same state: no change
+    finally:
+        hold_bounds(P.contact, False)
 
 
 def test_displacement_control_gives_the_state_of_the_force(tmp_path):

@@ -36,10 +36,10 @@ LOADINGS = {"soleus": "achilles_type3_psi45.yaml", "equal": "achilles_psi45_equa
 LAWS = [("sliding", "sliding", None)]
 LAWS += [(f"elastic k_t={k:.0e}", "sliding", {"law": "elastic", "stiffness": k}) for k in (1e8, 1e9, 1e10, 1e11)]
 LAWS += [("bonded (k_t=1e14)", "sliding", {"law": "elastic", "stiffness": 1e14})]
-LAWS += [(f"coulomb mu={mu:g}", "sliding", {"law": "coulomb", "friction": mu}) for mu in (0.03, 0.3, 3.0)]
+LAWS += [(f"coulomb mu={mu:g}", "sliding", {"law": "coulomb", "friction": mu}) for mu in (0.003, 0.03, 0.3, 3.0)]
 LAWS += [("unilateral", "unilateral", None)]
 LAWS += [(f"unilateral, coulomb mu={mu:g}", "unilateral", {"law": "coulomb", "friction": mu})
-         for mu in (0.03, 0.3, 3.0)]
+         for mu in (0.003, 0.03, 0.3, 3.0)]
 
 
 def config(loading: str, mode: str, tangential, elements: int, out: str, ends: str | None = None) -> dict:

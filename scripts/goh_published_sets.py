@@ -21,8 +21,13 @@ reduced``) and on the whole ψ = 45° column:
    (increments of at most 1 N): the lowest scaled tangent eigenvalue as the path nears its limit
    point, and the same soleus with the default increments (its first level lands on another
    stable branch).
+7. ``column_fold``: the solver_default_2025 column (unilateral, fade newton) through levels up to
+   89.5 N: at every converged level the smallest singular values of the Jacobi-scaled Jacobian,
+   the lowest scaled eigenvalue of the soleus' own block and the fibre strain Ē (min, max) per
+   soleus element; then the lone soleus with its end's r_x prescribed (displacement control)
+   through its fold, with the end's reaction.
 
-Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade]
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade column_fold]
 """
 from __future__ import annotations
 
@@ -253,11 +258,82 @@ def fold() -> None:
           f"{s['newton']} Newton, soleus {s['soleus_mm']:.3f} mm", flush=True)
 
 
+def soleus_element_strains(problem, X) -> np.ndarray:
+    """Ē (not clipped) of the soleus (the first beam), one row per element."""
+    from ancf_petsc.physics import kernels
+    blk = problem.blocks[0]
+    G, _, mat = blk.parts[0]
+    F = kernels.deformation_gradient(blk.element_vectors(problem.exchange.local_state(X)), G)
+    Fa = np.einsum("...ij,...j->...i", F, mat.a0[0])
+    E = np.einsum("...i,...i->...", Fa, Fa) - 1.0
+    return E.reshape(E.shape[0], -1)
+
+
+def column_measures(pb, X) -> tuple[np.ndarray, float]:
+    """(3 smallest singular values of the Jacobi-scaled Jacobian on the free DOFs and multipliers,
+    lowest eigenvalue of the scaled soleus block) at state X; multiplier rows and columns are
+    scaled by the norm of their scaled coupling to the beams."""
+    pb.jacobian(None, X, pb.J, pb.J)
+    M = pb.J.copy()
+    M.convert("seqaij")
+    A = M.convert("dense").getDenseArray().copy()
+    M.destroy()
+    nodes = pb.layout.perm[:pb.model.n_nodes]
+    beam = (18 * nodes[:, None] + np.arange(18)).ravel()
+    soleus = np.zeros(A.shape[0], dtype=bool)
+    soleus[beam[:18 * pb.model.beams[0].n_nodes]] = True
+    free = ~pb.fixed_mask
+    b = np.flatnonzero(np.isin(np.arange(A.shape[0]), beam) & free)
+    m = np.flatnonzero(~np.isin(np.arange(A.shape[0]), beam) & free)
+    d = 1.0 / np.sqrt(np.abs(np.diag(A)[b]))
+    coupling = np.linalg.norm(A[np.ix_(m, b)] * d[None, :], axis=1)
+    s = np.concatenate([d, np.where(coupling > 0.0, 1.0 / np.where(coupling > 0.0, coupling, 1.0), 1.0)])
+    rows = np.concatenate([b, m])
+    sv = np.linalg.svd(A[np.ix_(rows, rows)] * s[:, None] * s[None, :], compute_uv=False)[-3:]
+    K = A[np.ix_(b, b)] * d[:, None] * d[None, :]
+    sol = soleus[b]
+    return sv[::-1], float(np.linalg.eigvalsh(0.5 * (K + K.T)[np.ix_(sol, sol)])[0])
+
+
+def column_fold() -> None:
+    from ancf_petsc.solving.records import LoadStepFailure
+    c10, k1, k2 = SETS["solver_default_2025"]
+    law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+    raw = column(**law, mode="unilateral", steps=LEVELS[:7] + [85, 88, 89, 89.5])
+    raw["contact"]["fade"] = "newton"
+    run = _run(raw)
+    pb = run.problem
+
+    def on_level(rec):
+        sv, low = column_measures(pb, pb.X)
+        per = soleus_element_strains(pb, pb.X)
+        print(f"  {rec.load_factor:g} N ({rec.iterations} Newton): smallest scaled singular values "
+              f"{np.array2string(sv, precision=2)}, soleus block {low:.3e}, soleus Ē per element min "
+              + " ".join(f"{e.min():.3f}" for e in per) + ", max " + " ".join(f"{e.max():.3f}" for e in per), flush=True)
+    try:
+        run.stepper.run(list(raw["steps"]), on_level)
+        print("  column: all levels reached", flush=True)
+    except LoadStepFailure as exc:
+        print(f"  column stops: {str(exc)[:160]}", flush=True)
+    finally:
+        run.stepper.close()
+        run.destroy()
+    lone = column(**law, mode=None, steps=[2.5, 3, 3.5, 4, 4.2, 4.3, 4.4, 4.45, 4.5, 5, 6])
+    lone.pop("loads")
+    lone["boundary_conditions"].append({"beam": "soleus", "node": "last", "displacement": {"r": {"x": 1.0e-3}}})
+    s = solve(lone)
+    with open(os.path.join(s["dir"], "summary.json")) as fh:
+        steps = json.load(fh)["steps"]
+    print(f"  lone soleus, r_x of its end prescribed [mm]: {s['status']} {s['message'][:100]}; reaction [N] "
+          + ", ".join(f"{st['load_factor']:g} mm: {st['reactions']['soleus.8'][0]:.3f}" for st in steps), flush=True)
+
+
 def main(argv: list[str]) -> int:
     from mpi4py import MPI  # noqa: F401
     import petsc4py
     petsc4py.init([])
-    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade}
+    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade,
+             "column_fold": column_fold}
     if argv[:1] == ["fade"] and len(argv) > 1:          # fade set:mode ...
         print("## fade", flush=True)
         fade(argv[1:])

@@ -269,7 +269,7 @@ class Projector:
         ok, stuck_ever = np.zeros(P, dtype=bool), np.zeros(P, dtype=bool)
         tol_t = PROJECTION_TOL * t_end
         pinned = np.zeros(P, dtype=bool)
-        search = Backtracking(eB, xiB, tB, t_end)
+        search = Backtracking(eB, xiB, tB, t_end, keep_direction=self.metric_steps)
         for it in range(MAX_ITERATIONS):
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
             d = xA - Y

@@ -107,3 +107,28 @@ def test_points_moved_far_find_the_nearest_surface_point(shift):
     for p in sample:
         ref = _nearest_on_b(pj, pts.itf[p], xA[p], x_of)
         assert found[p] <= ref + 1e-9, (p, found[p], ref)
+
+
+def test_a_step_cut_to_one_element_stays_a_descent_direction():
+    """A Gauss–Newton step longer than an element in ξ is cut to |dξ| = 1; cutting ξ alone turns
+    it, and for points far from B (|d| of millimetres past the curve's end, measured on the
+    solver_default_2025 column at 89.5 N) the turned step can raise φ = ½|d|² to first order:
+    halving it then never lowered φ and the projection stopped unconverged.  Such a step is
+    shortened as a whole instead (the direction of dζ kept), so every accepted step descends."""
+    from ancf_petsc.contact.descent import Backtracking
+    Yz, Yzz, d = _surface_data(3, P=400)
+    pinned = np.zeros(len(d), dtype=bool)
+    dz, r = newton_step(Yz, Yzz, d, pinned)
+    long = np.abs(dz[:, 0]) > 1.0
+    cut = np.column_stack([np.clip(dz[:, 0], -1.0, 1.0), dz[:, 1]])
+    turned = long & (np.einsum("pk,pk->p", r, cut) >= 0.0)
+    assert turned.sum() > 0 and (long & ~turned).sum() > 0          # both cases are exercised
+    P = len(d)
+    search = Backtracking(np.zeros(P, dtype=np.int64), np.zeros(P), np.zeros(P), np.ones(P),
+                          keep_direction=True)     # Gauss–Newton (Projector.metric_steps)
+    search.accept(np.ones(P, dtype=bool), np.zeros(P, dtype=np.int64), np.zeros(P), np.zeros(P), d, dz, r)
+    step = search.dz
+    assert np.all(np.einsum("pk,pk->p", r, step) < 0.0) and np.all(search.descent < 0.0)
+    assert np.all(np.abs(step[:, 0]) <= 1.0)
+    assert np.allclose(step[turned], dz[turned] / np.abs(dz[turned, :1]), rtol=1e-14, atol=0.0)
+    assert np.array_equal(step[~turned], cut[~turned])             # other steps as before

@@ -59,11 +59,17 @@ def zone_label(variant: str, zone: float) -> str:
     return f"{variant}{rep.ZONE}{zone * 1e3:g} mm" if zone else variant
 
 
+#: friction's held root functions as docs/solid_friction.csv was measured: kept (the default until
+#: 2026-11-26; the default merge moves the beams' soleus by +0.19 / +0.08 / +0.02 % at 4 / 8 / 16
+#: elements, docs/interface.md "Verdict and why")
+SUPPORTED_ENDS = "keep"
+
+
 def ancf_config(psi: float, elements: int, mu: float, aug: float | None, out: str, space: str | None = None) -> dict:
     """verify_solid_contact's frictionless comparison config with Coulomb friction added (and the
     contact keys of the pressure space ``space``, a rep.SPACES name; None: the default)."""
     raw = vsc.tendon_config(psi, elements, "sliding", out)
-    raw["contact"]["tangential"] = {"law": "coulomb", "friction": mu}
+    raw["contact"]["tangential"] = {"law": "coulomb", "friction": mu, "supported_ends": SUPPORTED_ENDS}
     if aug is not None:
         raw["contact"]["tangential"][AUG_KEY] = aug
     if space:

@@ -102,8 +102,9 @@ class TangentialSpec:
     friction: float | None = None          # Coulomb: the friction coefficient μ
     augmentation: float | None = None      # Coulomb: the stick test's c in units of k_s / A (None: 1)
     # Coulomb: the end tangential functions where both bodies' positions are held, folded into
-    # their neighbours (merge) or kept (contact/multipliers.py fold_tangential)
-    supported_ends: str = "keep"
+    # their neighbours (merge, as the normal ones: unique root multipliers) or kept
+    # (contact/multipliers.py fold_tangential; docs/interface.md Limits)
+    supported_ends: str = "merge"
 
 
 @dataclass

@@ -64,15 +64,39 @@ def fade(u: np.ndarray) -> np.ndarray:
     return 1.0 - v * v * (3.0 - 2.0 * v)
 
 
+def fade_slope(u: np.ndarray) -> np.ndarray:
+    """d/du of ``fade``: −6u(1 − u) on [0, 1], 0 elsewhere (C¹: 0 at both ends)."""
+    return np.where((u > 0.0) & (u < 1.0), -6.0 * u * (1.0 - u), 0.0)
+
+
+def _fade_arguments(xiB, tB, t_end, at_first, at_last) -> tuple:
+    """The fades' arguments at partner places (``end_weight``): u_t past the curve's ends, u_x
+    past the beam's; whether t_B is below the curve's start, and ξ_B's overhang (signed)."""
+    below = -tB > tB - t_end
+    u_t = (np.where(below, -tB, tB - t_end) / t_end - CURVE_OVERHANG) / (CURVE_FADE_END - CURVE_OVERHANG)
+    raw = np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0)
+    return u_t, np.maximum(raw, 0.0) / (2.0 * END_FADE), below, raw
+
+
 def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
                at_last: np.ndarray) -> np.ndarray:
     """Weight of a partner place (ξ_B, t_B): 1 on B's surface, falling past the curve's ends
     (overhang as a share of the curve's length T) and past the beam's ends (``at_first``/
     ``at_last``: on B's first/last element, in element lengths)."""
-    o_t = np.maximum(-tB, tB - t_end) / t_end
-    o_x = np.maximum(np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0), 0.0)
-    return (fade((o_t - CURVE_OVERHANG) / (CURVE_FADE_END - CURVE_OVERHANG))
-            * fade(o_x / (2.0 * END_FADE)))
+    u_t, u_x, _, _ = _fade_arguments(xiB, tB, t_end, at_first, at_last)
+    return fade(u_t) * fade(u_x)
+
+
+def end_weight_slope(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
+                     at_last: np.ndarray) -> np.ndarray:
+    """∂w/∂ζ (P, 2) of ``end_weight`` at the partner places (ξ_B, t_B)."""
+    u_t, u_x, below, raw = _fade_arguments(xiB, tB, t_end, at_first, at_last)
+    sx = np.where(at_last, 1.0, 0.0) - np.where(at_first, 1.0, 0.0)
+    f_t, f_x = fade(u_t), fade(u_x)
+    dw_dt = (fade_slope(u_t) * np.where(below, -1.0, 1.0) / (t_end * (CURVE_FADE_END - CURVE_OVERHANG))
+             * f_x)
+    dw_dxi = f_t * fade_slope(u_x) * sx * (raw > 0.0) / (2.0 * END_FADE)
+    return np.stack([dw_dxi, dw_dt], axis=1)
 
 
 class Projector:

@@ -24,31 +24,11 @@ from __future__ import annotations
 import numpy as np
 
 from .gap import closest_point_gradient
-from .projection import CURVE_FADE_END, CURVE_OVERHANG, END_FADE, fade, subset
+from .projection import end_weight_slope, subset
 
 #: a change of a point's weight beyond this asks for another Newton solve (a weight off by 1e-6
 #: moves a weighted gap by 1e-6 of the point's local gap, ~1e-11 m)
 WEIGHT_TOL = 1e-6
-
-
-def fade_slope(u: np.ndarray) -> np.ndarray:
-    """d/du of ``projection.fade``: −6u(1 − u) on [0, 1], 0 elsewhere (C¹: 0 at both ends)."""
-    return np.where((u > 0.0) & (u < 1.0), -6.0 * u * (1.0 - u), 0.0)
-
-
-def end_weight_slope(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
-                     at_last: np.ndarray) -> np.ndarray:
-    """∂w/∂ζ (P, 2) of ``projection.end_weight`` at the partner places (ξ_B, t_B)."""
-    band = CURVE_FADE_END - CURVE_OVERHANG
-    below = -tB > tB - t_end
-    u_t = (np.where(below, -tB, tB - t_end) / t_end - CURVE_OVERHANG) / band
-    sx = np.where(at_last, 1.0, 0.0) - np.where(at_first, 1.0, 0.0)
-    raw = np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0)
-    u_x = np.maximum(raw, 0.0) / (2.0 * END_FADE)
-    f_t, f_x = fade(u_t), fade(u_x)
-    dw_dt = fade_slope(u_t) * np.where(below, -1.0, 1.0) / (t_end * band) * f_x
-    dw_dxi = f_t * fade_slope(u_x) * sx * (raw > 0.0) / (2.0 * END_FADE)
-    return np.stack([dw_dxi, dw_dt], axis=1)
 
 
 def weight_gradient(projector, pr) -> np.ndarray:

@@ -87,7 +87,7 @@ class LoadStepper:
         self.newton_iterations += its
         fnorm = S.snes.getFunctionNorm()
         self.unsettled = newton.unsettled is not None
-        if newton.unsettled is not None:
+        if self.unsettled:
             # a level accepted with its weights' last update unsettled reports the residual
             # with the state's own weights (contact/weights.py), never the stale one
             fnorm = max(fnorm, newton.unsettled)

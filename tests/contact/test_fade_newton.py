@@ -5,8 +5,7 @@ the weight against differences of ``end_weight``; the unsymmetric Jacobian's sol
 import numpy as np
 import pytest
 
-from ancf_petsc.contact.projection import end_weight
-from ancf_petsc.contact.weights import end_weight_slope
+from ancf_petsc.contact.projection import end_weight, end_weight_slope
 from contact.test_contact import achilles, perturbed_state
 from helpers import assert_contact_jacobian, build_problem, contact_evaluation, press_where_penetrating
 

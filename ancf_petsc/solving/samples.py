@@ -146,7 +146,7 @@ def solve_level(stepper: LoadStepper, lam: float) -> StepRecord | None:
     return StepRecord(load_factor=lam, iterations=its, substeps=1, cutbacks=0, reason=reason_name(reason),
                       residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
                       iteration_history=[list(stepper.history)], negative_eigenvalues=neg,
-                      weights_unsettled=stepper.unsettled)
+                      tresca_solves=stepper.tresca_solves, weights_unsettled=stepper.unsettled)
 
 
 class SampleSolver:

@@ -99,17 +99,20 @@ def _run(raw: dict):
     return Run(parse_config(copy.deepcopy(raw), base_dir=CONFIGS), PETSc.COMM_WORLD, lambda *_: None)
 
 
+def part_strains(blk, xl, G, mat) -> np.ndarray:
+    """Ē (not clipped) of the first fibre family at the Gauss points of one part of a block
+    (elements first) at the local state xl."""
+    from ancf_petsc.physics import kernels
+    F = kernels.deformation_gradient(blk.element_vectors(xl), G)
+    Fa = np.einsum("...ij,...j->...i", F, mat.a0[0])
+    return np.einsum("...i,...i->...", Fa, Fa) - 1.0
+
+
 def fibre_strains(problem, X) -> np.ndarray:
     """Ē (not clipped) at every Gauss point of the fibre-reinforced parts at state X."""
-    from ancf_petsc.physics import kernels
     xl = problem.exchange.local_state(X)
-    out = []
-    for blk in problem.blocks:
-        for G, _, mat in blk.parts:
-            F = kernels.deformation_gradient(blk.element_vectors(xl), G)
-            Fa = np.einsum("...ij,...j->...i", F, mat.a0[0])
-            out.append((np.einsum("...i,...i->...", Fa, Fa) - 1.0).ravel())
-    return np.concatenate(out)
+    return np.concatenate([part_strains(blk, xl, G, mat).ravel()
+                           for blk in problem.blocks for G, _, mat in blk.parts])
 
 
 def first_step(raw: dict, load: float) -> dict:
@@ -260,12 +263,9 @@ def fold() -> None:
 
 def soleus_element_strains(problem, X) -> np.ndarray:
     """Ē (not clipped) of the soleus (the first beam), one row per element."""
-    from ancf_petsc.physics import kernels
     blk = problem.blocks[0]
     G, _, mat = blk.parts[0]
-    F = kernels.deformation_gradient(blk.element_vectors(problem.exchange.local_state(X)), G)
-    Fa = np.einsum("...ij,...j->...i", F, mat.a0[0])
-    E = np.einsum("...i,...i->...", Fa, Fa) - 1.0
+    E = part_strains(blk, problem.exchange.local_state(X), G, mat)
     return E.reshape(E.shape[0], -1)
 
 

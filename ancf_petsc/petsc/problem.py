@@ -127,12 +127,15 @@ class Problem:
         bad = False
         logging.event(logging.ELEMENTS).begin()
         t0 = time.perf_counter()
-        for blk in self.blocks:
-            qe = blk.element_vectors(xl)
-            for k, (G, w, material) in enumerate(blk.parts):
-                f, Jmin = kernels.internal_force(qe, G, w, material)
-                bad |= k == 0 and not np.all(Jmin > 0.0)      # full-section part
-                floc += np.bincount(blk.local_dofs().ravel(), f.ravel(), minlength=floc.size)
+        # a trial iterate may overflow (a fibre's e^(k2 Ē²)): its residual is not finite, which
+        # _finish_residual turns into the NaN the line search backs off from; no warning needed
+        with np.errstate(over="ignore", invalid="ignore"):
+            for blk in self.blocks:
+                qe = blk.element_vectors(xl)
+                for k, (G, w, material) in enumerate(blk.parts):
+                    f, Jmin = kernels.internal_force(qe, G, w, material)
+                    bad |= k == 0 and not np.all(Jmin > 0.0)      # full-section part
+                    floc += np.bincount(blk.local_dofs().ravel(), f.ravel(), minlength=floc.size)
         self.timers["element_kernels"] += time.perf_counter() - t0
         logging.event(logging.ELEMENTS).end()
         self.contact_failed = False

@@ -361,3 +361,21 @@ def test_a_workflows_solves_each_get_their_own_options_prefix(tmp_path):
     with own_prefix(spec.solver, "study") as p2:
         pass
     assert p1 != p2 and p1.startswith("study") and spec.solver.options_prefix == ""
+
+
+def test_an_overflowing_trial_state_gives_a_nan_residual_without_warnings():
+    """A GOH fibre stretched so far that e^(k2 Ē²) overflows (a wild trial iterate): the residual
+    is NaN, which the line search backs off from, and numpy prints no RuntimeWarning (the runs
+    of soft-matrix sets used to fill stderr with them)."""
+    import warnings
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["beams"][0]["material"] = {"model": "goh", "mu": 1.0e4, "bulk_modulus": 5.0e5, "k1": 1.0e6,
+                                   "k2": 524.6, "kappa": 0.0, "fibres": {"follow": "twist"}}
+    P, _ = _problem(raw)
+    X = P.q0.copy()
+    X.scale(3.0)                      # every gradient tripled: Ē = 8, k2 Ē² ~ 3e4
+    F = X.duplicate()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        P.residual(None, X, F)
+    assert np.all(np.isnan(F.getArray())) and P.inverted

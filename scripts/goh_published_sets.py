@@ -26,8 +26,12 @@ reduced``) and on the whole ψ = 45° column:
    the lowest scaled eigenvalue of the soleus' own block and the fibre strain Ē (min, max) per
    soleus element; then the lone soleus with its end's r_x prescribed (displacement control)
    through its fold, with the end's reaction.
+8. ``traction``: every set's lone soleus and column (unilateral, fade newton) with the load spread
+   over the soleus' end section (``traction_force``) against the paper's point force on r; the
+   fibre strain Ē (min, max) at 10 N under both; with the traction both contact laws and fade
+   modes at 4 elements, and unilateral contact at 8.
 
-Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade column_fold]
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade column_fold traction]
 """
 from __future__ import annotations
 
@@ -328,12 +332,44 @@ def column_fold() -> None:
           + ", ".join(f"{st['load_factor']:g} mm: {st['reactions']['soleus.8'][0]:.3f}" for st in steps), flush=True)
 
 
+def traction() -> None:
+    def run(law: dict, mode, load: str, fade_mode: str = "newton", elements: int = 4, at_10: bool = False) -> str:
+        raw = column(**law, mode=mode, elements=elements)
+        raw["loads"] = [{"beam": "soleus", "node": "last", load: [1.0, 0.0, 0.0]}]
+        if mode:
+            raw["contact"]["fade"] = fade_mode
+        s = solve(raw)
+        out = (f"{s['status']}, last level {s['last']:g} N, {s['cutbacks']} cut-backs, {s['newton']} Newton, "
+               f"soleus {s['soleus_mm']:.5f} mm")
+        if not at_10:
+            return out
+        raw["steps"] = [10.0]
+        r = _run(raw)
+        try:
+            r.stepper.run([10.0], lambda *_: None)
+            E = fibre_strains(r.problem, r.problem.X)
+            return out + f"; Ē at 10 N {E.min():.3f} … {E.max():.3f}"
+        finally:
+            r.stepper.close()
+            r.destroy()
+
+    for name, (c10, k1, k2) in SETS.items():
+        law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+        for mode in (None, "unilateral"):
+            for load in ("force", "traction_force"):
+                print(f"{name}: {mode or 'lone soleus'}, {load}: {run(law, mode, load, at_10=True)}", flush=True)
+        for mode, fade_mode, elements in (("unilateral", "settle", 4), ("sliding", "settle", 4),
+                                          ("sliding", "newton", 4), ("unilateral", "newton", 8)):
+            print(f"{name}: {mode}, traction_force, fade {fade_mode}, {elements} elements: "
+                  f"{run(law, mode, 'traction_force', fade_mode, elements)}", flush=True)
+
+
 def main(argv: list[str]) -> int:
     from mpi4py import MPI  # noqa: F401
     import petsc4py
     petsc4py.init([])
     parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade,
-             "column_fold": column_fold}
+             "column_fold": column_fold, "traction": traction}
     if argv[:1] == ["fade"] and len(argv) > 1:          # fade set:mode ...
         print("## fade", flush=True)
         fade(argv[1:])

@@ -92,7 +92,8 @@ def test_goh_restart_continues_and_refuses_other_fibres(tmp_path):
 @pytest.mark.parametrize("name,mode", [("achilles_type3_psi45_goh_amir.yaml", "sliding"),
                                        ("achilles_type3_psi45_goh_tendon_model.yaml", "unilateral"),
                                        ("achilles_type3_psi45_goh_optimized_see.yaml", "unilateral"),
-                                       ("achilles_type3_psi45_goh_alex.yaml", "unilateral")])
+                                       ("achilles_type3_psi45_goh_alex.yaml", "unilateral"),
+                                       ("achilles_type3_psi45_goh_solver_default.yaml", "unilateral")])
 def test_published_goh_sets_run_the_column_to_400_newtons(tmp_path, name, mode):
     """The authors' full GOH sets that converge (docs/fibres.md, "The published parameter sets"),
     as shipped: every level of Table 1 reached, the fibres carrying the load (the soleus is
@@ -100,7 +101,9 @@ def test_published_goh_sets_run_the_column_to_400_newtons(tmp_path, name, mode):
     own contact weights.  optimized_SEE strains the soleus by 27 % and slides the neighbours' points
     past the soleus' element boundaries and ends; tendon_model_2023 and alex have partly weighted
     points there and differentiate their weights (contact.fade: newton: with settle, alex stops at
-    358.9 N and tendon_model_2023 accepts 350 and 400 N with |F| 1.9e-4 and 1.9e-5 N)."""
+    358.9 N and tendon_model_2023 accepts 350 and 400 N with |F| 1.9e-4 and 1.9e-5 N).
+    solver_default_2025 (μ = 15 kPa, k2 = 524.6) takes its load as an end traction: under the
+    paper's point force its end element is crushed and the column stops at 90.72 N."""
     from helpers import read_summary, solve_cli
     raw = load_raw(name)
     assert raw["contact"]["mode"] == mode

@@ -278,7 +278,8 @@ class ComplementarityPredictor:
         """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on a
         factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²): Cholesky's, or, for an indefinite S within
         INDEFINITE_SHARE of positive semidefinite, L = V Λ₊^½ of its nearest positive
-        semidefinite matrix (LinAlgError when it is farther)."""
+        semidefinite matrix (LinAlgError when it is farther), whose active set is then solved
+        with the exact S (``_exact_on_support``)."""
         M = len(d)
         if M == 0:
             return np.zeros(0)

@@ -26,12 +26,15 @@ reduced``) and on the whole ψ = 45° column:
    the lowest scaled eigenvalue of the soleus' own block and the fibre strain Ē (min, max) per
    soleus element; then the lone soleus with its end's r_x prescribed (displacement control)
    through its fold, with the end's reaction.
-8. ``traction``: every set's lone soleus and column (unilateral, fade newton) with the load spread
+8. ``column_limit``: the same column to 90.711 N, then Newton by hand (LU, active set kept) at
+   loads nearing its stop (90.7114 N): the smallest scaled singular values (∝ √(λc − λ) at a
+   limit point) and the gastrocnemii's ends.
+9. ``traction``: every set's lone soleus and column (unilateral, fade newton) with the load spread
    over the soleus' end section (``traction_force``) against the paper's point force on r; the
    fibre strain Ē (min, max) at 10 N under both; with the traction both contact laws and fade
    modes at 4 elements, and unilateral contact at 8.
 
-Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade column_fold traction]
+Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade column_fold column_limit traction]
 """
 from __future__ import annotations
 
@@ -364,12 +367,73 @@ def traction() -> None:
                   f"{run(law, mode, 'traction_force', fade_mode, elements)}", flush=True)
 
 
+def hand_newton(pb, X, load: float, tol: float, max_it: int = 40) -> tuple[bool, int]:
+    """Plain Newton at ``load`` from X (in place): MUMPS LU of the assembled Jacobian, no
+    predictor, no line search, the contact's active set kept; (converged, iterations)."""
+    from petsc4py import PETSc
+    ksp = PETSc.KSP().create()
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    F, dX = pb.F.duplicate(), X.duplicate()
+    pb.load_factor = load
+    try:
+        for k in range(max_it + 1):
+            pb.contact.allow_update = False
+            pb.residual(None, X, F)
+            if F.norm() <= tol:
+                return pb.contact.converged(), k
+            pb.contact.allow_update = False
+            pb.jacobian(None, X, pb.J, pb.J)
+            ksp.setOperators(pb.J)
+            ksp.solve(F, dX)
+            X.axpy(-1.0, dX)
+        return False, max_it
+    finally:
+        for o in (ksp, F, dX):
+            o.destroy()
+
+
+def column_limit() -> None:
+    """The solver_default_2025 column (unilateral, fade newton) through Table 1's levels to 90 N
+    and 90.711 N, then Newton by hand from there at loads nearing where the column stops
+    (``fade solver_default_2025:unilateral``: 90.7114 N): the smallest singular values of the
+    Jacobi-scaled Jacobian, the soleus block's lowest eigenvalue and the gastrocnemii's ends."""
+    c10, k1, k2 = SETS["solver_default_2025"]
+    raw = column(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2, mode="unilateral", steps=LEVELS[:8] + [90.711])
+    raw["contact"]["fade"] = "newton"
+    run = _run(raw)
+    pb = run.problem
+    ends = np.cumsum([b.n_nodes for b in pb.model.beams]) - 1
+    nodes = pb.layout.perm[ends]
+
+    def show(load, X, its=""):
+        sv, low = column_measures(pb, X)
+        x = X.getArray(readonly=True).reshape(-1, 6, 3)[nodes, 0] - pb.q0.getArray(readonly=True).reshape(-1, 6, 3)[nodes, 0]
+        print(f"  {load:.7g} N{its}: smallest scaled singular values {np.array2string(sv, precision=3)}, soleus block "
+              f"{low:.4e}, end y [mm] medial gastrocnemius {1e3 * x[1, 1]:.4f}, lateral {1e3 * x[2, 1]:.4f}", flush=True)
+    try:
+        run.stepper.run(list(raw["steps"]), lambda rec: None)
+        X = pb.X.copy()
+        show(raw["steps"][-1], X)
+        tol = run.stepper.solver.snes.getTolerances()[1]
+        for load in (90.7111, 90.7112, 90.7113, 90.71133, 90.71136):
+            ok, its = hand_newton(pb, X, load, tol)
+            if not ok:
+                print(f"  {load:.7g} N: Newton by hand does not converge ({its} iterations)", flush=True)
+                break
+            pb.checkpoint()
+            show(load, X, f" ({its} Newton)")
+    finally:
+        run.stepper.close()
+        run.destroy()
+
 def main(argv: list[str]) -> int:
     from mpi4py import MPI  # noqa: F401
     import petsc4py
     petsc4py.init([])
     parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade,
-             "column_fold": column_fold, "traction": traction}
+             "column_fold": column_fold, "column_limit": column_limit, "traction": traction}
     if argv[:1] == ["fade"] and len(argv) > 1:          # fade set:mode ...
         print("## fade", flush=True)
         fade(argv[1:])

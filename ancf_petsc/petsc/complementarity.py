@@ -25,6 +25,15 @@ constraints buckles), and so can S.  S is then replaced by its nearest positive 
 matrix (its negative eigenvalues set to zero) when that changes it by at most ``INDEFINITE_SHARE``
 of its norm (the paper's tendon and the second subject: 1e-5 … 5e-3); otherwise there is no
 prediction (bundle_circle7: the negative part dominates) and the law's phases decide the status.
+The clipped S only chooses the active set: its pressures are then solved again with the exact S
+(``_exact_on_support``), which makes the step the saddle-point Newton step of that active set,
+wherever that solves the exact LCP.  The clipped matrix's own pressures are off along the clipped
+direction, and Δq = y − Xs Δz carries that error through K⁻¹, which is large exactly where K is
+near its negative mode: on the solver_default_2025 GOH column (unilateral, 90.72 N, docs/fibres.md)
+S had −9.2e3 against 1.3e7, the clipped pressures differed from the exact ones by up to 56 % and
+the predicted step was 4.4 long against Newton's 0.028 on the same (unchanged) active set, leaving
+|F| = 0.35 N for an increment of 2e-4 N and an unconverged projection; the stepper's solves from
+it all failed.
 
 S costs one factorisation of K (MUMPS, the model's matrix assembled in the probe phase) and one
 solve per multiplier, so the predictor is used up to ``MAX_MULTIPLIERS``.  Not with friction's
@@ -58,6 +67,9 @@ REGULARISATION = 1e-12
 #: an indefinite S is replaced by its nearest positive semidefinite matrix when its most negative
 #: eigenvalue is at most this share of its largest (module docstring)
 INDEFINITE_SHARE = 1e-2
+#: relative tolerance (of max |d|) of the exact LCP's inequalities when the clipped S's active set
+#: is solved again with the exact S (``_exact_on_support``)
+LCP_TOL = 1e-9
 
 
 def multiplier_dofs(problem) -> np.ndarray:
@@ -266,7 +278,8 @@ class ComplementarityPredictor:
         """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on a
         factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²): Cholesky's, or, for an indefinite S within
         INDEFINITE_SHARE of positive semidefinite, L = V Λ₊^½ of its nearest positive
-        semidefinite matrix (LinAlgError when it is farther)."""
+        semidefinite matrix (LinAlgError when it is farther), whose active set is then solved
+        with the exact S (``_exact_on_support``)."""
         M = len(d)
         if M == 0:
             return np.zeros(0)
@@ -274,11 +287,34 @@ class ComplementarityPredictor:
         try:
             L = la.cholesky(S + reg * np.eye(M), lower=True)
             b = -la.solve_triangular(L, d, lower=True)
+            clipped = False
         except np.linalg.LinAlgError:
             lam, V = la.eigh(S)
             if -lam[0] > INDEFINITE_SHARE * lam[-1]:
                 raise
             L = V * np.sqrt(np.maximum(lam, reg))
             b = -la.solve(L, d)
+            clipped = True
         z, _ = so.nnls(L.T, b, maxiter=50 * M)
-        return z
+        return ComplementarityPredictor._exact_on_support(S, d, z) if clipped else z
+
+    @staticmethod
+    def _exact_on_support(S: np.ndarray, d: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """The solution of LCP(S, d) on the active set {z > 0} that the clipped S chose, with the
+        exact S (S_AA z_A = −d_A: the Newton step of the saddle-point system of that active set),
+        where it solves the exact LCP (z_A ≥ 0, w ≥ 0 off A, to ``LCP_TOL`` of d); else ``z``
+        (module docstring, "clipped")."""
+        A = z > 0.0
+        if not A.any():
+            return z
+        try:
+            zA = la.solve(S[np.ix_(A, A)], -d[A])
+        except np.linalg.LinAlgError:
+            return z
+        out = np.zeros_like(z)
+        out[A] = zA
+        w = d + S @ out
+        tol = LCP_TOL * float(np.max(np.abs(d)))
+        if not np.all(np.isfinite(out)) or zA.min() < 0.0 or w[~A].min(initial=0.0) < -tol:
+            return z
+        return out

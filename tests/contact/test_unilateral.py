@@ -99,24 +99,68 @@ def test_lcp_solution_is_complementary():
 def test_lcp_with_a_nearly_semidefinite_schur_complement():
     """Away from rest S can be indefinite (the bodies' tangent without the constraints is):
     within INDEFINITE_SHARE of semidefinite the LCP of its nearest semidefinite matrix is
-    solved (complementary for that matrix); farther, there is no prediction."""
+    solved, and its active set solved again with the exact S: complementary for S where that
+    solves the exact LCP, else for the semidefinite matrix (both occur below); farther, there
+    is no prediction."""
     import numpy.linalg as npl
     from ancf_petsc.petsc.complementarity import INDEFINITE_SHARE, ComplementarityPredictor
-    rng = np.random.default_rng(5)
-    V, _ = npl.qr(rng.standard_normal((6, 6)))
-    d = rng.standard_normal(6)
-    for share, ok in ((0.5 * INDEFINITE_SHARE, True), (2.0 * INDEFINITE_SHARE, False)):
-        lam = np.array([-share, 0.3, 0.5, 0.8, 0.9, 1.0])
-        S = (V * lam) @ V.T
-        if not ok:
-            with pytest.raises(np.linalg.LinAlgError):
-                ComplementarityPredictor._solve_lcp(S, d)
-            continue
+    branches = set()
+    for seed in (5, 6, 7, 8):
+        rng = np.random.default_rng(seed)
+        V, _ = npl.qr(rng.standard_normal((6, 6)))
+        d = rng.standard_normal(6)
+        lam = np.array([-2.0 * INDEFINITE_SHARE, 0.3, 0.5, 0.8, 0.9, 1.0])
+        with pytest.raises(np.linalg.LinAlgError):
+            ComplementarityPredictor._solve_lcp((V * lam) @ V.T, d)
+        lam[0] = -0.5 * INDEFINITE_SHARE
+        S, Sp = (V * lam) @ V.T, (V * np.maximum(lam, 0.0)) @ V.T
         z = ComplementarityPredictor._solve_lcp(S, d)
-        Sp = (V * np.maximum(lam, 0.0)) @ V.T
-        w = d + Sp @ z
-        assert z.min() >= 0 and w.min() > -1e-9 and abs(z @ w) < 1e-9
+        exact = [(d + M @ z).min() > -1e-9 and abs(z @ (d + M @ z)) < 1e-9 for M in (S, Sp)]
+        assert z.min() >= 0 and exact[0] != exact[1], exact            # one of the two, exactly
+        zp = ComplementarityPredictor._solve_lcp(Sp + 1e-9 * np.eye(6), d)   # Sp's own LCP
+        a = zp > 1e-12
+        za = np.zeros(6)
+        za[a] = np.linalg.solve(S[np.ix_(a, a)], -d[a])
+        assert exact[0] == (za.min() >= 0 and (d + S @ za).min() > -1e-9) and np.array_equal(z > 0, a)
+        branches.add(exact[0])
+    assert branches == {True, False}
 
+
+def test_a_clipped_schur_complement_keeps_the_exact_step_of_its_active_set():
+    """The bodies' tangent K without the constraints can be indefinite (a neighbour pressed by
+    its contact forces buckles when free): S = G K⁻¹ Gᵀ is then indefinite, and within
+    INDEFINITE_SHARE the clipped S chooses the active set.  Its pressures and the predicted
+    step Δq = K⁻¹(−F + Gᵀ z) come from the exact S: the step is the saddle-point Newton step
+    of that active set and closes its linearised gaps (w_A = 0).  The clipped S's own
+    pressures left a linearised gap of −0.019 (a penetration) here and, on the
+    solver_default_2025 GOH column at 90.72 N (docs/contact.md), a step of 4.4 against
+    Newton's 0.028, from which the stepper's solves failed."""
+    import scipy.linalg as la
+    from ancf_petsc.petsc.complementarity import INDEFINITE_SHARE, ComplementarityPredictor
+    rng = np.random.default_rng(7)
+    n, m = 6, 4
+    V, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    K = (V * np.array([-1e-3, 1.0, 1.5, 2.0, 2.5, 3.0])) @ V.T          # one soft negative mode
+    R = rng.standard_normal((m, n))
+    R[3, 1:] = R[2, 1:] + 1e-2 * rng.standard_normal(n - 1)            # two nearly redundant constraints
+    R[:, 0] = 3e-3 * rng.standard_normal(m)                            # that barely touch the soft mode
+    G = R @ V.T
+    Ki = np.linalg.inv(K)
+    S = G @ Ki @ G.T
+    lam = la.eigvalsh(S)
+    assert 0.0 < -lam[0] < INDEFINITE_SHARE * lam[-1]                   # the clipped branch
+    F = rng.standard_normal(n)
+    c = -S @ rng.uniform(0.5, 1.0, m) + G @ Ki @ F                      # pressed gaps
+    d = c - G @ Ki @ F
+    z = ComplementarityPredictor._solve_lcp(S, d)
+    dq = Ki @ (-F + G.T @ z)
+    w = c + G @ dq                                                     # the linearised gaps
+    A = z > 0.0
+    assert A.sum() >= 2 and z.min() >= 0.0 and w.min() > -1e-9 and abs(z @ w) < 1e-9
+    saddle = np.linalg.solve(np.block([[K, -G[A].T], [G[A], np.zeros((A.sum(), A.sum()))]]),
+                             np.concatenate([-F, -c[A]]))
+    assert np.allclose(dq, saddle[:n], rtol=1e-9, atol=1e-9 * np.abs(saddle[:n]).max())
+    assert np.allclose(z[A], saddle[n:], rtol=1e-9)
 
 def _achilles(psi, elements, axial, mode="unilateral", steps=None, solver=None, petsc=None):
     raw = load_raw(f"achilles_type3_psi{psi if psi in (0, 15, 45) else 45}.yaml")

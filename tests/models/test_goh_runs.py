@@ -48,13 +48,15 @@ def test_goh_achilles_with_contact_ranks_agree_with_serial(tmp_path):
 @pytest.mark.slow
 def test_a_predictor_step_that_inverts_an_element_on_one_rank_is_halved_on_every_rank(tmp_path):
     """configs/achilles_type3_psi45_goh_optimized_see.yaml (soft GOH matrix, unilateral contact)
-    to its first level, 10 N: its first increments are cut back, and the complementarity
+    under the paper's point force on r (the config spreads it over the end section) to its first
+    level, 10 N: its first increments are cut back, and the complementarity
     predictor's step inverts an element on one rank only.  Each rank used to decide from its own
     flag whether to halve the step, so on 2 ranks one evaluated again while the other waited in
     the SNES: a hang.  Now 2 ranks complete with the serial answer."""
     raw = load_raw("achilles_type3_psi45_goh_optimized_see.yaml")
     for b in raw["beams"]:
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["loads"] = [{"beam": "soleus", "node": "last", "force": [1.0, 0.0, 0.0]}]   # the paper's point force
     raw["steps"] = [10]
     runs = run_on_ranks(raw, tmp_path, ranks=(1, 2))
     assert runs[1][1]["steps"][0]["cutbacks"] > 0              # the hard first level
@@ -98,12 +100,11 @@ def test_published_goh_sets_run_the_column_to_400_newtons(tmp_path, name, mode):
     """The authors' full GOH sets that converge (docs/fibres.md, "The published parameter sets"),
     as shipped: every level of Table 1 reached, the fibres carrying the load (the soleus is
     stiffer than its matrix alone would be), every level's |F| that of a converged state with its
-    own contact weights.  optimized_SEE strains the soleus by 27 % and slides the neighbours' points
-    past the soleus' element boundaries and ends; tendon_model_2023 and alex have partly weighted
-    points there and differentiate their weights (contact.fade: newton: with settle, alex stops at
-    358.9 N and tendon_model_2023 accepts 350 and 400 N with |F| 1.9e-4 and 1.9e-5 N).
-    solver_default_2025 (μ = 15 kPa, k2 = 524.6) takes its load as an end traction: under the
-    paper's point force its end element is crushed and the column stops at 90.72 N."""
+    own contact weights.  Every config spreads the load over the soleus' end section
+    (traction_force): under the paper's point force the soft matrices let the soleus elongate 7–83 %
+    more, and the solver_default_2025 column (μ = 15 kPa, k2 = 524.6) stops at a limit point at
+    90.71 N (docs/fibres.md, "The load: an end traction").  tendon_model_2023 and optimized_SEE strain
+    the soleus by 21 %."""
     from helpers import read_summary, solve_cli
     raw = load_raw(name)
     assert raw["contact"]["mode"] == mode

@@ -123,6 +123,11 @@ class SNESSolver:
         """Free the SNES (with its KSP, PC and factor); not collective."""
         self.snes.destroy()
 
+    @property
+    def last_solve_history(self) -> list[float]:
+        """|F| of every iterate of the last SNES solve (its failure message reads it)."""
+        return list(self._history)
+
     def negative_eigenvalues(self) -> int | None:
         """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ
         inertia less one per contact constraint (a saddle-point matrix with m independent

@@ -47,12 +47,40 @@ def failure_detail(solver, reason: int) -> str:
         return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
                 "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
                                                f"; {SADDLE_POINT_HINT}") + ")")
+    cycle = newton_cycle(solver.last_solve_history)
+    if cycle is not None:
+        period, low, high = cycle
+        if period == 1:
+            return (f" (Newton stalls at |F| {high:.2e} N, above the tolerance "
+                    f"{solver.snes.getTolerances()[1]:.1e}: more iterations do not help)")
+        return (f" (Newton cycles: |F| repeats every {period} iterations, between {low:.1e} and {high:.1e} N, "
+                "so more iterations do not help)")
     contact = solver.problem.contact
     if contact is not None and contact.law.decides_activity:
         maxit = solver.snes.getTolerances()[3]
         return (f" (unilateral contact changes its active set within a level and may need more than "
                 f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
     return ""
+
+
+#: relative agreement of |F| one period apart that counts as a repeat (a Newton cycle)
+CYCLE_TOL = 1e-3
+#: the longest cycle looked for
+MAX_PERIOD = 8
+
+
+def newton_cycle(history: list[float]) -> tuple[int, float, float] | None:
+    """(period, min, max |F|) when the last p + 2 residual norms of a solve repeat those one period
+    earlier to ``CYCLE_TOL`` (period 1: |F| stalled), else None (Newton still moving)."""
+    h = history
+    for p in range(1, MAX_PERIOD + 1):
+        n = max(p + 2, 3)                       # one period and two more iterates compared
+        if len(h) < n + p:
+            break
+        tail = h[-(n + p):]
+        if all(abs(tail[k] - tail[k + p]) <= CYCLE_TOL * max(tail[k], tail[k + p]) for k in range(n)):
+            return p, min(h[-p:]), max(h[-p:])
+    return None
 
 
 def linear_solver_detail(solver, reason: int) -> str:

@@ -379,3 +379,32 @@ def test_an_overflowing_trial_state_gives_a_nan_residual_without_warnings():
         warnings.simplefilter("error")
         P.residual(None, X, F)
     assert np.all(np.isnan(F.getArray())) and P.inverted
+
+
+#: |F| of the last failed solve of the tendon_model_2023 GOH column with sliding contact at
+#: 81.34 N (-snes_monitor, 2026-11-26): a cycle of period 6
+CYCLING = [3.9986e-02, 3.0666e-05, 4.106667e-02, 8.471389e-02, 2.003852e-02, 1.484979e-02, 8.362539e-04,
+           9.967742e-05, 4.106672e-02, 8.471799e-02, 2.003861e-02, 1.485130e-02, 8.363446e-04, 9.970484e-05,
+           4.106672e-02, 8.471799e-02]
+
+
+@pytest.mark.parametrize("history,expected", [
+    (CYCLING, "cycles: |F| repeats every 6 iterations, between 1.0e-04 and 8.5e-02 N"),
+    ([2.2e-2, 1.5e-2, 3.6e-4, 1.2e-5] + [1.7090501e-08 * (1 + 1e-8 * k) for k in range(12)],
+     "stalls at |F| 1.71e-08 N"),
+    ([10.0 * 0.5 ** k for k in range(16)], None)], ids=["cycle", "stall", "converging"])
+def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
+    """A level that ran out of Newton iterations names a cycle or a stall (more iterations do not
+    help) instead of suggesting a larger -snes_max_it; a Newton still converging gets no such
+    words."""
+    from types import SimpleNamespace
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.solving.solver_messages import failure_detail
+    snes = PETSc.SNES().create(PETSc.COMM_SELF)
+    try:
+        solver = SimpleNamespace(snes=snes, last_solve_history=history, problem=SimpleNamespace(contact=None))
+        text = failure_detail(solver, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
+    finally:
+        snes.destroy()
+    assert (expected in text and "more iterations do not help" in text) if expected else text == "", text

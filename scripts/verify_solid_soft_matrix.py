@@ -21,6 +21,8 @@ quadrature points there).  Reference: Richardson extrapolation of the solid's th
 Usage: python scripts/verify_solid_soft_matrix.py [--out docs]
        python scripts/verify_solid_soft_matrix.py --replot      # the block from the CSV (no dolfinx)
        python scripts/verify_solid_soft_matrix.py --ancf-only   # ANCF runs again, the CSV's solid rows kept
+       python scripts/verify_solid_soft_matrix.py --profile 2   # u_x across the end face: beams, solid h 2 mm
+       python scripts/verify_solid_soft_matrix.py --more-solid --h 1.0   # one more solid mesh into the CSV
 """
 from __future__ import annotations
 
@@ -140,6 +142,50 @@ class SoftProbe(vsf.SolidProbe):
             out["u_mean"] = np.array([fem.assemble_scalar(fem.form(u[i] * dA)) / A for i in range(3)])
             out["fit0"], out["span"] = self.end_face_fit(u)
         return out
+
+
+class ProfileProbe(SoftProbe):
+    """SoftProbe that, at the last level, prints u_x along the end face's semi-axes (local y, z
+    at 0, 0.095, ..., 0.95 of the semi-axis), at x = L/2 and x = L: the ``--profile`` diagnosis."""
+
+    def __call__(self, u, ds_end) -> dict:
+        out = super().__call__(u, ds_end)
+        if self.level == len(self.case.steps):
+            from dolfinx import geometry
+            from ancf_petsc.physics.geometry import place
+            tree = geometry.BoundingBoxTree(self.msh, 3, padding=0.1 * vsf.SECTION["semi_axes"][1])
+            for axis, P in semi_axis_points().items():
+                for xf in (0.5, 1.0 - 1e-12):
+                    pts = place(np.full(len(P), xf * self.case.length), P, self.case.length, self.case.twist_deg,
+                                self.case.twist_axis)
+                    cells = np.array([vsf.owning_cell(self.msh, tree, p) for p in pts], dtype=np.int32)
+                    print(f"[profile] solid x/L = {xf:.2f}, {axis}: " +
+                          " ".join(f"{1e3 * v:.4f}" for v in u.eval(pts, cells)[:, 0]), flush=True)
+        return out
+
+
+def semi_axis_points() -> dict:
+    """Local section points along the semi-axes y and z at 0, 0.095, ..., 0.95 of their length."""
+    t = np.linspace(0.0, 0.95, 11)
+    a, b = vsf.SECTION["semi_axes"]
+    return {"y": np.stack([a * t, 0 * t], axis=1), "z": np.stack([0 * t, b * t], axis=1)}
+
+
+def profile(case: vs.Case, h: float, tmp: str) -> None:
+    """u_x [mm] along the end face's semi-axes: the 8-element traction beams (their quadratic
+    section field) and the solid on the mesh of size h [mm]."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.physics.element3363 import section_monomials
+    q0 = build_model(parse_config(vs.ancf_config(case, 8, 2, tmp), base_dir=vs.CONFIGS)).q0
+    for model in LOCKINGS:
+        q = vsf.run_ancf(case, 8, tmp, model, "traction_force")["q"]
+        for axis, P in semi_axis_points().items():
+            ux = section_monomials(P[:, 0], P[:, 1])[0] @ (q[-1, :, 0] - q0[-1, :, 0])
+            print(f"[profile] {model_name(LOCKINGS[model], 'traction_force')} x/L = 1.00, {axis}: " +
+                  " ".join(f"{1e3 * v:.4f}" for v in ux), flush=True)
+    vs._import_stack()
+    vsf.run_solid(case, vs.ancf_section(case), 1e-3 * h, 2, probe=ProfileProbe)
 
 
 def rows_of(case: vs.Case, runs: list) -> list[dict]:
@@ -276,6 +322,8 @@ def main(argv=None) -> int:
     ap.add_argument("--force", type=float, default=FORCE, help="end force [N] (other than 200: beam only)")
     ap.add_argument("--beam-only", action="store_true", help="the beam runs, printed; nothing written")
     ap.add_argument("--more-solid", action="store_true", help="keep the CSV's rows, add solid meshes --h")
+    ap.add_argument("--profile", type=float, metavar="H",
+                    help="print u_x along the end face's semi-axes: beams and the solid of mesh size H [mm]")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
     ap.add_argument("--h", type=float, nargs="+", default=[1e3 * h for h in H], help="solid mesh sizes [mm]")
     args = ap.parse_args(argv)
@@ -284,6 +332,10 @@ def main(argv=None) -> int:
         write_doc(args.doc, vsf.read_csv(path))
         return 0
     case = make_case(args.force)
+    if args.profile:
+        with tempfile.TemporaryDirectory(prefix="verify_solid_soft_") as tmp:
+            profile(case, args.profile, tmp)
+        return 0
     t_start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="verify_solid_soft_") as tmp:
         beams = beam_runs(case, tmp)

@@ -12,10 +12,12 @@ paper loads its subtendons, by the point force F on the position vector r of the
 
 Quantities: the end-section centroid's displacement and the end section's rotation about x
 (verify_solid_fibres: ANCF from r_y, r_z of the last node; the solid from the least-squares fit of
-its end face), their rotation along x, and the range of the fibre strain Ē = I4 − 1 over the
-middle half of the bar, L/4 < X < 3L/4 (ANCF: its Gauss points there; solid: its degree-2
-quadrature points there).  Reference: Richardson extrapolation of the solid's three meshes
-(verify_solid.richardson).  Writes docs/solid_soft_matrix.csv and the marked block
+its end face), the rotation along x, the end face's mean u_x (the displacement a uniform traction
+works on), the span of u_x over the end face and the constant of its quadratic fit, and the range
+of the fibre strain Ē = I4 − 1 over the middle half of the bar, L/4 < X < 3L/4 (ANCF: its Gauss
+points there, and per element; solid: its degree-2 quadrature points there).  Reference:
+Richardson extrapolation of the solid's finest three meshes (verify_solid.richardson; the finest
+mesh where the changes do not shrink).  Writes docs/solid_soft_matrix.csv and the marked block
 ``solid_soft_matrix`` of docs/fibres.md.
 
 Usage: python scripts/verify_solid_soft_matrix.py [--out docs]
@@ -52,10 +54,10 @@ BULK_RATIO = 49.67
 MATERIAL = {"model": "goh", "mu": MU, "bulk_modulus": BULK_RATIO * MU, "k1": 75.351e6, "k2": 23.926,
             "kappa": 0.0, "fibres": {"follow": "twist"}}
 #: total end force [N]: the largest Ē of the 8-element traction beam in the bar's middle half is
-#: ≈ 3 % (the quick beam runs of the docs' subsection)
+#: 3.2 % (``--beam-only --force F``: 2.4 % at 100 N, 4.0 % at 300 N)
 FORCE = 200.0
 ELEMENTS = (4, 8)
-H = (2.83e-3, 2e-3, 1.41e-3)
+H = (2.83e-3, 2e-3, 1.41e-3, 1e-3)     # solid mesh sizes [m]; the finest alone takes ~20 min
 LOADS = {"traction_force": "end traction", "force": "point force on r"}
 LOCKINGS = {vsf.ANCF: "none", vsf.ANCF_MIXED: "mixed"}
 MIDDLE = (0.25, 0.75)              # the bar's middle half, fractions of L
@@ -106,7 +108,8 @@ def run_beam(case: vs.Case, elements: int, tmp: str, model: str, load: str) -> d
 
 class SoftProbe(vsf.SolidProbe):
     """verify_solid_fibres.SolidProbe and, at the last level, the range of Ē over the solid's
-    degree-2 quadrature points in the middle half."""
+    degree-2 quadrature points in the middle half, the end face's mean displacement ∫ u dA / A,
+    and the span and quadratic-fit constant of u_x on the end face (``end_face_fit``)."""
 
     def __init__(self, case: vs.Case, sec, msh):
         super().__init__(case, sec, msh)

@@ -59,6 +59,7 @@ verify-solid: setup
 	bash scripts/setup_solid.sh
 	$(PY) scripts/verify_solid.py
 	$(PY) scripts/verify_solid_fibres.py
+	$(PY) scripts/verify_solid_soft_matrix.py
 
 verify-solid-contact: setup
 	bash scripts/setup_solid.sh

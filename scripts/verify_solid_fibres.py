@@ -188,20 +188,22 @@ def reduced_volumetric_rule(degree: int = VOLUMETRIC_DEGREE):
         Beam.parts = full
 
 
-def run_ancf(case: vs.Case, elements: int, tmp: str, model: str = ANCF) -> dict:
+def run_ancf(case: vs.Case, elements: int, tmp: str, model: str = ANCF, load: str = "traction_force") -> dict:
     """ANCF 3363, 2 axial Gauss points: end-centroid displacement and end-section rotation at
     every level; at the last, the rotation at the stations and the volumetric energy share
-    (``model`` ANCF_VOL: under ``reduced_volumetric_rule``, no share; ANCF_MIXED: ``locking: mixed``)."""
+    (``model`` ANCF_VOL: under ``reduced_volumetric_rule``, no share; ANCF_MIXED: ``locking: mixed``).
+    ``load``: the end load's config key, ``traction_force`` (the solid's) or ``force`` (on r)."""
     with reduced_volumetric_rule() if model == ANCF_VOL else contextlib.nullcontext():
-        return _run_ancf(case, elements, tmp, model)
+        return _run_ancf(case, elements, tmp, model, load)
 
 
-def _run_ancf(case: vs.Case, elements: int, tmp: str, model: str) -> dict:
+def _run_ancf(case: vs.Case, elements: int, tmp: str, model: str, load: str) -> dict:
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
-    out_dir = os.path.join(tmp, f"{case.key}_{elements}_{ANCF_MODELS.index(model):d}")
+    out_dir = os.path.join(tmp, f"{case.key}_{elements}_{ANCF_MODELS.index(model):d}_{load}")
     raw = vs.ancf_config(case, elements, 2, out_dir)
+    raw["loads"][0] = {"beam": "bar", "node": "last", load: list(case.force)}
     if model == ANCF_MIXED:
         raw["beams"][0]["locking"] = "mixed"
     t0 = time.perf_counter()
@@ -214,7 +216,7 @@ def _run_ancf(case: vs.Case, elements: int, tmp: str, model: str) -> dict:
         x = h5["model/beams/bar/x_nodes"][:]
         qs = [h5[f"steps/step_{k:04d}/nodal_vectors"][:] for k in range(1, len(case.steps) + 1)]
     every = (len(x) - 1) // STATIONS
-    levels = [{"load": lvl * FORCE, "u": q[-1, 0] - q0[-1, 0], "rot": section_rotation_deg(q[-1:], q0[-1:])[0]}
+    levels = [{"load": lvl * case.force[0], "u": q[-1, 0] - q0[-1, 0], "rot": section_rotation_deg(q[-1:], q0[-1:])[0]}
               for lvl, q in zip(case.steps, qs)]
     levels[-1]["along"] = section_rotation_deg(qs[-1][every::every], q0[every::every])
     if model != ANCF_VOL:
@@ -222,7 +224,7 @@ def _run_ancf(case: vs.Case, elements: int, tmp: str, model: str) -> dict:
     return {**levels[-1], "model": model, "res": f"{elements} el.",
             "dofs": int(res.summary["dofs"]),
             "its": int(sum(st["iterations"] for st in res.summary["steps"])), "wall": wall,
-            "levels": levels, "field_err": float("nan")}
+            "levels": levels, "field_err": float("nan"), "q": qs[-1]}
 
 
 # --------------------------------------------------------------------------------------------
@@ -357,16 +359,17 @@ class SolidProbe:
         return out
 
 
-def run_solid(case: vs.Case, sec, h: float, quad_degree: int) -> dict:
-    """Mesh, check the fibre field, solve; end displacement and rotation at every level."""
+def run_solid(case: vs.Case, sec, h: float, quad_degree: int, probe=SolidProbe) -> dict:
+    """Mesh, check the fibre field, solve; end displacement and rotation at every level (and
+    what ``probe(case, sec, msh)``, a SolidProbe, reports)."""
     t0 = time.perf_counter()
     msh = vs.solid_mesh(case, sec, h)
     t_mesh = time.perf_counter() - t0
     field_err = check_fibre_field(case, sec, msh) if case.material["model"] == "goh" else float("nan")
     t0 = time.perf_counter()
-    out = vs.solve_solid(case, sec, msh, quad_degree, energy=goh_energy, post=SolidProbe(case, sec, msh))
+    out = vs.solve_solid(case, sec, msh, quad_degree, energy=goh_energy, post=probe(case, sec, msh))
     for lv in out["levels"]:
-        lv["load"] *= FORCE
+        lv["load"] *= case.force[0]
     out.update(model="solid P2 tet", res=f"h {h * 1e3:.2f} mm", wall=time.perf_counter() - t0,
                mesh=t_mesh, field_err=field_err)
     return out

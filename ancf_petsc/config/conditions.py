@@ -143,7 +143,8 @@ def parse_steps(value) -> list[float]:
 
 
 def parse_probes(value, names: list[str], n_nodes: list[int]) -> list[ProbeSpec]:
-    """``probes``: named nodal vectors reported at every level."""
+    """``probes``: named nodal vectors reported at every level, or (``vector: mean``) the
+    displacement averaged over the node's section, ∫ u dA / A."""
     probes = []
     for i, pr in enumerate(sequence(value, "probes", nonempty=False)):
         p = f"probes[{i}]"
@@ -153,5 +154,5 @@ def parse_probes(value, names: list[str], n_nodes: list[int]) -> list[ProbeSpec]
         if pname in [x.name for x in probes]:
             raise ConfigError(f"{p}.name", f"duplicate probe name {pname!r}")
         probes.append(ProbeSpec(pname, bi, node_ref(pr["node"], f"{p}.node", n_nodes[bi]),
-                                string(pr.get("vector", "r"), f"{p}.vector", VECTORS)))
+                                string(pr.get("vector", "r"), f"{p}.vector", VECTORS + ("mean",))))
     return probes

@@ -177,11 +177,8 @@ class ResultsWriter:
                               f"cannot write: {os_reason(exc)}") from None
 
     def probe_values(self, q: np.ndarray) -> dict:
-        out = {}
-        for name, (node, slot) in self.model.probes.items():
-            out[name] = {"displacement": (q[node, slot] - self.model.q0[node, slot]).tolist(),
-                         "value": q[node, slot].tolist()}
-        return out
+        return {name: {"displacement": u.tolist(), "value": v.tolist()}
+                for name, (u, v) in self.model.probe_values(q).items()}
 
     def write_step(self, record, q: np.ndarray | None, extra: dict | None = None,
                    contact: dict | None = None, path: dict | None = None) -> None:

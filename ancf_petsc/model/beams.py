@@ -109,7 +109,7 @@ class Model:
     q0: np.ndarray                 # (n_nodes, 6, 3) reference nodal vectors
     fixed_dofs: np.ndarray         # sorted global DOF ids held at their reference value
     loading: list                  # LoadGroups (loading.py): forces and prescribed displacements
-    probes: dict[str, tuple[int, int]]   # name → (global node, vector slot)
+    probes: dict[str, tuple[int, np.ndarray]]   # name → (global node, weights of its 6 vectors)
     geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
     warnings: list = field(default_factory=list)          # implausible sizes (plausibility.py)
     supports: list = field(default_factory=list)         # the boundary conditions (Support)
@@ -123,6 +123,11 @@ class Model:
     def prescribed(self) -> np.ndarray:
         """(n_dofs,) every prescribed displacement at multiplier 1 (0: held in place)."""
         return sum(g.moves for g in self.loading)
+
+    def probe_values(self, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """name → (displacement, value) of every probe at the nodal vectors q (n_nodes, 6, 3):
+        one nodal vector, or a section mean Σ_k m̄_k q_k (m̄_k = ∫ m_k dA / A)."""
+        return {name: (w @ (q[node] - self.q0[node]), w @ q[node]) for name, (node, w) in self.probes.items()}
 
     @property
     def n_nodes(self) -> int:

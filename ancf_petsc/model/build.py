@@ -158,7 +158,8 @@ def build_section_at(sspec: SectionSpec, tendon, x: float) -> Section:
 
 
 def _end_moments(beam: Beam, tendon, bs, x: float) -> np.ndarray:
-    """∫ m_k dA / A over the section at x in the beam frame (a uniform end traction)."""
+    """∫ m_k dA / A over the section at x in the beam frame (a uniform end traction; a section
+    mean probe)."""
     if beam.ring_at is None:
         sec = beam.section
         m, _, _ = el.section_monomials(sec.points[:, 0], sec.points[:, 1])
@@ -250,7 +251,9 @@ def build_model(spec: ModelSpec) -> Model:
             raise ConfigError(ld.path, "the load pushes on a fixed component of r at this node; "
                                        "load another node or free that component")
 
-    probes = {p.name: (beams[p.beam].node_offset + p.node, el.VECTOR_INDEX[p.vector])
+    probes = {p.name: (beams[p.beam].node_offset + p.node,
+                       _end_moments(beams[p.beam], tendon, spec.beams[p.beam], beams[p.beam].x_nodes[p.node])
+                       if p.vector == "mean" else np.eye(len(el.VECTORS))[el.VECTOR_INDEX[p.vector]])
               for p in spec.probes}
     warnings = size_warnings(spec, beams) + point_force_warnings(spec, beams)
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,

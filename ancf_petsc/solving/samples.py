@@ -278,10 +278,9 @@ class SampleSolver:
         """Probes and the state of a converged level into ``out``."""
         run = self.run
         x = run.problem.X.getArray(readonly=True).reshape(-1, 6, 3)[run.layout.perm]   # model order
-        q0 = run.model.q0
-        for name, (node, slot) in run.model.probes.items():
-            out.displacements.setdefault(name, []).append(x[node, slot] - q0[node, slot])
-            out.values.setdefault(name, []).append(x[node, slot].copy())
+        for name, (u, v) in run.model.probe_values(x).items():
+            out.displacements.setdefault(name, []).append(u)
+            out.values.setdefault(name, []).append(v)
         c = run.contact
         out.states.append(LevelState(x.copy(), None if c is None else c.projector.state().copy(),
                                      None if c is None else c.status.copy()))

@@ -405,9 +405,9 @@ def csv_rows(case: vs.Case, law: str, ratio: float, runs: list) -> list[dict]:
     return out
 
 
-def write_csv(path: str, rows: list[dict]) -> None:
+def write_csv(path: str, rows: list[dict], columns: list[str] = COLUMNS) -> None:
     with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=COLUMNS)
+        w = csv.DictWriter(fh, fieldnames=columns)
         w.writeheader()
         w.writerows(rows)
 
@@ -526,14 +526,24 @@ def render_block(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def replace_block(text: str, block: str) -> str:
-    """``text`` with the marked block ``solid_fibres`` replaced by ``block``."""
-    begin = f"<!-- {BLOCK}: begin (written by scripts/verify_solid_fibres.py; do not edit) -->"
-    end = f"<!-- {BLOCK}: end -->"
+def replace_block(text: str, block: str, name: str = BLOCK, writer: str = "scripts/verify_solid_fibres.py") -> str:
+    """``text`` with the marked block ``name`` (written by the script ``writer``) replaced by
+    ``block``."""
+    begin = f"<!-- {name}: begin (written by {writer}; do not edit) -->"
+    end = f"<!-- {name}: end -->"
     i, j = text.find(begin), text.find(end)
     if i < 0 or j < i:
-        raise vs.SolidError(f"{DOC}: the markers of block {BLOCK} are missing")
+        raise vs.SolidError(f"{DOC}: the markers of block {name} are missing")
     return text[:i + len(begin)] + "\n" + block + "\n" + text[j:]
+
+
+def write_block(doc: str, block: str, name: str = BLOCK, writer: str = "scripts/verify_solid_fibres.py") -> None:
+    """The page ``doc`` with its block ``name`` replaced (``replace_block``); the page is only
+    opened for writing once the new text stands (missing markers leave it as it was)."""
+    with open(doc, encoding="utf-8") as fh:
+        text = replace_block(fh.read(), block, name, writer)
+    with open(doc, "w", encoding="utf-8") as fh:
+        fh.write(text)
 
 
 def plot(path: str, rows: list[dict]) -> None:
@@ -591,10 +601,7 @@ def write_outputs(out: str, rows: list[dict], doc: str) -> None:
     """CSV (unless it is the input), the docs block and the figure."""
     os.makedirs(os.path.join(out, "figures"), exist_ok=True)
     plot(os.path.join(out, FIGURE), rows)
-    with open(doc, encoding="utf-8") as fh:
-        text = fh.read()
-    with open(doc, "w", encoding="utf-8") as fh:
-        fh.write(replace_block(text, render_block(rows)))
+    write_block(doc, render_block(rows))
 
 
 def ancf_runs(case: vs.Case, tmp: str) -> list[dict]:

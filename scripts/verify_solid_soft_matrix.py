@@ -49,6 +49,7 @@ import verify_solid_fibres as vsf  # noqa: E402
 
 CSV_NAME = "solid_soft_matrix.csv"
 BLOCK = "solid_soft_matrix"
+WRITER = "scripts/verify_solid_soft_matrix.py"
 MU = 107.2e3
 BULK_RATIO = 49.67
 MATERIAL = {"model": "goh", "mu": MU, "bulk_modulus": BULK_RATIO * MU, "k1": 75.351e6, "k2": 23.926,
@@ -297,19 +298,11 @@ def render_block(rows: list[dict]) -> str:
 
 def replace_block(text: str, block: str) -> str:
     """``text`` with the marked block ``solid_soft_matrix`` replaced by ``block``."""
-    begin = f"<!-- {BLOCK}: begin (written by scripts/verify_solid_soft_matrix.py; do not edit) -->"
-    end = f"<!-- {BLOCK}: end -->"
-    i, j = text.find(begin), text.find(end)
-    if i < 0 or j < i:
-        raise vs.SolidError(f"{vsf.DOC}: the markers of block {BLOCK} are missing")
-    return text[:i + len(begin)] + "\n" + block + "\n" + text[j:]
+    return vsf.replace_block(text, block, BLOCK, WRITER)
 
 
 def write_doc(doc: str, rows: list[dict]) -> None:
-    with open(doc, encoding="utf-8") as fh:
-        text = replace_block(fh.read(), render_block(rows))
-    with open(doc, "w", encoding="utf-8") as fh:
-        fh.write(text)
+    vsf.write_block(doc, render_block(rows), BLOCK, WRITER)
 
 
 def beam_runs(case: vs.Case, tmp: str) -> list[dict]:
@@ -365,11 +358,7 @@ def main(argv=None) -> int:
                       f"{1e3 * r['u_mean'][0]:.4f} mm, fibre field "
                       f"{r['field_err']:.1e}", flush=True)
             rows = rows_of(case, beams + solids)
-    with open(path, "w", newline="") as fh:
-        import csv
-        w = csv.DictWriter(fh, fieldnames=vsf.COLUMNS + EXTRA)
-        w.writeheader()
-        w.writerows(rows)
+    vsf.write_csv(path, rows, vsf.COLUMNS + EXTRA)
     write_doc(args.doc, rows)
     print(render_block(rows))
     print(f"\n[verify-solid-soft-matrix] {time.perf_counter() - t_start:.0f} s; wrote {path} and the block "

@@ -63,6 +63,12 @@ SETS = {"tendon_model_2023": (30.6e3, 3.7859e6, 7.8085), "solver_default_2025": 
 PUBLISHED = dict(mu=2 * 30.6e3, K=2.0e8, k1=3.7859e6, k2=7.8085)     # K: the source's 1e8 (J - 1)^2
 
 
+def published_law(name: str) -> dict:
+    """``column``'s material arguments of the set ``name``: its μ = 2 c10, k1, k2 and our K = 49.67 μ."""
+    c10, k1, k2 = SETS[name]
+    return dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+
+
 def column(mu: float, K: float, k1: float, k2: float, mode: str | None, elements: int = 4,
            axial_points: int = 3, steps=LEVELS) -> dict:
     """configs/achilles_type3_psi45_goh.yaml with this GOH law; ``mode`` None: the soleus alone."""
@@ -215,8 +221,8 @@ def eigen() -> None:
 
 
 def sets() -> None:
-    for name, (c10, k1, k2) in SETS.items():
-        law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+    for name in SETS:
+        law = published_law(name)
         for mode in (None, "sliding", "unilateral"):
             s = solve(column(**law, mode=mode))
             print(f"{name}: {mode or 'lone soleus'}: {s['status']}, last level {s['last']:g} N "
@@ -236,8 +242,7 @@ def fade(runs=None) -> None:
     newton`` (the fade weights differentiated in Newton's iteration, contact/weights.py)."""
     chosen = [tuple(r.split(":")) for r in runs] if runs else FADE_RUNS
     for name, mode in chosen:
-        c10, k1, k2 = SETS[name]
-        raw = column(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2, mode=mode)
+        raw = column(**published_law(name), mode=mode)
         raw["contact"]["fade"] = "newton"
         s = solve(raw)
         print(f"{name}: {mode}, fade newton: {s['status']}, last level {s['last']:g} N ({s['levels']}/13), "
@@ -246,8 +251,7 @@ def fade(runs=None) -> None:
 
 
 def fold() -> None:
-    c10, k1, k2 = SETS["solver_default_2025"]
-    law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+    law = published_law("solver_default_2025")
     steps = LEVELS[:8] + [95, 99, 99.4, 99.49, 99.5, 99.501, 100]
     raw = column(**law, mode=None, steps=steps)
     raw["solver"] = {"max_increment": 1.0, "initial_increment": 1.0}
@@ -304,8 +308,7 @@ def column_measures(pb, X) -> tuple[np.ndarray, float]:
 
 def column_fold() -> None:
     from ancf_petsc.solving.records import LoadStepFailure
-    c10, k1, k2 = SETS["solver_default_2025"]
-    law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+    law = published_law("solver_default_2025")
     raw = column(**law, mode="unilateral", steps=LEVELS[:7] + [85, 88, 89, 89.5])
     raw["contact"]["fade"] = "newton"
     run = _run(raw)
@@ -356,8 +359,8 @@ def traction() -> None:
             r.stepper.close()
             r.destroy()
 
-    for name, (c10, k1, k2) in SETS.items():
-        law = dict(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2)
+    for name in SETS:
+        law = published_law(name)
         for mode in (None, "unilateral"):
             for load in ("force", "traction_force"):
                 print(f"{name}: {mode or 'lone soleus'}, {load}: {run(law, mode, load, at_10=True)}", flush=True)
@@ -399,8 +402,7 @@ def column_limit() -> None:
     and 90.711 N, then Newton by hand from there at loads nearing where the column stops
     (``fade solver_default_2025:unilateral``: 90.7114 N): the smallest singular values of the
     Jacobi-scaled Jacobian, the soleus block's lowest eigenvalue and the gastrocnemii's ends."""
-    c10, k1, k2 = SETS["solver_default_2025"]
-    raw = column(mu=2 * c10, K=NU49 * 2 * c10, k1=k1, k2=k2, mode="unilateral", steps=LEVELS[:8] + [90.711])
+    raw = column(**published_law("solver_default_2025"), mode="unilateral", steps=LEVELS[:8] + [90.711])
     raw["contact"]["fade"] = "newton"
     run = _run(raw)
     pb = run.problem

@@ -74,7 +74,7 @@ def newton_cycle(history: list[float]) -> tuple[int, float, float] | None:
     earlier to ``CYCLE_TOL`` (period 1: |F| stalled), else None (Newton still moving)."""
     h = history
     for p in range(1, MAX_PERIOD + 1):
-        n = max(p + 2, 3)                       # one period and two more iterates compared
+        n = p + 2                               # one period and two more iterates compared
         if len(h) < n + p:
             break
         tail = h[-(n + p):]

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..physics.element3363 import SLOTS
 from .descent import ROUNDING, Backtracking, newton_step
-from .surface import closest_parameter, section_shift, shape_on_curve
+from .surface import InterfaceCurves, closest_parameter, section_shift, shape_on_curve
 
 #: a point whose closest point lies past an end of B's interface curve (the spline's end piece
 #: continues smoothly) keeps its full weight up to CURVE_OVERHANG of the curve's length beyond
@@ -109,6 +109,7 @@ class Projector:
         self.t_end = np.array([interfaces[k].curve_b.t_end for k in itf])
         self.flip = np.array([interfaces[k].flip_b for k in itf], dtype=bool)
         self._shift = [section_shift(i.b) for i in interfaces]
+        self._curves = InterfaceCurves([i.curve_b for i in interfaces], self._shift)
         # state (B element, ξ_B, t_B), started at the matching reference point
         self.eB = points.eB0.copy()
         self.xiB = points.xi.copy()
@@ -195,16 +196,7 @@ class Projector:
         """B's surface at (e_B, ξ_B, t_B): Y, Y_ζ (P,3,2), Y_ζζ (P,3,2,2), N_B, N_B,ζ, N_B,ζζ.
         ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
         P = len(eB)
-        S, S1, S2 = np.empty((P, 2)), np.empty((P, 2)), np.zeros((P, 2))
-        for k, inter in enumerate(self.interfaces):          # only the spline evaluations
-            sel = itf == k
-            if not np.any(sel):
-                continue
-            t = tB[sel]
-            S[sel] = inter.curve_b(t) + self._shift[k]
-            S1[sel] = inter.curve_b(t, 1)
-            if inter.curve_b.degree >= 2:
-                S2[sel] = inter.curve_b(t, 2)
+        S, S1, S2 = self._curves(itf, tB)                       # every interface's curve at once
         NB, NBz, NBzz = shape_on_curve(xiB, S, S1, S2)
         qB = x_of(eB)                                           # (P, 18, 3)
         Y = np.matmul(NB[:, None, :], qB)[:, 0]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..physics import element3363 as el
+from ..physics.bspline import SplineSet
 from ..physics.element3363 import SLOTS
 
 DDL = np.array([1.0, -2.0, 1.0])          # second ξ-derivatives of the Lagrange polynomials
@@ -19,6 +20,37 @@ def section_shift(beam) -> np.ndarray:
     sec = beam.section
     offset = np.asarray(sec.shape_params.get("offset", (0.0, 0.0)), dtype=float)
     return offset - sec.centroid
+
+
+class InterfaceCurves:
+    """S(t) + shift, S'(t) and S''(t) of several interface curves (one per interface) for points
+    on any of them, in one vectorised spline evaluation (``SplineSet``); each value is bitwise
+    the curve's own ``curve(t) + shift``, ``curve(t, 1)``, ``curve(t, 2)`` (0 below degree 2)."""
+
+    def __init__(self, curves: list, shifts: list):
+        self.shifts = np.array(shifts, dtype=float).reshape(len(curves), 2)
+        self.t_end = np.array([c.t_end for c in curves])
+        self.flipped = np.array([c.is_reversed for c in curves], dtype=bool)
+        self.slot = np.full((len(curves), 3), -1, dtype=np.int64)     # spline of (curve, nu)
+        splines = []
+        for k, c in enumerate(curves):
+            for nu in range(3 if c.degree >= 2 else 2):
+                self.slot[k, nu] = len(splines)
+                splines.append(c.bspline(nu))
+        self.set = SplineSet(splines)
+
+    def __call__(self, which: np.ndarray, t: np.ndarray):
+        """(S + shift, S', S'') (P, 2) each at parameters t of curves ``which`` (P,)."""
+        P = len(t)
+        x = np.where(self.flipped[which], self.t_end[which] - t, t)
+        has2 = self.slot[which, 2] >= 0
+        lanes = np.concatenate([self.slot[which, 0], self.slot[which, 1], self.slot[which[has2], 2]])
+        vals = self.set(lanes, np.concatenate([x, x, x[has2]]))
+        S = vals[:P] + self.shifts[which]
+        S1 = np.where(self.flipped[which][:, None], -vals[P:2 * P], vals[P:2 * P])
+        S2 = np.zeros((P, 2))
+        S2[has2] = vals[2 * P:]
+        return S, S1, S2
 
 
 def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray | None = None):

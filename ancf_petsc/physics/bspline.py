@@ -13,21 +13,38 @@ from __future__ import annotations
 import numpy as np
 
 
-def _basis(t: np.ndarray, k: int, x: np.ndarray, ell: np.ndarray) -> list[np.ndarray]:
-    """The k + 1 B-splines non-zero on [t_ell, t_ell+1), at x: scipy's ``_deBoor_D`` (m = 0),
-    operation for operation, over all points at once."""
-    h = [np.ones_like(x)] + [np.zeros_like(x) for _ in range(k)]
+def _basis(t: np.ndarray, k: np.ndarray | int, x: np.ndarray, ell: np.ndarray) -> np.ndarray:
+    """The k + 1 B-splines non-zero on [t_ell, t_ell+1) at x, (max k + 1, len(x)): scipy's
+    ``_deBoor_D`` (m = 0) operation for operation, one level of the recursion at a time over all
+    points and all j of the level.  ``k`` may differ per point (several splines' knots in one
+    ``t``): a point's rows past its own k stay as its recursion left them (zero)."""
+    k = np.broadcast_to(k, x.shape)
+    top = int(k.max(initial=0))
+    h = np.zeros((top + 1, len(x)))
+    h[0] = 1.0
+    last = len(t) - 1
     with np.errstate(divide="ignore", invalid="ignore"):
-        for j in range(1, k + 1):
-            hh = h[:j]
-            h = [np.zeros_like(x)] + h[1:]
-            for n in range(1, j + 1):
-                xb, xa = t[ell + n], t[ell + n - j]
-                same = xb == xa
-                w = hh[n - 1] / (xb - xa)
-                h[n - 1] = np.where(same, h[n - 1], h[n - 1] + w * (xb - x))
-                h[n] = np.where(same, 0.0, w * (x - xa))
+        for j in range(1, top + 1):
+            idx = np.minimum(ell + np.arange(1, j + 1)[:, None], last)     # (j, points)
+            xb, xa = t[idx], t[np.maximum(idx - j, 0)]
+            same = xb == xa
+            w = h[:j] / (xb - xa)
+            new = np.empty((j + 1, len(x)))
+            new[0] = 0.0
+            new[1:] = np.where(same, 0.0, w * (x - xa))                  # h[n] = w (x − x_a)
+            new[:j] = np.where(same, new[:j], new[:j] + w * (xb - x))    # h[n−1] += w (x_b − x)
+            h[:j + 1] = np.where(k >= j, new, h[:j + 1])
     return h
+
+
+def _combine(c: np.ndarray, k: np.ndarray | int, ell: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Σ_a c[ell − k + a] h_a (points, d), summed from a = 0 up as scipy does."""
+    k = np.broadcast_to(k, ell.shape)
+    out = np.zeros((len(ell), c.shape[1]))
+    for a in range(h.shape[0]):
+        term = out + c[np.minimum(np.maximum(ell - k + a, 0), len(c) - 1)] * h[a][:, None]
+        out = np.where((a <= k)[:, None], term, out)
+    return out
 
 
 class BSpline:
@@ -49,11 +66,7 @@ class BSpline:
         x = x.reshape(-1)
         nan = np.isnan(x)
         ell = self.interval(np.where(nan, self.t[self.k], x))
-        h = _basis(self.t, self.k, x, ell)
-        c = self.c.reshape(len(self.c), -1)
-        out = np.zeros((len(x), c.shape[1]))
-        for a in range(self.k + 1):
-            out = out + c[ell + a - self.k] * h[a][:, None]
+        out = _combine(self.c.reshape(len(self.c), -1), self.k, ell, _basis(self.t, self.k, x, ell))
         out[nan] = np.nan
         return out.reshape(shape + self.c.shape[1:])
 
@@ -92,9 +105,9 @@ def interpolating_spline(x: np.ndarray, y: np.ndarray, k: int) -> BSpline:
     nt = len(t) - k - 1
     spline = BSpline(t, np.zeros(0), k)
     ell = spline.interval(x)
-    rows = _basis(t, k, x, ell)
     ab = np.zeros((3 * k + 1, nt), order="F")
     j = np.arange(len(x))
+    rows = _basis(t, k, x, ell)
     for a in range(k + 1):
         clmn = ell - k + a
         ab[2 * k + j - clmn, clmn] = rows[a]
@@ -103,3 +116,39 @@ def interpolating_spline(x: np.ndarray, y: np.ndarray, k: int) -> BSpline:
     if info > 0:
         raise np.linalg.LinAlgError("Collocation matrix is singular.")
     return BSpline(t, np.ascontiguousarray(c.reshape((nt,) + y.shape[1:])), k)
+
+
+class SplineSet:
+    """Several splines evaluated in one vectorised pass (``__call__(which, x)``: point i on spline
+    ``which[i]``), each value bitwise equal to that spline's own: the contact projection's curves
+    and their derivatives, a few numpy calls per evaluation instead of several per curve."""
+
+    def __init__(self, splines: list[BSpline]):
+        self.splines = list(splines)
+        dims = {s.c.reshape(len(s.c), -1).shape[1] for s in self.splines}
+        if len(dims) != 1:
+            raise ValueError("the splines of a SplineSet must have values of one dimension")
+        self.t = np.concatenate([s.t for s in self.splines])
+        self.c = np.concatenate([s.c.reshape(len(s.c), -1) for s in self.splines])
+        self.t_start = np.cumsum([0] + [len(s.t) for s in self.splines])[:-1]
+        self.c_start = np.cumsum([0] + [len(s.c) for s in self.splines])[:-1]
+        self.k = np.array([s.k for s in self.splines])
+        self.n = np.array([len(s.t) - s.k - 1 for s in self.splines])
+        width = max(len(s.t) for s in self.splines)
+        self.knots = np.full((len(self.splines), width), np.inf)   # padded: ℓ by one comparison
+        for i, s in enumerate(self.splines):
+            self.knots[i, :len(s.t)] = s.t
+
+    def __call__(self, which: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Values (len(x), d) of splines ``which`` (indices) at x (NaN where x is NaN)."""
+        x = np.asarray(x, dtype=float)
+        nan = np.isnan(x)
+        xs = np.where(nan, 0.0, x)
+        k = self.k[which]
+        # BSpline.interval of each point's spline: the knots <= x, less one, within [k, n − 1]
+        ell = np.count_nonzero(self.knots[which] <= xs[:, None], axis=1) - 1
+        ell = np.minimum(np.maximum(ell, k), self.n[which] - 1)
+        out = _combine(self.c, k, ell + self.c_start[which],
+                       _basis(self.t, k, xs, ell + self.t_start[which]))
+        out[nan] = np.nan
+        return out

@@ -91,6 +91,14 @@ class SplineCurve:
             base._derivs[nu] = base._spline.derivative(nu)
         return np.asarray(base._derivs[nu](np.asarray(s, dtype=float)), dtype=float)
 
+    def bspline(self, nu: int = 0):
+        """The forward spline's nu-th derivative (``bspline.BSpline``, what ``__call__`` evaluates;
+        a reversed curve evaluates it at t_end − t, negated for odd nu)."""
+        base = self._base
+        if nu not in base._derivs:
+            base._derivs[nu] = base._spline.derivative(nu)
+        return base._derivs[nu]
+
     def _forward_deriv(self, s: np.ndarray) -> np.ndarray:
         return self._forward(s, 1)
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import make_interp_spline
 
-from ancf_petsc.physics.bspline import interpolating_spline
+from ancf_petsc.physics.bspline import SplineSet, interpolating_spline
 
 
 @pytest.mark.parametrize("k", [1, 2, 3, 5])
@@ -27,3 +27,19 @@ def test_bitwise_equal_to_scipy(k):
 def test_even_degrees_above_two_are_refused_like_scipy():
     with pytest.raises(ValueError, match="Odd degree"):
         interpolating_spline(np.arange(6.0), np.zeros((6, 2)), 4)
+
+
+def test_a_spline_set_gives_each_spline_its_own_values():
+    """Several splines of different degrees (a curve and its derivative splines) in one pass."""
+    rng = np.random.default_rng(7)
+    splines = []
+    for k in (3, 3, 1, 2):
+        x = np.cumsum(rng.random(9) + 0.01)
+        s = interpolating_spline(x, rng.standard_normal((9, 2)), k)
+        splines += [s] + [s.derivative(nu) for nu in range(1, k + 1)]
+    which = rng.integers(0, len(splines), 500)
+    xs = rng.uniform(-1.0, 6.0, 500)
+    xs[7] = np.nan
+    got = SplineSet(splines)(which, xs)
+    for i in range(len(xs)):
+        assert np.array_equal(got[i], splines[which[i]](xs[i]), equal_nan=True)

@@ -16,7 +16,8 @@ faster), so that the comparison holds while the shared machine's speed drifts:
   iteration; a ``sitecustomize`` hook on PYTHONPATH notes the time, nothing else changes);
 * kernel [M GP/s]: ``kernels.internal_force_and_tangent`` (residual + tangent) on 64 elements
   3363 of degree 6 × 3 axial points (84 per element: the paper's rule and section cubature),
-  neo-Hookean and GOH (fibres along the pretwisted lines, all in tension); best of 20 calls.
+  neo-Hookean and GOH (bench_kernel.py's ``block``: fibres along the pretwisted lines, all in
+  tension); best of 20 calls.
 
 Usage: OPENBLAS_NUM_THREADS=1 python scripts/bench_iteration.py [--rounds 7] \\
            [--baseline 38a07d3=/path/to/checkout ...] [--pin 1]
@@ -76,33 +77,24 @@ class _Finder(importlib.abc.MetaPathFinder):
 sys.meta_path.insert(0, _Finder())
 '''
 
-#: run by each checkout's own python: the kernel rate of neo-Hookean and GOH (bench_kernel's block)
+#: run by each checkout's own python (argv[1]: this checkout's bench_kernel.py, whose ``block``
+#: it takes): the kernel rate of neo-Hookean and GOH, if that checkout has GOH
 KERNEL = r'''
-import json, sys, time
+import ast, json, sys, time
 import numpy as np
 from ancf_petsc.physics import element3363 as el, kernels
 from ancf_petsc.physics.cubature import gauss_legendre
 from ancf_petsc.physics.geometry import reference_nodal_vectors
 from ancf_petsc.physics.materials import NeoHookean
 from ancf_petsc.physics.section import make_ellipse
-
-def block(n_el, degree, axial):
-    sec = make_ellipse((0.004, 0.0025), (0.003, 0.0), degree)
-    xa, wa = gauss_legendre(axial)
-    xi, y, z = el.tensor_points(xa, sec.points)
-    _, dN = el.shape_functions(xi, y, z)
-    wq = np.repeat(wa, len(sec.weights)) * np.tile(sec.weights, axial)
-    x = np.linspace(0.0, 0.07, 2 * n_el + 1)
-    q0 = reference_nodal_vectors(x, sec.centroid, 0.07, 45.0, (0.0, 0.0))
-    conn = np.stack([2 * np.arange(n_el), 2 * np.arange(n_el) + 1, 2 * np.arange(n_el) + 2], 1)
-    q0e = q0[conn].reshape(n_el, 18, 3)
-    G, det = el.reference_gradients(q0e, dN)
-    rng = np.random.default_rng(0)
-    scale = np.where(np.arange(18) % 6 == 0, x[2] - x[0], 1.0)[None, :, None]
-    qe = q0e * np.array([1.05, 1.0, 1.0]) + 1e-3 * rng.standard_normal(q0e.shape) * scale
-    xg = x[0:-1:2, None] + 0.5 * (xi[None, :] + 1.0) * (x[2] - x[0])
-    P = np.broadcast_to(sec.centroid + np.column_stack([y, z]), xg.shape + (2,)).reshape(-1, 2)
-    return qe, G, det * wq[None], xg, P, sec
+try:
+    from ancf_petsc.physics.fibres import fibre_directions
+    from ancf_petsc.physics.goh import GOH
+except ImportError:
+    GOH = None
+source = open(sys.argv[1]).read()
+node = next(n for n in ast.parse(source).body if isinstance(n, ast.FunctionDef) and n.name == "block")
+exec("from __future__ import annotations\n" + ast.get_source_segment(source, node))
 
 def rate(fn, n, repeat=20):
     fn()
@@ -113,16 +105,11 @@ def rate(fn, n, repeat=20):
         best = min(best, time.perf_counter() - t)
     return n / best / 1e6
 
-qe, G, w, xg, P, sec = block(64, 6, 3)
+qe, G, w = block(64, 6, 3)
 out = {"kernel_nh": rate(lambda: kernels.internal_force_and_tangent(qe, G, w, NeoHookean(1e6, 5e7)), w.size)}
-try:
-    from ancf_petsc.physics.fibres import fibre_directions
-    from ancf_petsc.physics.goh import GOH
-    a0 = fibre_directions(xg.ravel(), P, 0.07, 45.0, (0.0, 0.0), sec.centroid)
-    law = GOH(1e6, 5e7, 2e6, 5.0, 0.1).with_directions(a0.reshape((1,) + xg.shape + (3,)))
+if GOH is not None:
+    qe, G, w, law = block(64, 6, 3, GOH(1e6, 5e7, 2e6, 5.0, 0.1))
     out["kernel_goh"] = rate(lambda: kernels.internal_force_and_tangent(qe, G, w, law), w.size)
-except ImportError:
-    pass
 print(json.dumps(out))
 '''
 
@@ -160,7 +147,8 @@ def run_column(tree: str, hook_dir: str, pin: str | None) -> dict:
 
 
 def run_kernel(tree: str, pin: str | None) -> dict:
-    cmd = [os.path.join(tree, ".venv", "bin", "python"), "-c", KERNEL]
+    cmd = [os.path.join(tree, ".venv", "bin", "python"), "-c", KERNEL,
+           os.path.join(ROOT, "scripts", "bench_kernel.py")]
     if pin is not None:
         cmd = ["taskset", "-c", pin] + cmd
     proc = subprocess.run(cmd, env=child_env(), cwd=tree, capture_output=True, text=True)

@@ -5,12 +5,37 @@ builds (not-a-knot; the same collocation rows and LAPACK ``gbsv``), and ``BSplin
 with the same de Boor–Cox recursion and summation order as scipy's ``BSpline`` (its derivatives on
 the coefficients of ``splder``), vectorised over the points: the values are scipy's to the last
 bit (tests/physics/test_bspline.py).  Importing ``scipy.interpolate`` imports ``scipy.optimize``
-too, ~0.1 s of every run's start-up; evaluating one here costs a few numpy calls, not a Python
-loop per curve call.
+too, ~0.1 s of every run's start-up.  One spline is evaluated by scipy's compiled routine itself
+(``_bspl.evaluate_spline``, what ``scipy.interpolate.BSpline`` calls), loaded by its path without
+the package (``compiled``); ``SplineSet`` evaluates many splines in one vectorised recursion.
 """
 from __future__ import annotations
 
+import functools
+import importlib.machinery
+import importlib.util
+import os
+
 import numpy as np
+
+
+@functools.lru_cache(maxsize=1)
+def compiled():
+    """scipy's compiled B-spline module ``scipy.interpolate._bspl`` loaded by its path (not
+    through ``scipy.interpolate``), or None where there is none (then numpy evaluates)."""
+    try:
+        import scipy
+        folder = os.path.join(os.path.dirname(scipy.__file__), "interpolate")
+        for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+            path = os.path.join(folder, "_bspl" + suffix)
+            if os.path.exists(path):
+                spec = importlib.util.spec_from_file_location("scipy.interpolate._bspl", path)
+                module = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(module)
+                return module if hasattr(module, "evaluate_spline") else None
+    except (ImportError, OSError):
+        pass
+    return None
 
 
 def _basis(t: np.ndarray, k: np.ndarray | int, x: np.ndarray, ell: np.ndarray) -> np.ndarray:
@@ -64,9 +89,15 @@ class BSpline:
         x = np.asarray(x, dtype=float)
         shape = x.shape
         x = x.reshape(-1)
+        c = self.c.reshape(len(self.c), -1)
+        fast = compiled()
+        if fast is not None:                   # scipy's own loop over the points
+            out = np.empty((len(x), c.shape[1]))
+            fast.evaluate_spline(self.t, np.ascontiguousarray(c), self.k, np.ascontiguousarray(x), 0, True, out)
+            return out.reshape(shape + self.c.shape[1:])
         nan = np.isnan(x)
         ell = self.interval(np.where(nan, self.t[self.k], x))
-        out = _combine(self.c.reshape(len(self.c), -1), self.k, ell, _basis(self.t, self.k, x, ell))
+        out = _combine(c, self.k, ell, _basis(self.t, self.k, x, ell))
         out[nan] = np.nan
         return out.reshape(shape + self.c.shape[1:])
 

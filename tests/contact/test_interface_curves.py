@@ -4,6 +4,7 @@ sections use, inside the curve and past its ends (where the projection's fade wo
 import numpy as np
 import pytest
 
+from ancf_petsc.contact import surface
 from ancf_petsc.contact.surface import InterfaceCurves
 from ancf_petsc.physics.spline import SplineCurve
 
@@ -17,15 +18,21 @@ def _curves(rng):
     return out
 
 
+@pytest.mark.parametrize("per_curve", [True, False])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_one_pass_equals_each_curve(seed):
+def test_one_pass_equals_each_curve(seed, per_curve, monkeypatch):
+    """Per curve by scipy's compiled routine (few curves) or all at once (``SplineSet``)."""
+    if not per_curve:
+        monkeypatch.setattr(surface, "COMPILED_CURVES_MAX", 0)
     rng = np.random.default_rng(seed)
     curves = _curves(rng)
     shifts = [rng.standard_normal(2) for _ in curves]
     which = rng.integers(0, len(curves), 300)
     T = np.array([c.t_end for c in curves])[which]
     t = rng.uniform(-0.3, 1.3, 300) * T
-    S, S1, S2 = InterfaceCurves(curves, shifts)(which, t)
+    ic = InterfaceCurves(curves, shifts)
+    assert ic.per_curve == per_curve
+    S, S1, S2 = ic(which, t)
     for k, c in enumerate(curves):
         sel = which == k
         assert np.array_equal(S[sel], c(t[sel]) + shifts[k])

@@ -1,15 +1,27 @@
 """physics/bspline.py against scipy.interpolate (issue 40): the same knots, coefficients, values
 and derivative splines to the last bit, for every degree the sections use, inside and beyond
-the knots (extrapolation) and at NaN."""
+the knots (extrapolation) and at NaN; evaluated by scipy's compiled routine (loaded without
+scipy.interpolate) and by the numpy recursion that replaces it where it is absent."""
 import numpy as np
 import pytest
 from scipy.interpolate import make_interp_spline
 
+from ancf_petsc.physics import bspline
 from ancf_petsc.physics.bspline import SplineSet, interpolating_spline
 
 
+@pytest.fixture(params=["compiled", "numpy"])
+def evaluation(request, monkeypatch):
+    """Both ways of evaluating a spline: scipy's compiled routine and the numpy recursion."""
+    if request.param == "numpy":
+        monkeypatch.setattr(bspline, "compiled", lambda: None)
+    else:
+        assert bspline.compiled() is not None
+    return request.param
+
+
 @pytest.mark.parametrize("k", [1, 2, 3, 5])
-def test_bitwise_equal_to_scipy(k):
+def test_bitwise_equal_to_scipy(k, evaluation):
     rng = np.random.default_rng(k)
     for _ in range(40):
         m = int(rng.integers(k + 1, 25))

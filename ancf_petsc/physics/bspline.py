@@ -12,30 +12,17 @@ the package (``compiled``); ``SplineSet`` evaluates many splines in one vectoris
 from __future__ import annotations
 
 import functools
-import importlib.machinery
-import importlib.util
-import os
 
 import numpy as np
+
+from . import scipy_extension
 
 
 @functools.lru_cache(maxsize=1)
 def compiled():
-    """scipy's compiled B-spline module ``scipy.interpolate._bspl`` loaded by its path (not
-    through ``scipy.interpolate``), or None where there is none (then numpy evaluates)."""
-    try:
-        import scipy
-        folder = os.path.join(os.path.dirname(scipy.__file__), "interpolate")
-        for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-            path = os.path.join(folder, "_bspl" + suffix)
-            if os.path.exists(path):
-                spec = importlib.util.spec_from_file_location("scipy.interpolate._bspl", path)
-                module = importlib.util.module_from_spec(spec)
-                spec.loader.exec_module(module)
-                return module if hasattr(module, "evaluate_spline") else None
-    except (ImportError, OSError):
-        pass
-    return None
+    """scipy's compiled B-spline module ``scipy.interpolate._bspl`` (not through
+    ``scipy.interpolate``), or None where there is none (then numpy evaluates)."""
+    return scipy_extension.load("interpolate", "_bspl", "evaluate_spline")
 
 
 def _basis(t: np.ndarray, k: np.ndarray | int, x: np.ndarray, ell: np.ndarray) -> np.ndarray:

@@ -10,29 +10,16 @@ a scipy without that module (another layout or version) is used through ``scipy.
 from __future__ import annotations
 
 import functools
-import importlib.machinery
-import importlib.util
-import os
 
 import numpy as np
+
+from . import scipy_extension
 
 
 @functools.lru_cache(maxsize=1)
 def _fortran_module():
-    """scipy's compiled ``__nnls`` module loaded by path, or None where there is none."""
-    try:
-        import scipy
-        folder = os.path.join(os.path.dirname(scipy.__file__), "optimize")
-        for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-            path = os.path.join(folder, "__nnls" + suffix)
-            if os.path.exists(path):
-                spec = importlib.util.spec_from_file_location("scipy.optimize.__nnls", path)
-                module = importlib.util.module_from_spec(spec)
-                spec.loader.exec_module(module)
-                return module if hasattr(module, "nnls") else None
-    except (ImportError, OSError):
-        pass
-    return None
+    """scipy's compiled ``__nnls`` module (not through ``scipy.optimize``), or None."""
+    return scipy_extension.load("optimize", "__nnls", "nnls")
 
 
 def nnls(A: np.ndarray, b: np.ndarray, maxiter: int) -> tuple[np.ndarray, float]:

@@ -63,6 +63,17 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
 
 
 
+def projection_conditioning(pr) -> np.ndarray:
+    """det H / det a of every point (1 on B's surface, g = 0): how well its closest point is
+    determined; it falls towards 0 as the point lies a radius of curvature of B away from it
+    (H = a − g b singular) and is negative past that."""
+    T = pr.Yz
+    a = np.matmul(T.transpose(0, 2, 1), T)
+    b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
+    H = a - pr.g[:, None, None] * b
+    return np.linalg.det(H) / np.linalg.det(a)
+
+
 def _projection_parts(pr):
     """a, b, H⁻¹ and U, V (P, 2, 108) of the linearised projection H Δζ = (U + g V) Δq."""
     T = pr.Yz                                                        # (P, 3, 2)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .gap import closest_point_gradient, closest_point_hessian
+from .gap import closest_point_gradient, closest_point_hessian, projection_conditioning
 from .projection import end_weight_curvature, end_weight_slope, subset
 
 #: a change of a point's weight beyond this asks for another Newton solve (a weight off by 1e-6
@@ -67,7 +67,9 @@ def weight_derivatives(projector, pr, x_of=None) -> tuple[np.ndarray, np.ndarray
     last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
     args = (pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
     slope = end_weight_slope(*args)
-    band = np.flatnonzero(np.any(slope != 0.0, axis=1))
+    # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
+    # weight's derivatives there would be large and meaningless, so it counts as kept
+    band = np.flatnonzero(np.any(slope != 0.0, axis=1) & (projection_conditioning(pr) > WELL_POSED))
     grad = np.zeros((len(pr.idx), 108))
     if not len(band):
         return grad, band, None if x_of is None else np.zeros((0, 108, 108))
@@ -83,6 +85,10 @@ def weight_derivatives(projector, pr, x_of=None) -> tuple[np.ndarray, np.ndarray
     return grad, band, hess
 
 
+#: det H / det a below which a point's weight is not differentiated (``weight_derivatives``)
+WELL_POSED = 0.5
+
+
 class PointWeights:
     """The last updated weight of every contact point, with its checkpoint.  ``rule`` settle or
     newton (``contact.fade``); ``differentiated``: the evaluations take their partner places' own
@@ -96,12 +102,16 @@ class PointWeights:
 
     def effective(self, idx: np.ndarray, current: np.ndarray) -> np.ndarray:
         """The weights of the points ``idx`` in an evaluation whose partner places have the
-        weights ``current``: kept (settle, and newton's first solve of an increment): those that
-        were whole follow them, the others keep theirs (0 once their partner has left every fade
-        band); differentiated: ``current``."""
+        weights ``current``: differentiated: ``current``; newton's solve from rest: the kept
+        ones (constants: the tangent is exact for them, and Newton converges quadratically to the
+        kept weights' state, from which the next solve differentiates them); settle: those that
+        were whole follow them, the others keep theirs (0 once their partner has left every
+        fade band)."""
         if self.differentiated:
             return current
         kept = self.values[idx]
+        if self.rule == "newton":
+            return kept.copy()
         return np.where(kept < 1.0, kept * (current > 0.0), current)
 
     def refresh(self, idx: np.ndarray, current: np.ndarray) -> float:
@@ -124,10 +134,11 @@ class PointWeights:
 
     def begin_increment(self, from_rest: bool) -> None:
         """newton: differentiate the weights in the increment's solves, but for the first solve
-        from rest (the reference state: its first iterates are far from the answer, and points
-        sliding through far extrapolations of B's surface then wreck them: from rest on the
-        paper's unilateral tendon at 8 elements, ψ = 45°, the differentiated iterates met an
-        inverted element and cost a cut-back and 44 more Newton iterations)."""
+        from rest, which keeps them (the reference state: its first iterates are far from the
+        answer, and points sliding through far extrapolations of B's surface then wreck them:
+        from rest on the paper's unilateral tendon at 8 elements, ψ = 45°, the differentiated
+        iterates met an inverted element and cost a cut-back and 44 more Newton iterations; kept,
+        the level takes 11)."""
         self.differentiated = self.rule == "newton" and not from_rest
 
     def checkpoint(self) -> None:

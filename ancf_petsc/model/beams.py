@@ -113,6 +113,8 @@ class Model:
     geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
     warnings: list = field(default_factory=list)          # implausible sizes (plausibility.py)
     supports: list = field(default_factory=list)         # the boundary conditions (Support)
+    #: per beam, the section-mean weights m̄_k = ∫ m_k dA / A of its last node (elongations)
+    end_means: list = field(default_factory=list)
 
     @property
     def f_ext(self) -> np.ndarray:

@@ -256,5 +256,6 @@ def build_model(spec: ModelSpec) -> Model:
                        if p.vector == "mean" else np.eye(len(el.VECTORS))[el.VECTOR_INDEX[p.vector]])
               for p in spec.probes}
     warnings = size_warnings(spec, beams) + point_force_warnings(spec, beams)
+    end_means = [_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[-1]) for b in beams]
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,
-                 geometry_report=report, warnings=warnings, supports=supports)
+                 geometry_report=report, warnings=warnings, supports=supports, end_means=end_means)

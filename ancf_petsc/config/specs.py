@@ -23,10 +23,17 @@ TWIST_RULES = ("centroid", "origin", "junction")
 #: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
 REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
                         "smoothing")
+#: named supports → fixed (vector, component) pairs, vectors in VECTORS order (r, r_y, r_z, r_yy,
+#: r_zz, r_yz), components 0, 1, 2 = x, y, z (README.md, "Fix presets", says what each means)
 FIX_PRESETS = {
+    # a built-in end: all 18 components (the solid's u = 0 over the root face)
     "clamped": [(v, c) for v in range(6) for c in range(3)],
-    # the paper's "r fixed, cross-section free to contract": all but r_y·e_y and r_z·e_z
+    # the paper's "r fixed, cross-section free to contract": all but r_y·e_y and r_z·e_z, so the
+    # section's in-plane shear (r_y·e_z, r_z·e_y) and its quadratic modes are clamped too
     "reduced": [(v, c) for v in range(6) for c in range(3) if (v, c) not in ((1, 1), (2, 2))],
+    # a root face on a frictionless plane x = const (the solid's u_x = 0 over the face, free in
+    # its plane): every x-component, r itself, and r_y·e_z (the section's rigid turn about x)
+    "plane": [(0, 0), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (3, 0), (4, 0), (5, 0)],
 }
 
 

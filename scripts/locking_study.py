@@ -38,8 +38,11 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
-import verify_solid as vs  # noqa: E402
-import verify_solid_fibres as vsf  # noqa: E402
+from ancf_verify.bars.cases import CASES, Case, ancf_config  # noqa: E402
+from ancf_verify.fibres.beams import run_ancf  # noqa: E402
+from ancf_verify.fibres.cases import ANCF, ANCF_MIXED, LAWS, case_key, make_case  # noqa: E402
+from ancf_verify.fibres.report import read_csv, runs_of  # noqa: E402
+from ancf_verify.stack import SolidError  # noqa: E402
 
 CONFIGS = os.path.join(ROOT, "configs")
 #: pressure spaces per station, as columns of the complete quadratic basis (1, y, z, y², yz, z²)
@@ -87,8 +90,8 @@ def solid_refs() -> dict:
         return {r["case"]: np.array([float(r[f"ref_u{c}_m"]) for c in "xyz"]) for r in csv.DictReader(fh)}
 
 
-def bar(case: vs.Case, elements: int, locking: str, tmp: str) -> dict:
-    raw = vs.ancf_config(case, elements, 2, os.path.join(tmp, f"{case.key}_{elements}_{locking}"))
+def bar(case: Case, elements: int, locking: str, tmp: str) -> dict:
+    raw = ancf_config(case, elements, 2, os.path.join(tmp, f"{case.key}_{elements}_{locking}"))
     raw["beams"][0]["locking"] = locking
     return solve(raw)
 
@@ -101,23 +104,23 @@ def _err(s: dict, ref: np.ndarray) -> str:
 
 
 def space() -> None:
-    fib = vsf.runs_of(vsf.read_csv(os.path.join(ROOT, "docs", "solid_fibres.csv")))
+    fib = runs_of(read_csv(os.path.join(ROOT, "docs", "solid_fibres.csv")))
     refs = solid_refs()
-    cases = {c.key: c for c in vs.CASES}
+    cases = {c.key: c for c in CASES}
     print("| pressure space per station | " + " | ".join(f"{law.key}, K/μ = 50, 16 el.: rotation / solid − 1"
-                                                          for law in vsf.LAWS)
+                                                          for law in LAWS)
           + " | tension, 8 el.: u error (signed) | bending, 8 el.: u error (signed) |")
-    print("|---|" + "---:|" * (len(vsf.LAWS) + 2))
+    print("|---|" + "---:|" * (len(LAWS) + 2))
     with tempfile.TemporaryDirectory() as tmp:
         for lock, name in [("none", None)] + [("mixed", n) for n in SPACES]:
             cells = []
             with pressure_space(name) if name else contextlib.nullcontext():
-                for law in vsf.LAWS:
-                    c = fib[vsf.case_key(law.key, 50.0)]
+                for law in LAWS:
+                    c = fib[case_key(law.key, 50.0)]
                     try:
-                        r = vsf.run_ancf(vsf.make_case(law, 50.0), 16, tmp, vsf.ANCF if name is None else vsf.ANCF_MIXED)
+                        r = run_ancf(make_case(law, 50.0), 16, tmp, ANCF if name is None else ANCF_MIXED)
                         cells.append(f"{100 * (r['rot'] / c['ref_rot'] - 1):+.2f} %")
-                    except vs.SolidError:
+                    except SolidError:
                         cells.append("fails")
                 for key in ("tension", "bending"):
                     cells.append(_err(bar(cases[key], 8, lock, tmp), refs[key]))
@@ -129,7 +132,7 @@ def solids() -> None:
     refs = solid_refs()
     print("| case | locking | 2 el. | 4 el. | 8 el. | 16 el. |\n|---|---|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
-        for case in vs.CASES:
+        for case in CASES:
             for lock in ("none", "mixed"):
                 print(f"| {case.key} | {lock} | " + " | ".join(_err(bar(case, n, lock, tmp), refs[case.key])
                                                           for n in (2, 4, 8, 16)) + " |", flush=True)

@@ -40,4 +40,4 @@ fi
 # byte-compile the package (what a non-editable install does): with PYTHONDONTWRITEBYTECODE set,
 # as on CI, Python would otherwise compile every module at every start (90 ms of an Achilles
 # column); quick when nothing changed, and a stale .pyc is ignored by Python, never used
-.venv/bin/python -m compileall -q ancf_petsc apps >/dev/null
+.venv/bin/python -m compileall -q ancf_petsc ancf_verify apps >/dev/null

@@ -69,6 +69,9 @@ class BeamSpec:
     axial_points: int = DEFAULT_AXIAL_POINTS
     element: str = DEFAULT_ELEMENT        # element type, see element3363.ELEMENTS
     locking: str = "none"                 # 'ecm' (Poisson), 'mixed' (volumetric): remedies, model.Beam.parts
+    #: the volumetric term on a section rule of this degree (selective reduced integration, a
+    #: locking diagnosis of ancf_verify.fibres; set in code, no config key): model.Beam.volumetric_degree
+    volumetric_degree: int | None = None
 
 
 @dataclass
@@ -112,6 +115,9 @@ class TangentialSpec:
     # their neighbours (merge, as the normal ones: unique root multipliers) or kept
     # (contact/multipliers.py fold_tangential; docs/interface.md Limits)
     supported_ends: str = "merge"
+    #: Coulomb: no friction on the tangential functions centred below this reference x [m] (a
+    #: diagnostic of the clamped roots, set in code, no config key: ancf_verify.friction.beams)
+    free_zone: float = 0.0
 
 
 @dataclass
@@ -126,6 +132,10 @@ class ContactSpec:
     # (axial_points − 1), linear across (1): docs/contact.md, "Which pressure space"
     projection: tuple[int, int] = (2, 1)
     per_element: bool = False             # pressure discontinuous between A elements
+    # the axial pressure functions span groups of this many A elements: the space of a coarser
+    # mesh on this one's displacements (a diagnosis, set in code: no config key;
+    # ancf_verify/studies/contact_variants.py)
+    group: int = 1
     # the end functions at supported ends (both bodies clamped): folded into their neighbours
     # (merge) or kept (docs/contact.md, "Supported ends")
     supported_ends: str = "merge"

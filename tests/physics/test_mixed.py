@@ -159,13 +159,11 @@ def test_the_solid_comparison_bars_stay_within_1_percent(tmp_path, case):
     ``locking: mixed``: the end-centroid displacement within 1 % of the committed converged solid
     answer (docs/solid_comparison.csv; docs/locking.md has every element count)."""
     import csv
-    import sys
+    from ancf_verify.bars.cases import CASES, ancf_config   # the bars' ANCF configs (no dolfinx)
     from helpers import ROOT
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
-    import verify_solid as vs        # the bars' ANCF configs (no dolfinx needed for them)
     with open(os.path.join(ROOT, "docs", "solid_comparison.csv"), newline="") as fh:
         ref = next(np.array([float(r[f"ref_u{c}_m"]) for c in "xyz"]) for r in csv.DictReader(fh) if r["case"] == case)
-    raw = vs.ancf_config(next(c for c in vs.CASES if c.key == case), 8, 2, str(tmp_path))
+    raw = ancf_config(next(c for c in CASES if c.key == case), 8, 2, str(tmp_path))
     raw["beams"][0]["locking"] = "mixed"
     u = np.array(run_inline(raw, tmp_path)["steps"][-1]["probes"]["tip"]["displacement"])
     assert np.linalg.norm(u - ref) < 0.01 * np.linalg.norm(ref)

@@ -72,6 +72,8 @@ class BeamSpec:
     #: the volumetric term on a section rule of this degree (selective reduced integration, a
     #: locking diagnosis of ancf_verify.fibres; set in code, no config key): model.Beam.volumetric_degree
     volumetric_degree: int | None = None
+    #: ``locking: mixed`` on other pressure columns (set in code, no config key): model.Beam.pressure_columns
+    pressure_columns: tuple | None = None
 
 
 @dataclass

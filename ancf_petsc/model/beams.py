@@ -16,7 +16,7 @@ from ..physics.cubature import ellipse_rule, gauss_legendre
 from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.goh import GOH
 from ..physics.materials import NeoHookean
-from ..physics.mixed import ProjectedDilatation, pressure_basis
+from ..physics.mixed import ProjectedDilatation, grouped_basis, pressure_basis
 from ..physics.section import Section
 
 
@@ -49,6 +49,10 @@ class Beam:
     #: selective reduced integration of the volumetric term (a locking diagnosis, set in code,
     #: no config key: BeamSpec.volumetric_degree): the section rule's degree, None = the full rule
     volumetric_degree: int | None = None
+    #: ``locking: mixed`` on another pressure space per station: groups of columns of the complete
+    #: quadratic basis (physics/mixed.py grouped_basis; a diagnosis, set in code, no config key:
+    #: BeamSpec.pressure_columns); None: {1, y, z}
+    pressure_columns: tuple | None = None
 
     @property
     def vectors(self) -> tuple[int, ...]:
@@ -75,7 +79,9 @@ class Beam:
             return self._selective_parts()
         mat = self._bound(self.material, self.fibres)
         if self.locking == "mixed":
-            return [(self.dN, self.wq, ProjectedDilatation(mat, pressure_basis(self.yz, self.wq, self.axial_points)))]
+            basis = pressure_basis(self.yz, self.wq, self.axial_points) if self.pressure_columns is None \
+                else grouped_basis(self.yz, self.wq, self.axial_points, self.pressure_columns)
+            return [(self.dN, self.wq, ProjectedDilatation(mat, basis))]
         on_axis = self._bound(self.material, self.fibres_axis)
         if self.locking == "ecm":
             free = self.material.poisson_free()

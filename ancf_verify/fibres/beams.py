@@ -12,12 +12,14 @@ from ancf_verify.paths import CONFIGS
 from ancf_verify.stack import SolidError
 
 
-def run_ancf(case: Case, elements: int, tmp: str, model: str = ANCF, load: str = "traction_force") -> dict:
+def run_ancf(case: Case, elements: int, tmp: str, model: str = ANCF, load: str = "traction_force",
+             pressure_columns: tuple | None = None) -> dict:
     """ANCF 3363, 2 axial Gauss points: end-centroid displacement and end-section rotation at
     every level; at the last, the rotation at the stations and the volumetric energy share
     (``model`` ANCF_VOL: the volumetric term on the section rule of degree VOLUMETRIC_DEGREE,
     ``BeamSpec.volumetric_degree``, a locking diagnosis, no share; ANCF_MIXED: ``locking: mixed``).
-    ``load``: the end load's config key, ``traction_force`` (the solid's) or ``force`` (on r)."""
+    ``load``: the end load's config key, ``traction_force`` (the solid's) or ``force`` (on r);
+    ``pressure_columns``: ANCF_MIXED's pressure space (``BeamSpec.pressure_columns``)."""
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
@@ -30,6 +32,7 @@ def run_ancf(case: Case, elements: int, tmp: str, model: str = ANCF, load: str =
     spec = parse_config(raw, base_dir=CONFIGS)
     if model == ANCF_VOL:
         spec.beams[0].volumetric_degree = VOLUMETRIC_DEGREE
+    spec.beams[0].pressure_columns = pressure_columns
     res = run_model(spec, log=lambda *_: None)
     wall = time.perf_counter() - t0
     if res.status != "completed":

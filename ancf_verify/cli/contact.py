@@ -64,7 +64,7 @@ from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_cs
     selftest_rows, solid_rows, write_csv)
 from ancf_verify.contact.selftest import selftest
 from ancf_verify.contact.solid import run_solid
-from ancf_verify.contact.tendon import SOURCE, ContactError, tendon_sections
+from ancf_verify.contact.tendon import ContactError, tendon_sections, use_source
 from ancf_verify.paths import ROOT
 from ancf_verify.stack import import_stack
 
@@ -97,12 +97,7 @@ def main(argv=None) -> int:
     ap.add_argument("--merge", action="store_true",
                     help="keep the rows of the existing CSV that this run does not redo")
     args = ap.parse_args(argv)
-    SOURCE.label = args.ancf_label
-    if args.ancf_src:
-        if "ancf_petsc" in sys.modules:
-            raise ContactError("--ancf-src: ancf_petsc is imported already")
-        sys.path.insert(0, os.path.abspath(args.ancf_src))
-        SOURCE.configs = os.path.join(os.path.abspath(args.ancf_src), "configs")
+    use_source(args.ancf_src, args.ancf_label)
     csv_path = os.path.join(args.out, "solid_contact.csv")
     md_path = os.path.join(args.out, "solid_contact.md")
     png_path = os.path.join(args.out, "figures", "solid_contact.png")

@@ -11,7 +11,6 @@ from ancf_verify.contact.interface import Interface
 from ancf_verify.contact.tendon import ContactError
 
 
-
 class ContactBodies:
     """Hyperelastic bodies (one dolfinx mesh, one μ, K per cell tag) with Dirichlet faces, dead end
     tractions and frictionless contact interfaces enforced by Lagrange multipliers.

@@ -1,6 +1,8 @@
 """The three-subtendon Achilles tendon of the contact comparison: names, material, loads, beam config."""
 from __future__ import annotations
 
+import os
+import sys
 import tempfile
 from dataclasses import dataclass
 
@@ -30,7 +32,6 @@ INTERFACES = (("mg_sol", 1, 0), ("lg_sol", 2, 0), ("lg_mg", 1, 2))
 SECTIONS_FILE = "data/achilles_type3_sections.yaml"
 
 
-
 @dataclass
 class AncfSource:
     """Where ancf_petsc and its configs/ come from (``--ancf-src``: an export of another commit,
@@ -39,12 +40,23 @@ class AncfSource:
     label: str = "the working tree"
 
 
-#: the source of the ANCF columns of this process
+#: the source of the ANCF columns of this process (``use_source`` changes it)
 SOURCE = AncfSource()
 
 
 class ContactError(SolidError):
     """A failed solve or a broken setup (one line, exit status 1)."""
+
+
+def use_source(src: str, label: str) -> None:
+    """Import ancf_petsc (and read configs/) from the directory ``src`` ('' : this checkout),
+    recorded in the CSV as ``label``; before ancf_petsc is first imported."""
+    SOURCE.label = label
+    if src:
+        if "ancf_petsc" in sys.modules:
+            raise ContactError("--ancf-src: ancf_petsc is imported already")
+        sys.path.insert(0, os.path.abspath(src))
+        SOURCE.configs = os.path.join(os.path.abspath(src), "configs")
 
 
 # ============================================================================================

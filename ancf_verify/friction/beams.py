@@ -10,8 +10,6 @@ from ancf_verify.contact.tendon import INTERFACES, NAMES, SHORT, SOURCE, tendon_
 from ancf_verify.friction.rows import SPACES, ZONE
 
 
-
-
 IFACES = [n for n, _, _ in INTERFACES]
 
 

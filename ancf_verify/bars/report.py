@@ -134,6 +134,12 @@ def plot(path: str, results: dict) -> None:
 
 def replot(csv_path: str, png: str) -> None:
     """Redraw the figure from a solid_comparison.csv (no dolfinx needed)."""
+    plot(png, results_of_csv(csv_path))
+
+
+def results_of_csv(csv_path: str) -> dict:
+    """{case: (case key, rows, reference u, uncertainty, how, goal)} from a solid_comparison.csv,
+    the shape ``plot`` and ``summary_table`` take (no dolfinx needed)."""
     results: dict = {}
     with open(csv_path, newline="") as fh:
         for d in csv.DictReader(fh):
@@ -149,7 +155,7 @@ def replot(csv_path: str, png: str) -> None:
     for key, (case, rows, ref, unc, how, _) in results.items():
         finest = any(r["model"] == "solid P2 tet" and r["err"] <= 1e-12 for r in rows)
         results[key] = (case, rows, ref, unc, "finest mesh" if finest else how, goal(rows))
-    plot(png, results)
+    return results
 
 
 def summary_table(results: dict) -> list[str]:

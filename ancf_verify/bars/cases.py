@@ -32,6 +32,7 @@ class Case:
     twist_axis: tuple = (0.0, 0.0)
     steps: tuple = (0.25, 0.5, 0.75, 1.0)
     notes: list = field(default_factory=list)
+    root: str = "clamped"        # the root's support, solid and beam alike (ancf_verify.roots)
 
 
 def geometric(h0: float, n: int, r: float = math.sqrt(2.0)) -> tuple:
@@ -62,14 +63,15 @@ CASES = [
 
 
 def ancf_config(case: Case, elements: int, axial_points: int, out_dir: str) -> dict:
-    """The raw ANCF config of ``case`` (one beam, clamped first node, end traction, tip probe)."""
+    """The raw ANCF config of ``case`` (one beam, its root's preset at the first node, end
+    traction, tip probe)."""
     return {"name": f"{case.key}_e{elements}_a{axial_points}",
             "geometry": {"length": case.length, "twist_deg": case.twist_deg,
                          "twist_axis": list(case.twist_axis)},
             "beams": [{"name": "bar", "section": copy.deepcopy(case.section),
                        "material": {"model": "neo-hookean", **case.material},
                        "elements": elements, "axial_points": axial_points}],
-            "boundary_conditions": [{"beam": "bar", "node": "first", "fix": "clamped"}],
+            "boundary_conditions": [{"beam": "bar", "node": "first", "fix": case.root}],
             "loads": [{"beam": "bar", "node": "last", "traction_force": list(case.force)}],
             "steps": list(case.steps),
             "probes": [{"name": "tip", "beam": "bar", "node": "last"}],

@@ -9,6 +9,7 @@ import numpy as np
 from ancf_verify.bars.cases import Case
 from ancf_verify.bars.mesh import solid_mesh
 from ancf_verify.newton import Newton
+from ancf_verify.roots import root_conditions
 from ancf_verify.stack import SolidError
 
 
@@ -24,9 +25,10 @@ def neo_hookean(case: Case, msh, F):
 
 
 def solve_solid(case: Case, sec, msh, quad_degree: int = 2, energy=neo_hookean, post=None) -> dict:
-    """Clamped root, dead end traction F/A, energy density ``energy(case, msh, F)`` (default
-    neo-Hookean); load levels as the ANCF run (with cut-backs).  Returns the end-centroid
-    displacement, DOFs and Newton iterations, and what ``post(u, ds(end face))`` adds."""
+    """The case's root (clamped or plane, ancf_verify.roots), dead end traction F/A, energy
+    density ``energy(case, msh, F)`` (default neo-Hookean); load levels as the ANCF run (with
+    cut-backs).  Returns the end-centroid displacement, DOFs and Newton iterations, and what
+    ``post(u, ds(end face))`` adds."""
     import ufl
     from petsc4py import PETSc
     from dolfinx import fem, geometry, mesh as dmesh
@@ -40,7 +42,7 @@ def solve_solid(case: Case, sec, msh, quad_degree: int = 2, energy=neo_hookean, 
     if len(root) == 0 or len(tip) == 0:
         raise SolidError(f"solid {case.key}: end faces not found")
     tags = dmesh.meshtags(msh, 2, tip, np.full(len(tip), 2, dtype=np.int32))
-    bc = fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), fem.locate_dofs_topological(V, 2, root), V)
+    bcs = root_conditions(V, msh, root, case.root)
     t = fem.Constant(msh, np.zeros(3, dtype=PETSc.ScalarType))
     psi = energy(case, msh, ufl.Identity(3) + ufl.grad(u))
     md = {"quadrature_degree": quad_degree}
@@ -52,7 +54,7 @@ def solve_solid(case: Case, sec, msh, quad_degree: int = 2, energy=neo_hookean, 
     residual = ufl.derivative(potential, u, v)
     E_form, F_form = fem.form(potential), fem.form(residual)
     J_form = fem.form(ufl.derivative(residual, u, du))
-    newton = Newton(u, [bc], E_form, F_form, J_form, rtol=1e-9,
+    newton = Newton(u, bcs, E_form, F_form, J_form, rtol=1e-9,
                     atol=1e-11 * float(np.linalg.norm(case.force)))
     # end-face centroid in the reference configuration: a + R(psi)(c - a)
     from ancf_petsc.physics.geometry import place

@@ -66,6 +66,7 @@ from ancf_verify.contact.selftest import selftest
 from ancf_verify.contact.solid import run_solid
 from ancf_verify.contact.tendon import ContactError, tendon_sections, use_source
 from ancf_verify.paths import ROOT
+from ancf_verify.roots import ROOTS
 from ancf_verify.stack import import_stack
 
 
@@ -94,6 +95,9 @@ def main(argv=None) -> int:
                     help="import ancf_petsc (and read configs/) from this directory, e.g. an export of a commit")
     ap.add_argument("--ancf-label", default="the working tree", help="what --ancf-src is (recorded in the CSV)")
     ap.add_argument("--no-solid", action="store_true", help="only the ANCF columns (with --merge)")
+    ap.add_argument("--root", default="clamped", choices=ROOTS,
+                    help="the roots of solid and beams: clamped (u = 0; fix: clamped) or plane (u_x = 0, "
+                         "free in the plane; fix: plane); with plane write to another --out")
     ap.add_argument("--merge", action="store_true",
                     help="keep the rows of the existing CSV that this run does not redo")
     args = ap.parse_args(argv)
@@ -150,7 +154,7 @@ def main(argv=None) -> int:
     free_psis = [float(p) for p in args.free_psi.split(",") if p.strip()]
     if args.quick:
         hs, elements = [3e-3, 2e-3], [e for e in elements if e <= 4] or [2]
-    kw = {"rule_points": args.rule_points}
+    kw = {"rule_points": args.rule_points, "root": args.root}
     rows: list = []
     meta = {"argv": " ".join(sys.argv[1:]), "h": hs, "rule_points": args.rule_points}
     runs_done = {}
@@ -184,7 +188,7 @@ def main(argv=None) -> int:
                     save()
             for law in ([None] if free else []) + laws:
                 for ne in elements:
-                    a = run_ancf(psi, law, ne, tmp)
+                    a = run_ancf(psi, law, ne, tmp, args.root)
                     print(f"[ancf] psi {psi:g}, {law or 'free'}, {ne} el.: "
                           + (f"soleus u_x(400 N) {1e3 * a['levels'][-1]['u']['soleus'][0]:.5f} mm, "
                              f"{a['wall']:.1f} s" if a["ok"] else f"FAILED ({a['msg']})"), flush=True)

@@ -12,15 +12,16 @@ from ancf_verify.contact.tendon import NAMES, SHORT, SOURCE, tendon_config
 # ============================================================================================
 # ANCF runs
 # ============================================================================================
-def run_ancf(psi: float, mode: str | None, elements: int, tmp: str) -> dict:
-    """One ANCF column in-process; per load the x-displacement of r at each last node."""
+def run_ancf(psi: float, mode: str | None, elements: int, tmp: str, root: str = "clamped") -> dict:
+    """One ANCF column in-process (roots: the preset ``root``); per load the x-displacement of r
+    at each last node."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     beams = NAMES if mode else NAMES[:1]
-    out = os.path.join(tmp, f"ancf_{psi:g}_{mode or 'free'}_{elements}")
+    out = os.path.join(tmp, f"ancf_{psi:g}_{mode or 'free'}_{elements}_{root}")
     t0 = time.perf_counter()
     try:
-        spec = parse_config(tendon_config(psi, elements, mode, out, beams), base_dir=SOURCE.configs)
+        spec = parse_config(tendon_config(psi, elements, mode, out, beams, root), base_dir=SOURCE.configs)
         res = run_model(spec, log=lambda *_: None)
         status, message, s = res.status, res.message, res.summary
     except Exception as exc:   # record and go on

@@ -9,13 +9,14 @@ import scipy.sparse as sp
 from ancf_verify.contact.faces import Faces
 from ancf_verify.contact.interface import Interface
 from ancf_verify.contact.tendon import ContactError
+from ancf_verify.roots import root_conditions
 
 
 class ContactBodies:
     """Hyperelastic bodies (one dolfinx mesh, one μ, K per cell tag) with Dirichlet faces, dead end
     tractions and frictionless contact interfaces enforced by Lagrange multipliers.
 
-    dirichlet: [(facet tag, components)]; tractions: {facet tag: total force per unit load
+    dirichlet: [(facet tag, components or a root name of ancf_verify.roots)]; tractions: {facet tag: total force per unit load
     factor (3,)}; interfaces: [(name, slave facet tag, master facet tag)]; law: None, 'sliding'
     or 'unilateral'."""
     #: the factorisation of the Newton matrix (MUMPS): LDLᵀ of the symmetric saddle-point system
@@ -48,7 +49,9 @@ class ContactBodies:
             facets = ft.indices[ft.values == tag]
             if len(facets) == 0:
                 raise ContactError(f"no facets with Dirichlet tag {tag}")
-            if tuple(comps) == (0, 1, 2):
+            if isinstance(comps, str):          # a named root support (ancf_verify.roots)
+                bcs += root_conditions(V, msh, facets, comps)
+            elif tuple(comps) == (0, 1, 2):
                 bcs.append(fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType),
                                            fem.locate_dofs_topological(V, 2, facets), V))
             else:

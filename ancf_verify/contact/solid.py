@@ -21,15 +21,16 @@ def centroid_points(secs, psi: float, bodies=(0, 1, 2)) -> np.ndarray:
 
 
 def tendon_problem(secs, psi: float, h: float, law: str | None, bodies=(0, 1, 2), loads_on=(0,),
-                   layered: bool = True, problem_class=None, **kw):
-    """Mesh (timed) and Problem of the tendon: clamped roots, end traction 1 N x load factor on
+                   layered: bool = True, problem_class=None, root: str = "clamped", **kw):
+    """Mesh (timed) and Problem of the tendon: roots ``root`` (clamped or plane:
+    ancf_verify.roots), end traction 1 N x load factor on
     the end faces of ``loads_on``, contact on the interfaces between the chosen bodies
     (``problem_class``: a Problem subclass taking the same arguments, e.g. with friction)."""
     t0 = time.perf_counter()
     msh, ct, ft = tendon_mesh(secs, h, psi, bodies, layered)
     t_mesh = time.perf_counter() - t0
     mats = {b + 1: (MU[b], KBULK) for b in bodies}
-    dirich = [(10 + b, (0, 1, 2)) for b in bodies]
+    dirich = [(10 + b, root) for b in bodies]
     tr = {20 + b: (1.0, 0.0, 0.0) for b in loads_on}
     ifs = []
     if law:

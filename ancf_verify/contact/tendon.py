@@ -62,9 +62,11 @@ def use_source(src: str, label: str) -> None:
 # ============================================================================================
 # Geometry and meshes
 # ============================================================================================
-def tendon_config(psi: float, elements: int, mode: str | None, out_dir: str, beams=NAMES) -> dict:
-    """The raw ANCF config: clamped first nodes, traction_force 1 N (load factors = newtons) at the
-    soleus' last node, 2 axial points, contact ``mode`` (None: none), probes at the last nodes."""
+def tendon_config(psi: float, elements: int, mode: str | None, out_dir: str, beams=NAMES,
+                  root: str = "clamped") -> dict:
+    """The raw ANCF config: first nodes fixed by the preset ``root`` (clamped or plane, as the
+    solid's roots: ancf_verify.roots), traction_force 1 N (load factors = newtons) at the soleus'
+    last node, 2 axial points, contact ``mode`` (None: none), probes at the last nodes."""
     raw = {"name": f"type3_psi{psi:g}_e{elements}_{mode or 'free'}",
            "geometry": {"length": LENGTH, "twist_deg": float(psi), "twist_axis": list(AXIS)},
            "beams": [{"name": n, "section": {"shape": "outline", "file": SECTIONS_FILE, "loop": n,
@@ -72,7 +74,7 @@ def tendon_config(psi: float, elements: int, mode: str | None, out_dir: str, bea
                       "material": {"model": "neo-hookean", "mu": MU[NAMES.index(n)],
                                    "bulk_modulus": KBULK},
                       "elements": elements, "axial_points": 2} for n in beams],
-           "boundary_conditions": [{"beam": n, "node": "first", "fix": "clamped"} for n in beams],
+           "boundary_conditions": [{"beam": n, "node": "first", "fix": root} for n in beams],
            "loads": [{"beam": "soleus", "node": "last", "traction_force": [1.0, 0.0, 0.0]}],
            "steps": [float(f) for f in LOADS],
            "probes": [{"name": n, "beam": n, "node": "last"} for n in beams],

@@ -142,9 +142,10 @@ class ContactSpec:
     # (merge) or kept (docs/contact.md, "Supported ends")
     supported_ends: str = "merge"
     scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
-    # the fade weights of points past B's ends: settled between Newton solves, or differentiated
-    # inside them (Newton on the state and the weights together; contact/weights.py)
-    fade: str = "settle"
+    # the fade weights of points past B's ends: differentiated inside Newton's iteration (newton,
+    # the default without a tangential law) or settled between solves (settle, the default with
+    # one; contact/weights.py)
+    fade: str = "newton"
     tangential: TangentialSpec | None = None   # interface shear (None: frictionless)
 
 
@@ -210,3 +211,4 @@ class ModelSpec:
     sections: Any = None                   # geometry.sections (config.sections.SectionsSpec)
     twist_rule: tuple = ("point",)         # twist-axis rule (model.build.resolve_twist_axis); twist_axis then
     twist_default: bool = False            # holds the resolved point; True: the rule was not given
+    history: Any = None                    # history: (config.history.HistorySpec): loads over frames

@@ -44,19 +44,25 @@ def bars(docs: str = DOCS) -> list[Reference]:
     return out
 
 
-def contact(docs: str = DOCS) -> list[Reference]:
-    """docs/solid_contact.csv: the soleus elongation of the three subtendons (worst over the loads)."""
+def contact(docs: str = DOCS, name: str = "solid_contact.csv", roots: str = "clamped") -> list[Reference]:
+    """docs/solid_contact.csv: the soleus elongation of the three subtendons (worst over the loads);
+    ``name``, ``roots``: another CSV of the same study and its roots (solid_contact_plane.csv)."""
     from ancf_verify.contact.rows import REF, ancf_errors, num, read_csv
-    rows = read_csv(os.path.join(docs, "solid_contact.csv"))
+    rows = read_csv(os.path.join(docs, name))
     errs = ancf_errors(rows)
     out = []
     for psi, law in dict.fromkeys((r["psi_deg"], r["law"]) for r in rows if r["model"] == REF):
         refs = [r for r in rows if r["model"] == REF and (r["psi_deg"], r["law"]) == (psi, law)]
         e = {n: _worst(errs.get((psi, law, n), {}).values()) for n in ELEMENTS}
-        out.append(Reference(f"three subtendons, {law}, ψ = {num(psi):g}°", "soleus u_x, worst over loads",
-                             refs[0]["resolution"], max(num(r["uncertainty_rel"]) for r in refs), e,
-                             "solid_contact.csv"))
+        out.append(Reference(f"three subtendons, {law}, ψ = {num(psi):g}°, {roots} roots",
+                             "soleus u_x, worst over loads", refs[0]["resolution"],
+                             max(num(r["uncertainty_rel"]) for r in refs), e, name))
     return out
+
+
+def contact_plane(docs: str = DOCS) -> list[Reference]:
+    """docs/solid_contact_plane.csv: the same on roots that slide on a frictionless plane."""
+    return contact(docs, "solid_contact_plane.csv", "plane")
 
 
 def friction(docs: str = DOCS, psi: float = 45.0) -> list[Reference]:
@@ -102,7 +108,7 @@ def soft_matrix(docs: str = DOCS) -> list[Reference]:
     return out
 
 
-FAMILIES = (bars, contact, friction, fibres, soft_matrix)
+FAMILIES = (bars, contact, contact_plane, friction, fibres, soft_matrix)
 
 
 def references(docs: str = DOCS) -> list[Reference]:

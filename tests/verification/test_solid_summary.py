@@ -9,7 +9,8 @@ from ancf_verify.summary import bars, contact, fibres, friction, references, sof
 def test_every_committed_reference_is_a_row():
     refs = references()
     assert len(bars()) == 4 and len(fibres()) == 9 and len(friction()) == 1 and len(soft_matrix()) == 2
-    assert {r.name for r in contact()} >= {"three subtendons, sliding, ψ = 45°", "three subtendons, unilateral, ψ = 45°"}
+    assert {r.name for r in contact()} >= {"three subtendons, sliding, ψ = 45°, clamped roots",
+                                           "three subtendons, unilateral, ψ = 45°, clamped roots"}
     assert len(refs) == len({r.name for r in refs})
     for r in refs:
         assert math.isfinite(r.convergence) and 0.0 <= r.convergence < 0.1, r

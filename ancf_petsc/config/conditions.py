@@ -31,8 +31,8 @@ def beam_ref(value, path: str, names: list[str]) -> int:
 def _fix(value, path: str) -> list[tuple[int, int]]:
     if isinstance(value, str):
         if value not in FIX_PRESETS:
-            raise ConfigError(path, f"unknown preset {shown(value)}; use clamped, reduced or a "
-                                    "mapping like {r: xyz, r_y: xz}")
+            raise ConfigError(path, f"unknown preset {shown(value)}; use {', '.join(FIX_PRESETS)} "
+                                    "or a mapping like {r: xyz, r_y: xz}")
         return list(FIX_PRESETS[value])
     mapping(value, path, optional=VECTORS)
     dofs = []
@@ -88,8 +88,8 @@ def _displacement(value, path: str) -> list[tuple[int, int, float]]:
 
 def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
                               history: HistorySpec | None = None) -> list[BCSpec]:
-    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced) and
-    prescribed displacements (``displacement``, ramped with the load factor, or following a
+    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced / plane)
+    and prescribed displacements (``displacement``, ramped with the load factor, or following a
     ``column`` of the load ``history``)."""
     bcs = []
     for i, bc in enumerate(sequence(value, "boundary_conditions", nonempty=False)):

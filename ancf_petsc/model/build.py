@@ -192,7 +192,8 @@ def build_model(spec: ModelSpec) -> Model:
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,
                     x_nodes=x_nodes, axial_points=bs.axial_points, element=bs.element,
-                    locking=bs.locking)
+                    locking=bs.locking, volumetric_degree=bs.volumetric_degree,
+                    pressure_columns=bs.pressure_columns)
         xa, wa = gauss_legendre(bs.axial_points)
         beam.xi, y, z = el.tensor_points(xa, section.points)
         beam.yz = np.column_stack([y, z])

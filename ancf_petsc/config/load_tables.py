@@ -19,9 +19,8 @@ import numpy as np
 
 from .values import ConfigError
 
-#: file kinds by extension
+#: OpenSim storage files by extension (anything else is read as CSV)
 STORAGE = (".sto", ".mot")
-CSV = (".csv", ".txt")
 
 
 @dataclass

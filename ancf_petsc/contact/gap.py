@@ -108,7 +108,7 @@ def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray)
     with φ_αβγ = Y_αβ·Y_γ + Y_αγ·Y_β + Y_βγ·Y_α − Y_αβγ·d, ∂H_αβ/∂q from H = Y_ζᵀY_ζ − Y_ζζ·d
     and r_α,qq = −(a_α bᵀ + b a_αᵀ) ⊗ I (a_α = [0, N_B,α], b = [N_A, −N_B]): the surface is
     linear in B's nodal vectors and d in both bodies'.  ``NBzz``, ``Yzzz``: B's shape functions'
-    second ζ-derivatives and the surface's third (``Projector.third``)."""
+    second ζ-derivatives and the surface's third (``projection.surface_third``)."""
     P = len(pr.g)
     T, Tab, d = pr.Yz, pr.Yzz, pr.d                                    # (P,3,2), (P,3,2,2), (P,3)
     a, b, Hi, U, V = _projection_parts(pr)

@@ -36,7 +36,8 @@ from __future__ import annotations
 import numpy as np
 
 from .gap import closest_point_gradient, closest_point_hessian, projection_conditioning
-from .projection import end_weight_curvature, end_weight_slope, subset
+from .fade import end_weight_curvature, end_weight_slope
+from .projection import subset, surface_third
 
 #: a change of a point's weight beyond this asks for another Newton solve (a weight off by 1e-6
 #: moves a weighted gap by 1e-6 of the point's local gap, ~1e-11 m)
@@ -79,7 +80,7 @@ def weight_derivatives(projector, pr, x_of=None) -> tuple[np.ndarray, np.ndarray
     if x_of is None:
         return grad, band, None
     curv = end_weight_curvature(*(a[band] for a in args))
-    NBzz, Yzzz = projector.third(x_of, itf[band], pr.eB[band], pr.xiB[band], pr.tB[band])
+    NBzz, Yzzz = surface_third(projector, x_of, itf[band], pr.eB[band], pr.xiB[band], pr.tB[band])
     hess = (np.einsum("paj,pab,pbk->pjk", dz, curv, dz)
             + closest_point_hessian(sub, slope[band], NBzz, Yzzz))
     return grad, band, hess

@@ -7,7 +7,7 @@ against second differences of the projection; the default rule and config keys."
 import numpy as np
 import pytest
 
-from ancf_petsc.contact.projection import end_weight, end_weight_curvature, end_weight_slope
+from ancf_petsc.contact.fade import end_weight, end_weight_curvature, end_weight_slope
 from contact.test_contact import achilles, perturbed_state
 from helpers import assert_contact_jacobian, build_problem, contact_evaluation, press_where_penetrating
 
@@ -33,7 +33,7 @@ def test_weight_curvature_is_the_second_derivative_and_vanishes_at_the_band_edge
     """∂²w/∂ζ² against central differences of ``end_weight_slope``; the quintic fade is C²: at
     both edges of a band (u = 0, 1) its slope and curvature are zero, so a partner place held
     at the end of a band has neither."""
-    from ancf_petsc.contact.projection import fade, fade_curvature, fade_slope
+    from ancf_petsc.contact.fade import fade, fade_curvature, fade_slope
     rng = np.random.default_rng(1)
     n, T = 4000, 2.0
     xi, t = rng.uniform(-1.6, 1.6, n), rng.uniform(-1.2, 3.2, n)
@@ -72,8 +72,9 @@ def test_second_order_sensitivity_of_the_closest_point():
     keep = st.weight > 0.0                        # partner places not held at a band's end
     rng = np.random.default_rng(5)
     cw = rng.standard_normal((len(z0), 2))
-    NBzz, Yzzz = c.projector.third(state_nodes(c, st), c.points.itf[st.pr.idx], st.pr.eB, st.pr.xiB,
-                                   st.pr.tB)
+    from ancf_petsc.contact.projection import surface_third
+    NBzz, Yzzz = surface_third(c.projector, state_nodes(c, st), c.points.itf[st.pr.idx], st.pr.eB,
+                               st.pr.xiB, st.pr.tB)
     hess = closest_point_hessian(st.pr, cw, NBzz, Yzzz)
     v = X.duplicate()
     v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-6)

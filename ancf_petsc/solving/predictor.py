@@ -15,7 +15,10 @@ prescribed displacements by Δq̄ = Σ_g Δm_g ū_g (load groups, model/loading.
   load change (non-proportional, unloading included, nothing when nothing changes).  J includes
   the contact constraints, so the multipliers are predicted with the state.  After a cut-back (the
   factor belongs to a failed attempt) or from rest there is no prediction.
-The default is ``tangent`` for a load history (config history:) and ``secant`` otherwise.
+``tangent`` is the default: on the paper's six columns (ψ = 0/15/45°, sliding and unilateral) it
+took 0-7 fewer Newton iterations than ``secant`` (47 → 40 on the ψ = 45° sliding column), the
+answers equal to 4e-11; on the gait envelope's unilateral columns at ψ = 90° 64-100 instead of
+83-110 with no cut-back.
 """
 from __future__ import annotations
 

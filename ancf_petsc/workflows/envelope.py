@@ -260,3 +260,60 @@ def summary_line(rows: list[dict], tag: str) -> str:
                  f"cut-backs on {cut} frames ({100.0 * cut / max(frames, 1):.2f} %), "
                  f"{frames / max(solve, 1e-9):.1f} frames/s (solve)")
     return line
+
+
+def _cell_text(r: dict | None, key: str) -> str:
+    if r is None:
+        return "–"
+    if r["status"] == "crashed":
+        return "**traceback**"
+    if r["status"] != "completed":
+        return f"**{r['status']}** after {float(r['last_level']):g} N"
+    cb = int(float(r.get("cutbacks_to_1200", r["cutbacks"]) or 0))
+    return f"{int(float(r[key]))}" + (f" ({cb} cut-back{'s' if cb > 1 else ''})" if cb else "")
+
+
+def markdown_table(after: list[dict], before: list[dict] | None = None, law: str | None = None,
+                   key: str = "iterations_to_1200") -> str:
+    """Twist × bias of a grid's rows (CSV rows of ``run_cells``; one law): Newton iterations to
+    1.2 kN (or the median per frame of strides: ``key``) and cut-backs, ``before → after``."""
+    def pick(rows):
+        return {(float(r["twist"]), r["bias"]): r for r in rows or [] if law is None or r["law"] == law}
+    a, b = pick(after), pick(before)
+    biases = [x for x in BIASES if any(k[1] == x for k in a)]
+    lines = ["| twist [deg] | " + " | ".join(biases) + " |", "|---:|" + "---|" * len(biases)]
+    for t in sorted({k[0] for k in a}):
+        cells = []
+        for bias in biases:
+            now = _cell_text(a.get((t, bias)), key)
+            cells.append(now if before is None else f"{_cell_text(b.get((t, bias)), key)} → {now}")
+        lines.append(f"| {t:g} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _read_rows(path: str) -> list[dict] | None:
+    import csv
+    if not os.path.isfile(path):
+        return None
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def render_docs(text: str, csv_dir: str) -> str:
+    """``text`` (docs/gait.md) with every block ``<!-- envelope:GRID:LAW -->`` … ``<!-- /envelope -->``
+    rendered from ``csv_dir``/gait_envelope_GRID.csv (and ``…_before.csv``, 38a07d3's, when it is
+    there) by ``markdown_table``; LAW ``strides-…`` tables the median Newton iterations per frame."""
+    import re
+    pattern = re.compile(r"(<!-- envelope:(\w+):([\w-]+) -->\n)(.*?)(<!-- /envelope -->)", re.S)
+
+    def block(m):
+        grid_name, law = m.group(2), m.group(3)
+        after = _read_rows(os.path.join(csv_dir, f"gait_envelope_{grid_name}.csv")) or []
+        before = _read_rows(os.path.join(csv_dir, f"gait_envelope_{grid_name}_before.csv"))
+        key = "iterations_to_1200"
+        if law.startswith("strides-"):
+            law, key = law[len("strides-"):], "median_iterations"
+        law_rows = [r for r in after if r["law"] == law] if law != "own" else after
+        return m.group(1) + markdown_table(law_rows, before, None if law == "own" else law, key) + "\n" + m.group(5)
+
+    return pattern.sub(block, text)

@@ -70,6 +70,8 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
         sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo, history=history)
     check_curves(spec)
+    if history is not None and "predictor" not in (raw.get("solver") or {}):
+        spec.solver.predictor = "tangent"        # non-proportional frames (solving/predictor.py)
     return spec
 
 

@@ -227,13 +227,9 @@ class PhasedNewton:
             its += n
             what = f"prediction {k} ({predicted} changes)" if ok else f"no prediction {k}"
             if reason <= 0:
+                # the predicted state's solve failed: the phases from the prediction (they
+                # rescue increments that may not be cut back: fixed increments)
                 self._trace(lam, what, n, reason)
-                if ok:
-                    # a predicted (Josephy–Newton) solve that fails fails the increment: the
-                    # stepper halves it, and the predictor finds the smaller increment's state
-                    start.destroy()
-                    return reason, its
-                # no prediction: the phases from the kept status
                 start.copy(X)
                 start.destroy()
                 c.status[:] = status

@@ -16,13 +16,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--twists", default=",".join(str(t) for t in TWISTS), help="degrees, comma-separated")
     ap.add_argument("--biases", default=",".join(BIASES))
     ap.add_argument("--elements", type=int, default=4)
+    ap.add_argument("--predictor", choices=("secant", "tangent", "none"), help="solver.predictor of every cell")
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="another ancf-solve to run the same cells with (before/after)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--work", default="results/envelope")
     ap.add_argument("--csv", help="write the rows here")
     args = ap.parse_args(argv)
-    cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements)
+    cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements,
+                 args.predictor)
     solvers = {"after": [args.solver], **({"before": [args.before]} if args.before else {})}
     rows = run_cells(cells, solvers, args.work, args.jobs, lambda line: print(line, flush=True))
     if args.csv and rows:

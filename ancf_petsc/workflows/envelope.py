@@ -21,7 +21,7 @@ import os
 import subprocess
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import yaml
@@ -62,6 +62,7 @@ class EnvelopeCell:
     elements: int = 4
     levels: tuple[float, ...] = LEVELS
     stride: bool = False
+    predictor: str | None = None          # solver.predictor (None: the config's default)
 
     @property
     def name(self) -> str:
@@ -69,7 +70,8 @@ class EnvelopeCell:
         mu = f"_mu{self.friction:g}" if self.friction else ""
         stem = os.path.splitext(os.path.basename(self.base))[0]
         kind = "_stride" if self.stride else ""
-        return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}"
+        pred = f"_{self.predictor}" if self.predictor else ""
+        return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
 def cell_config(cell: EnvelopeCell) -> dict:
@@ -108,6 +110,8 @@ def cell_config(cell: EnvelopeCell) -> dict:
     if cell.friction:
         contact["tangential"] = {"law": "coulomb", "friction": float(cell.friction)}
     cfg["output"] = {"vtk": False}
+    if cell.predictor:
+        cfg.setdefault("solver", {})["predictor"] = cell.predictor
     return cfg
 
 
@@ -215,11 +219,12 @@ GRIDS = {
 }
 
 
-def grid(name: str, twists, biases, elements: int = 4) -> list[EnvelopeCell]:
-    """The cells of a named grid (``GRIDS``)."""
+def grid(name: str, twists, biases, elements: int = 4, predictor: str | None = None) -> list[EnvelopeCell]:
+    """The cells of a named grid (``GRIDS``), with ``solver.predictor`` set when given."""
     if name not in GRIDS:
         raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
-    return GRIDS[name](twists, biases, elements)
+    cells = GRIDS[name](twists, biases, elements)
+    return cells if predictor is None else [replace(c, predictor=predictor) for c in cells]
 
 
 def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir: str, jobs: int,

@@ -63,8 +63,11 @@ def failure_detail(solver, reason: int) -> str:
     return ""
 
 
-#: relative agreement of |F| one period apart that counts as a repeat (a Newton cycle)
-CYCLE_TOL = 1e-3
+#: relative agreement of |F| one period apart that counts as a repeat (a Newton cycle): 1e-3 missed
+#: the period-5 cycle of the soleus-biased unilateral stride at ψ = 90° (2.35 kN, frame 46.8 of
+#: the gait envelope), whose norms drift by up to 1.8e-3 per period while raising -snes_max_it to
+#: 30 does not help; a converging or slowly contracting Newton never matches p + 2 norms to 1 %
+CYCLE_TOL = 1e-2
 #: the longest cycle looked for
 MAX_PERIOD = 8
 

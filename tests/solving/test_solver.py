@@ -388,11 +388,20 @@ CYCLING = [3.9986e-02, 3.0666e-05, 4.106667e-02, 8.471389e-02, 2.003852e-02, 1.4
            4.106672e-02, 8.471799e-02]
 
 
+#: ... and of the soleus-biased unilateral stride at ψ = 90°, frame 46.8 (2.35 kN; 2026-11-28): period
+#: 5, drifting by up to 1.8e-3 per period
+CYCLING_5 = [1.340833e+00, 7.801791e+00, 9.749213e+00, 2.712757e+00, 2.544255e-01, 1.346822e+00,
+             7.627389e+00, 9.711299e+00, 2.641625e+00, 2.527476e-01, 1.346365e+00, 7.637708e+00,
+             9.713286e+00, 2.646319e+00, 2.528854e-01, 1.346397e+00]
+
+
 @pytest.mark.parametrize("history,expected", [
     (CYCLING, "cycles: |F| repeats every 6 iterations, between 1.0e-04 and 8.5e-02 N"),
+    (CYCLING_5, "cycles: |F| repeats every 5 iterations, between 2.5e-01 and 9.7e+00 N"),
     ([2.2e-2, 1.5e-2, 3.6e-4, 1.2e-5] + [1.7090501e-08 * (1 + 1e-8 * k) for k in range(12)],
      "stalls at |F| 1.71e-08 N"),
-    ([10.0 * 0.5 ** k for k in range(16)], None)], ids=["cycle", "stall", "converging"])
+    ([10.0 * 0.5 ** k for k in range(16)], None),
+    ([10.0 * 0.97 ** k for k in range(16)], None)], ids=["cycle", "cycle5", "stall", "converging", "slow"])
 def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
     """A level that ran out of Newton iterations names a cycle or a stall (more iterations do not
     help) instead of suggesting a larger -snes_max_it; a Newton still converging gets no such

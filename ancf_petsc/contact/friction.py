@@ -42,6 +42,7 @@ import numpy as np
 from ..physics.element3363 import DOFS_PER_NODE
 from . import friction_blocks
 from .partners import PartnerTerm
+from .reports import output_signs
 
 EYE = np.eye(3)
 
@@ -236,10 +237,12 @@ class CoulombFriction(PartnerTerm):
     # ------------------------------------------------------------------ reports
     def fields(self, c, st) -> dict[str, np.ndarray]:
         """The base's per-point fields and per owned multiplier the tangential traction
-        coefficient λ_T = k_s y / A_k [Pa] and whether the function sticks."""
+        coefficient λ_T = k_s y / A_k [Pa] (the first beam's on the second, as ``shear_stress``)
+        and whether the function sticks."""
         ev, own = st.terms[self.name], c.owned
         area = c.space.tarea[c.mults]
-        lam = c.stiffness * ev.y / np.where(area > 0.0, area, 1.0)[:, None]
+        sign = output_signs(c, c.space.interface[c.mults])
+        lam = c.stiffness * sign[:, None] * ev.y / np.where(area > 0.0, area, 1.0)[:, None]
         return super().fields(c, st) | {"multiplier_shear": lam[own],
                                         "multiplier_stick": ev.m_stick[own].astype(np.int8)}
 

@@ -18,6 +18,10 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from .multipliers import reference_modulus, reference_size
+from .reports import output_signs
+
+#: the prefix of a law's history in the point fields (results.h5 ``steps/…/contact``)
+HISTORY = "history_"
 
 
 def node_dofs(nodes: np.ndarray) -> np.ndarray:
@@ -158,21 +162,25 @@ class PartnerTerm:
         self.state = {k: v.copy() for k, v in self._saved.items()}
 
     def set_state(self, fields: dict) -> None:
-        """A restart's history (every point: ``fields`` of the written level)."""
+        """A restart's history (every point: ``fields`` of the written level; ``shear_*`` in
+        files written before issue 39)."""
         for key in self.state:
-            self.state[key] = np.asarray(fields["shear_" + key], dtype=float).copy()
+            value = fields[HISTORY + key] if HISTORY + key in fields else fields["shear_" + key]
+            self.state[key] = np.asarray(value, dtype=float).copy()
         self.checkpoint()
 
     # ------------------------------------------------------------------ reports
     def fields(self, c, st) -> dict[str, np.ndarray]:
-        """Per local point: tangential slip s [m] from the reference partner (the part of d in
-        B's tangent plane at the point's closest point), interface stress σ [Pa] (on B, in the
-        direction of A's relative motion), stick (1) or not (0), and the history a restart
-        needs (``shear_*``)."""
+        """Per local point, first against second in config order (``Interface.sign``): the
+        tangential slip u_first − u_second [m] from the reference partner (the part of d in B's
+        tangent plane at the point's closest point), the interface stress [Pa] the first beam
+        puts on the second, stick (1) or not (0), and the history a restart needs
+        (``history_*``, as the law keeps it: A against B)."""
         ev, n = st.terms[self.name], st.pr.n
+        sign = output_signs(c, c.points.itf[c.local])[:, None]
         slip = ev.d - np.einsum("pi,pi->p", ev.d, n)[:, None] * n
-        out = {"tangential_slip": slip, "shear_stress": ev.sigma, "stick": ev.stick.astype(np.int8)}
-        return out | {"shear_" + k: v[c.local] for k, v in self.state.items()}
+        out = {"tangential_slip": sign * slip, "shear_stress": sign * ev.sigma, "stick": ev.stick.astype(np.int8)}
+        return out | {HISTORY + k: v[c.local] for k, v in self.state.items()}
 
     def sums(self, c, st, on: np.ndarray) -> list[float]:
         """The local parts of ``columns`` over the local points ``on`` (bool) of one interface."""
@@ -185,10 +193,13 @@ class PartnerTerm:
                 float(ev.omega[on] @ ev.stick[on]), float(ev.omega[on].sum())]
 
     @staticmethod
-    def report(values: dict) -> dict:
-        """Per-interface entries of the summary from the combined ``columns``."""
+    def report(values: dict, sign: float) -> dict:
+        """Per-interface entries of the summary from the combined ``columns``; ``sign`` the
+        interface's ``Interface.sign`` (the shear force is the one the first beam in config
+        order puts on the second [N])."""
         area = values["shear_area"]
         return {"max_tangential_slip": values["max_tangential_slip"],
                 "max_shear_stress": values["max_shear_stress"],
-                "shear_force": [values["shear_force_x"], values["shear_force_y"], values["shear_force_z"]],
+                "shear_force": [sign * values["shear_force_x"], sign * values["shear_force_y"],
+                                sign * values["shear_force_z"]],
                 "stick_share": values["stick_area"] / area if area else 0.0}

@@ -11,6 +11,8 @@ from ..physics import element3363 as el
 from .files import OutputError, os_reason, plain
 from .restart import fingerprint
 
+#: the "units" attribute of /model/reference_nodal_vectors and steps/…/nodal_vectors
+NODAL_UNITS = "r [m]; r_y, r_z [1]; r_yy, r_zz, r_yz [1/m] (the slots of dof_order)"
 #: the "frame" attribute of /model/beams/<name>/section_points and section_outline
 CENTROID_FRAME = "section centroid, m (add the beam group's centroid attribute for the tendon frame)"
 
@@ -26,7 +28,7 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     g.attrs["name"] = spec.name
     g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
     g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
-    g.create_dataset("reference_nodal_vectors", data=model.q0)
+    g.create_dataset("reference_nodal_vectors", data=model.q0).attrs["units"] = NODAL_UNITS
     fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
     for key, arr in fingerprint(model).items():
         fp.create_dataset(key, data=arr)
@@ -56,8 +58,9 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
                       path: dict | None, n_nodes: int) -> None:
     """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the contact
     fields, the supports' reactions and what a restart needs."""
-    g.create_dataset("nodal_vectors", data=q)
+    g.create_dataset("nodal_vectors", data=q).attrs["units"] = NODAL_UNITS
     g.attrs["load_factor"] = record.load_factor
+    g.attrs["load_factor_units"] = "1 (the multiple of the config's loads and displacements)"
     g.attrs["snes_iterations"] = record.iterations
     g.attrs["snes_reason"] = record.reason
     g.attrs["substeps"] = record.substeps
@@ -69,8 +72,10 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
     if extra and "reactions" in extra:       # force of each support on r [N]
         r = g.create_dataset("reactions", data=np.array(list(extra["reactions"].values())))
         r.attrs["supports"] = list(extra["reactions"])
+        r.attrs["units"] = "N: the force (x, y, z) the support exerts on the beam at its node's r"
     for pair, d in (extra or {}).get("displacement_differences", {}).items():   # io/derived.py
-        g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
+        dd = g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
+        dd.attrs["units"] = "m: u_x of the first beam's centroid line minus the second's, per node station"
     if path is not None:
         write_restart_group(g, record, path)
 
@@ -88,8 +93,10 @@ def write_restart_group(g, record, path: dict) -> None:
 def write_contact_group(g, contact: dict, multipliers: np.ndarray) -> None:
     """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
     c = g.create_group("contact")
-    c.attrs["units"] = ("SI: m, Pa; slip = reference position of the point minus its partner's on B; "
-                        "tangential_slip = the point's tangential displacement from its reference partner")
+    c.attrs["units"] = ("SI: m, Pa, N; interfaces 'curve (first|second)' in config order (summary.json "
+                        "contact_interfaces); x, x0 on the beam carrying the points; slip, tangential_slip "
+                        "= u_first - u_second [m]; shear_stress, multiplier_shear = the first beam's "
+                        "traction on the second [Pa]; pressure > 0 presses [Pa] (docs/running.md)")
     # every field the contact and its terms report (contact.reports.point_fields); the points
     # and multipliers are in id order, so the ids themselves are not stored
     for key, value in contact.items():

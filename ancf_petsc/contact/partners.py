@@ -38,6 +38,11 @@ def drop_held(dofs: np.ndarray, fixed_mask: np.ndarray) -> np.ndarray:
     return out
 
 
+def tangential(d: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """The part of each d (P, 3) in the plane normal to n (P, 3)."""
+    return d - np.einsum("pi,pi->p", d, n)[:, None] * n
+
+
 def per_segment_sum(srow: np.ndarray, n_s: int, values: np.ndarray) -> np.ndarray:
     """Σ over each segment's points of ``values`` (P, ...) → (n_s, ...); the points are stored
     segment by segment (``srow`` non-decreasing)."""
@@ -80,7 +85,7 @@ class PartnerTerm:
     #: per-interface statistics of ``sums``: (name, how ranks combine it)
     columns = (("max_tangential_slip", "max"), ("max_shear_stress", "max"), ("shear_force_x", "sum"),
                ("shear_force_y", "sum"), ("shear_force_z", "sum"), ("stick_area", "sum"),
-               ("shear_area", "sum"))
+               ("pressed_area", "sum"))
 
     def __init__(self, model, points, projector):
         self.points = points
@@ -178,26 +183,27 @@ class PartnerTerm:
         (``history_*``, as the law keeps it: A against B)."""
         ev, n = st.terms[self.name], st.pr.n
         sign = output_signs(c, c.points.itf[c.local])[:, None]
-        slip = ev.d - np.einsum("pi,pi->p", ev.d, n)[:, None] * n
-        out = {"tangential_slip": sign * slip, "shear_stress": sign * ev.sigma, "stick": ev.stick.astype(np.int8)}
+        out = {"tangential_slip": sign * tangential(ev.d, n), "shear_stress": sign * ev.sigma,
+               "stick": ev.stick.astype(np.int8)}
         return out | {HISTORY + k: v[c.local] for k, v in self.state.items()}
 
     def sums(self, c, st, on: np.ndarray) -> list[float]:
-        """The local parts of ``columns`` over the local points ``on`` (bool) of one interface."""
-        ev, n = st.terms[self.name], st.pr.n[on]
-        d = ev.d[on]
-        slip = np.linalg.norm(d - np.einsum("pi,pi->p", d, n)[:, None] * n, axis=1)
+        """The local parts of ``columns`` over the local points ``on`` (bool) of one interface:
+        the stick share is the sticking part of the pressed area (p > 0 at the point)."""
+        ev = st.terms[self.name]
+        slip = np.linalg.norm(tangential(ev.d[on], st.pr.n[on]), axis=1)
         sigma = ev.sigma[on]
         force = ev.omega[on] @ sigma if on.any() else np.zeros(3)
+        pressed = st.pressure[on] > 0.0
         return [slip.max(initial=0.0), np.linalg.norm(sigma, axis=1).max(initial=0.0), *force,
-                float(ev.omega[on] @ ev.stick[on]), float(ev.omega[on].sum())]
+                float(ev.omega[on] @ (ev.stick[on] & pressed)), float(ev.omega[on] @ pressed)]
 
     @staticmethod
     def report(values: dict, sign: float) -> dict:
         """Per-interface entries of the summary from the combined ``columns``; ``sign`` the
         interface's ``Interface.sign`` (the shear force is the one the first beam in config
         order puts on the second [N])."""
-        area = values["shear_area"]
+        area = values["pressed_area"]
         return {"max_tangential_slip": values["max_tangential_slip"],
                 "max_shear_stress": values["max_shear_stress"],
                 "shear_force": [sign * values["shear_force_x"], sign * values["shear_force_y"],

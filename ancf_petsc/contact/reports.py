@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .interfaces import held_ends, supported_ends
 from .state import ContactState
 
 #: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
@@ -14,17 +15,31 @@ GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "s
 
 
 def describe(c) -> list[str]:
-    """The ``Contact`` c in the run's header: laws, multipliers, points, interfaces."""
+    """The ``Contact`` c in the run's header: laws, multipliers, points, supported ends,
+    interfaces."""
     ka, kc = c.space.degrees
-    laws = "; ".join([c.law.describe()] + [t.describe() for t in c.terms])
+    laws = "; ".join([c.law.describe()] + ([t.describe() for t in c.terms] or ["frictionless"]))
     lines = [f"contact: {laws}; Lagrange multipliers (pressure of degree {ka} along the beam x {kc} "
              f"across the interface per element, {c.n_multipliers} in all); {c.points.n_points} points "
              f"({c.spec.axial_points} axial x {c.spec.curve_points} per curve piece); unknowns scaled "
-             f"by k_s = {c.stiffness:.4g} N/m"]
+             f"by k_s = {c.stiffness:.4g} N/m", "  " + ends_line(c)]
     for itf in c.interfaces:
         lines.append(f"  interface {itf.name}: {itf.n_points} points on {itf.a.name}, "
                      f"projected onto {itf.b.name}")
     return lines
+
+
+def ends_line(c) -> str:
+    """The supported ends' rules (``contact.projection.supported_ends`` and, for friction,
+    ``contact.tangential.supported_ends``) and how many interface ends each folds."""
+    normal = int(supported_ends(c.model, c.interfaces, c.spec.supported_ends).sum())
+    line = (f"supported ends: pressure {c.spec.supported_ends} ({normal} clamped interface end(s) folded "
+            "into their neighbours)")
+    if any(t.multipliers for t in c.terms):
+        tang = int(held_ends(c.model, c.interfaces, c.spec.tangential).sum())
+        line += (f"; tangential {c.spec.tangential.supported_ends} ({tang} end(s) where both bodies' "
+                 "r is held folded)")
+    return line
 
 
 def report_columns(c) -> tuple:

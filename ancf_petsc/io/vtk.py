@@ -125,7 +125,8 @@ class VtkSeries:
         A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
-        data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
+        with np.errstate(over="ignore"):            # beyond single precision: inf (results.h5: double)
+            data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
         compress = self.compress if self.compress is not None else len(pts) >= AUTO_COMPRESS_POINTS
         try:
             meshio.write(path, meshio.Mesh(np.asarray(pts, dtype=np.float32), cells, point_data=data),

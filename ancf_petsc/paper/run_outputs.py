@@ -9,13 +9,12 @@ import os
 import numpy as np
 
 from .. import viz
+from ..io.groups import PROBE_UNITS
 from ..io.reader import read_contact
 
-#: the unit and scale of each probe vector's change (physics/element3363.VECTORS; mean: the
-#: section's mean displacement)
-PROBE_UNITS = {"r": ("u", "mm", 1e3), "mean": ("section-mean u", "mm", 1e3),
-               "r_y": ("Δr_y", "1", 1.0), "r_z": ("Δr_z", "1", 1.0),
-               "r_yy": ("Δr_yy", "1/m", 1.0), "r_zz": ("Δr_zz", "1/m", 1.0), "r_yz": ("Δr_yz", "1/m", 1.0)}
+#: how a probe's change is shown: a displacement (r, or the section mean) as u in mm, another
+#: vector's change in its own unit (io.groups.PROBE_UNITS)
+SHOWN = {"r": "u", "mean": "section-mean u"}
 #: slip and pressure are drawn at up to this many levels (the last among them)
 SLIP_LEVELS = 4
 
@@ -34,9 +33,11 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
     vectors = probe_vectors(config)
     heads, cells = [], []
     for name in names:
-        what, unit, scale = PROBE_UNITS.get(vectors.get(name, "r"), PROBE_UNITS["r"])
-        position = unit == "mm"
-        heads.append(f"{name} {what}_x [{unit}]" if position else f"{name} {what} (x, y, z) [{unit}]")
+        vector = vectors.get(name, "r")
+        position = PROBE_UNITS.get(vector, "m") == "m"
+        scale = 1e3 if position else 1.0
+        heads.append(f"{name} {SHOWN.get(vector, 'u')}_x [mm]" if position
+                     else f"{name} Δ{vector} (x, y, z) [{PROBE_UNITS[vector]}]")
 
         def cell(st, name=name, scale=scale, position=position):
             if name not in st.get("probes", {}):

@@ -36,8 +36,8 @@ def test_the_twin_recovers_its_parameters_within_the_reported_errors(tmp_path):
       curvature), so the scatter of the estimates is the noise's, not the optimiser's; and the
       reported standard errors equal the truth's s (J^T J)^-1 to 5 %.
     * The true value lies in the reported 95 % interval (Student's t) in >= 90 % of the draws
-      per parameter (this seed: 93 % for mu, 94 % for K; its first 20 draws give 16 and 18 of
-      20, docs/calibration.md).
+      per parameter (this seed, with s^2 = max(chi^2/(m - n), 1): 94 % for mu, 94 % for K; its
+      first 20 draws give 17 and 18 of 20, docs/calibration.md).
     """
     spec = load_fit(BAR_TWIN)                      # configs/fits/bar_twin.yaml
     exact = exact_data(spec, TRUE)

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid verify-solid-contact verify-solid-friction studies clean
+.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-friction studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -26,10 +26,10 @@ report: setup
 	$(VENV)/bin/ancf-report --jobs 2
 
 test: setup
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q -rs tests
 
 test-fast: setup
-	$(PY) -m pytest -q -m "not slow and not mpi" tests
+	$(PY) -m pytest -q -rs -m "not slow and not mpi" tests
 
 bench: setup
 	$(PY) scripts/bench_kernel.py
@@ -55,14 +55,19 @@ studies: setup
 verify: setup
 	$(PY) scripts/verification_report.py
 
+# every 3D-solid reference re-solved on its coarsest mesh against its CSV, the contact solids'
+# checks, then one table: each reference, its mesh convergence, the beams' error against it
+# (a few minutes; VERIFY_SOLID_FLAGS=--quick: the table from the CSVs alone)
 verify-solid: setup
-	bash scripts/setup_solid.sh
+	$(PY) scripts/verify_solid_summary.py $(VERIFY_SOLID_FLAGS)
+
+# the bar, fibre and soft-matrix references made again on all their meshes (about 1 h)
+verify-solid-references: setup
 	$(PY) scripts/verify_solid.py
 	$(PY) scripts/verify_solid_fibres.py
 	$(PY) scripts/verify_solid_soft_matrix.py
 
 verify-solid-contact: setup
-	bash scripts/setup_solid.sh
 	$(PY) scripts/verify_solid_contact.py
 	$(PY) scripts/verify_solid_contact.py --merge --no-selftest --no-free --no-checks --laws unilateral \
 		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10
@@ -71,7 +76,6 @@ verify-solid-contact: setup
 # contact.tangential coulomb (docs/interface.md, "Against a 3D solid with friction"; a few hours),
 # then the diagnostic without friction within 10 mm of the clamped roots (both models)
 verify-solid-friction: setup
-	bash scripts/setup_solid.sh
 	$(PY) scripts/verify_solid_friction.py --profiles 10,100
 	$(PY) scripts/verify_solid_friction.py --merge --no-selftest --free-zone 0.01 --ancf-augmentations default
 

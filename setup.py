@@ -6,7 +6,7 @@ setup(
     version="0.1.0",
     description="ANCF 3363 continuum beams with arbitrary pretwisted sections, neo-Hookean "
                 "material and sliding contact, assembled and solved with PETSc (SNES).",
-    packages=find_packages(include=["ancf_petsc", "ancf_petsc.*", "apps"]),
+    packages=find_packages(include=["ancf_petsc", "ancf_petsc.*", "ancf_verify", "ancf_verify.*", "apps"]),
     python_requires=">=3.11",
     # petsc4py, mpi4py, h5py (MPI build), numpy, scipy, matplotlib, PyYAML come from Debian
     # (scripts/setup.sh); only the pure-Python / self-contained parts come from PyPI.

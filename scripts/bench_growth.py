@@ -30,8 +30,7 @@ import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from logview import read_log_view  # noqa: E402
+from ancf_petsc.linalg.log_view import read_log_view  # noqa: E402
 
 #: -log_view events kept per run (seconds over the run, slowest rank): the projection
 #: (scripts/project_scaling.py) splits a Newton iteration into per-fascicle work and the

@@ -8,7 +8,7 @@ Parts (all by default; each prints a markdown table):
   dilatation projected per axial station onto {1} (F-bar of the mean), {1, y, z} (``mixed``),
   {1, y, z, y² + z²} and the complete quadratics, against the committed solid references
   (docs/solid_fibres.csv, docs/solid_comparison.csv).  The variants other than {1, y, z} are a
-  diagnosis here (``pressure_space``), not model options.
+  diagnosis here (``BeamSpec.pressure_columns``, set in code), not config keys.
 * ``solids``: the four bars of docs/solid_comparison.md, 2-16 elements, without and with ``mixed``.
 * ``pretwisted``: configs/pretwisted_bar.yaml's refinement (docs/verification.md) with ``mixed``.
 * ``paper``: Table 1's columns (4 elements, the paper's 3 axial points, sliding contact) and Table
@@ -21,7 +21,6 @@ Usage: OPENBLAS_NUM_THREADS=1 python scripts/locking_study.py [space solids pret
 """
 from __future__ import annotations
 
-import contextlib
 import copy
 import csv
 import os
@@ -38,8 +37,11 @@ sys.path.insert(0, HERE)
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
-import verify_solid as vs  # noqa: E402
-import verify_solid_fibres as vsf  # noqa: E402
+from ancf_verify.bars.cases import CASES, Case, ancf_config  # noqa: E402
+from ancf_verify.fibres.beams import run_ancf  # noqa: E402
+from ancf_verify.fibres.cases import ANCF, ANCF_MIXED, LAWS, case_key, make_case  # noqa: E402
+from ancf_verify.fibres.report import read_csv, runs_of  # noqa: E402
+from ancf_verify.stack import SolidError  # noqa: E402
 
 CONFIGS = os.path.join(ROOT, "configs")
 #: pressure spaces per station, as columns of the complete quadratic basis (1, y, z, y², yz, z²)
@@ -47,28 +49,20 @@ SPACES = {"{1}": [[0]], "{1, y, z} (mixed)": [[0], [1], [2]], "{1, y, z, y²+z²
           "quadratic": [[0], [1], [2], [3], [4], [5]]}
 
 
-@contextlib.contextmanager
-def pressure_space(name: str):
-    """While active, ``locking: mixed`` projects on the space ``name`` of SPACES (a diagnosis)."""
-    import ancf_petsc.model.beams as beams
-    from ancf_petsc.physics.mixed import pressure_basis
-    keep = beams.pressure_basis
-
-    def basis(yz, wq, stations):
-        B = pressure_basis(yz, wq, stations, degree=2)
-        return np.stack([sum(B[..., 6 * s + k] for k in col) for s in range(stations) for col in SPACES[name]], -1)
-    beams.pressure_basis = basis if SPACES[name] != SPACES["{1, y, z} (mixed)"] else keep
-    try:
-        yield
-    finally:
-        beams.pressure_basis = keep
+def columns_of(name: str | None) -> tuple | None:
+    """``BeamSpec.pressure_columns`` of the space ``name`` of SPACES (None: {1, y, z}, mixed's own)."""
+    return None if name is None or SPACES[name] == SPACES["{1, y, z} (mixed)"] else tuple(map(tuple, SPACES[name]))
 
 
-def solve(raw: dict) -> dict:
+def solve(raw: dict, columns: tuple | None = None) -> dict:
+    """``raw`` solved in-process; ``columns``: every beam's ``BeamSpec.pressure_columns``."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
     t0 = time.perf_counter()
-    res = run_model(parse_config(copy.deepcopy(raw), base_dir=CONFIGS), log=lambda *_: None)
+    spec = parse_config(copy.deepcopy(raw), base_dir=CONFIGS)
+    for b in spec.beams:
+        b.pressure_columns = columns
+    res = run_model(spec, log=lambda *_: None)
     s = res.summary
     s["wall"] = time.perf_counter() - t0
     return s
@@ -87,10 +81,10 @@ def solid_refs() -> dict:
         return {r["case"]: np.array([float(r[f"ref_u{c}_m"]) for c in "xyz"]) for r in csv.DictReader(fh)}
 
 
-def bar(case: vs.Case, elements: int, locking: str, tmp: str) -> dict:
-    raw = vs.ancf_config(case, elements, 2, os.path.join(tmp, f"{case.key}_{elements}_{locking}"))
+def bar(case: Case, elements: int, locking: str, tmp: str, columns: tuple | None = None) -> dict:
+    raw = ancf_config(case, elements, 2, os.path.join(tmp, f"{case.key}_{elements}_{locking}"))
     raw["beams"][0]["locking"] = locking
-    return solve(raw)
+    return solve(raw, columns)
 
 
 def _err(s: dict, ref: np.ndarray) -> str:
@@ -101,26 +95,26 @@ def _err(s: dict, ref: np.ndarray) -> str:
 
 
 def space() -> None:
-    fib = vsf.runs_of(vsf.read_csv(os.path.join(ROOT, "docs", "solid_fibres.csv")))
+    fib = runs_of(read_csv(os.path.join(ROOT, "docs", "solid_fibres.csv")))
     refs = solid_refs()
-    cases = {c.key: c for c in vs.CASES}
+    cases = {c.key: c for c in CASES}
     print("| pressure space per station | " + " | ".join(f"{law.key}, K/μ = 50, 16 el.: rotation / solid − 1"
-                                                          for law in vsf.LAWS)
+                                                          for law in LAWS)
           + " | tension, 8 el.: u error (signed) | bending, 8 el.: u error (signed) |")
-    print("|---|" + "---:|" * (len(vsf.LAWS) + 2))
+    print("|---|" + "---:|" * (len(LAWS) + 2))
     with tempfile.TemporaryDirectory() as tmp:
         for lock, name in [("none", None)] + [("mixed", n) for n in SPACES]:
             cells = []
-            with pressure_space(name) if name else contextlib.nullcontext():
-                for law in vsf.LAWS:
-                    c = fib[vsf.case_key(law.key, 50.0)]
-                    try:
-                        r = vsf.run_ancf(vsf.make_case(law, 50.0), 16, tmp, vsf.ANCF if name is None else vsf.ANCF_MIXED)
-                        cells.append(f"{100 * (r['rot'] / c['ref_rot'] - 1):+.2f} %")
-                    except vs.SolidError:
-                        cells.append("fails")
-                for key in ("tension", "bending"):
-                    cells.append(_err(bar(cases[key], 8, lock, tmp), refs[key]))
+            for law in LAWS:
+                c = fib[case_key(law.key, 50.0)]
+                try:
+                    r = run_ancf(make_case(law, 50.0), 16, tmp, ANCF if name is None else ANCF_MIXED,
+                                 pressure_columns=columns_of(name))
+                    cells.append(f"{100 * (r['rot'] / c['ref_rot'] - 1):+.2f} %")
+                except SolidError:
+                    cells.append("fails")
+            for key in ("tension", "bending"):
+                cells.append(_err(bar(cases[key], 8, lock, tmp, columns_of(name)), refs[key]))
             print(f"| {'none (pointwise K/2 (J−1)²)' if name is None else name} | " + " | ".join(cells) + " |",
                   flush=True)
 
@@ -129,7 +123,7 @@ def solids() -> None:
     refs = solid_refs()
     print("| case | locking | 2 el. | 4 el. | 8 el. | 16 el. |\n|---|---|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
-        for case in vs.CASES:
+        for case in CASES:
             for lock in ("none", "mixed"):
                 print(f"| {case.key} | {lock} | " + " | ".join(_err(bar(case, n, lock, tmp), refs[case.key])
                                                           for n in (2, 4, 8, 16)) + " |", flush=True)
@@ -220,7 +214,7 @@ def pretwisted() -> None:
 
 
 def published() -> None:
-    import goh_published_sets as g
+    from ancf_verify.studies import goh_sets as g
     base = {k: g.PUBLISHED[k] for k in ("mu", "k1", "k2")}
     print("Lone soleus, tendon_model_2023 (μ = 61.2 kPa, K = 0.2 GPa = 3268 μ, k1 = 3.7859 MPa, k2 = 7.8085), "
           "4 elements, Table 1's 13 levels\n")

@@ -42,8 +42,8 @@ import sys
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from logview import read_log_view  # noqa: E402
+sys.path.insert(0, ROOT)
+from ancf_petsc.linalg.log_view import read_log_view  # noqa: E402
 
 S_EVENTS = ("ANCF Schur factor", "ANCF Schur solve")
 

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Idempotent install of the Debian packages that `make verify-solid` needs on top of scripts/setup.sh:
+# Idempotent install of the Debian packages that the 3D solids (ancf_verify, tests/solids, make
+# verify-solid) need; scripts/setup.sh runs it last:
 # FEniCSx/dolfinx 0.5.2 (built against the same PETSc 3.18 as petsc4py) and gmsh 4.8 with its Python
 # API.  Quick when everything is present: it only asks dpkg, then checks that both import.
 set -euo pipefail

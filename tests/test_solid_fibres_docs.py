@@ -2,46 +2,36 @@
 scripts/verify_solid_fibres.py makes of the committed docs/solid_fibres.csv, and the CSV's ANCF
 numbers are what today's code computes.  No dolfinx here: the solid runs only under
 ``make verify-solid``; the ANCF runs (a few tenths of a second each) are repeated."""
-import importlib.util
 import os
-import sys
 import tempfile
 
 import numpy as np
 import pytest
 
+from ancf_verify.fibres.beams import run_ancf
+from ancf_verify.fibres.cases import ANCF, ANCF_MIXED, ANCF_VOL, BULK_RATIOS, LAWS, case_key, make_case
+from ancf_verify.fibres.report import read_csv, render_block, replace_block, runs_of
 from helpers import ROOT, petsc_init
 
 CSV = os.path.join(ROOT, "docs", "solid_fibres.csv")
 DOC = os.path.join(ROOT, "docs", "fibres.md")
-SCRIPT = os.path.join(ROOT, "scripts", "verify_solid_fibres.py")
 
 
 @pytest.fixture(scope="module")
-def script():
-    sys.path.insert(0, os.path.dirname(SCRIPT))       # it imports verify_solid beside it
-    spec = importlib.util.spec_from_file_location("verify_solid_fibres", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod                        # its dataclasses look themselves up there
-    spec.loader.exec_module(mod)
-    return mod
+def cases():
+    return runs_of(read_csv(CSV))
 
 
-@pytest.fixture(scope="module")
-def cases(script):
-    return script.runs_of(script.read_csv(CSV))
-
-
-def test_the_docs_block_is_that_of_the_csv(script):
+def test_the_docs_block_is_that_of_the_csv():
     with open(DOC, encoding="utf-8") as fh:
         text = fh.read()
-    block = script.render_block(script.read_csv(CSV))
-    assert script.replace_block(text, block) == text, \
+    block = render_block(read_csv(CSV))
+    assert replace_block(text, block) == text, \
         "docs/fibres.md's solid_fibres block differs from the CSV: python scripts/verify_solid_fibres.py --replot"
 
 
-def test_the_csv_covers_the_study(script, cases):
-    assert set(cases) == {script.case_key(law.key, r) for law in script.LAWS for r in script.BULK_RATIOS}
+def test_the_csv_covers_the_study(cases):
+    assert set(cases) == {case_key(law.key, r) for law in LAWS for r in BULK_RATIOS}
     for key, c in cases.items():
         assert len(c["solid"]) >= 3, key                          # a Richardson reference
         assert {r["res"] for r in c["ancf"]} >= {"8 el.", "16 el."}, key
@@ -97,14 +87,14 @@ def test_what_the_page_says_of_locking_mixed(cases):
 @pytest.mark.parametrize("key,model", [("goh_twist_K50", "ANCF"), ("goh_axis_K2.1667", "ANCF"),
                                        ("goh_twist_K50", "vol"), ("goh_twist_K50", "mixed"),
                                        ("neo_hookean_K8.34", "mixed")])
-def test_the_csv_ancf_numbers_are_todays(script, cases, key, model):
+def test_the_csv_ancf_numbers_are_todays(cases, key, model):
     """The 8-element runs again, with today's code: end displacement and rotation as committed."""
     petsc_init()
-    law = next(law for law in script.LAWS if key.startswith(law.key + "_K"))
-    case = script.make_case(law, float(key.rsplit("_K", 1)[1]))
+    law = next(law for law in LAWS if key.startswith(law.key + "_K"))
+    case = make_case(law, float(key.rsplit("_K", 1)[1]))
     with tempfile.TemporaryDirectory() as tmp:
-        now = script.run_ancf(case, 8, tmp, {"ANCF": script.ANCF, "vol": script.ANCF_VOL,
-                                             "mixed": script.ANCF_MIXED}[model])
+        now = run_ancf(case, 8, tmp, {"ANCF": ANCF, "vol": ANCF_VOL,
+                                             "mixed": ANCF_MIXED}[model])
     then = next(r for r in cases[key]["ancf" if model == "ANCF" else model] if r["res"] == "8 el.")
     assert np.allclose(now["u"], then["u"], rtol=1e-6, atol=1e-6 * np.abs(then["u"]).max())
     assert abs(now["rot"] - then["rot"]) <= 1e-6 * abs(then["rot"])

@@ -2,116 +2,95 @@
 scripts/verify_solid_friction.py makes of the committed docs/solid_friction.csv, and the CSV's ANCF
 columns are today's ANCF answers.  No dolfinx: the solid is not solved here (make
 verify-solid-friction does), only the beams, in-process, to the first load level."""
-import contextlib
-import importlib.util
 import os
-import sys
 import tempfile
 
 import numpy as np
 import pytest
 
+from ancf_verify.contact.tendon import NAMES, SOURCE, tendon_sections
+from ancf_verify.friction import across
+from ancf_verify.friction.beams import ancf_config, zone_label
+from ancf_verify.friction.page import HEAD, across_csv, read_profiles, section
+from ancf_verify.friction.profiles import ancf_profile, read
+from ancf_verify.friction.rows import (ANCF, BEGIN, BODIES, CHECK, END, SOLID, SPACE, ancf_variant, differences,
+                                       read_csv, solid_runs)
+from ancf_verify.studies.supported_ends import ends
 from helpers import ROOT
 
 DOCS = os.path.join(ROOT, "docs")
 CSV = os.path.join(DOCS, "solid_friction.csv")
 MD = os.path.join(DOCS, "interface.md")
-SCRIPTS = os.path.join(ROOT, "scripts")
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CSV), reason="docs/solid_friction.csv not committed")
-
-
-def _load(name):
-    if SCRIPTS not in sys.path:
-        sys.path.insert(0, SCRIPTS)
-    spec = importlib.util.spec_from_file_location(name, os.path.join(SCRIPTS, f"{name}.py"))
-    if name in sys.modules:                 # imported already (by another script module)
-        return sys.modules[name]
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod                 # a dataclass looks its module up there
-    spec.loader.exec_module(mod)
-    return mod
-
-
-@pytest.fixture(scope="module")
-def page():
-    return _load("solid_friction_page")
-
-
-@pytest.fixture(scope="module")
-def rep():
-    return _load("solid_friction_report")
 
 
 def _tables(text: str) -> list:
     return [ln for ln in text.splitlines() if ln.startswith("|")]
 
 
-def test_the_section_is_that_of_the_csv(page, rep):
-    rows = rep.read_csv(CSV)
-    prof = page.read_profiles(os.path.join(DOCS, "solid_friction_profiles.csv"))
-    across = page.read_profiles(page.across_csv(CSV))
-    regenerated = _tables(page.section(rows, prof, {}, across=across))
+def test_the_section_is_that_of_the_csv():
+    rows = read_csv(CSV)
+    prof = read_profiles(os.path.join(DOCS, "solid_friction_profiles.csv"))
+    across = read_profiles(across_csv(CSV))
+    regenerated = _tables(section(rows, prof, {}, across=across))
     with open(MD, encoding="utf-8") as fh:
         text = fh.read()
-    assert page.HEAD in text and rep.BEGIN in text and rep.END in text
-    mine = _tables(text[text.index(page.HEAD):text.index(rep.END)])
+    assert HEAD in text and BEGIN in text and END in text
+    mine = _tables(text[text.index(HEAD):text.index(END)])
     assert regenerated and mine == regenerated, "docs/interface.md's solid-friction tables differ from the CSV"
 
 
-def test_the_solid_study_is_complete(rep):
+def test_the_solid_study_is_complete():
     """Two meshes or more over Table 1's 13 levels, the stick stiffness x 10 and the other slip
     measure on the coarse mesh; the friction tangent checked by FD."""
-    rows = rep.read_csv(CSV)
-    runs = rep.solid_runs(rows, 45.0)
+    rows = read_csv(CSV)
+    runs = solid_runs(rows, 45.0)
     assert len(runs) >= 2 and all(len(lv) == 13 for lv in runs.values())
     coarse = max(runs)
     for v in ("stick 1000", "slip closest"):
-        assert len(rep.solid_runs(rows, 45.0, v).get(coarse, {})) == 13, v
-    fd = [r for r in rows if r["model"] == rep.CHECK and r["variant"].startswith("finite differences")]
+        assert len(solid_runs(rows, 45.0, v).get(coarse, {})) == 13, v
+    fd = [r for r in rows if r["model"] == CHECK and r["variant"].startswith("finite differences")]
     assert len(fd) == 2 and all(float(r["value"]) < 1e-6 for r in fd)
     # everything slides: the regularisation changes nothing the comparison could see
-    d = rep.differences(rep.solid_runs(rows, 45.0, "stick 1000")[coarse], runs[coarse])
-    assert max(d[f"{b}_abs"] for b in rep.BODIES) < 1e-4
+    d = differences(solid_runs(rows, 45.0, "stick 1000")[coarse], runs[coarse])
+    assert max(d[f"{b}_abs"] for b in BODIES) < 1e-4
 
 
 @pytest.mark.parametrize("aug, elements, zone, space", [(None, 4, 0.0, None), (10.0, 4, 0.0, None), (0.1, 8, 0.0, None),
                                                         (None, 4, 0.01, None), (None, 4, 0.0, "quadratic across")])
-def test_the_ancf_columns_are_todays(rep, aug, elements, zone, space):
+def test_the_ancf_columns_are_todays(aug, elements, zone, space):
     """Each kind of column to the first level (10 N): the CSV's u_x of the three ends, to 1e-6
     (aug: the Coulomb law's augmentation c, None the default; zone: the diagnostic without
     friction within 10 mm of the clamp; space: the pressure space, None the default)."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
-    drv = _load("verify_solid_friction")
-    pf = _load("solid_friction_profiles")
-    rows = rep.read_csv(CSV)
-    variant = drv.zone_label(rep.ancf_variant(aug, space), zone)
-    want = [r for r in rows if r["model"] == rep.ANCF and r["variant"] == variant
+    rows = read_csv(CSV)
+    variant = zone_label(ancf_variant(aug, space), zone)
+    want = [r for r in rows if r["model"] == ANCF and r["variant"] == variant
             and r["resolution"] == f"{elements} el." and float(r["psi_deg"]) == 45.0 and r["load_N"]
             and float(r["load_N"]) == 10.0]
     assert len(want) == 1
     with tempfile.TemporaryDirectory() as tmp:
-        raw = drv.ancf_config(45.0, elements, 0.3, aug, tmp, space)
+        raw = ancf_config(45.0, elements, 0.3, aug, tmp, space)
         raw["steps"] = [10.0]
-        with pf.BeamFreeZone(zone, elements) if zone else contextlib.nullcontext():
-            res = run_model(parse_config(raw, base_dir=drv.vsc.CONFIGS), log=lambda *_: None)
+        spec = parse_config(raw, base_dir=SOURCE.configs)
+        spec.contact.tangential.free_zone = zone
+        res = run_model(spec, log=lambda *_: None)
     assert res.status == "completed", res.message
     probes = res.summary["steps"][0]["probes"]
-    for body, name in zip(rep.BODIES, drv.vsc.NAMES):
+    for body, name in zip(BODIES, NAMES):
         ref = float(want[0][f"{body}_ux_m"])
         assert probes[name]["displacement"][0] == pytest.approx(ref, rel=1e-6, abs=1e-12), body
 
 
-def test_the_beams_pressures_near_the_clamp_are_todays(rep):
+def test_the_beams_pressures_near_the_clamp_are_todays():
     """The profile the page's diagnosis rests on: the frictionless 4-element beams at 10 N carry
     the CSV's compressive normal force within 10 mm of the clamped roots (today's answer, to
     1e-6 of the largest), no more than the solid's plus 1 N (the clamped ends' pressure
     functions folded: contact.md, "Supported ends"); with them kept, the constraints that repeat
     the supports carry more than ten times the solid's."""
-    pf = _load("solid_friction_profiles")
-    study = _load("supported_ends_study")
-    prof = pf.read(os.path.join(DOCS, "solid_friction_profiles.csv"))
+    prof = read(os.path.join(DOCS, "solid_friction_profiles.csv"))
 
     def near(rows, model, resolution):
         sel = [r for r in rows if r["model"] == model and r["variant"] == "mu 0" and r["resolution"] == resolution
@@ -119,16 +98,16 @@ def test_the_beams_pressures_near_the_clamp_are_todays(rep):
         assert sel
         return {(r["interface"], round(float(r["x_lo_m"]), 6)):
                 float(r["q_plus_N_per_m"]) * (float(r["x_hi_m"]) - float(r["x_lo_m"])) for r in sel}
-    want = near(prof, rep.ANCF, "4 el.")
+    want = near(prof, ANCF, "4 el.")
     with tempfile.TemporaryDirectory() as tmp:
-        got = near(pf.ancf_profile(45.0, 4, 0.0, 10.0, None, tmp), rep.ANCF, "4 el.")
-        with study.supported_ends("keep"):
-            kept = near(pf.ancf_profile(45.0, 4, 0.0, 10.0, None, os.path.join(tmp, "keep")), rep.ANCF, "4 el.")
+        got = near(ancf_profile(45.0, 4, 0.0, 10.0, None, tmp), ANCF, "4 el.")
+        kept = near(ancf_profile(45.0, 4, 0.0, 10.0, None, os.path.join(tmp, "keep"), contact=ends("keep")),
+                    ANCF, "4 el.")
     scale = max(want.values())
     assert got.keys() == want.keys()
     for k in want:
         assert abs(got[k] - want[k]) <= 1e-6 * scale, k
-    solid = sum(near(prof, rep.SOLID, "h 2.00 mm").values())
+    solid = sum(near(prof, SOLID, "h 2.00 mm").values())
     assert sum(want.values()) <= solid + 1.0, (sum(want.values()), solid)
     assert sum(kept.values()) > 10.0 * solid, (sum(kept.values()), solid)
 
@@ -139,18 +118,16 @@ def test_the_pressure_across_is_todays():
     page's reading of the stored runs holds: on lg_sol and lg_mg the quadratic-across beams
     (16 el., μ = 0.3) press more than three times as hard as either solid mesh, the default
     beams no harder than the coarse solid plus 10 kPa."""
-    across = _load("solid_friction_across")
     rows = across.read()
 
     def sel(model, variant, resolution):
         return {(r["interface"], round(float(r["x_c_m"]), 6), round(float(r["s_lo_m"]), 7)):
                 (float(r["force_plus_N"]), float(r["force_minus_N"]), float(r["weight_m2"]))
                 for r in rows if (r["model"], r["variant"], r["resolution"]) == (model, variant, resolution)}
-    rep = across.rep
-    want = sel(rep.ANCF, "mu 0", "4 el.")
+    want = sel(ANCF, "mu 0", "4 el.")
     with tempfile.TemporaryDirectory() as tmp:
         pts = across.ancf_points(45.0, 4, 0.0, 100.0, tmp, None)
-    secs = across.vsc.tendon_sections()
+    secs = tendon_sections()
     centres = sorted({float(r["x_c_m"]) for r in rows})
     got = across.binned_rows(pts, across.across_coordinates(secs), centres, {})
     got = {(r["interface"], round(r["x_c_m"], 6), round(r["s_lo_m"], 7)):
@@ -164,9 +141,9 @@ def test_the_pressure_across_is_todays():
     def mean_plus(part, itf, x):
         v = [f for (i, xc, _), f in part.items() if i == itf and xc == round(x, 6)]
         return sum(f[0] for f in v) / sum(f[2] for f in v)
-    quad = sel(rep.ANCF, f"mu 0.3{rep.SPACE}quadratic across", "16 el.")
-    default = sel(rep.ANCF, "mu 0.3", "16 el.")
-    solids = [sel(rep.SOLID, "mu 0.3", f"h {h} mm") for h in ("2.00", "1.40")]
+    quad = sel(ANCF, f"mu 0.3{SPACE}quadratic across", "16 el.")
+    default = sel(ANCF, "mu 0.3", "16 el.")
+    solids = [sel(SOLID, "mu 0.3", f"h {h} mm") for h in ("2.00", "1.40")]
     for itf in ("lg_sol", "lg_mg"):
         for x in centres:
             ps = [mean_plus(s, itf, x) for s in solids]

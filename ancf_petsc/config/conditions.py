@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from ..physics.element3363 import VECTORS
+from .history import HistorySpec, history_curve
 from .specs import FIX_PRESETS, BCSpec, LoadSpec, ProbeSpec
 from .values import ConfigError, key_path, mapping, number, sequence, shown, string, vector
 
@@ -30,8 +31,8 @@ def beam_ref(value, path: str, names: list[str]) -> int:
 def _fix(value, path: str) -> list[tuple[int, int]]:
     if isinstance(value, str):
         if value not in FIX_PRESETS:
-            raise ConfigError(path, f"unknown preset {shown(value)}; use clamped, reduced or a "
-                                    "mapping like {r: xyz, r_y: xz}")
+            raise ConfigError(path, f"unknown preset {shown(value)}; use {', '.join(FIX_PRESETS)} "
+                                    "or a mapping like {r: xyz, r_y: xz}")
         return list(FIX_PRESETS[value])
     mapping(value, path, optional=VECTORS)
     dofs = []
@@ -85,16 +86,19 @@ def _displacement(value, path: str) -> list[tuple[int, int, float]]:
     return sorted(out)
 
 
-def parse_boundary_conditions(value, names: list[str], n_nodes: list[int]) -> list[BCSpec]:
-    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced) and
-    prescribed displacements (``displacement``, ramped with the load factor)."""
+def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
+                              history: HistorySpec | None = None) -> list[BCSpec]:
+    """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced / plane)
+    and prescribed displacements (``displacement``, ramped with the load factor, or following a
+    ``column`` of the load ``history``)."""
     bcs = []
     for i, bc in enumerate(sequence(value, "boundary_conditions", nonempty=False)):
         p = f"boundary_conditions[{i}]"
-        mapping(bc, p, required=("beam", "node"), optional=("fix", "displacement", "name", "curve"))
-        if "curve" in bc and "displacement" not in bc:
-            raise ConfigError(f"{p}.curve", "a curve says how a displacement follows the load "
-                                            "factor; this support prescribes none")
+        mapping(bc, p, required=("beam", "node"), optional=("fix", "displacement", "name", "curve", "column"))
+        for key in ("curve", "column"):
+            if key in bc and "displacement" not in bc:
+                raise ConfigError(f"{p}.{key}", f"a {key} says how a displacement follows the load "
+                                                "factor; this support prescribes none")
         if "fix" not in bc and "displacement" not in bc:
             raise ConfigError(p, "give fix (components held in place), displacement (components "
                                  "moved with the load factor), or both")
@@ -111,16 +115,20 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int]) -> li
         if name in [b.name for b in bcs]:
             raise ConfigError(f"{p}.name", f"duplicate support name {name!r}")
         curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None
+        if moved:
+            curve = history_curve(bc, history, p, curve)
         bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve))
     return bcs
 
 
-def parse_loads(value, names: list[str], n_nodes: list[int]) -> list[LoadSpec]:
-    """``loads``: a point force on r, or a total force spread over an end section (traction)."""
+def parse_loads(value, names: list[str], n_nodes: list[int],
+                history: HistorySpec | None = None) -> list[LoadSpec]:
+    """``loads``: a point force on r, or a total force spread over an end section (traction);
+    scaled by the load factor, a ``curve`` of it, or a ``column`` of the load ``history``."""
     loads = []
     for i, ld in enumerate(sequence(value, "loads", nonempty=False)):
         p = f"loads[{i}]"
-        mapping(ld, p, required=("beam", "node"), optional=("force", "traction_force", "curve"))
+        mapping(ld, p, required=("beam", "node"), optional=("force", "traction_force", "curve", "column"))
         if ("force" in ld) == ("traction_force" in ld):
             raise ConfigError(p, "give exactly one of 'force' (point force on r) or "
                                  "'traction_force' (total force spread over the end section)")
@@ -129,7 +137,7 @@ def parse_loads(value, names: list[str], n_nodes: list[int]) -> list[LoadSpec]:
         kind = "force" if "force" in ld else "traction_force"
         if kind == "traction_force" and node not in (0, n_nodes[bi] - 1):
             raise ConfigError(f"{p}.node", "a traction_force acts on an end section: use first or last")
-        curve = _curve(ld["curve"], f"{p}.curve") if "curve" in ld else None
+        curve = history_curve(ld, history, p, _curve(ld["curve"], f"{p}.curve") if "curve" in ld else None)
         loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p, curve))
     return loads
 

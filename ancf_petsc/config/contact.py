@@ -81,8 +81,9 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
                        hint=" (a factor on the multipliers' unit k_s; it does not change the answer)")
     if value.get("tangential") is not None:
         c.tangential = parse_tangential(value["tangential"])
-    c.fade = string(value.get("fade", c.fade), f"{p}.fade", FADE_RULES)
-    if c.fade == "newton" and c.tangential is not None and c.tangential.law != TANGENTIAL_LAW_NAMES[0]:
+    tangential = c.tangential is not None and c.tangential.law != TANGENTIAL_LAW_NAMES[0]
+    c.fade = string(value.get("fade", "settle" if tangential else "newton"), f"{p}.fade", FADE_RULES)
+    if c.fade == "newton" and tangential:
         raise ConfigError(f"{p}.fade", "newton differentiates the fade weights of the normal "
                                        "constraints only, not a tangential law's; use settle "
                                        "with contact.tangential")

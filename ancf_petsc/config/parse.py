@@ -19,20 +19,26 @@ from .beams import check_imported_loops, parse_beams
 from .bundle import expand_bundle
 from .conditions import beam_ref, check_curves, parse_boundary_conditions, parse_loads, parse_probes, parse_steps
 from .contact import parse_contact
+from .history import parse_history
 from .sections import parse_sections
 from .solving import parse_accuracy, parse_output, parse_partition, parse_petsc, parse_solver
 from .specs import TWIST_RULES, ModelSpec
 from .values import ConfigError, mapping, number, shown, string, vector
 
 TOP_KEYS = ("name", "units", "geometry", "beams", "boundary_conditions", "loads", "steps",
-            "probes", "output", "solver", "petsc", "contact", "partition", "bundle", "accuracy")
+            "probes", "output", "solver", "petsc", "contact", "partition", "bundle", "accuracy",
+            "history")
 
 
 def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> ModelSpec:
     """Validate a loaded YAML document and return the ``ModelSpec``."""
     if isinstance(raw, dict) and "bundle" in raw:
         raw = expand_bundle(raw)
-    mapping(raw, "", required=("name", "geometry", "beams", "steps"), optional=TOP_KEYS[1:])
+    history = None
+    if isinstance(raw, dict) and raw.get("history") is not None:
+        history = parse_history(raw["history"], base_dir)
+    mapping(raw, "", required=("name", "geometry", "beams") + (() if history else ("steps",)),
+            optional=TOP_KEYS[1:])
     name = _name(raw["name"])
     if "units" in raw and raw["units"] != "SI":
         raise ConfigError("units", "only SI (m, N, Pa) is supported; write units: SI or omit it")
@@ -50,20 +56,33 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     check_imported_loops(beams, sections)
     if twist_rule[0] == "centroid_of":
         beam_ref(twist_rule[1], "geometry.twist_axis.centroid_of", names)
-    steps = parse_steps(raw["steps"])
+    steps = _steps(raw, history)
     probes = parse_probes(raw.get("probes", []), names, n_nodes)
     spec = ModelSpec(
         name=name, length=length, twist_deg=twist, twist_axis=axis, beams=beams,
-        boundary_conditions=parse_boundary_conditions(raw.get("boundary_conditions", []), names, n_nodes),
-        loads=parse_loads(raw.get("loads", []), names, n_nodes), steps=steps, probes=probes,
+        boundary_conditions=parse_boundary_conditions(raw.get("boundary_conditions", []), names, n_nodes,
+                                                      history),
+        loads=parse_loads(raw.get("loads", []), names, n_nodes, history), steps=steps, probes=probes,
         output=parse_output(raw.get("output", {}), name), solver=parse_solver(raw.get("solver", {})),
         petsc=parse_petsc(raw.get("petsc", {}) or {}),
         contact=parse_contact(raw["contact"], names) if raw.get("contact") is not None else None,
         base_dir=base_dir, raw=raw, partition=parse_partition(raw.get("partition")),
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
-        sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo)
+        sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo, history=history)
     check_curves(spec)
+    if history is not None and "predictor" not in (raw.get("solver") or {}):
+        spec.solver.predictor = "tangent"        # non-proportional frames (solving/predictor.py)
     return spec
+
+
+def _steps(raw: dict, history) -> list[float]:
+    """The reported load factors: ``steps``, or with a load history every frame (1 … N)."""
+    if history is None:
+        return parse_steps(raw["steps"])
+    if raw.get("steps") is not None:
+        raise ConfigError("steps", f"with history every frame of {history.source} is a reported step "
+                                   f"(load factor k = frame k, 1 ... {history.n_frames}); remove steps")
+    return [float(k) for k in range(1, history.n_frames + 1)]
 
 
 def _name(value) -> str:

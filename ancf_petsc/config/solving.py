@@ -18,7 +18,7 @@ SOLVER_KEYS = {
     "growth": (lambda v, p: number(v, p, lo=1.0, hi=10.0), False),
     "min_det_f": (lambda v, p: number(v, p, lo=0.0, hi=0.9), False),
     "merit": (lambda v, p: string(v, p, ("energy", "residual")), False),
-    "predictor": (lambda v, p: string(v, p, ("none", "secant")), False),
+    "predictor": (lambda v, p: string(v, p, ("none", "secant", "tangent")), False),
     "easy_iterations": (lambda v, p: integer(v, p, lo=1), False),
     "matrix": (lambda v, p: string(v, p, ("auto", "aij", "sbaij")), False),
     "linear": (lambda v, p: string(v, p, ("auto", "direct", "fieldsplit")), True),

@@ -23,10 +23,17 @@ TWIST_RULES = ("centroid", "origin", "junction")
 #: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
 REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
                         "smoothing")
+#: named supports → fixed (vector, component) pairs, vectors in VECTORS order (r, r_y, r_z, r_yy,
+#: r_zz, r_yz), components 0, 1, 2 = x, y, z (README.md, "Fix presets", says what each means)
 FIX_PRESETS = {
+    # a built-in end: all 18 components (the solid's u = 0 over the root face)
     "clamped": [(v, c) for v in range(6) for c in range(3)],
-    # the paper's "r fixed, cross-section free to contract": all but r_y·e_y and r_z·e_z
+    # the paper's "r fixed, cross-section free to contract": all but r_y·e_y and r_z·e_z, so the
+    # section's in-plane shear (r_y·e_z, r_z·e_y) and its quadratic modes are clamped too
     "reduced": [(v, c) for v in range(6) for c in range(3) if (v, c) not in ((1, 1), (2, 2))],
+    # a root face on a frictionless plane x = const (the solid's u_x = 0 over the face, free in
+    # its plane): every x-component, r itself, and r_y·e_z (the section's rigid turn about x)
+    "plane": [(0, 0), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (3, 0), (4, 0), (5, 0)],
 }
 
 
@@ -62,6 +69,11 @@ class BeamSpec:
     axial_points: int = DEFAULT_AXIAL_POINTS
     element: str = DEFAULT_ELEMENT        # element type, see element3363.ELEMENTS
     locking: str = "none"                 # 'ecm' (Poisson), 'mixed' (volumetric): remedies, model.Beam.parts
+    #: the volumetric term on a section rule of this degree (selective reduced integration, a
+    #: locking diagnosis of ancf_verify.fibres; set in code, no config key): model.Beam.volumetric_degree
+    volumetric_degree: int | None = None
+    #: ``locking: mixed`` on other pressure columns (set in code, no config key): model.Beam.pressure_columns
+    pressure_columns: tuple | None = None
 
 
 @dataclass
@@ -105,6 +117,9 @@ class TangentialSpec:
     # their neighbours (merge, as the normal ones: unique root multipliers) or kept
     # (contact/multipliers.py fold_tangential; docs/interface.md Limits)
     supported_ends: str = "merge"
+    #: Coulomb: no friction on the tangential functions centred below this reference x [m] (a
+    #: diagnostic of the clamped roots, set in code, no config key: ancf_verify.friction.beams)
+    free_zone: float = 0.0
 
 
 @dataclass
@@ -119,13 +134,18 @@ class ContactSpec:
     # (axial_points − 1), linear across (1): docs/contact.md, "Which pressure space"
     projection: tuple[int, int] = (2, 1)
     per_element: bool = False             # pressure discontinuous between A elements
+    # the axial pressure functions span groups of this many A elements: the space of a coarser
+    # mesh on this one's displacements (a diagnosis, set in code: no config key;
+    # ancf_verify/studies/contact_variants.py)
+    group: int = 1
     # the end functions at supported ends (both bodies clamped): folded into their neighbours
     # (merge) or kept (docs/contact.md, "Supported ends")
     supported_ends: str = "merge"
     scaling: float = 1.0                  # factor on k_s, the multipliers' unit (no effect on answers)
-    # the fade weights of points past B's ends: settled between Newton solves, or differentiated
-    # inside them (Newton on the state and the weights together; contact/weights.py)
-    fade: str = "settle"
+    # the fade weights of points past B's ends: differentiated inside Newton's iteration (newton,
+    # the default without a tangential law) or settled between solves (settle, the default with
+    # one; contact/weights.py)
+    fade: str = "newton"
     tangential: TangentialSpec | None = None   # interface shear (None: frictionless)
 
 
@@ -137,7 +157,8 @@ class SolverSpec:
     max_cutbacks: int = 12
     growth: float = 2.0
     easy_iterations: int = 8
-    predictor: str = "secant"              # none | secant (extrapolate the last increment)
+    predictor: str = "secant"              # none | secant | tangent (solving/predictor.py); a load
+                                           # history's default is tangent (config/parse.py)
     reuse_tangent: bool = True            # chord steps / kept fieldsplit factors (solving.chord)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
@@ -191,3 +212,4 @@ class ModelSpec:
     sections: Any = None                   # geometry.sections (config.sections.SectionsSpec)
     twist_rule: tuple = ("point",)         # twist-axis rule (model.build.resolve_twist_axis); twist_axis then
     twist_default: bool = False            # holds the resolved point; True: the rule was not given
+    history: Any = None                    # history: (config.history.HistorySpec): loads over frames

@@ -3,25 +3,30 @@
 −Σ τ ∇²g over A's and B's nodes and the constraint rows −k_s Φ ∇g of its multipliers, as dense
 blocks with their DOF indices for the assembly layer to insert.
 
-With the fade weights differentiated (``contact.fade: newton``, weights.py) w_p = w(ζ_p(q)), so
-the constraint rows take ∇ḡ = Φ (w ∇g + g ∇w) and the forces −Σ τ_p ∇g_p, τ_p = p_p w_p
-(p_p = k_s (Φᵀ z·load)_p), gain −Σ p_p ∇g_p ∇w_pᵀ; the multipliers' columns stay −k_s Φ w ∇g:
-the Jacobian of the same residual, unsymmetric where a point is partly weighted."""
+With the fade weights differentiated (``contact.fade: newton``, weights.py) w_p = w(ζ_p(q)): the
+constraint rows and the multipliers' columns take ∇ḡ = Φ (w ∇g + g ∇w), the forces
+−Σ_p p_p ∇(w_p g_p) (p_p = k_s (Φᵀ z·load)_p) and the stiffness
+−Σ_p p_p (w ∇²g + ∇g ∇wᵀ + ∇w ∇gᵀ + g ∇²w): the exact, symmetric Jacobian."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE
+from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE, SLOTS
 from .gap import gap_gradient, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
-from .weights import weight_gradient
+from .weights import weight_derivatives
 
 EL = DOFS_PER_ELEMENT          # an element's 54 DOFs (3 nodes)
 Z = 2 * DOFS_PER_NODE          # the segment's two multiplier nodes
 
 #: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
 CHUNK_POINTS = 2048
+
+
+def state_nodes(c, st: ContactState):
+    """``x_of(elements)``: the nodal vectors (E, 18, 3) of elements at the evaluated state."""
+    return lambda els: st.xl[st.lpos(c.conn[els])].reshape(len(els), SLOTS, 3)
 
 
 def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
@@ -34,6 +39,15 @@ def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
         pos = st.lpos(c.conn[e])                                          # (P, 3)
         dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
         floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
+    if c.weights.differentiated:
+        # −Σ_p p_p g_p ∇w_p: the weights' part of the contact forces (forces = −Σ_k λ_k ∇ḡ_k)
+        gw, band, _ = weight_derivatives(c.projector, pr)
+        if len(band):
+            f = -(st.pressure[band] * pr.g[band])[:, None] * gw[band]
+            for half, e in enumerate((c.points.eA[pr.idx[band]], pr.eB[band])):
+                pos = st.lpos(c.conn[e])
+                dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
+                floc += np.bincount(dofs, f[:, EL * half:EL * (half + 1)].ravel(), minlength=floc.size)
     # the constraint rows; a function shared with another rank: each adds its own points
     rows = DOFS_PER_NODE * st.lpos(c.mult_block[c.mults]) + c.space.slot[c.mults]
     share = c.Phi @ np.ones(len(pr.g)) if c.sum_over_ranks is not None else 1.0
@@ -91,13 +105,18 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     K = np.zeros((n_s, D, D))
     Vg = V
     if c.weights.differentiated:
-        gw = weight_gradient(c.projector, sub)              # ∇w_p (0 off the fade bands)
-        if np.any(gw != 0.0):
+        gw, band, hess = weight_derivatives(c.projector, sub, state_nodes(c, st))
+        if len(band):
             Vg = V.copy()                                   # ∇(w_p g_p) with w = w(ζ(q))
             Vg[at] += sub.g[:, None] * gw
             Pe, Ge = np.zeros((n_s, P_s, Dq)), np.zeros((n_s, P_s, Dq))
             Pe[at], Ge[at] = grad * st.pressure[sel][:, None], gw
-            K[:, :Dq, :Dq] -= np.matmul(Pe.transpose(0, 2, 1), Ge)     # −Σ p_p ∇g_p ∇w_pᵀ
+            PG = np.matmul(Pe.transpose(0, 2, 1), Ge)
+            K[:, :Dq, :Dq] -= PG + PG.transpose(0, 2, 1)   # −Σ p_p (∇g ∇wᵀ + ∇w ∇gᵀ)
+            # −Σ p_p g_p ∇²w_p over each band point's 108 unknowns
+            coef = -(st.pressure[sel][band] * sub.g[band])[:, None, None]
+            cb = cols[band]
+            np.add.at(K, (s_loc[band][:, None, None], cb[:, :, None], cb[:, None, :]), coef * hess)
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
@@ -116,8 +135,8 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     dRg, dRz, om = (np.zeros(m_ids.shape) for _ in range(3))
     dRg[real], dRz[real], om[real] = st.rows.dR_dg[loc], st.rows.dR_dz[loc], st.rows.omega[loc]
     Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
-    Gc = -c.stiffness * np.matmul(Phi_s, V)          # (n_s, K, Dq)
-    Gr = Gc if Vg is V else -c.stiffness * np.matmul(Phi_s, Vg)
+    Gc = -c.stiffness * np.matmul(Phi_s, Vg)         # (n_s, K, Dq): ∇ḡ = Φ ∇(w g)
+    Gr = Gc
     share = Phi_s.sum(axis=2)
     ss, kk = np.nonzero(real)
     second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]

@@ -48,7 +48,7 @@ class Contact:
         self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
         self.space = with_tangential(build_space(
             self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
-            spec.per_element, merged=supported_ends(model, interfaces, spec.supported_ends)),
+            spec.per_element, spec.group, merged=supported_ends(model, interfaces, spec.supported_ends)),
             any(t.multipliers for t in self.terms), held_ends(model, interfaces, spec.tangential))
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()
@@ -66,7 +66,7 @@ class Contact:
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
         #: the points' weights past B's ends (weights.py; ``contact.fade: newton`` differentiates them)
-        self.weights = PointWeights(self.points.n_points, differentiated=spec.fade == "newton")
+        self.weights = PointWeights(self.points.n_points, spec.fade)
         self._cache = None
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
@@ -223,8 +223,8 @@ class Contact:
 
     @property
     def symmetric(self) -> bool:
-        """Whether the Jacobian is symmetric (every term's law is; fade weights not differentiated)."""
-        return not self.weights.differentiated and all(t.symmetric for t in self.terms)
+        """Whether the Jacobian is symmetric (every term's law is)."""
+        return all(t.symmetric for t in self.terms)
 
     @property
     def solver_defaults(self) -> dict:

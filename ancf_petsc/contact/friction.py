@@ -104,6 +104,17 @@ def stick_fraction(tPhi, area: np.ndarray, m_stick: np.ndarray) -> np.ndarray:
     return np.divide(tPhi.T @ (area * m_stick), weight, out=np.zeros(len(weight)), where=weight > 0.0)
 
 
+def reference_axial(model, points) -> np.ndarray:
+    """Reference x [m] of every contact point on its A element (beams straight along x)."""
+    x = np.zeros(len(points.eA))
+    for b in model.beams:
+        m = (points.eA >= b.element_offset) & (points.eA < b.element_offset + b.n_elements)
+        e = points.eA[m] - b.element_offset
+        x0, x1 = b.x_nodes[2 * e], b.x_nodes[2 * e + 2]
+        x[m] = x0 + 0.5 * (points.xi[m] + 1.0) * (x1 - x0)
+    return x
+
+
 class CoulombFriction(PartnerTerm):
     """Coulomb friction |t| ≤ μ p⁺ with tangential multipliers (module docstring)."""
     law = "coulomb"
@@ -117,9 +128,14 @@ class CoulombFriction(PartnerTerm):
     #: (a cut-back cannot help there: Coulomb's law is homogeneous in the load)
     options = {"snes_max_it": "200", "snes_linesearch_type": "l2"}
 
-    def __init__(self, coefficient: float, augmentation: float, model, points, projector):
+    def __init__(self, coefficient: float, augmentation: float, model, points, projector,
+                 free_zone: float = 0.0):
         super().__init__(model, points, projector)
         self.mu = float(coefficient)
+        #: a diagnostic: no friction on the functions whose support is centred (the points' mean
+        #: reference x, weighted by their weights) below ``free_zone`` [m]: their bound μ ẑ is 0
+        self.free_zone = float(free_zone)
+        self.x_ref = reference_axial(model, points) if free_zone > 0.0 else None
         self.augmentation = float(augmentation)
         self.n_nodes = model.n_nodes
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
@@ -134,7 +150,7 @@ class CoulombFriction(PartnerTerm):
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
         """From ``contact.tangential`` (``friction`` μ, ``augmentation`` c's factor, default 1)."""
         aug = spec.augmentation if spec.augmentation is not None else 1.0
-        return cls(spec.friction, aug, model, points, projector)
+        return cls(spec.friction, aug, model, points, projector, spec.free_zone)
 
     # ------------------------------------------------------------------ numbering
     def set_numbering(self, c, perm: np.ndarray) -> None:
@@ -182,10 +198,15 @@ class CoulombFriction(PartnerTerm):
         probe = c.law.phase.probe                   # the bodies alone: friction held, rows decoupled
         if probe:
             bound = np.zeros_like(bound)
+        free = self._free(c, wp)
+        if free is not None:
+            bound = np.where(free, 0.0, bound)
         a = y + self.augmentation * U
         held = ~c.space.tdrop[c.mults] & (not probe)    # a folded function's y is held at zero
         proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=held)
         R, T, g = y - proj, -S, (0.0 if held_bound else -1.0) * direction
+        if free is not None:
+            g[free] = 0.0
         na = np.einsum("ki,ki->k", nbar, a)
         dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
         Y = tPhi.T @ y
@@ -199,6 +220,16 @@ class CoulombFriction(PartnerTerm):
                                   pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, T=T, g=g,
                                   direction=direction, bound=bound, m_stick=m_stick, slide=slide,
                                   R=R, share=share, dRdn=dRdn, positive=positive)
+
+    def _free(self, c, wp: np.ndarray) -> np.ndarray | None:
+        """(M,) the local functions centred below ``free_zone``, or None without a free zone."""
+        if self.x_ref is None:
+            return None
+        sums = np.column_stack([c.Phi @ wp, c.Phi @ (wp * self.x_ref[c.local])])
+        if c.sum_over_ranks is not None:
+            sums = c.sum_over_ranks(sums)
+        weight = sums[:, 0]
+        return (weight > 0.0) & (sums[:, 1] < self.free_zone * np.where(weight > 0.0, weight, 1.0))
 
     def hold_bounds(self) -> float:
         """Tresca's problem (the bounds μ ẑ held at the last evaluation's; module docstring):

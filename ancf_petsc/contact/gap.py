@@ -63,6 +63,17 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
 
 
 
+def projection_conditioning(pr) -> np.ndarray:
+    """det H / det a of every point (1 on B's surface, g = 0): how well its closest point is
+    determined; it falls towards 0 as the point lies a radius of curvature of B away from it
+    (H = a − g b singular) and is negative past that."""
+    T = pr.Yz
+    a = np.matmul(T.transpose(0, 2, 1), T)
+    b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
+    H = a - pr.g[:, None, None] * b
+    return np.linalg.det(H) / np.linalg.det(a)
+
+
 def _projection_parts(pr):
     """a, b, H⁻¹ and U, V (P, 2, 108) of the linearised projection H Δζ = (U + g V) Δq."""
     T = pr.Yz                                                        # (P, 3, 2)
@@ -80,6 +91,56 @@ def normal_gradient(pr) -> np.ndarray:
     a, b, Hi, U, V = _projection_parts(pr)
     M = V + b @ Hi @ (U + pr.g[:, None, None] * V)
     return -(pr.Yz @ _inverse2(a)) @ M
+
+
+def _slot_vector(N: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(P, 36 × 3) vectors N_s v_i (slot-major) from slot values N (P, 36) and 3-vectors v (P, 3)."""
+    return (N[:, :, None] * v[:, None, :]).reshape(len(N), -1)
+
+
+def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray) -> np.ndarray:
+    """∇²(c·ζ) (P, 108, 108) of the partner place ζ = (ξ_B, t_B) of every point of ``pr``
+    contracted with fixed weights c (P, 2), from the closest-point condition r = −Y_ζᵀ d = 0
+    differentiated twice:
+
+        ∇²(c·ζ) = −λ·(φ_ζζζ[ζ′, ζ′] + 2 sym(∂H/∂q ζ′) + r_qq),   λ = H⁻¹ c,
+
+    with φ_αβγ = Y_αβ·Y_γ + Y_αγ·Y_β + Y_βγ·Y_α − Y_αβγ·d, ∂H_αβ/∂q from H = Y_ζᵀY_ζ − Y_ζζ·d
+    and r_α,qq = −(a_α bᵀ + b a_αᵀ) ⊗ I (a_α = [0, N_B,α], b = [N_A, −N_B]): the surface is
+    linear in B's nodal vectors and d in both bodies'.  ``NBzz``, ``Yzzz``: B's shape functions'
+    second ζ-derivatives and the surface's third (``projection.surface_third``)."""
+    P = len(pr.g)
+    T, Tab, d = pr.Yz, pr.Yzz, pr.d                                    # (P,3,2), (P,3,2,2), (P,3)
+    a, b, Hi, U, V = _projection_parts(pr)
+    dz = Hi @ (U + pr.g[:, None, None] * V)                           # ζ′ (P, 2, 108)
+    lam = np.einsum("pab,pb->pa", Hi, c)                              # H symmetric
+    phi = (np.einsum("piab,pic->pabc", Tab, T) + np.einsum("piac,pib->pabc", Tab, T)
+           + np.einsum("pibc,pia->pabc", Tab, T) - np.einsum("piabc,pi->pabc", Yzzz, d))
+    psi = np.einsum("pa,pabc->pbc", lam, phi)
+    out = np.einsum("pbj,pbc,pck->pjk", dz, psi, dz)                 # φ_ζζζ[ζ′, ζ′]
+    # Σ_α λ_α ∂H_αβ/∂q for β = ξ, t
+    zA = np.zeros((P, SLOTS))
+    NA, NB, NBz = pr.NA, pr.NB, pr.NBz
+    lam_h = np.empty((P, 2, 108))
+    for beta in range(2):
+        tb = np.einsum("pa,pia->pi", lam, Tab[:, :, :, beta])          # Σ_α λ_α Y_αβ
+        part_a = _slot_vector(np.concatenate([-NA, NB], axis=1), tb)
+        lt = np.einsum("pa,pia->pi", lam, T)                            # Σ_α λ_α Y_α
+        nb_lam = np.einsum("psa,pa->ps", NBz, lam)                      # Σ_α λ_α N_B,α
+        nbb_lam = np.einsum("psa,pa->ps", NBzz[:, :, :, beta], lam)     # Σ_α λ_α N_B,αβ
+        part_b = (_slot_vector(np.concatenate([zA, nb_lam], axis=1), T[:, :, beta])
+                  + _slot_vector(np.concatenate([zA, NBz[:, :, beta]], axis=1), lt)
+                  - _slot_vector(np.concatenate([zA, nbb_lam], axis=1), d))
+        lam_h[:, beta] = part_a + part_b
+    mixed = np.einsum("pbj,pbk->pjk", lam_h, dz)
+    out += mixed + mixed.transpose(0, 2, 1)
+    # Σ_α λ_α r_α,qq = −(ā bᵀ + b āᵀ) ⊗ I
+    abar = np.concatenate([zA, np.einsum("psa,pa->ps", NBz, lam)], axis=1)   # (P, 36)
+    bb = np.concatenate([NA, -NB], axis=1)
+    S = abar[:, :, None] * bb[:, None, :]
+    S = -(S + S.transpose(0, 2, 1))
+    out += np.einsum("pst,ij->psitj", S, np.eye(3)).reshape(P, 108, 108)
+    return -out
 
 
 def closest_point_gradient(pr) -> np.ndarray:

@@ -231,7 +231,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     some multipliers are not unique) and needs the factorisation's null-pivot detection; it is
     the space of the former penalty formulation, kept to compare with it.  ``group`` > 1 spans
     the axial functions over groups of that many A elements (the space of a coarser mesh on
-    this one's displacements: scripts/solid_contact_variants.py; no config key).  ``merged``
+    this one's displacements: ``ContactSpec.group``, set in code, no config key).  ``merged``
     (n_interfaces, 2) bool: fold the first / last axial function of those interfaces into its
     neighbour (supported ends: interfaces.supported_ends; only for axial degree ≥ 2, the
     trace space and richer: a linear space has fewer functions than the trace has values)."""

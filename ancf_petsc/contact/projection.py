@@ -16,18 +16,9 @@ import numpy as np
 
 from ..physics.element3363 import SLOTS
 from .descent import ROUNDING, Backtracking, newton_step
-from .surface import closest_parameter, section_shift, shape_on_curve
+from .fade import CURVE_FADE_END, END_FADE, end_weight
+from .surface import closest_parameter, section_shift, shape_on_curve, shape_third_on_curve
 
-#: a point whose closest point lies past an end of B's interface curve (the spline's end piece
-#: continues smoothly) keeps its full weight up to CURVE_OVERHANG of the curve's length beyond
-#: it; its weight then falls smoothly (C¹) to zero at CURVE_FADE_END, so that no point leaves the
-#: contact at once (a point switching off at 1.25 made Newton cycle between two states: the
-#: bulk-modulus sweep of the paper's columns, K = 0.90 GPa at ψ = 0°)
-CURVE_OVERHANG = 0.25
-CURVE_FADE_END = 0.3
-#: likewise past B's beam ends (in element lengths): the end element's polynomial continues and
-#: the weight falls from 1 at the end to 0 at a quarter of an element beyond it
-END_FADE = 0.25
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
 MAX_ITERATIONS = 40
 #: a partner place within this much of a B element boundary (in ξ) is sought across it too
@@ -56,47 +47,6 @@ class Projection:
     Yzz: np.ndarray        # (P, 3, 2, 2) second derivatives
     in_window: bool        # every point stayed within its candidate B elements (search_margin)
     converged: bool        # every local Newton iteration converged
-
-
-def fade(u: np.ndarray) -> np.ndarray:
-    """1 − 3u² + 2u³ on [0, 1], 1 below, 0 above: a C¹ step from 1 to 0."""
-    v = np.clip(u, 0.0, 1.0)
-    return 1.0 - v * v * (3.0 - 2.0 * v)
-
-
-def fade_slope(u: np.ndarray) -> np.ndarray:
-    """d/du of ``fade``: −6u(1 − u) on [0, 1], 0 elsewhere (C¹: 0 at both ends)."""
-    return np.where((u > 0.0) & (u < 1.0), -6.0 * u * (1.0 - u), 0.0)
-
-
-def _fade_arguments(xiB, tB, t_end, at_first, at_last) -> tuple:
-    """The fades' arguments at partner places (``end_weight``): u_t past the curve's ends, u_x
-    past the beam's; whether t_B is below the curve's start, and ξ_B's overhang (signed)."""
-    below = -tB > tB - t_end
-    u_t = (np.where(below, -tB, tB - t_end) / t_end - CURVE_OVERHANG) / (CURVE_FADE_END - CURVE_OVERHANG)
-    raw = np.where(at_last, xiB - 1.0, 0.0) + np.where(at_first, -1.0 - xiB, 0.0)
-    return u_t, np.maximum(raw, 0.0) / (2.0 * END_FADE), below, raw
-
-
-def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
-               at_last: np.ndarray) -> np.ndarray:
-    """Weight of a partner place (ξ_B, t_B): 1 on B's surface, falling past the curve's ends
-    (overhang as a share of the curve's length T) and past the beam's ends (``at_first``/
-    ``at_last``: on B's first/last element, in element lengths)."""
-    u_t, u_x, _, _ = _fade_arguments(xiB, tB, t_end, at_first, at_last)
-    return fade(u_t) * fade(u_x)
-
-
-def end_weight_slope(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
-                     at_last: np.ndarray) -> np.ndarray:
-    """∂w/∂ζ (P, 2) of ``end_weight`` at the partner places (ξ_B, t_B)."""
-    u_t, u_x, below, raw = _fade_arguments(xiB, tB, t_end, at_first, at_last)
-    sx = np.where(at_last, 1.0, 0.0) - np.where(at_first, 1.0, 0.0)
-    f_t, f_x = fade(u_t), fade(u_x)
-    dw_dt = (fade_slope(u_t) * np.where(below, -1.0, 1.0) / (t_end * (CURVE_FADE_END - CURVE_OVERHANG))
-             * f_x)
-    dw_dxi = f_t * fade_slope(u_x) * sx * (raw > 0.0) / (2.0 * END_FADE)
-    return np.stack([dw_dxi, dw_dt], axis=1)
 
 
 class Projector:
@@ -346,6 +296,25 @@ class Projector:
         eB[sel], xiB[sel], tB[sel], weight[sel] = self.wrap(itf[sel], eB[sel], xiB[sel], tB[sel])
         search.restart(pin)
         return pin
+
+
+def surface_third(projector: Projector, x_of, itf, eB, xiB, tB) -> tuple[np.ndarray, np.ndarray]:
+    """N_B,ζζ (P, 18, 2, 2) and Y_ζζζ (P, 3, 2, 2, 2) of B's surface at (e_B, ξ_B, t_B) (the
+    closest point's second-order sensitivity, gap.closest_point_hessian)."""
+    P = len(eB)
+    S, S1, S2, S3 = (np.zeros((P, 2)) for _ in range(4))
+    for k, inter in enumerate(projector.interfaces):
+        sel = itf == k
+        if not np.any(sel):
+            continue
+        t, c = tB[sel], inter.curve_b
+        S[sel], S1[sel] = c(t) + projector._shift[k], c(t, 1)
+        if c.degree >= 2:
+            S2[sel] = c(t, 2)
+        if c.degree >= 3:
+            S3[sel] = c(t, 3)
+    NBzz, NBzzz = shape_third_on_curve(xiB, S, S1, S2, S3)
+    return NBzz, np.einsum("psi,psabc->piabc", x_of(eB), NBzzz)
 
 
 @dataclass

@@ -46,6 +46,37 @@ def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray
     return prod[:, 0, 0], Nz, Nzz
 
 
+def shape_third_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray,
+                         S3: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """N_ζζ (P, 18, 2, 2) and N_ζζζ (P, 18, 2, 2, 2) at section points S(t) with derivatives S1,
+    S2, S3 (for the second-order sensitivity of the closest point, contact/gap.py)."""
+    L, dL = el.lagrange(xi)
+    _, my, mz = el.section_monomials(S[:, 0], S[:, 1])
+    _, _, N_zz = shape_on_curve(xi, S, S1, S2)
+    y1, z1, y2, z2 = S1[:, :1], S1[:, 1:], S2[:, :1], S2[:, 1:]
+    mt = my * y1 + mz * z1
+    mtt = my * y2 + mz * z2
+    mtt[:, 3:4] += y1 ** 2
+    mtt[:, 4:5] += z1 ** 2
+    mtt[:, 5:6] += 2.0 * y1 * z1
+    # third t-derivatives: (y²/2)‴ = 3 y′y″ + y y‴, (z²/2)‴ likewise, (yz)‴ = y‴z + 3(y″z′ + y′z″) + y z‴
+    mttt = my * S3[:, :1] + mz * S3[:, 1:]
+    mttt[:, 3:4] += 3.0 * y1 * y2
+    mttt[:, 4:5] += 3.0 * z1 * z2
+    mttt[:, 5:6] += 3.0 * (y1 * z2 + y2 * z1)
+    P = len(xi)
+
+    def outer(a, b):
+        return (a[:, :, None] * b[:, None, :]).reshape(P, SLOTS)
+
+    out = np.zeros((P, SLOTS, 2, 2, 2))
+    ddl = np.broadcast_to(DDL, L.shape)
+    out[:, :, 0, 0, 1] = out[:, :, 0, 1, 0] = out[:, :, 1, 0, 0] = outer(ddl, mt)    # L″ m_t
+    out[:, :, 0, 1, 1] = out[:, :, 1, 0, 1] = out[:, :, 1, 1, 0] = outer(dL, mtt)    # L′ m_tt
+    out[:, :, 1, 1, 1] = outer(L, mttt)                                              # L m_ttt
+    return N_zz, out
+
+
 def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False):
     """``shape_on_curve`` of ``beam`` on ``curve`` at (ξ, t)."""
     S = curve(t) + section_shift(beam)

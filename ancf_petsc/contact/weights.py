@@ -1,19 +1,31 @@
 """The weights of contact points in the weighted gaps when their partners slide past B's ends.
 
 A point's partner place (ξ_B, t_B) has the weight ``projection.end_weight``: 1 on B's surface and
-up to CURVE_OVERHANG beyond the ends of its interface curve, falling smoothly (C¹) to 0 at
-CURVE_FADE_END, and likewise past B's beam ends.  Two ways to solve with them
-(``contact.fade``):
+up to CURVE_OVERHANG beyond the ends of its interface curve, falling smoothly (C², a quintic) to 0
+at CURVE_FADE_END, and likewise past B's beam ends.  Two ways to solve with them (``contact.fade``):
 
-* ``settle`` (default): during a Newton solve a point whose weight was 1 at the last update
-  follows its partner (a wild iterate that slides it far acts through no far extrapolation of
-  B's surface), and a point partly off keeps the weight it had: a constant, so that the tangent
-  stays exact (and symmetric).  Between solves the weights are brought up to date and the state
-  solved again until none changes by more than ``WEIGHT_TOL`` (``refresh``): a fixed point.
-* ``newton``: every evaluation takes the weights w_p = w(ζ_p(q)) of its own partner places, and
-  the Jacobian their derivative ∇w_p = (∂w/∂ζ) ∂ζ/∂q (``weight_gradient``; ∂ζ/∂q from the
-  linearised projection, gap.py): Newton on the state and the weights together, with an
-  unsymmetric Jacobian (contact/blocks.py).
+* ``newton`` (the default without a tangential law): every evaluation takes the weights
+  w_p = w(ζ_p(q)) of its own partner places, inside the weighted gaps ḡ_k = Σ_p Φ_kp w_p g_p
+  and the forces, which are their exact variation −Σ_k λ_k ∇ḡ_k (a point in a fade band adds
+  −p_p g_p ∇w_p, of the size of its pointwise gap).  The Jacobian is their exact derivative:
+  ∇(w g) = w ∇g + g ∇w, and in the stiffness p (∇g ∇wᵀ + ∇w ∇gᵀ + g ∇²w) with
+  ∇²w = ζ′ᵀ (∂²w/∂ζ²) ζ′ + ∇²(∂w/∂ζ · ζ) from the closest point's second-order sensitivity
+  (gap.closest_point_hessian): Newton on the state and the weights together, symmetric (the
+  Hessian of the Lagrangian), so that LDLᵀ and its inertia still apply.
+* ``settle`` (the default with contact.tangential, whose laws keep their weights constant in a
+  solve): during a Newton solve a point whose weight was 1 at the last update follows its
+  partner, and a point partly off keeps the weight it had; between solves the weights are
+  brought up to date and the state solved again until none changes by more than ``WEIGHT_TOL``
+  (``refresh``): a fixed point, converging linearly.
+
+Measured on the gait envelope (the paper's outlines, twist 90° and 180°, three loading biases to
+1.2 kN; scripts/bench_envelope.py): at large twist the sections of neighbouring subtendons turn
+against each other and points near the ends of the interface curves slide up to half the
+curve's length past them.  The settled weights then cost 5-10 extra solves per level and did not
+settle at all on unilateral columns; the earlier narrow C¹ band (25-30 % of the curve's length)
+made Newton cycle (ψ = 180°, soleus-biased: a 2-cycle at 1030 N).  With the band 25-50 % and the
+weights differentiated exactly, the sliding columns take 48-66 Newton iterations to 1.2 kN with
+no cut-back (72-459 and a failure before).
 
 Before the fade, a point was switched off at once 25 % past the curve's end, and Newton cycled
 between two states when one sat there (the bulk-modulus sweep of the paper's sliding columns,
@@ -23,8 +35,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .gap import closest_point_gradient
-from .projection import end_weight_slope, subset
+from .gap import closest_point_gradient, closest_point_hessian, projection_conditioning
+from .fade import end_weight_curvature, end_weight_slope
+from .projection import subset, surface_third
 
 #: a change of a point's weight beyond this asks for another Newton solve (a weight off by 1e-6
 #: moves a weighted gap by 1e-6 of the point's local gap, ~1e-11 m)
@@ -46,35 +59,88 @@ def weight_gradient(projector, pr) -> np.ndarray:
     return out
 
 
-class PointWeights:
-    """The last updated weight of every contact point, with its checkpoint; ``differentiated``
-    (``contact.fade: newton``): every evaluation takes its partner places' own weights."""
+def weight_derivatives(projector, pr, x_of=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """∇w_p (P, 108) of every point of ``pr``, the positions of the points in a fade band
+    (``band``) and, with B's nodal vectors (``x_of(elements)``), their ∇²w_p (B, 108, 108)
+    = ζ′ᵀ (∂²w/∂ζ²) ζ′ + ∇²(∂w/∂ζ · ζ) (gap.closest_point_hessian): exact."""
+    itf = projector.points.itf[pr.idx]
+    first = np.array([i.b.element_offset for i in projector.interfaces], dtype=np.int64)[itf]
+    last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
+    args = (pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
+    slope = end_weight_slope(*args)
+    # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
+    # weight's derivatives there would be large and meaningless, so it counts as kept
+    band = np.flatnonzero(np.any(slope != 0.0, axis=1) & (projection_conditioning(pr) > WELL_POSED))
+    grad = np.zeros((len(pr.idx), 108))
+    if not len(band):
+        return grad, band, None if x_of is None else np.zeros((0, 108, 108))
+    sub = subset(pr, band)
+    dz = closest_point_gradient(sub)
+    grad[band] = np.einsum("pa,paj->pj", slope[band], dz)
+    if x_of is None:
+        return grad, band, None
+    curv = end_weight_curvature(*(a[band] for a in args))
+    NBzz, Yzzz = surface_third(projector, x_of, itf[band], pr.eB[band], pr.xiB[band], pr.tB[band])
+    hess = (np.einsum("paj,pab,pbk->pjk", dz, curv, dz)
+            + closest_point_hessian(sub, slope[band], NBzz, Yzzz))
+    return grad, band, hess
 
-    def __init__(self, n_points: int, differentiated: bool = False):
+
+#: det H / det a below which a point's weight is not differentiated (``weight_derivatives``)
+WELL_POSED = 0.5
+
+
+class PointWeights:
+    """The last updated weight of every contact point, with its checkpoint.  ``rule`` settle or
+    newton (``contact.fade``); ``differentiated``: the evaluations take their partner places' own
+    weights, differentiated (newton, from the second solve of an increment on: ``refresh``)."""
+
+    def __init__(self, n_points: int, rule: str = "settle"):
         self.values = np.ones(n_points)
         self._saved = self.values.copy()
-        self.differentiated = differentiated
+        self.rule = rule
+        self.differentiated = False
 
     def effective(self, idx: np.ndarray, current: np.ndarray) -> np.ndarray:
         """The weights of the points ``idx`` in an evaluation whose partner places have the
-        weights ``current``: settle: those that were whole follow them, the others keep theirs
-        (0 once their partner has left every fade band); newton: ``current``."""
+        weights ``current``: differentiated: ``current``; newton's solve from rest: the kept
+        ones (constants: the tangent is exact for them, and Newton converges quadratically to the
+        kept weights' state, from which the next solve differentiates them); settle: those that
+        were whole follow them, the others keep theirs (0 once their partner has left every
+        fade band)."""
         if self.differentiated:
             return current
         kept = self.values[idx]
+        if self.rule == "newton":
+            return kept.copy()
         return np.where(kept < 1.0, kept * (current > 0.0), current)
 
     def refresh(self, idx: np.ndarray, current: np.ndarray) -> float:
         """Update the points ``idx`` to ``current`` (what the output reports); the largest change
-        (newton: 0, every evaluation had its own weights)."""
+        (0 when the evaluations were differentiated).  With newton, a change beyond
+        ``WEIGHT_TOL`` after a solve that kept them (the first from rest, ``begin_increment``)
+        makes the next solves differentiate them."""
         change = float(np.max(np.abs(current - self.values[idx]), initial=0.0))
         self.values[idx] = current
-        return 0.0 if self.differentiated else change
+        if self.differentiated:
+            return 0.0
+        if self.rule == "newton" and change > WEIGHT_TOL:
+            self.differentiated = True
+        return change
 
     def set(self, values: np.ndarray) -> None:
         """Weights of a restored state (a restart), also as the checkpoint."""
         self.values = np.asarray(values, dtype=float).copy()
         self._saved = self.values.copy()
+
+    def begin_increment(self, from_rest: bool) -> None:
+        """newton: differentiate the weights in the increment's solves, but for the first solve
+        from rest, which keeps them (the reference state: its first iterates are far from the
+        answer, and points sliding through far extrapolations of B's surface then wreck them:
+        from rest on the paper's unilateral tendon at 8 elements, ψ = 45°, the differentiated
+        iterates met an inverted element and cost a cut-back and 44 more Newton iterations; kept,
+        the level takes 11)."""
+        self.differentiated = self.rule == "newton" and not from_rest
 
     def checkpoint(self) -> None:
         self._saved = self.values.copy()

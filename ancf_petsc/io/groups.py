@@ -88,6 +88,14 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
     for pair, d in (extra or {}).get("displacement_differences", {}).items():   # io/derived.py
         dd = g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
         dd.attrs["units"] = "m: u_x of the first beam's centroid line minus the second's, per node station"
+    for name, d in (extra or {}).get("subtendons", {}).items():       # io/subtendons.py
+        sg = g.create_group(f"subtendons/{name}")
+        sg.attrs["end_force_N"] = np.asarray(d["end_force"])
+        sg.attrs["elongation_m"] = d["elongation"]
+        sg.attrs["strain"] = d["strain"]
+    if extra and "frame" in extra:            # a load history's frame (config.history)
+        g.attrs["frame"] = extra["frame"]
+        g.attrs["time_s"] = extra["time"]
     if path is not None:
         write_restart_group(g, record, path)
 

@@ -10,4 +10,4 @@ package loads no PETSc: only the modules that need it import petsc4py."""
 
 #: the sub-modules (imported on use)
 __all__ = ["choice", "database", "diagnostics", "fascicles", "fieldsplit", "inertia", "interface_system",
-           "logging", "mumps_schur", "option_syntax", "options", "substructure"]
+           "log_view", "logging", "mumps_schur", "option_syntax", "options", "substructure"]

@@ -42,7 +42,7 @@ def _why_not_fieldsplit(model, contact, petsc_options: dict, prefix: str) -> str
         return "it needs contact multipliers (the fascicles' coupling)"
     if not contact.symmetric:
         return ("its factorisations are LDLᵀ, and the Jacobian is unsymmetric (friction of "
-                "contact.tangential or contact.fade: newton)")
+                "contact.tangential)")
     if len(model.beams) < 2:
         return "it needs at least two beams"
     if chosen:

@@ -78,12 +78,11 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
     ``auto`` takes SBAIJ node blocks when they pay and work: MUMPS LDLᵀ (the default solver) or
     the fascicle Schur solver (``linear`` 'fieldsplit') on 3363 beams (3333 beams hold half of
     each node block at zero).  An unsymmetric Jacobian (``symmetric`` False: Coulomb friction
-    at an interface, or ``contact.fade: newton``) takes AIJ and refuses a symmetric factorisation."""
+    at an interface) takes AIJ and refuses a symmetric factorisation."""
     pc, factor = factor_package(config_options, prefix, symmetric)
     if not symmetric and pc in SYMMETRIC_PCS:
         raise InputError("petsc.pc_type", f"{pc} factors a symmetric matrix, but the Jacobian is "
-                                           "unsymmetric (friction of contact.tangential or "
-                                           "contact.fade: newton); use lu")
+                                           "unsymmetric (friction of contact.tangential); use lu")
     if linear == "fieldsplit":
         pc, factor = "cholesky", "mumps"        # symmetric sub-blocks and MUMPS on the multipliers
     full = node_blocks_fit(model)
@@ -96,7 +95,7 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
         if pc not in SBAIJ_PCS or not symmetric:
             raise InputError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij"
                               + ("" if symmetric else " (an unsymmetric Jacobian: contact.tangential "
-                                 "friction or contact.fade: newton)") + "; use aij or auto")
+                                 "friction)") + "; use aij or auto")
     return choice
 
 

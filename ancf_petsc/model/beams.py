@@ -12,8 +12,11 @@ import numpy as np
 
 from ..config.specs import ModelSpec
 from ..physics import element3363 as el
+from ..physics.cubature import ellipse_rule, gauss_legendre
 from ..physics.element3363 import DOFS_PER_NODE
-from ..physics.mixed import ProjectedDilatation, pressure_basis
+from ..physics.goh import GOH
+from ..physics.materials import NeoHookean
+from ..physics.mixed import ProjectedDilatation, grouped_basis, pressure_basis
 from ..physics.section import Section
 
 
@@ -43,6 +46,13 @@ class Beam:
     # and (families, E, na, 3) on the axis (``locking: ecm``); set once (model/fibre_setup.py)
     fibres: np.ndarray = field(repr=False, default=None)
     fibres_axis: np.ndarray = field(repr=False, default=None)
+    #: selective reduced integration of the volumetric term (a locking diagnosis, set in code,
+    #: no config key: BeamSpec.volumetric_degree): the section rule's degree, None = the full rule
+    volumetric_degree: int | None = None
+    #: ``locking: mixed`` on another pressure space per station: groups of columns of the complete
+    #: quadratic basis (physics/mixed.py grouped_basis; a diagnosis, set in code, no config key:
+    #: BeamSpec.pressure_columns); None: {1, y, z}
+    pressure_columns: tuple | None = None
 
     @property
     def vectors(self) -> tuple[int, ...]:
@@ -65,15 +75,34 @@ class Beam:
         K/2 (J − 1)² on the dilatation projected per axial station onto {1, y, z}, the condensed
         three-field functional of physics/mixed.py; one part, whose law ``element_data`` binds to
         the elements' weights."""
+        if self.volumetric_degree is not None:
+            return self._selective_parts()
         mat = self._bound(self.material, self.fibres)
         if self.locking == "mixed":
-            return [(self.dN, self.wq, ProjectedDilatation(mat, pressure_basis(self.yz, self.wq, self.axial_points)))]
+            basis = pressure_basis(self.yz, self.wq, self.axial_points) if self.pressure_columns is None \
+                else grouped_basis(self.yz, self.wq, self.axial_points, self.pressure_columns)
+            return [(self.dN, self.wq, ProjectedDilatation(mat, basis))]
         on_axis = self._bound(self.material, self.fibres_axis)
         if self.locking == "ecm":
             free = self.material.poisson_free()
             return [(self.dN, self.wq, self._bound(free, self.fibres)), (self.dN_axis, self.wq_axis, on_axis),
                     (self.dN_axis, -self.wq_axis, self._bound(free, self.fibres_axis))]
         return [(self.dN, self.wq, mat)]
+
+    def _selective_parts(self) -> list[tuple[np.ndarray, np.ndarray, object]]:
+        """The law without its volumetric term on the full rule, plus K/2 (J − 1)² on the
+        elliptic section rule of degree ``volumetric_degree`` (same axial points): selective
+        reduced integration over the section.  Neo-Hookean and GOH laws, elliptic sections."""
+        m, semi = self.material, self.section.shape_params.get("semi_axes")
+        if semi is None or not isinstance(m, (NeoHookean, GOH)):
+            raise ValueError(f"beam {self.name}: volumetric_degree needs an elliptic section and a "
+                             "neo-Hookean or GOH law")
+        pts, w = ellipse_rule(*semi, self.volumetric_degree)
+        xa, wa = gauss_legendre(self.axial_points)
+        _, dN = el.shape_functions(*el.tensor_points(xa, pts), self.vectors)
+        matrix = GOH(m.mu, 0.0, m.k1, m.k2, m.kappa, m.fibres) if isinstance(m, GOH) else NeoHookean(m.mu, 0.0)
+        return [(self.dN, self.wq, self._bound(matrix, self.fibres)),
+                (dN, np.repeat(wa, len(w)) * np.tile(w, len(xa)), NeoHookean(0.0, m.K))]
 
     @staticmethod
     def _bound(material, directions):
@@ -113,6 +142,8 @@ class Model:
     geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
     warnings: list = field(default_factory=list)          # implausible sizes (plausibility.py)
     supports: list = field(default_factory=list)         # the boundary conditions (Support)
+    #: per beam, the section-mean weights m̄_k = ∫ m_k dA / A of its last node (elongations)
+    end_means: list = field(default_factory=list)
 
     @property
     def f_ext(self) -> np.ndarray:

@@ -192,7 +192,8 @@ def build_model(spec: ModelSpec) -> Model:
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,
                     x_nodes=x_nodes, axial_points=bs.axial_points, element=bs.element,
-                    locking=bs.locking)
+                    locking=bs.locking, volumetric_degree=bs.volumetric_degree,
+                    pressure_columns=bs.pressure_columns)
         xa, wa = gauss_legendre(bs.axial_points)
         beam.xi, y, z = el.tensor_points(xa, section.points)
         beam.yz = np.column_stack([y, z])
@@ -256,5 +257,6 @@ def build_model(spec: ModelSpec) -> Model:
                        if p.vector == "mean" else np.eye(len(el.VECTORS))[el.VECTOR_INDEX[p.vector]])
               for p in spec.probes}
     warnings = size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
+    end_means = [_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[-1]) for b in beams]
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,
-                 geometry_report=report, warnings=warnings, supports=supports)
+                 geometry_report=report, warnings=warnings, supports=supports, end_means=end_means)

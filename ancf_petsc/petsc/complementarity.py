@@ -42,11 +42,11 @@ the paper's tendon, equal loading, mu = 3 took 4576 Newton iterations and 4 cut-
 with the predictor, 526 and none without.  Collective: every rank
 gets the same S, d (sums over ranks) and the same solution.
 
-With the fade weights differentiated (``contact.fade: newton``) K is unsymmetric (LU here) and the
-constraint rows carry g ∇w, the multipliers' columns not: S is still formed from the columns
-(the frozen-weight linearisation).  S from the rows (G K⁻¹ Bᵀ, its symmetric part for the LCP,
-with or without the unsymmetric solve on the predicted active set) was tried and not kept: the
-alex GOH column then stopped at 98.9 N instead of reaching 400 N (measured 2026-11-26).
+With the fade weights differentiated (``contact.fade: newton``, contact/weights.py) the rows and
+columns of the multipliers are the same exact gradients of the weighted gaps (the variational
+weights), so S = G K⁻¹ Gᵀ is the exact linearisation.  (Until the gait envelope the weights'
+terms were in the rows only: K unsymmetric, S from the columns; the alex GOH column stopped at
+98.9 N with S from the rows, measured 2026-11-26.)
 """
 from __future__ import annotations
 
@@ -100,7 +100,7 @@ class ComplementarityPredictor:
         self.ksp = PETSc.KSP().create(comm=problem.comm)
         self.ksp.setType("preonly")
         pc = self.ksp.getPC()
-        # K's fade-weight terms (contact.fade: newton) make it unsymmetric: LU then
+        # an unsymmetric K (a tangential law's terms, when they are not excluded above): LU
         pc.setType("cholesky" if problem.symmetric else "lu")
         pc.setFactorSolverType("mumps")
         self.ksp.setOptionsPrefix("ancf_lcp_")
@@ -202,7 +202,13 @@ class ComplementarityPredictor:
         z = _owned_values(X, self.dofs, self.comm)
         S = 0.5 * (S + S.T)
         self._z = z
-        return S, cvec - Bty - S @ z
+        d = cvec - Bty - S @ z
+        if not (np.all(np.isfinite(S)) and np.all(np.isfinite(d))):
+            # a state the residual is not defined at (an inverted element: NaN by design,
+            # problem.py), or a tangent MUMPS factored into infinities: no linearisation here
+            # (the same on every rank: S and d are sums over the ranks)
+            return None
+        return S, d
 
     def _probe_matrix(self, X: PETSc.Vec) -> PETSc.Mat:
         """K with every multiplier acting on the bodies and the z rows decoupled (the probe

@@ -57,7 +57,8 @@ class GOH:
     volumetric_term = True          # the matrix's K/2 (J − 1)² (``locking: mixed`` projects it)
 
     def __init__(self, mu: float, bulk_modulus: float, k1: float, k2: float, kappa: float = 0.0,
-                 fibres: dict | None = None, directions: np.ndarray | None = None):
+                 fibres: dict | None = None, directions: np.ndarray | None = None,
+                 e_rounding: float = E_ROUNDING):
         self.mu, self.K = float(mu), float(bulk_modulus)
         self.k1, self.k2, self.kappa = float(k1), float(k2), float(kappa)
         self.fibres = dict(fibres or {"follow": "twist", "extra_twist_deg": 0.0, "angles_deg": (0.0,)})
@@ -65,6 +66,9 @@ class GOH:
         self.follow_axis = float(self.fibres["follow"] == "axis")
         self.matrix = NeoHookean(mu, bulk_modulus)
         self.a0 = None if directions is None else np.asarray(directions, dtype=float)
+        #: |Ē| below this is Ē = 0 for the switch's tangent (E_ROUNDING; 0: the exact switch, a
+        #: diagnosis of scripts/goh_published_sets.py)
+        self.e_rounding = float(e_rounding)
 
     @property
     def families(self) -> int:
@@ -80,7 +84,7 @@ class GOH:
         a0 = np.asarray(a0, dtype=float)
         if a0.shape[0] != self.families or a0.shape[-1] != 3:
             raise ValueError(f"fibre directions must be ({self.families}, ..., 3); got {a0.shape}")
-        return GOH(self.mu, self.K, self.k1, self.k2, self.kappa, self.fibres, a0)
+        return GOH(self.mu, self.K, self.k1, self.k2, self.kappa, self.fibres, a0, self.e_rounding)
 
     def take(self, rows) -> "GOH":
         """The law bound to the directions of elements ``rows`` (kernels process elements in chunks)."""
@@ -90,7 +94,7 @@ class GOH:
         """Matrix at ν = 0 with the same fibres (``locking: ecm``): the fibre energy cancels in
         the axis correction Ψ − Ψ₀, so it is integrated over the full section."""
         m = self.matrix.poisson_free()
-        return GOH(m.mu, m.K, self.k1, self.k2, self.kappa, self.fibres, self.a0)
+        return GOH(m.mu, m.K, self.k1, self.k2, self.kappa, self.fibres, self.a0, self.e_rounding)
 
     def describe(self) -> str:
         f = self.fibres
@@ -114,7 +118,7 @@ class GOH:
             Fa = np.einsum("...ij,...j->...i", F, a0)
             I4 = np.einsum("...i,...i->...", Fa, Fa)
             E = I4 - 1.0 if c == 1.0 else self.kappa * (I1 - 3.0) + c * (I4 - 1.0)
-            on = E >= -E_ROUNDING          # tangent at Ē = 0: the tension side's (see below)
+            on = E >= -self.e_rounding     # tangent at Ē = 0: the tension side's (see below)
             out.append((a0, Fa, I4, np.maximum(E, 0.0), on))
         return out
 

@@ -1,7 +1,7 @@
 """The material law of a validated config mapping (``config/beams.py``): neo-Hookean, SVK or GOH."""
 from __future__ import annotations
 
-from .goh import GOH
+from .goh import E_ROUNDING, GOH
 from .materials import NeoHookean, StVenantKirchhoff
 
 
@@ -10,8 +10,9 @@ from .materials import NeoHookean, StVenantKirchhoff
 MATERIALS = {
     NeoHookean.name: lambda spec: NeoHookean(spec["mu"], spec["bulk_modulus"]),
     StVenantKirchhoff.name: lambda spec: StVenantKirchhoff(spec["E"], spec["nu"]),
+    # e_rounding: no config key, set in code on a parsed spec (a diagnosis; physics/goh.py)
     GOH.name: lambda spec: GOH(spec["mu"], spec["bulk_modulus"], spec["k1"], spec["k2"], spec["kappa"],
-                               spec["fibres"]),
+                               spec["fibres"], e_rounding=spec.get("e_rounding", E_ROUNDING)),
 }
 
 

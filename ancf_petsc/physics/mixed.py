@@ -59,6 +59,13 @@ def pressure_basis(yz: np.ndarray, wq: np.ndarray, stations: int, degree: int = 
     return out.reshape(*lead, P, stations * k)
 
 
+def grouped_basis(yz: np.ndarray, wq: np.ndarray, stations: int, columns) -> np.ndarray:
+    """Φ (P, m) of the space spanned per station by sums of the complete quadratic basis's
+    columns (1, y, z, y², yz, z²): ``columns`` [[0], [1], [2], [3, 5]] is {1, y, z, y² + z²}."""
+    B = pressure_basis(yz, wq, stations, degree=2)
+    return np.stack([sum(B[..., 6 * s + k] for k in col) for s in range(stations) for col in columns], -1)
+
+
 class ProjectedDilatation:
     """A law (neo-Hookean or GOH: a decoupled K/2 (J − 1)²) with its volumetric term on θ = Π_h J.
 

@@ -92,6 +92,12 @@ class ContactSteps:
         self.problem, self.contact = problem, problem.contact
         self.frozen = False            # the status is kept during SNES solves (line searches)
 
+    def begin_increment(self, from_rest: bool) -> None:
+        """An increment's solves start (the fade weights' rule, contact/weights.py)."""
+        if self.contact is not None:
+            self.contact.weights.begin_increment(from_rest)
+            self.contact._cache = None
+
     def phases(self, from_rest: bool) -> list:
         return [NEWTON] if self.contact is None else self.contact.law.phases(from_rest)
 
@@ -167,6 +173,7 @@ class PhasedNewton:
         """(reason of the last solve, Newton iterations of all of them)."""
         P = self.steps
         P.frozen = self.between_solves
+        P.begin_increment(from_rest)
         its, solved = 0, None
         start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:

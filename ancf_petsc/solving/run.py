@@ -17,6 +17,7 @@ from .. import status as st
 from ..config.specs import ModelSpec
 from ..errors import InputError
 from ..io.derived import displacement_differences, interface_pairs
+from ..io.subtendons import subtendon_report
 from ..io.files import DirectoryLock, OutputError, prepare_output_dir
 from ..io.restart import check_same_run, read_restart
 from ..io.results import ResultsWriter
@@ -232,6 +233,11 @@ class Run:
             fields = contact_fields(problem, problem.X)
             reactions = support_reactions(problem, problem.X)
             extra = {"reactions": {s.name: r.tolist() for s, r in zip(self.model.supports, reactions)}}
+            if self.spec.history is not None:
+                extra["frame"] = self.spec.history.frame_of(rec.load_factor)
+                extra["time"] = self.spec.history.time_of(rec.load_factor)
+            if q is not None:              # rank 0
+                extra["subtendons"] = subtendon_report(self.model, q, rec.load_factor)
             if gaps is not None:
                 extra["contact"] = gaps
                 if q is not None:          # rank 0
@@ -251,7 +257,10 @@ class Run:
                                for n, p in self.writer.summary["steps"][-1]["probes"].items())
             unstable = (f"  UNSTABLE: {rec.negative_eigenvalues} negative tangent eigenvalue(s)"
                         if rec.negative_eigenvalues else "")
-            self.say(f"[ancf] step {k}/{len(self.spec.steps)}  load factor {rec.load_factor:.6g}  "
+            where = (f"frame {k}/{len(self.spec.steps)} (t = {self.spec.history.time_of(rec.load_factor):.4g} s)"
+                     if self.spec.history is not None else
+                     f"step {k}/{len(self.spec.steps)}  load factor {rec.load_factor:.6g}")
+            self.say(f"[ancf] {where}  "
                      f"Newton {rec.iterations} in {rec.substeps} substep(s)  {rec.reason}  "
                      f"|F| {rec.residual_norm:.2e}  {rec.wall_time:.2f} s{unstable}  {probes}")
             if k == 1:                      # the first level's plausibility warning, right away

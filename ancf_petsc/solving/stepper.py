@@ -24,6 +24,7 @@ from . import solver_messages
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
+from .predictor import TangentPredictor
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
                       reason_name)
 from .snes_solver import SNESSolver
@@ -43,6 +44,8 @@ class LoadStepper:
         #: complementarity.MAX_MULTIPLIERS multipliers; solving/newton.py)
         self.predictor = (ComplementarityPredictor(problem, self.solver.snes)
                           if ComplementarityPredictor.applies(problem) else None)
+        #: the tangent load predictor (solver.predictor: tangent; predictor.py)
+        self.tangent = TangentPredictor(problem, self.solver.snes)
         self.history: list[float] = []         # residual norms of the solves of an increment
         self.unsettled = False                  # the last solve's contact weights did not settle
         self.tresca_solves = 0                  # friction's fixed point in the last solve_at
@@ -148,6 +151,8 @@ class LoadStepper:
                 if self.spec.predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
                     self.problem.limits.limit_predictor(X_prev, X)    # fibre exponents (step_limits)
+                elif self.spec.predictor == "tangent" and self.tangent.predict(X, path.lam + step):
+                    self.problem.limits.limit_predictor(X_prev, X)
                 reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
                                                     from_rest=path.lam == 0.0)
                 tally.its += its
@@ -198,6 +203,7 @@ class LoadStepper:
     def _accept(self, path: PathState, X_prev: PETSc.Vec, step: float, its: int, neg, tally: LevelTally):
         if neg is not None:
             path.accepted_negative = neg
+        self.tangent.valid = True                      # the SNES's factor: a converged state's
         self.problem.checkpoint()
         self.problem.X.copy(path.dX_last)
         path.dX_last.axpy(-1.0, X_prev)
@@ -214,6 +220,7 @@ class LoadStepper:
         P = self.problem
         inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
         lost = bool(P.comm.tompi4py().allreduce(int(P.contact_failed)))
+        self.tangent.valid = False                     # the factor is the failed attempt's
         X_prev.copy(P.X)
         P.restore()
         path.dlam, give_up = self.control.after_failure(step, reason == UNSTABLE_STEP, tally)

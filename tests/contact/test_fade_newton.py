@@ -1,11 +1,13 @@
 """``contact.fade: newton`` (contact/weights.py): the fade weights of points whose partners sit past
-B's ends differentiated inside Newton's iteration.  The Jacobian, ∇w = (∂w/∂ζ) ∂ζ/∂q included,
-against central differences of the residual at states with partly weighted points; the slope of
-the weight against differences of ``end_weight``; the unsymmetric Jacobian's solver; config keys."""
+B's ends differentiated inside Newton's iteration, variationally (forces −Σ λ ∇ḡ with
+ḡ = Φ (w g)).  The Jacobian, ∇w and ∇²w (the closest point's second-order sensitivity) included,
+against central differences of the residual at states with partly weighted points, and its
+symmetry; the slope and curvature of the weight against differences of ``end_weight``; ∇²(c·ζ)
+against second differences of the projection; the default rule and config keys."""
 import numpy as np
 import pytest
 
-from ancf_petsc.contact.projection import end_weight, end_weight_slope
+from ancf_petsc.contact.fade import end_weight, end_weight_curvature, end_weight_slope
 from contact.test_contact import achilles, perturbed_state
 from helpers import assert_contact_jacobian, build_problem, contact_evaluation, press_where_penetrating
 
@@ -25,6 +27,73 @@ def test_weight_slope_is_the_derivative_of_the_end_weight():
     assert np.count_nonzero(slope[:, 0]) > 100 and np.count_nonzero(slope[:, 1]) > 100
     assert np.abs(slope[:, 0] - d_xi).max() < 1e-6 * np.abs(slope[:, 0]).max()
     assert np.abs(slope[:, 1] - d_t).max() < 1e-6 * np.abs(slope[:, 1]).max()
+
+
+def test_weight_curvature_is_the_second_derivative_and_vanishes_at_the_band_edges():
+    """∂²w/∂ζ² against central differences of ``end_weight_slope``; the quintic fade is C²: at
+    both edges of a band (u = 0, 1) its slope and curvature are zero, so a partner place held
+    at the end of a band has neither."""
+    from ancf_petsc.contact.fade import fade, fade_curvature, fade_slope
+    rng = np.random.default_rng(1)
+    n, T = 4000, 2.0
+    xi, t = rng.uniform(-1.6, 1.6, n), rng.uniform(-1.2, 3.2, n)
+    first, last = rng.random(n) < 0.5, rng.random(n) < 0.5
+    Tn = np.full(n, T)
+    curv = end_weight_curvature(xi, t, Tn, first, last)
+    h = 1e-6
+    for k, (dxi, dt) in enumerate(((h, 0.0), (0.0, h))):
+        diff = (end_weight_slope(xi + dxi, t + dt, Tn, first, last)
+                - end_weight_slope(xi - dxi, t - dt, Tn, first, last)) / (2 * h)
+        assert np.abs(curv[:, k] - diff).max() < 1e-5 * np.abs(curv).max()
+    assert np.count_nonzero(curv[:, 1, 1]) > 100 and np.count_nonzero(curv[:, 0, 0]) > 100
+    for u in (0.0, 1.0):
+        assert fade_slope(np.array([u]))[0] == 0.0 and fade_curvature(np.array([u]))[0] == 0.0
+    assert fade(np.array([0.0, 1.0])).tolist() == [1.0, 0.0]
+
+
+def test_second_order_sensitivity_of_the_closest_point():
+    """vᵀ ∇²(c·ζ) v (gap.closest_point_hessian) against second differences of the partner places
+    ζ(q ± h v) of every point, at a deformed state: the surface's third derivatives, ∂H/∂q and
+    the bodies' mixed terms all enter."""
+    from ancf_petsc.contact.blocks import state_nodes
+    from ancf_petsc.contact.gap import closest_point_hessian
+    P, _ = build_problem(achilles(contact={"mode": "sliding"}))
+    c = P.contact
+    X, free = fade_state(P)
+    saved = c.projector.state().copy()
+
+    def places(Y):
+        c.projector.set_state(saved)
+        c._cache = None
+        st = contact_evaluation(P, Y)
+        return st, np.column_stack([st.pr.xiB, st.pr.tB])
+
+    st, z0 = places(X)
+    keep = st.weight > 0.0                        # partner places not held at a band's end
+    rng = np.random.default_rng(5)
+    cw = rng.standard_normal((len(z0), 2))
+    from ancf_petsc.contact.projection import surface_third
+    NBzz, Yzzz = surface_third(c.projector, state_nodes(c, st), c.points.itf[st.pr.idx], st.pr.eB,
+                               st.pr.xiB, st.pr.tB)
+    hess = closest_point_hessian(st.pr, cw, NBzz, Yzzz)
+    v = X.duplicate()
+    v.setArray(rng.standard_normal(X.getLocalSize()) * free * 1e-6)
+    h = 4e-2          # second differences: the projection's tolerance (1e-11) sets the floor
+    vl = v.getArray()
+    Xp, Xm = X.copy(), X.copy()
+    Xp.axpy(h, v)
+    Xm.axpy(-h, v)
+    zp, zm = places(Xp)[1], places(Xm)[1]
+    same = keep & (places(Xp)[0].pr.eB == st.pr.eB) & (places(Xm)[0].pr.eB == st.pr.eB)
+    second = np.einsum("pa,pa->p", cw, zp - 2 * z0 + zm) / h ** 2
+    conn = c.conn
+    dofs = np.concatenate([(18 * conn[c.points.eA[st.pr.idx]][:, :, None] + np.arange(18)).reshape(-1, 54),
+                           (18 * conn[st.pr.eB][:, :, None] + np.arange(18)).reshape(-1, 54)], axis=1)
+    vv = vl[dofs]
+    analytic = np.einsum("pj,pjk,pk->p", vv, hess, vv)
+    assert same.sum() > 80
+    scale = np.abs(analytic[same]).max()
+    assert np.abs(analytic[same] - second[same]).max() < 1e-4 * scale
 
 
 def fade_state(P, seed=3):
@@ -47,17 +116,18 @@ def fade_state(P, seed=3):
 def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode):
     """J v against central differences of F (nodal vectors and multipliers) at a state where
     17 points are partly weighted (0 < w < 1, ∇w ≠ 0, on both kinds of fade band) and carry
-    pressure; J is unsymmetric there, and with the fade weights kept (settle) it is not exact."""
+    pressure; J is symmetric (the Hessian of the Lagrangian: the weights are variational)."""
     P, PETSc = build_problem(achilles(contact={"mode": mode, "fade": "newton"}))
     c = P.contact
-    assert not c.symmetric and not P.symmetric
+    assert c.symmetric and P.symmetric
+    c.weights.differentiated = True       # as from the second solve of an increment on (weights.py)
     P.load_factor = 50.0
     X, free = fade_state(P)
     st = contact_evaluation(P, X)
     part = (st.weight > 0.0) & (st.weight < 1.0)
     T = c.projector.t_end[st.pr.idx]
     o_t = np.maximum(-st.pr.tB, st.pr.tB - T) / T
-    assert part.sum() >= 15 and np.any(part & (o_t > 0.25)) and np.any(part & (o_t <= 0.25))
+    assert part.sum() >= 10 and np.any(part & (o_t > 0.25)) and np.any(part & (o_t <= 0.25))
     assert np.count_nonzero(st.pressure[part]) >= 10
     if mode == "unilateral":
         press_where_penetrating(P, X, st)
@@ -65,7 +135,7 @@ def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode):
     if mode == "unilateral":
         assert 0 < act.sum() < len(act)
     Jd = assert_contact_jacobian(P, X, free, act, h=1e-7)
-    assert np.abs(Jd - Jd.T).max() > 1e-3 * np.abs(Jd).max()
+    assert np.abs(Jd - Jd.T).max() < 1e-12 * np.abs(Jd).max()
 
 
 def test_fade_key_errors_name_the_key_path():
@@ -78,16 +148,16 @@ def test_fade_key_errors_name_the_key_path():
                             "tangential": {"law": "coulomb", "friction": 0.3}})
     with pytest.raises(ConfigError, match="^contact.fade: newton differentiates .* use settle"):
         parse_config(raw, base_dir=CONFIGS)
-    assert parse_config(achilles(contact={"mode": "sliding"}), base_dir=CONFIGS).contact.fade == "settle"
+    assert parse_config(achilles(contact={"mode": "sliding"}), base_dir=CONFIGS).contact.fade == "newton"
+    raw = achilles(contact={"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}})
+    assert parse_config(raw, base_dir=CONFIGS).contact.fade == "settle"
 
 
-def test_the_unsymmetric_jacobian_takes_aij_and_lu_as_friction_does():
-    from ancf_petsc.errors import InputError
+def test_the_differentiated_weights_keep_sbaij_and_ldlt():
+    """The variational weights leave the Jacobian symmetric: SBAIJ, MUMPS LDLᵀ and its inertia."""
     from ancf_petsc.linalg.choice import choose
     from ancf_petsc.linalg.options import default_options, matrix_type
     P, _ = build_problem(achilles(contact={"mode": "unilateral", "fade": "newton"}))
-    assert matrix_type(P.model, "auto", {}, symmetric=P.symmetric) == "aij"
-    assert default_options(P.symmetric)["pc_type"] == "lu"
+    assert matrix_type(P.model, "auto", {}, symmetric=P.symmetric) == "sbaij"
+    assert default_options(P.symmetric)["pc_type"] == "cholesky"
     assert choose("auto", P.model, P.contact, {})[0] == "direct"
-    with pytest.raises(InputError, match="fade: newton"):
-        matrix_type(P.model, "auto", {"pc_type": "cholesky"}, symmetric=P.symmetric)

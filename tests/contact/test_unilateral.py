@@ -8,7 +8,7 @@ import pytest
 
 from helpers import build_problem, load_raw, run_inline
 from ancf_petsc.contact.laws import BANDS, PATIENCE, Phase, UnilateralLaw
-from ancf_petsc.contact.projection import CURVE_FADE_END, CURVE_OVERHANG, END_FADE, end_weight
+from ancf_petsc.contact.fade import CURVE_FADE_END, CURVE_OVERHANG, END_FADE, end_weight
 
 
 def _serial_reduce(values, op):

@@ -169,6 +169,26 @@ def test_the_reference_state_has_the_tension_sides_tangent_despite_rounding():
         assert np.abs(law.stress(F)[0]).max() < 1e-6 * MU                # and no fibre stress
 
 
+def test_the_exact_switch_is_an_option_of_the_law_and_of_a_parsed_spec():
+    """``e_rounding`` = 0 (the exact Ē >= 0 switch, a diagnosis of scripts/goh_published_sets.py)
+    switches the fibres' tangent off where rounding makes Ē < 0; it survives binding the
+    directions and ``poisson_free``, and a parsed spec's material mapping carries it to the law."""
+    from ancf_petsc.physics.laws import make_material
+    rng = np.random.default_rng(3)
+    a0 = rng.standard_normal((1, 64, 3))
+    a0 /= np.linalg.norm(a0, axis=-1, keepdims=True)
+    F = np.eye(3) + 2e-16 * rng.standard_normal((64, 3, 3))
+    exact = GOH(MU, K, K1, K2, 0.0, e_rounding=0.0).with_directions(a0)
+    assert exact.poisson_free().e_rounding == 0.0 and exact.take(slice(0, 8)).e_rounding == 0.0
+    today = GOH(MU, K, K1, K2, 0.0).with_directions(a0).stress_and_tangent(F)[2].full()
+    before = exact.stress_and_tangent(F)[2].full()
+    assert np.abs(today - before).max() > 1e-3 * np.abs(today).max()
+    spec = {"model": "goh", "mu": MU, "bulk_modulus": K, "k1": K1, "k2": K2, "kappa": 0.0,
+            "fibres": {"follow": "twist", "extra_twist_deg": 0.0, "angles_deg": (0.0,)}}
+    assert make_material(spec).e_rounding == 1e-12
+    assert make_material({**spec, "e_rounding": 0.0}).e_rounding == 0.0
+
+
 def test_hydrostatic_tension_is_not_isotropic_without_the_split():
     """All-round Cauchy tension σ = p I on a fibre-reinforced cube: the law (fibre term not split)
     stretches less along the fibres, a sphere becomes an ellipsoid; the split form (Ī4) would

@@ -159,13 +159,11 @@ def test_the_solid_comparison_bars_stay_within_1_percent(tmp_path, case):
     ``locking: mixed``: the end-centroid displacement within 1 % of the committed converged solid
     answer (docs/solid_comparison.csv; docs/locking.md has every element count)."""
     import csv
-    import sys
+    from ancf_verify.bars.cases import CASES, ancf_config   # the bars' ANCF configs (no dolfinx)
     from helpers import ROOT
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
-    import verify_solid as vs        # the bars' ANCF configs (no dolfinx needed for them)
     with open(os.path.join(ROOT, "docs", "solid_comparison.csv"), newline="") as fh:
         ref = next(np.array([float(r[f"ref_u{c}_m"]) for c in "xyz"]) for r in csv.DictReader(fh) if r["case"] == case)
-    raw = vs.ancf_config(next(c for c in vs.CASES if c.key == case), 8, 2, str(tmp_path))
+    raw = ancf_config(next(c for c in CASES if c.key == case), 8, 2, str(tmp_path))
     raw["beams"][0]["locking"] = "mixed"
     u = np.array(run_inline(raw, tmp_path)["steps"][-1]["probes"]["tip"]["displacement"])
     assert np.linalg.norm(u - ref) < 0.01 * np.linalg.norm(ref)
@@ -186,3 +184,18 @@ def test_a_point_force_on_a_mixed_beam_is_warned_about():
     assert len(new) == 1 and new[0].startswith("warning: loads[0]") and "traction_force" in new[0]
     raw["loads"][0] = {"beam": "soleus", "node": "last", "traction_force": [1.0, 0.0, 0.0]}
     assert not [w for w in build_model(parse_config(raw, base_dir=CONFIGS)).warnings if "mixed" in w]
+
+
+def test_grouped_pressure_columns_span_the_spaces_they_name():
+    """``BeamSpec.pressure_columns`` (a locking diagnosis, scripts/locking_study.py space):
+    [[0], [1], [2]] is ``locking: mixed``'s own {1, y, z} basis column for column; [[0], [1], [2],
+    [3, 5]] adds y² + z² per station, the sum of the quadratic basis's columns 3 and 5."""
+    from ancf_petsc.physics.cubature import ellipse_rule, gauss_legendre
+    from ancf_petsc.physics.mixed import grouped_basis, pressure_basis
+    pts, w = ellipse_rule(0.006, 0.004, 6)
+    xa, wa = gauss_legendre(2)
+    yz, wq = np.tile(pts, (2, 1)), np.repeat(wa, len(w)) * np.tile(w, 2)
+    assert np.array_equal(grouped_basis(yz, wq, 2, [[0], [1], [2]]), pressure_basis(yz, wq, 2))
+    B2 = pressure_basis(yz, wq, 2, degree=2)
+    G = grouped_basis(yz, wq, 2, [[0], [1], [2], [3, 5]])
+    assert G.shape == (len(yz), 8) and np.allclose(G[:, 7], B2[:, 9] + B2[:, 11])

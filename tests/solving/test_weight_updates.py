@@ -20,6 +20,9 @@ class _Steps:
     def __init__(self, changes: int):
         self.changes, self.refreshes, self.frozen = changes, 0, False
 
+    def begin_increment(self, from_rest):
+        pass
+
     def phases(self, from_rest):
         return [NEWTON]
 

@@ -15,7 +15,7 @@ from helpers import CONFIGS, solved_config
 pytest.importorskip("matplotlib")
 
 from ancf_petsc import viz  # noqa: E402
-from ancf_petsc.contact.projection import CURVE_FADE_END  # noqa: E402
+from ancf_petsc.contact.fade import CURVE_FADE_END  # noqa: E402
 from ancf_petsc.io.reader import read_contact  # noqa: E402
 
 

@@ -1,5 +1,4 @@
-"""The section "Against a 3D solid with friction" of docs/interface.md and its figure, made from
-docs/solid_friction.csv (and docs/solid_friction_profiles.csv) alone."""
+"""The section 'Against a 3D solid with friction' of docs/interface.md and its figures, from the CSVs."""
 from __future__ import annotations
 
 import csv
@@ -7,12 +6,16 @@ import os
 
 import numpy as np
 
-import solid_friction_across
-import solid_friction_report as rep
-from solid_friction_report import ANCF, BASE, BODIES, CHECK, IFACES, SOLID, num
+from ancf_verify.friction.across import across_md
+from ancf_verify.friction.rows import (ANCF, BASE, BEGIN, BODIES, CHECK, DEFAULT_SPACE, END, IFACES, SOLID,
+    SPACE, SPACES, ZONE, ancf_columns, ancf_errors, differences, errors, num, read_csv, reference, solid_runs,
+    stick_order, variant_space, variant_value, write_csv)
+
 
 HEAD = "## Against a 3D solid with friction"
+
 TOL = 0.01
+
 SHOW = (10.0, 20.0, 40.0, 100.0, 200.0, 300.0, 400.0)
 
 
@@ -35,20 +38,20 @@ def checks_md(rows: list, psi: float) -> list:
     """The solid's own checks: FD tangent, mesh, regularisation, slip measure, increments."""
     L = ["| check | soleus | medial | lateral | medial, relative | lateral, relative |",
          "|---|---:|---:|---:|---:|---:|"]
-    runs = rep.solid_runs(rows, psi)
+    runs = solid_runs(rows, psi)
     hs = sorted(runs)
     pairs = []
     if len(hs) > 1:
         pairs.append((f"mesh: h {1e3 * hs[1]:.2f} → {1e3 * hs[0]:.2f} mm", runs[hs[1]], runs[hs[0]]))
     variants = sorted({r["variant"] for r in rows if r["model"] == SOLID and r["variant"] != BASE
-                       and rep.ZONE not in r["variant"] and num(r["psi_deg"]) == psi})
+                       and ZONE not in r["variant"] and num(r["psi_deg"]) == psi})
     for v in variants:
-        other = rep.solid_runs(rows, psi, v)
+        other = solid_runs(rows, psi, v)
         for h, lv in other.items():
             if h in runs:
                 pairs.append((f"{v} (against {BASE}; h {1e3 * h:.2f} mm)", lv, runs[h]))
     for name, a, b in pairs:
-        d = rep.differences(a, b)
+        d = differences(a, b)
         n = len(d["loads"])
         L.append(f"| {name} ({n} levels) | " + " | ".join(apct(d[f'{x}_abs'], 3) for x in BODIES) + " | "
                  + " | ".join(apct(d[f'{x}_rel'], 1) for x in BODIES[1:]) + " |")
@@ -56,7 +59,7 @@ def checks_md(rows: list, psi: float) -> list:
 
 
 def reference_md(rows: list, psi: float) -> list:
-    ref = rep.reference(rows, psi)
+    ref = reference(rows, psi)
     L = ["| load [N] | soleus u_x [mm] | medial u_x [µm] | lateral u_x [µm] | mesh change medial / lateral [µm] "
          "| friction on medial from soleus [N] | on lateral from soleus [N] | on medial from lateral [N] "
          "| stick share (mg_sol, lg_sol, lg_mg) |",
@@ -71,15 +74,15 @@ def reference_md(rows: list, psi: float) -> list:
 
 
 def ancf_md(rows: list, psi: float) -> list:
-    errs = rep.ancf_errors(rows, psi)
-    cols = rep.ancf_columns(rows, psi)
-    ref = rep.reference(rows, psi)
+    errs = ancf_errors(rows, psi)
+    cols = ancf_columns(rows, psi)
+    ref = reference(rows, psi)
     fs100 = friction_on_gastrocnemii(ref[100.0]["row"]) if 100.0 in ref else float("nan")
     L = ["| pressure space | augmentation c | elements | levels reached | soleus, relative | medial, relative "
          "| lateral, relative | medial / u_soleus | lateral / u_soleus | within 1 % | friction on the gastrocnemii "
          "from the soleus at 100 N (solid " + (f"{fs100:.1f}" if np.isfinite(fs100) else "—") + ") [N] |",
          "|---|---|---:|---|---:|---:|---:|---:|---:|---|---:|"]
-    for (v, ne) in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])):
+    for (v, ne) in sorted(cols, key=lambda k: (stick_order(k[0]), k[1])):
         e, col = errs.get((v, ne), {}), cols[(v, ne)]
         reached = max(col["levels"], default=0.0)
         status = f"all {len(ref)}" if not col["failed"] and len(e) == len(ref) else \
@@ -92,7 +95,7 @@ def ancf_md(rows: list, psi: float) -> list:
         if col["failed"] or len(e) < len(ref):
             verdict += " (not all levels)"
         f100 = friction_on_gastrocnemii(col["levels"][100.0]) if 100.0 in col["levels"] else float("nan")
-        L.append(f"| {rep.variant_space(v)} | {rep.variant_value(v)} | {ne} | {status} | {pct(worst['soleus'])} | "
+        L.append(f"| {variant_space(v)} | {variant_value(v)} | {ne} | {status} | {pct(worst['soleus'])} | "
                  f"{pct(worst['medial'], 0)} | {pct(worst['lateral'], 0)} | {pct(worsta['medial'])} | "
                  f"{pct(worsta['lateral'])} | {verdict} | " + (f"{f100:.1f}" if np.isfinite(f100) else "—") + " |")
     return L
@@ -113,35 +116,35 @@ def zone_md(rows: list, psi: float) -> list:
     """The free-zone diagnostic: each ANCF column without friction below x = zone against the
     solid run with the same zone (coarse mesh), beside the same column with friction everywhere
     against the plain solid on that mesh."""
-    zcols = rep.ancf_columns(rows, psi, zone=True)
+    zcols = ancf_columns(rows, psi, zone=True)
     if not zcols:
         return []
-    plain = rep.ancf_columns(rows, psi)
+    plain = ancf_columns(rows, psi)
     L = ["| augmentation c | elements | friction near the clamp | levels | solid | soleus, relative "
          "| medial / u_soleus | lateral / u_soleus | friction on the gastrocnemii from the soleus at 100 N, "
          "solid / ANCF [N] |", "|---|---:|---|---:|---|---:|---:|---:|---:|"]
-    for (v, ne) in sorted(zcols, key=lambda k: (rep.stick_order(k[0]), k[1])):
-        base, zone = v.split(rep.ZONE)
+    for (v, ne) in sorted(zcols, key=lambda k: (stick_order(k[0]), k[1])):
+        base, zone = v.split(ZONE)
         for label, col, variant in (("everywhere", plain.get((base, ne)), BASE),
-                                    (f"none below x = {zone}", zcols[(v, ne)], f"{BASE}{rep.ZONE}{zone}")):
-            runs = rep.solid_runs(rows, psi, variant)
+                                    (f"none below x = {zone}", zcols[(v, ne)], f"{BASE}{ZONE}{zone}")):
+            runs = solid_runs(rows, psi, variant)
             h = max(runs, default=None)
             if col is None or h is None:
                 continue
-            e = rep.errors(col["levels"], runs[h])
+            e = errors(col["levels"], runs[h])
             rel, ab = worst(e)
             f = [num(r["fx_mg_sol_N"]) + num(r["fx_lg_sol_N"]) for r in (runs[h].get(100.0), col["levels"].get(100.0))
                  if r is not None]
             reached = f"{len(e)}" + ("" if not col["failed"] else f" (to {max(col['levels'], default=0):g} N)")
-            L.append(f"| {rep.variant_value(base)} | {ne} | {label} | {reached} | {variant}, h {1e3 * h:.2f} mm | "
+            L.append(f"| {variant_value(base)} | {ne} | {label} | {reached} | {variant}, h {1e3 * h:.2f} mm | "
                      f"{pct(rel['soleus'])} | {pct(ab['medial'])} | {pct(ab['lateral'])} | "
                      + (" / ".join(f"{x:.1f}" for x in f) if len(f) == 2 else "—") + " |")
     return L
 
 
 def per_load_md(rows: list, psi: float, key) -> list:
-    ref = rep.reference(rows, psi)
-    col = rep.ancf_columns(rows, psi).get(key, {"levels": {}})["levels"]
+    ref = reference(rows, psi)
+    col = ancf_columns(rows, psi).get(key, {"levels": {}})["levels"]
     L = ["| load [N] | soleus solid / ANCF [mm] | medial solid / ANCF [µm] | lateral solid / ANCF [µm] "
          "| friction on the gastrocnemii from the soleus, solid / ANCF [N] |", "|---:|---:|---:|---:|---:|"]
     for F in sorted(ref):
@@ -157,7 +160,6 @@ def per_load_md(rows: list, psi: float, key) -> list:
                  f"{1e6 * ref[F]['lateral'][0]:+.1f} / {1e6 * num(a['lateral_ux_m']):+.1f} | {fs:.1f} / {fa:.1f} |")
     return L
 
-
 NEAR = 10e-3     # [m] the clamp zone of the profile table
 
 
@@ -169,7 +171,7 @@ def profiles_md(prof: list) -> list:
 
     def order(k):
         res = k[2].split()
-        return (k[0] != SOLID, k[1].split(",")[0], rep.SPACE in k[1], num(res[0]) if k[0] == ANCF else -num(res[1]), k[3])
+        return (k[0] != SOLID, k[1].split(",")[0], SPACE in k[1], num(res[0]) if k[0] == ANCF else -num(res[1]), k[3])
     keys = sorted({(p["model"], p["variant"], p["resolution"], num(p["load_N"])) for p in prof}, key=order)
     L = ["| model | variant | load [N] | " + " | ".join(f"{i}: Q⁺ / Q⁻ / F_x [N], x < {NEAR * 1e3:g} mm · beyond"
                                                     for i in IFACES) + " |",
@@ -209,7 +211,7 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
     """The whole section (from its heading to the end marker's line, exclusive)."""
     psis = sorted({num(r["psi_deg"]) for r in rows if r["model"] == SOLID}, key=lambda p: -p)
     mus = sorted({num(r["mu"]) for r in rows if r["model"] == SOLID})
-    L = [HEAD, "", rep.BEGIN, ""]
+    L = [HEAD, "", BEGIN, ""]
     gen = ("Generated by `scripts/verify_solid_friction.py` (`make verify-solid-friction`) from "
            "`docs/solid_friction.csv` and `docs/solid_friction_profiles.csv`, with the discussion from "
            "`docs/solid_friction.notes`; `--replot` redoes this section and the figure from them")
@@ -231,7 +233,7 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
           "exact stick: `docs/interface.md`, first sections), at the default augmentation c (1) and at c = 10 and "
           "0.1 (c only steers the semi-smooth Newton iteration; the answer must not depend on it); in the default "
           "pressure (and tangential multiplier) space, quadratic along × linear across, and in the richer ones of "
-          "`docs/solid_contact.md`: " + "; ".join(f"{n}: `{spaces_keys(k)}`" for n, k in rep.SPACES.items())
+          "`docs/solid_contact.md`: " + "; ".join(f"{n}: `{spaces_keys(k)}`" for n, k in SPACES.items())
           + " (`--ancf-spaces`).  Quantities: u_x at the end-section centroids (the soleus' is its "
           "elongation; the gastrocnemii move by tens of µm).", ""]
     for psi in psis:
@@ -244,9 +246,9 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
         L += ["**ANCF against the solid.**  Worst error over the levels reached (signed); the target is 1 % "
               "for the soleus and for each gastrocnemius, relative or against the soleus elongation:", ""]
         L += ancf_md(rows, psi) + [""]
-        cols = rep.ancf_columns(rows, psi)
-        full = [k for k in sorted(cols, key=lambda k: (rep.stick_order(k[0]), k[1])) if not cols[k]["failed"]
-                and (rep.variant_space(k[0]) == rep.DEFAULT_SPACE or rep.variant_value(k[0]) == "default")]
+        cols = ancf_columns(rows, psi)
+        full = [k for k in sorted(cols, key=lambda k: (stick_order(k[0]), k[1])) if not cols[k]["failed"]
+                and (variant_space(k[0]) == DEFAULT_SPACE or variant_value(k[0]) == "default")]
         for key in full or sorted(cols, key=lambda k: (-len(cols[k]["levels"]), k[1]))[:1]:
             L += [f"Per level, {key[0]}, {key[1]} elements:", ""] + per_load_md(rows, psi, key) + [""]
         zm = zone_md(rows, psi)
@@ -270,7 +272,7 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
               f"points within 3.5 mm of x at {F:g} N (μ Σ w p⁺ / Σ w is the mean friction bound per area); the "
               "distributions across the strip are drawn in the second figure (s: arc length along the interface "
               "curve from the triple point where the three subtendons meet):", ""]
-        L += solid_friction_across.across_md(across) + ["", "![pressure across the interfaces](figures/solid_friction_across.png)", ""]
+        L += across_md(across) + ["", "![pressure across the interfaces](figures/solid_friction_across.png)", ""]
     L += ["![solid vs ANCF with friction](figures/solid_friction.png)", ""]
     fd = fd_md(rows)
     if fd:
@@ -278,7 +280,7 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
               "while no point changes between stick and slip):", ""] + fd + [""]
     if notes:
         L += [notes.rstrip(), ""]
-    L += [rep.END]
+    L += [END]
     return "\n".join(L) + "\n"
 
 
@@ -287,9 +289,9 @@ def write_page(path: str, text: str) -> None:
     it; the page is created with a title when it does not exist."""
     page = open(path, encoding="utf-8").read() if os.path.exists(path) else \
         "# Interfaces between subtendons: shear, friction, displacement control\n\n"
-    if HEAD in page and rep.END in page:
+    if HEAD in page and END in page:
         a = page.index(HEAD)
-        b = page.index(rep.END) + len(rep.END)
+        b = page.index(END) + len(END)
         page = page[:a] + text.rstrip("\n") + page[b:]
     else:
         page = page.rstrip("\n") + "\n\n" + text
@@ -304,8 +306,8 @@ def plot(path: str, rows: list, prof: list, psi: float = 45.0) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(2, 2, figsize=(11, 8.2))
-    runs = rep.solid_runs(rows, psi)
-    ref = rep.reference(rows, psi)
+    runs = solid_runs(rows, psi)
+    ref = reference(rows, psi)
     if not ref:
         return
     for i, h in enumerate(sorted(runs, reverse=True)):
@@ -317,7 +319,7 @@ def plot(path: str, rows: list, prof: list, psi: float = 45.0) -> None:
         ax[0, 1].plot(Fs, [1e6 * num(lv[f]["medial_ux_m"]) for f in Fs], **sty)
         ax[0, 1].plot(Fs, [1e6 * num(lv[f]["lateral_ux_m"]) for f in Fs], **(sty | {"label": None, "color": "0.5"}))
         ax[1, 0].plot(Fs, [num(lv[f]["fx_mg_sol_N"]) + num(lv[f]["fx_lg_sol_N"]) for f in Fs], **sty)
-    cols = rep.ancf_columns(rows, psi)
+    cols = ancf_columns(rows, psi)
     colors = {4: "C0", 8: "C1", 16: "C2"}
     marks = {}
     for (v, ne), col in sorted(cols.items()):
@@ -340,7 +342,7 @@ def plot(path: str, rows: list, prof: list, psi: float = 45.0) -> None:
         a.set_xlabel("soleus load [N]")
         a.grid(True, lw=0.3)
     ax[0, 0].legend(fontsize=7, ncol=1)
-    _plot_profiles(ax[1, 1], prof)
+    plot_profiles(ax[1, 1], prof)
     fig.suptitle(f"Three subtendons with Coulomb friction (ψ = {psi:g}°): 3D solid against ANCF; grey band ±1 %",
                  fontsize=10)
     fig.tight_layout(rect=(0, 0, 1, 0.96))
@@ -348,7 +350,7 @@ def plot(path: str, rows: list, prof: list, psi: float = 45.0) -> None:
     plt.close(fig)
 
 
-def _plot_profiles(ax, prof: list) -> None:
+def plot_profiles(ax, prof: list) -> None:
     """Cumulative compressive normal force ∫_0^x q⁺ over the three interfaces at the highest
     profiled load, per model (dashed: frictionless)."""
     if not prof:
@@ -373,8 +375,8 @@ def _plot_profiles(ax, prof: list) -> None:
 
 def finish(paths, rows: list, meta: dict) -> None:
     """CSV, figure and the page section from the rows (and the profiles CSV)."""
-    rep.write_csv(paths.csv, rows)
-    rows = rep.read_csv(paths.csv)
+    write_csv(paths.csv, rows)
+    rows = read_csv(paths.csv)
     prof = read_profiles(os.path.join(os.path.dirname(paths.csv), "solid_friction_profiles.csv"))
     os.makedirs(os.path.dirname(paths.png), exist_ok=True)
     plot(paths.png, rows, prof)

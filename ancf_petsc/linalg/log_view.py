@@ -1,6 +1,6 @@
 """Read PETSc's ``-log_view`` text output: per-event times and MPI traffic, summed over stages.
 
-Used by the benchmark scripts (bench_scaling.py, bench_growth.py, project_scaling.py).  Times are
+Used by the benchmark scripts (scripts/bench_scaling.py, bench_growth.py, project_scaling.py).  Times are
 PETSc's "Max" column (the slowest rank); messages, lengths and reductions are its global counts.
 """
 from __future__ import annotations

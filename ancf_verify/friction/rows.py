@@ -1,33 +1,41 @@
-"""CSV rows, reference values, figure and page section of verify_solid_friction.py.
-
-The CSV (docs/solid_friction.csv) has one row per (run, load level) and the check rows; the
-section "Against a 3D solid with friction" of docs/interface.md and the figure are made from the
-CSV alone (``--replot``), between the markers below, so that the rest of that page is kept."""
+"""CSV rows and reference values of the friction comparison (docs/solid_friction.csv)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
 import csv
 import os
-from dataclasses import dataclass
 
 import numpy as np
 
-import verify_solid_contact as vsc
+from ancf_verify.contact.rows import write_rows
+
 
 SOLID, ANCF, CHECK = "solid P2 tet", "ANCF 2pt", "check"
+
 BASE = "stick 100"                   # the solid's reference variant
+
 ZONE = ", no friction x < "          # a free-zone diagnostic's variant: "<variant>, no friction x < 10 mm"
+
 SPACE = ", pressure "                # a pressure-space variant: "<variant>, pressure quadratic across"
+
+
 #: the beams' contact pressure (and tangential multiplier) spaces beside the default (quadratic
 #: along x linear across, 3 x 2 points): name -> contact keys (docs/solid_contact.md's variants)
 SPACES = {"quadratic across": {"curve_points": 3, "projection": {"axial": 2, "curve": 2}},
           "cubic along": {"axial_points": 4, "projection": {"axial": 3, "curve": 1}}}
+
 DEFAULT_SPACE = "quadratic along × linear across"
+
 IFACES = ("mg_sol", "lg_sol", "lg_mg")
+
 BODIES = ("soleus", "medial", "lateral")
+
 FIELDS = (["psi_deg", "mu", "model", "variant", "resolution", "h_m", "elements", "dofs", "load_N"]
           + [f"{b}_ux_m" for b in BODIES] + [f"fx_{i}_N" for i in IFACES] + [f"stick_{i}" for i in IFACES]
           + ["p_max_Pa", "p_min_Pa", "newton_its", "wall_s", "value", "note"])
+
 BEGIN = "<!-- verify_solid_friction: begin (generated from docs/solid_friction.csv; do not edit) -->"
+
 END = "<!-- verify_solid_friction: end -->"
 
 
@@ -61,7 +69,7 @@ def read_csv(path: str) -> list:
 
 
 def write_csv(path: str, rows: list) -> None:
-    vsc.write_rows(path, FIELDS, rows, lambda k: k.endswith(("_m", "_N", "_Pa")) or k == "value")
+    write_rows(path, FIELDS, rows, lambda k: k.endswith(("_m", "_N", "_Pa")) or k == "value")
 
 
 def row_key(r: dict) -> tuple:

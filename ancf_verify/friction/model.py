@@ -1,36 +1,12 @@
-"""Coulomb friction for the dolfinx solid tendon of verify_solid_contact.py (issue 27).
-
-The tangential law is the beam model's (ancf_petsc/contact/friction.py), posed at the slave Gauss
-points of the solid's mortar-type interfaces:
-
-* every slave point q keeps its *reference partner*: the master point (face, parameters ζ₀) it
-  touches in the reference configuration; the law acts on the relative displacement of the two
-  material points, d_q = x_s(q) − x_m(ζ₀) (current positions), ∇d = [N_s ⊗ I, −N_m(ζ₀) ⊗ I];
-* incremental return mapping from the stress σ₀ and relative displacement d₀ of the last
-  accepted load increment (Wriggers 2006, §5.2; Laursen 2002, §5):
-
-      σ = proj_{|σ| ≤ μ p⁺} (P (σ₀ + k (d − d₀))),   P = I − n nᵀ,
-
-  n the master's unit outward normal at the point's *current* closest point, p⁺ = max(p, 0) and
-  p the solid's contact pressure at the point: the nodal pressures p_k = Λ_k / ∫φ_k of the
-  weighted-gap multipliers interpolated with the same hats, p_q = Σ_k φ_k(q) p_k;
-* stick regularised by the stiffness k per area (a sticking point moves by σ/k):
-  k = ``stick`` × μ_max / h (h the mean slave edge);
-* virtual work Σ_q w_q σ_q · δd_q (w_q the reference area weight); the Jacobian
-  w ∇dᵀ (∂σ/∂d ∇d + ∂σ/∂n ∇n + ∂σ/∂p ∂p/∂z) is consistent (∇n includes the motion of the closest
-  point) and unsymmetric (MUMPS LU).
-
-``slip = "closest"`` replaces the reference-partner increment d − d₀ by the tangential motion
-of the slave point over the master since the last increment, measured on the current master
-surface: d − d₀ := x_s − x_m(ζ_n), ζ_n the closest point of the last accepted state (an
-objective slip measure, the usual one of solid contact codes; same return mapping otherwise).
-"""
+"""The contact solid with Coulomb friction: reference partners, return mapping, consistent tangent."""
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 
-import verify_solid_contact as vsc
+from ancf_verify.contact.problem import Problem
+from ancf_verify.contact.quadrature import D2N, p2_shape
+from ancf_verify.contact.tendon import ContactError
 
 
 def normal_gradient(Ns: np.ndarray, ev: dict, Ym: np.ndarray) -> np.ndarray:
@@ -38,7 +14,7 @@ def normal_gradient(Ns: np.ndarray, ev: dict, Ym: np.ndarray) -> np.ndarray:
     closest point, the closest point moving with u: H ∂ζ = Uᵀ + g Vᵀ (W = [U V] as in
     Interface.hess_W; Ns (P, 6) the slave shape values of the points)."""
     T, n, g, dN, N = ev["T"], ev["n"], ev["g"], ev["dN"], ev["N"]
-    X2 = np.einsum("abc,nai->nbci", vsc.D2N, Ym)                     # (P, 2, 2, 3)
+    X2 = np.einsum("abc,nai->nbci", D2N, Ym)                     # (P, 2, 2, 3)
     a = np.einsum("nbi,nci->nbc", T, T)
     b = np.einsum("nbci,ni->nbc", X2, n)
     Hi = np.linalg.inv(a - g[:, None, None] * b)
@@ -82,7 +58,7 @@ class InterfaceFriction:
         ev = itf.evaluate(X, hessian=False)
         itf.track, itf.last_mf = track, last
         self.mf0, self.z0 = ev["mf"].copy(), ev["z"].copy()
-        self.N0, _ = vsc.p2_shape(self.z0)                            # (nq, 6)
+        self.N0, _ = p2_shape(self.z0)                            # (nq, 6)
         nodes = np.hstack([itf.slave.nodes[itf.face_of_q], itf.master.nodes[self.mf0]])
         self.dofs0 = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(self.mf0), 36)
         self.Ns = itf.Ns[np.tile(np.arange(itf.Q), len(itf.slave))]    # (nq, 6)
@@ -100,7 +76,7 @@ class InterfaceFriction:
 
     def closest_increment(self, x: np.ndarray):
         """x_s − x_m(ζ_n) (nq, 3), its master shape values and face (slip = "closest")."""
-        N, _ = vsc.p2_shape(self.z_n)
+        N, _ = p2_shape(self.z_n)
         xs = self.itf.slave_points(x)
         return xs - np.einsum("qa,qai->qi", N, x[self.itf.master.nodes[self.mf_n]]), N, self.mf_n
 
@@ -125,7 +101,7 @@ def return_map(sigma0, a_incr, n, bound, k):
             "dsig_dn": S @ dtrial_dn, "t": t}
 
 
-class FrictionProblem(vsc.Problem):
+class FrictionProblem(Problem):
     """The solid tendon with the sliding normal law and Coulomb friction at the slave points."""
     factor = "lu"
 
@@ -135,7 +111,7 @@ class FrictionProblem(vsc.Problem):
         #: a diagnostic: no friction at slave points whose reference x is below this [m]
         self.free_zone = float(free_zone)
         if slip not in ("partner", "closest"):
-            raise vsc.ContactError(f"slip measure {slip!r}: partner or closest")
+            raise ContactError(f"slip measure {slip!r}: partner or closest")
         self.mu, self.slip = float(mu), slip
         self.k_stick = stick * self.mu_ref / self.h                 # [Pa/m]
         self.fr = [InterfaceFriction(i, self.X) for i in self.ifaces]
@@ -226,7 +202,7 @@ class FrictionProblem(vsc.Problem):
         return ok, n, u1, z1
 
     def accept(self, uvec, z) -> None:
-        c = vsc.Problem.residual(self, uvec, z, False)[2]
+        c = Problem.residual(self, uvec, z, False)[2]
         fr = self.friction(uvec, c, False)
         x = self.positions(uvec)
         for f, per in zip(self.fr, fr["per"]):

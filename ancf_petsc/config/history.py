@@ -1,0 +1,109 @@
+"""``history:`` of a config: loads that follow their own curves over frames (a gait cycle).
+
+    history:
+      file: data/stride_walking.sto    # CSV or OpenSim storage (.sto/.mot), relative to the config;
+      # table: {time: [...], soleus: [...]}   or the columns written inline
+      time: time                       # the clock column [s] (default: time)
+      scale: 1.0                       # multiplies every column a load reads (e.g. 1000 for kN)
+    loads:
+      - {beam: soleus, node: last, traction_force: [1, 0, 0], column: soleus_r}
+
+Frame k (row k of the table, k = 1 … N) is solved at load factor λ = k, each frame a quasi-static
+equilibrium continued from the one before (friction and contact history carried, adaptive
+sub-steps in between): a load with ``column: c`` is its config value times c_k · scale at frame
+k, piecewise linear in λ between frames and rising from rest (λ = 0, every load zero) to frame 1.
+Every frame is a reported step; a load without a column (or a ``curve`` over frame numbers) is
+refused, as it would grow with the frame number.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .load_tables import LoadTable, inline_table, read_load_table
+from .values import ConfigError, mapping, number, shown, string
+
+HISTORY_KEYS = ("file", "table", "time", "scale")
+
+
+@dataclass
+class HistorySpec:
+    """Frames of a load history: their times [s] and the columns loads may follow (scaled)."""
+    source: str
+    time_column: str
+    times: np.ndarray
+    columns: dict[str, np.ndarray]
+    scale: float = 1.0
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.times)
+
+    def frame_of(self, load_factor: float) -> int:
+        """The frame (1 … N) a reported load factor is."""
+        return int(round(load_factor))
+
+    def time_of(self, load_factor: float) -> float:
+        """The time [s] of the frame a load factor reports (between frames: interpolated)."""
+        return float(np.interp(load_factor, np.arange(1, self.n_frames + 1), self.times))
+
+    def curve(self, column: str, path: str) -> tuple:
+        """The multiplier curve ((λ, m), ...) of a load that reads ``column``: 0 at rest, then
+        the column's value × scale at every frame."""
+        if column not in self.columns:
+            have = ", ".join(c for c in self.columns if c != self.time_column)
+            raise ConfigError(path, f"no column {column!r} in {self.source} (columns: {have})")
+        values = self.scale * self.columns[column]
+        return ((0.0, 0.0),) + tuple((float(k + 1), float(v)) for k, v in enumerate(values))
+
+
+def parse_history(value, base_dir: str) -> HistorySpec:
+    """Validate ``history`` and read its table."""
+    p = "history"
+    mapping(value, p, optional=HISTORY_KEYS)
+    if ("file" in value) == ("table" in value):
+        raise ConfigError(p, "give the load table as file (CSV or OpenSim .sto/.mot) or as table "
+                             "(columns written inline), one of the two")
+    if "file" in value:
+        name = string(value["file"], f"{p}.file")
+        path = name if os.path.isabs(name) else os.path.join(base_dir, name)
+        table: LoadTable = read_load_table(path, f"{p}.file")
+        source = os.path.basename(path)
+    else:
+        table = inline_table(value["table"], f"{p}.table")
+        source = "history.table"
+    time_column = string(value.get("time", "time"), f"{p}.time")
+    if time_column not in table.columns:
+        raise ConfigError(f"{p}.time", f"no column {time_column!r} in {source} (columns: "
+                                       f"{', '.join(table.columns)}); name the clock column")
+    times = table.columns[time_column]
+    if np.any(np.diff(times) <= 0.0):
+        k = int(np.flatnonzero(np.diff(times) <= 0.0)[0])
+        raise ConfigError(f"{p}.time", f"the times of {source} must increase from frame to frame; "
+                                       f"frame {k + 2} ({times[k + 1]:g} s) follows {times[k]:g} s")
+    scale = number(value.get("scale", 1.0), f"{p}.scale", positive=True,
+                   hint=" (multiplies every load column, e.g. 1000 for a table in kN)")
+    return HistorySpec(source, time_column, times.copy(), dict(table.columns), scale)
+
+
+def history_curve(item: dict, history: HistorySpec | None, path: str, curve) -> tuple | None:
+    """The curve of a load or prescribed displacement (``item`` its config mapping): its
+    ``column`` of the history, its own ``curve``, or None (proportional to λ)."""
+    if "column" in item:
+        if history is None:
+            raise ConfigError(f"{path}.column", "a column names a load table's column: add "
+                                                "history: {file: ...} (docs/gait.md), or remove it")
+        if "curve" in item:
+            raise ConfigError(path, "give column (a history's) or curve, not both")
+        return history.curve(string(item["column"], f"{path}.column"), f"{path}.column")
+    if history is not None and curve is None:
+        raise ConfigError(path, f"with history every load follows a column of {history.source} "
+                                f"(e.g. column: {shown(next(iter(_load_columns(history)), 'name'))}); "
+                                "one without would grow with the frame number")
+    return curve
+
+
+def _load_columns(history: HistorySpec) -> list[str]:
+    return [c for c in history.columns if c != history.time_column]

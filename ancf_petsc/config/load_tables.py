@@ -1,0 +1,120 @@
+"""Tables of loads over time: CSV files and OpenSim storage files (.sto / .mot).
+
+A load history (config/history.py) reads its muscle forces from a table of columns: a CSV file
+with a header line ('#' lines are comments; an Excel "CSV UTF-8" byte-order mark is accepted), or
+an OpenSim storage file (a header of ``key=value`` lines closed by ``endheader``, then a line of
+tab- or space-separated column names and rows of numbers: what OpenSim's static optimisation or
+computed muscle control writes, e.g. ``*_StaticOptimization_force.sto``).  Every value must be a
+finite number; an error names the file, the data row (and its line) and the column.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .values import ConfigError
+
+#: OpenSim storage files by extension (anything else is read as CSV)
+STORAGE = (".sto", ".mot")
+
+
+@dataclass
+class LoadTable:
+    """Columns of numbers by name (in file order) and where they came from."""
+    path: str
+    columns: dict[str, np.ndarray]
+
+    @property
+    def n_rows(self) -> int:
+        return len(next(iter(self.columns.values())))
+
+
+def _storage_body(lines: list[str], path: str, where: str) -> tuple[list[str], int]:
+    """The lines after an OpenSim header (``endheader``) and the line number of the first."""
+    for k, line in enumerate(lines):
+        if line.strip().lower() == "endheader":
+            return lines[k + 1:], k + 2
+    raise ConfigError(where, f"{path}: no 'endheader' line: not an OpenSim storage file "
+                             "(.sto/.mot); give a CSV file with a header line instead")
+
+
+def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int]]:
+    """Header and data rows (fields as strings) with their line numbers."""
+    lines = text.splitlines()
+    first_line = 1
+    if os.path.splitext(path)[1].lower() in STORAGE:
+        lines, first_line = _storage_body(lines, path, where)
+        split = (lambda s: s.split("\t")) if any("\t" in ln for ln in lines) else str.split
+        rows = [(first_line + k, [f.strip() for f in split(ln)]) for k, ln in enumerate(lines)
+                if ln.strip()]
+    else:
+        rows = []
+        for k, ln in enumerate(lines):
+            if ln.strip() and not ln.lstrip().startswith("#"):
+                rows.append((first_line + k, [f.strip() for f in next(csv.reader(io.StringIO(ln)))]))
+    if len(rows) < 2:
+        raise ConfigError(where, f"{path}: expected a line of column names and at least one row of numbers")
+    return [r for _, r in rows], [n for n, _ in rows]
+
+
+def read_load_table(path: str, where: str) -> LoadTable:
+    """The columns of ``path`` (CSV or OpenSim storage); ``where`` the config key for errors."""
+    if not os.path.isfile(path):
+        raise ConfigError(where, f"no such file: {path}")
+    try:
+        with open(path, encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(where, f"{path}: cannot read it as UTF-8 text ({type(exc).__name__})") from None
+    rows, line_no = _rows(path, text, where)
+    header = rows[0]
+    empty = [k for k, h in enumerate(header) if not h]
+    if empty:
+        raise ConfigError(where, f"{path}: column {empty[0] + 1} of the header line has no name")
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise ConfigError(where, f"{path}: column {dup[0]!r} appears twice in the header line")
+    values = np.empty((len(rows) - 1, len(header)))
+    for i, (row, line) in enumerate(zip(rows[1:], line_no[1:]), start=1):
+        if len(row) != len(header):
+            raise ConfigError(where, f"{path}: data row {i} (line {line}) has {len(row)} fields, the "
+                                     f"header {len(header)}")
+        for j, field in enumerate(row):
+            try:
+                v = float(field)
+            except ValueError:
+                v = math.nan
+            if not math.isfinite(v):
+                raise ConfigError(where, f"{path}: data row {i} (line {line}), column {header[j]!r}: "
+                                         f"{field!r} is not a finite number")
+            values[i - 1, j] = v
+    return LoadTable(path, {h: values[:, j].copy() for j, h in enumerate(header)})
+
+
+def inline_table(value: dict, where: str) -> LoadTable:
+    """``table: {time: [...], soleus: [...], ...}`` written in the config: columns of numbers of
+    one length."""
+    if not isinstance(value, dict) or not value:
+        raise ConfigError(where, "expected a mapping of column names to lists of numbers, e.g. "
+                                 "{time: [0, 0.01], soleus: [0, 120]}")
+    cols, n = {}, None
+    for name, col in value.items():
+        p = f"{where}.{name}"
+        if not isinstance(col, (list, tuple)) or not col:
+            raise ConfigError(p, "expected a non-empty list of numbers")
+        out = []
+        for k, v in enumerate(col):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                raise ConfigError(f"{p}[{k}]", f"expected a finite number; got {v!r}")
+            out.append(float(v))
+        if n is not None and len(out) != n:
+            raise ConfigError(p, f"has {len(out)} values, the first column {n}: every column needs one "
+                                 "value per frame")
+        n = len(out)
+        cols[str(name)] = np.array(out)
+    return LoadTable("config", cols)

@@ -1,0 +1,57 @@
+"""The load predictor of an increment: where Newton starts from at the next load factor.
+
+From a converged state X(λ₀) the increment to λ₁ changes the loads by Δf = Σ_g Δm_g f_g and the
+prescribed displacements by Δq̄ = Σ_g Δm_g ū_g (load groups, model/loading.py).  Two predictors
+(``solver.predictor``):
+
+* ``secant``: X + (Δλ / Δλ_last) ΔX_last, the last increment's change scaled (stepper.py).  Good
+  for a proportional load, where the loads of the next increment grow along the same direction;
+  on a load history it extrapolates the last frame's response to loads that no longer change
+  that way (a muscle unloading while another loads), and where the loads stop changing it keeps
+  moving the state (each frame's unchanged residual below the tolerance accepted it).
+* ``tangent``: one Newton step at λ₁ from X with its held DOFs moved to q̄(λ₁), with the tangent
+  the last converged solve factored (a chord step: no assembly or factorisation of its own, one
+  residual evaluation and one back-substitution): the first-order response to the increment's own
+  load change (non-proportional, unloading included, nothing when nothing changes).  J includes
+  the contact constraints, so the multipliers are predicted with the state.  After a cut-back (the
+  factor belongs to a failed attempt) or from rest there is no prediction.
+The default is ``tangent`` for a load history (config history:) and ``secant`` otherwise.
+"""
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+
+class TangentPredictor:
+    """J⁻¹ of the load increment with the SNES's last factored tangent (module docstring);
+    ``valid`` while that factor belongs to a converged state."""
+
+    def __init__(self, problem, snes: PETSc.SNES):
+        self.problem, self.snes = problem, snes
+        self.valid = False
+
+    def predict(self, X: PETSc.Vec, lam1: float) -> bool:
+        """X ← X − J⁻¹ F(X; λ₁) with the held DOFs of X at q̄(λ₁) first; False (X unchanged but
+        for the held DOFs) without a valid factor, or when the residual or the step is not
+        finite.  Collective (the decisions use global norms)."""
+        if not self.valid:
+            return False
+        P = self.problem
+        P.load_factor = lam1
+        P.impose(X)
+        if P.contact is not None:
+            P.contact.allow_update = False        # the factor's active set (unilateral)
+        F, dX = X.duplicate(), X.duplicate()
+        try:
+            P.residual(None, X, F)
+            if not F.norm() < float("inf"):
+                return False
+            ksp = self.snes.getKSP()
+            ksp.solve(F, dX)
+            if ksp.getConvergedReason() <= 0 or not dX.norm() < float("inf"):
+                return False
+            X.axpy(-1.0, dX)
+            return True
+        finally:
+            F.destroy()
+            dX.destroy()

@@ -1,0 +1,1 @@
+"""Diagnostic studies on the solid references (contact spaces, supported ends)."""

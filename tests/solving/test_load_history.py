@@ -1,0 +1,190 @@
+"""Load histories (config history:, issue 38): each load follows its own column of a table over
+frames, frame k at load factor k.  The tables (CSV, OpenSim storage, inline) and their errors;
+a frictionless non-proportional history with unloading ends where a proportional run to the same
+loads does (no path dependence); with friction a history is the load-curve machinery (the same
+answers as the curves) and carries its path; a history run killed mid-way restarts to the
+uninterrupted answers; the per-frame outputs."""
+import copy
+import os
+
+import numpy as np
+import pytest
+
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.config.values import ConfigError
+from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
+
+PLANE = {"r": "xyz", "r_y": "xz", "r_z": "x", "r_yy": "x", "r_zz": "x", "r_yz": "x"}
+
+
+def tendon(table=None, elements=2, contact="sliding"):
+    """The paper's three subtendons (ψ = 45°, 2 elements, plane roots) pulled by end tractions
+    following the columns soleus, medial, lateral of an inline history table."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    names = [b["name"] for b in raw["beams"]]
+    for b in raw["beams"]:
+        b["elements"], b["axial_points"] = elements, 2
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["boundary_conditions"] = [{"beam": n, "node": "first", "fix": dict(PLANE)} for n in names]
+    raw["loads"] = [{"beam": n, "node": "last", "traction_force": [1.0, 0.0, 0.0], "column": c}
+                    for n, c in zip(names, ("soleus", "medial", "lateral"))]
+    raw["contact"] = {"mode": contact}
+    raw.pop("steps")
+    raw["history"] = {"table": table or {"time": [0.0, 0.1], "soleus": [10.0, 20.0],
+                                         "medial": [0.0, 5.0], "lateral": [0.0, 5.0]}}
+    raw["output"] = {"vtk": False}
+    return raw
+
+
+def test_tables_give_frames_and_curves(tmp_path):
+    """A CSV (with an Excel byte-order mark and a comment), an OpenSim storage file and an inline
+    table give the same frames; frame k is load factor k and every frame is a step."""
+    rows = [(0.0, 10.0, 0.0, 1.0), (0.01, 20.0, 4.0, 2.0), (0.02, 15.0, 8.0, 3.0)]
+    csv = tmp_path / "stride.csv"
+    csv.write_text("\ufeff# forces [N]\ntime,soleus,medial,lateral\n"
+                   + "".join(",".join(f"{v:g}" for v in r) + "\n" for r in rows), encoding="utf-8")
+    sto = tmp_path / "stride.sto"
+    sto.write_text("forces\nversion=1\nnRows=3\nnColumns=4\ninDegrees=no\nendheader\n"
+                   "time\tsoleus\tmedial\tlateral\n" + "".join("\t".join(f"{v:g}" for v in r) + "\n" for r in rows))
+    inline = {"time": [r[0] for r in rows], "soleus": [r[1] for r in rows],
+              "medial": [r[2] for r in rows], "lateral": [r[3] for r in rows]}
+    specs = []
+    for hist in ({"file": str(csv)}, {"file": str(sto)}, {"table": inline}):
+        raw = tendon()
+        raw["history"] = hist
+        specs.append(parse_config(raw, base_dir=CONFIGS))
+    for s in specs:
+        assert s.steps == [1.0, 2.0, 3.0]
+        assert s.loads[1].curve == ((0.0, 0.0), (1.0, 0.0), (2.0, 4.0), (3.0, 8.0))
+        assert s.history.time_of(2.0) == pytest.approx(0.01)
+        assert s.solver.predictor == "tangent"
+    raw = tendon()
+    raw["history"]["scale"] = 1000.0
+    assert parse_config(raw, base_dir=CONFIGS).loads[0].curve[-1] == (2.0, 20000.0)
+
+
+@pytest.mark.parametrize("edit,match", [
+    (lambda r, p: r["history"].update(file=str(p / "bad.csv"), table=None) or r["history"].pop("table"),
+     r"history\.file: .*bad\.csv: data row 2 \(line 3\), column 'medial': 'nan' is not a finite number"),
+    (lambda r, p: r["history"]["table"].update(time=[0.0, 0.0]),
+     r"history\.time: the times of history\.table must increase"),
+    (lambda r, p: r.__setitem__("steps", [1, 2]), r"^steps: with history every frame"),
+    (lambda r, p: r["loads"][0].pop("column"), r"^loads\[0\]: with history every load follows a column"),
+    (lambda r, p: r["loads"][0].update(column="gastrocnemius"),
+     r"^loads\[0\]\.column: no column 'gastrocnemius' in history\.table \(columns: soleus, medial, lateral\)"),
+    (lambda r, p: r["history"]["table"].update(medial=[1.0]), r"history\.table\.medial: has 1 values"),
+    (lambda r, p: r.pop("history"), r"^loads\[0\]\.column: a column names a load table's column"),
+])
+def test_history_errors_name_the_key_row_and_column(tmp_path, edit, match):
+    (tmp_path / "bad.csv").write_text("time,soleus,medial,lateral\n0,1,2,3\n0.1,1,nan,3\n")
+    raw = tendon()
+    edit(raw, tmp_path)
+    if "steps" not in raw and "history" not in raw:
+        raw["steps"] = [1.0]
+    with pytest.raises(ConfigError, match=match):
+        parse_config(raw, base_dir=CONFIGS)
+
+
+def _ends(summary, frame=-1):
+    return np.array([summary["steps"][frame]["probes"][n]["displacement"]
+                     for n in ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")])
+
+
+@pytest.mark.slow
+def test_frictionless_history_with_unloading_ends_where_a_proportional_run_does(tmp_path):
+    """Non-proportional frames that load the soleus, move the load to the gastrocnemii and unload
+    the soleus end at the state a single proportional increase to the last frame's loads reaches
+    (sliding contact is conservative: no path dependence), to 1e-7 of the displacements; the
+    reported end forces are the frames' loads."""
+    table = {"time": [0.0, 0.01, 0.02, 0.03, 0.04], "soleus": [60.0, 200.0, 120.0, 40.0, 80.0],
+             "medial": [0.0, 40.0, 150.0, 220.0, 90.0], "lateral": [10.0, 30.0, 90.0, 160.0, 70.0]}
+    hist = run_inline(tendon(table), tmp_path / "history")
+    assert hist["status"] == "completed" and len(hist["steps"]) == 5
+    last = {k: v[-1] for k, v in table.items() if k != "time"}
+    direct = run_inline(tendon({"time": [0.0], **{k: [v] for k, v in last.items()}}), tmp_path / "direct")
+    a, b = _ends(hist), _ends(direct)
+    assert np.abs(a - b).max() <= 1e-7 * np.abs(b).max()
+    st = hist["steps"][2]
+    assert st["frame"] == 3 and st["time"] == pytest.approx(0.02)
+    assert st["subtendons"]["medial_gastrocnemius"]["end_force"] == pytest.approx([150.0, 0.0, 0.0])
+    assert st["subtendons"]["soleus"]["elongation"] == pytest.approx(st["probes"]["soleus"]["displacement"][0],
+                                                                      rel=0.05)
+
+
+@pytest.mark.slow
+def test_a_friction_history_is_the_load_curves_and_carries_its_path(tmp_path):
+    """configs/friction_pressed_strips.yaml (pressing ramp, then the grip displaced out, back past
+    zero and out again, Coulomb μ = 0.5) written as a history table of its own frames gives the
+    curves' answers at every frame (the same machinery, load factors relabelled); the grip's
+    reaction at equal displacement differs between going out and coming back (the path kept)."""
+    raw = load_raw("friction_pressed_strips.yaml")
+    raw["output"] = {"vtk": False}
+    base = run_inline(raw, tmp_path / "curves")
+    from ancf_petsc.model.loading import LoadCurve
+    steps = raw["steps"]
+    press = LoadCurve(tuple(map(tuple, raw["loads"][0]["curve"])))
+    grip = LoadCurve(tuple(map(tuple, raw["boundary_conditions"][-1]["curve"])))
+    hist = copy.deepcopy(raw)
+    hist.pop("steps")
+    hist["history"] = {"table": {"time": [float(s) for s in steps], "press": [press(s) for s in steps],
+                                 "grip": [grip(s) for s in steps]}}
+    for ld in hist["loads"]:
+        ld.pop("curve")
+        ld["column"] = "press"
+    hist["boundary_conditions"][-1].pop("curve")
+    hist["boundary_conditions"][-1]["column"] = "grip"
+    hist["solver"] = {"predictor": "secant"}          # the curves' run's predictor
+    hs = run_inline(hist, tmp_path / "history")
+    assert base["status"] == hs["status"] == "completed" and len(hs["steps"]) == len(steps)
+    r_curves = np.array([s["reactions"]["grip"] for s in base["steps"]])
+    r_hist = np.array([s["reactions"]["grip"] for s in hs["steps"]])
+    assert np.abs(r_curves - r_hist).max() <= 1e-6 * np.abs(r_curves).max()
+    i_out, i_back = steps.index(1.5), steps.index(2.5)      # grip at +0.5e-4 m going out, coming back
+    assert abs(r_hist[i_out, 0] - r_hist[i_back, 0]) > 0.2 * abs(r_hist[i_out, 0])
+
+
+@pytest.mark.slow
+def test_a_history_run_stopped_midway_restarts_to_the_uninterrupted_answers(tmp_path):
+    """A history run stopped by its Newton budget after a few frames (exit 3, every converged
+    frame on disk) continues with --restart from its last frame to the answers of an
+    uninterrupted run (1e-10)."""
+    table = {"time": [0.01 * k for k in range(8)], "soleus": [20, 60, 120, 160, 120, 60, 30, 60],
+             "medial": [5, 20, 60, 100, 140, 100, 40, 20], "lateral": [5, 20, 40, 80, 120, 80, 40, 20]}
+    raw = tendon({k: [float(v) for v in vs] for k, vs in table.items()})
+    raw["history"]["table"]["time"] = [0.01 * k for k in range(8)]
+    full = run_inline(raw, tmp_path / "full")
+    assert full["status"] == "completed"
+    budget = sum(s["iterations"] for s in full["steps"][:4])
+    stopped = copy.deepcopy(raw)
+    stopped["solver"] = {"max_newton_iterations": budget}
+    cfg = write_config(stopped, tmp_path / "stopped.yaml")
+    p = solve_cli(cfg, extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 3, p.stderr
+    part = read_summary(tmp_path / "run")
+    assert 3 <= len(part["steps"]) < 8
+    cfg = write_config(raw, tmp_path / "again.yaml")
+    p = solve_cli(cfg, extra=["--restart", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    done = read_summary(tmp_path / "run")
+    assert len(done["steps"]) == 8 and done["steps"][-1]["frame"] == 8
+    for k in range(8):
+        a, b = _ends(full, k), _ends(done, k)
+        assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
+
+
+def test_shipped_stride_files_agree():
+    """The uniform stride as CSV and as OpenSim storage: the same frames and forces; every
+    bias peaks at 2.63 kN in all (workflows/stride.py)."""
+    from ancf_petsc.config.load_tables import read_load_table
+    data = os.path.join(CONFIGS, "data")
+    a = read_load_table(os.path.join(data, "stride_walking_uniform.csv"), "x")
+    b = read_load_table(os.path.join(data, "stride_walking_uniform.sto"), "x")
+    assert list(a.columns) == list(b.columns) == ["time", "soleus_r", "gasmed_r", "gaslat_r"]
+    for k in a.columns:
+        assert np.allclose(a.columns[k], b.columns[k])
+    for bias in ("gastrocnemius", "uniform", "soleus"):
+        t = read_load_table(os.path.join(data, f"stride_walking_{bias}.csv"), "x")
+        total = t.columns["soleus_r"] + t.columns["gasmed_r"] + t.columns["gaslat_r"]
+        assert t.n_rows == 100 and total.max() == pytest.approx(2630.0, abs=0.01)
+        ratio = t.columns["soleus_r"] / t.columns["gasmed_r"]
+        assert ratio.max() > 2.0 * ratio.min()          # not proportional

@@ -1,0 +1,32 @@
+"""``make verify-solid``'s table (ancf_verify.summary) from the committed CSVs: every reference
+of every family is a row, with its convergence and the beams' errors read off the CSVs."""
+import math
+
+from ancf_verify.cli.summary import main
+from ancf_verify.summary import bars, contact, fibres, friction, references, soft_matrix, table
+
+
+def test_every_committed_reference_is_a_row():
+    refs = references()
+    assert len(bars()) == 4 and len(fibres()) == 9 and len(friction()) == 1 and len(soft_matrix()) == 2
+    assert {r.name for r in contact()} >= {"three subtendons, sliding, ψ = 45°, clamped roots",
+                                           "three subtendons, unilateral, ψ = 45°, clamped roots"}
+    assert len(refs) == len({r.name for r in refs})
+    for r in refs:
+        assert math.isfinite(r.convergence) and 0.0 <= r.convergence < 0.1, r
+        assert any(math.isfinite(e) for e in r.errors.values()), r
+    lines = table(refs).splitlines()
+    assert len(lines) == 2 + len(refs)
+
+
+def test_the_bars_rows_are_the_csvs_numbers():
+    """bar: tension at 4 elements: the CSV's ANCF 2pt rel_error (9.920066e-04) and its
+    reference's uncertainty (5.039e-04)."""
+    tension = next(r for r in bars() if r.name == "bar: tension")
+    assert tension.errors[4] == 9.920066e-04 and tension.convergence == 5.039e-04
+
+
+def test_the_quick_mode_prints_the_table(capsys):
+    assert main(["--quick"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("| reference |") and "three subtendons, Coulomb" in out

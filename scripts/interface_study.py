@@ -110,54 +110,6 @@ def rows_of(r: dict) -> list[dict]:
     return out
 
 
-#: the figure's colour map per family of laws (darker: stiffer or more friction) and marker;
-#: dashed on the unilateral normal law
-FAMILIES = {"sliding": (None, "o"), "elastic": ("Blues", "s"), "coulomb": ("Reds", "^")}
-
-
-def family(name: str) -> str:
-    """The family of a law's label on the sliding law ("sliding", "elastic" with bonded, "coulomb")."""
-    return "coulomb" if name.startswith("coulomb") else "elastic" if name.startswith(("elastic", "bonded")) else "sliding"
-
-
-def style(label: str) -> dict:
-    """Line style of a law's curve: no two laws of the figure share one."""
-    import matplotlib
-    unilateral = label.startswith("unilateral")
-    name = label.removeprefix("unilateral").removeprefix(", ") or "sliding"
-    cmap, marker = FAMILIES[family(name)]
-    if cmap is None:
-        colour = "0.45" if unilateral else "k"
-    else:
-        members = [law[0] for law in LAWS if not law[0].startswith("unilateral") and family(law[0]) == family(name)]
-        colour = matplotlib.colormaps[cmap](0.35 + 0.6 * members.index(name) / max(len(members) - 1, 1))
-    return {"color": colour, "marker": marker, "ls": "--" if unilateral else "-", "ms": 4}
-
-
-def figure(results: list[dict], path: str, elements: int) -> None:
-    """Soleus − medial gastrocnemius at x = L (summary.json ``displacement_differences``,
-    "soleus|medial_gastrocnemius": first − second in config order) against the load, per law."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2), sharey=False)
-    for ax, loading in zip(axes, LOADINGS):
-        for r in results:
-            if r["loading"] != loading or r["elements"] != elements or not r["steps"]:
-                continue
-            load = [st["load_factor"] for st in r["steps"]]
-            du = [1e3 * st["displacement_differences"][PAIR]["end"] for st in r["steps"]]
-            ax.plot(load, du, lw=1.2, **style(r["law"]),
-                    label=r["law"] + ("" if r["status"] == "completed" else f" ({r['status']})"))
-        ax.set_title(f"{loading} loading, psi = 45 deg, {elements} elements")
-        ax.set_xlabel("tendon force [N]")
-        ax.set_ylabel("soleus - medial gastrocnemius at x = L [mm]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=6.5, loc="upper left", ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(allow_abbrev=False)
     ap.add_argument("--elements", type=int, nargs="+", default=[4, 8])
@@ -196,7 +148,8 @@ def main() -> int:
             w.writeheader()
             w.writerows(rows)
     if args.figure:
-        figure(results, args.figure, min(args.elements))
+        from ancf_petsc.viz import plot_law_differences
+        plot_law_differences(results, [law[0] for law in LAWS], list(LOADINGS), PAIR, min(args.elements), args.figure)
     return 0
 
 

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-friction studies clean
+.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-friction studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -33,6 +33,11 @@ test-fast: setup
 
 bench: setup
 	$(PY) scripts/bench_kernel.py
+
+# a Newton iteration of the paper's tendon, start-up, the column and the kernel (docs/parallel.md);
+# beside older checkouts: scripts/bench_iteration.py --baseline NAME=DIR ...
+bench-iteration: setup
+	$(PY) scripts/bench_iteration.py
 
 bench-scaling: setup
 	$(PY) scripts/bench_scaling.py

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import functools
 import os
-import subprocess
 
 __version__ = "0.1.0"
 
@@ -15,6 +14,7 @@ def git_describe() -> str | None:
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     if not os.path.exists(os.path.join(here, ".git")):
         return None
+    import subprocess                      # here only: not every import of the package runs git
     try:
         out = subprocess.run(["git", "-C", here, "describe", "--always", "--dirty", "--abbrev=10",
                               "--match", "NO-TAGS-ONLY-HASH"], capture_output=True, text=True,

@@ -37,6 +37,26 @@ if [ ! -f "$stamp" ] || [ setup.py -nt "$stamp" ] || [ scripts/constraints.txt -
   touch "$stamp"
 fi
 
+# console scripts that import their entry point directly (what pip writes for a wheel): the
+# ones `pip install -e` writes for a setup.py find it through importlib.metadata, which reads the
+# metadata of every package on sys.path (Debian's dist-packages too): 50-90 ms of every
+# ancf-solve's start-up.  Rewritten only when they differ (idempotent, quick).
+.venv/bin/python - <<'EOF'
+import os, re
+text = open("setup.py").read()
+for name, target in re.findall(r'"(ancf-[a-z]+)=([A-Za-z_.]+:[A-Za-z_]+)"', text):
+    module, func = target.split(":")
+    path = os.path.join(".venv", "bin", name)
+    script = (f"#!{os.path.abspath('.venv/bin/python')}\n"
+              f"# ancf-petsc console script (scripts/setup.sh): imports {target} directly\n"
+              f"import sys\nfrom {module} import {func}\n\n"
+              f"if __name__ == \"__main__\":\n    sys.exit({func}())\n")
+    if not os.path.exists(path) or open(path).read() != script:
+        with open(path, "w") as fh:
+            fh.write(script)
+        os.chmod(path, 0o755)
+EOF
+
 # byte-compile the package (what a non-editable install does): with PYTHONDONTWRITEBYTECODE set,
 # as on CI, Python would otherwise compile every module at every start (90 ms of an Achilles
 # column); quick when nothing changed, and a stale .pyc is ignored by Python, never used

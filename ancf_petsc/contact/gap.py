@@ -71,7 +71,9 @@ def projection_conditioning(pr) -> np.ndarray:
     a = np.matmul(T.transpose(0, 2, 1), T)
     b = np.einsum("piab,pi->pab", pr.Yzz, pr.n)
     H = a - pr.g[:, None, None] * b
-    return np.linalg.det(H) / np.linalg.det(a)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.linalg.det(H) / np.linalg.det(a)
+    return np.nan_to_num(out, nan=-1.0)          # a degenerate surface: ill-posed
 
 
 def _projection_parts(pr):

@@ -17,7 +17,7 @@ import numpy as np
 from ..physics.element3363 import SLOTS
 from .descent import ROUNDING, Backtracking, newton_step
 from .fade import CURVE_FADE_END, END_FADE, end_weight
-from .surface import closest_parameter, section_shift, shape_on_curve, shape_third_on_curve
+from .surface import InterfaceCurves, closest_parameter, section_shift, shape_on_curve, shape_third_on_curve
 
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
 MAX_ITERATIONS = 40
@@ -59,6 +59,11 @@ class Projector:
         self.t_end = np.array([interfaces[k].curve_b.t_end for k in itf])
         self.flip = np.array([interfaces[k].flip_b for k in itf], dtype=bool)
         self._shift = [section_shift(i.b) for i in interfaces]
+        self._curves = InterfaceCurves([i.curve_b for i in interfaces], self._shift)
+        # per interface (indexed by a point's interface): B's first and last element, its curve's length
+        self._b_first = np.array([i.b.element_offset for i in interfaces], dtype=np.int64)
+        self._b_last = self._b_first + np.array([i.b.n_elements - 1 for i in interfaces], dtype=np.int64)
+        self._curve_end = np.array([i.curve_b.t_end for i in interfaces], dtype=float)
         # state (B element, ξ_B, t_B), started at the matching reference point
         self.eB = points.eB0.copy()
         self.xiB = points.xi.copy()
@@ -145,16 +150,7 @@ class Projector:
         """B's surface at (e_B, ξ_B, t_B): Y, Y_ζ (P,3,2), Y_ζζ (P,3,2,2), N_B, N_B,ζ, N_B,ζζ.
         ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
         P = len(eB)
-        S, S1, S2 = np.empty((P, 2)), np.empty((P, 2)), np.zeros((P, 2))
-        for k, inter in enumerate(self.interfaces):          # only the spline evaluations
-            sel = itf == k
-            if not np.any(sel):
-                continue
-            t = tB[sel]
-            S[sel] = inter.curve_b(t) + self._shift[k]
-            S1[sel] = inter.curve_b(t, 1)
-            if inter.curve_b.degree >= 2:
-                S2[sel] = inter.curve_b(t, 2)
+        S, S1, S2 = self._curves(itf, tB)                       # every interface's curve at once
         NB, NBz, NBzz = shape_on_curve(xiB, S, S1, S2)
         qB = x_of(eB)                                           # (P, 18, 3)
         Y = np.matmul(NB[:, None, :], qB)[:, 0]
@@ -165,21 +161,15 @@ class Projector:
     def wrap(self, itf, eB, xiB, tB):
         """Move points across B's element boundaries; past B's beam and curve ends the end
         piece continues (up to the fade limits, clamped there): the weight says how far."""
-        weight = np.ones(len(eB))
-        for k, inter in enumerate(self.interfaces):
-            sel = itf == k
-            b = inter.b
-            lo, hi = b.element_offset, b.element_offset + b.n_elements - 1
-            e, x = eB[sel], xiB[sel]
-            shift = np.floor((x + 1.0) / 2.0).astype(int)
-            shift = np.where(x == 1.0, 0, shift)
-            e_new = np.minimum(np.maximum(e + shift, lo), hi)
-            x = x - 2.0 * (e_new - e)
-            x = np.minimum(np.maximum(x, -1.0 - 2.0 * END_FADE), 1.0 + 2.0 * END_FADE)
-            T = inter.curve_b.t_end
-            t = np.minimum(np.maximum(tB[sel], -CURVE_FADE_END * T), (1.0 + CURVE_FADE_END) * T)
-            eB[sel], xiB[sel], tB[sel] = e_new, x, t
-            weight[sel] = end_weight(x, t, np.full(len(t), T), e_new == lo, e_new == hi)
+        b_first, b_last, T = self._b_first[itf], self._b_last[itf], self._curve_end[itf]
+        shift = np.floor((xiB + 1.0) / 2.0).astype(int)
+        shift = np.where(xiB == 1.0, 0, shift)
+        e_new = np.minimum(np.maximum(eB + shift, b_first), b_last)
+        x = xiB - 2.0 * (e_new - eB)
+        x = np.minimum(np.maximum(x, -1.0 - 2.0 * END_FADE), 1.0 + 2.0 * END_FADE)
+        t = np.minimum(np.maximum(tB, -CURVE_FADE_END * T), (1.0 + CURVE_FADE_END) * T)
+        eB[:], xiB[:], tB[:] = e_new, x, t
+        weight = end_weight(x, t, T, e_new == b_first, e_new == b_last)
         return eB, xiB, tB, weight
 
     # ------------------------------------------------------------------ Newton on ζ

@@ -5,7 +5,7 @@
   wall time).  The file is opened and closed for every step.
 * ``summary.json`` — probes per step, iterations, timings; replaced atomically after each step.
 * ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled
-  along ξ), with displacement, axial Green–Lagrange strain E_xx and volume ratio J, via meshio.
+  along ξ), with displacement, axial Green–Lagrange strain E_xx and volume ratio J (io/vtu.py, meshio's layout).
 * ``contact_NNNN.vtu`` + ``contact.pvd`` — the contact points at their deformed positions with gap,
   pressure, slip (vector and its axial part) and interface; the same per step in results.h5
   (``steps/step_NNNN/contact``) with the multipliers and the projection state.

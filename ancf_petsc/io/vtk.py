@@ -1,10 +1,9 @@
 """ParaView output: the deformed beam surfaces (sections sampled along ξ) and the contact points,
-as VTU time series with .pvd collections, written with meshio."""
+as VTU time series with .pvd collections (``vtu.write_vtu``: meshio's layout, without its import)."""
 from __future__ import annotations
 
 import os
 
-import meshio
 import numpy as np
 
 from ..contact.partners import HISTORY
@@ -14,6 +13,7 @@ from ..physics import element3363 as el
 from ..physics.element3363 import SLOTS
 from .files import atomic_write, remove_quietly
 from .surface_fields import SampledState, fields_for
+from .vtu import write_vtu
 
 
 class SurfaceSampler:
@@ -129,8 +129,7 @@ class VtkSeries:
             data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
         compress = self.compress if self.compress is not None else len(pts) >= AUTO_COMPRESS_POINTS
         try:
-            meshio.write(path, meshio.Mesh(np.asarray(pts, dtype=np.float32), cells, point_data=data),
-                         binary=True, compression="zlib" if compress else None)
+            write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress))
             size = os.path.getsize(path)
             rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
                              for t, f in self.entries[series] + [(lam, name)])

@@ -27,7 +27,6 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from .base import Description, Importer, OutlineKey, OutlineReadError, RawOutline, file_name
 
@@ -50,6 +49,7 @@ SAMPLES = 64
 def slicer_curve(P: np.ndarray, closed: bool) -> np.ndarray:
     """Slicer's default curve through control points P (n, d), sampled ``SAMPLES`` times per
     segment (closed: without repeating the first point)."""
+    from scipy.interpolate import CubicSpline    # only here: scipy.interpolate takes ~0.1 s to import
     n = len(P)
     if closed:
         spline = CubicSpline(np.arange(n + 1), np.vstack([P, P[:1]]), bc_type="periodic")

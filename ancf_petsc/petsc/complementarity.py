@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as la
-import scipy.optimize as so
 from petsc4py import PETSc
 
 from ..contact.laws import HELD, PROBE
@@ -301,6 +300,7 @@ class ComplementarityPredictor:
             L = V * np.sqrt(np.maximum(lam, reg))
             b = -la.solve(L, d)
             clipped = True
+        import scipy.optimize as so          # here only: ~40 ms of every run's start-up
         z, _ = so.nnls(L.T, b, maxiter=50 * M)
         return ComplementarityPredictor._exact_on_support(S, d, z) if clipped else z
 

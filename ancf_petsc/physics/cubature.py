@@ -21,6 +21,8 @@ from typing import Callable, NamedTuple, Sequence
 import numpy as np
 from numpy.polynomial import legendre as _leg
 
+from .nnls import nnls
+
 __all__ = [
     "CurvePiece",
     "CompressionError",
@@ -210,7 +212,7 @@ def compress_rule(pts: np.ndarray, w: np.ndarray, degree: int,
 
     The moments of (``pts``, ``w``) are computed in the tensor Legendre basis of total degree
     ``degree`` scaled to the bounding box of ``pts``; nonnegative weights reproducing them are
-    sought with ``scipy.optimize.nnls`` on candidate nodes inside the domain (``inside(P)``
+    sought with ``scipy.optimize.nnls`` (``nnls.nnls``) on candidate nodes inside the domain (``inside(P)``
     returns a boolean mask): first the rule's own inside nodes, then increasingly fine
     inside tensor grids.  The Lawson-Hanson solution has at most (d+1)(d+2)/2 nonzero
     weights; the weights on that support are then refined by least squares.  Every moment
@@ -260,7 +262,6 @@ def compress_rule(pts: np.ndarray, w: np.ndarray, degree: int,
         if cand.shape[0] < 1:
             continue
         A = basis(cand).T                                  # (n_mom, n_cand)
-        from scipy.optimize import nnls  # only here: scipy.optimize takes 60 ms to import
         x, _ = nnls(A, mom, maxiter=max(50 * n_mom, 3 * A.shape[1]))
         supp = np.flatnonzero(x > 0.0)
         if supp.size == 0:

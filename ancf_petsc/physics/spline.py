@@ -4,8 +4,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import make_interp_spline
-
+from .bspline import interpolating_spline
 from .cubature import CurvePiece
 
 DEFAULT_SPLINE_DEGREE = 3
@@ -22,7 +21,8 @@ class SplineCurve:
     """Interpolating spline S(t) = (S_1(t), S_2(t)) through control points (Sec. 2.2).
 
     Parameter: cumulative chordal, t_1 = 0, t_{j+1} = t_j + |P_{j+1} - P_j|.  Degree
-    p = min(degree, m - 1) (``scipy.interpolate.make_interp_spline``, not-a-knot; p = 1
+    p = min(degree, m - 1) (``bspline.interpolating_spline``: scipy's ``make_interp_spline``,
+    not-a-knot, to the last bit; p = 1
     is the polygon through the points).  ``breakpoints`` are the parameters between which
     the spline is one polynomial; :meth:`pieces` hands them to the Gauss-Green rule (eq. 11).
 
@@ -63,7 +63,7 @@ class SplineCurve:
                                "remove the duplicate")
         t = np.concatenate([[0.0], np.cumsum(chords)])
         p = min(int(degree), P.shape[0] - 1)
-        spl = make_interp_spline(t, P, k=p)
+        spl = interpolating_spline(t, P, p)
         t_end = float(t[-1])
         bp = np.unique(np.concatenate([spl.t, t]))
         bp = bp[(bp >= 0.0) & (bp <= t_end)]
@@ -90,6 +90,14 @@ class SplineCurve:
         if nu not in base._derivs:
             base._derivs[nu] = base._spline.derivative(nu)
         return np.asarray(base._derivs[nu](np.asarray(s, dtype=float)), dtype=float)
+
+    def bspline(self, nu: int = 0):
+        """The forward spline's nu-th derivative (``bspline.BSpline``, what ``__call__`` evaluates;
+        a reversed curve evaluates it at t_end − t, negated for odd nu)."""
+        base = self._base
+        if nu not in base._derivs:
+            base._derivs[nu] = base._spline.derivative(nu)
+        return base._derivs[nu]
 
     def _forward_deriv(self, s: np.ndarray) -> np.ndarray:
         return self._forward(s, 1)

@@ -227,7 +227,8 @@ class PhasedNewton:
             its += n
             what = f"prediction {k} ({predicted} changes)" if ok else f"no prediction {k}"
             if reason <= 0:
-                # the predicted state's solve failed: the phases from the prediction
+                # the predicted state's solve failed: the phases from the prediction (they
+                # rescue increments that may not be cut back: fixed increments)
                 self._trace(lam, what, n, reason)
                 start.copy(X)
                 start.destroy()

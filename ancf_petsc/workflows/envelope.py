@@ -7,8 +7,11 @@ the loading biases of Blank et al. 2024's FEBio study), total loads to 3 kN (wal
 running 3.1–4.6 kN), soft-matrix GOH materials and friction.  ``EnvelopeCell`` is one such model
 built from a shipped config: its twist, the end tractions split by the bias, root sections on a
 frictionless plane (u_x = 0 over the root face, the section free in its plane), 2 axial points and
-the requested levels.  ``run_cell`` solves it with a given ``ancf-solve`` (this tree's or an older
-commit's, for before/after tables) in a child process, so that a crash is recorded, not raised.
+the requested levels (or a walking stride).  ``run_cell`` solves it with a given ``ancf-solve``
+(this tree's or an older commit's, for before/after tables) in a child process, so that a crash is
+recorded, not raised; ``grid`` names the grids of scripts/bench_envelope.py and ``summary_line``
+states them against the targets (monotonic columns to 1.2 kN within 60 Newton iterations and no
+cut-back at twist <= 90 deg; strides at a median of at most 8 per frame, cut-backs on under 1 %).
 """
 from __future__ import annotations
 
@@ -17,9 +20,13 @@ import json
 import os
 import subprocess
 import time
-from dataclasses import dataclass, field
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
 
+import numpy as np
 import yaml
+
+from ..contact.laws import LAWS
 
 #: share of the total load per subtendon (soleus, medial, lateral gastrocnemius)
 BIASES = {"gastrocnemius": (0.2, 0.4, 0.4), "uniform": (1 / 3, 1 / 3, 1 / 3), "soleus": (0.6, 0.2, 0.2)}
@@ -28,13 +35,25 @@ LEVELS = (30.0, 100.0, 200.0, 400.0, 600.0, 800.0, 1000.0, 1200.0, 1600.0, 2000.
 #: the root on a frictionless plane: u_x = 0 over the face, the section free in its plane
 PLANE_ROOT = {"r": "xyz", "r_y": "xz", "r_z": "x", "r_yy": "x", "r_zz": "x", "r_yz": "x"}
 BEAMS = ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")
+#: the stride files' muscle columns (OpenSim's names), in the order of BEAMS
+STRIDE_COLUMNS = ("soleus_r", "gasmed_r", "gaslat_r")
+CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                       "configs")
+DATA = os.path.join(CONFIGS, "data")
+NEO = os.path.join(CONFIGS, "achilles_type3_psi45.yaml")
+GOH = tuple(os.path.join(CONFIGS, f"achilles_type3_psi45_goh{s}.yaml")
+            for s in ("", "_alex", "_amir", "_optimized_see", "_solver_default", "_tendon_model"))
+#: a second subject: the outlines traced from a label image (docs/geometry.md)
+SUBJECT2 = os.path.join(CONFIGS, "geometry_mask_demo.yaml")
+TWISTS = tuple(range(0, 181, 15))
 
 
 @dataclass(frozen=True)
 class EnvelopeCell:
     """One model of the envelope: the base config (its material and geometry), its twist [deg],
     bias, contact law (sliding | unilateral | the base's own: None), Coulomb friction μ (0: none),
-    elements per beam and load levels [N]."""
+    elements per beam, and either monotonic load levels [N] or (``stride``) the synthetic walking
+    stride of the bias (configs/data/stride_walking_<bias>.csv, 100 frames, 2.63 kN peak)."""
     base: str
     twist: float
     bias: str
@@ -42,13 +61,17 @@ class EnvelopeCell:
     friction: float = 0.0
     elements: int = 4
     levels: tuple[float, ...] = LEVELS
+    stride: bool = False
+    predictor: str | None = None          # solver.predictor (None: the config's default)
 
     @property
     def name(self) -> str:
         law = self.law or "own"
         mu = f"_mu{self.friction:g}" if self.friction else ""
         stem = os.path.splitext(os.path.basename(self.base))[0]
-        return f"{stem}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}"
+        kind = "_stride" if self.stride else ""
+        pred = f"_{self.predictor}" if self.predictor else ""
+        return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
 def cell_config(cell: EnvelopeCell) -> dict:
@@ -70,10 +93,16 @@ def cell_config(cell: EnvelopeCell) -> dict:
         b["elements"] = cell.elements
         b["axial_points"] = 2
     cfg["boundary_conditions"] = [{"beam": n, "node": "first", "fix": dict(PLANE_ROOT)} for n in names]
-    shares = BIASES[cell.bias]
-    cfg["loads"] = [{"beam": n, "node": "last", "traction_force": [s, 0.0, 0.0]}
-                    for n, s in zip(BEAMS, shares) if n in names]
-    cfg["steps"] = [float(x) for x in cell.levels]
+    if cell.stride:
+        cfg["history"] = {"file": os.path.join(DATA, f"stride_walking_{cell.bias}.csv")}
+        cfg["loads"] = [{"beam": n, "node": "last", "traction_force": [1.0, 0.0, 0.0], "column": c}
+                        for n, c in zip(BEAMS, STRIDE_COLUMNS) if n in names]
+        cfg.pop("steps", None)
+    else:
+        shares = BIASES[cell.bias]
+        cfg["loads"] = [{"beam": n, "node": "last", "traction_force": [s, 0.0, 0.0]}
+                        for n, s in zip(BEAMS, shares) if n in names]
+        cfg["steps"] = [float(x) for x in cell.levels]
     cfg["probes"] = [{"name": n, "beam": n, "node": "last"} for n in names]
     contact = cfg.setdefault("contact", {})
     if cell.law is not None:
@@ -81,6 +110,8 @@ def cell_config(cell: EnvelopeCell) -> dict:
     if cell.friction:
         contact["tangential"] = {"law": "coulomb", "friction": float(cell.friction)}
     cfg["output"] = {"vtk": False}
+    if cell.predictor:
+        cfg.setdefault("solver", {})["predictor"] = cell.predictor
     return cfg
 
 
@@ -99,14 +130,31 @@ class CellResult:
     wall_time: float = 0.0
     message: str = ""
     per_level: list = field(default_factory=list)
+    solve_time: float = 0.0         # summary.json's timings.solve [s]
+
+    @property
+    def frames(self) -> int:
+        return len(self.per_level)
+
+    @property
+    def median_iterations(self) -> float:
+        """Median Newton iterations per level (per frame of a stride)."""
+        return float(np.median([its for _, its, _ in self.per_level])) if self.per_level else 0.0
+
+    @property
+    def cutback_levels(self) -> int:
+        """Levels (frames) that took a cut-back."""
+        return sum(1 for _, _, cb in self.per_level if cb)
 
     def row(self) -> dict:
         c = self.cell
         return {"base": os.path.basename(c.base), "law": c.law or "own", "friction": c.friction,
-                "twist": c.twist, "bias": c.bias, "elements": c.elements, "status": self.status,
-                "last_level": self.last_level, "iterations": self.iterations,
+                "twist": c.twist, "bias": c.bias, "elements": c.elements, "stride": c.stride,
+                "status": self.status, "last_level": self.last_level, "iterations": self.iterations,
                 "iterations_to_1200": self.iterations_to_1200, "cutbacks": self.cutbacks,
-                "cutbacks_to_1200": self.cutbacks_to_1200, "wall_time": round(self.wall_time, 2),
+                "cutbacks_to_1200": self.cutbacks_to_1200, "levels": self.frames,
+                "median_iterations": self.median_iterations, "cutback_levels": self.cutback_levels,
+                "solve_time": round(self.solve_time, 3), "wall_time": round(self.wall_time, 2),
                 "message": self.message}
 
 
@@ -136,7 +184,7 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
         tail = (proc.stderr.strip().splitlines() or ["(no output)"])[-1]
         return CellResult(cell, "crashed", wall_time=wall, message=f"exit {proc.returncode}: {tail[:200]}")
     steps = data.get("steps", [])
-    early = [s for s in steps if s["load_factor"] <= 1200.0 * (1 + 1e-12)]
+    early = [s for s in steps if s["load_factor"] <= 1200.0 * (1 + 1e-12)] if not cell.stride else steps
     status = data.get("status", "unknown")
     return CellResult(cell, status, last_level=steps[-1]["load_factor"] if steps else 0.0,
                       iterations=int(data.get("newton_iterations", sum(s["iterations"] for s in steps))),
@@ -144,4 +192,133 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
                       cutbacks=sum(s["cutbacks"] for s in steps),
                       cutbacks_to_1200=sum(s["cutbacks"] for s in early), wall_time=wall,
                       message="" if status == "completed" else str(data.get("message", ""))[:300],
-                      per_level=[(s["load_factor"], s["iterations"], s["cutbacks"]) for s in steps])
+                      per_level=[(s["load_factor"], s["iterations"], s["cutbacks"]) for s in steps],
+                      solve_time=float(data.get("timings", {}).get("solve", 0.0)))
+
+
+def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
+    """A grid builder: cells of ``base`` for every law, friction, twist and bias."""
+    return lambda twists, biases, elements: [
+        EnvelopeCell(base, t, b, law, mu, elements=elements, stride=stride)
+        for law in laws for mu in frictions for t in twists for b in biases]
+
+
+SLIDING, UNILATERAL = LAWS                    # contact/laws.py, in its order
+#: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
+#: Coulomb μ 0.1 / 0.3 / 0.5, every shipped fibre-reinforced (GOH) config with its own law,
+#: strides (sliding, unilateral, μ 0.3) and the traced second subject
+GRIDS = {
+    "core": _columns(NEO, (SLIDING, UNILATERAL)),
+    "friction": _columns(NEO, (SLIDING,), (0.1, 0.3, 0.5)),
+    "fibres": lambda twists, biases, elements: [c for base in GOH for c in _columns(base, (None,))(
+        twists, biases, elements)],
+    "strides": lambda twists, biases, elements: (
+        _columns(NEO, (SLIDING, UNILATERAL), stride=True)(twists, biases, elements)
+        + _columns(NEO, (SLIDING,), (0.3,), stride=True)(twists, biases, elements)),
+    "subject2": _columns(SUBJECT2, (SLIDING, UNILATERAL)),
+}
+
+
+def grid(name: str, twists, biases, elements: int = 4, predictor: str | None = None) -> list[EnvelopeCell]:
+    """The cells of a named grid (``GRIDS``), with ``solver.predictor`` set when given."""
+    if name not in GRIDS:
+        raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
+    cells = GRIDS[name](twists, biases, elements)
+    return cells if predictor is None else [replace(c, predictor=predictor) for c in cells]
+
+
+def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir: str, jobs: int,
+              report=print) -> list[dict]:
+    """Every cell with every solver (tag → command), ``jobs`` child processes at a time; a line
+    per cell to ``report``; the rows (``CellResult.row`` and the solver's tag)."""
+    work = [(tag, cmd, c) for c in cells for tag, cmd in solvers.items()]
+
+    def one(job):
+        tag, cmd, cell = job
+        res = run_cell(cell, cmd, os.path.join(workdir, tag))
+        report(f"{tag:6s} {cell.name:64s} {res.status:10s} last {res.last_level:6g}  Newton "
+               f"{res.iterations:4d} (to 1.2 kN {res.iterations_to_1200:4d}, median {res.median_iterations:g})  "
+               f"cut-backs {res.cutbacks:2d} ({res.cutback_levels} levels)  {res.wall_time:6.1f} s  "
+               f"{res.message[:100]}")
+        return dict(res.row(), solver=tag)
+
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        return list(pool.map(one, work))
+
+
+def summary_line(rows: list[dict], tag: str) -> str:
+    """The rows of one solver against the envelope's targets, in one line."""
+    mine = [r for r in rows if r["solver"] == tag]
+    bad = [r for r in mine if r["status"] != "completed"]
+    columns = [r for r in mine if not r["stride"]]
+    strides = [r for r in mine if r["stride"]]
+    line = f"[{tag}] {len(mine)} cells: {len(bad)} not completed"
+    if columns:
+        over = [r for r in columns if r["twist"] <= 90 and (r["iterations_to_1200"] > 60 or r["cutbacks_to_1200"])]
+        line += f"; {len(over)} columns at twist <= 90 over 60 Newton iterations or with a cut-back to 1.2 kN"
+    if strides:
+        frames = sum(r["levels"] for r in strides)
+        cut = sum(r["cutback_levels"] for r in strides)
+        solve = sum(r["solve_time"] for r in strides)
+        line += (f"; strides: {frames} frames, median of the strides' medians "
+                 f"{np.median([r['median_iterations'] for r in strides]):g} Newton iterations per frame, "
+                 f"cut-backs on {cut} frames ({100.0 * cut / max(frames, 1):.2f} %), "
+                 f"{frames / max(solve, 1e-9):.1f} frames/s (solve)")
+    return line
+
+
+def _cell_text(r: dict | None, key: str) -> str:
+    if r is None:
+        return "–"
+    if r["status"] == "crashed":
+        return "**traceback**"
+    if r["status"] != "completed":
+        return f"**{r['status']}** after {float(r['last_level']):g} N"
+    cb = int(float(r.get("cutbacks_to_1200", r["cutbacks"]) or 0))
+    return f"{int(float(r[key]))}" + (f" ({cb} cut-back{'s' if cb > 1 else ''})" if cb else "")
+
+
+def markdown_table(after: list[dict], before: list[dict] | None = None, law: str | None = None,
+                   key: str = "iterations_to_1200") -> str:
+    """Twist × bias of a grid's rows (CSV rows of ``run_cells``; one law): Newton iterations to
+    1.2 kN (or the median per frame of strides: ``key``) and cut-backs, ``before → after``."""
+    def pick(rows):
+        return {(float(r["twist"]), r["bias"]): r for r in rows or [] if law is None or r["law"] == law}
+    a, b = pick(after), pick(before)
+    biases = [x for x in BIASES if any(k[1] == x for k in a)]
+    lines = ["| twist [deg] | " + " | ".join(biases) + " |", "|---:|" + "---|" * len(biases)]
+    for t in sorted({k[0] for k in a}):
+        cells = []
+        for bias in biases:
+            now = _cell_text(a.get((t, bias)), key)
+            cells.append(now if before is None else f"{_cell_text(b.get((t, bias)), key)} → {now}")
+        lines.append(f"| {t:g} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _read_rows(path: str) -> list[dict] | None:
+    import csv
+    if not os.path.isfile(path):
+        return None
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def render_docs(text: str, csv_dir: str) -> str:
+    """``text`` (docs/gait.md) with every block ``<!-- envelope:GRID:LAW -->`` … ``<!-- /envelope -->``
+    rendered from ``csv_dir``/gait_envelope_GRID.csv (and ``…_before.csv``, 38a07d3's, when it is
+    there) by ``markdown_table``; LAW ``strides-…`` tables the median Newton iterations per frame."""
+    import re
+    pattern = re.compile(r"(<!-- envelope:(\w+):([\w-]+) -->\n)(.*?)(<!-- /envelope -->)", re.S)
+
+    def block(m):
+        grid_name, law = m.group(2), m.group(3)
+        after = _read_rows(os.path.join(csv_dir, f"gait_envelope_{grid_name}.csv")) or []
+        before = _read_rows(os.path.join(csv_dir, f"gait_envelope_{grid_name}_before.csv"))
+        key = "iterations_to_1200"
+        if law.startswith("strides-"):
+            law, key = law[len("strides-"):], "median_iterations"
+        law_rows = [r for r in after if r["law"] == law] if law != "own" else after
+        return m.group(1) + markdown_table(law_rows, before, None if law == "own" else law, key) + "\n" + m.group(5)
+
+    return pattern.sub(block, text)

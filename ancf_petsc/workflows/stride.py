@@ -64,3 +64,22 @@ def write_storage(path: str, times: np.ndarray, forces: dict[str, np.ndarray], n
         fh.write("\t".join(["time"] + list(forces)) + "\n")
         for k, t in enumerate(times):
             fh.write("\t".join([f"{t:.4f}"] + [f"{f[k]:.3f}" for f in forces.values()]) + "\n")
+
+
+def write_stride_files(directory: str) -> list[str]:
+    """The stride in its three biases as CSV files (stride_walking_<bias>.csv) and the uniform
+    one also as OpenSim storage (stride_walking_uniform.sto) in ``directory``; their paths."""
+    import os
+    out = []
+    for bias in BIASES:
+        times, forces = synthetic_stride(bias)
+        note = (f"Synthetic walking stride, {bias}-biased (not measured data): muscle forces [N] over 100 "
+                "frames of a 1 s stride,\ntotal peak 2.63 kN; made by scripts/make_stride.py "
+                "(ancf_petsc/workflows/stride.py says how).")
+        out.append(os.path.join(directory, f"stride_walking_{bias}.csv"))
+        write_csv(out[-1], times, forces, note)
+        if bias == "uniform":
+            out.append(os.path.join(directory, "stride_walking_uniform.sto"))
+            write_storage(out[-1], times, forces,
+                          "synthetic_walking_stride_uniform (ancf-petsc scripts/make_stride.py; not measured)")
+    return out

@@ -558,12 +558,11 @@ class _Fault:
     """Makes one writer fail with ENOSPC at load level ``level`` (in-process, 1 rank)."""
 
     def __init__(self, monkeypatch, target: str, level: int):
-        import meshio
-
         import ancf_petsc.io.results as out
+        import ancf_petsc.io.vtk as vtk
         self.calls = 0
         if target == "vtu":
-            real = meshio.write
+            real = vtk.write_vtu
 
             def write(path, *a, **k):
                 if path.endswith(f"surface_{level:04d}.vtu"):
@@ -571,7 +570,7 @@ class _Fault:
                         fh.write(b"<VTKFile trunc")          # a truncated file, then the error
                     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), path)
                 return real(path, *a, **k)
-            monkeypatch.setattr(meshio, "write", write)
+            monkeypatch.setattr(vtk, "write_vtu", write)
         elif target == "h5":
             real_file = h5py.File
 

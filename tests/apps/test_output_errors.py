@@ -22,13 +22,12 @@ def _enospc(path: str) -> OSError:
 
 def _fault(monkeypatch, target: str) -> str:
     """Make the first write of ``target`` fail with ENOSPC; the file the message names."""
-    import meshio
-
     import ancf_petsc.io.results as out
+    import ancf_petsc.io.vtk as vtk
     if target == "first vtu":
         def write(path, *a, **k):
             raise _enospc(path)
-        monkeypatch.setattr(meshio, "write", write)
+        monkeypatch.setattr(vtk, "write_vtu", write)
         return "surface_0000.vtu"
     if target == "first summary":
         real = out.atomic_write

@@ -133,7 +133,6 @@ def test_a_friction_history_is_the_load_curves_and_carries_its_path(tmp_path):
         ld["column"] = "press"
     hist["boundary_conditions"][-1].pop("curve")
     hist["boundary_conditions"][-1]["column"] = "grip"
-    hist["solver"] = {"predictor": "secant"}          # the curves' run's predictor
     hs = run_inline(hist, tmp_path / "history")
     assert base["status"] == hs["status"] == "completed" and len(hs["steps"]) == len(steps)
     r_curves = np.array([s["reactions"]["grip"] for s in base["steps"]])

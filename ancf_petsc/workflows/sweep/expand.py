@@ -66,7 +66,8 @@ def expand(sweep: Sweep) -> list[RunSpec]:
 def run_config(sweep: Sweep, run: RunSpec) -> dict:
     """The run's model config: base + values, output.dir = run dir (every launch passes the run
     directory on the command line too), and the base's data files (``beams[].section.file``,
-    ``file`` and ``source`` under ``geometry.sections``) relative to the run directory, where
+    ``file`` and ``source`` under ``geometry.sections``, ``history.file``) relative to the run
+    directory, where
     config.yaml lives: a sweep directory moved with its data keeps working (``_relocate``)."""
     raw = copy.deepcopy(sweep.base_raw)
     for p in sweep.parameters:
@@ -82,6 +83,8 @@ def run_config(sweep: Sweep, run: RunSpec) -> dict:
     geo = raw.get("geometry")
     if isinstance(geo, dict) and geo.get("sections") is not None:
         geo["sections"] = _relocated_tree(geo["sections"], sweep.base_dir, run.dir)
+    if isinstance(raw.get("history"), dict):
+        _relocate(raw["history"], ("file",), sweep.base_dir, run.dir)
     return raw
 
 

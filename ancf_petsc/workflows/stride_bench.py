@@ -1,0 +1,81 @@
+"""Frames per second of a walking stride (issue 38, point 4): the shipped stride (100 frames,
+workflows/stride.py) on the paper's tendon, by elements, contact law and material.
+
+*After* (this tree): the stride as one load history, each frame continued from the one before
+(``ancf-solve`` on the history config, in a child process): frames / the run's solve time, and
+frames / its wall time (start-up and output included).  *Before* (a commit without load
+histories, such as 38a07d3): a frame could only be its own run from rest, its loads applied
+proportionally (``steps: [1]``), losing the path and the friction history; its frames/s is the
+number of sampled frames over their summed wall time.  The two are run in turns (``repeats``)."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import yaml
+
+from .envelope import STRIDE_COLUMNS, BEAMS, EnvelopeCell, cell_config
+from .stride import synthetic_stride
+
+
+@dataclass(frozen=True)
+class StrideCase:
+    """A stride cell (``EnvelopeCell`` with stride=True) and a label."""
+    label: str
+    cell: EnvelopeCell
+
+
+def _solve(cmd: list[str], cfg: dict, where: str) -> tuple[float, dict | None]:
+    """Write ``cfg`` and run it; (wall time, summary or None)."""
+    os.makedirs(where, exist_ok=True)
+    path = os.path.join(where, "config.yaml")
+    with open(path, "w") as fh:
+        yaml.safe_dump(cfg, fh, sort_keys=False)
+    t0 = time.perf_counter()
+    subprocess.run(cmd + [path, "--output-dir", os.path.join(where, "run"), "--quiet"],
+                   capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    summary = os.path.join(where, "run", "summary.json")
+    if not os.path.isfile(summary):
+        return wall, None
+    with open(summary) as fh:
+        return wall, json.load(fh)
+
+
+def after(case: StrideCase, cmd: list[str], work: str) -> dict:
+    """The stride as one history: frames, status, Newton iterations, frames/s (solve, wall)."""
+    cfg = cell_config(case.cell)
+    cfg["output"] = {"vtk": False}
+    wall, s = _solve(cmd, cfg, os.path.join(work, case.label, "after"))
+    if s is None:
+        return {"status": "crashed", "frames": 0}
+    frames = len(s["steps"])
+    return {"status": s["status"], "frames": frames, "iterations": s["newton_iterations"],
+            "per_solve": frames / max(s["timings"]["solve"], 1e-9), "per_wall": frames / wall}
+
+
+def before(case: StrideCase, cmd: list[str], work: str, sample: int) -> dict:
+    """``sample`` frames of the stride (evenly spaced over the stance), each its own proportional
+    run from rest with ``cmd``: frames/s over their summed wall time, Newton iterations per frame."""
+    times, forces = synthetic_stride(case.cell.bias)
+    stance = np.flatnonzero(sum(forces.values()) > 100.0)
+    frames = stance[np.linspace(0, len(stance) - 1, sample).round().astype(int)]
+    base = cell_config(EnvelopeCell(case.cell.base, case.cell.twist, case.cell.bias, case.cell.law,
+                                    case.cell.friction, case.cell.elements, levels=(1.0,)))
+    base["output"] = {"vtk": False}
+    total, its, done = 0.0, [], 0
+    for k in frames:
+        cfg = json.loads(json.dumps(base))
+        for ld, col in zip(cfg["loads"], STRIDE_COLUMNS[:len(BEAMS)]):
+            ld["traction_force"] = [float(forces[col][k]), 0.0, 0.0]
+        wall, s = _solve(cmd, cfg, os.path.join(work, case.label, f"before_{k:03d}"))
+        total += wall
+        if s is not None and s["status"] == "completed":
+            done += 1
+            its.append(s["newton_iterations"])
+    return {"frames": len(frames), "completed": done, "per_wall": len(frames) / total,
+            "median_iterations": float(np.median(its)) if its else float("nan")}

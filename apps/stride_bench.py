@@ -1,0 +1,57 @@
+"""scripts/bench_stride.py: frames per second of the walking stride by elements, contact law and
+material, this tree's ancf-solve (one load history) beside another's (each frame its own run from
+rest), in alternating turns (workflows/stride_bench.py)."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+import numpy as np
+
+from ancf_petsc.workflows.envelope import GOH, NEO, EnvelopeCell
+from ancf_petsc.workflows.stride_bench import StrideCase, after, before
+
+
+def cases(twist: float, bias: str) -> list[StrideCase]:
+    out = []
+    for elements in (4, 8):
+        for law, mu in (("sliding", 0.0), ("unilateral", 0.0), ("sliding", 0.3)):
+            name = f"neo-Hookean {law}{f' mu {mu:g}' if mu else ''} {elements} el."
+            out.append(StrideCase(name, EnvelopeCell(NEO, twist, bias, law, mu, elements, stride=True)))
+    amir = [g for g in GOH if g.endswith("_amir.yaml")][0]
+    out.append(StrideCase("GOH amir (its own law) 4 el.", EnvelopeCell(amir, twist, bias, None, 0.0, 4, stride=True)))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="bench_stride", description=__doc__.splitlines()[0])
+    ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
+    ap.add_argument("--before", help="an ancf-solve without load histories (e.g. 38a07d3's)")
+    ap.add_argument("--twist", type=float, default=45.0)
+    ap.add_argument("--bias", default="uniform")
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--sample", type=int, default=10, help="frames of the stride the before side solves")
+    ap.add_argument("--work", default="results/bench_stride")
+    ap.add_argument("--only", help="cases whose label contains this")
+    args = ap.parse_args(argv)
+    print(f"{'case':40s} {'frames/s (solve)':>17s} {'frames/s (wall)':>16s} {'Newton/frame':>12s}"
+          + ("  before: frames/s (wall), Newton/frame, ratio" if args.before else ""))
+    for case in cases(args.twist, args.bias):
+        if args.only and args.only not in case.label:
+            continue
+        a, b = [], []
+        for _ in range(args.repeats):
+            a.append(after(case, [args.solver], args.work))
+            if args.before:
+                b.append(before(case, [args.before], args.work, args.sample))
+        solve = np.median([r.get("per_solve", 0.0) for r in a])
+        wall = np.median([r.get("per_wall", 0.0) for r in a])
+        per = a[-1].get("iterations", 0) / max(a[-1]["frames"], 1)
+        line = f"{case.label:40s} {solve:17.1f} {wall:16.1f} {per:12.2f}  {a[-1]['status']}"
+        if b:
+            bw = np.median([r["per_wall"] for r in b])
+            line += (f"  {bw:8.2f}, {b[-1]['median_iterations']:.0f}, {b[-1]['completed']}/{b[-1]['frames']} "
+                     f"frames completed; after/before (wall) {wall / bw:.0f}x")
+        print(line, flush=True)
+    return 0

@@ -1,0 +1,63 @@
+"""The gait envelope's failures at 38a07d3, each at small size (issue 38; workflows/envelope.py
+builds the cells: the paper's outlines, plane roots, end tractions split by the bias, 2 axial
+points).  Unilateral contact at ψ = 90°, gastrocnemius-biased, raised a traceback on its first
+level (a complementarity linearisation at a state with an inverted element); the sliding column at
+ψ = 180°, soleus-biased, cycled at 1030 N; the unilateral one lost its projections at 815 N; the
+sliding ψ = 90° columns took 72-91 Newton iterations to 1.2 kN.  A stride's push-off with
+unilateral contact, loading and unloading, holds too."""
+import numpy as np
+import pytest
+
+from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, cell_config
+from ancf_petsc.workflows.stride import OPENSIM_COLUMNS, synthetic_stride
+from helpers import CONFIGS, run_inline
+
+
+def _run(cell, tmp_path):
+    raw = cell_config(cell)
+    return run_inline(raw, tmp_path / cell.name, base_dir=CONFIGS)
+
+
+def _cutbacks(s):
+    return sum(st["cutbacks"] for st in s["steps"])
+
+
+@pytest.mark.slow
+def test_unilateral_twist_90_gastrocnemius_biased_first_levels(tmp_path):
+    """The traceback case (ValueError: array must not contain infs or NaNs, 38a07d3) reaches its
+    first levels without a cut-back."""
+    s = _run(EnvelopeCell(NEO, 90, "gastrocnemius", "unilateral", levels=(30.0, 100.0, 200.0)), tmp_path)
+    assert s["status"] == "completed" and _cutbacks(s) == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("law,bias,budget", [("sliding", "soleus", 70), ("sliding", "uniform", 60),
+                                            ("unilateral", "soleus", 250)])
+def test_twist_180_columns_to_1200_newtons(tmp_path, law, bias, budget):
+    """ψ = 180° to 1.2 kN: the sliding soleus-biased column (a Newton 2-cycle at 1030 N before)
+    and the unilateral one (projection lost at 815 N) complete; the sliding ones without a
+    cut-back and within their Newton budgets (measured 57 and 49 with the tangent predictor)."""
+    levels = (30.0, 100.0, 200.0, 400.0, 600.0, 800.0, 1000.0, 1200.0)
+    s = _run(EnvelopeCell(NEO, 180, bias, law, levels=levels), tmp_path)
+    assert s["status"] == "completed" and s["steps"][-1]["load_factor"] == 1200.0
+    assert s["newton_iterations"] <= budget
+    if law == "sliding":
+        assert _cutbacks(s) == 0
+
+
+@pytest.mark.slow
+def test_unilateral_push_off_loading_and_unloading(tmp_path):
+    """Frames 40-60 of the gastrocnemius-biased stride (the push-off peak, 2.63 kN, and the
+    unloading to toe-off) at ψ = 90° with unilateral contact: every frame converges, none after
+    the first (a ramp from rest to 0.5 kN in sub-steps) takes a cut-back, and the median frame
+    takes at most 8 Newton iterations (measured 5)."""
+    times, forces = synthetic_stride("gastrocnemius")
+    sel = slice(40, 61)
+    raw = cell_config(EnvelopeCell(NEO, 90, "gastrocnemius", "unilateral", stride=True))
+    raw["history"] = {"table": {"time": times[sel].tolist(),
+                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
+    s = run_inline(raw, tmp_path / "push_off", base_dir=CONFIGS)
+    its = [st["iterations"] for st in s["steps"]]
+    assert s["status"] == "completed" and len(its) == 21
+    assert sum(st["cutbacks"] for st in s["steps"][1:]) == 0
+    assert np.median(its[1:]) <= 8

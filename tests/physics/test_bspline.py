@@ -1,0 +1,57 @@
+"""physics/bspline.py against scipy.interpolate (issue 40): the same knots, coefficients, values
+and derivative splines to the last bit, for every degree the sections use, inside and beyond
+the knots (extrapolation) and at NaN; evaluated by scipy's compiled routine (loaded without
+scipy.interpolate) and by the numpy recursion that replaces it where it is absent."""
+import numpy as np
+import pytest
+from scipy.interpolate import make_interp_spline
+
+from ancf_petsc.physics import bspline
+from ancf_petsc.physics.bspline import SplineSet, interpolating_spline
+
+
+@pytest.fixture(params=["compiled", "numpy"])
+def evaluation(request, monkeypatch):
+    """Both ways of evaluating a spline: scipy's compiled routine and the numpy recursion."""
+    if request.param == "numpy":
+        monkeypatch.setattr(bspline, "compiled", lambda: None)
+    else:
+        assert bspline.compiled() is not None
+    return request.param
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 5])
+def test_bitwise_equal_to_scipy(k, evaluation):
+    rng = np.random.default_rng(k)
+    for _ in range(40):
+        m = int(rng.integers(k + 1, 25))
+        x = np.cumsum(rng.random(m) + 0.01)
+        y = rng.standard_normal((m, 2))
+        ref, ours = make_interp_spline(x, y, k=k), interpolating_spline(x, y, k)
+        assert np.array_equal(ref.t, ours.t) and np.array_equal(ref.c, ours.c)
+        xs = np.concatenate([rng.uniform(x[0] - 1.0, x[-1] + 1.0, 100), x, [np.nan]])
+        for nu in range(min(k, 2) + 1):
+            r, o = (ref.derivative(nu), ours.derivative(nu)) if nu else (ref, ours)
+            assert np.array_equal(r(xs), o(xs), equal_nan=True)
+            assert np.array_equal(r(xs[3]), o(xs[3]))          # one point: shape (2,)
+
+
+def test_even_degrees_above_two_are_refused_like_scipy():
+    with pytest.raises(ValueError, match="Odd degree"):
+        interpolating_spline(np.arange(6.0), np.zeros((6, 2)), 4)
+
+
+def test_a_spline_set_gives_each_spline_its_own_values():
+    """Several splines of different degrees (a curve and its derivative splines) in one pass."""
+    rng = np.random.default_rng(7)
+    splines = []
+    for k in (3, 3, 1, 2):
+        x = np.cumsum(rng.random(9) + 0.01)
+        s = interpolating_spline(x, rng.standard_normal((9, 2)), k)
+        splines += [s] + [s.derivative(nu) for nu in range(1, k + 1)]
+    which = rng.integers(0, len(splines), 500)
+    xs = rng.uniform(-1.0, 6.0, 500)
+    xs[7] = np.nan
+    got = SplineSet(splines)(which, xs)
+    for i in range(len(xs)):
+        assert np.array_equal(got[i], splines[which[i]](xs[i]), equal_nan=True)

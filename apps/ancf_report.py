@@ -49,13 +49,19 @@ def main(argv: list[str] | None = None) -> int:
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
     sections = []
+    heading = "Type III Achilles tendon: reproduction of Obrezkov et al. (2022)"
     log = (lambda msg: print(msg, flush=True))
     try:
         t1 = t2 = None
         if args.existing:
             from ancf_petsc.paper import existing
             runs = existing.read_existing(args.existing, inputs)
+            heading = existing.title(runs)
             sections.append(("The runs", existing.runs_markdown(runs)))
+            drawn = existing.other_figures(runs, out)
+            if drawn:
+                sections.append(("Figures of the other runs", "\n\n".join(
+                    f"![{os.path.basename(f)}]({os.path.basename(f)})" for f in drawn)))
             found = existing.paper_summaries(runs)
             if found:
                 t1 = rp.table1_from(inputs, found)
@@ -89,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
     with open(os.path.join(out, "report.md"), "w") as fh:
-        fh.write("# Type III Achilles tendon: reproduction of Obrezkov et al. (2022)\n\n" + text + "\n")
+        fh.write(f"# {heading}\n\n" + text + "\n")
     print(text)
     print(f"\n[report] {os.path.join(out, 'report.md')}")
     return 0

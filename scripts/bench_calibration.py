@@ -229,7 +229,7 @@ def twin(out: str, draws: int, path: str = TWIN, factors=(1.3, 0.8, 1.25)) -> di
     true = np.array([p.start for p in spec.parameters]) if factors else np.array([1.2e6, 3.6e6])
     exact = exact_data(spec, true)
     rng = np.random.default_rng(0)
-    fitted, se, t0, samples = [], [], time.perf_counter(), 0
+    fitted, se, scaled, t0, samples = [], [], [], time.perf_counter(), 0     # scaled: (t95, floored)
     for k in range(draws):
         s = with_data(spec, draw(spec, exact, rng), os.path.join(out, "twin", str(k)))
         if factors:                                            # start away from the truth
@@ -237,22 +237,22 @@ def twin(out: str, draws: int, path: str = TWIN, factors=(1.3, 0.8, 1.25)) -> di
         res = run_calibration(s, fresh=True, say=lambda *_: None)
         fitted.append(res.fit.u)
         se.append(res.uncertainty.se_u)
+        scaled.append((res.uncertainty.t95, res.uncertainty.floored))
         samples += res.throughput["samples"]
         if factors or k < 3:
             print(f"[bench] twin draw {k}: " + ", ".join(f"{p.name} {p.value:.4g} ± {p.se:.2g}"
                                                        for p in res.parameters), flush=True)
     u_true = to_u(spec.parameters, true)
-    t95 = res.uncertainty.t95
-    within = coverage(u_true, np.array(fitted), np.array(se), t95)
-    within1 = coverage(u_true, np.array(fitted), np.array(se), 1.0)
+    t95, floored = (np.array(x) for x in zip(*scaled))     # per draw: Student's t or 1.96 (s² = 1)
+    within, within1 = (coverage(u_true, np.array(fitted), np.array(se), k) for k in (t95[:, None], 1.0))
     wall = time.perf_counter() - t0
     z = (np.array(fitted) - u_true) / np.array(se)
     print(f"[bench] twin: z-scores (fitted - true) / SE: mean {np.round(z.mean(axis=0), 3).tolist()}, "
           f"standard deviation {np.round(z.std(axis=0), 3).tolist()}; first 20 draws within 95 %: "
           f"{within[:20].sum(axis=0).tolist()}")
     print(f"[bench] twin: {draws} draws, {samples} samples in {wall:.0f} s; true value within the 95 % "
-          f"interval (t = {t95:.2f}) per parameter {within.sum(axis=0).tolist()} of {draws}, all at once "
-          f"{int(within.all(axis=1).sum())}; within 1 SE {within1.sum(axis=0).tolist()}")
+          f"interval (t {min(t95):.2f}-{max(t95):.2f}, {sum(floored)} at s² = 1) per parameter {within.sum(axis=0).tolist()}"
+          f" of {draws}, all at once {int(within.all(axis=1).sum())}; within 1 SE {within1.sum(axis=0).tolist()}")
     return {"draws": draws, "within95": within.sum(axis=0).tolist(), "z_std": z.std(axis=0).tolist(), "within1se": within1.sum(axis=0).tolist(),
             "joint95": int(within.all(axis=1).sum()), "samples": samples, "wall": wall}
 

@@ -13,8 +13,9 @@ soleus elongation and the displacement of each gastrocnemius against the soleus 
         [--supported-ends keep|merge]
 
 Every run is one ancf-solve process (1 rank), as a user runs it.  The CSV has one row per run and
-level; the figure draws the soleus's displacement against the medial gastrocnemius at the far end
-against the load for each law (4 elements)."""
+level (the differences u_first − u_second in config order, ``end_<first>|<second>_mm``); the
+figure draws soleus − medial gastrocnemius at the far end against the load for each law (the
+fewest elements asked for), one colour and marker per law.  ``--reuse`` reads finished runs."""
 from __future__ import annotations
 
 import argparse
@@ -40,6 +41,10 @@ LAWS += [(f"coulomb mu={mu:g}", "sliding", {"law": "coulomb", "friction": mu}) f
 LAWS += [("unilateral", "unilateral", None)]
 LAWS += [(f"unilateral, coulomb mu={mu:g}", "unilateral", {"law": "coulomb", "friction": mu})
          for mu in (0.003, 0.03, 0.3, 3.0)]
+
+
+#: the pair the figure and the table read: u_soleus − u_medial (first − second in config order)
+PAIR = "soleus|medial_gastrocnemius"
 
 
 def config(loading: str, mode: str, tangential, elements: int, out: str, ends: str | None = None) -> dict:
@@ -97,39 +102,12 @@ def rows_of(r: dict) -> list[dict]:
         dd = st.get("displacement_differences", {})
         row = {"loading": r["loading"], "law": r["law"], "elements": r["elements"], "status": r["status"],
                "load_N": st["load_factor"], "newton": st["iterations"], "cutbacks": st["cutbacks"],
+               "tresca_solves": st.get("tresca_solves", 0), "wall_s": st.get("wall_time", float("nan")),
                "soleus_mm": 1e3 * st["probes"]["soleus"]["displacement"][0]}
         for pair, d in dd.items():
             row[f"end_{pair}_mm"] = 1e3 * d["end"]
         out.append(row)
     return out
-
-
-def figure(results: list[dict], path: str, elements: int) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=False)
-    colour = {law[0]: plt.cm.tab10(i % 10) for i, law in enumerate(LAWS)}
-    for ax, loading in zip(axes, LOADINGS):
-        for r in results:
-            if r["loading"] != loading or r["elements"] != elements or not r["steps"]:
-                continue
-            load = [st["load_factor"] for st in r["steps"]]
-            key = next((k for k in r["steps"][0].get("displacement_differences", {}) if k.startswith("medial")), None)
-            if key is None:
-                continue
-            # the soleus against the medial gastrocnemius (deep minus superficial), mm
-            du = [-1e3 * st["displacement_differences"][key]["end"] for st in r["steps"]]
-            style = "--" if r["law"].startswith("unilateral") else "-"
-            ax.plot(load, du, style, marker=".", color=colour[r["law"]],
-                    label=r["law"] + ("" if r["status"] == "completed" else f" ({r['status']})"))
-        ax.set_title(f"{loading} loading, psi = 45 deg, {elements} elements")
-        ax.set_xlabel("tendon force [N]")
-        ax.set_ylabel("soleus - medial gastrocnemius at x = L [mm]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=130)
 
 
 def main() -> int:
@@ -151,15 +129,16 @@ def main() -> int:
     cases = [(lo, law, n) for n in args.elements for lo in args.loadings for law in LAWS if law[0] in args.laws]
     with ThreadPoolExecutor(args.jobs) as pool:
         results = list(pool.map(lambda c: run(c, args.out, args.reuse, args.timeout, args.supported_ends), cases))
-    print("| loading | law | elements | status | Newton | cut-backs | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| loading | law | elements | status | Newton | cut-backs | Tresca solves | wall [s] | soleus at 400 N [mm] | soleus - MG at the end [mm] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         rows = rows_of(r)
         last = rows[-1] if rows else {}
-        mg = next((v for k, v in last.items() if k.startswith("end_medial")), float("nan"))
+        mg = last.get(f"end_{PAIR}_mm", float("nan"))
         print(f"| {r['loading']} | {r['law']} | {r['elements']} | {r['status']} | "
-              f"{sum(x['newton'] for x in rows)} | {sum(x['cutbacks'] for x in rows)} | {r['wall_s']:.1f} | "
-              f"{last.get('soleus_mm', float('nan')):.4f} | {-mg:.4f} |"
+              f"{sum(x['newton'] for x in rows)} | {sum(x['cutbacks'] for x in rows)} | "
+              f"{sum(x['tresca_solves'] for x in rows)} | {r['wall_s']:.1f} | "
+              f"{last.get('soleus_mm', float('nan')):.4f} | {mg:.4f} |"
               + ("" if r["status"] == "completed" else f" {r['message'][:80]}"))
     if args.csv:
         rows = [row for r in results for row in rows_of(r)]
@@ -169,7 +148,8 @@ def main() -> int:
             w.writeheader()
             w.writerows(rows)
     if args.figure:
-        figure(results, args.figure, min(args.elements))
+        from ancf_petsc.viz import plot_law_differences
+        plot_law_differences(results, [law[0] for law in LAWS], list(LOADINGS), PAIR, min(args.elements), args.figure)
     return 0
 
 

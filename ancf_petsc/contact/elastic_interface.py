@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.element3363 import DOFS_PER_ELEMENT, SLOTS
-from .partners import PartnerTerm, drop_held, node_dofs, segment_outer
+from .partners import PartnerTerm, drop_held, node_dofs, segment_outer, tangential
 
 EL = DOFS_PER_ELEMENT
 LEVI_CIVITA = np.zeros((3, 3, 3))
@@ -75,7 +75,7 @@ class ElasticMatrix(PartnerTerm):
         # ∂m_i/∂q_aj = ε_ijk V_ak with V_a = N_a,t T_ξ − N_a,ξ T_t (times the sign)
         V = sign[:, None, None] * (Nz[:, :, 1, None] * T[:, None, :, 0] - Nz[:, :, 0, None] * T[:, None, :, 1])
         M = np.einsum("ijk,pak->piaj", LEVI_CIVITA, V)
-        s = d - np.einsum("pi,pi->p", n, d)[:, None] * n
+        s = tangential(d, n)
         return MatrixEvaluation(d=d, sigma=self.stiffness * s, omega=self.points.w[idx] * st.weight,
                                 n=n, rho=rho, M=M, Nz=Nz, sign=sign, stick=np.ones(len(idx), dtype=bool))
 

@@ -41,7 +41,8 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE
 from . import friction_blocks
-from .partners import PartnerTerm
+from .partners import PartnerTerm, tangential
+from .reports import output_signs
 
 EYE = np.eye(3)
 
@@ -94,6 +95,13 @@ def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held=True) ->
     S = (stick[:, None, None] * EYE
          + ratio[:, None, None] * (EYE - direction[:, :, None] * direction[:, None, :]))
     return proj, S, direction, stick, slide
+
+
+def stick_fraction(tPhi, area: np.ndarray, m_stick: np.ndarray) -> np.ndarray:
+    """Per point the share of its tangential functions that stick, each weighted by its value
+    φ_k at the point (tΦ_kp = φ_k(x_p) w_p / A_k, ``area`` the functions' A_k); 0 where none."""
+    weight = tPhi.T @ area
+    return np.divide(tPhi.T @ (area * m_stick), weight, out=np.zeros(len(weight)), where=weight > 0.0)
 
 
 def reference_axial(model, points) -> np.ndarray:
@@ -170,7 +178,7 @@ class CoulombFriction(PartnerTerm):
         idx, n, w = c.local, st.pr.n, st.weight
         d = self.relative(c, st, x_of)
         du = d - self.state["anchor"][idx]
-        u = du - np.einsum("pi,pi->p", n, du)[:, None] * n
+        u = tangential(du, n)
         wp = self.points.w[idx]
         zl = st.z * st.rows.load
         positive = c.Phi.T @ zl > 0.0                  # the points that press (p > 0)
@@ -202,9 +210,10 @@ class CoulombFriction(PartnerTerm):
         na = np.einsum("ki,ki->k", nbar, a)
         dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
         Y = tPhi.T @ y
-        sigma = c.stiffness * (Y - np.einsum("pi,pi->p", n, Y)[:, None] * n) / wp[:, None]
-        # a point sticks where most of its functions (by their weight at the point) stick
-        on = tPhi.T @ m_stick.astype(float)
+        sigma = c.stiffness * tangential(Y, n) / wp[:, None]
+        # a point sticks where most of its functions (by their value φ_k there) stick; tΦ_kp is
+        # φ_k(x_p) w_p / A_k, so the weights are tΦ_kp A_k (not tΦ_kp: their sum is not 1)
+        on = stick_fraction(tPhi, c.space.tarea[c.mults], m_stick)
         pressure = c.stiffness * (c.Phi.T @ (st.z * st.rows.load)) / wp
         share = c.Phi @ np.ones(len(idx)) if c.sum_over_ranks is not None else np.ones(len(c.mults))
         return FrictionEvaluation(d=d, du=du, sigma=sigma, Y=Y, stick=on > 0.5, omega=wp * w,
@@ -266,13 +275,29 @@ class CoulombFriction(PartnerTerm):
 
     # ------------------------------------------------------------------ reports
     def fields(self, c, st) -> dict[str, np.ndarray]:
-        """The base's per-point fields and per owned multiplier the tangential traction
-        coefficient λ_T = k_s y / A_k [Pa] and whether the function sticks."""
+        """The base's per-point fields, the tangential slip in the level's last load increment
+        [m] (u_first − u_second, as ``tangential_slip``; what decides stick or slip) and per
+        owned multiplier the tangential traction coefficient λ_T = k_s y / A_k [Pa] (the first
+        beam's on the second, as ``shear_stress``) and whether the function sticks."""
         ev, own = st.terms[self.name], c.owned
         area = c.space.tarea[c.mults]
-        lam = c.stiffness * ev.y / np.where(area > 0.0, area, 1.0)[:, None]
-        return super().fields(c, st) | {"multiplier_shear": lam[own],
-                                        "multiplier_stick": ev.m_stick[own].astype(np.int8)}
+        sign = output_signs(c, c.space.interface[c.mults])
+        lam = c.stiffness * sign[:, None] * ev.y / np.where(area > 0.0, area, 1.0)[:, None]
+        return super().fields(c, st) | {
+            "slip_increment": output_signs(c, c.points.itf[c.local])[:, None] * tangential(ev.du, st.pr.n),
+            "multiplier_shear": lam[own], "multiplier_stick": ev.m_stick[own].astype(np.int8)}
+
+    columns = PartnerTerm.columns + (("max_slip_increment", "max"),)
+
+    def sums(self, c, st, on: np.ndarray) -> list[float]:
+        """The base's statistics and the largest slip in the level's last load increment."""
+        du = tangential(st.terms[self.name].du[on], st.pr.n[on])
+        return super().sums(c, st, on) + [float(np.linalg.norm(du, axis=1).max(initial=0.0))]
+
+    @staticmethod
+    def report(values: dict, sign: float) -> dict:
+        """The base's entries and ``max_slip_increment`` [m]."""
+        return PartnerTerm.report(values, sign) | {"max_slip_increment": values["max_slip_increment"]}
 
     def describe(self) -> str:
         return (f"Coulomb friction, mu = {self.mu:g} (tangential multipliers, exact stick; "

@@ -1,6 +1,8 @@
 """Contact interfaces: a section curve shared by two beams' outlines, swept along both beams.
 
-Quadrature points live on body A's side of the interface and are projected onto body B's.
+Quadrature points live on body A's side of the interface and are projected onto body B's; by
+default A is the later of the two beams in config order (whatever is loaded).  Outputs name an
+interface "curve (first|second)" in config order, whichever side carries the points.
 ``find_interfaces`` takes them from explicit pairs in the contact spec or finds every curve two
 outlines share.  Errors are ``ContactSetupError``s; the model layer names their config keys.
 """
@@ -36,6 +38,28 @@ class Interface:
         if self.curve_b is None:
             self.curve_b = self.curve
 
+    @property
+    def first(self):
+        """The earlier of the two beams in config order (outputs are "first|second")."""
+        return self.a if self.a.index < self.b.index else self.b
+
+    @property
+    def second(self):
+        """The later of the two beams in config order."""
+        return self.b if self.a.index < self.b.index else self.a
+
+    @property
+    def sides(self) -> str:
+        """"curve (A|B)": the curve and the beam carrying the points first, what the
+        discretisation depends on (a restart's fingerprint)."""
+        return f"{self.curve.name} ({self.a.name}|{self.b.name})"
+
+    @property
+    def sign(self) -> float:
+        """+1 where A (the beam carrying the points) is the first beam in config order, −1 where
+        it is the second: turns A − B into the outputs' first − second."""
+        return 1.0 if self.a.index < self.b.index else -1.0
+
 
 def _shared(a, b) -> list:
     """(curve, B's flip) of every curve object both outlines use."""
@@ -65,16 +89,13 @@ def _explicit_pairs(model, spec) -> list:
 
 
 def _automatic_pairs(model) -> list:
-    # the quadrature points go on the body that does not slide out of the interface: a loaded
-    # beam is the target (B); otherwise the later beam in the config carries them
-    loaded = {ld.beam for ld in model.spec.loads}
+    # the sides do not depend on the loads (issue 39): of two beams sharing a curve the later
+    # in config order carries the points (A), the earlier is the target (B); an explicit
+    # contact.interfaces list chooses otherwise
     pairs = []
     for i, first in enumerate(model.beams):
         for second in model.beams[i + 1:]:
-            a, b = second, first
-            if first.index not in loaded and second.index in loaded:
-                a, b = first, second
-            pairs += [(a, b, c, f, None) for c, f in _shared(a, b)]
+            pairs += [(second, first, c, f, None) for c, f in _shared(second, first)]
     if not pairs:
         raise ContactSetupError("no two beam outlines share a curve; give the neighbours a "
                                     "common named curve or remove contact")
@@ -90,7 +111,8 @@ def find_interfaces(model, spec) -> list[Interface]:
             raise ContactSetupError(f"interface {c.name}: beams {a.name} ({a.n_elements} "
                              f"elements) and {b.name} ({b.n_elements}) must have the same number "
                              "of elements so that the interface is conforming")
-        out.append(Interface(f"{c.name} ({a.name}|{b.name})", a, b, c, fb, cb))
+        first, second = (a, b) if a.index < b.index else (b, a)
+        out.append(Interface(f"{c.name} ({first.name}|{second.name})", a, b, c, fb, cb))
     return out
 
 

@@ -119,7 +119,7 @@ class SlidingLaw:
 
     @staticmethod
     def describe() -> str:
-        return "sliding (normal gap held at zero, frictionless)"
+        return "sliding (normal gap held at zero)"
 
 
 class UnilateralLaw:
@@ -182,7 +182,7 @@ class UnilateralLaw:
 
     @staticmethod
     def describe() -> str:
-        return "unilateral (gap >= 0, pressure >= 0, frictionless; active set in Newton)"
+        return "unilateral (gap >= 0, pressure >= 0; active set in Newton)"
 
 
 LAWS = {"sliding": SlidingLaw, "unilateral": UnilateralLaw}

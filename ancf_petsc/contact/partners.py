@@ -18,6 +18,10 @@ import numpy as np
 
 from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from .multipliers import reference_modulus, reference_size
+from .reports import output_signs
+
+#: the prefix of a law's history in the point fields (results.h5 ``steps/…/contact``)
+HISTORY = "history_"
 
 
 def node_dofs(nodes: np.ndarray) -> np.ndarray:
@@ -32,6 +36,11 @@ def drop_held(dofs: np.ndarray, fixed_mask: np.ndarray) -> np.ndarray:
     ok = out >= 0
     out[ok] = np.where(fixed_mask[out[ok]], -1, out[ok])
     return out
+
+
+def tangential(d: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """The part of each d (P, 3) in the plane normal to n (P, 3)."""
+    return d - np.einsum("pi,pi->p", d, n)[:, None] * n
 
 
 def per_segment_sum(srow: np.ndarray, n_s: int, values: np.ndarray) -> np.ndarray:
@@ -76,7 +85,7 @@ class PartnerTerm:
     #: per-interface statistics of ``sums``: (name, how ranks combine it)
     columns = (("max_tangential_slip", "max"), ("max_shear_stress", "max"), ("shear_force_x", "sum"),
                ("shear_force_y", "sum"), ("shear_force_z", "sum"), ("stick_area", "sum"),
-               ("shear_area", "sum"))
+               ("pressed_area", "sum"))
 
     def __init__(self, model, points, projector):
         self.points = points
@@ -158,37 +167,45 @@ class PartnerTerm:
         self.state = {k: v.copy() for k, v in self._saved.items()}
 
     def set_state(self, fields: dict) -> None:
-        """A restart's history (every point: ``fields`` of the written level)."""
+        """A restart's history (every point: ``fields`` of the written level; ``shear_*`` in
+        files written before issue 39)."""
         for key in self.state:
-            self.state[key] = np.asarray(fields["shear_" + key], dtype=float).copy()
+            value = fields[HISTORY + key] if HISTORY + key in fields else fields["shear_" + key]
+            self.state[key] = np.asarray(value, dtype=float).copy()
         self.checkpoint()
 
     # ------------------------------------------------------------------ reports
     def fields(self, c, st) -> dict[str, np.ndarray]:
-        """Per local point: tangential slip s [m] from the reference partner (the part of d in
-        B's tangent plane at the point's closest point), interface stress σ [Pa] (on B, in the
-        direction of A's relative motion), stick (1) or not (0), and the history a restart
-        needs (``shear_*``)."""
+        """Per local point, first against second in config order (``Interface.sign``): the
+        tangential slip u_first − u_second [m] from the reference partner (the part of d in B's
+        tangent plane at the point's closest point), the interface stress [Pa] the first beam
+        puts on the second, stick (1) or not (0), and the history a restart needs
+        (``history_*``, as the law keeps it: A against B)."""
         ev, n = st.terms[self.name], st.pr.n
-        slip = ev.d - np.einsum("pi,pi->p", ev.d, n)[:, None] * n
-        out = {"tangential_slip": slip, "shear_stress": ev.sigma, "stick": ev.stick.astype(np.int8)}
-        return out | {"shear_" + k: v[c.local] for k, v in self.state.items()}
+        sign = output_signs(c, c.points.itf[c.local])[:, None]
+        out = {"tangential_slip": sign * tangential(ev.d, n), "shear_stress": sign * ev.sigma,
+               "stick": ev.stick.astype(np.int8)}
+        return out | {HISTORY + k: v[c.local] for k, v in self.state.items()}
 
     def sums(self, c, st, on: np.ndarray) -> list[float]:
-        """The local parts of ``columns`` over the local points ``on`` (bool) of one interface."""
-        ev, n = st.terms[self.name], st.pr.n[on]
-        d = ev.d[on]
-        slip = np.linalg.norm(d - np.einsum("pi,pi->p", d, n)[:, None] * n, axis=1)
+        """The local parts of ``columns`` over the local points ``on`` (bool) of one interface:
+        the stick share is the sticking part of the pressed area (p > 0 at the point)."""
+        ev = st.terms[self.name]
+        slip = np.linalg.norm(tangential(ev.d[on], st.pr.n[on]), axis=1)
         sigma = ev.sigma[on]
         force = ev.omega[on] @ sigma if on.any() else np.zeros(3)
+        pressed = st.pressure[on] > 0.0
         return [slip.max(initial=0.0), np.linalg.norm(sigma, axis=1).max(initial=0.0), *force,
-                float(ev.omega[on] @ ev.stick[on]), float(ev.omega[on].sum())]
+                float(ev.omega[on] @ (ev.stick[on] & pressed)), float(ev.omega[on] @ pressed)]
 
     @staticmethod
-    def report(values: dict) -> dict:
-        """Per-interface entries of the summary from the combined ``columns``."""
-        area = values["shear_area"]
+    def report(values: dict, sign: float) -> dict:
+        """Per-interface entries of the summary from the combined ``columns``; ``sign`` the
+        interface's ``Interface.sign`` (the shear force is the one the first beam in config
+        order puts on the second [N])."""
+        area = values["pressed_area"]
         return {"max_tangential_slip": values["max_tangential_slip"],
                 "max_shear_stress": values["max_shear_stress"],
-                "shear_force": [values["shear_force_x"], values["shear_force_y"], values["shear_force_z"]],
+                "shear_force": [sign * values["shear_force_x"], sign * values["shear_force_y"],
+                                sign * values["shear_force_z"]],
                 "stick_share": values["stick_area"] / area if area else 0.0}

@@ -4,26 +4,42 @@ from __future__ import annotations
 
 import numpy as np
 
+from .interfaces import held_ends, supported_ends
 from .state import ContactState
 
 #: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
 GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
                ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
-               ("max_pressure", "max"), ("normal_force", "sum"), ("points", "sum"))
+               ("max_pressure", "max"), ("normal_force", "sum"), ("pressing_force", "sum"),
+               ("tension_force", "sum"), ("points", "sum"))
 
 
 def describe(c) -> list[str]:
-    """The ``Contact`` c in the run's header: laws, multipliers, points, interfaces."""
+    """The ``Contact`` c in the run's header: laws, multipliers, points, supported ends,
+    interfaces."""
     ka, kc = c.space.degrees
-    laws = "; ".join([c.law.describe()] + [t.describe() for t in c.terms])
+    laws = "; ".join([c.law.describe()] + ([t.describe() for t in c.terms] or ["frictionless"]))
     lines = [f"contact: {laws}; Lagrange multipliers (pressure of degree {ka} along the beam x {kc} "
              f"across the interface per element, {c.n_multipliers} in all); {c.points.n_points} points "
              f"({c.spec.axial_points} axial x {c.spec.curve_points} per curve piece); unknowns scaled "
-             f"by k_s = {c.stiffness:.4g} N/m"]
+             f"by k_s = {c.stiffness:.4g} N/m", "  " + ends_line(c)]
     for itf in c.interfaces:
         lines.append(f"  interface {itf.name}: {itf.n_points} points on {itf.a.name}, "
                      f"projected onto {itf.b.name}")
     return lines
+
+
+def ends_line(c) -> str:
+    """The supported ends' rules (``contact.projection.supported_ends`` and, for friction,
+    ``contact.tangential.supported_ends``) and how many interface ends each folds."""
+    normal = int(supported_ends(c.model, c.interfaces, c.spec.supported_ends).sum())
+    line = (f"supported ends: pressure {c.spec.supported_ends} ({normal} clamped interface end(s) folded "
+            "into their neighbours)")
+    if any(t.multipliers for t in c.terms):
+        tang = int(held_ends(c.model, c.interfaces, c.spec.tangential).sum())
+        line += (f"; tangential {c.spec.tangential.supported_ends} ({tang} end(s) where both bodies' "
+                 "r is held folded)")
+    return line
 
 
 def report_columns(c) -> tuple:
@@ -51,7 +67,9 @@ def gap_sums(c, st: ContactState) -> np.ndarray:
         out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[v], initial=0.0),
                   float(np.sum(pr.g[v] ** 2)), v.sum(),
                   np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
-                  lam[m].max(initial=0.0), float(lam[m] @ area[m]), on.sum()] + [
+                  lam[m].max(initial=0.0), float(lam[m] @ area[m]),
+                  float(np.maximum(st.tau[v], 0.0).sum()), float(np.minimum(st.tau[v], 0.0).sum()),
+                  on.sum()] + [
                   x for t in c.terms for x in t.sums(c, st, on)]
     return out
 
@@ -62,29 +80,39 @@ def pressure_coefficients(c, st: ContactState) -> np.ndarray:
 
 
 def gap_report(contact, sums: np.ndarray) -> dict:
-    """Per-interface statistics from (rank-combined) ``gap_sums``."""
+    """Per-interface statistics from (rank-combined) ``gap_sums``, keyed by the interfaces'
+    names "curve (first|second)"; the beam carrying the points is ``points_on``.  Signs and
+    units: docs/running.md, "Contact outputs"."""
     out = {}
     for k, itf in enumerate(contact.interfaces):
         c = dict(zip([n for n, _ in report_columns(contact)], sums[k]))
         nv = c["valid_points"]
-        out[itf.name] = {"max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
+        out[itf.name] = {"points_on": itf.a.name,
+                         "max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
                          "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
                          "max_weighted_gap": c["max_weighted_gap"],
                          "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
                          "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
+                         "pressing_force": c["pressing_force"], "tension_force": c["tension_force"],
                          "points": int(c["points"])}
         for term in contact.terms:
-            out[itf.name].update(term.report(c))
+            out[itf.name].update(term.report(c, itf.sign))
     return out
 
 
+def output_signs(c, interface: np.ndarray) -> np.ndarray:
+    """Per entry of ``interface`` (interface ids) the ``Interface.sign`` of the ``Contact`` c:
+    what turns a quantity of A against B into the outputs' first against second."""
+    return np.array([itf.sign for itf in c.interfaces])[interface] if len(interface) else np.zeros(0)
+
+
 def point_fields(c, st: ContactState, q0_of) -> dict:
-    """Per local point: id, interface, current and reference position on A, its reference area
-    w_p [m²] (pressure × area × weight is the point's force), gap, pressure,
-    slip (the reference position of the point minus that of its partner on B: how far B's
-    material has slid past it) and the projection state (e_B, ξ_B, t_B); per owned
-    multiplier: id, pressure coefficient λ [Pa] and status.  ``q0_of(elements)`` gives
-    reference nodal vectors."""
+    """Per local point: id, interface, current and reference position on A (the beam carrying
+    the points), its reference area w_p [m²] (pressure × area × weight is the point's force),
+    gap, pressure, slip u_first − u_second [m] of the two material points in contact now (the
+    reference position of the second beam's minus the first's: first and second in config
+    order) and the projection state (e_B, ξ_B, t_B); per owned multiplier: id, pressure
+    coefficient λ [Pa] and status.  ``q0_of(elements)`` gives reference nodal vectors."""
     pr, idx = st.pr, c.local
     if len(idx):
         X0A = np.einsum("pa,pai->pi", pr.NA, q0_of(c.points.eA[idx]))
@@ -97,7 +125,7 @@ def point_fields(c, st: ContactState, q0_of) -> dict:
     return terms | {"id": idx, "interface": c.points.itf[idx], "x": st.xA, "x0": X0A,
                     "area": c.points.w[idx],
             "gap": pr.g * pr.valid, "pressure": pressure,
-            "slip": (X0A - X0B) * pr.valid[:, None],
+            "slip": (output_signs(c, c.points.itf[idx]) * pr.valid)[:, None] * (X0B - X0A),
             "projection": np.column_stack([pr.eB, pr.xiB, pr.tB]) if len(idx) else np.zeros((0, 3)),
             "multiplier_id": c.mults[own],
             "multiplier_pressure": pressure_coefficients(c, st)[own],

@@ -7,10 +7,18 @@ import h5py
 import numpy as np
 import yaml
 
+from ..model.section_forces import element_means
 from ..physics import element3363 as el
 from .files import OutputError, os_reason, plain
 from .restart import fingerprint
+from .surface_fields import SURFACE_FIELDS
 
+#: the "units" attribute of /model/reference_nodal_vectors and steps/…/nodal_vectors
+NODAL_UNITS = "; ".join(f"{v} [{u}]" for v, u in el.VECTOR_UNITS.items()) + " (the slots of dof_order)"
+#: the units of a probe's change by its nodal vector (``vector: mean``: a displacement)
+PROBE_UNITS = {**el.VECTOR_UNITS, "mean": "m"}
+#: the SI units of the surface point fields written beside the VTUs (io/surface_fields.py)
+SURFACE_UNITS = {"points": "m (deformed positions)", **{f.name: f.si_unit for f in SURFACE_FIELDS.values()}}
 #: the "frame" attribute of /model/beams/<name>/section_points and section_outline
 CENTROID_FRAME = "section centroid, m (add the beam group's centroid attribute for the tendon frame)"
 
@@ -26,7 +34,7 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     g.attrs["name"] = spec.name
     g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
     g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
-    g.create_dataset("reference_nodal_vectors", data=model.q0)
+    g.create_dataset("reference_nodal_vectors", data=model.q0).attrs["units"] = NODAL_UNITS
     fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
     for key, arr in fingerprint(model).items():
         fp.create_dataset(key, data=arr)
@@ -53,11 +61,13 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
 
 
 def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dict | None,
-                      path: dict | None, n_nodes: int) -> None:
-    """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the contact
-    fields, the supports' reactions and what a restart needs."""
-    g.create_dataset("nodal_vectors", data=q)
+                      path: dict | None, model) -> None:
+    """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the probes,
+    the section forces, the contact fields, the supports' reactions, the subtendons'
+    displacement differences and what a restart needs."""
+    g.create_dataset("nodal_vectors", data=q).attrs["units"] = NODAL_UNITS
     g.attrs["load_factor"] = record.load_factor
+    g.attrs["load_factor_units"] = "1 (the multiple of the config's loads and displacements)"
     g.attrs["snes_iterations"] = record.iterations
     g.attrs["snes_reason"] = record.reason
     g.attrs["substeps"] = record.substeps
@@ -65,12 +75,19 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
     g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
         else record.negative_eigenvalues
     if contact is not None:
-        write_contact_group(g, contact, path["blocks"][n_nodes:])
+        write_contact_group(g, contact, path["blocks"][model.n_nodes:])
+    write_probes(g, (extra or {}).get("probes", {}), model)
+    for name, value in (extra or {}).get("surface", {}).items():     # surface_NNNN.vtu's, in double
+        d = g.create_dataset(f"surface/{name}", data=np.asarray(value, dtype=float))
+        d.attrs["units"] = SURFACE_UNITS.get(name, "")
+    write_section_forces(g, (extra or {}).get("section_forces"), model)
     if extra and "reactions" in extra:       # force of each support on r [N]
         r = g.create_dataset("reactions", data=np.array(list(extra["reactions"].values())))
         r.attrs["supports"] = list(extra["reactions"])
+        r.attrs["units"] = "N: the force (x, y, z) the support exerts on the beam at its node's r"
     for pair, d in (extra or {}).get("displacement_differences", {}).items():   # io/derived.py
-        g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
+        dd = g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
+        dd.attrs["units"] = "m: u_x of the first beam's centroid line minus the second's, per node station"
     for name, d in (extra or {}).get("subtendons", {}).items():       # io/subtendons.py
         sg = g.create_group(f"subtendons/{name}")
         sg.attrs["end_force_N"] = np.asarray(d["end_force"])
@@ -81,6 +98,32 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
         g.attrs["time_s"] = extra["time"]
     if path is not None:
         write_restart_group(g, record, path)
+
+
+def write_probes(g, probes: dict, model) -> None:
+    """``steps/…/probes/<name>``: the probe's change of its nodal vector (x, y, z) and its value
+    (summary.json's ``displacement`` and ``value``), with its vector and units."""
+    vectors = {p.name: p.vector for p in model.spec.probes}
+    for name, p in probes.items():
+        d = g.create_dataset(f"probes/{name}", data=np.array([p["displacement"], p["value"]]))
+        vector = vectors.get(name, "r")
+        d.attrs["vector"] = vector
+        d.attrs["rows"] = "change since the reference state; value"
+        d.attrs["units"] = PROBE_UNITS.get(vector, "m")
+
+
+def write_section_forces(g, forces: dict | None, model) -> None:
+    """``steps/…/section_forces/<beam>`` (model/section_forces.py): per axial Gauss point the
+    reference x [m] and the force (x, y, z) [N] the cross-section carries; ``<beam>_mean`` the
+    same per element (its mean over the element's length, at its mid x)."""
+    if not forces:
+        return
+    for name, (x, f) in forces.items():
+        d = g.create_dataset(f"section_forces/{name}", data=np.column_stack([x, f]))
+        d.attrs["columns"] = "x [m], force x, y, z [N]: through the cross-section at x, at the axial Gauss points"
+    for name, (x, f) in element_means(model, forces).items():
+        d = g.create_dataset(f"section_forces/{name}_mean", data=np.column_stack([x, f]))
+        d.attrs["columns"] = "element mid x [m], mean force x, y, z [N] over the element"
 
 
 def write_restart_group(g, record, path: dict) -> None:
@@ -96,8 +139,10 @@ def write_restart_group(g, record, path: dict) -> None:
 def write_contact_group(g, contact: dict, multipliers: np.ndarray) -> None:
     """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
     c = g.create_group("contact")
-    c.attrs["units"] = ("SI: m, Pa; slip = reference position of the point minus its partner's on B; "
-                        "tangential_slip = the point's tangential displacement from its reference partner")
+    c.attrs["units"] = ("SI: m, Pa, N; interfaces 'curve (first|second)' in config order (summary.json "
+                        "contact_interfaces); x, x0 on the beam carrying the points; slip, tangential_slip "
+                        "= u_first - u_second [m]; shear_stress, multiplier_shear = the first beam's "
+                        "traction on the second [Pa]; pressure > 0 presses [Pa] (docs/running.md)")
     # every field the contact and its terms report (contact.reports.point_fields); the points
     # and multipliers are in id order, so the ids themselves are not stored
     for key, value in contact.items():

@@ -99,14 +99,14 @@ def _folded_ends(model, contact) -> list[str]:
     except ContactSetupError:           # reported by the contact setup itself
         return []
     ends = supported_ends(model, interfaces, contact.supported_ends)
-    return [f"{i.name} {('first', 'last')[j]}" for i, row in zip(interfaces, ends) for j in range(2) if row[j]]
+    return [f"{i.sides} {('first', 'last')[j]}" for i, row in zip(interfaces, ends) for j in range(2) if row[j]]
 
 
 def _resolved_interfaces(model, contact) -> list[str]:
-    """The interfaces contact will use ("curve (A|B)", sorted): ``auto`` and the same pairs
-    written out are one model."""
+    """The interfaces contact will use ("curve (A|B)", A the beam carrying the points, sorted):
+    ``auto`` and the same pairs written out are one model."""
     try:
-        return sorted(i.name for i in find_interfaces(model, contact))
+        return sorted(i.sides for i in find_interfaces(model, contact))
     except ContactSetupError:           # reported by the contact setup itself
         return [repr(i) for i in (contact.interfaces or [])]
 
@@ -114,6 +114,12 @@ def _resolved_interfaces(model, contact) -> list[str]:
 def model_difference(stored: dict, now: dict) -> str | None:
     """The first item that differs between two fingerprints, with what changed (None: same);
     a beam's items first (in this model's order), then the model-wide ones."""
+    found = first_difference(stored, now)
+    return None if found is None else f"{found[0]} ({found[1]})"
+
+
+def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
+    """``model_difference`` as (fingerprint key, what changed), None when the same."""
     fields = ("elements", "element_axial_points_locking", "material", "fibres", "x_nodes",
               "section_points", "section_weights", "connectivity")
 
@@ -127,19 +133,19 @@ def model_difference(stored: dict, now: dict) -> str | None:
     keys = sorted(now, key=order)
     for key in keys + [k for k in stored if k not in now]:
         if key not in stored or key not in now:
-            return f"{key} ({'added' if key in now else 'removed'})"
+            return key, "added" if key in now else "removed"
         a, b = np.asarray(stored[key]), np.asarray(now[key])
         if key == "contact" and not np.array_equal(a, b):
-            return f"contact ({_words_difference(a, b)})"
+            return key, _words_difference(a, b)
         if a.shape != b.shape:
-            return f"{key} (shape {a.shape} → {b.shape})"
+            return key, f"shape {a.shape} → {b.shape}"
         if not np.allclose(a, b, rtol=1e-12, atol=1e-300 + 1e-12 * float(np.max(np.abs(a), initial=0.0))):
             if key.endswith("section_weights"):
-                return f"{key} (section area {a.sum():.6g} → {b.sum():.6g} of the rule's units)"
+                return key, f"section area {a.sum():.6g} → {b.sum():.6g} of the rule's units"
             k = int(np.argmax(np.abs(a - b)))
             if a.size == 1:
-                return f"{key} ({a.ravel()[0]:.9g} → {b.ravel()[0]:.9g})"
-            return f"{key} (largest change at entry {k}: {a.ravel()[k]:.9g} → {b.ravel()[k]:.9g})"
+                return key, f"{a.ravel()[0]:.9g} → {b.ravel()[0]:.9g}"
+            return key, f"largest change at entry {k}: {a.ravel()[k]:.9g} → {b.ravel()[k]:.9g}"
     return None
 
 

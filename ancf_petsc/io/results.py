@@ -29,6 +29,7 @@ import numpy as np
 
 from ..model.beams import Model
 from ..model.plausibility import strain_warning
+from ..model.section_forces import axial_forces
 from ..status import OUTPUT_ERROR
 from ..version import version_info
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
@@ -221,11 +222,15 @@ class ResultsWriter:
         self._check_space(k, q)
         name = f"step_{k:04d}"
         size0 = os.path.getsize(self.h5_path)
+        level = dict(extra or {}, probes=entry["probes"], section_forces=axial_forces(self.model, q))
+        surface = surface_cells(self.sampler, q) if self.sampler is not None else None
+        if surface is not None:
+            level["surface"] = {"points": surface[0], **surface[2]}
         try:
             with h5py.File(self.h5_path, "a") as h5:
                 steps = h5["steps"]
                 g = steps.create_group(name + ".partial")      # renamed once complete
-                write_level_group(g, record, q, extra, contact, path, self.model.n_nodes)
+                write_level_group(g, record, q, level, contact, path, self.model)
                 steps.move(name + ".partial", name)
                 steps.attrs["converged"] = k
                 steps.attrs["last_load_factor"] = record.load_factor
@@ -238,7 +243,7 @@ class ResultsWriter:
         self._append(entry)
         if self.sampler is not None:
             self._last_sizes["vtu"] = 0                  # the level's VTUs together
-            self._write_series("surface", k, record.load_factor, surface_cells(self.sampler, q))
+            self._write_series("surface", k, record.load_factor, surface)
             if contact is not None:
                 self._write_series("contact", k, record.load_factor, contact_cells(contact))
         self._write_summary()

@@ -49,6 +49,7 @@ class SurfaceField:
     components: int = 1
     applies: Callable[[SampledState], bool] = _everywhere
     where: str = "every model"
+    si_unit: str = "1"                               # the stored value's unit (results.h5 attrs)
 
     def values(self, s: SampledState) -> np.ndarray:
         """The field on one beam's points, or NaN where it does not apply."""
@@ -69,7 +70,8 @@ def _volume_ratio(s: SampledState) -> np.ndarray:
 
 #: the surface point fields, in the order they are written
 SURFACE_FIELDS = {f.name: f for f in (
-    SurfaceField("displacement", "displacement magnitude $|u|$", "mm", MM, lambda s: s.r - s.r0, components=3),
+    SurfaceField("displacement", "displacement magnitude $|u|$", "mm", MM, lambda s: s.r - s.r0, components=3,
+                 si_unit="m"),
     SurfaceField("E_xx", "axial Green-Lagrange strain $E_{xx}$", "%", 100.0, _green_lagrange_xx),
     SurfaceField("J", "volume ratio $J$", "-", 1.0, _volume_ratio),
     SurfaceField("beam", "beam index", "-", 1.0, lambda s: np.full(len(s.r), float(s.beam))),
@@ -78,7 +80,7 @@ SURFACE_FIELDS = {f.name: f for f in (
                  where="fibre-reinforced models (first family; NaN on other beams)"),
     SurfaceField("fibre_stress", r"fibre Cauchy stress $\sigma_{ff}$", "MPa", MPA,
                  lambda s: s.fibre_law.fibre_cauchy_stress(s.F)[0], applies=_fibre_reinforced,
-                 where="fibre-reinforced models (first family; NaN on other beams)"),
+                 where="fibre-reinforced models (first family; NaN on other beams)", si_unit="Pa"),
 )}
 
 

@@ -6,6 +6,7 @@ import os
 
 import numpy as np
 
+from ..contact.partners import HISTORY
 from ..model.beams import Model
 from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
@@ -87,7 +88,7 @@ def surface_cells(sampler: SurfaceSampler, q: np.ndarray) -> tuple:
     return pts, [("quad", quads)] + [("polygon", c[None, :]) for c in caps], data
 
 
-#: point fields that are no data to look at (ids, positions, the projection; ``shear_*`` and
+#: point fields that are no data to look at (ids, positions, the projection; ``history_*`` and
 #: ``multiplier_*`` are a term's restart state and the multipliers)
 NOT_DRAWN = ("id", "x", "x0", "projection", "area")
 
@@ -97,7 +98,7 @@ def contact_cells(fields: dict) -> tuple:
     every per-point field (gap, pressure, slip, a term's shear stress, ...), and the axial slip."""
     n = len(fields["x"])
     data = {k: np.asarray(v, dtype=float) for k, v in fields.items()       # not the restart state
-            if k not in NOT_DRAWN and not k.startswith(("multiplier", "shear_")) and len(v) == n}
+            if k not in NOT_DRAWN and not k.startswith(("multiplier", HISTORY)) and len(v) == n}
     data["slip_axial"] = fields["slip"][:, 0]
     return fields["x"], [("vertex", np.arange(n)[:, None])], data
 
@@ -124,7 +125,8 @@ class VtkSeries:
         A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
-        data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
+        with np.errstate(over="ignore"):            # beyond single precision: inf (results.h5: double)
+            data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
         compress = self.compress if self.compress is not None else len(pts) >= AUTO_COMPRESS_POINTS
         try:
             write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress))

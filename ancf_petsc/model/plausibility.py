@@ -8,8 +8,8 @@ import re
 
 import numpy as np
 
-__all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "size_warnings",
-           "strain_warning", "point_force_warnings"]
+__all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "MIN_OVERFLOW_STRETCH",
+           "fibre_warnings", "size_warnings", "strain_warning", "point_force_warnings"]
 
 #: a tendon, fascicle or bar longer than this [m] is most likely given in mm
 MAX_LENGTH = 5.0
@@ -19,6 +19,11 @@ MAX_WIDTH = 0.5
 SLENDERNESS = (1.0, 1000.0)
 #: an axial strain beyond this (either sign) at the first converged level suggests wrong units
 MAX_FIRST_STRAIN = 0.5
+#: a fibre law whose exponential overflows (double precision) below this fibre stretch is warned
+#: of: tendon fibres stretch by several per cent
+MIN_OVERFLOW_STRETCH = 1.1
+#: ln of the largest double: e^x is inf beyond it
+LOG_MAX_DOUBLE = float(np.log(np.finfo(float).max))
 
 
 def _section_key(spec, i: int) -> str:
@@ -93,3 +98,21 @@ def point_force_warnings(spec, beams) -> list[str]:
             "locking: mixed; its node's displacement includes the end section's local deformation, which "
             "mixed leaves 4-5 % softer (docs/locking.md): for the beam's response load it with traction_force"
             for ld in spec.loads if ld.kind == "force" and beams[ld.beam].locking == "mixed"]
+
+
+def fibre_warnings(spec, beams) -> list[str]:
+    """One warning per fibre-reinforced beam whose e^(k2 Ē²) overflows below a fibre stretch of
+    ``MIN_OVERFLOW_STRETCH`` (Ē = I4 − 1 without dispersion): its fibre stresses there are inf
+    (surface_NNNN.vtu stores single precision, which overflows sooner)."""
+    out = []
+    for i, b in enumerate(beams):
+        k2 = getattr(b.material, "k2", None)
+        if k2 is None:
+            continue
+        E = float(np.sqrt(LOG_MAX_DOUBLE / k2))
+        stretch = float(np.sqrt(1.0 + E))
+        if stretch < MIN_OVERFLOW_STRETCH:
+            out.append(f"warning: beams[{i}].material.k2: {k2:g}: the fibre term e^(k2 E^2) of beam {b.name} "
+                       f"overflows (inf stress) from a fibre stretch of {stretch:.4g} (E = {E:.3g}); tendon "
+                       f"fibres stretch by several per cent; the published sets have k2 = 4.8 to 525 (docs/fibres.md)")
+    return out

@@ -13,13 +13,30 @@ import os
 
 import h5py
 
+import yaml
+
 from ..config.parse import load_config
 from ..errors import InputError
-from ..io.restart import fingerprint, model_difference
+from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
 from .inputs import TWISTS, PaperInputs
+from .run_outputs import interface_markdown, probe_markdown, run_figures
 
-__all__ = ["ExistingRun", "levels_missing", "paper_summaries", "read_existing", "runs_markdown"]
+__all__ = ["ExistingRun", "levels_missing", "other_figures", "paper_summaries", "read_existing", "runs_markdown",
+           "title"]
+
+#: what a fingerprint item (io/restart.py) is, in words: "<beam>'s ..." for a beam's items
+DIFFERENCE_WORDS = {
+    "elements": "{beam} has another number of elements",
+    "element_axial_points_locking": "{beam} has another element, axial Gauss points or locking remedy",
+    "material": "{beam} has another material", "fibres": "{beam} has other fibres",
+    "x_nodes": "{beam} has other nodes along x", "section_points": "{beam} has another cross-section",
+    "section_weights": "{beam} has another cross-section", "connectivity": "{beam} has other elements",
+    "reference_nodal_vectors": "the geometry differs", "supported_dofs": "the supports differ",
+    "loads": "the loads differ (the paper pulls the soleus end along x)",
+    "length": "the tendon length differs", "twist_deg": "the pretwist differs",
+    "prescribed_displacements": "a support moves (displacement control)",
+    "contact": "the contact differs"}
 
 
 class ExistingRun:
@@ -40,7 +57,17 @@ class ExistingRun:
         self.status = s.get("status", "unknown")
         self.twist = s.get("twist_deg")
         self.levels = [st["load_factor"] for st in s.get("steps", [])]
+        self.config = self._config()
         self.why_not = self._paper_difference(inputs)
+
+    def _config(self) -> dict:
+        """The run's config as written into results.h5 (empty when it cannot be read)."""
+        try:
+            with h5py.File(os.path.join(self.dir, "results.h5"), "r") as f:
+                raw = yaml.safe_load(f["model"].attrs["config_yaml"])
+        except (OSError, KeyError, yaml.YAMLError):
+            return {}
+        return raw if isinstance(raw, dict) else {}
 
     @property
     def is_paper(self) -> bool:
@@ -66,8 +93,8 @@ class ExistingRun:
             return f"{h5}: not readable ({exc})"
         paper = fingerprint(build_model(load_config(
             os.path.join(inputs.configs, f"achilles_type3_psi{self.psi}.yaml"))))
-        differs = model_difference(paper, stored)
-        return None if differs is None else f"its model differs from the paper's: {differs}"
+        differs = first_difference(paper, stored)
+        return None if differs is None else "its model is not the paper's: " + difference_words(*differs)
 
     def ended(self) -> str:
         """How the run ended, in words."""
@@ -76,6 +103,18 @@ class ExistingRun:
         if self.status != "completed":
             text += f" ({s.get('reason_code', '')}: {s.get('message', '')})"
         return text
+
+
+def difference_words(key: str, detail: str) -> str:
+    """A fingerprint difference (``io.restart.first_difference``) in words."""
+    beam, _, item = key.rpartition("/")
+    beam = beam.removeprefix("beams/")
+    if detail in ("added", "removed") and beam:
+        return f"beam {beam} is {'not in' if detail == 'added' else 'missing from'} the paper's model"
+    if item.startswith("load_curve"):
+        return "a load or displacement follows a load curve"
+    words = DIFFERENCE_WORDS.get(item, f"{key} differs").format(beam=beam)
+    return f"{words} ({detail})" if item in ("elements", "length", "twist_deg", "contact") else words
 
 
 def read_existing(dirs: list[str], inputs: PaperInputs) -> list[ExistingRun]:
@@ -93,17 +132,23 @@ def runs_markdown(runs: list[ExistingRun]) -> str:
         if r.is_paper:
             continue
         lines += ["", f"**{r.dir}** is not compared with the paper: {r.why_not}.", ""]
-        probes = sorted({p for st in r.summary.get("steps", []) for p in st.get("probes", {})})
-        if not probes:
+        if not r.summary.get("steps"):
             lines.append("No converged level.")
             continue
-        lines += ["| load factor | " + " | ".join(f"{p} u_x [mm]" for p in probes) + " |",
-                  "|---:|" + "---:|" * len(probes)]
-        for st in r.summary["steps"]:
-            cells = [f"{1e3 * st['probes'][p]['displacement'][0]:.5f}" if p in st["probes"] else ""
-                     for p in probes]
-            lines.append(f"| {st['load_factor']:g} | " + " | ".join(cells) + " |")
+        lines += probe_markdown(r.summary, r.config) + interface_markdown(r.summary, r.config)
     return "\n".join(lines)
+
+
+def other_figures(runs: list[ExistingRun], out: str) -> list[str]:
+    """The figures of the runs that are not the paper's model (``run_outputs.run_figures``)."""
+    return [f for r in runs if not r.is_paper for f in run_figures(r.dir, r.summary, r.config, out)]
+
+
+def title(runs: list[ExistingRun]) -> str:
+    """The report's title: the paper's reproduction only when a run is the paper's model."""
+    if any(r.is_paper for r in runs):
+        return "Type III Achilles tendon: reproduction of Obrezkov et al. (2022)"
+    return "Runs of " + ", ".join(dict.fromkeys(r.name for r in runs)) + " (not the paper's model)"
 
 
 def paper_summaries(runs: list[ExistingRun]) -> dict[int, dict]:

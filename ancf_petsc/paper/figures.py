@@ -30,7 +30,7 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
         return []
     loads = [st["load_factor"] for st in s["steps"]]
     levels = [read_contact(h5, loads.index(f) + 1) for f in SLIP_LEVELS if f in loads]
-    names = [n.split(" ")[0].replace("_", "–") for n in s["contact_interfaces"]]
+    names = viz.interface_labels(s["contact_interfaces"])
     soleus = tuple(k for k, n in enumerate(s["contact_interfaces"]) if "soleus" in n)
     return [viz.plot_slip(levels, names, os.path.join(out, f"slip_psi{twist}.png"), soleus,
                                s.get("length", 0.07),

@@ -39,6 +39,8 @@ import numpy as np
 
 NODES_PER_ELEMENT = 3
 VECTORS = ("r", "r_y", "r_z", "r_yy", "r_zz", "r_yz")
+#: the SI unit of each nodal vector (a position, section directions, their derivatives)
+VECTOR_UNITS = {"r": "m", "r_y": "1", "r_z": "1", "r_yy": "1/m", "r_zz": "1/m", "r_yz": "1/m"}
 VECTORS_PER_NODE = len(VECTORS)
 DOFS_PER_NODE = 3 * VECTORS_PER_NODE          # 18
 SLOTS = NODES_PER_ELEMENT * VECTORS_PER_NODE  # 18 shape functions per element

@@ -162,10 +162,11 @@ class GOH:
         """Cauchy normal stress along each deformed fibre, n·σn with n = Fa0/|Fa0| and σ = PFᵀ/J
         (families, ...): the stress a fibre-aligned cut carries, matrix included."""
         P, J = self.stress(F)
-        sigma = np.matmul(P, np.swapaxes(F, -1, -2)) / J[..., None, None]
         out = []
-        for _, Fa, I4, _, _ in self._fibres(F):
-            out.append(np.einsum("...i,...ij,...j->...", Fa, sigma, Fa) / I4)
+        with np.errstate(over="ignore", invalid="ignore"):      # an overflowed fibre term: inf
+            sigma = np.matmul(P, np.swapaxes(F, -1, -2)) / J[..., None, None]
+            for _, Fa, I4, _, _ in self._fibres(F):
+                out.append(np.einsum("...i,...ij,...j->...", Fa, sigma, Fa) / I4)
         return np.stack(out)
 
     def stress_and_tangent(self, F: np.ndarray, theta: np.ndarray | None = None

@@ -20,6 +20,7 @@ from ..petsc.problem import Problem
 from ..petsc.step_limits import MAX_STEP_SECTIONS_CONTACT
 from . import solver_messages
 from .chord import TangentReuse
+from .cycle_stop import CycleStop
 from .newton import ContactSteps
 from ..linalg.options import SolverOptionError, configure_options, refused, run_defaults
 from .records import LoadStepFailure
@@ -57,6 +58,13 @@ class SNESSolver:
         self.rounding_floor = rounding_floor(problem)
         atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
+        self._history: list[float] = []        # residual norms of the current SNES solve
+        #: friction: a Newton cycle ends the solve early (cycle_stop.py; set before the options,
+        #: so that -snes_convergence_test replaces it)
+        self.cycle_stop = None
+        if problem.contact is not None and any(t.bounded for t in problem.contact.terms):
+            self.cycle_stop = CycleStop(lambda: self._history, petsc_options, self.prefix)
+            self.snes.setConvergenceTest(self.cycle_stop)
         self._kept_options: list[str] = []
         self.linesearch, self._kept_options = configure_options(
             self.snes, petsc_options,
@@ -77,7 +85,6 @@ class SNESSolver:
             schur = FascicleSchur(fascicle_split(problem), problem.comm, self.prefix)
             pc.setPythonContext(schur)
         self._check_factorisation()
-        self._history: list[float] = []        # residual norms of the current SNES solve
         self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
         #: the fascicle Schur preconditioner (linalg/fieldsplit.py) with solver.linear: fieldsplit

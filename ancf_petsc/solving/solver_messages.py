@@ -47,15 +47,18 @@ def failure_detail(solver, reason: int) -> str:
         return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
                 "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
                                                f"; {SADDLE_POINT_HINT}") + ")")
+    contact = solver.problem.contact
+    friction = "" if contact is None or not any(t.bounded for t in contact.terms) else FRICTION_WHY
     cycle = newton_cycle(solver.last_solve_history)
     if cycle is not None:
         period, low, high = cycle
         if period == 1:
             return (f" (Newton stalls at |F| {high:.2e} N, above the tolerance "
-                    f"{solver.snes.getTolerances()[1]:.1e}: more iterations do not help)")
+                    f"{solver.snes.getTolerances()[1]:.1e}: more iterations do not help{friction})")
         return (f" (Newton cycles: |F| repeats every {period} iterations, between {low:.1e} and {high:.1e} N, "
-                "so more iterations do not help)")
-    contact = solver.problem.contact
+                f"so more iterations do not help{friction})")
+    if friction:
+        return f" ({friction.removeprefix('; ')})"
     if contact is not None and contact.law.decides_activity:
         maxit = solver.snes.getTolerances()[3]
         return (f" (unilateral contact changes its active set within a level and may need more than "
@@ -63,6 +66,12 @@ def failure_detail(solver, reason: int) -> str:
     return ""
 
 
+#: why a friction increment fails (docs/interface.md, "Limits")
+FRICTION_WHY = ("; friction: the stick-slip statuses of the tangential functions flip from iterate "
+                "to iterate and do not settle, and the Tresca fixed point did not contract; with a "
+                "large friction coefficient the quasi-static incremental problem need not have a "
+                "unique solution near this path (docs/interface.md, Limits): another increment "
+                "(solver.max_increment) or mu may pass")
 #: relative agreement of |F| one period apart that counts as a repeat (a Newton cycle): 1e-3 missed
 #: the period-5 cycle of the soleus-biased unilateral stride at ψ = 90° (2.35 kN, frame 46.8 of
 #: the gait envelope), whose norms drift by up to 1.8e-3 per period while raising -snes_max_it to

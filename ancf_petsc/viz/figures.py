@@ -138,6 +138,15 @@ def plot_convergence(table: dict[str, list[tuple[int, float]]],
     return save_figure(fig, out_png)
 
 
+def interface_labels(names: list[str]) -> list[str]:
+    """Legend labels "first − second (curve)" of interface names "curve (first|second)"."""
+    out = []
+    for name in names:
+        curve, _, pair = name.partition(" (")
+        out.append(f"{pair.rstrip(')').replace('|', ' − ')} ({curve})" if pair else name)
+    return out
+
+
 def counted_points(level: dict) -> np.ndarray:
     """Which contact points count (weight > 0) at a level from ``io.reader.read_contact``.  A point
     whose partner place lies past the end of its interface curve or past B's beam end (beyond the
@@ -150,9 +159,11 @@ def counted_points(level: dict) -> np.ndarray:
 
 
 def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tuple[int, ...],
-              length: float, title: str = "") -> str:
-    """Axial slip (top) and contact pressure (bottom) of the contact points along the tendon,
-    one colour per load level, one marker per interface: ``levels`` from ``io.reader.read_contact``.
+              length: float, title: str = "", level_label: str = "{:g} N") -> str:
+    """Axial slip u_first − u_second (top; first and second in config order) and contact
+    pressure (bottom) of the contact points along the tendon, one colour per load level (its
+    load factor formatted by ``level_label``), one marker per interface (``names`` per interface
+    id): ``levels`` from ``io.reader.read_contact``.
     Points out of contact (``counted_points``) have no slip: they are marked by a cross along the
     top edge of both panels at their x (not as zero slip), explained below the figure."""
     fig = Figure(figsize=(8.0, 6.0))
@@ -169,7 +180,7 @@ def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tu
             sel = (lev["interface"] == k) & counts
             x = MM * lev["x0"][sel, 0]
             order = np.argsort(x)
-            label = f"{lev['load_factor']:g} N" if j == 0 else None
+            label = level_label.format(lev["load_factor"]) if j == 0 else None
             ax_s.plot(x[order], MM * lev["slip"][sel, 0][order], markers[j % 4], color=c, ms=3,
                       label=label)
             ax_p.plot(x[order], 1e-6 * lev["pressure"][sel][order], markers[j % 4], color=c, ms=3)
@@ -182,7 +193,7 @@ def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tu
         ax_s.plot([], [], markers[j % 4], color="0.4", ms=4, label=names[k])
     if out:
         ax_s.plot([], [], "X", color="0.6", mec="k", ms=7, label="out of contact\n(weight 0, no slip)")
-    ax_s.set_ylabel("axial slip of the soleus past\nthe point [mm]")
+    ax_s.set_ylabel("slip along x [mm]\n(u_first − u_second)")
     ax_p.set_ylabel("contact pressure [MPa]\n(> 0 presses, < 0 holds)")
     ax_p.set_xlabel("x along the tendon [mm] (0: supports, L: loaded end)")
     ax_p.set_xlim(0.0, MM * length)
@@ -194,7 +205,7 @@ def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tu
         ax_s.set_title(title, fontsize=10)
     fig.tight_layout()
     if out:                                      # the caption, below the figure
-        at = ", ".join(f"{x:.1f} mm at {f:g} N" for f, x in out)
+        at = ", ".join(f"{x:.1f} mm at {level_label.format(f)}" for f, x in out)
         fig.text(0.01, 0.0, f"X on the top edge: {len(out)} point(s) out of contact ({at}): the partner "
                  "place lies past the end of the interface curve or of the beam,\nso the point has "
                  "weight 0 and no slip, gap or pressure (results.h5 writes them as 0, with weight 0).",

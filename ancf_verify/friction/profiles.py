@@ -84,8 +84,9 @@ def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: s
     sigma = pts["shear_stress"][:, 0]
     for i, name in enumerate(IFACES):
         m = itf == i
-        # force on the solid's slave body: the beams' slave A on mg_sol, lg_sol; B on lg_mg
-        fx = (1.0 if name == "lg_mg" else -1.0) * area[m] * sigma[m]
+        # force on the solid's slave body; shear_stress is the first beam's (config order) on
+        # the second: the slave is the second on mg_sol, lg_sol and the first on lg_mg
+        fx = (-1.0 if name == "lg_mg" else 1.0) * area[m] * sigma[m]
         for lo, hi, qp, qm, fxb in binned(x0[m], p[m] * area[m], fx):
             rows.append({"model": ANCF, "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}")
                          + (f"{SPACE}{space}" if space else ""),

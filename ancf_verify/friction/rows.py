@@ -134,9 +134,10 @@ def ancf_rows(run: dict, mu: float) -> list:
         for b in BODIES:
             r[f"{b}_ux_m"] = float(lv["u"][b])
         for i in IFACES:
-            # the x-force on the solid's slave body (medial, lateral, medial): the beams' slave (A)
-            # is the same body on mg_sol and lg_sol, the other one (lateral) on lg_mg
-            r[f"fx_{i}_N"] = (1.0 if i == "lg_mg" else -1.0) * fr.get(i, np.nan)
+            # the x-force on the solid's slave body (medial, lateral, medial); the beams report the
+            # force of the first beam in config order on the second (soleus|medial,
+            # soleus|lateral, medial|lateral): the slave is the second on mg_sol and lg_sol
+            r[f"fx_{i}_N"] = (-1.0 if i == "lg_mg" else 1.0) * fr.get(i, np.nan)
             r[f"stick_{i}"] = fr.get(i + "_stick", np.nan)
         rows.append(r)
     if not run["ok"]:

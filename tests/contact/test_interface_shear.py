@@ -23,12 +23,13 @@ def sandwich(k_t: float | None) -> dict:
 
 
 def outer_force(out_dir, x: np.ndarray) -> np.ndarray:
-    """Axial force the top strip has taken up beyond each x: −Σ ω σ_x over its interface
-    points past x (ω = reference area × weight; σ acts on the core, the strip gets −σ)."""
+    """Axial force the top strip has taken up beyond each x: Σ ω σ_x over its interface
+    points past x (ω = reference area × weight; σ is the first beam's traction on the second,
+    here the core's on the top strip)."""
     c = read_contact(f"{out_dir}/results.h5", 1)
-    top = c["interface"] == 1                     # upper_interface (top|core)
+    top = c["interface"] == 1                     # upper_interface (core|top)
     omega = (c["area"] * c["weight"])[top]
-    fx = -omega * c["shear_stress"][top, 0]
+    fx = omega * c["shear_stress"][top, 0]
     x0 = c["x0"][top, 0]
     return np.array([fx[x0 > xe].sum() for xe in x])
 

@@ -49,7 +49,9 @@ def test_traced_noisy_tendon_with_contact_same_on_1_2_3_ranks(tmp_path):
             log, serial = p.stdout, s
     # two merged interfaces (left and right do not touch), contact on both, twist about the centroid
     assert "interface left/middle" in log and "interface middle/right" in log
-    assert "left/middle (left|middle)" in log and "middle/right (right|middle)" in log
+    # named in config order (left, middle, right), the later beam carrying the points (issue 39)
+    assert "left/middle (left|middle): " in log and "middle/right (middle|right): " in log
+    assert "points on middle, projected onto left" in log and "points on right, projected onto middle" in log
     assert "twist axis: area centroid of all sections at x = 0" in log and "default rule" in log
     assert np.abs(probe(serial, "left")).max() > 1e-6        # the neighbours are dragged along
     assert_same_as_serial(tables)

@@ -20,3 +20,59 @@ def test_section_outlines_say_their_frame(tmp_path):
         outline = beam["section_outline"][()]
         assert np.allclose(outline.mean(axis=0), 0.0, atol=1e-12)
         assert np.allclose(beam.attrs["centroid"], [0.01, -0.02])
+
+
+def test_every_level_has_units_probes_section_forces_and_surface_fields(tmp_path):
+    """Issue 39: units on the nodal vectors, the load factor, the reactions and the differences;
+    the probes (with their vector's unit) and the surface fields (the VTU's, in double) beside
+    summary.json and the VTU; the force each cross-section carries: 45 N along the pulled bar."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["probes"].append({"name": "tip_ry", "beam": "bar", "node": "last", "vector": "r_y"})
+    raw["steps"] = [0.5, 1.0]
+    s = run_inline(raw, tmp_path)
+    with h5py.File(tmp_path / "results.h5") as h5:
+        assert h5["model/reference_nodal_vectors"].attrs["units"].startswith("r [m]; r_y [1]")
+        g = h5["steps/step_0002"]
+        assert g["nodal_vectors"].attrs["units"].startswith("r [m]")
+        assert "multiple" in g.attrs["load_factor_units"]
+        assert g["reactions"].attrs["units"].startswith("N")
+        tip, ry = g["probes/tip"], g["probes/tip_ry"]
+        assert tip.attrs["units"] == "m" and ry.attrs["units"] == "1" and ry.attrs["vector"] == "r_y"
+        assert np.allclose(tip[0], s["steps"][-1]["probes"]["tip"]["displacement"])
+        f = g["section_forces/bar"][()]
+        assert f.shape == (2, 4) and np.allclose(f[:, 1], 45.0, rtol=1e-6) and np.allclose(f[:, 2:], 0.0, atol=1e-6)
+        assert g["surface/displacement"].attrs["units"] == "m" and g["surface/points"].shape[1] == 3
+        assert "fibre_stress" not in g["surface"]
+
+
+def test_section_forces_carry_the_tendon_load_between_the_subtendons(tmp_path):
+    """The paper's tendon at 100 N on the soleus: every element's mean section force, summed over
+    the three subtendons, is the load to 1 % (measured 0.1 %); the soleus carries nearly all of
+    it (frictionless sliding); with the gastrocnemii pulled instead, they carry it."""
+    for name, carrier in (("achilles_type3_psi45.yaml", "soleus"), ("achilles_psi45_gastrocnemii.yaml", None)):
+        raw = load_raw(name)
+        raw["steps"] = [100.0]
+        raw["output"] = {"vtk": False}
+        run_inline(raw, tmp_path / name)
+        with h5py.File(tmp_path / name / "results.h5") as h5:
+            g = h5["steps/step_0001/section_forces"]
+            means = {b: g[f"{b}_mean"][()] for b in ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")}
+        total = sum(m[:, 1] for m in means.values())
+        assert np.allclose(total, 100.0, rtol=0.01), total
+        if carrier:
+            assert np.all(means[carrier][1:, 1] > 95.0), means[carrier]
+        else:
+            assert np.all(np.abs(means["soleus"][1:, 1]) < 5.0), means["soleus"]
+
+
+def test_fibre_fields_are_in_results_h5(tmp_path):
+    """Fibre stretch and stress were in the VTU only; now also in results.h5, in Pa."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["material"] = {"model": "goh", "mu": 1.0e6, "bulk_modulus": 50.0e6, "k1": 2.0e6,
+                                   "k2": 5.0, "fibres": {"follow": "axis"}}
+    raw["steps"] = [1.0]
+    run_inline(raw, tmp_path)
+    with h5py.File(tmp_path / "results.h5") as h5:
+        g = h5["steps/step_0001/surface"]
+        assert g["fibre_stress"].attrs["units"] == "Pa" and g["fibre_stress"].dtype == np.float64
+        assert np.all(g["fibre_stretch"][()] > 1.0) and np.all(g["fibre_stress"][()] > 0.0)

@@ -95,3 +95,23 @@ def test_first_level_strain_warning_on_stderr(tmp_path):
 def test_paper_column_runs_without_warnings(tmp_path):
     s = run_inline(load_raw("achilles_type3_psi0.yaml"), tmp_path / "psi0")
     assert s["status"] == "completed" and s["warnings"] == []
+
+
+def test_a_fibre_exponent_that_overflows_is_warned_of_and_leaks_no_numpy_warning(tmp_path):
+    """Issue 39: k2 = 1e6 overflows e^(k2 Ē²) from a fibre stretch of 1.013: one warning naming
+    the key; the run's outputs (VTU in single precision, results.h5) leak no numpy warning."""
+    import warnings
+    from helpers import load_raw, run_inline
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["material"] = {"model": "goh", "mu": 1.0e6, "bulk_modulus": 50.0e6, "k1": 2.0e6,
+                                   "k2": 1.0e6, "fibres": {"follow": "axis"}}
+    raw["steps"] = [0.1, 1.0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = run_inline(raw, tmp_path)
+    assert s["status"] == "completed"
+    note = [w for w in s["warnings"] if "k2" in w]
+    assert len(note) == 1 and note[0].startswith("warning: beams[0].material.k2: 1e+06:")
+    assert "fibre stretch of 1.013" in note[0]
+    raw["beams"][0]["material"]["k2"] = 524.6                  # the largest published set: no warning
+    assert not [w for w in run_inline(raw, tmp_path / "b")["warnings"] if "k2" in w]

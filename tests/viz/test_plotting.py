@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, solved_config
+from helpers import CONFIGS, ROOT, solved_config
 
 matplotlib = pytest.importorskip("matplotlib")
 from matplotlib import image as mpimg  # noqa: E402
@@ -204,3 +204,20 @@ def test_load_elongation_legend_has_no_csv_column_names(tmp_path, monkeypatch):
     legend = [t.get_text() for ax in captured["fig"].axes if ax.get_legend()
               for t in ax.get_legend().get_texts()]
     assert legend == ["ψ = 0° (this code)", "ψ = 0° (paper)"]
+
+
+def test_the_interface_study_chart_gives_every_law_its_own_style(tmp_path):
+    """Issue 39: the non-uniformity figure reused three colours among its 15 laws."""
+    import importlib.util
+    from ancf_petsc.viz import plot_law_differences
+    from ancf_petsc.viz.law_charts import law_style
+    spec = importlib.util.spec_from_file_location("interface_study", os.path.join(ROOT, "scripts", "interface_study.py"))
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    labels = [law[0] for law in study.LAWS]
+    styles = {str(law_style(label, labels)) for label in labels}
+    assert len(labels) == 15 and len(styles) == 15
+    steps = [{"load_factor": f, "displacement_differences": {"a|b": {"end": 1e-5 * f}}} for f in (10.0, 20.0)]
+    runs = [{"loading": "soleus", "law": label, "elements": 4, "status": "completed", "steps": steps} for label in labels]
+    out = plot_law_differences(runs, labels, ["soleus"], "a|b", 4, str(tmp_path / "laws.png"))
+    assert os.path.getsize(out) > 10_000

@@ -134,10 +134,10 @@ def test_the_library_predicts_states_that_are_linear_in_the_parameters():
 def test_standard_errors_of_a_linear_model_and_a_parameter_it_cannot_see():
     rng = np.random.default_rng(1)
     J = rng.normal(size=(30, 2))
-    r = rng.normal(size=30)
+    r = 2.0 * rng.normal(size=30)                 # a misfit beyond the σ: s² = χ²/(m − n) > 1
     unc = uncertainty(J, r)
     s2 = r @ r / 28
-    assert unc.s2 == pytest.approx(s2)
+    assert s2 > 1 and unc.s2 == pytest.approx(s2)
     assert unc.se_u == pytest.approx(np.sqrt(np.diag(s2 * np.linalg.inv(J.T @ J))))
     J2 = np.column_stack([J[:, 0], np.zeros(30)])              # the second parameter is invisible
     unc2 = uncertainty(J2, r)

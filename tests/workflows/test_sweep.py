@@ -366,3 +366,20 @@ def test_a_killed_run_is_continued_from_its_last_level(tmp_path):
     script = (tmp_path / "again" / "sweep.slurm").read_text()
     assert 'WHERE=(--restart "$RUN_DIR")' in script and '"${WHERE[@]}"' in script
     assert subprocess.run(["bash", "-n", str(tmp_path / "again" / "sweep.slurm")]).returncode == 0
+
+
+def test_the_shipped_muscle_ratio_sweep_expands_to_valid_configs():
+    """configs/sweeps/muscle_ratio.yaml (cited by the README and configs/achilles_psi45_equal_muscles.yaml,
+    missing before issue 39): six runs from the soleus alone to the gastrocnemii alone, each a
+    valid config whose end forces sum to 1 N per unit load factor."""
+    from ancf_petsc.config.parse import parse_config
+    sweep = load_sweep(os.path.join(CONFIGS, "sweeps", "muscle_ratio.yaml"))
+    runs = expand(sweep)
+    shares = []
+    for run in runs:
+        raw = run_config(sweep, run)
+        spec = parse_config(raw, base_dir=run.dir)
+        forces = [ld.force[0] for ld in spec.loads]
+        assert abs(sum(forces) - 1.0) < 1e-12
+        shares.append(forces[0])
+    assert shares == [1.0, 0.75, 0.5, 1.0 / 3.0, 0.25, 0.0]

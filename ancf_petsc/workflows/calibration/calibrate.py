@@ -15,9 +15,9 @@ from .identify import (Profile, Uncertainty, at_bounds, interval, profile_width,
                        uncertainty, verdict)
 from .log import SampleLog
 from .optimise import LocalFit, global_fit, local_fit, start_points
-from .parameters import describe, from_u
+from .parameters import describe, from_u, to_u
 from .profiles import profile
-from .sample import Sample
+from .sample import Sample, start_ratios
 from .spec import FitSpec
 
 
@@ -117,6 +117,9 @@ def run_calibration(spec: FitSpec, fresh: bool = False, task: int | None = None,
         say(f"[fit] resuming: {log.resumed} sample(s) read from {log.path}")
     ev = Evaluator(spec, log, say)
     try:
+        start = ev([to_u(spec.parameters, [p.start for p in spec.parameters])], "fit")[0]
+        for line in start_ratios(spec, start):
+            say(f"[fit] {line}")
         best, starts = fit(ev, spec, task, say)
         unc, params = analyse(ev, spec, best, say) if task is None else (None, [])
     finally:

@@ -50,37 +50,55 @@ class DataSet:
         return list(self.levels) + list(self.extra_levels)
 
 
-def read_table(path: str, where: str) -> dict[str, list[str]]:
-    """Columns of a CSV file with a header line ('#' lines are comments)."""
+@dataclass
+class Table:
+    """A CSV file's columns (header name → cells) and the file line of each data row."""
+    path: str
+    columns: dict[str, list[str]]
+    lines: list[int]
+
+
+def read_table(path: str, where: str) -> Table:
+    """Columns of a CSV file with a header line ('#' lines are comments; a UTF-8 byte-order mark,
+    as spreadsheets write it, is dropped)."""
     expect(os.path.isfile(path), where, f"no such file: {path}")
     try:
-        with open(path, encoding="utf-8") as fh:
-            text = "".join(line for line in fh if not line.lstrip().startswith("#"))
+        with open(path, encoding="utf-8-sig") as fh:
+            lines = [(k, line) for k, line in enumerate(fh, start=1) if not line.lstrip().startswith("#")]
     except (OSError, UnicodeDecodeError) as exc:
         raise CalibrationError(where, f"{path}: cannot read it as text ({exc.__class__.__name__})") from None
-    rows = [r for r in csv.reader(io.StringIO(text)) if any(c.strip() for c in r)]
+    rows = [(k, r) for k, line in lines for r in csv.reader(io.StringIO(line)) if any(c.strip() for c in r)]
     expect(len(rows) >= 2, where, f"{path}: expected a header line and at least one row")
-    header = [h.strip() for h in rows[0]]
+    header = [h.strip() for h in rows[0][1]]
     cols = {h: [] for h in header}
-    for k, row in enumerate(rows[1:], start=2):
-        expect(len(row) == len(header), where, f"{path}: data row {k - 1} has {len(row)} fields, "
+    for k, row in rows[1:]:
+        expect(len(row) == len(header), where, f"{path}: line {k} has {len(row)} fields, "
                                                f"the header {len(header)}")
         for h, c in zip(header, row):
             cols[h].append(c.strip())
-    return cols
+    return Table(path, cols, [k for k, _ in rows[1:]])
 
 
-def _column(cols: dict, name: Any, where: str, path: str) -> np.ndarray:
+def _column(table: Table, name: Any, where: str) -> np.ndarray:
+    """A column as finite numbers; an empty, non-numeric, NaN or infinite cell is refused with its
+    line and column."""
+    cols, base = table.columns, os.path.basename(table.path)
     expect(isinstance(name, str) and name in cols, where,
-           f"no column {name!r} in {os.path.basename(path)} (columns: {', '.join(cols)})")
-    try:
-        return np.array([float(v) for v in cols[name]])
-    except ValueError:
-        raise CalibrationError(where, f"column {name!r} of {os.path.basename(path)} holds a "
-                                      "value that is not a number") from None
+           f"no column {name!r} in {base} (columns: {', '.join(cols)})")
+    out = []
+    for line, cell in zip(table.lines, cols[name]):
+        try:
+            value = float(cell)
+        except ValueError:
+            value = None
+        expect(value is not None and np.isfinite(value), where,
+               f"{base}, line {line}, column {name!r}: {cell!r} is not a finite number; "
+               "give a measured value there or remove the row")
+        out.append(value)
+    return np.array(out)
 
 
-def _sigmas(item: dict, where: str, cols: dict, path: str, values: np.ndarray, scale: float) -> np.ndarray:
+def _sigmas(item: dict, where: str, table: Table, values: np.ndarray, scale: float) -> np.ndarray:
     given = [k for k in ("sigma", "sigma_column", "relative_sigma") if k in item]
     expect(len(given) == 1, where, "give one uncertainty: sigma (SI), sigma_column (a column in "
                                    "the value's unit) or relative_sigma (a fraction of |value|)")
@@ -88,7 +106,7 @@ def _sigmas(item: dict, where: str, cols: dict, path: str, values: np.ndarray, s
     if key == "sigma":
         s = np.full(len(values), number(item["sigma"], f"{where}.sigma", positive=True))
     elif key == "sigma_column":
-        s = _column(cols, item["sigma_column"], f"{where}.sigma_column", path) * abs(scale)
+        s = _column(table, item["sigma_column"], f"{where}.sigma_column") * abs(scale)
     else:
         s = number(item["relative_sigma"], f"{where}.relative_sigma", positive=True) * np.abs(values)
     expect(bool(np.all(s > 0)), f"{where}.{key}", "every uncertainty must be > 0")
@@ -104,14 +122,17 @@ def _data_set(item: Any, i: int, here: str, raw: dict) -> DataSet:
                                    + " and the quantity's own keys")
     expect(isinstance(item.get("file"), str), f"{where}.file", "missing: the CSV file (relative to the fit file)")
     path = os.path.normpath(os.path.join(here, item["file"]))
-    cols = read_table(path, f"{where}.file")
+    table = read_table(path, f"{where}.file")
     load_scale = number(item.get("load_scale", 1.0), f"{where}.load_scale", positive=True)
     value_scale = number(item.get("value_scale", 1.0), f"{where}.value_scale")
-    levels = _column(cols, item.get("load"), f"{where}.load", path) * load_scale
-    expect(bool(np.all(levels > 0)), f"{where}.load", "every load level must be > 0 (0 is the reference)")
-    expect(len(set(levels)) == len(levels), f"{where}.load", "a load level appears twice")
-    values = _column(cols, item.get("value"), f"{where}.value", path) * value_scale
-    sigmas = _sigmas(item, where, cols, path, values, value_scale)
+    expect(value_scale > 0, f"{where}.value_scale", f"must be > 0 (the value column's unit in SI, "
+           f"e.g. 1e-3 for mm); got {value_scale:g}; for data of the opposite sign negate the column")
+    levels = _column(table, item.get("load"), f"{where}.load") * load_scale
+    low = [line for line, lv in zip(table.lines, levels) if lv <= 0]
+    expect(not low, f"{where}.load", f"{os.path.basename(path)}, line {low[0] if low else 0}: every "
+           "load level must be > 0 (0 is the reference)")
+    values = _column(table, item.get("value"), f"{where}.value") * value_scale
+    sigmas = _sigmas(item, where, table, values, value_scale)
     qname = item.get("quantity")
     expect(qname in QUANTITIES, f"{where}.quantity",
            f"must be one of {', '.join(QUANTITIES)}; got {qname!r}")
@@ -122,7 +143,7 @@ def _data_set(item: Any, i: int, here: str, raw: dict) -> DataSet:
     options = q.check({k: item[k] for k in q.keys if k in item}, where, raw, levels, load_scale)
     name = item.get("name", f"{qname}_{i}")
     expect(isinstance(name, str) and name, f"{where}.name", "expected a name")
-    order = np.argsort(levels)
+    order = np.argsort(levels, kind="stable")     # repeated trials at a level: one residual each
     return DataSet(name, path, qname, options, levels[order], values[order], sigmas[order],
                    str(item["load"]), str(item["value"]), value_scale, q.extra_levels(options, levels))
 

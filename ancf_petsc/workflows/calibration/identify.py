@@ -3,8 +3,10 @@ the optimum, profiles of the objective along each parameter, and a verdict per p
 
 With weighted residuals r (in σ) and their Jacobian J in the optimiser's coordinates u, the
 covariance of the estimate is  Cov(u) = s² (Jᵀ J)⁻¹ = s² (Jᵀ W J)⁻¹ in unweighted terms, with
-s² = Σ r² / (m − n) (m data, n parameters: the misfit the σ did not explain scales the errors),
-or s² = 1 with ``objective.absolute_sigma`` (the σ are the data's known errors, as scipy's
+s² = max(Σ r² / (m − n), 1) (m data, n parameters: the misfit the σ did not explain scales the
+errors up; a fit better than its σ does not scale them down: with few data Σ r² / (m − n) is
+itself uncertain, and 3 points fitting to 0.08 σ would shrink the errors 13-fold), or s² = 1
+with ``objective.absolute_sigma`` (the σ are the data's known errors, as scipy's
 curve_fit(absolute_sigma=True); needed when there are no more data than parameters).
 It is taken through the singular values of J: a direction J does not see (a singular value below
 ``RCOND`` of the largest) has infinite variance, and every parameter with a part in it an
@@ -16,8 +18,8 @@ whole bounds when the error is infinite), the other parameters fitted again (``r
 freedom); a side is *closed* when the profile crosses 3.84 inside the bounds.
 
 The linearised 95 % interval is u ± t SE_u, t the 97.5 % quantile of Student's t with m − n
-degrees of freedom (s² is estimated from m − n residuals; t → 1.96 for many data, and 1.96 with
-absolute σ).
+degrees of freedom where s² is estimated from the m − n residuals (t → 1.96 for many data), and
+1.96 where s² = 1 (absolute σ, or the floor).
 
 The verdict uses w, the relative half-width of the 95 % interval: the profile's when there is one
 (it follows the model's curvature and the bounds of the other parameters, which the linearisation
@@ -36,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import t as student_t
 
-from .parameters import Parameter, bounds_u
+from .parameters import Parameter, bounds_u, pow10
 
 RCOND = 1e-8
 CHI2_95 = 3.841458820694124                  # χ²₁ quantile at 0.95
@@ -45,7 +47,7 @@ DETERMINED, WEAK, NOT = "determined", "weakly determined", "not determined"
 
 @dataclass
 class Uncertainty:
-    s2: float                                # residual variance factor Σ r² / (m − n)
+    s2: float                                # the errors' variance factor max(Σ r² / (m − n), 1)
     dof: int
     cov_u: np.ndarray                        # (n, n); inf where not determined
     corr: np.ndarray                         # (n, n) correlations (regularised where singular)
@@ -53,18 +55,26 @@ class Uncertainty:
     singular_values: np.ndarray
 
     absolute: bool = False                   # s² = 1: the σ are the data's errors
+    chi2_dof: float = 1.0                    # Σ r² / (m − n), before the floor
+
+    @property
+    def floored(self) -> bool:
+        """Whether the fit is better than its σ (Σ r² / (m − n) < 1) and s² is the floor, 1."""
+        return not self.absolute and self.chi2_dof < 1.0
 
     @property
     def t95(self) -> float:
-        """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (normal: absolute σ)."""
-        return float(student_t.ppf(0.975, np.inf if self.absolute else self.dof))
+        """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom (normal where
+        s² = 1: absolute σ or the floor)."""
+        return float(student_t.ppf(0.975, np.inf if self.absolute or self.floored else self.dof))
 
 
 def uncertainty(J: np.ndarray, r: np.ndarray, absolute: bool = False) -> Uncertainty:
     """Cov(u) = s² (JᵀJ)⁻¹ through the SVD of J (module docstring)."""
     m, n = J.shape
     dof = max(m - n, 1)
-    s2 = 1.0 if absolute else float(np.sum(r ** 2)) / dof
+    chi2_dof = float(np.sum(r ** 2)) / dof
+    s2 = 1.0 if absolute else max(chi2_dof, 1.0)
     _, S, Vt = np.linalg.svd(J, full_matrices=False)
     V = Vt.T
     null = S <= RCOND * (S[0] if len(S) and S[0] > 0 else 1.0)
@@ -79,7 +89,7 @@ def uncertainty(J: np.ndarray, r: np.ndarray, absolute: bool = False) -> Uncerta
     reg = (V / (S ** 2 + eps2)) @ V.T
     d = np.sqrt(np.diag(reg))
     corr = reg / np.outer(d, d)
-    return Uncertainty(s2, dof, cov, corr, np.sqrt(var), S, absolute)
+    return Uncertainty(s2, dof, cov, corr, np.sqrt(var), S, absolute, chi2_dof)
 
 
 def relative_width(par: Parameter, p: float, se_u: float, t95: float) -> float:
@@ -87,7 +97,7 @@ def relative_width(par: Parameter, p: float, se_u: float, t95: float) -> float:
     if not np.isfinite(se_u):
         return np.inf
     if par.log:
-        return 10.0 ** (t95 * se_u) - 1.0
+        return pow10(t95 * se_u) - 1.0
     return t95 * se_u * par.scale / abs(p) if p != 0 else np.inf
 
 

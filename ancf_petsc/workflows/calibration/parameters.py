@@ -12,6 +12,12 @@ import numpy as np
 from ..sweep.base import Token, format_key_path, set_key_path
 
 
+def pow10(x: float) -> float:
+    """10 ** x, inf beyond the largest float (no overflow warning: an undetermined parameter's
+    interval reaches it)."""
+    return math.inf if x > 308.25 else 10.0 ** float(x)
+
+
 @dataclass
 class Parameter:
     """One fitted parameter.  ``keys``: the config values it sets (one value at all of them, or,
@@ -35,7 +41,7 @@ class Parameter:
         return math.log10(p) if self.log else p / self.scale
 
     def from_u(self, u: float) -> float:
-        return 10.0 ** u if self.log else u * self.scale
+        return pow10(u) if self.log else u * self.scale
 
     @property
     def bounds_u(self) -> tuple[float, float]:

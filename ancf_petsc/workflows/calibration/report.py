@@ -33,6 +33,16 @@ def _span(interval, closed=(True, True)) -> str:
     return f"[{'≤' if not closed[0] else ''}{a}, {'≥' if not closed[1] else ''}{b}]"
 
 
+def s2_text(unc) -> str:
+    """How the errors were scaled (identify.py), in words."""
+    if unc.absolute:
+        return "s² = 1 (absolute σ)"
+    if unc.floored:
+        return (f"s² = 1: χ²/(m − n) = {unc.chi2_dof:.3g} ({unc.dof} dof) is below 1, the data fit "
+                "better than their σ, and the σ are kept as the errors (not shrunk by it)")
+    return f"s² = χ²/(m − n) = {unc.s2:.4g} ({unc.dof} dof)"
+
+
 def summary(res: CalibrationResult, log: SampleLog) -> dict:
     spec, best, unc = res.spec, res.best, res.uncertainty
     params = [{"name": p.name, "keys": spec.parameters[i].key_text(), "value": p.value, "start": p.start,
@@ -47,6 +57,7 @@ def summary(res: CalibrationResult, log: SampleLog) -> dict:
         "fit": spec.name, "fit_file": spec.file, "model": spec.model_path, "status": res.fit.status,
         "message": res.fit.message, "cost": best.cost, "chi2": 2 * best.cost, "data_points": n_data(spec),
         "parameters": params, "s2": None if unc is None else unc.s2, "dof": None if unc is None else unc.dof,
+        "chi2_per_dof": None if unc is None else unc.chi2_dof,
         "correlation": None if unc is None else _finite(unc.corr.tolist()),
         "singular_values": None if unc is None else unc.singular_values.tolist(),
         "best_sample": best.record(), "samples": log.counts(), "throughput": res.throughput,
@@ -66,10 +77,9 @@ def markdown(res: CalibrationResult, log: SampleLog) -> str:
              f"Model `{os.path.relpath(spec.model_path, os.path.dirname(spec.file))}`, "
              f"{n_data(spec)} data points in {len(spec.data)} set(s), {len(spec.parameters)} parameter(s); "
              f"{spec.optimizer.method}: {res.fit.status} ({res.fit.message}).", "",
-             f"χ² = {2 * res.best.cost:.4g}" + ("" if unc is None else ", s² = 1 (absolute σ)" if unc.absolute
-                                                else f", s² = χ²/(m − n) = {unc.s2:.4g} ({unc.dof} dof)")
-             + f"; {tp.get('samples', 0)} samples ({tp.get('resumed', 0)} read from the log), "
-             f"{log.counts()}.", "",
+             f"χ² = {2 * res.best.cost:.4g}" + ("" if unc is None else f", {s2_text(unc)}")
+             + f"; {tp.get('samples', 0)} samples ({tp.get('resumed', 0)} read from the log): "
+             + ", ".join(f"{n} {status}" for status, n in sorted(log.counts().items())) + ".", "",
              "| parameter | start | fitted | SE | 95 % interval, linearised | 95 % interval, profile | w | verdict |",
              "|---|---:|---:|---:|---|---|---:|---|"]
     for p in res.parameters:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .quantities import evaluate
+from .quantities import QUANTITIES, evaluate
 from .spec import FitSpec
 
 if TYPE_CHECKING:                      # the solving layer loads PETSc
@@ -91,3 +91,28 @@ def model_values(spec: FitSpec, outcome: SampleOutcome) -> dict[str, np.ndarray]
 
 def n_data(spec: FitSpec) -> int:
     return sum(len(d.levels) for d in spec.data)
+
+
+QUANTITY_UNITS = {name: q.unit for name, q in QUANTITIES.items()}
+#: a start whose model values differ from the data by more than this factor (median over a data
+#: set's levels) gets a warning: a unit the data were not converted from, most likely
+UNIT_HINT_FACTOR = 30.0
+
+
+def start_ratios(spec: FitSpec, start: Sample) -> list[str]:
+    """Lines for the log: per data set the median ratio model / data at the start, with a warning
+    (and the unit hint) where it is off by more than ``UNIT_HINT_FACTOR``."""
+    out = []
+    for d in spec.data:
+        model = np.asarray(start.model[d.name], dtype=float)
+        ok = np.isfinite(model) & (d.values != 0.0)
+        if not ok.any():
+            continue
+        ratio = float(np.median(model[ok] / d.values[ok]))
+        line = f"{d.name}: model / data = {ratio:.3g} at the start (median over {int(ok.sum())} level(s))"
+        if not 1.0 / UNIT_HINT_FACTOR <= abs(ratio) <= UNIT_HINT_FACTOR or ratio < 0:
+            line = (f"warning: {line}; are the data in SI units ({d.quantity}: "
+                    f"{QUANTITY_UNITS.get(d.quantity, 'm')}) and of the model's sign? value_scale "
+                    f"converts the column {d.value_column!r} (1e-3 for mm; now {d.value_scale:g})")
+        out.append(line)
+    return out

@@ -23,7 +23,7 @@ from typing import Any
 
 from ...config.parse import parse_config
 from ...config.values import ConfigError
-from ..sweep.base import SweepLoader, load_yaml, path_exists, parse_key_path
+from ..sweep.base import SweepLoader, format_key_path, load_yaml, path_exists, parse_key_path
 from ..sweep.spec import SlurmSpec, slurm_spec
 from .data import DataSet, parse_data
 from .errors import CalibrationError, expect, number, integer
@@ -177,6 +177,22 @@ def _parameters(doc: dict, raw: dict, model_dir: str) -> list[Parameter]:
     names = [p.name for p in params]
     for i, n in enumerate(names):
         expect(names.index(n) == i, f"parameters[{i}].name", f"{n!r} names two parameters")
+    owner: dict[tuple, int] = {}
+    for i, p in enumerate(params):       # one config value, one parameter
+        for k in p.keys:
+            expect(tuple(k) not in owner, f"parameters[{i}]", f"{format_key_path(k)} is also set by "
+                   f"parameters[{owner.get(tuple(k))}]: give each config value to one parameter")
+            owner[tuple(k)] = i
+    for i, p in enumerate(params):       # the key itself: the model config takes it at the start
+        try:
+            parse_config(apply(raw, [p], [p.start]), base_dir=model_dir)
+        except ConfigError as exc:
+            if all(path_exists(raw, k) for k in p.keys):
+                raise CalibrationError(f"parameters[{i}].start", f"the model config refuses "
+                                       f"{p.name} = {p.start:g}: {exc}; change start") from None
+            raise CalibrationError(f"parameters[{i}].{'key' if len(p.keys) == 1 else 'keys'}",
+                                   f"{p.key_text()} is not a value of the model config and the "
+                                   f"config refuses it ({exc}); check the key path") from None
     for i, p in enumerate(params):       # the model config must accept each bound
         for edge in (p.lower, p.start, p.upper):
             values = [edge if j == i else q.start for j, q in enumerate(params)]

@@ -1,0 +1,125 @@
+"""What ``ancf-report --existing`` shows of a run that is not the paper's model: its probes with
+their own units, the force it carried (the loads, or a prescribed end's reaction under
+displacement control), how far the subtendons moved against each other (first − second in
+config order) and, for a contact run, slip and pressure along the tendon."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .. import viz
+from ..io.groups import PROBE_UNITS
+from ..io.reader import read_contact
+
+#: how a probe's change is shown: a displacement (r, or the section mean) as u in mm, another
+#: vector's change in its own unit (io.groups.PROBE_UNITS)
+SHOWN = {"r": "u", "mean": "section-mean u"}
+#: slip and pressure are drawn at up to this many levels (the last among them)
+SLIP_LEVELS = 4
+
+
+def probe_vectors(config: dict) -> dict[str, str]:
+    """Probe name → its nodal vector (``r`` unless the config says otherwise)."""
+    return {p["name"]: p.get("vector", "r") for p in config.get("probes", []) or []
+            if isinstance(p, dict) and "name" in p}
+
+
+def probe_markdown(summary: dict, config: dict) -> list[str]:
+    """A table of every probe per level: u_x [mm] of a position (r, mean), the three components
+    of a direction vector's change [1] (r_y, r_z) or of a curvature vector's [1/m]."""
+    steps = summary["steps"]
+    names = sorted({p for st in steps for p in st.get("probes", {})})
+    vectors = probe_vectors(config)
+    heads, cells = [], []
+    for name in names:
+        vector = vectors.get(name, "r")
+        position = PROBE_UNITS.get(vector, "m") == "m"
+        scale = 1e3 if position else 1.0
+        heads.append(f"{name} {SHOWN.get(vector, 'u')}_x [mm]" if position
+                     else f"{name} Δ{vector} (x, y, z) [{PROBE_UNITS[vector]}]")
+
+        def cell(st, name=name, scale=scale, position=position):
+            if name not in st.get("probes", {}):
+                return ""
+            d = np.asarray(st["probes"][name]["displacement"], dtype=float) * scale
+            return f"{d[0]:.5f}" if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
+        cells.append(cell)
+    lines = ["| load factor | " + " | ".join(heads) + " |", "|---:|" + "---:|" * len(heads)]
+    lines += [f"| {st['load_factor']:g} | " + " | ".join(c(st) for c in cells) + " |" for st in steps]
+    return lines
+
+
+def moved_supports(config: dict) -> list[str]:
+    """The names of the supports with a prescribed displacement (displacement control)."""
+    out = []
+    for k, bc in enumerate(config.get("boundary_conditions", []) or []):
+        if isinstance(bc, dict) and "displacement" in bc:
+            node = bc.get("node", "")
+            out.append(bc.get("name") or f"{bc.get('beam')}.{node}")
+    return out
+
+
+def force_axis(summary: dict, config: dict) -> tuple[np.ndarray, str]:
+    """The force each level carried and its label: the x-reactions of the moved supports under
+    displacement control, else the load factor times the loads' x-sum (a load curve: the load
+    factor itself)."""
+    steps = summary["steps"]
+    moved = [n for n in moved_supports(config) if all(n in st.get("reactions", {}) for st in steps)]
+    if moved:
+        return (np.array([sum(st["reactions"][n][0] for n in moved) for st in steps]),
+                f"reaction of {', '.join(moved)} along x [N]")
+    loads = [ld for ld in config.get("loads", []) or [] if isinstance(ld, dict)]
+    lam = np.array([st["load_factor"] for st in steps])
+    if loads and not any("curve" in ld for ld in loads):
+        fx = sum(float((ld.get("force") or ld.get("traction_force") or [0.0])[0]) for ld in loads)
+        if fx != 0.0:
+            return lam * fx, "applied load along x [N]"
+    return lam, "load factor"
+
+
+def interface_markdown(summary: dict, config: dict) -> list[str]:
+    """Per level the force (``force_axis``) and each pair's u_first − u_second at x = L [mm];
+    nothing for a run without interfaces or moved supports."""
+    steps = summary["steps"]
+    pairs = list(dict.fromkeys(p for st in steps for p in st.get("displacement_differences", {})))
+    if not pairs and not moved_supports(config):
+        return []
+    force, label = force_axis(summary, config)
+    lines = ["", "How far the subtendons moved against each other (`displacement_differences`: u_x of "
+             "the first beam's centroid line minus the second's at x = L, first and second in config "
+             "order):", "", f"| load factor | {label} | " + " | ".join(f"{p.replace('|', ' − ')} [mm]" for p in pairs)
+             + " |", "|---:|---:|" + "---:|" * len(pairs)]
+    for st, f in zip(steps, force):
+        dd = st.get("displacement_differences", {})
+        lines.append(f"| {st['load_factor']:g} | {f:.6g} | " + " | ".join(
+            f"{1e3 * dd[p]['end']:.5f}" if p in dd else "" for p in pairs) + " |")
+    return lines
+
+
+def run_figures(directory: str, summary: dict, config: dict, out: str) -> list[str]:
+    """The run's force–elongation and differences chart and, with contact fields in results.h5,
+    slip and pressure along the tendon; the PNG paths (files named after the run)."""
+    steps = summary.get("steps", [])
+    pairs = list(dict.fromkeys(p for st in steps for p in st.get("displacement_differences", {})))
+    if not steps or (not pairs and not moved_supports(config)):
+        return []
+    name = summary.get("name") or os.path.basename(os.path.normpath(directory))
+    force, label = force_axis(summary, config)
+    vectors = probe_vectors(config)
+    elong = {p: np.array([st["probes"][p]["displacement"][0] for st in steps])
+             for p in vectors if vectors[p] in ("r", "mean") and all(p in st["probes"] for st in steps)}
+    diffs = {p: np.array([st["displacement_differences"][p]["end"] for st in steps]) for p in pairs
+             if all(p in st.get("displacement_differences", {}) for st in steps)}
+    made = [viz.plot_force_and_differences(force, label, elong, diffs, os.path.join(out, f"{name}_force.png"),
+                                           title=f"{name}: force and subtendon displacement differences")]
+    h5 = os.path.join(directory, "results.h5")
+    itfs = summary.get("contact_interfaces") or []
+    if itfs and os.path.exists(h5):
+        picks = sorted({int(round(k)) for k in np.linspace(0, len(steps) - 1, min(SLIP_LEVELS, len(steps)))})
+        levels = [read_contact(h5, k + 1) for k in picks]
+        made.append(viz.plot_slip(levels, viz.interface_labels(itfs), os.path.join(out, f"{name}_slip.png"),
+                                  tuple(range(len(itfs))), float(config.get("geometry", {}).get("length", 0.0)),
+                                  title=f"{name}: slip and contact pressure along the tendon",
+                                  level_label="load factor {:g}"))
+    return made

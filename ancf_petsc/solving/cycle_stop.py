@@ -1,0 +1,73 @@
+"""A SNES convergence test that stops a Newton iteration caught in a cycle (issue 39).
+
+Coulomb friction's semi-smooth iteration can cycle between stick and slip statuses: |F| repeats
+with a period of 2–3 iterations until ``snes_max_it`` (measured on the paper's tendon, μ = 3, the
+load step 90 → 100 N: period 3, |F| 0.62 / 0.41 / 0.37 N from the 15th iteration to the 200th).
+This test is PETSc's default (SNESConvergedDefault, restated: rtol, atol, stol, the function
+budget and the divergence tolerance) plus one rule: from ``MIN_ITERATIONS`` on, a cycle of
+period ≥ 2 (``solver_messages.newton_cycle``) ends the solve as DIVERGED_MAX_IT, so the increment
+goes to friction's Tresca fixed point or a cut-back at once.  A stall (period 1) is left to the
+other tests.  It is installed for models whose contact has state-dependent bounds (friction)
+unless ``-snes_convergence_test`` is given.
+"""
+from __future__ import annotations
+
+import math
+
+from petsc4py import PETSc
+
+from ..linalg.database import option
+from .solver_messages import newton_cycle
+
+#: iterations before a cycle may end a solve (a status change needs a few iterations to show)
+MIN_ITERATIONS = 12
+#: PETSc's default divergence tolerance (fnorm > divtol × |F₀|: DIVERGED_DTOL)
+DEFAULT_DIVTOL = 1.0e4
+
+Reason = PETSc.SNES.ConvergedReason
+
+
+class CycleStop:
+    """``snes.setConvergenceTest(CycleStop(history, config_options, prefix))``; ``history()``
+    the |F| of the solve's iterates so far (the monitor's, called before the test); the
+    divergence tolerance and forced first iteration from the command line or the config's
+    ``petsc:``; ``cycle`` the (period, min, max |F|) of the cycle that ended the last solve, or
+    None."""
+
+    def __init__(self, history, config_options: dict, prefix: str = ""):
+        self.history = history
+
+        def given(name: str):
+            value = option(name, prefix)
+            return config_options.get(name) if value is None else value
+        self.divtol = float(given("snes_divergence_tolerance") or DEFAULT_DIVTOL)
+        self.force = str(given("snes_force_iteration") or "false").lower() in ("", "1", "true", "yes")
+        self.ttol = self.rnorm0 = 0.0
+        self.cycle: tuple[int, float, float] | None = None
+
+    def __call__(self, snes: PETSc.SNES, its: int, norms) -> int:
+        xnorm, snorm, fnorm = norms
+        rtol, atol, stol, _ = snes.getTolerances()
+        if its == 0:
+            self.ttol, self.rnorm0, self.cycle = fnorm * rtol, fnorm, None
+        if math.isnan(fnorm) or math.isinf(fnorm):
+            return Reason.DIVERGED_FNORM_NAN
+        if fnorm < atol and (its > 0 or not self.force):
+            return Reason.CONVERGED_FNORM_ABS
+        max_funcs = snes.getMaxFunctionEvaluations()
+        if max_funcs >= 0 and snes.getFunctionEvaluations() >= max_funcs:
+            return Reason.DIVERGED_FUNCTION_COUNT
+        if its == 0:
+            return Reason.ITERATING
+        if fnorm <= self.ttol:
+            return Reason.CONVERGED_FNORM_RELATIVE
+        if snorm < stol * xnorm:
+            return Reason.CONVERGED_SNORM_RELATIVE
+        if self.divtol > 0 and fnorm > self.divtol * self.rnorm0:
+            return Reason.DIVERGED_DTOL
+        if its >= MIN_ITERATIONS:
+            cycle = newton_cycle(self.history())
+            if cycle is not None and cycle[0] >= 2:
+                self.cycle = cycle
+                return Reason.DIVERGED_MAX_IT
+        return Reason.ITERATING

@@ -1,0 +1,42 @@
+"""``ancf-report --existing`` on runs that are not the paper's model (issue 39): probes with their
+own units (a direction vector's change is not a displacement in mm), a title that does not claim
+the paper's reproduction, plain reasons, and for a contact run under displacement control the
+reaction, the first − second differences, a force chart and slip and pressure along the tendon."""
+import os
+import subprocess
+
+from helpers import MPI_ENV, ROOT, VENV_BIN, load_raw, solve_cli, write_config
+
+
+def _report(runs: list[str], out) -> str:
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", *runs, "--out", str(out)],
+                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+    assert p.returncode == 0, p.stderr
+    return open(os.path.join(out, "report.md")).read()
+
+
+def test_existing_runs_of_other_models_say_what_they_hold(tmp_path):
+    bar = load_raw("pretwisted_bar.yaml")
+    strips = load_raw("friction_pressed_strips.yaml")
+    strips["steps"] = [1.0, 1.5, 2.0, 2.1]
+    runs = []
+    for name, raw in (("bar", bar), ("strips", strips)):
+        p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), extra=["--output-dir", str(tmp_path / name), "--quiet"])
+        assert p.returncode == 0, p.stderr
+        runs.append(str(tmp_path / name))
+    text = _report(runs, tmp_path / "rep")
+    title = text.splitlines()[0]
+    assert "reproduction" not in title and "pretwisted_bar" in title and "not the paper's model" in title
+    # the r_y probe: its change (x, y, z), dimensionless; before: "tip_r_y u_x [mm]" 10.95
+    assert "| tip_r_y Δr_y (x, y, z) [1] |" in text and "tip_r_y u_x" not in text
+    assert "(0.01095, " in text and "10.95" not in text
+    # plain reasons, no fingerprint keys
+    assert "beams/" not in text and "beam base is not in the paper's model" in text
+    # the strips: the grip's reaction (displacement control) and base − slider per level
+    head = "| load factor | reaction of grip along x [N] | base − slider [mm] |"
+    assert head in text
+    row = next(line for line in text.split(head)[1].splitlines() if line.startswith("| 1.5 | ")).split("|")
+    assert abs(float(row[2]) - 0.5 * 0.01) < 1e-3 * 0.005      # sliding: mu N
+    assert float(row[3]) < 0                                    # the slider (second) ahead
+    for png in ("friction_pressed_strips_force.png", "friction_pressed_strips_slip.png"):
+        assert os.path.getsize(tmp_path / "rep" / png) > 10_000 and f"]({png})" in text

@@ -304,21 +304,37 @@ def _read_rows(path: str) -> list[dict] | None:
         return list(csv.DictReader(fh))
 
 
+def _matches(row: dict, filters: dict[str, str]) -> bool:
+    """``row`` has every ``filters`` value (numbers compared as numbers, 'friction=0.3')."""
+    def same(a: str, b: str) -> bool:
+        try:
+            return float(a) == float(b)
+        except ValueError:
+            return a == b
+    return all(same(str(row.get(k, "")), v) for k, v in filters.items())
+
+
 def render_docs(text: str, csv_dir: str) -> str:
-    """``text`` (docs/gait.md) with every block ``<!-- envelope:GRID:LAW -->`` … ``<!-- /envelope -->``
-    rendered from ``csv_dir``/gait_envelope_GRID.csv (and ``…_before.csv``, 38a07d3's, when it is
-    there) by ``markdown_table``; LAW ``strides-…`` tables the median Newton iterations per frame."""
+    """``text`` (docs/gait.md) with every block ``<!-- envelope:GRID:LAW[:KEY=VALUE,…] -->`` …
+    ``<!-- /envelope -->`` rendered from ``csv_dir``/gait_envelope_GRID.csv (and
+    ``…_before.csv``, 38a07d3's, when it is there) by ``markdown_table``; LAW ``strides-…`` tables
+    the median Newton iterations per frame, LAW ``own`` every law; the filters pick rows by their
+    CSV columns (``friction=0.3``, ``base=achilles_type3_psi45_goh_amir.yaml``)."""
     import re
-    pattern = re.compile(r"(<!-- envelope:(\w+):([\w-]+) -->\n)(.*?)(<!-- /envelope -->)", re.S)
+    pattern = re.compile(r"(<!-- envelope:(\w+):([\w-]+)(?::([^ ]+))? -->\n)(.*?)(<!-- /envelope -->)", re.S)
 
     def block(m):
         grid_name, law = m.group(2), m.group(3)
+        filters = dict(item.split("=", 1) for item in m.group(4).split(",")) if m.group(4) else {}
         after = _read_rows(os.path.join(csv_dir, f"gait_envelope_{grid_name}.csv")) or []
         before = _read_rows(os.path.join(csv_dir, f"gait_envelope_{grid_name}_before.csv"))
         key = "iterations_to_1200"
         if law.startswith("strides-"):
             law, key = law[len("strides-"):], "median_iterations"
+        if filters:
+            after = [r for r in after if _matches(r, filters)]
+            before = None if before is None else [r for r in before if _matches(r, filters)]
         law_rows = [r for r in after if r["law"] == law] if law != "own" else after
-        return m.group(1) + markdown_table(law_rows, before, None if law == "own" else law, key) + "\n" + m.group(5)
+        return m.group(1) + markdown_table(law_rows, before, None if law == "own" else law, key) + "\n" + m.group(6)
 
     return pattern.sub(block, text)

@@ -383,3 +383,22 @@ def test_the_shipped_muscle_ratio_sweep_expands_to_valid_configs():
         assert abs(sum(forces) - 1.0) < 1e-12
         shares.append(forces[0])
     assert shares == [1.0, 0.75, 0.5, 1.0 / 3.0, 0.25, 0.0]
+
+
+def test_the_shipped_gait_envelope_sweep_expands_to_39_strides():
+    """configs/sweeps/gait_envelope.yaml (docs/gait.md): 13 twists x 3 biases, each a valid
+    config whose history file (relocated by the sweep) holds the bias's stride."""
+    from ancf_petsc.config.parse import parse_config
+    sweep = load_sweep(os.path.join(CONFIGS, "sweeps", "gait_envelope.yaml"))
+    runs = expand(sweep)
+    assert len(runs) == 39
+    twists, files = set(), set()
+    for run in runs:
+        raw = run_config(sweep, run)
+        spec = parse_config(raw, base_dir=run.dir)
+        assert spec.history is not None
+        twists.add(raw["geometry"]["twist_deg"])
+        files.add(os.path.basename(raw["history"]["file"]))
+        assert os.path.isfile(os.path.join(run.dir, raw["history"]["file"])) or os.path.isfile(raw["history"]["file"])
+    assert twists == set(range(0, 181, 15))
+    assert files == {f"stride_walking_{b}.csv" for b in ("gastrocnemius", "uniform", "soleus")}

@@ -272,8 +272,13 @@ def _cell_text(r: dict | None, key: str) -> str:
         return "–"
     if r["status"] == "crashed":
         return "**traceback**"
+    stride = str(r.get("stride", "")).lower() in ("true", "1")
     if r["status"] != "completed":
-        return f"**{r['status']}** after {float(r['last_level']):g} N"
+        where = f"at frame {float(r['last_level']):g}" if stride else f"after {float(r['last_level']):g} N"
+        return f"**{r['status']}** {where}"
+    if stride:                     # the frames with a cut-back
+        cb = int(float(r.get("cutback_levels") or 0))
+        return f"{float(r[key]):g}" + (f" ({cb} frame{'s' if cb > 1 else ''} cut back)" if cb else "")
     cb = int(float(r.get("cutbacks_to_1200", r["cutbacks"]) or 0))
     return f"{int(float(r[key]))}" + (f" ({cb} cut-back{'s' if cb > 1 else ''})" if cb else "")
 

@@ -20,7 +20,7 @@ the path's curvature from the last increment) and ``tangent`` for a load history
 history:), whose frames change the loads' direction.  On proportional columns ``tangent`` is an
 option worth trying at large twist: the paper's six columns took 0-7 fewer Newton iterations with
 it (47 → 40 on the ψ = 45° sliding column, answers equal to 4e-11) and the gait envelope's
-unilateral columns at ψ = 90° 60-94 instead of 83-110 with no cut-back; but a path it follows
+unilateral columns at ψ = 90° 60-94 instead of 83-109 with no cut-back; but a path it follows
 continuously may stop at a limit point a secant step jumps over (the lone soleus of the stiffest
 published GOH set stops at its limit point near 99.5 N, where the secant path lands on a second
 stable branch and reaches 400 N: tests/solving/test_step_limits.py), and it takes the

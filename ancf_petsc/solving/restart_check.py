@@ -29,6 +29,26 @@ def stored_residual(problem, X, load_factor: float) -> float:
         F.destroy()
 
 
+def fade_modes(problem):
+    """Iterate over the residuals a stored level may have converged with: with the fade weights
+    differentiated (``contact.fade: newton``) a level's last solve used the partner places' own
+    weights and their variation (the force −p g ∇w of a point in a fade band), but for a level
+    from rest whose kept weights needed no update (contact/weights.py): the differentiated
+    residual first, then the kept one; one residual otherwise.  The mode is left as it was."""
+    c = getattr(problem, "contact", None)
+    w = getattr(c, "weights", None)
+    if w is None or w.rule != "newton":
+        yield None
+        return
+    before = w.differentiated
+    try:
+        for mode in (True, False):
+            w.differentiated, c._cache = mode, None
+            yield mode
+    finally:
+        w.differentiated, c._cache = before, None
+
+
 def allowed_residual(atol: float, recorded: float | None, rounding_floor: float) -> float:
     """The largest residual the stored level may show: its acceptance test (the absolute
     tolerance, or the residual it was accepted with) with room for rounding."""
@@ -38,13 +58,14 @@ def allowed_residual(atol: float, recorded: float | None, rounding_floor: float)
 def check_restart_state(problem, stepper, point, X, directory: str) -> None:
     """InputError on every rank (the norm is collective) if the stored state at ``point`` is not
     converged."""
-    fnorm = stored_residual(problem, X, point.load_factor)
     steps = point.summary.get("steps") or []
     recorded = steps[-1].get("residual_norm") if steps else None
     _, atol, _, _ = stepper.solver.snes.getTolerances()
     bound = allowed_residual(atol, recorded, stepper.solver.rounding_floor)
-    if math.isfinite(fnorm) and fnorm <= bound:
-        return
+    for _ in fade_modes(problem):
+        fnorm = stored_residual(problem, X, point.load_factor)
+        if math.isfinite(fnorm) and fnorm <= bound:
+            return
     what = ("an element of it is inverted (J <= 0)" if not math.isfinite(fnorm)
             else f"its residual |F| = {fnorm:.3e} is above the tolerance {bound:.3e}"
             + (f" (recorded when it converged: {recorded:.3e})" if recorded is not None else ""))

@@ -79,7 +79,7 @@ verify-solid-contact: setup
 
 # the same tendon on plane roots (u_x = 0, free in the plane; beams fix: plane), both laws at psi = 45 deg,
 # 10-40 N, h = 2.0 and 1.4 mm (docs/solid_contact.md, "The unilateral 10 N question on plane roots";
-# about 1 h on one shared core), then the CSV into docs/
+# about 30 min on one shared core), then the CSV into docs/
 verify-solid-contact-plane: setup
 	$(PY) scripts/verify_solid_contact.py --root plane --no-selftest --no-free --no-checks --laws unilateral,sliding \
 		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10 --out results/solid_contact_plane

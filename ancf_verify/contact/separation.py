@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 
-from ancf_verify.contact.rows import ANCF, REF, SOLID, ancf_errors, num
+from ancf_verify.contact.rows import ANCF, PENALTY, REF, SOLID, ancf_errors, num
 
 #: the heading of the page's section
 SECTION = "## The unilateral 10 N question on plane roots"
@@ -116,10 +116,34 @@ def beams_table(plane: list) -> list:
     return L
 
 
+def penalty_table(plane: list, psi: float = 45.0) -> list:
+    """Markdown lines: the solid with a pure penalty ε = κ μ/h instead of exact multipliers (rows of
+    model PENALTY, one mesh), per κ (stiff to soft) and load: each law's soleus elongation, the
+    gain and its difference to the exact multipliers' (same mesh), and each law against them; a
+    failed run shows —."""
+    pen = [r for r in plane if r["model"] == PENALTY and num(r["psi_deg"]) == psi]
+    runs = sorted({r["resolution"] for r in pen}, key=lambda m: -float(m.split("eps = ")[1].split()[0]))
+    L = ["| κ | load [N] | sliding [mm] | unilateral [mm] | gain | gain − exact [points] | "
+         "sliding against exact | unilateral against exact |", "|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for res in runs:
+        mesh = res.split(",")[0]
+        u = {(r["law"], num(r["load_N"])): num(r["soleus_ux_m"]) for r in pen
+             if r["resolution"] == res and r["load_N"] not in ("", None)}
+        exact = {law: elongations(plane, law, psi) for law in ("sliding", "unilateral")}
+        for F in solid_loads(plane, psi):
+            us, uu = u.get(("sliding", F), np.nan), u.get(("unilateral", F), np.nan)
+            es, eu = exact["sliding"][(mesh, F)], exact["unilateral"][(mesh, F)]
+            mm = lambda x: "—" if not np.isfinite(x) else f"{1e3 * x:.5f}"
+            gain = (uu - us) / us
+            L.append(f"| {res.split('eps = ')[1].split()[0]} | {F:g} | {mm(us)} | {mm(uu)} | {pct(gain)} | "
+                     f"{points(gain - (eu - es) / es)} | {pct((us - es) / es, 3)} | {pct((uu - eu) / eu, 3)} |")
+    return L
+
+
 def section_tables(plane: list, clamped: list) -> list:
-    """The section's four tables (lists of markdown lines), in the page's order."""
+    """The section's five tables (lists of markdown lines), in the page's order."""
     return [solid_table(plane, clamped), convergence_table(plane, clamped), roots_table(plane, clamped),
-            beams_table(plane)]
+            penalty_table(plane), beams_table(plane)]
 
 
 def stated(text: str) -> list:

@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-friction studies clean
+.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-contact-plane verify-solid-friction studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -76,6 +76,17 @@ verify-solid-contact: setup
 	$(PY) scripts/verify_solid_contact.py
 	$(PY) scripts/verify_solid_contact.py --merge --no-selftest --no-free --no-checks --laws unilateral \
 		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10
+
+# the same tendon on plane roots (u_x = 0, free in the plane; beams fix: plane), both laws at psi = 45 deg,
+# 10-40 N, h = 2.0 and 1.4 mm, then with a pure penalty eps = k mu/h on 2.0 mm (docs/solid_contact.md,
+# "The unilateral 10 N question on plane roots"; about 35 min on one shared core), then the CSV into docs/
+verify-solid-contact-plane: setup
+	$(PY) scripts/verify_solid_contact.py --root plane --no-selftest --no-free --no-checks --laws unilateral,sliding \
+		--psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10 --out results/solid_contact_plane
+	for k in 10 1 0.1 0.01; do $(PY) scripts/verify_solid_contact.py --root plane --merge --no-selftest --no-free \
+		--no-checks --laws sliding,unilateral --psi 45 --h 2e-3 --loads 10,20,40 --max-increment 10 --penalty $$k \
+		--out results/solid_contact_plane || exit 1; done
+	cp results/solid_contact_plane/solid_contact.csv docs/solid_contact_plane.csv
 
 # the three subtendons as 3D solids with Coulomb friction (mu = 0.3) against the beams with
 # contact.tangential coulomb (docs/interface.md, "Against a 3D solid with friction"; a few hours),

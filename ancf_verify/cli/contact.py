@@ -98,6 +98,9 @@ def main(argv=None) -> int:
     ap.add_argument("--root", default="clamped", choices=ROOTS,
                     help="the roots of solid and beams: clamped (u = 0; fix: clamped) or plane (u_x = 0, "
                          "free in the plane; fix: plane); with plane write to another --out")
+    ap.add_argument("--penalty", type=float, default=0.0,
+                    help="solve the solid's laws with a pure penalty eps = PENALTY mu/h instead of exact "
+                         "multipliers (a sensitivity study: rows of model 'solid P2 tet, penalty', no reference)")
     ap.add_argument("--merge", action="store_true",
                     help="keep the rows of the existing CSV that this run does not redo")
     args = ap.parse_args(argv)
@@ -154,7 +157,7 @@ def main(argv=None) -> int:
     free_psis = [float(p) for p in args.free_psi.split(",") if p.strip()]
     if args.quick:
         hs, elements = [3e-3, 2e-3], [e for e in elements if e <= 4] or [2]
-    kw = {"rule_points": args.rule_points, "root": args.root}
+    kw = {"rule_points": args.rule_points, "root": args.root, "penalty": args.penalty}
     rows: list = []
     meta = {"argv": " ".join(sys.argv[1:]), "h": hs, "rule_points": args.rule_points}
     runs_done = {}

@@ -26,7 +26,7 @@ class ContactBodies:
     def __init__(self, msh, ct, ft, materials: dict, dirichlet, tractions: dict, interfaces=(),
                  law: str | None = "sliding", quad_degree: int = 2, rule_points: int = 3,
                  ks: float | None = None, kappa: float = 1.0, geometric: bool = True,
-                 candidates: int = 24):
+                 candidates: int = 24, penalty: float = 0.0):
         import ufl
         from petsc4py import PETSc
         from dolfinx import fem
@@ -99,7 +99,8 @@ class ContactBodies:
         self.h = hmin
         self.ks = ks if ks is not None else self.mu_ref * hmin     # multiplier unit [N/m]
         self.kappa = kappa                                        # unilateral: ε = κ μ / h
-        self.eps_pen = kappa * self.mu_ref / hmin
+        self.penalty = penalty      # > 0: either law by a pure penalty ε = penalty μ / h, no multipliers
+        self.eps_pen = (penalty or kappa) * self.mu_ref / hmin
         self.ak_all = np.concatenate([i.ak for i in self.ifaces]) if self.ifaces else np.zeros(0)
         self.lam = np.zeros(self.nc)                              # Uzawa multipliers [Pa]
         self.restrict = None

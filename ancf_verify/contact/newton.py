@@ -19,22 +19,23 @@ class ContactNewton(ContactBodies):
         Returns (R_u, matrix, c, E): R_u = ∇E (forces of p_k = max(0, λ_k − ε ḡ_k)), and the
         Newton matrix in the regularised saddle-point form [[K + K_geo, −k_s G_Aᵀ],
         [−k_s G_A, −k_s²/(a ε)]] (A: p_k > 0), whose Schur complement is the penalty Hessian
-        K + K_geo + ε G_Aᵀ diag(a) G_A without forming G_Aᵀ G_A."""
+        K + K_geo + ε G_Aᵀ diag(a) G_A without forming G_Aᵀ G_A.  A pure penalty of the sliding
+        law (``penalty`` > 0) is the same with p_k = λ_k − ε ḡ_k (tension too), every k in A."""
         r, Kc = self._internal(uvec, matrix)
         if not np.all(np.isfinite(r)):
             return None, None, None, None
         ak, eps, lam = self.ak_all, self.eps_pen, self.lam
-        holder = {}
+        holder, bilateral = {}, bool(self.penalty) and self.law == "sliding"
 
         def zfun(gb):
-            p = np.where(self.alive, np.maximum(0.0, lam - eps * gb), 0.0)
+            p = np.where(self.alive, lam - eps * gb if bilateral else np.maximum(0.0, lam - eps * gb), 0.0)
             holder["p"] = p
             return ak * p / self.ks
         c = self.contact(uvec, zfun, matrix)
         p = holder["p"]
         # generalised Hessian: at the kink λ − ε ḡ = 0 (the touching reference state) the
         # constraint counts as closed, so that a first step does not run into the penalty
-        active = self.alive & (lam - eps * c["gbar"] >= -1e-12 * eps * self.h)
+        active = self.alive & (bilateral | (lam - eps * c["gbar"] >= -1e-12 * eps * self.h))
         c["active"], c["p"] = active, p
         R = r + c["r"]
         E = self._energy(uvec) + float(np.sum(ak / (2 * eps) * (p ** 2 - np.where(self.alive, lam, 0.0) ** 2)))

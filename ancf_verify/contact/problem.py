@@ -94,7 +94,14 @@ class Problem(ContactNewton):
         return ch > 0
 
     def _increment(self, u0, z0):
-        """One load increment from (u0, z0): (ok, its, u, z)."""
+        """One load increment from (u0, z0): (ok, its, u, z).  With ``penalty``: one solve of the
+        penalty problem (λ = 0, no Uzawa update, no polish); its pressures are kept in ``lam``."""
+        if self.penalty:
+            self.lam = np.zeros(self.nc)
+            ok, n, u1, c = self.newton_alm(u0)
+            if ok:
+                self.lam = c["p"].copy()
+            return ok, n, u1, self.ak_all * self.lam / self.ks
         if self.law == "unilateral":
             ok, n, u1 = self.solve_alm(u0)
             return ok, n, u1, self.ak_all * self.lam / self.ks
@@ -196,7 +203,7 @@ class Problem(ContactNewton):
         w = np.concatenate([i.w for i in self.ifaces])[on]
         ak = np.concatenate([i.ak for i in self.ifaces])
         p = self.ks * self.zvec / ak
-        act = (self.lam > 0) if self.law == "unilateral" else self.active
+        act = (self.lam > 0) if self.law == "unilateral" or self.penalty else self.active
         return {"g_max": float(np.abs(g).max()), "g_rms": float(np.sqrt(np.sum(w * g ** 2) / w.sum())),
                 "gbar_max_active": float(np.abs(c["gbar"][act]).max()) if act.any() else 0.0,
                 "gbar_min": float(c["gbar"][self.alive].min()),

@@ -17,6 +17,14 @@ CSV_FIELDS = ["psi_deg", "law", "model", "resolution", "h_m", "elements", "dofs"
               "wall_s", "newton_its", "gap_max_m", "multipliers", "kink_floor", "note"]
 
 SOLID, ANCF, REF = "solid P2 tet", "ANCF 2pt", "solid reference (Richardson)"
+#: the same solid with a pure penalty instead of exact multipliers (--penalty; a sensitivity study,
+#: no reference is made of it); its resolution names ε
+PENALTY = "solid P2 tet, penalty"
+
+
+def resolution(run: dict) -> str:
+    """A solid run's label: its mesh size, and ε of a pure penalty."""
+    return f"h {run['h'] * 1e3:.2f} mm" + (f", penalty eps = {run['penalty']:g} mu/h" if run.get("penalty") else "")
 
 
 def solid_rows(run: dict) -> list:
@@ -27,8 +35,8 @@ def solid_rows(run: dict) -> list:
         if "p_min" in lv:
             note = (f"p [{lv['p_min'] / 1e6:+.3f}, {lv['p_max'] / 1e6:+.3f}] MPa; active {lv['active']}/{lv['nc']}; "
                     f"slave points past the master's edge {lv['off']}/{lv['nq']}" + ("; " + note if note else ""))
-        rows.append({"psi_deg": run["psi"], "law": run["law"], "model": SOLID,
-                     "resolution": f"h {run['h'] * 1e3:.2f} mm", "h_m": run["h"], "elements": "",
+        rows.append({"psi_deg": run["psi"], "law": run["law"], "model": PENALTY if run.get("penalty") else SOLID,
+                     "resolution": resolution(run), "h_m": run["h"], "elements": "",
                      "dofs": run["dofs"], "load_N": lv["load"],
                      "soleus_ux_m": u["soleus"][0], "medial_ux_m": u.get("medial", [np.nan])[0],
                      "lateral_ux_m": u.get("lateral", [np.nan])[0], "soleus_face_ux_m": lv["face"][0],
@@ -36,8 +44,8 @@ def solid_rows(run: dict) -> list:
                      "gap_max_m": lv.get("g_max", ""), "multipliers": run["nc"],
                      "kink_floor": run["stats"].get("stalls", 0), "note": note})
     if not run["levels"] or not run["ok"]:
-        rows.append({"psi_deg": run["psi"], "law": run["law"], "model": SOLID,
-                     "resolution": f"h {run['h'] * 1e3:.2f} mm", "h_m": run["h"], "dofs": run["dofs"],
+        rows.append({"psi_deg": run["psi"], "law": run["law"], "model": PENALTY if run.get("penalty") else SOLID,
+                     "resolution": resolution(run), "h_m": run["h"], "dofs": run["dofs"],
                      "load_N": "", "note": f"FAILED: {run['msg']}"})
     return rows
 

@@ -72,5 +72,5 @@ def run_solid(secs, psi: float, law: str | None, h: float, loads=LOADS, bodies=(
     except ContactError as exc:
         ok, msg = False, str(exc)
     return {"psi": psi, "law": law or "free", "h": h, "dofs": P.ndof, "nc": P.nc, "levels": levels,
-            "ok": ok, "msg": msg, "t_mesh": t_mesh, "wall": time.perf_counter() - t_solve0,
+            "ok": ok, "msg": msg, "t_mesh": t_mesh, "wall": time.perf_counter() - t_solve0, "penalty": P.penalty,
             "stats": dict(P.stats), "ks": P.ks, "h_mean": P.h, "t_total": time.perf_counter() - t0}

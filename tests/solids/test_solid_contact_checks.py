@@ -44,3 +44,19 @@ def test_the_friction_tangent_is_the_residuals_derivative(secs):
         assert rec["stick"] > 0 and rec["slide"] > 0, rec
         assert min(rec[eps]["full"] for eps in (1e-5, 1e-6, 1e-7, 1e-8)) < 1e-6, rec
         assert min(rec[eps]["friction"] for eps in (1e-5, 1e-6, 1e-7, 1e-8)) < 1e-5, rec
+
+
+def test_a_pure_penalty_tends_to_the_multipliers(secs):
+    """``penalty`` (the sensitivity study of docs/solid_contact.md, "The unilateral 10 N question on
+    plane roots"): the sliding law by a pure penalty ε = κ μ/h is softer than with exact
+    multipliers, by less the stiffer the penalty; rows of model PENALTY name ε."""
+    from ancf_verify.contact.rows import PENALTY, SOLID, solid_rows
+    from ancf_verify.contact.solid import run_solid
+    kw = dict(loads=[10.0], max_increment=10.0, log=None, root="plane")
+    exact = run_solid(secs, 45.0, "sliding", 4e-3, **kw)
+    soft, stiff = (run_solid(secs, 45.0, "sliding", 4e-3, penalty=k, **kw) for k in (0.1, 10.0))
+    u = [r["levels"][0]["u"]["soleus"][0] for r in (exact, soft, stiff)]
+    assert exact["ok"] and soft["ok"] and stiff["ok"]
+    assert u[1] > u[2] > u[0] and (u[2] - u[0]) < 0.5 * (u[1] - u[0]), u
+    assert solid_rows(exact)[0]["model"] == SOLID and solid_rows(soft)[0]["model"] == PENALTY
+    assert solid_rows(soft)[0]["resolution"] == "h 4.00 mm, penalty eps = 0.1 mu/h"

@@ -28,6 +28,9 @@ class LevelTally:
     stability: int = 0      # retries because a step landed on a less stable state
     unsettled: bool = False  # a sub-step accepted with its contact weights unsettled
     tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
+    #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
+    #: that converged to a less stable state (a stability retry)
+    unstable_at: tuple[float, int, int] | None = None
 
 
 class LoadControl:

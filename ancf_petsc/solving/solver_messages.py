@@ -35,6 +35,19 @@ SADDLE_POINT_HINT = ("a contact model's Jacobian is a saddle-point matrix (a zer
                      "jacobi and the factorisations of PETSc and SuperLU_DIST fail on it")
 
 
+def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:
+    """The cause of a failure after a stability retry in the same level: a sub-step on the way
+    converged to a state whose tangent had more negative eigenvalues than the last accepted one,
+    so the path nears a limit or bifurcation point that load control cannot pass."""
+    if unstable_at is None:
+        return ""
+    lam, neg, before = unstable_at
+    return (f"; on the way, a converged state at load factor {lam:.6g} had {neg} negative tangent "
+            f"eigenvalue(s) against {before} at the last accepted one: the path nears a limit or "
+            f"bifurcation point, which load control cannot pass (smaller increments, -snes_max_it "
+            f"or another predictor may find another branch)")
+
+
 def failure_detail(solver, reason: int) -> str:
     """What to try after a failed level: the linear solver's reason and what works, a
     preconditioner that solves nothing, or a Newton budget too small for an active set."""

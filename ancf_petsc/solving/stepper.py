@@ -230,9 +230,12 @@ class LoadStepper:
                    f"tolerance {self.solver.snes.getTolerances()[1]:.1e})")
         if reason == UNSTABLE_STEP:
             why = f" ({neg} negative tangent eigenvalue(s), the last state had {path.accepted_negative})"
+            if tally.unstable_at is None:
+                tally.unstable_at = (path.lam + step, neg, path.accepted_negative)
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}{why}; "
                  f"retry with increment {path.dlam:.4g}")
         if give_up:
             P.load_factor = path.lam
             raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                  solver_messages.failure_detail(self.solver, reason))
+                                  solver_messages.failure_detail(self.solver, reason)
+                                  + solver_messages.stability_detail(tally.unstable_at))

@@ -129,3 +129,15 @@ def test_a_step_onto_a_saddle_is_cut_back(tmp_path):
     assert s["status"] == "completed"
     assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 0]
     assert s["steps"][1]["cutbacks"] > 0
+
+
+def test_a_failure_after_a_stability_retry_names_the_instability(tmp_path):
+    """When a level gives up after one of its sub-steps converged on a less stable state, the
+    failure says so (the load factor and the eigenvalue counts: a limit or bifurcation point
+    that load control cannot pass), not only the last SNES reason."""
+    raw = coarse_achilles()
+    raw.setdefault("solver", {})["min_increment"] = 25.0      # the 40 N step may not be halved
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode != 0
+    assert "negative tangent eigenvalue(s) against 0 at the last accepted one" in p.stderr, p.stderr
+    assert "limit or bifurcation point" in read_summary(tmp_path / "run")["message"]

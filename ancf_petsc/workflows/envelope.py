@@ -274,7 +274,9 @@ def _cell_text(r: dict | None, key: str) -> str:
         return "**traceback**"
     stride = str(r.get("stride", "")).lower() in ("true", "1")
     if r["status"] != "completed":
-        where = f"at frame {float(r['last_level']):g}" if stride else f"after {float(r['last_level']):g} N"
+        last = float(r["last_level"] or 0.0)
+        where = (f"at frame {last:g}" if stride else f"after {last:g} N" if last > 0
+                 else "in the first level")
         return f"**{r['status']}** {where}"
     if stride:                     # the frames with a cut-back
         cb = int(float(r.get("cutback_levels") or 0))

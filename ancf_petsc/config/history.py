@@ -68,7 +68,7 @@ def parse_history(value, base_dir: str) -> HistorySpec:
                              "(columns written inline), one of the two")
     if "file" in value:
         name = string(value["file"], f"{p}.file")
-        path = name if os.path.isabs(name) else os.path.join(base_dir, name)
+        path = name if os.path.isabs(name) else os.path.normpath(os.path.join(base_dir, name))
         table: LoadTable = read_load_table(path, f"{p}.file")
         source = os.path.basename(path)
     else:

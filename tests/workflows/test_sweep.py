@@ -399,6 +399,6 @@ def test_the_shipped_gait_envelope_sweep_expands_to_39_strides():
         assert spec.history is not None
         twists.add(raw["geometry"]["twist_deg"])
         files.add(os.path.basename(raw["history"]["file"]))
-        assert os.path.isfile(os.path.join(run.dir, raw["history"]["file"])) or os.path.isfile(raw["history"]["file"])
+        assert os.path.isfile(os.path.normpath(os.path.join(run.dir, raw["history"]["file"])))
     assert twists == set(range(0, 181, 15))
     assert files == {f"stride_walking_{b}.csv" for b in ("gastrocnemius", "uniform", "soleus")}

@@ -158,28 +158,35 @@ class CellResult:
                 "message": self.message}
 
 
-def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float = 900.0) -> CellResult:
-    """Solve ``cell`` with the command ``solver`` (an ancf-solve) in ``workdir``/<name>: its
-    outcome from summary.json, and from the exit code and stderr where there is none (a crash)."""
-    out = os.path.join(workdir, cell.name)
+def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None = None):
+    """Write ``cfg`` to ``out``/config.yaml and run the command ``solver`` (an ancf-solve) on it
+    with its output in ``out``/run: (the finished process, or None after ``timeout`` seconds;
+    the wall time; summary.json's content, or None when it wrote none)."""
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, "config.yaml")
     with open(path, "w") as fh:
-        yaml.safe_dump(cell_config(cell), fh, sort_keys=False)
+        yaml.safe_dump(cfg, fh, sort_keys=False)
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(solver + [path, "--output-dir", os.path.join(out, "run"), "--quiet"],
                               capture_output=True, text=True, timeout=timeout,
                               env=dict(os.environ, OMPI_MCA_rmaps_base_oversubscribe="1"))
     except subprocess.TimeoutExpired:
-        return CellResult(cell, "timeout", wall_time=time.perf_counter() - t0,
-                          message=f"no answer in {timeout:g} s")
+        return None, time.perf_counter() - t0, None
     wall = time.perf_counter() - t0
     summary = os.path.join(out, "run", "summary.json")
-    data = None
-    if os.path.isfile(summary):
-        with open(summary) as fh:
-            data = json.load(fh)
+    if not os.path.isfile(summary):
+        return proc, wall, None
+    with open(summary) as fh:
+        return proc, wall, json.load(fh)
+
+
+def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float = 900.0) -> CellResult:
+    """Solve ``cell`` with the command ``solver`` (an ancf-solve) in ``workdir``/<name>: its
+    outcome from summary.json, and from the exit code and stderr where there is none (a crash)."""
+    proc, wall, data = solve_config(solver, cell_config(cell), os.path.join(workdir, cell.name), timeout)
+    if proc is None:
+        return CellResult(cell, "timeout", wall_time=wall, message=f"no answer in {timeout:g} s")
     if data is None or proc.returncode == 1:
         tail = (proc.stderr.strip().splitlines() or ["(no output)"])[-1]
         return CellResult(cell, "crashed", wall_time=wall, message=f"exit {proc.returncode}: {tail[:200]}")
@@ -341,7 +348,6 @@ def render_docs(text: str, csv_dir: str) -> str:
         if filters:
             after = [r for r in after if _matches(r, filters)]
             before = None if before is None else [r for r in before if _matches(r, filters)]
-        law_rows = [r for r in after if r["law"] == law] if law != "own" else after
-        return m.group(1) + markdown_table(law_rows, before, None if law == "own" else law, key) + "\n" + m.group(6)
+        return m.group(1) + markdown_table(after, before, None if law == "own" else law, key) + "\n" + m.group(6)
 
     return pattern.sub(block, text)

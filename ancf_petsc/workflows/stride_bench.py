@@ -11,14 +11,11 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import time
 from dataclasses import dataclass
 
 import numpy as np
-import yaml
 
-from .envelope import STRIDE_COLUMNS, BEAMS, EnvelopeCell, cell_config
+from .envelope import STRIDE_COLUMNS, BEAMS, EnvelopeCell, cell_config, solve_config
 from .stride import synthetic_stride
 
 
@@ -29,28 +26,11 @@ class StrideCase:
     cell: EnvelopeCell
 
 
-def _solve(cmd: list[str], cfg: dict, where: str) -> tuple[float, dict | None]:
-    """Write ``cfg`` and run it; (wall time, summary or None)."""
-    os.makedirs(where, exist_ok=True)
-    path = os.path.join(where, "config.yaml")
-    with open(path, "w") as fh:
-        yaml.safe_dump(cfg, fh, sort_keys=False)
-    t0 = time.perf_counter()
-    subprocess.run(cmd + [path, "--output-dir", os.path.join(where, "run"), "--quiet"],
-                   capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    summary = os.path.join(where, "run", "summary.json")
-    if not os.path.isfile(summary):
-        return wall, None
-    with open(summary) as fh:
-        return wall, json.load(fh)
-
-
 def after(case: StrideCase, cmd: list[str], work: str) -> dict:
     """The stride as one history: frames, status, Newton iterations, frames/s (solve, wall)."""
     cfg = cell_config(case.cell)
     cfg["output"] = {"vtk": False}
-    wall, s = _solve(cmd, cfg, os.path.join(work, case.label, "after"))
+    _, wall, s = solve_config(cmd, cfg, os.path.join(work, case.label, "after"))
     if s is None:
         return {"status": "crashed", "frames": 0}
     frames = len(s["steps"])
@@ -72,7 +52,7 @@ def before(case: StrideCase, cmd: list[str], work: str, sample: int) -> dict:
         cfg = json.loads(json.dumps(base))
         for ld, col in zip(cfg["loads"], STRIDE_COLUMNS[:len(BEAMS)]):
             ld["traction_force"] = [float(forces[col][k]), 0.0, 0.0]
-        wall, s = _solve(cmd, cfg, os.path.join(work, case.label, f"before_{k:03d}"))
+        _, wall, s = solve_config(cmd, cfg, os.path.join(work, case.label, f"before_{k:03d}"))
         total += wall
         if s is not None and s["status"] == "completed":
             done += 1

@@ -12,14 +12,19 @@ from contact.test_contact import achilles, perturbed_state
 from helpers import assert_contact_jacobian, build_problem, contact_evaluation, press_where_penetrating
 
 
+def band_samples(seed: int, t_range: tuple[float, float], n: int = 4000, T: float = 2.0):
+    """Random partner places (ξ, t) over and around the fade bands of a curve of length ``T``,
+    on first or last elements at random: (ξ, t, T per point, first, last)."""
+    rng = np.random.default_rng(seed)
+    xi, t = rng.uniform(-1.6, 1.6, n), rng.uniform(*t_range, n)
+    first, last = rng.random(n) < 0.5, rng.random(n) < 0.5
+    return xi, t, np.full(n, T), first, last
+
+
 def test_weight_slope_is_the_derivative_of_the_end_weight():
     """∂w/∂ζ against central differences of ``end_weight`` on both fade bands (curve and beam
     ends) and off them."""
-    rng = np.random.default_rng(0)
-    n, T = 4000, 2.0
-    xi, t = rng.uniform(-1.6, 1.6, n), rng.uniform(-0.7, 2.7, n)
-    first, last = rng.random(n) < 0.5, rng.random(n) < 0.5
-    Tn = np.full(n, T)
+    xi, t, Tn, first, last = band_samples(0, (-0.7, 2.7))
     slope = end_weight_slope(xi, t, Tn, first, last)
     h = 1e-7
     d_xi = (end_weight(xi + h, t, Tn, first, last) - end_weight(xi - h, t, Tn, first, last)) / (2 * h)
@@ -34,11 +39,7 @@ def test_weight_curvature_is_the_second_derivative_and_vanishes_at_the_band_edge
     both edges of a band (u = 0, 1) its slope and curvature are zero, so a partner place held
     at the end of a band has neither."""
     from ancf_petsc.contact.fade import fade, fade_curvature, fade_slope
-    rng = np.random.default_rng(1)
-    n, T = 4000, 2.0
-    xi, t = rng.uniform(-1.6, 1.6, n), rng.uniform(-1.2, 3.2, n)
-    first, last = rng.random(n) < 0.5, rng.random(n) < 0.5
-    Tn = np.full(n, T)
+    xi, t, Tn, first, last = band_samples(1, (-1.2, 3.2))
     curv = end_weight_curvature(xi, t, Tn, first, last)
     h = 1e-6
     for k, (dxi, dt) in enumerate(((h, 0.0), (0.0, h))):

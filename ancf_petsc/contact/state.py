@@ -24,3 +24,4 @@ class ContactState:
     rows: Rows             # the law's constraint rows (laws.Rows)
     xl: np.ndarray         # the local state (n, 6, 3) it was evaluated at
     terms: dict = field(default_factory=dict)   # each contact term's evaluation (Contact.terms)
+    fade: object = None    # the fade weights' derivatives here (weights.FadeDerivatives), once asked

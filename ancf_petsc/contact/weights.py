@@ -44,46 +44,54 @@ from .projection import subset, surface_third
 WEIGHT_TOL = 1e-6
 
 
-def weight_gradient(projector, pr) -> np.ndarray:
-    """∇w_p (P, 108, over A's then B's element slots as gap.gap_gradient) of the points of the
-    projection ``pr``: (∂w/∂ζ) ∂ζ/∂q, nonzero only in the fade bands."""
-    itf = projector.points.itf[pr.idx]
-    first = np.array([i.b.element_offset for i in projector.interfaces], dtype=np.int64)[itf]
-    last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
-    slope = end_weight_slope(pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
-    out = np.zeros((len(pr.idx), 108))
-    band = np.flatnonzero(np.any(slope != 0.0, axis=1))
-    if len(band):
-        dz = closest_point_gradient(subset(pr, band))                   # (B, 2, 108)
-        out[band] = np.einsum("pa,paj->pj", slope[band], dz)
-    return out
+class FadeDerivatives:
+    """The fade weights' derivatives at one evaluation of the points of ``pr``: ∇w_p (P, 108, over
+    A's then B's element slots as gap.gap_gradient) of every point and the positions of the points
+    in a fade band (``band``), at once; their ∇²w_p (B, 108, 108) = ζ′ᵀ (∂²w/∂ζ²) ζ′ +
+    ∇²(∂w/∂ζ · ζ) (gap.closest_point_hessian, exact) on first use (``hessians``: the Jacobian's, a
+    residual alone never needs them).  One evaluation serves the residual's forces and every
+    segment group of the Jacobian (``of``), instead of one evaluation each."""
 
+    def __init__(self, projector, pr):
+        itf = projector.points.itf[pr.idx]
+        first = np.array([i.b.element_offset for i in projector.interfaces], dtype=np.int64)[itf]
+        last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
+        self._projector, self._pr, self._itf = projector, pr, itf
+        self._args = (pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
+        self._slope = end_weight_slope(*self._args)
+        # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
+        # weight's derivatives there would be large and meaningless, so it counts as kept
+        self.band = np.flatnonzero(np.any(self._slope != 0.0, axis=1)
+                                   & (projection_conditioning(pr) > WELL_POSED))
+        self.grad = np.zeros((len(pr.idx), 108))
+        self._sub = self._dz = self._hess = None
+        if len(self.band):
+            self._sub = subset(pr, self.band)
+            self._dz = closest_point_gradient(self._sub)
+            self.grad[self.band] = np.einsum("pa,paj->pj", self._slope[self.band], self._dz)
 
-def weight_derivatives(projector, pr, x_of=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """∇w_p (P, 108) of every point of ``pr``, the positions of the points in a fade band
-    (``band``) and, with B's nodal vectors (``x_of(elements)``), their ∇²w_p (B, 108, 108)
-    = ζ′ᵀ (∂²w/∂ζ²) ζ′ + ∇²(∂w/∂ζ · ζ) (gap.closest_point_hessian): exact."""
-    itf = projector.points.itf[pr.idx]
-    first = np.array([i.b.element_offset for i in projector.interfaces], dtype=np.int64)[itf]
-    last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
-    args = (pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
-    slope = end_weight_slope(*args)
-    # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
-    # weight's derivatives there would be large and meaningless, so it counts as kept
-    band = np.flatnonzero(np.any(slope != 0.0, axis=1) & (projection_conditioning(pr) > WELL_POSED))
-    grad = np.zeros((len(pr.idx), 108))
-    if not len(band):
-        return grad, band, None if x_of is None else np.zeros((0, 108, 108))
-    sub = subset(pr, band)
-    dz = closest_point_gradient(sub)
-    grad[band] = np.einsum("pa,paj->pj", slope[band], dz)
-    if x_of is None:
-        return grad, band, None
-    curv = end_weight_curvature(*(a[band] for a in args))
-    NBzz, Yzzz = surface_third(projector, x_of, itf[band], pr.eB[band], pr.xiB[band], pr.tB[band])
-    hess = (np.einsum("paj,pab,pbk->pjk", dz, curv, dz)
-            + closest_point_hessian(sub, slope[band], NBzz, Yzzz))
-    return grad, band, hess
+    def hessians(self, x_of) -> np.ndarray:
+        """∇²w_p (B, 108, 108) of the band's points; ``x_of(elements)``: B's nodal vectors."""
+        if self._hess is None:
+            band, pr = self.band, self._pr
+            if not len(band):
+                self._hess = np.zeros((0, 108, 108))
+            else:
+                curv = end_weight_curvature(*(a[band] for a in self._args))
+                NBzz, Yzzz = surface_third(self._projector, x_of, self._itf[band], pr.eB[band],
+                                           pr.xiB[band], pr.tB[band])
+                self._hess = (np.einsum("paj,pab,pbk->pjk", self._dz, curv, self._dz)
+                              + closest_point_hessian(self._sub, self._slope[band], NBzz, Yzzz))
+        return self._hess
+
+    def of(self, sel: np.ndarray, x_of=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """∇w of the points ``sel`` (positions in ``pr``), the positions among them of those in a
+        band and, with ``x_of``, their ∇²w."""
+        inside = np.zeros(len(self.grad), dtype=bool)
+        inside[self.band] = True
+        band = np.flatnonzero(inside[sel])
+        hess = None if x_of is None else self.hessians(x_of)[np.searchsorted(self.band, sel[band])]
+        return self.grad[sel], band, hess
 
 
 #: det H / det a below which a point's weight is not differentiated (``weight_derivatives``)

@@ -118,10 +118,10 @@ class VtkSeries:
         self.compress = compress                 # None: by size (AUTO_COMPRESS_POINTS)
         self.entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
 
-    def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
-        """One VTU of a time series and its .pvd collection (binary, in single precision: for
-        display, results.h5 keeps double; half the size and the write time), zlib-compressed if
-        asked or, by default, from ``AUTO_COMPRESS_POINTS`` points on.
+    def write(self, series: str, k: int, lam: float, pts, cells, data, index: bool = True) -> int:
+        """One VTU of a time series and, with ``index``, its .pvd collection (binary, in single
+        precision: for display, results.h5 keeps double; half the size and the write time),
+        zlib-compressed if asked or, by default, from ``AUTO_COMPRESS_POINTS`` points on.
         A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
@@ -131,16 +131,25 @@ class VtkSeries:
         try:
             write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress))
             size = os.path.getsize(path)
-            rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>'
-                             for t, f in self.entries[series] + [(lam, name)])
-            atomic_write(os.path.join(self.dir, f"{series}.pvd"),
-                         '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                         f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+            if index:
+                self._write_index(series, self.entries[series] + [(lam, name)])
         except OSError:
             remove_quietly(path)                   # never leave a truncated VTU behind
             raise
         self.entries[series].append((lam, name))
         return size
+
+    def write_indexes(self) -> None:
+        """Every series' .pvd collection with all its files so far (the OSError if one fails)."""
+        for series, entries in self.entries.items():
+            if entries:
+                self._write_index(series, entries)
+
+    def _write_index(self, series: str, entries: list) -> None:
+        rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>' for t, f in entries)
+        atomic_write(os.path.join(self.dir, f"{series}.pvd"),
+                     '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                     f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
 
     def resume(self, loads: list[float]) -> None:
         """Continue the series of a restarted run whose levels 0 … n have load factors ``loads``:

@@ -35,8 +35,9 @@ class JacobianPattern:
         lo, hi = (0, n) if rows is None else rows
         conn = self.layout.perm[self.model.connectivity()]
         conn = conn[np.any((conn >= lo) & (conn < hi), axis=1)]
-        r = np.repeat(conn, 3, axis=1).ravel()
-        c = np.tile(conn, (1, 3)).ravel()
+        k = conn.shape[1]                     # axial nodes of an element
+        r = np.repeat(conn, k, axis=1).ravel()
+        c = np.tile(conn, (1, k)).ravel()
         if self.contact is not None:
             cr, cc = np.divmod(self.contact_pairs, n)
             r, c = np.concatenate([r, cr]), np.concatenate([c, cc])

@@ -279,3 +279,19 @@ def test_beams_of_one_model_share_their_node_block(registered):
     raw["beams"][1]["element"] = "no-such-element"
     with pytest.raises(ConfigError, match="no-such-element"):
         parse_config(raw, base_dir=CONFIGS)
+
+
+def test_the_restart_fingerprint_names_the_element_and_reads_older_files():
+    """The element is a string in the fingerprint (any registered name); a results.h5 written
+    before stores [element number, axial points, locking] and is still the same model."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.io.restart import fingerprint, model_difference
+    from ancf_petsc.model.build import build_model
+    raw = load_raw("uniaxial_neohookean.yaml")
+    now = fingerprint(build_model(parse_config(raw, base_dir=CONFIGS)))
+    old = {k: v for k, v in now.items() if k not in ("beams/bar/element", "beams/bar/axial_points_locking")}
+    old["beams/bar/element_axial_points_locking"] = np.array([3363.0, 2.0, 0.0])
+    assert model_difference(old, now) is None
+    raw["beams"][0]["element"] = "3333"
+    other = fingerprint(build_model(parse_config(raw, base_dir=CONFIGS)))
+    assert model_difference(old, other) == "beams/bar/element (3363 → 3333)"

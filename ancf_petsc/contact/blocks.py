@@ -23,7 +23,7 @@ CHUNK_POINTS = 2048
 
 def state_nodes(c, st: ContactState):
     """``x_of(elements)``: the nodal vectors (E, 18, 3) of elements at the evaluated state."""
-    return lambda els: st.xl[st.lpos(c.conn[els])].reshape(len(els), -1, 3)
+    return lambda els: st.xl[st.lpos(c.conn[els])].reshape(len(els), c.model.block.slots, 3)
 
 
 def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:

@@ -172,7 +172,7 @@ class Contact:
             return np.searchsorted(needed, nodes)
 
         def x_of(els):
-            return xl[lpos(self.conn[els])].reshape(len(els), -1, 3)
+            return xl[lpos(self.conn[els])].reshape(len(els), self.model.block.slots, 3)
 
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))

@@ -95,7 +95,7 @@ class PartnerTerm:
         conn = model.connectivity()
 
         def q0_of(els):
-            return model.q0[conn[els]].reshape(len(els), -1, 3)
+            return model.q0[conn[els]].reshape(len(els), self.slots, 3)
         _, _, _, self.NB0, self.NB0z = projector.surface(q0_of, points.itf, self.eB0, projector.xiB, projector.tB)
         #: B's outward normal is T_t × T_ξ, flipped where B runs its curve backwards
         self.flip = projector.flip

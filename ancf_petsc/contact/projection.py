@@ -155,7 +155,7 @@ class Projector:
         qB = x_of(eB)                                           # (P, 18, 3)
         Y = np.matmul(NB[:, None, :], qB)[:, 0]
         Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
-        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, -1, 4)).reshape(P, 3, 2, 2)
+        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, self.block.slots, 4)).reshape(P, 3, 2, 2)
         return Y, Yz, Yzz, NB, NBz
 
     def wrap(self, itf, eB, xiB, tB):

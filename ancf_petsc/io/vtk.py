@@ -67,7 +67,7 @@ class SurfaceSampler:
         offset = 0
         for beam, m, S, N, G, e_of, r0, law in self.parts:
             conn = beam.connectivity
-            qe = q[conn].reshape(len(conn), -1, 3)[e_of]
+            qe = q[conn].reshape(len(conn), self.model.block.slots, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
             F = np.matmul(np.swapaxes(qe, 1, 2), G)
             states.append(SampledState(r, r0, F, beam.index, law))

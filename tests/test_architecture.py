@@ -333,7 +333,7 @@ def test_the_text_rule_catches_what_it_forbids():
 def _vocabularies() -> dict[str, tuple[set, set]]:
     """vocabulary → (its names, read from the registry; the modules that own them)."""
     from ancf_petsc.contact.laws import LAWS
-    from ancf_petsc.physics.element3363 import ELEMENTS
+    from ancf_petsc.physics.elements import ELEMENTS
     from ancf_petsc.physics.laws import MATERIALS
     from ancf_petsc.contact.tangential import TANGENTIAL_LAWS
     from ancf_petsc.outline_formats import FORMATS
@@ -342,7 +342,7 @@ def _vocabularies() -> dict[str, tuple[set, set]]:
             "geometry importer": (set(FORMATS), OUTLINE_FORMAT_MODULES),
             "tangential law": (tangential, {"contact/tangential.py", "contact/elastic_interface.py",
                                             "contact/friction.py"}),
-            "element": (set(ELEMENTS), {"physics/element3363.py"}),
+            "element": (set(ELEMENTS), ELEMENT_MODULES),
             "material": (set(MATERIALS), {"physics/laws.py", "physics/materials.py", "physics/goh.py"})}
 
 
@@ -364,8 +364,13 @@ def _spelt(tree: ast.AST, names: set) -> list[tuple[int, str]]:
     return out
 
 
+#: the modules of the element registry (one per element, plus the registry and its types)
+ELEMENT_MODULES = {os.path.relpath(p, PACKAGE) for m, p in MODULES.items()
+                   if os.path.relpath(p, PACKAGE).startswith("physics/elements/")}
+
+
 def test_registry_names_are_not_spelt_outside_their_module():
-    """Contact laws (contact/laws.py LAWS), elements (physics/element3363.py ELEMENTS),
+    """Contact laws (contact/laws.py LAWS), elements (physics/elements ELEMENTS),
     materials (physics/laws.py MATERIALS) and geometry importers (outline_formats FORMATS)
     are named in code only by their registry: no
     ``law == "unilateral"`` or ``("3363", "3333")`` elsewhere; behaviour lives in the law,
@@ -479,7 +484,7 @@ def test_config_vocabularies_are_the_registries():
     from ancf_petsc.config.specs import CONTACT_MODES, MATERIAL_MODELS, TANGENTIAL_LAW_NAMES
     from ancf_petsc.contact.tangential import TANGENTIAL_LAWS
     from ancf_petsc.contact.laws import LAWS
-    from ancf_petsc.physics.element3363 import ELEMENT_TYPES, ELEMENTS
+    from ancf_petsc.physics.elements import ELEMENTS, element_names
     from ancf_petsc.physics.laws import MATERIALS
     from ancf_petsc.config.sections import OUTLINE_KEYS
     from ancf_petsc.outline_formats import FORMATS
@@ -487,7 +492,7 @@ def test_config_vocabularies_are_the_registries():
     assert CONTACT_MODES == tuple(LAWS) and MATERIAL_MODELS == tuple(MATERIALS)
     assert TANGENTIAL_LAW_NAMES == tuple(TANGENTIAL_LAWS)
     assert set(TANGENTIAL_PARSERS) == {n for n, cls in TANGENTIAL_LAWS.items() if cls is not None}
-    assert set(MATERIAL_PARSERS) == set(MATERIALS) and ELEMENT_TYPES == tuple(ELEMENTS)
+    assert set(MATERIAL_PARSERS) == set(MATERIALS) and element_names() == tuple(ELEMENTS)
     assert all(e.name == name for name, e in ELEMENTS.items())
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..physics.element3363 import DEFAULT_ELEMENT, ELEMENT_TYPES, ELEMENTS
+from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from ..physics.goh import GOH
 from ..physics.laws import VOLUMETRIC_LAWS
 from ..physics.materials import NeoHookean, StVenantKirchhoff
@@ -28,7 +28,7 @@ def parse_beams(value, base_dir: str) -> list[BeamSpec]:
             material=parse_material(b["material"], f"{p}.material"),
             elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
             axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points")))
-        beams[-1].element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", ELEMENT_TYPES)
+        beams[-1].element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", tuple(ELEMENTS))
         beams[-1].locking = string(b.get("locking", ELEMENTS[beams[-1].element].default_locking),
                                    f"{p}.locking", LOCKING)
         if beams[-1].locking == "mixed" and beams[-1].material["model"] not in VOLUMETRIC_LAWS:

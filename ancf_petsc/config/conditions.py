@@ -1,10 +1,13 @@
 """Supports, loads, load steps and probes of a config, referring to beams by name and nodes."""
 from __future__ import annotations
 
-from ..physics.element3363 import VECTORS
+from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from .history import HistorySpec, history_curve
 from .specs import FIX_PRESETS, BCSpec, LoadSpec, ProbeSpec
 from .values import ConfigError, key_path, mapping, number, sequence, shown, string, vector
+
+
+DEFAULT_BLOCK = ELEMENTS[DEFAULT_ELEMENT].block
 
 
 def node_ref(value, path: str, n_nodes: int) -> int:
@@ -28,12 +31,14 @@ def beam_ref(value, path: str, names: list[str]) -> int:
     return names.index(value)
 
 
-def _fix(value, path: str) -> list[tuple[int, int]]:
+def _fix(value, path: str, block) -> list[tuple[int, int]]:
+    """Fixed (vector, component) pairs of ``block``'s nodal vectors (physics/elements NodeBlock)."""
     if isinstance(value, str):
         if value not in FIX_PRESETS:
             raise ConfigError(path, f"unknown preset {shown(value)}; use {', '.join(FIX_PRESETS)} "
                                     "or a mapping like {r: xyz, r_y: xz}")
-        return list(FIX_PRESETS[value])
+        return list(FIX_PRESETS[value](block))
+    VECTORS = block.names
     mapping(value, path, optional=VECTORS)
     dofs = []
     for name, comps in value.items():
@@ -71,9 +76,10 @@ def check_curves(spec) -> None:
                               f"{item.curve[-1][0]:g}, the steps run {lo:g} .. {hi:g}; extend it")
 
 
-def _displacement(value, path: str) -> list[tuple[int, int, float]]:
+def _displacement(value, path: str, block) -> list[tuple[int, int, float]]:
     """``{r: {x: 0.006}}``: components held at their reference value plus the load factor times
     the given displacement [m for r; the slopes' values are dimensionless]."""
+    VECTORS = block.names
     mapping(value, path, optional=VECTORS)
     out = []
     for name, comps in value.items():
@@ -87,10 +93,12 @@ def _displacement(value, path: str) -> list[tuple[int, int, float]]:
 
 
 def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
-                              history: HistorySpec | None = None) -> list[BCSpec]:
+                              history: HistorySpec | None = None, blocks: list | None = None) -> list[BCSpec]:
     """``boundary_conditions``: fixed nodal vector components (presets clamped / reduced / plane)
     and prescribed displacements (``displacement``, ramped with the load factor, or following a
-    ``column`` of the load ``history``)."""
+    ``column`` of the load ``history``).  ``blocks``: each beam's node block (physics/elements;
+    default 3363's), which names its nodal vectors."""
+    blocks = blocks or [DEFAULT_BLOCK] * len(names)
     bcs = []
     for i, bc in enumerate(sequence(value, "boundary_conditions", nonempty=False)):
         p = f"boundary_conditions[{i}]"
@@ -104,12 +112,12 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
                                  "moved with the load factor), or both")
         bi = beam_ref(bc["beam"], f"{p}.beam", names)
         node = node_ref(bc["node"], f"{p}.node", n_nodes[bi])
-        fixed = _fix(bc["fix"], f"{p}.fix") if "fix" in bc else []
-        moved = _displacement(bc["displacement"], f"{p}.displacement") if "displacement" in bc else []
+        fixed = _fix(bc["fix"], f"{p}.fix", blocks[bi]) if "fix" in bc else []
+        moved = _displacement(bc["displacement"], f"{p}.displacement", blocks[bi]) if "displacement" in bc else []
         both = sorted(set(fixed) & {(v, c) for v, c, _ in moved})
         if both:
             v, c = both[0]
-            raise ConfigError(f"{p}.displacement.{VECTORS[v]}.{'xyz'[c]}", "this component is also in "
+            raise ConfigError(f"{p}.displacement.{blocks[bi].names[v]}.{'xyz'[c]}", "this component is also in "
                               "fix; a component is either held in place or moved, remove it from one")
         name = string(bc.get("name", f"{names[bi]}.{node}"), f"{p}.name")
         if name in [b.name for b in bcs]:
@@ -150,9 +158,11 @@ def parse_steps(value) -> list[float]:
     return steps
 
 
-def parse_probes(value, names: list[str], n_nodes: list[int]) -> list[ProbeSpec]:
+def parse_probes(value, names: list[str], n_nodes: list[int], blocks: list | None = None) -> list[ProbeSpec]:
     """``probes``: named nodal vectors reported at every level, or (``vector: mean``) the
-    displacement averaged over the node's section, ∫ u dA / A."""
+    displacement averaged over the node's section, ∫ u dA / A.  ``blocks`` as in
+    ``parse_boundary_conditions``."""
+    blocks = blocks or [DEFAULT_BLOCK] * len(names)
     probes = []
     for i, pr in enumerate(sequence(value, "probes", nonempty=False)):
         p = f"probes[{i}]"
@@ -162,5 +172,5 @@ def parse_probes(value, names: list[str], n_nodes: list[int]) -> list[ProbeSpec]
         if pname in [x.name for x in probes]:
             raise ConfigError(f"{p}.name", f"duplicate probe name {pname!r}")
         probes.append(ProbeSpec(pname, bi, node_ref(pr["node"], f"{p}.node", n_nodes[bi]),
-                                string(pr.get("vector", "r"), f"{p}.vector", VECTORS + ("mean",))))
+                                string(pr.get("vector", "r"), f"{p}.vector", blocks[bi].names + ("mean",))))
     return probes

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 from ..contact.friction import CoulombFriction
 from ..contact.elastic_interface import ElasticMatrix
-from ..physics.element3363 import DOFS_PER_NODE
 from .conditions import beam_ref
 from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, FADE_RULES, REMOVED_CONTACT_KEYS,
                     SUPPORTED_END_RULES, TANGENTIAL_LAW_NAMES, ContactSpec, TangentialSpec)
@@ -62,8 +61,9 @@ def parse_tangential(value, p: str = "contact.tangential") -> TangentialSpec:
     return t
 
 
-def parse_contact(value, names: list[str]) -> ContactSpec:
-    """The contact law (sliding | unilateral), Gauss points, pressure space and interfaces."""
+def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
+    """The contact law (sliding | unilateral), Gauss points, pressure space and interfaces;
+    ``node_dofs``: the slots of a multiplier node (the beams' node block, physics/elements)."""
     p = "contact"
     if isinstance(value, dict):
         for key in REMOVED_CONTACT_KEYS:
@@ -102,9 +102,9 @@ def parse_contact(value, names: list[str]) -> ContactSpec:
         c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
         c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",
                                   SUPPORTED_END_RULES)
-    if (c.projection[0] + 1) * (c.projection[1] + 1) > DOFS_PER_NODE:
+    if (c.projection[0] + 1) * (c.projection[1] + 1) > node_dofs:
         raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + 1) pressure functions per element "
-                                             "must not exceed 18 (one node block)")
+                                             f"must not exceed {node_dofs} (one node block)")
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []

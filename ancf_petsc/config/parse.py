@@ -14,6 +14,7 @@ from typing import Any
 import yaml
 
 from .. import yamlio
+from ..physics.elements import ELEMENTS
 
 from .beams import check_imported_loops, parse_beams
 from .bundle import expand_bundle
@@ -52,20 +53,22 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         sections = parse_sections(geo["sections"], "geometry.sections", base_dir, length)
     beams = parse_beams(raw["beams"], base_dir)
     names = [b.name for b in beams]
-    n_nodes = [2 * b.elements + 1 for b in beams]
+    blocks = [ELEMENTS[b.element].block for b in beams]     # each beam's nodal vectors and axial nodes
+    n_nodes = [blk.nodes_of(b.elements) for b, blk in zip(beams, blocks)]
     check_imported_loops(beams, sections)
     if twist_rule[0] == "centroid_of":
         beam_ref(twist_rule[1], "geometry.twist_axis.centroid_of", names)
     steps = _steps(raw, history)
-    probes = parse_probes(raw.get("probes", []), names, n_nodes)
+    probes = parse_probes(raw.get("probes", []), names, n_nodes, blocks)
     spec = ModelSpec(
         name=name, length=length, twist_deg=twist, twist_axis=axis, beams=beams,
         boundary_conditions=parse_boundary_conditions(raw.get("boundary_conditions", []), names, n_nodes,
-                                                      history),
+                                                      history, blocks),
         loads=parse_loads(raw.get("loads", []), names, n_nodes, history), steps=steps, probes=probes,
         output=parse_output(raw.get("output", {}), name), solver=parse_solver(raw.get("solver", {})),
         petsc=parse_petsc(raw.get("petsc", {}) or {}),
-        contact=parse_contact(raw["contact"], names) if raw.get("contact") is not None else None,
+        contact=parse_contact(raw["contact"], names, blocks[0].dofs_per_node)
+        if raw.get("contact") is not None else None,
         base_dir=base_dir, raw=raw, partition=parse_partition(raw.get("partition")),
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
         sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo, history=history)

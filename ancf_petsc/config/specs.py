@@ -6,7 +6,7 @@ from typing import Any
 
 from ..contact.laws import LAWS, SlidingLaw
 from ..contact.tangential import TANGENTIAL_LAWS
-from ..physics.element3363 import DEFAULT_ELEMENT
+from ..physics.elements import DEFAULT_ELEMENT
 from ..physics.laws import MATERIALS
 
 LOCKING = ("none", "ecm", "mixed")
@@ -23,17 +23,20 @@ TWIST_RULES = ("centroid", "origin", "junction")
 #: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
 REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
                         "smoothing")
-#: named supports → fixed (vector, component) pairs, vectors in VECTORS order (r, r_y, r_z, r_yy,
-#: r_zz, r_yz), components 0, 1, 2 = x, y, z (README.md, "Fix presets", says what each means)
+#: named supports → the fixed (vector, component) pairs of a node block (physics/elements), vectors
+#: in the block's order (r, r_y, r_z first; 3363: then r_yy, r_zz, r_yz), components 0, 1, 2 = x, y, z
+#: (README.md, "Fix presets", says what each means)
 FIX_PRESETS = {
-    # a built-in end: all 18 components (the solid's u = 0 over the root face)
-    "clamped": [(v, c) for v in range(6) for c in range(3)],
+    # a built-in end: every component (the solid's u = 0 over the root face)
+    "clamped": lambda block: [(v, c) for v in range(block.vectors_per_node) for c in range(3)],
     # the paper's "r fixed, cross-section free to contract": all but r_y·e_y and r_z·e_z, so the
-    # section's in-plane shear (r_y·e_z, r_z·e_y) and its quadratic modes are clamped too
-    "reduced": [(v, c) for v in range(6) for c in range(3) if (v, c) not in ((1, 1), (2, 2))],
+    # section's in-plane shear (r_y·e_z, r_z·e_y) and its higher modes are clamped too
+    "reduced": lambda block: [(v, c) for v in range(block.vectors_per_node) for c in range(3)
+                              if (v, c) not in ((1, 1), (2, 2))],
     # a root face on a frictionless plane x = const (the solid's u_x = 0 over the face, free in
     # its plane): every x-component, r itself, and r_y·e_z (the section's rigid turn about x)
-    "plane": [(0, 0), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (3, 0), (4, 0), (5, 0)],
+    "plane": lambda block: [(0, 0), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0)]
+                           + [(v, 0) for v in range(3, block.vectors_per_node)],
 }
 
 
@@ -67,7 +70,7 @@ class BeamSpec:
     material: dict
     elements: int
     axial_points: int = DEFAULT_AXIAL_POINTS
-    element: str = DEFAULT_ELEMENT        # element type, see element3363.ELEMENTS
+    element: str = DEFAULT_ELEMENT        # element type, see physics.elements.ELEMENTS
     locking: str = "none"                 # 'ecm' (Poisson), 'mixed' (volumetric): remedies, model.Beam.parts
     #: the volumetric term on a section rule of this degree (selective reduced integration, a
     #: locking diagnosis of ancf_verify.fibres; set in code, no config key): model.Beam.volumetric_degree

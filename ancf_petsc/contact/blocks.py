@@ -11,14 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_ELEMENT, DOFS_PER_NODE, SLOTS
 from .gap import gap_gradient, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
 from .weights import FadeDerivatives
 
-EL = DOFS_PER_ELEMENT          # an element's 54 DOFs (3 nodes)
-Z = 2 * DOFS_PER_NODE          # the segment's two multiplier nodes
 
 #: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
 CHUNK_POINTS = 2048
@@ -26,7 +23,7 @@ CHUNK_POINTS = 2048
 
 def state_nodes(c, st: ContactState):
     """``x_of(elements)``: the nodal vectors (E, 18, 3) of elements at the evaluated state."""
-    return lambda els: st.xl[st.lpos(c.conn[els])].reshape(len(els), SLOTS, 3)
+    return lambda els: st.xl[st.lpos(c.conn[els])].reshape(len(els), c.model.block.slots, 3)
 
 
 def fade_derivatives(c, st: ContactState) -> FadeDerivatives:
@@ -41,6 +38,7 @@ def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
     """Add −τ_p N_A n_p on A, τ_p N_B n_p on B and the constraint rows k_s R_k to the local
     residual ``floc`` of the ``Contact`` c at its evaluation st."""
     pr = st.pr
+    DOFS_PER_NODE, EL = c.model.dofs_per_node, c.model.block.dofs_per_element
     traction = st.tau[:, None] * pr.n                                  # τ_p n_p
     for e, N, sign in ((c.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
         f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
@@ -86,12 +84,14 @@ def jacobian_blocks(c, st: ContactState, fixed_mask: np.ndarray) -> list[tuple[n
     return out
 
 
-def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.ndarray) -> None:
-    """K[seg_p] += values_p (108 × 108) over each point's unknowns in its segment's block: A's
-    element (the block's first 54) and its B element j_p (54 from 54 + 18 j_p on), in the points'
-    order, i.e. exactly what ``np.add.at`` on those indices adds, entry by entry in the same order,
-    without its per-entry cost (1 ms for the two fade-band points of the Achilles column's
-    Jacobian).  Pass r adds the r-th point of every segment: no segment twice in a pass."""
+def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.ndarray,
+                     el: int, stride: int) -> None:
+    """K[seg_p] += values_p (2 el × 2 el) over each point's unknowns in its segment's block: A's
+    element (the block's first ``el``) and its B element j_p (``el`` from el + stride j_p on),
+    in the points' order, i.e. exactly what ``np.add.at`` on those indices adds, entry by entry
+    in the same order, without its per-entry cost (1 ms for the two fade-band points of the
+    Achilles column's Jacobian).  Pass r adds the r-th point of every segment: no segment twice
+    in a pass."""
     order = np.argsort(seg, kind="stable")
     grouped = seg[order]
     start = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])
@@ -100,22 +100,26 @@ def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.n
     for r in range(int(rank.max(initial=-1)) + 1):
         for jj in np.unique(j[rank == r]):
             p = np.flatnonzero((rank == r) & (j == jj))
-            s, v, b = seg[p], values[p], EL + 2 * DOFS_PER_NODE * int(jj)
-            K[s, :EL, :EL] += v[:, :EL, :EL]
-            K[s, :EL, b:b + EL] += v[:, :EL, EL:]
-            K[s, b:b + EL, :EL] += v[:, EL:, :EL]
-            K[s, b:b + EL, b:b + EL] += v[:, EL:, EL:]
+            s, v, b = seg[p], values[p], el + stride * int(jj)
+            K[s, :el, :el] += v[:, :el, :el]
+            K[s, :el, b:b + el] += v[:, :el, el:]
+            K[s, b:b + el, :el] += v[:, el:, :el]
+            K[s, b:b + el, b:b + el] += v[:, el:, el:]
 
 
 def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
     """Blocks of the local segments ``sk``, each spanning ``width`` B elements.  The block's
     unknowns: A's 3 nodes, B's 2 width + 1 nodes and the (at most two) multiplier nodes of
-    the functions living on the segment: D = 18 (2 width + 6)."""
+    the functions living on the segment: D = 18 (2 width + 6) (three-node elements of 18-DOF
+    nodes, 3363; k axial nodes of Dn DOFs: Dn ((k − 1) width + k + 3))."""
     pr, pts, sp = st.pr, c.points, c.space
+    DOFS_PER_NODE, EL = c.model.dofs_per_node, c.model.block.dofs_per_element
+    k = c.model.block.axial_nodes - 1                   # an element's last node
+    Z = 2 * DOFS_PER_NODE                               # the segment's two multiplier nodes
     segs = c.segments[sk]
     n_s = len(sk)
     P_s = int(pts.seg_size[segs].max())
-    D = DOFS_PER_NODE * (2 * width + 6)
+    D = DOFS_PER_NODE * (k * width + k + 4)
     Dq = D - Z
     in_sk = np.zeros(len(c.segments), dtype=bool)
     in_sk[sk] = True
@@ -126,7 +130,7 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     # each point's 2 x 54 unknowns (A element, its B element) inside the block; B's elements
     # share end nodes, so element j starts 2 nodes after element j - 1
     cols = np.concatenate([np.broadcast_to(np.arange(EL), (len(sel), EL)),
-                           EL + 2 * DOFS_PER_NODE * j[:, None] + np.arange(EL)], axis=1)
+                           EL + k * DOFS_PER_NODE * j[:, None] + np.arange(EL)], axis=1)
     sub = subset(pr, sel)
     at = (s_loc[:, None], p_loc[:, None], cols)
     # one B element per segment: each point's unknowns are the block's, in order, and its rows
@@ -159,7 +163,7 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
             K[:, :Dq, :Dq] -= PG + PG.transpose(0, 2, 1)   # −Σ p_p (∇g ∇wᵀ + ∇w ∇gᵀ)
             # −Σ p_p g_p ∇²w_p over each band point's 108 unknowns
             coef = -(st.pressure[sel][band] * sub.g[band])[:, None, None]
-            add_point_blocks(K, s_loc[band], j[band], coef * hess)
+            add_point_blocks(K, s_loc[band], j[band], coef * hess, EL, k * DOFS_PER_NODE)
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
@@ -187,7 +191,7 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     K[ss, mrow, mrow] = c.stiffness * dRz[ss, kk] * share[ss, kk]
     # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes
     els = c.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
-    bnodes = np.concatenate([els[:, :, :2].reshape(n_s, -1), els[:, -1:, 2]], axis=1)
+    bnodes = np.concatenate([els[:, :, :k].reshape(n_s, -1), els[:, -1:, k]], axis=1)
     nodes = np.concatenate([c.conn[pts.seg_eA[segs]], bnodes, c.seg_blocks[segs]], axis=1)
     rows = (DOFS_PER_NODE * nodes[:, :, None] + np.arange(DOFS_PER_NODE)).reshape(n_s, D)
     # the B elements of a segment need not be contiguous (points on e and e + 2): the

@@ -23,7 +23,6 @@ import time
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from . import blocks, couplings, reports
 from .interfaces import find_interfaces, held_ends, supported_ends
 from .laws import Phase, active_set_rows, make_law
@@ -88,11 +87,11 @@ class Contact:
     def padding_dofs(self) -> np.ndarray:
         """Model-numbered DOF ids of the unused multiplier slots (held at zero)."""
         node, slot = np.nonzero(self.space.padding())
-        return DOFS_PER_NODE * (self.model.n_nodes + node) + slot
+        return self.model.dofs_per_node * (self.model.n_nodes + node) + slot
 
     def multiplier_dofs(self) -> np.ndarray:
         """Model-numbered DOF id of every multiplier (M,)."""
-        return DOFS_PER_NODE * (self.model.n_nodes + self.space.node) + self.space.slot
+        return self.model.dofs_per_node * (self.model.n_nodes + self.space.node) + self.space.slot
 
     def set_numbering(self, perm: np.ndarray, local_segments: np.ndarray,
                       owned_elements: np.ndarray | None = None) -> None:
@@ -123,7 +122,7 @@ class Contact:
 
     def multiplier_positions(self, needed: np.ndarray) -> np.ndarray:
         """Positions of the local multipliers (``mults``) in a local DOF array over ``needed``."""
-        return DOFS_PER_NODE * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
+        return self.model.dofs_per_node * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
         """Node blocks (PETSc) read locally: A, B, neighbouring and wanted elements', multipliers'."""
@@ -156,7 +155,7 @@ class Contact:
 
     # ---------------------------------------------------------------- evaluation
     def evaluate(self, xl: np.ndarray, needed: np.ndarray) -> ContactState:
-        """Project the local points at the local state ``xl`` (n, 6, 3) and apply the law.
+        """Project the local points at the local state ``xl`` (n, V, 3) and apply the law.
 
         SNES evaluates the Jacobian at the state of the residual before it: that evaluation is
         reused.  With the parallel hooks set (``sum_over_ranks``) every rank calls it."""
@@ -173,7 +172,7 @@ class Contact:
             return np.searchsorted(needed, nodes)
 
         def x_of(els):
-            return xl[lpos(self.conn[els])].reshape(len(els), SLOTS, 3)
+            return xl[lpos(self.conn[els])].reshape(len(els), self.model.block.slots, 3)
 
         idx = self.local
         xA = np.einsum("pa,pai->pi", self.points.NA[idx], x_of(self.points.eA[idx]))
@@ -184,7 +183,7 @@ class Contact:
             sums = self.sum_over_ranks(sums)
         gbar = sums[:, 0]
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
-        z = xl.reshape(-1)[DOFS_PER_NODE * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
+        z = xl.reshape(-1)[self.model.dofs_per_node * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
         prev = self.status[self.mults]
         if self.allow_update or not self.law.decides_activity:
             active = self.law.update(gbar, z, prev, self.tie_tolerance, self.mults, self.owned,

@@ -44,8 +44,8 @@ def node_couplings(c) -> tuple[np.ndarray, np.ndarray]:
     for i in np.flatnonzero(first != np.arange(len(seg_b))):
         others = c.conn[seg_b[first[i]:i, 1]].ravel()
         mine = c.conn[seg_b[i, 1]]
-        rows += [np.repeat(mine, len(others)), np.tile(others, 3)]
-        cols += [np.tile(others, 3), np.repeat(mine, len(others))]
+        rows += [np.repeat(mine, len(others)), np.tile(others, len(mine))]
+        cols += [np.tile(others, len(mine)), np.repeat(mine, len(others))]
     return np.concatenate(rows), np.concatenate(cols)
 
 

@@ -22,10 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_ELEMENT, SLOTS
 from .partners import PartnerTerm, drop_held, node_dofs, segment_outer, tangential
 
-EL = DOFS_PER_ELEMENT
 LEVI_CIVITA = np.zeros((3, 3, 3))
 LEVI_CIVITA[0, 1, 2] = LEVI_CIVITA[1, 2, 0] = LEVI_CIVITA[2, 0, 1] = 1.0
 LEVI_CIVITA[0, 2, 1] = LEVI_CIVITA[2, 1, 0] = LEVI_CIVITA[1, 0, 2] = -1.0
@@ -92,7 +90,7 @@ class ElasticMatrix(PartnerTerm):
         NAB = self.grad_d(c)                                                  # (P, 36)
         Dn, n, d = self._normal_terms(ev, slice(None))
         cn = np.einsum("pi,pi->p", n, d)
-        grad_c = NAB[:, :, None] * n[:, None, :]
+        grad_c, SLOTS = NAB[:, :, None] * n[:, None, :], self.slots
         grad_c[:, SLOTS:] += np.einsum("piaj,pi->paj", Dn, d)
         force = (self.stiffness * ev.omega)[:, None, None] * (NAB[:, :, None] * d[:, None, :]
                                                               - cn[:, None, None] * grad_c)
@@ -105,13 +103,15 @@ class ElasticMatrix(PartnerTerm):
         ev = st.terms[self.name]
         srow = np.searchsorted(c.segments, c.points.seg[c.local])
         K = self._segment_hessians(ev, self.grad_d(c), srow, len(c.segments))
-        return [(drop_held(node_dofs(self.segment_nodes(c)), fixed_mask), K.reshape(-1, 2 * EL, 2 * EL))]
+        EL = 3 * self.slots
+        return [(drop_held(node_dofs(self.segment_nodes(c), self.node_size), fixed_mask), K.reshape(-1, 2 * EL, 2 * EL))]
 
     def _segment_hessians(self, ev: MatrixEvaluation, NAB: np.ndarray, srow: np.ndarray, n_s: int) -> np.ndarray:
         """Σ_p ∇²Π_p per segment (n_s, 36, 3, 36, 3) over (A's element, the partner's): every
         term a sum of outer products, formed as batched products over the segments' points
         (``segment_outer``), never as a 108 × 108 matrix per point."""
         Dn, n, d = self._normal_terms(ev, slice(None))
+        SLOTS = self.slots
         p = len(NAB)
         w = self.stiffness * ev.omega                                          # k_t ω
         cn = np.einsum("pi,pi->p", n, d)
@@ -137,6 +137,7 @@ class ElasticMatrix(PartnerTerm):
         (n_s, 18, 3, 18, 3), from ∂²n = [P ∂²m − ∂_b n (n·∂_a m) − ∂_a n (n·∂_b m) −
         n (∂_b n·∂_a m)] / |m| and ∂²m_i/∂q_aj∂q_bl = ε_ijl (N_a,t N_b,ξ − N_b,t N_a,ξ)."""
         Nz, sign, rho, M = ev.Nz, ev.sign, ev.rho, ev.M
+        SLOTS = self.slots
         p = len(d)
         f = wc / rho
         Pd = d - np.einsum("pi,pi->p", n, d)[:, None] * n

@@ -39,7 +39,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_NODE
 from . import friction_blocks
 from .partners import PartnerTerm, tangential
 from .reports import output_signs
@@ -110,7 +109,8 @@ def reference_axial(model, points) -> np.ndarray:
     for b in model.beams:
         m = (points.eA >= b.element_offset) & (points.eA < b.element_offset + b.n_elements)
         e = points.eA[m] - b.element_offset
-        x0, x1 = b.x_nodes[2 * e], b.x_nodes[2 * e + 2]
+        k = b.layout.block.axial_nodes - 1          # nodes k e … k e + k of element e
+        x0, x1 = b.x_nodes[k * e], b.x_nodes[k * e + k]
         x[m] = x0 + 0.5 * (points.xi[m] + 1.0) * (x1 - x0)
     return x
 
@@ -138,6 +138,7 @@ class CoulombFriction(PartnerTerm):
         self.x_ref = reference_axial(model, points) if free_zone > 0.0 else None
         self.augmentation = float(augmentation)
         self.n_nodes = model.n_nodes
+        self.node_dofs = model.dofs_per_node
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
         self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
         self.tPhi = None
@@ -158,18 +159,19 @@ class CoulombFriction(PartnerTerm):
         sp = c.space
         #: the tangential functions' Φ over the local multipliers and points (fold_tangential)
         self.tPhi = c.Phi if sp.tPhi is sp.Phi else sp.tPhi[c.mults][:, c.local].tocsr()
-        self.tdof = DOFS_PER_NODE * perm[self.n_nodes + sp.tnode] + sp.tslot
+        self.tdof = self.node_dofs * perm[self.n_nodes + sp.tnode] + sp.tslot
         sm = sp.seg_mults
         blocks = perm[self.n_nodes + sp.tnode[np.maximum(sm, 0)]]                # (S, K, 3)
         self.seg_tblocks = np.where((sm >= 0)[:, :, None], blocks, -1).reshape(len(sm), -1)
 
     def required_blocks(self, c) -> np.ndarray:
         """The node blocks of the local multipliers' tangential components."""
-        return np.unique(self.tdof[c.mults] // DOFS_PER_NODE)
+        return np.unique(self.tdof[c.mults] // self.node_dofs)
 
     def local_positions(self, c, st) -> np.ndarray:
         """Positions of the local y_k (M, 3) in the local DOF array."""
-        return DOFS_PER_NODE * st.lpos(self.tdof[c.mults] // DOFS_PER_NODE) + self.tdof[c.mults] % DOFS_PER_NODE
+        D = self.node_dofs
+        return D * st.lpos(self.tdof[c.mults] // D) + self.tdof[c.mults] % D
 
     # ------------------------------------------------------------------ evaluation
     def evaluate(self, c, st, x_of) -> FrictionEvaluation:

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_NODE
 from .gap import normal_gradient
 from .partners import drop_held, node_dofs, segment_outer
 
@@ -64,7 +63,7 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     Bm = ev.dRdn @ Pbar / np.where(ev.mnorm > 0.0, ev.mnorm, 1.0)[:, None, None]
     NAB = term.grad_d(c)                                                      # (P, 36)
     rows_y = np.where((sm >= 0)[:, :, None], term.tdof[np.maximum(sm, 0)], -1).reshape(n_s, 3 * K)
-    qrows = drop_held(node_dofs(term.segment_nodes(c)), fixed_mask)           # (n_s, 108)
+    qrows = drop_held(node_dofs(term.segment_nodes(c), term.node_size), fixed_mask)   # (n_s, 108)
     # rows of y through the slips d: Σ_p (k_s Φ ω' ∂R/∂U P_p) ⊗ N_AB
     M1 = ks * phi[:, :, None, None] * (A[kp] @ Pn[:, None])                   # (P, K, 3, 3)
     K1 = segment_outer(srow, n_s, M1.reshape(P, -1), NAB)
@@ -83,7 +82,8 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     G = np.concatenate([(M2.reshape(P, 3 * K, 3) @ gradn),
                         (NAB[:, :, None, None] * (E @ gradn)[:, None]).reshape(P, -1, gradn.shape[2])], axis=1)
     pair, Kn = _per_pair(srow, st.pr.eB, G)
-    cols = node_dofs(np.concatenate([c.conn[c.points.seg_eA[c.segments[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1))
+    cols = node_dofs(np.concatenate([c.conn[c.points.seg_eA[c.segments[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1),
+                     term.node_size)
     rows = np.concatenate([rows_y[pair[:, 0]], qrows[pair[:, 0]]], axis=1)
     out.append((rows, drop_held(cols, fixed_mask), Kn))
     # the bounds μ ẑ_k = μ ∫ φ_k p⁺ dA / k_s of the sliding functions through the pressures z_j
@@ -91,7 +91,7 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     left = c.space.tarea[sm[srow]] * phi * (ev.positive / wp)[:, None]
     Gz = segment_outer(srow, n_s, left, phi0 * st.rows.load[kp])                 # (n_s, K, K)
     Vz = ks * term.mu * ev.g[kseg][:, :, :, None] * Gz[:, :, None, :]   # (n_s, K, 3, K)
-    zcols = np.where(sm >= 0, DOFS_PER_NODE * c.mult_block[np.maximum(sm, 0)] + c.space.slot[np.maximum(sm, 0)], -1)
+    zcols = np.where(sm >= 0, term.node_size * c.mult_block[np.maximum(sm, 0)] + c.space.slot[np.maximum(sm, 0)], -1)
     out.append((rows_y, zcols, Vz.reshape(n_s, 3 * K, K)))
     # each multiplier's own rows: ∂R/∂y (each rank its share)
     ydof = term.tdof[c.mults]

@@ -24,13 +24,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.element3363 import SLOTS
 
 
 def gap_gradient(pr) -> np.ndarray:
     """∇g of every point (P, 108)."""
     NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
-    return (NAB[:, :, None] * pr.n[:, None, :]).reshape(len(pr.g), 108)
+    return (NAB[:, :, None] * pr.n[:, None, :]).reshape(len(pr.g), 3 * NAB.shape[1])
 
 
 def _inverse2(M: np.ndarray) -> np.ndarray:
@@ -56,10 +55,11 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
     C[:, 2:, :2] = Hi
     C[:, 2:, 2:] = pr.g[:, None, None] * Hi
     NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
-    W = np.zeros((P, 36, 3, 4))
+    SLOTS = pr.NA.shape[1]                                           # an element's slots (18 for 3363)
+    W = np.zeros((P, 2 * SLOTS, 3, 4))
     W[..., :2] = NAB[:, :, None, None] * T[:, None, :, :]            # u_α
     W[:, SLOTS:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
-    return W.reshape(P, 108, 4), C
+    return W.reshape(P, 6 * SLOTS, 4), C
 
 
 
@@ -121,9 +121,10 @@ def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray)
     psi = np.einsum("pa,pabc->pbc", lam, phi)
     out = np.einsum("pbj,pbc,pck->pjk", dz, psi, dz)                 # φ_ζζζ[ζ′, ζ′]
     # Σ_α λ_α ∂H_αβ/∂q for β = ξ, t
+    SLOTS = pr.NA.shape[1]                                           # an element's slots (18 for 3363)
     zA = np.zeros((P, SLOTS))
     NA, NB, NBz = pr.NA, pr.NB, pr.NBz
-    lam_h = np.empty((P, 2, 108))
+    lam_h = np.empty((P, 2, 6 * SLOTS))
     for beta in range(2):
         tb = np.einsum("pa,pia->pi", lam, Tab[:, :, :, beta])          # Σ_α λ_α Y_αβ
         part_a = _slot_vector(np.concatenate([-NA, NB], axis=1), tb)
@@ -141,7 +142,7 @@ def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray)
     bb = np.concatenate([NA, -NB], axis=1)
     S = abar[:, :, None] * bb[:, None, :]
     S = -(S + S.transpose(0, 2, 1))
-    out += np.einsum("pst,ij->psitj", S, np.eye(3)).reshape(P, 108, 108)
+    out += np.einsum("pst,ij->psitj", S, np.eye(3)).reshape(P, 6 * SLOTS, 6 * SLOTS)
     return -out
 
 

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_NODE
 
 
 class ContactSetupError(ValueError):
@@ -116,7 +115,7 @@ def find_interfaces(model, spec) -> list[Interface]:
     return out
 
 
-def supported_ends(model, interfaces, rule: str = "merge", held_slots: int = DOFS_PER_NODE) -> np.ndarray:
+def supported_ends(model, interfaces, rule: str = "merge", held_slots: int | None = None) -> np.ndarray:
     """(n_interfaces, 2) bool, all False for ``rule`` keep (``contact.projection.supported_ends``);
     for merge True where the interface's first / last end lies at nodes of A and
     B whose every DOF is held or prescribed (``fix: clamped``): the gap there is the supports',
@@ -124,10 +123,11 @@ def supported_ends(model, interfaces, rule: str = "merge", held_slots: int = DOF
     may stretch (``fix: reduced``): that end's constraint still holds the two bodies' different
     contraction (docs/contact.md, "Supported ends": folding it there moves Table 1 by 1.7 %).
     ``held_slots`` 3: where the nodes' positions r are held (``fix: reduced`` too; the tangential
-    functions' rule, ``contact.tangential.supported_ends``)."""
-    held = np.zeros(DOFS_PER_NODE * model.n_nodes, dtype=bool)
+    functions' rule, ``contact.tangential.supported_ends``); default every DOF of a node."""
+    D = model.dofs_per_node
+    held = np.zeros(D * model.n_nodes, dtype=bool)
     held[model.fixed_dofs] = True
-    node_held = held.reshape(-1, DOFS_PER_NODE)[:, :held_slots].all(axis=1)
+    node_held = held.reshape(-1, D)[:, :D if held_slots is None else held_slots].all(axis=1)
     out = np.zeros((len(interfaces), 2), dtype=bool)
     for k, itf in enumerate(interfaces if rule == "merge" else ()):
         for j, end in enumerate((0, -1)):

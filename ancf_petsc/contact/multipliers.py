@@ -43,10 +43,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
-from ..physics.element3363 import DOFS_PER_NODE
 
 #: multiplier slots in one node block (the multipliers share the beams' 18-DOF block layout)
-SLOTS = DOFS_PER_NODE
 
 
 def bernstein(x: np.ndarray, degree: int) -> np.ndarray:
@@ -64,7 +62,7 @@ class MultiplierSpace:
     interface: np.ndarray     # (M,) interface of each multiplier
     element: np.ndarray       # (M,) A element owning it (the lowest its function lives on)
     node: np.ndarray          # (M,) multiplier node (0-based among multiplier nodes)
-    slot: np.ndarray          # (M,) slot in its node (0..17)
+    slot: np.ndarray          # (M,) slot in its node (0 .. node_slots − 1)
     node_element: np.ndarray  # (nodes,) A element each multiplier node belongs to
     seg_mults: np.ndarray     # (S, K) the multipliers whose functions live on each segment
     dense: np.ndarray         # (S, K, P) Φ of those multipliers over the segment's own points
@@ -81,6 +79,8 @@ class MultiplierSpace:
     tarea: np.ndarray | None = None
     tdense: np.ndarray | None = None
     tdrop: np.ndarray | None = None
+    #: slots of a multiplier node: the DOFs of the beams' node block (18 for 3363; Model.dofs_per_node)
+    node_slots: int = 18
 
     @property
     def n_multipliers(self) -> int:
@@ -99,8 +99,8 @@ class MultiplierSpace:
         return np.stack([first, np.where(last != first, last, -1)], axis=1)
 
     def padding(self) -> np.ndarray:
-        """(nodes, 18) True for the slots no multiplier uses."""
-        used = np.zeros((self.n_nodes, SLOTS), dtype=bool)
+        """(nodes, node_slots) True for the slots no multiplier uses."""
+        used = np.zeros((self.n_nodes, self.node_slots), dtype=bool)
         used[self.node, self.slot] = True
         if self.tnode is not None:
             used[self.tnode, self.tslot] = True
@@ -119,6 +119,7 @@ def with_tangential(space: MultiplierSpace, wanted: bool = True,
     tnode = np.empty((space.n_multipliers, 3), dtype=np.int64)
     tslot = np.empty((space.n_multipliers, 3), dtype=np.int64)
     nodes = list(space.node_element)
+    SLOTS = space.node_slots
     for e in np.unique(space.element):
         idx = np.flatnonzero(space.element == e)
         k = np.arange(3 * len(idx))
@@ -169,7 +170,8 @@ def reference_modulus(beam) -> float:
 
 def reference_size(beam) -> float:
     """h [m] = min(element length, √area): the length over which a contact force spreads."""
-    return float(min(beam.x_nodes[2] - beam.x_nodes[0], np.sqrt(beam.section.area)))
+    k = beam.layout.block.axial_nodes - 1                  # the element's last node
+    return float(min(beam.x_nodes[k] - beam.x_nodes[0], np.sqrt(beam.section.area)))
 
 
 def reference_stiffness(interfaces) -> float:
@@ -234,8 +236,10 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     this one's displacements: ``ContactSpec.group``, set in code, no config key).  ``merged``
     (n_interfaces, 2) bool: fold the first / last axial function of those interfaces into its
     neighbour (supported ends: interfaces.supported_ends; only for axial degree ≥ 2, the
-    trace space and richer: a linear space has fewer functions than the trace has values)."""
+    trace space and richer: a linear space has fewer functions than the trace has values).
+    A multiplier node has as many slots as the beams' node block has DOFs (Model.dofs_per_node)."""
     ka, kc = degrees
+    node_slots = interfaces[0].a.layout.block.dofs_per_node
     S = points.n_segments
     K = (ka + 1) * (kc + 1)
     P_max = int(points.seg_size.max(initial=0))
@@ -293,15 +297,15 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     area = np.asarray(W.sum(axis=1)).ravel()
     Phi = sp.diags(1.0 / area) @ W
     dense /= np.where(seg_mults >= 0, area[seg_mults], 1.0)[:, :, None]
-    # pack each A element's multipliers into nodes of 18 slots, interface by interface
+    # pack each A element's multipliers into nodes of node_slots slots, interface by interface
     node = np.empty(M, dtype=np.int64)
     slot = np.empty(M, dtype=np.int64)
     node_element = []
     for e in np.unique(element):
-        fill = SLOTS
+        fill = node_slots
         for k in np.unique(interface[element == e]):
             idx = np.flatnonzero((element == e) & (interface == k))
-            if fill + len(idx) > SLOTS:
+            if fill + len(idx) > node_slots:
                 node_element.append(e)
                 fill = 0
             node[idx], slot[idx] = len(node_element) - 1, fill + np.arange(len(idx))
@@ -309,4 +313,4 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     return MultiplierSpace(Phi=Phi.tocsr(), area=area, interface=interface, element=element,
                            node=node, slot=slot, node_element=np.asarray(node_element, dtype=np.int64),
                            seg_mults=seg_mults, dense=dense, degrees=degrees, stiffness=float(stiffness),
-                           n_across=np.asarray(n_across, dtype=np.int64))
+                           n_across=np.asarray(n_across, dtype=np.int64), node_slots=node_slots)

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_NODE, SLOTS
 from .multipliers import reference_modulus, reference_size
 from .reports import output_signs
 
@@ -24,10 +23,11 @@ from .reports import output_signs
 HISTORY = "history_"
 
 
-def node_dofs(nodes: np.ndarray) -> np.ndarray:
-    """DOF ids (n, 18 k) of node groups (n, k), −1 for the unused (−1) nodes."""
-    rows = (DOFS_PER_NODE * nodes[:, :, None] + np.arange(DOFS_PER_NODE)).reshape(len(nodes), -1)
-    return np.where(np.repeat(nodes, DOFS_PER_NODE, axis=1) >= 0, rows, -1)
+def node_dofs(nodes: np.ndarray, D: int) -> np.ndarray:
+    """DOF ids (n, D k) of node groups (n, k) of D DOFs each (Model.dofs_per_node), −1 for the
+    unused (−1) nodes."""
+    rows = (D * nodes[:, :, None] + np.arange(D)).reshape(len(nodes), -1)
+    return np.where(np.repeat(nodes, D, axis=1) >= 0, rows, -1)
 
 
 def drop_held(dofs: np.ndarray, fixed_mask: np.ndarray) -> np.ndarray:
@@ -89,11 +89,13 @@ class PartnerTerm:
 
     def __init__(self, model, points, projector):
         self.points = points
+        self.slots = model.block.slots              # an element's shape functions (18 for 3363)
+        self.node_size = model.dofs_per_node        # a node block's DOFs
         self.eB0 = projector.eB.copy()              # the projector starts at the partners
         conn = model.connectivity()
 
         def q0_of(els):
-            return model.q0[conn[els]].reshape(len(els), SLOTS, 3)
+            return model.q0[conn[els]].reshape(len(els), self.slots, 3)
         _, _, _, self.NB0, self.NB0z = projector.surface(q0_of, points.itf, self.eB0, projector.xiB, projector.tB)
         #: B's outward normal is T_t × T_ξ, flipped where B runs its curve backwards
         self.flip = projector.flip
@@ -112,9 +114,10 @@ class PartnerTerm:
     def add_point_forces(self, c, st, floc: np.ndarray, force: np.ndarray) -> None:
         """Add per-point forces over (A's element, the partner's): ``force`` (P, 36, 3)."""
         idx = c.local
-        for e, f in ((c.points.eA[idx], force[:, :SLOTS]), (self.eB0[idx], force[:, SLOTS:])):
+        S, D = self.slots, self.node_size
+        for e, f in ((c.points.eA[idx], force[:, :S]), (self.eB0[idx], force[:, S:])):
             pos = st.lpos(c.conn[e])                                          # (P, 3)
-            dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
+            dofs = (D * pos[:, :, None] + np.arange(D)).ravel()
             floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
 
     def segment_nodes(self, c) -> np.ndarray:

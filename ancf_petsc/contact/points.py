@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.cubature import gauss_legendre
-from ..physics.element3363 import SLOTS
 from .surface import curve_shape
 
 
@@ -56,7 +55,7 @@ def build_points(model, interfaces, axial_points: int, curve_points: int) -> Con
         T, XI, W0 = T.ravel(), XI.ravel(), (WT * WX).ravel()
         # the same points (ξ, t) on every element of A: one shape-function evaluation
         N, Nz = curve_shape(a, curve, XI, T)
-        q0e = model.q0[a.connectivity].reshape(a.n_elements, SLOTS, 3)
+        q0e = model.q0[a.connectivity].reshape(a.n_elements, model.block.slots, 3)
         Xz = np.einsum("pak,eai->epik", Nz, q0e)        # (E, P, 3, 2): X_ξ, X_t
         dA = np.linalg.norm(np.cross(Xz[..., 0], Xz[..., 1]), axis=-1)
         E, P = a.n_elements, len(T)

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.element3363 import SLOTS
 from .descent import ROUNDING, Backtracking, newton_step
 from .fade import CURVE_FADE_END, END_FADE, end_weight
 from .surface import InterfaceCurves, closest_parameter, section_shift, shape_on_curve, shape_third_on_curve
@@ -54,6 +53,7 @@ class Projector:
 
     def __init__(self, model, interfaces, points, search_margin: float):
         self.model, self.interfaces, self.points = model, interfaces, points
+        self.block = model.block                  # the node layout (physics/elements)
         self.search_margin = search_margin
         itf = points.itf
         self.t_end = np.array([interfaces[k].curve_b.t_end for k in itf])
@@ -151,11 +151,11 @@ class Projector:
         ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
         P = len(eB)
         S, S1, S2 = self._curves(itf, tB)                       # every interface's curve at once
-        NB, NBz, NBzz = shape_on_curve(xiB, S, S1, S2)
+        NB, NBz, NBzz = shape_on_curve(xiB, S, S1, S2, self.block)
         qB = x_of(eB)                                           # (P, 18, 3)
         Y = np.matmul(NB[:, None, :], qB)[:, 0]
         Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
-        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, SLOTS, 4)).reshape(P, 3, 2, 2)
+        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, self.block.slots, 4)).reshape(P, 3, 2, 2)
         return Y, Yz, Yzz, NB, NBz
 
     def wrap(self, itf, eB, xiB, tB):
@@ -303,7 +303,7 @@ def surface_third(projector: Projector, x_of, itf, eB, xiB, tB) -> tuple[np.ndar
             S2[sel] = c(t, 2)
         if c.degree >= 3:
             S3[sel] = c(t, 3)
-    NBzz, NBzzz = shape_third_on_curve(xiB, S, S1, S2, S3)
+    NBzz, NBzzz = shape_third_on_curve(xiB, S, S1, S2, S3, projector.block)
     return NBzz, np.einsum("psi,psabc->piabc", x_of(eB), NBzzz)
 
 

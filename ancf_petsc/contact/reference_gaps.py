@@ -11,7 +11,7 @@ def check_reference_gaps(contact) -> None:
     """The reference configuration must be gap-free (sliding) or not penetrating
     (unilateral): evaluated with every point local, then the projection state is reset."""
     n_blocks = contact.model.n_nodes + contact.space.n_nodes
-    xl = np.zeros((n_blocks, 6, 3))
+    xl = np.zeros((n_blocks, contact.model.block.vectors_per_node, 3))
     xl[:contact.model.n_nodes] = contact.model.q0
     st = contact.evaluate(xl, np.arange(n_blocks))
     size = max(np.sqrt(b.section.area) for b in contact.model.beams)

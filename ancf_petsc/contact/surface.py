@@ -8,11 +8,41 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics import element3363 as el
 from ..physics.bspline import SplineSet, compiled
-from ..physics.element3363 import SLOTS
+from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 
-DDL = np.array([1.0, -2.0, 1.0])          # second ξ-derivatives of the Lagrange polynomials
+#: 3363's node block (the default of the functions below; a model passes its own, Model.block)
+BLOCK_3363 = ELEMENTS[DEFAULT_ELEMENT].block
+
+
+def _monomials_on_curve(block, S, S1, S2=None, S3=None):
+    """The block's section monomials m (P, V) at S(t) and their t-derivatives m_t, m_tt (S2
+    given), m_ttt (S3 given) by the chain rule (physics/elements: the derivatives of a monomial
+    are monomials).  Terms of degree above the block's order are skipped (they are 0)."""
+    y, z = S[:, 0], S[:, 1]
+    d = {ab: block.section_monomials(y, z, *ab) for ab in ((0, 0), (1, 0), (0, 1))}
+    y1, z1 = S1[:, :1], S1[:, 1:]
+    out = [d[0, 0], d[1, 0] * y1 + d[0, 1] * z1]
+    if S2 is None:
+        return out
+    y2, z2 = S2[:, :1], S2[:, 1:]
+    mtt = d[1, 0] * y2 + d[0, 1] * z2
+    if block.order >= 2:                # (y²/2)'' = y'² + y y'', (yz)'' = 2 y'z' + y''z + y z''
+        d.update({ab: block.section_monomials(y, z, *ab) for ab in ((2, 0), (1, 1), (0, 2))})
+        mtt += d[2, 0] * y1 ** 2 + d[0, 2] * z1 ** 2 + d[1, 1] * (2.0 * y1 * z1)
+    out.append(mtt)
+    if S3 is None:
+        return out
+    # (y²/2)‴ = 3 y′y″ + y y‴, (yz)‴ = y‴z + 3(y″z′ + y′z″) + y z‴, and the cubic terms
+    mttt = d[1, 0] * S3[:, :1] + d[0, 1] * S3[:, 1:]
+    if block.order >= 2:
+        mttt += d[2, 0] * (3.0 * y1 * y2) + d[0, 2] * (3.0 * z1 * z2) + d[1, 1] * (3.0 * (y1 * z2 + y2 * z1))
+    if block.order >= 3:
+        d3 = {ab: block.section_monomials(y, z, *ab) for ab in ((3, 0), (2, 1), (1, 2), (0, 3))}
+        mttt += (d3[3, 0] * y1 ** 3 + d3[2, 1] * (3.0 * y1 ** 2 * z1) + d3[1, 2] * (3.0 * y1 * z1 ** 2)
+                 + d3[0, 3] * z1 ** 3)
+    out.append(mttt)
+    return out
 
 
 def section_shift(beam) -> np.ndarray:
@@ -71,34 +101,34 @@ class InterfaceCurves:
         return S, S1, S2
 
 
-def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray | None = None):
-    """N (P, 18), N_ζ (P, 18, 2) and, if S2 is given, N_ζζ (P, 18, 2, 2) at section points S(t)
-    with derivatives S1 = S'(t), S2 = S''(t)."""
-    L, dL = el.lagrange(xi)
-    m, my, mz = el.section_monomials(S[:, 0], S[:, 1])
-    mt = my * S1[:, :1] + mz * S1[:, 1:]
-    P, n_l, n_m = len(xi), L.shape[1], m.shape[1]
+def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray | None = None,
+                   block=BLOCK_3363):
+    """N (P, S), N_ζ (P, S, 2) and, if S2 is given, N_ζζ (P, S, 2, 2) at section points S(t)
+    with derivatives S1 = S'(t), S2 = S''(t); S = ``block.slots`` (18 for 3363)."""
+    L, dL = block.axial(xi)
+    SLOTS = block.slots
+    P = len(xi)
 
     def outer(a, b, out):
-        """(Lagrange factor) x (monomial factor) of every point into ``out`` (P, slots)."""
-        np.multiply(a[:, :, None], b[:, None, :], out=out.reshape(P, n_l, n_m))
+        """(axial factor) x (monomial factor) of every point into ``out`` (P, slots)."""
+        np.multiply(a[:, :, None], b[:, None, :], out=out.reshape(P, a.shape[1], b.shape[1]))
         return out
 
-    N = outer(L, m, np.empty((P, SLOTS)))
-    # N_ζ = (N_ξ, N_t) = (L' m, L m_t), each formed once into its column (not all of
+    # N = L m, N_ζ = (N_ξ, N_t) = (L' m, L m_t), each formed once into its own array (not all of
     # [L, L', L''] x [m, m_t, m_tt] and then picked: a third of the projection's surface cost)
+    if S2 is None:
+        m, mt = _monomials_on_curve(block, S, S1)
+    else:
+        m, mt, mtt = _monomials_on_curve(block, S, S1, S2)
+    N = outer(L, m, np.empty((P, SLOTS)))
     Nz = np.empty((2, P, SLOTS))
     outer(dL, m, Nz[0])
     outer(L, mt, Nz[1])
     if S2 is None:
         return N, Nz.transpose(1, 2, 0)
-    mtt = my * S2[:, :1] + mz * S2[:, 1:]
-    mtt[:, 3] += S1[:, 0] ** 2                 # (y²/2)'' = y'² + y y''
-    mtt[:, 4] += S1[:, 1] ** 2
-    mtt[:, 5] += 2.0 * S1[:, 0] * S1[:, 1]     # (yz)'' = 2 y'z' + y''z + y z''
     # N_ξξ = L'' m, N_ξt = N_tξ = L' m_t, N_tt = L m_tt
     Nzz = np.empty((2, 2, P, SLOTS))
-    outer(np.broadcast_to(DDL, L.shape), m, Nzz[0, 0])
+    outer(block.axial_second(xi), m, Nzz[0, 0])
     outer(dL, mt, Nzz[0, 1])
     Nzz[1, 0] = Nzz[0, 1]
     outer(L, mtt, Nzz[1, 1])
@@ -106,30 +136,19 @@ def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray
 
 
 def shape_third_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray,
-                         S3: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """N_ζζ (P, 18, 2, 2) and N_ζζζ (P, 18, 2, 2, 2) at section points S(t) with derivatives S1,
+                         S3: np.ndarray, block=BLOCK_3363) -> tuple[np.ndarray, np.ndarray]:
+    """N_ζζ (P, S, 2, 2) and N_ζζζ (P, S, 2, 2, 2) at section points S(t) with derivatives S1,
     S2, S3 (for the second-order sensitivity of the closest point, contact/gap.py)."""
-    L, dL = el.lagrange(xi)
-    _, my, mz = el.section_monomials(S[:, 0], S[:, 1])
-    _, _, N_zz = shape_on_curve(xi, S, S1, S2)
-    y1, z1, y2, z2 = S1[:, :1], S1[:, 1:], S2[:, :1], S2[:, 1:]
-    mt = my * y1 + mz * z1
-    mtt = my * y2 + mz * z2
-    mtt[:, 3:4] += y1 ** 2
-    mtt[:, 4:5] += z1 ** 2
-    mtt[:, 5:6] += 2.0 * y1 * z1
-    # third t-derivatives: (y²/2)‴ = 3 y′y″ + y y‴, (z²/2)‴ likewise, (yz)‴ = y‴z + 3(y″z′ + y′z″) + y z‴
-    mttt = my * S3[:, :1] + mz * S3[:, 1:]
-    mttt[:, 3:4] += 3.0 * y1 * y2
-    mttt[:, 4:5] += 3.0 * z1 * z2
-    mttt[:, 5:6] += 3.0 * (y1 * z2 + y2 * z1)
-    P = len(xi)
+    L, dL = block.axial(xi)
+    _, _, N_zz = shape_on_curve(xi, S, S1, S2, block)
+    _, mt, mtt, mttt = _monomials_on_curve(block, S, S1, S2, S3)
+    P, SLOTS = len(xi), block.slots
 
     def outer(a, b):
         return (a[:, :, None] * b[:, None, :]).reshape(P, SLOTS)
 
     out = np.zeros((P, SLOTS, 2, 2, 2))
-    ddl = np.broadcast_to(DDL, L.shape)
+    ddl = block.axial_second(xi)
     out[:, :, 0, 0, 1] = out[:, :, 0, 1, 0] = out[:, :, 1, 0, 0] = outer(ddl, mt)    # L″ m_t
     out[:, :, 0, 1, 1] = out[:, :, 1, 0, 1] = out[:, :, 1, 1, 0] = outer(dL, mtt)    # L′ m_tt
     out[:, :, 1, 1, 1] = outer(L, mttt)                                              # L m_ttt
@@ -141,7 +160,7 @@ def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False
     S = curve(t) + section_shift(beam)
     S1 = curve(t, 1)
     S2 = (curve(t, 2) if curve.degree >= 2 else np.zeros_like(S1)) if second else None
-    return shape_on_curve(xi, S, S1, S2)
+    return shape_on_curve(xi, S, S1, S2, beam.layout.block)
 
 
 def closest_parameter(curve, points: np.ndarray, samples: int = 400) -> np.ndarray:

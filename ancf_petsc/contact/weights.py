@@ -45,8 +45,8 @@ WEIGHT_TOL = 1e-6
 
 
 class FadeDerivatives:
-    """The fade weights' derivatives at one evaluation of the points of ``pr``: ∇w_p (P, 108, over
-    A's then B's element slots as gap.gap_gradient) of every point and the positions of the points
+    """The fade weights' derivatives at one evaluation of the points of ``pr``: ∇w_p (P, 108 for
+    3363: over A's then B's element slots as gap.gap_gradient) of every point and the positions of the points
     in a fade band (``band``), at once; their ∇²w_p (B, 108, 108) = ζ′ᵀ (∂²w/∂ζ²) ζ′ +
     ∇²(∂w/∂ζ · ζ) (gap.closest_point_hessian, exact) on first use (``hessians``: the Jacobian's, a
     residual alone never needs them).  One evaluation serves the residual's forces and every
@@ -63,7 +63,7 @@ class FadeDerivatives:
         # weight's derivatives there would be large and meaningless, so it counts as kept
         self.band = np.flatnonzero(np.any(self._slope != 0.0, axis=1)
                                    & (projection_conditioning(pr) > WELL_POSED))
-        self.grad = np.zeros((len(pr.idx), 108))
+        self.grad = np.zeros((len(pr.idx), 6 * pr.NA.shape[1]))     # A's and B's slots × 3
         self._sub = self._dz = self._hess = None
         if len(self.band):
             self._sub = subset(pr, self.band)
@@ -75,7 +75,7 @@ class FadeDerivatives:
         if self._hess is None:
             band, pr = self.band, self._pr
             if not len(band):
-                self._hess = np.zeros((0, 108, 108))
+                self._hess = np.zeros((0,) + 2 * self.grad.shape[1:])
             else:
                 curv = end_weight_curvature(*(a[band] for a in self._args))
                 NBzz, Yzzz = surface_third(self._projector, x_of, self._itf[band], pr.eB[band],

@@ -8,15 +8,24 @@ import numpy as np
 import yaml
 
 from ..model.section_forces import element_means
-from ..physics import element3363 as el
+from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from .files import OutputError, os_reason, plain
 from .restart import fingerprint
 from .surface_fields import SURFACE_FIELDS
 
-#: the "units" attribute of /model/reference_nodal_vectors and steps/…/nodal_vectors
-NODAL_UNITS = "; ".join(f"{v} [{u}]" for v, u in el.VECTOR_UNITS.items()) + " (the slots of dof_order)"
-#: the units of a probe's change by its nodal vector (``vector: mean``: a displacement)
-PROBE_UNITS = {**el.VECTOR_UNITS, "mean": "m"}
+def nodal_units(block) -> str:
+    """The "units" attribute of /model/reference_nodal_vectors and steps/…/nodal_vectors."""
+    return "; ".join(f"{v} [{u}]" for v, u in block.units().items()) + " (the slots of dof_order)"
+
+
+def probe_units(block) -> dict[str, str]:
+    """The units of a probe's change by its nodal vector (``vector: mean``: a displacement)."""
+    return {**block.units(), "mean": "m"}
+
+
+#: 3363's (the default block; a model's own: ``nodal_units(model.block)``)
+NODAL_UNITS = nodal_units(ELEMENTS[DEFAULT_ELEMENT].block)
+PROBE_UNITS = probe_units(ELEMENTS[DEFAULT_ELEMENT].block)
 #: the SI units of the surface point fields written beside the VTUs (io/surface_fields.py)
 SURFACE_UNITS = {"points": "m (deformed positions)", **{f.name: f.si_unit for f in SURFACE_FIELDS.values()}}
 #: the "frame" attribute of /model/beams/<name>/section_points and section_outline
@@ -33,8 +42,8 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     g = h5.create_group("model")
     g.attrs["name"] = spec.name
     g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
-    g.attrs["dof_order"] = "per node: " + ", ".join(el.VECTORS) + " (x, y, z each)"
-    g.create_dataset("reference_nodal_vectors", data=model.q0).attrs["units"] = NODAL_UNITS
+    g.attrs["dof_order"] = "per node: " + ", ".join(model.block.names) + " (x, y, z each)"
+    g.create_dataset("reference_nodal_vectors", data=model.q0).attrs["units"] = nodal_units(model.block)
     fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
     for key, arr in fingerprint(model).items():
         fp.create_dataset(key, data=arr)
@@ -65,7 +74,7 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
     """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the probes,
     the section forces, the contact fields, the supports' reactions, the subtendons'
     displacement differences and what a restart needs."""
-    g.create_dataset("nodal_vectors", data=q).attrs["units"] = NODAL_UNITS
+    g.create_dataset("nodal_vectors", data=q).attrs["units"] = nodal_units(model.block)
     g.attrs["load_factor"] = record.load_factor
     g.attrs["load_factor_units"] = "1 (the multiple of the config's loads and displacements)"
     g.attrs["snes_iterations"] = record.iterations
@@ -109,7 +118,7 @@ def write_probes(g, probes: dict, model) -> None:
         vector = vectors.get(name, "r")
         d.attrs["vector"] = vector
         d.attrs["rows"] = "change since the reference state; value"
-        d.attrs["units"] = PROBE_UNITS.get(vector, "m")
+        d.attrs["units"] = probe_units(model.block).get(vector, "m")
 
 
 def write_section_forces(g, forces: dict | None, model) -> None:

@@ -43,7 +43,7 @@ class Results:
         return os.path.join(self.directory, "results.h5")
 
     def nodal_vectors(self, step: int) -> np.ndarray:
-        """Nodal vectors (n_nodes, 6, 3) at converged level ``step`` (0: the reference state)."""
+        """Nodal vectors (n_nodes, V, 3) at converged level ``step`` (0: the reference state)."""
         with h5py.File(self.h5_path, "r") as h5:
             if step == 0:
                 return h5["model/reference_nodal_vectors"][()]

@@ -38,8 +38,8 @@ class RestartPoint:
     """The last converged level of a run, read from its results.h5 (model order)."""
     step: int                     # its number (1-based)
     load_factor: float
-    blocks: np.ndarray            # (n_blocks, 18): nodal vectors, then multiplier blocks
-    increment_blocks: np.ndarray  # (n_blocks, 18): the last accepted increment of the state
+    blocks: np.ndarray            # (n_blocks, D): nodal vectors, then multiplier blocks (D DOFs per node)
+    increment_blocks: np.ndarray  # (n_blocks, D): the last accepted increment of the state
     increment: float              # the next load increment
     last_increment: float         # the last accepted one
     accepted_negative: int
@@ -67,8 +67,9 @@ def fingerprint(model) -> dict[str, np.ndarray]:
         m = b.material
         params = [float(v) for k, v in sorted(vars(m).items()) if isinstance(v, (int, float))]
         out.update({f"beams/{b.name}/elements": np.array([float(b.n_elements)]),
-                    f"beams/{b.name}/element_axial_points_locking": np.array(
-                        [float(b.element), b.axial_points, LOCKING.index(b.locking)]),
+                    f"beams/{b.name}/element": _word(b.element),
+                    f"beams/{b.name}/axial_points_locking": np.array(
+                        [float(b.axial_points), LOCKING.index(b.locking)]),
                     f"beams/{b.name}/material": np.array(params),
                     f"beams/{b.name}/x_nodes": np.asarray(b.x_nodes),
                     f"beams/{b.name}/section_points": np.asarray(b.yz, dtype=float),
@@ -86,8 +87,28 @@ def fingerprint(model) -> dict[str, np.ndarray]:
             words["supported_ends"] = folded
         if c.tangential is not None and TANGENTIAL_LAWS[c.tangential.law] is not None:   # frictionless: as before
             words["tangential"] = vars(c.tangential)
-        words = json.dumps(words, sort_keys=True)
-        out["contact"] = np.frombuffer(words.encode(), dtype=np.uint8).astype(float)
+        out["contact"] = _word(json.dumps(words, sort_keys=True))
+    return out
+
+
+def _word(text: str) -> np.ndarray:
+    """A string as a fingerprint array (its UTF-8 bytes as floats)."""
+    return np.frombuffer(text.encode(), dtype=np.uint8).astype(float)
+
+
+def _text(a: np.ndarray) -> str:
+    return bytes(np.asarray(a).astype(np.uint8)).decode()
+
+
+def _current(fp: dict) -> dict:
+    """A fingerprint in today's items: files written before the element name was a string store
+    ``element_axial_points_locking`` = [element number, axial points, locking]."""
+    out = dict(fp)
+    for key in [k for k in fp if k.endswith("/element_axial_points_locking")]:
+        beam = key.rpartition("/")[0]
+        e, axial, locking = np.asarray(out.pop(key), dtype=float)
+        out[f"{beam}/element"] = _word(f"{e:g}")
+        out[f"{beam}/axial_points_locking"] = np.array([axial, locking])
     return out
 
 
@@ -120,8 +141,9 @@ def model_difference(stored: dict, now: dict) -> str | None:
 
 def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
     """``model_difference`` as (fingerprint key, what changed), None when the same."""
-    fields = ("elements", "element_axial_points_locking", "material", "fibres", "x_nodes",
+    fields = ("elements", "element", "axial_points_locking", "material", "fibres", "x_nodes",
               "section_points", "section_weights", "connectivity")
+    stored, now = _current(stored), _current(now)
 
     beams: dict[str, int] = {}
     for key in now:                               # beams in the order the model has them
@@ -137,6 +159,8 @@ def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
         a, b = np.asarray(stored[key]), np.asarray(now[key])
         if key == "contact" and not np.array_equal(a, b):
             return key, _words_difference(a, b)
+        if key.endswith("/element") and not np.array_equal(a, b):
+            return key, f"{_text(a)} → {_text(b)}"
         if a.shape != b.shape:
             return key, f"shape {a.shape} → {b.shape}"
         if not np.allclose(a, b, rtol=1e-12, atol=1e-300 + 1e-12 * float(np.max(np.abs(a), initial=0.0))):
@@ -151,7 +175,7 @@ def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
 
 def _words_difference(a: np.ndarray, b: np.ndarray) -> str:
     """The contact settings that differ between two fingerprints' ``contact`` words."""
-    sa, sb = (json.loads(bytes(x.astype(np.uint8)).decode()) for x in (a, b))
+    sa, sb = (json.loads(_text(x)) for x in (a, b))
     keys = sorted(k for k in set(sa) | set(sb) if sa.get(k) != sb.get(k))
     return ", ".join(f"{k}: {sa.get(k, 'absent')} → {sb.get(k, 'absent')}" for k in keys)
 

@@ -211,7 +211,7 @@ class ResultsWriter:
                    contact: dict | None = None, path: dict | None = None) -> None:
         """Append one converged level; ``q`` is the gathered nodal vectors (rank 0), ``contact``
         the gathered contact fields (``petsc.contact_reports.contact_fields``), ``path`` what a restart needs:
-        ``blocks`` and ``increment_blocks`` (every block in model order, (n, 18)) and
+        ``blocks`` and ``increment_blocks`` (every block in model order, (n, D), D DOFs per node) and
         ``accepted_negative``.  Collective."""
         self._on_root(lambda: self._write_step(record, q, extra, contact, path))
 

@@ -10,7 +10,6 @@ from ..contact.partners import HISTORY
 from ..model.beams import Model
 from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
-from ..physics.element3363 import SLOTS
 from .files import atomic_write, remove_quietly
 from .surface_fields import SampledState, fields_for
 from .vtu import write_vtu
@@ -23,12 +22,14 @@ class SurfaceSampler:
     def __init__(self, model: Model, samples: int):
         self.model = model
         self.parts = []
+        block = model.block
+        SLOTS, k = block.slots, block.axial_nodes - 1
         for beam in model.beams:
             xi = np.linspace(-1.0, 1.0, samples + 1)
             conn = beam.connectivity
             E = len(conn)
             if beam.ring_at is not None:            # the outline at every sampled x, per element
-                x = beam.x_nodes[0:-1:2, None] + 0.5 * (xi[None, :] + 1.0) * (beam.x_nodes[2] - beam.x_nodes[0])
+                x = beam.x_nodes[0:-1:k, None] + 0.5 * (xi[None, :] + 1.0) * (beam.x_nodes[k] - beam.x_nodes[0])
                 YZ = np.stack([np.concatenate([beam.ring_at(xx) for xx in row]) for row in x])
                 m = YZ.shape[1] // len(xi)
             else:
@@ -38,7 +39,7 @@ class SurfaceSampler:
                 m = len(ring)
                 YZ = np.broadcast_to(np.tile(ring, (len(xi), 1)), (E, len(xi) * m, 2))
             M = len(xi) * m
-            N, dN = el.shape_functions(np.tile(np.repeat(xi, m), E), YZ[..., 0].ravel(), YZ[..., 1].ravel())
+            N, dN = block.shape_functions(np.tile(np.repeat(xi, m), E), YZ[..., 0].ravel(), YZ[..., 1].ravel())
             q0e = model.q0[conn].reshape(E, SLOTS, 3)
             G, _ = el.reference_gradients(q0e, dN.reshape(E, M, SLOTS, 3))
             # drop the duplicated first station of every element but the first
@@ -53,7 +54,8 @@ class SurfaceSampler:
         if beam.fibres is None:
             return None
         spec = self.model.spec
-        x0, h = beam.x_nodes[0:-1:2], beam.x_nodes[2] - beam.x_nodes[0]
+        k = self.model.block.axial_nodes - 1
+        x0, h = beam.x_nodes[0:-1:k], beam.x_nodes[k] - beam.x_nodes[0]
         x = x0[:, None] + 0.5 * (np.repeat(xi, m)[None, :] + 1.0) * h                   # (E, M)
         a0 = directions_at(beam, x, np.asarray(YZ), spec.length, spec.twist_deg, spec.twist_axis)
         return beam.material.with_directions(a0.reshape(a0.shape[0], -1, 3)[:, keep])
@@ -65,7 +67,7 @@ class SurfaceSampler:
         offset = 0
         for beam, m, S, N, G, e_of, r0, law in self.parts:
             conn = beam.connectivity
-            qe = q[conn].reshape(len(conn), SLOTS, 3)[e_of]
+            qe = q[conn].reshape(len(conn), self.model.block.slots, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
             F = np.matmul(np.swapaxes(qe, 1, 2), G)
             states.append(SampledState(r, r0, F, beam.index, law))

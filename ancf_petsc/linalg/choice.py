@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.rigid import rigid_modes
 from .database import option
 
@@ -22,12 +21,13 @@ def not_self_supported(model) -> list[str]:
     """Names of the beams whose own supports leave a rigid-body motion free (their K_f is then
     singular without the neighbours): the six rigid modes of the reference configuration,
     restricted to the beam's held DOFs, must have rank 6."""
-    fixed = np.zeros(DOFS_PER_NODE * model.n_nodes, dtype=bool)
+    D = model.dofs_per_node
+    fixed = np.zeros(D * model.n_nodes, dtype=bool)
     fixed[model.fixed_dofs] = True
     free = []
     for beam in model.beams:
         nodes = beam.node_offset + np.arange(beam.n_nodes)
-        dofs = (DOFS_PER_NODE * nodes[:, None] + np.arange(DOFS_PER_NODE)).ravel()
+        dofs = (D * nodes[:, None] + np.arange(D)).ravel()
         R = np.stack([m.reshape(-1) for m in rigid_modes(model.q0[nodes])], axis=1)[fixed[dofs]]
         scale = np.abs(R).max(axis=0, initial=0.0)
         if len(R) < 6 or np.linalg.matrix_rank(R / np.where(scale > 0, scale, 1.0), tol=1e-8) < 6:

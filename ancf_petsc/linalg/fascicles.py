@@ -17,7 +17,6 @@ from petsc4py import PETSc
 from scipy.linalg import lapack
 from scipy.linalg.blas import dtrsm
 
-from ..physics.element3363 import DOFS_PER_NODE
 
 
 @dataclass
@@ -33,6 +32,7 @@ class FascicleSplit:
     z_range: tuple            # this rank's owned range of the multiplier space
     z_beams: np.ndarray       # (M, 2) the two beams (A, B) each multiplier couples
     beam_rank: np.ndarray     # (n_beams,) the rank that holds each beam
+    dofs_per_node: int = 18   # DOFs of a node block (the model's, Model.dofs_per_node)
 
     @property
     def n_multipliers(self) -> int:
@@ -43,6 +43,7 @@ def fascicle_split(problem) -> FascicleSplit:
     """The split of ``problem`` (petsc.problem.Problem) on this rank.  Raises ValueError when a beam
     is not whole on one rank (use ``parallel.partition.make_layout(..., 'beams')``) or there is no contact."""
     model, layout, contact = problem.model, problem.layout, problem.contact
+    D = model.dofs_per_node
     if contact is None or contact.n_multipliers == 0:
         raise ValueError("the fascicle split needs contact multipliers")
     lo, hi = layout.owned_nodes
@@ -57,16 +58,16 @@ def fascicle_split(problem) -> FascicleSplit:
         if owners[0] == layout.rank:
             blocks = layout.perm[beam.node_offset + np.arange(beam.n_nodes)]
             beams.append(beam.index)
-            u_dofs.append((DOFS_PER_NODE * blocks[:, None] + np.arange(DOFS_PER_NODE)).ravel())
+            u_dofs.append((D * blocks[:, None] + np.arange(D)).ravel())
     dofs = layout.petsc_dofs(contact.multiplier_dofs())
     order = np.argsort(dofs, kind="stable")
     z_dofs = dofs[order]
     itf = contact.space.interface[order]
     ends = np.array([[i.a.index, i.b.index] for i in contact.interfaces], dtype=np.int64)
     z_beams = ends[itf]
-    r0, r1 = np.searchsorted(z_dofs, [DOFS_PER_NODE * lo, DOFS_PER_NODE * hi])
+    r0, r1 = np.searchsorted(z_dofs, [D * lo, D * hi])
     m_index = [np.flatnonzero((z_beams[:, 0] == b) | (z_beams[:, 1] == b)) for b in beams]
-    return FascicleSplit(beams, u_dofs, m_index, z_dofs, (int(r0), int(r1)), z_beams, beam_rank)
+    return FascicleSplit(beams, u_dofs, m_index, z_dofs, (int(r0), int(r1)), z_beams, beam_rank, D)
 
 
 #: a Cholesky factor is also kept in LAPACK's band storage when the half-bandwidth of K_f is

@@ -40,7 +40,6 @@ from __future__ import annotations
 import numpy as np
 from petsc4py import PETSc
 
-from ..physics.element3363 import DOFS_PER_NODE
 from . import logging
 from .fascicles import FascicleFactor, FascicleSplit, fascicle_blocks
 from .substructure import SubstructuredSchur
@@ -78,10 +77,10 @@ class FascicleSchur:
         self._pos = []
         for u, m in zip(sp_.u_dofs, sp_.m_index):
             dofs = np.concatenate([u, sp_.z_dofs[m]])
-            blocks = np.unique(dofs // DOFS_PER_NODE)
-            pos = (DOFS_PER_NODE * np.searchsorted(blocks, dofs // DOFS_PER_NODE)
-                   + dofs % DOFS_PER_NODE)
-            self._is.append(PETSc.IS().createBlock(DOFS_PER_NODE, blocks.astype(PETSc.IntType), comm=PETSc.COMM_SELF))
+            D = split.dofs_per_node
+            blocks = np.unique(dofs // D)
+            pos = (D * np.searchsorted(blocks, dofs // D) + dofs % D)
+            self._is.append(PETSc.IS().createBlock(D, blocks.astype(PETSc.IntType), comm=PETSc.COMM_SELF))
             self._pos.append((pos[:len(u)], pos[len(u):]))
         self._subs = None
         self.factors: list[FascicleFactor] = []

@@ -16,8 +16,9 @@ from .database import insert, option, remove
 from .diagnostics import petsc_message, solver_hint
 
 def node_blocks_fit(model) -> bool:
-    """Whether every node's 18 DOFs are active (all beams 3363), as SBAIJ node blocks need."""
-    return all(len(b.vectors) == 6 for b in model.beams)
+    """Whether every node's DOFs are active (all beams interpolate their whole node block, e.g.
+    3363), as SBAIJ node blocks need."""
+    return all(len(b.vectors) == model.block.vectors_per_node for b in model.beams)
 
 
 DEFAULT_OPTIONS = {
@@ -90,8 +91,8 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full and symmetric) else "aij"
     if choice == "sbaij":
         if not full:
-            raise InputError("solver.matrix", "sbaij needs element 3363 on every beam (3333 holds "
-                                               "half of each node block); use aij or auto")
+            raise InputError("solver.matrix", "sbaij needs elements that use their whole node block "
+                                               "on every beam (3333 holds half of 3363's); use aij or auto")
         if pc not in SBAIJ_PCS or not symmetric:
             raise InputError("solver.matrix", f"PETSc's pc_type {pc} does not run on sbaij"
                               + ("" if symmetric else " (an unsymmetric Jacobian: contact.tangential "

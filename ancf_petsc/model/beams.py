@@ -1,8 +1,9 @@
 """The discretised model: beams (elements, nodes, section, material, quadrature) and their numbering.
 
 Global numbering (before any partitioning): beams in config order, nodes of a beam consecutive
-(2 n_el + 1 per beam), 18 DOFs per node in eq. (3) order (``element3363``).  Element e of a beam
-has nodes (2e, 2e+1, 2e+2).  The model is replicated on every rank; only the per-element
+((k − 1) n_el + 1 per beam for elements of k axial nodes), ``Model.block.dofs_per_node`` DOFs per
+node in the order of the block's nodal vectors (``physics/elements``: 18 in eq. (3) order for
+3363 and 3333).  Element e of a beam of three-node elements has nodes (2e, 2e+1, 2e+2).  The model is replicated on every rank; only the per-element
 quadrature data (``element_data``) is built for the elements a rank owns."""
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import numpy as np
 from ..config.specs import ModelSpec
 from ..physics import element3363 as el
 from ..physics.cubature import ellipse_rule, gauss_legendre
-from ..physics.element3363 import DOFS_PER_NODE
+from ..physics.elements import Element, NodeBlock, element as registered_element
 from ..physics.goh import GOH
 from ..physics.materials import NeoHookean
 from ..physics.mixed import ProjectedDilatation, grouped_basis, pressure_basis
@@ -31,7 +32,7 @@ class Beam:
     element_offset: int
     x_nodes: np.ndarray
     axial_points: int
-    element: str = el.DEFAULT_ELEMENT                      # a name of element3363.ELEMENTS
+    element: str = el.DEFAULT_ELEMENT                      # a name of physics.elements.ELEMENTS
     locking: str = "none"                                  # 'none' | 'ecm' | 'mixed' (see ``parts``)
     xi: np.ndarray = field(repr=False, default=None)      # (P,) ξ of the element's Gauss points
     yz: np.ndarray = field(repr=False, default=None)      # (P, 2) section coordinates
@@ -55,9 +56,14 @@ class Beam:
     pressure_columns: tuple | None = None
 
     @property
+    def layout(self) -> Element:
+        """This beam's element (the registry's entry for ``element``)."""
+        return registered_element(self.element)
+
+    @property
     def vectors(self) -> tuple[int, ...]:
         """The nodal vectors this beam's element interpolates (all six for 3363)."""
-        return el.ELEMENT_VECTORS[self.element]
+        return self.layout.vectors
 
     def parts(self) -> list[tuple[np.ndarray, np.ndarray, object]]:
         """(dN, weights, material) of each integrated part of the strain energy.
@@ -99,7 +105,7 @@ class Beam:
                              "neo-Hookean or GOH law")
         pts, w = ellipse_rule(*semi, self.volumetric_degree)
         xa, wa = gauss_legendre(self.axial_points)
-        _, dN = el.shape_functions(*el.tensor_points(xa, pts), self.vectors)
+        _, dN = self.layout.shape_functions(*el.tensor_points(xa, pts))
         matrix = GOH(m.mu, 0.0, m.k1, m.k2, m.kappa, m.fibres) if isinstance(m, GOH) else NeoHookean(m.mu, 0.0)
         return [(self.dN, self.wq, self._bound(matrix, self.fibres)),
                 (dN, np.repeat(wa, len(w)) * np.tile(w, len(xa)), NeoHookean(0.0, m.K))]
@@ -110,13 +116,12 @@ class Beam:
 
     @property
     def n_nodes(self) -> int:
-        return 2 * self.n_elements + 1
+        return self.layout.block.nodes_of(self.n_elements)
 
     @property
     def connectivity(self) -> np.ndarray:
-        """Global node ids (n_el, 3)."""
-        e = np.arange(self.n_elements)
-        return self.node_offset + np.stack([2 * e, 2 * e + 1, 2 * e + 2], axis=1)
+        """Global node ids (n_el, axial nodes)."""
+        return self.node_offset + self.layout.block.connectivity(self.n_elements)
 
     @property
     def points_per_element(self) -> int:
@@ -135,10 +140,10 @@ class Support:
 class Model:
     spec: ModelSpec
     beams: list[Beam]
-    q0: np.ndarray                 # (n_nodes, 6, 3) reference nodal vectors
+    q0: np.ndarray                 # (n_nodes, vectors per node, 3) reference nodal vectors
     fixed_dofs: np.ndarray         # sorted global DOF ids held at their reference value
     loading: list                  # LoadGroups (loading.py): forces and prescribed displacements
-    probes: dict[str, tuple[int, np.ndarray]]   # name → (global node, weights of its 6 vectors)
+    probes: dict[str, tuple[int, np.ndarray]]   # name → (global node, weights of its vectors)
     geometry_report: list = field(default_factory=list)   # measured sections, twist axis (printed)
     warnings: list = field(default_factory=list)          # implausible sizes (plausibility.py)
     supports: list = field(default_factory=list)         # the boundary conditions (Support)
@@ -156,9 +161,18 @@ class Model:
         return sum(g.moves for g in self.loading)
 
     def probe_values(self, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-        """name → (displacement, value) of every probe at the nodal vectors q (n_nodes, 6, 3):
+        """name → (displacement, value) of every probe at the nodal vectors q (n_nodes, V, 3):
         one nodal vector, or a section mean Σ_k m̄_k q_k (m̄_k = ∫ m_k dA / A)."""
         return {name: (w @ (q[node] - self.q0[node]), w @ q[node]) for name, (node, w) in self.probes.items()}
+
+    @property
+    def block(self) -> NodeBlock:
+        """The node block every beam's element shares (DOFs per node, vector names, monomials)."""
+        return self.beams[0].layout.block
+
+    @property
+    def dofs_per_node(self) -> int:
+        return self.block.dofs_per_node
 
     @property
     def n_nodes(self) -> int:
@@ -166,7 +180,7 @@ class Model:
 
     @property
     def n_dofs(self) -> int:
-        return DOFS_PER_NODE * self.n_nodes
+        return self.dofs_per_node * self.n_nodes
 
     @property
     def n_elements(self) -> int:
@@ -186,7 +200,8 @@ class Model:
 
     def element_data(self, beam: Beam, local: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, object]]:
         """Per energy part (``Beam.parts``): material gradients G (E, P, S, 3), weights w (E, P)
-        and material, for elements ``local`` of a beam (S = 18 for 3363, 9 for 3333)."""
+        and material, for elements ``local`` of a beam (S = axial nodes × interpolated vectors:
+        18 for 3363, 9 for 3333)."""
         conn = beam.connectivity[local]
         q0e = self.q0[conn][:, :, list(beam.vectors)].reshape(len(local), -1, 3)
         out = []

@@ -11,7 +11,7 @@ from ..config.specs import ModelSpec, SectionSpec
 from ..config.values import ConfigError
 from ..physics import element3363 as el
 from ..physics.cubature import gauss_legendre
-from ..physics.element3363 import DOFS_PER_NODE
+from ..physics.elements import element
 from ..physics.geometry import reference_nodal_vectors
 from ..physics.laws import make_material
 from ..physics.section import Section, make_circle, make_ellipse, make_outline, make_rectangle
@@ -137,7 +137,7 @@ def _varying_rules(beam: Beam, tendon, bs, length: float) -> None:
             w[e, g, :k] = s.weights
             area[e, g] = s.area
     xi = np.repeat(xa, n)
-    _, dN = el.shape_functions(np.tile(xi, E), yz[..., 0].ravel(), yz[..., 1].ravel(), beam.vectors)
+    _, dN = beam.layout.shape_functions(np.tile(xi, E), yz[..., 0].ravel(), yz[..., 1].ravel())
     beam.xi = xi
     beam.yz = yz.reshape(E, na * n, 2)
     beam.dN = dN.reshape(E, na * n, -1, 3)
@@ -160,13 +160,14 @@ def build_section_at(sspec: SectionSpec, tendon, x: float) -> Section:
 def _end_moments(beam: Beam, tendon, bs, x: float) -> np.ndarray:
     """∫ m_k dA / A over the section at x in the beam frame (a uniform end traction; a section
     mean probe)."""
+    block = beam.layout.block
     if beam.ring_at is None:
         sec = beam.section
-        m, _, _ = el.section_monomials(sec.points[:, 0], sec.points[:, 1])
+        m = block.section_monomials(sec.points[:, 0], sec.points[:, 1])
         return sec.weights @ m / sec.weights.sum()
     sec = build_section_at(bs.section, tendon, x)
     P = sec.points + sec.centroid - beam.section.centroid
-    m, _, _ = el.section_monomials(P[:, 0], P[:, 1])
+    m = block.section_monomials(P[:, 0], P[:, 1])
     return sec.weights @ m / sec.weights.sum()
 
 
@@ -186,9 +187,13 @@ def build_model(spec: ModelSpec) -> Model:
             raise ConfigError("contact", "sections that vary along x work with contact only when every "
                               f"interface curve is the same at every station ({tendon.field.reason}); "
                               "remove contact or give equal borders at every station")
+    block = element(spec.beams[0].element).block
     for i, bs in enumerate(spec.beams):
+        if element(bs.element).block != block:
+            raise ConfigError(f"beams[{i}].element", f"element {bs.element} has another node block than "
+                              f"{spec.beams[0].element} (beams[0]); the beams of one model share their node layout")
         section = build_section(bs.section, f"beams[{i}].section", registry, tendon)
-        x_nodes = np.linspace(0.0, spec.length, 2 * bs.elements + 1)
+        x_nodes = np.linspace(0.0, spec.length, block.nodes_of(bs.elements))
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,
                     x_nodes=x_nodes, axial_points=bs.axial_points, element=bs.element,
@@ -198,9 +203,9 @@ def build_model(spec: ModelSpec) -> Model:
         beam.xi, y, z = el.tensor_points(xa, section.points)
         beam.yz = np.column_stack([y, z])
         beam.wq = np.repeat(wa, len(section.weights)) * np.tile(section.weights, len(xa))
-        _, beam.dN = el.shape_functions(beam.xi, y, z, beam.vectors)
+        _, beam.dN = beam.layout.shape_functions(beam.xi, y, z)
         zero = np.zeros_like(xa)     # the beam axis y = z = 0 runs through the section centroid
-        _, beam.dN_axis = el.shape_functions(xa, zero, zero, beam.vectors)
+        _, beam.dN_axis = beam.layout.shape_functions(xa, zero, zero)
         beam.wq_axis = wa * section.weights.sum()
         if tendon is not None and tendon.varies and _measured(bs):
             _varying_rules(beam, tendon, bs, spec.length)
@@ -212,25 +217,26 @@ def build_model(spec: ModelSpec) -> Model:
     report.append(line)
     for beam in beams:
         q0_parts.append(reference_nodal_vectors(beam.x_nodes, beam.section.centroid, spec.length,
-                                                spec.twist_deg, spec.twist_axis))
+                                                spec.twist_deg, spec.twist_axis, block.vectors_per_node))
         set_fibre_directions(beam, spec.length, spec.twist_deg, spec.twist_axis)
     q0 = np.concatenate(q0_parts)
 
+    D = block.dofs_per_node
     fixed = set()
-    for beam in beams:     # 3333: r_yy, r_zz, r_yz held at their reference value 0
-        held = [v for v in range(el.VECTORS_PER_NODE) if v not in beam.vectors]
+    for beam in beams:     # vectors the element does not interpolate (3333: r_yy, r_zz, r_yz) held at 0
+        held = list(beam.layout.held)
         nodes = beam.node_offset + np.arange(beam.n_nodes)
-        fixed.update((DOFS_PER_NODE * nodes[:, None] + (3 * np.array(held, dtype=int)[:, None] + np.arange(3)).ravel())
+        fixed.update((D * nodes[:, None] + (3 * np.array(held, dtype=int)[:, None] + np.arange(3)).ravel())
                      .ravel().tolist())
-    n_dofs = DOFS_PER_NODE * q0.shape[0]
+    n_dofs = D * q0.shape[0]
     loading = [LoadGroup(None, np.zeros(n_dofs), np.zeros(n_dofs))]      # the λ-proportional one
     supports = []
     for bc in spec.boundary_conditions:
         node = beams[bc.beam].node_offset + bc.node
-        dofs = [DOFS_PER_NODE * node + 3 * v + c for v, c in bc.dofs]
+        dofs = [D * node + 3 * v + c for v, c in bc.dofs]
         group = group_for(loading, None if bc.curve is None else LoadCurve(bc.curve), n_dofs)
         for v, c, value in bc.displacement:
-            dofs.append(DOFS_PER_NODE * node + 3 * v + c)
+            dofs.append(D * node + 3 * v + c)
             group.moves[dofs[-1]] = value
         fixed.update(dofs)
         supports.append(Support(bc.name, node, np.array(sorted(dofs), dtype=np.int64)))
@@ -242,19 +248,19 @@ def build_model(spec: ModelSpec) -> Model:
         force = np.asarray(ld.force)
         f_ext = group_for(loading, None if ld.curve is None else LoadCurve(ld.curve), n_dofs).forces
         if ld.kind == "force":
-            f_ext[DOFS_PER_NODE * node:DOFS_PER_NODE * node + 3] += force
+            f_ext[D * node:D * node + 3] += force
         else:
             # uniform dead traction t = F / A over the end section: f_k = t ∫ m_k dA
             moments = _end_moments(beam, tendon, spec.beams[ld.beam], beam.x_nodes[ld.node])
-            f_ext[DOFS_PER_NODE * node:DOFS_PER_NODE * node + DOFS_PER_NODE] += np.outer(moments, force).ravel()
-        loaded = [DOFS_PER_NODE * node + c for c in range(3) if force[c] != 0.0]
+            f_ext[D * node:D * node + D] += np.outer(moments, force).ravel()
+        loaded = [D * node + c for c in range(3) if force[c] != 0.0]
         if np.any(np.isin(loaded, fixed_dofs)):
             raise ConfigError(ld.path, "the load pushes on a fixed component of r at this node; "
                                        "load another node or free that component")
 
     probes = {p.name: (beams[p.beam].node_offset + p.node,
                        _end_moments(beams[p.beam], tendon, spec.beams[p.beam], beams[p.beam].x_nodes[p.node])
-                       if p.vector == "mean" else np.eye(len(el.VECTORS))[el.VECTOR_INDEX[p.vector]])
+                       if p.vector == "mean" else np.eye(block.vectors_per_node)[block.index(p.vector)])
               for p in spec.probes}
     warnings = size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
     end_means = [_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[-1]) for b in beams]

@@ -25,9 +25,9 @@ def set_fibre_directions(beam: Beam, length: float, twist_deg: float, axis) -> N
     law with fibres (one that has ``with_directions``); nothing for an isotropic law."""
     if not hasattr(beam.material, "with_directions"):
         return
-    x = gauss_point_stations(beam.x_nodes, beam.xi)                          # (E, P)
+    x = gauss_point_stations(beam.x_nodes, beam.xi, beam.layout.block.axial_nodes)                          # (E, P)
     yz = beam.yz if beam.yz.ndim == 3 else np.broadcast_to(beam.yz, x.shape + (2,))
     beam.fibres = directions_at(beam, x, yz, length, twist_deg, axis)
     xa, _ = gauss_legendre(beam.axial_points)
-    xx = gauss_point_stations(beam.x_nodes, xa)
+    xx = gauss_point_stations(beam.x_nodes, xa, beam.layout.block.axial_nodes)
     beam.fibres_axis = directions_at(beam, xx, np.zeros(xx.shape + (2,)), length, twist_deg, axis)

@@ -25,7 +25,7 @@ __all__ = ["axial_forces", "element_means"]
 
 def axial_forces(model, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Per beam: the reference x of every axial Gauss point (E na,) [m] and the force f there
-    (E na, 3) [N] the section carries (module docstring), for nodal vectors q (n_nodes, 6, 3).
+    (E na, 3) [N] the section carries (module docstring), for nodal vectors q (n_nodes, V, 3).
     Within an element it oscillates where the element locks (the paper's 3 axial points: the
     Achilles soleus at 400 N carries 460 / 325 / 463 N at the first element's points, whose
     mean is 400 N); ``element_means`` gives each element's mean."""
@@ -36,7 +36,8 @@ def axial_forces(model, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray
         _, wa = gauss_legendre(beam.axial_points)
         na = len(wa)
         qe = q[beam.connectivity][:, :, list(beam.vectors)].reshape(E, -1, 3)
-        dx_dxi = 0.5 * (beam.x_nodes[2::2] - beam.x_nodes[0:-1:2])                 # (E,)
+        k = beam.layout.block.axial_nodes - 1                                      # element ends k apart
+        dx_dxi = 0.5 * (beam.x_nodes[k::k] - beam.x_nodes[0:-1:k])                 # (E,)
         force = np.zeros((E, na, 3))
         for G, w, law in model.element_data(beam, local):
             F = np.matmul(np.swapaxes(qe, 1, 2)[:, None], G)                      # (E, P, 3, 3)
@@ -45,7 +46,7 @@ def axial_forces(model, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray
             f = (w[..., None] * P[..., :, 0]).reshape(E, na, per, 3).sum(axis=2)
             force += f / (wa[None, :, None] * dx_dxi[:, None, None])
         xa, _ = gauss_legendre(beam.axial_points)
-        x = beam.x_nodes[0:-1:2, None] + dx_dxi[:, None] * (xa[None, :] + 1.0)
+        x = beam.x_nodes[0:-1:k, None] + dx_dxi[:, None] * (xa[None, :] + 1.0)
         out[beam.name] = (x.ravel(), force.reshape(-1, 3))
     return out
 
@@ -58,6 +59,7 @@ def element_means(model, forces: dict[str, tuple[np.ndarray, np.ndarray]]) -> di
         _, wa = gauss_legendre(beam.axial_points)
         x, f = forces[beam.name]
         f = f.reshape(beam.n_elements, len(wa), 3)
-        out[beam.name] = (0.5 * (beam.x_nodes[0:-1:2] + beam.x_nodes[2::2]),
+        k = beam.layout.block.axial_nodes - 1
+        out[beam.name] = (0.5 * (beam.x_nodes[0:-1:k] + beam.x_nodes[k::k]),
                           np.einsum("g,egi->ei", wa / wa.sum(), f))
     return out

@@ -28,7 +28,8 @@ __all__ = ["ExistingRun", "levels_missing", "other_figures", "paper_summaries", 
 #: what a fingerprint item (io/restart.py) is, in words: "<beam>'s ..." for a beam's items
 DIFFERENCE_WORDS = {
     "elements": "{beam} has another number of elements",
-    "element_axial_points_locking": "{beam} has another element, axial Gauss points or locking remedy",
+    "element": "{beam} has another element",
+    "axial_points_locking": "{beam} has other axial Gauss points or another locking remedy",
     "material": "{beam} has another material", "fibres": "{beam} has other fibres",
     "x_nodes": "{beam} has other nodes along x", "section_points": "{beam} has another cross-section",
     "section_weights": "{beam} has another cross-section", "connectivity": "{beam} has other elements",
@@ -114,7 +115,7 @@ def difference_words(key: str, detail: str) -> str:
     if item.startswith("load_curve"):
         return "a load or displacement follows a load curve"
     words = DIFFERENCE_WORDS.get(item, f"{key} differs").format(beam=beam)
-    return f"{words} ({detail})" if item in ("elements", "length", "twist_deg", "contact") else words
+    return f"{words} ({detail})" if item in ("elements", "element", "length", "twist_deg", "contact") else words
 
 
 def read_existing(dirs: list[str], inputs: PaperInputs) -> list[ExistingRun]:

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.element3363 import DOFS_PER_NODE
 
 
 @dataclass
@@ -28,6 +27,7 @@ class Layout:
     ranges: np.ndarray          # (size + 1,) PETSc node ownership ranges
     method: str = "blocks"
     n_nodes: int = -1           # beam nodes; blocks n_nodes … n_blocks − 1 are extra blocks
+    dofs_per_node: int = 18     # DOFs of a block (the model's node block, Model.dofs_per_node)
 
     @property
     def n_blocks(self) -> int:
@@ -44,8 +44,9 @@ class Layout:
     def petsc_dofs(self, model_dofs: np.ndarray) -> np.ndarray:
         """Map model DOF ids to PETSc DOF ids (negative ids pass through unchanged)."""
         model_dofs = np.asarray(model_dofs)
-        node, local = np.divmod(np.maximum(model_dofs, 0), DOFS_PER_NODE)
-        return np.where(model_dofs < 0, model_dofs, DOFS_PER_NODE * self.perm[node] + local)
+        D = self.dofs_per_node
+        node, local = np.divmod(np.maximum(model_dofs, 0), D)
+        return np.where(model_dofs < 0, model_dofs, D * self.perm[node] + local)
 
     def summary(self) -> str:
         counts = np.bincount(self.elem_owner, minlength=self.size)

@@ -14,7 +14,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..model.beams import Model
-from ..physics.element3363 import DOFS_PER_NODE
 from .layout import Layout, block_layout, layout_from_owner
 
 CONTACT_COST = 4
@@ -37,13 +36,13 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
         if len(els) > 1:
             a, b = np.meshgrid(els, els)
             off = a != b
-            rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), DOFS_PER_NODE))
+            rows.append(a[off]); cols.append(b[off]); wts.append(np.full(off.sum(), model.dofs_per_node))
     graph = None if contact is None else contact.coupling_graph()
     if graph is not None:
         (pa, pb), cnt = graph.pairs.T, graph.counts
         keep = pa != pb
         rows += [pa[keep], pb[keep]]; cols += [pb[keep], pa[keep]]
-        wts += [DOFS_PER_NODE * cnt[keep], DOFS_PER_NODE * cnt[keep]]
+        wts += [model.dofs_per_node * cnt[keep], model.dofs_per_node * cnt[keep]]
     if rows:
         r, c, w = np.concatenate(rows), np.concatenate(cols), np.concatenate(wts)
     else:
@@ -118,11 +117,14 @@ def make_layout(model: Model, method: str, size: int, rank: int, contact=None, c
     broadcast."""
     extra = None if contact is None else contact.coupling_graph().multiplier_node_element
     if method == "blocks" or size == 1:
-        return block_layout(model.connectivity(), model.n_nodes, size, rank, extra)
-    owner = OWNERS[method](model, size, contact) if rank == 0 else None
-    if comm is not None:
-        owner = comm.bcast(owner, root=0)
-    return layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, method, extra)
+        lay = block_layout(model.connectivity(), model.n_nodes, size, rank, extra)
+    else:
+        owner = OWNERS[method](model, size, contact) if rank == 0 else None
+        if comm is not None:
+            owner = comm.bcast(owner, root=0)
+        lay = layout_from_owner(owner, model.connectivity(), model.n_nodes, size, rank, method, extra)
+    lay.dofs_per_node = model.dofs_per_node
+    return lay
 
 
 def partition_stats(layout: Layout, model: Model, contact=None) -> dict:

@@ -17,7 +17,6 @@ from petsc4py import PETSc
 from ..linalg.options import node_blocks_fit
 from ..model.beams import Beam, Model
 from ..parallel.layout import Layout
-from ..physics.element3363 import DOFS_PER_NODE
 
 ADD = PETSc.InsertMode.ADD_VALUES
 INSERT = PETSc.InsertMode.INSERT_VALUES
@@ -28,10 +27,10 @@ class ElementBlock:
     """A rank's elements of one beam with their quadrature data."""
     beam: Beam
     parts: list          # [(G (E, P, S, 3), w (E, P), material)] per energy part (Beam.parts)
-    nodes: np.ndarray    # (E, 3) PETSc node ids
+    nodes: np.ndarray    # (E, k) PETSc node ids (k axial nodes)
     rows: np.ndarray     # (E, 3S) PETSc DOF ids, −1 for DOFs held by BCs
-    node_dofs: np.ndarray  # (3S/3,) offsets of the active DOFs inside a node's 18-DOF block
-    lnodes: np.ndarray | None = None   # (E, 3) positions of the nodes in the local array (exchange.py)
+    node_dofs: np.ndarray  # (3S/k,) offsets of the active DOFs inside a node's block (18 DOFs for 3363)
+    lnodes: np.ndarray | None = None   # (E, k) positions of the nodes in the local array (exchange.py)
 
     @property
     def G(self) -> np.ndarray:
@@ -39,12 +38,13 @@ class ElementBlock:
         return self.parts[0][0]
 
     def element_vectors(self, xl: np.ndarray) -> np.ndarray:
-        """Active nodal vectors of the elements (E, S, 3) from the local state (n, 6, 3)."""
+        """Active nodal vectors of the elements (E, S, 3) from the local state (n, V, 3)."""
         return xl[self.lnodes][:, :, list(self.beam.vectors)].reshape(len(self.nodes), -1, 3)
 
     def local_dofs(self) -> np.ndarray:
         """Positions of the elements' active DOFs in the local array (E, 3S)."""
-        return (DOFS_PER_NODE * self.lnodes[:, :, None] + self.node_dofs).reshape(len(self.nodes), -1)
+        D = self.beam.layout.block.dofs_per_node
+        return (D * self.lnodes[:, :, None] + self.node_dofs).reshape(len(self.nodes), -1)
 
 
 #: Jacobian storage formats (``Problem(matrix_type=...)``)
@@ -53,22 +53,22 @@ MATRIX_TYPES = ("aij", "sbaij")
 
 def check_matrix_type(model: Model, matrix_type: str) -> None:
     """ValueError unless ``matrix_type`` is one of MATRIX_TYPES and fits the model (SBAIJ node
-    blocks need all six nodal vectors on every beam)."""
+    blocks need every beam to interpolate its whole node block)."""
     if matrix_type not in MATRIX_TYPES:
         raise ValueError(f"matrix_type must be one of {MATRIX_TYPES}, not {matrix_type!r}")
     if matrix_type == "sbaij" and not node_blocks_fit(model):
-        raise ValueError("SBAIJ node blocks need every beam to use all six nodal vectors "
-                         "(element 3363); use matrix_type 'aij'")
+        raise ValueError("SBAIJ node blocks need every beam to use all nodal vectors of its node "
+                         "block (e.g. element 3363); use matrix_type 'aij'")
 
 
-def node_blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """Node ids (n, D/18) of DOF index blocks (n, D) made of whole 18-DOF nodes, and a mask
-    (n, D) of the held DOFs (−1) of nodes that have free DOFs (None when there are none).
-    A node whose 18 DOFs are all −1 (unused, or held entirely) gets the node id −1."""
+def node_blocks(rows: np.ndarray, bs: int = 18) -> tuple[np.ndarray, np.ndarray | None]:
+    """Node ids (n, D/bs) of DOF index blocks (n, D) made of whole nodes of ``bs`` DOFs (18 for
+    3363), and a mask (n, D) of the held DOFs (−1) of nodes that have free DOFs (None when there
+    are none).  A node whose DOFs are all −1 (unused, or held entirely) gets the node id −1."""
     n, D = rows.shape
-    g = rows.reshape(n, D // DOFS_PER_NODE, DOFS_PER_NODE)
+    g = rows.reshape(n, D // bs, bs)
     valid = g >= 0
-    node = np.where(valid.any(axis=2), g.max(axis=2) // DOFS_PER_NODE, -1).astype(PETSc.IntType)
+    node = np.where(valid.any(axis=2), g.max(axis=2) // bs, -1).astype(PETSc.IntType)
     held = ~valid & (node >= 0)[:, :, None]
     return node, (held.reshape(n, D) if held.any() else None)
 
@@ -98,7 +98,7 @@ def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, *values: np.ndarray) ->
         return
     values = values[0]
     if mat.getType().endswith("sbaij"):
-        node, held = node_blocks(rows)
+        node, held = node_blocks(rows, mat.getBlockSize())
         mat.setValuesBlockedRCV(node, node, zero_held(values, held), ADD)
     else:
         rows = rows.astype(PETSc.IntType)
@@ -118,7 +118,7 @@ def element_blocks(model: Model, layout: Layout, fixed_mask: np.ndarray) -> list
         parts = model.element_data(beam, mine - beam.element_offset)
         cn = conn_all[mine]
         node_dofs = (3 * np.array(beam.vectors)[:, None] + np.arange(3)).ravel()
-        rows = (DOFS_PER_NODE * cn[:, :, None] + node_dofs).reshape(len(mine), -1)
+        rows = (model.dofs_per_node * cn[:, :, None] + node_dofs).reshape(len(mine), -1)
         rows = np.where(fixed_mask[rows], -1, rows).astype(PETSc.IntType)
         out.append(ElementBlock(beam, parts, cn, rows, node_dofs))
     return out

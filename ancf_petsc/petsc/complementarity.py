@@ -55,7 +55,6 @@ import scipy.linalg as la
 from petsc4py import PETSc
 
 from ..contact.laws import HELD, PROBE
-from ..physics.element3363 import DOFS_PER_NODE
 
 #: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
 MAX_MULTIPLIERS = 2500
@@ -74,7 +73,7 @@ LCP_TOL = 1e-9
 def multiplier_dofs(problem) -> np.ndarray:
     """Global PETSc DOF of every multiplier (model order of contact.space)."""
     c, lay = problem.contact, problem.layout
-    return DOFS_PER_NODE * lay.perm[problem.model.n_nodes + c.space.node] + c.space.slot
+    return problem.model.dofs_per_node * lay.perm[problem.model.n_nodes + c.space.node] + c.space.slot
 
 
 def _owned_values(vec: PETSc.Vec, dofs: np.ndarray, comm) -> np.ndarray:

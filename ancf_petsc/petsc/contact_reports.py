@@ -8,7 +8,6 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..contact import reports
-from ..physics.element3363 import SLOTS
 from .problem import Problem
 
 
@@ -40,7 +39,7 @@ def contact_fields(problem: Problem, X: PETSc.Vec) -> dict | None:
     conn = problem.model.connectivity()
 
     def q0_of(els):
-        return q0[conn[els]].reshape(len(els), SLOTS, 3)
+        return q0[conn[els]].reshape(len(els), problem.model.block.slots, 3)
     def fields(xl):
         out = reports.point_fields(problem.contact, problem.contact.evaluate(xl, problem.exchange.needed), q0_of)
         # the weight each point has in the weighted gaps: 0 for a point whose partner place is

@@ -12,7 +12,6 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..parallel.layout import Layout
-from ..physics.element3363 import DOFS_PER_NODE
 from .blocks import ADD, INSERT, ElementBlock
 
 
@@ -52,18 +51,19 @@ class GhostExchange:
         if self.scatter is not None:
             for obj in (self.scatter, self.xloc, self.floc):
                 obj.destroy()
-        self.xloc = PETSc.Vec().createSeq(DOFS_PER_NODE * len(self.needed), bsize=DOFS_PER_NODE, comm=PETSc.COMM_SELF)
+        D = self.layout.dofs_per_node
+        self.xloc = PETSc.Vec().createSeq(D * len(self.needed), bsize=D, comm=PETSc.COMM_SELF)
         self.floc = self.xloc.duplicate()
-        is_needed = PETSc.IS().createBlock(DOFS_PER_NODE, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        is_needed = PETSc.IS().createBlock(D, self.needed.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(self.X, is_needed, self.xloc, None)
         is_needed.destroy()
         # the internal forces are evaluated with held DOFs at their prescribed values, so the free
         # residuals do not depend on them and the symmetric Jacobian (held columns dropped) is exact
         model_node = np.argsort(self.layout.perm)[self.needed]
-        held = self.fixed_mask[(DOFS_PER_NODE * self.needed[:, None] + np.arange(DOFS_PER_NODE))]
+        held = self.fixed_mask[(D * self.needed[:, None] + np.arange(D))]
         self.held_local = np.flatnonzero(held.ravel())
-        self.held_values = self.q0_model.reshape(-1, DOFS_PER_NODE)[model_node].ravel()[self.held_local]
-        self.held_moves = np.array([m.reshape(-1, DOFS_PER_NODE)[model_node].ravel()[self.held_local]
+        self.held_values = self.q0_model.reshape(-1, D)[model_node].ravel()[self.held_local]
+        self.held_moves = np.array([m.reshape(-1, D)[model_node].ravel()[self.held_local]
                                     for m in self.moved_model]).reshape(len(self.moved_model), -1)
         for blk in self.blocks:
             blk.lnodes = np.searchsorted(self.needed, blk.nodes)
@@ -92,9 +92,9 @@ class GhostExchange:
         raise RuntimeError("contact exchange did not settle")   # not reached: one element per retry
 
     def local_state(self, X: PETSc.Vec) -> np.ndarray:
-        """The needed node blocks of X (n, 6, 3), with held DOFs at their prescribed values."""
+        """The needed node blocks of X (n, V, 3), with held DOFs at their prescribed values."""
         self.scatter.scatter(X, self.xloc, INSERT, PETSc.ScatterMode.FORWARD)
-        xl = self.xloc.getArray().reshape(-1, 6, 3)
+        xl = self.xloc.getArray().reshape(-1, self.layout.dofs_per_node // 3, 3)
         xl.reshape(-1)[self.held_local] = self.held_values + self.multipliers @ self.held_moves
         return xl
 

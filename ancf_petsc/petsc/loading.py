@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 from petsc4py import PETSc
 
-from ..physics.element3363 import DOFS_PER_NODE
 
 
 def held_dofs(model, layout, contact=None) -> tuple[np.ndarray, np.ndarray]:
@@ -14,10 +13,11 @@ def held_dofs(model, layout, contact=None) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = layout.owned_nodes
     held = model.fixed_dofs if contact is None else np.concatenate([model.fixed_dofs, contact.padding_dofs()])
     fixed = layout.petsc_dofs(held)
-    mask = np.zeros(DOFS_PER_NODE * layout.n_blocks, dtype=bool)
+    D = model.dofs_per_node
+    mask = np.zeros(D * layout.n_blocks, dtype=bool)
     mask[fixed] = True
-    owned = np.sort(fixed[(fixed >= DOFS_PER_NODE * lo) & (fixed < DOFS_PER_NODE * hi)])
-    return mask, owned - DOFS_PER_NODE * lo
+    owned = np.sort(fixed[(fixed >= D * lo) & (fixed < D * hi)])
+    return mask, owned - D * lo
 
 
 def every_block(model, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -10,7 +10,6 @@ from petsc4py import PETSc
 
 from ..model.beams import Model
 from ..parallel.layout import Layout
-from ..physics.element3363 import DOFS_PER_NODE
 
 
 class JacobianPattern:
@@ -36,8 +35,9 @@ class JacobianPattern:
         lo, hi = (0, n) if rows is None else rows
         conn = self.layout.perm[self.model.connectivity()]
         conn = conn[np.any((conn >= lo) & (conn < hi), axis=1)]
-        r = np.repeat(conn, 3, axis=1).ravel()
-        c = np.tile(conn, (1, 3)).ravel()
+        k = conn.shape[1]                     # axial nodes of an element
+        r = np.repeat(conn, k, axis=1).ravel()
+        c = np.tile(conn, (1, k)).ravel()
         if self.contact is not None:
             cr, cc = np.divmod(self.contact_pairs, n)
             r, c = np.concatenate([r, cr]), np.concatenate([c, cc])
@@ -73,11 +73,12 @@ class JacobianPattern:
         return True
 
     def create_matrix(self) -> PETSc.Mat:
-        """A new AIJ or SBAIJ matrix (18 × 18 blocks) preallocated with the pattern."""
+        """A new AIJ or SBAIJ matrix (D × D node blocks, 18 for 3363) preallocated with the pattern."""
+        D = self.model.dofs_per_node
         lo, hi = self.layout.owned_nodes
         J = PETSc.Mat().create(comm=self.comm)
-        N = DOFS_PER_NODE * self.n_blocks
-        J.setSizes(((DOFS_PER_NODE * (hi - lo), N), (DOFS_PER_NODE * (hi - lo), N)), bsize=DOFS_PER_NODE)
+        N = D * self.n_blocks
+        J.setSizes(((D * (hi - lo), N), (D * (hi - lo), N)), bsize=D)
         J.setType(PETSc.Mat.Type.SBAIJ if self.matrix_type == "sbaij" else PETSc.Mat.Type.AIJ)
         self.preallocate(J)
         return J
@@ -94,24 +95,25 @@ class JacobianPattern:
 
         A free DOF row of node i couples with every free DOF of the nodes i is coupled with; a
         held DOF's row is its diagonal alone (its column is dropped everywhere else)."""
+        D = self.model.dofs_per_node
         lo, hi = self.layout.owned_nodes
         A = self.node_pattern((lo, hi))
         free = ~self.fixed_mask
-        node_cols = (DOFS_PER_NODE * A.indices[:, None] + np.arange(DOFS_PER_NODE)).ravel()      # DOF columns per entry
+        node_cols = (D * A.indices[:, None] + np.arange(D)).ravel()      # DOF columns per entry
         keep = free[node_cols]
         cols = node_cols[keep]                                            # free columns, node by node
-        count = np.add.reduceat(keep.reshape(-1, DOFS_PER_NODE).sum(axis=1), A.indptr[:-1]) \
+        count = np.add.reduceat(keep.reshape(-1, D).sum(axis=1), A.indptr[:-1]) \
             if A.nnz else np.zeros(hi - lo, dtype=np.int64)
         count[np.diff(A.indptr) == 0] = 0
         start = np.concatenate([[0], np.cumsum(count)])[:-1]
-        rows = DOFS_PER_NODE * lo + np.arange(DOFS_PER_NODE * (hi - lo))
+        rows = D * lo + np.arange(D * (hi - lo))
         row_free = free[rows]
-        length = np.where(row_free, np.repeat(count, DOFS_PER_NODE), 1)
+        length = np.where(row_free, np.repeat(count, D), 1)
         indptr = np.concatenate([[0], np.cumsum(length)])
         # free row r of node i: cols[start_i : start_i + count_i]; held row: itself.  Entry k of
         # row r reads cols[start_i + k - indptr_r] (few full-size temporaries: this runs on
         # millions of entries, and fresh large arrays cost page faults)
-        shift = np.where(row_free, np.repeat(start, DOFS_PER_NODE), 0) - indptr[:-1]
+        shift = np.where(row_free, np.repeat(start, D), 0) - indptr[:-1]
         src = np.repeat(shift, length)
         src += np.arange(indptr[-1])
         indices = cols.astype(PETSc.IntType)[src]

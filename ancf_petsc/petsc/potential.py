@@ -50,7 +50,7 @@ def rounding_floor(problem) -> float:
 def rigid_body_modes(problem) -> list[PETSc.Vec]:
     """Orthonormal rigid-body modes of the reference configuration (``physics.rigid``), given to
     the Jacobian as its near null space (used by GAMG, ignored by LU); collective."""
-    x = problem.q0.getArray(readonly=True).reshape(-1, 6, 3)
+    x = problem.q0.getArray(readonly=True).reshape(-1, problem.model.block.vectors_per_node, 3)
     out = []
     for v in rigid_modes(x):                # modified Gram-Schmidt (collective dots)
         w = problem.X.duplicate()

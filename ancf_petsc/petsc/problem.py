@@ -23,7 +23,6 @@ from petsc4py import PETSc
 from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
-from ..physics.element3363 import DOFS_PER_NODE
 from ..linalg import logging
 from .blocks import ADD, INSERT, check_matrix_type, element_blocks, insert_node_blocks
 from .exchange import GhostExchange
@@ -52,11 +51,12 @@ class Problem:
         self.contact_failed = False             # the last residual's contact projection failed
         lo, hi = layout.owned_nodes
         self.n_blocks = layout.n_blocks
-        N = DOFS_PER_NODE * self.n_blocks
+        D = layout.dofs_per_node = model.dofs_per_node      # the model's node block
+        N = D * self.n_blocks
         # held DOFs (supports, unused multiplier slots): a mask of every DOF, the owned ones
         self.fixed_mask, self.owned_fixed_local = held_dofs(model, layout, contact)
         self.blocks = element_blocks(model, layout, self.fixed_mask)
-        self.X = PETSc.Vec().createMPI((DOFS_PER_NODE * (hi - lo), N), bsize=DOFS_PER_NODE, comm=comm)
+        self.X = PETSc.Vec().createMPI((D * (hi - lo), N), bsize=D, comm=comm)
         self.F = self.X.duplicate()
         q0_model, forces, moved = every_block(model, N)
         self.owned_physical = np.argsort(layout.perm)[lo:hi] < model.n_nodes   # beam nodes, not z
@@ -86,7 +86,7 @@ class Problem:
         v = self.X.duplicate()
         lo, hi = self.layout.owned_nodes
         inv = np.argsort(self.layout.perm)[lo:hi]          # PETSc node → model node
-        v.setArray(arr_model.reshape(-1, DOFS_PER_NODE)[inv].ravel())
+        v.setArray(arr_model.reshape(-1, self.model.dofs_per_node)[inv].ravel())
         return v
 
     @property
@@ -189,7 +189,7 @@ class Problem:
                 self.timers["element_kernels"] += t1 - t0
                 self.timers["element_assembly"] += time.perf_counter() - t1
             logging.event(logging.ELEMENTS).end()
-            d = (self.owned_fixed_local + DOFS_PER_NODE * self.layout.owned_nodes[0]).astype(PETSc.IntType)
+            d = (self.owned_fixed_local + self.model.dofs_per_node * self.layout.owned_nodes[0]).astype(PETSc.IntType)
             if len(d):
                 P.setValuesRCV(d[:, None], d[:, None], np.ones((len(d), 1, 1)), ADD)
             P.assemble()
@@ -263,14 +263,15 @@ class Problem:
             self.contact.restore()
 
     def gather(self, X: PETSc.Vec | None = None, blocks: bool = False) -> np.ndarray | None:
-        """Beam nodal vectors in model order (n_nodes, 6, 3) on rank 0 (None elsewhere); with
-        ``blocks`` every block, multiplier blocks after the nodes (n_blocks, 6, 3)."""
+        """Beam nodal vectors in model order (n_nodes, V, 3) on rank 0 (None elsewhere; V vectors
+        per node); with ``blocks`` every block, multiplier blocks after the nodes (n_blocks, V, 3)."""
         X = self.X if X is None else X
         scat, full = PETSc.Scatter.toZero(X)
         scat.scatter(X, full, INSERT, PETSc.ScatterMode.FORWARD)
         out = None
         if self.comm.rank == 0:
-            out = full.getArray()[:].reshape(-1, DOFS_PER_NODE)[self.layout.perm].reshape(-1, 6, 3)
+            D = self.model.dofs_per_node
+            out = full.getArray()[:].reshape(-1, D)[self.layout.perm].reshape(-1, D // 3, 3)
             out = out if blocks else out[:self.model.n_nodes]
         scat.destroy()
         full.destroy()

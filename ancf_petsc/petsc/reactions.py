@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 from petsc4py import PETSc
 
-from ..physics.element3363 import DOFS_PER_NODE
 
 
 def support_rows(model, layout) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -15,9 +14,10 @@ def support_rows(model, layout) -> list[tuple[np.ndarray, np.ndarray]]:
     lo, hi = layout.owned_nodes
     out = []
     for sup in model.supports:
-        r = sup.dofs[(sup.dofs % DOFS_PER_NODE) < 3]
-        p = layout.petsc_dofs(r) - DOFS_PER_NODE * lo
-        mine = (p >= 0) & (p < DOFS_PER_NODE * (hi - lo))
+        D = model.dofs_per_node
+        r = sup.dofs[(sup.dofs % D) < 3]
+        p = layout.petsc_dofs(r) - D * lo
+        mine = (p >= 0) & (p < D * (hi - lo))
         out.append((p[mine], r[mine] % 3))
     return out
 

@@ -81,7 +81,7 @@ class StepLimits:
         so that SNES reports a domain failure and the load step is cut back.  Returns whether Y
         was changed."""
         P = self.problem
-        y = Y.getArray(readonly=True).reshape(-1, 6, 3)[P.owned_physical]
+        y = Y.getArray(readonly=True).reshape(-1, P.model.block.vectors_per_node, 3)[P.owned_physical]
         big = P.comm.tompi4py().allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (
             self.sections * self.size)
         changed = False

@@ -25,67 +25,44 @@ Within an element a shape-function *slot* is ``6 * node + vector`` (node 0..2), 
 component ``c`` (x, y, z) of slot ``s`` is ``3 * s + c``; this is also the order of a node's
 18-DOF block in the global vectors.
 
-Element 3333 (Nachbagauer et al. 2013, Ebel et al. 2017) keeps the same quadratic axial
-interpolation but only the section monomials 1, y, z: its nodes carry r, r_y, r_z (9 DOFs).  In
-this code a 3333 beam keeps the 18-DOF node block and holds r_yy, r_zz, r_yz at their reference
-value 0, so its kinematics are exactly 3333's while contact, output and the DOF layout stay
-one code path; its element kernels run on the 27 active DOFs only (``ELEMENT_VECTORS``).
+The layout itself is data (``physics/elements``: the nodal vectors as monomials y^i z^j, the DOFs
+per node, the axial nodes and their shape functions, one module per element); this module keeps
+the paper's element for verification (eq. 6 literally, the paper's numbering) and the functions
+of 3363's block under their old names.  The model reads its own block (``Model.block``), never
+the constants below, which are 3363's.
+
+Element 3333 (Nachbagauer et al. 2013, Ebel et al. 2017): ``physics/elements/ancf3333.py``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-NODES_PER_ELEMENT = 3
-VECTORS = ("r", "r_y", "r_z", "r_yy", "r_zz", "r_yz")
+from .elements import DEFAULT_ELEMENT, ELEMENTS, Element, element_names, quadratic_lagrange
+from .elements.ancf3363 import BLOCK
+
+NODES_PER_ELEMENT = BLOCK.axial_nodes
+VECTORS = BLOCK.names
 #: the SI unit of each nodal vector (a position, section directions, their derivatives)
-VECTOR_UNITS = {"r": "m", "r_y": "1", "r_z": "1", "r_yy": "1/m", "r_zz": "1/m", "r_yz": "1/m"}
-VECTORS_PER_NODE = len(VECTORS)
-DOFS_PER_NODE = 3 * VECTORS_PER_NODE          # 18
-SLOTS = NODES_PER_ELEMENT * VECTORS_PER_NODE  # 18 shape functions per element
-DOFS_PER_ELEMENT = 3 * SLOTS                  # 54
+VECTOR_UNITS = BLOCK.units()
+VECTORS_PER_NODE = BLOCK.vectors_per_node
+DOFS_PER_NODE = BLOCK.dofs_per_node           # 18
+SLOTS = BLOCK.slots                           # 18 shape functions per element
+DOFS_PER_ELEMENT = BLOCK.dofs_per_element     # 54
 VECTOR_INDEX = {name: k for k, name in enumerate(VECTORS)}
 #: index of the paper's N-function (1-based, node 1) carried by each slot of a node
 PAPER_FUNCTION = (1, 2, 3, 5, 6, 4)
 
-
-@dataclass(frozen=True)
-class ElementType:
-    """One element of the three-node family: the nodal vectors (slots of a node) it interpolates
-    with and the volumetric-locking remedy a beam of it gets unless the config says otherwise
-    (``none`` | ``ecm`` | ``mixed``, config ``beams[i].locking``; model.Beam.parts)."""
-    name: str
-    vectors: tuple[int, ...]
-    default_locking: str = "none"
-
-
-#: the element registry: every reader of element names (config, workflows, charts) reads it
-ELEMENTS = {e.name: e for e in (ElementType("3363", (0, 1, 2, 3, 4, 5)),
-                                ElementType("3333", (0, 1, 2), default_locking="ecm"))}
-DEFAULT_ELEMENT = "3363"
+#: the element registry (``physics/elements``), re-exported: every reader of element names reads it
+ElementType = Element
 #: nodal vectors (slots of a node) each element type interpolates with
 ELEMENT_VECTORS = {name: e.vectors for name, e in ELEMENTS.items()}
-ELEMENT_TYPES = tuple(ELEMENTS)
-
-
-def lagrange(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Quadratic Lagrange polynomials on nodes ξ = −1, 0, 1 and their ξ-derivatives, (n, 3) each."""
-    xi = np.asarray(xi, dtype=float)
-    L = np.stack([0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)], axis=-1)
-    dL = np.stack([xi - 0.5, -2.0 * xi, xi + 0.5], axis=-1)
-    return L, dL
+ELEMENT_TYPES = element_names()
+lagrange = quadratic_lagrange
 
 
 def section_monomials(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Section monomials m_k(y, z) in slot order and their y- and z-derivatives, (n, 6) each."""
-    y = np.asarray(y, dtype=float)
-    z = np.asarray(z, dtype=float)
-    one, zero = np.ones_like(y), np.zeros_like(y)
-    m = np.stack([one, y, z, 0.5 * y * y, 0.5 * z * z, y * z], axis=-1)
-    my = np.stack([zero, one, zero, y, zero, z], axis=-1)
-    mz = np.stack([zero, zero, one, zero, z, y], axis=-1)
-    return m, my, mz
+    """Section monomials m_k(y, z) of 3363's block in slot order and their y- and z-derivatives, (n, 6) each."""
+    return ELEMENTS[DEFAULT_ELEMENT].section_monomials(y, z)
 
 
 def shape_functions(xi: np.ndarray, y: np.ndarray, z: np.ndarray,
@@ -93,18 +70,11 @@ def shape_functions(xi: np.ndarray, y: np.ndarray, z: np.ndarray,
     """Shape functions N (n, S) and their derivatives dN (n, S, 3) w.r.t. (ξ, y, z) (eq. 6).
 
     Points are given pointwise (xi, y, z of equal length n).  ``vectors`` selects the nodal
-    vectors (default all six: 3363, S = 18; ``ELEMENT_VECTORS["3333"]``: S = 9); slot order is
-    node-major, ``len(vectors) * node + k``.
+    vectors of 3363's block (default all six: 3363, S = 18; ``ELEMENT_VECTORS["3333"]``: S = 9);
+    slot order is node-major, ``len(vectors) * node + k``.  ``Element.shape_functions`` is the
+    same for any element.
     """
-    L, dL = lagrange(xi)
-    m, my, mz = (a[:, list(vectors)] for a in section_monomials(y, z))
-    n, S = L.shape[0], 3 * len(vectors)
-    N = (L[:, :, None] * m[:, None, :]).reshape(n, S)
-    dN = np.empty((n, S, 3))
-    dN[:, :, 0] = (dL[:, :, None] * m[:, None, :]).reshape(n, S)
-    dN[:, :, 1] = (L[:, :, None] * my[:, None, :]).reshape(n, S)
-    dN[:, :, 2] = (L[:, :, None] * mz[:, None, :]).reshape(n, S)
-    return N, dN
+    return Element("", BLOCK, tuple(vectors)).shape_functions(xi, y, z)
 
 
 def tensor_points(xi: np.ndarray, yz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

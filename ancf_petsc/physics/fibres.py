@@ -46,9 +46,10 @@ def fibre_directions(x: np.ndarray, P: np.ndarray, length: float, twist_deg: flo
     return np.stack(out)
 
 
-def gauss_point_stations(x_nodes: np.ndarray, xi: np.ndarray) -> np.ndarray:
+def gauss_point_stations(x_nodes: np.ndarray, xi: np.ndarray, axial_nodes: int = 3) -> np.ndarray:
     """x of every element's points (E, P): x = x_start + (ξ + 1) h / 2 (nodes equally spaced
     within an element, so the element's x(ξ) is exactly this linear map)."""
-    x0 = x_nodes[0:-1:2]
-    h = x_nodes[2:None:2] - x0
+    k = axial_nodes - 1                       # an element's end nodes are k apart
+    x0 = x_nodes[0:-1:k]
+    h = x_nodes[k:None:k] - x0
     return x0[:, None] + 0.5 * (np.asarray(xi)[None, :] + 1.0) * h[:, None]

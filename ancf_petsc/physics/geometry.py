@@ -35,12 +35,13 @@ def place(x: np.ndarray, P: np.ndarray, length: float, twist_deg: float, axis) -
 
 
 def reference_nodal_vectors(x_nodes: np.ndarray, centroid, length: float, twist_deg: float,
-                            axis) -> np.ndarray:
-    """Reference nodal vectors (n_nodes, 6, 3) of one beam in eq. (3) order."""
+                            axis, vectors: int = 6) -> np.ndarray:
+    """Reference nodal vectors (n_nodes, vectors, 3) of one beam in its node block's order (eq. (3)
+    for 3363): r, r_y, r_z, then the higher section derivatives, all 0."""
     x_nodes = np.asarray(x_nodes, dtype=float)
     n = len(x_nodes)
     R = rotation(twist_angle(x_nodes, length, twist_deg))
-    q0 = np.zeros((n, 6, 3))
+    q0 = np.zeros((n, vectors, 3))
     q0[:, 0] = place(x_nodes, np.tile(centroid, (n, 1)), length, twist_deg, axis)
     q0[:, 1, 1:] = R[:, :, 0]
     q0[:, 2, 1:] = R[:, :, 1]

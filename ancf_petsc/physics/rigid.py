@@ -6,7 +6,7 @@ import numpy as np
 
 
 def rigid_modes(x: np.ndarray) -> list[np.ndarray]:
-    """The three translations and three rotations (about the origin) of nodal vectors x (n, 6, 3),
+    """The three translations and three rotations (about the origin) of nodal vectors x (n, V, 3),
     each an array like x."""
     modes = []
     for k in range(3):

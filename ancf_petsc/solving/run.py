@@ -29,7 +29,6 @@ from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
 from ..petsc.reactions import reactions as support_reactions
-from ..physics.element3363 import DOFS_PER_NODE
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
@@ -244,7 +243,8 @@ class Run:
                     extra["displacement_differences"] = displacement_differences(
                         self.model, q, interface_pairs(self.contact.interfaces))
             path = None if blocks is None else {
-                "blocks": blocks.reshape(-1, DOFS_PER_NODE), "increment_blocks": increment.reshape(-1, DOFS_PER_NODE),
+                "blocks": blocks.reshape(-1, self.model.dofs_per_node),
+                "increment_blocks": increment.reshape(-1, self.model.dofs_per_node),
                 "accepted_negative": stepper.path.accepted_negative}
             self.writer.write_step(rec, q, extra, fields, path)
             self.converged.append(rec)

@@ -30,7 +30,6 @@ from ..linalg.database import option, own_prefix
 from ..model.fibre_setup import set_fibre_directions
 from ..petsc.blocks import refresh_parts
 from ..petsc.potential import rounding_floor
-from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.laws import make_material
 from .records import LoadStepFailure, PathState, StepRecord, reason_name
 from .run import Run, serial_comm
@@ -40,7 +39,7 @@ from .stepper import LoadStepper
 
 @dataclass
 class LevelState:
-    """A converged level: every block of the state in model order (n_blocks, 6, 3) and the
+    """A converged level: every block of the state in model order (n_blocks, V, 3) and the
     contact's projection state and multiplier status (None without contact)."""
     x: np.ndarray
     projection: np.ndarray | None = None
@@ -271,13 +270,13 @@ class SampleSolver:
         P = self.run.problem
         lo, hi = self.run.layout.owned_nodes
         inv = np.argsort(self.run.layout.perm)[lo:hi]
-        P.X.setArray(s.x.reshape(-1, DOFS_PER_NODE)[inv].ravel())
+        P.X.setArray(s.x.reshape(-1, P.model.dofs_per_node)[inv].ravel())
         self._set_contact(None if s.projection is None else (s.projection, s.status))
 
     def _record(self, rec, out: SampleOutcome):
         """Probes and the state of a converged level into ``out``."""
         run = self.run
-        x = run.problem.X.getArray(readonly=True).reshape(-1, 6, 3)[run.layout.perm]   # model order
+        x = run.problem.X.getArray(readonly=True).reshape(-1, run.model.block.vectors_per_node, 3)[run.layout.perm]   # model order
         for name, (u, v) in run.model.probe_values(x).items():
             out.displacements.setdefault(name, []).append(u)
             out.values.setdefault(name, []).append(v)

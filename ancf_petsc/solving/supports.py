@@ -16,7 +16,6 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
-from ..physics.element3363 import DOFS_PER_NODE
 from ..physics.rigid import rigid_modes
 
 #: a combination of unit modes is free when its constraint violation (held DOFs in metres or
@@ -50,12 +49,13 @@ def _row_beams(P) -> tuple[np.ndarray, np.ndarray]:
     physical = model_block < P.model.n_nodes              # the rest are multiplier nodes
     node_beam = np.full(len(model_block), -1)
     node_beam[physical] = P.model.node_beam()[model_block[physical]]
-    owner = np.repeat(node_beam, DOFS_PER_NODE)
+    D = P.model.dofs_per_node
+    owner = np.repeat(node_beam, D)
     out = np.full((len(owner), 2), -1)
     out[:, 0] = owner
     if P.contact is not None and P.contact.n_multipliers:
         c = P.contact
-        dofs = P.layout.petsc_dofs(c.multiplier_dofs()) - DOFS_PER_NODE * lo
+        dofs = P.layout.petsc_dofs(c.multiplier_dofs()) - D * lo
         ends = np.array([[i.a.index, i.b.index] for i in c.interfaces], dtype=np.int64)[c.space.interface]
         mine = (dofs >= 0) & (dofs < len(out))
         out[dofs[mine]] = ends[mine]
@@ -81,13 +81,13 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     instead of six per beam (the 37-fascicle bundle: 24 columns instead of 222)."""
     P = problem
     comm = P.comm.tompi4py()
-    model = P.model
+    model, D = P.model, P.model.dofs_per_node
     nb = len(model.beams)
     pairs = [(i.a.index, i.b.index) for i in P.contact.interfaces] if P.contact else []
     colours = beam_colours(nb, pairs)
     n_col = int(colours.max()) + 1
     owner, rows = _row_beams(P)
-    x = P.q0.getArray(readonly=True).reshape(-1, 6, 3)
+    x = P.q0.getArray(readonly=True).reshape(-1, D // 3, 3)
     modes = np.stack([v.ravel() for v in rigid_modes(x)], axis=1)          # (n_local, 6)
     modes[owner < 0] = 0.0
     norms = np.zeros((nb, 6))
@@ -103,8 +103,8 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     P.residual(None, X, P.F)                 # the contact projections of the reference state
     P.jacobian(None, X, P.J, P.J)
     lo, hi = P.layout.owned_nodes
-    held = P.fixed_mask[DOFS_PER_NODE * lo:DOFS_PER_NODE * hi]
-    constraint = np.repeat(~P.owned_physical, DOFS_PER_NODE) & ~held
+    held = P.fixed_mask[D * lo:D * hi]
+    constraint = np.repeat(~P.owned_physical, D) & ~held
     scale = np.where(held, 1.0, 0.0) + np.where(constraint, 1.0 / (P.contact.stiffness if P.contact else 1.0), 0.0)
     Vf = np.asfortranarray(V)                        # PETSc's dense storage; kept alive below
     Vmat = PETSc.Mat().createDense(((len(V), None), (None, V.shape[1])), array=Vf, comm=P.comm)

@@ -13,7 +13,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FuncFormatter, LogLocator, NullFormatter
 
-from ..physics.element3363 import ELEMENTS
+from ..physics.elements import ELEMENTS
 from .figures import save_figure
 
 ERROR_FLOOR = 1e-16       # exact answers (e.g. uniaxial tension) are drawn at this error

@@ -41,7 +41,7 @@ from typing import Callable
 
 from ..config.specs import LOCKING
 from ..contact.laws import LAWS
-from ..physics.element3363 import ELEMENTS
+from ..physics.elements import ELEMENTS
 from ..physics.materials import NeoHookean
 from .refinement import Discretisation, apply, quantity
 from .study import Scene, StudyError, expect, parse_discretisation, parse_scene, read_yaml, solve_raw

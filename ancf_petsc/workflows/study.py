@@ -40,7 +40,7 @@ import yaml
 
 from .. import yamlio
 from ..config.specs import DEFAULT_AXIAL_POINTS
-from ..physics.element3363 import DEFAULT_ELEMENT
+from ..physics.elements import DEFAULT_ELEMENT
 from ..errors import InputError
 from ..status import CONFIG_ERROR, EXIT_INPUT
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
@@ -326,7 +326,7 @@ def parse_discretisation(value: Any, path: str, extra: tuple = ()) -> dict:
 
 
 def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
-    from ..physics.element3363 import ELEMENT_TYPES
+    from ..physics.elements import element_names
     expect(isinstance(value, dict) and value, path,
             f"expected a mapping of lists over {', '.join(GRID_KEYS)}")
     out = {}
@@ -335,8 +335,8 @@ def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
         expect(key in GRID_KEYS, kp, f"unknown key; allowed here: {', '.join(GRID_KEYS)}")
         if key == "element":
             vals = [str(v) for v in vals] if isinstance(vals, list) else vals
-            expect(isinstance(vals, list) and vals and all(v in ELEMENT_TYPES for v in vals), kp,
-                    f"expected a list of element types from {', '.join(ELEMENT_TYPES)}; got {vals!r}")
+            expect(isinstance(vals, list) and vals and all(v in element_names() for v in vals), kp,
+                    f"expected a list of element types from {', '.join(element_names())}; got {vals!r}")
             out[key] = vals
         else:
             out[key] = _int_list(vals, kp)

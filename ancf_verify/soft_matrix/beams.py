@@ -18,7 +18,6 @@ def ancf_measures(case: Case, elements: int, q: np.ndarray) -> tuple[np.ndarray,
     end-face sample points (SolidProbe's), state q."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
-    from ancf_petsc.physics.element3363 import section_monomials
     from ancf_petsc.physics.kernels import deformation_gradient
     model = build_model(parse_config(ancf_config(case, elements, 2, tempfile.mkdtemp()), base_dir=CONFIGS))
     b = model.beams[0]
@@ -26,9 +25,9 @@ def ancf_measures(case: Case, elements: int, q: np.ndarray) -> tuple[np.ndarray,
     G, _, material = model.element_data(b, local)[0]
     F = deformation_gradient(q[b.connectivity[local]][:, :, list(b.vectors)].reshape(len(local), -1, 3), G)
     Fa = np.einsum("...ij,...j->...i", F, material.a0[0])
-    m = section_monomials(b.section.points[:, 0], b.section.points[:, 1])[0]
+    m = model.block.section_monomials(b.section.points[:, 0], b.section.points[:, 1])
     mean = b.section.weights @ m / b.section.weights.sum()
-    ux = section_monomials(*(SAMPLE_SCALE * b.section.points).T)[0] @ (q[-1, :, 0] - model.q0[-1, :, 0])
+    ux = model.block.section_monomials(*(SAMPLE_SCALE * b.section.points).T) @ (q[-1, :, 0] - model.q0[-1, :, 0])
     return np.einsum("...i,...i->...", Fa, Fa) - 1.0, mean @ (q[-1] - model.q0[-1]), float(ux.max() - ux.min())
 
 

@@ -89,12 +89,12 @@ def profile(case: Case, h: float, tmp: str) -> None:
     section field) and the solid on the mesh of size h [mm]."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.model.build import build_model
-    from ancf_petsc.physics.element3363 import section_monomials
-    q0 = build_model(parse_config(ancf_config(case, 8, 2, tmp), base_dir=CONFIGS)).q0
+    model = build_model(parse_config(ancf_config(case, 8, 2, tmp), base_dir=CONFIGS))
+    q0, section_monomials = model.q0, model.block.section_monomials
     for model in LOCKINGS:
         q = run_ancf(case, 8, tmp, model, "traction_force")["q"]
         for axis, P in semi_axis_points().items():
-            ux = section_monomials(P[:, 0], P[:, 1])[0] @ (q[-1, :, 0] - q0[-1, :, 0])
+            ux = section_monomials(P[:, 0], P[:, 1]) @ (q[-1, :, 0] - q0[-1, :, 0])
             print(f"[profile] {model_name(LOCKINGS[model], 'traction_force')} x/L = 1.00, {axis}: " +
                   " ".join(f"{1e3 * v:.4f}" for v in ux), flush=True)
     import_stack()

@@ -1,8 +1,9 @@
 """The contact assembly's fast paths add exactly what their plain numpy forms add (issue 40)."""
 import numpy as np
 
-from ancf_petsc.contact.blocks import EL, add_point_blocks
-from ancf_petsc.physics.element3363 import DOFS_PER_NODE
+from ancf_petsc.contact.blocks import add_point_blocks
+
+EL, DOFS_PER_NODE = 54, 18          # element 3363: 3 nodes x 18 DOFs
 
 
 def test_point_blocks_add_what_add_at_adds_bitwise():
@@ -20,11 +21,12 @@ def test_point_blocks_add_what_add_at_adds_bitwise():
     expected = K0.copy()
     np.add.at(expected, (seg[:, None, None], cols[:, :, None], cols[:, None, :]), values)
     got = K0.copy()
-    add_point_blocks(got, seg, j, values)
+    add_point_blocks(got, seg, j, values, EL, 2 * DOFS_PER_NODE)
     assert np.array_equal(got, expected)
 
 
 def test_point_blocks_with_no_points_change_nothing():
     K = np.ones((2, 144, 144))
-    add_point_blocks(K, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 108, 108)))
+    add_point_blocks(K, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 108, 108)),
+                     EL, 2 * DOFS_PER_NODE)
     assert np.array_equal(K, np.ones((2, 144, 144)))

@@ -1,0 +1,57 @@
+"""The element registry: one module per element, each binding ``ELEMENT`` (an :class:`Element`:
+its name, its node block — the nodal vectors as section monomials y^i z^j, the axial nodes and
+their shape functions — the vectors it interpolates with and its default locking remedy).  The
+package finds them itself, so adding an element is one new module here (and its test); config
+validation, the model, supports, probes, contact, output and restart read the layout from it.
+
+The node block is a model's: every beam of one model uses elements of one block (3333 and 3363
+share 3363's).  ``register`` adds an element at run time (tests)."""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from .base import Element, NodeBlock, complete_monomials, quadratic_lagrange, vector_name
+
+__all__ = ["DEFAULT_ELEMENT", "ELEMENTS", "Element", "NodeBlock", "complete_monomials", "element",
+           "element_names", "quadratic_lagrange", "register", "vector_name"]
+
+
+def _discover() -> dict[str, Element]:
+    """name → element of every module of this package that binds ``ELEMENT``."""
+    found: dict[str, Element] = {}
+    owner: dict[str, str] = {}
+    for info in pkgutil.iter_modules(__path__):
+        e = getattr(importlib.import_module(f"{__name__}.{info.name}"), "ELEMENT", None)
+        if e is None:
+            continue
+        if e.name in found:
+            raise ImportError(f"elements {owner[e.name]} and {info.name} are both named {e.name!r}")
+        found[e.name], owner[e.name] = e, info.name
+    return dict(sorted(found.items(), key=lambda kv: (kv[0] != "3363", kv[0])))
+
+
+#: every element, by registry name (config ``beams[i].element``); 3363 first
+ELEMENTS = _discover()
+DEFAULT_ELEMENT = "3363"
+
+
+def element_names() -> tuple[str, ...]:
+    """The registered names now (``register`` may have added some)."""
+    return tuple(ELEMENTS)
+
+
+def element(name: str) -> Element:
+    """The element registered as ``name`` (KeyError naming the registered ones)."""
+    try:
+        return ELEMENTS[name]
+    except KeyError:
+        raise KeyError(f"unknown element {name!r}; registered: {', '.join(ELEMENTS)}") from None
+
+
+def register(e: Element) -> Element:
+    """Add an element to the registry (tests; a module in this package is the permanent way)."""
+    if e.name in ELEMENTS and ELEMENTS[e.name] != e:
+        raise ValueError(f"element {e.name!r} is already registered")
+    ELEMENTS[e.name] = e
+    return e

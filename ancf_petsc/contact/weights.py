@@ -46,11 +46,11 @@ WEIGHT_TOL = 1e-6
 
 class FadeDerivatives:
     """The fade weights' derivatives at one evaluation of the points of ``pr``: ∇w_p (P, 108 for
-    3363: over A's then B's element slots as gap.gap_gradient) of every point and the positions of the points
-    in a fade band (``band``), at once; their ∇²w_p (B, 108, 108) = ζ′ᵀ (∂²w/∂ζ²) ζ′ +
-    ∇²(∂w/∂ζ · ζ) (gap.closest_point_hessian, exact) on first use (``hessians``: the Jacobian's, a
-    residual alone never needs them).  One evaluation serves the residual's forces and every
-    segment group of the Jacobian (``of``), instead of one evaluation each."""
+    3363: A's then B's element slots × 3, as gap.gap_gradient) of every point and the positions
+    of the points in a fade band (``band``), at once; their ∇²w_p (B, 108, 108) =
+    ζ′ᵀ (∂²w/∂ζ²) ζ′ + ∇²(∂w/∂ζ · ζ) (gap.closest_point_hessian, exact) on first use
+    (``hessians``: the Jacobian's; a residual alone never needs them).  One evaluation serves the
+    residual's forces and every segment group of the Jacobian (``of``), instead of one each."""
 
     def __init__(self, projector, pr):
         itf = projector.points.itf[pr.idx]
@@ -94,7 +94,7 @@ class FadeDerivatives:
         return self.grad[sel], band, hess
 
 
-#: det H / det a below which a point's weight is not differentiated (``weight_derivatives``)
+#: det H / det a below which a point's weight is not differentiated (``FadeDerivatives``)
 WELL_POSED = 0.5
 
 

@@ -41,11 +41,6 @@ RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
 
 
-#: the .pvd collections are rewritten at the first level, then at most this often [s] and at the
-#: end (``finish``): replacing a file costs ~3 ms on ext4 (it flushes a file renamed over
-#: another), twice a level on a stride; the VTUs themselves are written at every level
-INDEX_INTERVAL = 0.5
-
 #: stands for the levels in the summary's text before they are put in (``compact_summary``)
 STEPS_MARK = "@ancf-steps@"
 
@@ -82,7 +77,6 @@ class ResultsWriter:
         self.vtk = VtkSeries(self.dir, compress=spec.output.vtk_compress)
         self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
         self._step_texts: list = []            # each level's entry and its JSON (compact_summary)
-        self._index_time = -np.inf             # when the .pvd collections were last rewritten
         self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
@@ -193,11 +187,10 @@ class ResultsWriter:
             except OSError as exc2:
                 raise OutputError(self.summary_path, f"cannot write: {os_reason(exc2)}") from None
 
-    def _write_series(self, series: str, k: int, lam: float, mesh: tuple, index: bool = True) -> None:
-        """One VTU of ``series`` (``vtk.VtkSeries``) and, with ``index``, its .pvd; a failure is
-        an OutputError."""
+    def _write_series(self, series: str, k: int, lam: float, mesh: tuple) -> None:
+        """One VTU of ``series`` (``vtk.VtkSeries``); a failure is an OutputError."""
         try:
-            self._last_sizes["vtu"] += self.vtk.write(series, k, lam, *mesh, index=index)
+            self._last_sizes["vtu"] += self.vtk.write(series, k, lam, *mesh)
         except OSError as exc:
             self._release_reserve()
             raise OutputError(os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
@@ -269,12 +262,9 @@ class ResultsWriter:
         self._append(entry)
         if self.sampler is not None:
             self._last_sizes["vtu"] = 0                  # the level's VTUs together
-            now = time.monotonic()
-            index = k == 1 or now - self._index_time >= INDEX_INTERVAL
-            self._index_time = now if index else self._index_time
-            self._write_series("surface", k, record.load_factor, surface, index)
+            self._write_series("surface", k, record.load_factor, surface)
             if contact is not None:
-                self._write_series("contact", k, record.load_factor, contact_cells(contact), index)
+                self._write_series("contact", k, record.load_factor, contact_cells(contact))
         self._write_summary()
 
     def _append(self, entry: dict) -> None:
@@ -305,11 +295,8 @@ class ResultsWriter:
         self.summary["status"] = status
         self.summary.update(info)
         self._release_reserve()
-        problem = None
-        try:
-            self.vtk.write_indexes()               # the .pvd collections with every level's VTU
-        except OSError as exc:
-            problem = f"{self.dir}: cannot write the .pvd collections: {os_reason(exc)}"
+        problem = self.vtk.write_indexes()          # the .pvd collections with every level's VTU
+        if problem:
             self.summary.update(status="failed", reason_code=OUTPUT_ERROR, message=f"output error: {problem}")
         try:
             self._write_summary(final=True)

@@ -3,6 +3,7 @@ as VTU time series with .pvd collections (``vtu.write_vtu``: meshio's layout, wi
 from __future__ import annotations
 
 import os
+import time
 
 import numpy as np
 
@@ -10,7 +11,7 @@ from ..contact.partners import HISTORY
 from ..model.beams import Model
 from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
-from .files import atomic_write, remove_quietly
+from .files import atomic_write, os_reason, remove_quietly
 from .surface_fields import SampledState, fields_for
 from .vtu import write_vtu
 
@@ -112,6 +113,12 @@ def contact_cells(fields: dict) -> tuple:
 AUTO_COMPRESS_POINTS = 20_000
 
 
+#: a series' .pvd collection is rewritten with its first VTU, then at most this often [s] and at
+#: the end (``write_indexes``): replacing a file costs ~3 ms on ext4 (it flushes a file renamed
+#: over another), twice a level on a stride; the VTUs themselves are written at every level
+INDEX_INTERVAL = 0.5
+
+
 class VtkSeries:
     """VTU files ``<series>_NNNN.vtu`` and their ``<series>.pvd`` collections in one directory."""
 
@@ -119,12 +126,13 @@ class VtkSeries:
         self.dir = directory
         self.compress = compress                 # None: by size (AUTO_COMPRESS_POINTS)
         self.entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
+        self._indexed: dict[str, float] = {}     # when each .pvd was last rewritten (monotonic)
 
-    def write(self, series: str, k: int, lam: float, pts, cells, data, index: bool = True) -> int:
-        """One VTU of a time series and, with ``index``, its .pvd collection (binary, in single
-        precision: for display, results.h5 keeps double; half the size and the write time),
-        zlib-compressed if asked or, by default, from ``AUTO_COMPRESS_POINTS`` points on.
-        A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
+    def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
+        """One VTU of a time series and, when due (``INDEX_INTERVAL``), its .pvd collection
+        (binary, in single precision: for display, results.h5 keeps double; half the size and
+        the write time), zlib-compressed if asked or, by default, from ``AUTO_COMPRESS_POINTS``
+        points on.  A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
         with np.errstate(over="ignore"):            # beyond single precision: inf (results.h5: double)
@@ -133,19 +141,26 @@ class VtkSeries:
         try:
             write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress))
             size = os.path.getsize(path)
-            if index:
+            now = time.monotonic()
+            if now - self._indexed.get(series, -np.inf) >= INDEX_INTERVAL:
                 self._write_index(series, self.entries[series] + [(lam, name)])
+                self._indexed[series] = now
         except OSError:
             remove_quietly(path)                   # never leave a truncated VTU behind
             raise
         self.entries[series].append((lam, name))
         return size
 
-    def write_indexes(self) -> None:
-        """Every series' .pvd collection with all its files so far (the OSError if one fails)."""
+    def write_indexes(self) -> str | None:
+        """Every series' .pvd collection with all its files so far; None, or the one-line reason
+        one could not be written."""
         for series, entries in self.entries.items():
-            if entries:
-                self._write_index(series, entries)
+            try:
+                if entries:
+                    self._write_index(series, entries)
+            except OSError as exc:
+                return f"{os.path.join(self.dir, series + '.pvd')}: cannot write: {os_reason(exc)}"
+        return None
 
     def _write_index(self, series: str, entries: list) -> None:
         rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>' for t, f in entries)

@@ -25,3 +25,29 @@ def test_same_file_as_meshio(tmp_path, compress):
     back = meshio.read(b)
     assert np.array_equal(back.points, pts) and np.array_equal(back.point_data["J"], data["J"])
     assert [c.type for c in back.cells] == ["quad", "polygon", "polygon"]
+
+
+def test_pvd_collections_rewritten_when_due_and_complete_at_the_end(tmp_path, monkeypatch):
+    """A series' .pvd is written with its first VTU, then at most every INDEX_INTERVAL, and
+    ``write_indexes`` lists every VTU; a collection that cannot be written is named, not raised."""
+    from ancf_petsc.io import vtk
+    clock = [100.0]
+    monkeypatch.setattr(vtk.time, "monotonic", lambda: clock[0])
+    series = vtk.VtkSeries(str(tmp_path), compress=False)
+    pts = np.zeros((2, 3))
+    cells = [("vertex", np.arange(2)[:, None])]
+    pvd = tmp_path / "surface.pvd"
+    for k in range(3):                                      # at 0, 0.2 and 0.4 s
+        series.write("surface", k, float(k), pts, cells, {"a": np.ones(2)})
+        clock[0] += 0.2
+        assert pvd.read_text().count("<DataSet") == 1       # the first level's
+    series.write("surface", 3, 3.0, pts, cells, {"a": np.ones(2)})      # 0.6 s: due
+    assert pvd.read_text().count("<DataSet") == 4
+    series.write("surface", 4, 4.0, pts, cells, {"a": np.ones(2)})
+    assert pvd.read_text().count("<DataSet") == 4
+    assert series.write_indexes() is None
+    assert pvd.read_text().count("<DataSet") == 5
+    pvd.unlink()
+    pvd.mkdir()                                             # a directory where the file goes
+    reason = series.write_indexes()
+    assert reason is not None and "surface.pvd: cannot write" in reason

@@ -20,7 +20,12 @@ def _monomials_on_curve(block, S, S1, S2=None, S3=None):
     given), m_ttt (S3 given) by the chain rule (physics/elements: the derivatives of a monomial
     are monomials).  Terms of degree above the block's order are skipped (they are 0)."""
     y, z = S[:, 0], S[:, 1]
-    d = {ab: block.section_monomials(y, z, *ab) for ab in ((0, 0), (1, 0), (0, 1))}
+    pairs = ((0, 0), (1, 0), (0, 1))
+    if S2 is not None and block.order >= 2:
+        pairs += ((2, 0), (1, 1), (0, 2))
+    if S3 is not None and block.order >= 3:
+        pairs += ((3, 0), (2, 1), (1, 2), (0, 3))
+    d = dict(zip(pairs, block.monomial_derivatives(y, z, pairs)))    # one pass for all of them
     y1, z1 = S1[:, :1], S1[:, 1:]
     out = [d[0, 0], d[1, 0] * y1 + d[0, 1] * z1]
     if S2 is None:
@@ -28,7 +33,6 @@ def _monomials_on_curve(block, S, S1, S2=None, S3=None):
     y2, z2 = S2[:, :1], S2[:, 1:]
     mtt = d[1, 0] * y2 + d[0, 1] * z2
     if block.order >= 2:                # (y²/2)'' = y'² + y y'', (yz)'' = 2 y'z' + y''z + y z''
-        d.update({ab: block.section_monomials(y, z, *ab) for ab in ((2, 0), (1, 1), (0, 2))})
         mtt += d[2, 0] * y1 ** 2 + d[0, 2] * z1 ** 2 + d[1, 1] * (2.0 * y1 * z1)
     out.append(mtt)
     if S3 is None:
@@ -38,9 +42,8 @@ def _monomials_on_curve(block, S, S1, S2=None, S3=None):
     if block.order >= 2:
         mttt += d[2, 0] * (3.0 * y1 * y2) + d[0, 2] * (3.0 * z1 * z2) + d[1, 1] * (3.0 * (y1 * z2 + y2 * z1))
     if block.order >= 3:
-        d3 = {ab: block.section_monomials(y, z, *ab) for ab in ((3, 0), (2, 1), (1, 2), (0, 3))}
-        mttt += (d3[3, 0] * y1 ** 3 + d3[2, 1] * (3.0 * y1 ** 2 * z1) + d3[1, 2] * (3.0 * y1 * z1 ** 2)
-                 + d3[0, 3] * z1 ** 3)
+        mttt += (d[3, 0] * y1 ** 3 + d[2, 1] * (3.0 * y1 ** 2 * z1) + d[1, 2] * (3.0 * y1 * z1 ** 2)
+                 + d[0, 3] * z1 ** 3)
     out.append(mttt)
     return out
 

@@ -295,3 +295,33 @@ def test_the_restart_fingerprint_names_the_element_and_reads_older_files():
     raw["beams"][0]["element"] = "3333"
     other = fingerprint(build_model(parse_config(raw, base_dir=CONFIGS)))
     assert model_difference(old, other) == "beams/bar/element (3363 → 3333)"
+
+
+def test_monomial_derivatives_are_each_monomial_formed_alone_bitwise():
+    """``NodeBlock.monomial_derivatives`` (all pairs in one pass) gives, for a quartic block, what
+    forming each derivative alone gives: y^p z^q by repeated products, times 1/(p! q!), 0 past
+    the exponent; bitwise, at points of both signs and magnitudes from 1e-6 to 1e-2 m."""
+    import math
+    from ancf_petsc.physics.elements.base import NodeBlock, complete_monomials
+    block = NodeBlock(complete_monomials(4))
+    rng = np.random.default_rng(3)
+    y = rng.standard_normal(50) * 10.0 ** rng.uniform(-6, -2, 50)
+    z = rng.standard_normal(50) * 10.0 ** rng.uniform(-6, -2, 50)
+    pairs = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3))
+
+    def power(x, n):
+        out = np.ones_like(x) if n == 0 else x
+        for _ in range(n - 1):
+            out = out * x
+        return out
+
+    got = block.monomial_derivatives(y, z, pairs)
+    for k, (a, b) in enumerate(pairs):
+        for v, (i, j) in enumerate(block.monomials):
+            p, q = i - a, j - b
+            if p < 0 or q < 0:
+                want = np.zeros_like(y)
+            else:
+                want = (1.0 / (math.factorial(p) * math.factorial(q))) * (power(y, p) * power(z, q))
+            assert np.array_equal(got[k, :, v], want), (a, b, i, j)
+        assert np.array_equal(block.section_monomials(y, z, a, b), got[k])

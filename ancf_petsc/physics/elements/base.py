@@ -15,6 +15,7 @@ The monomials' derivatives are monomials of the same family:
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Callable
@@ -110,10 +111,22 @@ class NodeBlock:
 
     def section_monomials(self, y: np.ndarray, z: np.ndarray, dy: int = 0, dz: int = 0) -> np.ndarray:
         """∂^dy_y ∂^dz_z of every nodal vector's monomial at points (y, z), (n, vectors_per_node)."""
+        return self.monomial_derivatives(y, z, ((dy, dz),))[0]
+
+    def monomial_derivatives(self, y: np.ndarray, z: np.ndarray, pairs: tuple) -> np.ndarray:
+        """∂^a_y ∂^b_z of every nodal vector's monomial for each (a, b) of ``pairs``, at points
+        (y, z): (len(pairs), n, vectors_per_node), each y^p z^q / (p! q!) formed as (y·y·…)(z·z·…)
+        times 1/(p! q!) (0 where a derivative order exceeds the exponent), in a few array
+        operations for all pairs at once: the contact surface asks for six at every step of its
+        closest-point descent (one call per pair and monomial cost 0.6 ms a residual)."""
         y = np.asarray(y, dtype=float)
         z = np.asarray(z, dtype=float)
-        cols = [_monomial(i - dy, j - dz, y, z) for i, j in self.monomials]
-        return np.stack(cols, axis=-1)
+        ey, ez, coef, live = _derivative_table(self.monomials, tuple(pairs))
+        Y, Z = _powers(y, self.order), _powers(z, self.order)
+        out = np.where(live, coef * (Y[..., ey] * Z[..., ez]), 0.0)
+        # C-contiguous (n, vectors) per pair, as the stacked columns were: products and sums over
+        # them take the same paths (a strided view changed the traction loads' sums by 1e-20)
+        return np.ascontiguousarray(np.moveaxis(out.reshape(y.shape + (len(pairs), len(self.monomials))), -2, 0))
 
     def shape_functions(self, xi, y, z, vectors: tuple[int, ...] | None = None):
         """N (n, S) and dN (n, S, 3) w.r.t. (ξ, y, z) of ``vectors`` (default the whole block:
@@ -130,26 +143,24 @@ class NodeBlock:
         return N, dN
 
 
-def _monomial(i: int, j: int, y: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """y^i z^j / (i! j!) (zeros for a negative exponent: the derivative of a lower monomial)."""
-    if i < 0 or j < 0:
-        return np.zeros_like(y)
-    if i == 0 and j == 0:
-        return np.ones_like(y)
-    yi = _power(y, i)
-    zj = _power(z, j)
-    term = zj if yi is None else yi if zj is None else yi * zj
-    c = 1.0 / (math.factorial(i) * math.factorial(j))
-    return term if c == 1.0 else c * term
+@functools.lru_cache(maxsize=None)
+def _derivative_table(monomials: tuple, pairs: tuple) -> tuple[np.ndarray, ...]:
+    """For each (a, b) of ``pairs`` and each monomial (i, j): the exponents (i − a, j − b) (0 where
+    negative), 1/((i − a)! (j − b)!) and whether the derivative is a monomial at all (not 0)."""
+    rows = [(i - a, j - b) for a, b in pairs for i, j in monomials]
+    ey = np.array([max(p, 0) for p, _ in rows])
+    ez = np.array([max(q, 0) for _, q in rows])
+    coef = np.array([1.0 / (math.factorial(p) * math.factorial(q)) for p, q in zip(ey, ez)])
+    live = np.array([p >= 0 and q >= 0 for p, q in rows])
+    return ey, ez, coef, live
 
 
-def _power(x: np.ndarray, n: int):
-    """x^n by repeated products (None for n = 0)."""
-    if n == 0:
-        return None
-    out = x
-    for _ in range(n - 1):
-        out = out * x
+def _powers(x: np.ndarray, order: int) -> np.ndarray:
+    """[1, x, x², …, x^order] along a new last axis, x^n by repeated products ((x·x)·x …)."""
+    out = np.empty(x.shape + (order + 1,))
+    out[..., 0] = 1.0
+    for n in range(1, order + 1):
+        out[..., n] = x if n == 1 else out[..., n - 1] * x
     return out
 
 

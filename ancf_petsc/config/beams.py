@@ -22,13 +22,15 @@ def parse_beams(value, base_dir: str) -> list[BeamSpec]:
         bname = string(b["name"], f"{p}.name")
         if bname in [x.name for x in beams]:
             raise ConfigError(f"{p}.name", f"duplicate beam name {bname!r}; names must be unique")
+        element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", tuple(ELEMENTS))
         beams.append(BeamSpec(
             name=bname,
             section=parse_section(b["section"], f"{p}.section", base_dir),
             material=parse_material(b["material"], f"{p}.material"),
             elements=integer(b["elements"], f"{p}.elements", lo=1, hi=100000),
-            axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points")))
-        beams[-1].element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", tuple(ELEMENTS))
+            axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points",
+                                       ELEMENTS[element].block.axial_nodes)))
+        beams[-1].element = element
         beams[-1].locking = string(b.get("locking", ELEMENTS[beams[-1].element].default_locking),
                                    f"{p}.locking", LOCKING)
         if beams[-1].locking == "mixed" and beams[-1].material["model"] not in VOLUMETRIC_LAWS:
@@ -197,13 +199,19 @@ def _goh(value, path: str) -> dict:
 MATERIAL_PARSERS = {NeoHookean.name: _neo_hookean, StVenantKirchhoff.name: _svk, GOH.name: _goh_material}
 
 
-def _axial_points(value, path: str) -> int:
-    """Gauss points along ξ: one point leaves the three-node element's stiffness singular."""
+def _axial_points(value, path: str, nodes: int = 3) -> int:
+    """Gauss points along ξ: one point leaves the three-node element's stiffness singular, and
+    fewer points than nodes an element with four or more nodes along the beam (measured on a
+    four-node 3363: with 2 or 3 points the uniaxial bar and the Achilles column end "unstable")."""
     n = integer(value, path, hi=10)
-    if n < 2:
+    if nodes <= 3 and n < 2:
         raise ConfigError(path, f"must be >= 2; got {n}: one point along the beam leaves the "
                                 "three-node element's stiffness singular (zero-energy modes); "
                                 "use 2 (reduced) or 3 (full, the paper's)")
+    if nodes > 3 and n < nodes:
+        raise ConfigError(path, f"must be >= {nodes} for an element with {nodes} nodes along the beam; "
+                                f"got {n}: fewer points leave its stiffness singular (zero-energy "
+                                f"modes); use {nodes}")
     return n
 
 

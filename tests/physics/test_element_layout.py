@@ -325,3 +325,19 @@ def test_monomial_derivatives_are_each_monomial_formed_alone_bitwise():
                 want = (1.0 / (math.factorial(p) * math.factorial(q))) * (power(y, p) * power(z, q))
             assert np.array_equal(got[k, :, v], want), (a, b, i, j)
         assert np.array_equal(block.section_monomials(y, z, a, b), got[k])
+
+
+def test_too_few_axial_points_for_a_four_node_element_is_a_config_error(registered):
+    """An element with four nodes along the beam needs four Gauss points along it (with 2 or 3
+    its cubic axial field keeps zero-energy modes): a one-line error naming the key, before any
+    model is built; the three-node elements keep their minimum of 2."""
+    from ancf_petsc.config.parse import parse_config
+    for n in (2, 3):
+        raw = _achilles("four-node-3363", [10.0])
+        raw["beams"][0]["axial_points"] = n
+        with pytest.raises(ConfigError) as err:
+            parse_config(raw, base_dir=CONFIGS)
+        assert str(err.value).startswith("beams[0].axial_points: must be >= 4 for an element with 4 nodes")
+    raw = _achilles("3363", [10.0])
+    raw["beams"][0]["axial_points"] = 2
+    parse_config(raw, base_dir=CONFIGS)

@@ -7,9 +7,7 @@ The third-party readers (Pillow, scikit-image, nibabel, svgelements) are importe
 of theirs is read.  User guide: docs/geometry.md."""
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
+from ..registry import discover
 from .base import Description, Importer, OutlineKey, OutlineReadError, RawOutline
 
 __all__ = ["Description", "FORMATS", "Importer", "OutlineKey", "OutlineReadError", "RawOutline",
@@ -17,20 +15,15 @@ __all__ = ["Description", "FORMATS", "Importer", "OutlineKey", "OutlineReadError
 
 
 def _discover() -> dict[str, Importer]:
-    """name → importer of every module of this package that binds ``IMPORTER``."""
+    """name → importer of every module of this package that binds ``IMPORTER``; no extension
+    claimed twice."""
     found: dict[str, Importer] = {}
-    owner: dict[str, str] = {}
-    for info in pkgutil.iter_modules(__path__):
-        imp = getattr(importlib.import_module(f"{__name__}.{info.name}"), "IMPORTER", None)
-        if imp is None:
-            continue
-        if imp.name in found:
-            raise ImportError(f"outline formats {owner[imp.name]} and {info.name} are both named {imp.name!r}")
+    for name, (_, imp) in discover(__path__, __name__, "IMPORTER", "outline formats").items():
         for e in imp.extensions:
             other = [n for n, f in found.items() if e in f.extensions]
             if other:
                 raise ImportError(f"outline formats {other[0]!r} and {imp.name!r} both claim {e}")
-        found[imp.name], owner[imp.name] = imp, info.name
+        found[name] = imp
     return found
 
 

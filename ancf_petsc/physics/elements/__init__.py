@@ -8,9 +8,7 @@ The node block is a model's: every beam of one model uses elements of one block 
 share 3363's).  ``register`` adds an element at run time (tests)."""
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
+from ...registry import discover
 from .base import Element, NodeBlock, complete_monomials, quadratic_lagrange, vector_name
 
 __all__ = ["DEFAULT_ELEMENT", "ELEMENTS", "Element", "NodeBlock", "complete_monomials", "element",
@@ -18,16 +16,8 @@ __all__ = ["DEFAULT_ELEMENT", "ELEMENTS", "Element", "NodeBlock", "complete_mono
 
 
 def _discover() -> dict[str, Element]:
-    """name → element of every module of this package that binds ``ELEMENT``."""
-    found: dict[str, Element] = {}
-    owner: dict[str, str] = {}
-    for info in pkgutil.iter_modules(__path__):
-        e = getattr(importlib.import_module(f"{__name__}.{info.name}"), "ELEMENT", None)
-        if e is None:
-            continue
-        if e.name in found:
-            raise ImportError(f"elements {owner[e.name]} and {info.name} are both named {e.name!r}")
-        found[e.name], owner[e.name] = e, info.name
+    """name → element of every module of this package that binds ``ELEMENT``, 3363 first."""
+    found = {name: e for name, (_, e) in discover(__path__, __name__, "ELEMENT", "elements").items()}
     return dict(sorted(found.items(), key=lambda kv: (kv[0] != "3363", kv[0])))
 
 

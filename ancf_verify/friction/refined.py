@@ -14,6 +14,8 @@ SHOW = (10.0, 40.0, 100.0, 200.0, 400.0)
 
 JUDGED = (10.0, 100.0, 400.0)          # the levels the beams are judged at
 
+PLAUSIBLE = (0.5, 4.0)                 # observed orders whose Richardson value the tables show
+
 QUANTITIES = [(f"fx_{i}_N", f"friction {i} [N]", 1.0, "{:+.3f}") for i in IFACES] + \
              [("soleus_ux_m", "soleus u_x [mm]", 1e3, "{:.5f}")]
 
@@ -123,7 +125,7 @@ def quantity_md(rows: list, psi: float, column: str, scale: float, fmt: str) -> 
         ok = "—" if not np.isfinite(c["change"]) else ("yes" if abs(c["change"]) <= TARGET else "no")
         L.append(f"| {F:g} | " + " | ".join(cells) + f" | {' → '.join(mm(h) for h in c['pair'])} | "
                  f"{pct(c['change'])} | {ok} | " + ("—" if not np.isfinite(c["p"]) else f"{c['p']:.2f}")
-                 + " | " + ("—" if not np.isfinite(c["limit"]) else fmt.format(scale * c["limit"])) + " |")
+                 + " | " + (fmt.format(scale * c["limit"]) if PLAUSIBLE[0] <= c["p"] <= PLAUSIBLE[1] else "—") + " |")
     return L
 
 
@@ -171,8 +173,9 @@ def refined_md(rows: list, psi: float) -> list:
     L = ["**Meshes** (the uniform ones of the tables above first; wall: the solid's cumulative solve time):", ""]
     L += meshes_md(rows, psi) + [""]
     for column, title, scale, fmt in QUANTITIES:
-        L += [f"**{title}** per mesh; change between the two finest refined meshes (relative to the finer), "
-              "observed order and Richardson value from the three finest refined meshes:", ""]
+        L += [f"**{title}** per mesh; change between the two finest refined meshes (relative to the finer); "
+              "observed order from the three finest refined meshes where the two changes have one sign and "
+              f"shrink, and the Richardson value where that order is between {PLAUSIBLE[0]:g} and {PLAUSIBLE[1]:g}:", ""]
         L += quantity_md(rows, psi, column, scale, fmt) + [""]
     L += ["**End displacements**, change between the two finest refined meshes (soleus relative, the "
           "gastrocnemii against the soleus elongation):", ""] + ends_md(rows, psi) + [""]

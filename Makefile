@@ -98,8 +98,8 @@ verify-solid-friction: setup
 
 # the friction reference refined at the soleus-medial interface (issue 41; docs/interface.md, "The friction
 # reference, locally refined at the soleus-medial interface"): bulk h = 2 mm, 1.0 and 0.7 mm at mg_sol over
-# Table 1's 13 levels, 0.5 mm over the levels to 100 N; merged into docs/solid_friction.csv (REFINED_MIN min
-# on one core, one process, peak REFINED_GB GB)
+# Table 1's 13 levels, 0.5 mm over the levels to 100 N; merged into docs/solid_friction.csv (10 + 32 + 33 min
+# on one shared core, one process; peak resident memory 1.7 / 3.6 / 7.4 GB)
 FRICTION_REFINED := --merge --psi 45 --no-selftest --no-checks --no-ancf --profiles=
 verify-solid-friction-refined: setup
 	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3,2e-3 --h-interface 1e-3,7e-4

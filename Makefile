@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-contact-plane verify-solid-friction studies clean
+.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-contact-plane verify-solid-friction verify-solid-friction-refined studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -94,6 +94,17 @@ verify-solid-contact-plane: setup
 verify-solid-friction: setup
 	$(PY) scripts/verify_solid_friction.py --profiles 10,100
 	$(PY) scripts/verify_solid_friction.py --merge --no-selftest --free-zone 0.01 --ancf-augmentations default
+	$(MAKE) verify-solid-friction-refined
+
+# the friction reference refined at the soleus-medial interface (issue 41; docs/interface.md, "The friction
+# reference, locally refined at the soleus-medial interface"): bulk h = 2 mm, 1.0 and 0.7 mm at mg_sol over
+# Table 1's 13 levels, 0.5 mm over the levels to 100 N; merged into docs/solid_friction.csv (10 + 32 + 33 min
+# on one shared core, one process; peak resident memory 1.7 / 3.6 / 7.4 GB)
+FRICTION_REFINED := --merge --psi 45 --no-selftest --no-checks --no-ancf --profiles=
+verify-solid-friction-refined: setup
+	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3,2e-3 --h-interface 1e-3,7e-4
+	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3 --h-interface 5e-4 \
+		--loads 10,20,30,40,45,60,80,90,100
 
 clean:
 	rm -rf results .pytest_cache

@@ -35,7 +35,8 @@ import sys
 import tempfile
 import time
 
-from ancf_verify.contact.tendon import tendon_sections
+from ancf_verify.contact.mesh import LocalSize
+from ancf_verify.contact.tendon import LOADS, tendon_sections
 from ancf_verify.friction.beams import run_ancf, zone_label
 from ancf_verify.friction.page import finish
 from ancf_verify.friction.rows import (Paths, SPACES, ancf_rows, fd_rows, read_csv, row_key, solid_rows,
@@ -54,6 +55,12 @@ def main(argv=None) -> int:
     ap.add_argument("--mu", type=float, default=0.3, help="friction coefficient")
     ap.add_argument("--h", default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m] at the first pretwist, coarse to fine")
     ap.add_argument("--h-more", default="2e-3,1.4e-3", help="solid mesh sizes at the other pretwists")
+    ap.add_argument("--h-interface", default="",
+                    help="local refinement: element size [m] around the --refine-at interface, one per --h (then "
+                         "the bulk size; the axial layers follow it; '' or 0: uniform), e.g. --h 2e-3,2e-3 "
+                         "--h-interface 1e-3,7e-4")
+    ap.add_argument("--refine-at", default="mg_sol", help="the interface curve of --h-interface")
+    ap.add_argument("--loads", default="", help="solid load levels [N] (default: Table 1's 10 ... 400 N)")
     ap.add_argument("--stick", type=float, default=100.0, help="solid stick stiffness k in mu_max/h")
     ap.add_argument("--elements", default="4,8,16", help="ANCF elements per subtendon")
     ap.add_argument("--ancf-augmentations", default="default,10,0.1",
@@ -103,15 +110,20 @@ def main(argv=None) -> int:
             return 0
     psis = [float(p) for p in args.psi.split(",") if p.strip()]
     hs = [float(h) for h in args.h.split(",")]
+    locs = local_sizes(args, len(hs))
+    loads = [float(F) for F in args.loads.split(",") if F.strip()] or list(LOADS)
     mu = args.mu
     zone = args.free_zone
     for psi in psis:
-        for h in (hs if psi == psis[0] else [float(x) for x in args.h_more.split(",")])[:1 if zone else None]:
+        more = [float(x) for x in args.h_more.split(",")]
+        for h, loc in list(zip(hs, locs) if psi == psis[0] else zip(more, [None] * len(more)))[:1 if zone else None]:
             if args.no_solid:
                 break
-            print(f"[solid] psi {psi:g}, mu {mu:g}, h {h * 1e3:.2f} mm, stick {args.stick:g}"
-                  + (f", no friction below x = {zone * 1e3:g} mm" if zone else ""), flush=True)
-            r = run_solid(secs, psi, h, mu, args.stick, max_increment=args.max_increment, free_zone=zone)
+            print(f"[solid] psi {psi:g}, mu {mu:g}, h {h * 1e3:.2f} mm" + (f", {loc.label()}" if loc else "")
+                  + f", stick {args.stick:g}" + (f", no friction below x = {zone * 1e3:g} mm" if zone else ""),
+                  flush=True)
+            r = run_solid(secs, psi, h, mu, args.stick, max_increment=args.max_increment, free_zone=zone,
+                          loads=loads, local=loc)
             save(solid_rows(r, psi, mu, zone_label(f"stick {args.stick:g}", zone)))
         if not args.no_checks and not args.no_solid and not zone and psi == psis[0]:
             h = hs[0]
@@ -138,3 +150,11 @@ def main(argv=None) -> int:
         profiles(secs, args, levels, psis[0])
     finish(paths, rows, {"argv": " ".join(sys.argv[1:]), "total": time.perf_counter() - t_start})
     return 0
+
+
+def local_sizes(args, n: int) -> list:
+    """One contact.mesh.LocalSize (or None: uniform) per --h from --h-interface and --refine-at."""
+    hi = [float(x) for x in args.h_interface.split(",") if x.strip()]
+    if hi and len(hi) != n:
+        raise SystemExit(f"verify_solid_friction: --h-interface gives {len(hi)} sizes for {n} --h")
+    return [LocalSize(args.refine_at, x) if x > 0 else None for x in hi] or [None] * n

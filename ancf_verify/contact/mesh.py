@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -9,8 +10,47 @@ from ancf_verify.bars.mesh import gmsh_section
 from ancf_verify.contact.tendon import AXIS, ContactError, LENGTH, curve_names
 
 
-def tendon_mesh(secs, h: float, psi: float, bodies=(0, 1, 2), layered: bool = True):
+@dataclass(frozen=True)
+class LocalSize:
+    """Local refinement of the tendon mesh around one interface curve of the section: element
+    size ``h`` within ``band`` (default 2 h) of the curve, growing by ``growth`` per unit
+    distance beyond it up to the bulk size; the axial layers follow ``h`` (``tendon_mesh``).
+
+    The size is a function of the section position only (the distance to the curve, sampled
+    from the ANCF outline), so every body's gmsh model sees the same size on a shared curve and
+    the interfaces keep the same 1D mesh on both sides."""
+    curve: str
+    h: float
+    band: float | None = None
+    growth: float = 0.5
+
+    def label(self) -> str:
+        """What the CSV's resolution column says after the bulk size: '0.70 mm at mg_sol'."""
+        return f"{self.h * 1e3:.2f} mm at {self.curve}"
+
+    def polyline(self, secs) -> np.ndarray:
+        """The curve in gmsh's section plane (the tendon's (y, z)), 400 points."""
+        for sec in secs:
+            for cv, _ in sec.loop:
+                if cv.name == self.curve:
+                    return cv.sample(400) + sec.shape_params["offset"]
+        raise ContactError(f"local refinement: no curve {self.curve!r} in the sections")
+
+    def sizes(self, pts: np.ndarray, line: np.ndarray, h_bulk: float) -> np.ndarray:
+        """Element size at section points pts (n, 2) for the curve's polyline ``line``."""
+        a, d = line[:-1], np.diff(line, axis=0)
+        t = np.clip(np.einsum("nsi,si->ns", pts[:, None, :] - a[None], d) / np.einsum("si,si->s", d, d), 0.0, 1.0)
+        dist = np.linalg.norm(pts[:, None, :] - (a[None] + t[:, :, None] * d[None]), axis=2).min(axis=1)
+        band = 2.0 * self.h if self.band is None else self.band
+        return np.minimum(h_bulk, self.h + self.growth * np.maximum(dist - band, 0.0))
+
+
+def tendon_mesh(secs, h: float, psi: float, bodies=(0, 1, 2), layered: bool = True,
+                local: LocalSize | None = None):
     """P2 tets of the chosen bodies as separate volumes (duplicated interface nodes), twisted.
+
+    local: a LocalSize (finer elements around one interface curve of the section, h the bulk
+    size; the axial layers of every body at the local size, graded as ``axial_layers``).
 
     layered: the section's triangles are extruded in ceil(L/h) layers (each prism split into 3
     tets), so that the cross-section tessellation of a body is the same at every x; the shared
@@ -24,7 +64,7 @@ def tendon_mesh(secs, h: float, psi: float, bodies=(0, 1, 2), layered: bool = Tr
     Cell tags: body b -> b + 1.  Facet tags: root 10 + b, end 20 + b, lateral face on curve c of
     body b -> 100 * (b + 1) + index of c in the loop."""
     from ancf_petsc.physics.geometry import place
-    parts = [gmsh_body(secs, b, h, layered) for b in bodies]
+    parts = [gmsh_body(secs, b, h, layered, local) for b in bodies]
     msh, ct, ft = merge_to_dolfinx(parts)
     x = msh.geometry.x          # gmsh (x, y, z) = tendon (y, z, x), then the pretwist map
     yz, xs = x[:, :2].copy(), x[:, 2].copy()
@@ -47,8 +87,9 @@ def axial_layers(h: float, layered) -> dict:
     return {"numElements": [n_end, n_mid, n_end], "heights": [a / LENGTH, (LENGTH - a) / LENGTH, 1.0]}
 
 
-def gmsh_body(secs, b: int, h: float, layered) -> dict:
-    """Mesh one body in its own gmsh model; nodes, P2 tets and tagged P2 triangles (gmsh order)."""
+def gmsh_body(secs, b: int, h: float, layered, local: LocalSize | None = None) -> dict:
+    """Mesh one body in its own gmsh model; nodes, P2 tets and tagged P2 triangles (gmsh order);
+    ``local``: the section's size from LocalSize.sizes (a gmsh size callback), layers at its h."""
     import gmsh
     from dolfinx.io import gmshio
     gmsh.initialize()
@@ -58,7 +99,8 @@ def gmsh_body(secs, b: int, h: float, layered) -> dict:
         occ = gmsh.model.occ
         srf = gmsh_section(occ, secs[b])
         if layered:
-            out = occ.extrude([(2, srf)], 0.0, 0.0, LENGTH, recombine=False, **axial_layers(h, layered))
+            out = occ.extrude([(2, srf)], 0.0, 0.0, LENGTH, recombine=False,
+                              **axial_layers(local.h if local else h, layered))
         else:
             out = occ.extrude([(2, srf)], 0.0, 0.0, LENGTH)
         occ.synchronize()
@@ -91,6 +133,10 @@ def gmsh_body(secs, b: int, h: float, layered) -> dict:
         gmsh.option.setNumber("Mesh.MeshSizeMax", h)
         gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+        if local is not None:
+            line = local.polyline(secs)
+            gmsh.model.mesh.setSizeCallback(
+                lambda dim, tag, x, y, z: float(local.sizes(np.array([[x, y]]), line, h)[0]))
         gmsh.model.mesh.generate(3)
         gmsh.model.mesh.setOrder(2)
         x = gmshio.extract_geometry(gmsh.model)

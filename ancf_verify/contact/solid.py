@@ -21,13 +21,14 @@ def centroid_points(secs, psi: float, bodies=(0, 1, 2)) -> np.ndarray:
 
 
 def tendon_problem(secs, psi: float, h: float, law: str | None, bodies=(0, 1, 2), loads_on=(0,),
-                   layered: bool = True, problem_class=None, root: str = "clamped", **kw):
+                   layered: bool = True, problem_class=None, root: str = "clamped", local=None, **kw):
     """Mesh (timed) and Problem of the tendon: roots ``root`` (clamped or plane:
     ancf_verify.roots), end traction 1 N x load factor on
     the end faces of ``loads_on``, contact on the interfaces between the chosen bodies
-    (``problem_class``: a Problem subclass taking the same arguments, e.g. with friction)."""
+    (``problem_class``: a Problem subclass taking the same arguments, e.g. with friction;
+    ``local``: a contact.mesh.LocalSize, finer elements around one interface)."""
     t0 = time.perf_counter()
-    msh, ct, ft = tendon_mesh(secs, h, psi, bodies, layered)
+    msh, ct, ft = tendon_mesh(secs, h, psi, bodies, layered, local)
     t_mesh = time.perf_counter() - t0
     mats = {b + 1: (MU[b], KBULK) for b in bodies}
     dirich = [(10 + b, root) for b in bodies]
@@ -63,7 +64,10 @@ def run_solid(secs, psi: float, law: str | None, h: float, loads=LOADS, bodies=(
                 extra = (f", |g-g0| max {rec['g_max'] * 1e6:.2f} um, p [{rec['p_min'] / 1e6:+.2f}, "
                          f"{rec['p_max'] / 1e6:+.2f}] MPa, active {rec['active']}/{rec['nc']}, "
                          f"off-master points {rec['off']}/{rec['nq']}")
-            log(f"    {level:5.0f} N: soleus u_x {1e3 * u[0][0]:.6f} mm, {its} its, "
+            if rec.get("friction"):
+                extra += ", friction x " + ", ".join(f"{k} {v['force_x']:+.4f} N" for k, v in rec["friction"].items())
+            others = "".join(f", {SHORT[b]} u_x {1e6 * u[i][0]:+.4f} um" for i, b in enumerate(bodies) if i)
+            log(f"    {level:5.0f} N: soleus u_x {1e3 * u[0][0]:.6f} mm{others}, {its} its, "
                 f"{rec['wall']:.1f} s{extra}")
 
     ok, msg = True, ""

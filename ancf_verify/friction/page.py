@@ -7,6 +7,7 @@ import os
 import numpy as np
 
 from ancf_verify.friction.across import across_md
+from ancf_verify.friction.refined import refined_md
 from ancf_verify.friction.rows import (ANCF, BASE, BEGIN, BODIES, CHECK, DEFAULT_SPACE, END, IFACES, SOLID,
     SPACE, SPACES, ZONE, ancf_columns, ancf_errors, differences, errors, num, read_csv, reference, solid_runs,
     stick_order, variant_space, variant_value, write_csv)
@@ -207,7 +208,8 @@ def fd_md(rows: list) -> list:
     return L
 
 
-def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | None = None) -> str:
+def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | None = None,
+            refined_notes: str = "") -> str:
     """The whole section (from its heading to the end marker's line, exclusive)."""
     psis = sorted({num(r["psi_deg"]) for r in rows if r["model"] == SOLID}, key=lambda p: -p)
     mus = sorted({num(r["mu"]) for r in rows if r["model"] == SOLID})
@@ -259,6 +261,10 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
                   "solid run with the same change on the coarse mesh (h = 2.00 mm; the first row of each pair: "
                   "friction everywhere, against the plain solid on that mesh).  Worst error over the levels:", ""]
             L += zm + [""]
+        rm = refined_md(rows, psi)
+        if rm:
+            L += ["#### The friction reference, locally refined at the soleus–medial interface (issue 41)", ""]
+            L += rm + ([refined_notes.rstrip(), ""] if refined_notes else [])
     if prof:
         L += ["### Where the friction comes from", "",
               "Normal force carried in compression (Q⁺ = ∫ p⁺ dA, Coulomb's bound is μ Q⁺) and in tension "
@@ -380,9 +386,11 @@ def finish(paths, rows: list, meta: dict) -> None:
     prof = read_profiles(os.path.join(os.path.dirname(paths.csv), "solid_friction_profiles.csv"))
     os.makedirs(os.path.dirname(paths.png), exist_ok=True)
     plot(paths.png, rows, prof)
-    notes = os.path.join(os.path.dirname(paths.csv), "solid_friction.notes")
-    text = open(notes, encoding="utf-8").read() if os.path.exists(notes) else ""
-    write_page(paths.md, section(rows, prof, meta, text, read_profiles(across_csv(paths.csv))))
+    text = {}
+    for key in ("", "_refined"):
+        notes = os.path.join(os.path.dirname(paths.csv), f"solid_friction{key}.notes")
+        text[key] = open(notes, encoding="utf-8").read() if os.path.exists(notes) else ""
+    write_page(paths.md, section(rows, prof, meta, text[""], read_profiles(across_csv(paths.csv)), text["_refined"]))
 
 
 def across_csv(csv_path: str) -> str:

@@ -18,6 +18,8 @@ ZONE = ", no friction x < "          # a free-zone diagnostic's variant: "<varia
 
 SPACE = ", pressure "                # a pressure-space variant: "<variant>, pressure quadratic across"
 
+LOCAL = " mm at "                    # a locally refined mesh's resolution: "h 2.00 mm, 0.70 mm at mg_sol"
+
 
 #: the beams' contact pressure (and tangential multiplier) spaces beside the default (quadratic
 #: along x linear across, 3 x 2 points): name -> contact keys (docs/solid_contact.md's variants)
@@ -84,7 +86,7 @@ def row_key(r: dict) -> tuple:
 # ============================================================================================
 def solid_rows(run: dict, psi: float, mu: float, variant: str) -> list:
     rows = []
-    res = f"h {run['h'] * 1e3:.2f} mm"
+    res = f"h {run['h'] * 1e3:.2f} mm" + (f", {run['local'].label()}" if run.get("local") else "")
     for lv in run["levels"]:
         fr = lv.get("friction", {})
         r = {"psi_deg": psi, "mu": mu, "model": SOLID, "variant": variant, "resolution": res, "h_m": run["h"],
@@ -166,10 +168,12 @@ def fd_rows(recs: list) -> list:
 # Reference and errors
 # ============================================================================================
 def solid_runs(rows: list, psi: float, variant: str = BASE) -> dict:
-    """{h: {load: row}} of the solid runs of one variant at ψ."""
+    """{h: {load: row}} of the solid runs of one variant at ψ on uniform meshes (the locally
+    refined ones: friction.refined)."""
     out = {}
     for r in rows:
-        if r["model"] == SOLID and r["variant"] == variant and num(r["psi_deg"]) == psi and r["load_N"]:
+        if (r["model"] == SOLID and r["variant"] == variant and num(r["psi_deg"]) == psi and r["load_N"]
+                and LOCAL not in r["resolution"]):
             out.setdefault(num(r["h_m"]), {})[num(r["load_N"])] = r
     return out
 

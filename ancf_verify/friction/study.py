@@ -13,11 +13,15 @@ from ancf_verify.friction.model import FrictionProblem
 
 
 def run_solid(secs, psi: float, h: float, mu: float, stick: float, slip: str = "partner",
-              max_increment: float = 50.0, loads=LOADS, log=print, free_zone: float = 0.0) -> dict:
+              max_increment: float = 50.0, loads=LOADS, log=print, free_zone: float = 0.0, local=None) -> dict:
     """One solid run with friction (verify_solid_contact.run_solid with FrictionProblem;
-    ``free_zone`` > 0, a diagnostic: no friction at slave points below x = free_zone [m])."""
-    return contact_run_solid(secs, psi, "sliding", h, loads=list(loads), max_increment=max_increment, log=log,
-                         problem_class=FrictionProblem, mu=mu, stick=stick, slip=slip, free_zone=free_zone)
+    ``free_zone`` > 0, a diagnostic: no friction at slave points below x = free_zone [m];
+    ``local``: a contact.mesh.LocalSize, h then being the bulk size)."""
+    r = contact_run_solid(secs, psi, "sliding", h, loads=list(loads), max_increment=max_increment, log=log,
+                          problem_class=FrictionProblem, mu=mu, stick=stick, slip=slip, free_zone=free_zone,
+                          local=local)
+    r["local"] = local
+    return r
 
 
 # ============================================================================================

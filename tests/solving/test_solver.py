@@ -400,12 +400,17 @@ CYCLING_5 = [1.340833e+00, 7.801791e+00, 9.749213e+00, 2.712757e+00, 2.544255e-0
     (CYCLING_5, "cycles: |F| repeats every 5 iterations, between 2.5e-01 and 9.7e+00 N"),
     ([2.2e-2, 1.5e-2, 3.6e-4, 1.2e-5] + [1.7090501e-08 * (1 + 1e-8 * k) for k in range(12)],
      "stalls at |F| 1.71e-08 N"),
-    ([10.0 * 0.5 ** k for k in range(16)], None),
-    ([10.0 * 0.97 ** k for k in range(16)], None)], ids=["cycle", "cycle5", "stall", "converging", "slow"])
+    ([10.0 * 0.5 ** k for k in range(16)], "converges only linearly here, |F| x 0.50-0.50"),
+    ([10.0 * 0.97 ** k for k in range(16)], "converges only linearly here, |F| x 0.97-0.97"),
+    # the traced subject's sliding column at twist 120 deg, 2.57 kN (docs/gait.md): the last iterates
+    ([1.0, 0.21, 0.11, 0.72, 0.12, 0.096, 0.16, 0.116, 0.36, 0.167, 0.363, 0.072, 0.104, 0.269, 0.069,
+      0.157, 0.122], "iterates wander: |F| between 6.9e-02 and 3.6e-01 N over the last 7")],
+    ids=["cycle", "cycle5", "stall", "converging", "slow", "wandering"])
 def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
     """A level that ran out of Newton iterations names a cycle or a stall (more iterations do not
-    help) instead of suggesting a larger -snes_max_it; a Newton still converging gets no such
-    words."""
+    help) instead of suggesting a larger -snes_max_it; a Newton still converging says it converges
+    only linearly, one that neither converges nor repeats that it wanders (both: a larger
+    -snes_max_it may reach a state whose stability check names a limit point)."""
     from types import SimpleNamespace
     petsc_init()
     from petsc4py import PETSc
@@ -414,6 +419,9 @@ def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
     try:
         solver = SimpleNamespace(snes=snes, last_solve_history=history, problem=SimpleNamespace(contact=None))
         text = failure_detail(solver, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
+        more = f"-snes_max_it {3 * snes.getTolerances()[3]} may reach"
     finally:
         snes.destroy()
-    assert (expected in text and "more iterations do not help" in text) if expected else text == "", text
+    assert expected in text, text
+    helps = "linearly" in expected or "wander" in expected
+    assert ("more iterations do not help" in text) != helps and (more in text) == helps, text

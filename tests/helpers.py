@@ -218,7 +218,8 @@ def perturbed_state(P, rng, amplitude: float):
 FAILURE_MESSAGE = re.compile(r"^could not reach load factor \S+: SNES failed at load factor \S+ "
                              r"\(last converged \S+\) with [A-Z_]+"
                              r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+\))?"
-                             r"( \(an element was inverted, J <= 0\))?$")
+                             r"( \(an element was inverted, J <= 0\))?"
+                             r"( \(Newton( converges only linearly|'s iterates wander)[^()]*\))?$")
 
 
 def _paper_inputs():

@@ -94,8 +94,8 @@ def newton_course(history: list[float], maxit: int) -> str:
         return ""
     tail = history[-(COURSE_WINDOW + 1):]
     ratios = [b / a for a, b in zip(tail, tail[1:]) if a > 0.0]
-    advice = (f"-snes_max_it {3 * maxit} may reach a state whose stability check then says whether "
-              "a limit or bifurcation point is ahead")
+    advice = (f"a smaller solver.max_increment or -snes_max_it {3 * maxit} may reach a state "
+              "whose stability check then says whether a limit or bifurcation point is ahead")
     if len(ratios) == COURSE_WINDOW and max(ratios) < 1.0:
         return (f" (Newton converges only linearly here, |F| x {min(ratios):.2f}-{max(ratios):.2f} per "
                 f"iteration down to {tail[-1]:.1e} N: a nearly singular tangent, as near a limit or "

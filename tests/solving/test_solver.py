@@ -419,7 +419,7 @@ def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
     try:
         solver = SimpleNamespace(snes=snes, last_solve_history=history, problem=SimpleNamespace(contact=None))
         text = failure_detail(solver, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)
-        more = f"-snes_max_it {3 * snes.getTolerances()[3]} may reach"
+        more = f"or -snes_max_it {3 * snes.getTolerances()[3]} may reach"
     finally:
         snes.destroy()
     assert expected in text, text

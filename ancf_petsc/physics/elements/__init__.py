@@ -15,15 +15,17 @@ __all__ = ["DEFAULT_ELEMENT", "ELEMENTS", "Element", "NodeBlock", "complete_mono
            "element_names", "quadratic_lagrange", "register", "vector_name"]
 
 
-def _discover() -> dict[str, Element]:
-    """name → element of every module of this package that binds ``ELEMENT``, 3363 first."""
-    found = {name: e for name, (_, e) in discover(__path__, __name__, "ELEMENT", "elements").items()}
-    return dict(sorted(found.items(), key=lambda kv: (kv[0] != "3363", kv[0])))
-
-
-#: every element, by registry name (config ``beams[i].element``); 3363 first
-ELEMENTS = _discover()
 DEFAULT_ELEMENT = "3363"
+
+
+def _discover() -> dict[str, Element]:
+    """name → element of every module of this package that binds ``ELEMENT``, the default first."""
+    found = {name: e for name, (_, e) in discover(__path__, __name__, "ELEMENT", "elements").items()}
+    return dict(sorted(found.items(), key=lambda kv: (kv[0] != DEFAULT_ELEMENT, kv[0])))
+
+
+#: every element, by registry name (config ``beams[i].element``); the default (3363) first
+ELEMENTS = _discover()
 
 
 def element_names() -> tuple[str, ...]:

@@ -133,7 +133,7 @@ class NodeBlock:
         S = ``slots``), slot ``len(vectors) * node + k``."""
         vectors = tuple(range(len(self.monomials))) if vectors is None else vectors
         L, dL = self.axial(xi)
-        m, my, mz = (self.section_monomials(y, z, a, b)[:, list(vectors)] for a, b in ((0, 0), (1, 0), (0, 1)))
+        m, my, mz = self.monomial_derivatives(y, z, ((0, 0), (1, 0), (0, 1)))[:, :, list(vectors)]
         n, S = L.shape[0], L.shape[1] * len(vectors)
         N = (L[:, :, None] * m[:, None, :]).reshape(n, S)
         dN = np.empty((n, S, 3))
@@ -186,8 +186,7 @@ class Element:
 
     def section_monomials(self, y, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """m, ∂m/∂y, ∂m/∂z of the whole block (n, vectors_per_node) each."""
-        b = self.block
-        return b.section_monomials(y, z), b.section_monomials(y, z, 1, 0), b.section_monomials(y, z, 0, 1)
+        return tuple(self.block.monomial_derivatives(y, z, ((0, 0), (1, 0), (0, 1))))
 
     def shape_functions(self, xi: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Shape functions N (n, S) and their derivatives dN (n, S, 3) w.r.t. (ξ, y, z) of the

@@ -146,6 +146,18 @@ class Section:
         poly, margin = self._fine_polygon()
         return inside_with_margin(P, poly, margin)
 
+    @property
+    def smallest_width(self) -> float:
+        """The section's smallest width [m]: the least distance between two parallel lines that
+        enclose it (its convex hull's, attained with one line on a hull edge)."""
+        from scipy.spatial import ConvexHull
+        pts, _ = self._fine_polygon()
+        hull = pts[ConvexHull(pts).vertices]
+        edge = np.roll(hull, -1, axis=0) - hull
+        normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.linalg.norm(edge, axis=1)[:, None]
+        heights = hull @ normal.T
+        return float((heights.max(axis=0) - heights.min(axis=0)).min())
+
     def describe(self) -> str:
         """One line: kind, area [mm^2], centroid [mm], second moments [mm^4], point count."""
         return (f"{self.kind}: area {self.area * 1e6:.4g} mm^2, centroid "

@@ -25,6 +25,7 @@ from ..model.build import build_model
 from ..model.contact_setup import contact_for
 from ..parallel.partition import make_layout, partition_stats
 from ..linalg import logging
+from ..contact.reports import penetration_warnings
 from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
@@ -362,6 +363,10 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     timings.update(run.problem.timers)
     timings["linear_solve"] = logging.event_time("KSPSolve") + logging.event_time("PCSetUp") - solver_events0
     exchange = run.exchange_report()
+    if run.contact is not None and comm.rank == 0 and run.writer.summary["steps"]:
+        for note in penetration_warnings(run.contact, run.writer.summary["steps"][-1].get("contact", {})):
+            run.writer.summary["warnings"].append(note)
+            say(f"[ancf] {note}")
     problem_writing = run.writer.finish(
         status, reason_code=code, message=message, timings=timings,
         newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.solver.chord.count,

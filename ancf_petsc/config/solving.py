@@ -9,6 +9,10 @@ from ..linalg.option_syntax import check_value
 from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
 from .values import ConfigError, boolean, integer, mapping, number, shown, string
 
+#: ``accuracy.section_order``: none, or check the start rung one rung up the section ladder
+#: (workflows/section_order.py)
+SECTION_ORDER_CHECKS = ("none", "check")
+
 #: ``solver:`` keys → (validator, whether null means "the default")
 SOLVER_KEYS = {
     "max_increment": (lambda v, p: number(v, p, positive=True), True),
@@ -98,7 +102,8 @@ def parse_petsc(value) -> dict[str, str]:
 def parse_accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
     """``accuracy``: the probe, tolerance and ladder of the mesh choice (workflows/refinement.py)."""
     p = "accuracy"
-    mapping(value, p, required=("probe",), optional=("rtol", "component", "level", "start", "max_elements"))
+    mapping(value, p, required=("probe",),
+            optional=("rtol", "component", "level", "start", "max_elements", "section_order"))
     names = [x.name for x in probes]
     probe = string(value["probe"], f"{p}.probe")
     if probe not in names:
@@ -109,7 +114,9 @@ def parse_accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
                        component=string(value.get("component", "norm"), f"{p}.component",
                                         ("x", "y", "z", "norm")),
                        start=integer(value.get("start", 1), f"{p}.start", lo=1, hi=10000),
-                       max_elements=integer(value.get("max_elements", 64), f"{p}.max_elements", lo=1, hi=100000))
+                       max_elements=integer(value.get("max_elements", 64), f"{p}.max_elements", lo=1, hi=100000),
+                       section_order=string(value.get("section_order", "none"), f"{p}.section_order",
+                                            SECTION_ORDER_CHECKS))
     if "level" in value:
         acc.level = number(value["level"], f"{p}.level", positive=True)
         if not any(math.isclose(acc.level, s, rel_tol=1e-12) for s in steps):

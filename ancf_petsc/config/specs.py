@@ -191,6 +191,7 @@ class AccuracySpec:
     level: float | None = None            # load factor the probe is read at (default: last step)
     start: int = 1                        # elements of the first beam on the first rung
     max_elements: int = 64
+    section_order: str = "none"           # check: the start rung again one section order up
 
 
 @dataclass

@@ -21,6 +21,7 @@ from ..config.parse import parse_config
 from ..config.specs import ModelSpec
 from ..io.files import atomic_write
 from .refinement import choose, quantity
+from .section_order import check_section_order
 
 
 def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> dict:
@@ -102,6 +103,10 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
             "ladder": rungs, "ladder_seconds": ladder_time,
             "limit": None if ex is None else ex.limit, "order": None if ex is None else ex.order,
             "estimate": None if ex is None else ex.kind}
+    if acc.section_order == "check" and rungs and math.isfinite(values[0]):
+        start = os.path.join(spec.output.dir, "accuracy", "start")
+        info["section_order"] = check_section_order(spec, comm, run_model, _scaled_raw(
+            spec, rungs[0]["elements"] / base, start, level), values[0], level, say)
     if chosen is None:
         n = next((r["elements"] for r in reversed(rungs) if r["status"] in ("completed", "unstable")), base)
         info.update(chosen_elements=n, estimated_error=None, met=False)

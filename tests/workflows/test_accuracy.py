@@ -60,6 +60,7 @@ def test_apply_sets_every_beam_and_keeps_the_rest():
     ({"probe": "tip", "level": 0.33}, "accuracy.level", "must be one of the steps"),
     ({"probe": "tip", "start": 4, "max_elements": 8}, "accuracy.max_elements", "three rungs"),
     ({"probe": "tip", "component": "w"}, "accuracy.component", "must be one of x, y, z, norm"),
+    ({"probe": "tip", "section_order": "yes"}, "accuracy.section_order", "must be one of none, check"),
 ])
 def test_accuracy_config_errors_name_the_key(accuracy, path, words):
     raw = load_raw("bending_neohookean.yaml")
@@ -99,11 +100,43 @@ def test_bending_choice_meets_tolerance_against_a_fine_reference(tmp_path):
     assert abs(z - z_fine) / abs(z_fine) <= 3.0 * acc["estimated_error"]
 
 
+def test_section_order_check_compares_the_start_rung_one_order_up(tmp_path):
+    """``section_order: check`` solves the start rung again with the next element of the section
+    ladder (``richer``: 3333 → 3363, its default locking) and reports the probe's change.  In
+    uniaxial tension both section fields hold the exact uniform contraction: no change, the
+    field suffices.  The bending scene on 3333 (ecm) moves by 2.3 % at 2 elements: the check
+    says so, its richer value is a 3363 run of the same rung, and the run keeps 3333."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["element"] = "3333"
+    raw["accuracy"] = {"probe": "tip", "component": "x", "rtol": 1e-6, "section_order": "check"}
+    so = run_inline(raw, tmp_path / "bar")["accuracy"]["section_order"]
+    assert so["element"] == ["3333"] and so["next"] == "3363" and so["needs_next"] is False
+    assert so["change"] < 1e-10
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0].update(axial_points=2, element="3333")
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 2e-3, "start": 2, "section_order": "check"}
+    s = run_inline(raw, tmp_path / "bending")
+    so = s["accuracy"]["section_order"]
+    assert so["needs_next"] is True and so["change"] > 0.01
+    assert s["elements_per_beam"] == {"beam": s["accuracy"]["chosen_elements"]}
+    direct = run_inline(apply(raw | {"accuracy": None}, Discretisation(elements=2, element="3363")),
+                        tmp_path / "direct")
+    assert so["next_value"] == pytest.approx(direct["steps"][-1]["probes"]["tip"]["displacement"][2], rel=1e-12)
+    assert so["value"] == s["accuracy"]["ladder"][0]["value"]
+
+
+def test_the_top_of_the_section_ladder_has_no_next_rung():
+    from ancf_petsc.physics.elements import ELEMENTS, richer
+    top = max(ELEMENTS.values(), key=lambda e: e.order)
+    assert richer([top.name]) is None
+    assert all(richer([e.name]).order > e.order for e in ELEMENTS.values() if e.order < top.order)
+
+
 @pytest.mark.mpi
 def test_accuracy_run_is_the_same_on_two_ranks(tmp_path):
     raw = load_raw("bending_neohookean.yaml")
-    raw["beams"][0]["axial_points"] = 2
-    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 2e-3, "start": 2}
+    raw["beams"][0].update(axial_points=2, element="3333")      # its next section order: 3363
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 2e-3, "start": 2, "section_order": "check"}
     serial = run_inline(raw, tmp_path / "serial")
     raw["output"] = {"dir": str(tmp_path / "mpi"), "vtk": False}
     cfg = write_config(raw, tmp_path / "acc.yaml")
@@ -113,4 +146,7 @@ def test_accuracy_run_is_the_same_on_two_ranks(tmp_path):
     par = read_summary(tmp_path / "mpi")
     assert par["accuracy"]["chosen_elements"] == serial["accuracy"]["chosen_elements"]
     a, b = (st["steps"][-1]["probes"]["tip"]["displacement"][2] for st in (serial, par))
+    assert a == pytest.approx(b, rel=1e-9)
+    assert "[accuracy] section order: 3333 -> 3363 on the start rung changes tip by" in proc.stdout
+    a, b = (st["accuracy"]["section_order"]["next_value"] for st in (serial, par))
     assert a == pytest.approx(b, rel=1e-9)

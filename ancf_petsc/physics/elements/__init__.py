@@ -12,7 +12,7 @@ from ...registry import discover
 from .base import Element, NodeBlock, complete_monomials, quadratic_lagrange, vector_name
 
 __all__ = ["DEFAULT_ELEMENT", "ELEMENTS", "Element", "NodeBlock", "complete_monomials", "element",
-           "element_names", "quadratic_lagrange", "register", "vector_name"]
+           "element_names", "quadratic_lagrange", "register", "richer", "vector_name"]
 
 
 DEFAULT_ELEMENT = "3363"
@@ -39,6 +39,17 @@ def element(name: str) -> Element:
         return ELEMENTS[name]
     except KeyError:
         raise KeyError(f"unknown element {name!r}; registered: {', '.join(ELEMENTS)}") from None
+
+
+def richer(names) -> Element | None:
+    """The next rung of the section ladder above the elements ``names``: of the registered
+    elements with their axial nodes and a section field of higher degree than the richest of
+    them, one of the lowest such degree (ties: the complete field, then the name); None at the
+    top of the ladder."""
+    have = [element(n) for n in names]
+    top, nodes = max(e.order for e in have), have[0].block.axial_nodes
+    up = [e for e in ELEMENTS.values() if e.order > top and e.block.axial_nodes == nodes]
+    return min(up, key=lambda e: (e.order, len(e.held), e.name)) if up else None
 
 
 def register(e: Element) -> Element:

@@ -180,6 +180,11 @@ class Element:
             object.__setattr__(self, "vectors", tuple(range(self.block.vectors_per_node)))
 
     @property
+    def order(self) -> int:
+        """The degree of the section field it interpolates (3333: 1, 3363: 2)."""
+        return max(sum(self.block.monomials[v]) for v in self.vectors)
+
+    @property
     def held(self) -> tuple[int, ...]:
         """Vectors of the block this element does not interpolate with (held at 0)."""
         return tuple(v for v in range(self.block.vectors_per_node) if v not in self.vectors)

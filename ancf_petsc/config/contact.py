@@ -95,16 +95,17 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
         c.projection = (c.axial_points - 1, 1)
     else:
         pp = f"{p}.projection"
-        mapping(proj, pp, optional=("axial", "curve", "per_element", "supported_ends"))
+        mapping(proj, pp, optional=("axial", "curve", "curve_spans", "per_element", "supported_ends"))
         c.projection = (integer(proj.get("axial", c.axial_points - 1), f"{pp}.axial", lo=0,
                                 hi=c.axial_points - 1),
                         integer(proj.get("curve", 1), f"{pp}.curve", lo=0, hi=8))
         c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
+        c.curve_spans = integer(proj.get("curve_spans", 1), f"{pp}.curve_spans", lo=1, hi=16)
         c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",
                                   SUPPORTED_END_RULES)
-    if (c.projection[0] + 1) * (c.projection[1] + 1) > node_dofs:
-        raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + 1) pressure functions per element "
-                                             f"must not exceed {node_dofs} (one node block)")
+    if (c.projection[0] + 1) * (c.projection[1] + c.curve_spans) > node_dofs:
+        raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + curve_spans) pressure functions per "
+                                             f"element must not exceed {node_dofs} (one node block)")
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []

@@ -137,6 +137,7 @@ class ContactSpec:
     # (axial_points − 1), linear across (1): docs/contact.md, "Which pressure space"
     projection: tuple[int, int] = (2, 1)
     per_element: bool = False             # pressure discontinuous between A elements
+    curve_spans: int = 1                  # equal spans of the pressure across (B-splines; 1: Bernstein)
     # the axial pressure functions span groups of this many A elements: the space of a coarser
     # mesh on this one's displacements (a diagnosis, set in code: no config key;
     # ancf_verify/studies/contact_variants.py)

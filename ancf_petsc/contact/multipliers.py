@@ -6,7 +6,9 @@ functions are continuous piecewise Bernstein polynomials of degree ``axial`` ove
 (the trace space of the quadratic elements for degree 2: one function per A node, so no
 constraint repeats what continuity already says — a per-element space would, and its
 multipliers would not be unique), piecewise constants for degree 0; across the interface they
-are Bernstein polynomials of degree ``curve`` in τ ∈ [−1, 1].  The constraints are the weighted
+are Bernstein polynomials of degree ``curve`` in τ ∈ [−1, 1] (or, with ``curve_spans`` > 1, the
+B-splines of that degree on equal spans of τ: local functions that see an edge's gap, for
+unilateral contact; docs/contact.md, "Pointwise penetration").  The constraints are the weighted
 mean gaps
 
     ḡ_k = ∫ φ_k g dA / ∫ φ_k dA = Σ_p Φ_kp g_p,       Φ_kp = w_p φ_k(p) / A_k,
@@ -53,6 +55,20 @@ def bernstein(x: np.ndarray, degree: int) -> np.ndarray:
     k = np.arange(degree + 1)
     binomial = np.array([math.comb(degree, j) for j in k], dtype=float)
     return binomial * s ** k * (1.0 - s) ** (degree - k)
+
+
+def across_functions(tau: np.ndarray, degree: int, spans: int = 1) -> np.ndarray:
+    """The pressure functions across the interface at τ ∈ [−1, 1]: (len(τ), degree + spans).
+    One span: the Bernstein polynomials of ``degree``; more: the B-splines of ``degree`` on
+    ``spans`` equal spans with maximal smoothness (clamped knots), non-negative and summing to
+    one like them, but each living on degree + 1 spans only, so that a function near an edge of
+    the interface sees that edge's gap (docs/contact.md, "Pointwise penetration")."""
+    if spans == 1:
+        return bernstein(tau, degree)
+    from scipy.interpolate import BSpline
+    knots = np.concatenate([np.full(degree, -1.0), np.linspace(-1.0, 1.0, spans + 1), np.full(degree, 1.0)])
+    x = np.clip(np.asarray(tau, dtype=float), -1.0, 1.0)
+    return BSpline.design_matrix(x, knots, degree, extrapolate=False).toarray()
 
 
 @dataclass
@@ -226,7 +242,7 @@ def _merge(into: np.ndarray, rows: np.ndarray, seg_mults: np.ndarray, dense: np.
 
 def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
                 per_element: bool = False, group: int = 1,
-                merged: np.ndarray | None = None) -> MultiplierSpace:
+                merged: np.ndarray | None = None, spans: int = 1) -> MultiplierSpace:
     """Multipliers of ``degrees`` (axial, curve) on every interface of ``points``; with
     ``per_element`` the pressure is discontinuous between A elements.  That space repeats
     constraints (in the reference state its gaps vanish together with the continuous ones, so
@@ -241,7 +257,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
     ka, kc = degrees
     node_slots = interfaces[0].a.layout.block.dofs_per_node
     S = points.n_segments
-    K = (ka + 1) * (kc + 1)
+    K = (ka + 1) * (kc + spans)
     P_max = int(points.seg_size.max(initial=0))
     seg_mults = np.full((S, K), -1, dtype=np.int64)
     dense = np.zeros((S, K, P_max))
@@ -254,10 +270,13 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
         p0 = points.seg_start[segs[0]]
         n = int(points.seg_size[segs[0]])
         xi, tau = points.xi[p0:p0 + n], points.tau[p0:p0 + n]
-        dc = min(kc, len(np.unique(np.round(tau, 12))) - 1)   # no more than the points tell apart
+        distinct = len(np.unique(np.round(tau, 12)))          # no more than the points tell apart
+        ds = max(1, min(spans, distinct - kc))
+        dc = min(kc, distinct - ds)
+        across = across_functions(tau, dc, ds)
         ax, step = _axial_functions(xi, ka, per_element)
-        phi = (ax[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)   # (n, na·nc)
-        na, nc = ax.shape[1], dc + 1
+        phi = (ax[:, :, None] * across[:, None, :]).reshape(n, -1)   # (n, na·nc)
+        na, nc = ax.shape[1], across.shape[1]
         n_across.append(nc)
         if len(segs) % group:
             raise ValueError(f"{len(segs)} elements do not fall into groups of {group}")
@@ -266,7 +285,7 @@ def build_space(points, interfaces, degrees: tuple[int, int], stiffness: float,
             if group > 1:                # the group's functions at the segment's points
                 ax_g, _ = _axial_functions((e % group + 0.5 * (xi + 1.0)) * 2.0 / group - 1.0, ka,
                                            per_element)
-                phi = (ax_g[:, :, None] * bernstein(tau, dc)[:, None, :]).reshape(n, -1)
+                phi = (ax_g[:, :, None] * across[:, None, :]).reshape(n, -1)
             # the segment's functions: axial dofs g·step … g·step + na − 1 (g = e // group), all
             # across dofs
             ids = first + (((e // group) * step + np.arange(na))[:, None] * nc + np.arange(nc)).ravel()

@@ -172,6 +172,14 @@ class Projector:
         weight = end_weight(x, t, T, e_new == b_first, e_new == b_last)
         return eB, xiB, tB, weight
 
+    def on_surface(self, idx: np.ndarray, eB: np.ndarray, xiB: np.ndarray, tB: np.ndarray) -> np.ndarray:
+        """Whether the partner places (e_B, ξ_B, t_B) of the points ``idx`` lie on B's interface
+        surface: within its curve and its beam, not on the continued end pieces (``wrap``) where
+        a gap is measured to an extrapolated surface."""
+        itf, T = self.points.itf[idx], self.t_end[idx]
+        past_beam = ((eB == self._b_first[itf]) & (xiB < -1.0)) | ((eB == self._b_last[itf]) & (xiB > 1.0))
+        return (tB >= 0.0) & (tB <= T) & ~past_beam
+
     # ------------------------------------------------------------------ Newton on ζ
     def neighbours(self, idx: np.ndarray) -> np.ndarray:
         """B element across the element boundary within NEIGHBOUR_BAND of each point's partner

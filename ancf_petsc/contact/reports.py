@@ -65,12 +65,13 @@ def gap_sums(c, st: ContactState) -> np.ndarray:
     itf_m = c.space.interface[c.mults]
     area = c.space.area[c.mults] * c.owned        # each multiplier counted once
     lam = pressure_coefficients(c, st)
+    over = pr.valid & c.projector.on_surface(c.local, pr.eB, pr.xiB, pr.tB)    # penetration: only there
     for k in range(len(c.interfaces)):
         on, m = itf_p == k, itf_m == k
         v = on & pr.valid
         m = m & c.owned
         act = m & st.active
-        out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[v], initial=0.0),
+        out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[on & over], initial=0.0),
                   float(np.sum(pr.g[v] ** 2)), v.sum(),
                   np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
                   lam[m].max(initial=0.0), float(lam[m] @ area[m]),

@@ -83,3 +83,64 @@ def test_the_last_level_decides_and_the_threshold_is_the_thinner_section(tmp_pat
     deep = [name for name, c in s["steps"][-1]["contact"].items() if c["max_penetration"] > limit]
     named = [re.match(r"warning: contact interface (.+?): the bodies", n).group(1) for n in _notes(s)]
     assert deep and sorted(named) == sorted(deep)
+
+
+def test_pressure_functions_across_on_spans():
+    """One span: the Bernstein polynomials, bitwise.  More: B-splines that are non-negative, sum
+    to one, and live on degree + 1 spans each (degree 1: the hat functions on the span ends)."""
+    from ancf_petsc.contact.multipliers import across_functions, bernstein
+    tau = np.linspace(-1.0, 1.0, 41)
+    for d in (0, 1, 2, 3):
+        assert np.array_equal(across_functions(tau, d, 1), bernstein(tau, d))
+    for d, n in ((1, 4), (2, 3), (0, 5), (1, 5)):
+        phi = across_functions(tau, d, n)
+        assert phi.shape == (41, d + n) and phi.min() >= 0.0
+        assert np.allclose(phi.sum(axis=1), 1.0, rtol=0, atol=1e-14)
+        width = ((phi > 0).sum(axis=0) - 1) / 40 * n          # spans each function covers
+        assert width.max() <= d + 1 + 1e-9
+    nodes = np.linspace(-1.0, 1.0, 5)
+    hats = np.clip(1.0 - np.abs(tau[:, None] - nodes[None, :]) / 0.5, 0.0, None)
+    assert np.allclose(across_functions(tau, 1, 4), hats, rtol=0, atol=1e-14)
+
+
+def test_local_pressure_functions_across_hold_the_points(tmp_path):
+    """The paper's unilateral tendon at 10 N with linear pressure functions on 4 spans across
+    (`projection.curve_spans: 4`): the points stay within 20 µm of the medial gastrocnemius
+    (0.17 mm deep with one span), no warning, and the soleus end moves by less than 0.3 %."""
+    raw = _column("unilateral")
+    raw["contact"]["projection"] = {"curve": 1, "curve_spans": 4}
+    raw["contact"]["curve_points"] = 4
+    s = run_inline(raw, tmp_path / "spans")
+    assert s["steps"][-1]["contact"][MG_SOL]["max_penetration"] < 20e-6 and not _notes(s)
+    one = run_inline(_column("unilateral"), tmp_path / "one")
+    u, u1 = (x["steps"][-1]["probes"]["soleus"]["displacement"][0] for x in (s, one))
+    assert abs(u - u1) < 3e-3 * abs(u1)
+
+
+def test_penetration_counts_only_points_over_the_partner_surface():
+    """A partner place past the interface curve's ends or past B's beam ends has its gap to a
+    continued end piece: it is not on the surface (``Projector.on_surface``), so its gap is no
+    penetration; inside both it is."""
+    P, _ = build_problem(_column("unilateral"))
+    pj = P.contact.projector
+    idx = np.arange(4)
+    T = pj.t_end[idx]
+    eB = pj.eB[idx].copy()
+    first = np.array([P.contact.interfaces[k].b.element_offset for k in pj.points.itf[idx]])
+    inside = pj.on_surface(idx, eB, np.zeros(4), 0.5 * T)
+    assert inside.all()
+    assert not pj.on_surface(idx, eB, np.zeros(4), -1e-9 * T).any()
+    assert not pj.on_surface(idx, eB, np.zeros(4), (1 + 1e-9) * T).any()
+    assert not pj.on_surface(idx, first, np.full(4, -1.01), 0.5 * T).any()
+    assert pj.on_surface(idx, first, np.full(4, -0.99), 0.5 * T).all()
+
+
+def test_too_many_pressure_functions_across_is_a_config_error():
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.config.values import ConfigError
+    from helpers import CONFIGS
+    raw = _column("unilateral")
+    raw["contact"]["projection"] = {"curve": 1, "curve_spans": 6}      # 3 x 7 = 21 > 18
+    with pytest.raises(ConfigError) as err:
+        parse_config(raw, base_dir=CONFIGS)
+    assert str(err.value).startswith("contact.projection: (axial + 1) x (curve + curve_spans)")

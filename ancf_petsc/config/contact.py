@@ -87,25 +87,7 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
         raise ConfigError(f"{p}.fade", "newton differentiates the fade weights of the normal "
                                        "constraints only, not a tangential law's; use settle "
                                        "with contact.tangential")
-    proj = value.get("projection", None)
-    if proj == "pointwise":
-        raise ConfigError(f"{p}.projection", "a multiplier per point over-constrains the quadratic "
-                                             "section fields; give {axial: .., curve: ..} degrees")
-    if proj is None:
-        c.projection = (c.axial_points - 1, 1)
-    else:
-        pp = f"{p}.projection"
-        mapping(proj, pp, optional=("axial", "curve", "curve_spans", "per_element", "supported_ends"))
-        c.projection = (integer(proj.get("axial", c.axial_points - 1), f"{pp}.axial", lo=0,
-                                hi=c.axial_points - 1),
-                        integer(proj.get("curve", 1), f"{pp}.curve", lo=0, hi=8))
-        c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
-        c.curve_spans = integer(proj.get("curve_spans", 1), f"{pp}.curve_spans", lo=1, hi=16)
-        c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",
-                                  SUPPORTED_END_RULES)
-    if (c.projection[0] + 1) * (c.projection[1] + c.curve_spans) > node_dofs:
-        raise ConfigError(f"{p}.projection", "(axial + 1) x (curve + curve_spans) pressure functions per "
-                                             f"element must not exceed {node_dofs} (one node block)")
+    _parse_projection(c, value.get("projection", None), f"{p}.projection", node_dofs)
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []
@@ -122,3 +104,26 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
             c.interfaces.append((a, b, string(it["curve"], f"{ip}.curve") if "curve" in it else None,
                                  string(it["curve_b"], f"{ip}.curve_b") if "curve_b" in it else None))
     return c
+
+
+def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
+    """``contact.projection`` (at key path ``pp``) into ``c`` (a ContactSpec): the pressure
+    space's degrees along the beam and across, its spans across, continuity and supported-end
+    rule."""
+    if proj == "pointwise":
+        raise ConfigError(pp, "a multiplier per point over-constrains the quadratic "
+                              "section fields; give {axial: .., curve: ..} degrees")
+    if proj is None:
+        c.projection = (c.axial_points - 1, 1)
+    else:
+        mapping(proj, pp, optional=("axial", "curve", "curve_spans", "per_element", "supported_ends"))
+        c.projection = (integer(proj.get("axial", c.axial_points - 1), f"{pp}.axial", lo=0,
+                                hi=c.axial_points - 1),
+                        integer(proj.get("curve", 1), f"{pp}.curve", lo=0, hi=8))
+        c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
+        c.curve_spans = integer(proj.get("curve_spans", 1), f"{pp}.curve_spans", lo=1, hi=16)
+        c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",
+                                  SUPPORTED_END_RULES)
+    if (c.projection[0] + 1) * (c.projection[1] + c.curve_spans) > node_dofs:
+        raise ConfigError(pp, "(axial + 1) x (curve + curve_spans) pressure functions per "
+                              f"element must not exceed {node_dofs} (one node block)")

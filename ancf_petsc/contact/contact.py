@@ -47,8 +47,7 @@ class Contact:
         self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
         self.space = with_tangential(build_space(
             self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
-            spec.per_element, spec.group, merged=supported_ends(model, interfaces, spec.supported_ends),
-            spans=spec.curve_spans),
+            spec.per_element, spec.group, supported_ends(model, interfaces, spec.supported_ends), spec.curve_spans),
             any(t.multipliers for t in self.terms), held_ends(model, interfaces, spec.tangential))
         self.timers: dict | None = None
         self.seg_mnodes = self.space.segment_nodes()

@@ -25,6 +25,7 @@ from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .predictor import TangentPredictor
+from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
                       reason_name)
 from .snes_solver import SNESSolver
@@ -131,6 +132,8 @@ class LoadStepper:
         c = self.problem.contact
         dlam = self.control.first_increment(first_level, None if c is None else c.law.first_increment,
                                             last_level, self.predictor is not None)
+        if self.spec.initial_increment is None:         # fibre laws: the linear response's range
+            dlam = bounded_first_increment(self.problem, self.solver.snes, dlam)
         dX = X.duplicate()
         dX.set(0.0)
         return PathState(X=X, dX_last=dX, lam=0.0, dlam=dlam, dlam_last=0.0)

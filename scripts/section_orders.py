@@ -189,6 +189,10 @@ def untwist() -> None:
 
 # ----------------------------------------------------------------------------- soft matrix
 def soft() -> None:
+    from petsc4py import PETSc
+    # order 3-4 with ``mixed``: MUMPS's first workspace estimate is short (INFOG(1) = -9, delayed
+    # pivots); more room, the same factorisation
+    PETSc.Options().setValue("mat_mumps_icntl_14", 100)
     from ancf_verify.fibres.cases import ANCF, ANCF_MIXED
     from ancf_verify.fibres.report import read_csv
     from ancf_verify.soft_matrix.beams import run_beam

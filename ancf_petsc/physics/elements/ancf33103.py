@@ -19,4 +19,4 @@ from .base import Element, NodeBlock, complete_monomials
 
 BLOCK = NodeBlock(monomials=complete_monomials(3))
 
-ELEMENT = Element("33103", BLOCK, section_degree=2 * BLOCK.order)
+ELEMENT = Element("33103", BLOCK, section_degree=2 * BLOCK.order, remedies=("none", "mixed"))

@@ -15,4 +15,4 @@ from .base import Element, NodeBlock, complete_monomials
 
 BLOCK = NodeBlock(monomials=complete_monomials(4))
 
-ELEMENT = Element("33153", BLOCK, section_degree=2 * BLOCK.order)
+ELEMENT = Element("33153", BLOCK, section_degree=2 * BLOCK.order, remedies=("none", "mixed"))

@@ -82,10 +82,11 @@ def _pct(x: float) -> str:
 
 
 # ----------------------------------------------------------------------------- cantilever
-def cantilever_raw(element: str, locking: str, length: float, elements: int = 16) -> dict:
+def cantilever_raw(element: str, locking: str, length: float, fix: str = "clamped", elements: int = 16) -> dict:
     raw = load("bending_neohookean.yaml")
     b = raw["beams"][0]
-    b.update(element=element, locking=locking, elements=elements)
+    b.update(element=element, elements=elements)
+    raw["boundary_conditions"][0]["fix"] = fix
     raw["geometry"]["length"] = length
     raw["loads"][0]["traction_force"] = [0.0, 0.0, 1e-3 * beam_theory(length)[0]]
     raw["steps"] = [1.0]
@@ -103,17 +104,21 @@ def beam_theory(length: float, h: float = 0.01, mu: float = 1.0e6, K: float = 50
 
 
 def cantilever() -> None:
-    _head("element, locking", [f"L/h = {r}: vs EB / vs Timoshenko" for r in (10, 40)])
+    """Roots: ``clamped`` (the config's; the root section can neither contract nor warp) and
+    ``plane`` (a face on a frictionless plane: free to contract, held plane)."""
+    _head("root, element, locking", [f"L/h = {r}: w/w_EB − 1 / w/w_Timoshenko − 1" for r in (10, 40)])
     with tempfile.TemporaryDirectory() as tmp:
-        for el in ORDERS:
-            for lock in lockings(el):
-                cells = []
-                for L in (0.1, 0.4):
-                    s = solve(cantilever_raw(el, lock, L), tmp, f"c{el}{lock}{L}")
-                    P, w_eb, w_t = beam_theory(L)
-                    w = s["steps"][-1]["probes"]["tip"]["displacement"][2] / 1e-3
-                    cells.append(f"{_pct(w / w_eb - 1)} / {_pct(w / w_t - 1)}")
-                print(f"| {el}, {lock} | " + " | ".join(cells) + " |", flush=True)
+        for fix in ("clamped", "plane"):
+            for el in ORDERS:
+                for lock in LOCKINGS:
+                    cells = []
+                    for L in (0.1, 0.4):
+                        s = solve(cantilever_raw(el, "none", L, fix), tmp, f"c{el}{lock}{L}{fix}", locking=lock)
+                        P, w_eb, w_t = beam_theory(L)
+                        w = s["steps"][-1]["probes"]["tip"]["displacement"][2] / 1e-3
+                        cells.append(f"{_pct(w / w_eb - 1)} / {_pct(w / w_t - 1)}")
+                    refused = "" if lock in lockings(el) else " (refused)"
+                    print(f"| {fix}, {el}, {lock}{refused} | " + " | ".join(cells) + " |", flush=True)
 
 
 # ----------------------------------------------------------------------------- uniaxial

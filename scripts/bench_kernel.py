@@ -5,10 +5,8 @@ Prints the residual-only and residual+tangent rates for the neo-Hookean and SVK 
 realistic element block, the split of one tangent evaluation into its parts, and the wall time
 of the verification problems.  Target (issue 2): >= 200 000 tangent evaluations per second; the GOH kernel (issue 26, fibres along
 the pretwisted material lines, stretched so that every fibre is in tension) >= 70 % of neo-Hookean's;
-the cost of ``locking: mixed`` (issue 26) against each law without it; the cost per Gauss point
-of each section order (issue 42: 3363, 33103, 33153 at their own section rules, ``--element``).
+the cost of ``locking: mixed`` (issue 26) against each law without it.
 Usage: OPENBLAS_NUM_THREADS=1 python scripts/bench_kernel.py [--elements 64] [--repeat 20]
-       [--element 3363 33103 33153 --only-elements]
 """
 from __future__ import annotations
 
@@ -26,7 +24,6 @@ import numpy as np  # noqa: E402
 
 from ancf_petsc.physics import element3363 as el, kernels
 from ancf_petsc.physics.cubature import gauss_legendre
-from ancf_petsc.physics.elements import ELEMENTS
 from ancf_petsc.physics.geometry import reference_nodal_vectors
 from ancf_petsc.physics.fibres import fibre_directions
 from ancf_petsc.physics.goh import GOH
@@ -35,24 +32,21 @@ from ancf_petsc.physics.mixed import ProjectedDilatation, pressure_basis
 from ancf_petsc.physics.section import make_ellipse
 
 
-def block(n_el: int, degree: int, axial: int, goh: GOH | None = None, element: str = "3363"):
-    """An element block of ``element`` (physics/elements) on an ellipse rule of ``degree``."""
-    layout = ELEMENTS[element]
-    V = layout.block.vectors_per_node
+def block(n_el: int, degree: int, axial: int, goh: GOH | None = None):
     sec = make_ellipse((0.004, 0.0025), (0.003, 0.0), degree)
     xa, wa = gauss_legendre(axial)
     xi, y, z = el.tensor_points(xa, sec.points)
-    _, dN = layout.shape_functions(xi, y, z)
+    _, dN = el.shape_functions(xi, y, z)
     wq = np.repeat(wa, len(sec.weights)) * np.tile(sec.weights, axial)
     x = np.linspace(0.0, 0.07, 2 * n_el + 1)
-    q0 = reference_nodal_vectors(x, sec.centroid, 0.07, 45.0, (0.0, 0.0), V)
+    q0 = reference_nodal_vectors(x, sec.centroid, 0.07, 45.0, (0.0, 0.0))
     conn = np.stack([2 * np.arange(n_el), 2 * np.arange(n_el) + 1, 2 * np.arange(n_el) + 2], 1)
-    q0e = q0[conn].reshape(n_el, 3 * V, 3)
+    q0e = q0[conn].reshape(n_el, 18, 3)
     G, det = el.reference_gradients(q0e, dN)
     rng = np.random.default_rng(0)
     # a physical state (det F > 0, every fibre in tension): 5 % axial stretch plus noise of 0.1 %
     # of the element length on r and 0.1 % on the gradient vectors (NaNs would time other paths)
-    scale = np.where(np.arange(3 * V) % V == 0, x[2] - x[0], 1.0)[None, :, None]
+    scale = np.where(np.arange(18) % 6 == 0, x[2] - x[0], 1.0)[None, :, None]
     qe = q0e * np.array([1.05, 1.0, 1.0]) + 1e-3 * rng.standard_normal(q0e.shape) * scale
     if goh is None:
         return qe, G, det * wq[None]
@@ -92,36 +86,12 @@ def best_times(fns, repeat: int) -> list[float]:
     return best
 
 
-def per_element(names: list[str], n_el: int, repeat: int) -> None:
-    """µs per Gauss point and per element of each element at its default section rule (degree
-    max(6, 2 × order)) and 2 axial points, neo-Hookean and GOH; best of ``repeat`` calls."""
-    print("\n# cost per section order (2 axial points, the element's default section rule, "
-          f"{n_el} elements; best of {repeat} interleaved calls): microseconds per Gauss point / per element")
-    print(f"  {'element':8s} {'DOFs/el':>7s} {'GP/el':>6s} {'law':12s} {'residual':>18s} {'residual+tangent':>22s}")
-    law = GOH(1e6, 5e7, 2e6, 5.0, 0.1)
-    for name in names:
-        degree = max(6, ELEMENTS[name].section_degree)
-        for lname, mat in (("neo-hookean", NeoHookean(1e6, 5e7)), ("goh", law)):
-            qe, G, w, *bound = block(n_el, degree, 2, law if mat is law else None, element=name)
-            m = bound[0] if bound else mat
-            a, b = best_times([lambda: kernels.internal_force(qe, G, w, m),
-                               lambda: kernels.internal_force_and_tangent(qe, G, w, m)], repeat)
-            print(f"  {name:8s} {3 * qe.shape[1]:7d} {w.shape[1]:6d} {lname:12s} {1e6 * a / w.size:8.3f} / "
-                  f"{1e6 * a / n_el:7.1f} {1e6 * b / w.size:10.3f} / {1e6 * b / n_el:8.1f}", flush=True)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(allow_abbrev=False)
     ap.add_argument("--elements", type=int, default=64)
     ap.add_argument("--repeat", type=int, default=20)
     ap.add_argument("--skip-runs", action="store_true")
-    ap.add_argument("--element", nargs="+", default=["3363", "33103", "33153"],
-                    help="elements of the per-order table (physics/elements)")
-    ap.add_argument("--only-elements", action="store_true", help="the per-order table alone")
     args = ap.parse_args()
-    if args.only_elements:
-        per_element(args.element, args.elements, args.repeat)
-        return
     print(f"# element kernel throughput, 1 core (OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']})")
     print(f"{'material':14s} {'GP/elem':>8s} {'residual GP/s':>15s} {'res+tangent GP/s':>17s}  target 200000")
     law = GOH(1e6, 5e7, 2e6, 5.0, 0.1)
@@ -178,7 +148,6 @@ def main() -> None:
         total += us
         print(f"  {name:32s} {us:7.3f}")
     print(f"  {'sum':32s} {total:7.3f}   ({1e6 / total:,.0f} GP/s)")
-    per_element(args.element, args.elements, args.repeat)
     if args.skip_runs:
         return
     print("\n# whole-run wall time of the verification problems (ancf-solve, 1 rank, no VTK)")

@@ -105,11 +105,13 @@ def build_problem(raw, matrix_type: str = "aij", partition: str = "blocks"):
     return Problem(model, layout, comm, contact, matrix_type), PETSc
 
 
-def hex7_problem(loaded: bool, matrix: str = "sbaij", partition: str = "blocks"):
+def hex7_problem(loaded: bool, matrix: str = "sbaij", partition: str = "blocks", element: str | None = None):
     """bundle_hex7 on PETSc.COMM_WORLD, Jacobian at q0 of the first load level (no multipliers:
     no contact curvature) or after one Newton step with MUMPS (multipliers non-zero); returns
-    (Problem, PETSc, the residual F)."""
+    (Problem, PETSc, the residual F).  ``element``: the bundle's element (default its own)."""
     raw = load_raw("bundle_hex7.yaml")
+    if element is not None:
+        raw["bundle"]["element"] = element
     raw["output"] = {"dir": "unused", "vtk": False}
     P, PETSc = build_problem(raw, matrix, partition)
     P.load_factor = 0.5
@@ -149,10 +151,9 @@ def apply_fascicle_schur(P, PETSc, F):
 
 def beam_of_dofs(P) -> np.ndarray:
     """The beam of every PETSc DOF of ``P`` (−1: a multiplier node)."""
-    from ancf_petsc.physics.element3363 import DOFS_PER_NODE
     owner = np.full(P.n_blocks, -1)
     owner[P.layout.perm[:P.model.n_nodes]] = P.model.node_beam()
-    return np.repeat(owner, DOFS_PER_NODE)
+    return np.repeat(owner, P.model.dofs_per_node)
 
 
 def without_cross_fascicle_blocks(J: np.ndarray, beam_of: np.ndarray) -> np.ndarray:

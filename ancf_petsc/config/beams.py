@@ -31,13 +31,25 @@ def parse_beams(value, base_dir: str) -> list[BeamSpec]:
             axial_points=_axial_points(b.get("axial_points", DEFAULT_AXIAL_POINTS), f"{p}.axial_points",
                                        ELEMENTS[element].block.axial_nodes)))
         beams[-1].element = element
-        beams[-1].locking = string(b.get("locking", ELEMENTS[beams[-1].element].default_locking),
-                                   f"{p}.locking", LOCKING)
-        if beams[-1].locking == "mixed" and beams[-1].material["model"] not in VOLUMETRIC_LAWS:
-            raise ConfigError(f"{p}.locking", f"'mixed' projects the volumetric term K/2 (J - 1)^2 of "
-                              f"{' or '.join(VOLUMETRIC_LAWS)}; {beams[-1].material['model']!r} has none: "
-                              "use 'none'")
+        _element_choices(beams[-1], b, p)
     return beams
+
+
+def _element_choices(beam: BeamSpec, raw: dict, p: str) -> None:
+    """What the element decides for ``beams[i]``: the section rule raised to its least degree
+    (2 × order for 33103, 33153: ``Element.section_degree``), the locking remedy (its default
+    unless given) among those it accepts (``Element.remedies``)."""
+    e = ELEMENTS[beam.element]
+    beam.section.cubature_degree = max(beam.section.cubature_degree, e.section_degree)
+    beam.locking = string(raw.get("locking", e.default_locking), f"{p}.locking", LOCKING)
+    if beam.locking not in e.remedies:
+        raise ConfigError(f"{p}.locking", f"{beam.locking!r} is not a remedy of element {e.name} (its "
+                          "ν = 0 part loads the section's cubic modes, docs/locking.md); use "
+                          + " or ".join(repr(r) for r in e.remedies))
+    if beam.locking == "mixed" and beam.material["model"] not in VOLUMETRIC_LAWS:
+        raise ConfigError(f"{p}.locking", f"'mixed' projects the volumetric term K/2 (J - 1)^2 of "
+                          f"{' or '.join(VOLUMETRIC_LAWS)}; {beam.material['model']!r} has none: "
+                          "use 'none'")
 
 
 def parse_section(value, path: str, base_dir: str) -> SectionSpec:

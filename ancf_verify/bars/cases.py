@@ -33,6 +33,7 @@ class Case:
     steps: tuple = (0.25, 0.5, 0.75, 1.0)
     notes: list = field(default_factory=list)
     root: str = "clamped"        # the root's support, solid and beam alike (ancf_verify.roots)
+    element: str = "3363"        # the beam's element (physics/elements; issue 42's section orders)
 
 
 def geometric(h0: float, n: int, r: float = math.sqrt(2.0)) -> tuple:
@@ -70,7 +71,8 @@ def ancf_config(case: Case, elements: int, axial_points: int, out_dir: str) -> d
                          "twist_axis": list(case.twist_axis)},
             "beams": [{"name": "bar", "section": copy.deepcopy(case.section),
                        "material": {"model": "neo-hookean", **case.material},
-                       "elements": elements, "axial_points": axial_points}],
+                       "elements": elements, "axial_points": axial_points,
+                       **({"element": case.element} if case.element != "3363" else {})}],
             "boundary_conditions": [{"beam": "bar", "node": "first", "fix": case.root}],
             "loads": [{"beam": "bar", "node": "last", "traction_force": list(case.force)}],
             "steps": list(case.steps),

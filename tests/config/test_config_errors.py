@@ -52,7 +52,7 @@ CASES = [
     ("node missing", _set(["boundary_conditions", 0, "node"], 7), "boundary_conditions[0].node",
      "does not exist"),
     ("unknown beam", _set(["loads", 0, "beam"], "rod"), "loads[0].beam", "unknown beam"),
-    ("bad element", _set(["beams", 0, "element"], 3344), "beams[0].element", "one of 3363, 3333"),
+    ("bad element", _set(["beams", 0, "element"], 3344), "beams[0].element", "one of 3363, 33103, 33153, 3333"),
     ("bad locking", _set(["beams", 0, "locking"], "sri"), "beams[0].locking", "one of none, ecm"),
     ("bad fix", _set(["boundary_conditions", 0, "fix"], {"r": "xw"}), "boundary_conditions[0].fix.r",
      "components"),

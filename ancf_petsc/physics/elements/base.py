@@ -169,11 +169,22 @@ class Element:
     """An element: its registry name, its node block, the vectors of the block it interpolates
     with (indices; the others are held at their reference value 0) and the volumetric-locking
     remedy a beam of it gets unless the config says otherwise (``none`` | ``ecm`` | ``mixed``,
-    config ``beams[i].locking``; model.Beam.parts)."""
+    config ``beams[i].locking``; model.Beam.parts).
+
+    ``section_degree``: the least polynomial degree of the section rule the element needs; a
+    beam's ``cubature_degree`` below it is raised to it (config/beams.py).  The higher orders
+    set 2 × order: the stiffness integrates products of two monomials of the field (degree
+    2·order) and the tractions and section means their single monomials.  0 (3363, 3333): the
+    configured degree as given (the speed–accuracy study under-integrates 3363 on purpose,
+    docs/studies.md)."""
     name: str
     block: NodeBlock
     vectors: tuple[int, ...] | None = None
     default_locking: str = "none"
+    section_degree: int = 0
+    #: the ``locking`` values a beam of it accepts (33103, 33153: not ``ecm``, whose ν = 0 part
+    #: does work on the cubic modes in a homogeneous state: docs/locking.md, "Orders 3 and 4")
+    remedies: tuple[str, ...] = ("none", "ecm", "mixed")
 
     def __post_init__(self):
         if self.vectors is None:

@@ -10,7 +10,7 @@ import os
 import numpy as np
 
 from ancf_verify.friction.refined import finest_two, mm
-from ancf_verify.friction.rows import ANCF, DEFAULT_SPACE, IFACES, num, variant_space
+from ancf_verify.friction.rows import ANCF, DEFAULT_SPACE, IFACES, SPACE, num, variant_space
 from ancf_verify.paths import ROOT
 
 INFSUP_CSV = os.path.join(ROOT, "docs", "solid_friction_infsup.csv")
@@ -27,19 +27,33 @@ SHOWN = (10.0, 100.0, 400.0)
 CURVE = {DEFAULT_SPACE: 1, "quadratic across": 2, "cubic across": 3}
 
 
+#: the element of the ANCF rows without one (the config's default)
+DEFAULT_ELEMENT = "3363"
+
+
+def order_key(key: tuple) -> tuple:
+    """Sort key of (element, ...): by the element's order (3363 < 33103 < 33153), then the rest."""
+    return (len(key[0]), key)
+
+
 def element_of(model: str) -> str:
-    """The element of an element row's model ("ANCF 33103 2pt" -> "33103"); '' for other rows."""
+    """The element of an ANCF row's model ("ANCF 33103 2pt" -> "33103"; ANCF: the default 3363);
+    '' for other rows."""
     parts = model.split()
-    return parts[1] if model.startswith("ANCF ") and model != ANCF and len(parts) == 3 else ""
+    if model == ANCF:
+        return DEFAULT_ELEMENT
+    return parts[1] if model.startswith("ANCF ") and len(parts) == 3 else ""
 
 
 def columns(rows: list, psi: float) -> dict:
-    """{(element, curve degree, elements): {"levels": {load: row}, "failed": note}} of the element
-    rows at the default augmentation."""
+    """{(element, curve degree, elements): {"levels": {load: row}, "failed": note}} of the ANCF
+    rows at the default augmentation in the spaces across (CURVE; no free-zone diagnostics); the
+    plain ANCF rows are the element 3363's."""
     out = {}
     for r in rows:
         el = element_of(r["model"])
-        if not el or num(r["psi_deg"]) != psi or not r["variant"].startswith("augmentation default"):
+        if (not el or num(r["psi_deg"]) != psi or r["variant"].split(SPACE)[0] != "augmentation default"
+                or variant_space(r["variant"]) not in CURVE):
             continue
         key = (el, CURVE[variant_space(r["variant"])], int(num(r["elements"])))
         col = out.setdefault(key, {"levels": {}, "failed": ""})
@@ -79,11 +93,11 @@ def summary_md(rows: list, psi: float) -> list:
     sol, sol_lg = (" / ".join(f"{num(ref[F][1][f'fx_{i}_N']):.2f}" for F in SHOWN if F in ref)
                    for i in ("mg_sol", "lg_sol"))
     shown = " / ".join(f"{F:g}" for F in SHOWN)
-    L = [f"| element | pressure across | elements | levels | soleus at {shown} N | worst soleus (load) "
+    L = [f"| element | degree across | elements | levels | soleus at {shown} N | worst soleus (load) "
          f"| within {100 * TARGET:g} % at every level | friction mg_sol at {shown} N (solid {sol}) [N] "
          f"| friction lg_sol (solid {sol_lg}) [N] | Newton |",
          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|"]
-    for (el, deg, ne) in sorted(cols):
+    for (el, deg, ne) in sorted(cols, key=order_key):
         col = cols[(el, deg, ne)]
         e = soleus_errors(col, ref)
         worst = max(e, key=lambda F: abs(e[F])) if e else None
@@ -104,8 +118,8 @@ def per_level_md(rows: list, psi: float, elements: int = 8) -> list:
     """The soleus error per level at ``elements``, one column per element and degree across."""
     cols = {k: v for k, v in columns(rows, psi).items() if k[2] == elements}
     ref = reference(rows, psi, sorted({F for c in cols.values() for F in c["levels"]}))
-    keys = sorted(cols)
-    L = ["| load [N] | solid mesh | solid soleus u_x [mm] | " + " | ".join(f"{el}, {deg} across" for el, deg, _ in keys)
+    keys = sorted(cols, key=order_key)
+    L = ["| load [N] | solid mesh | solid soleus u_x [mm] | " + " | ".join(f"{el}, degree {deg}" for el, deg, _ in keys)
          + " |", "|---:|---|---:|" + "---:|" * len(keys)]
     errs = {k: soleus_errors(cols[k], ref) for k in keys}
     for F in sorted(ref):
@@ -131,9 +145,9 @@ def write_infsup(rows: list, path: str = INFSUP_CSV) -> None:
 
 def infsup_md(rows: list) -> list:
     """β² E / ℓ per element, degree across and mesh (friction.infsup)."""
-    L = ["| element | pressure across | elements | multipliers | β² E/ℓ, all | mg_sol | lg_sol | lg_mg |",
+    L = ["| element | degree across | elements | multipliers | β² E/ℓ, all | mg_sol | lg_sol | lg_mg |",
          "|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for r in sorted(rows, key=lambda r: (r["element"], CURVE[r["space"] or DEFAULT_SPACE], int(r["elements"]))):
+    for r in sorted(rows, key=lambda r: order_key((r["element"], CURVE[r["space"] or DEFAULT_SPACE], int(r["elements"])))):
         L.append(f"| {r['element']} | {CURVE[r['space'] or DEFAULT_SPACE]} | {r['elements']} | {r['multipliers']} | "
                  + " | ".join(f"{num(r[k]):.2e}" for k in ["all"] + list(IFACES)) + " |")
     return L

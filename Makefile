@@ -120,6 +120,8 @@ verify-friction-orders: setup
 		--spaces "quadratic across;default"
 	$(PY) scripts/solid_friction_across.py --no-solid --mu 0.3 --elements 8 --element 33153 \
 		--spaces "cubic across;quadratic across"
+	$(PY) scripts/solid_friction_across.py --no-solid --mu 0 --elements 8 --element 33153 --spaces "cubic across"
+	$(PY) scripts/solid_friction_across.py --no-solid --mu 0 --elements 8 --element 33103 --spaces "quadratic across"
 	$(PY) scripts/friction_orders.py --infsup
 	$(PY) scripts/verify_solid_friction.py --replot
 

@@ -210,3 +210,21 @@ def test_the_orders_tables_are_those_of_the_csvs():
     cols = orders.columns(rows, 45.0)
     want = {(el, d) for el in ("33103", "33153") for d in (1, 2, 3)} | {("3363", 1), ("3363", 2)}
     assert {(el, deg) for el, deg, ne in cols if ne == 8 and len(cols[(el, deg, ne)]["levels"]) == 13} >= want
+
+
+@pytest.mark.parametrize("element, space", [("3363", "cubic across"), ("33103", "quadratic across")])
+def test_the_infsup_constants_are_todays(element, space):
+    """docs/solid_friction_infsup.csv at 4 elements is today's friction.infsup (to 1e-6): the
+    cubic pressure across 3363 is not determined (β² over 1000 times below the quadratic's),
+    the quadratic across 33103 is."""
+    from ancf_verify.friction import orders
+    from ancf_verify.friction.infsup import infsup
+    rows = {(r["element"], r["space"], r["elements"]): r for r in orders.read_infsup()}
+    want = rows[(element, space, "4")]
+    with tempfile.TemporaryDirectory() as tmp:
+        got = infsup(element, 4, space, tmp)
+    assert got["multipliers"] == int(want["multipliers"])
+    for k in ("all", "mg_sol", "lg_sol", "lg_mg"):
+        assert got[k] == pytest.approx(float(want[k]), rel=1e-6), k
+    quad = float(rows[(element, "quadratic across", "4")]["all"])
+    assert (got["all"] < 1e-3 * quad) == (element == "3363")

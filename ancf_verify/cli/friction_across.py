@@ -81,7 +81,8 @@ def main(argv=None) -> int:
                           + ("done" if pts else "did not reach the level"), flush=True)
                     if pts:
                         rows += binned_rows(pts, frame, centres, {
-                            "model": ancf_model(args.element), "variant": f"mu {mu:g}" + ("" if sp is None else f"{SPACE}{sp}"),
+                            "model": ancf_model(args.element),
+                            "variant": f"mu {mu:g}" + ("" if sp is None else f"{SPACE}{sp}"),
                             "resolution": f"{ne} el.", "load_N": F})
     new = {key(r) for r in rows}
     rows = [r for r in old if key(r) not in new] + rows      # the runs not redone are kept

@@ -71,7 +71,8 @@ def ancf_points(psi: float, elements: int, mu: float, level: float, tmp: str, sp
     """The same for the beams (solid_friction_profiles.ancf_contact; μ = 0: frictionless;
     ``element``: every beam's element, None the default)."""
     from ancf_verify.friction.profiles import ancf_contact
-    out = os.path.join(tmp, (f"across_{elements}_{mu:g}_{space}" + (f"_{element}" if element else "")).replace(" ", "_"))
+    name = f"across_{elements}_{mu:g}_{space}" + (f"_{element}" if element else "")
+    out = os.path.join(tmp, name.replace(" ", "_"))
     pts = ancf_contact(psi, elements, mu, level, None, out, space, element=element)
     if pts is None:
         return {}

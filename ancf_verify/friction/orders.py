@@ -147,7 +147,9 @@ def infsup_md(rows: list) -> list:
     """β² E / ℓ per element, degree across and mesh (friction.infsup)."""
     L = ["| element | degree across | elements | multipliers | β² E/ℓ, all | mg_sol | lg_sol | lg_mg |",
          "|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for r in sorted(rows, key=lambda r: order_key((r["element"], CURVE[r["space"] or DEFAULT_SPACE], int(r["elements"])))):
+    def key(r):
+        return order_key((r["element"], CURVE[r["space"] or DEFAULT_SPACE], int(r["elements"])))
+    for r in sorted(rows, key=key):
         L.append(f"| {r['element']} | {CURVE[r['space'] or DEFAULT_SPACE]} | {r['elements']} | {r['multipliers']} | "
                  + " | ".join(f"{num(r[k]):.2e}" for k in ["all"] + list(IFACES)) + " |")
     return L

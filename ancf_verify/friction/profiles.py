@@ -90,7 +90,8 @@ def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: s
         # the second: the slave is the second on mg_sol, lg_sol and the first on lg_mg
         fx = (-1.0 if name == "lg_mg" else 1.0) * area[m] * sigma[m]
         for lo, hi, qp, qm, fxb in binned(x0[m], p[m] * area[m], fx):
-            rows.append({"model": ancf_model(element), "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}")
+            rows.append({"model": ancf_model(element),
+                         "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}")
                          + (f"{SPACE}{space}" if space else ""),
                          "resolution": f"{elements} el.", "interface": name, "load_N": level, "x_lo_m": lo,
                          "x_hi_m": hi, "q_plus_N_per_m": qp, "q_minus_N_per_m": qm, "fx_N_per_m": fxb})

@@ -36,6 +36,7 @@ def ancf_model(element: str | None = None) -> str:
     generated tables read the ANCF rows only, the element rows are issue 42's (friction.orders)."""
     return ANCF if not element else ANCF.replace("ANCF", f"ANCF {element}", 1)
 
+
 IFACES = ("mg_sol", "lg_sol", "lg_mg")
 
 BODIES = ("soleus", "medial", "lateral")

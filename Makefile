@@ -11,7 +11,7 @@ MPIRUN := mpirun --oversubscribe
 DEMO_CONFIG ?= configs/achilles_type3_psi45.yaml
 DEMO_OUT    ?= results/achilles_type3_psi45
 
-.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-contact-plane verify-solid-friction verify-solid-friction-refined studies clean
+.PHONY: setup demo report test test-fast bench bench-iteration bench-scaling bench-growth verify verify-solid verify-solid-references verify-solid-contact verify-solid-contact-plane verify-solid-friction verify-solid-friction-refined verify-friction-orders studies clean
 
 setup:
 	@bash scripts/setup.sh
@@ -105,6 +105,25 @@ verify-solid-friction-refined: setup
 	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3,2e-3 --h-interface 1e-3,7e-4
 	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3 --h-interface 5e-4 \
 		--loads 10,20,30,40,45,60,80,90,100
+
+# the section orders against the friction solid (issue 42; docs/interface.md, "Orders 3 and 4 against the
+# friction solid"): the beams only (the solid rows are verify-solid-friction's), elements 33103 and 33153 with
+# the pressure of degree 1, 2, 3 across at 4/8/16 elements and 3363 with degree 3 at 4/8 (3363's degrees 1
+# and 2 are the plain ANCF rows), merged into docs/solid_friction.csv; the pressure across at 100 N (8 el.);
+# the inf-sup study (docs/solid_friction_infsup.csv); the page's generated section again
+FRICTION_ORDERS := --psi 45 --no-solid --merge --no-selftest --no-checks --ancf-augmentations default --profiles=
+verify-friction-orders: setup
+	for e in 33103 33153; do $(PY) scripts/verify_solid_friction.py $(FRICTION_ORDERS) --element $$e \
+		--ancf-spaces "default;quadratic across;cubic across" || exit 1; done
+	$(PY) scripts/verify_solid_friction.py $(FRICTION_ORDERS) --element 3363 --elements 4,8 --ancf-spaces "cubic across"
+	$(PY) scripts/solid_friction_across.py --no-solid --mu 0.3 --elements 8 --element 33103 \
+		--spaces "quadratic across;default"
+	$(PY) scripts/solid_friction_across.py --no-solid --mu 0.3 --elements 8 --element 33153 \
+		--spaces "cubic across;quadratic across"
+	$(PY) scripts/solid_friction_across.py --no-solid --mu 0 --elements 8 --element 33153 --spaces "cubic across"
+	$(PY) scripts/solid_friction_across.py --no-solid --mu 0 --elements 8 --element 33103 --spaces "quadratic across"
+	$(PY) scripts/friction_orders.py --infsup
+	$(PY) scripts/verify_solid_friction.py --replot
 
 clean:
 	rm -rf results .pytest_cache

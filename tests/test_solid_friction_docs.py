@@ -174,3 +174,57 @@ def test_richardson_recovers_a_power_law():
     p, limit = richardson([3.0 - 2e3 * h ** 1.5 * 30 for h in hs], hs)
     assert p == pytest.approx(1.5, rel=1e-6) and limit == pytest.approx(3.0, rel=1e-9)
     assert np.isnan(richardson([1.0, 2.0, 1.5], hs)[0])        # not monotone: no estimate
+
+
+def test_the_element_option_reaches_every_beam():
+    """Issue 42: the friction comparison's beams take an element (``--element``); unset, the
+    config is the committed columns' (no element key: the default 3363) and the rows keep the
+    model label the page's tables read."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_verify.friction.rows import ancf_model
+    with tempfile.TemporaryDirectory() as tmp:
+        raw = ancf_config(45.0, 2, 0.3, None, tmp, "quadratic across", element="33103")
+        assert [b["element"] for b in raw["beams"]] == ["33103"] * 3
+        spec = parse_config(raw, base_dir=SOURCE.configs)
+        assert [b.element for b in spec.beams] == ["33103"] * 3
+        assert spec.contact.projection == (2, 2)
+        plain = ancf_config(45.0, 2, 0.3, None, tmp)
+        assert all("element" not in b for b in plain["beams"])
+    assert ancf_model(None) == ANCF and ancf_model("33103") == "ANCF 33103 2pt"
+
+
+def test_the_orders_tables_are_those_of_the_csvs():
+    """docs/interface.md's section "Orders 3 and 4 against the friction solid" shows the element
+    columns of docs/solid_friction.csv against the finest refined solid and the inf-sup constants
+    of docs/solid_friction_infsup.csv as friction.orders makes them."""
+    from ancf_verify.friction import orders
+    rows = read_csv(CSV)
+    with open(MD, encoding="utf-8") as fh:
+        text = fh.read()
+    tables = [orders.summary_md(rows, 45.0), orders.per_level_md(rows, 45.0),
+              orders.infsup_md(orders.read_infsup())]
+    for table in tables:
+        assert len(table) > 2
+        missing = [ln for ln in table if ln not in text]
+        assert not missing, missing[:3]
+    cols = orders.columns(rows, 45.0)
+    want = {(el, d) for el in ("33103", "33153") for d in (1, 2, 3)} | {("3363", 1), ("3363", 2)}
+    assert {(el, deg) for el, deg, ne in cols if ne == 8 and len(cols[(el, deg, ne)]["levels"]) == 13} >= want
+
+
+@pytest.mark.parametrize("element, space", [("3363", "cubic across"), ("33103", "quadratic across")])
+def test_the_infsup_constants_are_todays(element, space):
+    """docs/solid_friction_infsup.csv at 4 elements is today's friction.infsup (to 1e-6): the
+    cubic pressure across 3363 is not determined (β² over 1000 times below the quadratic's),
+    the quadratic across 33103 is."""
+    from ancf_verify.friction import orders
+    from ancf_verify.friction.infsup import infsup
+    rows = {(r["element"], r["space"], r["elements"]): r for r in orders.read_infsup()}
+    want = rows[(element, space, "4")]
+    with tempfile.TemporaryDirectory() as tmp:
+        got = infsup(element, 4, space, tmp)
+    assert got["multipliers"] == int(want["multipliers"])
+    for k in ("all", "mg_sol", "lg_sol", "lg_mg"):
+        assert got[k] == pytest.approx(float(want[k]), rel=1e-6), k
+    quad = float(rows[(element, "quadratic across", "4")]["all"])
+    assert (got["all"] < 1e-3 * quad) == (element == "3363")

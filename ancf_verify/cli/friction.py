@@ -68,6 +68,9 @@ def main(argv=None) -> int:
     ap.add_argument("--ancf-spaces", default="default",
                     help="ANCF pressure spaces separated by ';': 'default' (quadratic along × linear across) and/or "
                          + ", ".join(f"'{n}'" for n in SPACES))
+    ap.add_argument("--element", default="",
+                    help="every beam's element of the ANCF columns, e.g. 33103 ('': the config's default, 3363); "
+                         "the rows' model then names it ('ANCF 33103 2pt') and the generated page tables skip them")
     ap.add_argument("--max-increment", type=float, default=50.0, help="largest solid load increment [N]")
     ap.add_argument("--free-zone", type=float, default=0.0,
                     help="a diagnostic [m]: the runs without friction below x = this (solid: coarsest mesh only)")
@@ -139,9 +142,10 @@ def main(argv=None) -> int:
             for space, aug in ((s, a) for s in spaces(args) for a in args.ancf_augmentations.split(",")):
                 c = None if aug == "default" else float(aug)
                 for ne in [int(e) for e in args.elements.split(",")]:
-                    a = run_ancf(psi, ne, mu, c, tmp, zone, space)
+                    a = run_ancf(psi, ne, mu, c, tmp, zone, space, element=args.element or None)
                     last = a["levels"][-1] if a["levels"] else None
-                    print(f"[ancf] psi {psi:g}, {ne} el., augmentation {aug}, pressure {space or 'default'}: "
+                    print(f"[ancf] psi {psi:g}, {ne} el., element {args.element or 'default'}, augmentation {aug}, "
+                          f"pressure {space or 'default'}: "
                           + (f"{last['load']:g} N, soleus u_x {1e3 * last['u']['soleus']:.5f} mm" if last else "")
                           + (f", {a['wall']:.0f} s" if a["ok"] else f" FAILED ({a['msg']})"), flush=True)
                     save(ancf_rows(a, mu))

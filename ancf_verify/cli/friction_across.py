@@ -15,9 +15,13 @@ interpolated pressure p).  Beams: the contact points of results.h5 (``x0``, ``ar
     python scripts/solid_friction_across.py --no-solid       # the beams only (the CSV's other runs kept)
     python scripts/solid_friction_across.py --h 1.4e-3 --mu 0.3 --elements ""   # one more solid run
     python scripts/solid_friction_across.py --replot         # figure and table from the CSV
+    python scripts/solid_friction_across.py --no-solid --mu 0.3 --elements 8 --element 33103 \
+        --spaces "default;quadratic across"                  # element 33103 (rows "ANCF 33103 2pt")
 
 Writes docs/solid_friction_across.csv (one row per model, variant, interface, window, s bin) and
-docs/figures/solid_friction_across.png; prints the table of mean p± per window (docs/interface.md).
+docs/figures/solid_friction_across.png (the order-2 beams and the solid) and
+docs/figures/solid_friction_across_orders.png (the ``--element`` rows at 8 elements); prints the
+table of mean p± per window (docs/interface.md).
 """
 from __future__ import annotations
 
@@ -27,8 +31,8 @@ import tempfile
 
 from ancf_verify.contact.tendon import tendon_sections
 from ancf_verify.friction.across import (CSV, across_coordinates, across_md, ancf_points, binned_rows, key,
-    plot, read, solid_points, write)
-from ancf_verify.friction.rows import ANCF, SOLID, SPACE
+    plot, plot_orders, read, solid_points, write)
+from ancf_verify.friction.rows import SOLID, SPACE, ancf_model
 from ancf_verify.stack import import_stack
 
 
@@ -39,6 +43,7 @@ def main(argv=None) -> int:
     ap.add_argument("--h", default="2e-3", help="solid mesh sizes [m]")
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--spaces", default="default;quadratic across", help="beam pressure spaces (';')")
+    ap.add_argument("--element", default="", help="every beam's element, e.g. 33103 ('': the default, 3363)")
     ap.add_argument("--windows", default="15,35,55", help="window centres x_c [mm]")
     ap.add_argument("--no-solid", action="store_true", help="the beams only (every run not redone is kept)")
     ap.add_argument("--replot", action="store_true")
@@ -46,6 +51,7 @@ def main(argv=None) -> int:
     if args.replot:
         rows = read()
         plot(rows)
+        plot_orders(rows)
         print("\n".join(across_md(rows)))
         return 0
     import_stack()
@@ -70,16 +76,18 @@ def main(argv=None) -> int:
             for ne in [int(e) for e in args.elements.split(",") if e.strip()]:
                 for mu in mus:
                     sp = None if space == "default" else space
-                    pts = ancf_points(psi, ne, mu, F, tmp, sp)
-                    print(f"[across] ANCF {ne} el., mu {mu:g}, pressure {space}: "
+                    pts = ancf_points(psi, ne, mu, F, tmp, sp, args.element or None)
+                    print(f"[across] {ancf_model(args.element)} {ne} el., mu {mu:g}, pressure {space}: "
                           + ("done" if pts else "did not reach the level"), flush=True)
                     if pts:
                         rows += binned_rows(pts, frame, centres, {
-                            "model": ANCF, "variant": f"mu {mu:g}" + ("" if sp is None else f"{SPACE}{sp}"),
+                            "model": ancf_model(args.element),
+                            "variant": f"mu {mu:g}" + ("" if sp is None else f"{SPACE}{sp}"),
                             "resolution": f"{ne} el.", "load_N": F})
     new = {key(r) for r in rows}
     rows = [r for r in old if key(r) not in new] + rows      # the runs not redone are kept
     write(rows)
     plot(rows)
+    plot_orders(rows)
     print("\n".join(across_md(rows)))
     return 0

@@ -23,6 +23,8 @@ CSV = os.path.join(ROOT, "docs", "solid_friction_across.csv")
 
 PNG = os.path.join(ROOT, "docs", "figures", "solid_friction_across.png")
 
+PNG_ORDERS = os.path.join(ROOT, "docs", "figures", "solid_friction_across_orders.png")
+
 
 def untwist(X: np.ndarray, psi: float) -> np.ndarray:
     """Section coordinates P (n, 2) of reference points X (n, 3): the inverse of geometry.place."""
@@ -64,11 +66,14 @@ def solid_points(secs, psi: float, h: float, mu: float, level: float) -> dict:
     return out
 
 
-def ancf_points(psi: float, elements: int, mu: float, level: float, tmp: str, space: str | None) -> dict:
-    """The same for the beams (solid_friction_profiles.ancf_contact; μ = 0: frictionless)."""
+def ancf_points(psi: float, elements: int, mu: float, level: float, tmp: str, space: str | None,
+                element: str | None = None) -> dict:
+    """The same for the beams (solid_friction_profiles.ancf_contact; μ = 0: frictionless;
+    ``element``: every beam's element, None the default)."""
     from ancf_verify.friction.profiles import ancf_contact
-    out = os.path.join(tmp, f"across_{elements}_{mu:g}_{space}".replace(" ", "_"))
-    pts = ancf_contact(psi, elements, mu, level, None, out, space)
+    name = f"across_{elements}_{mu:g}_{space}" + (f"_{element}" if element else "")
+    out = os.path.join(tmp, name.replace(" ", "_"))
+    pts = ancf_contact(psi, elements, mu, level, None, out, space, element=element)
     if pts is None:
         return {}
     itf, x0, p, area = pts["interface"], pts["x0"], pts["pressure"], pts["area"]
@@ -139,19 +144,40 @@ def across_md(rows: list) -> list:
 
 def plot(rows: list, path: str = PNG) -> None:
     """p̄(s) per interface (columns) and window (rows): the solid runs, the beams at the largest
-    element count (every count is in the CSV and the table)."""
+    element count (every count is in the CSV and the table; the element rows: ``plot_orders``)."""
+    plain = [r for r in rows if r["model"] in (SOLID, ANCF)]
+    top = max((int(r["resolution"].split()[0]) for r in plain if r["model"] == ANCF), default=0)
+    keys = [k for k in dict.fromkeys(key(r) for r in plain) if k[0] == SOLID or k[2] == f"{top} el."]
+
+    def style(j, k):
+        solid = k[0] == SOLID
+        return {"color": ("k" if "2.00" in k[2] else "0.45") if solid else ("C3" if SPACE in k[1] else "C0"),
+                "lw": 2.0 if solid else 1.0,
+                "ls": "--" if k[1].startswith("mu 0,") or k[1] == "mu 0" else "-", "marker": None if solid else "."}
+    draw(plain, keys, style, path, "solid black")
+
+
+def plot_orders(rows: list, path: str = PNG_ORDERS, elements: int = 8) -> None:
+    """The same for the section orders (issue 42): the solid runs with friction, the order-2 beams
+    (ANCF) and every element row (model "ANCF <element> 2pt") at ``elements``, with friction."""
+    fric = [r for r in rows if r["variant"].startswith("mu 0.3")]
+    keys = [k for k in dict.fromkeys(key(r) for r in fric) if k[0] == SOLID or k[2] == f"{elements} el."]
+
+    def style(j, k):
+        if k[0] == SOLID:
+            return {"color": "k" if "2.00" in k[2] else "0.45", "lw": 2.0, "ls": "-", "marker": None}
+        return {"color": f"C{j}", "lw": 1.0, "ls": "-" if k[0] == ANCF else "-.", "marker": "."}
+    draw(fric, keys, style, path, f"solid black/grey, beams {elements} el.")
+
+
+def draw(rows: list, keys: list, style, path: str, legend: str) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     xs = sorted({float(r["x_c_m"]) for r in rows})
     fig, ax = plt.subplots(len(xs), len(IFACES), figsize=(12, 2.8 * len(xs)), squeeze=False)
-    top = max((int(r["resolution"].split()[0]) for r in rows if r["model"] == ANCF), default=0)
-    keys = [k for k in dict.fromkeys(key(r) for r in rows) if k[0] == SOLID or k[2] == f"{top} el."]
     for j, k in enumerate(keys):
-        solid = k[0] == SOLID
-        sty = {"color": ("k" if "2.00" in k[2] else "0.45") if solid else ("C3" if SPACE in k[1] else "C0"),
-               "lw": 2.0 if solid else 1.0,
-               "ls": "--" if k[1].startswith("mu 0,") or k[1] == "mu 0" else "-", "marker": None if solid else "."}
+        sty = style(j, k)
         for a, x in enumerate(xs):
             for b, i in enumerate(IFACES):
                 sel = sorted((r for r in rows if key(r) == k and r["interface"] == i and float(r["x_c_m"]) == x),
@@ -168,7 +194,7 @@ def plot(rows: list, path: str = PNG) -> None:
         a.set_ylabel("mean pressure in the bin [MPa]")
     ax[0, 0].legend(fontsize=6)
     load = float(rows[0]["load_N"]) if rows else float("nan")
-    fig.suptitle(f"Contact pressure across the interfaces at {load:g} N, ψ = 45° (solid black)", fontsize=10)
+    fig.suptitle(f"Contact pressure across the interfaces at {load:g} N, ψ = 45° ({legend})", fontsize=10)
     fig.tight_layout(rect=(0, 0, 1, 0.97))
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -29,11 +29,15 @@ SUPPORTED_ENDS = "keep"
 
 
 def ancf_config(psi: float, elements: int, mu: float, aug: float | None, out: str, space: str | None = None,
-                contact: dict | None = None) -> dict:
+                contact: dict | None = None, element: str | None = None) -> dict:
     """verify_solid_contact's frictionless comparison config with Coulomb friction added (and the
     contact keys of the pressure space ``space``, a rows.SPACES name; None: the default; then the
-    keys of ``contact``, e.g. ``{"projection": {"supported_ends": "merge"}}``)."""
+    keys of ``contact``, e.g. ``{"projection": {"supported_ends": "merge"}}``; ``element``: every
+    beam's ``element`` key, e.g. "33103"; None: the key unset, the config's default 3363)."""
     raw = tendon_config(psi, elements, "sliding", out)
+    if element:
+        for b in raw["beams"]:
+            b["element"] = str(element)
     raw["contact"]["tangential"] = {"law": "coulomb", "friction": mu, "supported_ends": SUPPORTED_ENDS}
     if aug is not None:
         raw["contact"]["tangential"][AUG_KEY] = aug
@@ -44,22 +48,24 @@ def ancf_config(psi: float, elements: int, mu: float, aug: float | None, out: st
 
 
 def run_ancf(psi: float, elements: int, mu: float, aug: float | None, tmp: str, zone: float = 0.0,
-             space: str | None = None, contact: dict | None = None) -> dict:
+             space: str | None = None, contact: dict | None = None, element: str | None = None) -> dict:
     """One ANCF column in-process: per level the probes' u_x, iterations and shear forces
     (``zone`` > 0, a diagnostic: no friction on the functions centred below x = zone [m],
-    ``TangentialSpec.free_zone``; ``space``: the pressure space, a rows.SPACES name, None the default)."""
+    ``TangentialSpec.free_zone``; ``space``: the pressure space, a rows.SPACES name, None the default;
+    ``element``: every beam's element, None the config's default)."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
-    out = os.path.join(tmp, f"ancf_{psi:g}_{elements}_{aug}_{zone:g}_{space}".replace(" ", "_"))
+    out = os.path.join(tmp, (f"ancf_{psi:g}_{elements}_{aug}_{zone:g}_{space}"
+                                + (f"_{element}" if element else "")).replace(" ", "_"))
     t0 = time.perf_counter()
     try:
-        spec = parse_config(ancf_config(psi, elements, mu, aug, out, space, contact), base_dir=SOURCE.configs)
+        spec = parse_config(ancf_config(psi, elements, mu, aug, out, space, contact, element), base_dir=SOURCE.configs)
         spec.contact.tangential.free_zone = zone
         res = run_model(spec, log=lambda *_: None)
         status, message, s = res.status, str(res.message), res.summary
     except Exception as exc:   # record and go on
         status, message, s = "failed", f"{type(exc).__name__}: {exc}", None
-    rec = {"psi": psi, "elements": elements, "augmentation": aug, "zone": zone, "space": space,
+    rec = {"psi": psi, "elements": elements, "augmentation": aug, "zone": zone, "space": space, "element": element,
            "ok": status == "completed",
            "msg": "" if status == "completed" else message, "wall": time.perf_counter() - t0,
            "levels": [], "dofs": int(s["dofs"]) if s else 0,

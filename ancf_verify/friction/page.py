@@ -234,8 +234,8 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
           "2 axial points) with `contact.tangential: {law: coulomb, friction: 0.3}` (tangential multipliers, "
           "exact stick: `docs/interface.md`, first sections), at the default augmentation c (1) and at c = 10 and "
           "0.1 (c only steers the semi-smooth Newton iteration; the answer must not depend on it); in the default "
-          "pressure (and tangential multiplier) space, quadratic along × linear across, and in the richer ones of "
-          "`docs/solid_contact.md`: " + "; ".join(f"{n}: `{spaces_keys(k)}`" for n, k in SPACES.items())
+          "pressure (and tangential multiplier) space, quadratic along × linear across, and in richer ones (the "
+          "first two: those of `docs/solid_contact.md`): " + "; ".join(f"{n}: `{spaces_keys(k)}`" for n, k in SPACES.items())
           + " (`--ancf-spaces`).  Quantities: u_x at the end-section centroids (the soleus' is its "
           "elongation; the gastrocnemii move by tens of µm).", ""]
     for psi in psis:

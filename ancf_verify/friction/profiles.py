@@ -9,7 +9,7 @@ from ancf_verify.contact.solid import tendon_problem
 from ancf_verify.contact.tendon import LENGTH, LOADS, SOURCE
 from ancf_verify.friction.beams import ancf_config
 from ancf_verify.friction.model import FrictionProblem
-from ancf_verify.friction.rows import ANCF, IFACES, SOLID, SPACE
+from ancf_verify.friction.rows import IFACES, SOLID, SPACE, ancf_model
 
 
 FIELDS = ["model", "variant", "resolution", "interface", "load_N", "x_lo_m", "x_hi_m", "q_plus_N_per_m",
@@ -50,15 +50,16 @@ def solid_profile(secs, psi: float, h: float, mu: float, level: float, stick: fl
 
 
 def ancf_contact(psi: float, elements: int, mu: float, level: float, aug, out: str,
-                 space: str | None = None, contact: dict | None = None) -> dict | None:
+                 space: str | None = None, contact: dict | None = None, element: str | None = None) -> dict | None:
     """The ANCF column (verify_solid_friction.ancf_config; μ = 0: frictionless; ``space`` a
-    rows.SPACES name, None the default pressure space; ``contact``: more contact keys) to ``level``, written to ``out``: the last
+    rows.SPACES name, None the default pressure space; ``contact``: more contact keys; ``element``:
+    every beam's element, None the default) to ``level``, written to ``out``: the last
     level's contact points (interface, x0, pressure, area, shear_stress or zeros), None if the run
     did not complete."""
     import h5py
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.solving.run import run_model
-    raw = ancf_config(psi, elements, mu, aug, out, space, contact)
+    raw = ancf_config(psi, elements, mu, aug, out, space, contact, element)
     if mu == 0.0:
         del raw["contact"]["tangential"]
     raw["steps"] = [float(F) for F in LOADS if F <= level]
@@ -73,10 +74,11 @@ def ancf_contact(psi: float, elements: int, mu: float, level: float, aug, out: s
 
 
 def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: str, space: str | None = None,
-                 contact: dict | None = None) -> list:
-    """The ANCF column's profiles (``ancf_contact``) to ``level``."""
-    out = os.path.join(tmp, f"profile_{elements}_{mu:g}_{aug}_{space}".replace(" ", "_"))
-    pts = ancf_contact(psi, elements, mu, level, aug, out, space, contact)
+                 contact: dict | None = None, element: str | None = None) -> list:
+    """The ANCF column's profiles (``ancf_contact``) to ``level`` (model label: rows.ancf_model)."""
+    out = os.path.join(tmp, (f"profile_{elements}_{mu:g}_{aug}_{space}" + (f"_{element}" if element else ""))
+                       .replace(" ", "_"))
+    pts = ancf_contact(psi, elements, mu, level, aug, out, space, contact, element)
     if pts is None:
         return []
     rows = []
@@ -88,7 +90,8 @@ def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: s
         # the second: the slave is the second on mg_sol, lg_sol and the first on lg_mg
         fx = (-1.0 if name == "lg_mg" else 1.0) * area[m] * sigma[m]
         for lo, hi, qp, qm, fxb in binned(x0[m], p[m] * area[m], fx):
-            rows.append({"model": ANCF, "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}")
+            rows.append({"model": ancf_model(element),
+                         "variant": f"mu {mu:g}" + ("" if aug is None else f", augmentation {aug:g}")
                          + (f"{SPACE}{space}" if space else ""),
                          "resolution": f"{elements} el.", "interface": name, "load_N": level, "x_lo_m": lo,
                          "x_hi_m": hi, "q_plus_N_per_m": qp, "q_minus_N_per_m": qm, "fx_N_per_m": fxb})

@@ -24,9 +24,18 @@ LOCAL = " mm at "                    # a locally refined mesh's resolution: "h 2
 #: the beams' contact pressure (and tangential multiplier) spaces beside the default (quadratic
 #: along x linear across, 3 x 2 points): name -> contact keys (docs/solid_contact.md's variants)
 SPACES = {"quadratic across": {"curve_points": 3, "projection": {"axial": 2, "curve": 2}},
-          "cubic along": {"axial_points": 4, "projection": {"axial": 3, "curve": 1}}}
+          "cubic along": {"axial_points": 4, "projection": {"axial": 3, "curve": 1}},
+          "cubic across": {"curve_points": 4, "projection": {"axial": 2, "curve": 3}}}
 
 DEFAULT_SPACE = "quadratic along × linear across"
+
+
+def ancf_model(element: str | None = None) -> str:
+    """The model label of an ANCF column: ANCF for the config's own element (none set: 3363), and
+    with the element named when one is set (``--element``), e.g. "ANCF 33103 2pt"; the page's
+    generated tables read the ANCF rows only, the element rows are issue 42's (friction.orders)."""
+    return ANCF if not element else ANCF.replace("ANCF", f"ANCF {element}", 1)
+
 
 IFACES = ("mg_sol", "lg_sol", "lg_mg")
 
@@ -128,9 +137,10 @@ def ancf_rows(run: dict, mu: float) -> list:
     if run.get("zone"):
         variant += f"{ZONE}{run['zone'] * 1e3:g} mm"
     res = f"{run['elements']} el."
+    model = ancf_model(run.get("element"))
     for lv in run["levels"]:
         fr = lv["friction"]
-        r = {"psi_deg": run["psi"], "mu": mu, "model": ANCF, "variant": variant, "resolution": res,
+        r = {"psi_deg": run["psi"], "mu": mu, "model": model, "variant": variant, "resolution": res,
              "elements": run["elements"], "dofs": run["dofs"], "load_N": lv["load"], "newton_its": lv["its"],
              "wall_s": run["wall"], "p_max_Pa": max(fr.get(i + "_pmax", np.nan) for i in IFACES)}
         for b in BODIES:
@@ -143,7 +153,7 @@ def ancf_rows(run: dict, mu: float) -> list:
             r[f"stick_{i}"] = fr.get(i + "_stick", np.nan)
         rows.append(r)
     if not run["ok"]:
-        rows.append({"psi_deg": run["psi"], "mu": mu, "model": ANCF, "variant": variant, "resolution": res,
+        rows.append({"psi_deg": run["psi"], "mu": mu, "model": model, "variant": variant, "resolution": res,
                      "elements": run["elements"], "dofs": run["dofs"], "wall_s": run["wall"],
                      "note": f"FAILED: {run['msg']}"})
     return rows

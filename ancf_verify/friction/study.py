@@ -106,7 +106,8 @@ def profiles(secs, args, levels: list, psi: float) -> None:
                     rows += solid_profile(secs, psi, h, mu, F, args.stick)
                 for space, ne in ((s, e) for s in spaces(args) for e in [int(e) for e in args.elements.split(",")]):
                     for aug in (args.ancf_augmentations.split(",") if mu else ["default"]):
-                        got = ancf_profile(psi, ne, mu, F, None if aug == "default" else float(aug), tmp, space)
+                        got = ancf_profile(psi, ne, mu, F, None if aug == "default" else float(aug), tmp, space,
+                                           element=args.element or None)
                         print(f"[profile] ANCF {ne} el., mu {mu:g}, augmentation {aug}, pressure {space or 'default'}: "
                               + ("done" if got else "did not reach the level"), flush=True)
                         rows += got

@@ -131,6 +131,12 @@ class ContactSteps:
         """After a converged solve: did a contact point's weight change? (collective)"""
         return self.contact is not None and self.contact.refresh_weights()
 
+    def differentiate_weights(self) -> bool:
+        """After a converged solve that kept the weights (the first from rest, contact/weights.py):
+        bring them up to date; True (collective) when one changed, the later evaluations then
+        differentiating them.  False when they were not kept."""
+        return self.contact is not None and self.contact.weights.kept and self.contact.refresh_weights()
+
     def residual_norm(self, X: PETSc.Vec) -> float:
         """|F(X)| with the contact weights as they are now (collective)."""
         F = self.problem.F.duplicate()
@@ -238,10 +244,20 @@ class PhasedNewton:
             start.destroy()
             changes = P.update_status(X)
             self._trace(lam, what, n, reason, changes)
-            if changes == 0:
+            # the first solve from rest kept the weights: they now follow the state, and the next
+            # prediction linearises them with it (one Josephy–Newton step for the status and the
+            # weights together, instead of a re-solve for the weights after the status settled)
+            reweighted = P.differentiate_weights()
+            if reweighted:
+                self._trace(lam, "weights differentiated", 0, reason)
+            if changes == 0 and not reweighted:
                 return reason, its
             if not ok:
-                return None, its
+                if changes:
+                    return None, its
+                reason, n = self.snes_solve(X)          # no prediction: solve with the weights
+                self._trace(lam, "weights changed", n, reason)
+                return reason, its + n
         return None, its
 
     def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:

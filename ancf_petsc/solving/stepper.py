@@ -46,6 +46,10 @@ class LoadStepper:
                           if ComplementarityPredictor.applies(problem) else None)
         #: the tangent load predictor (solver.predictor: tangent; predictor.py)
         self.tangent = TangentPredictor(problem, self.solver.snes)
+        #: the load predictor of the increments: ``solver.predictor``, but none by default where
+        #: the complementarity predictor predicts the increments (predictor.py, "Unilateral")
+        self.load_predictor = ("none" if self.predictor is not None and not spec.predictor_given
+                               else spec.predictor)
         self.history: list[float] = []         # residual norms of the solves of an increment
         self.unsettled = False                  # the last solve's contact weights did not settle
         self.tresca_solves = 0                  # friction's fixed point in the last solve_at
@@ -148,10 +152,10 @@ class LoadStepper:
                 self._stop_if_requested(target, level)
                 step = self.control.step(path.lam, path.dlam, target)
                 X.copy(X_prev)
-                if self.spec.predictor == "secant" and path.dlam_last > 0.0:
+                if self.load_predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
                     self.problem.limits.limit_predictor(X_prev, X)    # fibre exponents (step_limits)
-                elif self.spec.predictor == "tangent" and self.tangent.predict(X, path.lam + step):
+                elif self.load_predictor == "tangent" and self.tangent.predict(X, path.lam + step):
                     self.problem.limits.limit_predictor(X_prev, X)
                 reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
                                                     from_rest=path.lam == 0.0)

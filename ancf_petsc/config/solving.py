@@ -46,7 +46,6 @@ def parse_solver(value) -> SolverSpec:
     for key, (check, nullable) in SOLVER_KEYS.items():
         if key in sv and not (nullable and sv[key] is None):
             setattr(solver, key, check(sv[key], f"solver.{key}"))
-    solver.predictor_given = "predictor" in sv
     return solver
 
 

@@ -162,8 +162,6 @@ class SolverSpec:
     easy_iterations: int = 8
     predictor: str = "secant"              # none | secant | tangent (solving/predictor.py); a load
                                            # history's default is tangent (config/parse.py)
-    predictor_given: bool = False          # solver.predictor was written: the increments the
-                                           # complementarity predictor predicts use it too
     reuse_tangent: bool = True            # chord steps / kept fieldsplit factors (solving.chord)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this

@@ -65,8 +65,8 @@ class LoadControl:
     def after_success(self, step: float, dlam: float, its: int) -> float:
         """The next increment after a converged sub-step of ``its`` Newton iterations: grown by
         ``growth`` after an easy full-size one (a sub-step shortened to hit a level keeps it)."""
-        if its <= self.spec.easy_iterations and step >= dlam * (1 - 1e-12):
-            return step * self.spec.growth
+        if its <= self.spec.easy_iterations:
+            return max(step * self.spec.growth, dlam)
         return dlam
 
     def wants_stability_retry(self, negative: int | None, accepted: int, tally: LevelTally) -> bool:

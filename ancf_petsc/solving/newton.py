@@ -175,15 +175,26 @@ class PhasedNewton:
         #: Tresca solves of the increment (friction's bounds held; 0: none were needed)
         self.bound_updates = 0
 
-    def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
-        """(reason of the last solve, Newton iterations of all of them)."""
+    def solve(self, X: PETSc.Vec, lam: float, from_rest: bool,
+              converged: PETSc.Vec | None = None) -> tuple[int, int]:
+        """(reason of the last solve, Newton iterations of all of them).  ``converged``: the
+        converged state a load predictor moved X from (module docstring, "From the converged
+        state")."""
         P = self.steps
         P.frozen = self.between_solves
         P.begin_increment(from_rest)
         its, solved = 0, None
         start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:
-            solved, its = self._predicted(X, lam)
+            solved, its = self._predicted(X, lam, converged is not None)
+            if solved is None and converged is not None:
+                # the load predictor's path lost the predictions: the Josephy–Newton iteration
+                # again from the converged state, linearised at an equilibrium
+                self._trace(lam, "from the converged state", 0, 0)
+                converged.copy(X)
+                P.contact.restore()
+                solved, n = self._predicted(X, lam)
+                its += n
         if solved is not None:
             reason = solved
         else:
@@ -215,11 +226,13 @@ class PhasedNewton:
             self.unsettled = P.residual_norm(X)
         return reason, its
 
-    def _predicted(self, X: PETSc.Vec, lam: float) -> tuple[int | None, int]:
+    def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False) -> tuple[int | None, int]:
         """Josephy–Newton (module docstring): (reason, iterations), reason None when the
         increment is left to the phases (from X as it is then).  A prediction counts as one
         Newton iteration (one factorisation).  Without a prediction the status is kept as it
-        is for the solve; the phases take over when the check then changes it."""
+        is for the solve; the phases take over when the check then changes it.  ``moved``: X
+        is a load predictor's state, and the caller starts again from the converged state
+        where there is no prediction."""
         P, c = self.steps, self.steps.contact
         its = 0
         for k in range(MAX_PREDICTIONS):
@@ -227,6 +240,9 @@ class PhasedNewton:
             ok = self.predictor.predict(X)
             predicted = int((status != c.status).sum())          # this rank's, for the trace
             its += int(ok)
+            if not ok and moved:
+                self._trace(lam, f"no prediction {k} on the load predictor's path", 0, 0)
+                return None, its
             start, status = X.copy(), c.status.copy()
             P.keep_status(CHECK)
             reason, n = self.snes_solve(X)

@@ -201,14 +201,14 @@ class PhasedNewton:
         its, solved = 0, None
         start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:
-            solved, its = self._predicted(X, lam, converged is not None)
-            if solved is None and converged is not None:
+            solved, its, lost = self._predicted(X, lam, converged is not None)
+            if lost:
                 # the load predictor's path lost the predictions: the Josephy–Newton iteration
                 # again from the converged state, linearised at an equilibrium
                 self._trace(lam, "from the converged state", 0, 0)
                 converged.copy(X)
                 P.contact.restore()
-                solved, n = self._predicted(X, lam)
+                solved, n, _ = self._predicted(X, lam)
                 its += n
         if solved is not None:
             reason = solved
@@ -241,23 +241,25 @@ class PhasedNewton:
             self.unsettled = P.residual_norm(X)
         return reason, its
 
-    def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False) -> tuple[int | None, int]:
-        """Josephy–Newton (module docstring): (reason, iterations), reason None when the
+    def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False) -> tuple[int | None, int, bool]:
+        """Josephy–Newton (module docstring): (reason, iterations, lost), reason None when the
         increment is left to the phases (from X as it is then).  A prediction counts as one
         Newton iteration (one factorisation).  Without a prediction the status is kept as it
         is for the solve; the phases take over when the check then changes it.  ``moved``: X
-        is a load predictor's state, and the caller starts again from the converged state
-        where there is no prediction."""
+        is a load predictor's state; ``lost`` then says that this path made a prediction and
+        lost the next one or its solve failed (the caller starts again from the converged
+        state, "From the converged state")."""
         P, c = self.steps, self.steps.contact
-        its = 0
+        its, predicted_once = 0, False
         for k in range(MAX_PREDICTIONS):
             status = c.status.copy()
             ok = self.predictor.predict(X)
             predicted = int((status != c.status).sum())          # this rank's, for the trace
             its += int(ok)
-            if not ok and moved:
+            if not ok and moved and predicted_once:
                 self._trace(lam, f"no prediction {k} on the load predictor's path", 0, 0)
-                return None, its
+                return None, its, True
+            predicted_once |= ok
             start, status = X.copy(), c.status.copy()
             P.keep_status(CHECK)
             reason, n = self.snes_solve(X)
@@ -271,7 +273,7 @@ class PhasedNewton:
                 start.destroy()
                 c.status[:] = status
                 c.projector.restore()
-                return None, its
+                return None, its, moved and predicted_once
             start.destroy()
             changes = P.update_status(X)
             self._trace(lam, what, n, reason, changes)
@@ -282,14 +284,14 @@ class PhasedNewton:
             if reweighted:
                 self._trace(lam, "weights differentiated", 0, reason)
             if changes == 0 and not reweighted:
-                return reason, its
+                return reason, its, False
             if not ok:
                 if changes:
-                    return None, its
+                    return None, its, False
                 reason, n = self.snes_solve(X)          # no prediction: solve with the weights
                 self._trace(lam, "weights changed", n, reason)
-                return reason, its + n
-        return None, its
+                return reason, its + n, False
+        return None, its, False
 
     def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:
         """Friction's bounds (module docstring): Tresca solves from X (the increment's start),

@@ -253,7 +253,7 @@ class PhasedNewton:
         lost the next one or its solve failed (the caller starts again from the converged
         state, "From the converged state")."""
         P, c = self.steps, self.steps.contact
-        its, predicted_once = 0, False
+        its, predicted_once, weighed = 0, False, None
         for k in range(MAX_PREDICTIONS):
             status = c.status.copy()
             ok = self.predictor.predict(X)
@@ -269,13 +269,20 @@ class PhasedNewton:
             its += n
             what = f"prediction {k} ({predicted} changes)" if ok else f"no prediction {k}"
             if reason <= 0:
+                self._trace(lam, what, n, reason)
+                c.projector.restore()
+                if weighed is not None:
+                    # the step that linearised the weights with the status failed: the weights
+                    # alone from the state they were updated at, its status kept
+                    weighed[0].copy(X)
+                    c.status[:] = weighed[1]
+                    start.destroy()
+                    return self._reweigh(X, lam, its, weighed)
                 # the predicted state's solve failed: the phases from the prediction (they
                 # rescue increments that may not be cut back: fixed increments)
-                self._trace(lam, what, n, reason)
                 start.copy(X)
                 start.destroy()
                 c.status[:] = status
-                c.projector.restore()
                 return None, its, moved and predicted_once
             start.destroy()
             changes = P.update_status(X)
@@ -283,18 +290,29 @@ class PhasedNewton:
             # the first solve from rest kept the weights: they now follow the state, and the next
             # prediction linearises them with it (one Josephy–Newton step for the status and the
             # weights together, instead of a re-solve for the weights after the status settled)
+            if weighed is not None:
+                weighed[0].destroy()
+                weighed = None
             reweighted = P.differentiate_weights()
             if reweighted:
                 self._trace(lam, "weights differentiated", 0, reason)
+                weighed = (X.copy(), c.status.copy())
             if changes == 0 and not reweighted:
                 return reason, its, False
             if not ok:
                 if changes:
                     return None, its, False
-                reason, n = self.snes_solve(X)          # no prediction: solve with the weights
-                self._trace(lam, "weights changed", n, reason)
-                return reason, its + n, False
+                return self._reweigh(X, lam, its, weighed)   # no prediction: the weights alone
         return None, its, False
+
+    def _reweigh(self, X: PETSc.Vec, lam: float, its: int, weighed) -> tuple[int, int, bool]:
+        """One solve for the weights just updated, the status kept (``_predicted``)."""
+        if weighed is not None:
+            weighed[0].destroy()
+        self.steps.contact._cache = None
+        reason, n = self.snes_solve(X)
+        self._trace(lam, "weights changed", n, reason)
+        return reason, its + n, False
 
     def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:
         """Friction's bounds (module docstring): Tresca solves from X (the increment's start),

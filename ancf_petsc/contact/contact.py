@@ -282,6 +282,10 @@ class Contact:
         change = 0.0 if st is None else self.weights.refresh(st.pr.idx, st.pr.weight)
         lost = float(st is not None and not st.pr.converged and not self.projector.metric_steps)
         change, lost = self.reduce(np.array([change, lost]), "max")
+        if change > WEIGHT_TOL and self.weights.rule == "newton":
+            # every rank differentiates from here on, whichever rank's weights changed (its
+            # solves and decisions then agree: solving/newton.py asks every rank alike)
+            self.weights.differentiated = True
         self.projector.metric_steps |= bool(lost)
         self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
         return bool(change > WEIGHT_TOL or lost)

@@ -136,6 +136,12 @@ class PointWeights:
             self.differentiated = True
         return change
 
+    @property
+    def kept(self) -> bool:
+        """newton's solve from rest: the evaluations keep the weights (``begin_increment``) until
+        ``refresh`` finds one changed."""
+        return self.rule == "newton" and not self.differentiated
+
     def set(self, values: np.ndarray) -> None:
         """Weights of a restored state (a restart), also as the checkpoint."""
         self.values = np.asarray(values, dtype=float).copy()

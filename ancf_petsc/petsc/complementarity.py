@@ -157,7 +157,7 @@ class ComplementarityPredictor:
             # and a status set by the sign of rounding made predictions and checks alternate
             # (the paper's ψ = 45° column with k_s x 10: 79 instead of 54 Newton iterations)
             w = (lcp[1] + lcp[0] @ z_new) / c.stiffness
-            keep = self._global_status(status)
+            keep = self.global_status(status)
             active = np.where(z_new > c.tie_tolerance, True, np.where(w > c.tie_tolerance, False, keep))
             self._step(X, z_new, active, *vecs[:3])
             self.solves += 1
@@ -227,7 +227,7 @@ class ComplementarityPredictor:
         P.J.assemble()
         return P.J.duplicate(copy=True)
 
-    def _global_status(self, status: np.ndarray) -> np.ndarray:
+    def global_status(self, status: np.ndarray) -> np.ndarray:
         """The status of every multiplier on every rank (each rank knows its own)."""
         c = self.problem.contact
         mine = np.zeros(len(status), dtype=np.int64)

@@ -16,6 +16,24 @@ Measured over the unilateral grid (scripts/bench_contact_grid.py, docs/contact.m
 the contact state of an increment in one prediction in most increments and two in the others,
 where the status rule inside Newton's iteration took several phases of several iterations each.
 
+**The weights from rest.**  The first solve from rest keeps the fade weights (contact/weights.py);
+after it they are brought up to date, and when one changed the next prediction linearises them
+with the status (one Josephy–Newton step for both), instead of a further solve for the weights
+once the status has settled (gait envelope, twist 60-90 deg: the first level 17-20 → 10-13 Newton
+iterations).
+
+**From the converged state.**  The load predictor (secant, tangent) moves X off an equilibrium,
+and the complementarity problem is linearised there.  Where that path loses its predictions (S
+too far from semidefinite at a state it reaches after a first prediction, or a failed solve after
+one), the increment starts again from the converged state, whose linearisation is that of an
+equilibrium, before the phases: on the gait envelope at twist 90 deg the secant's path met an
+indefinite S (one eigenvalue −5.6e9 against 7.5e9) after a prediction that changed 4 constraints
+and 3 more at its check, and the phases then took 16 Newton iterations (32 for the level, 600 N,
+gastrocnemius-biased); from the converged state the level takes 19, the lost path's 10 included.
+Where there is no prediction already at the load predictor's state, the kept-status solve and
+the phases run as before (restarting there took the 135 deg gastrocnemius-biased column into a
+state it failed at, 1072 N).
+
 Where there is no prediction (S too far from positive definite, a failed factorisation) and the
 kept status does not pass the check, where a solve fails (restarted from the predicted state)
 and past ``MAX_PREDICTIONS``, the increment is solved in the law's phases (``contact.laws``):
@@ -131,6 +149,12 @@ class ContactSteps:
         """After a converged solve: did a contact point's weight change? (collective)"""
         return self.contact is not None and self.contact.refresh_weights()
 
+    def differentiate_weights(self) -> bool:
+        """After a converged solve that kept the weights (the first from rest, contact/weights.py):
+        bring them up to date; True (collective) when one changed, the later evaluations then
+        differentiating them.  False when they were not kept."""
+        return self.contact is not None and self.contact.weights.kept and self.contact.refresh_weights()
+
     def residual_norm(self, X: PETSc.Vec) -> float:
         """|F(X)| with the contact weights as they are now (collective)."""
         F = self.problem.F.duplicate()
@@ -169,15 +193,26 @@ class PhasedNewton:
         #: Tresca solves of the increment (friction's bounds held; 0: none were needed)
         self.bound_updates = 0
 
-    def solve(self, X: PETSc.Vec, lam: float, from_rest: bool) -> tuple[int, int]:
-        """(reason of the last solve, Newton iterations of all of them)."""
+    def solve(self, X: PETSc.Vec, lam: float, from_rest: bool,
+              converged: PETSc.Vec | None = None) -> tuple[int, int]:
+        """(reason of the last solve, Newton iterations of all of them).  ``converged``: the
+        converged state a load predictor moved X from (module docstring, "From the converged
+        state")."""
         P = self.steps
         P.frozen = self.between_solves
         P.begin_increment(from_rest)
         its, solved = 0, None
         start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:
-            solved, its = self._predicted(X, lam)
+            solved, its, lost = self._predicted(X, lam, converged is not None)
+            if lost:
+                # the load predictor's path lost the predictions: the Josephy–Newton iteration
+                # again from the converged state, linearised at an equilibrium
+                self._trace(lam, "from the converged state", 0, 0)
+                converged.copy(X)
+                P.contact.restore()
+                solved, n, _ = self._predicted(X, lam)
+                its += n
         if solved is not None:
             reason = solved
         else:
@@ -209,40 +244,75 @@ class PhasedNewton:
             self.unsettled = P.residual_norm(X)
         return reason, its
 
-    def _predicted(self, X: PETSc.Vec, lam: float) -> tuple[int | None, int]:
-        """Josephy–Newton (module docstring): (reason, iterations), reason None when the
+    def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False) -> tuple[int | None, int, bool]:
+        """Josephy–Newton (module docstring): (reason, iterations, lost), reason None when the
         increment is left to the phases (from X as it is then).  A prediction counts as one
         Newton iteration (one factorisation).  Without a prediction the status is kept as it
-        is for the solve; the phases take over when the check then changes it."""
+        is for the solve; the phases take over when the check then changes it.  ``moved``: X
+        is a load predictor's state; ``lost`` then says that this path made a prediction and
+        lost the next one or its solve failed (the caller starts again from the converged
+        state, "From the converged state")."""
         P, c = self.steps, self.steps.contact
-        its = 0
+        its, predicted_once, weighed = 0, False, None
         for k in range(MAX_PREDICTIONS):
             status = c.status.copy()
             ok = self.predictor.predict(X)
             predicted = int((status != c.status).sum())          # this rank's, for the trace
             its += int(ok)
+            if not ok and moved and predicted_once:
+                self._trace(lam, f"no prediction {k} on the load predictor's path", 0, 0)
+                return None, its, True
+            predicted_once |= ok
             start, status = X.copy(), c.status.copy()
             P.keep_status(CHECK)
             reason, n = self.snes_solve(X)
             its += n
             what = f"prediction {k} ({predicted} changes)" if ok else f"no prediction {k}"
             if reason <= 0:
+                self._trace(lam, what, n, reason)
+                c.projector.restore()
+                if weighed is not None:
+                    # the step that linearised the weights with the status failed: the weights
+                    # alone from the state they were updated at, its status kept
+                    weighed[0].copy(X)
+                    c.status[:] = weighed[1]
+                    start.destroy()
+                    return self._reweigh(X, lam, its, weighed)
                 # the predicted state's solve failed: the phases from the prediction (they
                 # rescue increments that may not be cut back: fixed increments)
-                self._trace(lam, what, n, reason)
                 start.copy(X)
                 start.destroy()
                 c.status[:] = status
-                c.projector.restore()
-                return None, its
+                return None, its, moved and predicted_once
             start.destroy()
             changes = P.update_status(X)
             self._trace(lam, what, n, reason, changes)
-            if changes == 0:
-                return reason, its
+            # the first solve from rest kept the weights: they now follow the state, and the next
+            # prediction linearises them with it (one Josephy–Newton step for the status and the
+            # weights together, instead of a re-solve for the weights after the status settled)
+            if weighed is not None:
+                weighed[0].destroy()
+                weighed = None
+            reweighted = P.differentiate_weights()
+            if reweighted:
+                self._trace(lam, "weights differentiated", 0, reason)
+                weighed = (X.copy(), c.status.copy())
+            if changes == 0 and not reweighted:
+                return reason, its, False
             if not ok:
-                return None, its
-        return None, its
+                if changes:
+                    return None, its, False
+                return self._reweigh(X, lam, its, weighed)   # no prediction: the weights alone
+        return None, its, False
+
+    def _reweigh(self, X: PETSc.Vec, lam: float, its: int, weighed) -> tuple[int, int, bool]:
+        """One solve for the weights just updated, the status kept (``_predicted``)."""
+        if weighed is not None:
+            weighed[0].destroy()
+        self.steps.contact._cache = None
+        reason, n = self.snes_solve(X)
+        self._trace(lam, "weights changed", n, reason)
+        return reason, its + n, False
 
     def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:
         """Friction's bounds (module docstring): Tresca solves from X (the increment's start),

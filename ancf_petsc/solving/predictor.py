@@ -25,7 +25,17 @@ continuously may stop at a limit point a secant step jumps over (the lone soleus
 published GOH set stops at its limit point near 99.5 N, where the secant path lands on a second
 stable branch and reaches 400 N: tests/solving/test_step_limits.py), and it takes the
 preconditioner reuse and the calibration's warm starts their measured advantage.
+
+**Unilateral contact** (the complementarity predictor of petsc/complementarity.py predicts each
+increment's contact state): the increment after the first one from rest starts at the converged
+state when that first increment formed the contact state (a constraint became active): it is no
+step along the load path (the soleus lifts off in the first newtons), and extrapolating it lost
+projections and cut back the second level on the gait envelope at twist 75-90 deg
+(stepper.LoadStepper._contact_formed); the Josephy-Newton step from the converged state is then
+the predictor.  A Josephy-Newton iteration that started from a predictor's state and loses its
+predictions starts again from the converged state (solving/newton.py).
 """
+
 from __future__ import annotations
 
 from petsc4py import PETSc

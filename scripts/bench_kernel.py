@@ -30,6 +30,7 @@ from ancf_petsc.physics.goh import GOH
 from ancf_petsc.physics.materials import NeoHookean, StVenantKirchhoff
 from ancf_petsc.physics.mixed import ProjectedDilatation, pressure_basis
 from ancf_petsc.physics.section import make_ellipse
+from ancf_petsc.workflows.timing import best_times
 
 
 def block(n_el: int, degree: int, axial: int, goh: GOH | None = None):
@@ -71,19 +72,6 @@ def rate(fn, n_gp: int, repeat: int) -> float:
     for _ in range(repeat):
         fn()
     return n_gp * repeat / (time.perf_counter() - t)
-
-
-def best_times(fns, repeat: int) -> list[float]:
-    """Shortest of ``repeat`` timed calls of each function, the calls interleaved."""
-    best = [np.inf] * len(fns)
-    for fn in fns:
-        fn()
-    for _ in range(repeat):
-        for k, fn in enumerate(fns):
-            t = time.perf_counter()
-            fn()
-            best[k] = min(best[k], time.perf_counter() - t)
-    return best
 
 
 def main() -> None:

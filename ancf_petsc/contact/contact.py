@@ -66,11 +66,10 @@ class Contact:
         self._saved_status = self.status.copy()
         #: the points' weights past B's ends (weights.py; ``contact.fade: newton`` differentiates them)
         self.weights = PointWeights(self.points.n_points, spec.fade)
-        self._cache = None
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
-        self.owned, self.Phi = np.zeros(0, dtype=bool), None
+        self.owned, self.Phi, self._cache = np.zeros(0, dtype=bool), None, None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
         check_reference_gaps(self)
@@ -282,10 +281,7 @@ class Contact:
         change = 0.0 if st is None else self.weights.refresh(st.pr.idx, st.pr.weight)
         lost = float(st is not None and not st.pr.converged and not self.projector.metric_steps)
         change, lost = self.reduce(np.array([change, lost]), "max")
-        if change > WEIGHT_TOL and self.weights.rule == "newton":
-            # every rank differentiates from here on, whichever rank's weights changed (its
-            # solves and decisions then agree: solving/newton.py asks every rank alike)
-            self.weights.differentiated = True
+        self.weights.differentiated |= bool(change > WEIGHT_TOL and self.weights.rule == "newton")  # all ranks
         self.projector.metric_steps |= bool(lost)
         self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
         return bool(change > WEIGHT_TOL or lost)

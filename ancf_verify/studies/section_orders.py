@@ -16,6 +16,7 @@ import time
 import numpy as np
 import yaml
 
+from ancf_petsc.workflows.timing import best_times
 from ancf_verify.paths import CONFIGS, ROOT
 
 ORDERS = {"3363": 2, "33103": 3, "33153": 4}
@@ -255,16 +256,6 @@ def kernel_block(name: str, n_el: int, law):
     return qe, G, w, law.with_directions(a0.reshape((1,) + xg.shape + (3,)))
 
 
-def _best(fns, repeat: int) -> list[float]:
-    best = [math.inf] * len(fns)
-    for _ in range(repeat):
-        for k, fn in enumerate(fns):
-            t = time.perf_counter()
-            fn()
-            best[k] = min(best[k], time.perf_counter() - t)
-    return best
-
-
 def kernel(n_el: int = 64, repeat: int = 30) -> None:
     """µs per Gauss point and per element, residual and residual + tangent, neo-Hookean and GOH
     (scripts/bench_kernel.py's state and laws), best of ``repeat`` interleaved calls."""
@@ -276,7 +267,7 @@ def kernel(n_el: int = 64, repeat: int = 30) -> None:
     for name in ORDERS:
         for lname, law in (("neo-Hookean", NeoHookean(1e6, 5e7)), ("GOH", GOH(1e6, 5e7, 2e6, 5.0, 0.1))):
             qe, G, w, m = kernel_block(name, n_el, law)
-            a, b = _best([lambda: kernels.internal_force(qe, G, w, m),
+            a, b = best_times([lambda: kernels.internal_force(qe, G, w, m),
                           lambda: kernels.internal_force_and_tangent(qe, G, w, m)], repeat)
             print(f"| {name} ({3 * qe.shape[1]}, {w.shape[1]}) | {lname} | {1e6 * a / w.size:.3f} | "
                   f"{1e6 * b / w.size:.3f} | {1e6 * b / n_el:.1f} |", flush=True)

@@ -144,3 +144,28 @@ def test_too_many_pressure_functions_across_is_a_config_error():
     with pytest.raises(ConfigError) as err:
         parse_config(raw, base_dir=CONFIGS)
     assert str(err.value).startswith("contact.projection: (axial + 1) x (curve + curve_spans)")
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_local_pressure_functions_and_the_warning_on_ranks_are_serial(tmp_path, ranks):
+    """The B-splines across (`curve_spans: 4`) and the penetration report on 2 and 3 ranks: the
+    serial probes and the serial largest penetration (the warning's figure) to 1e-9."""
+    from helpers import CONFIGS, read_summary, solve_cli, write_config
+    raw = _column("unilateral", steps=(10.0, 20.0))
+    raw["contact"]["projection"] = {"curve": 1, "curve_spans": 4}
+    raw["contact"]["curve_points"] = 4
+    for b in raw["beams"]:
+        b["section"]["file"] = f"{CONFIGS}/{b['section']['file']}"
+    serial = run_inline(raw, tmp_path / "serial")
+    raw["output"] = {"vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "spans.yaml"), ranks=ranks,
+                  extra=["--output-dir", str(tmp_path / "mpi"), "--quiet"], cwd=CONFIGS)
+    assert p.returncode == 0, p.stderr
+    par = read_summary(tmp_path / "mpi")
+    assert par["ranks"] == ranks
+    for a, b in zip(serial["steps"], par["steps"]):
+        assert np.allclose(a["probes"]["soleus"]["displacement"], b["probes"]["soleus"]["displacement"],
+                           rtol=1e-9, atol=1e-15)
+        assert b["contact"][MG_SOL]["max_penetration"] == pytest.approx(a["contact"][MG_SOL]["max_penetration"],
+                                                                       rel=1e-9, abs=1e-12)

@@ -1,14 +1,13 @@
 """Friction across the interfaces (profiles across the section), solid and beams."""
 from __future__ import annotations
 
-import csv
 import os
 
 import numpy as np
 
 from ancf_verify.contact.solid import tendon_problem
 from ancf_verify.contact.tendon import AXIS, INTERFACES, LENGTH, LOADS
-from ancf_verify.friction.rows import ANCF, IFACES, SOLID, SPACE, num
+from ancf_verify.friction.rows import ANCF, IFACES, SOLID, SPACE, num, read_csv, write_sci
 from ancf_verify.paths import ROOT
 
 
@@ -104,16 +103,11 @@ def binned_rows(pts: dict, frame: dict, centres, head: dict) -> list:
 
 
 def read(path: str = CSV) -> list:
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
+    return read_csv(path)
 
 
 def write(rows: list, path: str = CSV) -> None:
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=FIELDS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items() if k in FIELDS})
+    write_sci(path, FIELDS, rows)
 
 
 def key(r: dict) -> tuple:

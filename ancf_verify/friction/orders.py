@@ -4,13 +4,13 @@ refined solid at every level it has, and the pressure spaces' inf-sup constants
 (docs/solid_friction_infsup.csv, friction.infsup), as tables of docs/interface.md."""
 from __future__ import annotations
 
-import csv
 import os
 
 import numpy as np
 
 from ancf_verify.friction.refined import finest_two, mm
-from ancf_verify.friction.rows import ANCF, DEFAULT_SPACE, IFACES, SPACE, num, variant_space
+from ancf_verify.friction.rows import (ANCF, DEFAULT_SPACE, IFACES, SPACE, num, read_csv, variant_space,
+    write_sci)
 from ancf_verify.paths import ROOT
 
 INFSUP_CSV = os.path.join(ROOT, "docs", "solid_friction_infsup.csv")
@@ -130,17 +130,11 @@ def per_level_md(rows: list, psi: float, elements: int = 8) -> list:
 
 
 def read_infsup(path: str = INFSUP_CSV) -> list:
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
+    return read_csv(path)
 
 
 def write_infsup(rows: list, path: str = INFSUP_CSV) -> None:
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=INFSUP_FIELDS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else ("" if v is None else v))
-                        for k, v in r.items() if k in INFSUP_FIELDS})
+    write_sci(path, INFSUP_FIELDS, rows)
 
 
 def infsup_md(rows: list) -> list:

@@ -9,7 +9,7 @@ from ancf_verify.contact.solid import tendon_problem
 from ancf_verify.contact.tendon import LENGTH, LOADS, SOURCE
 from ancf_verify.friction.beams import ancf_config
 from ancf_verify.friction.model import FrictionProblem
-from ancf_verify.friction.rows import IFACES, SOLID, SPACE, ancf_model
+from ancf_verify.friction.rows import IFACES, SOLID, SPACE, ancf_model, read_csv, write_sci
 
 
 FIELDS = ["model", "variant", "resolution", "interface", "load_N", "x_lo_m", "x_hi_m", "q_plus_N_per_m",
@@ -99,15 +99,8 @@ def ancf_profile(psi: float, elements: int, mu: float, level: float, aug, tmp: s
 
 
 def read(path: str) -> list:
-    import csv
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
+    return read_csv(path)
 
 
 def write(path: str, rows: list) -> None:
-    import csv
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=FIELDS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items() if k in FIELDS})
+    write_sci(path, FIELDS, rows)

@@ -83,6 +83,16 @@ def write_csv(path: str, rows: list) -> None:
     write_rows(path, FIELDS, rows, lambda k: k.endswith(("_m", "_N", "_Pa")) or k == "value")
 
 
+def write_sci(path: str, fields, rows: list) -> None:
+    """``rows`` as CSV with the columns ``fields`` (keys outside them dropped), floats as %.6e, None
+    empty: the friction profiles, the pressure across and the inf-sup constants."""
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items() if k in fields})
+
+
 def row_key(r: dict) -> tuple:
     """Rows of one run (or one check) share this key; a new run replaces them as a whole."""
     if r["model"] == CHECK:

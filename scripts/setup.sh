@@ -10,8 +10,9 @@ cd "$(dirname "$0")/.."
 DEB_PKGS=(python3-petsc4py python3-mpi4py python3-h5py-mpi openmpi-bin libopenmpi-dev
           libpetsc-real3.18-dev libopenblas0-pthread python3-numpy python3-scipy
           python3-matplotlib python3-yaml python3-pytest python3-venv python3-dev python3-pip
-          python3-skimage python3-nibabel python3-svgelements python3-pil)
-# the last line: geometry importers (label masks, NIfTI volumes, SVG paths; imported lazily)
+          python3-skimage python3-nibabel python3-svgelements python3-pil cython3)
+# the last line: geometry importers (label masks, NIfTI volumes, SVG paths; imported lazily) and
+# Cython for the compiled kernels (scripts/build_native.py)
 
 missing=()
 for p in "${DEB_PKGS[@]}"; do
@@ -56,6 +57,10 @@ for name, target in re.findall(r'"(ancf-[a-z]+)=([A-Za-z_.]+:[A-Za-z_]+)"', text
             fh.write(script)
         os.chmod(path, 0o755)
 EOF
+
+# the compiled kernels (Cython, in place; rebuilt only when a .pyx changed): without them the
+# numpy kernels run, and ancf_petsc.native says so
+.venv/bin/python scripts/build_native.py || echo "[setup] the compiled kernels are not built: the numpy kernels run instead" >&2
 
 # byte-compile the package (what a non-editable install does): with PYTHONDONTWRITEBYTECODE set,
 # as on CI, Python would otherwise compile every module at every start (90 ms of an Achilles

@@ -1,22 +1,9 @@
-"""The compiled-kernel plumbing (ancf_petsc/native.py, scripts/build_native.py): which path runs,
+"""The compiled-kernel plumbing (ancf_petsc/native.py): which path runs,
 and when a module counts as out of date.  The kernels themselves are tested against their numpy
 originals beside them (tests/physics)."""
-import importlib.util
 import os
-import sys
-
-import pytest
 
 from ancf_petsc import native
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def _build_script():
-    spec = importlib.util.spec_from_file_location("build_native", os.path.join(ROOT, "scripts", "build_native.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_switched_off_by_the_environment(monkeypatch):
@@ -33,7 +20,7 @@ def test_a_missing_module_says_why(monkeypatch):
 
 
 def test_a_source_newer_than_its_extension_is_rebuilt(tmp_path):
-    build = _build_script()
+    build = native
     pyx = tmp_path / "k.pyx"
     pyx.write_text("# a kernel\n")
     assert build.stale(str(pyx))                      # no extension yet

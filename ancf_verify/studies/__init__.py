@@ -1,1 +1,1 @@
-"""Diagnostic studies on the solid references (contact spaces, supported ends)."""
+"""Diagnostic studies: on the solid references (contact spaces, supported ends, GOH sets) and on the beams (locking remedies, the friction fold, interface laws, Table 1 with GOH fibres); each command-line study a ``main`` that scripts/ calls."""

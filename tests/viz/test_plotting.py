@@ -208,12 +208,9 @@ def test_load_elongation_legend_has_no_csv_column_names(tmp_path, monkeypatch):
 
 def test_the_interface_study_chart_gives_every_law_its_own_style(tmp_path):
     """Issue 39: the non-uniformity figure reused three colours among its 15 laws."""
-    import importlib.util
     from ancf_petsc.viz import plot_law_differences
     from ancf_petsc.viz.law_charts import law_style
-    spec = importlib.util.spec_from_file_location("interface_study", os.path.join(ROOT, "scripts", "interface_study.py"))
-    study = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(study)
+    from ancf_verify.studies import interface_study as study
     labels = [law[0] for law in study.LAWS]
     styles = {str(law_style(label, labels)) for label in labels}
     assert len(labels) == 15 and len(styles) == 15

@@ -1,0 +1,1 @@
+"""Benchmarks of the beams: calibration, contact columns, fascicle bundles (growth, scaling, memory), the support check, and the projection of scaling to a cluster; each module a ``main`` that scripts/bench_*.py and scripts/project_scaling.py call."""

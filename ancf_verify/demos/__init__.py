@@ -1,0 +1,1 @@
+"""Demonstrations and reports of the beams: the accuracy ladder on three scenes, the traced-geometry demo data, the results snapshot for regression checks, and the verification report; each module a ``main`` that scripts/ calls."""

@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import native
 from ..physics.bspline import SplineSet, compiled
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
+from ..physics.elements.base import _derivative_table, quadratic_lagrange, quadratic_lagrange_second
 
 #: 3363's node block (the default of the functions below; a model passes its own, Model.block)
 BLOCK_3363 = ELEMENTS[DEFAULT_ELEMENT].block
@@ -156,6 +158,30 @@ def shape_third_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.n
     out[:, :, 0, 1, 1] = out[:, :, 1, 0, 1] = out[:, :, 1, 1, 0] = outer(dL, mtt)    # L′ m_tt
     out[:, :, 1, 1, 1] = outer(L, mttt)                                              # L m_ttt
     return N_zz, out
+
+
+class CompiledShapes:
+    """The compiled descent kernels (``descent_native``) bound to a node block: ``shapes(xi, S,
+    S1, S2, *table)`` is ``shape_on_curve(xi, S, S1, S2, block)`` bitwise, ``newton_step`` is
+    ``descent.newton_step``'s (pinned as uint8)."""
+
+    def __init__(self, module, block):
+        pairs = ((0, 0), (1, 0), (0, 1)) + (((2, 0), (1, 1), (0, 2)) if block.order >= 2 else ())
+        ey, ez, coef, live = _derivative_table(block.monomials, pairs)
+        V = len(block.monomials)
+        self.table = (ey.reshape(-1, V).astype(np.int64), ez.reshape(-1, V).astype(np.int64),
+                      coef.reshape(-1, V), live.reshape(-1, V).astype(np.uint8), block.order)
+        self.shapes, self.newton_step = module.shapes, module.newton_step
+
+
+def compiled_shapes(block) -> CompiledShapes | None:
+    """The compiled kernels for ``block`` where they apply (three axial nodes with quadratic
+    Lagrange functions, section order ≤ 15) and are built; None otherwise (numpy runs)."""
+    if (block.axial is not quadratic_lagrange or block.axial_second is not quadratic_lagrange_second
+            or block.axial_nodes != 3 or block.order > 15):
+        return None
+    module = native.load("contact.descent_native")
+    return None if module is None else CompiledShapes(module, block)
 
 
 def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False):

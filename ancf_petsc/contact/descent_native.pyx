@@ -111,3 +111,75 @@ def newton_step(const double[:, :, :] Yz, const double[:, :, :, :] Yzz, const do
             dz[p, 0] = -(H11 * r0 - H01 * r1) / det
             dz[p, 1] = -(-H10 * r0 + H00 * r1) / det
     return dz_arr, r_arr
+
+
+cdef inline Py_ssize_t _interval(const double* t, Py_ssize_t nt, int k, double x) nogil:
+    """scipy's ``find_interval`` (extrapolating, no previous interval): ℓ with t_ℓ ≤ x < t_ℓ+1
+    within [k, n − 1]; −1 for NaN."""
+    cdef Py_ssize_t n = nt - k - 1, l = k
+    if x != x:
+        return -1
+    while x < t[l] and l != k:
+        l -= 1
+    l += 1
+    while x >= t[l] and l != n:
+        l += 1
+    return l - 1
+
+
+def curves(const long[::1] which, const double[::1] tp, const double[::1] t_end, const double[::1] knots,
+           const double[:, ::1] coefs, const long[:, ::1] spec, const double[:, ::1] shifts,
+           const cnp.uint8_t[::1] flipped):
+    """``surface.InterfaceCurves.__call__`` (S + shift, S', S'') at parameters ``tp`` of curves
+    ``which`` (a reversed curve at t_end − t): each spline evaluated as scipy's
+    ``_bspl.evaluate_spline`` does (``_deBoor_D``, then Σ_a c[ℓ − k + a] h_a from a = 0).  ``spec``
+    (curves × 3 derivatives, 4): knot offset, knot count, coefficient offset, degree (count −1:
+    no such derivative, 0 returned)."""
+    cdef Py_ssize_t P = tp.shape[0], p, nu, j, n, a, jp, ell, nt
+    cdef int k
+    cdef long w
+    cdef double xv, xa, xb, wgt, acc
+    cdef double h[32]
+    cdef double hh[32]
+    out = np.zeros((3, P, 2))
+    cdef double[:, :, ::1] o = out
+    cdef const double* t
+    for p in range(P):
+        w = which[p]
+        xv = t_end[w] - tp[p] if flipped[w] else tp[p]
+        for nu in range(3):
+            nt = spec[w * 3 + nu, 1]
+            if nt < 0:
+                continue
+            t = &knots[spec[w * 3 + nu, 0]]
+            k = <int>spec[w * 3 + nu, 3]
+            ell = _interval(t, nt, k, xv)
+            if ell < 0:
+                o[nu, p, 0] = xv
+                o[nu, p, 1] = xv
+                continue
+            h[0] = 1.0
+            for j in range(1, k + 1):
+                for n in range(j):
+                    hh[n] = h[n]
+                h[0] = 0.0
+                for n in range(1, j + 1):
+                    xb = t[ell + n]
+                    xa = t[ell + n - j]
+                    if xb == xa:
+                        h[n] = 0.0
+                        continue
+                    wgt = hh[n - 1] / (xb - xa)
+                    h[n - 1] += wgt * (xb - xv)
+                    h[n] = wgt * (xv - xa)
+            for jp in range(2):
+                acc = 0.0
+                for a in range(k + 1):
+                    acc = acc + coefs[spec[w * 3 + nu, 2] + ell + a - k, jp] * h[a]
+                o[nu, p, jp] = acc
+        o[0, p, 0] = o[0, p, 0] + shifts[w, 0]
+        o[0, p, 1] = o[0, p, 1] + shifts[w, 1]
+        if flipped[w]:
+            o[1, p, 0] = -o[1, p, 0]
+            o[1, p, 1] = -o[1, p, 1]
+    return out[0], out[1], out[2]

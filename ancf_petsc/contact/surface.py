@@ -79,9 +79,13 @@ class InterfaceCurves:
                  np.concatenate([np.arange(len(c)) for c in self.splines])] = np.arange(len(flat))
         self.set = SplineSet(flat)
         self.per_curve = compiled() is not None and len(curves) <= COMPILED_CURVES_MAX
+        self._native = _packed_curves(self.splines, self.shifts, self.t_end, self.flipped)
 
     def __call__(self, which: np.ndarray, t: np.ndarray):
         """(S + shift, S', S'') (P, 2) each at parameters t of curves ``which`` (P,)."""
+        if self._native is not None:
+            return self._native[0](np.ascontiguousarray(which, dtype=np.int64),
+                                   np.ascontiguousarray(t, dtype=float), *self._native[1:])
         P = len(t)
         x = np.where(self.flipped[which], self.t_end[which] - t, t)
         if self.per_curve:
@@ -104,6 +108,27 @@ class InterfaceCurves:
         S2 = np.zeros((P, 2))
         S2[has2] = vals[2 * P:]
         return S, S1, S2
+
+
+def _packed_curves(splines: list, shifts, t_end, flipped) -> tuple | None:
+    """``descent_native.curves`` and its arguments after (which, t): every curve's splines'
+    knots and coefficients packed into flat arrays; None when it is not built or a spline does
+    not fit (not two columns, degree above 30)."""
+    module = native.load("contact.descent_native")
+    if module is None or any(s.c.reshape(len(s.c), -1).shape[1] != 2 or s.k > 30
+                             for curve in splines for s in curve):
+        return None
+    spec = np.full((3 * len(splines), 4), -1, dtype=np.int64)
+    knots, coefs, nk, nc = [], [], 0, 0
+    for i, curve in enumerate(splines):
+        for nu, s in enumerate(curve):
+            spec[3 * i + nu] = (nk, len(s.t), nc, s.k)
+            knots.append(s.t)
+            coefs.append(s.c.reshape(len(s.c), 2))
+            nk, nc = nk + len(s.t), nc + len(s.c)
+    return (module.curves, np.ascontiguousarray(t_end, dtype=float), np.concatenate(knots),
+            np.ascontiguousarray(np.concatenate(coefs)), spec, np.ascontiguousarray(shifts),
+            np.asarray(flipped, dtype=np.uint8))
 
 
 def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray | None = None,

@@ -21,7 +21,7 @@ def shapes(const double[::1] xi, const double[:, ::1] S, const double[:, ::1] S1
     """N (P, 3V), N_ζ (P, 3V, 2) and N_ζζ (P, 3V, 2, 2) of a three-node block of V monomials at
     section points S(t) (S1 = S', S2 = S''): ``surface.shape_on_curve`` with S2.  ``ey``, ``ez``,
     ``coef``, ``live`` (6, V): the block's derivative table of the pairs (0,0), (1,0), (0,1),
-    (2,0), (1,1), (0,2) (``base._derivative_table``); the last three are used for order ≥ 2."""
+    (2,0), (1,1), (0,2) (``base.derivative_table``); the last three are used for order ≥ 2."""
     cdef Py_ssize_t P = xi.shape[0], V = ey.shape[1], SL = 3 * V
     cdef Py_ssize_t p, a, v, n, k, np_ = 6 if order >= 2 else 3
     N_arr = np.empty((P, SL))

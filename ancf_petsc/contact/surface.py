@@ -11,7 +11,8 @@ import numpy as np
 from .. import native
 from ..physics.bspline import SplineSet, compiled
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
-from ..physics.elements.base import _derivative_table, quadratic_lagrange, quadratic_lagrange_second
+from ..physics.elements.base import derivative_table, quadratic_lagrange, quadratic_lagrange_second
+from .descent import newton_step
 
 #: 3363's node block (the default of the functions below; a model passes its own, Model.block)
 BLOCK_3363 = ELEMENTS[DEFAULT_ELEMENT].block
@@ -185,28 +186,39 @@ def shape_third_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.n
     return N_zz, out
 
 
-class CompiledShapes:
-    """The compiled descent kernels (``descent_native``) bound to a node block: ``shapes(xi, S,
-    S1, S2, *table)`` is ``shape_on_curve(xi, S, S1, S2, block)`` bitwise, ``newton_step`` is
-    ``descent.newton_step``'s (pinned as uint8)."""
+class SurfaceKernels:
+    """B's shape functions on its interface surface (``shape_on_curve`` with N_ζζ) and the
+    closest-point step (``descent.newton_step``) for one node block: compiled
+    (``descent_native``, bitwise the numpy code) where the block has three axial nodes with
+    quadratic Lagrange functions and section order ≤ 15 and the module is built, else numpy."""
 
-    def __init__(self, module, block):
-        pairs = ((0, 0), (1, 0), (0, 1)) + (((2, 0), (1, 1), (0, 2)) if block.order >= 2 else ())
-        ey, ez, coef, live = _derivative_table(block.monomials, pairs)
-        V = len(block.monomials)
-        self.table = (ey.reshape(-1, V).astype(np.int64), ez.reshape(-1, V).astype(np.int64),
-                      coef.reshape(-1, V), live.reshape(-1, V).astype(np.uint8), block.order)
-        self.shapes, self.newton_step = module.shapes, module.newton_step
+    def __init__(self, block):
+        self.block = block
+        module = None
+        if (block.axial is quadratic_lagrange and block.axial_second is quadratic_lagrange_second
+                and block.axial_nodes == 3 and block.order <= 15):
+            module = native.load("contact.descent_native")
+        self.compiled = module is not None
+        if self.compiled:
+            pairs = ((0, 0), (1, 0), (0, 1)) + (((2, 0), (1, 1), (0, 2)) if block.order >= 2 else ())
+            ey, ez, coef, live = derivative_table(block.monomials, pairs)
+            V = len(block.monomials)
+            self._table = (ey.reshape(-1, V).astype(np.int64), ez.reshape(-1, V).astype(np.int64),
+                           coef.reshape(-1, V), live.reshape(-1, V).astype(np.uint8), block.order)
+            self._shapes, self._step = module.shapes, module.newton_step
 
+    def shapes(self, xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray):
+        """N (P, S), N_ζ (P, S, 2), N_ζζ (P, S, 2, 2) (``shape_on_curve``)."""
+        if self.compiled:
+            return self._shapes(np.ascontiguousarray(xi, dtype=float), S, S1, S2, *self._table)
+        return shape_on_curve(xi, S, S1, S2, self.block)
 
-def compiled_shapes(block) -> CompiledShapes | None:
-    """The compiled kernels for ``block`` where they apply (three axial nodes with quadratic
-    Lagrange functions, section order ≤ 15) and are built; None otherwise (numpy runs)."""
-    if (block.axial is not quadratic_lagrange or block.axial_second is not quadratic_lagrange_second
-            or block.axial_nodes != 3 or block.order > 15):
-        return None
-    module = native.load("contact.descent_native")
-    return None if module is None else CompiledShapes(module, block)
+    def step(self, Yz: np.ndarray, Yzz: np.ndarray, d: np.ndarray, pinned: np.ndarray,
+             metric: bool) -> tuple[np.ndarray, np.ndarray]:
+        """dζ and φ_ζ (P, 2) each (``descent.newton_step``)."""
+        if self.compiled:
+            return self._step(Yz, Yzz, d, pinned.view(np.uint8), metric)
+        return newton_step(Yz, Yzz, d, pinned, metric)
 
 
 def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False):

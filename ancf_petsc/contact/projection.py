@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .descent import ROUNDING, Backtracking, newton_step
+from .descent import ROUNDING, Backtracking
 from .fade import CURVE_FADE_END, END_FADE, end_weight
-from .surface import InterfaceCurves, closest_parameter, section_shift, shape_on_curve, shape_third_on_curve
+from .surface import InterfaceCurves, SurfaceKernels, closest_parameter, section_shift, shape_third_on_curve
 
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
 MAX_ITERATIONS = 40
@@ -64,6 +64,7 @@ class Projector:
         self._b_first = np.array([i.b.element_offset for i in interfaces], dtype=np.int64)
         self._b_last = self._b_first + np.array([i.b.n_elements - 1 for i in interfaces], dtype=np.int64)
         self._curve_end = np.array([i.curve_b.t_end for i in interfaces], dtype=float)
+        self._kernels = SurfaceKernels(self.block)      # compiled or numpy
         # state (B element, ξ_B, t_B), started at the matching reference point
         self.eB = points.eB0.copy()
         self.xiB = points.xi.copy()
@@ -151,7 +152,7 @@ class Projector:
         ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
         P = len(eB)
         S, S1, S2 = self._curves(itf, tB)                       # every interface's curve at once
-        NB, NBz, NBzz = shape_on_curve(xiB, S, S1, S2, self.block)
+        NB, NBz, NBzz = self._kernels.shapes(xiB, S, S1, S2)
         qB = x_of(eB)                                           # (P, 18, 3)
         Y = np.matmul(NB[:, None, :], qB)[:, 0]
         Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
@@ -246,7 +247,7 @@ class Projector:
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
             d = xA - Y
             worse = search.worse(d, valid)          # never on the first pass (φ of the start: ∞)
-            dz, r = newton_step(Yz, Yzz, d, pinned, self.metric_steps)
+            dz, r = self._kernels.step(Yz, Yzz, d, pinned, self.metric_steps)
             stuck = ~np.all(np.isfinite(dz), axis=1)
             # a degenerate local problem (only in wild intermediate iterates, far from the
             # surface) keeps the point where it is; such a state is never accepted

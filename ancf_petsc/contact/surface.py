@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import native
 from ..physics.bspline import SplineSet, compiled
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
+from ..physics.elements.base import derivative_table, quadratic_lagrange, quadratic_lagrange_second
+from .descent import newton_step
 
 #: 3363's node block (the default of the functions below; a model passes its own, Model.block)
 BLOCK_3363 = ELEMENTS[DEFAULT_ELEMENT].block
@@ -77,9 +80,13 @@ class InterfaceCurves:
                  np.concatenate([np.arange(len(c)) for c in self.splines])] = np.arange(len(flat))
         self.set = SplineSet(flat)
         self.per_curve = compiled() is not None and len(curves) <= COMPILED_CURVES_MAX
+        self._native = _packed_curves(self.splines, self.shifts, self.t_end, self.flipped)
 
     def __call__(self, which: np.ndarray, t: np.ndarray):
         """(S + shift, S', S'') (P, 2) each at parameters t of curves ``which`` (P,)."""
+        if self._native is not None:
+            return self._native[0](np.ascontiguousarray(which, dtype=np.int64),
+                                   np.ascontiguousarray(t, dtype=float), *self._native[1:])
         P = len(t)
         x = np.where(self.flipped[which], self.t_end[which] - t, t)
         if self.per_curve:
@@ -102,6 +109,27 @@ class InterfaceCurves:
         S2 = np.zeros((P, 2))
         S2[has2] = vals[2 * P:]
         return S, S1, S2
+
+
+def _packed_curves(splines: list, shifts, t_end, flipped) -> tuple | None:
+    """``descent_native.curves`` and its arguments after (which, t): every curve's splines'
+    knots and coefficients packed into flat arrays; None when it is not built or a spline does
+    not fit (not two columns, degree above 30)."""
+    module = native.load("contact.descent_native")
+    if module is None or any(s.c.reshape(len(s.c), -1).shape[1] != 2 or s.k > 30
+                             for curve in splines for s in curve):
+        return None
+    spec = np.full((3 * len(splines), 4), -1, dtype=np.int64)
+    knots, coefs, nk, nc = [], [], 0, 0
+    for i, curve in enumerate(splines):
+        for nu, s in enumerate(curve):
+            spec[3 * i + nu] = (nk, len(s.t), nc, s.k)
+            knots.append(s.t)
+            coefs.append(s.c.reshape(len(s.c), 2))
+            nk, nc = nk + len(s.t), nc + len(s.c)
+    return (module.curves, np.ascontiguousarray(t_end, dtype=float), np.concatenate(knots),
+            np.ascontiguousarray(np.concatenate(coefs)), spec, np.ascontiguousarray(shifts),
+            np.asarray(flipped, dtype=np.uint8))
 
 
 def shape_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray | None = None,
@@ -156,6 +184,41 @@ def shape_third_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.n
     out[:, :, 0, 1, 1] = out[:, :, 1, 0, 1] = out[:, :, 1, 1, 0] = outer(dL, mtt)    # L′ m_tt
     out[:, :, 1, 1, 1] = outer(L, mttt)                                              # L m_ttt
     return N_zz, out
+
+
+class SurfaceKernels:
+    """B's shape functions on its interface surface (``shape_on_curve`` with N_ζζ) and the
+    closest-point step (``descent.newton_step``) for one node block: compiled
+    (``descent_native``, bitwise the numpy code) where the block has three axial nodes with
+    quadratic Lagrange functions and section order ≤ 15 and the module is built, else numpy."""
+
+    def __init__(self, block):
+        self.block = block
+        module = None
+        if (block.axial is quadratic_lagrange and block.axial_second is quadratic_lagrange_second
+                and block.axial_nodes == 3 and block.order <= 15):
+            module = native.load("contact.descent_native")
+        self.compiled = module is not None
+        if self.compiled:
+            pairs = ((0, 0), (1, 0), (0, 1)) + (((2, 0), (1, 1), (0, 2)) if block.order >= 2 else ())
+            ey, ez, coef, live = derivative_table(block.monomials, pairs)
+            V = len(block.monomials)
+            self._table = (ey.reshape(-1, V).astype(np.int64), ez.reshape(-1, V).astype(np.int64),
+                           coef.reshape(-1, V), live.reshape(-1, V).astype(np.uint8), block.order)
+            self._shapes, self._step = module.shapes, module.newton_step
+
+    def shapes(self, xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray):
+        """N (P, S), N_ζ (P, S, 2), N_ζζ (P, S, 2, 2) (``shape_on_curve``)."""
+        if self.compiled:
+            return self._shapes(np.ascontiguousarray(xi, dtype=float), S, S1, S2, *self._table)
+        return shape_on_curve(xi, S, S1, S2, self.block)
+
+    def step(self, Yz: np.ndarray, Yzz: np.ndarray, d: np.ndarray, pinned: np.ndarray,
+             metric: bool) -> tuple[np.ndarray, np.ndarray]:
+        """dζ and φ_ζ (P, 2) each (``descent.newton_step``)."""
+        if self.compiled:
+            return self._step(Yz, Yzz, d, pinned.view(np.uint8), metric)
+        return newton_step(Yz, Yzz, d, pinned, metric)
 
 
 def curve_shape(beam, curve, xi: np.ndarray, t: np.ndarray, second: bool = False):

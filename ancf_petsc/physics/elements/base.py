@@ -121,7 +121,7 @@ class NodeBlock:
         closest-point descent (one call per pair and monomial cost 0.6 ms a residual)."""
         y = np.asarray(y, dtype=float)
         z = np.asarray(z, dtype=float)
-        ey, ez, coef, live = _derivative_table(self.monomials, tuple(pairs))
+        ey, ez, coef, live = derivative_table(self.monomials, tuple(pairs))
         Y, Z = _powers(y, self.order), _powers(z, self.order)
         out = np.where(live, coef * (Y[..., ey] * Z[..., ez]), 0.0)
         # C-contiguous (n, vectors) per pair, as the stacked columns were: products and sums over
@@ -144,7 +144,7 @@ class NodeBlock:
 
 
 @functools.lru_cache(maxsize=None)
-def _derivative_table(monomials: tuple, pairs: tuple) -> tuple[np.ndarray, ...]:
+def derivative_table(monomials: tuple, pairs: tuple) -> tuple[np.ndarray, ...]:
     """For each (a, b) of ``pairs`` and each monomial (i, j): the exponents (i − a, j − b) (0 where
     negative), 1/((i − a)! (j − b)!) and whether the derivative is a monomial at all (not 0)."""
     rows = [(i - a, j - b) for a, b in pairs for i, j in monomials]

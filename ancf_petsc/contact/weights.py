@@ -108,6 +108,9 @@ class PointWeights:
         self._saved = self.values.copy()
         self.rule = rule
         self.differentiated = False
+        #: the normal forces are −Σ_k λ_k ∇ḡ_k, with the weights' part −p g ∇w (frictionless), or
+        #: τ_p ∇g_p as settle's (with a tangential law: its answers then stay settle's; blocks.py)
+        self.variational = True
 
     def effective(self, idx: np.ndarray, current: np.ndarray) -> np.ndarray:
         """The weights of the points ``idx`` in an evaluation whose partner places have the

@@ -3,6 +3,7 @@ with friction since issue 38's friction columns; contact/friction_blocks.py ``_w
 the Jacobian against central differences of the residual at a state where points are partly
 weighted, press, stick and slide; the weights' settle rule's extra solves it replaces."""
 import numpy as np
+import pytest
 
 from contact.test_fade_newton import fade_state
 from contact.test_contact import achilles
@@ -61,3 +62,28 @@ def test_friction_jacobian_with_partly_weighted_points_matches_finite_difference
         jv, fd, _, _ = jacobian_and_difference(P, X, v, 1e-8)
         err = np.abs(jv - fd)[free].max() / np.abs(jv).max()
         assert err < 1e-6, err
+
+
+@pytest.mark.slow
+def test_friction_column_levels_are_single_solves(tmp_path):
+    """μ = 0.1, twist 90°, soleus-biased, 2 elements, to 1.2 kN (workflows/envelope.py's cell):
+    with the weights differentiated each level is one Newton solve, 60 Newton iterations in all
+    and at most 8 per level from 600 N on, no cut-back; with them settled between solves
+    (``contact.fade: settle``, the default before) the points sliding into the fade bands cost
+    2-4 re-solves per level: 87 iterations, 12-14 per level at 600-1000 N (measured).  The
+    answers are the same equations' (the settled fixed point's, to its weight tolerance)."""
+    from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, cell_config
+    from helpers import CONFIGS, run_inline
+    levels = (30.0, 100.0, 200.0, 400.0, 600.0, 800.0, 1000.0, 1200.0)
+    raw = cell_config(EnvelopeCell(NEO, 90, "soleus", "sliding", friction=0.1, elements=2, levels=levels))
+    s = run_inline(raw, tmp_path / "newton", base_dir=CONFIGS)
+    assert s["status"] == "completed" and s["steps"][-1]["load_factor"] == 1200.0
+    assert sum(st["cutbacks"] for st in s["steps"]) == 0
+    assert s["newton_iterations"] <= 66
+    assert max(st["iterations"] for st in s["steps"][4:]) <= 8
+    raw["contact"]["fade"] = "settle"
+    settled = run_inline(raw, tmp_path / "settle", base_dir=CONFIGS)
+    for a, b in zip(s["steps"], settled["steps"]):
+        for name, u in a["probes"].items():
+            u, v = np.asarray(u["displacement"]), np.asarray(b["probes"][name]["displacement"])
+            assert np.abs(u - v).max() <= 1e-6 * np.abs(v).max()

@@ -16,8 +16,8 @@ from helpers import ROOT
 PACKAGE = os.path.join(ROOT, "ancf_petsc")
 #: layer of each top-level component of ancf_petsc (sub-package or root module)
 LAYERS = [
-    ("errors", "version", "status", "yamlio", "registry"),  # vocabulary shared by everything; YAML
-    # input; registries that find their modules
+    ("errors", "version", "status", "yamlio", "registry", "native"),  # vocabulary shared by
+    # everything; YAML input; registries that find their modules; which compiled kernels load
     ("physics",),                             # element 3363, sections and cubature, materials, kernels
     ("linalg",),                              # PETSc options, linear solvers, log events (one home)
     ("contact", "outline_formats"),           # contact points, projection, multipliers, laws; outline files

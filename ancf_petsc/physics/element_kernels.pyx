@@ -3,64 +3,38 @@
 GOH laws, per element, for any number S of shape functions (3333: 9, 3363: 18, ...).
 
 The numpy kernels (kernels.py, materials.py, goh.py) are the reference; this module computes the
-same quantities point by point in C and contracts the tangent with BLAS (scipy's cython_blas):
+same quantities point by point in C and the tangent's sum over the points with one BLAS DGEMM per
+element (scipy's cython_blas), in two contractions of the shape gradients with the elasticity:
 
-    f_a = Σ_p w P G_a                                  (eq. 9, P = ∂Ψ/∂F, eqs. 18, 23, 24)
-    K[(a,i),(b,k)] = Σ_p w G_aj 𝔸_ijkl G_bl = Kq[(a,i),(b,k)] + Z[(a,k),(b,i)] + δ_ik Ks[a,b]
+    f_a = Σ_p w P G_a                               (eq. 9; P = ∂Ψ/∂F, eqs. 18, 23, 24; goh.py)
+    K[(a,i),(b,k)] = Σ_p G_aj Y[(p,j),(i,k,b)],     Y[(p,j),(i,k,b)] = w Σ_l 𝔸_ijkl G_bl
 
-Every part is a symmetric sum of signed rank-one terms λ u uᵀ: the outer terms of 𝔸 on the vectors
-h = F⁻ᵀG_a and f = F G_a (the 2 × 2 form [[c1, c2], [c2, 0]] diagonalised by one Jacobi rotation)
-and a fibre's 4ψ'' t tᵀ go to Kq (D × D, D = 3S); the cross term γ F⁻ᵀ ⊠ F⁻ᵀ is γ h hᵀ with the
-two component indices swapped (Z); the δ_ik terms (μJ^(-2/3) + 2κψ') G_a·G_b and 2(1 − 3κ)ψ'
-(G_a·a0)(G_b·a0) form an S × S matrix Ks added to the three diagonal blocks.  Rows √|λ| u are
-stored by the sign of λ and each part is two DSYRKs (one triangle), mirrored when K is written.
+The shape functions are scalars, so K's 3 × 3 component blocks K^ik (S × S) are G 𝔸^ik Gᵀ; by
+the major symmetry 𝔸_ijkl = 𝔸_klij only the six blocks i ≤ k are computed (K^ki = K^ikᵀ), and
+every δ_ik term of 𝔸 (μJ^(-2/3), GOH's 2ψ'H) is part of the diagonal blocks' 3 × 3 matrices.
+Each point's 𝔸 is formed in C from the same dyadic terms as materials.TangentTerms.
 """
 import numpy as np
 
-from libc.math cimport sqrt, exp, fabs, pow, hypot, NAN
+from libc.math cimport sqrt, exp, fabs, pow, NAN
 from libc.stdlib cimport malloc, free
-from libc.string cimport memset
-from scipy.linalg.cython_blas cimport dsyrk
+from libc.string cimport memset, memcpy
+from scipy.linalg.cython_blas cimport dgemm
+
+
+#: fibre families a GOH law may have here (goh.py's recipes use 1 or 2)
+DEF MAX_FAMILIES = 8
+
+
+cdef extern from *:
+    # a pointer the compiler may assume unaliased (C99 restrict): the loops over a vectorise
+    ctypedef double* rdouble "double * __restrict__"
+    ctypedef const double* crdouble "const double * __restrict__"
 
 
 cdef struct Law:
     double mu, K, k1, k2, kappa, c, e_round
     int nfam
-
-
-cdef struct Rows:
-    double* buf     # cap rows of n doubles: positive rows from the top, negative from the bottom
-    int n, cap, npos, nneg
-
-
-cdef inline double* _row(Rows* r, double lam, double* scale) nogil:
-    """The next row for λ (its sign picks the group) and √|λ| in scale; NULL for λ = 0."""
-    if lam == 0.0:
-        return NULL
-    scale[0] = sqrt(fabs(lam))
-    if lam > 0.0:
-        r.npos += 1
-        return r.buf + (r.npos - 1) * r.n
-    r.nneg += 1
-    return r.buf + (r.cap - r.nneg) * r.n
-
-
-cdef void _syrk(Rows* r, double* C) nogil:
-    """C (n × n, lower triangle in column-major order) = Σ_pos u uᵀ − Σ_neg u uᵀ."""
-    cdef double one = 1.0, minus = -1.0, zero = 0.0
-    cdef char L = b'L', N = b'N'
-    if r.npos:
-        dsyrk(&L, &N, &r.n, &r.npos, &one, r.buf, &r.n, &zero, C, &r.n)
-    else:
-        memset(C, 0, r.n * r.n * sizeof(double))
-    if r.nneg:
-        dsyrk(&L, &N, &r.n, &r.nneg, &minus, r.buf + (r.cap - r.nneg) * r.n, &r.n, &one, C, &r.n)
-    r.npos = 0
-    r.nneg = 0
-
-
-cdef inline double _sym(const double* C, int n, int x, int y) nogil:
-    return C[y * n + x] if x >= y else C[x * n + y]
 
 
 cdef double _matrix(const Law* L, const double* F, double* H, double* P, double* co) nogil:
@@ -117,134 +91,165 @@ cdef void _fibre(const Law* L, const double* F, const double* a0, double I1, dou
             P[3 * i + j] += (s * L.c) * Fa[i] * a0[j] + (s * L.kappa) * F[3 * i + j]
 
 
-cdef void _tangent_rows(const Law* L, const double* Gp, int S, double w, const double* F,
-                        const double* H, const double* co, const double* fib, Rows* rq,
-                        Rows* rz, Rows* rs, double* h, double* f) nogil:
-    """The rows of Kq, Z and Ks of one point (module docstring); fib holds per family
-    (a0, Fa, ψ', ψ'')."""
-    cdef int a, i, D = 3 * S, m
-    cdef double lam1, lam2, tau, t, cs, sn, sc, iso = co[0], g
-    cdef double* u
-    cdef double* v
+cdef inline int _pair(int i, int k) nogil:
+    """The index of the component block (i, k), i ≤ k: (0,0) (0,1) (0,2) (1,1) (1,2) (2,2)."""
+    return 3 * i - i * (i - 1) // 2 + k - i
+
+
+cdef void _elasticity(const Law* L, const double* F, const double* H, const double* co,
+                      const double* fib, double w, rdouble A) nogil:
+    """w 𝔸_ijkl of one point for the pairs i ≤ k, A[(pair, j, l)] (54 numbers): the matrix's
+    μJ^(-2/3) δ_ik δ_jl + (c1 H + c2 F) ⊗ H + c2 H ⊗ F + γ H ⊠ H (materials.NeoHookean) and
+    per GOH family 2ψ'H_jl δ_ik + 4ψ'' (FH) ⊗ (FH), FH = κF + (1 − 3κ) Fa0 ⊗ a0 (goh.py)."""
+    cdef int i, k, j, l, m, n
+    cdef double V[9]
+    cdef double T[9]
+    cdef double iso = co[0], r, d2
     cdef const double* fb
-    for a in range(S):
-        for i in range(3):
-            h[3 * a + i] = H[3 * i] * Gp[3 * a] + H[3 * i + 1] * Gp[3 * a + 1] + H[3 * i + 2] * Gp[3 * a + 2]
-            f[3 * a + i] = F[3 * i] * Gp[3 * a] + F[3 * i + 1] * Gp[3 * a + 1] + F[3 * i + 2] * Gp[3 * a + 2]
-    # w [[c1, c2], [c2, 0]] on (h, f): λ1 u1 u1ᵀ + λ2 u2 u2ᵀ by one Jacobi rotation
-    lam1, lam2, cs, sn = w * co[1], 0.0, 1.0, 0.0
-    if co[2] != 0.0:
-        tau = -co[1] / (2.0 * co[2])
-        t = (1.0 if tau >= 0.0 else -1.0) / (fabs(tau) + hypot(1.0, tau))
-        cs = 1.0 / sqrt(1.0 + t * t)
-        sn = t * cs
-        lam1 = w * (co[1] - t * co[2])
-        lam2 = w * t * co[2]
-    u = _row(rq, lam1, &sc)
-    if u != NULL:
-        for m in range(D):
-            u[m] = sc * (cs * h[m] - sn * f[m])
-    u = _row(rq, lam2, &sc)
-    if u != NULL:
-        for m in range(D):
-            u[m] = sc * (sn * h[m] + cs * f[m])
-    u = _row(rz, w * co[3], &sc)
-    if u != NULL:
-        for m in range(D):
-            u[m] = sc * h[m]
+    for j in range(9):
+        V[j] = co[1] * H[j] + co[2] * F[j]
+    n = 0
+    for i in range(3):
+        for k in range(i, 3):
+            for j in range(3):
+                for l in range(3):
+                    A[n] = V[3 * i + j] * H[3 * k + l] + co[2] * H[3 * i + j] * F[3 * k + l] \
+                        + co[3] * H[3 * i + l] * H[3 * k + j]
+                    n += 1
     for m in range(L.nfam):
         fb = fib + 8 * m
         iso += 2.0 * L.kappa * fb[6]
-        u = _row(rq, 4.0 * fb[7] * w, &sc)
-        v = _row(rs, 2.0 * L.c * fb[6] * w, &g)
-        for a in range(S):
-            t = fb[0] * Gp[3 * a] + fb[1] * Gp[3 * a + 1] + fb[2] * Gp[3 * a + 2]
-            if v != NULL:
-                v[a] = g * t
-            if u != NULL:
-                for i in range(3):
-                    u[3 * a + i] = sc * (L.kappa * f[3 * a + i] + L.c * fb[3 + i] * t)
-    for i in range(3):
-        u = _row(rs, w * iso, &sc)
-        if u != NULL:
-            for a in range(S):
-                u[a] = sc * Gp[3 * a + i]
+        r = 2.0 * L.c * fb[6]
+        d2 = 4.0 * fb[7]
+        for i in range(3):
+            for j in range(3):
+                T[3 * i + j] = L.kappa * F[3 * i + j] + L.c * fb[3 + i] * fb[j]
+        n = 0
+        for i in range(3):
+            for k in range(i, 3):
+                for j in range(3):
+                    for l in range(3):
+                        A[n] += d2 * T[3 * i + j] * T[3 * k + l] + (r * fb[j] * fb[l] if i == k else 0.0)
+                        n += 1
+    for n in range(54):
+        A[n] *= w
+    for i in range(3):          # δ_ik δ_jl: the diagonal of the blocks (0,0), (1,1), (2,2)
+        for j in range(3):
+            A[9 * _pair(i, i) + 4 * j] += w * iso
 
 
-cdef void _write_tangent(const double* Cq, const double* Cz, const double* Cs, int S, double* K) nogil:
-    """K[(a,i),(b,k)] = Kq[(a,i),(b,k)] + Z[(a,k),(b,i)] + δ_ik Ks[a,b], from the triangles."""
+cdef void _y_rows(const double* A, crdouble Gc, int S, rdouble Y) nogil:
+    """Y[(j), (pair, b)] = Σ_l A[pair, j, l] G_bl for one point: 3 rows of 6S; Gc is (3, S)."""
+    cdef int q, j, b
+    cdef double a0, a1, a2
+    cdef rdouble y
+    for j in range(3):
+        for q in range(6):
+            a0 = A[9 * q + 3 * j]
+            a1 = A[9 * q + 3 * j + 1]
+            a2 = A[9 * q + 3 * j + 2]
+            y = Y + j * 6 * S + q * S
+            for b in range(S):
+                y[b] = a0 * Gc[b] + a1 * Gc[S + b] + a2 * Gc[2 * S + b]
+
+
+cdef void _write_tangent(const double* C, int S, double* K) nogil:
+    """K[(a,i),(b,k)] from C[a, (pair(i,k), b)] (blocks i ≤ k; the others by symmetry)."""
     cdef int a, b, i, k, D = 3 * S
-    cdef double ks
+    cdef double* Kr
     for a in range(S):
-        for b in range(S):
-            ks = _sym(Cs, S, a, b)
-            for i in range(3):
-                for k in range(3):
-                    K[(3 * a + i) * D + 3 * b + k] = (_sym(Cq, D, 3 * a + i, 3 * b + k)
-                                                      + _sym(Cz, D, 3 * a + k, 3 * b + i)
-                                                      + (ks if i == k else 0.0))
+        for i in range(3):
+            Kr = K + (3 * a + i) * D
+            for k in range(3):
+                if i <= k:
+                    for b in range(S):
+                        Kr[3 * b + k] = C[a * 6 * S + _pair(i, k) * S + b]
+                else:
+                    for b in range(S):
+                        Kr[3 * b + k] = C[b * 6 * S + _pair(k, i) * S + a]
 
 
 cdef struct Work:
-    double *q
-    double *G
-    double *h
-    double *f
-    double *Cq
-    double *Cz
-    double *Cs
-    double *fib
-    Rows rq, rz, rs
+    double *q       # (3, S): the element's nodal vectors, component-major
+    double *GT      # (S, 3P): gradients, shape-function-major (the DGEMM's right factor)
+    double *Gc      # (P, 3, S): gradients per point, component-major (sums over a vectorise)
+    double *Fs      # (3, 3P): F of every point, F[i, (p, j)]
+    double *Y       # (3P, 6S)
+    double *C       # (S, 6S)
+    double *fT      # (3, S): the force, component-major
+    double *fib     # per family: a0, Fa, ψ', ψ''
+    double *A       # 54
 
 
-cdef double* _work(Work* ws, int S, int P, int nfam) except NULL:
-    """Per-call scratch: one element's q and G, the rows and the triangles (all in cache)."""
-    cdef int D = 3 * S
-    cdef size_t n = (3 * S + 3 * S * P + 2 * D + 2 * D * D + S * S + 8 * nfam
-                     + D * P * (2 + nfam) + D * P + S * P * (3 + nfam))
+cdef double* _work(Work* ws, int S, int P, int nfam, bint tangent) except NULL:
+    """Per-call scratch for one element (in cache)."""
+    cdef size_t y = 18 * S * P if tangent else 0
+    cdef size_t n = 3 * S + 6 * S * P + 9 * P + y + 6 * S * S + 3 * S + 8 * nfam + 54
     cdef double* mem = <double*> malloc(n * sizeof(double))
     if mem == NULL:
         raise MemoryError()
     ws.q = mem
-    ws.G = ws.q + 3 * S
-    ws.h = ws.G + 3 * S * P
-    ws.f = ws.h + D
-    ws.Cq = ws.f + D
-    ws.Cz = ws.Cq + D * D
-    ws.Cs = ws.Cz + D * D
-    ws.fib = ws.Cs + S * S
-    ws.rq = Rows(ws.fib + 8 * nfam, D, P * (2 + nfam), 0, 0)
-    ws.rz = Rows(ws.rq.buf + D * P * (2 + nfam), D, P, 0, 0)
-    ws.rs = Rows(ws.rz.buf + D * P, S, P * (3 + nfam), 0, 0)
+    ws.GT = ws.q + 3 * S
+    ws.Gc = ws.GT + 3 * S * P
+    ws.Fs = ws.Gc + 3 * S * P
+    ws.Y = ws.Fs + 9 * P
+    ws.C = ws.Y + y
+    ws.fT = ws.C + 6 * S * S
+    ws.fib = ws.fT + 3 * S
+    ws.A = ws.fib + 8 * nfam
     return mem
+
+
+cdef void _load(Work* ws, const double[:, :, :] q, const double[:, :, :, :] G, int e) nogil:
+    """The element's q and G into the scratch layouts, and F of every point (Fs).  G as stored
+    by ``Model.element_data`` ((E, S, P, 3) in memory) is one copy per shape function."""
+    cdef int S = G.shape[2], P = G.shape[1], a, i, p, j, n3 = 3 * P
+    cdef bint rows = G.strides[3] == sizeof(double) and G.strides[1] == 3 * sizeof(double)
+    cdef double qa
+    cdef rdouble g
+    cdef rdouble Fs = ws.Fs
+    cdef rdouble Gc = ws.Gc
+    for a in range(S):
+        g = ws.GT + a * n3
+        if rows:
+            memcpy(g, &G[e, 0, a, 0], n3 * sizeof(double))
+        else:
+            for p in range(P):
+                for j in range(3):
+                    g[3 * p + j] = G[e, p, a, j]
+        for i in range(3):
+            ws.q[i * S + a] = q[e, a, i]
+        for j in range(n3):
+            Gc[j * S + a] = g[j]
+    memset(Fs, 0, 9 * P * sizeof(double))
+    for a in range(S):
+        g = ws.GT + a * n3
+        for i in range(3):
+            qa = ws.q[i * S + a]
+            for j in range(n3):
+                Fs[i * n3 + j] += qa * g[j]
 
 
 cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double[:, :, :, :] G,
                    const double[:, :] w, const double[:, :, :, :] a0, int e, double* fe,
                    double* Jmin, double* Ke) nogil:
     """Force (and tangent if Ke) of element e; Jmin its smallest J."""
-    cdef int S = G.shape[2], P = G.shape[1], D = 3 * S, p, a, i, j, m
+    cdef int S = G.shape[2], P = G.shape[1], p, a, i, j, m, n3 = 3 * P, m6 = 6 * S
     cdef double F[9]
     cdef double H[9]
     cdef double Pk[9]
     cdef double co[5]
-    cdef double J, wp
+    cdef double J, wp, one = 1.0, zero = 0.0
     cdef double* Gp
     cdef double* fb
-    for a in range(S):
-        for i in range(3):
-            ws.q[3 * a + i] = q[e, a, i]
-            for p in range(P):
-                ws.G[(p * S + a) * 3 + i] = G[e, p, a, i]
-    memset(fe, 0, D * sizeof(double))
-    Jmin[0] = 0.0
+    cdef char N = b'N'
+    _load(ws, q, G, e)
+    memset(ws.fT, 0, 3 * S * sizeof(double))
     for p in range(P):
-        Gp = ws.G + p * S * 3
-        memset(F, 0, 9 * sizeof(double))
-        for a in range(S):
-            for i in range(3):
-                for j in range(3):
-                    F[3 * i + j] += ws.q[3 * a + i] * Gp[3 * a + j]
+        Gp = ws.Gc + p * 3 * S
+        for i in range(3):
+            for j in range(3):
+                F[3 * i + j] = ws.Fs[i * n3 + 3 * p + j]
         J = _matrix(L, F, H, Pk, co)
         Jmin[0] = J if p == 0 or J < Jmin[0] or J != J else Jmin[0]
         for m in range(L.nfam):
@@ -253,17 +258,19 @@ cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double
                 fb[i] = a0[m, e, p, i]
             _fibre(L, F, fb, co[4], Pk, fb + 3, fb + 6)
         wp = w[e, p]
-        for a in range(S):
-            for i in range(3):
-                fe[3 * a + i] += wp * (Pk[3 * i] * Gp[3 * a] + Pk[3 * i + 1] * Gp[3 * a + 1]
-                                       + Pk[3 * i + 2] * Gp[3 * a + 2])
+        for i in range(3):
+            for a in range(S):
+                ws.fT[i * S + a] += wp * (Pk[3 * i] * Gp[a] + Pk[3 * i + 1] * Gp[S + a]
+                                          + Pk[3 * i + 2] * Gp[2 * S + a])
         if Ke != NULL:
-            _tangent_rows(L, Gp, S, wp, F, H, co, ws.fib, &ws.rq, &ws.rz, &ws.rs, ws.h, ws.f)
+            _elasticity(L, F, H, co, ws.fib, wp, ws.A)
+            _y_rows(ws.A, Gp, S, ws.Y + 3 * p * m6)
+    for a in range(S):
+        for i in range(3):
+            fe[3 * a + i] = ws.fT[i * S + a]
     if Ke != NULL:
-        _syrk(&ws.rq, ws.Cq)
-        _syrk(&ws.rz, ws.Cz)
-        _syrk(&ws.rs, ws.Cs)
-        _write_tangent(ws.Cq, ws.Cz, ws.Cs, S, Ke)
+        dgemm(&N, &N, &m6, &S, &n3, &one, ws.Y, &m6, ws.GT, &n3, &zero, ws.C, &m6)
+        _write_tangent(ws.C, S, Ke)
 
 
 def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True):
@@ -278,6 +285,8 @@ def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True):
     L.mu, L.K, L.k1, L.k2, L.kappa, L.e_round = law[0], law[1], law[2], law[3], law[4], law[5]
     L.c = 1.0 - 3.0 * L.kappa
     L.nfam = a_v.shape[0]
+    if L.nfam > MAX_FAMILIES:
+        raise ValueError(f"element_kernels.evaluate: at most {MAX_FAMILIES} fibre families")
     if q_v.shape[0] != E or q_v.shape[1] != S or w_v.shape[0] != E or w_v.shape[1] != P \
             or (L.nfam and (a_v.shape[1] != E or a_v.shape[2] != P)):
         raise ValueError("element_kernels.evaluate: inconsistent shapes")
@@ -288,7 +297,7 @@ def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True):
     cdef double[::1] J_v = Jmin
     cdef double[:, :, ::1] K_v = K if tangent else np.empty((1, 1, 1))
     cdef Work ws
-    cdef double* mem = _work(&ws, S, P, L.nfam)
+    cdef double* mem = _work(&ws, S, P, L.nfam, tangent)
     try:
         with nogil:
             for e in range(E):

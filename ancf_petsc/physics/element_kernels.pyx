@@ -139,18 +139,22 @@ cdef void _elasticity(const Law* L, const double* F, const double* H, const doub
 
 
 cdef void _y_rows(const double* A, crdouble Gc, int S, rdouble Y) nogil:
-    """Y[(j), (pair, b)] = Σ_l A[pair, j, l] G_bl for one point: 3 rows of 6S; Gc is (3, S)."""
-    cdef int q, j, b
+    """Y[j, (pair, b)] = Σ_l A[pair, j, l] G_bl of one point: its 3 rows of 6S; Gc is (3, S)."""
+    cdef int q, j
+    cdef Py_ssize_t b
     cdef double a0, a1, a2
+    cdef crdouble g0 = Gc
+    cdef crdouble g1 = Gc + S
+    cdef crdouble g2 = Gc + 2 * S
     cdef rdouble y
     for j in range(3):
         for q in range(6):
             a0 = A[9 * q + 3 * j]
             a1 = A[9 * q + 3 * j + 1]
             a2 = A[9 * q + 3 * j + 2]
-            y = Y + j * 6 * S + q * S
+            y = Y + (6 * j + q) * S
             for b in range(S):
-                y[b] = a0 * Gc[b] + a1 * Gc[S + b] + a2 * Gc[2 * S + b]
+                y[b] = a0 * g0[b] + a1 * g1[b] + a2 * g2[b]
 
 
 cdef void _write_tangent(const double* C, int S, double* K) nogil:
@@ -163,28 +167,33 @@ cdef void _write_tangent(const double* C, int S, double* K) nogil:
             for k in range(3):
                 if i <= k:
                     for b in range(S):
-                        Kr[3 * b + k] = C[a * 6 * S + _pair(i, k) * S + b]
+                        Kr[3 * b + k] = C[(6 * a + _pair(i, k)) * S + b]
                 else:
                     for b in range(S):
-                        Kr[3 * b + k] = C[b * 6 * S + _pair(k, i) * S + a]
+                        Kr[3 * b + k] = C[(6 * b + _pair(k, i)) * S + a]
+
+
+#: Gauss points per DGEMM of the tangent: OpenBLAS multiplies without packing (its small-matrix
+#: kernels) while m n k <= 1e6; the rows Y of a chunk then also stay in the L2 cache
+DEF GEMM_MNK = 1000000
 
 
 cdef struct Work:
     double *q       # (3, S): the element's nodal vectors, component-major
-    double *GT      # (S, 3P): gradients, shape-function-major (the DGEMM's right factor)
-    double *Gc      # (P, 3, S): gradients per point, component-major (sums over a vectorise)
-    double *Fs      # (3, 3P): F of every point, F[i, (p, j)]
-    double *Y       # (3P, 6S)
+    double *GT      # (S, P, 3): gradients G[a, (p, j)] (the DGEMMs' shared factor)
+    double *Gc      # (P, 3, S): gradients per point, component-major (the loops over b vectorise)
+    double *Fs      # (3, P, 3): F of every point, F[i, (p, j)]
+    double *wP      # (3, P, 3): w P[i, (p, j)]
+    double *Y       # (3 chunk, 6S): the rows (p, j) of a chunk of points
     double *C       # (S, 6S)
-    double *fT      # (3, S): the force, component-major
     double *fib     # per family: a0, Fa, ψ', ψ''
-    double *A       # 54
+    double *Ap      # 54: w 𝔸 of one point, pairs i ≤ k
 
 
-cdef double* _work(Work* ws, int S, int P, int nfam, bint tangent) except NULL:
+cdef double* _work(Work* ws, int S, int P, int chunk, int nfam, bint tangent) except NULL:
     """Per-call scratch for one element (in cache)."""
-    cdef size_t y = 18 * S * P if tangent else 0
-    cdef size_t n = 3 * S + 6 * S * P + 9 * P + y + 6 * S * S + 3 * S + 8 * nfam + 54
+    cdef size_t t = (18 * S * chunk + 6 * S * S) if tangent else 0
+    cdef size_t n = 3 * S + 6 * S * P + 18 * P + t + 8 * nfam + 54
     cdef double* mem = <double*> malloc(n * sizeof(double))
     if mem == NULL:
         raise MemoryError()
@@ -192,23 +201,24 @@ cdef double* _work(Work* ws, int S, int P, int nfam, bint tangent) except NULL:
     ws.GT = ws.q + 3 * S
     ws.Gc = ws.GT + 3 * S * P
     ws.Fs = ws.Gc + 3 * S * P
-    ws.Y = ws.Fs + 9 * P
-    ws.C = ws.Y + y
-    ws.fT = ws.C + 6 * S * S
-    ws.fib = ws.fT + 3 * S
-    ws.A = ws.fib + 8 * nfam
+    ws.wP = ws.Fs + 9 * P
+    ws.Y = ws.wP + 9 * P
+    ws.C = ws.Y + (18 * S * chunk if tangent else 0)
+    ws.fib = ws.C + (6 * S * S if tangent else 0)
+    ws.Ap = ws.fib + 8 * nfam
     return mem
 
 
 cdef void _load(Work* ws, const double[:, :, :] q, const double[:, :, :, :] G, int e) nogil:
-    """The element's q and G into the scratch layouts, and F of every point (Fs).  G as stored
-    by ``Model.element_data`` ((E, S, P, 3) in memory) is one copy per shape function."""
-    cdef int S = G.shape[2], P = G.shape[1], a, i, p, j, n3 = 3 * P
+    """The element's q and G into the scratch layouts, and F of every point, Fs[i, (p, j)]
+    (eq. 7).  G as stored by ``Model.element_data`` ((E, S, P, 3) in memory) is one copy per a."""
+    cdef int S = G.shape[2], P = G.shape[1], a, i, j
+    cdef Py_ssize_t p, n3 = 3 * P
     cdef bint rows = G.strides[3] == sizeof(double) and G.strides[1] == 3 * sizeof(double)
     cdef double qa
     cdef rdouble g
-    cdef rdouble Fs = ws.Fs
-    cdef rdouble Gc = ws.Gc
+    cdef rdouble Fr
+    cdef crdouble gc
     for a in range(S):
         g = ws.GT + a * n3
         if rows:
@@ -219,37 +229,34 @@ cdef void _load(Work* ws, const double[:, :, :] q, const double[:, :, :, :] G, i
                     g[3 * p + j] = G[e, p, a, j]
         for i in range(3):
             ws.q[i * S + a] = q[e, a, i]
-        for j in range(n3):
-            Gc[j * S + a] = g[j]
-    memset(Fs, 0, 9 * P * sizeof(double))
+        for p in range(n3):
+            ws.Gc[(p // 3 * 3 + p % 3) * S + a] = g[p]
+    memset(ws.Fs, 0, 9 * P * sizeof(double))
     for a in range(S):
-        g = ws.GT + a * n3
+        gc = ws.GT + a * n3
         for i in range(3):
             qa = ws.q[i * S + a]
-            for j in range(n3):
-                Fs[i * n3 + j] += qa * g[j]
+            Fr = ws.Fs + i * n3
+            for p in range(n3):
+                Fr[p] += qa * gc[p]
 
 
 cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double[:, :, :, :] G,
-                   const double[:, :] w, const double[:, :, :, :] a0, int e, double* fe,
-                   double* Jmin, double* Ke) nogil:
+                   const double[:, :] w, const double[:, :, :, :] a0, int e, int chunk,
+                   double* fe, double* Jmin, double* Ke) nogil:
     """Force (and tangent if Ke) of element e; Jmin its smallest J."""
-    cdef int S = G.shape[2], P = G.shape[1], p, a, i, j, m, n3 = 3 * P, m6 = 6 * S
+    cdef int S = G.shape[2], P = G.shape[1], p, i, m, n3 = 3 * P, m6 = 6 * S, three = 3, k, p0 = 0
     cdef double F[9]
     cdef double H[9]
     cdef double Pk[9]
     cdef double co[5]
-    cdef double J, wp, one = 1.0, zero = 0.0
-    cdef double* Gp
+    cdef double J, wp, one = 1.0, zero = 0.0, beta = 0.0
     cdef double* fb
-    cdef char N = b'N'
+    cdef char N = b'N', T = b'T'
     _load(ws, q, G, e)
-    memset(ws.fT, 0, 3 * S * sizeof(double))
     for p in range(P):
-        Gp = ws.Gc + p * 3 * S
-        for i in range(3):
-            for j in range(3):
-                F[3 * i + j] = ws.Fs[i * n3 + 3 * p + j]
+        for i in range(9):
+            F[i] = ws.Fs[(i // 3) * n3 + 3 * p + i % 3]
         J = _matrix(L, F, H, Pk, co)
         Jmin[0] = J if p == 0 or J < Jmin[0] or J != J else Jmin[0]
         for m in range(L.nfam):
@@ -258,18 +265,20 @@ cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double
                 fb[i] = a0[m, e, p, i]
             _fibre(L, F, fb, co[4], Pk, fb + 3, fb + 6)
         wp = w[e, p]
-        for i in range(3):
-            for a in range(S):
-                ws.fT[i * S + a] += wp * (Pk[3 * i] * Gp[a] + Pk[3 * i + 1] * Gp[S + a]
-                                          + Pk[3 * i + 2] * Gp[2 * S + a])
+        for i in range(9):
+            ws.wP[(i // 3) * n3 + 3 * p + i % 3] = wp * Pk[i]
         if Ke != NULL:
-            _elasticity(L, F, H, co, ws.fib, wp, ws.A)
-            _y_rows(ws.A, Gp, S, ws.Y + 3 * p * m6)
-    for a in range(S):
-        for i in range(3):
-            fe[3 * a + i] = ws.fT[i * S + a]
+            _elasticity(L, F, H, co, ws.fib, wp, ws.Ap)
+            _y_rows(ws.Ap, ws.Gc + 3 * S * p, S, ws.Y + 18 * S * (p - p0))
+            if p + 1 - p0 == chunk or p + 1 == P:
+                # C[a, (pair, b)] += Σ_(p,j) G[a, (p, j)] Y[(p, j), (pair, b)]  (column-major 6S × S)
+                k = 3 * (p + 1 - p0)
+                dgemm(&N, &N, &m6, &S, &k, &one, ws.Y, &m6, ws.GT + 3 * p0, &n3, &beta, ws.C, &m6)
+                beta = 1.0
+                p0 = p + 1
+    # f[a, i] = Σ_(p,j) G[a, (p, j)] wP[i, (p, j)]: f (3 × S, column-major) = wPᵀ G
+    dgemm(&T, &N, &three, &S, &n3, &one, ws.wP, &n3, ws.GT, &n3, &zero, fe, &three)
     if Ke != NULL:
-        dgemm(&N, &N, &m6, &S, &n3, &one, ws.Y, &m6, ws.GT, &n3, &zero, ws.C, &m6)
         _write_tangent(ws.C, S, Ke)
 
 
@@ -297,11 +306,12 @@ def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True):
     cdef double[::1] J_v = Jmin
     cdef double[:, :, ::1] K_v = K if tangent else np.empty((1, 1, 1))
     cdef Work ws
-    cdef double* mem = _work(&ws, S, P, L.nfam, tangent)
+    cdef int chunk = max(1, min(P, GEMM_MNK // (54 * S * S)))
+    cdef double* mem = _work(&ws, S, P, chunk, L.nfam, tangent)
     try:
         with nogil:
             for e in range(E):
-                _element(&L, &ws, q_v, G_v, w_v, a_v, e, &f_v[e, 0], &J_v[e],
+                _element(&L, &ws, q_v, G_v, w_v, a_v, e, chunk, &f_v[e, 0], &J_v[e],
                          &K_v[e, 0, 0] if tangent else NULL)
     finally:
         free(mem)

@@ -282,9 +282,10 @@ cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double
         _write_tangent(ws.C, S, Ke)
 
 
-def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True):
+def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True, int chunk=0):
     """(f (E, 3S), K (E, 3S, 3S) or None, min J (E,)) of qe (E, S, 3), G (E, P, S, 3), w (E, P)
-    for law = (μ, K, k1, k2, κ, e_rounding) and a0 (families, E, P, 3) or None (neo-Hookean)."""
+    for law = (μ, K, k1, k2, κ, e_rounding) and a0 (families, E, P, 3) or None (neo-Hookean);
+    ``chunk``: Gauss points per DGEMM of the tangent (0: as many as ``GEMM_MNK`` allows)."""
     cdef const double[:, :, :] q_v = qe
     cdef const double[:, :, :, :] G_v = G
     cdef const double[:, :] w_v = w
@@ -306,7 +307,7 @@ def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True):
     cdef double[::1] J_v = Jmin
     cdef double[:, :, ::1] K_v = K if tangent else np.empty((1, 1, 1))
     cdef Work ws
-    cdef int chunk = max(1, min(P, GEMM_MNK // (54 * S * S)))
+    chunk = max(1, min(P, chunk if chunk > 0 else GEMM_MNK // (54 * S * S)))
     cdef double* mem = _work(&ws, S, P, chunk, L.nfam, tangent)
     try:
         with nogil:

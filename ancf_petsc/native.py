@@ -7,8 +7,11 @@ the numpy code, which stays the reference that the compiled code is tested again
 """
 from __future__ import annotations
 
+import glob
 import importlib
 import os
+import sys
+import sysconfig
 from types import ModuleType
 
 _loaded: dict[str, ModuleType | None] = {}
@@ -47,3 +50,48 @@ def status(name: str) -> str:
     if not enabled():
         return "numpy (ANCF_NATIVE=0)"
     return "compiled" if load(name) is not None else f"numpy: {_why.get(name, 'unknown')}"
+
+
+# ------------------------------------------------------------------ building (scripts/build_native.py)
+def extension_path(pyx: str) -> str:
+    """The compiled extension built beside ``pyx``."""
+    return pyx[:-4] + sysconfig.get_config_var("EXT_SUFFIX")
+
+
+def stale(pyx: str) -> bool:
+    """True if ``pyx`` (or a .pxd beside it) is newer than its extension, or there is none."""
+    so = extension_path(pyx)
+    if not os.path.exists(so):
+        return True
+    sources = [pyx] + glob.glob(os.path.join(os.path.dirname(pyx), "*.pxd"))
+    return max(os.path.getmtime(s) for s in sources) > os.path.getmtime(so)
+
+
+def build() -> int:
+    """Build every stale ``ancf_petsc/**/*.pyx`` in place (``-O3 -march=native``: the extension
+    is built on the machine that runs it) with Cython; 1 (and why, on stderr) if it cannot, the
+    numpy kernels then run.  A second run does nothing."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    os.chdir(root)
+    todo = [p for p in sorted(glob.glob("ancf_petsc/**/*.pyx", recursive=True)) if stale(p)]
+    if not todo:
+        return 0
+    try:
+        from Cython.Build import cythonize
+        from setuptools import Extension, setup
+    except ImportError as exc:
+        print(f"[setup] cannot build the compiled kernels: {exc} (apt-get install cython3)",
+              file=sys.stderr)
+        return 1
+    exts = [Extension(p[:-4].replace(os.sep, "."), [p],
+                      extra_compile_args=["-O3", "-march=native", "-Wno-unused-function"])
+            for p in todo]
+    print(f"[setup] building {len(todo)} compiled kernel module(s): {', '.join(todo)}")
+    try:
+        setup(name="ancf-petsc-native", script_args=["-q", "build_ext", "--inplace"],
+              ext_modules=cythonize(exts, language_level=3, quiet=True))
+    except (SystemExit, Exception) as exc:   # setuptools reports a compiler failure by SystemExit
+        print(f"[setup] the compiled kernels did not build ({exc}): the numpy kernels run instead",
+              file=sys.stderr)
+        return 1
+    return 0

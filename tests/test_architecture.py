@@ -567,7 +567,7 @@ THIN_LINES = 20
 #: benchmarks and the beam studies; issue 41 moved the 3D solids into ancf_verify.
 NOT_YET_THIN = {
     "accuracy_demo": 97, "bench_calibration": 366, "bench_contact": 107, "bench_contact_grid": 158,
-    "bench_goh_achilles": 77, "bench_growth": 192, "bench_kernel": 164, "bench_memory": 93,
+    "bench_goh_achilles": 77, "bench_growth": 192, "bench_memory": 93,
     "bench_scaling": 257, "bench_support_check": 73, "friction_stick_rank": 96,
     "goh_published_sets": 403, "interface_study": 157, "locking_study": 250, "make_geometry_demo": 140,
     "project_scaling": 184, "snapshot_results": 148, "table1_goh": 324, "verification_report": 156,

@@ -104,35 +104,44 @@ cdef void _elasticity(const Law* L, const double* F, const double* H, const doub
     cdef int i, k, j, l, m, n
     cdef double V[9]
     cdef double T[9]
-    cdef double iso = co[0], r, d2
+    cdef double wH[9]
+    cdef double c2 = w * co[2], g = w * co[3], iso = co[0], r, d2
     cdef const double* fb
+    cdef rdouble Aq
     for j in range(9):
-        V[j] = co[1] * H[j] + co[2] * F[j]
+        V[j] = w * (co[1] * H[j] + co[2] * F[j])
+        wH[j] = c2 * H[j]
     n = 0
     for i in range(3):
         for k in range(i, 3):
+            Aq = A + 9 * n
             for j in range(3):
                 for l in range(3):
-                    A[n] = V[3 * i + j] * H[3 * k + l] + co[2] * H[3 * i + j] * F[3 * k + l] \
-                        + co[3] * H[3 * i + l] * H[3 * k + j]
-                    n += 1
+                    Aq[3 * j + l] = (V[3 * i + j] * H[3 * k + l] + wH[3 * i + j] * F[3 * k + l]
+                                     + g * H[3 * k + j] * H[3 * i + l])
+            n += 1
     for m in range(L.nfam):
         fb = fib + 8 * m
         iso += 2.0 * L.kappa * fb[6]
-        r = 2.0 * L.c * fb[6]
-        d2 = 4.0 * fb[7]
-        for i in range(3):
-            for j in range(3):
-                T[3 * i + j] = L.kappa * F[3 * i + j] + L.c * fb[3 + i] * fb[j]
-        n = 0
-        for i in range(3):
-            for k in range(i, 3):
+        r = w * 2.0 * L.c * fb[6]
+        d2 = w * 4.0 * fb[7]
+        if d2 != 0.0:
+            for i in range(3):
                 for j in range(3):
-                    for l in range(3):
-                        A[n] += d2 * T[3 * i + j] * T[3 * k + l] + (r * fb[j] * fb[l] if i == k else 0.0)
-                        n += 1
-    for n in range(54):
-        A[n] *= w
+                    T[3 * i + j] = L.kappa * F[3 * i + j] + L.c * fb[3 + i] * fb[j]
+            n = 0
+            for i in range(3):
+                for k in range(i, 3):
+                    Aq = A + 9 * n
+                    for j in range(3):
+                        for l in range(3):
+                            Aq[3 * j + l] += d2 * T[3 * i + j] * T[3 * k + l]
+                    n += 1
+        for i in range(3):
+            Aq = A + 9 * _pair(i, i)
+            for j in range(3):
+                for l in range(3):
+                    Aq[3 * j + l] += r * fb[j] * fb[l]
     for i in range(3):          # δ_ik δ_jl: the diagonal of the blocks (0,0), (1,1), (2,2)
         for j in range(3):
             A[9 * _pair(i, i) + 4 * j] += w * iso
@@ -307,7 +316,7 @@ def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True, int chunk=0):
     cdef double[::1] J_v = Jmin
     cdef double[:, :, ::1] K_v = K if tangent else np.empty((1, 1, 1))
     cdef Work ws
-    chunk = max(1, min(P, chunk if chunk > 0 else GEMM_MNK // (54 * S * S)))
+    chunk = max(1, min(P, chunk if chunk > 0 else GEMM_MNK // (18 * S * S)))
     cdef double* mem = _work(&ws, S, P, chunk, L.nfam, tangent)
     try:
         with nogil:

@@ -100,10 +100,10 @@ def compiled_vs_numpy(elements: int, repeat: int) -> None:
           f"{repeat} interleaved calls each [M GP/s]")
     print(f"{'law':12s} {'GP/elem':>8s} {'residual':>27s} {'residual+tangent':>27s}")
     law = GOH(1e6, 5e7, 2e6, 5.0, 0.1)
-    for name in ("neo-hookean", "goh"):
+    for mat in (NeoHookean(1e6, 5e7), law):
         for degree in (4, 6, 8):
-            qe, G, w, *bound = block(elements, degree, 3, law if name == "goh" else None)
-            m = bound[0] if bound else NeoHookean(1e6, 5e7)
+            qe, G, w, *bound = block(elements, degree, 3, law if mat is law else None)
+            m = bound[0] if bound else mat
             cells = []
             for fn in (kernels.internal_force, kernels.internal_force_and_tangent):
                 def slow(fn=fn):
@@ -111,7 +111,7 @@ def compiled_vs_numpy(elements: int, repeat: int) -> None:
                         fn(qe, G, w, m)
                 fast, ref = best_times([lambda fn=fn: fn(qe, G, w, m), slow], repeat)
                 cells.append(f"{w.size / fast / 1e6:6.2f} / {w.size / ref / 1e6:5.2f} = {ref / fast:5.1f}x")
-            print(f"{name:12s} {w.shape[1]:8d} {cells[0]:>27s} {cells[1]:>27s}")
+            print(f"{mat.name:12s} {w.shape[1]:8d} {cells[0]:>27s} {cells[1]:>27s}")
 
 
 def throughput(elements: int, repeat: int) -> None:

@@ -189,7 +189,8 @@ DEF GEMM_MNK = 1000000
 
 cdef struct Work:
     double *q       # (3, S): the element's nodal vectors, component-major
-    double *GT      # (S, P, 3): gradients G[a, (p, j)] (the DGEMMs' shared factor)
+    double *GT      # (S, P, 3): gradients G[a, (p, j)], a copy when G is not stored so
+    const double *Gk    # G[a, (p, j)]: GT, or the element's G itself (the DGEMMs' shared factor)
     double *Gc      # (P, 3, S): gradients per point, component-major (the loops over b vectorise)
     double *Fs      # (3, P, 3): F of every point, F[i, (p, j)]
     double *wP      # (3, P, 3): w P[i, (p, j)]
@@ -218,31 +219,32 @@ cdef double* _work(Work* ws, int S, int P, int chunk, int nfam, bint tangent) ex
     return mem
 
 
-cdef void _load(Work* ws, const double[:, :, :] q, const double[:, :, :, :] G, int e) nogil:
+cdef void _load(Work* ws, const double[:, :, :] q, const double[:, :, :, :] G, int e, bint rows) nogil:
     """The element's q and G into the scratch layouts, and F of every point, Fs[i, (p, j)]
-    (eq. 7).  G as stored by ``Model.element_data`` ((E, S, P, 3) in memory) is one copy per a."""
+    (eq. 7).  G as stored by ``Model.element_data`` ((E, S, P, 3) in memory) is used in place."""
     cdef int S = G.shape[2], P = G.shape[1], a, i, j
     cdef Py_ssize_t p, n3 = 3 * P
-    cdef bint rows = G.strides[3] == sizeof(double) and G.strides[1] == 3 * sizeof(double)
+    cdef bint stored = (G.strides[3] == sizeof(double) and G.strides[1] == 3 * sizeof(double)
+                        and G.strides[2] == n3 * sizeof(double))
     cdef double qa
     cdef rdouble g
     cdef rdouble Fr
     cdef crdouble gc
+    ws.Gk = &G[e, 0, 0, 0] if stored else ws.GT
     for a in range(S):
-        g = ws.GT + a * n3
-        if rows:
-            memcpy(g, &G[e, 0, a, 0], n3 * sizeof(double))
-        else:
+        if not stored:
+            g = ws.GT + a * n3
             for p in range(P):
                 for j in range(3):
                     g[3 * p + j] = G[e, p, a, j]
         for i in range(3):
             ws.q[i * S + a] = q[e, a, i]
-        for p in range(n3):
-            ws.Gc[(p // 3 * 3 + p % 3) * S + a] = g[p]
+    for p in range(n3 if rows else 0):  # Gc (P, 3, S) for the tangent's rows: strided reads
+        for a in range(S):
+            ws.Gc[p * S + a] = ws.Gk[a * n3 + p]
     memset(ws.Fs, 0, 9 * P * sizeof(double))
     for a in range(S):
-        gc = ws.GT + a * n3
+        gc = ws.Gk + a * n3
         for i in range(3):
             qa = ws.q[i * S + a]
             Fr = ws.Fs + i * n3
@@ -262,7 +264,7 @@ cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double
     cdef double J, wp, one = 1.0, zero = 0.0, beta = 0.0
     cdef double* fb
     cdef char N = b'N', T = b'T'
-    _load(ws, q, G, e)
+    _load(ws, q, G, e, Ke != NULL)
     for p in range(P):
         for i in range(9):
             F[i] = ws.Fs[(i // 3) * n3 + 3 * p + i % 3]
@@ -282,11 +284,11 @@ cdef void _element(const Law* L, Work* ws, const double[:, :, :] q, const double
             if p + 1 - p0 == chunk or p + 1 == P:
                 # C[a, (pair, b)] += Σ_(p,j) G[a, (p, j)] Y[(p, j), (pair, b)]  (column-major 6S × S)
                 k = 3 * (p + 1 - p0)
-                dgemm(&N, &N, &m6, &S, &k, &one, ws.Y, &m6, ws.GT + 3 * p0, &n3, &beta, ws.C, &m6)
+                dgemm(&N, &N, &m6, &S, &k, &one, ws.Y, &m6, <double*> ws.Gk + 3 * p0, &n3, &beta, ws.C, &m6)
                 beta = 1.0
                 p0 = p + 1
     # f[a, i] = Σ_(p,j) G[a, (p, j)] wP[i, (p, j)]: f (3 × S, column-major) = wPᵀ G
-    dgemm(&T, &N, &three, &S, &n3, &one, ws.wP, &n3, ws.GT, &n3, &zero, fe, &three)
+    dgemm(&T, &N, &three, &S, &n3, &one, ws.wP, &n3, <double*> ws.Gk, &n3, &zero, fe, &three)
     if Ke != NULL:
         _write_tangent(ws.C, S, Ke)
 

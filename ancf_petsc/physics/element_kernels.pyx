@@ -16,14 +16,10 @@ Each point's 𝔸 is formed in C from the same dyadic terms as materials.Tangent
 """
 import numpy as np
 
-from libc.math cimport sqrt, exp, fabs, pow, NAN
+from libc.math cimport exp, pow, NAN
 from libc.stdlib cimport malloc, free
-from libc.string cimport memset, memcpy
+from libc.string cimport memset
 from scipy.linalg.cython_blas cimport dgemm
-
-
-#: fibre families a GOH law may have here (goh.py's recipes use 1 or 2)
-DEF MAX_FAMILIES = 8
 
 
 cdef extern from *:
@@ -306,9 +302,8 @@ def evaluate(qe, G, w, tuple law, a0=None, bint tangent=True, int chunk=0):
     L.mu, L.K, L.k1, L.k2, L.kappa, L.e_round = law[0], law[1], law[2], law[3], law[4], law[5]
     L.c = 1.0 - 3.0 * L.kappa
     L.nfam = a_v.shape[0]
-    if L.nfam > MAX_FAMILIES:
-        raise ValueError(f"element_kernels.evaluate: at most {MAX_FAMILIES} fibre families")
-    if q_v.shape[0] != E or q_v.shape[1] != S or w_v.shape[0] != E or w_v.shape[1] != P \
+    if q_v.shape[0] != E or q_v.shape[1] != S or q_v.shape[2] != 3 or G_v.shape[3] != 3 \
+            or w_v.shape[0] != E or w_v.shape[1] != P or a_v.shape[3] != 3 \
             or (L.nfam and (a_v.shape[1] != E or a_v.shape[2] != P)):
         raise ValueError("element_kernels.evaluate: inconsistent shapes")
     f = np.empty((E, D))

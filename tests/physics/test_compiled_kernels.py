@@ -81,6 +81,7 @@ def laws(shape):
     return {"nh": NeoHookean(1e6, 5e7), "nh-no-mu": NeoHookean(0.0, 5e7), "nh-no-K": NeoHookean(1e6, 0.0),
             "goh-aligned": goh(0.0, shape=shape), "goh-dispersed": goh(0.1, shape=shape),
             "goh-two-families": goh(0.05, (30.0, -30.0), shape=shape),
+            "goh-nine-families": goh(0.02, tuple(range(-40, 50, 10)), shape=shape),
             "goh-exact-switch": goh(0.1, e_rounding=0.0, shape=shape),
             "goh-isotropic-fibres": goh(1.0 / 3.0, shape=shape)}
 

@@ -25,7 +25,7 @@ from .materials import NeoHookean, TangentTerms
 COMPILED = "physics.element_kernels"
 
 
-def compiled_law(material, shape: tuple[int, int]):
+def compiled_law(material, shape: tuple[int, int]) -> tuple | None:
     """(module, law parameters, fibre directions (families, E, P, 3) or None) when the compiled
     kernels compute ``material`` on points of ``shape`` (E, P); None for the numpy path."""
     module = native.load(COMPILED)

@@ -197,9 +197,10 @@ def _column(raw: dict, out) -> tuple[dict, np.ndarray]:
 @pytest.mark.parametrize("config", ["achilles_type3_psi45.yaml", "achilles_type3_psi45_goh_amir.yaml"])
 def test_the_columns_are_the_numpy_columns(compiled, monkeypatch, tmp_path, config):
     """The ψ = 45° Table 1 column (neo-Hookean) and a GOH column, compiled and ANCF_NATIVE=0:
-    the same Newton iterations, the Table 1 values (probes) equal to 1e-12 (measured max
-    1.8e-14) and the nodal vectors of every step to 1e-10 of their largest (measured max 3.4e-12:
-    rounding moves the last Newton iterate within the solver's tolerance)."""
+    the same Newton iterations, the probes (the Table 1 values) of every step equal to 5e-12 of
+    their largest (measured max 9.5e-14 and 4.3e-13) and the nodal vectors of every step to 1e-10
+    (measured max 1.6e-12 and 3.8e-12: rounding moves the last Newton iterate within the solver's
+    tolerance)."""
     from helpers import load_raw
     raw = load_raw(config)
     fast, q = _column(raw, tmp_path / "compiled")
@@ -211,4 +212,5 @@ def test_the_columns_are_the_numpy_columns(compiled, monkeypatch, tmp_path, conf
         for name, p in s0["probes"].items():
             for key, v in p.items():
                 if isinstance(v, list):
-                    assert_close(np.array(s["probes"][name][key], float), np.array(v, float), (name, key))
+                    x, x0 = np.array(s["probes"][name][key], float), np.array(v, float)
+                    assert np.max(np.abs(x - x0)) <= 5e-12 * np.max(np.abs(x0)), (name, key)

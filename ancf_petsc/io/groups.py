@@ -9,6 +9,7 @@ import yaml
 
 from ..model.section_forces import element_means
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
+from . import h5fast as fast
 from .files import OutputError, os_reason, plain
 from .restart import fingerprint
 from .surface_fields import SURFACE_FIELDS
@@ -30,6 +31,11 @@ PROBE_UNITS = probe_units(ELEMENTS[DEFAULT_ELEMENT].block)
 SURFACE_UNITS = {"points": "m (deformed positions)", **{f.name: f.si_unit for f in SURFACE_FIELDS.values()}}
 #: the "frame" attribute of /model/beams/<name>/section_points and section_outline
 CENTROID_FRAME = "section centroid, m (add the beam group's centroid attribute for the tendon frame)"
+#: the "units" attribute of steps/…/contact
+CONTACT_UNITS = ("SI: m, Pa, N; interfaces 'curve (first|second)' in config order (summary.json "
+                 "contact_interfaces); x, x0 on the beam carrying the points; slip, tangential_slip "
+                 "= u_first - u_second [m]; shear_stress, multiplier_shear = the first beam's "
+                 "traction on the second [Pa]; pressure > 0 presses [Pa] (docs/running.md)")
 
 
 def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
@@ -73,91 +79,84 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
                       path: dict | None, model) -> None:
     """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the probes,
     the section forces, the contact fields, the supports' reactions, the subtendons'
-    displacement differences and what a restart needs."""
-    g.create_dataset("nodal_vectors", data=q).attrs["units"] = nodal_units(model.block)
-    g.attrs["load_factor"] = record.load_factor
-    g.attrs["load_factor_units"] = "1 (the multiple of the config's loads and displacements)"
-    g.attrs["snes_iterations"] = record.iterations
-    g.attrs["snes_reason"] = record.reason
-    g.attrs["substeps"] = record.substeps
-    g.attrs["wall_time"] = record.wall_time
-    g.attrs["negative_eigenvalues"] = -1 if record.negative_eigenvalues is None \
-        else record.negative_eigenvalues
+    displacement differences and what a restart needs (``h5fast``: h5py's low-level calls)."""
+    gid, extra = g.id, extra or {}
+    fast.attribute(fast.dataset(gid, "nodal_vectors", q), "units", nodal_units(model.block))
+    fast.attributes(gid, {
+        "load_factor": record.load_factor,
+        "load_factor_units": "1 (the multiple of the config's loads and displacements)",
+        "snes_iterations": record.iterations, "snes_reason": record.reason,
+        "substeps": record.substeps, "wall_time": record.wall_time,
+        "negative_eigenvalues": -1 if record.negative_eigenvalues is None else record.negative_eigenvalues})
     if contact is not None:
-        write_contact_group(g, contact, path["blocks"][model.n_nodes:])
-    write_probes(g, (extra or {}).get("probes", {}), model)
-    for name, value in (extra or {}).get("surface", {}).items():     # surface_NNNN.vtu's, in double
-        d = g.create_dataset(f"surface/{name}", data=np.asarray(value, dtype=float))
-        d.attrs["units"] = SURFACE_UNITS.get(name, "")
-    write_section_forces(g, (extra or {}).get("section_forces"), model)
-    if extra and "reactions" in extra:       # force of each support on r [N]
-        r = g.create_dataset("reactions", data=np.array(list(extra["reactions"].values())))
-        r.attrs["supports"] = list(extra["reactions"])
-        r.attrs["units"] = "N: the force (x, y, z) the support exerts on the beam at its node's r"
-    for pair, d in (extra or {}).get("displacement_differences", {}).items():   # io/derived.py
-        dd = g.create_dataset(f"displacement_differences/{pair}", data=np.asarray(d["profile"]))
-        dd.attrs["units"] = "m: u_x of the first beam's centroid line minus the second's, per node station"
-    for name, d in (extra or {}).get("subtendons", {}).items():       # io/subtendons.py
-        sg = g.create_group(f"subtendons/{name}")
-        sg.attrs["end_force_N"] = np.asarray(d["end_force"])
-        sg.attrs["elongation_m"] = d["elongation"]
-        sg.attrs["strain"] = d["strain"]
-    if extra and "frame" in extra:            # a load history's frame (config.history)
-        g.attrs["frame"] = extra["frame"]
-        g.attrs["time_s"] = extra["time"]
+        write_contact_group(gid, contact, path["blocks"][model.n_nodes:])
+    write_probes(gid, extra.get("probes", {}), model)
+    for name, value in extra.get("surface", {}).items():     # surface_NNNN.vtu's, in double
+        d = fast.dataset(gid, f"surface/{name}", np.asarray(value, dtype=float))
+        fast.attribute(d, "units", SURFACE_UNITS.get(name, ""))
+    write_section_forces(gid, extra.get("section_forces"), model)
+    if "reactions" in extra:       # force of each support on r [N]
+        r = fast.dataset(gid, "reactions", np.array(list(extra["reactions"].values())))
+        fast.attributes(r, {"supports": list(extra["reactions"]),
+                            "units": "N: the force (x, y, z) the support exerts on the beam at its node's r"})
+    for pair, d in extra.get("displacement_differences", {}).items():   # io/derived.py
+        dd = fast.dataset(gid, f"displacement_differences/{pair}", np.asarray(d["profile"]))
+        fast.attribute(dd, "units", "m: u_x of the first beam's centroid line minus the second's, per node station")
+    for name, d in extra.get("subtendons", {}).items():       # io/subtendons.py
+        fast.attributes(fast.group(gid, f"subtendons/{name}"), {
+            "end_force_N": np.asarray(d["end_force"]), "elongation_m": d["elongation"], "strain": d["strain"]})
+    if "frame" in extra:            # a load history's frame (config.history)
+        fast.attributes(gid, {"frame": extra["frame"], "time_s": extra["time"]})
     if path is not None:
-        write_restart_group(g, record, path)
+        write_restart_group(gid, record, path)
 
 
-def write_probes(g, probes: dict, model) -> None:
+def write_probes(gid, probes: dict, model) -> None:
     """``steps/…/probes/<name>``: the probe's change of its nodal vector (x, y, z) and its value
-    (summary.json's ``displacement`` and ``value``), with its vector and units."""
+    (summary.json's ``displacement`` and ``value``), with its vector and units (``gid``: the
+    level group's low-level id)."""
     vectors = {p.name: p.vector for p in model.spec.probes}
+    units = probe_units(model.block)
     for name, p in probes.items():
-        d = g.create_dataset(f"probes/{name}", data=np.array([p["displacement"], p["value"]]))
+        d = fast.dataset(gid, f"probes/{name}", np.array([p["displacement"], p["value"]]))
         vector = vectors.get(name, "r")
-        d.attrs["vector"] = vector
-        d.attrs["rows"] = "change since the reference state; value"
-        d.attrs["units"] = probe_units(model.block).get(vector, "m")
+        fast.attributes(d, {"vector": vector, "rows": "change since the reference state; value",
+                            "units": units.get(vector, "m")})
 
 
-def write_section_forces(g, forces: dict | None, model) -> None:
+def write_section_forces(gid, forces: dict | None, model) -> None:
     """``steps/…/section_forces/<beam>`` (model/section_forces.py): per axial Gauss point the
     reference x [m] and the force (x, y, z) [N] the cross-section carries; ``<beam>_mean`` the
     same per element (its mean over the element's length, at its mid x)."""
     if not forces:
         return
     for name, (x, f) in forces.items():
-        d = g.create_dataset(f"section_forces/{name}", data=np.column_stack([x, f]))
-        d.attrs["columns"] = "x [m], force x, y, z [N]: through the cross-section at x, at the axial Gauss points"
+        d = fast.dataset(gid, f"section_forces/{name}", np.column_stack([x, f]))
+        fast.attribute(d, "columns", "x [m], force x, y, z [N]: through the cross-section at x, at the axial Gauss points")
     for name, (x, f) in element_means(model, forces).items():
-        d = g.create_dataset(f"section_forces/{name}_mean", data=np.column_stack([x, f]))
-        d.attrs["columns"] = "element mid x [m], mean force x, y, z [N] over the element"
+        d = fast.dataset(gid, f"section_forces/{name}_mean", np.column_stack([x, f]))
+        fast.attribute(d, "columns", "element mid x [m], mean force x, y, z [N] over the element")
 
 
-def write_restart_group(g, record, path: dict) -> None:
+def write_restart_group(gid, record, path: dict) -> None:
     """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
-    r = g.create_group("restart")
-    r.create_dataset("blocks", data=path["blocks"])
-    r.create_dataset("increment_blocks", data=path["increment_blocks"])
-    r.attrs["increment"] = record.increment
-    r.attrs["last_increment"] = record.last_increment
-    r.attrs["accepted_negative"] = path["accepted_negative"]
+    r = fast.group(gid, "restart")
+    fast.dataset(r, "blocks", path["blocks"])
+    fast.dataset(r, "increment_blocks", path["increment_blocks"])
+    fast.attributes(r, {"increment": record.increment, "last_increment": record.last_increment,
+                        "accepted_negative": path["accepted_negative"]})
 
 
-def write_contact_group(g, contact: dict, multipliers: np.ndarray) -> None:
+def write_contact_group(gid, contact: dict, multipliers: np.ndarray) -> None:
     """The level's contact fields, multipliers and projection state (``steps/…/contact``)."""
-    c = g.create_group("contact")
-    c.attrs["units"] = ("SI: m, Pa, N; interfaces 'curve (first|second)' in config order (summary.json "
-                        "contact_interfaces); x, x0 on the beam carrying the points; slip, tangential_slip "
-                        "= u_first - u_second [m]; shear_stress, multiplier_shear = the first beam's "
-                        "traction on the second [Pa]; pressure > 0 presses [Pa] (docs/running.md)")
+    c = fast.group(gid, "contact")
+    fast.attribute(c, "units", CONTACT_UNITS)
     # every field the contact and its terms report (contact.reports.point_fields); the points
     # and multipliers are in id order, so the ids themselves are not stored
     for key, value in contact.items():
         if key not in ("id", "multiplier_id"):
-            c.create_dataset(key, data=value)
-    c.create_dataset("multiplier_blocks", data=multipliers)
+            fast.dataset(c, key, value)
+    fast.dataset(c, "multiplier_blocks", multipliers)
 
 
 def truncate_levels(h5_path: str, step: int, load_factor: float) -> None:

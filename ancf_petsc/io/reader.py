@@ -1,7 +1,10 @@
 """A finished (or interrupted) run read back from its directory: summary.json and results.h5.
 
 ``read_results(directory)`` is the public reader (``ancf_petsc.read_results``); it reads what
-``results.ResultsWriter`` wrote, level by level, without PETSc.
+``results.ResultsWriter`` wrote, level by level, without PETSc.  While a run goes on (or after
+it was killed) summary.json may not list its last few levels yet (it is rewritten at most every
+``results.SUMMARY_INTERVAL`` s); ``append_levels`` takes them from results.h5, where every level
+carries its summary entry.
 """
 from __future__ import annotations
 
@@ -54,8 +57,22 @@ class Results:
         return read_contact(self.h5_path, step)
 
 
+def append_levels(summary: dict, steps) -> None:
+    """Append to ``summary["steps"]`` the converged levels the h5py group ``steps`` (results.h5's
+    ``/steps``) holds beyond them, from each level's ``summary_entry`` (files written before it
+    existed have none: nothing is appended)."""
+    listed = summary.setdefault("steps", [])
+    for k in range(len(listed) + 1, int(steps.attrs.get("converged", 0)) + 1):
+        level = steps.get(f"step_{k:04d}")
+        if level is None or "summary_entry" not in level.attrs:
+            break
+        listed.append(json.loads(level.attrs["summary_entry"]))
+        summary["last_converged"] = {"step": k, "load_factor": listed[-1]["load_factor"]}
+
+
 def read_results(directory: str) -> Results:
-    """The run in ``directory`` (its summary.json must exist; results.h5 is read on demand)."""
+    """The run in ``directory`` (its summary.json must exist; results.h5 is read on demand, and
+    for a run that still says ``running`` to add the levels summary.json does not list yet)."""
     path = os.path.join(directory, "summary.json")
     try:
         with open(path) as fh:
@@ -64,6 +81,13 @@ def read_results(directory: str) -> Results:
         raise InputError("results", f"{directory}: no summary.json (not a run's output directory)") from None
     except (OSError, ValueError) as exc:
         raise InputError("results", f"{path}: cannot read: {exc}") from None
+    h5_path = os.path.join(directory, "results.h5")
+    if summary.get("status") == "running" and os.path.exists(h5_path):
+        try:
+            with h5py.File(h5_path, "r") as h5:
+                append_levels(summary, h5["steps"])
+        except (OSError, KeyError, ValueError):
+            pass                     # results.h5 being written or damaged: summary.json's levels
     return Results(os.path.abspath(directory), summary)
 
 

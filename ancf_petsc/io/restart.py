@@ -235,6 +235,8 @@ def read_restart(directory: str) -> RestartPoint:
     with the continuing run's model).  InputError with one line when the directory has no
     usable results."""
     import h5py
+
+    from .reader import append_levels
     path = os.path.join(directory, "results.h5")
     if not os.path.isfile(path):
         raise InputError("--restart", f"{path}: no such file (restart from a run's output directory)")
@@ -248,8 +250,10 @@ def read_restart(directory: str) -> RestartPoint:
         with h5py.File(path, "r") as h5:
             stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
             steps = h5["steps"]
-            # a run killed between writing a level to results.h5 and to summary.json: continue
-            # from the last level both hold (the other is solved again)
+            # summary.json is rewritten at most every SUMMARY_INTERVAL s: the levels after it
+            # come from results.h5 (their summary_entry); a level without one (an older file, a
+            # run killed between results.h5 and summary.json) is solved again
+            append_levels(summary, steps)
             k = min(int(steps.attrs.get("converged", 0)), len(summary.get("steps", [])))
             if k == 0:
                 raise InputError("--restart", f"{path}: no converged level to restart from; run it afresh")

@@ -3,17 +3,21 @@
 * ``results.h5``  — ``/model`` (reference nodal vectors, connectivity, sections, config text,
   partition) and ``/steps/step_NNNN`` (load factor, nodal vectors, SNES iterations/reason,
   wall time).  The file is opened and closed for every step.
-* ``summary.json`` — probes per step, iterations, timings; replaced atomically after each step.
+* ``summary.json`` — probes per step, iterations, timings; replaced atomically after the first
+  level, then at most every ``SUMMARY_INTERVAL`` s while the run goes on, and at its end (every
+  ending: completed, failed, interrupted).  Each level's entry is also in results.h5 (attribute
+  ``summary_entry`` of ``steps/step_NNNN``), so a run killed between two rewrites loses nothing:
+  ``reader.read_results`` and ``--restart`` append the levels summary.json does not list yet.
 * ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled
   along ξ), with displacement, axial Green–Lagrange strain E_xx and volume ratio J (io/vtu.py, meshio's layout).
 * ``contact_NNNN.vtu`` + ``contact.pvd`` — the contact points at their deformed positions with gap,
   pressure, slip (vector and its axial part) and interface; the same per step in results.h5
   (``steps/step_NNNN/contact``) with the multipliers and the projection state.
 
-results.h5 and summary.json agree on the converged levels, also when the disk fills: a level is
+Every converged level is in results.h5 when it converges, also when the disk fills: a level is
 written to results.h5 under a temporary name and renamed when complete (``/steps`` attributes
 ``converged`` and ``last_load_factor`` name the last one, for a restart); summary.json lists
-exactly the levels results.h5 holds.  Before each level the free space is checked against the
+the levels results.h5 holds (while running, possibly not yet the last few: see above).  Before each level the free space is checked against the
 size of the previous one, and a small reserve file (``RESERVE``) set aside at the start is
 released when writing fails, so that the final summary.json can still be written.  Every file
 problem becomes an ``OutputError`` naming the path, raised on every rank.
@@ -32,6 +36,7 @@ from ..model.plausibility import strain_warning
 from ..model.section_forces import axial_forces
 from ..status import OUTPUT_ERROR
 from ..version import version_info
+from . import h5fast
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
 from .groups import truncate_levels, write_level_group, write_model_group
 from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
@@ -39,6 +44,12 @@ from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 #: space set aside for the final summary.json (released on a write error and at the end)
 RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
+
+
+#: summary.json is rewritten after level 1, then at most this often [s] while running (a rewrite
+#: costs ~3 ms on ext4, which flushes a file renamed over another: as much as a stride's frame
+#: takes to solve), and at the end; each level's entry is in results.h5 meanwhile
+SUMMARY_INTERVAL = 0.5
 
 
 #: stands for the levels in the summary's text before they are put in (``compact_summary``)
@@ -77,6 +88,7 @@ class ResultsWriter:
         self.vtk = VtkSeries(self.dir, compress=spec.output.vtk_compress)
         self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
         self._step_texts: list = []            # each level's entry and its JSON (compact_summary)
+        self._summary_time = -np.inf           # when summary.json was last written (monotonic)
         self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
@@ -176,6 +188,7 @@ class ResultsWriter:
         self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
         text = json.dumps(self.summary, indent=1) if final else compact_summary(self.summary, self._step_texts)
         self._last_sizes["summary"] = len(text)
+        self._summary_time = time.monotonic()
         try:
             atomic_write(self.summary_path, text)
         except OSError as exc:
@@ -234,6 +247,7 @@ class ResultsWriter:
                  "newton_history": record.iteration_history}
         if extra:
             entry.update(extra)
+        text = json.dumps(entry, separators=(",", ":"))          # summary.json's, and results.h5's
         if k == 1:                          # a first level strained beyond belief: wrong units?
             note = strain_warning(self.model, q, record.load_factor)
             if note:
@@ -250,6 +264,7 @@ class ResultsWriter:
                 steps = h5["steps"]
                 g = steps.create_group(name + ".partial")      # renamed once complete
                 write_level_group(g, record, q, level, contact, path, self.model)
+                h5fast.attribute(g.id, "summary_entry", text)
                 steps.move(name + ".partial", name)
                 steps.attrs["converged"] = k
                 steps.attrs["last_load_factor"] = record.load_factor
@@ -259,15 +274,19 @@ class ResultsWriter:
                 self._append(entry)
             raise OutputError(self.h5_path, f"cannot write level {k}: {os_reason(exc)}") from None
         self._last_sizes["h5"] = max(os.path.getsize(self.h5_path) - size0, q.nbytes)
-        self._append(entry)
+        self._append(entry, text)
         if self.sampler is not None:
             self._last_sizes["vtu"] = 0                  # the level's VTUs together
             self._write_series("surface", k, record.load_factor, surface)
             if contact is not None:
                 self._write_series("contact", k, record.load_factor, contact_cells(contact))
-        self._write_summary()
+        if k == 1 or time.monotonic() - self._summary_time >= SUMMARY_INTERVAL:
+            self._write_summary()
 
-    def _append(self, entry: dict) -> None:
+    def _append(self, entry: dict, text: str | None = None) -> None:
+        """Add a level to the summary (``text``: its compact JSON, kept for ``compact_summary``)."""
+        if text is not None and len(self._step_texts) == len(self.summary["steps"]):
+            self._step_texts.append((entry, text))
         self.summary["steps"].append(entry)
         self.summary["last_converged"] = {"step": len(self.summary["steps"]),
                                           "load_factor": entry["load_factor"]}

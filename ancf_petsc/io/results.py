@@ -33,7 +33,7 @@ import numpy as np
 
 from ..model.beams import Model
 from ..model.plausibility import strain_warning
-from ..model.section_forces import axial_forces
+from ..model.section_forces import AxialForces
 from ..status import OUTPUT_ERROR
 from ..version import version_info
 from . import h5fast
@@ -85,6 +85,7 @@ class ResultsWriter:
         self.summary = {"name": spec.name, "status": "running", **run_info,
                         "warnings": list(model.warnings), "steps": []}   # + the first level's strain
         self.sampler = SurfaceSampler(model, spec.output.vtk_samples) if spec.output.vtk else None
+        self.axial_forces = AxialForces(model)   # the section forces of every level
         self.vtk = VtkSeries(self.dir, compress=spec.output.vtk_compress)
         self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
         self._step_texts: list = []            # each level's entry and its JSON (compact_summary)
@@ -255,7 +256,7 @@ class ResultsWriter:
         self._check_space(k, q)
         name = f"step_{k:04d}"
         size0 = os.path.getsize(self.h5_path)
-        level = dict(extra or {}, probes=entry["probes"], section_forces=axial_forces(self.model, q))
+        level = dict(extra or {}, probes=entry["probes"], section_forces=self.axial_forces(q))
         surface = surface_cells(self.sampler, q) if self.sampler is not None else None
         if surface is not None:
             level["surface"] = {"points": surface[0], **surface[2]}

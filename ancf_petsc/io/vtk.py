@@ -13,7 +13,7 @@ from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
 from .files import atomic_write, os_reason, remove_quietly
 from .surface_fields import SampledState, fields_for
-from .vtu import write_vtu
+from .vtu import cells_xml, write_vtu
 
 
 class SurfaceSampler:
@@ -23,6 +23,8 @@ class SurfaceSampler:
     def __init__(self, model: Model, samples: int):
         self.model = model
         self.parts = []
+        self._cells = None                  # (quads, caps): ``_topology``
+        self.cell_blocks = None             # the VTU cell blocks: ``surface_cells``
         block = model.block
         SLOTS, k = block.slots, block.axial_nodes - 1
         for beam in model.beams:
@@ -63,32 +65,45 @@ class SurfaceSampler:
 
     def mesh(self, q: np.ndarray):
         """points (n, 3), quads (k, 4), caps list, point data dict for nodal vectors q: the
-        fields of ``surface_fields.SURFACE_FIELDS`` that apply to these beams."""
-        quads, caps, states = [], [], []
-        offset = 0
+        fields of ``surface_fields.SURFACE_FIELDS`` that apply to these beams (the quads and
+        caps are the same arrays at every call)."""
+        states = []
         for beam, m, S, N, G, e_of, r0, law in self.parts:
             conn = beam.connectivity
             qe = q[conn].reshape(len(conn), self.model.block.slots, 3)[e_of]
             r = np.einsum("pa,pai->pi", N, qe)
             F = np.matmul(np.swapaxes(qe, 1, 2), G)
             states.append(SampledState(r, r0, F, beam.index, law))
-            n_st = beam.n_elements * S + 1
-            st = np.arange(n_st - 1)[:, None]
-            j = np.arange(m)[None, :]
-            a = st * m + j
-            b = st * m + (j + 1) % m
-            quads.append(offset + np.stack([a, b, b + m, a + m], axis=-1).reshape(-1, 4))
-            caps.append(offset + np.arange(m)[::-1])
-            caps.append(offset + (n_st - 1) * m + np.arange(m))
-            offset += len(r)
+        quads, caps = self._topology()
         data = {f.name: np.concatenate([f.values(s) for s in states]) for f in fields_for(states)}
-        return np.concatenate([s.r for s in states]), np.concatenate(quads), caps, data
+        return np.concatenate([s.r for s in states]), quads, caps, data
+
+    def _topology(self) -> tuple[np.ndarray, list]:
+        """The quads (k, 4) and end caps of every beam's sampled surface, made once."""
+        if self._cells is None:
+            quads, caps = [], []
+            offset = 0
+            for beam, m, S, N, *_ in self.parts:
+                n_st = beam.n_elements * S + 1
+                st = np.arange(n_st - 1)[:, None]
+                j = np.arange(m)[None, :]
+                a = st * m + j
+                b = st * m + (j + 1) % m
+                quads.append(offset + np.stack([a, b, b + m, a + m], axis=-1).reshape(-1, 4))
+                caps.append(offset + np.arange(m)[::-1])
+                caps.append(offset + (n_st - 1) * m + np.arange(m))
+                offset += len(N)
+            self._cells = (np.concatenate(quads), caps)
+        return self._cells
 
 
 def surface_cells(sampler: SurfaceSampler, q: np.ndarray) -> tuple:
-    """(points, cells, point data) of the deformed surfaces for nodal vectors q."""
+    """(points, cells, point data) of the deformed surfaces for nodal vectors q (the cells are
+    the same list at every call: ``VtkSeries`` then encodes them once)."""
     pts, quads, caps, data = sampler.mesh(q)
-    return pts, [("quad", quads)] + [("polygon", c[None, :]) for c in caps], data
+    if sampler.cell_blocks is None:
+        sampler.cell_blocks = [("quad", quads)] + [("polygon", c[None, :]) for c in caps]
+    return pts, sampler.cell_blocks, data
 
 
 #: point fields that are no data to look at (ids, positions, the projection; ``history_*`` and
@@ -127,6 +142,7 @@ class VtkSeries:
         self.compress = compress                 # None: by size (AUTO_COMPRESS_POINTS)
         self.entries: dict[str, list[tuple[float, str]]] = {"surface": [], "contact": []}
         self._indexed: dict[str, float] = {}     # when each .pvd was last rewritten (monotonic)
+        self._cells: dict[str, tuple] = {}       # per series: (cell blocks, compress, their XML)
 
     def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
         """One VTU of a time series and, when due (``INDEX_INTERVAL``), its .pvd collection
@@ -139,7 +155,8 @@ class VtkSeries:
             data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
         compress = self.compress if self.compress is not None else len(pts) >= AUTO_COMPRESS_POINTS
         try:
-            write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress))
+            write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress),
+                      cells_text=self._cells_text(series, cells, bool(compress)))
             size = os.path.getsize(path)
             now = time.monotonic()
             if now - self._indexed.get(series, -np.inf) >= INDEX_INTERVAL:
@@ -150,6 +167,14 @@ class VtkSeries:
             raise
         self.entries[series].append((lam, name))
         return size
+
+    def _cells_text(self, series: str, cells: list, compress: bool) -> str:
+        """The ``<Cells>`` XML of ``cells``, encoded again only when the series' cell blocks are
+        another list than last time (the surface's are one list for the whole run)."""
+        kept = self._cells.get(series)
+        if kept is None or kept[0] is not cells or kept[1] != compress:
+            kept = self._cells[series] = (cells, compress, cells_xml(cells, compress))
+        return kept[2]
 
     def write_indexes(self) -> str | None:
         """Every series' .pvd collection with all its files so far; None, or the one-line reason

@@ -37,25 +37,33 @@ def _array(name: str, data: np.ndarray, compress: bool) -> str:
             f"{_encoded(data, compress)}\n</DataArray>\n")
 
 
-def write_vtu(path: str, points: np.ndarray, cells: list[tuple[str, np.ndarray]],
-              point_data: dict[str, np.ndarray], compress: bool = False) -> None:
-    """Write ``points`` (n, 3), cell blocks [(type, (k, nodes))] and ``point_data`` to ``path``."""
-    points = np.asarray(points)
+def cells_xml(cells: list[tuple[str, np.ndarray]], compress: bool = False) -> str:
+    """The ``<Cells>`` element of cell blocks [(type, (k, nodes))]: connectivity, offsets, types."""
     conn = np.concatenate([np.asarray(c).reshape(-1) for _, c in cells])
     offsets = [c.shape[1] * np.arange(1, c.shape[0] + 1, dtype=conn.dtype) for _, c in cells]
     for k in range(1, len(offsets)):
         offsets[k] += offsets[k - 1][-1]
     types = np.concatenate([np.full(len(c), VTK_TYPES[t]) for t, c in cells])
+    return ("<Cells>\n" + _array("connectivity", conn, compress)
+            + _array("offsets", np.concatenate(offsets), compress) + _array("types", types, compress)
+            + "</Cells>\n")
+
+
+def write_vtu(path: str, points: np.ndarray, cells: list[tuple[str, np.ndarray]],
+              point_data: dict[str, np.ndarray], compress: bool = False,
+              cells_text: str | None = None) -> None:
+    """Write ``points`` (n, 3), cell blocks [(type, (k, nodes))] and ``point_data`` to ``path``
+    (``cells_text``: ``cells_xml(cells, compress)`` if the caller kept it from an earlier file)."""
+    points = np.asarray(points)
+    n_cells = sum(len(c) for _, c in cells)
     order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
     compressor = ' compressor="vtkZLibDataCompressor"' if compress else ""
     parts = ['<?xml version="1.0"?>\n',
              f'<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{order}"{compressor}>\n',
              "<!--This file was created by ancf-petsc-->\n<UnstructuredGrid>\n",
-             f'<Piece NumberOfPoints="{len(points)}" NumberOfCells="{len(types)}">\n',
+             f'<Piece NumberOfPoints="{len(points)}" NumberOfCells="{n_cells}">\n',
              "<Points>\n", _array("Points", points, compress), "</Points>\n",
-             "<Cells>\n", _array("connectivity", conn, compress),
-             _array("offsets", np.concatenate(offsets), compress), _array("types", types, compress),
-             "</Cells>\n"]
+             cells_text if cells_text is not None else cells_xml(cells, compress)]
     if point_data:
         parts += ["<PointData>\n"] + [_array(k, np.asarray(v), compress) for k, v in point_data.items()] \
             + ["</PointData>\n"]

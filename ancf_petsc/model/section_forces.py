@@ -20,7 +20,39 @@ import numpy as np
 
 from ..physics.cubature import gauss_legendre
 
-__all__ = ["axial_forces", "element_means"]
+__all__ = ["AxialForces", "axial_forces", "element_means"]
+
+
+class AxialForces:
+    """``axial_forces`` of one model, its reference-state data (gradients, weights, laws: half
+    the work of a call) computed once: ``AxialForces(model)(q)``, as the results writer does at
+    every level."""
+
+    def __init__(self, model):
+        self.beams = []
+        for beam in model.beams:
+            E = beam.n_elements
+            xa, wa = gauss_legendre(beam.axial_points)
+            k = beam.layout.block.axial_nodes - 1                                  # element ends k apart
+            dx_dxi = 0.5 * (beam.x_nodes[k::k] - beam.x_nodes[0:-1:k])             # (E,)
+            x = beam.x_nodes[0:-1:k, None] + dx_dxi[:, None] * (xa[None, :] + 1.0)
+            self.beams.append((beam, wa, dx_dxi, x.ravel(), model.element_data(beam, np.arange(E))))
+
+    def __call__(self, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """``axial_forces(model, q)``."""
+        out = {}
+        for beam, wa, dx_dxi, x, parts in self.beams:
+            E, na = beam.n_elements, len(wa)
+            qe = q[beam.connectivity][:, :, list(beam.vectors)].reshape(E, -1, 3)
+            force = np.zeros((E, na, 3))
+            for G, w, law in parts:
+                F = np.matmul(np.swapaxes(qe, 1, 2)[:, None], G)                  # (E, P, 3, 3)
+                P = law.stress(F)[0]
+                per = G.shape[1] // na                                            # points per station
+                f = (w[..., None] * P[..., :, 0]).reshape(E, na, per, 3).sum(axis=2)
+                force += f / (wa[None, :, None] * dx_dxi[:, None, None])
+            out[beam.name] = (x, force.reshape(-1, 3))
+        return out
 
 
 def axial_forces(model, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -28,27 +60,8 @@ def axial_forces(model, q: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray
     (E na, 3) [N] the section carries (module docstring), for nodal vectors q (n_nodes, V, 3).
     Within an element it oscillates where the element locks (the paper's 3 axial points: the
     Achilles soleus at 400 N carries 460 / 325 / 463 N at the first element's points, whose
-    mean is 400 N); ``element_means`` gives each element's mean."""
-    out = {}
-    for beam in model.beams:
-        E = beam.n_elements
-        local = np.arange(E)
-        _, wa = gauss_legendre(beam.axial_points)
-        na = len(wa)
-        qe = q[beam.connectivity][:, :, list(beam.vectors)].reshape(E, -1, 3)
-        k = beam.layout.block.axial_nodes - 1                                      # element ends k apart
-        dx_dxi = 0.5 * (beam.x_nodes[k::k] - beam.x_nodes[0:-1:k])                 # (E,)
-        force = np.zeros((E, na, 3))
-        for G, w, law in model.element_data(beam, local):
-            F = np.matmul(np.swapaxes(qe, 1, 2)[:, None], G)                      # (E, P, 3, 3)
-            P = law.stress(F)[0]
-            per = G.shape[1] // na                                                # points per station
-            f = (w[..., None] * P[..., :, 0]).reshape(E, na, per, 3).sum(axis=2)
-            force += f / (wa[None, :, None] * dx_dxi[:, None, None])
-        xa, _ = gauss_legendre(beam.axial_points)
-        x = beam.x_nodes[0:-1:k, None] + dx_dxi[:, None] * (xa[None, :] + 1.0)
-        out[beam.name] = (x.ravel(), force.reshape(-1, 3))
-    return out
+    mean is 400 N); ``element_means`` gives each element's mean.  (``AxialForces`` for many q.)"""
+    return AxialForces(model)(q)
 
 
 def element_means(model, forces: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, tuple[np.ndarray, np.ndarray]]:

@@ -159,6 +159,23 @@ def write_contact_group(gid, contact: dict, multipliers: np.ndarray) -> None:
     fast.dataset(c, "multiplier_blocks", multipliers)
 
 
+def recover_level(h5_path: str, name: str) -> bool:
+    """After a failed write of level ``name`` (``step_NNNN``): drop a partial level; True if
+    the level is complete in the file after all (``/steps`` attributes then name it)."""
+    try:
+        with h5py.File(h5_path, "a") as h5:
+            steps = h5["steps"]
+            if name + ".partial" in steps:
+                del steps[name + ".partial"]
+            if name in steps:
+                steps.attrs["converged"] = int(name.split("_")[1])
+                steps.attrs["last_load_factor"] = steps[name].attrs["load_factor"]
+                return True
+    except (OSError, RuntimeError, KeyError):
+        pass
+    return False
+
+
 def truncate_levels(h5_path: str, step: int, load_factor: float) -> None:
     """Continue results.h5 after level ``step`` (a restart): the later and partial levels go."""
     try:

@@ -38,7 +38,7 @@ from ..status import OUTPUT_ERROR
 from ..version import version_info
 from . import h5fast
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
-from .groups import truncate_levels, write_level_group, write_model_group
+from .groups import recover_level, truncate_levels, write_level_group, write_model_group
 from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 
 #: space set aside for the final summary.json (released on a write error and at the end)
@@ -271,7 +271,7 @@ class ResultsWriter:
                 steps.attrs["last_load_factor"] = record.load_factor
         except (OSError, RuntimeError) as exc:
             self._release_reserve()
-            if self._recover_h5(name):            # the level made it to disk after all
+            if recover_level(self.h5_path, name):            # the level made it to disk after all
                 self._append(entry)
             raise OutputError(self.h5_path, f"cannot write level {k}: {os_reason(exc)}") from None
         self._last_sizes["h5"] = max(os.path.getsize(self.h5_path) - size0, q.nbytes)
@@ -291,21 +291,6 @@ class ResultsWriter:
         self.summary["steps"].append(entry)
         self.summary["last_converged"] = {"step": len(self.summary["steps"]),
                                           "load_factor": entry["load_factor"]}
-
-    def _recover_h5(self, name: str) -> bool:
-        """After a failed write: drop a partial level; True if level ``name`` is complete."""
-        try:
-            with h5py.File(self.h5_path, "a") as h5:
-                steps = h5["steps"]
-                if name + ".partial" in steps:
-                    del steps[name + ".partial"]
-                if name in steps:
-                    steps.attrs["converged"] = int(name.split("_")[1])
-                    steps.attrs["last_load_factor"] = steps[name].attrs["load_factor"]
-                    return True
-        except (OSError, RuntimeError, KeyError):
-            pass
-        return False
 
     def finish(self, status: str, **info) -> str | None:
         """Write the final status and the .pvd collections (rank 0; not collective).  Returns

@@ -83,10 +83,10 @@ def read_results(directory: str) -> Results:
         raise InputError("results", f"{path}: cannot read: {exc}") from None
     h5_path = os.path.join(directory, "results.h5")
     if summary.get("status") == "running" and os.path.exists(h5_path):
-        try:
-            with h5py.File(h5_path, "r") as h5:
+        try:                         # no file lock: the run's next level must not find one
+            with h5py.File(h5_path, "r", locking=False) as h5:
                 append_levels(summary, h5["steps"])
-        except (OSError, KeyError, ValueError):
+        except (OSError, KeyError, ValueError, RuntimeError):
             pass                     # results.h5 being written or damaged: summary.json's levels
     return Results(os.path.abspath(directory), summary)
 

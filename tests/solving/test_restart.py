@@ -10,6 +10,8 @@ import time
 import numpy as np
 import pytest
 
+from ancf_petsc.errors import InputError
+
 from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, read_summary, solve_cli, write_config
 from helpers import probes_table
 
@@ -48,7 +50,9 @@ def _kill_writers(out, timeout=30.0):
 
 def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
     """Start ancf-solve, SIGKILL it (every process writing into ``out``, and its process group)
-    once ``after_levels`` levels are in summary.json."""
+    once ``after_levels`` levels are written (``read_results``: summary.json, rewritten at most
+    every 0.5 s, completed from results.h5)."""
+    from ancf_petsc.io.reader import read_results
     exe = os.path.join(VENV_BIN, "ancf-solve")
     cmd = [exe, cfg, "--output-dir", str(out), "--quiet"]
     if ranks > 1:
@@ -59,10 +63,9 @@ def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
     try:
         while time.time() - t0 < timeout:
             try:
-                with open(out / "summary.json") as fh:
-                    if len(json.load(fh)["steps"]) >= after_levels:
-                        break
-            except (OSError, ValueError, KeyError):
+                if len(read_results(str(out)).summary["steps"]) >= after_levels:
+                    break
+            except (OSError, ValueError, KeyError, InputError):
                 pass
             if p.poll() is not None:
                 break
@@ -75,7 +78,7 @@ def _killed_run(cfg, out, ranks, after_levels=4, timeout=120):
             pass
         p.wait()
         _kill_writers(out)
-    s = read_summary(out)
+    s = read_results(str(out)).summary
     assert s["status"] == "running" and after_levels <= len(s["steps"]) < 13, (s["status"], len(s["steps"]))
 
 

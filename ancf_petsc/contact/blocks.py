@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import native
+
 from .gap import gap_gradient, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
@@ -107,6 +109,25 @@ def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.n
             K[s, b:b + el, b:b + el] += v[:, el:, el:]
 
 
+def hessian_operands(sub, tau: np.ndarray, spread, s_loc: np.ndarray, p_loc: np.ndarray,
+                     col_b: np.ndarray, n_s: int, P_s: int, Dq: int) -> tuple[np.ndarray, np.ndarray]:
+    """L (n_s, Dq, 4 P_s) and R (n_s, 4 P_s, Dq) with L R = Σ_p τ_p W_p C_p W_pᵀ over each
+    segment's unknowns (gap.gap_hessian_factors): point p of ``sub`` is the ``p_loc``-th of
+    segment ``s_loc``, its B element's unknowns start at ``col_b``; ``spread`` puts per-point rows
+    in that layout.  Compiled (contact/blocks_native.pyx: to rounding, not bitwise) or numpy."""
+    module = native.load("contact.blocks_native")
+    if module is not None:
+        f = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
+        i = lambda a: np.ascontiguousarray(a, dtype=np.int64)     # noqa: E731
+        return module.hessian_operands(f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.Yzz), f(sub.n),
+                                       f(sub.g), f(tau), i(s_loc), i(p_loc), i(col_b), n_s, P_s, Dq)
+    W, C = gap_hessian_factors(sub)
+    We = spread(W)
+    WCe = spread(np.matmul(W, C * tau[:, None, None]))
+    return (WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
+            We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+
+
 def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
     """Blocks of the local segments ``sk``, each spanning ``width`` B elements.  The block's
     unknowns: A's 3 nodes, B's 2 width + 1 nodes and the (at most two) multiplier nodes of
@@ -167,11 +188,8 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
-        W, C = gap_hessian_factors(sub)
-        We = spread(W)
-        WCe = spread(np.matmul(W, C * tau[:, None, None]))
-        K[:, :Dq, :Dq] += np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
-                                    We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+        K[:, :Dq, :Dq] += np.matmul(*hessian_operands(sub, tau, spread, s_loc, p_loc,
+                                                      cols[:, EL], n_s, P_s, Dq))
     # constraint rows k_s ∂R/∂ḡ Φ_s ∇g, the multipliers' columns −k_s ω Φ_s ∇g of the forces and
     # the diagonal k_s ∂R/∂z × (the segment's share of the function)
     m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad

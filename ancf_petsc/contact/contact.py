@@ -69,7 +69,7 @@ class Contact:
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
-        self.owned, self.Phi, self._cache = np.zeros(0, dtype=bool), None, None
+        self.owned, self.Phi, self.PhiT, self._cache = np.zeros(0, dtype=bool), None, None, None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
         check_reference_gaps(self)
@@ -110,6 +110,9 @@ class Contact:
         self.owned = (np.ones(len(self.mults), dtype=bool) if owned_elements is None
                       else owned_elements[sp.element[self.mults]])
         self.Phi = sp.Phi[self.mults][:, self.local].tocsr()
+        #: Φᵀ as its own CSR matrix (``Phi.T`` would build a CSC view per product): the same sums
+        #: in the same order (each row's entries by ascending column)
+        self.PhiT = self.Phi.T.tocsr()
         for term in self.terms:
             term.set_numbering(self, perm)
         self._cache = None
@@ -193,7 +196,7 @@ class Contact:
         self.status_changes += int(np.count_nonzero(active != prev))
         self.status[self.mults] = active
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
-        pressure = self.stiffness * (self.Phi.T @ (z * rows.load))
+        pressure = self.stiffness * (self.PhiT @ (z * rows.load))
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=pressure * weight,
                           pressure=pressure, lpos=lpos, rows=rows, weight=weight, xl=xl.copy())
         st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}

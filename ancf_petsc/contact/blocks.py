@@ -109,23 +109,26 @@ def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.n
             K[s, b:b + el, b:b + el] += v[:, el:, el:]
 
 
-def hessian_operands(sub, tau: np.ndarray, spread, s_loc: np.ndarray, p_loc: np.ndarray,
-                     col_b: np.ndarray, n_s: int, P_s: int, Dq: int) -> tuple[np.ndarray, np.ndarray]:
-    """L (n_s, Dq, 4 P_s) and R (n_s, 4 P_s, Dq) with L R = Σ_p τ_p W_p C_p W_pᵀ over each
-    segment's unknowns (gap.gap_hessian_factors): point p of ``sub`` is the ``p_loc``-th of
-    segment ``s_loc``, its B element's unknowns start at ``col_b``; ``spread`` puts per-point rows
-    in that layout.  Compiled (contact/blocks_native.pyx: to rounding, not bitwise) or numpy."""
+def add_gap_hessian(K: np.ndarray, sub, tau: np.ndarray, spread, s_loc: np.ndarray, p_loc: np.ndarray,
+                    col_b: np.ndarray, P_s: int, Dq: int) -> None:
+    """K[s, :Dq, :Dq] += Σ_p τ_p W_p C_p W_pᵀ = −Σ_p τ_p ∇²g_p over each segment's unknowns
+    (gap.gap_hessian_factors): point p of ``sub`` is the ``p_loc``-th of segment ``s_loc``, its B
+    element's unknowns start at ``col_b``; ``spread`` puts per-point rows in that layout.
+    Compiled (contact/blocks_native.pyx: one BLAS product per segment into K, equal to the numpy
+    path to rounding, not bitwise) or numpy."""
     module = native.load("contact.blocks_native")
     if module is not None:
         f = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
         i = lambda a: np.ascontiguousarray(a, dtype=np.int64)     # noqa: E731
-        return module.hessian_operands(f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.Yzz), f(sub.n),
-                                       f(sub.g), f(tau), i(s_loc), i(p_loc), i(col_b), n_s, P_s, Dq)
+        module.add_gap_hessian(K, f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.Yzz), f(sub.n),
+                               f(sub.g), f(tau), i(s_loc), i(col_b), Dq)
+        return
+    n_s = len(K)
     W, C = gap_hessian_factors(sub)
     We = spread(W)
     WCe = spread(np.matmul(W, C * tau[:, None, None]))
-    return (WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
-            We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+    K[:, :Dq, :Dq] += np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
+                                We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
 
 
 def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
@@ -188,8 +191,7 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
-        K[:, :Dq, :Dq] += np.matmul(*hessian_operands(sub, tau, spread, s_loc, p_loc,
-                                                      cols[:, EL], n_s, P_s, Dq))
+        add_gap_hessian(K, sub, tau, spread, s_loc, p_loc, cols[:, EL], P_s, Dq)
     # constraint rows k_s ∂R/∂ḡ Φ_s ∇g, the multipliers' columns −k_s ω Φ_s ∇g of the forces and
     # the diagonal k_s ∂R/∂z × (the segment's share of the function)
     m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad

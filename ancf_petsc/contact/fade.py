@@ -44,10 +44,10 @@ def fade_slope(u: np.ndarray) -> np.ndarray:
 
 
 def _compiled(xiB, tB, t_end, at_first, at_last) -> tuple | None:
-    """``contact.fade_native`` and its arrays (contiguous float64, flags as uint8) for
+    """``contact.control_native`` and its arrays (contiguous float64, flags as uint8) for
     ``end_weight`` and ``end_weight_slope``; None when it is not built (or ANCF_NATIVE=0) or the
     arguments are not arrays of one length (scalars, broadcasting: the numpy code takes those)."""
-    module = native.load("contact.fade_native")
+    module = native.load("contact.control_native")
     args = (xiB, tB, t_end, at_first, at_last)
     if module is None or not all(isinstance(a, np.ndarray) and a.ndim == 1 and len(a) == len(xiB)
                                  for a in args):
@@ -71,7 +71,7 @@ def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.
     (overhang as a share of the curve's length T) and past the beam's ends (``at_first``/
     ``at_last``: on B's first/last element, in element lengths)."""
     fast = _compiled(xiB, tB, t_end, at_first, at_last)
-    if fast is not None:                  # bitwise the numpy below (contact/fade_native.pyx)
+    if fast is not None:                  # bitwise the numpy below (contact/control_native.pyx)
         return fast[0].end_weight(*fast[1:], CURVE_OVERHANG, CURVE_FADE_END, END_FADE)
     u_t, u_x, _, _ = _fade_arguments(xiB, tB, t_end, at_first, at_last)
     return fade(u_t) * fade(u_x)
@@ -101,7 +101,7 @@ def end_weight_slope(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_firs
                      at_last: np.ndarray) -> np.ndarray:
     """∂w/∂ζ (P, 2) of ``end_weight`` at the partner places (ξ_B, t_B)."""
     fast = _compiled(xiB, tB, t_end, at_first, at_last)
-    if fast is not None:                  # bitwise the numpy below (contact/fade_native.pyx)
+    if fast is not None:                  # bitwise the numpy below (contact/control_native.pyx)
         return fast[0].end_weight_slope(*fast[1:], CURVE_OVERHANG, CURVE_FADE_END, END_FADE)
     u_t, u_x, below, raw = _fade_arguments(xiB, tB, t_end, at_first, at_last)
     sx = np.where(at_last, 1.0, 0.0) - np.where(at_first, 1.0, 0.0)

@@ -42,9 +42,15 @@ def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
     pr = st.pr
     DOFS_PER_NODE, EL = c.model.dofs_per_node, c.model.block.dofs_per_element
     traction = st.tau[:, None] * pr.n                                  # τ_p n_p
+    module = native.load("contact.blocks_native")
     for e, N, sign in ((c.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
-        f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
         pos = st.lpos(c.conn[e])                                          # (P, 3)
+        if module is not None and floc.dtype == float and floc.flags.c_contiguous:
+            # bitwise the numpy below (contact/blocks_native.pyx)
+            module.add_point_forces(floc.reshape(-1), np.ascontiguousarray(pos, dtype=np.int64),
+                                    np.ascontiguousarray(N, dtype=float), traction, sign, DOFS_PER_NODE)
+            continue
+        f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
         dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
         floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
     if c.weights.differentiated:

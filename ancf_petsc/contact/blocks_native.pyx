@@ -1,14 +1,17 @@
+# distutils: extra_compile_args = -ffp-contract=off
 # cython: boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
-"""Compiled operands of the contact Jacobian's gap-Hessian term (contact/blocks.py): per segment
+"""Compiled parts of the normal contact's residual and Jacobian (contact/blocks.py): the points'
+forces scattered onto their elements' DOFs (``add_point_forces``, bitwise the numpy code: no
+fused multiply-adds, ``-ffp-contract=off``) and the gap-Hessian term (``add_gap_hessian``): per segment
 −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ (contact/gap.py) as one BLAS product L R (L = [W_p C_p τ_p],
 R = [W_pᵀ] over the segment's points) added into the segment's block, the operands formed here in
 one pass over its points (the numpy path forms W and C per point, scatters them into a padded
 segment layout, transposes, multiplies into a temporary and adds: ~25 numpy calls and four
 copies of the operands per segment group).
 
-The factors C_p are formed from the same formulas as ``gap.gap_hessian_factors`` but W_p C_p τ_p
-by plain loops, not by BLAS: the product L R agrees with the numpy path to rounding (summation
-order), not bitwise (tests/contact/test_blocks_native.py bounds the difference)."""
+The factors C_p of the Hessian term are formed from the same formulas as
+``gap.gap_hessian_factors`` but W_p C_p τ_p by plain loops and the sum over the points in other
+blocks: it agrees with the numpy path to rounding (summation order), not bitwise (tests/contact/test_blocks_native.py bounds the difference)."""
 import numpy as np
 
 cimport numpy as cnp
@@ -134,3 +137,28 @@ cdef void _point_rows(Py_ssize_t p, Py_ssize_t q, Py_ssize_t v, double[:, ::1] L
                 l = q + a if a < 2 else v + q + a - 2
                 Rm[l, col] = w[a]
                 Lm[col, l] = w[0] * C[a] + w[1] * C[4 + a] + w[2] * C[8 + a] + w[3] * C[12 + a]
+
+
+def add_point_forces(double[::1] floc, const long[:, ::1] pos, const double[:, ::1] N,
+                     const double[:, ::1] traction, double sign, int dofs_per_node):
+    """floc += Σ_p sign N_p ⊗ traction_p over the DOFs of each point's element (node positions
+    ``pos`` (P, nodes) in the local array, slot-major: slot s, component i is the element's
+    unknown 3 s + i): ``np.bincount`` of the products into a zeroed array, in the points' order,
+    then added (bitwise what blocks.add_normal_forces's numpy code adds)."""
+    cdef Py_ssize_t P = N.shape[0], S = N.shape[1], n = floc.shape[0], p, s, i, j, dof
+    acc_arr = np.zeros(n)
+    cdef double[::1] acc = acc_arr
+    cdef double v
+    if pos.shape[0] != P or traction.shape[0] != P or 3 * S > pos.shape[1] * dofs_per_node:
+        raise ValueError("shapes of pos, N, traction do not match")
+    for p in range(P):
+        for s in range(S):
+            v = sign * N[p, s]
+            for i in range(3):
+                j = 3 * s + i
+                dof = dofs_per_node * pos[p, j // dofs_per_node] + j % dofs_per_node
+                if dof < 0 or dof >= n:
+                    raise IndexError("a DOF outside the local array")
+                acc[dof] += v * traction[p, i]
+    for j in range(n):
+        floc[j] = floc[j] + acc[j]

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import native
 
-from .gap import gap_gradient, gap_hessian_factors
+from .gap import gap_gradient, gap_hessian_core, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
 from .weights import FadeDerivatives
@@ -120,14 +120,14 @@ def add_gap_hessian(K: np.ndarray, sub, tau: np.ndarray, spread, s_loc: np.ndarr
     """K[s, :Dq, :Dq] += Σ_p τ_p W_p C_p W_pᵀ = −Σ_p τ_p ∇²g_p over each segment's unknowns
     (gap.gap_hessian_factors): point p of ``sub`` is the ``p_loc``-th of segment ``s_loc``, its B
     element's unknowns start at ``col_b``; ``spread`` puts per-point rows in that layout.
-    Compiled (contact/blocks_native.pyx: one BLAS product per segment into K, equal to the numpy
-    path to rounding, not bitwise) or numpy."""
+    Compiled (contact/blocks_native.pyx: bitwise this numpy code) or numpy."""
     module = native.load("contact.blocks_native")
     if module is not None:
         f = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
         i = lambda a: np.ascontiguousarray(a, dtype=np.int64)     # noqa: E731
-        module.add_gap_hessian(K, f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.Yzz), f(sub.n),
-                               f(sub.g), f(tau), i(s_loc), i(col_b), Dq)
+        Ct = gap_hessian_core(sub) * tau[:, None, None]
+        module.add_gap_hessian(K, f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.n), Ct,
+                               i(s_loc), i(p_loc), i(col_b), P_s, Dq)
         return
     n_s = len(K)
     W, C = gap_hessian_factors(sub)

@@ -4,14 +4,12 @@
 forces scattered onto their elements' DOFs (``add_point_forces``, bitwise the numpy code: no
 fused multiply-adds, ``-ffp-contract=off``) and the gap-Hessian term (``add_gap_hessian``): per segment
 −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ (contact/gap.py) as one BLAS product L R (L = [W_p C_p τ_p],
-R = [W_pᵀ] over the segment's points) added into the segment's block, the operands formed here in
-one pass over its points (the numpy path forms W and C per point, scatters them into a padded
-segment layout, transposes, multiplies into a temporary and adds: ~25 numpy calls and four
-copies of the operands per segment group).
-
-The factors C_p of the Hessian term are formed from the same formulas as
-``gap.gap_hessian_factors`` but W_p C_p τ_p by plain loops and the sum over the points in other
-blocks: it agrees with the numpy path to rounding (summation order), not bitwise (tests/contact/test_blocks_native.py bounds the difference)."""
+R = [W_pᵀ] over the segment's points) added into the segment's block, W_p and the operands formed
+here in one pass over the points (the numpy path forms W per point, scatters W and W C τ into a
+padded segment layout, transposes and copies them: ~25 numpy calls and four copies of the
+operands per segment group).  The products are the BLAS calls numpy's matmul makes there
+(scipy's BLAS is numpy's: the same library, the same kernels), on the same operands in the same
+layout: the Jacobian is bitwise the numpy path's (tests/contact/test_blocks_native.py)."""
 import numpy as np
 
 cimport numpy as cnp
@@ -20,123 +18,96 @@ from scipy.linalg.cython_blas cimport dgemm
 cnp.import_array()
 
 
-cdef inline void _inverse2(double m00, double m01, double m10, double m11, double* out) nogil:
-    """Inverse of [[m00, m01], [m10, m11]] into out (row-major), as gap._inverse2."""
-    cdef double det = m00 * m11 - m01 * m10
-    out[0] = m11 / det
-    out[1] = -m01 / det
-    out[2] = -m10 / det
-    out[3] = m00 / det
+#: scratch arrays of ``add_gap_hessian`` kept between calls (fresh ones of a few MB cost page
+#: faults on every call: half of the kernel's time)
+_scratch = [np.zeros(0), np.zeros(0), np.zeros(0)]
+
+
+def _zeroed(which: int, shape: tuple):
+    """Scratch array ``which`` as a zeroed contiguous array of ``shape``."""
+    size = int(np.prod(shape))
+    if _scratch[which].size < size:
+        _scratch[which] = np.zeros(size)
+    out = _scratch[which][:size].reshape(shape)
+    out.fill(0.0)
+    return out
 
 
 def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:, ::1] NB,
-                    const double[:, :, ::1] NBz, const double[:, :, ::1] Yz,
-                    const double[:, :, :, ::1] Yzz, const double[:, ::1] n, const double[::1] g,
-                    const double[::1] tau, const long[::1] s_loc, const long[::1] col_b, int Dq):
-    """K[s, :Dq, :Dq] += Σ_p τ_p W_p C_p W_pᵀ over the points p of each segment s (``s_loc``),
-    two BLAS products per segment into K.  The points' arrays: A's and B's shape functions NA,
-    NB (P, S), B's ζ-derivatives NBz (P, S, 2), the surface's Y_ζ (P, 3, 2), Y_ζζ (P, 3, 2, 2),
-    normal n, gap g, τ; point p's rows of W (A's S slots × 3, then B's) are the block's unknowns
-    0 … 3S − 1 and ``col_b[p]`` … ``col_b[p]`` + 3S − 1."""
-    cdef Py_ssize_t P = NA.shape[0], n_s = K.shape[0]
-    cdef Py_ssize_t p, s, m, most = 0
-    cdef int k, ldl, D = K.shape[1], ea = 3 * NA.shape[1], eb = Dq - 3 * NA.shape[1]
-    cdef double one = 1.0
+                    const double[:, :, ::1] NBz, const double[:, :, ::1] Yz, const double[:, ::1] n,
+                    const double[:, :, ::1] Ct, const long[::1] s_loc, const long[::1] p_loc,
+                    const long[::1] col_b, int P_s, int Dq):
+    """K[s, :Dq, :Dq] += Σ_p W_p Ct_p W_pᵀ over the points p of each segment s (``s_loc``; the
+    ``p_loc``-th of at most P_s), with Ct_p = τ_p C_p (4, 4) (gap.gap_hessian_factors) and W_p
+    formed here from A's and B's shape functions NA, NB (P, S), B's ζ-derivatives NBz (P, S, 2),
+    the surface's Y_ζ (P, 3, 2) and the normal n; point p's rows of W (A's S slots × 3, then
+    B's) are the block's unknowns 0 … 3S − 1 and ``col_b[p]`` … ``col_b[p]`` + 3S − 1.  The
+    products are the BLAS calls numpy's matmul makes in blocks.add_gap_hessian's numpy path,
+    on the same operands: the sums are bitwise equal to it."""
+    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, s, i, j
+    cdef int R = 6 * NA.shape[1], four = 4, k = 4 * P_s, D = K.shape[1]
+    cdef double one = 1.0, zero = 0.0
     cdef char trans = b'N'
-    if K.shape[2] != D or Dq > D:
-        raise ValueError("K must be (n_s, D, D) with Dq <= D")
-    counts = np.zeros(n_s + 1, dtype=np.int64)
-    cdef long[::1] start = counts
+    if K.shape[2] != D or Dq > D or Ct.shape[0] != P or Ct.shape[1] != 4 or Ct.shape[2] != 4:
+        raise ValueError("K must be (n_s, D, D) with Dq <= D, Ct (P, 4, 4)")
     for p in range(P):
-        if s_loc[p] < 0 or s_loc[p] >= n_s or col_b[p] < 3 * NA.shape[1] or col_b[p] + 3 * NA.shape[1] > Dq:
+        if (s_loc[p] < 0 or s_loc[p] >= n_s or p_loc[p] < 0 or p_loc[p] >= P_s
+                or col_b[p] < 3 * S or col_b[p] + 3 * S > Dq):
             raise ValueError("a point outside the blocks")
-        start[s_loc[p] + 1] += 1
-    for s in range(n_s):
-        most = max(most, start[s + 1])
-        start[s + 1] += start[s]
-    order_arr = np.empty(P, dtype=np.int64)
-    fill_arr = counts[:n_s].copy()
-    cdef long[::1] order = order_arr
-    cdef long[::1] fill = fill_arr
+    W_arr = np.empty((R, 4))
+    WC_arr = np.empty((R, 4))
+    L_arr, R_arr = _zeroed(0, (n_s, Dq, k)), _zeroed(1, (n_s, k, Dq))
+    T_arr = _zeroed(2, (Dq, Dq))
+    cdef double[:, ::1] W = W_arr
+    cdef double[:, ::1] WC = WC_arr
+    cdef double[:, :, ::1] Lm = L_arr
+    cdef double[:, :, ::1] Rm = R_arr
+    cdef double[:, ::1] Tm = T_arr
     for p in range(P):
-        order[fill[s_loc[p]]] = p
-        fill[s_loc[p]] += 1
-    L_arr = np.empty((Dq, 4 * most))
-    R_arr = np.empty((4 * most, Dq))
-    cdef double[:, ::1] Lm = L_arr
-    cdef double[:, ::1] Rm = R_arr
-    ldl = 4 * most
+        _point_w(p, W, NA, NB, NBz, Yz, n)
+        # numpy: cblas_dgemm(RowMajor, N, N, R, 4, 4, 1, W, 4, Ct_p, 4, 0, WC, 4)
+        dgemm(&trans, &trans, &four, &R, &four, &one, <double*>&Ct[p, 0, 0], &four, &W[0, 0], &four, &zero,
+              &WC[0, 0], &four)
+        _scatter(p, W, WC, Lm, Rm, s_loc[p], 4 * p_loc[p], col_b[p], 3 * S)
     for s in range(n_s):
-        m = start[s + 1] - start[s]
-        if m == 0:
-            continue
-        L_arr[:, :4 * m] = 0.0
-        R_arr[:4 * m] = 0.0
-        for k in range(m):
-            _point_rows(order[start[s] + k], 2 * k, 2 * m, Lm, Rm, NA, NB, NBz, Yz, Yzz, n, g, tau, col_b)
-        # column-major: K_sᵀ += Rᵀ Lᵀ, i.e. row-major K_s += L R; A's rows of W have no v part
-        # (R's last 2m rows are 0 in A's columns): those columns take the u part alone
-        k = 2 * m
-        dgemm(&trans, &trans, &ea, &Dq, &k, &one, &Rm[0, 0], &Dq, &Lm[0, 0], &ldl, &one,
-              &K[s, 0, 0], &D)
-        k = 4 * m
-        dgemm(&trans, &trans, &eb, &Dq, &k, &one, &Rm[0, ea], &Dq, &Lm[0, 0], &ldl, &one,
-              &K[s, 0, ea], &D)
+        # numpy: cblas_dgemm(RowMajor, N, N, Dq, Dq, k, 1, L_s, k, R_s, Dq, 0, T, Dq), then K += T
+        dgemm(&trans, &trans, &Dq, &Dq, &k, &one, &Rm[s, 0, 0], &Dq, &Lm[s, 0, 0], &k, &zero,
+              &Tm[0, 0], &Dq)
+        for i in range(Dq):
+            for j in range(Dq):
+                K[s, i, j] = K[s, i, j] + Tm[i, j]
 
 
-cdef void _point_rows(Py_ssize_t p, Py_ssize_t q, Py_ssize_t v, double[:, ::1] Lm, double[:, ::1] Rm,
-                      const double[:, ::1] NA, const double[:, ::1] NB, const double[:, :, ::1] NBz,
-                      const double[:, :, ::1] Yz, const double[:, :, :, ::1] Yzz,
-                      const double[:, ::1] n, const double[::1] g, const double[::1] tau,
-                      const long[::1] col_b) nogil:
-    """Point p's columns of L = W C τ and rows of R = Wᵀ, u parts at q, q + 1 and v parts at
-    v + q, v + q + 1 (gap.gap_hessian_factors:
-    C = [[a⁻¹ b H⁻¹ (symmetrised), H⁻¹], [H⁻¹, g H⁻¹]], H = a − g b)."""
-    cdef Py_ssize_t S = NA.shape[1], half = 3 * NA.shape[1], slot, i, k, l, a, r, col
-    cdef double am[4]
-    cdef double bm[4]
-    cdef double ai[4]
-    cdef double Hi[4]
-    cdef double ab[4]
-    cdef double cuu[4]
-    cdef double C[16]
-    cdef double w[4]
-    cdef double nab, gp = g[p], t = tau[p]
-    for k in range(2):
-        for l in range(2):
-            am[2 * k + l] = Yz[p, 0, k] * Yz[p, 0, l] + Yz[p, 1, k] * Yz[p, 1, l] + Yz[p, 2, k] * Yz[p, 2, l]
-            bm[2 * k + l] = Yzz[p, 0, k, l] * n[p, 0] + Yzz[p, 1, k, l] * n[p, 1] + Yzz[p, 2, k, l] * n[p, 2]
-    _inverse2(am[0] - gp * bm[0], am[1] - gp * bm[1], am[2] - gp * bm[2], am[3] - gp * bm[3], Hi)
-    _inverse2(am[0], am[1], am[2], am[3], ai)
-    for k in range(2):
-        for l in range(2):
-            ab[2 * k + l] = ai[2 * k] * bm[l] + ai[2 * k + 1] * bm[2 + l]
-    for k in range(2):
-        for l in range(2):
-            cuu[2 * k + l] = ab[2 * k] * Hi[l] + ab[2 * k + 1] * Hi[2 + l]
-    for k in range(2):
-        for l in range(2):
-            C[4 * k + l] = 0.5 * (cuu[2 * k + l] + cuu[2 * l + k]) * t
-            C[4 * k + 2 + l] = Hi[2 * k + l] * t
-            C[4 * (2 + k) + l] = Hi[2 * k + l] * t
-            C[4 * (2 + k) + 2 + l] = gp * Hi[2 * k + l] * t
+cdef void _point_w(Py_ssize_t p, double[:, ::1] W, const double[:, ::1] NA, const double[:, ::1] NB,
+                   const double[:, :, ::1] NBz, const double[:, :, ::1] Yz, const double[:, ::1] n) nogil:
+    """W_p (6S, 4) = [u₁ u₂ v₁ v₂] (gap.gap_hessian_factors: [N_A, −N_B] ⊗ Y_ζ, [0, N_B,ζ] ⊗ n)."""
+    cdef Py_ssize_t S = NA.shape[1], slot, i, r
+    cdef double nab
     for slot in range(2 * S):
         nab = NA[p, slot] if slot < S else -NB[p, slot - S]
         for i in range(3):
             r = 3 * slot + i
-            col = r if r < half else col_b[p] + r - half
-            w[0] = nab * Yz[p, i, 0]
-            w[1] = nab * Yz[p, i, 1]
+            W[r, 0] = nab * Yz[p, i, 0]
+            W[r, 1] = nab * Yz[p, i, 1]
             if slot < S:
-                w[2] = 0.0
-                w[3] = 0.0
+                W[r, 2] = 0.0
+                W[r, 3] = 0.0
             else:
-                w[2] = NBz[p, slot - S, 0] * n[p, i]
-                w[3] = NBz[p, slot - S, 1] * n[p, i]
-            for a in range(4):
-                l = q + a if a < 2 else v + q + a - 2
-                Rm[l, col] = w[a]
-                Lm[col, l] = w[0] * C[a] + w[1] * C[4 + a] + w[2] * C[8 + a] + w[3] * C[12 + a]
+                W[r, 2] = NBz[p, slot - S, 0] * n[p, i]
+                W[r, 3] = NBz[p, slot - S, 1] * n[p, i]
+
+
+cdef void _scatter(Py_ssize_t p, double[:, ::1] W, double[:, ::1] WC, double[:, :, ::1] Lm,
+                   double[:, :, ::1] Rm, Py_ssize_t s, Py_ssize_t q, Py_ssize_t col_b,
+                   Py_ssize_t half) nogil:
+    """Point p's W and W C τ into its segment's operands: L[s, col, q + a] = (W C τ)[row, a],
+    R[s, q + a, col] = W[row, a] (blocks.add_gap_hessian's ``spread`` and transposes)."""
+    cdef Py_ssize_t r, a, col
+    for r in range(W.shape[0]):
+        col = r if r < half else col_b + r - half
+        for a in range(4):
+            Lm[s, col, q + a] = WC[r, a]
+            Rm[s, q + a, col] = W[r, a]
 
 
 def add_point_forces(double[::1] floc, const long[:, ::1] pos, const double[:, ::1] N,

@@ -152,13 +152,9 @@ class Projector:
     def surface(self, x_of, itf, eB, xiB, tB):
         """B's surface at (e_B, ξ_B, t_B): Y, Y_ζ (P,3,2), Y_ζζ (P,3,2,2), N_B, N_B,ζ, N_B,ζζ.
         ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
-        P = len(eB)
         S, S1, S2 = self._curves(itf, tB)                       # every interface's curve at once
         NB, NBz, NBzz = self._kernels.shapes(xiB, S, S1, S2)
-        qB = x_of(eB)                                           # (P, 18, 3)
-        Y = np.matmul(NB[:, None, :], qB)[:, 0]
-        Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
-        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, self.block.slots, 4)).reshape(P, 3, 2, 2)
+        Y, Yz, Yzz = self._kernels.surface(x_of(eB), NB, NBz, NBzz)
         return Y, Yz, Yzz, NB, NBz
 
     def wrap(self, itf, eB, xiB, tB):

@@ -19,18 +19,16 @@ cnp.import_array()
 
 
 #: scratch arrays of ``add_gap_hessian`` kept between calls (fresh ones of a few MB cost page
-#: faults on every call: half of the kernel's time)
+#: faults on every call: half of the kernel's time); every entry used is written in each call
 _scratch = [np.zeros(0), np.zeros(0), np.zeros(0)]
 
 
-def _zeroed(which: int, shape: tuple):
-    """Scratch array ``which`` as a zeroed contiguous array of ``shape``."""
+def _scratch_array(which: int, shape: tuple):
+    """Scratch array ``which`` as a contiguous array of ``shape`` (its values left over)."""
     size = int(np.prod(shape))
     if _scratch[which].size < size:
         _scratch[which] = np.zeros(size)
-    out = _scratch[which][:size].reshape(shape)
-    out.fill(0.0)
-    return out
+    return _scratch[which][:size].reshape(shape)
 
 
 def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:, ::1] NB,
@@ -44,7 +42,7 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
     B's) are the block's unknowns 0 … 3S − 1 and ``col_b[p]`` … ``col_b[p]`` + 3S − 1.  The
     products are the BLAS calls numpy's matmul makes in blocks.add_gap_hessian's numpy path,
     on the same operands: the sums are bitwise equal to it."""
-    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, s, i, j
+    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, s, i, j, q
     cdef int R = 6 * NA.shape[1], four = 4, k = 4 * P_s, D = K.shape[1]
     cdef double one = 1.0, zero = 0.0
     cdef char trans = b'N'
@@ -56,8 +54,12 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
             raise ValueError("a point outside the blocks")
     W_arr = np.empty((R, 4))
     WC_arr = np.empty((R, 4))
-    L_arr, R_arr = _zeroed(0, (n_s, Dq, k)), _zeroed(1, (n_s, k, Dq))
-    T_arr = _zeroed(2, (Dq, Dq))
+    # every entry of L and R is written: a point's W and W C τ over its unknowns, zero over the
+    # block's other ones and over the slots of absent points (cheaper than zeroing them first)
+    L_arr, R_arr = _scratch_array(0, (n_s, Dq, k)), _scratch_array(1, (n_s, k, Dq))
+    T_arr = _scratch_array(2, (Dq, Dq))
+    filled_arr = np.zeros((n_s, P_s), dtype=np.uint8)
+    cdef cnp.uint8_t[:, ::1] filled = filled_arr
     cdef double[:, ::1] W = W_arr
     cdef double[:, ::1] WC = WC_arr
     cdef double[:, :, ::1] Lm = L_arr
@@ -69,6 +71,14 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
         dgemm(&trans, &trans, &four, &R, &four, &one, <double*>&Ct[p, 0, 0], &four, &W[0, 0], &four, &zero,
               &WC[0, 0], &four)
         _scatter(p, W, WC, Lm, Rm, s_loc[p], 4 * p_loc[p], col_b[p], 3 * S)
+        filled[s_loc[p], p_loc[p]] = 1
+    for s in range(n_s):
+        for q in range(P_s):
+            if not filled[s, q]:
+                for i in range(Dq):
+                    for j in range(4):
+                        Lm[s, i, 4 * q + j] = 0.0
+                        Rm[s, 4 * q + j, i] = 0.0
     for s in range(n_s):
         # numpy: cblas_dgemm(RowMajor, N, N, Dq, Dq, k, 1, L_s, k, R_s, Dq, 0, T, Dq), then K += T
         dgemm(&trans, &trans, &Dq, &Dq, &k, &one, &Rm[s, 0, 0], &Dq, &Lm[s, 0, 0], &k, &zero,
@@ -103,6 +113,11 @@ cdef void _scatter(Py_ssize_t p, double[:, ::1] W, double[:, ::1] WC, double[:, 
     """Point p's W and W C τ into its segment's operands: L[s, col, q + a] = (W C τ)[row, a],
     R[s, q + a, col] = W[row, a] (blocks.add_gap_hessian's ``spread`` and transposes)."""
     cdef Py_ssize_t r, a, col
+    for col in range(half, Lm.shape[1]):           # the block's unknowns the point has not
+        if col < col_b or col >= col_b + half:
+            for a in range(4):
+                Lm[s, col, q + a] = 0.0
+                Rm[s, q + a, col] = 0.0
     for r in range(W.shape[0]):
         col = r if r < half else col_b + r - half
         for a in range(4):

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from ..contact.friction import CoulombFriction
 from ..contact.elastic_interface import ElasticMatrix
+from ..contact.tangential import TANGENTIAL_LAWS
 from .conditions import beam_ref
 from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, FADE_RULES, REMOVED_CONTACT_KEYS,
                     SUPPORTED_END_RULES, TANGENTIAL_LAW_NAMES, ContactSpec, TangentialSpec)
@@ -81,12 +82,15 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
                        hint=" (a factor on the multipliers' unit k_s; it does not change the answer)")
     if value.get("tangential") is not None:
         c.tangential = parse_tangential(value["tangential"])
-    tangential = c.tangential is not None and c.tangential.law != TANGENTIAL_LAW_NAMES[0]
-    c.fade = string(value.get("fade", "settle" if tangential else "newton"), f"{p}.fade", FADE_RULES)
-    if c.fade == "newton" and tangential:
+    # the normal constraints differentiate the weights, and so do the tangential laws that say so
+    # (Coulomb friction, friction_blocks.py; the elastic matrix's weights settle between solves)
+    law = TANGENTIAL_LAWS[c.tangential.law] if c.tangential is not None else None
+    undifferentiated = law is not None and not getattr(law, "differentiates_weights", False)
+    c.fade = string(value.get("fade", "settle" if undifferentiated else "newton"), f"{p}.fade", FADE_RULES)
+    if c.fade == "newton" and undifferentiated:
         raise ConfigError(f"{p}.fade", "newton differentiates the fade weights of the normal "
-                                       "constraints only, not a tangential law's; use settle "
-                                       "with contact.tangential")
+                                       "constraints and Coulomb friction, not the "
+                                       f"{c.tangential.law} law's; use settle with it")
     _parse_projection(c, value.get("projection", None), f"{p}.projection", node_dofs)
     inter = value.get("interfaces", "auto")
     if inter == "auto":

@@ -6,7 +6,10 @@ blocks with their DOF indices for the assembly layer to insert.
 With the fade weights differentiated (``contact.fade: newton``, weights.py) w_p = w(ζ_p(q)): the
 constraint rows and the multipliers' columns take ∇ḡ = Φ (w ∇g + g ∇w), the forces
 −Σ_p p_p ∇(w_p g_p) (p_p = k_s (Φᵀ z·load)_p) and the stiffness
-−Σ_p p_p (w ∇²g + ∇g ∇wᵀ + ∇w ∇gᵀ + g ∇²w): the exact, symmetric Jacobian."""
+−Σ_p p_p (w ∇²g + ∇g ∇wᵀ + ∇w ∇gᵀ + g ∇²w): the exact, symmetric Jacobian.  With a tangential
+law (``weights.variational`` False) the forces stay settle's −Σ_p τ_p ∇g_p (τ_p = p_p w_p), so a
+friction model solves the same equations with either rule: their stiffness −Σ_p p_p (w ∇²g +
+∇g ∇wᵀ), the multipliers' columns −k_s Φ w ∇g (unsymmetric, as friction is)."""
 from __future__ import annotations
 
 import numpy as np
@@ -50,7 +53,7 @@ def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
         f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
         dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
         floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
-    if c.weights.differentiated:
+    if c.weights.differentiated and c.weights.variational:
         # −Σ_p p_p g_p ∇w_p: the weights' part of the contact forces (forces = −Σ_k λ_k ∇ḡ_k)
         fd = fade_derivatives(c, st)
         gw, band = fd.grad, fd.band
@@ -133,15 +136,19 @@ def _segment_blocks(c, st: ContactState, lay: segment_layout.SegmentLayout):
     K = np.zeros((lay.n_s, lay.D, lay.D))
     Vg = V
     if c.weights.differentiated:
-        gw, band, hess = fade_derivatives(c, st).of(sel, state_nodes(c, st))
+        nodes = state_nodes(c, st) if c.weights.variational else None     # ∇²w: variational only
+        gw, band, hess = fade_derivatives(c, st).of(sel, nodes)
         if len(band):
             Vg = V + spread(sub.g[:, None] * gw)            # ∇(w_p g_p) with w = w(ζ(q))
             Pe, Ge = spread(grad * st.pressure[sel][:, None]), spread(gw)
             PG = np.matmul(Pe.transpose(0, 2, 1), Ge)
-            K[:, :Dq, :Dq] -= PG + PG.transpose(0, 2, 1)   # −Σ p_p (∇g ∇wᵀ + ∇w ∇gᵀ)
-            # −Σ p_p g_p ∇²w_p over each band point's 108 unknowns
-            coef = -(st.pressure[sel][band] * sub.g[band])[:, None, None]
-            add_point_blocks(K, lay.s_loc[band], lay.j[band], coef * hess, EL, k * DOFS_PER_NODE)
+            if not c.weights.variational:                  # forces τ_p ∇g_p: −Σ p_p ∇g ∇wᵀ
+                K[:, :Dq, :Dq] -= PG
+            else:
+                K[:, :Dq, :Dq] -= PG + PG.transpose(0, 2, 1)   # −Σ p_p (∇g ∇wᵀ + ∇w ∇gᵀ)
+                # −Σ p_p g_p ∇²w_p over each band point's 108 unknowns
+                coef = -(st.pressure[sel][band] * sub.g[band])[:, None, None]
+                add_point_blocks(K, lay.s_loc[band], lay.j[band], coef * hess, EL, k * DOFS_PER_NODE)
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
@@ -151,8 +158,9 @@ def _segment_blocks(c, st: ContactState, lay: segment_layout.SegmentLayout):
     real, loc, ss, kk, mrow = lay.real, lay.loc, lay.ss, lay.kk, lay.mrow
     dRg, dRz, om = (np.zeros(real.shape) for _ in range(3))
     dRg[real], dRz[real], om[real] = st.rows.dR_dg[loc], st.rows.dR_dz[loc], st.rows.omega[loc]
-    Gc = -c.stiffness * np.matmul(lay.Phi_s, Vg)     # (n_s, K, Dq): ∇ḡ = Φ ∇(w g)
-    Gr = Gc
+    Gr = -c.stiffness * np.matmul(lay.Phi_s, Vg)     # (n_s, K, Dq): ∇ḡ = Φ ∇(w g)
+    # the multipliers' columns: the forces' −k_s Φ ∇(w g), or Φ w ∇g when they are τ_p ∇g_p
+    Gc = Gr if c.weights.variational or Vg is V else -c.stiffness * np.matmul(lay.Phi_s, V)
     K[ss, mrow, :Dq] = -dRg[ss, kk, None] * Gr[ss, kk]
     K[ss, :Dq, mrow] = om[ss, kk, None] * Gc[ss, kk]
     K[ss, mrow, mrow] = c.stiffness * dRz[ss, kk] * lay.share[ss, kk]

@@ -123,6 +123,8 @@ class CoulombFriction(PartnerTerm):
     bounded = True
     #: per point: the relative displacement d₀ [m] of the last accepted increment
     history = ("anchor",)
+    #: the fade weights' derivatives are in the Jacobian (``contact.fade: newton``, the default)
+    differentiates_weights = True
     #: the semi-smooth Newton iteration takes the l2 line search (bt stalls at the kinks of the
     #: projection); from rest at mu = 3 it needs up to ~100 iterations to settle the statuses
     #: (a cut-back cannot help there: Coulomb's law is homogeneous in the load)

@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .blocks import fade_derivatives
 from .gap import normal_gradient
-from .partners import drop_held, node_dofs, segment_outer
+from .partners import drop_held, node_dofs, segment_outer, tangential
 
 EYE = np.eye(3)
 
@@ -44,7 +45,26 @@ def _points(term, c, st):
     p_loc = idx - pts.seg_start[pts.seg[idx]]
     phi0 = sp.dense[pts.seg[idx], :, p_loc] * real[srow]
     phit = sp.tdense[pts.seg[idx], :, p_loc] * real[srow]
-    return srow, sm, kloc[srow], phit * st.weight[:, None], phi0, kloc
+    return srow, sm, kloc[srow], phit * st.weight[:, None], phi0, kloc, phit
+
+
+def _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB) -> np.ndarray:
+    """The fade weights' part (``contact.fade: newton``, weights.py) of the (segment, B element)
+    blocks: per point (P, 3K + 108, 108), rows of y then the forces, over A's element and the B
+    element of the closest point.  ω'_p = w_p enters U_k, m_k and ẑ_k as Φ_kp w_p (·) and the
+    forces as k_s w_p P_p Y_p, so ∂/∂q through w_p is
+    k_s Φ_kp (∂R/∂U u_p + ∂R/∂m n_p + μ g_k A_k [p_p > 0] p_p / k_s) ⊗ ∇w_p on the rows of y and
+    k_s N_ABᵀ P_p Y_p ⊗ ∇w_p on the forces (zero off the fade bands)."""
+    ev, ks, n = st.terms[term.name], c.stiffness, st.pr.n
+    gw = fade_derivatives(c, st).grad                                         # (P, 108)
+    u = tangential(ev.du, n)
+    bound = c.space.tarea[sm[srow]] * (ev.positive * ev.pressure)[:, None]    # (P, K) A_k p⁺ k_s
+    rows = (np.einsum("pkij,pj->pki", A[kp], u) + np.einsum("pkij,pj->pki", Bm[kp], n)
+            + term.mu * ev.g[kp] * (bound / ks)[:, :, None])                  # (P, K, 3)
+    rows_y = ks * phit[:, :, None] * rows
+    forces = ks * (NAB[:, :, None] * tangential(ev.Y, n)[:, None, :])          # (P, 36, 3)
+    left = np.concatenate([rows_y.reshape(len(n), -1), forces.reshape(len(n), -1)], axis=1)
+    return left[:, :, None] * gw[:, None, :]
 
 
 def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
@@ -54,7 +74,7 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     if len(c.local) == 0:
         return []
     ev, ks = st.terms[term.name], c.stiffness
-    srow, sm, kp, phi, phi0, kseg = _points(term, c, st)
+    srow, sm, kp, phi, phi0, kseg, phit = _points(term, c, st)
     n_s, K, P = len(c.segments), sm.shape[1], len(c.local)
     n = st.pr.n
     Pn = EYE - n[:, :, None] * n[:, None, :]
@@ -81,6 +101,8 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
                                           + n[:, :, None] * ev.Y[:, None, :])
     G = np.concatenate([(M2.reshape(P, 3 * K, 3) @ gradn),
                         (NAB[:, :, None, None] * (E @ gradn)[:, None]).reshape(P, -1, gradn.shape[2])], axis=1)
+    if c.weights.differentiated:
+        G += _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB)
     pair, Kn = _per_pair(srow, st.pr.eB, G)
     cols = node_dofs(np.concatenate([c.conn[c.points.seg_eA[c.segments[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1),
                      term.node_size)

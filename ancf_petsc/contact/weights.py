@@ -104,11 +104,15 @@ class PointWeights:
     newton (``contact.fade``); ``differentiated``: the evaluations take their partner places' own
     weights, differentiated (newton, from the second solve of an increment on: ``refresh``)."""
 
-    def __init__(self, n_points: int, rule: str = "settle"):
+    def __init__(self, n_points: int, rule: str = "settle", variational: bool = True):
         self.values = np.ones(n_points)
         self._saved = self.values.copy()
         self.rule = rule
         self.differentiated = False
+        #: the normal forces are −Σ_k λ_k ∇ḡ_k, with the weights' part −p g ∇w (frictionless), or
+        #: τ_p ∇g_p as settle's (the contact's choice with a tangential law: its answers then are
+        #: settle's; blocks.py)
+        self.variational = variational
 
     def effective(self, idx: np.ndarray, current: np.ndarray) -> np.ndarray:
         """The weights of the points ``idx`` in an evaluation whose partner places have the

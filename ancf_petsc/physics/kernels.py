@@ -8,12 +8,37 @@ the internal force is f_a = Σ_gp w P G_a and the tangent K_ab = Σ_gp w G_a · 
 work ∫ S : δE dV of eq. (14) written with P = F S.  ``w`` already holds det J0 and the axial ×
 section cubature weights.  Every product below is a batched matrix product over the element's
 Gauss points, so the cost per Gauss point is a few small GEMM columns and no Python loop.
+
+The neo-Hookean and GOH laws (pointwise, without ``locking: mixed``) run in the compiled kernels
+of ``element_kernels.pyx`` when they are built (``ancf_petsc.native``; ``ANCF_NATIVE=0`` switches
+them off); this numpy code is the reference they are tested against (tests/physics).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .materials import TangentTerms
+from .. import native
+from .goh import GOH
+from .materials import NeoHookean, TangentTerms
+
+#: the Cython module of the compiled kernels (``native.load``)
+COMPILED = "physics.element_kernels"
+
+
+def compiled_law(material, shape: tuple[int, int]) -> tuple | None:
+    """(module, law parameters, fibre directions (families, E, P, 3) or None) when the compiled
+    kernels compute ``material`` on points of ``shape`` (E, P); None for the numpy path."""
+    module = native.load(COMPILED)
+    if module is None:
+        return None
+    kind = type(material)
+    if kind is NeoHookean:
+        return module, (material.mu, material.K, 0.0, 0.0, 0.0, 0.0), None
+    if kind is GOH and material.a0 is not None:
+        a0 = np.broadcast_to(material.a0, (material.families,) + tuple(shape) + (3,))
+        return module, (material.mu, material.K, material.k1, material.k2, material.kappa,
+                        material.e_rounding), a0
+    return None
 
 
 def deformation_gradient(qe: np.ndarray, G: np.ndarray) -> np.ndarray:
@@ -38,6 +63,10 @@ def energy(qe: np.ndarray, G: np.ndarray, w: np.ndarray, material) -> np.ndarray
 
 def internal_force(qe, G, w, material) -> tuple[np.ndarray, np.ndarray]:
     """Internal forces (E, 54) and min J per element (E,); f_a = Σ w P G_a."""
+    fast = compiled_law(material, w.shape)
+    if fast is not None:
+        f, _, J = fast[0].evaluate(qe, G, w, fast[1], fast[2], False)
+        return f, J
     F = deformation_gradient(qe, G)
     P, J = material.stress(F)
     E, Np = w.shape
@@ -55,8 +84,12 @@ def internal_force_and_tangent(qe, G, w, material) -> tuple[np.ndarray, np.ndarr
     """Internal forces (E, 54), tangents (E, 54, 54) and min J per element (E,).
 
     Elements are processed in chunks of about ``CHUNK_POINTS`` Gauss points (a law with data
-    per point, e.g. GOH's fibre directions, gives the chunk's with ``material.take``).
+    per point, e.g. GOH's fibre directions, gives the chunk's with ``material.take``); the
+    compiled kernels take all elements at once (their scratch is one element's).
     """
+    fast = compiled_law(material, w.shape)
+    if fast is not None:
+        return fast[0].evaluate(qe, G, w, fast[1], fast[2], True)
     E, Np = w.shape
     step = max(1, CHUNK_POINTS // Np)
     if E <= step:

@@ -16,7 +16,7 @@ median of every checkout and the median of the per-round ratios against each bas
   iteration; a ``sitecustomize`` hook on PYTHONPATH notes the time, nothing else changes);
 * kernel [M GP/s]: ``kernels.internal_force_and_tangent`` (residual + tangent) on 64 elements
   3363 of degree 6 × 3 axial points (84 per element: the paper's rule and section cubature),
-  neo-Hookean and GOH (bench_kernel.py's ``block``: fibres along the pretwisted lines, all in
+  neo-Hookean and GOH (workflows/kernel_bench.py's ``block``: fibres along the pretwisted lines, all in
   tension); best of 20 calls.
 """
 from __future__ import annotations
@@ -74,8 +74,8 @@ class _Finder(importlib.abc.MetaPathFinder):
 sys.meta_path.insert(0, _Finder())
 '''
 
-#: run by each checkout's own python (argv[1]: this checkout's bench_kernel.py, whose ``block``
-#: it takes): the kernel rate of neo-Hookean and GOH, if that checkout has GOH
+#: run by each checkout's own python (argv[1]: this checkout's workflows/kernel_bench.py, whose
+#: ``block`` it takes): the kernel rate of neo-Hookean and GOH, if that checkout has GOH
 KERNEL = r'''
 import ast, json, sys, time
 import numpy as np
@@ -145,7 +145,7 @@ def run_column(tree: str, hook_dir: str, pin: str | None) -> dict:
 
 def run_kernel(tree: str, pin: str | None) -> dict:
     cmd = [os.path.join(tree, ".venv", "bin", "python"), "-c", KERNEL,
-           os.path.join(ROOT, "scripts", "bench_kernel.py")]
+           os.path.join(ROOT, "ancf_petsc", "workflows", "kernel_bench.py")]
     if pin is not None:
         cmd = ["taskset", "-c", pin] + cmd
     proc = subprocess.run(cmd, env=child_env(), cwd=tree, capture_output=True, text=True)

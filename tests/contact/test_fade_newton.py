@@ -146,12 +146,14 @@ def test_fade_key_errors_name_the_key_path():
     with pytest.raises(ConfigError, match="^contact.fade: must be one of settle, newton"):
         parse_config(achilles(contact={"mode": "sliding", "fade": "exact"}), base_dir=CONFIGS)
     raw = achilles(contact={"mode": "sliding", "fade": "newton",
-                            "tangential": {"law": "coulomb", "friction": 0.3}})
+                            "tangential": {"law": "elastic", "stiffness": 1e10}})
     with pytest.raises(ConfigError, match="^contact.fade: newton differentiates .* use settle"):
         parse_config(raw, base_dir=CONFIGS)
     assert parse_config(achilles(contact={"mode": "sliding"}), base_dir=CONFIGS).contact.fade == "newton"
-    raw = achilles(contact={"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}})
+    raw = achilles(contact={"mode": "sliding", "tangential": {"law": "elastic", "stiffness": 1e10}})
     assert parse_config(raw, base_dir=CONFIGS).contact.fade == "settle"
+    raw = achilles(contact={"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}})
+    assert parse_config(raw, base_dir=CONFIGS).contact.fade == "newton"     # friction_blocks.py
 
 
 def test_the_differentiated_weights_keep_sbaij_and_ldlt():

@@ -44,7 +44,6 @@ LONG_FUNCTIONS = {
     "physics/cubature.py:gauss_green_rule": "one algorithm (Gauss-Green cubature, eq. 11)",
     "geometry_input/merge.py:_assemble": "one algorithm (outlines merged along shared boundaries)",
     "model/build.py:build_model": "the model's parts built in dependency order",
-    "contact/blocks.py:_segment_blocks": "one vectorised block assembly over all segments",
     "contact/multipliers.py:build_space": "one construction (the Bernstein pressure space)",
     "config/bundle.py:expand_bundle": "one expansion of a bundle into beams, supports and loads",
     "viz/render.py:_render": "one figure's layout, in drawing order",

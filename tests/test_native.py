@@ -1,9 +1,33 @@
 """The compiled-kernel plumbing (ancf_petsc/native.py): which path runs,
 and when a module counts as out of date.  The kernels themselves are tested against their numpy
 originals beside them (tests/physics)."""
+import glob
+import importlib.util
 import os
 
+import pytest
+
 from ancf_petsc import native
+
+PACKAGE = os.path.dirname(os.path.abspath(native.__file__))
+#: every compiled module of the package, by its ``native.load`` name
+MODULES = sorted(os.path.relpath(p, PACKAGE)[:-4].replace(os.sep, ".")
+                 for p in glob.glob(os.path.join(PACKAGE, "**", "*.pyx"), recursive=True))
+
+
+def test_the_package_has_compiled_modules():
+    assert {"physics.element_kernels", "contact.descent_native"} <= set(MODULES), MODULES
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_every_compiled_module_is_built_wherever_cython_is(name):
+    """No silent fallback: with Cython importable (CI runs scripts/setup.sh, which builds every
+    .pyx), the compiled module is the one that runs, not the numpy code beside it."""
+    if not native.enabled():
+        pytest.skip("ANCF_NATIVE=0 switches the compiled kernels off for this run")
+    if importlib.util.find_spec("Cython") is None:
+        pytest.skip("no Cython here: the numpy code runs")
+    assert native.status(name) == "compiled"
 
 
 def test_switched_off_by_the_environment(monkeypatch):

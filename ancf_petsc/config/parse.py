@@ -15,6 +15,7 @@ import yaml
 
 from .. import yamlio
 from ..physics.elements import ELEMENTS
+from ..physics.goh import GOH
 
 from .beams import check_imported_loops, parse_beams
 from .bundle import expand_bundle
@@ -73,9 +74,17 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
         sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo, history=history)
     check_curves(spec)
-    if history is not None and "predictor" not in (raw.get("solver") or {}):
-        spec.solver.predictor = "tangent"        # non-proportional frames (solving/predictor.py)
+    if "predictor" not in (raw.get("solver") or {}):
+        spec.solver.predictor = default_predictor(spec)
     return spec
+
+
+def default_predictor(spec: ModelSpec) -> str:
+    """``solver.predictor`` when the config gives none (solving/predictor.py): ``tangent`` for a
+    load history (non-proportional frames) and for a model with a fibre-reinforced law (a
+    stiffening path, where the secant overshoots: docs/gait.md), else ``secant``."""
+    fibres = any(b.material.get("model") == GOH.name for b in spec.beams)
+    return "tangent" if spec.history is not None or fibres else "secant"
 
 
 def _steps(raw: dict, history) -> list[float]:

@@ -162,7 +162,8 @@ class SolverSpec:
     growth: float = 2.0
     easy_iterations: int = 8
     predictor: str = "secant"              # none | secant | tangent (solving/predictor.py); a load
-                                           # history's default is tangent (config/parse.py)
+                                           # history's and a fibre law's default is tangent
+                                           # (config/parse.py default_predictor)
     reuse_tangent: bool = True            # chord steps / kept fieldsplit factors (solving.chord)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this

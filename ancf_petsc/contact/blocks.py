@@ -14,14 +14,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .gap import gap_gradient, gap_hessian_factors
+from .. import native
+from . import segment_layout
+
+from .gap import gap_gradient, gap_hessian_core, gap_hessian_factors
 from .projection import subset
 from .state import ContactState
 from .weights import FadeDerivatives
-
-
-#: points per batch of segment blocks in ``jacobian_blocks`` (bounds the temporaries' memory)
-CHUNK_POINTS = 2048
 
 
 def state_nodes(c, st: ContactState):
@@ -43,9 +42,15 @@ def add_normal_forces(c, st: ContactState, floc: np.ndarray) -> None:
     pr = st.pr
     DOFS_PER_NODE, EL = c.model.dofs_per_node, c.model.block.dofs_per_element
     traction = st.tau[:, None] * pr.n                                  # τ_p n_p
+    module = native.load("contact.blocks_native")
     for e, N, sign in ((c.points.eA[pr.idx], pr.NA, -1.0), (pr.eB, pr.NB, 1.0)):
-        f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
         pos = st.lpos(c.conn[e])                                          # (P, 3)
+        if module is not None and floc.dtype == float and floc.flags.c_contiguous:
+            # bitwise the numpy below (contact/blocks_native.pyx)
+            module.add_point_forces(floc.reshape(-1), np.ascontiguousarray(pos, dtype=np.int64),
+                                    np.ascontiguousarray(N, dtype=float), traction, sign, DOFS_PER_NODE)
+            continue
+        f = sign * N[:, :, None] * traction[:, None, :]                   # (P, 18, 3)
         dofs = (DOFS_PER_NODE * pos[:, :, None] + np.arange(DOFS_PER_NODE)).ravel()
         floc += np.bincount(dofs, f.reshape(-1), minlength=floc.size)
     if c.weights.differentiated and c.weights.variational:
@@ -68,23 +73,11 @@ def jacobian_blocks(c, st: ContactState, fixed_mask: np.ndarray) -> list[tuple[n
     """Dense blocks (rows (n, D) PETSc DOF ids, −1 dropped; values (n, D, D)) of the contact
     part of the Jacobian: one per local segment over its A nodes, the nodes of the B elements
     its points project onto and its multiplier node; segments are batched by the number of
-    B elements they span (and in chunks of at most ``CHUNK_POINTS`` points).  ``c`` is the
-    ``Contact``, ``st`` its evaluation at the state."""
+    B elements they span (contact/segment_layout.py).  ``c`` is the ``Contact``, ``st`` its
+    evaluation at the state."""
     if len(c.local) == 0:
         return []
-    srow = np.searchsorted(c.segments, c.points.seg[c.local])
-    first_b = np.full(len(c.segments), np.iinfo(np.int64).max)
-    np.minimum.at(first_b, srow, st.pr.eB)
-    last_b = np.full(len(c.segments), -1)
-    np.maximum.at(last_b, srow, st.pr.eB)
-    span = last_b - first_b + 1
-    p_max = int(c.points.seg_size.max())
-    out = []
-    for width in np.unique(span):
-        group = np.flatnonzero(span == width)
-        for sk in np.array_split(group, -(-len(group) * p_max // CHUNK_POINTS)):
-            out.append(_segment_blocks(c, st, srow, first_b, sk, int(width), fixed_mask))
-    return out
+    return [_segment_blocks(c, st, lay) for lay in segment_layout.layouts(c, st.pr.eB, fixed_mask)]
 
 
 def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.ndarray,
@@ -110,52 +103,37 @@ def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.n
             K[s, b:b + el, b:b + el] += v[:, el:, el:]
 
 
-def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_mask):
-    """Blocks of the local segments ``sk``, each spanning ``width`` B elements.  The block's
-    unknowns: A's 3 nodes, B's 2 width + 1 nodes and the (at most two) multiplier nodes of
-    the functions living on the segment: D = 18 (2 width + 6) (three-node elements of 18-DOF
-    nodes, 3363; k axial nodes of Dn DOFs: Dn ((k − 1) width + k + 3))."""
-    pr, pts, sp = st.pr, c.points, c.space
+def add_gap_hessian(K: np.ndarray, sub, tau: np.ndarray, spread, s_loc: np.ndarray, p_loc: np.ndarray,
+                    col_b: np.ndarray, P_s: int, Dq: int) -> None:
+    """K[s, :Dq, :Dq] += Σ_p τ_p W_p C_p W_pᵀ = −Σ_p τ_p ∇²g_p over each segment's unknowns
+    (gap.gap_hessian_factors): point p of ``sub`` is the ``p_loc``-th of segment ``s_loc``, its B
+    element's unknowns start at ``col_b``; ``spread`` puts per-point rows in that layout.
+    Compiled (contact/blocks_native.pyx: bitwise this numpy code) or numpy."""
+    module = native.load("contact.blocks_native")
+    if module is not None:
+        f = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
+        i = lambda a: np.ascontiguousarray(a, dtype=np.int64)     # noqa: E731
+        Ct = gap_hessian_core(sub) * tau[:, None, None]
+        module.add_gap_hessian(K, f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.n), Ct,
+                               i(s_loc), i(p_loc), i(col_b), P_s, Dq)
+        return
+    n_s = len(K)
+    W, C = gap_hessian_factors(sub)
+    We = spread(W)
+    WCe = spread(np.matmul(W, C * tau[:, None, None]))
+    K[:, :Dq, :Dq] += np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
+                                We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+
+
+def _segment_blocks(c, st: ContactState, lay: segment_layout.SegmentLayout):
+    """The block rows and values (n_s, D, D) of the segments of the layout ``lay``."""
+    pr, sel, spread, Dq = st.pr, lay.sel, lay.spread, lay.Dq
     DOFS_PER_NODE, EL = c.model.dofs_per_node, c.model.block.dofs_per_element
     k = c.model.block.axial_nodes - 1                   # an element's last node
-    Z = 2 * DOFS_PER_NODE                               # the segment's two multiplier nodes
-    segs = c.segments[sk]
-    n_s = len(sk)
-    P_s = int(pts.seg_size[segs].max())
-    D = DOFS_PER_NODE * (k * width + k + 4)
-    Dq = D - Z
-    in_sk = np.zeros(len(c.segments), dtype=bool)
-    in_sk[sk] = True
-    sel = np.flatnonzero(in_sk[srow])                   # positions in the local arrays
-    s_loc = np.searchsorted(sk, srow[sel])
-    p_loc = c.local[sel] - pts.seg_start[segs[s_loc]]
-    j = pr.eB[sel] - first_b[srow[sel]]
-    # each point's 2 x 54 unknowns (A element, its B element) inside the block; B's elements
-    # share end nodes, so element j starts 2 nodes after element j - 1
-    cols = np.concatenate([np.broadcast_to(np.arange(EL), (len(sel), EL)),
-                           EL + k * DOFS_PER_NODE * j[:, None] + np.arange(EL)], axis=1)
     sub = subset(pr, sel)
-    at = (s_loc[:, None], p_loc[:, None], cols)
-    # one B element per segment: each point's unknowns are the block's, in order, and its rows
-    # go in whole (every segment full and its points in order: the arrays as they are), never
-    # scattered entry by entry (0.1 of the Achilles column's 0.25 s of contact assembly)
-    whole = width == 1
-    dense = whole and len(sel) == n_s * P_s and np.array_equal(s_loc * P_s + p_loc, np.arange(len(sel)))
-
-    def spread(X):
-        """Per-point rows X (points, Dq, ...) as (n_s, P_s, Dq, ...) over the block's unknowns."""
-        if dense:
-            return X.reshape((n_s, P_s) + X.shape[1:])
-        out = np.zeros((n_s, P_s, Dq) + X.shape[2:])
-        if whole:
-            out[s_loc, p_loc] = X
-        else:
-            out[at] = X
-        return out
-
     grad = gap_gradient(sub)
     V = spread(grad * st.weight[sel][:, None])           # ∇(w_p g_p) at fixed w: w_p ∇g_p
-    K = np.zeros((n_s, D, D))
+    K = np.zeros((lay.n_s, lay.D, lay.D))
     Vg = V
     if c.weights.differentiated:
         nodes = state_nodes(c, st) if c.weights.variational else None     # ∇²w: variational only
@@ -170,47 +148,20 @@ def _segment_blocks(c, st: ContactState, srow, first_b, sk, width: int, fixed_ma
                 K[:, :Dq, :Dq] -= PG + PG.transpose(0, 2, 1)   # −Σ p_p (∇g ∇wᵀ + ∇w ∇gᵀ)
                 # −Σ p_p g_p ∇²w_p over each band point's 108 unknowns
                 coef = -(st.pressure[sel][band] * sub.g[band])[:, None, None]
-                add_point_blocks(K, s_loc[band], j[band], coef * hess, EL, k * DOFS_PER_NODE)
+                add_point_blocks(K, lay.s_loc[band], lay.j[band], coef * hess, EL, k * DOFS_PER_NODE)
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment
-        W, C = gap_hessian_factors(sub)
-        We = spread(W)
-        WCe = spread(np.matmul(W, C * tau[:, None, None]))
-        K[:, :Dq, :Dq] += np.matmul(WCe.transpose(0, 2, 1, 3).reshape(n_s, Dq, 4 * P_s),
-                                    We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
+        add_gap_hessian(K, sub, tau, spread, lay.s_loc, lay.p_loc, lay.cols[:, EL], lay.P_s, Dq)
     # constraint rows k_s ∂R/∂ḡ Φ_s ∇g, the multipliers' columns −k_s ω Φ_s ∇g of the forces and
     # the diagonal k_s ∂R/∂z × (the segment's share of the function)
-    m_ids = sp.seg_mults[segs]                                            # (n_s, K), −1 pad
-    real = m_ids >= 0
-    loc = np.searchsorted(c.mults, m_ids[real])
-    dRg, dRz, om = (np.zeros(m_ids.shape) for _ in range(3))
+    real, loc, ss, kk, mrow = lay.real, lay.loc, lay.ss, lay.kk, lay.mrow
+    dRg, dRz, om = (np.zeros(real.shape) for _ in range(3))
     dRg[real], dRz[real], om[real] = st.rows.dR_dg[loc], st.rows.dR_dz[loc], st.rows.omega[loc]
-    Phi_s = sp.dense[segs][:, :, :P_s]                                    # (n_s, K, P_s)
-    Gr = -c.stiffness * np.matmul(Phi_s, Vg)         # (n_s, K, Dq): ∇ḡ = Φ ∇(w g)
+    Gr = -c.stiffness * np.matmul(lay.Phi_s, Vg)     # (n_s, K, Dq): ∇ḡ = Φ ∇(w g)
     # the multipliers' columns: the forces' −k_s Φ ∇(w g), or Φ w ∇g when they are τ_p ∇g_p
-    Gc = Gr if c.weights.variational or Vg is V else -c.stiffness * np.matmul(Phi_s, V)
-    share = Phi_s.sum(axis=2)
-    ss, kk = np.nonzero(real)
-    second = sp.node[m_ids[ss, kk]] != c.seg_mnodes[segs[ss], 0]
-    mrow = Dq + DOFS_PER_NODE * second + sp.slot[m_ids[ss, kk]]
+    Gc = Gr if c.weights.variational or Vg is V else -c.stiffness * np.matmul(lay.Phi_s, V)
     K[ss, mrow, :Dq] = -dRg[ss, kk, None] * Gr[ss, kk]
     K[ss, :Dq, mrow] = om[ss, kk, None] * Gc[ss, kk]
-    K[ss, mrow, mrow] = c.stiffness * dRz[ss, kk] * share[ss, kk]
-    # DOF indices: A nodes, B nodes of elements first … first + width − 1, multiplier nodes
-    els = c.conn[first_b[sk][:, None] + np.arange(width)]            # (n_s, width, 3)
-    bnodes = np.concatenate([els[:, :, :k].reshape(n_s, -1), els[:, -1:, k]], axis=1)
-    nodes = np.concatenate([c.conn[pts.seg_eA[segs]], bnodes, c.seg_blocks[segs]], axis=1)
-    rows = (DOFS_PER_NODE * nodes[:, :, None] + np.arange(DOFS_PER_NODE)).reshape(n_s, D)
-    # the B elements of a segment need not be contiguous (points on e and e + 2): the
-    # nodes of an element in between that no point projects onto stay out of the matrix
-    used = np.zeros((n_s, D), dtype=bool)
-    used[:, :EL] = True
-    used[:, Dq:] = np.repeat(c.seg_blocks[segs] >= 0, DOFS_PER_NODE, axis=1)
-    used[s_loc[:, None], cols[:, EL:]] = True
-    rows = np.where(used, rows, -1)
-    rows[rows >= 0] = np.where(fixed_mask[rows[rows >= 0]], -1, rows[rows >= 0])
-    return rows, K
-
-
-
+    K[ss, mrow, mrow] = c.stiffness * dRz[ss, kk] * lay.share[ss, kk]
+    return lay.rows, K

@@ -19,6 +19,7 @@ DOF indices for the assembly layer to insert.
 """
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -69,7 +70,7 @@ class Contact:
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty
-        self.owned, self.Phi, self._cache = np.zeros(0, dtype=bool), None, None
+        self.owned, self.Phi, self.PhiT, self._cache, self.block_layouts = np.zeros(0, dtype=bool), None, None, None, None
         n_blocks = model.n_nodes + self.space.n_nodes
         self.set_numbering(np.arange(n_blocks), np.ones(self.points.n_segments, dtype=bool))
         check_reference_gaps(self)
@@ -110,9 +111,10 @@ class Contact:
         self.owned = (np.ones(len(self.mults), dtype=bool) if owned_elements is None
                       else owned_elements[sp.element[self.mults]])
         self.Phi = sp.Phi[self.mults][:, self.local].tocsr()
+        self.PhiT = self.Phi.T.tocsr()       # Φᵀ's products summed as Phi.T's, without its CSC copy
         for term in self.terms:
             term.set_numbering(self, perm)
-        self._cache = None
+        self._cache = self.block_layouts = None       # (contact/segment_layout.py)
 
     def set_layout(self, layout) -> None:
         """This rank's segments (those of its A elements) in the layout's numbering."""
@@ -167,8 +169,7 @@ class Contact:
             return c[2]
         t0 = time.perf_counter()
 
-        def lpos(nodes):
-            return np.searchsorted(needed, nodes)
+        lpos = functools.partial(np.searchsorted, needed)       # PETSc node id → local position
 
         def x_of(els):
             return xl[lpos(self.conn[els])].reshape(len(els), self.model.block.slots, 3)
@@ -193,7 +194,7 @@ class Contact:
         self.status_changes += int(np.count_nonzero(active != prev))
         self.status[self.mults] = active
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
-        pressure = self.stiffness * (self.Phi.T @ (z * rows.load))
+        pressure = self.stiffness * (self.PhiT @ (z * rows.load))
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=pressure * weight,
                           pressure=pressure, lpos=lpos, rows=rows, weight=weight, xl=xl.copy())
         st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}

@@ -11,6 +11,7 @@ import numpy as np
 
 cimport numpy as cnp
 from libc.math cimport fabs
+from scipy.linalg.cython_blas cimport dgemm, dgemv
 
 cnp.import_array()
 
@@ -183,3 +184,36 @@ def curves(const long[::1] which, const double[::1] tp, const double[::1] t_end,
             o[1, p, 0] = -o[1, p, 0]
             o[1, p, 1] = -o[1, p, 1]
     return out[0], out[1], out[2]
+
+
+def surface_products(const double[:, :, ::1] qB, const double[:, ::1] NB, const double[:, :, :] NBz,
+                     const double[:, :, :] NBzz4):
+    """Y (P, 3), Y_ζ (P, 3, 2), Y_ζζ (P, 3, 4) of ``projection.Projector.surface`` from B's nodal
+    vectors qB (P, S, 3) and the shape functions of ``shapes`` (N_ζ and N_ζζ as it returns them:
+    transposed views, (P, S, 2) and (P, S, 4) with unit stride along S): per point the BLAS calls
+    numpy's matmul makes for ``NB[:, None, :] @ qB`` (gemv), ``qBᵀ @ NBz`` and ``qBᵀ @ NBzz``
+    (gemm, both operands transposed: the views' layout), so the values are bitwise numpy's."""
+    cdef Py_ssize_t P = qB.shape[0], p
+    cdef int S = qB.shape[1], three = 3, two = 2, four = 4, inc = 1, ldz, ldzz
+    cdef double one = 1.0, zero = 0.0
+    cdef char tn = b'N', tt = b'T'
+    if (NB.shape[0] != P or NBz.shape[0] != P or NBzz4.shape[0] != P or qB.shape[2] != 3
+            or NB.shape[1] != S or NBz.shape[1] != S or NBzz4.shape[1] != S or NBz.shape[2] != 2
+            or NBzz4.shape[2] != 4 or NBz.strides[1] != 8 or NBzz4.strides[1] != 8
+            or NBz.strides[2] % 8 or NBzz4.strides[2] % 8 or NBz.strides[2] < 8 * S or NBzz4.strides[2] < 8 * S):
+        raise ValueError("unexpected shapes or layout")
+    ldz, ldzz = NBz.strides[2] // 8, NBzz4.strides[2] // 8
+    Y_arr, Yz_arr, Yzz_arr = np.empty((P, 3)), np.empty((P, 3, 2)), np.empty((P, 3, 4))
+    cdef double[:, ::1] Y = Y_arr
+    cdef double[:, :, ::1] Yz = Yz_arr
+    cdef double[:, :, ::1] Yzz = Yzz_arr
+    for p in range(P):
+        # cblas_dgemv(RowMajor, Trans, S, 3, 1, qB_p, 3, NB_p, 1, 0, Y_p, 1)
+        dgemv(&tn, &three, &S, &one, <double*>&qB[p, 0, 0], &three, <double*>&NB[p, 0], &inc, &zero,
+              &Y[p, 0], &inc)
+        # cblas_dgemm(RowMajor, Trans, Trans, 3, k, S, 1, qB_p, 3, N_p, ld, 0, out_p, k)
+        dgemm(&tt, &tt, &two, &three, &S, &one, <double*>&NBz[p, 0, 0], &ldz, <double*>&qB[p, 0, 0],
+              &three, &zero, &Yz[p, 0, 0], &two)
+        dgemm(&tt, &tt, &four, &three, &S, &one, <double*>&NBzz4[p, 0, 0], &ldzz, <double*>&qB[p, 0, 0],
+              &three, &zero, &Yzz[p, 0, 0], &four)
+    return Y_arr, Yz_arr, Yzz_arr

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import native
+
 #: a point whose closest point lies past an end of B's interface curve (the spline's end piece
 #: continues smoothly) keeps its full weight up to CURVE_OVERHANG of the curve's length beyond
 #: it; its weight then falls smoothly (C²) to zero at CURVE_FADE_END, so that no point leaves the
@@ -41,6 +43,19 @@ def fade_slope(u: np.ndarray) -> np.ndarray:
     return np.where((u > 0.0) & (u < 1.0), -30.0 * u * u * (1.0 - u) ** 2, 0.0)
 
 
+def _compiled(xiB, tB, t_end, at_first, at_last) -> tuple | None:
+    """``contact.control_native`` and its arrays (contiguous float64, flags as uint8) for
+    ``end_weight`` and ``end_weight_slope``; None when it is not built (or ANCF_NATIVE=0) or the
+    arguments are not arrays of one length (scalars, broadcasting: the numpy code takes those)."""
+    module = native.load("contact.control_native")
+    args = (xiB, tB, t_end, at_first, at_last)
+    if module is None or not all(isinstance(a, np.ndarray) and a.ndim == 1 and len(a) == len(xiB)
+                                 for a in args):
+        return None
+    return (module,) + tuple(np.ascontiguousarray(a, dtype=float) for a in args[:3]) + tuple(
+        np.ascontiguousarray(a, dtype=bool).view(np.uint8) for a in args[3:])
+
+
 def _fade_arguments(xiB, tB, t_end, at_first, at_last) -> tuple:
     """The fades' arguments at partner places (``end_weight``): u_t past the curve's ends, u_x
     past the beam's; whether t_B is below the curve's start, and ξ_B's overhang (signed)."""
@@ -55,6 +70,9 @@ def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.
     """Weight of a partner place (ξ_B, t_B): 1 on B's surface, falling past the curve's ends
     (overhang as a share of the curve's length T) and past the beam's ends (``at_first``/
     ``at_last``: on B's first/last element, in element lengths)."""
+    fast = _compiled(xiB, tB, t_end, at_first, at_last)
+    if fast is not None:                  # bitwise the numpy below (contact/control_native.pyx)
+        return fast[0].end_weight(*fast[1:], CURVE_OVERHANG, CURVE_FADE_END, END_FADE)
     u_t, u_x, _, _ = _fade_arguments(xiB, tB, t_end, at_first, at_last)
     return fade(u_t) * fade(u_x)
 
@@ -82,6 +100,9 @@ def end_weight_curvature(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_
 def end_weight_slope(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
                      at_last: np.ndarray) -> np.ndarray:
     """∂w/∂ζ (P, 2) of ``end_weight`` at the partner places (ξ_B, t_B)."""
+    fast = _compiled(xiB, tB, t_end, at_first, at_last)
+    if fast is not None:                  # bitwise the numpy below (contact/control_native.pyx)
+        return fast[0].end_weight_slope(*fast[1:], CURVE_OVERHANG, CURVE_FADE_END, END_FADE)
     u_t, u_x, below, raw = _fade_arguments(xiB, tB, t_end, at_first, at_last)
     sx = np.where(at_last, 1.0, 0.0) - np.where(at_first, 1.0, 0.0)
     f_t, f_x = fade(u_t), fade(u_x)

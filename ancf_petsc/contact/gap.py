@@ -43,6 +43,17 @@ def _inverse2(M: np.ndarray) -> np.ndarray:
 
 def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
     """W (P, 108, 4) and C (P, 4, 4) with ∇²g_p = −W_p C_p W_pᵀ."""
+    P, T, C = len(pr.g), pr.Yz, gap_hessian_core(pr)
+    NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
+    SLOTS = pr.NA.shape[1]                                           # an element's slots (18 for 3363)
+    W = np.zeros((P, 2 * SLOTS, 3, 4))
+    W[..., :2] = NAB[:, :, None, None] * T[:, None, :, :]            # u_α
+    W[:, SLOTS:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
+    return W.reshape(P, 6 * SLOTS, 4), C
+
+
+def gap_hessian_core(pr) -> np.ndarray:
+    """C (P, 4, 4) of ``gap_hessian_factors``."""
     P = len(pr.g)
     T = pr.Yz                                                        # (P, 3, 2)
     a = np.matmul(T.transpose(0, 2, 1), T)
@@ -54,12 +65,7 @@ def gap_hessian_factors(pr) -> tuple[np.ndarray, np.ndarray]:
     C[:, :2, 2:] = Hi
     C[:, 2:, :2] = Hi
     C[:, 2:, 2:] = pr.g[:, None, None] * Hi
-    NAB = np.concatenate([pr.NA, -pr.NB], axis=1)                    # (P, 36)
-    SLOTS = pr.NA.shape[1]                                           # an element's slots (18 for 3363)
-    W = np.zeros((P, 2 * SLOTS, 3, 4))
-    W[..., :2] = NAB[:, :, None, None] * T[:, None, :, :]            # u_α
-    W[:, SLOTS:, :, 2:] = pr.NBz[:, :, None, :] * pr.n[:, None, :, None]  # v_α
-    return W.reshape(P, 6 * SLOTS, 4), C
+    return C
 
 
 

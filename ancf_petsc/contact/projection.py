@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .control import DescentControl
 from .descent import ROUNDING, Backtracking
 from .fade import CURVE_FADE_END, END_FADE, end_weight
 from .surface import InterfaceCurves, SurfaceKernels, closest_parameter, section_shift, shape_third_on_curve
@@ -65,6 +66,7 @@ class Projector:
         self._b_last = self._b_first + np.array([i.b.n_elements - 1 for i in interfaces], dtype=np.int64)
         self._curve_end = np.array([i.curve_b.t_end for i in interfaces], dtype=float)
         self._kernels = SurfaceKernels(self.block)      # compiled or numpy
+        self._control = DescentControl(self, self._kernels.compiled)
         # state (B element, ξ_B, t_B), started at the matching reference point
         self.eB = points.eB0.copy()
         self.xiB = points.xi.copy()
@@ -150,13 +152,9 @@ class Projector:
     def surface(self, x_of, itf, eB, xiB, tB):
         """B's surface at (e_B, ξ_B, t_B): Y, Y_ζ (P,3,2), Y_ζζ (P,3,2,2), N_B, N_B,ζ, N_B,ζζ.
         ``x_of(elements)`` returns their nodal vectors (E, 18, 3)."""
-        P = len(eB)
         S, S1, S2 = self._curves(itf, tB)                       # every interface's curve at once
         NB, NBz, NBzz = self._kernels.shapes(xiB, S, S1, S2)
-        qB = x_of(eB)                                           # (P, 18, 3)
-        Y = np.matmul(NB[:, None, :], qB)[:, 0]
-        Yz = np.matmul(qB.transpose(0, 2, 1), NBz)              # (P, 3, 2)
-        Yzz = np.matmul(qB.transpose(0, 2, 1), NBzz.reshape(P, self.block.slots, 4)).reshape(P, 3, 2, 2)
+        Y, Yz, Yzz = self._kernels.surface(x_of(eB), NB, NBz, NBzz)
         return Y, Yz, Yzz, NB, NBz
 
     def wrap(self, itf, eB, xiB, tB):
@@ -172,6 +170,11 @@ class Projector:
         eB[:], xiB[:], tB[:] = e_new, x, t
         weight = end_weight(x, t, T, e_new == b_first, e_new == b_last)
         return eB, xiB, tB, weight
+
+    def wrap_bounds(self, itf: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """B's first and last element and its curve's length for points of the interfaces ``itf``
+        (what ``wrap`` clamps to)."""
+        return self._b_first[itf], self._b_last[itf], self._curve_end[itf]
 
     def on_surface(self, idx: np.ndarray, eB: np.ndarray, xiB: np.ndarray, tB: np.ndarray) -> np.ndarray:
         """Whether the partner places (e_B, ξ_B, t_B) of the points ``idx`` lie on B's interface
@@ -246,20 +249,14 @@ class Projector:
         for it in range(MAX_ITERATIONS):
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
             d = xA - Y
-            worse = search.worse(d, valid)          # never on the first pass (φ of the start: ∞)
             dz, r = self._kernels.step(Yz, Yzz, d, pinned, self.metric_steps)
-            stuck = ~np.all(np.isfinite(dz), axis=1)
-            # a degenerate local problem (only in wild intermediate iterates, far from the
-            # surface) keeps the point where it is; such a state is never accepted
-            dz[stuck], r[stuck] = 0.0, 0.0
-            stuck_ever |= stuck
-            ok = (np.abs(dz[:, 0]) < PROJECTION_TOL) & (np.abs(dz[:, 1]) < tol_t) & ~worse | ~valid
+            # worse: never on the first pass (φ of the start: ∞); a degenerate local problem (only
+            # in wild intermediate iterates, far from the surface) keeps the point where it is
+            # (``stuck_ever``); such a state is never accepted
+            worse, ok = self._control.assess(search, d, valid, dz, r, PROJECTION_TOL, tol_t, stuck_ever)
             if it > 0 and np.all(ok):
                 break
-            crossed = worse & (eB != search.e)
-            search.accept(~worse, eB, xiB, tB, d, dz, r)
-            eB, xiB, tB = search.trial()
-            eB, xiB, tB, weight = self.wrap(itf, eB, xiB, tB)
+            eB, xiB, tB, weight, crossed = self._control.advance(search, itf, eB, xiB, tB, d, dz, r, worse)
             if np.any(crossed):
                 pinned |= self._stop_at_boundary(itf, crossed, search, eB, xiB, tB, weight)
             valid = weight > 0.0

@@ -206,12 +206,27 @@ class SurfaceKernels:
             self._table = (ey.reshape(-1, V).astype(np.int64), ez.reshape(-1, V).astype(np.int64),
                            coef.reshape(-1, V), live.reshape(-1, V).astype(np.uint8), block.order)
             self._shapes, self._step = module.shapes, module.newton_step
+            self._products = module.surface_products
 
     def shapes(self, xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.ndarray):
         """N (P, S), N_ζ (P, S, 2), N_ζζ (P, S, 2, 2) (``shape_on_curve``)."""
         if self.compiled:
             return self._shapes(np.ascontiguousarray(xi, dtype=float), S, S1, S2, *self._table)
         return shape_on_curve(xi, S, S1, S2, self.block)
+
+    def surface(self, qB: np.ndarray, NB: np.ndarray, NBz: np.ndarray, NBzz: np.ndarray):
+        """Y (P, 3), Y_ζ (P, 3, 2), Y_ζζ (P, 3, 2, 2) of the surface with B's nodal vectors qB
+        (P, S, 3) from ``shapes``' N, N_ζ, N_ζζ: numpy's matmuls, or the compiled module making
+        the same BLAS calls on the same operands where their layout is ``shapes``' (bitwise)."""
+        P, S = NB.shape
+        NBzz4 = NBzz.reshape(P, S, 4)
+        if (self.compiled and qB.flags.c_contiguous and NB.flags.c_contiguous
+                and NBz.strides[1] == NBzz4.strides[1] == 8 and min(NBz.strides[2], NBzz4.strides[2]) >= 8 * S):
+            Y, Yz, Yzz = self._products(qB, NB, NBz, NBzz4)
+            return Y, Yz, Yzz.reshape(P, 3, 2, 2)
+        Y = np.matmul(NB[:, None, :], qB)[:, 0]
+        Yz = np.matmul(qB.transpose(0, 2, 1), NBz)                 # (P, 3, 2)
+        return Y, Yz, np.matmul(qB.transpose(0, 2, 1), NBzz4).reshape(P, 3, 2, 2)
 
     def step(self, Yz: np.ndarray, Yzz: np.ndarray, d: np.ndarray, pinned: np.ndarray,
              metric: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -61,8 +61,9 @@ class FadeDerivatives:
         self._slope = end_weight_slope(*self._args)
         # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
         # weight's derivatives there would be large and meaningless, so it counts as kept
-        self.band = np.flatnonzero(np.any(self._slope != 0.0, axis=1)
-                                   & (projection_conditioning(pr) > WELL_POSED))
+        # (the conditioning of the sloped points alone: each point's is its own)
+        sloped = np.flatnonzero(np.any(self._slope != 0.0, axis=1))
+        self.band = sloped[projection_conditioning(subset(pr, sloped)) > WELL_POSED] if len(sloped) else sloped
         self.grad = np.zeros((len(pr.idx), 6 * pr.NA.shape[1]))     # A's and B's slots × 3
         self._sub = self._dz = self._hess = None
         if len(self.band):

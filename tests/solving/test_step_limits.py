@@ -97,11 +97,13 @@ def test_lone_soleus_of_the_stiffest_published_set_reaches_400_newtons(tmp_path)
     on a second stable branch in its first level).  The jump needs the whole first level as the
     first increment: the default bounds it by the linear response at rest (solving/
     rest_response.py: 10 N -> 0.08 N here), the path is then continuous and stops at the fold,
-    99.501 N, with a message naming a limit or bifurcation point."""
+    99.501 N, with a message naming a limit or bifurcation point.  The jump is the secant
+    predictor's (solving/predictor.py): with the tangent one, a fibre law's default since
+    2026-11-28, the path is continuous too and stops at the fold."""
     from helpers import run_inline
     raw = _lone_soleus()
     raw["steps"] = [10, 20, 30, 40, 45, 60, 80, 90, 100, 150, 200, 300, 400]
-    raw["solver"] = {"initial_increment": 10.0}
+    raw["solver"] = {"initial_increment": 10.0, "predictor": "secant"}
     raw["output"] = {"vtk": False}
     s = run_inline(raw, tmp_path)
     assert s["status"] == "completed" and [st["load_factor"] for st in s["steps"]] == raw["steps"]

@@ -16,6 +16,7 @@ import yaml
 from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN
 
 from apps.ancf_sweep import main
+from ancf_petsc.io.groups import truncate_levels
 from ancf_petsc.workflows.sweep import (SweepError, expand, format_value, load_sweep, parse_key_path,
     run_config)
 
@@ -357,6 +358,9 @@ def test_a_killed_run_is_continued_from_its_last_level(tmp_path):
     s["status"], s["steps"] = "interrupted", s["steps"][:1]
     with open(summary_path, "w") as fh:
         json.dump(s, fh)
+    # and results.h5 with it (a restart continues from results.h5's last level, whose entry
+    # completes summary.json)
+    truncate_levels(os.path.join(run.dir, "results.h5"), 1, s["steps"][0]["load_factor"])
     rc, out, _ = run_main([path])
     assert rc == 0, out
     with open(summary_path) as fh:

@@ -6,8 +6,11 @@ load step 90 → 100 N: period 3, |F| 0.62 / 0.41 / 0.37 N from the 15th iterati
 This test is PETSc's default (SNESConvergedDefault, restated: rtol, atol, stol, the function
 budget and the divergence tolerance) plus one rule: from ``MIN_ITERATIONS`` on, a cycle of
 period ≥ 2 (``solver_messages.newton_cycle``) ends the solve as DIVERGED_MAX_IT, so the increment
-goes to friction's Tresca fixed point or a cut-back at once.  A stall (period 1) is left to the
-other tests.  It is installed for models whose contact has state-dependent bounds (friction)
+goes to friction's Tresca fixed point or a cut-back at once.  A second rule ends a solve that
+wanders: no new smallest |F| in the last ``WANDER_WINDOW`` iterations (the μ = 0.3 walking stride
+at 4 elements, frame 12 with the fade weights differentiated: |F| between 1 and 750 N for 196
+iterations after its best, 1.03 N at the 4th, before friction's ``snes_max_it`` 200 sent it to
+the Tresca fixed point, which converged).  A stall (period 1) is left to the other tests.  It is installed for models whose contact has state-dependent bounds (friction)
 unless ``-snes_convergence_test`` is given.
 """
 from __future__ import annotations
@@ -21,6 +24,8 @@ from .solver_messages import newton_cycle
 
 #: iterations before a cycle may end a solve (a status change needs a few iterations to show)
 MIN_ITERATIONS = 12
+#: iterations without a new smallest |F| that end a solve as wandering (``wandering``)
+WANDER_WINDOW = 40
 #: PETSc's default divergence tolerance (fnorm > divtol × |F₀|: DIVERGED_DTOL)
 DEFAULT_DIVTOL = 1.0e4
 
@@ -70,4 +75,13 @@ class CycleStop:
             if cycle is not None and cycle[0] >= 2:
                 self.cycle = cycle
                 return Reason.DIVERGED_MAX_IT
+            if wandering(self.history()):
+                return Reason.DIVERGED_MAX_IT
         return Reason.ITERATING
+
+
+def wandering(history: list[float], window: int = WANDER_WINDOW) -> bool:
+    """True when none of the last ``window`` norms is below the smallest before them."""
+    if len(history) <= window:
+        return False
+    return min(history[-window:]) >= min(history[:-window])

@@ -440,3 +440,17 @@ def test_a_failure_that_lost_the_contact_projection_names_the_search_window():
     assert "slid out of its search window, 0.1 of the partner beam" in text
     assert "down to 0.00114" in text and "contact.search_margin" in text
     assert lost_detail(contact, 0.001, False) == "" and lost_detail(None, 0.001, True) == ""
+
+
+def test_a_wandering_friction_solve_is_ended_early():
+    """Friction's semi-smooth iteration that finds no new smallest |F| in WANDER_WINDOW iterations
+    ends (DIVERGED_MAX_IT: the Tresca fixed point takes over) instead of running to its 200: the
+    μ = 0.3 walking stride's frame 12 wandered between 1 and 750 N for 196 iterations after its
+    best (1.03 N at the 4th).  A converging history, however slowly, and a short one do not."""
+    from ancf_petsc.solving.cycle_stop import WANDER_WINDOW, wandering
+    rng = np.random.default_rng(0)
+    wander = [3.2, 1.6, 1.1, 1.6, 1.03] + list(1.5 + 5.0 * rng.random(WANDER_WINDOW))
+    assert wandering(wander)
+    assert not wandering(wander[:-1] + [1.0])                    # a new best in the window
+    assert not wandering([10.0 * 0.97 ** k for k in range(3 * WANDER_WINDOW)])
+    assert not wandering(wander[:WANDER_WINDOW])                 # too short to judge

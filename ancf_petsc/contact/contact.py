@@ -288,13 +288,19 @@ class Contact:
         return bool(change > WEIGHT_TOL or lost)
 
 
+def forget_evaluation(contact: Contact) -> None:
+    """Drop the kept evaluation (projections, forces, blocks) of the last state: something the
+    residual depends on changed outside the state (the weights' rule, a phase, a reweighing)."""
+    contact._cache = None
+
+
 def hold_bounds(contact: Contact, hold: bool = True) -> float:
     """Tresca's problem (solving/newton.py, "Friction's bounds"): every bounded term's bounds held
     at the last evaluation's (``hold``), or following the state again; the largest change of a
     held bound since the last hold relative to the largest, over the terms and the ranks (inf
     the first time; collective when holding)."""
     changes = [t.hold_bounds() if hold else t.release_bounds() for t in contact.terms if t.bounded]
-    contact._cache = None                                 # the residual changed
+    forget_evaluation(contact)                            # the residual changed
     if not hold:
         return 0.0
     return float(contact.reduce(np.array([max(changes, default=0.0)]), "max")[0])

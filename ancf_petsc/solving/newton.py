@@ -73,7 +73,7 @@ from typing import Callable
 
 from petsc4py import PETSc
 
-from ..contact import hold_bounds
+from ..contact import forget_evaluation, hold_bounds
 from ..contact.laws import HELD, NEWTON, Phase
 
 #: Newton solves after the first at most, to bring contact points' weights up to date
@@ -114,7 +114,7 @@ class ContactSteps:
         """An increment's solves start (the fade weights' rule, contact/weights.py)."""
         if self.contact is not None:
             self.contact.weights.begin_increment(from_rest)
-            self.contact._cache = None
+            forget_evaluation(self.contact)
 
     def phases(self, from_rest: bool) -> list:
         return [NEWTON] if self.contact is None else self.contact.law.phases(from_rest)
@@ -309,7 +309,7 @@ class PhasedNewton:
         """One solve for the weights just updated, the status kept (``_predicted``)."""
         if weighed is not None:
             weighed[0].destroy()
-        self.steps.contact._cache = None
+        forget_evaluation(self.steps.contact)
         reason, n = self.snes_solve(X)
         self._trace(lam, "weights changed", n, reason)
         return reason, its + n, False

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from ..contact import forget_evaluation
 from ..errors import InputError
 
 #: a stored level's residual recomputed may exceed the one recorded only by rounding (another
@@ -43,10 +44,12 @@ def fade_modes(problem):
     before = w.differentiated
     try:
         for mode in (True, False):
-            w.differentiated, c._cache = mode, None
+            w.differentiated = mode
+            forget_evaluation(c)
             yield mode
     finally:
-        w.differentiated, c._cache = before, None
+        w.differentiated = before
+        forget_evaluation(c)
 
 
 def allowed_residual(atol: float, recorded: float | None, rounding_floor: float) -> float:

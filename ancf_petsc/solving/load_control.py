@@ -31,8 +31,6 @@ class LevelTally:
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)
     unstable_at: tuple[float, int, int] | None = None
-    #: whether the last failed attempt lost a contact point's projection (its search window)
-    lost_last: bool = False
 
 
 class LoadControl:

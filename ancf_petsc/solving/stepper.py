@@ -249,7 +249,6 @@ class LoadStepper:
         P.restore()
         path.dlam, give_up = self.control.after_failure(step, reason == UNSTABLE_STEP, tally)
         why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
-        tally.lost_last = lost and not inverted
         if reason == STALLED_STEP:
             why = (f" (stopped on the step length with |F| {self.solver.stalled_at:.2e} above the "
                    f"tolerance {self.solver.snes.getTolerances()[1]:.1e})")
@@ -263,5 +262,5 @@ class LoadStepper:
             P.load_factor = path.lam
             raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
                                   solver_messages.failure_detail(self.solver, reason)
-                                  + solver_messages.lost_detail(P.contact, step, tally.lost_last)
+                                  + solver_messages.lost_detail(P.contact, step, lost and not inverted)
                                   + solver_messages.stability_detail(tally.unstable_at))

@@ -3,9 +3,9 @@
 * ``results.h5``  — ``/model`` (reference nodal vectors, connectivity, sections, config text,
   partition) and ``/steps/step_NNNN`` (load factor, nodal vectors, SNES iterations/reason,
   wall time).  The file is opened and closed for every step.
-* ``summary.json`` — probes per step, iterations, timings; replaced atomically after the first
-  level, then at most every ``SUMMARY_INTERVAL`` s while the run goes on, and at its end (every
-  ending: completed, failed, interrupted).  Each level's entry is also in results.h5 (attribute
+* ``summary.json`` — probes per step, iterations, timings; replaced atomically after every
+  level (``SUMMARY_INTERVAL``) and at the run's end (every ending: completed, failed,
+  interrupted).  Each level's entry is also in results.h5 (attribute
   ``summary_entry`` of ``steps/step_NNNN``), so a run killed between two rewrites loses nothing:
   ``reader.read_results`` and ``--restart`` append the levels summary.json does not list yet.
 * ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled
@@ -46,10 +46,12 @@ RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
 
 
-#: summary.json is rewritten after level 1, then at most this often [s] while running (a rewrite
-#: costs ~3 ms on ext4, which flushes a file renamed over another: as much as a stride's frame
-#: takes to solve), and at the end; each level's entry is in results.h5 meanwhile
-SUMMARY_INTERVAL = 0.5
+#: summary.json is rewritten after level 1, then at most this often [s] while running, and at
+#: the end; each level's entry is in results.h5 meanwhile.  0: at every level.  0.5 s saved ~3 ms
+#: a stride frame (a rewrite on ext4 flushes a file renamed over another), but a run killed while
+#: writing results.h5 left that file unreadable and summary.json without its last levels
+#: (tests/solving/test_restart.py, a fresh clone, 2026-11-28): every level, as before
+SUMMARY_INTERVAL = 0.0
 
 
 #: stands for the levels in the summary's text before they are put in (``compact_summary``)

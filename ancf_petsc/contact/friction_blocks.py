@@ -18,18 +18,9 @@ import numpy as np
 
 from .blocks import fade_derivatives
 from .gap import normal_gradient
-from .partners import drop_held, node_dofs, segment_outer, tangential
+from .partners import drop_held, node_dofs, pair_products, segment_outer, tangential
 
 EYE = np.eye(3)
-
-
-def _per_pair(srow: np.ndarray, eB: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Σ of per-point ``values`` (P, ...) over each (segment row, B element) pair: (pairs (n, 2),
-    sums (n, ...))."""
-    pair, inv = np.unique(np.stack([srow, eB], 1), axis=0, return_inverse=True)
-    inv = inv.ravel()
-    order = np.argsort(inv, kind="stable")
-    return pair, np.add.reduceat(values[order], np.searchsorted(inv[order], np.arange(len(pair))), axis=0)
 
 
 def _points(term, c, st):
@@ -48,10 +39,10 @@ def _points(term, c, st):
     return srow, sm, kloc[srow], phit * st.weight[:, None], phi0, kloc, phit
 
 
-def _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB) -> np.ndarray:
+def _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB) -> tuple[np.ndarray, np.ndarray]:
     """The fade weights' part (``contact.fade: newton``, weights.py) of the (segment, B element)
-    blocks: per point (P, 3K + 108, 108), rows of y then the forces, over A's element and the B
-    element of the closest point.  ω'_p = w_p enters U_k, m_k and ẑ_k as Φ_kp w_p (·) and the
+    blocks, per point the outer product of its two factors (P, 3K + 108) ⊗ (P, 108): rows of y
+    then the forces, over A's element and the B element of the closest point.  ω'_p = w_p enters U_k, m_k and ẑ_k as Φ_kp w_p (·) and the
     forces as k_s w_p P_p Y_p, so ∂/∂q through w_p is
     k_s Φ_kp (∂R/∂U u_p + ∂R/∂m n_p + μ g_k A_k [p_p > 0] p_p / k_s) ⊗ ∇w_p on the rows of y and
     k_s N_ABᵀ P_p Y_p ⊗ ∇w_p on the forces (zero off the fade bands)."""
@@ -63,8 +54,7 @@ def _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB) -> np.ndarray:
             + term.mu * ev.g[kp] * (bound / ks)[:, :, None])                  # (P, K, 3)
     rows_y = ks * phit[:, :, None] * rows
     forces = ks * (NAB[:, :, None] * tangential(ev.Y, n)[:, None, :])          # (P, 36, 3)
-    left = np.concatenate([rows_y.reshape(len(n), -1), forces.reshape(len(n), -1)], axis=1)
-    return left[:, :, None] * gw[:, None, :]
+    return np.concatenate([rows_y.reshape(len(n), -1), forces.reshape(len(n), -1)], axis=1), gw
 
 
 def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
@@ -99,11 +89,13 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     M2 = ks * phi[:, :, None, None] * (A[kp] @ D[:, None] + Bm[kp])
     E = ks * st.weight[:, None, None] * -(np.einsum("pi,pi->p", n, ev.Y)[:, None, None] * EYE
                                           + n[:, :, None] * ev.Y[:, None, :])
-    G = np.concatenate([(M2.reshape(P, 3 * K, 3) @ gradn),
-                        (NAB[:, :, None, None] * (E @ gradn)[:, None]).reshape(P, -1, gradn.shape[2])], axis=1)
+    # per point L_p ∇n_p (+ the fade weights' outer product), summed per pair as one product
+    left = np.concatenate([M2.reshape(P, 3 * K, 3), (NAB[:, :, None, None] * E[:, None]).reshape(P, -1, 3)], axis=1)
+    right = gradn
     if c.weights.differentiated:
-        G += _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB)
-    pair, Kn = _per_pair(srow, st.pr.eB, G)
+        lw, gw = _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB)
+        left, right = np.concatenate([left, lw[:, :, None]], axis=2), np.concatenate([right, gw[:, None]], axis=1)
+    pair, Kn = pair_products(srow, st.pr.eB, left, right)
     cols = node_dofs(np.concatenate([c.conn[c.points.seg_eA[c.segments[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1),
                      term.node_size)
     rows = np.concatenate([rows_y[pair[:, 0]], qrows[pair[:, 0]]], axis=1)

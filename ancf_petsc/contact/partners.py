@@ -64,6 +64,26 @@ def segment_outer(srow: np.ndarray, n_s: int, left: np.ndarray, right: np.ndarra
     return np.matmul(L.transpose(0, 2, 1), R)
 
 
+def pair_products(srow: np.ndarray, eB: np.ndarray, left: np.ndarray,
+                  right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Σ of left_p @ right_p over the points of each (segment row, B element) pair: (pairs (n, 2)
+    in lexicographic order, sums (n, R, C)) from left (P, R, I) and right (P, I, C), as one
+    batched product over zero-padded pairs (the inner index runs over the pair's points × I)."""
+    nb = int(eB.max(initial=0)) + 2                          # eB = −1 (no partner) sorts first
+    key, inv = np.unique(srow.astype(np.int64) * nb + (eB + 1), return_inverse=True)
+    inv = inv.ravel()
+    count = np.bincount(inv, minlength=len(key))
+    order = np.argsort(inv, kind="stable")
+    slot = np.empty(len(inv), dtype=np.int64)
+    slot[order] = np.arange(len(inv)) - np.repeat(np.cumsum(count) - count, count)
+    (_, R, I), C, n = left.shape, right.shape[2], len(key)
+    L = np.zeros((n, count.max(initial=1), R, I))
+    Rt = np.zeros((n, count.max(initial=1), I, C))
+    L[inv, slot], Rt[inv, slot] = left, right
+    pair = np.stack([key // nb, key % nb - 1], axis=1)
+    return pair, np.matmul(L.transpose(0, 2, 1, 3).reshape(n, R, -1), Rt.reshape(n, -1, C))
+
+
 def reference_scale(interfaces) -> float:
     """E/h [Pa/m] of the softest beam of the interfaces (h = min(element length, √area)): the
     stiffness per area of an interface as stiff as the beams next to it."""

@@ -106,7 +106,8 @@ def _slot_vector(N: np.ndarray, v: np.ndarray) -> np.ndarray:
     return (N[:, :, None] * v[:, None, :]).reshape(len(N), -1)
 
 
-def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray) -> np.ndarray:
+def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray,
+                          curvature: np.ndarray | None = None) -> np.ndarray:
     """∇²(c·ζ) (P, 108, 108) of the partner place ζ = (ξ_B, t_B) of every point of ``pr``
     contracted with fixed weights c (P, 2), from the closest-point condition r = −Y_ζᵀ d = 0
     differentiated twice:
@@ -116,7 +117,12 @@ def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray)
     with φ_αβγ = Y_αβ·Y_γ + Y_αγ·Y_β + Y_βγ·Y_α − Y_αβγ·d, ∂H_αβ/∂q from H = Y_ζᵀY_ζ − Y_ζζ·d
     and r_α,qq = −(a_α bᵀ + b a_αᵀ) ⊗ I (a_α = [0, N_B,α], b = [N_A, −N_B]): the surface is
     linear in B's nodal vectors and d in both bodies'.  ``NBzz``, ``Yzzz``: B's shape functions'
-    second ζ-derivatives and the surface's third (``projection.surface_third``)."""
+    second ζ-derivatives and the surface's third (``projection.surface_third``).  With
+    ``curvature`` C (P, 2, 2), ζ′ᵀ C ζ′ is added (a weight's ∂²w/∂ζ², weights.py).
+
+    Every term has rank ≤ 3 per point in q, so the sum is one batched product L R of
+    (P, 108, 10) and (P, 10, 108): [ζ′ᵀ(C − ψ) − Λᵀ, −ζ′ᵀ, ā ⊗ I, b ⊗ I] [ζ′; Λ; b ⊗ I; ā ⊗ I]
+    with ψ = λ·φ_ζζζ and Λ_β = Σ_α λ_α ∂H_αβ/∂q."""
     P = len(pr.g)
     T, Tab, d = pr.Yz, pr.Yzz, pr.d                                    # (P,3,2), (P,3,2,2), (P,3)
     a, b, Hi, U, V = _projection_parts(pr)
@@ -124,32 +130,34 @@ def closest_point_hessian(pr, c: np.ndarray, NBzz: np.ndarray, Yzzz: np.ndarray)
     lam = np.einsum("pab,pb->pa", Hi, c)                              # H symmetric
     phi = (np.einsum("piab,pic->pabc", Tab, T) + np.einsum("piac,pib->pabc", Tab, T)
            + np.einsum("pibc,pia->pabc", Tab, T) - np.einsum("piabc,pi->pabc", Yzzz, d))
-    psi = np.einsum("pa,pabc->pbc", lam, phi)
-    out = np.einsum("pbj,pbc,pck->pjk", dz, psi, dz)                 # φ_ζζζ[ζ′, ζ′]
-    # Σ_α λ_α ∂H_αβ/∂q for β = ξ, t
+    M = -np.einsum("pa,pabc->pbc", lam, phi)                          # −ψ, the φ_ζζζ[ζ′, ζ′] part
+    if curvature is not None:
+        M = M + curvature
+    # Λ_β = Σ_α λ_α ∂H_αβ/∂q for β = ξ, t
     SLOTS = pr.NA.shape[1]                                           # an element's slots (18 for 3363)
     zA = np.zeros((P, SLOTS))
     NA, NB, NBz = pr.NA, pr.NB, pr.NBz
     lam_h = np.empty((P, 2, 6 * SLOTS))
+    lt = np.einsum("pa,pia->pi", lam, T)                              # Σ_α λ_α Y_α
+    nb_lam = np.einsum("psa,pa->ps", NBz, lam)                        # Σ_α λ_α N_B,α
     for beta in range(2):
         tb = np.einsum("pa,pia->pi", lam, Tab[:, :, :, beta])          # Σ_α λ_α Y_αβ
         part_a = _slot_vector(np.concatenate([-NA, NB], axis=1), tb)
-        lt = np.einsum("pa,pia->pi", lam, T)                            # Σ_α λ_α Y_α
-        nb_lam = np.einsum("psa,pa->ps", NBz, lam)                      # Σ_α λ_α N_B,α
         nbb_lam = np.einsum("psa,pa->ps", NBzz[:, :, :, beta], lam)     # Σ_α λ_α N_B,αβ
         part_b = (_slot_vector(np.concatenate([zA, nb_lam], axis=1), T[:, :, beta])
                   + _slot_vector(np.concatenate([zA, NBz[:, :, beta]], axis=1), lt)
                   - _slot_vector(np.concatenate([zA, nbb_lam], axis=1), d))
         lam_h[:, beta] = part_a + part_b
-    mixed = np.einsum("pbj,pbk->pjk", lam_h, dz)
-    out += mixed + mixed.transpose(0, 2, 1)
-    # Σ_α λ_α r_α,qq = −(ā bᵀ + b āᵀ) ⊗ I
-    abar = np.concatenate([zA, np.einsum("psa,pa->ps", NBz, lam)], axis=1)   # (P, 36)
+    # −Σ_α λ_α r_α,qq = (ā bᵀ + b āᵀ) ⊗ I, ā = [0, Σ_α λ_α N_B,α], b = [N_A, −N_B]
+    abar = np.concatenate([zA, nb_lam], axis=1)                       # (P, 36)
     bb = np.concatenate([NA, -NB], axis=1)
-    S = abar[:, :, None] * bb[:, None, :]
-    S = -(S + S.transpose(0, 2, 1))
-    out += np.einsum("pst,ij->psitj", S, np.eye(3)).reshape(P, 6 * SLOTS, 6 * SLOTS)
-    return -out
+    eye = np.eye(3)
+    abar_I = (abar[:, :, None, None] * eye).reshape(P, 6 * SLOTS, 3)  # (P, 108, 3): ā ⊗ e_k
+    bb_I = (bb[:, :, None, None] * eye).reshape(P, 6 * SLOTS, 3)
+    left = np.concatenate([np.einsum("paj,pab->pjb", dz, M) - lam_h.transpose(0, 2, 1),
+                           -dz.transpose(0, 2, 1), abar_I, bb_I], axis=2)
+    right = np.concatenate([dz, lam_h, bb_I.transpose(0, 2, 1), abar_I.transpose(0, 2, 1)], axis=1)
+    return left @ right
 
 
 def closest_point_gradient(pr) -> np.ndarray:

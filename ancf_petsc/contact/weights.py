@@ -81,8 +81,7 @@ class FadeDerivatives:
                 curv = end_weight_curvature(*(a[band] for a in self._args))
                 NBzz, Yzzz = surface_third(self._projector, x_of, self._itf[band], pr.eB[band],
                                            pr.xiB[band], pr.tB[band])
-                self._hess = (np.einsum("paj,pab,pbk->pjk", self._dz, curv, self._dz)
-                              + closest_point_hessian(self._sub, self._slope[band], NBzz, Yzzz))
+                self._hess = closest_point_hessian(self._sub, self._slope[band], NBzz, Yzzz, curv)
         return self._hess
 
     def of(self, sel: np.ndarray, x_of=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:

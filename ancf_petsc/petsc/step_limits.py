@@ -12,6 +12,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..physics import kernels
+from ..physics.materials import determinant
 
 #: largest node move of one Newton step, in section sizes; full Newton steps with contact are
 #: held to fewer (solving/stepper.py): a step of several sections makes the closest-point pairing
@@ -34,7 +35,7 @@ def min_jacobian(problem, X: PETSc.Vec) -> float:
     local = np.inf
     for blk in problem.blocks:
         F = kernels.deformation_gradient(blk.element_vectors(xl), blk.G)
-        local = min(local, float(np.min(np.linalg.det(F))))
+        local = min(local, float(np.min(determinant(F))))
     val = problem.comm.tompi4py().allreduce(local, op=MPI.MIN)
     return val if np.isfinite(val) else -np.inf
 

@@ -106,6 +106,10 @@ class ComplementarityPredictor:
         self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
         self._select = None                       # E: the multipliers' columns (``_columns``)
         self._zero_rows = True                    # the matrix type can zero rows and columns
+        #: K of the last linearisation and the Jacobian pattern's growths it was made at: while
+        #: the pattern stands, the next K is copied into it and MUMPS refactors numerically on
+        #: its symbolic analysis (the ordering depends on the pattern alone: the same factors)
+        self._K, self._K_growths = None, -1
 
     @staticmethod
     def applies(problem) -> bool:
@@ -116,6 +120,8 @@ class ComplementarityPredictor:
 
     def destroy(self) -> None:
         self.ksp.destroy()
+        if self._K is not None:
+            self._K.destroy()
         if self._select is not None:
             self._select.destroy()
 
@@ -183,8 +189,6 @@ class ComplementarityPredictor:
             rhs.scale(-1.0)
             self._set_owned(rhs, np.zeros(len(self.dofs)))          # a probe's z rows: 0
             K = self._probe_matrix(X)
-            vecs.append(K)
-            self.ksp.getPC().reset()                                 # the pattern may have grown
             self.ksp.setOperators(K)
             self.ksp.setFromOptions()
             self.ksp.setUp()
@@ -215,17 +219,35 @@ class ComplementarityPredictor:
         rows and columns (MPISBAIJ), assembled in the probe phase."""
         P, c = self.problem, self.problem.contact
         if self._zero_rows:
-            K = P.J.duplicate(copy=True)
+            K = self._copy_of(P.J)
             try:
                 K.zeroRowsColumns(self.dofs.astype(PETSc.IntType), diag=-c.stiffness)
                 return K
             except PETSc.Error:                   # the same type on every rank: all fail
-                K.destroy()
+                self._forget_matrix()
                 self._zero_rows = False
         c.begin_phase(PROBE)
         P.jacobian(self.snes, X, P.J, P.J)
         P.J.assemble()
-        return P.J.duplicate(copy=True)
+        return self._copy_of(P.J)
+
+    def _copy_of(self, J: PETSc.Mat) -> PETSc.Mat:
+        """J's values in the kept K while the Jacobian's pattern has not grown since K was made,
+        else a new K (the preconditioner reset: a MUMPS factorisation on the old symbolic
+        analysis corrupts memory).  Collective (the growths are the same on every rank)."""
+        growths = self.problem.pattern_growths
+        if self._K is not None and growths == self._K_growths:
+            J.copy(self._K, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+            return self._K
+        self._forget_matrix()
+        self._K, self._K_growths = J.duplicate(copy=True), growths
+        return self._K
+
+    def _forget_matrix(self) -> None:
+        self.ksp.getPC().reset()
+        if self._K is not None:
+            self._K.destroy()
+        self._K, self._K_growths = None, -1
 
     def global_status(self, status: np.ndarray) -> np.ndarray:
         """The status of every multiplier on every rank (each rank knows its own)."""

@@ -85,6 +85,33 @@ def _owned_values(vec: PETSc.Vec, dofs: np.ndarray, comm) -> np.ndarray:
     return comm.allreduce(out)
 
 
+class KeptOperator:
+    """The predictor's K between linearisations: while the Jacobian's pattern has not grown
+    (``growths`` the same), the next K is copied into the kept one and MUMPS refactors it on its
+    symbolic analysis (the ordering depends on the pattern alone: the same factors); after a
+    growth a new K and the preconditioner reset (a MUMPS factorisation on the old symbolic
+    analysis corrupts memory).  Collective (the growths are the same on every rank)."""
+
+    def __init__(self, ksp: PETSc.KSP):
+        self.ksp, self.K, self.growths = ksp, None, -1
+
+    def copy_of(self, J: PETSc.Mat, growths: int) -> PETSc.Mat:
+        """J's values in the kept K, or a new K."""
+        if self.K is not None and growths == self.growths:
+            J.copy(self.K, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+            return self.K
+        self.forget()
+        self.K, self.growths = J.duplicate(copy=True), growths
+        return self.K
+
+    def forget(self) -> None:
+        """No kept K (and the preconditioner reset)."""
+        self.ksp.getPC().reset()
+        if self.K is not None:
+            self.K.destroy()
+        self.K, self.growths = None, -1
+
+
 class ComplementarityPredictor:
     """Solves the linearised complementarity problem at a state (module docstring).  ``snes``:
     the Newton solver that factors the same matrix (its preconditioner is reset when the
@@ -106,10 +133,7 @@ class ComplementarityPredictor:
         self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
         self._select = None                       # E: the multipliers' columns (``_columns``)
         self._zero_rows = True                    # the matrix type can zero rows and columns
-        #: K of the last linearisation and the Jacobian pattern's growths it was made at: while
-        #: the pattern stands, the next K is copied into it and MUMPS refactors numerically on
-        #: its symbolic analysis (the ordering depends on the pattern alone: the same factors)
-        self._K, self._K_growths = None, -1
+        self._kept = KeptOperator(self.ksp)        # K between linearisations
 
     @staticmethod
     def applies(problem) -> bool:
@@ -119,9 +143,8 @@ class ComplementarityPredictor:
                 and not any(t.multipliers for t in c.terms))
 
     def destroy(self) -> None:
+        self._kept.forget()
         self.ksp.destroy()
-        if self._K is not None:
-            self._K.destroy()
         if self._select is not None:
             self._select.destroy()
 
@@ -219,35 +242,17 @@ class ComplementarityPredictor:
         rows and columns (MPISBAIJ), assembled in the probe phase."""
         P, c = self.problem, self.problem.contact
         if self._zero_rows:
-            K = self._copy_of(P.J)
+            K = self._kept.copy_of(P.J, P.pattern_growths)
             try:
                 K.zeroRowsColumns(self.dofs.astype(PETSc.IntType), diag=-c.stiffness)
                 return K
             except PETSc.Error:                   # the same type on every rank: all fail
-                self._forget_matrix()
+                self._kept.forget()
                 self._zero_rows = False
         c.begin_phase(PROBE)
         P.jacobian(self.snes, X, P.J, P.J)
         P.J.assemble()
-        return self._copy_of(P.J)
-
-    def _copy_of(self, J: PETSc.Mat) -> PETSc.Mat:
-        """J's values in the kept K while the Jacobian's pattern has not grown since K was made,
-        else a new K (the preconditioner reset: a MUMPS factorisation on the old symbolic
-        analysis corrupts memory).  Collective (the growths are the same on every rank)."""
-        growths = self.problem.pattern_growths
-        if self._K is not None and growths == self._K_growths:
-            J.copy(self._K, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-            return self._K
-        self._forget_matrix()
-        self._K, self._K_growths = J.duplicate(copy=True), growths
-        return self._K
-
-    def _forget_matrix(self) -> None:
-        self.ksp.getPC().reset()
-        if self._K is not None:
-            self._K.destroy()
-        self._K, self._K_growths = None, -1
+        return self._kept.copy_of(P.J, P.pattern_growths)
 
     def global_status(self, status: np.ndarray) -> np.ndarray:
         """The status of every multiplier on every rank (each rank knows its own)."""

@@ -42,8 +42,8 @@ def _points(term, c, st):
 def _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB) -> tuple[np.ndarray, np.ndarray]:
     """The fade weights' part (``contact.fade: newton``, weights.py) of the (segment, B element)
     blocks, per point the outer product of its two factors (P, 3K + 108) ⊗ (P, 108): rows of y
-    then the forces, over A's element and the B element of the closest point.  ω'_p = w_p enters U_k, m_k and ẑ_k as Φ_kp w_p (·) and the
-    forces as k_s w_p P_p Y_p, so ∂/∂q through w_p is
+    then the forces, over A's element and the B element of the closest point.  ω'_p = w_p enters
+    U_k, m_k and ẑ_k as Φ_kp w_p (·) and the forces as k_s w_p P_p Y_p, so ∂/∂q through w_p is
     k_s Φ_kp (∂R/∂U u_p + ∂R/∂m n_p + μ g_k A_k [p_p > 0] p_p / k_s) ⊗ ∇w_p on the rows of y and
     k_s N_ABᵀ P_p Y_p ⊗ ∇w_p on the forces (zero off the fade bands)."""
     ev, ks, n = st.terms[term.name], c.stiffness, st.pr.n
@@ -94,7 +94,8 @@ def jacobian_blocks(term, c, st, fixed_mask: np.ndarray) -> list:
     right = gradn
     if c.weights.differentiated:
         lw, gw = _weight_columns(term, c, st, srow, sm, kp, phit, A, Bm, NAB)
-        left, right = np.concatenate([left, lw[:, :, None]], axis=2), np.concatenate([right, gw[:, None]], axis=1)
+        left = np.concatenate([left, lw[:, :, None]], axis=2)
+        right = np.concatenate([right, gw[:, None]], axis=1)
     pair, Kn = pair_products(srow, st.pr.eB, left, right)
     cols = node_dofs(np.concatenate([c.conn[c.points.seg_eA[c.segments[pair[:, 0]]]], c.conn[pair[:, 1]]], axis=1),
                      term.node_size)

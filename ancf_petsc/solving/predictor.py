@@ -70,7 +70,12 @@ class TangentPredictor:
             if not F.norm() < float("inf"):
                 return False
             ksp = self.snes.getKSP()
-            ksp.solve(F, dX)
+            pc = ksp.getPC()
+            pc.setReusePreconditioner(True)       # the SNES's factor, whatever the matrix holds now
+            try:
+                ksp.solve(F, dX)
+            finally:
+                pc.setReusePreconditioner(False)
             if ksp.getConvergedReason() <= 0 or not dX.norm() < float("inf"):
                 return False
             X.axpy(-1.0, dX)

@@ -35,3 +35,45 @@ def test_soft_matrix_goh_column_at_two_elements_within_its_newton_budget(tmp_pat
     assert s["status"] == "completed"
     assert sum(st["cutbacks"] for st in s["steps"]) == 0
     assert s["newton_iterations"] <= 130
+
+
+def test_tangent_predictor_solves_with_the_snes_factor_after_the_matrix_changed():
+    """The tangent load predictor solves with the SNES's last factor even when the matrix was
+    assembled again since (the complementarity predictor's held-phase Jacobian, when the solve
+    after its step took no iteration): X − K⁻¹F with the factored K, not a factorisation of what
+    the matrix holds now (which cost a factorisation in 40 of 98 unilateral stride frames)."""
+    import numpy as np
+    from helpers import build_problem
+    from ancf_petsc.solving.predictor import TangentPredictor
+    P, PETSc = build_problem(load_raw("achilles_type3_psi45.yaml"), "aij")
+    X = P.q0.copy()
+    P.load_factor = 1.0
+    P.jacobian(None, X, P.J, P.J)
+    K = P.J.duplicate(copy=True)
+    solvers = []
+    for A in (P.J, K):
+        ksp = PETSc.KSP().create(comm=P.comm)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        ksp.setOperators(A)
+        ksp.setUp()
+        solvers.append(ksp)
+    snes = PETSc.SNES().create(comm=P.comm)
+    snes.setKSP(solvers[0])
+    tangent = TangentPredictor(P, snes)
+    tangent.valid = True
+    P.J.scale(2.0)                       # assembled again: no longer the factored tangent
+    expected, F, dX = X.copy(), X.duplicate(), X.duplicate()
+    P.load_factor = 2.0
+    P.impose(expected)
+    P.contact.allow_update = False
+    P.residual(None, expected, F)
+    solvers[1].solve(F, dX)
+    expected.axpy(-1.0, dX)
+    got = X.copy()
+    assert tangent.predict(got, 2.0)
+    diff = (got - expected).norm() / (got - X).norm()
+    assert diff < 1e-10, diff
+    for obj in solvers + [snes, K]:
+        obj.destroy()

@@ -53,14 +53,25 @@ def per_segment_sum(srow: np.ndarray, n_s: int, values: np.ndarray) -> np.ndarra
     return out
 
 
+def _padded(group: np.ndarray, n: int, *arrays: np.ndarray) -> list[np.ndarray]:
+    """Per group zero-padded copies (n, most points, ...) of per-point ``arrays``, each group's
+    points in their order (``segment_outer``, ``pair_products``)."""
+    count = np.bincount(group, minlength=n)
+    order = np.argsort(group, kind="stable")
+    slot = np.empty(len(group), dtype=np.int64)
+    slot[order] = np.arange(len(group)) - np.repeat(np.cumsum(count) - count, count)
+    out = []
+    for a in arrays:
+        padded = np.zeros((n, count.max(initial=1)) + a.shape[1:])
+        padded[group, slot] = a
+        out.append(padded)
+    return out
+
+
 def segment_outer(srow: np.ndarray, n_s: int, left: np.ndarray, right: np.ndarray) -> np.ndarray:
     """Σ over each segment's points of left_p ⊗ right_p: (n_s, X, Y) from (P, X) and (P, Y), as
-    one batched product over zero-padded segments (points stored segment by segment)."""
-    count = np.bincount(srow, minlength=n_s)
-    at = (srow, np.arange(len(srow)) - np.concatenate([[0], np.cumsum(count)[:-1]])[srow])
-    L = np.zeros((n_s, count.max(initial=1), left.shape[1]))
-    R = np.zeros((n_s, count.max(initial=1), right.shape[1]))
-    L[at], R[at] = left, right
+    one batched product over zero-padded segments."""
+    L, R = _padded(srow, n_s, left, right)
     return np.matmul(L.transpose(0, 2, 1), R)
 
 
@@ -71,15 +82,8 @@ def pair_products(srow: np.ndarray, eB: np.ndarray, left: np.ndarray,
     batched product over zero-padded pairs (the inner index runs over the pair's points × I)."""
     nb = int(eB.max(initial=0)) + 2                          # eB = −1 (no partner) sorts first
     key, inv = np.unique(srow.astype(np.int64) * nb + (eB + 1), return_inverse=True)
-    inv = inv.ravel()
-    count = np.bincount(inv, minlength=len(key))
-    order = np.argsort(inv, kind="stable")
-    slot = np.empty(len(inv), dtype=np.int64)
-    slot[order] = np.arange(len(inv)) - np.repeat(np.cumsum(count) - count, count)
     (_, R, I), C, n = left.shape, right.shape[2], len(key)
-    L = np.zeros((n, count.max(initial=1), R, I))
-    Rt = np.zeros((n, count.max(initial=1), I, C))
-    L[inv, slot], Rt[inv, slot] = left, right
+    L, Rt = _padded(inv.ravel(), n, left, right)
     pair = np.stack([key // nb, key % nb - 1], axis=1)
     return pair, np.matmul(L.transpose(0, 2, 1, 3).reshape(n, R, -1), Rt.reshape(n, -1, C))
 

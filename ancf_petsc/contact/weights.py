@@ -36,12 +36,31 @@ from __future__ import annotations
 import numpy as np
 
 from .gap import closest_point_gradient, closest_point_hessian, projection_conditioning
-from .fade import end_weight_curvature, end_weight_slope
+from .fade import end_weight_curvature, end_weight_slope, fade
 from .projection import subset, surface_third
 
 #: a change of a point's weight beyond this asks for another Newton solve (a weight off by 1e-6
 #: moves a weighted gap by 1e-6 of the point's local gap, ~1e-11 m)
 WEIGHT_TOL = 1e-6
+
+
+#: det H / det a (``gap.projection_conditioning``) from which a point's weight is differentiated
+#: whole (``FadeDerivatives``), and below which not at all; in between its ∇w and ∇²w enter with
+#: the share ``conditioned``
+WELL_POSED = 0.5
+ILL_POSED = 0.25
+
+
+def conditioned(kappa: np.ndarray) -> np.ndarray:
+    """The share of the weight's derivatives that enters the forces and the Jacobian of a
+    point whose projection has the conditioning ``kappa``: 1 from WELL_POSED up, 0 from ILL_POSED
+    down, the C² quintic fade in between.  A cut at one threshold made the residual jump: on the
+    soleus-biased unilateral stride at twist 90° (frame 46.8) a point 0.52 mm off the end piece of
+    its partner's interface curve sat at det H / det a = 0.5, and its −p g ∇w switched a 0.87 N
+    force pair on and off between states 5e-13 apart, so that Newton cycled at every increment.
+    The share is a constant in the Jacobian (its own derivative, through H's, is left out): the
+    Jacobian is exact where the share is 0 or 1."""
+    return fade((WELL_POSED - kappa) / (WELL_POSED - ILL_POSED))
 
 
 class FadeDerivatives:
@@ -60,16 +79,21 @@ class FadeDerivatives:
         self._args = (pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
         self._slope = end_weight_slope(*self._args)
         # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
-        # weight's derivatives there would be large and meaningless, so it counts as kept
-        # (the conditioning of the sloped points alone: each point's is its own)
+        # weight's derivatives there would be large and meaningless, so it counts as kept; between
+        # ILL_POSED and WELL_POSED its derivatives enter with the share ``conditioned`` (the
+        # conditioning of the sloped points alone: each point's is its own)
         sloped = np.flatnonzero(np.any(self._slope != 0.0, axis=1))
-        self.band = sloped[projection_conditioning(subset(pr, sloped)) > WELL_POSED] if len(sloped) else sloped
+        kappa = projection_conditioning(subset(pr, sloped)) if len(sloped) else np.zeros(0)
+        self.band = sloped[kappa > ILL_POSED]
+        self.share = conditioned(kappa[kappa > ILL_POSED])
         self.grad = np.zeros((len(pr.idx), 6 * pr.NA.shape[1]))     # A's and B's slots × 3
         self._sub = self._dz = self._hess = None
         if len(self.band):
             self._sub = subset(pr, self.band)
             self._dz = closest_point_gradient(self._sub)
             self.grad[self.band] = np.einsum("pa,paj->pj", self._slope[self.band], self._dz)
+            if np.any(self.share < 1.0):
+                self.grad[self.band] *= self.share[:, None]
 
     def hessians(self, x_of) -> np.ndarray:
         """∇²w_p (B, 108, 108) of the band's points; ``x_of(elements)``: B's nodal vectors."""
@@ -82,6 +106,8 @@ class FadeDerivatives:
                 NBzz, Yzzz = surface_third(self._projector, x_of, self._itf[band], pr.eB[band],
                                            pr.xiB[band], pr.tB[band])
                 self._hess = closest_point_hessian(self._sub, self._slope[band], NBzz, Yzzz, curv)
+                if np.any(self.share < 1.0):
+                    self._hess *= self.share[:, None, None]
         return self._hess
 
     def of(self, sel: np.ndarray, x_of=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -92,10 +118,6 @@ class FadeDerivatives:
         band = np.flatnonzero(inside[sel])
         hess = None if x_of is None else self.hessians(x_of)[np.searchsorted(self.band, sel[band])]
         return self.grad[sel], band, hess
-
-
-#: det H / det a below which a point's weight is not differentiated (``FadeDerivatives``)
-WELL_POSED = 0.5
 
 
 class PointWeights:

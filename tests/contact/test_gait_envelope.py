@@ -63,3 +63,23 @@ def test_unilateral_push_off_loading_and_unloading(tmp_path):
     assert s["status"] == "completed" and len(its) == 21
     assert sum(st["cutbacks"] for st in s["steps"][1:]) == 0
     assert np.median(its[1:]) <= 8
+
+
+@pytest.mark.slow
+def test_unilateral_twist_90_soleus_biased_frames_46_to_47(tmp_path):
+    """Frames 46-47 of the soleus-biased stride at ψ = 90°, unilateral contact (the whole stride
+    stopped at frame 46.8 before, 2.4 kN: a point 0.52 mm off the end piece of its partner's
+    interface curve sat at the projection conditioning where its weight's derivatives were cut
+    off, and the residual jumped by a 0.87 N force pair between states 5e-13 apart; the weights'
+    derivatives now fade in with the conditioning, contact/weights.conditioned).  Frame 46 is
+    reached from rest, and frame 47 from it without a cut-back (measured: 9 Newton iterations;
+    the code before cycled at 1.798 at every increment down to 6e-5 of a frame)."""
+    times, forces = synthetic_stride("soleus")
+    sel = slice(45, 47)
+    raw = cell_config(EnvelopeCell(NEO, 90, "soleus", "unilateral", stride=True))
+    raw["history"] = {"table": {"time": times[sel].tolist(),
+                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
+    s = run_inline(raw, tmp_path / "frames_46_47", base_dir=CONFIGS)
+    assert s["status"] == "completed", s.get("message")
+    last = s["steps"][-1]
+    assert last["load_factor"] == 2.0 and last["cutbacks"] == 0 and last["iterations"] <= 15

@@ -20,6 +20,7 @@ from ..petsc.problem import Problem
 from ..petsc.step_limits import MAX_STEP_SECTIONS_CONTACT
 from . import solver_messages
 from .chord import TangentReuse
+from .continuity import IterateTrail
 from .cycle_stop import CycleStop
 from .newton import ContactSteps
 from ..linalg.options import SolverOptionError, configure_options, refused, run_defaults
@@ -59,6 +60,7 @@ class SNESSolver:
         atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._history: list[float] = []        # residual norms of the current SNES solve
+        self.trail = IterateTrail()             # its last iterates: a failed level's jump scan
         #: friction: a Newton cycle ends the solve early (cycle_stop.py; set before the options,
         #: so that -snes_convergence_test replaces it)
         self.cycle_stop = None
@@ -91,8 +93,7 @@ class SNESSolver:
         self.fascicle_schur = schur
         self.chord = TangentReuse(spec.reuse_tangent, schur)
         self.contact_steps = ContactSteps(problem)
-        self.ksp_reason = 0
-        self.stalled_at = 0.0                    # |F| of the last step-length stop (messages)
+        self.ksp_reason, self.stalled_at = 0, 0.0   # the last KSP reason, |F| of a step-length stop
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
 
@@ -128,6 +129,7 @@ class SNESSolver:
 
     def destroy(self) -> None:
         """Free the SNES (with its KSP, PC and factor); not collective."""
+        self.trail.destroy()
         self.snes.destroy()
 
     @property
@@ -148,6 +150,7 @@ class SNESSolver:
 
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
+        self.trail.record(its, snes.getSolution(), fnorm)
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""

@@ -21,6 +21,7 @@ from ..linalg import logging
 from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.problem import Problem
 from . import solver_messages
+from .continuity import jump_detail, residual_jump
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
@@ -29,6 +30,12 @@ from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
                       reason_name)
 from .snes_solver import SNESSolver
+
+
+#: failures whose last iterates are scanned for a jump of the residual (continuity.py): Newton
+#: ran out of iterations (cycling, wandering, stalling) or its line search found no descent
+JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH,
+                STALLED_STEP)
 
 
 class LoadStepper:
@@ -259,8 +266,15 @@ class LoadStepper:
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}{why}; "
                  f"retry with increment {path.dlam:.4g}")
         if give_up:
+            jump = None
+            if not (inverted or lost) and reason in JUMP_REASONS:
+                atol = self.solver.snes.getTolerances()[1]
+                jump = residual_jump(P, self.solver.trail, path.lam + step, atol)     # collective
+                X_prev.copy(P.X)
+                P.restore()
             P.load_factor = path.lam
             raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
                                   solver_messages.failure_detail(self.solver, reason)
                                   + solver_messages.lost_detail(P.contact, step, lost and not inverted)
-                                  + solver_messages.stability_detail(tally.unstable_at))
+                                  + solver_messages.stability_detail(tally.unstable_at)
+                                  + jump_detail(jump))

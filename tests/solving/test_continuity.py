@@ -1,0 +1,103 @@
+"""solving/continuity.py: on a level's final failure the residual is scanned along Newton's last
+steps for a jump (a discontinuity of the discrete model, not a limit point), found to rounding
+and named by where it acts; a continuous residual gives none.  On a real contact problem (the
+paper's outlines, 2 elements, sliding) with a jump of 1 N injected into one beam node's row
+where the state crosses a plane, on 1 rank and on 2 (the scan is collective, the place is said
+by the rank that holds it); and the failure message carries it."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from helpers import MPI_ENV, ROOT
+
+SCRIPT = r"""
+import numpy as np
+from contact.test_contact import achilles
+from helpers import build_problem
+from ancf_petsc.solving.continuity import IterateTrail, residual_jump, jump_detail
+
+def trail_and_plane(P):
+    # four iterates q0 + k (0.2 um ... ) along a smooth path; the plane halfway between the 2nd and 3rd
+    X = P.q0.copy()
+    lo, hi = X.getOwnershipRange()
+    idx = np.arange(lo, hi)
+    trail, states = IterateTrail(), []
+    for k in range(4):
+        Y = X.copy()
+        Y.setArray(X.getArray() + 2e-7 * k * np.sin(0.37 * idx + k))
+        trail.record(k, Y, float(k))
+        states.append(Y)
+    w = states[2].copy()
+    w.axpy(-1.0, states[1])
+    mid = states[1].copy()
+    mid.axpy(0.5, w)
+    return trail, w, w.dot(mid)
+
+P, PETSc = build_problem(achilles(contact={"mode": "sliding"}))
+beam = P.model.beams[1]
+node = beam.node_offset + 3
+D = P.X.getBlockSize()
+dof = int(P.layout.perm[node]) * D + 1
+trail, w, level = trail_and_plane(P)
+assert residual_jump(P, trail, 0.5) is None             # the residual itself is continuous here
+plain = P.residual
+
+def jumping(snes, X, F):
+    plain(snes, X, F)
+    if X.dot(w) > level:                                 # collective; the owner adds 1 N
+        lo, hi = F.getOwnershipRange()
+        if lo <= dof < hi:
+            F.setValue(dof, 1.0, addv=PETSc.InsertMode.ADD_VALUES)
+        F.assemble()
+
+P.residual = jumping
+jump = residual_jump(P, trail, 0.5)
+assert jump is not None and abs(jump.size - 1.0) < 1e-6, jump
+assert jump.where == f"beam {beam.name}, node 3", jump.where
+assert "jumps by 1 N" in jump_detail(jump) and jump_detail(None) == ""
+if P.comm.rank == 0:
+    print("ok", P.comm.size)
+"""
+
+
+def _run(ranks: int) -> subprocess.CompletedProcess:
+    cmd = [sys.executable, "-c", SCRIPT]
+    if ranks > 1:
+        cmd = ["mpirun", "--oversubscribe", "-n", str(ranks)] + cmd
+    env = dict(os.environ, **MPI_ENV, PYTHONPATH=os.pathsep.join([ROOT, os.path.join(ROOT, "tests")]))
+    return subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+
+
+def test_a_jump_is_found_to_rounding_and_named():
+    p = _run(1)
+    assert p.returncode == 0 and "ok 1" in p.stdout, p.stdout + p.stderr
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_the_scan_on_ranks_finds_the_same_jump(ranks):
+    p = _run(ranks)
+    assert p.returncode == 0 and f"ok {ranks}" in p.stdout, p.stdout + p.stderr
+
+
+def test_the_trail_keeps_the_last_iterates_in_order():
+    """``IterateTrail``: the last TRAIL iterates of a solve, oldest first, with the rise of |F|
+    along each step; a new solve (iteration 0) starts it again."""
+    from petsc4py import PETSc
+    from ancf_petsc.solving.continuity import TRAIL, IterateTrail
+    trail = IterateTrail()
+    v = PETSc.Vec().createSeq(2)
+    for its in range(TRAIL + 3):
+        v.set(float(its))
+        trail.record(its, v, 10.0 * its)
+    steps = trail.steps()
+    assert len(steps) == TRAIL - 1
+    assert [a.getArray()[0] for a, _, _ in steps] == [float(k) for k in range(3, TRAIL + 2)]
+    assert all(rise == 10.0 for _, _, rise in steps)
+    v.set(-1.0)
+    trail.record(0, v, 5.0)
+    assert trail.steps() == []
+    trail.destroy()
+    v.destroy()

@@ -38,8 +38,8 @@ JUMP_SHARE = 1e-4
 
 
 class IterateTrail:
-    """The last ``TRAIL`` iterates of the current SNES solve and their |F| (``record`` from the
-    monitor; ``start`` at iteration 0)."""
+    """The last ``TRAIL`` iterates of the current SNES solve and their |F| (``record``, from the
+    monitor: iteration 0 starts the trail again)."""
 
     def __init__(self, size: int = TRAIL):
         self.size = size
@@ -104,7 +104,7 @@ def residual_jump(problem, trail: IterateTrail, load_factor: float, tolerance: f
     return best
 
 
-def _scan(problem, A, d, Y, F, comm, problem_tolerance: float) -> Jump | None:
+def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
     def at(s: float) -> np.ndarray:
         A.copy(Y)
         Y.axpy(s, d)
@@ -131,7 +131,7 @@ def _scan(problem, A, d, Y, F, comm, problem_tolerance: float) -> Jump | None:
         else:
             lo, f_lo = mid, f_mid
     size = largest(f_hi, f_lo)
-    if not np.isfinite(size) or size <= max(JUMP_SHARE * scale, problem_tolerance):
+    if not np.isfinite(size) or size <= max(JUMP_SHARE * scale, tolerance):
         return None
     return Jump(size=size, scale=scale, where=_where(problem, np.abs(f_hi - f_lo), comm))
 

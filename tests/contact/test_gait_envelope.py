@@ -5,6 +5,8 @@ level (a complementarity linearisation at a state with an inverted element); the
 ψ = 180°, soleus-biased, cycled at 1030 N; the unilateral one lost its projections at 815 N; the
 sliding ψ = 90° columns took 72-91 Newton iterations to 1.2 kN.  A stride's push-off with
 unilateral contact, loading and unloading, holds too."""
+import re
+
 import numpy as np
 import pytest
 
@@ -83,3 +85,24 @@ def test_unilateral_twist_90_soleus_biased_frames_46_to_47(tmp_path):
     assert s["status"] == "completed", s.get("message")
     last = s["steps"][-1]
     assert last["load_factor"] == 2.0 and last["cutbacks"] == 0 and last["iterations"] <= 15
+
+
+@pytest.mark.slow
+def test_the_old_single_cut_fails_frame_47_and_the_failure_names_the_jump(tmp_path, monkeypatch):
+    """The same frames with the weights' derivatives cut at one conditioning value again (as on
+    da3c67c: ILL_POSED just below WELL_POSED): Newton cycles at 1.798 at every increment, and the
+    failure's scan (solving/continuity.py) names the residual's jump, 0.87 N on the medial
+    gastrocnemius, instead of the cycle alone."""
+    from ancf_petsc.contact import weights
+    monkeypatch.setattr(weights, "ILL_POSED", np.nextafter(weights.WELL_POSED, 0.0))
+    times, forces = synthetic_stride("soleus")
+    sel = slice(45, 47)
+    raw = cell_config(EnvelopeCell(NEO, 90, "soleus", "unilateral", stride=True))
+    raw["history"] = {"table": {"time": times[sel].tolist(),
+                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
+    s = run_inline(raw, tmp_path / "frames_46_47_cut", base_dir=CONFIGS)
+    assert s["status"] == "failed" and s["steps"][-1]["load_factor"] == 1.0
+    message = s["message"]
+    size = re.search(r"the residual jumps by ([0-9.e+-]+) N", message)
+    assert "Newton cycles" in message and size is not None and 0.8 < float(size.group(1)) < 0.95, message
+    assert "beam medial_gastrocnemius" in message, message

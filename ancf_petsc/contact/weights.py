@@ -84,8 +84,8 @@ class FadeDerivatives:
         # conditioning of the sloped points alone: each point's is its own)
         sloped = np.flatnonzero(np.any(self._slope != 0.0, axis=1))
         kappa = projection_conditioning(subset(pr, sloped)) if len(sloped) else np.zeros(0)
-        self.band = sloped[kappa > ILL_POSED]
-        self.share = conditioned(kappa[kappa > ILL_POSED])
+        posed = kappa > ILL_POSED
+        self.band, self.share = sloped[posed], conditioned(kappa[posed])
         self.grad = np.zeros((len(pr.idx), 6 * pr.NA.shape[1]))     # A's and B's slots × 3
         self._sub = self._dz = self._hess = None
         if len(self.band):

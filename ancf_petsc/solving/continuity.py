@@ -145,12 +145,12 @@ def _where(problem, change: np.ndarray, comm) -> str:
         D = problem.X.getBlockSize()
         lo = problem.X.getOwnershipRange()[0] // D
         row = int(np.argmax(change))
-        node = int(np.argsort(problem.layout.perm)[lo + row // D])
+        node = int(np.argsort(problem.layout.perm)[lo + row // D])       # PETSc → model node
         model = problem.model
         text = "a contact multiplier's row"
-        for beam in model.beams:
-            if beam.node_offset <= node < beam.node_offset + beam.n_nodes:
-                text = f"beam {beam.name}, node {node - beam.node_offset}"
+        if node < model.n_nodes:
+            beam = model.beams[model.node_beam()[node]]
+            text = f"beam {beam.name}, node {node - beam.node_offset}"
     return comm.bcast(text, root=rank)
 
 

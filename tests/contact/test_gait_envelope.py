@@ -24,6 +24,17 @@ def _cutbacks(s):
     return sum(st["cutbacks"] for st in s["steps"])
 
 
+def _stride_frames(bias: str, first: int, stop: int, out):
+    """Frames first+1 … stop of the shipped stride in ``bias`` at ψ = 90°, unilateral contact, as
+    a history of their own (the first reached from rest)."""
+    times, forces = synthetic_stride(bias)
+    sel = slice(first, stop)
+    raw = cell_config(EnvelopeCell(NEO, 90, bias, "unilateral", stride=True))
+    raw["history"] = {"table": {"time": times[sel].tolist(),
+                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
+    return run_inline(raw, out, base_dir=CONFIGS)
+
+
 @pytest.mark.slow
 def test_unilateral_twist_90_gastrocnemius_biased_first_levels(tmp_path):
     """The traceback case (ValueError: array must not contain infs or NaNs, 38a07d3) reaches its
@@ -55,12 +66,7 @@ def test_unilateral_push_off_loading_and_unloading(tmp_path):
     unloading to toe-off) at ψ = 90° with unilateral contact: every frame converges, none after
     the first (a ramp from rest to 0.5 kN in sub-steps) takes a cut-back, and the median frame
     takes at most 8 Newton iterations (measured 5)."""
-    times, forces = synthetic_stride("gastrocnemius")
-    sel = slice(40, 61)
-    raw = cell_config(EnvelopeCell(NEO, 90, "gastrocnemius", "unilateral", stride=True))
-    raw["history"] = {"table": {"time": times[sel].tolist(),
-                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
-    s = run_inline(raw, tmp_path / "push_off", base_dir=CONFIGS)
+    s = _stride_frames("gastrocnemius", 40, 61, tmp_path / "push_off")
     its = [st["iterations"] for st in s["steps"]]
     assert s["status"] == "completed" and len(its) == 21
     assert sum(st["cutbacks"] for st in s["steps"][1:]) == 0
@@ -76,12 +82,7 @@ def test_unilateral_twist_90_soleus_biased_frames_46_to_47(tmp_path):
     derivatives now fade in with the conditioning, contact/weights.conditioned).  Frame 46 is
     reached from rest, and frame 47 from it without a cut-back (measured: 9 Newton iterations;
     the code before cycled at 1.798 at every increment down to 6e-5 of a frame)."""
-    times, forces = synthetic_stride("soleus")
-    sel = slice(45, 47)
-    raw = cell_config(EnvelopeCell(NEO, 90, "soleus", "unilateral", stride=True))
-    raw["history"] = {"table": {"time": times[sel].tolist(),
-                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
-    s = run_inline(raw, tmp_path / "frames_46_47", base_dir=CONFIGS)
+    s = _stride_frames("soleus", 45, 47, tmp_path / "frames_46_47")
     assert s["status"] == "completed", s.get("message")
     last = s["steps"][-1]
     assert last["load_factor"] == 2.0 and last["cutbacks"] == 0 and last["iterations"] <= 15
@@ -95,12 +96,7 @@ def test_the_old_single_cut_fails_frame_47_and_the_failure_names_the_jump(tmp_pa
     gastrocnemius, instead of the cycle alone."""
     from ancf_petsc.contact import weights
     monkeypatch.setattr(weights, "ILL_POSED", np.nextafter(weights.WELL_POSED, 0.0))
-    times, forces = synthetic_stride("soleus")
-    sel = slice(45, 47)
-    raw = cell_config(EnvelopeCell(NEO, 90, "soleus", "unilateral", stride=True))
-    raw["history"] = {"table": {"time": times[sel].tolist(),
-                                **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
-    s = run_inline(raw, tmp_path / "frames_46_47_cut", base_dir=CONFIGS)
+    s = _stride_frames("soleus", 45, 47, tmp_path / "frames_46_47_cut")
     assert s["status"] == "failed" and s["steps"][-1]["load_factor"] == 1.0
     message = s["message"]
     size = re.search(r"the residual jumps by ([0-9.e+-]+) N", message)

@@ -46,9 +46,13 @@ WEIGHT_TOL = 1e-6
 
 #: det H / det a (``gap.projection_conditioning``) from which a point's weight is differentiated
 #: whole (``FadeDerivatives``), and below which not at all; in between its ∇w and ∇²w enter with
-#: the share ``conditioned``
-WELL_POSED = 0.5
-ILL_POSED = 0.25
+#: the share ``conditioned``.  Only a partner place near a focal point of B's surface (det H → 0:
+#: an early iterate far off the surface) has meaningless derivatives; with the fade at 0.25–0.5
+#: (2026-11-29) points at converged states sat in it and the weighted gaps' gradients lacked
+#: (1 − s) g ∇w: Newton converged linearly (0.946 per iteration, |F| 1e-6 → 2.5e-7 in 15) and the
+#: 165° soleus-biased unilateral column stopped at 2881.9 N (docs/gait.md)
+WELL_POSED = 0.1
+ILL_POSED = 0.05
 
 
 def conditioned(kappa: np.ndarray) -> np.ndarray:
@@ -58,8 +62,12 @@ def conditioned(kappa: np.ndarray) -> np.ndarray:
     soleus-biased unilateral stride at twist 90° (frame 46.8) a point 0.52 mm off the end piece of
     its partner's interface curve sat at det H / det a = 0.5, and its −p g ∇w switched a 0.87 N
     force pair on and off between states 5e-13 apart, so that Newton cycled at every increment.
-    The share is a constant in the Jacobian (its own derivative, through H's, is left out): the
-    Jacobian is exact where the share is 0 or 1."""
+    The share is a constant in the Jacobian (its own derivative, through H's, is left out), and
+    the weight itself keeps following its partner place: where the share is below 1, the
+    weighted gaps' gradients lack (1 − s) g ∇w and Newton converges only linearly (a weight
+    blended as w_kept + s (w − w_kept), with the share's own derivative (w − w_kept) s′ ∇κ added,
+    was tried: Newton then cycled at 1600 N in that column).  The Jacobian is exact where the
+    share is 1, which the fade at 0.05–0.1 leaves to points near a focal point of B."""
     return fade((WELL_POSED - kappa) / (WELL_POSED - ILL_POSED))
 
 

@@ -61,6 +61,16 @@ def test_twist_180_columns_to_1200_newtons(tmp_path, law, bias, predictor, budge
 
 
 @pytest.mark.slow
+def test_unilateral_twist_165_soleus_biased_column_to_3_kilonewtons(tmp_path):
+    """With the fade weights' derivatives shared out over det H / det a 0.25–0.5, points at
+    converged states sat in the fade and the weighted gaps' gradients lacked (1 − s) g ∇w: from
+    2881.9 N Newton converged linearly (0.946 per iteration from |F| 1e-6) and the column stopped
+    (contact/weights.py).  With the fade at 0.05–0.1 it reaches 3 kN."""
+    s = _run(EnvelopeCell(NEO, 165, "soleus", "unilateral"), tmp_path)
+    assert s["status"] == "completed" and s["steps"][-1]["load_factor"] == 3000.0
+
+
+@pytest.mark.slow
 def test_unilateral_push_off_loading_and_unloading(tmp_path):
     """Frames 40-60 of the gastrocnemius-biased stride (the push-off peak, 2.63 kN, and the
     unloading to toe-off) at ψ = 90° with unilateral contact: every frame converges, none after
@@ -91,11 +101,12 @@ def test_unilateral_twist_90_soleus_biased_frames_46_to_47(tmp_path):
 @pytest.mark.slow
 def test_the_old_single_cut_fails_frame_47_and_the_failure_names_the_jump(tmp_path, monkeypatch):
     """The same frames with the weights' derivatives cut at one conditioning value again (as on
-    da3c67c: ILL_POSED just below WELL_POSED): Newton cycles at 1.798 at every increment, and the
-    failure's scan (solving/continuity.py) names the residual's jump, 0.87 N on the medial
+    da3c67c: at 0.5, ILL_POSED just below WELL_POSED): Newton cycles at 1.798 at every increment,
+    and the failure's scan (solving/continuity.py) names the residual's jump, 0.87 N on the medial
     gastrocnemius, instead of the cycle alone."""
     from ancf_petsc.contact import weights
-    monkeypatch.setattr(weights, "ILL_POSED", np.nextafter(weights.WELL_POSED, 0.0))
+    monkeypatch.setattr(weights, "WELL_POSED", 0.5)
+    monkeypatch.setattr(weights, "ILL_POSED", np.nextafter(0.5, 0.0))
     s = _stride_frames("soleus", 45, 47, tmp_path / "frames_46_47_cut")
     assert s["status"] == "failed" and s["steps"][-1]["load_factor"] == 1.0
     message = s["message"]

@@ -16,9 +16,11 @@ def contact_gaps(problem: Problem, X: PETSc.Vec) -> dict | None:
     combined (collective)."""
     if problem.contact is None:
         return None
-    needed = problem.exchange.needed
     c = problem.contact
-    local = problem.exchange.evaluate(X, lambda xl: reports.gap_sums(c, c.evaluate(xl, needed)))
+
+    def sums(xl):      # the exchange's blocks as they are now: ``evaluate`` may have rebuilt it
+        return reports.gap_sums(c, c.evaluate(xl, problem.exchange.needed))
+    local = problem.exchange.evaluate(X, sums)
     comm = problem.comm.tompi4py()
     out = np.empty_like(local)
     for op, mpi_op in (("max", MPI.MAX), ("sum", MPI.SUM)):

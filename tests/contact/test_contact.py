@@ -116,6 +116,25 @@ def test_reference_state_is_gap_free_and_stress_free():
     assert len(gaps) == 3 and all(g["max_gap"] < 1e-12 for g in gaps.values())
 
 
+def test_gap_report_after_the_exchange_is_rebuilt():
+    """``contact_gaps`` evaluates with the exchange's node blocks as ``GhostExchange.evaluate``
+    left them: it had taken them before, so when the exchange was rebuilt first (a projection
+    that reached blocks the rank did not hold) it indexed past the local array (2 ranks, the 165°
+    soleus-biased unilateral column after 2500 N: an IndexError on one rank).  Here the
+    exchange starts without the contact's blocks (multipliers ~1e-5 m), so the report rebuilds it
+    and must give what it gives with the exchange built."""
+    P, _ = _problem(achilles(contact={"mode": "sliding"}))
+    X, _ = perturbed_state(P, 1e-6, 4, multipliers=1e-5)
+    built = contact_gaps(P, X)
+    P.exchange.build(np.zeros(0, dtype=np.int64))
+    rebuilt = contact_gaps(P, X)
+    assert np.all(np.isin(P.contact.required_nodes(), P.exchange.needed))
+    assert built.keys() == rebuilt.keys() and len(built) == 3
+    for name in built:
+        assert built[name]["max_pressure"] != 0.0
+        assert rebuilt[name] == pytest.approx(built[name], rel=1e-12), name   # projections to rounding
+
+
 @pytest.mark.parametrize("elements,projection", [(4, {"axial": 2, "curve": 0}),
                                                  (4, {"axial": 2, "curve": 1}),
                                                  (2, {"axial": 1, "curve": 1}),

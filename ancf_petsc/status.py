@@ -24,6 +24,8 @@ COMPLETED = "COMPLETED"
 NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
 #: completed, but some levels were accepted with their contact weights unsettled
 WEIGHTS_UNSETTLED = "WEIGHTS_UNSETTLED"
+#: completed, after switching to a stable branch at a bifurcation (solving/branch_switch.py)
+BRANCH_SWITCHED = "BRANCH_SWITCHED"
 OUTPUT_ERROR = "OUTPUT_ERROR"
 PETSC_ERROR = "PETSC_ERROR"
 INTERNAL_ERROR = "INTERNAL_ERROR"         # a bug (exit code 1, with a traceback)

@@ -28,6 +28,7 @@ SOLVER_KEYS = {
     "linear": (lambda v, p: string(v, p, ("auto", "direct", "fieldsplit")), True),
     "stability_cutbacks": (lambda v, p: integer(v, p, lo=0, hi=20), False),
     "allow_unstable": (boolean, False),
+    "branch_switch": (boolean, False),
     "reuse_tangent": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),
     "options_prefix": (lambda v, p: options_prefix(v, p), False),

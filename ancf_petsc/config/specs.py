@@ -172,6 +172,8 @@ class SolverSpec:
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (linalg.options.matrix_type)
     linear: str = "auto"                  # linear solver: auto | direct | fieldsplit (linalg.choice.choose)
     allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
+    branch_switch: bool = True            # at a give-up, switch to a stable branch from an unstable
+                                          # state met ahead (solving/branch_switch.py)
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 
 

@@ -248,6 +248,8 @@ class ResultsWriter:
                  "negative_eigenvalues": record.negative_eigenvalues,
                  "weights_unsettled": record.weights_unsettled,
                  "newton_history": record.iteration_history}
+        if record.branch_switches:
+            entry["branch_switches"] = record.branch_switches
         if extra:
             entry.update(extra)
         text = json.dumps(entry, separators=(",", ":"))          # summary.json's, and results.h5's

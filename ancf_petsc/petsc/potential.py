@@ -1,4 +1,5 @@
-"""The total potential of a Problem without contact multipliers, the rounding floor of its
+"""The total potential of a Problem (without contact multipliers; at a converged contact state,
+``constrained_potential``), the rounding floor of its
 residual, and the rigid-body modes of its reference configuration (the Jacobian's near null
 space)."""
 from __future__ import annotations
@@ -17,6 +18,13 @@ def total_potential(problem, X: PETSc.Vec) -> float:
     gradient of a Lagrangian, whose stationary point is a saddle (``Problem.has_potential``)."""
     if not problem.has_potential:
         raise RuntimeError("no potential with contact multipliers; use the residual merit")
+    return constrained_potential(problem, X)
+
+
+def constrained_potential(problem, X: PETSc.Vec) -> float:
+    """Π at X without the contact multipliers' term: with a frictionless law, the Lagrangian's
+    value at a converged state (its gaps closed or its multipliers zero), which compares two
+    equilibria at one load (solving/branch_switch.py); collective."""
     logging.stage(logging.ASSEMBLY).push()
     try:
         def local_energy(xl):

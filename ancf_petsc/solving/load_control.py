@@ -9,7 +9,7 @@ halving after a failed one (at most ``solver.max_cutbacks`` in a row, not below
 SNES side (stepper.py) asks it at every sub-step."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 
 #: the rest of the way to a requested level is taken in one step when it is at most this many
@@ -31,6 +31,8 @@ class LevelTally:
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)
     unstable_at: tuple[float, int, int] | None = None
+    #: the branch switches of this level (solving/branch_switch.py reports)
+    switches: list = field(default_factory=list)
 
 
 class LoadControl:

@@ -64,6 +64,8 @@ class StepRecord:
     last_increment: float = 0.0     # the last accepted one (secant predictor)
     #: a sub-step was accepted with its contact weights unsettled (residual_norm: with its own)
     weights_unsettled: bool = False
+    #: switches to a stable branch at a bifurcation within this level (branch_switch.py reports)
+    branch_switches: list = field(default_factory=list)
 
 
 @dataclass

@@ -30,6 +30,7 @@ from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
 from ..petsc.reactions import reactions as support_reactions
+from . import solver_messages
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
@@ -87,6 +88,9 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
                 f"{len(unstable)} of {len(records)} levels are unstable equilibria (negative tangent "
                 f"eigenvalues at load factor {', '.join(f'{x:g}' for x in unstable)}): a buckled "
                 "or under-supported model; set solver.allow_unstable: true to accept them")
+    switched = [s["load_factor"] for r in records for s in r.branch_switches]
+    if switched:
+        return "completed", st.BRANCH_SWITCHED, solver_messages.switched_message(switched)
     unsettled = [r.load_factor for r in records if r.weights_unsettled]
     if unsettled:
         return ("completed", st.WEIGHTS_UNSETTLED,

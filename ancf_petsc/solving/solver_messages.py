@@ -48,6 +48,26 @@ def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:
             f"or another predictor may find another branch)")
 
 
+def switch_line(report: dict) -> str:
+    """The log line of a branch switch (branch_switch.py's report)."""
+    how = (f"total potential {report['potential_drop']:.3g} J below the unstable state's, the lower of "
+           f"{report['sides']} side(s)" if "potential_drop" in report
+           else f"the smaller jump of {report['sides']} side(s)")
+    return (f"  branch switch at load factor {report['load_factor']:.6g}: the state there had "
+            f"{report['negative_before']} negative tangent eigenvalue(s); along its critical mode "
+            f"(eigenvalue {report['eigenvalue']:.3g}), perturbed by {report['sign'] * report['amplitude'] * 1e3:+.3g} mm, "
+            f"Newton reached a state with {report['negative_after']}, {report['jump'] * 1e3:.3g} mm away "
+            f"({how}; {report['iterations']} Newton iterations)")
+
+
+def switched_message(load_factors: list[float]) -> str:
+    """The final message of a run that switched branch at ``load_factors``."""
+    return (f"completed, switching branch {len(load_factors)} time(s) at a bifurcation (load factor "
+            f"{', '.join(f'{x:g}' for x in load_factors)}): load control met an unstable state and "
+            "could not pass it; the path went on from a stable state along its critical mode "
+            "(summary.json steps[].branch_switches; solver.branch_switch: false stops there instead)")
+
+
 def lost_detail(contact, smallest: float, lost: bool) -> str:
     """The cause of a failure whose last attempts lost a contact point's projection: the point
     slid out of its search window (``contact.search_margin`` of the partner beam per load step)

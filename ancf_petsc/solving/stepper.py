@@ -21,6 +21,7 @@ from ..linalg import logging
 from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.problem import Problem
 from . import solver_messages
+from .branch_switch import BranchSwitch
 from .continuity import jump_detail, residual_jump
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
@@ -57,6 +58,7 @@ class LoadStepper:
         self.history: list[float] = []         # residual norms of the solves of an increment
         self.unsettled = False                  # the last solve's contact weights did not settle
         self.tresca_solves = 0                  # friction's fixed point in the last solve_at
+        self.branches = BranchSwitch(problem, spec.branch_switch and not spec.allow_unstable)  # saddles
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -75,6 +77,7 @@ class LoadStepper:
     def destroy(self) -> None:
         """Free the SNES and the path's vectors; not collective."""
         self.release_path()
+        self.branches.destroy()
         self.solver.destroy()
 
     def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
@@ -177,6 +180,10 @@ class LoadStepper:
                 history.append(list(self.history))
                 self._check_budget(path, X_prev, target, step)
                 reason, neg = self._judge(path, reason, fnorm, step, tally)
+                if reason > 0 and self.branches.applies(path, neg):       # branch_switch.py
+                    if self.branches.take(self, path, X_prev, target, tally, resume=True):
+                        continue
+                    reason, neg = self.branches.resumed
                 if reason > 0:
                     tally.unsettled |= self.unsettled
                     self._accept(path, X_prev, step, its, neg, tally)
@@ -190,7 +197,7 @@ class LoadStepper:
                           residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
                           iteration_history=history, negative_eigenvalues=self.solver.negative_eigenvalues(),
                           increment=path.dlam, last_increment=path.dlam_last,
-                          weights_unsettled=tally.unsettled)
+                          weights_unsettled=tally.unsettled, branch_switches=tally.switches)
 
     def _contact_formed(self, path: PathState) -> bool:
         """Whether the last increment was the first from rest and formed the contact state (a
@@ -227,6 +234,8 @@ class LoadStepper:
         if reason > 0 and not converged:
             reason = UNCLEAN_STATE
         neg = self.solver.negative_eigenvalues() if converged else None
+        if neg:                                         # a saddle: a branch point to switch from
+            self.branches.remember(path.lam + step, P.X, self.solver.snes.getJacobian()[0], neg, path.lam)
         if self.control.wants_stability_retry(neg, path.accepted_negative, tally):
             reason = UNSTABLE_STEP
         return reason, neg
@@ -268,13 +277,15 @@ class LoadStepper:
         if give_up:
             jump = None
             if not (inverted or lost) and reason in JUMP_REASONS:
-                atol = self.solver.snes.getTolerances()[1]
-                jump = residual_jump(P, self.solver.trail, path.lam + step, atol)     # collective
+                jump = residual_jump(P, self.solver.trail, path.lam + step,         # collective
+                                     self.solver.snes.getTolerances()[1])
                 X_prev.copy(P.X)
                 P.restore()
+            failure = LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
+                                      solver_messages.failure_detail(self.solver, reason)
+                                      + solver_messages.lost_detail(P.contact, step, lost and not inverted)
+                                      + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
+            if self.branches.take(self, path, X_prev, target, tally, resume=False):
+                return                                  # on from a stable branch (branch_switch.py)
             P.load_factor = path.lam
-            raise LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                  solver_messages.failure_detail(self.solver, reason)
-                                  + solver_messages.lost_detail(P.contact, step, lost and not inverted)
-                                  + solver_messages.stability_detail(tally.unstable_at)
-                                  + jump_detail(jump))
+            raise failure

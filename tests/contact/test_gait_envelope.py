@@ -113,3 +113,20 @@ def test_the_old_single_cut_fails_frame_47_and_the_failure_names_the_jump(tmp_pa
     size = re.search(r"the residual jumps by ([0-9.e+-]+) N", message)
     assert "Newton cycles" in message and size is not None and 0.8 < float(size.group(1)) < 0.95, message
     assert "beam medial_gastrocnemius" in message, message
+
+
+@pytest.mark.slow
+def test_unilateral_twist_180_uniform_stride_switches_branch_at_frame_13(tmp_path):
+    """The uniform stride at ψ = 180°, unilateral contact, stopped at frame 13.16 (455 N): a sub-step
+    converged at frame 13.375 on a saddle (the lateral gastrocnemius' sections turning near the
+    loaded end, eigenvalue −1.6) and every smaller one failed.  The branch switch
+    (solving/branch_switch.py) leaves that saddle along its critical mode for a stable state
+    about 1 mm away, and the stride completes on it: every frame a stable equilibrium."""
+    s = _run(EnvelopeCell(NEO, 180, "uniform", "unilateral", stride=True), tmp_path)
+    assert s["status"] == "completed" and s["reason_code"] == "BRANCH_SWITCHED", s["message"]
+    switches = [x for st in s["steps"] for x in st.get("branch_switches", [])]
+    assert len(switches) == 1, switches
+    sw = switches[0]
+    assert 13.0 < sw["load_factor"] < 14.0 and sw["negative_before"] == 1 and sw["negative_after"] == 0
+    assert 0.2e-3 < sw["jump"] < 2e-3 and sw["potential_drop"] > 0.0
+    assert len(s["steps"]) == 100 and all(st["negative_eigenvalues"] == 0 for st in s["steps"])

@@ -26,9 +26,10 @@ def coarse_achilles(psi=0, elements=1, steps=(10, 50), projection=MEAN_GAP):
     return raw
 
 
-def unguarded(raw):
-    """Accept whatever state Newton converges to (no retry when a step lands on a saddle)."""
-    raw.setdefault("solver", {})["stability_cutbacks"] = 0
+def unguarded(raw, switch: bool = False):
+    """Accept whatever state Newton converges to (no retry when a step lands on a saddle, and
+    without ``switch`` no branch switch from it either: solving/branch_switch.py)."""
+    raw.setdefault("solver", {}).update(stability_cutbacks=0, branch_switch=switch)
     return raw
 
 
@@ -72,6 +73,18 @@ def test_negative_pivots_equal_the_dense_spectrum(tmp_path):
         # the solver's count is the last Newton iteration's factor; the state itself agrees
         assert n == expected, w[:4]
 
+
+def test_the_branch_switch_leaves_that_saddle_for_a_stable_state(tmp_path):
+    """The same step to 50 N with the branch switch on (the default): the saddle is left along its
+    critical mode, and the state it goes on from is stable by the dense spectrum too."""
+    raw = unguarded(coarse_achilles(), switch=True)
+    s = run_inline(raw, tmp_path / "switched")
+    assert s["status"] == "completed" and s["reason_code"] == "BRANCH_SWITCHED", s["message"]
+    assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 0]
+    (sw,) = s["steps"][1]["branch_switches"]
+    assert 10.0 < sw["load_factor"] <= 50.0 and sw["negative_before"] == 1 and sw["potential_drop"] > 0.0
+    n, w = dense_negative_eigenvalues(raw, tmp_path / "switched", 2)
+    assert n == 0, w[:4]
 
 
 @pytest.mark.mpi
@@ -136,8 +149,25 @@ def test_a_failure_after_a_stability_retry_names_the_instability(tmp_path):
     failure says so (the load factor and the eigenvalue counts: a limit or bifurcation point
     that load control cannot pass), not only the last SNES reason."""
     raw = coarse_achilles()
-    raw.setdefault("solver", {})["min_increment"] = 25.0      # the 40 N step may not be halved
+    # the 40 N step may not be halved; no branch switch from the saddle (the next test)
+    raw.setdefault("solver", {}).update(min_increment=25.0, branch_switch=False)
     p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
     assert p.returncode != 0
     assert "negative tangent eigenvalue(s) against 0 at the last accepted one" in p.stderr, p.stderr
     assert "limit or bifurcation point" in read_summary(tmp_path / "run")["message"]
+
+
+def test_at_that_give_up_the_branch_switch_goes_on_from_a_stable_state(tmp_path):
+    """The same run with the branch switch (the default): where the stepper would give up, the
+    saddle met ahead of the path is left along its critical mode and the level is reached; every
+    level stable, the switch reported (summary.json, message, exit 0)."""
+    raw = coarse_achilles()
+    raw.setdefault("solver", {})["min_increment"] = 25.0
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "run")])
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "branch switch at load factor" in p.stdout
+    s = read_summary(tmp_path / "run")
+    assert s["reason_code"] == "BRANCH_SWITCHED" and "switching branch 1 time(s)" in s["message"]
+    assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 0]
+    (sw,) = s["steps"][1]["branch_switches"]
+    assert sw["negative_before"] == 1 and sw["negative_after"] == 0 and sw["potential_drop"] > 0.0

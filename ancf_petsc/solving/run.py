@@ -20,7 +20,7 @@ from ..io.derived import displacement_differences, interface_pairs
 from ..io.subtendons import subtendon_report
 from ..io.files import DirectoryLock, OutputError, prepare_output_dir
 from ..io.restart import check_same_run, read_restart
-from ..io.results import ResultsWriter
+from ..io.results import ResultsWriter, record_crash
 from ..model.build import build_model
 from ..model.contact_setup import contact_for
 from ..parallel.partition import make_layout, partition_stats
@@ -286,7 +286,7 @@ class Run:
         except BaseException as exc:
             # a bug, possibly on this rank only: no collective calls; record it where we can
             self.stepper.close(collective=False)
-            self.writer.finish("failed", reason_code=st.INTERNAL_ERROR, message=f"{type(exc).__name__}: {exc}")
+            record_crash(self.writer, st.INTERNAL_ERROR, f"{type(exc).__name__}: {exc}")
             raise
         return None, 0, False
 

@@ -227,6 +227,51 @@ def test_an_exception_in_rank_0s_file_writing_fails_every_rank(tmp_path):
     assert (s["status"], s["reason_code"], len(s["steps"])) == ("failed", "OUTPUT_ERROR", 1)
 
 
+RANK_1_BUG = """
+import sys
+sys.path.insert(0, {tests!r})
+from helpers import load_raw, petsc_init
+petsc_init()
+from petsc4py import PETSc
+from ancf_petsc.api import solve
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.solving import stepper
+real, calls = stepper.LoadStepper._stop_if_requested, []
+
+def bug(self, target, level):
+    calls.append(1)
+    if PETSc.COMM_WORLD.rank == 1 and len(calls) == 2:       # rank 0 goes on into a collective
+        raise RuntimeError("simulated bug on one rank")
+    return real(self, target, level)
+stepper.LoadStepper._stop_if_requested = bug
+raw = load_raw("bundle_hex7.yaml")
+raw["output"] = {{"dir": sys.argv[1], "vtk": False}}
+try:
+    solve(parse_config(raw, base_dir={configs!r}), PETSc.COMM_WORLD, log=lambda *_: None)
+except Exception:
+    import traceback
+    traceback.print_exc()
+    sys.stderr.flush()
+    PETSc.COMM_WORLD.tompi4py().Abort(1)                  # as ancf-solve does
+"""
+
+
+@pytest.mark.mpi
+def test_a_bug_on_rank_1_alone_still_leaves_a_final_status(tmp_path):
+    """A bug raised on rank 1 only, while rank 0 waits in a collective call: the abort kills rank
+    0 before it can write, so rank 1 marks rank 0's summary.json itself (it stayed 'running')."""
+    script = tmp_path / "bug.py"
+    script.write_text(RANK_1_BUG.format(tests=os.path.dirname(os.path.dirname(__file__)), configs=CONFIGS))
+    p = subprocess.run(["mpirun", "--oversubscribe", "-n", "2", sys.executable, str(script),
+                        str(tmp_path / "out")], capture_output=True, text=True, cwd=ROOT,
+                       timeout=TIMEOUT, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode != 0 and "simulated bug on one rank" in p.stderr, p.stdout + p.stderr
+    s = read_summary(tmp_path / "out")
+    assert (s["status"], s["reason_code"]) == ("failed", "INTERNAL_ERROR"), s["status"]
+    assert s["message"] == "rank 1: RuntimeError: simulated bug on one rank"
+    assert len(s["steps"]) >= 1                          # the converged levels are kept
+
+
 @pytest.mark.mpi
 def test_config_file_is_binary_or_a_directory(tmp_path):
     binary = tmp_path / "model.yaml"

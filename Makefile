@@ -98,13 +98,14 @@ verify-solid-friction: setup
 
 # the friction reference refined at the soleus-medial interface (issue 41; docs/interface.md, "The friction
 # reference, locally refined at the soleus-medial interface"): bulk h = 2 mm, 1.0 and 0.7 mm at mg_sol over
-# Table 1's 13 levels, 0.5 mm over the levels to 100 N; merged into docs/solid_friction.csv (10 + 32 + 33 min
-# on one shared core, one process; peak resident memory 1.7 / 3.6 / 7.4 GB)
+# Table 1's 13 levels, 0.5 mm over the levels to 100 N, 0.4 mm at 10 N; merged into docs/solid_friction.csv
+# (10 + 32 + 33 + 101 min on one shared core, one process; peak resident memory 1.7 / 3.6 / 7.4 / 11.4 GB)
 FRICTION_REFINED := --merge --psi 45 --no-selftest --no-checks --no-ancf --profiles=
 verify-solid-friction-refined: setup
 	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3,2e-3 --h-interface 1e-3,7e-4
 	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3 --h-interface 5e-4 \
 		--loads 10,20,30,40,45,60,80,90,100
+	$(PY) scripts/verify_solid_friction.py $(FRICTION_REFINED) --h 2e-3 --h-interface 4e-4 --loads 10
 
 # the section orders against the friction solid (issue 42; docs/interface.md, "Orders 3 and 4 against the
 # friction solid"): the beams only (the solid rows are verify-solid-friction's), elements 33103 and 33153 with

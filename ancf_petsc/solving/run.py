@@ -89,14 +89,15 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
                 f"eigenvalues at load factor {', '.join(f'{x:g}' for x in unstable)}): a buckled "
                 "or under-supported model; set solver.allow_unstable: true to accept them")
     switched = [s["load_factor"] for r in records for s in r.branch_switches]
-    if switched:
-        return "completed", st.BRANCH_SWITCHED, solver_messages.switched_message(switched)
     unsettled = [r.load_factor for r in records if r.weights_unsettled]
+    weights = (f"contact weights not settled at {len(unsettled)} of {len(records)} levels (load factor "
+               f"{', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is |F| with the state's own "
+               "weights): contact.fade: newton solves for them")
+    if switched:
+        return ("completed", st.BRANCH_SWITCHED,
+                solver_messages.switched_message(switched) + (f"; {weights}" if unsettled else ""))
     if unsettled:
-        return ("completed", st.WEIGHTS_UNSETTLED,
-                f"completed, but with contact weights not settled at {len(unsettled)} of {len(records)} "
-                f"levels (load factor {', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is "
-                "|F| with the state's own weights): contact.fade: newton solves for them")
+        return "completed", st.WEIGHTS_UNSETTLED, f"completed, but with {weights}"
     return "completed", st.COMPLETED, "completed"
 
 

@@ -85,3 +85,19 @@ def test_the_switch_gives_the_serial_answer_on_2_and_3_ranks(tmp_path):
     for n, (_, s) in runs.items():
         assert s["reason_code"] == "BRANCH_SWITCHED", (n, s["message"])
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()}, rtol=1e-8)
+
+
+def test_the_final_status_names_the_switches_and_unsettled_weights_together():
+    from ancf_petsc import status
+    from ancf_petsc.solving.records import StepRecord
+    from ancf_petsc.solving.run import final_status
+
+    def record(lam, switches=(), unsettled=False):
+        return StepRecord(lam, 3, 1, 0, "CONVERGED_FNORM_ABS", 1e-9, 0.1, negative_eigenvalues=0,
+                          weights_unsettled=unsettled, branch_switches=list(switches))
+    sw = {"load_factor": 0.75}
+    state, code, message = final_status([record(0.5), record(1.0, [sw], unsettled=True)], None, False)
+    assert (state, code) == ("completed", status.BRANCH_SWITCHED)
+    assert "switching branch 1 time(s) at a bifurcation (load factor 0.75)" in message
+    assert "contact weights not settled at 1 of 2 levels (load factor 1;" in message
+    assert final_status([record(0.5), record(1.0, unsettled=True)], None, False)[1] == status.WEIGHTS_UNSETTLED

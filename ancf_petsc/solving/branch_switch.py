@@ -73,6 +73,7 @@ class BranchSwitch:
         self.problem, self.enabled = problem, enabled
         self.point: BranchPoint | None = None
         self.resumed: tuple[int, int | None] = (0, None)   # ``resume``'s (reason, negative)
+        self.outcome = ""                       # why the last switch found nothing (the log's)
 
     def remember(self, lam: float, X: PETSc.Vec, J: PETSc.Mat, negative: int, reached: float) -> None:
         """A sub-step from ``reached`` converged at ``lam`` on a state with ``negative``
@@ -126,8 +127,7 @@ class BranchSwitch:
         its0 = stepper.newton_iterations
         report = self.switch(stepper, path, target, path.accepted_negative)
         if report is None:
-            stepper.log(f"  branch switch at load factor {point.lam:.6g} found no stable state along "
-                        "the critical mode(s)")
+            stepper.log(f"  branch switch at load factor {point.lam:.6g}: {self.outcome}")
             if resume:
                 self.resume(stepper, path, target)
             else:
@@ -163,6 +163,9 @@ class BranchSwitch:
         accepted = min(accepted, point.negative - 1)
         size = section_size(P.model)
         modes = critical_modes(P, point.J, max(1, min(MAX_MODES, point.negative - accepted)))
+        self.outcome = ("no stable state along the critical mode(s)" if modes else
+                        "its tangent has no negative eigenvalue whose vector is on the beam nodes (the "
+                        "count's saddle lives on the contact multipliers): nothing to switch along")
         conservative = P.contact is None or not P.contact.terms
         P.load_factor = point.lam
         base = constrained_potential(P, point.X) if conservative else None

@@ -165,7 +165,7 @@ class BranchSwitch:
         modes = critical_modes(P, point.J, max(1, min(MAX_MODES, point.negative - accepted)))
         self.outcome = ("no stable state along the critical mode(s)" if modes else
                         "its tangent has no negative eigenvalue whose vector is on the beam nodes (the "
-                        "count's saddle lives on the contact multipliers): nothing to switch along")
+                        "count's saddle lies mostly on the contact multipliers): nothing to switch along")
         conservative = P.contact is None or not P.contact.terms
         P.load_factor = point.lam
         base = constrained_potential(P, point.X) if conservative else None

@@ -125,7 +125,7 @@ class BranchSwitch:
         if point is None or path.accepted_negative > 0:      # a path already on saddles: as it is
             return False
         its0 = stepper.newton_iterations
-        report = self.switch(stepper, path, target, path.accepted_negative)
+        report = self.switch(stepper, point, path, target)
         if report is None:
             stepper.log(f"  branch switch at load factor {point.lam:.6g}: {self.outcome}")
             if resume:
@@ -135,7 +135,8 @@ class BranchSwitch:
                 P.restore()
             tally.its += stepper.newton_iterations - its0
             return False
-        tally.its += stepper.newton_iterations - its0
+        report["iterations"] = stepper.newton_iterations - its0
+        tally.its += report["iterations"]
         stepper.log(switch_line(report))
         tally.switches.append(report)
         tally.substeps += 1
@@ -149,36 +150,29 @@ class BranchSwitch:
         path.dlam = max(point.step, stepper.spec.min_increment)
         return True
 
-    def switch(self, stepper, path, target: float, accepted: int) -> dict | None:
-        """Perturb the pending branch point along its critical modes (``AMPLITUDES``, both
-        signs) and solve at its load; on success leave the chosen state (fewer negative
-        eigenvalues than the point and no more than the last accepted state's, ``accepted``)
-        in ``problem.X`` with its own contact state and return its report, else restore the
-        last checkpoint and return None.  Collective."""
+    def switch(self, stepper, point: BranchPoint, path, target: float) -> dict | None:
+        """Perturb the branch point ``point`` (reached from a stable path) along its critical
+        modes (``AMPLITUDES``, both signs) and solve at its load; on success leave the chosen
+        stable state in ``problem.X`` with its own contact state and return its report, else
+        restore the last checkpoint and return None.  Collective."""
         P = self.problem
-        point = self.pending(path.lam)
-        if point is None:
-            return None
         point.tried = True
-        accepted = min(accepted, point.negative - 1)
         size = section_size(P.model)
-        modes = critical_modes(P, point.J, max(1, min(MAX_MODES, point.negative - accepted)))
+        modes = critical_modes(P, point.J, min(MAX_MODES, point.negative))
         self.outcome = ("no stable state along the critical mode(s)" if modes else
                         "its tangent has no negative eigenvalue whose vector is on the beam nodes (the "
                         "count's saddle lies mostly on the contact multipliers): nothing to switch along")
         conservative = P.contact is None or not P.contact.terms
         P.load_factor = point.lam
         base = constrained_potential(P, point.X) if conservative else None
-        its0 = stepper.newton_iterations
         try:
-            return self._switch_along(stepper, point, modes, size, accepted, conservative, base, path,
-                                      target, its0)
+            return self._switch_along(stepper, point, modes, size, conservative, base, path, target)
         finally:
             for _, mode in modes:
                 mode.destroy()
 
-    def _switch_along(self, stepper, point: BranchPoint, modes: list, size: float, accepted: int,
-                      conservative: bool, base: float | None, path, target: float, its0: int) -> dict | None:
+    def _switch_along(self, stepper, point: BranchPoint, modes: list, size: float, conservative: bool,
+                      base: float | None, path, target: float) -> dict | None:
         """``switch``'s ladder: every mode, amplitude and sign in turn."""
         P = self.problem
         for eigenvalue, mode in modes:
@@ -187,7 +181,7 @@ class BranchSwitch:
                 found = []
                 for sign in (1.0, -1.0):
                     neg = self._attempt(stepper, point, mode, sign * amplitude * scale, path, target)
-                    if neg is not None and neg <= accepted:
+                    if neg == 0:
                         found.append(self._side(P, point, sign, neg, conservative))
                 side = self._keep(stepper, point, mode, found, amplitude * scale, path, target,
                                   "potential" if conservative else "jump")
@@ -195,8 +189,7 @@ class BranchSwitch:
                     report = {"load_factor": point.lam, "negative_before": point.negative,
                               "negative_after": side["negative"], "sign": side["sign"],
                               "jump": side["jump"], "eigenvalue": eigenvalue, "amplitude": amplitude * size,
-                              "sides": len(found), "iterations": stepper.newton_iterations - its0,
-                              "rule": "lower potential" if conservative else "smaller jump"}
+                              "sides": len(found), "rule": "lower potential" if conservative else "smaller jump"}
                     if base is not None:
                         report["potential_drop"] = base - side["potential"]
                     return report
@@ -235,7 +228,7 @@ class BranchSwitch:
             if side["sign"] == last:
                 return side
             neg = self._attempt(stepper, point, mode, side["sign"] * offset, path, target)
-            last = side["sign"] if neg is not None and neg <= side["negative"] else 0.0
+            last = side["sign"] if neg == 0 else 0.0
             if last:
                 return side
         return None

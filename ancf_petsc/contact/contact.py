@@ -227,8 +227,8 @@ class Contact:
 
     @property
     def solver_defaults(self) -> dict:
-        """PETSc option defaults the terms' laws ask for (e.g. a line search)."""
-        return {k: v for t in self.terms for k, v in t.options.items()}
+        """PETSc option defaults the normal law and (over it) the terms' laws ask for."""
+        return dict(self.law.options) | {k: v for t in self.terms for k, v in t.options.items()}
 
     # ---------------------------------------------------------------- checks
     def begin_phase(self, phase: Phase, previous: Phase | None = None) -> None:

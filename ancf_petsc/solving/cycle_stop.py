@@ -12,6 +12,11 @@ at 4 elements, frame 12 with the fade weights differentiated: |F| between 1 and 
 iterations after its best, 1.03 N at the 4th, before friction's ``snes_max_it`` 200 sent it to
 the Tresca fixed point, which converged).  A stall (period 1) is left to the other tests.  It is installed for models whose contact has state-dependent bounds (friction)
 unless ``-snes_convergence_test`` is given.
+
+A unilateral law installs it too, with its own window (``UnilateralLaw.wander_window``, 15): its
+default ``-snes_max_it`` 60 lets a Newton iteration whose active set settles late go on while
+|F| still finds new lows, and the window ends one that has stopped finding them after as many
+iterations as the general budget gave every solve before (docs/gait.md, 2026-11-29).
 """
 from __future__ import annotations
 
@@ -36,25 +41,28 @@ class CycleStop:
     """``snes.setConvergenceTest(CycleStop(history, config_options, prefix))``; ``history()``
     the |F| of the solve's iterates so far (the monitor's, called before the test); the
     divergence tolerance and forced first iteration from the command line or the config's
-    ``petsc:``; ``cycle`` the (period, min, max |F|) of the cycle that ended the last solve, or
-    None."""
+    ``petsc:`` (else ``divtol``); ``cycle`` the (period, min, max |F|) of the cycle that ended the
+    last solve, or None."""
 
-    def __init__(self, history, config_options: dict, prefix: str = ""):
+    def __init__(self, history, config_options: dict, prefix: str = "", window: int = WANDER_WINDOW,
+                 divtol: float = DEFAULT_DIVTOL):
         self.history = history
+        self.window = window
 
         def given(name: str):
             value = option(name, prefix)
             return config_options.get(name) if value is None else value
-        self.divtol = float(given("snes_divergence_tolerance") or DEFAULT_DIVTOL)
+        self.divtol = float(given("snes_divergence_tolerance") or divtol)
         self.force = str(given("snes_force_iteration") or "false").lower() in ("", "1", "true", "yes")
         self.ttol = self.rnorm0 = 0.0
         self.cycle: tuple[int, float, float] | None = None
+        self.wandered = False           # the last solve ended on the window's rule
 
     def __call__(self, snes: PETSc.SNES, its: int, norms) -> int:
         xnorm, snorm, fnorm = norms
         rtol, atol, stol, _ = snes.getTolerances()
         if its == 0:
-            self.ttol, self.rnorm0, self.cycle = fnorm * rtol, fnorm, None
+            self.ttol, self.rnorm0, self.cycle, self.wandered = fnorm * rtol, fnorm, None, False
         if math.isnan(fnorm) or math.isinf(fnorm):
             return Reason.DIVERGED_FNORM_NAN
         if fnorm < atol and (its > 0 or not self.force):
@@ -75,7 +83,8 @@ class CycleStop:
             if cycle is not None and cycle[0] >= 2:
                 self.cycle = cycle
                 return Reason.DIVERGED_MAX_IT
-            if wandering(self.history()):
+            if wandering(self.history(), self.window):
+                self.wandered = True
                 return Reason.DIVERGED_MAX_IT
         return Reason.ITERATING
 

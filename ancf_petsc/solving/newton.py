@@ -37,9 +37,9 @@ state it failed at, 1072 N).
 Where there is no prediction (S too far from positive definite, a failed factorisation) and the
 kept status does not pass the check, where a solve fails (restarted from the predicted state)
 and past ``MAX_PREDICTIONS``, the increment is solved in the law's phases (``contact.laws``):
-bands of tolerated violations, then the exact rule, each phase taking extra rounds of
-``snes_max_it`` iterations while its active set still changes.  Two ways to change the status
-there:
+bands of tolerated violations, then the exact rule, each phase one SNES solve of up to the law's
+``snes_max_it`` (60) iterations while |F| still finds new lows (solving/cycle_stop.py).  Two ways
+to change the status there:
 
 * with the full Newton step (``-snes_linesearch_type basic``, the default), at every iterate
   (a primal–dual active set inside Newton's iteration);
@@ -369,15 +369,10 @@ class PhasedNewton:
                 if changes == 0:
                     return reason, its
             return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, its
-        for round_ in range(phase.extra_rounds + 1):
-            changes = P.status_changes()
-            reason, n = self.snes_solve(X)
-            its += n
-            self._trace(lam, f"{phase.name} round {round_}", n, reason, P.status_changes() - changes)
-            if (reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
-                    or P.status_changes() == changes):
-                break
-        return reason, its
+        changes = P.status_changes()
+        reason, n = self.snes_solve(X)
+        self._trace(lam, phase.name, n, reason, P.status_changes() - changes)
+        return reason, its + n
 
     @staticmethod
     def _trace(lam, what, n, reason, changes=None) -> None:

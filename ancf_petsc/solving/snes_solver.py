@@ -21,9 +21,9 @@ from ..petsc.step_limits import MAX_STEP_SECTIONS_CONTACT
 from . import solver_messages
 from .chord import TangentReuse
 from .continuity import IterateTrail
-from .cycle_stop import CycleStop
+from .cycle_stop import DEFAULT_DIVTOL, WANDER_WINDOW, CycleStop
 from .newton import ContactSteps
-from ..linalg.options import SolverOptionError, configure_options, refused, run_defaults
+from ..linalg.options import DEFAULT_OPTIONS, SolverOptionError, configure_options, refused, run_defaults
 from .records import LoadStepFailure
 
 
@@ -31,6 +31,19 @@ def absolute_tolerance(load_norm: float, floor: float) -> float:
     """The absolute tolerance of a run: 1e-10 of the largest load, at least 20 x the residual's
     rounding floor."""
     return max(1e-10 * load_norm, 20.0 * floor, 1e-30)
+
+
+def stop_window(contact) -> tuple[int, float] | None:
+    """The wandering window and the divergence tolerance (unless an option sets one) of
+    ``CycleStop`` for a contact, or None (PETSc's own test): friction's state-dependent bounds
+    (PETSc's divtol 1e4, as since issue 39), else a law that decides the active set (its
+    ``wander_window``; the run's default divtol, off)."""
+    if contact is None:
+        return None
+    if any(t.bounded for t in contact.terms):
+        return WANDER_WINDOW, DEFAULT_DIVTOL
+    window = getattr(contact.law, "wander_window", None)
+    return None if window is None else (window, float(DEFAULT_OPTIONS["snes_divergence_tolerance"]))
 
 
 class SNESSolver:
@@ -61,11 +74,11 @@ class SNESSolver:
         self.petsc_options = petsc_options
         self._history: list[float] = []        # residual norms of the current SNES solve
         self.trail = IterateTrail()             # its last iterates: a failed level's jump scan
-        #: friction: a Newton cycle ends the solve early (cycle_stop.py; set before the options,
-        #: so that -snes_convergence_test replaces it)
-        self.cycle_stop = None
-        if problem.contact is not None and any(t.bounded for t in problem.contact.terms):
-            self.cycle_stop = CycleStop(lambda: self._history, petsc_options, self.prefix)
+        #: friction, unilateral contact: a Newton cycle or wandering ends the solve early
+        #: (cycle_stop.py; set before the options, so that -snes_convergence_test replaces it)
+        self.cycle_stop, stop = None, stop_window(problem.contact)
+        if stop is not None:
+            self.cycle_stop = CycleStop(lambda: self._history, petsc_options, self.prefix, *stop)
             self.snes.setConvergenceTest(self.cycle_stop)
         self._kept_options: list[str] = []
         self.linesearch, self._kept_options = configure_options(

@@ -110,7 +110,11 @@ def failure_detail(solver, reason: int) -> str:
     if friction:
         return f" ({friction.removeprefix('; ')})"
     if contact is not None and contact.law.decides_activity:
-        maxit = solver.snes.getTolerances()[3]
+        maxit, stop = solver.snes.getTolerances()[3], solver.cycle_stop
+        if stop is not None and stop.wandered:
+            h = solver.last_solve_history
+            return (f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
+                    f"{stop.window} iterations: more iterations do not help)")
         return (f" (unilateral contact changes its active set within a level and may need more than "
                 f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])

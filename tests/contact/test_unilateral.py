@@ -322,3 +322,20 @@ def test_sliding_full_newton_from_rest_in_large_steps(share, tmp_path):
     u0 = np.array(adaptive["steps"][-1]["probes"]["soleus"]["displacement"])
     u1 = np.array(s["steps"][-1]["probes"]["soleus"]["displacement"])
     assert np.abs(u1 - u0).max() <= 1e-9 * np.abs(u0).max()
+
+
+def test_unilateral_law_asks_for_more_newton_iterations_than_the_general_default(tmp_path):
+    """The unilateral law's PETSc default -snes_max_it 60 (contact/laws.py: an active set that
+    settles late needs more than 15 at any increment); sliding keeps the general 15, a tangential
+    law's own default (200) and the user's option win over it."""
+    cases = {"unilateral": ({}, {}, "max_it 60"), "sliding": ({}, {}, "max_it 15"),
+             "user": ({}, {"snes_max_it": 20}, "max_it 20"),
+             "friction": ({"law": "coulomb", "friction": 0.3}, {}, "max_it 200")}
+    for name, (tangential, petsc, expected) in cases.items():
+        raw = _achilles(45, 1, 2, mode="sliding" if name == "sliding" else "unilateral", steps=[1.0],
+                        petsc=petsc or None)
+        if tangential:
+            raw["contact"]["tangential"] = tangential
+        s = run_inline(raw, tmp_path / name)
+        assert s["status"] == "completed", name
+        assert expected in s["solver"], (name, s["solver"])

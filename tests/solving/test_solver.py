@@ -454,3 +454,25 @@ def test_a_wandering_friction_solve_is_ended_early():
     assert not wandering(wander[:-1] + [1.0])                    # a new best in the window
     assert not wandering([10.0 * 0.97 ** k for k in range(3 * WANDER_WINDOW)])
     assert not wandering(wander[:WANDER_WINDOW])                 # too short to judge
+
+
+def test_unilateral_contact_ends_a_solve_without_progress_after_its_window():
+    """A unilateral law's solve may take -snes_max_it 60 (its default) while |F| finds new lows,
+    and ends after ``wander_window`` (15) iterations without one: the stop rules of the model's
+    contact (friction's window 40, unilateral 15, none without contact)."""
+    from ancf_petsc.contact.laws import SlidingLaw, UnilateralLaw
+    from ancf_petsc.solving.cycle_stop import WANDER_WINDOW, wandering
+    from ancf_petsc.solving.snes_solver import stop_window
+
+    class Contact:
+        def __init__(self, law, bounded):
+            self.law, self.terms = law, [type("Term", (), {"bounded": bounded})()]
+    assert stop_window(None) is None
+    assert stop_window(Contact(SlidingLaw(), False)) is None
+    assert stop_window(Contact(UnilateralLaw(), False)) == (UnilateralLaw.wander_window, -1.0)  # divtol off
+    assert UnilateralLaw.wander_window == 15
+    assert stop_window(Contact(UnilateralLaw(), True)) == (WANDER_WINDOW, 1e4)
+    stuck = [50.0, 9.0, 4.0] + [4.0 + k % 3 for k in range(15)]
+    assert wandering(stuck, 15) and not wandering(stuck[:-1], 15)
+    slow = [50.0 * 0.9 ** k for k in range(60)]                 # a new low at every iteration
+    assert not wandering(slow, 15)

@@ -114,7 +114,7 @@ def failure_detail(solver, reason: int) -> str:
         if stop is not None and stop.wandered:
             h = solver.last_solve_history
             return (f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
-                    f"{stop.window} iterations: more iterations do not help)")
+                    f"{stop.window} iterations, so the solve ended: more iterations are unlikely to help)")
         return (f" (unilateral contact changes its active set within a level and may need more than "
                 f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])

@@ -99,6 +99,7 @@ class SlidingLaw:
     name = "sliding"
     decides_activity = False
     options: dict = {}                    # PETSc option defaults (solver's general ones)
+    wander_window = None                  # PETSc's own convergence test (solving/cycle_stop.py)
     #: the first load increment from rest as a share of the first level (None: the level)
     first_increment = None
 

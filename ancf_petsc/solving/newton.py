@@ -372,7 +372,7 @@ class PhasedNewton:
         changes = P.status_changes()
         reason, n = self.snes_solve(X)
         self._trace(lam, phase.name, n, reason, P.status_changes() - changes)
-        return reason, its + n
+        return reason, n
 
     @staticmethod
     def _trace(lam, what, n, reason, changes=None) -> None:

@@ -42,7 +42,7 @@ def stop_window(contact) -> tuple[int, float] | None:
         return None
     if any(t.bounded for t in contact.terms):
         return WANDER_WINDOW, DEFAULT_DIVTOL
-    window = getattr(contact.law, "wander_window", None)
+    window = contact.law.wander_window
     return None if window is None else (window, float(DEFAULT_OPTIONS["snes_divergence_tolerance"]))
 
 

@@ -3,13 +3,11 @@
 """Compiled parts of the normal contact's residual and Jacobian (contact/blocks.py): the points'
 forces scattered onto their elements' DOFs (``add_point_forces``, bitwise the numpy code: no
 fused multiply-adds, ``-ffp-contract=off``) and the gap-Hessian term (``add_gap_hessian``): per segment
-−Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ (contact/gap.py) as one BLAS product L R (L = [W_p C_p τ_p],
-R = [W_pᵀ] over the segment's points) added into the segment's block, W_p and the operands formed
-here in one pass over the points (the numpy path forms W per point, scatters W and W C τ into a
-padded segment layout, transposes and copies them: ~25 numpy calls and four copies of the
-operands per segment group).  The products are the BLAS calls numpy's matmul makes there
-(scipy's BLAS is numpy's: the same library, the same kernels), on the same operands in the same
-layout: the Jacobian is bitwise the numpy path's (tests/contact/test_blocks_native.py)."""
+−Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ (contact/gap.py) as BLAS products over the blocks each
+point has (A–A, and A–B, B–B per B element), W_p and the operands formed here in one pass over
+the points (the numpy path forms W per point, scatters W and W C τ into a padded segment layout
+and multiplies the padded operands: the reference, equal to rounding;
+tests/contact/test_blocks_native.py)."""
 import numpy as np
 
 cimport numpy as cnp
@@ -20,7 +18,7 @@ cnp.import_array()
 
 #: scratch arrays of ``add_gap_hessian`` kept between calls (fresh ones of a few MB cost page
 #: faults on every call: half of the kernel's time); every entry used is written in each call
-_scratch = [np.zeros(0), np.zeros(0), np.zeros(0)]
+_scratch = [np.zeros(0) for _ in range(5)]
 
 
 def _scratch_array(which: int, shape: tuple):
@@ -39,53 +37,86 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
     ``p_loc``-th of at most P_s), with Ct_p = τ_p C_p (4, 4) (gap.gap_hessian_factors) and W_p
     formed here from A's and B's shape functions NA, NB (P, S), B's ζ-derivatives NBz (P, S, 2),
     the surface's Y_ζ (P, 3, 2) and the normal n; point p's rows of W (A's S slots × 3, then
-    B's) are the block's unknowns 0 … 3S − 1 and ``col_b[p]`` … ``col_b[p]`` + 3S − 1.  The
-    products are the BLAS calls numpy's matmul makes in blocks.add_gap_hessian's numpy path,
-    on the same operands: the sums are bitwise equal to it."""
-    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, s, i, j, q
-    cdef int R = 6 * NA.shape[1], four = 4, k = 4 * P_s, D = K.shape[1]
+    B's) are the block's unknowns 0 … 3S − 1 and ``col_b[p]`` … ``col_b[p]`` + 3S − 1.
+
+    Only the blocks a point has are multiplied (A's 3S rows have no v columns, W's columns 2, 3):
+    per segment A–A over its points with k = 2 per point, and per B element of the segment A–B
+    and B–B with k = 4 (B–A is A–B's transpose: W C Wᵀ is symmetric, C_p is); ~58 k multiply-adds
+    per point against the padded (Dq × 4 P_s) (4 P_s × Dq) product's 93 k, or 165 k on a
+    two-element-wide block.  The sums run in another order than the numpy path's padded product:
+    they agree to rounding (tests/contact/test_blocks_native.py)."""
+    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, q, s, i, j, a, r
+    cdef Py_ssize_t g0, g1, s0, s1, c
+    cdef int R = 6 * NA.shape[1], half = 3 * NA.shape[1], four = 4, D = K.shape[1], k
     cdef double one = 1.0, zero = 0.0
-    cdef char trans = b'N'
+    cdef char nt = b'N', tt = b'T'
     if K.shape[2] != D or Dq > D or Ct.shape[0] != P or Ct.shape[1] != 4 or Ct.shape[2] != 4:
         raise ValueError("K must be (n_s, D, D) with Dq <= D, Ct (P, 4, 4)")
     for p in range(P):
         if (s_loc[p] < 0 or s_loc[p] >= n_s or p_loc[p] < 0 or p_loc[p] >= P_s
                 or col_b[p] < 3 * S or col_b[p] + 3 * S > Dq):
             raise ValueError("a point outside the blocks")
+    if P == 0:
+        return
+    # the points by segment, B element, place in the segment
+    order_arr = np.lexsort((np.asarray(p_loc), np.asarray(col_b), np.asarray(s_loc)))
+    cdef long[::1] order = order_arr
     W_arr = np.empty((R, 4))
     WC_arr = np.empty((R, 4))
-    # every entry of L and R is written: a point's W and W C τ over its unknowns, zero over the
-    # block's other ones and over the slots of absent points (cheaper than zeroing them first)
-    L_arr, R_arr = _scratch_array(0, (n_s, Dq, k)), _scratch_array(1, (n_s, k, Dq))
-    T_arr = _scratch_array(2, (Dq, Dq))
-    filled_arr = np.zeros((n_s, P_s), dtype=np.uint8)
-    cdef cnp.uint8_t[:, ::1] filled = filled_arr
+    # the operands transposed, in that order: row 4 q + a of Wt is W_q's column a; the A rows'
+    # u columns (a = 0, 1) also apart, row 2 q + a of WtA
+    Wt_arr, WCt_arr = _scratch_array(0, (4 * P, R)), _scratch_array(1, (4 * P, R))
+    WtA_arr, WCtA_arr = _scratch_array(2, (2 * P, half)), _scratch_array(3, (2 * P, half))
+    T_arr = _scratch_array(4, (half, half))
     cdef double[:, ::1] W = W_arr
     cdef double[:, ::1] WC = WC_arr
-    cdef double[:, :, ::1] Lm = L_arr
-    cdef double[:, :, ::1] Rm = R_arr
-    cdef double[:, ::1] Tm = T_arr
-    for p in range(P):
+    cdef double[:, ::1] Wt = Wt_arr
+    cdef double[:, ::1] WCt = WCt_arr
+    cdef double[:, ::1] WtA = WtA_arr
+    cdef double[:, ::1] WCtA = WCtA_arr
+    cdef double[:, ::1] T = T_arr
+    for q in range(P):
+        p = order[q]
         _point_w(p, W, NA, NB, NBz, Yz, n)
-        # numpy: cblas_dgemm(RowMajor, N, N, R, 4, 4, 1, W, 4, Ct_p, 4, 0, WC, 4)
-        dgemm(&trans, &trans, &four, &R, &four, &one, <double*>&Ct[p, 0, 0], &four, &W[0, 0], &four, &zero,
+        dgemm(&nt, &nt, &four, &R, &four, &one, <double*>&Ct[p, 0, 0], &four, &W[0, 0], &four, &zero,
               &WC[0, 0], &four)
-        _scatter(p, W, WC, Lm, Rm, s_loc[p], 4 * p_loc[p], col_b[p], 3 * S)
-        filled[s_loc[p], p_loc[p]] = 1
-    for s in range(n_s):
-        for q in range(P_s):
-            if not filled[s, q]:
-                for i in range(Dq):
-                    for j in range(4):
-                        Lm[s, i, 4 * q + j] = 0.0
-                        Rm[s, 4 * q + j, i] = 0.0
-    for s in range(n_s):
-        # numpy: cblas_dgemm(RowMajor, N, N, Dq, Dq, k, 1, L_s, k, R_s, Dq, 0, T, Dq), then K += T
-        dgemm(&trans, &trans, &Dq, &Dq, &k, &one, &Rm[s, 0, 0], &Dq, &Lm[s, 0, 0], &k, &zero,
-              &Tm[0, 0], &Dq)
-        for i in range(Dq):
-            for j in range(Dq):
-                K[s, i, j] = K[s, i, j] + Tm[i, j]
+        for a in range(4):
+            for r in range(R):
+                Wt[4 * q + a, r] = W[r, a]
+                WCt[4 * q + a, r] = WC[r, a]
+        for a in range(2):
+            for r in range(half):
+                WtA[2 * q + a, r] = W[r, a]
+                WCtA[2 * q + a, r] = WC[r, a]
+    s0 = 0
+    while s0 < P:
+        s = s_loc[order[s0]]
+        s1 = s0
+        while s1 < P and s_loc[order[s1]] == s:
+            s1 += 1
+        # A–A: K[s, i, j] += Σ WCtA[ρ, i] WtA[ρ, j] (column-major: Kᵀ = WtAᵀ WCtA)
+        k = <int>(2 * (s1 - s0))
+        dgemm(&nt, &tt, &half, &half, &k, &one, &WtA[2 * s0, 0], &half, &WCtA[2 * s0, 0], &half, &one,
+              &K[s, 0, 0], &D)
+        g0 = s0
+        while g0 < s1:
+            c = col_b[order[g0]]
+            g1 = g0
+            while g1 < s1 and col_b[order[g1]] == c:
+                g1 += 1
+            k = <int>(4 * (g1 - g0))
+            # A–B into T (T[i, j] = Σ WCt[ρ, i] Wt[ρ, half + j]), then added at (A, B) and (B, A)
+            dgemm(&nt, &tt, &half, &half, &k, &one, &Wt[4 * g0, half], &R, &WCt[4 * g0, 0], &R, &zero,
+                  &T[0, 0], &half)
+            for i in range(half):
+                for j in range(half):
+                    K[s, i, c + j] = K[s, i, c + j] + T[i, j]
+                    K[s, c + j, i] = K[s, c + j, i] + T[i, j]
+            # B–B: K[s, c + i, c + j] += Σ WCt[ρ, half + i] Wt[ρ, half + j]
+            dgemm(&nt, &tt, &half, &half, &k, &one, &Wt[4 * g0, half], &R, &WCt[4 * g0, half], &R, &one,
+                  &K[s, c, c], &D)
+            g0 = g1
+        s0 = s1
 
 
 cdef void _point_w(Py_ssize_t p, double[:, ::1] W, const double[:, ::1] NA, const double[:, ::1] NB,
@@ -105,24 +136,6 @@ cdef void _point_w(Py_ssize_t p, double[:, ::1] W, const double[:, ::1] NA, cons
             else:
                 W[r, 2] = NBz[p, slot - S, 0] * n[p, i]
                 W[r, 3] = NBz[p, slot - S, 1] * n[p, i]
-
-
-cdef void _scatter(Py_ssize_t p, double[:, ::1] W, double[:, ::1] WC, double[:, :, ::1] Lm,
-                   double[:, :, ::1] Rm, Py_ssize_t s, Py_ssize_t q, Py_ssize_t col_b,
-                   Py_ssize_t half) nogil:
-    """Point p's W and W C τ into its segment's operands: L[s, col, q + a] = (W C τ)[row, a],
-    R[s, q + a, col] = W[row, a] (blocks.add_gap_hessian's ``spread`` and transposes)."""
-    cdef Py_ssize_t r, a, col
-    for col in range(half, Lm.shape[1]):           # the block's unknowns the point has not
-        if col < col_b or col >= col_b + half:
-            for a in range(4):
-                Lm[s, col, q + a] = 0.0
-                Rm[s, q + a, col] = 0.0
-    for r in range(W.shape[0]):
-        col = r if r < half else col_b + r - half
-        for a in range(4):
-            Lm[s, col, q + a] = WC[r, a]
-            Rm[s, q + a, col] = W[r, a]
 
 
 def add_point_forces(double[::1] floc, const long[:, ::1] pos, const double[:, ::1] N,

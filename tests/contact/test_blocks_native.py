@@ -1,6 +1,7 @@
-"""contact/blocks_native.pyx (issue 40): the compiled normal forces and gap-Hessian term (on one- and
-two-element-wide segment blocks) equal the numpy ones to the last bit (the numpy code is the
-reference and the fallback), and the module is compiled wherever Cython is."""
+"""contact/blocks_native.pyx (issue 40): the compiled normal forces equal the numpy ones to the last
+bit, the gap-Hessian term (on one- and two-element-wide segment blocks, products over the
+blocks each point has) equals the numpy path's padded product to rounding (the numpy code is
+the reference and the fallback), and the module is compiled wherever Cython is."""
 
 import numpy as np
 import pytest
@@ -52,7 +53,16 @@ def test_jacobian_blocks_equal_numpy(evaluation, monkeypatch):
     assert len(got) == len(want) >= 1
     for (r1, k1), (r2, k2) in zip(got, want):
         np.testing.assert_array_equal(r1, r2)
-        np.testing.assert_array_equal(k1, k2)
+        assert_rounding(k1, k2)
+
+
+def assert_rounding(got: np.ndarray, want: np.ndarray) -> None:
+    """Equal to rounding: every entry within 1e-14 of the largest one (the products sum the
+    same terms in another order; a wrong block or a missing term is off by its size)."""
+    scale = np.abs(want).max()
+    err = np.abs(got - want).max()
+    print(f"largest difference {err:.3g} of {scale:.3g}")
+    assert err <= 1e-14 * scale
 
 
 def _spread(s_loc, p_loc, cols, n_s, P_s, Dq):
@@ -90,4 +100,4 @@ def test_gap_hessian_equals_numpy_on_wide_blocks(evaluation, width, monkeypatch)
     blocks.add_gap_hessian(want, sub, tau, _spread(s_loc, p_loc, cols, n_s, P_s, Dq), s_loc, p_loc,
                            cols[:, EL], P_s, Dq)
     assert np.abs(want - K0).max() > 0.0
-    np.testing.assert_array_equal(got, want)
+    assert_rounding(got, want)

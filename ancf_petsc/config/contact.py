@@ -5,7 +5,7 @@ from ..contact.friction import CoulombFriction
 from ..contact.elastic_interface import ElasticMatrix
 from ..contact.tangential import TANGENTIAL_LAWS
 from .conditions import beam_ref
-from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, FADE_RULES, REMOVED_CONTACT_KEYS,
+from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, FADE_FORCES, FADE_RULES, REMOVED_CONTACT_KEYS,
                     SUPPORTED_END_RULES, TANGENTIAL_LAW_NAMES, ContactSpec, TangentialSpec)
 from .values import ConfigError, boolean, integer, mapping, number, sequence, string
 
@@ -72,7 +72,7 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
                 raise ConfigError(f"{p}.{key}", "contact is enforced exactly by Lagrange multipliers "
                                                 "(no penalty, nothing to tune); remove this key")
     mapping(value, p, optional=("mode", "interfaces", "axial_points", "curve_points", "search_margin",
-                                "projection", "scaling", "tangential", "fade"))
+                                "projection", "scaling", "tangential", "fade", "fade_forces"))
     c = ContactSpec()
     c.mode = string(value.get("mode", DEFAULT_CONTACT_MODE), f"{p}.mode", CONTACT_MODES)
     c.axial_points = integer(value.get("axial_points", 3), f"{p}.axial_points", lo=1, hi=10)
@@ -91,6 +91,11 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
         raise ConfigError(f"{p}.fade", "newton differentiates the fade weights of the normal "
                                        "constraints and Coulomb friction, not the "
                                        f"{c.tangential.law} law's; use settle with it")
+    c.fade_forces = string(value.get("fade_forces", "pointwise" if law is not None else "variational"),
+                           f"{p}.fade_forces", FADE_FORCES)
+    if law is not None and c.fade_forces == "variational":
+        raise ConfigError(f"{p}.fade_forces", "a tangential law's forces are pointwise (τ_p ∇g_p); "
+                                              "remove fade_forces or set it to pointwise")
     _parse_projection(c, value.get("projection", None), f"{p}.projection", node_dofs)
     inter = value.get("interfaces", "auto")
     if inter == "auto":

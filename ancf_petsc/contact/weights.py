@@ -18,6 +18,15 @@ at CURVE_FADE_END, and likewise past B's beam ends.  Two ways to solve with them
   brought up to date and the state solved again until none changes by more than ``WEIGHT_TOL``
   (``refresh``): a fixed point, converging linearly.
 
+The forces of a point in a fade band (``contact.fade_forces``, with ``newton``): ``variational``
+(the default without a tangential law) as above; ``pointwise``, −Σ_p τ_p ∇g_p (τ_p = p_p w_p,
+friction's form): the weights' slope puts no force along B's surface, the constraint rows keep
+∇(w g), and the Jacobian (−Σ p ∇g ∇wᵀ in the force rows) is unsymmetric: LU, no inertia, so no
+stability check or branch switch.  At large twist a point sliding along a fade band makes a nearly
+free direction along which the variational residual changes only through p g ∇w: there Newton
+took steps of microns that did not settle (the second subject, 150°, soleus-biased, unilateral,
+80.9 N; docs/gait.md), where ``pointwise`` converges (docs/contact.md, "The weights' forces").
+
 Measured on the gait envelope (the paper's outlines, twist 90° and 180°, three loading biases to
 1.2 kN; scripts/bench_envelope.py): at large twist the sections of neighbouring subtendons turn
 against each other and points near the ends of the interface curves slide up to half the
@@ -138,10 +147,16 @@ class PointWeights:
         self._saved = self.values.copy()
         self.rule = rule
         self.differentiated = False
-        #: the normal forces are −Σ_k λ_k ∇ḡ_k, with the weights' part −p g ∇w (frictionless), or
-        #: τ_p ∇g_p as settle's (the contact's choice with a tangential law: its answers then are
-        #: settle's; blocks.py)
+        #: the normal forces are −Σ_k λ_k ∇ḡ_k, with the weights' part −p g ∇w (``contact.fade_forces:
+        #: variational``, the default without a tangential law), or τ_p ∇g_p as settle's
+        #: (``pointwise``, the only choice with one; blocks.py)
         self.variational = variational
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether the weights keep the Jacobian symmetric: their forces are the weighted gaps'
+        exact variation, or they are never differentiated (settle)."""
+        return self.variational or self.rule == "settle"
 
     def effective(self, idx: np.ndarray, current: np.ndarray) -> np.ndarray:
         """The weights of the points ``idx`` in an evaluation whose partner places have the

@@ -113,8 +113,10 @@ def failure_detail(solver, reason: int) -> str:
         maxit, stop = solver.snes.getTolerances()[3], solver.cycle_stop
         if stop is not None and stop.wandered:
             h = solver.last_solve_history
+            hint = ("; at large twist, contact.fade_forces: pointwise converges where the fade bands' "
+                    "forces stall Newton (docs/contact.md)" if contact.weights.variational else "")
             return (f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
-                    f"{stop.window} iterations, so the solve ended: more iterations are unlikely to help)")
+                    f"{stop.window} iterations, so the solve ended: more iterations are unlikely to help{hint})")
         return (f" (unilateral contact changes its active set within a level and may need more than "
                 f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])

@@ -113,14 +113,16 @@ def fade_state(P, seed=3):
     return X, free
 
 
-@pytest.mark.parametrize("mode", ["sliding", "unilateral"])
-def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode):
+@pytest.mark.parametrize("mode,forces", [("sliding", "variational"), ("unilateral", "variational"),
+                                         ("unilateral", "pointwise")])
+def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode, forces):
     """J v against central differences of F (nodal vectors and multipliers) at a state where
     17 points are partly weighted (0 < w < 1, ∇w ≠ 0, on both kinds of fade band) and carry
-    pressure; J is symmetric (the Hessian of the Lagrangian: the weights are variational)."""
-    P, PETSc = build_problem(achilles(contact={"mode": mode, "fade": "newton"}))
+    pressure; J is symmetric with variational forces (the Hessian of the Lagrangian) and not with
+    pointwise ones (−Σ τ_p ∇g_p: the rows keep ∇(w g), the forces' columns only w ∇g)."""
+    P, PETSc = build_problem(achilles(contact={"mode": mode, "fade": "newton", "fade_forces": forces}))
     c = P.contact
-    assert c.symmetric and P.symmetric
+    assert c.symmetric == P.symmetric == (forces == "variational")
     c.weights.differentiated = True       # as from the second solve of an increment on (weights.py)
     P.load_factor = 50.0
     X, free = fade_state(P)
@@ -136,7 +138,8 @@ def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode):
     if mode == "unilateral":
         assert 0 < act.sum() < len(act)
     Jd = assert_contact_jacobian(P, X, free, act, h=1e-7)
-    assert np.abs(Jd - Jd.T).max() < 1e-12 * np.abs(Jd).max()
+    asymmetry = np.abs(Jd - Jd.T).max() / np.abs(Jd).max()
+    assert asymmetry < 1e-12 if forces == "variational" else asymmetry > 1e-9
 
 
 def test_fade_key_errors_name_the_key_path():
@@ -154,6 +157,14 @@ def test_fade_key_errors_name_the_key_path():
     assert parse_config(raw, base_dir=CONFIGS).contact.fade == "settle"
     raw = achilles(contact={"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}})
     assert parse_config(raw, base_dir=CONFIGS).contact.fade == "newton"     # friction_blocks.py
+    assert parse_config(raw, base_dir=CONFIGS).contact.fade_forces == "pointwise"
+    assert parse_config(achilles(contact={"mode": "sliding"}), base_dir=CONFIGS).contact.fade_forces == "variational"
+    with pytest.raises(ConfigError, match="^contact.fade_forces: must be one of variational, pointwise"):
+        parse_config(achilles(contact={"mode": "unilateral", "fade_forces": "exact"}), base_dir=CONFIGS)
+    raw = achilles(contact={"mode": "sliding", "fade_forces": "variational",
+                            "tangential": {"law": "coulomb", "friction": 0.3}})
+    with pytest.raises(ConfigError, match="^contact.fade_forces: a tangential law's forces are pointwise"):
+        parse_config(raw, base_dir=CONFIGS)
 
 
 def test_the_differentiated_weights_keep_sbaij_and_ldlt():

@@ -44,16 +44,19 @@ def test_ranks_agree_with_serial(tmp_path, name):
 
 @pytest.mark.mpi
 @pytest.mark.slow
-def test_differentiated_fade_weights_give_the_serial_answer(tmp_path):
+@pytest.mark.parametrize("forces", ["variational", "pointwise"])
+def test_differentiated_fade_weights_give_the_serial_answer(tmp_path, forces):
     """The paper's ψ = 45° sliding column with ``contact.fade: newton`` (contact/weights.py): at
     400 N a point's partner sits in the fade band past the end of its interface curve (weight
-    0.399 on every rank count); 1, 2 and 3 ranks give the serial probes and Newton counts."""
+    0.399 on every rank count); 1, 2 and 3 ranks give the serial probes and Newton counts, with
+    the weights' forces variational (LDLᵀ) and pointwise (``contact.fade_forces``, LU)."""
     import meshio
     import numpy as np
     raw = load_raw("achilles_type3_psi45.yaml")
     for b in raw["beams"]:
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
     raw["contact"]["fade"] = "newton"
+    raw["contact"]["fade_forces"] = forces
     runs = run_on_ranks(raw, tmp_path)
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
     assert len({s["newton_iterations"] for _, s in runs.values()}) == 1

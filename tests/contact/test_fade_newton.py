@@ -146,25 +146,24 @@ def test_fade_key_errors_name_the_key_path():
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.config.values import ConfigError
     from helpers import CONFIGS
-    with pytest.raises(ConfigError, match="^contact.fade: must be one of settle, newton"):
-        parse_config(achilles(contact={"mode": "sliding", "fade": "exact"}), base_dir=CONFIGS)
-    raw = achilles(contact={"mode": "sliding", "fade": "newton",
-                            "tangential": {"law": "elastic", "stiffness": 1e10}})
-    with pytest.raises(ConfigError, match="^contact.fade: newton differentiates .* use settle"):
-        parse_config(raw, base_dir=CONFIGS)
-    assert parse_config(achilles(contact={"mode": "sliding"}), base_dir=CONFIGS).contact.fade == "newton"
-    raw = achilles(contact={"mode": "sliding", "tangential": {"law": "elastic", "stiffness": 1e10}})
-    assert parse_config(raw, base_dir=CONFIGS).contact.fade == "settle"
-    raw = achilles(contact={"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}})
-    assert parse_config(raw, base_dir=CONFIGS).contact.fade == "newton"     # friction_blocks.py
-    assert parse_config(raw, base_dir=CONFIGS).contact.fade_forces == "pointwise"
-    assert parse_config(achilles(contact={"mode": "sliding"}), base_dir=CONFIGS).contact.fade_forces == "variational"
-    with pytest.raises(ConfigError, match="^contact.fade_forces: must be one of variational, pointwise"):
-        parse_config(achilles(contact={"mode": "unilateral", "fade_forces": "exact"}), base_dir=CONFIGS)
-    raw = achilles(contact={"mode": "sliding", "fade_forces": "variational",
-                            "tangential": {"law": "coulomb", "friction": 0.3}})
-    with pytest.raises(ConfigError, match="^contact.fade_forces: a tangential law's forces are pointwise"):
-        parse_config(raw, base_dir=CONFIGS)
+
+    def contact(**keys):
+        return parse_config(achilles(contact=keys), base_dir=CONFIGS).contact
+
+    elastic = {"law": "elastic", "stiffness": 1e10}
+    coulomb = {"law": "coulomb", "friction": 0.3}
+    for keys, message in [({"fade": "exact"}, "contact.fade: must be one of settle, newton"),
+                          ({"fade": "newton", "tangential": elastic}, "contact.fade: newton differentiates .* use settle"),
+                          ({"fade_forces": "exact"}, "contact.fade_forces: must be one of variational, pointwise"),
+                          ({"fade_forces": "variational", "tangential": coulomb},
+                           "contact.fade_forces: a tangential law's forces are pointwise")]:
+        with pytest.raises(ConfigError, match="^" + message):
+            contact(mode="sliding", **keys)
+    assert (contact(mode="sliding").fade, contact(mode="sliding").fade_forces) == ("newton", "variational")
+    assert contact(mode="sliding", tangential=elastic).fade == "settle"
+    # friction_blocks.py: Coulomb differentiates its weights, with pointwise forces
+    assert (contact(mode="sliding", tangential=coulomb).fade, contact(mode="sliding", tangential=coulomb).fade_forces) \
+        == ("newton", "pointwise")
 
 
 def test_the_differentiated_weights_keep_sbaij_and_ldlt():

@@ -113,7 +113,7 @@ def failure_detail(solver, reason: int) -> str:
         maxit, stop = solver.snes.getTolerances()[3], solver.cycle_stop
         if stop is not None and stop.wandered:
             h = solver.last_solve_history
-            hint = ("; at large twist, contact.fade_forces: pointwise converges where the fade bands' "
+            hint = ("; at large twist, contact.fade_forces: pointwise may converge where the fade bands' "
                     "forces stall Newton (docs/contact.md)" if contact.weights.variational else "")
             return (f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
                     f"{stop.window} iterations, so the solve ended: more iterations are unlikely to help{hint})")

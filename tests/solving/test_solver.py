@@ -491,7 +491,7 @@ def test_a_unilateral_solve_ended_by_its_window_says_so():
     snes.setTolerances(max_it=60)
     history = [50.0, 9.0, 4.0] + [4.0 + k % 7 for k in range(15)]
     stop = CycleStop(lambda: history, {}, "", 15, -1.0)
-    contact = SimpleNamespace(law=UnilateralLaw(), terms=[], weights=SimpleNamespace(variational=True))
+    contact = SimpleNamespace(law=UnilateralLaw(), terms=[], weights=SimpleNamespace(variational=True, rule="newton"))
     solver = SimpleNamespace(snes=snes, problem=SimpleNamespace(contact=contact), cycle_stop=stop,
                              last_solve_history=history)
     reason = PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
@@ -499,6 +499,8 @@ def test_a_unilateral_solve_ended_by_its_window_says_so():
     assert "found no |F| below 4.00e+00 N in its last 15 iterations" in failure_detail(solver, reason)
     assert "contact.fade_forces: pointwise" in failure_detail(solver, reason)    # the way out
     contact.weights.variational = False
+    assert "fade_forces" not in failure_detail(solver, reason)
+    contact.weights.variational, contact.weights.rule = True, "settle"    # never differentiated
     assert "fade_forces" not in failure_detail(solver, reason)
     stop.wandered = False
     assert "try -snes_max_it 240" in failure_detail(solver, reason)

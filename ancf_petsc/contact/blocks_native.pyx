@@ -45,7 +45,7 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
     per point against the padded (Dq × 4 P_s) (4 P_s × Dq) product's 93 k, or 165 k on a
     two-element-wide block.  The sums run in another order than the numpy path's padded product:
     they agree to rounding (tests/contact/test_blocks_native.py)."""
-    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, q, s, i, j, a, r
+    cdef Py_ssize_t P = NA.shape[0], S = NA.shape[1], n_s = K.shape[0], p, q, s, i, j
     cdef Py_ssize_t g0, g1, s0, s1, c
     cdef int R = 6 * NA.shape[1], half = 3 * NA.shape[1], four = 4, D = K.shape[1], k
     cdef double one = 1.0, zero = 0.0
@@ -80,20 +80,12 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
         _point_w(p, W, NA, NB, NBz, Yz, n)
         dgemm(&nt, &nt, &four, &R, &four, &one, <double*>&Ct[p, 0, 0], &four, &W[0, 0], &four, &zero,
               &WC[0, 0], &four)
-        for a in range(4):
-            for r in range(R):
-                Wt[4 * q + a, r] = W[r, a]
-                WCt[4 * q + a, r] = WC[r, a]
-        for a in range(2):
-            for r in range(half):
-                WtA[2 * q + a, r] = W[r, a]
-                WCtA[2 * q + a, r] = WC[r, a]
+        _columns_as_rows(W, WC, Wt, WCt, 4 * q, 4, R)
+        _columns_as_rows(W, WC, WtA, WCtA, 2 * q, 2, half)
     s0 = 0
     while s0 < P:
         s = s_loc[order[s0]]
-        s1 = s0
-        while s1 < P and s_loc[order[s1]] == s:
-            s1 += 1
+        s1 = _run_end(s_loc, order, s0, P)
         # A–A: K[s, i, j] += Σ WCtA[ρ, i] WtA[ρ, j] (column-major: Kᵀ = WtAᵀ WCtA)
         k = <int>(2 * (s1 - s0))
         dgemm(&nt, &tt, &half, &half, &k, &one, &WtA[2 * s0, 0], &half, &WCtA[2 * s0, 0], &half, &one,
@@ -101,9 +93,7 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
         g0 = s0
         while g0 < s1:
             c = col_b[order[g0]]
-            g1 = g0
-            while g1 < s1 and col_b[order[g1]] == c:
-                g1 += 1
+            g1 = _run_end(col_b, order, g0, s1)
             k = <int>(4 * (g1 - g0))
             # A–B into T (T[i, j] = Σ WCt[ρ, i] Wt[ρ, half + j]), then added at (A, B) and (B, A)
             dgemm(&nt, &tt, &half, &half, &k, &one, &Wt[4 * g0, half], &R, &WCt[4 * g0, 0], &R, &zero,
@@ -117,6 +107,25 @@ def add_gap_hessian(double[:, :, ::1] K, const double[:, ::1] NA, const double[:
                   &K[s, c, c], &D)
             g0 = g1
         s0 = s1
+
+
+cdef Py_ssize_t _run_end(const long[::1] key, const long[::1] order, Py_ssize_t start,
+                         Py_ssize_t stop) nogil:
+    """The end of the run of points ``order[start:stop]`` sharing ``key[order[start]]``."""
+    cdef Py_ssize_t end = start + 1
+    while end < stop and key[order[end]] == key[order[start]]:
+        end += 1
+    return end
+
+
+cdef void _columns_as_rows(const double[:, ::1] W, const double[:, ::1] WC, double[:, ::1] Wt,
+                           double[:, ::1] WCt, Py_ssize_t row, int ncols, int nrows) nogil:
+    """Columns 0 … ncols − 1 of W and W C (their first nrows rows) as rows row … of Wt, WCt."""
+    cdef Py_ssize_t a, r
+    for a in range(ncols):
+        for r in range(nrows):
+            Wt[row + a, r] = W[r, a]
+            WCt[row + a, r] = WC[r, a]
 
 
 cdef void _point_w(Py_ssize_t p, double[:, ::1] W, const double[:, ::1] NA, const double[:, ::1] NB,

@@ -91,8 +91,9 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
         raise ConfigError(f"{p}.fade", "newton differentiates the fade weights of the normal "
                                        "constraints and Coulomb friction, not the "
                                        f"{c.tangential.law} law's; use settle with it")
-    c.fade_forces = string(value.get("fade_forces", "pointwise" if law is not None else "variational"),
-                           f"{p}.fade_forces", FADE_FORCES)
+    c.fade_forces = string(value.get("fade_forces", "auto"), f"{p}.fade_forces", FADE_FORCES)
+    if law is not None and c.fade_forces == "auto":
+        c.fade_forces = "pointwise"
     if law is not None and c.fade_forces == "variational":
         raise ConfigError(f"{p}.fade_forces", "a tangential law's forces are pointwise (τ_p ∇g_p); "
                                               "remove fade_forces or set it to pointwise")

@@ -15,7 +15,7 @@ MATERIAL_MODELS = tuple(MATERIALS)          # the registry's names (physics/laws
 FIBRE_FOLLOW = ("twist", "axis")
 SUPPORTED_END_RULES = ("merge", "keep")     # contact.projection.supported_ends
 FADE_RULES = ("settle", "newton")           # contact.fade (contact/weights.py)
-FADE_FORCES = ("variational", "pointwise")  # contact.fade_forces (contact/weights.py)
+FADE_FORCES = ("auto", "variational", "pointwise")  # contact.fade_forces (weights.py, fade_switch.py)
 CONTACT_MODES = tuple(LAWS)                 # the registry's names (contact/laws.py)
 TANGENTIAL_LAW_NAMES = tuple(TANGENTIAL_LAWS)   # contact.tangential.law (contact/tangential.py)
 DEFAULT_CONTACT_MODE = SlidingLaw.name
@@ -154,7 +154,7 @@ class ContactSpec:
     # the forces of points in a fade band: the weighted gaps' exact variation (variational: a
     # symmetric Jacobian, LDLᵀ and its inertia) or −Σ τ_p ∇g_p (pointwise: LU, no inertia; the
     # only choice with a tangential law); contact/weights.py
-    fade_forces: str = "variational"
+    fade_forces: str = "auto"
     tangential: TangentialSpec | None = None   # interface shear (None: frictionless)
 
 

@@ -66,7 +66,7 @@ class Contact:
         self.status = np.zeros(self.space.n_multipliers, dtype=bool)     # active set (unilateral)
         self._saved_status = self.status.copy()
         #: the points' weights past B's ends (weights.py; ``contact.fade: newton`` differentiates them)
-        self.weights = PointWeights(self.points.n_points, spec.fade, spec.fade_forces == "variational")
+        self.weights = PointWeights(self.points.n_points, spec.fade, spec.fade_forces != "pointwise")
         # the rank's numbering (``set_numbering``): PETSc blocks, local pieces, reported ones, Φ of them
         empty = np.zeros(0, dtype=np.int64)
         self.conn = self.mult_block = self.seg_blocks = self.segments = self.local = self.mults = empty

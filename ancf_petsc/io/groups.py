@@ -145,6 +145,8 @@ def write_restart_group(gid, record, path: dict) -> None:
     fast.dataset(r, "increment_blocks", path["increment_blocks"])
     fast.attributes(r, {"increment": record.increment, "last_increment": record.last_increment,
                         "accepted_negative": path["accepted_negative"]})
+    if path.get("fade_forces_pointwise_from") is not None:        # solving/fade_switch.py
+        fast.attribute(r, "fade_forces_pointwise_from", path["fade_forces_pointwise_from"])
 
 
 def write_contact_group(gid, contact: dict, multipliers: np.ndarray) -> None:

@@ -50,6 +50,7 @@ class RestartPoint:
     stored_config: dict | None = None  # its config (runs without a fingerprint)
     levels: tuple = ()            # the converged load factors, in order
     contact_fields: dict | None = None   # the level's contact fields (a contact term's state)
+    pointwise_from: float | None = None  # the run's switch to pointwise fade forces (fade_switch.py)
 
 
 def fingerprint(model) -> dict[str, np.ndarray]:
@@ -275,9 +276,26 @@ def read_restart(directory: str) -> RestartPoint:
                                  levels=tuple(float(steps[f"step_{i:04d}"].attrs["load_factor"])
                                               for i in range(1, k + 1)),
                                  contact_fields=({key: v[()] for key, v in g["contact"].items()}
-                                                 if "contact" in g else None))
+                                                 if "contact" in g else None),
+                                 pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
+                                                 if "fade_forces_pointwise_from" in r.attrs else None))
     except (OSError, KeyError) as exc:
         raise InputError("--restart", f"{path}: not a readable results file ({exc})") from None
     summary["steps"] = summary.get("steps", [])[:point.step]
     point.summary = summary
+    return point
+
+
+def read_restart_on_every_rank(directory: str, comm) -> RestartPoint:
+    """``read_restart`` on rank 0, its result or its input error on every rank."""
+    point, err = None, None
+    if comm.rank == 0:
+        try:
+            point = read_restart(directory)
+        except InputError as exc:
+            err = (exc.path, exc.message, exc.kind)
+    if comm.size > 1:
+        point, err = comm.tompi4py().bcast((point, err), root=0)
+    if err:
+        raise InputError(*err)
     return point

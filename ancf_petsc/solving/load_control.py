@@ -25,6 +25,7 @@ class LevelTally:
     substeps: int = 0       # accepted sub-steps
     cutbacks: int = 0       # halvings (failures and stability retries)
     consecutive: int = 0    # failures since the last accepted sub-step
+    first_failed: float = 0.0   # the increment of the first of them
     stability: int = 0      # retries because a step landed on a less stable state
     unsettled: bool = False  # a sub-step accepted with its contact weights unsettled
     tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
@@ -87,6 +88,8 @@ class LoadControl:
         """The increment after a failed (or stability-retried) sub-step and whether to give up:
         more than ``max_cutbacks`` failures in a row, or below ``min_increment``."""
         tally.cutbacks += 1
+        if not tally.consecutive:
+            tally.first_failed = step
         tally.consecutive += not stability                 # retries are bounded on their own
         dlam = 0.5 * step
         return dlam, tally.consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment

@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..io.derived import displacement_differences, interface_pairs
 from ..io.subtendons import subtendon_report
 from ..io.files import DirectoryLock, OutputError, prepare_output_dir
-from ..io.restart import check_same_run, read_restart
+from ..io.restart import check_same_run, read_restart_on_every_rank
 from ..io.results import ResultsWriter, record_crash
 from ..model.build import build_model
 from ..model.contact_setup import contact_for
@@ -103,21 +103,6 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
 
 def _fmt_vec(v) -> str:
     return "[" + ", ".join(f"{x:+.4e}" for x in v) + "]"
-
-
-def _read_restart(directory: str, spec: ModelSpec, comm):
-    """``io.restart.read_restart`` on rank 0, its result or its input error on every rank."""
-    point, err = None, None
-    if comm.rank == 0:
-        try:
-            point = read_restart(directory)
-        except InputError as exc:
-            err = (exc.path, exc.message, exc.kind)
-    if comm.size > 1:
-        point, err = comm.tompi4py().bcast((point, err), root=0)
-    if err:
-        raise InputError(*err)
-    return point
 
 
 def _check_supports(problem: Problem) -> None:
@@ -219,6 +204,7 @@ class Run:
                          dX_last=self.problem.global_vector(point.increment_blocks.ravel()),
                          lam=point.load_factor, dlam=point.increment, dlam_last=point.last_increment,
                          accepted_negative=point.accepted_negative)
+        self.stepper.fade_switch.resume(self.stepper, point.pointwise_from, self.spec.output.dir)
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
         levels = [f for f in self.spec.steps if f > point.load_factor * (1.0 + 1e-12)]
         self.say(f"[ancf] restart from step {point.step} (load factor {point.load_factor:g}) of "
@@ -251,7 +237,8 @@ class Run:
             path = None if blocks is None else {
                 "blocks": blocks.reshape(-1, self.model.dofs_per_node),
                 "increment_blocks": increment.reshape(-1, self.model.dofs_per_node),
-                "accepted_negative": stepper.path.accepted_negative}
+                "accepted_negative": stepper.path.accepted_negative,
+                "fade_forces_pointwise_from": stepper.fade_switch.at}
             self.writer.write_step(rec, q, extra, fields, path)
             self.converged.append(rec)
             self.timings["output"] += time.perf_counter() - t0
@@ -321,7 +308,7 @@ def run_model(spec: ModelSpec, comm=None, log=print, info: dict | None = None,
     lock = check_output_dir(spec.output.dir, comm, say)
     try:
         if restart is not None:
-            point = _read_restart(restart, spec, comm)
+            point = read_restart_on_every_rank(restart, comm)
         return _run(spec, comm, say, info, point)
     finally:
         if lock is not None:
@@ -362,6 +349,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     spec, comm, say, stepper = run.spec, run.comm, run.say, run.stepper
     records = run.converged
     status, code, message = final_status(records, failure, spec.solver.allow_unstable)
+    message += stepper.fade_switch.note()
     unused = [f"petsc.{k}" for k in stepper.solver.unused_config_options] + unused_command_line_options(comm)
     timings = dict(run.timings, total=total)
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
@@ -381,6 +369,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,
         stability_checked=all(r.negative_eigenvalues is not None for r in records),
+        **stepper.fade_switch.summary(),
         unused_petsc_options=unused)
     if comm.size > 1:
         problem_writing = comm.tompi4py().bcast(problem_writing, root=0)

@@ -50,7 +50,7 @@ class SNESSolver:
     """One SNES for ``problem`` (its options, callbacks, preconditioner and counters)."""
 
     def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict, max_level: float = 1.0,
-                 linear: str = "direct"):
+                 linear: str = "direct", floor: float | None = None):
         self.problem, self.spec = problem, spec
         self.prefix = spec.options_prefix
         self.linear = linear                    # 'direct' | 'fieldsplit' (linalg.choice.choose)

@@ -22,6 +22,7 @@ from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.problem import Problem
 from . import solver_messages
 from .branch_switch import BranchSwitch
+from .fade_switch import FadeForcesSwitch
 from .continuity import jump_detail, residual_jump
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
@@ -59,6 +60,7 @@ class LoadStepper:
         self.unsettled = False                  # the last solve's contact weights did not settle
         self.tresca_solves = 0                  # friction's fixed point in the last solve_at
         self.branches = BranchSwitch(problem, spec.branch_switch and not spec.allow_unstable)  # saddles
+        self.fade_switch = FadeForcesSwitch(self, petsc_options, max_level, linear)   # fade_switch.py
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -200,14 +202,10 @@ class LoadStepper:
                           weights_unsettled=tally.unsettled, branch_switches=tally.switches)
 
     def _contact_formed(self, path: PathState) -> bool:
-        """Whether the last increment was the first from rest and formed the contact state (a
-        constraint became active): it is no step along the load path, and the secant or tangent
-        load predictor would extrapolate it (on the gait envelope at twist 60-90 deg, the secant
-        extrapolated the soleus' lift-off of the first 30 N to 60 N: projections lost and a
-        cut-back in 4 of 10 columns, 13-96 Newton iterations for the second level).  The next
-        increment then starts at the converged state, where the complementarity predictor's
-        Josephy-Newton step is its predictor.  From the path and the status alone, so that a
-        restart decides as the uninterrupted run did (collective)."""
+        """Whether the last increment was the first from rest and formed the contact state: no
+        step along the load path for a load predictor to extrapolate (the secant took the soleus'
+        lift-off of 30 N to 60 N at twist 60-90 deg: cut-backs in 4 of 10 columns); the next one
+        starts at the converged state.  From the path and status alone, as a restart (collective)."""
         if self.predictor is None or path.dlam_last <= 0.0 or path.lam != path.dlam_last:
             return False
         c = self.problem.contact
@@ -287,5 +285,7 @@ class LoadStepper:
                                       + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
             if self.branches.take(self, path, X_prev, target, tally, resume=False):
                 return                                  # on from a stable branch (branch_switch.py)
+            if self.fade_switch.take(self, path, tally):
+                return                                  # on with pointwise fade forces
             P.load_factor = path.lam
             raise failure

@@ -154,16 +154,18 @@ def test_fade_key_errors_name_the_key_path():
     coulomb = {"law": "coulomb", "friction": 0.3}
     for keys, message in [({"fade": "exact"}, "contact.fade: must be one of settle, newton"),
                           ({"fade": "newton", "tangential": elastic}, "contact.fade: newton differentiates .* use settle"),
-                          ({"fade_forces": "exact"}, "contact.fade_forces: must be one of variational, pointwise"),
+                          ({"fade_forces": "exact"}, "contact.fade_forces: must be one of auto, variational, pointwise"),
                           ({"fade_forces": "variational", "tangential": coulomb},
                            "contact.fade_forces: a tangential law's forces are pointwise")]:
         with pytest.raises(ConfigError, match="^" + message):
             contact(mode="sliding", **keys)
-    assert (contact(mode="sliding").fade, contact(mode="sliding").fade_forces) == ("newton", "variational")
+    # auto: variational, pointwise from a level those cannot reach (solving/fade_switch.py)
+    assert (contact(mode="sliding").fade, contact(mode="sliding").fade_forces) == ("newton", "auto")
     assert contact(mode="sliding", tangential=elastic).fade == "settle"
     # friction_blocks.py: Coulomb differentiates its weights, with pointwise forces
     assert (contact(mode="sliding", tangential=coulomb).fade, contact(mode="sliding", tangential=coulomb).fade_forces) \
         == ("newton", "pointwise")
+    assert contact(mode="sliding", tangential=coulomb, fade_forces="auto").fade_forces == "pointwise"
 
 
 def test_the_differentiated_weights_keep_sbaij_and_ldlt():

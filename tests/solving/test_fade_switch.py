@@ -1,0 +1,129 @@
+"""``contact.fade_forces: auto`` (solving/fade_switch.py): a level the variational fade forces
+cannot reach is solved on with the pointwise ones.  A run made to fail with variational forces
+past a load factor switches there, completes, and ends on the pointwise equilibrium of a run
+with pointwise forces from the start (frictionless hyperelastic equilibria do not depend on the
+path), not on the variational one; a restart of it goes on with pointwise forces and repeats
+the uninterrupted run; which configs may switch.  2 and 3 ranks: tests/parallel/test_mpi.py."""
+import copy
+
+import numpy as np
+import pytest
+
+from contact.test_contact import achilles
+from helpers import petsc_init, probes_table
+
+STEPS = [100.0, 250.0, 400.0]
+
+
+def column(forces: str = "auto", steps=STEPS) -> dict:
+    """The paper's ψ = 45° tendon, 2 elements, sliding contact with differentiated fade weights
+    (the default rule): partner places sit in the fade bands, and at 400 N the two forms' soleus
+    elongations differ by 5.5e-4 of it."""
+    raw = achilles(elements=2, contact={"mode": "sliding", "fade_forces": forces})
+    raw["steps"] = list(steps)
+    raw["output"] = {"vtk": False}
+    return raw
+
+
+def fail_variational_past(above: float, put=setattr) -> None:
+    """Every SNES solve with variational fade forces at a load factor above ``above`` fails
+    (DIVERGED_FNORM_NAN, as a projection lost): a level those forces cannot reach (``put``:
+    a monkeypatch's setattr, or setattr in a driver process, tests/parallel/test_mpi.py)."""
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.solving.snes_solver import SNESSolver
+    solve = SNESSolver.solve
+
+    def failing(self, X, target, lam, reached):
+        if self.problem.contact.weights.variational and lam > above * (1.0 + 1e-12):
+            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN, 0
+        return solve(self, X, target, lam, reached)
+    put(SNESSolver, "solve", failing)
+
+
+def run(raw: dict, out, restart=None, log=None):
+    """``raw`` solved in this process: its RunResult."""
+    petsc_init()
+    from ancf_petsc.api import solve
+    from ancf_petsc.config.parse import parse_config
+    from helpers import CONFIGS
+    raw = copy.deepcopy(raw)
+    raw["output"]["dir"] = str(out)
+    return solve(parse_config(raw, base_dir=CONFIGS), log=log or (lambda *_: None), restart=restart)
+
+
+@pytest.fixture(scope="module")
+def references(tmp_path_factory):
+    """The column with variational and with pointwise forces from the start: {forces: summary}."""
+    out = {}
+    for forces in ("variational", "pointwise"):
+        res = run(column(forces), tmp_path_factory.mktemp(forces))
+        assert res.status == "completed", res.message
+        out[forces] = res.summary
+    return out
+
+
+def test_a_level_the_variational_forces_cannot_reach_is_solved_with_pointwise_ones(
+        tmp_path, monkeypatch, references):
+    fail_variational_past(STEPS[0], monkeypatch.setattr)
+    lines = []
+    res = run(column(), tmp_path, log=lines.append)
+    assert res.status == "completed", res.message
+    s = res.summary
+    assert s["fade_forces_pointwise_from"] == STEPS[0]
+    assert not s["stability_checked"]                      # LU from the switch on: no inertia
+    assert s["steps"][0]["negative_eigenvalues"] == 0 and s["steps"][1]["negative_eigenvalues"] is None
+    assert any("on with the pointwise ones" in line and f"load factor {STEPS[0]:g}" in line for line in lines)
+    # the first level is the variational run's; the last one the pointwise run's equilibrium
+    first = probes_table(s)[0]
+    assert np.allclose(first, probes_table(references["variational"])[0], rtol=1e-12, atol=0.0)
+    last, pointwise, variational = (probes_table(x)[-1] for x in (s, *(references[k] for k in
+                                                                          ("pointwise", "variational"))))
+    assert np.abs(last - pointwise).max() < 1e-8 * np.abs(pointwise).max()
+    assert np.abs(variational - pointwise).max() > 1e-4 * np.abs(pointwise).max()   # the test can tell
+
+
+def test_a_restart_after_the_switch_goes_on_with_pointwise_forces(tmp_path, monkeypatch):
+    fail_variational_past(STEPS[0], monkeypatch.setattr)
+    whole = run(column(), tmp_path / "whole")
+    part = run(column(steps=STEPS[:2]), tmp_path / "part")
+    monkeypatch.undo()                          # the restart needs no forced failure to stay pointwise
+    assert part.summary["fade_forces_pointwise_from"] == STEPS[0]
+    res = run(column(), tmp_path / "part", restart=str(tmp_path / "part"))
+    assert res.status == "completed", res.message
+    assert res.summary["fade_forces_pointwise_from"] == STEPS[0]
+    # to the solver's tolerance (the shorter run's is 1e-10 of its own largest load)
+    assert np.abs(probes_table(res.summary) - probes_table(whole.summary)).max() \
+        < 1e-8 * np.abs(probes_table(whole.summary)).max()
+    from ancf_petsc.errors import InputError
+    with pytest.raises(InputError, match=r"went on with pointwise fade forces from load factor 100 "
+                                         r"\(contact.fade_forces: auto\); restart with auto or pointwise"):
+        run(column("variational"), tmp_path / "part", restart=str(tmp_path / "part"))
+
+
+@pytest.mark.parametrize("change, switches", [
+    ({}, True),
+    ({"contact": {"fade_forces": "variational"}}, False),
+    ({"contact": {"fade": "settle"}}, False),                 # the two forms are one
+    ({"petsc": {"pc_type": "cholesky"}}, False),               # LDLᵀ asked for
+    ({"solver": {"matrix": "sbaij"}}, False),
+    ({"solver": {"linear": "fieldsplit"}}, False),
+])
+def test_which_runs_may_switch(change, switches):
+    petsc_init()
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.model.contact_setup import contact_for
+    from ancf_petsc.solving.fade_switch import switchable
+    from helpers import CONFIGS
+    raw = column()
+    for key, value in change.items():
+        raw.setdefault(key, {}).update(value)
+    spec = parse_config(raw, base_dir=CONFIGS)
+    model = build_model(spec)
+
+    class Problem:
+        contact = contact_for(model, spec.contact, lambda *_: None)
+    Problem.model = model
+    assert switchable(Problem, spec.solver.matrix, spec.petsc, "", spec.solver.linear
+                      if spec.solver.linear != "auto" else "direct") is switches

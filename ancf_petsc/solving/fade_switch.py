@@ -8,8 +8,9 @@ branch switching), or with τ_p ∇g_p (``pointwise``: an unsymmetric Jacobian, 
 unilateral envelope grids 13 cells complete with pointwise forces only and 4 with variational
 ones only.  ``auto`` starts with variational forces; when a level cannot be reached (its cut-backs
 spent, no branch to switch to, no sub-step on a less stable state) the run goes on from the last
-converged state with pointwise forces to its end, its stability no longer checked.  The Jacobian is then AIJ and the SNES, its LU and the predictors are built again;
-the load factor of the switch is in summary.json (``fade_forces_pointwise_from``) and in each
+converged state with pointwise forces to its end, its stability no longer checked.  The Jacobian
+is then AIJ and the SNES, its LU and the predictors are built again; the load factor of the
+switch is in the log, the final message, summary.json (``fade_forces_pointwise_from``) and each
 later level's restart data, so that a restart goes on as the run did.
 """
 from __future__ import annotations
@@ -91,7 +92,7 @@ class FadeForcesSwitch:
         petsc_options, max_level, linear = self.args
         P.matrix_type = P.pattern.matrix_type = matrix_type(
             P.model, self.matrix, petsc_options, stepper.spec.options_prefix, linear, False)
-        floor = stepper.solver.rounding_floor
+        old = stepper.solver
         stepper.solver.close()
         stepper.solver.destroy()
         if stepper.predictor is not None:
@@ -99,7 +100,8 @@ class FadeForcesSwitch:
         P.J.destroy()
         P.J = P.pattern.create_matrix()
         set_near_null_space(P)
-        stepper.solver = SNESSolver(P, stepper.spec, petsc_options, max_level, linear, floor)
+        stepper.solver = SNESSolver(P, stepper.spec, petsc_options, max_level, linear, old.rounding_floor)
+        stepper.solver.chord.count, stepper.solver.chord.kept = old.chord.count, old.chord.kept
         stepper.predictor = (ComplementarityPredictor(P, stepper.solver.snes)
                              if ComplementarityPredictor.applies(P) else None)
         stepper.tangent = TangentPredictor(P, stepper.solver.snes)

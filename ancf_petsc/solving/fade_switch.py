@@ -65,9 +65,10 @@ class FadeForcesSwitch:
         path.dlam = tally.first_failed or path.dlam
         return True
 
-    def summary(self) -> dict:
-        """summary.json's record of the switch (nothing without one)."""
-        return {} if self.at is None else {"fade_forces_pointwise_from": self.at}
+    def summary(self, stepper) -> dict:
+        """summary.json's record of the switch, with the solver the run ended with (nothing
+        without a switch)."""
+        return {} if self.at is None else {"fade_forces_pointwise_from": self.at, "solver": stepper.describe()}
 
     def note(self) -> str:
         """What the final message adds after a switch."""

@@ -369,7 +369,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,
         stability_checked=all(r.negative_eigenvalues is not None for r in records),
-        **stepper.fade_switch.summary(),
+        **stepper.fade_switch.summary(stepper),
         unused_petsc_options=unused)
     if comm.size > 1:
         problem_writing = comm.tompi4py().bcast(problem_writing, root=0)

@@ -113,9 +113,10 @@ def failure_detail(solver, reason: int) -> str:
         maxit, stop = solver.snes.getTolerances()[3], solver.cycle_stop
         if stop is not None and stop.wandered:
             h = solver.last_solve_history
-            hint = ("; at large twist, contact.fade_forces: pointwise may converge where the fade bands' "
-                    "forces stall Newton (docs/contact.md)"
-                    if contact.weights.variational and contact.weights.rule == "newton" else "")
+            # with auto the run switched to them where it could (solving/fade_switch.py)
+            hint = ("; at large twist, contact.fade_forces: auto or pointwise may converge where the fade "
+                    "bands' forces stall Newton (docs/contact.md)"
+                    if contact.spec.fade_forces == "variational" and contact.weights.rule == "newton" else "")
             return (f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
                     f"{stop.window} iterations, so the solve ended: more iterations are unlikely to help{hint})")
         return (f" (unilateral contact changes its active set within a level and may need more than "

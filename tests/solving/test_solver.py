@@ -480,8 +480,9 @@ def test_unilateral_contact_ends_a_solve_without_progress_after_its_window():
 
 def test_a_unilateral_solve_ended_by_its_window_says_so():
     """The failure of a unilateral level whose last solve the window ended names the smallest |F|
-    and the window, and the pointwise fade forces while they are variational, not the advice to
-    raise -snes_max_it (which stays for a solve that ran all its iterations finding new lows)."""
+    and the window, and the pointwise fade forces when the config chose variational ones (with
+    auto the run switched where it could), not the advice to raise -snes_max_it (which stays for
+    a solve that ran all its iterations finding new lows)."""
     from types import SimpleNamespace
     from petsc4py import PETSc
     from ancf_petsc.contact.laws import UnilateralLaw
@@ -491,15 +492,17 @@ def test_a_unilateral_solve_ended_by_its_window_says_so():
     snes.setTolerances(max_it=60)
     history = [50.0, 9.0, 4.0] + [4.0 + k % 7 for k in range(15)]
     stop = CycleStop(lambda: history, {}, "", 15, -1.0)
-    contact = SimpleNamespace(law=UnilateralLaw(), terms=[], weights=SimpleNamespace(variational=True, rule="newton"))
+    contact = SimpleNamespace(law=UnilateralLaw(), terms=[], weights=SimpleNamespace(variational=True, rule="newton"),
+                              spec=SimpleNamespace(fade_forces="variational"))
     solver = SimpleNamespace(snes=snes, problem=SimpleNamespace(contact=contact), cycle_stop=stop,
                              last_solve_history=history)
     reason = PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
     stop.wandered = True
     assert "found no |F| below 4.00e+00 N in its last 15 iterations" in failure_detail(solver, reason)
-    assert "contact.fade_forces: pointwise" in failure_detail(solver, reason)    # the way out
-    contact.weights.variational = False
+    assert "contact.fade_forces: auto or pointwise" in failure_detail(solver, reason)    # the way out
+    contact.spec.fade_forces = "auto"               # switched where it could, or refused on a saddle
     assert "fade_forces" not in failure_detail(solver, reason)
+    contact.spec.fade_forces = "variational"
     contact.weights.variational, contact.weights.rule = True, "settle"    # never differentiated
     assert "fade_forces" not in failure_detail(solver, reason)
     stop.wandered = False

@@ -98,6 +98,8 @@ class FadeForcesSwitch:
         stepper.solver.destroy()
         if stepper.predictor is not None:
             stepper.predictor.destroy()
+        stepper.branches.destroy()              # LU has no inertia: no branch points from here on
+        stepper.branches.enabled = False
         P.J.destroy()
         P.J = P.pattern.create_matrix()
         set_near_null_space(P)

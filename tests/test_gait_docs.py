@@ -30,3 +30,22 @@ def test_a_block_filter_picks_its_rows(tmp_path):
     assert "| 90 | 57 |" in out and "41" not in out
     out = render_docs("<!-- envelope:friction:sliding:friction=0 -->\n<!-- /envelope -->", str(tmp_path))
     assert "| 90 | 41 |" in out and "57" not in out
+
+
+def test_a_cell_that_switched_to_pointwise_fade_forces_says_where():
+    """``contact.fade_forces: auto`` (solving/fade_switch.py): a row with
+    ``fade_forces_pointwise_from`` ends its table cell with where the run switched; the
+    ``CellResult`` row carries it from summary.json."""
+    from ancf_petsc.workflows.envelope import CellResult, EnvelopeCell, markdown_table
+    base = {"base": "a.yaml", "law": "unilateral", "friction": "0.0", "bias": "soleus", "elements": "8",
+            "status": "completed", "last_level": "3000", "iterations": "420", "iterations_to_1200": "109",
+            "cutbacks": "19", "cutbacks_to_1200": "0", "cutback_levels": "2", "median_iterations": "15.5"}
+    rows = [dict(base, twist="135", stride="False", fade_forces_pointwise_from=""),
+            dict(base, twist="150", stride="False", fade_forces_pointwise_from="2468.75")]
+    text = markdown_table(rows, law="unilateral")
+    assert "| 150 | 109, pointwise from 2469 N |" in text and "| 135 | 109 |" in text
+    strides = [dict(base, twist="120", stride="True", fade_forces_pointwise_from="35.7169")]
+    assert "pointwise from frame 35.72" in markdown_table(strides, law="unilateral", key="median_iterations")
+    cell = EnvelopeCell("a.yaml", 150.0, "soleus", "unilateral", elements=8)
+    assert CellResult(cell, "completed", pointwise_from=2468.75).row()["fade_forces_pointwise_from"] == 2468.75
+    assert CellResult(cell, "completed").row()["fade_forces_pointwise_from"] == ""

@@ -119,7 +119,8 @@ def cell_config(cell: EnvelopeCell) -> dict:
 class CellResult:
     """How a cell ended: status (completed | failed | unstable | interrupted | crashed | timeout),
     the last converged load [N], Newton iterations (all, and up to 1.2 kN), cut-backs, wall time
-    [s] and the run's message."""
+    [s], the run's message and where it went on with pointwise fade forces (``contact.fade_forces:
+    auto``, solving/fade_switch.py; None: it did not)."""
     cell: EnvelopeCell
     status: str
     last_level: float = 0.0
@@ -131,6 +132,7 @@ class CellResult:
     message: str = ""
     per_level: list = field(default_factory=list)
     solve_time: float = 0.0         # summary.json's timings.solve [s]
+    pointwise_from: float | None = None   # summary.json's fade_forces_pointwise_from
 
     @property
     def frames(self) -> int:
@@ -155,7 +157,8 @@ class CellResult:
                 "cutbacks_to_1200": self.cutbacks_to_1200, "levels": self.frames,
                 "median_iterations": self.median_iterations, "cutback_levels": self.cutback_levels,
                 "solve_time": round(self.solve_time, 3), "wall_time": round(self.wall_time, 2),
-                "message": self.message}
+                "message": self.message,
+                "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from}
 
 
 def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None = None):
@@ -200,7 +203,8 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
                       cutbacks_to_1200=sum(s["cutbacks"] for s in early), wall_time=wall,
                       message="" if status == "completed" else str(data.get("message", ""))[:300],
                       per_level=[(s["load_factor"], s["iterations"], s["cutbacks"]) for s in steps],
-                      solve_time=float(data.get("timings", {}).get("solve", 0.0)))
+                      solve_time=float(data.get("timings", {}).get("solve", 0.0)),
+                      pointwise_from=data.get("fade_forces_pointwise_from"))
 
 
 def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
@@ -246,7 +250,8 @@ def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir:
         report(f"{tag:6s} {cell.name:64s} {res.status:10s} last {res.last_level:6g}  Newton "
                f"{res.iterations:4d} (to 1.2 kN {res.iterations_to_1200:4d}, median {res.median_iterations:g})  "
                f"cut-backs {res.cutbacks:2d} ({res.cutback_levels} levels)  {res.wall_time:6.1f} s  "
-               f"{res.message[:100]}")
+               + ("" if res.pointwise_from is None else f"pointwise fade forces from {res.pointwise_from:g}  ")
+               + f"{res.message[:100]}")
         return dict(res.row(), solver=tag)
 
     with ThreadPoolExecutor(max_workers=jobs) as pool:
@@ -275,11 +280,19 @@ def summary_line(rows: list[dict], tag: str) -> str:
 
 
 def _cell_text(r: dict | None, key: str) -> str:
+    """A row in a table cell, with where it switched to pointwise fade forces (fade_switch.py)."""
     if r is None:
         return "–"
     if r["status"] == "crashed":
         return "**traceback**"
     stride = str(r.get("stride", "")).lower() in ("true", "1")
+    text, at = _outcome_text(r, key, stride), r.get("fade_forces_pointwise_from") or ""
+    if not at:
+        return text
+    return text + (f", pointwise from frame {float(at):.4g}" if stride else f", pointwise from {float(at):.4g} N")
+
+
+def _outcome_text(r: dict, key: str, stride: bool) -> str:
     if r["status"] != "completed":
         last = float(r["last_level"] or 0.0)
         where = (f"at frame {last:g}" if stride else f"after {last:g} N" if last > 0

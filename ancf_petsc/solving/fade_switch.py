@@ -6,9 +6,11 @@ gap's exact variation, −p ∇(w g) (``variational``: a symmetric Jacobian, LDL
 branch switching), or with τ_p ∇g_p (``pointwise``: an unsymmetric Jacobian, LU); docs/contact.md,
 "The weights' forces".  Neither converges everywhere the other does (docs/gait.md): on the four
 unilateral envelope grids 13 cells completed with pointwise forces only and 4 with variational
-ones only; with ``auto`` 147 of the 156 complete (135 before, none lost).  ``auto`` starts with variational forces; when a level cannot be reached (its cut-backs
-spent, no branch to switch to, no sub-step on a less stable state) the run goes on from the last
-converged state with pointwise forces to its end, its stability no longer checked.  The Jacobian
+ones only; with ``auto`` 147 of the 156 complete (135 before, none lost).
+
+``auto`` starts with variational forces; when a level cannot be reached (its cut-backs spent, no
+branch to switch to, no sub-step on a less stable state) the run goes on from the last converged
+state with pointwise forces to its end, its stability no longer checked.  The Jacobian
 is then AIJ and the SNES, its LU and the predictors are built again; the load factor of the
 switch is in the log, the final message, summary.json (``fade_forces_pointwise_from``) and each
 later level's restart data, so that a restart goes on as the run did.

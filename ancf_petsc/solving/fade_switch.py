@@ -105,6 +105,7 @@ class FadeForcesSwitch:
         P.J.destroy()
         P.J = P.pattern.create_matrix()
         set_near_null_space(P)
+        # the floor as measured at the start: measuring it again evaluates the contact at q0
         stepper.solver = SNESSolver(P, stepper.spec, petsc_options, max_level, linear, old.rounding_floor)
         stepper.solver.chord.count, stepper.solver.chord.kept = old.chord.count, old.chord.kept
         stepper.predictor = (ComplementarityPredictor(P, stepper.solver.snes)

@@ -66,10 +66,10 @@ class SNESSolver:
         if spec.min_det_f > 0.0:
             problem.limits.j_min = spec.min_det_f
             self.snes.setLineSearchPreCheck(problem.limits.precheck)
-        # absolute tolerance: 1e-10 of the largest requested load, but never below the rounding
-        # floor of the residual, measured as ‖F(q0, 0)‖ (exactly zero in exact arithmetic)
+        # absolute tolerance: 1e-10 of the largest load, at least the residual's rounding floor ‖F(q0, 0)‖
+        # (zero in exact arithmetic; ``floor``: the replaced solver's, not re-measured mid-run, fade_switch.py)
         self.load_norm = problem.loads.scale(max_level)
-        self.rounding_floor = rounding_floor(problem)
+        self.rounding_floor = rounding_floor(problem) if floor is None else floor
         atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._history: list[float] = []        # residual norms of the current SNES solve

@@ -6,7 +6,7 @@ gap's exact variation, −p ∇(w g) (``variational``: a symmetric Jacobian, LDL
 branch switching), or with τ_p ∇g_p (``pointwise``: an unsymmetric Jacobian, LU); docs/contact.md,
 "The weights' forces".  Neither converges everywhere the other does (docs/gait.md): on the four
 unilateral envelope grids 13 cells completed with pointwise forces only and 4 with variational
-ones only; with ``auto`` 147 of the 156 complete (135 before, none lost).
+ones only; with ``auto`` 145 of the 156 complete (135 before, none lost).
 
 ``auto`` starts with variational forces; when a level cannot be reached (its cut-backs spent, no
 branch to switch to, no sub-step on a less stable state) the run goes on from the last converged

@@ -9,7 +9,8 @@ import re
 import numpy as np
 
 __all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "MIN_OVERFLOW_STRETCH",
-           "fibre_warnings", "size_warnings", "strain_warning", "point_force_warnings"]
+           "MIN_SHEAR_MODULUS", "MAX_BULK_RATIO", "MAX_TWIST_DEG", "TWIST_AXIS_REACH", "fibre_warnings",
+           "material_warnings", "size_warnings", "strain_warning", "point_force_warnings", "twist_warnings"]
 
 #: a tendon, fascicle or bar longer than this [m] is most likely given in mm
 MAX_LENGTH = 5.0
@@ -22,6 +23,15 @@ MAX_FIRST_STRAIN = 0.5
 #: a fibre law whose exponential overflows (double precision) below this fibre stretch is warned
 #: of: tendon fibres stretch by several per cent
 MIN_OVERFLOW_STRETCH = 1.1
+#: a (matrix) shear modulus below this [Pa] is most likely kPa or MPa written as Pa: the softest
+#: published tendon matrix is 15 kPa (docs/fibres.md), the paper's subtendons 103-227 MPa
+MIN_SHEAR_MODULUS = 1e3
+#: K / mu beyond this is incompressible past what Newton's tolerance resolves (studies sweep to 1e4)
+MAX_BULK_RATIO = 1e6
+#: a pretwist beyond this [deg] over the tendon's length is more than a full turn (measured: 0-180)
+MAX_TWIST_DEG = 360.0
+#: a twist axis farther than this many section widths from every section winds them on a helix
+TWIST_AXIS_REACH = 10.0
 #: ln of the largest double: e^x is inf beyond it
 LOG_MAX_DOUBLE = float(np.log(np.finfo(float).max))
 
@@ -115,4 +125,45 @@ def fibre_warnings(spec, beams) -> list[str]:
             out.append(f"warning: beams[{i}].material.k2: {k2:g}: the fibre term e^(k2 E^2) of beam {b.name} "
                        f"overflows (inf stress) from a fibre stretch of {stretch:.4g} (E = {E:.3g}); tendon "
                        f"fibres stretch by several per cent; the published sets have k2 = 4.8 to 525 (docs/fibres.md)")
+    return out
+
+
+def material_warnings(spec, beams) -> list[str]:
+    """One warning per beam whose (matrix) shear modulus mu is below ``MIN_SHEAR_MODULUS`` (a unit
+    slip), else whose bulk modulus K gives a negative small-strain Poisson ratio (K < 2 mu / 3: an
+    auxetic tendon, most likely a unit slip in K) or K / mu above ``MAX_BULK_RATIO``."""
+    out = []
+    for i, b in enumerate(beams):
+        mu, K = getattr(b.material, "mu", None), getattr(b.material, "K", None)
+        if mu is None or K is None:
+            continue
+        key = f"warning: beams[{i}].material"
+        if mu < MIN_SHEAR_MODULUS:
+            out.append(f"{key}.mu: {mu:g} Pa for beam {b.name} is softer than any tendon (matrices from 15 kPa, "
+                       f"the paper's subtendons 103-227 MPa): moduli are in Pa (units: SI); if you meant "
+                       f"{mu:g} MPa, write {mu:g}e6")
+        elif K < 2.0 * mu / 3.0 or K > MAX_BULK_RATIO * mu:
+            nu = (3.0 * K - 2.0 * mu) / (2.0 * (3.0 * K + mu))
+            what = "negative (auxetic)" if nu < 0 else f"incompressible beyond K/mu = {MAX_BULK_RATIO:g}"
+            out.append(f"{key}.bulk_modulus: K = {K:g} Pa is {K / mu:.3g} x mu for beam {b.name}: a small-strain "
+                       f"Poisson ratio of {nu:.7g}, {what}; tendon is nearly incompressible (the paper's "
+                       f"K/mu 3.8-8.3); check K's units (Pa)")
+    return out
+
+
+def twist_warnings(spec, beams) -> list[str]:
+    """Warnings for a pretwist of more than ``MAX_TWIST_DEG`` and for a twist axis farther than
+    ``TWIST_AXIS_REACH`` section widths from every section's centroid (millimetres written as
+    metres: the sections then wind round it on a helix of that radius)."""
+    out = []
+    if abs(spec.twist_deg) > MAX_TWIST_DEG:
+        out.append(f"warning: geometry.twist_deg: {spec.twist_deg:g} deg is more than a full turn over the tendon's "
+                   f"length (measured subtendon twists are 0-180 deg); twist_deg is in degrees")
+    if spec.twist_deg and spec.twist_axis is not None and beams:
+        width = max(2.0 * float(np.max(b.section.extent)) for b in beams)
+        dist = min(float(np.linalg.norm(b.section.centroid - np.asarray(spec.twist_axis))) for b in beams)
+        if dist > TWIST_AXIS_REACH * width:
+            out.append(f"warning: geometry.twist_axis: the axis is {dist:.3g} m from the nearest section centroid "
+                       f"({dist / width:.3g} x the sections' width), so the sections wind round it on a helix; "
+                       f"coordinates are in metres (units: SI): if they are millimetres, divide them by 1000")
     return out

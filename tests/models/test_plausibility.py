@@ -45,6 +45,31 @@ def test_bundle_radius_in_mm_is_named():
     assert w.startswith("warning: bundle.radius: the section of beam fascicle0 is 1.2 m wide (and 6 more")
 
 
+@pytest.mark.parametrize("key,value,expected", [
+    ("mu", 103.1, "beams[0].material.mu: 103.1 Pa for beam soleus is softer than any tendon"),
+    ("bulk_modulus", 3.7, "a small-strain Poisson ratio of -0.9999998, negative (auxetic)"),
+    ("bulk_modulus", 1e15, "incompressible beyond K/mu = 1e+06")])
+def test_implausible_moduli_are_named(key, value, expected):
+    """A modulus written in MPa as Pa, or a bulk modulus far off (in the fuzzing of configs:
+    bulk_modulus 3.7 failed after hundreds of Newton iterations with no word of the material)."""
+    raw = load_raw("achilles_type3_psi0.yaml")
+    raw["beams"][0]["material"][key] = value
+    (w,) = _warnings(raw)
+    assert expected in w and "units" in w
+
+
+def test_twist_axis_in_mm_and_more_than_a_turn_are_named():
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["geometry"]["twist_axis"] = [5.896, -2.9837]               # mm meant
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: geometry.twist_axis: the axis is 6.6 m from the nearest section centroid (635 x")
+    assert "divide them by 1000" in w
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["geometry"]["twist_deg"] = 1000
+    (w,) = _warnings(raw)
+    assert "geometry.twist_deg: 1000 deg is more than a full turn" in w
+
+
 def test_implausible_slenderness_is_named():
     raw = load_raw("uniaxial_neohookean.yaml")
     raw["geometry"]["length"] = 0.0001                         # 0.1 mm long, 12 mm wide

@@ -23,10 +23,14 @@ Josephy–Newton iteration whose inner solves keep the status.  Away from rest t
 bodies alone can be indefinite (a neighbour pressed by its contact forces and free of its
 constraints buckles), and so can S.  S is then replaced by its nearest positive semidefinite
 matrix (its negative eigenvalues set to zero) when that changes it by at most ``INDEFINITE_SHARE``
-of its norm (the paper's tendon and the second subject: 1e-5 … 5e-3); otherwise there is no
-prediction (bundle_circle7: the negative part dominates) and the law's phases decide the status.
+of its norm (the paper's tendon and the second subject: 1e-5 … 5e-3).  Farther from
+semidefinite (the gait envelope at twist ≥ 75°: −5.6e9 against 7.5e9 at 90°, 600 N) the
+constraints active at X are held as equalities (``lcp.held_lcp``): the Schur complement of the
+saddle-point system with them held is semidefinite where K is on the motions they allow, and its
+LCP gives an exact solution of LCP(S, d) or none.  Without one there is no prediction
+(bundle_circle7: the negative part dominates) and the law's phases decide the status.
 The clipped S only chooses the active set: its pressures are then solved again with the exact S
-(``_exact_on_support``), which makes the step the saddle-point Newton step of that active set,
+(``lcp.exact_on_support``), which makes the step the saddle-point Newton step of that active set,
 wherever that solves the exact LCP.  The clipped matrix's own pressures are off along the clipped
 direction, and Δq = y − Xs Δz carries that error through K⁻¹, which is large exactly where K is
 near its negative mode: on the solver_default_2025 GOH column (unilateral, 90.72 N, docs/fibres.md)
@@ -51,23 +55,15 @@ terms were in the rows only: K unsymmetric, S from the columns; the alex GOH col
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as la
 from petsc4py import PETSc
 
 from ..contact.laws import HELD, PROBE
+from .lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
 
 #: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
 MAX_MULTIPLIERS = 2500
 #: halvings of the predicted step before it is dropped (the status is kept)
 MAX_HALVINGS = 8
-#: relative regularisation of S before its Cholesky factor (redundant constraints)
-REGULARISATION = 1e-12
-#: an indefinite S is replaced by its nearest positive semidefinite matrix when its most negative
-#: eigenvalue is at most this share of its largest (module docstring)
-INDEFINITE_SHARE = 1e-2
-#: relative tolerance (of max |d|) of the exact LCP's inequalities when the clipped S's active set
-#: is solved again with the exact S (``_exact_on_support``)
-LCP_TOL = 1e-9
 
 
 def multiplier_dofs(problem) -> np.ndarray:
@@ -134,6 +130,7 @@ class ComplementarityPredictor:
         self._select = None                       # E: the multipliers' columns (``_columns``)
         self._zero_rows = True                    # the matrix type can zero rows and columns
         self._kept = KeptOperator(self.ksp)        # K between linearisations
+        self.last_held = False                     # the last prediction held the active set
 
     @staticmethod
     def applies(problem) -> bool:
@@ -168,15 +165,22 @@ class ComplementarityPredictor:
     def predict(self, X: PETSc.Vec) -> bool:
         """Replace X by the Josephy–Newton step from X and set the contact status from the
         solution; False (X and the status unchanged) when a factorisation failed or S is too
-        far from positive definite (``INDEFINITE_SHARE``)."""
+        far from positive definite (``INDEFINITE_SHARE``) and holding the active constraints
+        (``lcp.held_lcp``) gives no solution.  ``last_held``: this prediction came from the held
+        constraints."""
         c = self.problem.contact
         law_phase, status = c.law.phase, c.status.copy()
-        vecs = []
-        try:
-            lcp = self._linearised(X, vecs)
-            z_new = self._solve_lcp(lcp[0], lcp[1]) if lcp is not None else None
-        except np.linalg.LinAlgError:            # S far from positive definite: no convex LCP
-            z_new = None
+        vecs, self.last_held = [], False
+        lcp = self._linearised(X, vecs)
+        z_new = None
+        if lcp is not None:
+            try:
+                z_new = solve_lcp(lcp[0], lcp[1])
+            except np.linalg.LinAlgError:        # S far from positive definite: no convex LCP
+                z_new = held_lcp(lcp[0], lcp[1], self.global_status(status))
+                self.last_held = z_new is not None
+            except RuntimeError:                 # NNLS past its iteration limit: no prediction
+                z_new = None
         c.begin_phase(law_phase)
         if z_new is None:
             c.status[:] = status
@@ -303,50 +307,3 @@ class ComplementarityPredictor:
         lo, hi = v.getOwnershipRange()
         v.setArray(values[lo:hi])
         return v
-
-    @staticmethod
-    def _solve_lcp(S: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on a
-        factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²): Cholesky's, or, for an indefinite S within
-        INDEFINITE_SHARE of positive semidefinite, L = V Λ₊^½ of its nearest positive
-        semidefinite matrix (LinAlgError when it is farther), whose active set is then solved
-        with the exact S (``_exact_on_support``)."""
-        M = len(d)
-        if M == 0:
-            return np.zeros(0)
-        reg = REGULARISATION * max(float(np.max(np.diag(S))), 1e-300)
-        try:
-            L = la.cholesky(S + reg * np.eye(M), lower=True)
-            b = -la.solve_triangular(L, d, lower=True)
-            clipped = False
-        except np.linalg.LinAlgError:
-            lam, V = la.eigh(S)
-            if -lam[0] > INDEFINITE_SHARE * lam[-1]:
-                raise
-            L = V * np.sqrt(np.maximum(lam, reg))
-            b = -la.solve(L, d)
-            clipped = True
-        import scipy.optimize as so          # here only: ~40 ms of every run's start-up
-        z, _ = so.nnls(L.T, b, maxiter=50 * M)
-        return ComplementarityPredictor._exact_on_support(S, d, z) if clipped else z
-
-    @staticmethod
-    def _exact_on_support(S: np.ndarray, d: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """The solution of LCP(S, d) on the active set {z > 0} that the clipped S chose, with the
-        exact S (S_AA z_A = −d_A: the Newton step of the saddle-point system of that active set),
-        where it solves the exact LCP (z_A ≥ 0, w ≥ 0 off A, to ``LCP_TOL`` of d); else ``z``
-        (module docstring, "clipped")."""
-        A = z > 0.0
-        if not A.any():
-            return z
-        try:
-            zA = la.solve(S[np.ix_(A, A)], -d[A])
-        except np.linalg.LinAlgError:
-            return z
-        out = np.zeros_like(z)
-        out[A] = zA
-        w = d + S @ out
-        tol = LCP_TOL * float(np.max(np.abs(d)))
-        if not np.all(np.isfinite(out)) or zA.min() < 0.0 or w[~A].min(initial=0.0) < -tol:
-            return z
-        return out

@@ -32,7 +32,9 @@ and 3 more at its check, and the phases then took 16 Newton iterations (32 for t
 gastrocnemius-biased); from the converged state the level takes 19, the lost path's 10 included.
 Where there is no prediction already at the load predictor's state, the kept-status solve and
 the phases run as before (restarting there took the 135 deg gastrocnemius-biased column into a
-state it failed at, 1072 N).
+state it failed at, 1072 N).  Where the check sets a status it set before in the increment, the
+predictions cycle (an indefinite S has several complementary solutions: period 3 at 1000 N on
+the 120 deg gastrocnemius-biased column) and the phases take over from that state.
 
 Where there is no prediction (S too far from positive definite, a failed factorisation) and the
 kept status does not pass the check, where a solve fails (restarted from the predicted state)
@@ -247,13 +249,11 @@ class PhasedNewton:
     def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False) -> tuple[int | None, int, bool]:
         """Josephy–Newton (module docstring): (reason, iterations, lost), reason None when the
         increment is left to the phases (from X as it is then).  A prediction counts as one
-        Newton iteration (one factorisation).  Without a prediction the status is kept as it
-        is for the solve; the phases take over when the check then changes it.  ``moved``: X
-        is a load predictor's state; ``lost`` then says that this path made a prediction and
-        lost the next one or its solve failed (the caller starts again from the converged
-        state, "From the converged state")."""
-        P, c = self.steps, self.steps.contact
-        its, predicted_once, weighed = 0, False, None
+        Newton iteration.  Without one the status is kept for the solve; the phases take over
+        when the check then changes it.  ``moved``: X is a load predictor's state; ``lost``:
+        this path made a prediction and lost the next one or its solve failed (the caller
+        starts again from the converged state)."""
+        P, c, its, predicted_once, weighed, seen = self.steps, self.steps.contact, 0, False, None, set()
         for k in range(MAX_PREDICTIONS):
             status = c.status.copy()
             ok = self.predictor.predict(X)
@@ -267,7 +267,7 @@ class PhasedNewton:
             P.keep_status(CHECK)
             reason, n = self.snes_solve(X)
             its += n
-            what = f"prediction {k} ({predicted} changes)" if ok else f"no prediction {k}"
+            what = f"prediction {k} ({predicted} changes{self._held})" if ok else f"no prediction {k}"
             if reason <= 0:
                 self._trace(lam, what, n, reason)
                 c.projector.restore()
@@ -287,6 +287,8 @@ class PhasedNewton:
             start.destroy()
             changes = P.update_status(X)
             self._trace(lam, what, n, reason, changes)
+            if changes and self._cycles(seen, lam, reason):
+                return None, its, False
             # the first solve from rest kept the weights: they now follow the state, and the next
             # prediction linearises them with it (one Josephy–Newton step for the status and the
             # weights together, instead of a re-solve for the weights after the status settled)
@@ -304,6 +306,21 @@ class PhasedNewton:
                     return None, its, False
                 return self._reweigh(X, lam, its, weighed)   # no prediction: the weights alone
         return None, its, False
+
+    @property
+    def _held(self) -> str:
+        return ", held" if self.predictor.last_held else ""
+
+    def _cycles(self, seen: set, lam: float, reason: int) -> bool:
+        """Whether the check set a status it set before in this increment (``seen``, which
+        gets this one): the predictions cycle (module docstring; from the converged state they
+        cycle again).  Collective."""
+        key = self.predictor.global_status(self.steps.contact.status).tobytes()
+        if key in seen:
+            self._trace(lam, "the predictions cycle", 0, reason)
+            return True
+        seen.add(key)
+        return False
 
     def _reweigh(self, X: PETSc.Vec, lam: float, its: int, weighed) -> tuple[int, int, bool]:
         """One solve for the weights just updated, the status kept (``_predicted``)."""

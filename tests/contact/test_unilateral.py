@@ -74,13 +74,13 @@ def test_end_weight_is_one_on_the_surface_and_falls_smoothly_past_its_ends():
 
 def test_lcp_solution_is_complementary():
     """The predictor's dense solve against enumeration of every active set (random SPD S)."""
-    from ancf_petsc.petsc.complementarity import ComplementarityPredictor
+    from ancf_petsc.petsc.lcp import solve_lcp
     rng = np.random.default_rng(3)
     for _ in range(5):
         A = rng.standard_normal((7, 7))
         S = A @ A.T + 0.1 * np.eye(7)
         d = rng.standard_normal(7)
-        z = ComplementarityPredictor._solve_lcp(S, d)
+        z = solve_lcp(S, d)
         w = d + S @ z
         assert z.min() >= 0 and w.min() > -1e-9 and abs(z @ w) < 1e-9
         # the unique solution of a P-matrix problem: the one complementary active set
@@ -103,7 +103,7 @@ def test_lcp_with_a_nearly_semidefinite_schur_complement():
     solves the exact LCP, else for the semidefinite matrix (both occur below); farther, there
     is no prediction."""
     import numpy.linalg as npl
-    from ancf_petsc.petsc.complementarity import INDEFINITE_SHARE, ComplementarityPredictor
+    from ancf_petsc.petsc.lcp import INDEFINITE_SHARE, solve_lcp
     branches = set()
     for seed in (5, 6, 7, 8):
         rng = np.random.default_rng(seed)
@@ -111,13 +111,13 @@ def test_lcp_with_a_nearly_semidefinite_schur_complement():
         d = rng.standard_normal(6)
         lam = np.array([-2.0 * INDEFINITE_SHARE, 0.3, 0.5, 0.8, 0.9, 1.0])
         with pytest.raises(np.linalg.LinAlgError):
-            ComplementarityPredictor._solve_lcp((V * lam) @ V.T, d)
+            solve_lcp((V * lam) @ V.T, d)
         lam[0] = -0.5 * INDEFINITE_SHARE
         S, Sp = (V * lam) @ V.T, (V * np.maximum(lam, 0.0)) @ V.T
-        z = ComplementarityPredictor._solve_lcp(S, d)
+        z = solve_lcp(S, d)
         exact = [(d + M @ z).min() > -1e-9 and abs(z @ (d + M @ z)) < 1e-9 for M in (S, Sp)]
         assert z.min() >= 0 and exact[0] != exact[1], exact            # one of the two, exactly
-        zp = ComplementarityPredictor._solve_lcp(Sp + 1e-9 * np.eye(6), d)   # Sp's own LCP
+        zp = solve_lcp(Sp + 1e-9 * np.eye(6), d)   # Sp's own LCP
         a = zp > 1e-12
         za = np.zeros(6)
         za[a] = np.linalg.solve(S[np.ix_(a, a)], -d[a])
@@ -136,7 +136,7 @@ def test_a_clipped_schur_complement_keeps_the_exact_step_of_its_active_set():
     solver_default_2025 GOH column at 90.72 N (docs/contact.md), a step of 4.4 against
     Newton's 0.028, from which the stepper's solves failed."""
     import scipy.linalg as la
-    from ancf_petsc.petsc.complementarity import INDEFINITE_SHARE, ComplementarityPredictor
+    from ancf_petsc.petsc.lcp import INDEFINITE_SHARE, solve_lcp
     rng = np.random.default_rng(7)
     n, m = 6, 4
     V, _ = np.linalg.qr(rng.standard_normal((n, n)))
@@ -152,7 +152,7 @@ def test_a_clipped_schur_complement_keeps_the_exact_step_of_its_active_set():
     F = rng.standard_normal(n)
     c = -S @ rng.uniform(0.5, 1.0, m) + G @ Ki @ F                      # pressed gaps
     d = c - G @ Ki @ F
-    z = ComplementarityPredictor._solve_lcp(S, d)
+    z = solve_lcp(S, d)
     dq = Ki @ (-F + G.T @ z)
     w = c + G @ dq                                                     # the linearised gaps
     A = z > 0.0
@@ -161,6 +161,50 @@ def test_a_clipped_schur_complement_keeps_the_exact_step_of_its_active_set():
                              np.concatenate([-F, -c[A]]))
     assert np.allclose(dq, saddle[:n], rtol=1e-9, atol=1e-9 * np.abs(saddle[:n]).max())
     assert np.allclose(z[A], saddle[n:], rtol=1e-9)
+
+def test_an_indefinite_schur_complement_is_solved_with_the_pressing_constraints_held():
+    """Far from semidefinite (a body that buckles when free of its pressed neighbour: K has a
+    strong negative mode that one constraint holds) there is no clipped prediction; holding
+    the pressing constraints as equalities leaves the Schur complement of the saddle-point
+    system with them held, positive definite here, and its LCP gives a solution of the exact
+    LCP(S, d): one of the complementary solutions that enumeration finds, with the held
+    constraint closed (w = 0).  The plain solve has none (LinAlgError)."""
+    from ancf_petsc.petsc.lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
+    rng = np.random.default_rng(11)
+    n, m = 7, 5
+    V, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    K = (V * np.array([-0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5])) @ V.T     # one strong negative mode
+    R = rng.standard_normal((m, n))
+    R[0, 0] = 4.0                                                     # constraint 0 holds it
+    R[1:, 0] = 0.05 * rng.standard_normal(m - 1)
+    G = R @ V.T
+    Ki = np.linalg.inv(K)
+    S = 0.5 * (G @ Ki @ G.T + (G @ Ki @ G.T).T)
+    lam = np.linalg.eigvalsh(S)
+    assert -lam[0] > INDEFINITE_SHARE * lam[-1]
+    d = rng.standard_normal(m)
+    d[0] = -abs(d[0]) - 1.0                                           # constraint 0 penetrates
+    held = np.zeros(m, bool)
+    held[0] = True
+    with pytest.raises(np.linalg.LinAlgError):
+        solve_lcp(S, d)
+    z = held_lcp(S, d, held)
+    w = d + S @ z
+    assert z.min() >= 0 and w.min() > -1e-9 and abs(z @ w) < 1e-9 and abs(w[0]) < 1e-9
+    sols = []
+    for act in itertools.product([0, 1], repeat=m):
+        a = np.array(act, dtype=bool)
+        zz = np.zeros(m)
+        if a.any():
+            zz[a] = np.linalg.solve(S[np.ix_(a, a)], -d[a])
+        if zz.min() >= -1e-12 and (d + S @ zz).min() >= -1e-12:
+            sols.append(zz)
+    assert any(np.allclose(zz, z, atol=1e-9) for zz in sols)
+    # the held system's Schur complement is positive definite: K is, on the motions it allows
+    E, Rr = held, ~held
+    St = S[np.ix_(Rr, Rr)] - S[np.ix_(Rr, E)] @ np.linalg.solve(S[np.ix_(E, E)], S[np.ix_(E, Rr)])
+    assert np.linalg.eigvalsh(St).min() > 0
+
 
 def _achilles(psi, elements, axial, mode="unilateral", steps=None, solver=None, petsc=None):
     raw = load_raw(f"achilles_type3_psi{psi if psi in (0, 15, 45) else 45}.yaml")

@@ -3,6 +3,8 @@ import os
 
 import pytest
 
+from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, cell_config
+
 from helpers import (CONFIGS, assert_same_as_serial, load_raw, probes_table, read_summary, run_on_ranks,
                      two_beam_twisted, write_config)
 
@@ -28,8 +30,10 @@ def _cases():
     for bc in tendon["boundary_conditions"]:
         bc["fix"] = "clamped"
     tendon["steps"] = [10.0, 100.0]
+    # unilateral at 90 deg: S far from semidefinite at 600 N, predicted with the active set held
+    held = cell_config(EnvelopeCell(NEO, 90, "gastrocnemius", "unilateral", levels=(30.0, 100.0, 200.0, 400.0, 600.0)))
     return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
-            "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon}
+            "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon, "tendon-unilateral-held": held}
 
 
 CASES = _cases()

@@ -14,7 +14,7 @@ import scipy.linalg as la
 #: relative regularisation of S before its Cholesky factor (redundant constraints)
 REGULARISATION = 1e-12
 #: an indefinite S is replaced by its nearest positive semidefinite matrix when its most negative
-#: eigenvalue is at most this share of its largest (module docstring)
+#: eigenvalue is at most this share of its largest (petsc/complementarity.py's docstring)
 INDEFINITE_SHARE = 1e-2
 #: relative tolerance (of max |d|) of the exact LCP's inequalities when the clipped S's active set
 #: is solved again with the exact S (``exact_on_support``)
@@ -48,6 +48,7 @@ def solve_lcp(S: np.ndarray, d: np.ndarray) -> np.ndarray:
     z, _ = so.nnls(L.T, b, maxiter=50 * M)
     return exact_on_support(S, d, z) if clipped else z
 
+
 def held_lcp(S: np.ndarray, d: np.ndarray, held: np.ndarray) -> np.ndarray | None:
     """LCP(S, d) for an indefinite S with the constraints ``held`` (E) as equalities
     (w_E = 0): eliminating z_E leaves LCP(S̃, d̃) in the others (R), S̃ = S_RR − S_RE S_EE⁻¹ S_ER
@@ -79,11 +80,12 @@ def held_lcp(S: np.ndarray, d: np.ndarray, held: np.ndarray) -> np.ndarray | Non
         return z if ok else None
     return None
 
+
 def exact_on_support(S: np.ndarray, d: np.ndarray, z: np.ndarray) -> np.ndarray:
     """The solution of LCP(S, d) on the active set {z > 0} that the clipped S chose, with the
     exact S (S_AA z_A = −d_A: the Newton step of the saddle-point system of that active set),
     where it solves the exact LCP (z_A ≥ 0, w ≥ 0 off A, to ``LCP_TOL`` of d); else ``z``
-    (module docstring, "clipped")."""
+    (petsc/complementarity.py's docstring)."""
     A = z > 0.0
     if not A.any():
         return z

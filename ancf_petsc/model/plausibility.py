@@ -8,6 +8,8 @@ import re
 
 import numpy as np
 
+from ..physics.materials import NeoHookean
+
 __all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "MIN_OVERFLOW_STRETCH",
            "MIN_SHEAR_MODULUS", "MAX_BULK_RATIO", "MAX_TWIST_DEG", "TWIST_AXIS_REACH", "fibre_warnings",
            "material_warnings", "size_warnings", "strain_warning", "point_force_warnings", "twist_warnings"]
@@ -134,16 +136,17 @@ def material_warnings(spec, beams) -> list[str]:
     auxetic tendon, most likely a unit slip in K) or K / mu above ``MAX_BULK_RATIO``."""
     out = []
     for i, b in enumerate(beams):
-        mu, K = getattr(b.material, "mu", None), getattr(b.material, "K", None)
-        if mu is None or K is None:
+        law = getattr(b.material, "matrix", b.material)         # GOH: its neo-Hookean matrix
+        if not isinstance(law, NeoHookean):
             continue
+        mu, K = law.mu, law.K
         key = f"warning: beams[{i}].material"
         if mu < MIN_SHEAR_MODULUS:
             out.append(f"{key}.mu: {mu:g} Pa for beam {b.name} is softer than any tendon (matrices from 15 kPa, "
                        f"the paper's subtendons 103-227 MPa): moduli are in Pa (units: SI); if you meant "
                        f"{mu:g} MPa, write {mu:g}e6")
         elif K < 2.0 * mu / 3.0 or K > MAX_BULK_RATIO * mu:
-            nu = (3.0 * K - 2.0 * mu) / (2.0 * (3.0 * K + mu))
+            nu = law.poisson
             what = "negative (auxetic)" if nu < 0 else f"incompressible beyond K/mu = {MAX_BULK_RATIO:g}"
             out.append(f"{key}.bulk_modulus: K = {K:g} Pa is {K / mu:.3g} x mu for beam {b.name}: a small-strain "
                        f"Poisson ratio of {nu:.7g}, {what}; tendon is nearly incompressible (the paper's "

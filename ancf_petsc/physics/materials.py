@@ -129,6 +129,11 @@ class NeoHookean:
         """Small-strain Young's modulus E = 9Kμ / (3K + μ)."""
         return 9.0 * self.K * self.mu / (3.0 * self.K + self.mu)
 
+    @property
+    def poisson(self) -> float:
+        """Small-strain Poisson ratio ν = (3K − 2μ) / (2 (3K + μ))."""
+        return (3 * self.K - 2 * self.mu) / (2 * (3 * self.K + self.mu))
+
     def poisson_free(self) -> "NeoHookean":
         """The same small-strain E with ν = 0 (μ₀ = E/2, K₀ = E/3): used by ``locking: ecm``."""
         E = self.young
@@ -139,9 +144,8 @@ class NeoHookean:
         return self
 
     def describe(self) -> str:
-        nu = (3 * self.K - 2 * self.mu) / (2 * (3 * self.K + self.mu))
         return (f"neo-Hookean  mu={self.mu:.6g} Pa  K={self.K:.6g} Pa  "
-                f"(K/mu={self.K / self.mu:.4g}, small-strain nu={nu:.4f})")
+                f"(K/mu={self.K / self.mu:.4g}, small-strain nu={self.poisson:.4f})")
 
     def _invariants(self, F):
         J, H = det_and_inverse_transpose(F)

@@ -3,8 +3,8 @@
 ``read_results(directory)`` is the public reader (``ancf_petsc.read_results``); it reads what
 ``results.ResultsWriter`` wrote, level by level, without PETSc.  While a run goes on (or after
 it was killed) summary.json may not list its last level yet (it is rewritten after results.h5;
-``results.SUMMARY_INTERVAL`` can space its rewrites); ``append_levels`` takes them from results.h5, where every level
-carries its summary entry.
+``results.SUMMARY_SHARE`` spaces its rewrites in long histories); ``append_levels`` takes them
+from results.h5, where every level carries its summary entry.
 """
 from __future__ import annotations
 

@@ -251,7 +251,7 @@ def read_restart(directory: str) -> RestartPoint:
         with h5py.File(path, "r") as h5:
             stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
             steps = h5["steps"]
-            # summary.json may lag results.h5 (SUMMARY_INTERVAL, a kill between them): the levels after it
+            # summary.json may lag results.h5 (SUMMARY_SHARE, a kill between them): the levels after it
             # come from results.h5 (their summary_entry); a level without one (an older file, a
             # run killed between results.h5 and summary.json) is solved again
             append_levels(summary, steps)

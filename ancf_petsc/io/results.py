@@ -3,9 +3,9 @@
 * ``results.h5``  — ``/model`` (reference nodal vectors, connectivity, sections, config text,
   partition) and ``/steps/step_NNNN`` (load factor, nodal vectors, SNES iterations/reason,
   wall time).  The file is opened and closed for every step.
-* ``summary.json`` — probes per step, iterations, timings; replaced atomically after every
-  level (``SUMMARY_INTERVAL``) and at the run's end (every ending: completed, failed,
-  interrupted).  Each level's entry is also in results.h5 (attribute
+* ``summary.json`` — probes per step, iterations, timings; replaced atomically after a level
+  while that takes at most ``SUMMARY_SHARE`` of the run's time (every level but in long
+  histories) and at the run's end (every ending: completed, failed, interrupted).  Each level's entry is also in results.h5 (attribute
   ``summary_entry`` of ``steps/step_NNNN``), so a run killed between two rewrites loses nothing:
   ``reader.read_results`` and ``--restart`` append the levels summary.json does not list yet.
 * ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled
@@ -46,12 +46,16 @@ RESERVE = ".ancf-space-reserve"
 RESERVE_BYTES = 64 * 1024
 
 
-#: summary.json is rewritten after level 1, then at most this often [s] while running, and at
-#: the end; each level's entry is in results.h5 meanwhile.  0: at every level.  0.5 s saved ~3 ms
-#: a stride frame (a rewrite on ext4 flushes a file renamed over another), but a run killed while
-#: writing results.h5 left that file unreadable and summary.json without its last levels
-#: (tests/solving/test_restart.py, a fresh clone, 2026-11-28): every level, as before
-SUMMARY_INTERVAL = 0.0
+#: summary.json is rewritten after level 1, at the end, and after a level when the time since
+#: its last rewrite is at least its cost over SUMMARY_SHARE: its rewrites take at most that share
+#: of the run.  A column's or a 100-frame stride's rewrite costs ~0.1–1 ms against a level's
+#: 20 ms or more, so there it is every level: a fixed interval (0.5 s) saved ~3 ms a stride frame,
+#: but a run killed while writing results.h5 left that file unreadable and summary.json without
+#: its last levels (tests/solving/test_restart.py, 2026-11-28).  In a long history the file grows
+#: with every level, and rewriting it at each made the output O(levels) per level: 7.4 → 16.1 ms
+#: from the first to the tenth hundred levels of a 1000-frame history (docs/gait.md).  Each
+#: level's entry is in results.h5 meanwhile.  ``math.inf``: at every level.
+SUMMARY_SHARE = 0.05
 
 
 #: stands for the levels in the summary's text before they are put in (``compact_summary``)
@@ -92,6 +96,7 @@ class ResultsWriter:
         self._last_sizes = {"vtu": 0, "h5": 0, "summary": 0}
         self._step_texts: list = []            # each level's entry and its JSON (compact_summary)
         self._summary_time = -np.inf           # when summary.json was last written (monotonic)
+        self._summary_cost = 0.0                # how long that took [s]
         self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None else self._resume())
 
     def _on_root(self, action) -> None:
@@ -191,7 +196,7 @@ class ResultsWriter:
         self.summary["updated"] = time.strftime("%Y-%m-%dT%H:%M:%S")
         text = json.dumps(self.summary, indent=1) if final else compact_summary(self.summary, self._step_texts)
         self._last_sizes["summary"] = len(text)
-        self._summary_time = time.monotonic()
+        t0 = time.monotonic()
         try:
             atomic_write(self.summary_path, text)
         except OSError as exc:
@@ -202,6 +207,8 @@ class ResultsWriter:
                 atomic_write(self.summary_path, text)
             except OSError as exc2:
                 raise OutputError(self.summary_path, f"cannot write: {os_reason(exc2)}") from None
+        self._summary_time = time.monotonic()
+        self._summary_cost = self._summary_time - t0
 
     def _write_series(self, series: str, k: int, lam: float, mesh: tuple) -> None:
         """One VTU of ``series`` (``vtk.VtkSeries``); a failure is an OutputError."""
@@ -285,7 +292,7 @@ class ResultsWriter:
             self._write_series("surface", k, record.load_factor, surface)
             if contact is not None:
                 self._write_series("contact", k, record.load_factor, contact_cells(contact))
-        if k == 1 or time.monotonic() - self._summary_time >= SUMMARY_INTERVAL:
+        if k == 1 or time.monotonic() - self._summary_time >= self._summary_cost / SUMMARY_SHARE:
             self._write_summary()
 
     def _append(self, entry: dict, text: str | None = None) -> None:

@@ -8,6 +8,7 @@ import copy
 import ctypes
 import errno
 import json
+import math
 import os
 import re
 import shutil
@@ -635,7 +636,7 @@ class _Fault:
                     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), path + ".tmp")
                 return real_atomic(path, text)
             monkeypatch.setattr(out, "atomic_write", atomic)
-            monkeypatch.setattr(out, "SUMMARY_INTERVAL", 0.0)   # rewritten at every level, as it may be
+            monkeypatch.setattr(out, "SUMMARY_SHARE", math.inf)   # rewritten at every level, as it may be
         monkeypatch.setattr(out.ResultsWriter, "_check_space", lambda self, k, q: None)
 
 

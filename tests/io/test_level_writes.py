@@ -1,6 +1,6 @@
 """The per-level output's fast paths (issue 38 item 4): h5py's low-level writes (io/h5fast.py)
 store what h5py's high-level calls store, summary.json's levels come back from results.h5 when
-summary.json lags (it is rewritten at most every SUMMARY_INTERVAL s), and the VTU cells encoded
+summary.json lags (in a long history it is rewritten only while that takes at most SUMMARY_SHARE of the run), and the VTU cells encoded
 once per run make the same files."""
 import json
 
@@ -97,3 +97,36 @@ def test_vtu_cells_encoded_once_make_the_same_files(tmp_path):
         write_vtu(str(tmp_path / f"ref_{k}.vtu"), (k * pts).astype(np.float32), cells,
                   {"J": np.full(8, float(k), dtype=np.float32)})
         assert (tmp_path / f"surface_{k:04d}.vtu").read_bytes() == (tmp_path / f"ref_{k}.vtu").read_bytes()
+
+
+def test_summary_rewrites_take_a_bounded_share_of_a_long_run(tmp_path, monkeypatch):
+    """A summary.json that costs 4 ms per level it lists to write (as a long history's grows):
+    while the run goes on its rewrites take at most SUMMARY_SHARE of the run's time (and one
+    rewrite more), instead of one per level (which here would be most of the run), and the
+    final summary.json and read_results list every level."""
+    import time
+
+    from ancf_petsc.io import results
+    from ancf_petsc.io.reader import read_results
+    costs = []
+    real = results.atomic_write
+
+    def slow(path, text):
+        t0 = time.monotonic()
+        doc = json.loads(text)
+        if doc["status"] == "running":
+            time.sleep(0.004 * len(doc["steps"]))
+        real(path, text)
+        if doc["status"] == "running":
+            costs.append(time.monotonic() - t0)
+
+    monkeypatch.setattr(results, "atomic_write", slow)
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.02 * k for k in range(1, 41)]
+    t0 = time.monotonic()
+    s = run_inline(raw, tmp_path)
+    wall = time.monotonic() - t0
+    assert s["status"] == "completed" and len(s["steps"]) == 40
+    assert len(costs) < 40                                   # the level-1 rewrite and some others
+    assert sum(costs) <= results.SUMMARY_SHARE * wall + max(costs) + 0.01, (sum(costs), wall)
+    assert len(read_results(str(tmp_path)).summary["steps"]) == 40

@@ -15,7 +15,14 @@ interval of the largest change, keeping the half that changes more.  A change th
 ``JUMP_SHARE`` of the residual's size and above Newton's absolute tolerance as the two states
 close to rounding is a jump (below the tolerance: the closest points' own convergence leaves
 jumps of 4e-10 N at |F| 1e-6 N, measured on the traced subject at twist 120°); the message
-names its size and where it acts (a beam's node, or a contact multiplier's row)."""
+names its size and where it acts (a beam's node, or a contact multiplier's row), and what the
+contact's projections at the two states show changing there (``contact_cause``): a closest point
+on another B element (B's surface is only C⁰ across its element boundaries: the point's normal
+and force turn there; docs/contact.md, "Limits"), or a point's weight.  Each projection starts
+from the last one, so where a point has two closest points the state evaluated last decides;
+the scan then says so (the two states evaluated again one after the other do not jump).
+Measured 2026-11-29 on the traced subject's 30° soleus-biased sliding column at 2499.64 N: a
+point of mg_sol two closest points on soleus's elements 1 and 2, Newton cycling between them."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -76,6 +83,7 @@ class Jump:
     size: float        # max |ΔF| over the DOFs between the two closest states [N]
     scale: float       # max |F| along the step [N]
     where: str         # the DOF it acts on, in words
+    cause: str = ""    # what the contact's projections show changing there, in words
 
 
 def residual_jump(problem, trail: IterateTrail, load_factor: float, tolerance: float = 0.0) -> Jump | None:
@@ -105,12 +113,16 @@ def residual_jump(problem, trail: IterateTrail, load_factor: float, tolerance: f
 
 
 def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
+    projections = {}
+
     def at(s: float) -> np.ndarray:
         A.copy(Y)
         Y.axpy(s, d)
         if problem.contact is not None:
             problem.contact.allow_update = False          # the status held
         problem.residual(None, Y, F)
+        if problem.contact is not None:
+            projections[s] = _projection(problem, Y)
         return F.getArray().copy()
 
     def largest(a: np.ndarray, b: np.ndarray) -> float:
@@ -133,7 +145,53 @@ def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
     size = largest(f_hi, f_lo)
     if not np.isfinite(size) or size <= max(JUMP_SHARE * scale, tolerance):
         return None
-    return Jump(size=size, scale=scale, where=_where(problem, np.abs(f_hi - f_lo), comm))
+    where = _where(problem, np.abs(f_hi - f_lo), comm)
+    cause = ""
+    if problem.contact is not None:
+        cause = contact_cause(problem.contact, projections[lo], projections[hi], comm)
+        again = at(lo)
+        if largest(at(hi), again) < 0.5 * size:
+            cause += ("; evaluated again one after the other the two states agree: each projection "
+                      "starts from the last one, and a contact point has two closest points there")
+    return Jump(size=size, scale=scale, where=where, cause=cause)
+
+
+def _projection(problem, Y: PETSc.Vec):
+    """The projections of the contact's evaluation at Y, the one its residual just made (the
+    contact keeps it), the status held."""
+    problem.contact.allow_update = False
+    return problem.contact.evaluate(problem.exchange.local_state(Y).copy(), problem.exchange.needed).pr
+
+
+def contact_cause(contact, a, b, comm) -> str:
+    """What changes between the projections ``a`` and ``b`` (of this rank's points) of two states
+    a rounding apart, in words: the point whose closest point is on another B element, with the
+    largest turn of its normal, else the point whose weight changes most (collective)."""
+    switched = np.flatnonzero((a.eB != b.eB) & (a.valid | b.valid))
+    turn = np.nan_to_num(np.degrees(np.arccos(np.clip(np.einsum("pi,pi->p", a.n, b.n), -1.0, 1.0))))
+    dw = np.nan_to_num(np.abs(a.weight - b.weight))
+    if switched.size:
+        k = int(switched[np.argmax(turn[switched])])
+        key = 2.0 + float(turn[k])                      # above any change of a weight
+    else:
+        k = int(np.argmax(dw)) if dw.size else -1
+        key = min(float(dw[k]), 1.0) if dw.size else 0.0
+    best, rank = comm.allreduce((key, comm.rank), op=MPI.MAXLOC)
+    text = ""
+    if comm.rank == rank and best > 1e-9:
+        p = int(a.idx[k])
+        itf = contact.interfaces[int(contact.points.itf[p])]
+        point = f"contact point {p} (on {itf.a.name}) of interface {itf.name}"
+        if best >= 2.0:
+            off = itf.b.element_offset
+            text = (f"; there {point} has its closest point on {itf.b.name}'s element "
+                    f"{int(a.eB[k]) - off} at xi = {a.xiB[k]:+.4f} on one side and on element "
+                    f"{int(b.eB[k]) - off} at xi = {b.xiB[k]:+.4f} on the other: B's surface is only "
+                    f"C0 across its element boundaries, and the point's normal turns by {turn[k]:.2g} "
+                    "deg there (docs/contact.md, \"Limits\")")
+        else:
+            text = f"; there the weight of {point} changes from {a.weight[k]:.4g} to {b.weight[k]:.4g}"
+    return comm.bcast(text, root=rank)
 
 
 def _where(problem, change: np.ndarray, comm) -> str:
@@ -158,6 +216,8 @@ def jump_detail(jump: Jump | None) -> str:
     """The failure message's part for a jump (empty without one)."""
     if jump is None:
         return ""
+    explained = "element boundaries" in jump.cause
     return (f"; the residual jumps by {jump.size:.3g} N (max |F| {jump.scale:.3g} N along the step) "
-            f"between two states of Newton's last steps closer than 1e-13 of a step, at {jump.where}: "
-            "a discontinuity of the discrete model, not a limit point (please report it with the config)")
+            f"between two states of Newton's last steps closer than 1e-13 of a step, at {jump.where}"
+            f"{jump.cause}: a discontinuity of the discrete model, not a limit point"
+            + ("" if explained else " (please report it with the config)"))

@@ -57,6 +57,7 @@ jump = residual_jump(P, trail, 0.5)
 assert jump is not None and abs(jump.size - 1.0) < 1e-6, jump
 assert jump.where == f"beam {beam.name}, node 3", jump.where
 assert "jumps by 1 N" in jump_detail(jump) and jump_detail(None) == ""
+assert jump.cause == "" and "please report it" in jump_detail(jump)   # not the contact's doing
 if P.comm.rank == 0:
     print("ok", P.comm.size)
 """
@@ -101,3 +102,43 @@ def test_the_trail_keeps_the_last_iterates_in_order():
     assert trail.steps() == []
     trail.destroy()
     v.destroy()
+
+
+def _projection(eB, xiB, normals, weight):
+    from types import SimpleNamespace
+    import numpy as np
+    n = np.array(normals, float)
+    return SimpleNamespace(idx=np.array([7, 8]), eB=np.array(eB), xiB=np.array(xiB, float),
+                           n=n / np.linalg.norm(n, axis=1)[:, None], weight=np.array(weight, float),
+                           valid=np.array([True, True]))
+
+
+def _contact():
+    from types import SimpleNamespace
+    import numpy as np
+    beam = lambda name, offset=0: SimpleNamespace(name=name, element_offset=offset)   # noqa: E731
+    itf = SimpleNamespace(name="mg_sol", a=beam("medial_gastrocnemius"), b=beam("soleus", 4))
+    return SimpleNamespace(interfaces=[itf], points=SimpleNamespace(itf=np.zeros(9, dtype=int)))
+
+
+def test_the_cause_names_a_closest_point_that_changes_element():
+    """Two states a rounding apart whose projections put point 8's closest point on the soleus'
+    elements 1 and 2 (global 5 and 6) at their common node, the normals 5 deg apart: the cause
+    names the point, the interface, both elements and the turn, and the failure message no longer
+    asks for a report; a weight that changes is named when no point changes element."""
+    import numpy as np
+    from mpi4py import MPI
+    from ancf_petsc.solving.continuity import Jump, contact_cause, jump_detail
+    t = np.radians(5.0)
+    a = _projection([5, 5], [0.2, 1.0], [[0, 0, 1], [0, 0, 1]], [1.0, 0.5])
+    b = _projection([5, 6], [0.2, -1.0], [[0, 0, 1], [0, np.sin(t), np.cos(t)]], [1.0, 0.5])
+    text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
+    assert ("contact point 8 (on medial_gastrocnemius) of interface mg_sol has its closest point on "
+            "soleus's element 1 at xi = +1.0000 on one side and on element 2 at xi = -1.0000") in text
+    assert "only C0 across its element boundaries" in text and "turns by 5 deg" in text
+    detail = jump_detail(Jump(size=0.12, scale=0.14, where="beam soleus, node 4", cause=text))
+    assert "node 4; there contact point 8" in detail and "please report" not in detail
+    b = _projection([5, 5], [0.2, 1.0], [[0, 0, 1], [0, 0, 1]], [1.0, 0.25])
+    text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
+    assert text == "; there the weight of contact point 8 (on medial_gastrocnemius) of interface mg_sol changes from 0.5 to 0.25"
+    assert contact_cause(_contact(), a, a, MPI.COMM_SELF) == ""

@@ -21,8 +21,11 @@ on another B element (B's surface is only C⁰ across its element boundaries: th
 and force turn there; docs/contact.md, "Limits"), or a point's weight.  Each projection starts
 from the last one, so where a point has two closest points the state evaluated last decides;
 the scan then says so (the two states evaluated again one after the other do not jump).
-Measured 2026-11-29 on the traced subject's 30° soleus-biased sliding column at 2499.64 N: a
-point of mg_sol two closest points on soleus's elements 1 and 2, Newton cycling between them."""
+Measured 2026-11-29 on the 26 failing cells of the gait envelope (docs/gait.md): 8 jump, each
+where a point's closest point changes B element and each with two closest points; in 3 at the
+common node of two elements (normals 4–5° apart, Newton cycling at |F| 0.15–0.21 N: the C⁰
+surface), in 5 at two places of B far apart (normals 59–160° apart; in 4 of them on iterates
+far from equilibrium)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -42,6 +45,9 @@ BISECTIONS = 45
 #: a change of F between the bisected states above this share of max |F| along the step is a jump
 #: (a continuous residual leaves ~1e-12 of it)
 JUMP_SHARE = 1e-4
+#: a closest point this near (in ξ) to the ends of two neighbouring B elements sits at their
+#: common node, where B's surface is C⁰ (``contact_cause``)
+NODE_XI = 0.01
 
 
 class IterateTrail:
@@ -184,11 +190,14 @@ def contact_cause(contact, a, b, comm) -> str:
         point = f"contact point {p} (on {itf.a.name}) of interface {itf.name}"
         if best >= 2.0:
             off = itf.b.element_offset
+            step = int(b.eB[k]) - int(a.eB[k])          # a common node: ξ = ±1 toward each other
+            at_node = abs(step) == 1 and min(step * a.xiB[k], -step * b.xiB[k]) > 1.0 - NODE_XI
+            why = ("B's surface is only C0 across its element boundaries, and the point's normal "
+                   "turns by {:.2g} deg there (docs/contact.md, \"Limits\")" if at_node else
+                   "two places of B about as near to the point, their normals {:.2g} deg apart")
             text = (f"; there {point} has its closest point on {itf.b.name}'s element "
                     f"{int(a.eB[k]) - off} at xi = {a.xiB[k]:+.4f} on one side and on element "
-                    f"{int(b.eB[k]) - off} at xi = {b.xiB[k]:+.4f} on the other: B's surface is only "
-                    f"C0 across its element boundaries, and the point's normal turns by {turn[k]:.2g} "
-                    "deg there (docs/contact.md, \"Limits\")")
+                    f"{int(b.eB[k]) - off} at xi = {b.xiB[k]:+.4f} on the other: " + why.format(turn[k]))
         else:
             text = f"; there the weight of {point} changes from {a.weight[k]:.4g} to {b.weight[k]:.4g}"
     return comm.bcast(text, root=rank)
@@ -216,7 +225,7 @@ def jump_detail(jump: Jump | None) -> str:
     """The failure message's part for a jump (empty without one)."""
     if jump is None:
         return ""
-    explained = "element boundaries" in jump.cause
+    explained = "has its closest point on" in jump.cause
     return (f"; the residual jumps by {jump.size:.3g} N (max |F| {jump.scale:.3g} N along the step) "
             f"between two states of Newton's last steps closer than 1e-13 of a step, at {jump.where}"
             f"{jump.cause}: a discontinuity of the discrete model, not a limit point"

@@ -138,6 +138,10 @@ def test_the_cause_names_a_closest_point_that_changes_element():
     assert "only C0 across its element boundaries" in text and "turns by 5 deg" in text
     detail = jump_detail(Jump(size=0.12, scale=0.14, where="beam soleus, node 4", cause=text))
     assert "node 4; there contact point 8" in detail and "please report" not in detail
+    b = _projection([5, 6], [0.2, -0.4], [[0, 0, 1], [0, np.sin(t), np.cos(t)]], [1.0, 0.5])
+    text = contact_cause(_contact(), a, b, MPI.COMM_SELF)      # element 2 but not near the node
+    assert text.endswith("element 2 at xi = -0.4000 on the other: two places of B about as near to "
+                         "the point, their normals 5 deg apart")
     b = _projection([5, 5], [0.2, 1.0], [[0, 0, 1], [0, 0, 1]], [1.0, 0.25])
     text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
     assert text == "; there the weight of contact point 8 (on medial_gastrocnemius) of interface mg_sol changes from 0.5 to 0.25"

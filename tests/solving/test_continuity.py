@@ -3,7 +3,10 @@ steps for a jump (a discontinuity of the discrete model, not a limit point), fou
 and named by where it acts; a continuous residual gives none.  On a real contact problem (the
 paper's outlines, 2 elements, sliding) with a jump of 1 N injected into one beam node's row
 where the state crosses a plane, on 1 rank and on 2 (the scan is collective, the place is said
-by the rank that holds it); and the failure message carries it."""
+by the rank that holds it); and the failure message carries it.  The jump's cause from the
+contact's projections (a closest point on another B element, at a common node or not, or a
+point's weight): on the real projections of that problem with one point moved to the next
+element, the same words on every rank, and on made-up projections each case's words."""
 import os
 import subprocess
 import sys
@@ -58,6 +61,29 @@ assert jump is not None and abs(jump.size - 1.0) < 1e-6, jump
 assert jump.where == f"beam {beam.name}, node 3", jump.where
 assert "jumps by 1 N" in jump_detail(jump) and jump_detail(None) == ""
 assert jump.cause == "" and "please report it" in jump_detail(jump)   # not the contact's doing
+
+# the cause on real projections: a point's closest point moved to the next element, at their
+# common node; the rank that holds it says, every rank gets the same words
+import dataclasses
+from mpi4py import MPI
+from ancf_petsc.solving.continuity import contact_cause
+P.residual = plain
+c = P.contact
+c.allow_update = False
+a = c.evaluate(P.exchange.local_state(P.q0).copy(), P.exchange.needed).pr
+good = a.valid & np.all(np.isfinite(a.n), axis=1)
+pid = P.comm.tompi4py().allreduce(int(a.idx[good].min()) if good.any() else 10**9, op=MPI.MIN)
+xa, eb, xb, nb = a.xiB.copy(), a.eB.copy(), a.xiB.copy(), a.n.copy()
+mine = np.flatnonzero(a.idx == pid)
+for k in mine:
+    xa[k], eb[k], xb[k] = 1.0, a.eB[k] + 1, -1.0
+    nb[k] = [a.n[k, 0], -a.n[k, 2], a.n[k, 1]]             # turned by 90 deg about x
+text = contact_cause(c, dataclasses.replace(a, xiB=xa), dataclasses.replace(a, eB=eb, xiB=xb, n=nb),
+                     P.comm.tompi4py())
+assert P.comm.tompi4py().allgather(text) == [text] * P.comm.size
+itf = c.interfaces[int(c.points.itf[pid])]
+assert text.startswith(f"; there contact point {pid} (on {itf.a.name}) of interface {itf.name} has its closest point")
+assert "only C0 across its element boundaries" in text and "turns by 90 deg" in text, text
 if P.comm.rank == 0:
     print("ok", P.comm.size)
 """

@@ -5,7 +5,8 @@
   wall time).  The file is opened and closed for every step.
 * ``summary.json`` — probes per step, iterations, timings; replaced atomically after a level
   while that takes at most ``SUMMARY_SHARE`` of the run's time (every level but in long
-  histories) and at the run's end (every ending: completed, failed, interrupted).  Each level's entry is also in results.h5 (attribute
+  histories) and at the run's end (every ending: completed, failed, interrupted).  Each level's
+  entry is also in results.h5 (attribute
   ``summary_entry`` of ``steps/step_NNNN``), so a run killed between two rewrites loses nothing:
   ``reader.read_results`` and ``--restart`` append the levels summary.json does not list yet.
 * ``surface_NNNN.vtu`` + ``surface.pvd`` — the deformed 3D surfaces of all beams (sections sampled

@@ -193,8 +193,8 @@ def contact_cause(contact, a, b, comm) -> str:
             step = int(b.eB[k]) - int(a.eB[k])          # a common node: ξ = ±1 toward each other
             at_node = abs(step) == 1 and min(step * a.xiB[k], -step * b.xiB[k]) > 1.0 - NODE_XI
             why = ("B's surface is only C0 across its element boundaries, and the point's normal "
-                   "turns by {:.2g} deg there (docs/contact.md, \"Limits\")" if at_node else
-                   "two places of B about as near to the point, their normals {:.2g} deg apart")
+                   "turns by {:.3g} deg there (docs/contact.md, \"Limits\")" if at_node else
+                   "two places of B about as near to the point, their normals {:.3g} deg apart")
             text = (f"; there {point} has its closest point on {itf.b.name}'s element "
                     f"{int(a.eB[k]) - off} at xi = {a.xiB[k]:+.4f} on one side and on element "
                     f"{int(b.eB[k]) - off} at xi = {b.xiB[k]:+.4f} on the other: " + why.format(turn[k]))

@@ -50,6 +50,8 @@ class RestartPoint:
     stored_config: dict | None = None  # its config (runs without a fingerprint)
     levels: tuple = ()            # the converged load factors, in order
     contact_fields: dict | None = None   # the level's contact fields (a contact term's state)
+    #: the level before's (None: the first level, whose increment started from rest)
+    previous_contact_fields: dict | None = None
     pointwise_from: float | None = None  # the run's switch to pointwise fade forces (fade_switch.py)
 
 
@@ -231,6 +233,11 @@ def _datasets(group) -> dict:
     return out
 
 
+def _contact_fields(group) -> dict | None:
+    """A level's contact fields (its contact group's datasets), None without contact."""
+    return {key: v[()] for key, v in group["contact"].items()} if "contact" in group else None
+
+
 def read_restart(directory: str) -> RestartPoint:
     """The last converged level of the run in ``directory`` (``check_same_run`` compares it
     with the continuing run's model).  InputError with one line when the directory has no
@@ -275,8 +282,8 @@ def read_restart(directory: str) -> RestartPoint:
                                  stored_config=stored,
                                  levels=tuple(float(steps[f"step_{i:04d}"].attrs["load_factor"])
                                               for i in range(1, k + 1)),
-                                 contact_fields=({key: v[()] for key, v in g["contact"].items()}
-                                                 if "contact" in g else None),
+                                 contact_fields=_contact_fields(g),
+                                 previous_contact_fields=_contact_fields(steps[f"step_{k - 1:04d}"]) if k > 1 else None,
                                  pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
                                                  if "fade_forces_pointwise_from" in r.attrs else None))
     except (OSError, KeyError) as exc:

@@ -42,7 +42,11 @@ predictions starts again from the converged state (solving/newton.py).
 
 from __future__ import annotations
 
+import numpy as np
 from petsc4py import PETSc
+
+from ..contact import forget_evaluation
+from ..contact.partners import HISTORY
 
 
 class TangentPredictor:
@@ -52,6 +56,40 @@ class TangentPredictor:
     def __init__(self, problem, snes: PETSc.SNES):
         self.problem, self.snes = problem, snes
         self.valid = False
+
+    def prime(self, X: PETSc.Vec, lam: float, previous_history: dict | None) -> None:
+        """A restart: factor the tangent the interrupted run's last solve left, that of the
+        increment which reached the restored state X at load factor ``lam``.  Its contact terms'
+        history is the level before's (``previous_history``, the written fields; None: from rest,
+        every history zero), not the restored level's own, to which the terms then return.
+        Without it the first increment after a restart had no prediction, and a friction
+        history went on along another path (a 13-frame μ = 0.3 stride cut back a later frame
+        the uninterrupted run did not: the final probes up to 6 % apart).  X is the last iterate
+        rather than the one before it, so the prediction agrees with the uninterrupted run's to
+        the last Newton step's size (tests/solving/test_load_history.py).  Collective."""
+        P = self.problem
+        c = P.contact
+        P.load_factor = lam
+        terms = [] if c is None else c.terms
+        kept = [{k: v.copy() for k, v in t.state.items()} for t in terms]
+        for t in terms:
+            t.state = {k: (np.zeros_like(v) if previous_history is None
+                           else np.asarray(previous_history[HISTORY + k], dtype=float).copy())
+                       for k, v in t.state.items()}
+        if c is not None:
+            forget_evaluation(c)
+            c.allow_update = False                # the restored active set (unilateral)
+        J, Pmat, _ = self.snes.getJacobian()
+        P.jacobian(self.snes, X, J, Pmat)
+        ksp = self.snes.getKSP()
+        ksp.setOperators(J, Pmat)
+        ksp.setUp()
+        for t, state in zip(terms, kept):
+            t.state = state
+            t.checkpoint()
+        if c is not None:
+            forget_evaluation(c)
+        self.valid = True
 
     def predict(self, X: PETSc.Vec, lam1: float) -> bool:
         """X ← X − J⁻¹ F(X; λ₁) with the held DOFs of X at q̄(λ₁) first; False (X unchanged but

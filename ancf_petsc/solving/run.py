@@ -206,6 +206,8 @@ class Run:
                          accepted_negative=point.accepted_negative)
         self.stepper.fade_switch.resume(self.stepper, point.pointwise_from, self.spec.output.dir)
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
+        if self.stepper.spec.predictor == "tangent":            # the factor the interrupted run had
+            self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
         levels = [f for f in self.spec.steps if f > point.load_factor * (1.0 + 1e-12)]
         self.say(f"[ancf] restart from step {point.step} (load factor {point.load_factor:g}) of "
                  f"{self.spec.output.dir}: {len(levels)} level(s) to go")

@@ -121,7 +121,12 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
                               "fix; a component is either held in place or moved, remove it from one")
         name = string(bc.get("name", f"{names[bi]}.{node}"), f"{p}.name")
         if name in [b.name for b in bcs]:
-            raise ConfigError(f"{p}.name", f"duplicate support name {name!r}")
+            other = next(b for b in bcs if b.name == name)
+            if "name" not in bc:
+                raise ConfigError(p, f"{names[bi]} node {bc['node']} already has a support ({other.path}): "
+                                     "merge the two into one entry, or give both a name")
+            raise ConfigError(f"{p}.name", f"duplicate support name {name!r} (also {other.path}); "
+                                           "give each support its own name")
         curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None
         if moved:
             curve = history_curve(bc, history, p, curve)

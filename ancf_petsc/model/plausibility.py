@@ -12,7 +12,8 @@ from ..physics.materials import NeoHookean
 
 __all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "MIN_OVERFLOW_STRETCH",
            "MIN_SHEAR_MODULUS", "MAX_BULK_RATIO", "MAX_TWIST_DEG", "TWIST_AXIS_REACH", "fibre_warnings",
-           "material_warnings", "size_warnings", "strain_warning", "point_force_warnings", "twist_warnings"]
+           "load_warnings", "material_warnings", "size_warnings", "strain_warning", "point_force_warnings",
+           "twist_warnings"]
 
 #: a tendon, fascicle or bar longer than this [m] is most likely given in mm
 MAX_LENGTH = 5.0
@@ -110,6 +111,24 @@ def point_force_warnings(spec, beams) -> list[str]:
             "locking: mixed; its node's displacement includes the end section's local deformation, which "
             "mixed leaves 4-5 % softer (docs/locking.md): for the beam's response load it with traction_force"
             for ld in spec.loads if ld.kind == "force" and beams[ld.beam].locking == "mixed"]
+
+
+def _zero(vector, curve) -> bool:
+    """Whether a load or prescribed displacement is zero at every load factor."""
+    return all(v == 0.0 for v in vector) or (curve is not None and all(m == 0.0 for _, m in curve))
+
+
+def load_warnings(spec) -> list[str]:
+    """One warning when nothing moves the model: every load and prescribed displacement zero at
+    every load factor (all-zero forces, or curves and history columns of zeros).  The solution is
+    then the reference state at every level, where the stability check's inertia count is not
+    meaningful (a saddle-point matrix without pressures)."""
+    loads = [(ld.force, ld.curve) for ld in spec.loads]
+    moved = [([v for _, _, v in bc.displacement], bc.curve) for bc in spec.boundary_conditions if bc.displacement]
+    if loads + moved and not all(_zero(v, c) for v, c in loads + moved):
+        return []
+    return ["warning: loads: every load and prescribed displacement is zero at every level: the solution is "
+            "the reference state; give a load a nonzero force (or a history column with nonzero values)"]
 
 
 def fibre_warnings(spec, beams) -> list[str]:

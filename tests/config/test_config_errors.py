@@ -76,6 +76,12 @@ CASES = [
     ("bad loop", _set(["beams", 0, "section"], {"shape": "outline", "file": "data/achilles_type3_sections.yaml",
                                                  "loop": "plantaris"}), "beams[0].section.loop", "soleus"),
     ("partition method", _set(["partition"], {"method": "scotch"}), "partition.method", "metis"),
+    ("second support",
+     lambda raw: raw["boundary_conditions"].append({"beam": "bar", "node": "first", "fix": "clamped"}),
+     "boundary_conditions[1]", "bar node first already has a support (boundary_conditions[0]): merge"),
+    ("support names",
+     lambda raw: raw["boundary_conditions"].append({"beam": "bar", "node": "last", "fix": {"r": "y"}, "name": "bar.0"}),
+     "boundary_conditions[1].name", "duplicate support name 'bar.0' (also boundary_conditions[0])"),
 ]
 
 BUNDLE = {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2, "force": [1, 0, 0],

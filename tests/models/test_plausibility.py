@@ -140,3 +140,24 @@ def test_a_fibre_exponent_that_overflows_is_warned_of_and_leaks_no_numpy_warning
     assert "fibre stretch of 1.013" in note[0]
     raw["beams"][0]["material"]["k2"] = 524.6                  # the largest published set: no warning
     assert not [w for w in run_inline(raw, tmp_path / "b")["warnings"] if "k2" in w]
+
+
+def test_a_model_nothing_moves_is_named():
+    """Every load zero (forces, or a history column of zeros) and no prescribed displacement:
+    the reference state is the answer, which the run completes with; one warning says so.  A
+    single nonzero load or displacement silences it."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for ld in raw["loads"]:
+        ld[[k for k in ld if k.endswith("force")][0]] = [0.0, 0.0, 0.0]
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: loads: every load and prescribed displacement is zero")
+    raw["boundary_conditions"].append({"beam": "soleus", "node": "last", "displacement": {"r": {"x": 1e-4}}})
+    assert _warnings(raw) == []
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["history"] = {"table": {"time": [0.0, 0.1], "pull": [0.0, 0.0]}}
+    raw["loads"][0]["column"] = "pull"
+    (w,) = _warnings(raw)
+    assert "zero at every level" in w
+    raw["history"]["table"]["pull"] = [0.0, 2.0]
+    assert _warnings(raw) == []

@@ -406,3 +406,19 @@ def test_the_shipped_gait_envelope_sweep_expands_to_39_strides():
         assert os.path.isfile(os.path.normpath(os.path.join(run.dir, raw["history"]["file"])))
     assert twists == set(range(0, 181, 15))
     assert files == {f"stride_walking_{b}.csv" for b in ("gastrocnemius", "uniform", "soleus")}
+
+
+def test_a_config_error_found_by_the_contact_setup_keeps_its_reason(tmp_path):
+    """A run refused by a check past the model (the interfaces' conforming meshes, in the contact
+    setup) is classified with the solver's one-line reason, not 'see log.txt'."""
+    from ancf_petsc.workflows.sweep.execute import classify
+    with open(os.path.join(CONFIGS, "achilles_type3_psi45.yaml")) as fh:
+        raw = yaml.safe_load(fh)
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["beams"][0]["elements"] = 3
+    with open(tmp_path / "config.yaml", "w") as fh:
+        yaml.safe_dump(raw, fh)
+    status, reason = classify(str(tmp_path), 2)
+    assert status == "config_error"
+    assert reason.startswith("config error: contact: interface ") and "same number of elements" in reason

@@ -139,6 +139,15 @@ def point_fields(c, st: ContactState, q0_of) -> dict:
             "multiplier_active": st.active[own]}
 
 
+#: what marks a warning about the last level (a restart drops the stopped run's: ``from_last_level``)
+LAST_LEVEL = "at the last level"
+
+
+def from_last_level(note: str) -> bool:
+    """Whether a warning line is a ``penetration_warnings`` one (about the run's last level)."""
+    return note.startswith("warning: contact interface ") and LAST_LEVEL in note
+
+
 def penetration_warnings(c, report: dict) -> list[str]:
     """One warning line per interface of the ``Contact`` c, if its law lets the bodies separate
     (unilateral), whose ``max_penetration`` in ``report`` (a level's ``gap_report``) is above
@@ -153,7 +162,7 @@ def penetration_warnings(c, report: dict) -> list[str]:
         width = min(itf.a.section.smallest_width, itf.b.section.smallest_width)
         if depth > PENETRATION_SHARE * width:
             out.append(f"warning: contact interface {itf.name}: the bodies interpenetrate by up to "
-                       f"{depth * 1e6:.3g} um at the last level, above {PENETRATION_SHARE:.0%} of the "
+                       f"{depth * 1e6:.3g} um {LAST_LEVEL}, above {PENETRATION_SHARE:.0%} of the "
                        f"thinner section ({width * 1e3:.3g} mm wide): each pressure function's weighted "
                        "gap holds, the points between them are not held; see docs/contact.md, "
                        "\"Pointwise penetration\"")

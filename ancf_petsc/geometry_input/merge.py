@@ -157,6 +157,7 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
                     f"subtendons '{a}' and '{b}' overlap by {d[k] * 1e3:.3f} mm near "
                     f"{_fmt_mm(D[a][k])}, more than the merge tolerance {tol * 1e3:.3g} mm; "
                     "correct the tracing or raise geometry.sections.merge_tolerance")
+            _check_interiors(a, b, D[a], D[b], dist[b], tol)
             near = (d <= tol) & (d < best)
             best[near], lab[near], sg[near] = d[near], ib, j[near]
         label[a], seg[a] = lab, sg
@@ -176,6 +177,24 @@ def merge_outlines(outlines: dict[str, np.ndarray], tol: float, h: float,
         pairs, _ = _pair_runs(names, label, seg)
 
     return _assemble(names, D, V, dist, pairs, tol, h)
+
+
+def _check_interiors(a: str, b: str, Da: np.ndarray, Db: np.ndarray, dist_b, tol: float) -> None:
+    """MergeError where a's inside lies in b's: a's boundary moved 2 tol inwards (still inside a)
+    and farther than tol inside b.  Catches what the boundary test cannot: outlines that lie on
+    each other (two subtendons traced from one label), whose boundaries are everywhere within
+    tol of each other."""
+    t = np.roll(Da, -1, axis=0) - np.roll(Da, 1, axis=0)
+    n = np.column_stack([-t[:, 1], t[:, 0]]) / np.maximum(np.linalg.norm(t, axis=1), 1e-300)[:, None]
+    P = Da + 2.0 * tol * n                     # counter-clockwise: the inside is on the left
+    d, _, _ = dist_b.query(P)
+    deep = (d > tol) & inside(P, Da) & inside(P, Db)
+    if deep.any():
+        k = np.flatnonzero(deep)[np.argmax(d[deep])]
+        raise MergeError(
+            f"subtendons '{a}' and '{b}' overlap: the inside of '{a}' near {_fmt_mm(P[k])} lies "
+            f"{d[k] * 1e3:.3f} mm inside '{b}' (the outlines lie on each other), more than the merge "
+            f"tolerance {tol * 1e3:.3g} mm; correct the tracing")
 
 
 def _pair_runs(names, label, seg):

@@ -62,13 +62,18 @@ def moved_supports(config: dict) -> list[str]:
 
 def force_axis(summary: dict, config: dict) -> tuple[np.ndarray, str]:
     """The force each level carried and its label: the x-reactions of the moved supports under
-    displacement control, else the load factor times the loads' x-sum (a load curve: the load
-    factor itself)."""
+    displacement control, else the x-sum of the loads applied at each level (``subtendons``'
+    end forces: curves and history columns included), else (files without them) the load factor
+    times the loads' x-sum (a load curve: the load factor itself)."""
     steps = summary["steps"]
     moved = [n for n in moved_supports(config) if all(n in st.get("reactions", {}) for st in steps)]
     if moved:
         return (np.array([sum(st["reactions"][n][0] for n in moved) for st in steps]),
                 f"reaction of {', '.join(moved)} along x [N]")
+    if steps and all("subtendons" in st for st in steps):
+        fx = np.array([sum(b["end_force"][0] for b in st["subtendons"].values()) for st in steps])
+        if np.any(fx != 0.0):
+            return fx, "applied load along x [N]"
     loads = [ld for ld in config.get("loads", []) or [] if isinstance(ld, dict)]
     lam = np.array([st["load_factor"] for st in steps])
     if loads and not any("curve" in ld for ld in loads):

@@ -169,3 +169,30 @@ def test_local_pressure_functions_and_the_warning_on_ranks_are_serial(tmp_path, 
                            rtol=1e-9, atol=1e-15)
         assert b["contact"][MG_SOL]["max_penetration"] == pytest.approx(a["contact"][MG_SOL]["max_penetration"],
                                                                        rel=1e-9, abs=1e-12)
+
+
+def test_a_restart_warns_of_its_own_last_level_only(tmp_path):
+    """A unilateral run stopped after 10 N (penetration 0.17 mm there) and restarted to 100 N
+    warns as the uninterrupted run does, of 100 N only (the stopped run's warning about its own
+    last level was kept beside it); restarting the finished run warns once, not twice."""
+    import os
+    from helpers import CONFIGS, read_summary, solve_cli, write_config
+
+    def column(steps):
+        raw = _column("unilateral", steps=steps)
+        for b in raw["beams"]:
+            b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        raw["output"] = {"vtk": False}
+        return raw
+    full = run_inline(column((10.0, 100.0)), tmp_path / "full")
+    assert len(_notes(full)) == 1
+    stopped = column((10.0,))
+    p = solve_cli(write_config(stopped, tmp_path / "a.yaml"), extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    assert _notes(read_summary(tmp_path / "run")) and _notes(read_summary(tmp_path / "run")) != _notes(full)
+    cfg = write_config(column((10.0, 100.0)), tmp_path / "b.yaml")
+    for _ in range(2):                       # the stopped run, then the finished one
+        p = solve_cli(cfg, extra=["--restart", str(tmp_path / "run"), "--quiet"])
+        assert p.returncode == 0, p.stderr
+        assert _notes(read_summary(tmp_path / "run")) == _notes(full)
+        assert p.stderr.count("interpenetrate") == 1

@@ -71,6 +71,9 @@ CASES = [
     ("overlap", config(inline({"a": {"points": disc(2.0)}, "b": {"points": disc(2.0, c=(3.5, 0.0))}}),
                        beams=("a", "b")),
      "geometry.sections.outlines", "subtendons 'a' and 'b' overlap by 0.498 mm near (2.000, 0.000) mm"),
+    ("outlines on each other", config(inline({"a": {"points": disc(1.0, c=(2.0, 0.0))},
+                                              "b": {"points": disc(1.0, c=(2.0, 0.0))}}), beams=("a", "b")),
+     "geometry.sections.outlines", "subtendons 'a' and 'b' overlap: the inside of 'a' near "),
     ("contact with stations whose interfaces differ", config(
         {"stations": [dict(inline(three()), x=0.0), dict(inline(three(r=2.5)), x=0.02)]},
         beams=("p", "q", "r"), contact=True),

@@ -40,3 +40,26 @@ def test_existing_runs_of_other_models_say_what_they_hold(tmp_path):
     assert float(row[3]) < 0                                    # the slider (second) ahead
     for png in ("friction_pressed_strips_force.png", "friction_pressed_strips_slip.png"):
         assert os.path.getsize(tmp_path / "rep" / png) > 10_000 and f"]({png})" in text
+
+
+def test_a_history_run_reports_the_load_of_each_frame(tmp_path):
+    """A load history (each muscle on its column, loading then unloading): the report's force is
+    the frame's applied load (the columns' sum), not the frame number times the unit loads."""
+    from helpers import CONFIGS
+    raw = load_raw("achilles_type3_psi45.yaml")
+    names = [b["name"] for b in raw["beams"]]
+    for b in raw["beams"]:
+        b["elements"] = 2
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw.pop("steps")
+    raw["history"] = {"table": {"time": [0.0, 0.1, 0.2], "s": [20.0, 60.0, 10.0], "m": [10.0, 30.0, 5.0],
+                                "l": [10.0, 30.0, 5.0]}}
+    raw["loads"] = [{"beam": n, "node": "last", "traction_force": [1.0, 0.0, 0.0], "column": c}
+                    for n, c in zip(names, "sml")]
+    raw["output"] = {"vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "h.yaml"), extra=["--output-dir", str(tmp_path / "h"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "h")], tmp_path / "rep")
+    head = "| load factor | applied load along x [N] |"
+    rows = [line.split("|") for line in text.split(head)[1].splitlines()[2:5]]
+    assert [float(r[2]) for r in rows] == [40.0, 120.0, 20.0]

@@ -422,3 +422,24 @@ def test_a_config_error_found_by_the_contact_setup_keeps_its_reason(tmp_path):
     status, reason = classify(str(tmp_path), 2)
     assert status == "config_error"
     assert reason.startswith("config error: contact: interface ") and "same number of elements" in reason
+
+
+def test_a_run_that_completed_as_the_sweep_was_stopped_is_recorded_completed(tmp_path, monkeypatch):
+    """Stopping the sweep as a run finishes: mpirun exits 1 when it forwards the signal, but the
+    run's summary.json says completed; run.json then says completed too (it said interrupted,
+    with reason code COMPLETED)."""
+    from types import SimpleNamespace
+    from ancf_petsc.workflows.sweep import execute
+    from ancf_petsc.workflows.sweep.processes import Active
+    script = f"printf '{{\"status\": \"completed\", \"steps\": []}}' > {tmp_path / 'summary.json'}; exit 1"
+    monkeypatch.setattr(execute, "solve_command", lambda sweep, run: ["sh", "-c", script])
+
+    class StoppedAfterStart(Active):
+        def start(self, cmd, **popen):
+            proc = super().start(cmd, **popen)
+            self.cancelled.set()
+            return proc
+    out = execute.execute_run(SimpleNamespace(timeout=60, ranks=2), SimpleNamespace(dir=str(tmp_path)),
+                              StoppedAfterStart())
+    record = json.load(open(tmp_path / "run.json"))
+    assert out.status == record["status"] == "completed" and record["reason_code"] == "COMPLETED"

@@ -229,6 +229,8 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
         # stopped by the sweep: at its next safe point (exit 130/143, converged levels kept) or,
         # past the grace period, killed; either way it is continued by the next ancf-sweep
         summary = read_json(os.path.join(run.dir, "summary.json")) or {}
+        if summary.get("status") == "completed":      # done as the signal came (mpirun: exit 1)
+            return record_outcome(run.dir, rc, wall, verdict=("completed", ""))
         how = "stopped at a safe point" if summary.get("status") == "interrupted" \
             else f"killed ({_signal_name(rc) if rc is not None and rc < 0 else f'exit code {rc}'})"
         return record_outcome(run.dir, rc, wall,

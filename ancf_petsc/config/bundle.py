@@ -120,6 +120,10 @@ def expand_bundle(raw: dict) -> dict:
     section_opts = {"cubature_degree": integer(b.get("cubature_degree", 4), "bundle.cubature_degree", lo=1, hi=20),
                     "spline_degree": 3}
     if shape == "hexagon":
+        for key in ("gap", "arc_deg"):
+            if key in b:
+                raise ConfigError(f"bundle.{key}", "applies to circle fascicles only (hexagons tile the "
+                                                   "section, sharing their edges); remove it")
         pitch = math.sqrt(3.0) * radius              # flat-to-flat: the hexagons tile the plane
         centres = hex_centres(rings, pitch)
         loops = hexagon_beams(centres, radius)

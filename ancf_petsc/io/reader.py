@@ -45,16 +45,31 @@ class Results:
     def h5_path(self) -> str:
         return os.path.join(self.directory, "results.h5")
 
+    def level(self, step: int) -> int:
+        """Level number 1 … n of ``step`` (0: the reference state; negative counts from the last
+        converged level, as Python's indices do); IndexError naming the levels there are."""
+        n = len(self.summary.get("steps", []))
+        k = step + n + 1 if step < 0 else step
+        if not 0 <= k <= n:
+            raise IndexError(f"step {step}: the run has {n} converged level(s): 1 … {n}, 0 the reference "
+                             "state, -1 the last")
+        return k
+
     def nodal_vectors(self, step: int) -> np.ndarray:
-        """Nodal vectors (n_nodes, V, 3) at converged level ``step`` (0: the reference state)."""
+        """Nodal vectors (n_nodes, V, 3) at converged level ``step`` (0: the reference state,
+        -1: the last level)."""
+        k = self.level(step)
         with h5py.File(self.h5_path, "r") as h5:
-            if step == 0:
+            if k == 0:
                 return h5["model/reference_nodal_vectors"][()]
-            return h5["steps"][f"step_{step:04d}"]["nodal_vectors"][()]
+            return h5["steps"][f"step_{k:04d}"]["nodal_vectors"][()]
 
     def contact(self, step: int) -> dict:
-        """Contact fields of converged level ``step`` (``read_contact``)."""
-        return read_contact(self.h5_path, step)
+        """Contact fields of converged level ``step`` (``read_contact``; -1: the last level)."""
+        k = self.level(step)
+        if k == 0:
+            raise IndexError("step 0 is the reference state: contact fields are written from level 1 on")
+        return read_contact(self.h5_path, k)
 
 
 def append_levels(summary: dict, steps) -> None:
@@ -96,6 +111,8 @@ def read_contact(results_h5: str, step: int) -> dict:
     load factor."""
     with h5py.File(results_h5, "r") as h5:
         g = h5["steps"][f"step_{step:04d}"]
+        if "contact" not in g:
+            raise KeyError(f"{results_h5}: the run has no contact (no contact fields at level {step})")
         out = {k: g["contact"][k][()] for k in g["contact"]}
         out["load_factor"] = float(g.attrs["load_factor"])
     return out

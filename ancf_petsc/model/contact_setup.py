@@ -6,6 +6,7 @@ from ..config.specs import ContactSpec
 from ..config.values import ConfigError
 from ..contact import Contact, ContactSetupError, build_contact
 from .beams import Model
+from .build import build_model
 
 
 def contact_for(model: Model, spec: ContactSpec, log=print) -> Contact:
@@ -15,3 +16,12 @@ def contact_for(model: Model, spec: ContactSpec, log=print) -> Contact:
     except ContactSetupError as exc:
         key = "contact" if exc.interface is None else f"contact.interfaces[{exc.interface}]"
         raise ConfigError(key, str(exc)) from None
+
+
+def check_model(spec) -> Model:
+    """The model of ``spec`` and its contact built once, for their input checks (a ConfigError
+    names the key): what a run checks before it solves."""
+    model = build_model(spec)
+    if spec.contact:                    # the interfaces' checks (conforming meshes, sides)
+        contact_for(model, spec.contact, lambda *_: None)
+    return model

@@ -63,6 +63,8 @@ def element_counts(spec: ModelSpec) -> list[int]:
 def select_and_run(spec: ModelSpec, comm, log, run_model):
     """Run the ladder, choose the element count, then ``run_model`` the chosen model (collective)."""
     from ..linalg.database import own_prefix
+    from ..model.contact_setup import check_model
+    check_model(spec)                   # the scene as written, before its rungs scale it
     acc = spec.accuracy
     say = log if comm.rank == 0 else (lambda *_: None)
     level = acc.level if acc.level is not None else max(spec.steps)

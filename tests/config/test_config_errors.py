@@ -102,6 +102,8 @@ CASES += [
     ("bundle section", _bundle(fascicle_section="square"), "bundle.fascicle_section", "hexagon"),
     ("bundle radius", _bundle(radius=-1.0), "bundle.radius", "> 0"),
     ("bundle missing", _bundle(force=None), "bundle", "force"),
+    ("bundle gap of hexagons", _bundle(fascicle_section="hexagon", gap=2e-4), "bundle.gap", "circle fascicles only"),
+    ("bundle arc of hexagons", _bundle(fascicle_section="hexagon", arc_deg=40), "bundle.arc_deg", "remove it"),
     ("matrix format", _set(["solver"], {"matrix": "dense"}), "solver.matrix", "one of"),
     ("linear solver", _set(["solver"], {"linear": "gmres"}), "solver.linear", "fieldsplit"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),

@@ -6,6 +6,7 @@ import json
 
 import h5py
 import numpy as np
+import pytest
 
 from helpers import load_raw, run_inline
 
@@ -68,6 +69,14 @@ def test_a_summary_that_lags_results_h5_is_completed_from_it(tmp_path):
     assert np.array_equal(res.load_factors, [0.25, 0.5, 0.75, 1.0])
     point = read_restart(str(tmp_path))
     assert point.step == 4 and point.summary["steps"] == final["steps"]
+    # levels as Python indexes them; a level the run has not: IndexError naming the ones it has
+    assert np.array_equal(res.nodal_vectors(-1), res.nodal_vectors(4))
+    assert np.array_equal(res.nodal_vectors(-5), res.nodal_vectors(0))
+    for bad in (5, -6):
+        with pytest.raises(IndexError, match=r"the run has 4 converged level\(s\): 1 … 4, 0 the reference"):
+            res.nodal_vectors(bad)
+    with pytest.raises(KeyError, match="the run has no contact"):
+        res.contact(-1)
 
 
 def test_an_older_results_h5_without_entries_restarts_where_summary_json_ends(tmp_path):

@@ -1,5 +1,6 @@
 """``accuracy: {probe, rtol}``: Richardson estimates and the automatic choice of the element count."""
 import math
+import os
 
 import pytest
 
@@ -150,3 +151,17 @@ def test_accuracy_run_is_the_same_on_two_ranks(tmp_path):
     assert "[accuracy] section order: 3333 -> 3363 on the start rung changes tip by" in proc.stdout
     a, b = (st["accuracy"]["section_order"]["next_value"] for st in (serial, par))
     assert a == pytest.approx(b, rel=1e-9)
+
+
+def test_a_scene_the_ladder_cannot_build_is_refused_with_its_own_counts(tmp_path):
+    """Beams of an interface with different element counts: the config error names the counts
+    the config gives (4 and 2), before the ladder scales them (it named its first rung's, 2 and 1)."""
+    from helpers import solve_cli, write_config
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["beams"][0]["elements"] = 2
+    raw["accuracy"] = {"probe": raw["probes"][0]["name"], "component": "x", "rtol": 1e-2, "start": 1}
+    p = solve_cli(write_config(raw, tmp_path / "a.yaml"), extra=["--output-dir", str(tmp_path / "o"), "--quiet"])
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert "(4 elements) and soleus (2)" in p.stderr and "[accuracy]" not in p.stdout, p.stderr

@@ -76,13 +76,9 @@ def input_problem(run_dir: str) -> str:
     """Why ancf-solve refused the run's config.yaml (exit code 2 before summary.json): the same
     checks run here, and the error's key path and message are read as data."""
     from ...config.parse import load_config
-    from ...model.build import build_model
-    from ...model.contact_setup import contact_for
+    from ...model.contact_setup import check_model
     try:
-        spec = load_config(os.path.join(run_dir, "config.yaml"))
-        model = build_model(spec)
-        if spec.contact:                # the interfaces' checks (conforming meshes, sides)
-            contact_for(model, spec.contact, lambda *_: None)
+        check_model(load_config(os.path.join(run_dir, "config.yaml")))
     except InputError as exc:
         return f"config error: {exc.path}: {exc.message}" if exc.path else f"config error: {exc.message}"
     except Exception:               # noqa: BLE001 - any other failure: the log has it

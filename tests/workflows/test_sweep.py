@@ -265,6 +265,8 @@ BAD = {
     "empty list": ({"parameters": {"geometry.length": []}}, "parameters.geometry.length: empty"),
     "unknown sweep key": ({"parameters": {"geometry.length": [1]}, "runs": {}}, "runs: unknown key"),
     "bad run value": ({"parameters": {"geometry.length": [1]}, "run": {"jobs": 0}}, "run.jobs:"),
+    "a grid value twice": ({"parameters": {"geometry.length": [0.1, 0.2, 0.1e0]}},
+                           "parameters.geometry.length: values 1 and 3 are equal (0.1, 0.1)"),
 }
 
 

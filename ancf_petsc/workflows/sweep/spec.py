@@ -276,6 +276,11 @@ def load_sweep(path: str) -> Sweep:
                                     f"(write [{values!r}] for a single value)")
         if not values:
             raise SweepError(where, "empty list of values")
+        twice = [(i, j) for j in range(len(values)) for i in range(j) if values[i] == values[j]]
+        if mode == "grid" and twice:
+            i, j = twice[0]
+            raise SweepError(where, f"values {i + 1} and {j + 1} are equal ({values[i]!r}, {values[j]!r}): "
+                                    "a grid would run each of their combinations twice; remove one")
         p = Parameter(norm, tokens, values)
         try:
             exists = path_exists(base_raw, tokens)

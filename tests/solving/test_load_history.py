@@ -90,6 +90,17 @@ def _ends(summary, frame=-1):
                      for n in ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")])
 
 
+def _stopped(raw, full, frames: int, tmp_path) -> dict:
+    """``raw`` run into tmp_path/run with the Newton budget of ``full``'s first ``frames`` frames:
+    it stops with exit 3 (every converged frame on disk); its summary."""
+    stopped = copy.deepcopy(raw)
+    stopped["solver"] = {"max_newton_iterations": sum(s["iterations"] for s in full["steps"][:frames])}
+    p = solve_cli(write_config(stopped, tmp_path / "stopped.yaml"),
+                  extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 3, p.stderr
+    return read_summary(tmp_path / "run")
+
+
 @pytest.mark.slow
 def test_frictionless_history_with_unloading_ends_where_a_proportional_run_does(tmp_path):
     """Non-proportional frames that load the soleus, move the load to the gastrocnemii and unload
@@ -153,13 +164,7 @@ def test_a_history_run_stopped_midway_restarts_to_the_uninterrupted_answers(tmp_
     raw["history"]["table"]["time"] = [0.01 * k for k in range(8)]
     full = run_inline(raw, tmp_path / "full")
     assert full["status"] == "completed"
-    budget = sum(s["iterations"] for s in full["steps"][:4])
-    stopped = copy.deepcopy(raw)
-    stopped["solver"] = {"max_newton_iterations": budget}
-    cfg = write_config(stopped, tmp_path / "stopped.yaml")
-    p = solve_cli(cfg, extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
-    assert p.returncode == 3, p.stderr
-    part = read_summary(tmp_path / "run")
+    part = _stopped(raw, full, 4, tmp_path)
     assert 3 <= len(part["steps"]) < 8
     cfg = write_config(raw, tmp_path / "again.yaml")
     p = solve_cli(cfg, extra=["--restart", str(tmp_path / "run"), "--quiet"])
@@ -178,21 +183,15 @@ def test_a_friction_history_restarts_with_its_load_predictor(tmp_path, ranks):
     the uninterrupted run does: the tangent predictor needs the factor of the last converged state,
     which a restart factors again (predictor.TangentPredictor.prime).  Without it the first frame
     after a restart started unpredicted (|F| 69 against 27 N here; on a 13-frame μ = 0.3 stride a
-    later frame then cut back where the uninterrupted one did not: the final probes up to 6 % apart).  On 1
-    rank and on 2 (the factor is collective)."""
+    later frame then cut back where the uninterrupted one did not: the final probes up to 6 %
+    apart).  On 1 rank and on 2 (the factor is collective)."""
     table = {"time": [0.01 * k for k in range(6)], "soleus": [20, 60, 120, 160, 80, 20],
              "medial": [5, 20, 60, 100, 140, 60], "lateral": [5, 20, 40, 80, 120, 60]}
     raw = tendon({k: [float(v) for v in vs] for k, vs in table.items()})
     raw["contact"]["tangential"] = {"law": "coulomb", "friction": 0.3}
     full = run_inline(raw, tmp_path / "full")
     assert full["status"] == "completed"
-    budget = sum(s["iterations"] for s in full["steps"][:3])
-    stopped = copy.deepcopy(raw)
-    stopped["solver"] = {"max_newton_iterations": budget}
-    p = solve_cli(write_config(stopped, tmp_path / "stopped.yaml"),
-                  extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
-    assert p.returncode == 3, p.stderr
-    kept = len(read_summary(tmp_path / "run")["steps"])
+    kept = len(_stopped(raw, full, 3, tmp_path)["steps"])
     assert 2 <= kept < 6
     p = solve_cli(write_config(raw, tmp_path / "again.yaml"), ranks=ranks,
                   extra=["--restart", str(tmp_path / "run"), "--quiet"])
@@ -238,12 +237,7 @@ def test_a_unilateral_history_at_large_twist_restarts(tmp_path):
     cfg = write_config(raw, tmp_path / "again.yaml")
     p = solve_cli(cfg, extra=["--restart", str(tmp_path / "full"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    budget = sum(s["iterations"] for s in full["steps"][:3])
-    stopped = copy.deepcopy(raw)
-    stopped["solver"] = {"max_newton_iterations": budget}
-    p = solve_cli(write_config(stopped, tmp_path / "stopped.yaml"),
-                  extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
-    assert p.returncode == 3, p.stderr
+    _stopped(raw, full, 3, tmp_path)
     p = solve_cli(cfg, extra=["--restart", str(tmp_path / "run"), "--quiet"])
     assert p.returncode == 0, p.stderr
     done = read_summary(tmp_path / "run")

@@ -190,7 +190,7 @@ def plot_slip(levels: list[dict], names: list[str], out_png: str, interfaces: tu
                         transform=ax.get_xaxis_transform(), clip_on=False, zorder=5)[0].set_in_layout(False)
             out += [(lev["load_factor"], x0) for x0 in MM * lev["x0"][gone, 0]]
     for j, k in enumerate(interfaces):
-        ax_s.plot([], [], markers[j % 4], color="0.4", ms=4, label=names[k])
+        ax_s.plot([], [], markers[j % 4], color="0.4", ms=4, label=names[k].replace(" (", "\n("))
     if out:
         ax_s.plot([], [], "X", color="0.6", mec="k", ms=7, label="out of contact\n(weight 0, no slip)")
     ax_s.set_ylabel("slip along x [mm]\n(u_first − u_second)")

@@ -283,7 +283,8 @@ def read_restart(directory: str) -> RestartPoint:
                                  levels=tuple(float(steps[f"step_{i:04d}"].attrs["load_factor"])
                                               for i in range(1, k + 1)),
                                  contact_fields=_contact_fields(g),
-                                 previous_contact_fields=_contact_fields(steps[f"step_{k - 1:04d}"]) if k > 1 else None,
+                                 previous_contact_fields=(_contact_fields(steps[f"step_{k - 1:04d}"])
+                                                          if k > 1 else None),
                                  pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
                                                  if "fade_forces_pointwise_from" in r.attrs else None))
     except (OSError, KeyError) as exc:

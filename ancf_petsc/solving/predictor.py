@@ -73,9 +73,8 @@ class TangentPredictor:
         terms = [] if c is None else c.terms
         kept = [{k: v.copy() for k, v in t.state.items()} for t in terms]
         for t in terms:
-            t.state = {k: (np.zeros_like(v) if previous_history is None
-                           else np.asarray(previous_history[HISTORY + k], dtype=float).copy())
-                       for k, v in t.state.items()}
+            t.set_state(previous_history if previous_history is not None else
+                        {HISTORY + k: np.zeros_like(v) for k, v in t.state.items()})
         if c is not None:
             forget_evaluation(c)
             c.allow_update = False                # the restored active set (unilateral)

@@ -40,6 +40,18 @@ JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.Converged
                 STALLED_STEP)
 
 
+def residual_norm(problem, X: PETSc.Vec, reported: float) -> float:
+    """|F(X)| as the SNES reported it, or evaluated where its type keeps none (ksponly, ms report
+    0: their levels were accepted with NaN or one linear step's answers).  Collective."""
+    if reported > 0.0:
+        return reported
+    F = X.duplicate()
+    problem.residual(None, X, F)
+    norm = F.norm()
+    F.destroy()
+    return norm
+
+
 class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES (``solver``)."""
 
@@ -103,7 +115,7 @@ class LoadStepper:
                      f"{'converged' if reason > 0 else 'failed'}, {its} Newton iterations in all")
         self.history = S.history
         self.newton_iterations += its
-        fnorm = S.snes.getFunctionNorm()
+        fnorm = residual_norm(self.problem, X, S.snes.getFunctionNorm())
         self.unsettled = newton.unsettled is not None
         if self.unsettled:
             # a level accepted with its weights' last update unsettled reports the residual

@@ -105,6 +105,33 @@ def test_newton_budget_stops_a_run_cleanly(tmp_path):
     assert 1 <= len(s["steps"]) < 4 and s["newton_iterations"] > 12
 
 
+@pytest.mark.parametrize("snes_type", ["ksponly", "ms"])
+def test_a_snes_type_that_keeps_no_residual_norm_is_judged_on_the_residual(tmp_path, snes_type):
+    """-snes_type ksponly (one linear step) and ms report |F| = 0 and CONVERGED_ITS: their levels
+    were accepted, the run said completed with one linear step's answers (ksponly) or NaN (ms).
+    Now |F(X)| decides: the levels are not reached, exit 3."""
+    raw = load_raw("bending_neohookean.yaml")
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-snes_type", snes_type, "--quiet"])
+    assert p.returncode == 3, p.stdout + p.stderr
+    s = read_summary(tmp_path / "out")
+    assert s["status"] == "failed" and not s["steps"]
+
+
+def test_a_vi_newton_type_runs_on_aij(tmp_path):
+    """-snes_type vinewtonssls reduces the Jacobian to its free rows, which segfaulted on the
+    default SBAIJ matrix (exit 59, summary.json left 'running'): such types get AIJ, and the run
+    gives the default solver's answer."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.5, 1.0]
+    raw["output"] = {"dir": str(tmp_path / "vi"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-snes_type", "vinewtonssls", "--quiet"])
+    assert p.returncode == 0, p.stdout + p.stderr
+    default = run_inline(raw, tmp_path / "default")
+    a, b = read_summary(tmp_path / "vi")["steps"][-1], default["steps"][-1]
+    assert np.allclose(a["probes"]["tip"]["displacement"], b["probes"]["tip"]["displacement"], rtol=1e-8, atol=1e-14)
+
+
 def test_command_line_overrides_config_petsc_section(tmp_path):
     raw = load_raw("uniaxial_neohookean.yaml")
     raw["petsc"] = {"snes_linesearch_type": "l2", "snes_max_it": 3}

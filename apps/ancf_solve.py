@@ -71,8 +71,17 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _error(line: str, rank: int = 0) -> None:
-    if rank == 0:
+def _launch_rank() -> int:
+    """This process's rank as the MPI launcher set it (Open MPI, MPICH, PMIx), before MPI starts:
+    errors found before then are printed by rank 0 only, once under mpirun."""
+    for key in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
+        if os.environ.get(key, "").isdigit():
+            return int(os.environ[key])
+    return 0
+
+
+def _error(line: str, rank: int | None = None) -> None:
+    if (_launch_rank() if rank is None else rank) == 0:
         print(f"ancf-solve: {line}", file=sys.stderr, flush=True)
 
 
@@ -107,6 +116,8 @@ def _main(argv: list[str], interrupt) -> int:
               flush=True)
         return 0
     try:
+        if _launch_rank():               # argparse's usage error from rank 0 only
+            parser.error = lambda message: sys.exit(2)      # type: ignore[method-assign]
         args, petsc_args = parser.parse_known_args(ours)
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0

@@ -153,6 +153,15 @@ def test_cli_config_error_under_mpi_is_one_line(tmp_path):
     assert sum("config error" in ln for ln in p.stderr.splitlines()) == 1, p.stderr
 
 
+@pytest.mark.parametrize("arg", [["-snes_max_it", "abc"], ["-pc_type", "nosuch"], ["--outputdir", "x"]])
+def test_command_line_errors_under_mpi_are_one_line(tmp_path, arg):
+    """Found before MPI starts, printed by the launcher's rank 0 only (it was once per rank)."""
+    cfg = write_config(copy.deepcopy(BASE), tmp_path / "ok.yaml")
+    p = solve_cli(cfg, ranks=2, extra=arg)
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert sum(ln.startswith("ancf-solve: ") for ln in p.stderr.splitlines()) == 1, p.stderr
+
+
 def test_repeated_keys_are_an_error_naming_both_lines(tmp_path):
     """Appending ``steps: [1.0]`` and ``loads: []`` gave a zero-load run reported completed
     (PyYAML keeps the last value): now one line naming the key and both lines, exit 2."""

@@ -43,9 +43,8 @@ def _element_choices(beam: BeamSpec, raw: dict, p: str) -> None:
     beam.section.cubature_degree = max(beam.section.cubature_degree, e.section_degree)
     beam.locking = string(raw.get("locking", e.default_locking), f"{p}.locking", LOCKING)
     if beam.locking not in e.remedies:
-        raise ConfigError(f"{p}.locking", f"{beam.locking!r} is not a remedy of element {e.name} (its "
-                          "ν = 0 part loads the section's cubic modes, docs/locking.md); use "
-                          + " or ".join(repr(r) for r in e.remedies))
+        raise ConfigError(f"{p}.locking", f"{beam.locking!r} is not a remedy of element {e.name} "
+                          f"({e.refused_because}, docs/locking.md); use " + " or ".join(repr(r) for r in e.remedies))
     if beam.locking == "mixed" and beam.material["model"] not in VOLUMETRIC_LAWS:
         raise ConfigError(f"{p}.locking", f"'mixed' projects the volumetric term K/2 (J - 1)^2 of "
                           f"{' or '.join(VOLUMETRIC_LAWS)}; {beam.material['model']!r} has none: "

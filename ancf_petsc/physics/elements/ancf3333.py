@@ -8,4 +8,5 @@ locking, hence ``ecm`` by default."""
 from .ancf3363 import BLOCK
 from .base import Element
 
-ELEMENT = Element("3333", BLOCK, vectors=(0, 1, 2), default_locking="ecm")
+ELEMENT = Element("3333", BLOCK, vectors=(0, 1, 2), default_locking="ecm", remedies=("none", "ecm"),
+                  refused_because="mixed projects J onto 1, y, z, where 3333's J already lies: it changes nothing")

@@ -185,6 +185,8 @@ class Element:
     #: the ``locking`` values a beam of it accepts (33103, 33153: not ``ecm``, whose ν = 0 part
     #: does work on the cubic modes in a homogeneous state: docs/locking.md, "Orders 3 and 4")
     remedies: tuple[str, ...] = ("none", "ecm", "mixed")
+    #: why the others are refused (the config error says it)
+    refused_because: str = ""
 
     def __post_init__(self):
         if self.vectors is None:

@@ -150,6 +150,9 @@ def check_value(name: str, value: str | None) -> str | None:
                 "real": "a number", "int": "an integer"}[kind]
         return f"needs a value: {what}"
     if kind == "type":
+        if value in NEEDS_CODE.get(base, ()):
+            return (f"{base.rsplit('_', 1)[0]} type {value!r} needs setup code that ancf-solve does not "
+                    f"provide (sub-solvers or a user routine); use one of " + ", ".join(_COMMON[base]))
         if value in TYPES[base]:
             return None
         near = [t for t in TYPES[base] if t.lower() == value.lower()]
@@ -202,6 +205,12 @@ def check_command_line(args: list[str]) -> str | None:
             return f"-{name}" + (f" {value}" if value is not None else "") + f": {why}"
     return None
 
+
+#: types PETSc knows that cannot run without code of their own (composite/nasm/aspin: sub-solvers
+#: set up in code; shell/python: a user's routine): refused before the solve, which failed with
+#: "Must call SNESShellSetSolve() first" reported as a linear-solver failure (exit 3)
+NEEDS_CODE = {"snes_type": ("aspin", "composite", "nasm", "patch", "python", "shell"),
+              "snes_linesearch_type": ("shell",)}
 
 _COMMON = {
     "snes_type": ("newtonls", "newtontr", "vinewtonrsls", "qn", "ksponly"),

@@ -13,6 +13,8 @@ import difflib
 import os
 import sys
 
+from ancf_petsc.parallel.launch import launch_rank
+
 OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help", "--check", "--output")
 
 
@@ -71,17 +73,9 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _launch_rank() -> int:
-    """This process's rank as the MPI launcher set it (Open MPI, MPICH, PMIx), before MPI starts:
-    errors found before then are printed by rank 0 only, once under mpirun."""
-    for key in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
-        if os.environ.get(key, "").isdigit():
-            return int(os.environ[key])
-    return 0
-
-
 def _error(line: str, rank: int | None = None) -> None:
-    if (_launch_rank() if rank is None else rank) == 0:
+    """One line on stderr from rank 0 (before MPI starts: the launcher's rank 0)."""
+    if (launch_rank() if rank is None else rank) == 0:
         print(f"ancf-solve: {line}", file=sys.stderr, flush=True)
 
 
@@ -116,7 +110,7 @@ def _main(argv: list[str], interrupt) -> int:
               flush=True)
         return 0
     try:
-        if _launch_rank():               # argparse's usage error from rank 0 only
+        if launch_rank():                # argparse's usage error from rank 0 only
             parser.error = lambda message: sys.exit(2)      # type: ignore[method-assign]
         args, petsc_args = parser.parse_known_args(ours)
     except SystemExit as exc:            # argparse already printed its one-line usage error

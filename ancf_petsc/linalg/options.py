@@ -89,7 +89,7 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
     full = node_blocks_fit(model)
     # the VI Newton types reduce the Jacobian to its free rows (MatCreateSubMatrix), which
     # segfaults on SBAIJ (-snes_type vinewtonssls, measured): they get AIJ
-    vi = str(option_in_effect("snes_type", config_options, prefix, symmetric) or "").startswith("vi")
+    vi = option_in_effect("snes_type", config_options, prefix, symmetric).startswith("vi")
     if choice == "auto":
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full and symmetric and not vi) else "aij"
     if choice == "sbaij":

@@ -10,6 +10,15 @@ from typing import NoReturn
 LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE", "SLURM_STEP_ID")
 
 
+def launch_rank() -> int:
+    """This process's rank as the MPI launcher set it (Open MPI, MPICH, PMIx), read before MPI
+    starts: 0 without a launcher.  Errors found before then are printed by rank 0 only."""
+    for key in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
+        if os.environ.get(key, "").isdigit():
+            return int(os.environ[key])
+    return 0
+
+
 def prepare_environment() -> None:
     """Single-threaded BLAS (small dense kernels: threads only contend with MPI ranks) and, for a
     process started without an MPI launcher (a singleton), Open MPI's ob1 messaging layer and no

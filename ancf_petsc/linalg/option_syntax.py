@@ -77,10 +77,19 @@ VIEWERS = ("snes_monitor", "snes_monitor_short", "snes_monitor_solution", "snes_
            "snes_monitor_solution_update", "snes_linesearch_monitor", "snes_converged_reason",
            "snes_view", "snes_view_pre", "ksp_monitor", "ksp_monitor_short", "ksp_monitor_true_residual",
            "ksp_monitor_singular_value", "ksp_converged_reason", "ksp_view", "ksp_view_pre",
-           "ksp_view_mat", "ksp_view_pmat", "ksp_view_rhs", "ksp_view_solution", "mat_view")
+           "ksp_view_mat", "ksp_view_pmat", "ksp_view_rhs", "ksp_view_solution", "mat_view",
+           "log_view")
 #: the viewer types PetscOptionsGetViewer (3.18) takes as a whole value (no ':', no file name)
 VIEWER_TYPES = ("ascii", "binary", "draw", "socket", "matlab", "saws", "vtk", "hdf5", "glvis",
                 "exodusii")
+
+#: options PETSc reads only while it starts (PetscInitialize), before ancf-solve reads the config:
+#: under ``petsc:`` they did nothing and were reported as misspelt; refused there (config/solving.py)
+START_UP_OPTIONS = ("help", "version", "info", "log_trace", "malloc_debug", "on_error_abort",
+                    "no_signal_handler", "options_file", "skip_petscrc", "fp_trap")
+#: options PETSc reads when it finishes (PetscFinalize): the config's value is put into the
+#: database for the rest of the process (linalg/logging.view_at_exit), not around a solve
+AT_FINISH_OPTIONS = ("log_view",)
 
 #: prefixes under which the same option names appear (block, multigrid and split solvers)
 PREFIX = re.compile(r"^(?:(?:sub|mg_coarse|mg_levels(?:_\d+)?|fieldsplit_\w+?|redundant|ksp)_)+")

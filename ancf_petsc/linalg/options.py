@@ -14,7 +14,7 @@ from petsc4py import PETSc
 from ..errors import InputError
 from .database import insert, option, option_names, remove
 from .diagnostics import petsc_message, solver_hint
-from .option_syntax import check_value
+from .option_syntax import AT_FINISH_OPTIONS, check_value
 
 def node_blocks_fit(model) -> bool:
     """Whether every node's DOFs are active (all beams interpolate their whole node block, e.g.
@@ -149,7 +149,7 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     inserted = []
     for source in (config_options, defaults):
         for key, value in source.items():
-            if option(key, prefix) is None:
+            if option(key, prefix) is None and key not in AT_FINISH_OPTIONS:
                 insert(prefix + key, value)
                 inserted.append(prefix + key)
     n = len(prefix)

@@ -35,6 +35,22 @@ SADDLE_POINT_HINT = ("a contact model's Jacobian is a saddle-point matrix (a zer
                      "jacobi and the factorisations of PETSc and SuperLU_DIST fail on it")
 
 
+#: what works instead of ``-snes_mf`` (measured on the two-element bar of tests/apps/test_edges.py
+#: and configs/achilles_type3_psi45.yaml: -snes_mf_operator -ksp_type gmres converges like the
+#: default; -snes_mf -ksp_type gmres solves the bar but did not reach the contact model's first
+#: level in 5 minutes)
+MF_OPERATOR = ("-snes_mf_operator -ksp_type gmres (GMRES on matrix-free products, preconditioned by "
+               "the factored assembled Jacobian)")
+MF_NO_MATRIX = "-snes_mf leaves no matrix to precondition with, so PETSc sets -pc_type none"
+
+
+def matrix_free(snes: PETSc.SNES) -> bool:
+    """Whether the SNES runs matrix-free without a preconditioning matrix (``-snes_mf``; not
+    ``-snes_mf_operator``, which keeps the assembled Jacobian for the preconditioner)."""
+    P = snes.getJacobian()[1]
+    return P is not None and P.getType() == PETSc.Mat.Type.MFFD
+
+
 def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:
     """The cause of a failure after a stability retry in the same level: a sub-step on the way
     converged to a state whose tangent had more negative eigenvalues than the last accepted one,
@@ -94,6 +110,11 @@ def failure_detail(solver, reason: int) -> str:
         return ""
     ksp = solver.snes.getKSP()
     if ksp.getType() == "preonly" and ksp.getPC().getType() == "none":
+        if matrix_free(solver.snes):
+            return (f" ({MF_NO_MATRIX}, and with -ksp_type preonly every Newton step is the residual "
+                    f"itself; for matrix-free products use {MF_OPERATOR}, or add -ksp_type gmres "
+                    "(unpreconditioned: slow, and on a contact model's saddle-point Jacobian unlikely "
+                    "to converge))")
         return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
                 "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
                                                f"; {SADDLE_POINT_HINT}") + ")")
@@ -189,6 +210,8 @@ def linear_solver_detail(solver, reason: int) -> str:
     infog1 = mumps_error(solver.snes.getKSP())
     if solver.linear == "fieldsplit":
         hint = "solver.linear: direct factors the whole Jacobian instead"
+    elif matrix_free(solver.snes):
+        hint = f"{MF_NO_MATRIX}; use {MF_OPERATOR}, or leave out -snes_mf"
     elif infog1 is not None:
         hint = mumps_hint(infog1)
     elif solver.problem.contact is not None:
@@ -203,4 +226,6 @@ def solver_text(solver) -> str:
     """The linear solver in effect, for messages."""
     if solver.linear == "fieldsplit":
         return "FGMRES with the fascicle Schur preconditioner, solver.linear: fieldsplit"
+    if matrix_free(solver.snes):
+        return f"-snes_mf -ksp_type {solver.snes.getKSP().getType()} (no preconditioner)"
     return solver_options(solver.petsc_options, solver.prefix, solver.problem.symmetric)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from petsc4py import PETSc
 
+from ..config.specs import SolverSpec
 from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.options import factor_package, solver_options
@@ -49,6 +50,15 @@ def matrix_free(snes: PETSc.SNES) -> bool:
     ``-snes_mf_operator``, which keeps the assembled Jacobian for the preconditioner)."""
     P = snes.getJacobian()[1]
     return P is not None and P.getType() == PETSc.Mat.Type.MFFD
+
+
+def floor_detail(step: float, lam: float, floor: float) -> str:
+    """The cause of a level given up at its first failure: half the failed step is below
+    ``solver.min_increment`` (``floor``), so no smaller step was tried (load_control.floored)."""
+    return (f" (no cut-back was tried: half the failed step from load factor {lam:.6g} to {lam + step:.6g} "
+            f"is {0.5 * step:.4g}, below solver.min_increment = {floor:g}; lower solver.min_increment "
+            f"to at most {0.5 * step:.4g} (the default is {SolverSpec.min_increment:g}) so that the step can "
+            "be cut back)")
 
 
 def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:

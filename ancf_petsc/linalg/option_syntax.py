@@ -71,7 +71,7 @@ BOOLS = ("ksp_initial_guess_nonzero", "snes_ksp_ew", "snes_mf", "snes_mf_operato
          "pc_gamg_reuse_interpolation", "pc_jacobi_fixdiagonal", "options_left")
 #: monitors and viewers: PETSc reads their value as a viewer, ``type[:file[:format[:mode]]]``
 #: (PetscOptionsGetViewer), never as a boolean: ``-snes_monitor false`` stops the solve with
-#: "Unsupported viewer false" (PETSc 3.18 and later alike); tests/apps/test_edges.py checks that
+#: "Unsupported viewer false" (PETSc 3.18 and later alike); tests/apps/test_monitor_options.py checks that
 #: PETSc reads each of these as a viewer
 VIEWERS = ("snes_monitor", "snes_monitor_short", "snes_monitor_solution", "snes_monitor_residual",
            "snes_monitor_solution_update", "snes_linesearch_monitor", "snes_converged_reason",

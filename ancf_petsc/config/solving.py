@@ -5,7 +5,7 @@ import math
 import os
 import re
 
-from ..linalg.option_syntax import check_value
+from ..linalg.option_syntax import START_UP_OPTIONS, check_value, option_kind
 from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
 from .values import ConfigError, boolean, integer, mapping, number, shown, string
 
@@ -93,7 +93,13 @@ def parse_petsc(value) -> dict[str, str]:
             raise ConfigError(f"petsc.{k}", "option values are scalars (number, string, true/false)")
         name = k.lstrip("-")
         text = "" if v is None or v is True else ("0" if v is False else str(v))
-        why = check_value(name, None if v is None or v is True else text)
+        if name in START_UP_OPTIONS:
+            raise ConfigError(f"petsc.{k}", f"PETSc reads -{name} only while it starts, before the "
+                                            "config is read; give it on the command line (ancf-solve "
+                                            f"CONFIG.yaml -{name}" + (f" {text}" if text else "") + ")")
+        # a monitor's false is refused in the config's own words (PETSc would read "0")
+        shown_text = "false" if v is False and option_kind(name) == "viewer" else text
+        why = check_value(name, None if v is None or v is True else shown_text)
         if why:
             raise ConfigError(f"petsc.{k}", why)
         petsc[name] = text

@@ -7,6 +7,9 @@ import functools
 
 from petsc4py import PETSc
 
+from .database import insert, option
+from .option_syntax import AT_FINISH_OPTIONS
+
 SETUP = "ANCF setup"
 ASSEMBLY = "ANCF assembly"
 SOLVE = "ANCF load stepping"
@@ -44,3 +47,12 @@ def event_time(name: str) -> float:
 def event_count(name: str) -> int:
     """How often event ``name`` ran (every stage)."""
     return int(_over_stages(name, "count"))
+
+
+def view_at_exit(config_options: dict) -> None:
+    """Put the config's ``log_view`` (``AT_FINISH_OPTIONS``) into PETSc's options database for the
+    rest of the process: PETSc prints the log in PetscFinalize, as for ``-log_view`` on the
+    command line (which wins).  The log itself runs already (``PETSc.Log.begin`` in each run)."""
+    for key in AT_FINISH_OPTIONS:
+        if key in config_options and option(key) is None:
+            insert(key, config_options[key])

@@ -69,9 +69,31 @@ BOOLS = ("ksp_initial_guess_nonzero", "snes_ksp_ew", "snes_mf", "snes_mf_operato
          "ksp_error_if_not_converged", "snes_error_if_not_converged", "pc_factor_reuse_ordering",
          "pc_factor_reuse_fill", "ksp_gmres_modifiedgramschmidt", "pc_gamg_repartition",
          "pc_gamg_reuse_interpolation", "pc_jacobi_fixdiagonal", "options_left")
+#: monitors and viewers: PETSc reads their value as a viewer, ``type[:file[:format[:mode]]]``
+#: (PetscOptionsGetViewer), never as a boolean: ``-snes_monitor false`` stops the solve with
+#: "Unsupported viewer false" (PETSc 3.18 and later alike); tests/apps/test_monitor_options.py checks that
+#: PETSc reads each of these as a viewer
+VIEWERS = ("snes_monitor", "snes_monitor_short", "snes_monitor_solution", "snes_monitor_residual",
+           "snes_monitor_solution_update", "snes_linesearch_monitor", "snes_converged_reason",
+           "snes_view", "snes_view_pre", "ksp_monitor", "ksp_monitor_short", "ksp_monitor_true_residual",
+           "ksp_monitor_singular_value", "ksp_converged_reason", "ksp_view", "ksp_view_pre",
+           "ksp_view_mat", "ksp_view_pmat", "ksp_view_rhs", "ksp_view_solution", "mat_view",
+           "log_view")
+#: the viewer types PetscOptionsGetViewer (3.18) takes as a whole value (no ':', no file name)
+VIEWER_TYPES = ("ascii", "binary", "draw", "socket", "matlab", "saws", "vtk", "hdf5", "glvis",
+                "exodusii")
+
+#: options PETSc reads only while it starts (PetscInitialize), before ancf-solve reads the config:
+#: under ``petsc:`` they did nothing and were reported as misspelt; refused there (config/solving.py)
+START_UP_OPTIONS = ("help", "version", "info", "log_trace", "malloc_debug", "on_error_abort",
+                    "no_signal_handler", "options_file", "skip_petscrc", "fp_trap")
+#: options PETSc reads when it finishes (PetscFinalize): the config's value is put into the
+#: database for the rest of the process (linalg/logging.view_at_exit), not around a solve
+AT_FINISH_OPTIONS = ("log_view",)
 
 #: prefixes under which the same option names appear (block, multigrid and split solvers)
 PREFIX = re.compile(r"^(?:(?:sub|mg_coarse|mg_levels(?:_\d+)?|fieldsplit_\w+?|redundant|ksp)_)+")
+_ONE_PREFIX = re.compile(r"^(?:sub|mg_coarse|mg_levels(?:_\d+)?|fieldsplit_[A-Za-z0-9]+|redundant|ksp)_")
 
 _SPECIAL_REAL = ("petsc_default", "default", "petsc_decide", "decide")
 _SPECIAL_INT = _SPECIAL_REAL + ("mouse",)
@@ -117,10 +139,18 @@ def parse_bool(text: str) -> bool | None:
     return True if t in _TRUE else (False if t in _FALSE else None)
 
 
+def _bases(name: str) -> list[str]:
+    """``name`` and what is left after each prefix in turn (``sub_ksp_type``: also ``ksp_type``;
+    stripping every prefix at once would leave ``type``)."""
+    out = [name]
+    while (m := _ONE_PREFIX.match(out[-1])) and m.end() < len(out[-1]):
+        out.append(out[-1][m.end():])
+    return out
+
+
 def _kind(name: str) -> tuple[str, str]:
     """(kind, base name) of an option name without its dash; kind '' = not checked."""
-    base = PREFIX.sub("", name)
-    for key in (name, base):
+    for key in _bases(name):
         if key in TYPES:
             return "type", key
         if key in ENUMS:
@@ -131,7 +161,15 @@ def _kind(name: str) -> tuple[str, str]:
             return "int", key
         if key in BOOLS:
             return "bool", key
+        if key in VIEWERS:
+            return "viewer", key
     return "", name
+
+
+def option_kind(name: str) -> str:
+    """'type', 'enum', 'real', 'int', 'bool', 'viewer', or '' (not checked) for an option name
+    without its dash."""
+    return _kind(name)[0]
 
 
 def check_value(name: str, value: str | None) -> str | None:
@@ -145,6 +183,8 @@ def check_value(name: str, value: str | None) -> str | None:
         if value is None or parse_bool(value) is not None:
             return None
         return f"expected a boolean (true/false, yes/no, on/off, 1/0); got {value!r}"
+    if kind == "viewer":
+        return None if value is None or value == "" else _check_viewer(value)
     if value is None or value == "":
         what = {"type": "a type name", "enum": "one of " + ", ".join(ENUMS.get(base, ())),
                 "real": "a number", "int": "an integer"}[kind]
@@ -178,6 +218,19 @@ def check_value(name: str, value: str | None) -> str | None:
     if lo is not None and value.lower() not in _SPECIAL_INT and n < lo:
         return f"must be >= {lo}; got {value}"
     return None
+
+
+def _check_viewer(value: str) -> str | None:
+    """Why PetscOptionsGetViewer would refuse ``value``, or None.  Only a value without ':' is
+    checked (its type is matched by suffix, as PETSc does); a ``type:file...`` value is PETSc's."""
+    if parse_bool(value) is not None:
+        return (f"a monitor or viewer takes no true/false: PETSc reads {value!r} as a viewer and stops "
+                f"('Unsupported viewer {value}'); to turn it off leave the option out, to turn it on "
+                "give it without a value (in the config: true) or a viewer such as ascii:FILE.txt")
+    if ":" in value or value.endswith(VIEWER_TYPES):
+        return None
+    return (f"unknown viewer {value!r}; give no value (standard output) or "
+            "ascii[:FILE[:FORMAT[:MODE]]], binary[:FILE], draw or hdf5:FILE")
 
 
 def _is_key(token: str) -> bool:

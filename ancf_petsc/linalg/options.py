@@ -12,8 +12,9 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from ..errors import InputError
-from .database import insert, option, remove
+from .database import insert, option, option_names, remove
 from .diagnostics import petsc_message, solver_hint
+from .option_syntax import AT_FINISH_OPTIONS, check_value
 
 def node_blocks_fit(model) -> bool:
     """Whether every node's DOFs are active (all beams interpolate their whole node block, e.g.
@@ -142,10 +143,13 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     prefix) left in the database.  A value or combination PETSc refuses raises
     ``SolverOptionError`` (the same on every rank: the options are).
     """
+    bad = prefixed_option_problem(prefix)
+    if bad:
+        raise SolverOptionError("", bad)
     inserted = []
     for source in (config_options, defaults):
         for key, value in source.items():
-            if option(key, prefix) is None:
+            if option(key, prefix) is None and key not in AT_FINISH_OPTIONS:
                 insert(prefix + key, value)
                 inserted.append(prefix + key)
     n = len(prefix)
@@ -165,6 +169,21 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     return linesearch, kept
 
 
+def prefixed_option_problem(prefix: str) -> str | None:
+    """The first option under ``prefix`` (``solver.options_prefix``) that PETSc would refuse, as
+    one line, or None.  Options without a prefix are checked before PETSc starts
+    (config/options_files.py); the prefix of a solve is known only from its config."""
+    if not prefix:
+        return None
+    for name in option_names():
+        if name.startswith(prefix):
+            value = option(name) or None           # a flag without a value: None
+            why = check_value(name[len(prefix):], value)
+            if why:
+                return f"PETSc option -{name}" + (f" {value}" if value else "") + f": {why}"
+    return None
+
+
 def solver_options(config_options: dict, prefix: str = "", symmetric: bool = True) -> str:
     """``-ksp_type gmres -pc_type ilu`` as in effect (for messages)."""
     pc, factor = factor_package(config_options, prefix, symmetric)
@@ -174,8 +193,15 @@ def solver_options(config_options: dict, prefix: str = "", symmetric: bool = Tru
 
 def refused(exc: Exception, config_options: dict, ranks: int, prefix: str = "",
             symmetric: bool = True) -> str:
-    """One line: PETSc's reason, the options in effect and what works instead."""
+    """One line: PETSc's reason, the options in effect and what works instead.  With MUMPS LU or
+    LDLᵀ (the defaults, which factor every matrix here) the solver is not to blame: another
+    option PETSc read with it is."""
     pc, factor = factor_package(config_options, prefix, symmetric)
+    if factor == "mumps" and pc in MUMPS_PCS and PETSc.Sys.hasExternalPackage("mumps"):
+        return (f"PETSc refused an option while setting up the solver on {ranks} rank(s): "
+                f"{petsc_message(exc)}; check the PETSc options"
+                + (f" with the prefix -{prefix}" if prefix else "") + " given on the command line, "
+                "in PETSC_OPTIONS or options files, and under petsc: in the config")
     return (f"PETSc refused the solver options {solver_options(config_options, prefix, symmetric)} on {ranks} "
             f"rank(s): {petsc_message(exc)}; {solver_hint(pc, factor, ranks, PETSc.Sys.hasExternalPackage)}")
 

@@ -94,6 +94,21 @@ class LoadControl:
         dlam = 0.5 * step
         return dlam, tally.consecutive > self.spec.max_cutbacks or dlam < self.spec.min_increment
 
+    def stop_reason(self, dlam: float, tally: LevelTally) -> str:
+        """Why ``after_failure`` gave up, for the log."""
+        if tally.consecutive > self.spec.max_cutbacks:
+            return f"{tally.consecutive} failures in a row (solver.max_cutbacks = {self.spec.max_cutbacks})"
+        return f"the increment {dlam:.4g} would be below solver.min_increment = {self.spec.min_increment:g}"
+
+    def floored(self, step: float, tally: LevelTally) -> bool:
+        """Whether a level gave up at its first failure only because half the failed ``step`` is
+        below ``min_increment``: no cut-back was tried.  A min_increment above half the spacing
+        of the load levels (or of ``max_increment``) does that to every failure; the config is
+        valid still (a run whose steps all converge never cuts back: the ψ = 45° config with
+        min_increment 6 between its levels 40 and 45 completes), so this is said at the failure."""
+        return (tally.consecutive == 1 and tally.consecutive <= self.spec.max_cutbacks
+                and 0.5 * step < self.spec.min_increment)
+
     def over_budget(self, newton_iterations: int) -> bool:
         """Whether the run has spent more Newton iterations than ``max_newton_iterations``."""
         budget = self.spec.max_newton_iterations

@@ -320,6 +320,7 @@ def run_model(spec: ModelSpec, comm=None, log=print, info: dict | None = None,
 def _run(spec: ModelSpec, comm, say, info: dict | None, point) -> RunResult:
     """``run_model`` with the output directory held."""
     PETSc.Log.begin()                 # event timings for the summary (cheap)
+    logging.view_at_exit(spec.petsc)  # the config's log_view, printed when PETSc finishes
     # PETSc's event times add up over the process: this run's share is the difference
     solver_events0 = logging.event_time("KSPSolve") + logging.event_time("PCSetUp")
     t_start = time.perf_counter()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from petsc4py import PETSc
 
+from ..config.specs import SolverSpec
 from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.options import factor_package, solver_options
@@ -33,6 +34,31 @@ SADDLE_POINT_HINT = ("a contact model's Jacobian is a saddle-point matrix (a zer
                      "multipliers): only a pivoting direct solver factors it, the default (-pc_type cholesky, "
                      "MUMPS LDLᵀ) or -pc_type lu (MUMPS); Krylov methods with gamg, hypre, bjacobi, asm, ilu or "
                      "jacobi and the factorisations of PETSc and SuperLU_DIST fail on it")
+
+
+#: what works instead of ``-snes_mf`` (measured on the two-element bar of tests/apps/test_edges.py
+#: and configs/achilles_type3_psi45.yaml: -snes_mf_operator -ksp_type gmres converges like the
+#: default; -snes_mf -ksp_type gmres solves the bar but did not reach the contact model's first
+#: level in 5 minutes)
+MF_OPERATOR = ("-snes_mf_operator -ksp_type gmres (GMRES on matrix-free products, preconditioned by "
+               "the factored assembled Jacobian)")
+MF_NO_MATRIX = "-snes_mf leaves no matrix to precondition with, so PETSc sets -pc_type none"
+
+
+def matrix_free(snes: PETSc.SNES) -> bool:
+    """Whether the SNES runs matrix-free without a preconditioning matrix (``-snes_mf``; not
+    ``-snes_mf_operator``, which keeps the assembled Jacobian for the preconditioner)."""
+    P = snes.getJacobian()[1]
+    return P is not None and P.getType() == PETSc.Mat.Type.MFFD
+
+
+def floor_detail(step: float, lam: float, floor: float) -> str:
+    """The cause of a level given up at its first failure: half the failed step is below
+    ``solver.min_increment`` (``floor``), so no smaller step was tried (load_control.floored)."""
+    return (f" (no cut-back was tried: half the failed step from load factor {lam:.6g} to {lam + step:.6g} "
+            f"is {0.5 * step:.4g}, below solver.min_increment = {floor:g}; lower solver.min_increment "
+            f"to at most {0.5 * step:.4g} (the default is {SolverSpec.min_increment:g}) so that the step can "
+            "be cut back)")
 
 
 def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:
@@ -94,6 +120,11 @@ def failure_detail(solver, reason: int) -> str:
         return ""
     ksp = solver.snes.getKSP()
     if ksp.getType() == "preonly" and ksp.getPC().getType() == "none":
+        if matrix_free(solver.snes):
+            return (f" ({MF_NO_MATRIX}, and with -ksp_type preonly every Newton step is the residual "
+                    f"itself; for matrix-free products use {MF_OPERATOR}, or add -ksp_type gmres "
+                    "(unpreconditioned: slow, and on a contact model's saddle-point Jacobian unlikely "
+                    "to converge))")
         return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
                 "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
                                                f"; {SADDLE_POINT_HINT}") + ")")
@@ -189,6 +220,8 @@ def linear_solver_detail(solver, reason: int) -> str:
     infog1 = mumps_error(solver.snes.getKSP())
     if solver.linear == "fieldsplit":
         hint = "solver.linear: direct factors the whole Jacobian instead"
+    elif matrix_free(solver.snes):
+        hint = f"{MF_NO_MATRIX}; use {MF_OPERATOR}, or leave out -snes_mf"
     elif infog1 is not None:
         hint = mumps_hint(infog1)
     elif solver.problem.contact is not None:
@@ -203,4 +236,6 @@ def solver_text(solver) -> str:
     """The linear solver in effect, for messages."""
     if solver.linear == "fieldsplit":
         return "FGMRES with the fascicle Schur preconditioner, solver.linear: fieldsplit"
+    if matrix_free(solver.snes):
+        return f"-snes_mf -ksp_type {solver.snes.getKSP().getType()} (no preconditioner)"
     return solver_options(solver.petsc_options, solver.prefix, solver.problem.symmetric)

@@ -52,6 +52,16 @@ def residual_norm(problem, X: PETSc.Vec, reported: float) -> float:
     return norm
 
 
+def _attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_negative) -> str:
+    """What went wrong with a failed sub-step, for its cut-back line in the log."""
+    if reason == STALLED_STEP:
+        return (f" (stopped on the step length with |F| {solver.stalled_at:.2e} above the "
+                f"tolerance {solver.snes.getTolerances()[1]:.1e})")
+    if reason == UNSTABLE_STEP:
+        return f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
+    return " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+
+
 class LoadStepper:
     """Drives ``problem`` through the requested load factors with one SNES (``solver``)."""
 
@@ -274,16 +284,12 @@ class LoadStepper:
         X_prev.copy(P.X)
         P.restore()
         path.dlam, give_up = self.control.after_failure(step, reason == UNSTABLE_STEP, tally)
-        why = " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
-        if reason == STALLED_STEP:
-            why = (f" (stopped on the step length with |F| {self.solver.stalled_at:.2e} above the "
-                   f"tolerance {self.solver.snes.getTolerances()[1]:.1e})")
-        if reason == UNSTABLE_STEP:
-            why = f" ({neg} negative tangent eigenvalue(s), the last state had {path.accepted_negative})"
-            if tally.unstable_at is None:
-                tally.unstable_at = (path.lam + step, neg, path.accepted_negative)
-        self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}{why}; "
-                 f"retry with increment {path.dlam:.4g}")
+        if reason == UNSTABLE_STEP and tally.unstable_at is None:
+            tally.unstable_at = (path.lam + step, neg, path.accepted_negative)
+        then = (f"no retry: {self.control.stop_reason(path.dlam, tally)}" if give_up
+                else f"retry with increment {path.dlam:.4g}")
+        self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}"
+                 f"{_attempt_why(self.solver, reason, neg, inverted, lost, path.accepted_negative)}; {then}")
         if give_up:
             jump = None
             if not (inverted or lost) and reason in JUMP_REASONS:
@@ -291,9 +297,11 @@ class LoadStepper:
                                      self.solver.snes.getTolerances()[1])
                 X_prev.copy(P.X)
                 P.restore()
+            # a min_increment that forbade every cut-back is the cause, not Newton's course
+            cause = (solver_messages.floor_detail(step, path.lam, self.spec.min_increment)
+                     if self.control.floored(step, tally) else solver_messages.failure_detail(self.solver, reason))
             failure = LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                      solver_messages.failure_detail(self.solver, reason)
-                                      + solver_messages.lost_detail(P.contact, step, lost and not inverted)
+                                      cause + solver_messages.lost_detail(P.contact, step, lost and not inverted)
                                       + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
             if self.branches.take(self, path, X_prev, target, tally, resume=False):
                 return                                  # on from a stable branch (branch_switch.py)

@@ -21,6 +21,8 @@ from .surface import InterfaceCurves, SurfaceKernels, closest_parameter, section
 
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
 MAX_ITERATIONS = 40
+#: passes a point off B (weight 0) makes on its own before it stops there (``Projector.descend``)
+OFF_B_PASSES = 3
 #: a partner place within this much of a B element boundary (in ξ) is sought across it too
 NEIGHBOUR_BAND = 0.1
 #: a start this close (in ξ) to the boundary it stepped across is on it
@@ -242,12 +244,16 @@ class Projector:
         pinned to the boundary and only t is solved for.  A point sliding onto a B element this
         rank does not hold stays at the boundary and the element is recorded in ``wanted`` (the
         caller exchanges it and projects again).  Each point stops when done (after the first pass;
-        off B: once a step leaves it in place), so its place does not depend on the batch (a rank's)."""
+        off B: once a step leaves it in place, or after ``OFF_B_PASSES`` passes in a row off B), so
+        its place does not depend on the batch (a rank's); off-B points used to run for as long as
+        the batch's slowest point, and waiting for them to stand still made the projection 5x
+        slower (the unilateral 90 deg stride: 0.9 -> 4.9 s of 8.5)."""
         P = len(eB)
         valid, weight = np.ones(P, dtype=bool), np.ones(P)
         ok, stuck_ever = np.zeros(P, dtype=bool), np.zeros(P, dtype=bool)
         tol_t = PROJECTION_TOL * t_end
         pinned, stopped, idle = (np.zeros(P, dtype=bool) for _ in range(3))
+        off = np.zeros(P, dtype=np.int64)          # passes in a row a point ended off B
         search = Backtracking(eB, xiB, tB, t_end, keep_direction=self.metric_steps)
         for it in range(MAX_ITERATIONS):
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
@@ -257,7 +263,8 @@ class Projector:
             # in wild intermediate iterates, far from the surface) keeps the point where it is
             # (``stuck_ever``); such a state is never accepted
             worse, ok = self._control.assess(search, d, valid, dz, r, PROJECTION_TOL, tol_t, stuck_ever)
-            stopped |= ok & (valid | idle) & (it > 0)
+            off = np.where(ok & ~valid, off + 1, 0)
+            stopped |= ok & (valid | idle | (off > OFF_B_PASSES)) & (it > 0)
             if np.all(stopped):
                 break
             place = (eB.copy(), xiB.copy(), tB.copy(), weight.copy())   # advance may overwrite them

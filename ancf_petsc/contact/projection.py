@@ -21,7 +21,11 @@ from .surface import InterfaceCurves, SurfaceKernels, closest_parameter, section
 
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
 MAX_ITERATIONS = 40
-#: passes a point off B (weight 0) makes on its own before it stops there (``Projector.descend``)
+#: passes in a row a point off B (weight 0) makes before it stops there, or a step leaves it in
+#: place (``Projector.descend``; its own count, so the batch does not decide).  Off-B points used
+#: to run for as long as the batch's slowest point; waiting for them to stand still made the
+#: projection 5x slower (the unilateral 90 deg stride: 0.9 -> 4.9 s of 8.5); with 1 pass the
+#: bundle's fixed increments lose a point from its search window (tests/contact/test_unilateral.py)
 OFF_B_PASSES = 3
 #: a partner place within this much of a B element boundary (in ξ) is sought across it too
 NEIGHBOUR_BAND = 0.1
@@ -244,24 +248,19 @@ class Projector:
         pinned to the boundary and only t is solved for.  A point sliding onto a B element this
         rank does not hold stays at the boundary and the element is recorded in ``wanted`` (the
         caller exchanges it and projects again).  Each point stops when done (after the first pass;
-        off B: once a step leaves it in place, or after ``OFF_B_PASSES`` passes in a row off B), so
-        its place does not depend on the batch (a rank's); off-B points used to run for as long as
-        the batch's slowest point, and waiting for them to stand still made the projection 5x
-        slower (the unilateral 90 deg stride: 0.9 -> 4.9 s of 8.5)."""
+        off B: ``OFF_B_PASSES``), so its place does not depend on the batch (a rank's)."""
         P = len(eB)
         valid, weight = np.ones(P, dtype=bool), np.ones(P)
         ok, stuck_ever = np.zeros(P, dtype=bool), np.zeros(P, dtype=bool)
         tol_t = PROJECTION_TOL * t_end
-        pinned, stopped, idle = (np.zeros(P, dtype=bool) for _ in range(3))
-        off = np.zeros(P, dtype=np.int64)          # passes in a row a point ended off B
+        pinned, stopped, idle, off = (np.zeros(P, dtype=t) for t in (bool, bool, bool, np.int64))
         search = Backtracking(eB, xiB, tB, t_end, keep_direction=self.metric_steps)
         for it in range(MAX_ITERATIONS):
             Y, Yz, Yzz, NB, NBz = self.surface(x_of, itf, eB, xiB, tB)
             d = xA - Y
             dz, r = self._kernels.step(Yz, Yzz, d, pinned, self.metric_steps)
-            # worse: never on the first pass (φ of the start: ∞); a degenerate local problem (only
-            # in wild intermediate iterates, far from the surface) keeps the point where it is
-            # (``stuck_ever``); such a state is never accepted
+            # worse: never on the first pass (φ of the start: ∞); a degenerate local problem (wild
+            # iterates far from the surface) keeps the point (``stuck_ever``), never accepted
             worse, ok = self._control.assess(search, d, valid, dz, r, PROJECTION_TOL, tol_t, stuck_ever)
             off = np.where(ok & ~valid, off + 1, 0)
             stopped |= ok & (valid | idle | (off > OFF_B_PASSES)) & (it > 0)

@@ -184,15 +184,7 @@ class Contact:
         gbar = sums[:, 0]
         support = sums[:, 1] > 1e-9                  # Φ's rows sum to one
         z = xl.reshape(-1)[self.model.dofs_per_node * lpos(self.mult_block[self.mults]) + self.space.slot[self.mults]]
-        prev = self.status[self.mults]
-        if self.allow_update or not self.law.decides_activity:
-            active = self.law.update(gbar, z, prev, self.tie_tolerance, self.mults, self.owned,
-                                     self.reduce) & support
-            self.allow_update = False
-        else:
-            active = prev & support
-        self.status_changes += int(np.count_nonzero(active != prev))
-        self.status[self.mults] = active
+        active = decide_status(self, gbar, z, support)
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
         pressure = self.stiffness * (self.PhiT @ (z * rows.load))
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=pressure * weight,
@@ -286,6 +278,26 @@ class Contact:
         self.projector.metric_steps |= bool(lost)
         self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
         return bool(change > WEIGHT_TOL or lost)
+
+
+def decide_status(contact: Contact, gbar: np.ndarray, z: np.ndarray, support: np.ndarray) -> np.ndarray:
+    """The status of the local multipliers in an evaluation: the law's (where it may change it),
+    else the kept one.  An evaluation in which some rank's projection reached an element that
+    rank does not hold is repeated after the exchange (petsc/exchange.py): it neither decides
+    nor records a status, so that the law sees the gaps one rank would (collective with the
+    parallel hooks set)."""
+    prev = contact.status[contact.mults]
+    complete = contact.all_ranks is None or contact.all_ranks(not contact.missing)
+    if complete and (contact.allow_update or not contact.law.decides_activity):
+        active = contact.law.update(gbar, z, prev, contact.tie_tolerance, contact.mults, contact.owned,
+                                    contact.reduce) & support
+        contact.allow_update = False
+    else:
+        active = prev & support
+    if complete:
+        contact.status_changes += int(np.count_nonzero(active != prev))
+        contact.status[contact.mults] = active
+    return active
 
 
 def forget_evaluation(contact: Contact) -> None:

@@ -33,6 +33,7 @@ class GhostExchange:
         self.needed = self.element_nodes        # local array: these node blocks, in this order
         self.contact_nodes = np.zeros(0, dtype=np.int64)
         self.scatter: PETSc.Scatter | None = None
+        self.last: PETSc.Vec | None = None      # the state of the last evaluation (with contact)
         self.xloc: PETSc.Vec | None = None
         self.floc: PETSc.Vec | None = None
         self.held_local = np.zeros(0, dtype=np.int64)    # held DOFs in the local array …
@@ -47,6 +48,7 @@ class GhostExchange:
         The local array holds this rank's element nodes and the node blocks its contact points
         read (their A elements and the B elements they project onto): never the whole vector."""
         self.needed = np.union1d(self.element_nodes, contact_nodes).astype(np.int64)
+        self.forget_state()                     # a new local array: the next evaluation refreshes
         self.contact_nodes = np.asarray(contact_nodes, dtype=np.int64)
         if self.scatter is not None:
             for obj in (self.scatter, self.xloc, self.floc):
@@ -70,11 +72,20 @@ class GhostExchange:
         if self.contact is not None:
             self.contact.set_available(self.needed)
 
-    def refresh(self) -> None:
-        """Rebuild the exchange if any rank's contact pairs changed."""
+    def forget_state(self) -> None:
+        """No last evaluated state (``evaluate`` then refreshes the exchange first)."""
+        if self.last is not None:
+            self.last.destroy()
+        self.last = None
+
+    def refresh(self, reached: np.ndarray | None = None) -> None:
+        """Rebuild the exchange if any rank's contact pairs changed (``reached``: node blocks an
+        attempt of the evaluation being repeated reached, kept)."""
         if self.contact is None:
             return
         want = self.contact.required_nodes()
+        if reached is not None:
+            want = np.union1d(want, reached)
         changed = self.contact.missing or not np.array_equal(want, self.contact_nodes)
         if self.comm.tompi4py().allreduce(int(changed)):
             self.build(want)
@@ -82,13 +93,27 @@ class GhostExchange:
 
     def evaluate(self, X: PETSc.Vec, evaluate):
         """``evaluate(xl)`` on the local state of X; if a contact projection reached a node block
-        the rank did not hold, exchange and evaluate again."""
-        for _ in range(20):
-            self.refresh()
+        the rank did not hold, exchange and evaluate again, every point from the place it started
+        the first attempt from: its descent is then the one a single rank makes (an attempt's
+        point waits at the boundary of the element it lacks, and a descent from there may end at
+        another closest point), and the contact law decides on that evaluation only (Contact)."""
+        start = None if self.contact is None else self.contact.projector.state()
+        reached = None
+        # at the state the last evaluation was made at, its exchange served it: a rebuild (to a
+        # smaller set) would only drop the contact's kept evaluation, and the projections made
+        # again from their own results may move where one rank's kept ones do not
+        again = self.last is not None and X.equal(self.last)
+        for attempt in range(20):
+            if attempt or not again:
+                self.refresh(reached)
             out = evaluate(self.local_state(X))
             missing = self.contact is not None and self.contact.missing
             if not self.comm.tompi4py().allreduce(int(missing)):
+                if self.contact is not None:
+                    self.last = X.copy(self.last)
                 return out
+            reached = np.union1d(self.contact.required_nodes(), [] if reached is None else reached)
+            self.contact.projector.resume(start)
         raise RuntimeError("contact exchange did not settle")   # not reached: one element per retry
 
     def local_state(self, X: PETSc.Vec) -> np.ndarray:
@@ -134,7 +159,7 @@ class GhostExchange:
 
     def destroy(self) -> None:
         """Free the scatter and the local vectors (not collective)."""
-        for obj in (self.scatter, self.xloc, self.floc):
+        for obj in (self.scatter, self.xloc, self.floc, self.last):
             if obj is not None:
                 obj.destroy()
-        self.scatter = self.xloc = self.floc = None
+        self.scatter = self.xloc = self.floc = self.last = None

@@ -242,6 +242,32 @@ def test_predictor_finds_the_contact_state_of_the_touching_start():
     pred.destroy()
 
 
+def test_an_evaluation_repeated_after_the_exchange_decides_no_status():
+    """On several ranks an evaluation in which some rank's projection reached an element that
+    rank does not hold is repeated after the exchange (petsc/exchange.py), every point from the
+    place it started from.  Its gaps are not those one rank sees (the point waited at the
+    boundary), so it neither decides nor records a status: the law decides on the repeated
+    evaluation.  (Before, the law decided on the incomplete gaps and the repeat kept that status.)"""
+    from ancf_petsc.petsc.complementarity import multiplier_dofs
+    P, _ = build_problem(_achilles(45, 4, 2), "aij")
+    c = P.contact
+    X = P.q0.copy()
+    lo, _ = X.getOwnershipRange()
+    x = X.getArray()
+    x[multiplier_dofs(P) - lo] = -1e-3                  # every multiplier pulls ...
+    del x
+    c.status[:] = True                                  # ... on an active constraint: release
+    before = c.status_changes
+    c.all_ranks = lambda flag: False                    # another rank lacks an element
+    c.allow_update = True
+    c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+    assert c.status.all() and c.allow_update and c.status_changes == before
+    c.all_ranks = lambda flag: flag                     # the repeated, complete evaluation
+    c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+    assert not c.status.any() and not c.allow_update
+    assert c.status_changes == before + len(c.status)
+
+
 @pytest.mark.parametrize("matrix", ["sbaij", "aij"])
 def test_kept_operator_refactors_to_a_fresh_predictors_schur_complement(matrix):
     """The predictor keeps K between linearisations (complementarity.KeptOperator: its values

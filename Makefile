@@ -26,10 +26,10 @@ report: setup
 	$(VENV)/bin/ancf-report --jobs 2
 
 test: setup
-	$(PY) -m pytest -q -rs -n auto tests
+	$(PY) -m pytest -q -rs tests
 
 test-fast: setup
-	$(PY) -m pytest -q -rs -n auto -m "not slow and not mpi" tests
+	$(PY) -m pytest -q -rs -m "not slow and not mpi" tests
 
 bench: setup
 	$(PY) scripts/bench_kernel.py

@@ -80,6 +80,20 @@ def _nearest_on_b(projector, k, xA, x_of, samples=(21, 81)):
     return best
 
 
+def _moved(shift):
+    """The projector and points of ``_contact``'s contact, the reference positions' reader,
+    every point's index and A's contact points moved rigidly by ``shift`` [m]."""
+    model, contact = _contact()
+    pj, pts = contact.projector, contact.points
+    conn = model.connectivity()
+
+    def x_of(els):
+        return model.q0[conn[els]].reshape(len(els), SLOTS, 3)
+    idx = np.arange(pts.n_points)
+    xA = np.einsum("pa,pai->pi", pts.NA, x_of(pts.eA)) + np.asarray(shift)
+    return pj, pts, x_of, idx, xA
+
+
 @pytest.mark.parametrize("shift", [(0.012, 0.0, 0.0), (0.004, 0.003, -0.002), (-0.009, -0.0035, 0.0)])
 def test_points_moved_far_find_the_nearest_surface_point(shift):
     """A's contact points moved rigidly far from their partners (up to 0.7 element along the
@@ -89,14 +103,7 @@ def test_points_moved_far_find_the_nearest_surface_point(shift):
     minimiser finds on B's surface (sampling + L-BFGS-B, every element).  With the Levenberg
     steps of a solve's iterates (``metric_steps`` off) two of the three moves do not converge,
     as with the former projector: the case ``Contact.refresh_weights`` re-solves."""
-    model, contact = _contact()
-    pj, pts = contact.projector, contact.points
-    conn = model.connectivity()
-
-    def x_of(els):
-        return model.q0[conn[els]].reshape(len(els), SLOTS, 3)
-    idx = np.arange(pts.n_points)
-    xA = np.einsum("pa,pai->pi", pts.NA, x_of(pts.eA)) + np.asarray(shift)
+    pj, pts, x_of, idx, xA = _moved(shift)
     pj.metric_steps = True           # as after a converged solve left a projection unconverged
     pr = pj.project(idx, xA, x_of)
     assert pr.converged
@@ -144,14 +151,7 @@ def test_a_points_projection_does_not_depend_on_the_points_beside_it(shift):
     one mixed beam: 2 and 3 ranks 23 % from the serial answer).  Moved far (points deep inside B
     and past it, some unconverged with the Levenberg steps of a solve's iterates), every point
     projected in one batch lands exactly where it lands projected alone."""
-    model, contact = _contact()
-    pj, pts = contact.projector, contact.points
-    conn = model.connectivity()
-
-    def x_of(els):
-        return model.q0[conn[els]].reshape(len(els), SLOTS, 3)
-    idx = np.arange(pts.n_points)
-    xA = np.einsum("pa,pai->pi", pts.NA, x_of(pts.eA)) + np.asarray(shift)
+    pj, pts, x_of, idx, xA = _moved(shift)
     start = pj.state()
     batch = pj.project(idx, xA, x_of)
     together = pj.state()

@@ -139,13 +139,36 @@ def point_fields(c, st: ContactState, q0_of) -> dict:
             "multiplier_active": st.active[own]}
 
 
-#: what marks a warning about the last level (a restart drops the stopped run's: ``from_last_level``)
+#: what marks a warning about the last level (a restart drops the stopped run's: ``made_at_the_end``)
 LAST_LEVEL = "at the last level"
 
 
-def from_last_level(note: str) -> bool:
-    """Whether a warning line is a ``penetration_warnings`` one (about the run's last level)."""
-    return note.startswith("warning: contact interface ") and LAST_LEVEL in note
+#: the start of ``path_notes``' line
+PATH_NOTE = "note: Coulomb friction's answer follows the load path"
+
+
+def made_at_the_end(note: str) -> bool:
+    """Whether a warning line is one made at the end of a run (``penetration_warnings`` about its
+    last level, ``path_notes`` about its levels): a restarted run makes it again."""
+    return (note.startswith("warning: contact interface ") and LAST_LEVEL in note) or note.startswith(PATH_NOTE)
+
+
+def path_notes(c, steps: list[dict]) -> list[str]:
+    """One line if the ``Contact`` c has friction (bounds that follow the state) and levels of
+    ``steps`` (summary.json's) were reached through cut-backs or Tresca solves: their increments
+    were the solver's choice, and near a stick–slip change whether a solve fails follows rounding
+    (docs/gait.md, "Friction histories and the increment": the locked-in soleus displacement of
+    the 13-frame stride is 0.11725 or 0.11502 mm by that alone), so another number of ranks, a
+    restart or other options may end on another valid state."""
+    levels = [s["load_factor"] for s in steps if s.get("cutbacks") or s.get("tresca_solves")]
+    if not levels or not any(t.bounded for t in c.terms):
+        return []
+    shown = ", ".join(f"{x:g}" for x in levels[:5]) + (", ..." if len(levels) > 5 else "")
+    return [f"{PATH_NOTE}: {len(levels)} level(s) ({shown}) were reached through cut-backs or Tresca "
+            "solves, increments the solver chose; near a stick-slip change whether a solve fails follows "
+            "rounding, so another number of ranks, a restart or other options may take other increments "
+            "and end on another valid state (docs/gait.md, \"Friction histories and the increment\"); a "
+            "smaller solver.max_increment makes cut-backs rarer"]
 
 
 def penetration_warnings(c, report: dict) -> list[str]:

@@ -25,7 +25,7 @@ from ..model.build import build_model
 from ..model.contact_setup import contact_for
 from ..parallel.partition import make_layout, partition_stats
 from ..linalg import logging
-from ..contact.reports import from_last_level, penetration_warnings
+from ..contact.reports import made_at_the_end, path_notes, penetration_warnings
 from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
@@ -361,8 +361,9 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     exchange = run.exchange_report()
     if run.contact is not None and comm.rank == 0 and run.writer.summary["steps"]:
         notes = run.writer.summary["warnings"]
-        notes[:] = [w for w in notes if not from_last_level(w)]     # a restarted run's earlier last level
-        for note in penetration_warnings(run.contact, run.writer.summary["steps"][-1].get("contact", {})):
+        notes[:] = [w for w in notes if not made_at_the_end(w)]     # a restarted run's, made again
+        steps = run.writer.summary["steps"]
+        for note in penetration_warnings(run.contact, steps[-1].get("contact", {})) + path_notes(run.contact, steps):
             run.writer.summary["warnings"].append(note)
             say(f"[ancf] {note}")
     problem_writing = run.writer.finish(

@@ -12,6 +12,7 @@ import pytest
 from petsc4py import PETSc
 
 from helpers import CONFIGS, assert_same_as_serial, load_raw, probes_table, run_inline, run_on_ranks
+from ancf_petsc.contact.reports import PATH_NOTE, made_at_the_end, path_notes
 from ancf_petsc.solving import newton
 
 
@@ -63,6 +64,22 @@ def test_fixed_point_gives_the_plain_answer(tmp_path, monkeypatch):
     assert [st["tresca_solves"] for st in detour["steps"]] == calls
     assert [st["tresca_solves"] for st in plain["steps"]] == [0, 0]
     assert_same_as_serial({1: probes_table(plain), 2: probes_table(detour)}, rtol=1e-8)
+    # the detour's increments were the solver's choice: the run says its answer follows the path
+    (note,) = [w for w in detour["warnings"] if w.startswith(PATH_NOTE)]
+    assert "2 level(s) (60, 80) were reached through cut-backs or Tresca solves" in note, note
+    assert not [w for w in plain["warnings"] if w.startswith(PATH_NOTE)]
+
+
+def test_the_path_note_is_frictions_and_made_again_on_a_restart():
+    """``path_notes``: only a contact with friction's bounds gets it, only for levels reached
+    through cut-backs or Tresca solves; a restart drops the stopped run's (``made_at_the_end``)."""
+    from types import SimpleNamespace
+    steps = [{"load_factor": 1.0, "cutbacks": 0, "tresca_solves": 0},
+             {"load_factor": 2.5, "cutbacks": 2, "tresca_solves": 0}]
+    coulomb, frictionless = (SimpleNamespace(terms=[SimpleNamespace(bounded=b)]) for b in (True, False))
+    (note,) = path_notes(coulomb, steps)
+    assert note.startswith(PATH_NOTE) and "1 level(s) (2.5)" in note and made_at_the_end(note)
+    assert path_notes(frictionless, steps) == [] and path_notes(coulomb, steps[:1]) == []
 
 
 @pytest.mark.mpi

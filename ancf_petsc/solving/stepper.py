@@ -40,18 +40,6 @@ JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.Converged
                 STALLED_STEP)
 
 
-def residual_norm(problem, X: PETSc.Vec, reported: float) -> float:
-    """|F(X)| as the SNES reported it, or evaluated where its type keeps none (ksponly, ms report
-    0: their levels were accepted with NaN or one linear step's answers).  Collective."""
-    if reported > 0.0:
-        return reported
-    F = X.duplicate()
-    problem.residual(None, X, F)
-    norm = F.norm()
-    F.destroy()
-    return norm
-
-
 def _attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_negative) -> str:
     """What went wrong with a failed sub-step, for its cut-back line in the log."""
     if reason == STALLED_STEP:
@@ -125,7 +113,10 @@ class LoadStepper:
                      f"{'converged' if reason > 0 else 'failed'}, {its} Newton iterations in all")
         self.history = S.history
         self.newton_iterations += its
-        fnorm = residual_norm(self.problem, X, S.snes.getFunctionNorm())
+        # a SNES type that keeps no norm (ksponly, ms report 0: their levels were accepted with
+        # NaN or one linear step's answers) is judged on |F(X)| (collective)
+        fnorm = S.snes.getFunctionNorm()
+        fnorm = fnorm if fnorm > 0.0 else S.contact_steps.residual_norm(X)
         self.unsettled = newton.unsettled is not None
         if self.unsettled:
             # a level accepted with its weights' last update unsettled reports the residual

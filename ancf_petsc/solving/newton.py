@@ -323,13 +323,18 @@ class PhasedNewton:
         return False
 
     def _reweigh(self, X: PETSc.Vec, lam: float, its: int, weighed) -> tuple[int, int, bool]:
-        """One solve for the weights just updated, the status kept (``_predicted``)."""
+        """One solve for the weights just updated, the status kept (``_predicted``), and the
+        exact rule's check of its state: where that changes the status, the phases go on from
+        there (reason None).  Without the check a state with pulling multipliers was accepted:
+        the 135° uniform unilateral stride's frame 1, after a failed prediction whose status the
+        weights' solve kept (normal force −28 N between soleus and medial gastrocnemius)."""
         if weighed is not None:
             weighed[0].destroy()
         forget_evaluation(self.steps.contact)
         reason, n = self.snes_solve(X)
-        self._trace(lam, "weights changed", n, reason)
-        return reason, its + n, False
+        changes = self.steps.update_status(X) if reason > 0 else 0
+        self._trace(lam, "weights changed", n, reason, changes)
+        return (None if changes else reason), its + n, False
 
     def _bounds_fixed_point(self, X, lam: float, phases: list) -> tuple[int, int]:
         """Friction's bounds (module docstring): Tresca solves from X (the increment's start),

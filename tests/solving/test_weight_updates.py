@@ -83,3 +83,31 @@ def test_a_run_with_unsettled_levels_says_so_in_its_reason_and_message():
     assert (state, code) == ("completed", status.WEIGHTS_UNSETTLED)
     assert "2 of 3 levels" in message and "0.875, 1" in message and "contact.fade: newton" in message
     assert status.exit_code(state, code) == status.EXIT_OK
+
+
+class _StatusSteps(_Steps):
+    """A unilateral law's part whose exact rule changes ``changes`` statuses at a checked state."""
+
+    decides_activity = True
+
+    def __init__(self, flips: int):
+        super().__init__(0)
+        self.contact, self.checked, self.flips = object(), [], flips
+
+    def update_status(self, X):
+        self.checked.append(X)
+        return self.flips
+
+
+def test_the_solve_for_new_weights_is_checked_by_the_exact_rule(monkeypatch):
+    """The weights' solve after a failed prediction keeps the status the check before set; its
+    state is checked again, and where that changes the status the phases go on (reason None)
+    instead of accepting it: accepted unchecked, the 135° uniform unilateral stride's frame 1
+    had multipliers pulling (tests/contact/test_gait_envelope.py)."""
+    from ancf_petsc.solving import newton as newton_module
+    monkeypatch.setattr(newton_module, "forget_evaluation", lambda contact: None)
+    for changes, expected in ((3, None), (0, CONVERGED)):
+        steps = _StatusSteps(changes)
+        newton = PhasedNewton(steps, lambda X: (CONVERGED, 4))
+        assert newton._reweigh("X", 1.0, 7, None) == (expected, 11, False)
+        assert steps.checked == ["X"]

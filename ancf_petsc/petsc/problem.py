@@ -20,6 +20,7 @@ import time
 import numpy as np
 from petsc4py import PETSc
 
+from ..contact import pending_status
 from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
@@ -248,9 +249,8 @@ class Problem:
         return self.contact is None
 
     def state_is_clean(self) -> bool:
-        """After SNES converged: did the last residual use converged contact projections? (collective)"""
-        ok = self.contact is None or self.contact.converged()
-        return bool(self.comm.tompi4py().allreduce(int(not ok)) == 0)
+        """After SNES converged: is the last residual's state an answer? (``unclean``; collective)"""
+        return unclean(self) is None
 
     def checkpoint(self) -> None:
         """Called at every converged state: history the residual depends on (contact projections)."""
@@ -283,3 +283,13 @@ class Problem:
         self.loads.destroy()
         for obj in (self.X, self.F, self.q0, self.J):
             obj.destroy()
+
+
+def unclean(problem: Problem) -> str | None:
+    """After SNES converged, what keeps the last residual's state from being an answer:
+    "projection" (a contact projection did not converge), "conditions" (a unilateral status the
+    exact rule would change there: contact.pending_status) or None.  Collective."""
+    c = problem.contact
+    flags = [c is not None and not c.converged(), c is not None and bool(np.any(pending_status(c)))]
+    flags = problem.comm.tompi4py().allreduce(np.array(flags, dtype=int))
+    return "projection" if flags[0] else ("conditions" if flags[1] else None)

@@ -85,13 +85,12 @@ MAX_STATUS_UPDATES = 40
 #: predictions (Josephy–Newton steps) of one increment at most before the phases take over
 MAX_PREDICTIONS = 8
 TRACE = bool(os.environ.get("ANCF_TRACE_PHASES"))
-#: Tresca solves of a failed friction increment at most, and the bounds' relative change below
-#: which Coulomb's own iteration takes over (module docstring)
+#: Tresca solves of a failed friction increment at most; the bounds' relative change below which
+#: Coulomb's own iteration takes over (module docstring)
 MAX_BOUND_UPDATES = 60
 BOUND_TOL = 1e-9
-#: ... and gives up when ``STALL_WINDOW`` updates did not halve the smallest change (measured:
-#: about 0.55 per update where it helps, with plateaus of 3–4 updates; 0.2–0.3 without
-#: shrinking at μ = 3 from rest on the unilateral law)
+#: ... and gives up when ``STALL_WINDOW`` updates did not halve the smallest change (measured: about
+#: 0.55 per update where it helps, plateaus of 3–4; 0.2–0.3, not shrinking, at μ = 3 from rest)
 STALL_WINDOW, STALL_FACTOR = 6, 0.5
 #: the rule that checks a predicted state (the exact one, block principal pivoting)
 CHECK = Phase("exact", pivoting=True)
@@ -323,11 +322,9 @@ class PhasedNewton:
         return False
 
     def _reweigh(self, X: PETSc.Vec, lam: float, its: int, weighed) -> tuple[int, int, bool]:
-        """One solve for the weights just updated, the status kept (``_predicted``), and the
-        exact rule's check of its state: where that changes the status, the phases go on from
-        there (reason None).  Without the check a state with pulling multipliers was accepted:
-        the 135° uniform unilateral stride's frame 1, after a failed prediction whose status the
-        weights' solve kept (normal force −28 N between soleus and medial gastrocnemius)."""
+        """One solve for the weights just updated, the status kept (``_predicted``), checked by
+        the exact rule: a changed status leaves the increment to the phases (reason None; unchecked,
+        the 135° uniform unilateral stride's frame 1 had multipliers pulling, −28 N)."""
         if weighed is not None:
             weighed[0].destroy()
         forget_evaluation(self.steps.contact)

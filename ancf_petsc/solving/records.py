@@ -20,6 +20,10 @@ REASONS[UNCLEAN_STATE] = "PROJECTION_NOT_CONVERGED"
 #: absolute tolerance: not converged (a line search that no longer moves)
 STALLED_STEP = -1002
 REASONS[STALLED_STEP] = "STALLED_ABOVE_TOLERANCE"
+#: SNES converged on a unilateral active set that the exact rule would change at the final state
+#: (a multiplier pulls or a constraint penetrates beyond the tie tolerance): not an answer
+VIOLATED_STATE = -1003
+REASONS[VIOLATED_STATE] = "UNILATERAL_CONDITIONS_VIOLATED"
 
 
 def reason_name(reason: int) -> str:

@@ -19,7 +19,7 @@ from petsc4py import PETSc
 from ..config.specs import SolverSpec
 from ..linalg import logging
 from ..petsc.complementarity import ComplementarityPredictor
-from ..petsc.problem import Problem
+from ..petsc.problem import Problem, unclean
 from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
@@ -29,8 +29,8 @@ from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .predictor import TangentPredictor
 from .rest_response import bounded_first_increment
-from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, LoadStepFailure, PathState, StepRecord,
-                      reason_name)
+from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
+                      StepRecord, reason_name)
 from .snes_solver import SNESSolver
 
 
@@ -47,6 +47,8 @@ def _attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_
                 f"tolerance {solver.snes.getTolerances()[1]:.1e})")
     if reason == UNSTABLE_STEP:
         return f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
+    if reason == VIOLATED_STATE:
+        return " (converged with a multiplier pulling or a gap penetrating: the exact rule would change the status)"
     return " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
 
 
@@ -235,15 +237,15 @@ class LoadStepper:
 
     def _judge(self, path: PathState, reason: int, fnorm: float, step: float, tally: LevelTally):
         """The sub-step's verdict: SNES's reason, made a failure when the residual is not small
-        (stalled), when a projection did not converge, or when the state is less stable than
-        the last accepted one (``UNSTABLE_STEP``, ``LoadControl.wants_stability_retry``)."""
+        (stalled), the state no answer (problem.unclean) or less stable than the last accepted."""
         P = self.problem
         if reason > 0 and not self.solver.residual_small(reason, fnorm):
             reason = STALLED_STEP                       # a step-length stop above the tolerance
             self.solver.stalled_at = fnorm
-        converged = reason > 0 and np.isfinite(fnorm) and P.state_is_clean()
+        cause = unclean(P) if reason > 0 and np.isfinite(fnorm) else "residual"
+        converged = reason > 0 and cause is None
         if reason > 0 and not converged:
-            reason = UNCLEAN_STATE
+            reason = VIOLATED_STATE if cause == "conditions" else UNCLEAN_STATE
         neg = self.solver.negative_eigenvalues() if converged else None
         if neg:                                         # a saddle: a branch point to switch from
             self.branches.remember(path.lam + step, P.X, self.solver.snes.getJacobian()[0], neg, path.lam)

@@ -198,3 +198,29 @@ def test_every_accepted_frame_of_the_135_degree_uniform_stride_is_unilateral(tmp
     for step in s["steps"]:
         for name, c in step["contact"].items():
             assert c["tension_force"] >= -1e-9 and c["normal_force"] >= 0.0, (step["load_factor"], name)
+
+
+@pytest.mark.slow
+def test_a_state_the_exact_rule_would_change_is_not_accepted(tmp_path, monkeypatch):
+    """The guard behind ``_reweigh``'s check: with the weights' solve accepted unchecked again
+    (the solver before the fix), the stepper itself refuses frame 1's state with multipliers
+    pulling (UNILATERAL_CONDITIONS_VIOLATED, petsc/problem.py ``unclean``) and cuts back: every
+    accepted frame still presses only."""
+    from ancf_petsc.contact import forget_evaluation
+    from ancf_petsc.solving import newton
+
+    def unchecked(self, X, lam, its, weighed):
+        if weighed is not None:
+            weighed[0].destroy()
+        forget_evaluation(self.steps.contact)
+        reason, n = self.snes_solve(X)
+        return reason, its + n, False
+
+    monkeypatch.setattr(newton.PhasedNewton, "_reweigh", unchecked)
+    raw = cell_config(EnvelopeCell(NEO, 135.0, "uniform", "unilateral", stride=True))
+    raw.setdefault("solver", {})["max_newton_iterations"] = 200
+    s = run_inline(raw, tmp_path, base_dir=CONFIGS)
+    assert len(s["steps"]) >= 2 and s["steps"][0]["cutbacks"] >= 1
+    for step in s["steps"]:
+        for name, c in step["contact"].items():
+            assert c["tension_force"] >= -1e-9 and c["normal_force"] >= 0.0, (step["load_factor"], name)

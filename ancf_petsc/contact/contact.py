@@ -303,10 +303,10 @@ def decide_status(contact: Contact, gbar: np.ndarray, z: np.ndarray, support: np
 def pending_status(contact: Contact) -> np.ndarray:
     """The local multipliers whose status the exact rule would change at the last evaluation's
     state: an active one pulling (z < −tie tolerance) or an inactive one penetrating (ḡ < −tie
-    tolerance).  None where evaluations may change the status (they did); at a state solved with
-    the status kept, a converged residual says nothing of them (solving/newton.py ``_reweigh``:
-    an accepted frame with multipliers pulling).  Empty without a law that decides activity or
-    without a kept evaluation."""
+    tolerance).  Where the evaluations may change the status, the last one applied the rule and
+    none is pending; at a state solved with the status kept a converged residual says nothing of
+    them (solving/newton.py ``_reweigh``: an accepted frame with multipliers pulling).  Empty
+    without a law that decides activity or without a kept evaluation."""
     if not contact.law.decides_activity or contact._cache is None:
         return np.zeros(0, dtype=bool)
     st, tol = contact._cache[2], contact.tie_tolerance

@@ -8,6 +8,7 @@ from ..config.specs import SolverSpec
 from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.options import factor_package, solver_options
+from .records import VIOLATED_STATE
 
 
 def describe(solver) -> str:
@@ -116,6 +117,9 @@ def failure_detail(solver, reason: int) -> str:
     preconditioner that solves nothing, or a Newton budget too small for an active set."""
     if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
         return linear_solver_detail(solver, reason)
+    if reason == VIOLATED_STATE:
+        return (" (the solves converged on active sets with a multiplier pulling or a gap penetrating "
+                "at their states, which are no answers of unilateral contact)")
     if reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT:
         return ""
     ksp = solver.snes.getKSP()

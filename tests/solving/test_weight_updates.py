@@ -111,3 +111,12 @@ def test_the_solve_for_new_weights_is_checked_by_the_exact_rule(monkeypatch):
         newton = PhasedNewton(steps, lambda X: (CONVERGED, 4))
         assert newton._reweigh("X", 1.0, 7, None) == (expected, 11, False)
         assert steps.checked == ["X"]
+
+
+def test_a_level_given_up_on_violated_conditions_names_them():
+    """A level whose every attempt converged on a pending unilateral status ends on
+    UNILATERAL_CONDITIONS_VIOLATED, with what that means."""
+    from ancf_petsc.solving.records import VIOLATED_STATE, reason_name
+    from ancf_petsc.solving.solver_messages import failure_detail
+    assert reason_name(VIOLATED_STATE) == "UNILATERAL_CONDITIONS_VIOLATED"
+    assert "multiplier pulling" in failure_detail(None, VIOLATED_STATE)

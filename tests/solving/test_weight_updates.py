@@ -86,7 +86,7 @@ def test_a_run_with_unsettled_levels_says_so_in_its_reason_and_message():
 
 
 class _StatusSteps(_Steps):
-    """A unilateral law's part whose exact rule changes ``changes`` statuses at a checked state."""
+    """A unilateral law's part whose exact rule changes ``flips`` statuses at a checked state."""
 
     decides_activity = True
 
@@ -106,8 +106,8 @@ def test_the_solve_for_new_weights_is_checked_by_the_exact_rule(monkeypatch):
     had multipliers pulling (tests/contact/test_gait_envelope.py)."""
     from ancf_petsc.solving import newton as newton_module
     monkeypatch.setattr(newton_module, "forget_evaluation", lambda contact: None)
-    for changes, expected in ((3, None), (0, CONVERGED)):
-        steps = _StatusSteps(changes)
+    for flips, expected in ((3, None), (0, CONVERGED)):
+        steps = _StatusSteps(flips)
         newton = PhasedNewton(steps, lambda X: (CONVERGED, 4))
         assert newton._reweigh("X", 1.0, 7, None) == (expected, 11, False)
         assert steps.checked == ["X"]

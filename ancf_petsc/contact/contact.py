@@ -26,7 +26,7 @@ import numpy as np
 
 from . import blocks, couplings, reports
 from .interfaces import find_interfaces, held_ends, supported_ends
-from .laws import Phase, active_set_rows, make_law
+from .laws import Phase, active_set_rows, make_law, violated
 from .multipliers import build_space, reference_stiffness, with_tangential
 from .points import build_points
 from .projection import Projector
@@ -310,7 +310,7 @@ def pending_status(contact: Contact) -> np.ndarray:
     if not contact.law.decides_activity or contact._cache is None:
         return np.zeros(0, dtype=bool)
     st, tol = contact._cache[2], contact.tie_tolerance
-    return (st.active & (st.z < -tol)) | (~st.active & (st.gbar < -tol))
+    return violated(st.gbar, st.z, st.active, tol, tol)
 
 
 def forget_evaluation(contact: Contact) -> None:

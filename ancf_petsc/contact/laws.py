@@ -84,6 +84,12 @@ class Rows:
     load: np.ndarray
 
 
+def violated(gbar: np.ndarray, z: np.ndarray, active: np.ndarray, tol_g: float, tol_z: float) -> np.ndarray:
+    """The constraints whose status the rule changes: an active one whose multiplier pulls
+    (z < −tol_z), an inactive one that penetrates (ḡ < −tol_g)."""
+    return (active & (z < -tol_z)) | (~active & (gbar < -tol_g))
+
+
 def active_set_rows(gbar: np.ndarray, z: np.ndarray, active: np.ndarray, probe: bool = False) -> Rows:
     """Rows of an active set: ḡ = 0 where active, z = 0 elsewhere; a probe has z = 0 rows only
     and every multiplier acting on the bodies, without a column."""
@@ -165,7 +171,7 @@ class UnilateralLaw:
             return previous.copy()
         scale = reduce(np.array([np.abs(gbar).max(initial=0.0), np.abs(z).max(initial=0.0)]), "max")
         tg, tz = max(tol, ph.band * scale[0]), max(tol, ph.band * scale[1])
-        flip = (previous & (z < -tz)) | (~previous & (gbar < -tg))
+        flip = violated(gbar, z, previous, tg, tz)
         if not ph.pivoting:
             # a banded phase only prepares the exact one: a constraint that would change its
             # status a third time (a cycle at the band's edge) keeps it for this phase

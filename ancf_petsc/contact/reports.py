@@ -11,7 +11,7 @@ from .state import ContactState
 GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
                ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
                ("max_pressure", "max"), ("normal_force", "sum"), ("pressing_force", "sum"),
-               ("tension_force", "sum"), ("points", "sum"))
+               ("tension_force", "sum"), ("points", "sum"), ("past_ends_force", "sum"))
 
 
 #: a unilateral interface whose largest pointwise penetration exceeds this share of the smaller of
@@ -76,7 +76,7 @@ def gap_sums(c, st: ContactState) -> np.ndarray:
                   np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
                   lam[m].max(initial=0.0), float(lam[m] @ area[m]),
                   float(np.maximum(st.tau[v], 0.0).sum()), float(np.minimum(st.tau[v], 0.0).sum()),
-                  on.sum()] + [
+                  on.sum(), float(np.abs(st.tau[v & ~over]).sum())] + [
                   x for t in c.terms for x in t.sums(c, st, on)]
     return out
 
@@ -94,6 +94,7 @@ def gap_report(contact, sums: np.ndarray) -> dict:
     for k, itf in enumerate(contact.interfaces):
         c = dict(zip([n for n, _ in report_columns(contact)], sums[k]))
         nv = c["valid_points"]
+        absolute = c["pressing_force"] - c["tension_force"]        # Σ|τ_p|
         out[itf.name] = {"points_on": itf.a.name,
                          "max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
                          "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
@@ -101,7 +102,9 @@ def gap_report(contact, sums: np.ndarray) -> dict:
                          "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
                          "max_pressure": c["max_pressure"], "normal_force": c["normal_force"],
                          "pressing_force": c["pressing_force"], "tension_force": c["tension_force"],
-                         "points": int(c["points"])}
+                         "points": int(c["points"]),
+                         "past_ends_force": c["past_ends_force"],
+                         "past_ends_share": (c["past_ends_force"] / absolute if absolute else 0.0)}
         for term in contact.terms:
             out[itf.name].update(term.report(c, itf.sign))
     return out

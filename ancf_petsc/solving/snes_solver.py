@@ -102,11 +102,11 @@ class SNESSolver:
         self._check_factorisation()
         self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
-        #: the fascicle Schur preconditioner (linalg/fieldsplit.py) with solver.linear: fieldsplit
-        self.fascicle_schur = schur
+        self.fascicle_schur = schur            # linalg/fieldsplit.py (solver.linear: fieldsplit)
         self.chord = TangentReuse(spec.reuse_tangent, schur)
         self.contact_steps = ContactSteps(problem)
         self.ksp_reason, self.stalled_at = 0, 0.0   # the last KSP reason, |F| of a step-length stop
+        self.assemblies = self.accepted_assemblies = 0   # tangents factored; at the last accept
         #: config ``petsc:`` options PETSc never read (known at ``close``)
         self.unused_config_options: list[str] = []
 
@@ -150,16 +150,54 @@ class SNESSolver:
         """|F| of every iterate of the last SNES solve (its failure message reads it)."""
         return list(self._history)
 
-    def negative_eigenvalues(self) -> int | None:
+    def negative_eigenvalues(self, X: PETSc.Vec | None = None) -> int | None:
         """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ
         inertia less one per contact constraint (a saddle-point matrix with m independent
         constraints has m negative eigenvalues besides those of the constrained tangent), plus
-        the null pivots (a singular tangent: a mechanism the supports leave free)."""
+        the null pivots (a singular tangent: a mechanism the supports leave free).  ``X``: the
+        state a solve just converged to, whose tangent is factored first where the last factor
+        is no Newton iterate of it (``factor_at``)."""
+        if X is not None:
+            self.factor_at(X)
         counts = pivot_counts(self.snes.getKSP())
         if counts is None:
             return None
         negative, null = counts
         return negative - self.problem.n_constraints + null
+
+    def accepted(self) -> None:
+        """The stepper accepted the state the last solve converged to."""
+        self.accepted_assemblies = self.assemblies
+
+    def factor_at(self, X: PETSc.Vec) -> None:
+        """Factor the tangent at X (the converged state of the last solve) when that solve took
+        no Newton iteration and a tangent was factored since the last accepted state: the factor
+        is then another state's, a failed attempt's iterate (after a cut-back a unilateral
+        increment can converge in its complementarity prediction alone, which factors K with its
+        own solver) or an earlier solve's of this attempt.  Its inertia had stopped the second
+        subject's 135 deg gastrocnemius-biased unilateral column at 37.75 N (UNSTABLE_STATE, one
+        negative eigenvalue: the diverging attempt's before it).  Without a factor since the
+        accepted state (a stride frame whose loads did not change) that state's is kept.  The
+        contact status is kept (the stepper has checked it at X).  Collective."""
+        if self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies:
+            return
+        c = self.problem.contact
+        update = c is not None and c.allow_update
+        if c is not None:
+            c.allow_update = False
+        if self.fascicle_schur is not None:
+            self.fascicle_schur.keep_factors = False
+        J, P, _ = self.snes.getJacobian()
+        self._assemble(self.snes, X, J, P)
+        ksp = self.snes.getKSP()
+        ksp.setOperators(J, P)
+        ksp.setUp()
+        if c is not None:
+            c.allow_update = update
+
+    def _assemble(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
+        self.assemblies += 1
+        self.problem.jacobian(snes, X, J, P)
 
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
@@ -167,7 +205,7 @@ class SNESSolver:
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
-        self.chord.jacobian(snes, self._history, lambda: self.problem.jacobian(snes, X, J, P))
+        self.chord.jacobian(snes, self._history, lambda: self._assemble(snes, X, J, P))
         self.contact_steps.next_iterate()
 
     def describe(self) -> str:

@@ -62,8 +62,7 @@ class LoadStepper:
         self.solver = SNESSolver(problem, spec, petsc_options, max_level, linear)
         self.path: PathState | None = None      # where the load path is (``run``)
         self.newton_iterations = 0
-        #: the complementarity predictor of a unilateral law's increments (up to
-        #: complementarity.MAX_MULTIPLIERS multipliers; solving/newton.py)
+        #: a unilateral law's complementarity predictor (complementarity.MAX_MULTIPLIERS; newton.py)
         self.predictor = (ComplementarityPredictor(problem, self.solver.snes)
                           if ComplementarityPredictor.applies(problem) else None)
         #: the tangent load predictor (solver.predictor: tangent; predictor.py)
@@ -246,7 +245,7 @@ class LoadStepper:
         converged = reason > 0 and cause is None
         if reason > 0 and not converged:
             reason = VIOLATED_STATE if cause == "conditions" else UNCLEAN_STATE
-        neg = self.solver.negative_eigenvalues() if converged else None
+        neg = self.solver.negative_eigenvalues(P.X) if converged else None
         if neg:                                         # a saddle: a branch point to switch from
             self.branches.remember(path.lam + step, P.X, self.solver.snes.getJacobian()[0], neg, path.lam)
         if self.control.wants_stability_retry(neg, path.accepted_negative, tally):
@@ -257,6 +256,7 @@ class LoadStepper:
         if neg is not None:
             path.accepted_negative = neg
         self.tangent.valid = True                      # the SNES's factor: a converged state's
+        self.solver.accepted()
         self.problem.checkpoint()
         self.problem.X.copy(path.dX_last)
         path.dX_last.axpy(-1.0, X_prev)

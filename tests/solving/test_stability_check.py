@@ -171,3 +171,45 @@ def test_at_that_give_up_the_branch_switch_goes_on_from_a_stable_state(tmp_path)
     assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 0]
     (sw,) = s["steps"][1]["branch_switches"]
     assert sw["negative_before"] == 1 and sw["negative_after"] == 0 and sw["potential_drop"] > 0.0
+
+
+def test_the_inertia_is_read_from_the_converged_state_after_a_solve_without_an_iteration():
+    """A solve that converges without a Newton iteration factors nothing: the SNES's factor is
+    then that of the last tangent factored, which after a failed attempt is another state's.  The
+    second subject's 135° gastrocnemius-biased unilateral column stopped on such a count at
+    37.75 N (UNSTABLE_STATE): after a diverging attempt at 37.7551 N the next, smaller increment
+    converged in its complementarity prediction alone, and the diverging iterate's negative
+    eigenvalue was read.  Here: the coarse column is stable at 10 N and lands on a saddle with a
+    step straight to 50 N (``test_negative_pivots_equal_the_dense_spectrum``); back at the 10 N
+    state, a solve there takes no iteration and the stale factor counts the saddle's eigenvalue,
+    while the count at the state (``negative_eigenvalues(X)``) factors its tangent again.  An
+    accepted state's own factor is kept (a stride frame whose loads did not change)."""
+    from helpers import build_problem
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.solving.stepper import LoadStepper
+    raw = unguarded(coarse_achilles())
+    spec = parse_config(raw, base_dir=CONFIGS)
+    P, _ = build_problem(raw, "sbaij")                 # the symmetric tangent's LDLᵀ (inertia)
+    stepper = LoadStepper(P, spec.solver, spec.petsc, lambda *_: None, max_level=50.0)
+    S, X = stepper.solver, P.X
+    P.q0.copy(X)
+    try:
+        assert stepper.solve_at(10.0, X, 10.0, 0.0, from_rest=True)[0] > 0
+        assert S.negative_eigenvalues(X) == 0
+        S.accepted()
+        P.checkpoint()
+        X10 = X.copy()
+        assert stepper.solve_at(50.0, X, 50.0, 10.0)[0] > 0
+        assert S.negative_eigenvalues(X) == 1                       # the saddle, not accepted
+        X10.copy(X)
+        P.restore()
+        reason, its, _ = stepper.solve_at(10.0, X, 10.0, 10.0)
+        assert reason > 0 and its == 0
+        assert S.negative_eigenvalues() == 1                        # the stale factor
+        assert S.negative_eigenvalues(X) == 0                       # this state's tangent
+        S.accepted()
+        made = S.assemblies
+        assert stepper.solve_at(10.0, X, 10.0, 10.0)[1] == 0
+        assert S.negative_eigenvalues(X) == 0 and S.assemblies == made   # no refactorisation
+    finally:
+        stepper.destroy()

@@ -157,8 +157,8 @@ class SNESSolver:
         the null pivots (a singular tangent: a mechanism the supports leave free).  ``X``: the
         state a solve just converged to, whose tangent is factored first where the last factor
         is no Newton iterate of it (``factor_at``)."""
-        if X is not None:
-            self.factor_at(X)
+        if X is not None and not self.factor_at(X):
+            return None
         counts = pivot_counts(self.snes.getKSP())
         if counts is None:
             return None
@@ -169,7 +169,7 @@ class SNESSolver:
         """The stepper accepted the state the last solve converged to."""
         self.accepted_assemblies = self.assemblies
 
-    def factor_at(self, X: PETSc.Vec) -> None:
+    def factor_at(self, X: PETSc.Vec) -> bool:
         """Factor the tangent at X (the converged state of the last solve) when that solve took
         no Newton iteration and a tangent was factored since the last accepted state: the factor
         is then another state's, a failed attempt's iterate (after a cut-back a unilateral
@@ -178,9 +178,10 @@ class SNESSolver:
         subject's 135 deg gastrocnemius-biased unilateral column at 37.75 N (UNSTABLE_STATE, one
         negative eigenvalue: the diverging attempt's before it).  Without a factor since the
         accepted state (a stride frame whose loads did not change) that state's is kept.  The
-        contact status is kept (the stepper has checked it at X).  Collective."""
+        contact status is kept (the stepper has checked it at X).  False where the factorisation
+        failed (no count, as for a solver without inertia).  Collective."""
         if self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies:
-            return
+            return True
         c = self.problem.contact
         update = c is not None and c.allow_update
         if c is not None:
@@ -188,12 +189,17 @@ class SNESSolver:
         if self.fascicle_schur is not None:
             self.fascicle_schur.keep_factors = False
         J, P, _ = self.snes.getJacobian()
-        self._assemble(self.snes, X, J, P)
         ksp = self.snes.getKSP()
-        ksp.setOperators(J, P)
-        ksp.setUp()
-        if c is not None:
-            c.allow_update = update
+        try:
+            self._assemble(self.snes, X, J, P)
+            ksp.setOperators(J, P)
+            ksp.setUp()
+        except PETSc.Error:                     # the same on every rank (MUMPS's own error)
+            return False
+        finally:
+            if c is not None:
+                c.allow_update = update
+        return True
 
     def _assemble(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         self.assemblies += 1

@@ -239,7 +239,7 @@ def stable_verdict(stepper, reason: int, fnorm: float) -> int | None:
     residual, None for any other solve (or without an inertia count)."""
     ok = (reason > 0 and stepper.solver.residual_small(reason, fnorm) and np.isfinite(fnorm)
           and stepper.problem.state_is_clean())
-    return stepper.solver.negative_eigenvalues() if ok else None
+    return stepper.solver.negative_eigenvalues(stepper.problem.X) if ok else None
 
 
 def section_size(model) -> float:

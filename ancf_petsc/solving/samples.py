@@ -134,13 +134,14 @@ def solve_level(stepper: LoadStepper, lam: float) -> StepRecord | None:
         reason, its, fnorm = PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_DOMAIN, 0, np.nan
     ok = (reason > 0 and np.isfinite(fnorm) and stepper.solver.residual_small(reason, fnorm)
           and P.state_is_clean())
-    neg = stepper.solver.negative_eigenvalues() if ok else None
+    neg = stepper.solver.negative_eigenvalues(P.X) if ok else None      # the state's own count
     if not ok or (neg is not None and neg > 0):
         X0.copy(P.X)
         X0.destroy()
         P.restore()
         return None
     X0.destroy()
+    stepper.solver.accepted()
     P.checkpoint()
     return StepRecord(load_factor=lam, iterations=its, substeps=1, cutbacks=0, reason=reason_name(reason),
                       residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,

@@ -49,3 +49,20 @@ def test_a_cell_that_switched_to_pointwise_fade_forces_says_where():
     cell = EnvelopeCell("a.yaml", 150.0, "soleus", "unilateral", elements=8)
     assert CellResult(cell, "completed", pointwise_from=2468.75).row()["fade_forces_pointwise_from"] == 2468.75
     assert CellResult(cell, "completed").row()["fade_forces_pointwise_from"] == ""
+
+
+def test_a_stride_cell_states_its_cut_backs_and_total_newton_iterations():
+    """A stride's median per frame hides a frame that cut back many times: the cell also says
+    how many cut-backs in how many frames and the stride's Newton iterations in all (the 120 deg
+    uniform unilateral stride: median 4, but 19 cut-backs in one frame and 1546 iterations)."""
+    from ancf_petsc.workflows.envelope import markdown_table
+    base = {"base": "a.yaml", "law": "unilateral", "friction": "0.0", "bias": "uniform", "elements": "4",
+            "stride": "True", "status": "completed", "last_level": "100", "median_iterations": "4.0",
+            "iterations_to_1200": "1546", "cutbacks_to_1200": "19", "fade_forces_pointwise_from": ""}
+    rows = [dict(base, twist="120", iterations="1546", cutbacks="19", cutback_levels="1"),
+            dict(base, twist="150", iterations="858", cutbacks="6", cutback_levels="3"),
+            dict(base, twist="90", iterations="260", cutbacks="0", cutback_levels="0")]
+    text = markdown_table(rows, law="unilateral", key="median_iterations")
+    assert "| 120 | 4 (19 cut-backs in 1 frame; 1546 in all) |" in text
+    assert "| 150 | 4 (6 cut-backs in 3 frames; 858 in all) |" in text
+    assert "| 90 | 4 |" in text

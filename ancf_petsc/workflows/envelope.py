@@ -298,9 +298,14 @@ def _outcome_text(r: dict, key: str, stride: bool) -> str:
         where = (f"at frame {last:g}" if stride else f"after {last:g} N" if last > 0
                  else "in the first level")
         return f"**{r['status']}** {where}"
-    if stride:                     # the frames with a cut-back
+    if stride:                     # the frames with a cut-back, how many, and the stride's total
         cb = int(float(r.get("cutback_levels") or 0))
-        return f"{float(r[key]):g}" + (f" ({cb} frame{'s' if cb > 1 else ''} cut back)" if cb else "")
+        if not cb:
+            return f"{float(r[key]):g}"
+        n = int(float(r.get("cutbacks") or cb))
+        its = int(float(r.get("iterations") or 0))
+        return (f"{float(r[key]):g} ({n} cut-back{'s' if n > 1 else ''} in {cb} frame{'s' if cb > 1 else ''}"
+                + (f"; {its} in all)" if its else ")"))
     cb = int(float(r.get("cutbacks_to_1200", r["cutbacks"]) or 0))
     return f"{int(float(r[key]))}" + (f" ({cb} cut-back{'s' if cb > 1 else ''})" if cb else "")
 

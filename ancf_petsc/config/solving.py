@@ -30,6 +30,7 @@ SOLVER_KEYS = {
     "allow_unstable": (boolean, False),
     "branch_switch": (boolean, False),
     "reuse_tangent": (boolean, False),
+    "compact_factor": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),
     "options_prefix": (lambda v, p: options_prefix(v, p), False),
 }

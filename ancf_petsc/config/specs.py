@@ -170,6 +170,8 @@ class SolverSpec:
                                            # history's and a fibre law's default is tangent
                                            # (config/parse.py default_predictor)
     reuse_tangent: bool = True            # chord steps / kept fieldsplit factors (solving.chord)
+    compact_factor: bool = True           # one rank: MUMPS factors J's structural nonzeros only
+                                          # (linalg/compact_factor.py)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)

@@ -16,6 +16,9 @@ def mumps_factor(ksp: PETSc.KSP) -> PETSc.Mat | None:
     """The MUMPS factor matrix of ``ksp``'s LU/Cholesky preconditioner, None when there is none
     (another preconditioner or package, or before the first factorisation)."""
     pc = ksp.getPC()
+    if pc.getType() == "python":                # the compact factorisation (compact_factor.py)
+        factor = getattr(pc.getPythonContext(), "factor", None)
+        return factor() if factor is not None else None
     if pc.getType() not in ("cholesky", "lu") or pc.getFactorSolverType() != "mumps":
         return None
     try:

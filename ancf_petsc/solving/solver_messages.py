@@ -16,14 +16,16 @@ def describe(solver) -> str:
     ksp = solver.snes.getKSP()
     pc = ksp.getPC()
     ls = solver.linesearch
-    extra = ""
-    if pc.getType() in ("lu", "cholesky"):
+    name, extra = pc.getType(), ""
+    if name in ("lu", "cholesky"):
         extra = f" ({pc.getFactorSolverType()})"
     if solver.linear == "fieldsplit":
         extra = " (fascicle Schur: dense fascicle factors, MUMPS LDLT on the multipliers)"
+    elif name == "python":                      # linalg/compact_factor.py
+        name, extra = "cholesky", " (mumps, of the Jacobian's structural nonzeros)"
     rtol, atol, stol, maxit = solver.snes.getTolerances()
     return (f"SNES {solver.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
-            f"{pc.getType()}{extra} on {solver.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
+            f"{name}{extra} on {solver.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
             f"stol {stol:.1e} max_it {maxit}; "
             f"rounding floor |F(q0,0)| {solver.rounding_floor:.1e}"
             + ("; chord steps near convergence" if solver.spec.reuse_tangent else ""))

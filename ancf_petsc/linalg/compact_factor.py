@@ -1,0 +1,227 @@
+"""The matrix MUMPS factors on one rank: the Jacobian's structural nonzeros, not its node blocks.
+
+The Jacobian is stored in node blocks (18 × 18 for 3363, SBAIJ: petsc/pattern.py), and PETSc
+3.18 hands MUMPS every stored entry.  With contact multipliers many are zeros by construction:
+the supported DOFs inside their nodes' blocks (unit rows, zero columns), the unused slots of the
+multiplier nodes (held at zero; 12 of the 18 on the paper's tendon), the off-diagonal
+multiplier–multiplier entries, which no law writes, and the couplings of every contact pair
+seen so far (the pattern only grows) that no contact point uses at present.  MUMPS orders
+and factors them as numbers, and a stored multiplier diagonal keeps it from its compressed
+ordering for saddle points (ICNTL(12) = 2: each multiplier matched with a displacement it
+constrains), which it applies only where a diagonal is structurally empty.  On the walking
+stride's Jacobians (630 rows) PETSc passed 89 000 upper entries, 55 000 of them nonzero.
+
+``CompactCholesky`` is the preconditioner of the direct solve on one rank (a PETSc PCPYTHON
+context, ``install``): its structure is J's nonzeros when its pattern last changed; each
+set-up copies J's entries at that structure into a scalar SBAIJ matrix through a fixed index
+map between the two value arrays (``MatSeqSBAIJGetArray``, 0.4 ms on the walking stride) and
+factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 3 unless the solve's -mat_mumps_*
+options say otherwise (they reach this factor: it has the solve's prefix).  A nonzero of J
+outside the structure (a contact pair that comes into use, a law that writes there) adds its
+position to the structure, and MUMPS analyses the grown one: the factor is J's whatever the law.
+Measured (docs/parallel.md): the walking stride's factorisations 5.5 → 3.6 ms, whole runs 0.87–0.96
+of the time with every stored entry, the same Newton iterations.  Negative and null pivots
+(INFOG(12), INFOG(28)) are J's: dropped entries are zeros and the held DOFs keep their unit
+diagonals, so the stability check reads the same counts (``pivot_counts``).  A failed
+factorisation fails the outer preconditioner (PCSetFailedReason), as MUMPS's own does.
+"""
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+from petsc4py import PETSc
+
+from .diagnostics import petsc_library
+from .database import option
+
+#: MUMPS controls of the compact factor unless the solve's options say otherwise: ordering on the
+#: compressed graph of matched pairs (ICNTL(12) = 2) after a bottleneck matching (ICNTL(6) = 3).
+#: Measured: MUMPS's default matching for it (5) keeps the scaling of the analysis for later
+#: factorisations (residual 4e-11 instead of 3e-13 on bundle_hex7), 4 takes 170 ms an analysis on
+#: the 8-element stride (3: 20 ms); AMD without matching factors the strides as fast but
+#: bundle_hex7 in 2.0e8 flops against 7.7e7 (MUMPS on every stored entry: 1.6e8)
+ORDERING = {12: 2, 6: 3}
+#: PETSc's PCFailedReason for a factorisation that failed otherwise than on a zero pivot
+PC_FACTOR_OTHER = 4
+_DOUBLE_P = ctypes.POINTER(ctypes.c_double)
+
+
+class _Values:
+    """The value array of a sequential SBAIJ matrix as a numpy view, for the ``with`` block only."""
+
+    def __init__(self, mat: PETSc.Mat, size: int):
+        self.mat, self.size, self.ptr = mat, size, _DOUBLE_P()
+
+    def __enter__(self) -> np.ndarray:
+        if petsc_library().MatSeqSBAIJGetArray(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr)):
+            raise RuntimeError("MatSeqSBAIJGetArray failed")
+        return np.ctypeslib.as_array(self.ptr, shape=(self.size,))
+
+    def __exit__(self, *exc) -> None:
+        petsc_library().MatSeqSBAIJRestoreArray(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr))
+
+
+def stored_entries(J: PETSc.Mat) -> tuple[np.ndarray, np.ndarray]:
+    """(row, column) of every stored value of a sequential SBAIJ J, in its value array's order:
+    the blocks in block-CSR order, each bs × bs by columns."""
+    ia, ja = J.getRowIJ(symmetric=False, compressed=True)
+    D = J.getBlockSize()
+    brow = np.repeat(np.arange(len(ia) - 1), np.diff(ia))
+    r, c = np.tile(np.arange(D), D), np.repeat(np.arange(D), D)      # entry m of a block: r = m % D
+    return (brow[:, None] * D + r).ravel(), (np.asarray(ja)[:, None] * D + c).ravel()
+
+
+class CompactStructure:
+    """Which stored values of J MUMPS gets (``src``, the compact matrix's CSR order) and which it
+    does not (``dropped``, upper entries only): off the diagonal, a held DOF's entries, the
+    multiplier–multiplier ones and those zero in J now (couplings of contact pairs no point
+    uses at present, contact curvature at rest), unless ``kept`` (positions row · n + column
+    found nonzero since)."""
+
+    def __init__(self, J: PETSc.Mat, held: np.ndarray, multiplier: np.ndarray, kept: np.ndarray):
+        rows, cols = stored_entries(J)
+        with _Values(J, len(rows)) as a:
+            values = a.copy()
+        self.n, self.size = J.getSize()[0], len(rows)
+        self.key = rows.astype(np.int64) * self.n + cols
+        upper = cols >= rows
+        diag = rows == cols
+        zero = ~diag & ((values == 0.0) | held[rows] | held[cols] | (multiplier[rows] & multiplier[cols]))
+        zero &= ~np.isin(self.key, kept)
+        take = np.flatnonzero(upper & ~zero)
+        take = take[np.lexsort((cols[take], rows[take]))]
+        self.src, self.dropped = take, np.flatnonzero(upper & zero)
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(rows[take], minlength=self.n))])
+        self.indices = cols[take]
+
+    def matrix(self) -> PETSc.Mat:
+        """An empty scalar SBAIJ matrix with this structure."""
+        C = PETSc.Mat().createSBAIJ(self.n, 1, csr=(self.indptr.astype(PETSc.IntType),
+                                                   self.indices.astype(PETSc.IntType)),
+                                    comm=PETSc.COMM_SELF)
+        C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        return C
+
+    def copy(self, J: PETSc.Mat, C: PETSc.Mat) -> np.ndarray:
+        """Copy J's values into C; returns the positions (keys) of J's nonzero values that the
+        structure dropped (then nothing is copied: the structure must grow)."""
+        with _Values(J, self.size) as a:
+            stray = self.dropped[a[self.dropped] != 0.0]
+            if len(stray):
+                return self.key[stray]
+            with _Values(C, len(self.src)) as c:
+                c[:] = a[self.src]
+        C.assemble()                              # a new state: the inner PC factors again
+        return stray
+
+
+class CompactCholesky:
+    """PCPYTHON context: MUMPS LDLᵀ of J's structural nonzeros (module docstring)."""
+
+    def __init__(self, held: np.ndarray, multiplier: np.ndarray, prefix: str = ""):
+        self.held, self.multiplier, self.prefix = held, multiplier, prefix
+        self.kept = np.zeros(0, dtype=np.int64)
+        self.structure: CompactStructure | None = None
+        self.C: PETSc.Mat | None = None
+        self.ksp: PETSc.KSP | None = None
+        self._source: tuple | None = None
+        self.analyses = 0                        # structures MUMPS analysed (growths included)
+
+    def setUp(self, pc: PETSc.PC) -> None:
+        _, J = pc.getOperators()
+        source = (J.handle, J.getInfo()["nz_allocated"])
+        if self.structure is None or source != self._source:
+            self._build(J)
+        self._source = source
+        stray = self.structure.copy(J, self.C)
+        if len(stray):                           # a coupling came into use: grow, factor J's
+            self.kept = np.union1d(self.kept, stray)
+            self._build(J)
+            stray = self.structure.copy(J, self.C)
+        self.ksp.setOperators(self.C, self.C)
+        self.ksp.setUp()
+
+    def _build(self, J: PETSc.Mat) -> None:
+        self.structure = CompactStructure(J, self.held, self.multiplier, self.kept)
+        self.destroy()
+        self.C = self.structure.matrix()
+        ksp = self.ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+        ksp.setOptionsPrefix(self.prefix)        # -mat_mumps_* of the solve reach this factor
+        ksp.setType(PETSc.KSP.Type.PREONLY)
+        inner = ksp.getPC()
+        inner.setType(PETSc.PC.Type.CHOLESKY)
+        inner.setFactorSolverType("mumps")
+        ksp.setOperators(self.C, self.C)
+        inner.setFactorSetUpSolverType()
+        for k, v in ORDERING.items():
+            if option(f"mat_mumps_icntl_{k}", self.prefix) is None:
+                inner.getFactorMatrix().setMumpsIcntl(k, v)
+        self.analyses += 1
+
+    def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        self.ksp.solve(x, y)
+        if self.ksp.getConvergedReason() < 0:    # MUMPS gave up (its own factor error)
+            petsc_library().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(PC_FACTOR_OTHER))
+
+    def factor(self) -> PETSc.Mat | None:
+        """The MUMPS factor (None before the first set-up)."""
+        if self.ksp is None:
+            return None
+        try:
+            return self.ksp.getPC().getFactorMatrix()
+        except PETSc.Error:
+            return None
+
+    def pivot_counts(self) -> tuple[int, int] | None:
+        """(negative, null) pivots of the last factorisation: INFOG(12), INFOG(28)."""
+        F = self.factor()
+        return None if F is None else (int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28)))
+
+    def view(self, pc: PETSc.PC, viewer: PETSc.Viewer) -> None:
+        if self.ksp is not None:
+            viewer.printfASCII("  MUMPS LDLT of the Jacobian's structural nonzeros "
+                               f"({len(self.structure.src)} of {len(self.structure.src) + len(self.structure.dropped)} "
+                               "upper entries):\n")
+            self.ksp.view(viewer)
+
+    def reset(self, pc: PETSc.PC) -> None:
+        """PCReset (the Jacobian's pattern grew, petsc/problem.py): a new structure and analysis
+        at the next set-up."""
+        self.structure = None
+
+    def destroy(self, pc: PETSc.PC | None = None) -> None:
+        """Free the factor and the compact matrix (nothing after PETSc finalized: the outer
+        PC of an object still alive at interpreter exit is destroyed then)."""
+        if not PETSc.Sys.isFinalized():
+            for obj in (self.ksp, self.C):
+                if obj is not None:
+                    obj.destroy()
+        self.ksp = self.C = None
+
+
+def compact_applies(problem, pc: PETSc.PC, wanted: bool) -> bool:
+    """Whether the compact factorisation replaces ``pc`` (``solver.compact_factor``): one rank,
+    MUMPS Cholesky of an SBAIJ Jacobian with contact multipliers (their slots and blocks are the
+    zeros it leaves out; without multipliers only the held DOFs' entries would go)."""
+    return (wanted and problem.comm.size == 1 and problem.n_constraints > 0
+            and pc.getType() == PETSc.PC.Type.CHOLESKY and pc.getFactorSolverType() == "mumps"
+            and problem.J.getType() == PETSc.Mat.Type.SEQSBAIJ)
+
+
+def multiplier_mask(problem) -> np.ndarray:
+    """Every DOF of the multiplier nodes (the blocks after the beams' nodes, PETSc numbering)."""
+    D, lay = problem.model.dofs_per_node, problem.layout
+    mask = np.zeros(D * lay.n_blocks, dtype=bool)
+    blocks = lay.perm[problem.model.n_nodes:]
+    mask[(D * blocks[:, None] + np.arange(D)).ravel()] = True
+    return mask
+
+
+def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: str = "") -> CompactCholesky:
+    """Make ``ksp``'s preconditioner the compact factorisation (one rank, SBAIJ J, Cholesky)."""
+    pc = ksp.getPC()
+    context = CompactCholesky(held, multiplier, prefix)
+    pc.setType(PETSc.PC.Type.PYTHON)
+    pc.setPythonContext(context)
+    return context

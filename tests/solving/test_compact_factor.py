@@ -1,0 +1,176 @@
+"""The compact factorisation on one rank (linalg/compact_factor.py): MUMPS LDLᵀ of the
+Jacobian's structural nonzeros gives the Newton step and the pivot counts of MUMPS on every
+stored entry, grows its structure where a value appears outside it, fails the preconditioner as
+MUMPS's own factorisation does, and leaves the paper's column unchanged."""
+import numpy as np
+import pytest
+
+from helpers import hex7_problem, load_raw, petsc_init, read_summary, solve_cli, write_config, CONFIGS
+
+
+def _mumps(PETSc, J, icntl24=True):
+    ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+    ksp.setOperators(J, J)
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("cholesky")
+    pc.setFactorSolverType("mumps")
+    pc.setFactorSetUpSolverType()
+    F = pc.getFactorMatrix()
+    F.setMumpsIcntl(24, 1 if icntl24 else 0)
+    F.setMumpsCntl(3, 1e-11)
+    return ksp
+
+
+def _residual(J, x, b) -> float:
+    r = b.duplicate()
+    J.mult(x, r)
+    r.axpy(-1.0, b)
+    return r.norm()
+
+
+def _compact(PETSc, P):
+    from ancf_petsc.linalg.compact_factor import install, multiplier_mask
+    ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+    ksp.setOperators(P.J, P.J)
+    ksp.setType("preonly")
+    PETSc.Options()["mat_mumps_icntl_24"] = "1"
+    ctx = install(ksp, P.fixed_mask, multiplier_mask(P))
+    return ksp, ctx
+
+
+def test_stored_entries_name_the_value_array_in_order():
+    """Entry i of a sequential SBAIJ value array is J[rows[i], cols[i]] (blocks by columns)."""
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.linalg.compact_factor import _Values, stored_entries
+    rng = np.random.default_rng(3)
+    D, nb = 3, 3
+    A = rng.standard_normal((D * nb, D * nb))
+    A = A + A.T
+    A[:D, 2 * D:] = A[2 * D:, :D] = 0.0            # blocks (0, 2) and (2, 0) not stored
+    J = PETSc.Mat().createSBAIJ(D * nb, D, nnz=3, comm=PETSc.COMM_SELF)
+    J.setOption(PETSc.Mat.Option.IGNORE_LOWER_TRIANGULAR, True)
+    for i in range(nb):
+        for j in range(i, nb):
+            if (i, j) != (0, 2):
+                J.setValuesBlocked([i], [j], A[D * i:D * i + D, D * j:D * j + D])
+    J.assemble()
+    rows, cols = stored_entries(J)
+    assert len(rows) == 5 * D * D
+    upper = cols >= rows
+    with _Values(J, len(rows)) as a:
+        assert np.array_equal(a[upper], A[rows[upper], cols[upper]])
+    J.destroy()
+
+
+def test_the_compact_factor_gives_the_newton_step_and_the_pivots_of_mumps():
+    """bundle_hex7 after a Newton step (multipliers non-zero: contact curvature): the same step
+    to rounding, the same negative and null pivots, from fewer entries."""
+    P, PETSc, F = hex7_problem(loaded=True, matrix="sbaij")
+    plain = _mumps(PETSc, P.J)
+    ksp, ctx = _compact(PETSc, P)
+    x0, x1 = F.duplicate(), F.duplicate()
+    plain.solve(F, x0)
+    ksp.solve(F, x1)
+    assert ksp.getConvergedReason() > 0
+    # as accurate as MUMPS on every entry (2e-13 and 7e-13 of |F| = 0.064); the steps differ
+    # by 3e-9 (the saddle matrix's condition)
+    assert _residual(P.J, x1, F) <= 10.0 * _residual(P.J, x0, F) + 1e-14 * F.norm()
+    assert (x1 - x0).norm() <= 1e-7 * x0.norm()
+    F0 = plain.getPC().getFactorMatrix()
+    assert ctx.pivot_counts() == (F0.getMumpsInfog(12), F0.getMumpsInfog(28))
+    assert ctx.pivot_counts()[0] >= P.n_constraints > 0
+    s = ctx.structure
+    assert len(s.dropped) > 0 and len(s.src) < len(s.src) + len(s.dropped)
+    # the held DOFs' off-diagonal entries and the multiplier-multiplier ones are gone
+    rows, cols = s.indptr, s.indices
+    r = np.repeat(np.arange(s.n), np.diff(rows))
+    held = P.fixed_mask
+    assert not np.any(held[r] & (r != cols)) and not np.any(held[cols] & (r != cols))
+    for obj in (ksp, plain):
+        obj.destroy()
+
+
+def test_a_value_outside_the_structure_grows_it():
+    """A multiplier-multiplier coupling no law writes today (an elastic interface could): it is
+    found at the next set-up, the structure grows, and the step is that of the changed J."""
+    P, PETSc, F = hex7_problem(loaded=True, matrix="sbaij")
+    from ancf_petsc.linalg.compact_factor import multiplier_mask
+    ksp, ctx = _compact(PETSc, P)
+    x = F.duplicate()
+    ksp.solve(F, x)
+    assert ctx.analyses == 1
+    m = np.flatnonzero(multiplier_mask(P) & ~P.fixed_mask)
+    i, j = int(m[0]), int(m[1])                 # two multipliers of one node (a stored block)
+    assert i // 18 == j // 18
+    P.J.setValue(i, j, 1e-3 * abs(P.J.getValue(i, i)) + 1.0)
+    P.J.assemble()
+    ksp.setOperators(P.J, P.J)
+    ksp.solve(F, x)
+    assert ctx.analyses == 2 and i * P.J.getSize()[0] + j in ctx.kept
+    y = F.duplicate()
+    plain = _mumps(PETSc, P.J)
+    plain.solve(F, y)
+    assert _residual(P.J, x, F) <= 10.0 * _residual(P.J, y, F) + 1e-14 * F.norm()
+    assert (x - y).norm() <= 1e-7 * y.norm()
+    for obj in (ksp, plain):
+        obj.destroy()
+
+
+def test_a_failed_factorisation_fails_the_preconditioner():
+    """A singular matrix without null-pivot detection: MUMPS stops (INFOG(1) = −10) and the
+    outer KSP says DIVERGED_PCSETUP_FAILED (−11), as with MUMPS as the preconditioner itself (SNES then
+    reports DIVERGED_LINEAR_SOLVE and the stepper cuts back)."""
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.linalg.compact_factor import install
+    J = PETSc.Mat().createSBAIJ(4, 2, nnz=2, comm=PETSc.COMM_SELF)
+    J.setOption(PETSc.Mat.Option.IGNORE_LOWER_TRIANGULAR, True)
+    J.setValuesBlocked([0], [0], np.array([[2.0, 1.0], [1.0, 2.0]]))
+    J.setValuesBlocked([0], [1], np.zeros((2, 2)))
+    J.setValuesBlocked([1], [1], np.zeros((2, 2)))
+    J.assemble()
+    ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+    ksp.setType("preonly")
+    ksp.setOperators(J, J)
+    opts = PETSc.Options()
+    opts["mat_mumps_icntl_24"] = "0"
+    try:
+        ctx = install(ksp, np.zeros(4, bool), np.array([False, False, True, True]))
+        b = J.createVecLeft()
+        b.set(1.0)
+        x = b.duplicate()
+        ksp.solve(b, x)
+        assert ksp.getConvergedReason() == PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED
+        assert int(ctx.factor().getMumpsInfog(1)) == -10
+    finally:
+        opts["mat_mumps_icntl_24"] = "1"
+        ksp.destroy()
+        J.destroy()
+
+
+@pytest.mark.parametrize("mode", ["sliding", "unilateral"])
+def test_the_paper_column_is_the_same_with_every_stored_entry(tmp_path, mode):
+    """ψ = 45° to 100 N: the compact factorisation (the default on one rank) and MUMPS on
+    every stored entry (``solver.compact_factor: false``) take the same Newton iterations and
+    agree to rounding; the header names the factorisation."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = f"{CONFIGS}/{b['section']['file']}"
+    raw["steps"] = [10.0, 100.0]
+    raw["contact"]["mode"] = mode
+    out = {}
+    for compact in (True, False):
+        raw["solver"] = {"compact_factor": compact}
+        raw["output"] = {"dir": str(tmp_path / f"out_{compact}"), "vtk": False}
+        cfg = write_config(raw, tmp_path / f"c_{compact}.yaml")
+        assert solve_cli(cfg).returncode == 0
+        out[compact] = read_summary(tmp_path / f"out_{compact}")
+    a, b = out[True], out[False]
+    assert "structural nonzeros" in a["solver"] and "structural nonzeros" not in b["solver"]
+    assert a["newton_iterations"] == b["newton_iterations"]
+    for sa, sb in zip(a["steps"], b["steps"]):
+        for name, pa in sa["probes"].items():
+            d = np.asarray(pa["displacement"]) - np.asarray(sb["probes"][name]["displacement"])
+            assert np.abs(d).max() <= 1e-10 * np.abs(pa["displacement"]).max()

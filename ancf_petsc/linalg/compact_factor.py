@@ -19,7 +19,7 @@ factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 3 unless the solve'
 options say otherwise (they reach this factor: it has the solve's prefix).  A nonzero of J
 outside the structure (a contact pair that comes into use, a law that writes there) adds its
 position to the structure, and MUMPS analyses the grown one: the factor is J's whatever the law.
-Measured (docs/parallel.md): the walking stride's factorisations 5.5 → 3.6 ms, whole runs 0.87–0.96
+Measured (docs/parallel.md): the walking stride's factorisations 5.5 → 3.6 ms, whole runs 0.75–0.99
 of the time with every stored entry, the same Newton iterations.  Negative and null pivots
 (INFOG(12), INFOG(28)) are J's: dropped entries are zeros and the held DOFs keep their unit
 diagonals, so the stability check reads the same counts (``pivot_counts``).  A failed
@@ -119,8 +119,10 @@ class CompactStructure:
 class CompactCholesky:
     """PCPYTHON context: MUMPS LDLᵀ of J's structural nonzeros (module docstring)."""
 
-    def __init__(self, held: np.ndarray, multiplier: np.ndarray, prefix: str = ""):
+    def __init__(self, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
+                 ordering: dict | None = None):
         self.held, self.multiplier, self.prefix = held, multiplier, prefix
+        self.ordering = ORDERING if ordering is None else ordering
         self.kept = np.zeros(0, dtype=np.int64)
         self.structure: CompactStructure | None = None
         self.C: PETSc.Mat | None = None
@@ -154,7 +156,7 @@ class CompactCholesky:
         inner.setFactorSolverType("mumps")
         ksp.setOperators(self.C, self.C)
         inner.setFactorSetUpSolverType()
-        for k, v in ORDERING.items():
+        for k, v in self.ordering.items():
             if option(f"mat_mumps_icntl_{k}", self.prefix) is None:
                 inner.getFactorMatrix().setMumpsIcntl(k, v)
         self.analyses += 1
@@ -218,10 +220,12 @@ def multiplier_mask(problem) -> np.ndarray:
     return mask
 
 
-def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: str = "") -> CompactCholesky:
-    """Make ``ksp``'s preconditioner the compact factorisation (one rank, SBAIJ J, Cholesky)."""
+def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
+            ordering: dict | None = None) -> CompactCholesky:
+    """Make ``ksp``'s preconditioner the compact factorisation (one rank, SBAIJ J, Cholesky);
+    ``ordering``: its MUMPS controls (default ``ORDERING``, for a saddle-point matrix)."""
     pc = ksp.getPC()
-    context = CompactCholesky(held, multiplier, prefix)
+    context = CompactCholesky(held, multiplier, prefix, ordering)
     pc.setType(PETSc.PC.Type.PYTHON)
     pc.setPythonContext(context)
     return context

@@ -58,6 +58,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..contact.laws import HELD, PROBE
+from ..linalg.compact_factor import compact_applies, install, multiplier_mask
+from ..linalg.inertia import mumps_factor
 from .lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
 
 #: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
@@ -114,7 +116,7 @@ class ComplementarityPredictor:
     predictor's assembly grows the contact pattern, as the SNES's own assembly does: a MUMPS
     factorisation on the old symbolic analysis corrupts memory)."""
 
-    def __init__(self, problem, snes: PETSc.SNES | None = None):
+    def __init__(self, problem, snes: PETSc.SNES | None = None, compact: bool = False):
         self.problem, self.snes = problem, snes
         self.comm = problem.comm.tompi4py()
         self.dofs = multiplier_dofs(problem)
@@ -125,6 +127,9 @@ class ComplementarityPredictor:
         pc.setType("cholesky" if problem.symmetric else "lu")
         pc.setFactorSolverType("mumps")
         self.ksp.setOptionsPrefix("ancf_lcp_")
+        if compact_applies(problem, pc, compact):
+            # K's multiplier rows are diagonal: no saddle point, MUMPS's own ordering
+            install(self.ksp, problem.fixed_mask, multiplier_mask(problem), "ancf_lcp_", ordering={})
         self.solves = 0
         self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
         self._select = None                       # E: the multipliers' columns (``_columns``)
@@ -221,7 +226,10 @@ class ComplementarityPredictor:
             self.ksp.setUp()
             Xs, y = B.duplicate(), X.duplicate()
             vecs[:0] = [B, Xs, y]
-            self.ksp.getPC().getFactorMatrix().matSolve(B, Xs)      # K⁻¹(−Gᵀ)
+            factor = mumps_factor(self.ksp)
+            if factor is None:
+                return None
+            factor.matSolve(B, Xs)                                    # K⁻¹(−Gᵀ)
             self.ksp.solve(rhs, y)                                   # −K⁻¹ F_q
         except PETSc.Error:
             return None

@@ -63,7 +63,7 @@ class LoadStepper:
         self.path: PathState | None = None      # where the load path is (``run``)
         self.newton_iterations = 0
         #: a unilateral law's complementarity predictor (complementarity.MAX_MULTIPLIERS; newton.py)
-        self.predictor = (ComplementarityPredictor(problem, self.solver.snes)
+        self.predictor = (ComplementarityPredictor(problem, self.solver.snes, spec.compact_factor)
                           if ComplementarityPredictor.applies(problem) else None)
         #: the tangent load predictor (solver.predictor: tangent; predictor.py)
         self.tangent = TangentPredictor(problem, self.solver.snes)

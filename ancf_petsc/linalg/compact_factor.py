@@ -22,7 +22,8 @@ position to the structure, and MUMPS analyses the grown one: the factor is J's w
 Measured (docs/parallel.md): the walking stride's factorisations 5.5 → 3.6 ms, whole runs 0.75–0.99
 of the time with every stored entry, the same Newton iterations.  Negative and null pivots
 (INFOG(12), INFOG(28)) are J's: dropped entries are zeros and the held DOFs keep their unit
-diagonals, so the stability check reads the same counts (``pivot_counts``).  A failed
+diagonals, so the stability check reads the same counts (``inertia.pivot_counts`` reads this
+factor through ``factor``).  A failed
 factorisation fails the outer preconditioner (PCSetFailedReason), as MUMPS's own does.
 """
 from __future__ import annotations
@@ -139,8 +140,8 @@ class CompactCholesky:
         stray = self.structure.copy(J, self.C)
         if len(stray):                           # a coupling came into use: grow, factor J's
             self.kept = np.union1d(self.kept, stray)
-            self._build(J)
-            stray = self.structure.copy(J, self.C)
+            self._build(J)                       # from J's values now: nothing strays
+            self.structure.copy(J, self.C)
         self.ksp.setOperators(self.C, self.C)
         self.ksp.setUp()
 
@@ -174,11 +175,6 @@ class CompactCholesky:
             return self.ksp.getPC().getFactorMatrix()
         except PETSc.Error:
             return None
-
-    def pivot_counts(self) -> tuple[int, int] | None:
-        """(negative, null) pivots of the last factorisation: INFOG(12), INFOG(28)."""
-        F = self.factor()
-        return None if F is None else (int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28)))
 
     def view(self, pc: PETSc.PC, viewer: PETSc.Viewer) -> None:
         if self.ksp is not None:

@@ -30,13 +30,15 @@ def mumps_factor(ksp: PETSc.KSP) -> PETSc.Mat | None:
 def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
     """(negative, null) pivots of the matrix last factored by ``ksp``'s MUMPS Cholesky (LDLᵀ)
     preconditioner — INFOG(12) and INFOG(28), the latter with null-pivot detection on
-    (ICNTL(24)) — or by the fascicle Schur preconditioner (``FascicleSchur.pivot_counts``);
-    None when the preconditioner is neither (collective; same on every rank)."""
+    (ICNTL(24)) — also the compact one's (compact_factor.py) — or by the fascicle Schur
+    preconditioner (``FascicleSchur.pivot_counts``); None when the preconditioner is none of
+    these (collective; same on every rank)."""
     pc = ksp.getPC()
     if pc.getType() == "python":                # the fascicle Schur solver (fieldsplit.py)
         counts = getattr(pc.getPythonContext(), "pivot_counts", None)
-        return counts() if counts is not None else None
-    factor = mumps_factor(ksp) if pc.getType() == "cholesky" else None
+        if counts is not None:
+            return counts()
+    factor = mumps_factor(ksp) if pc.getType() in ("cholesky", "python") else None
     if factor is None:
         return None
     # a root front factored by ScaLAPACK (ICNTL(13) = 0, MUMPS's default on many ranks) leaves

@@ -37,10 +37,17 @@ class AppliedLoads:
 
     def __init__(self, groups: list, forces: list[PETSc.Vec], moves: list[PETSc.Vec], q0: PETSc.Vec):
         self.groups, self.forces, self.moves, self.q0 = groups, forces, moves, q0
+        #: the groups with a force or a prescribed displacement (collective: global norms)
+        self.acting = np.array([f.norm() > 0.0 or u.norm() > 0.0 for f, u in zip(forces, moves)], dtype=bool)
 
     def multipliers(self, lam: float) -> np.ndarray:
         """m_g(λ) of every group."""
         return np.array([g.multiplier(lam) for g in self.groups])
+
+    def unchanged(self, lam0: float, lam1: float) -> bool:
+        """Whether every load and prescribed displacement is the same at λ₁ as at λ₀ (a load
+        history's frames that repeat their forces, e.g. a stride's swing)."""
+        return bool(np.array_equal(self.multipliers(lam0)[self.acting], self.multipliers(lam1)[self.acting]))
 
     def subtract(self, F: PETSc.Vec, lam: float) -> None:
         """F −= f_ext(λ)."""

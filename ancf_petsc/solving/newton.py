@@ -17,10 +17,9 @@ the contact state of an increment in one prediction in most increments and two i
 where the status rule inside Newton's iteration took several phases of several iterations each.
 
 **The weights from rest.**  The first solve from rest keeps the fade weights (contact/weights.py);
-after it they are brought up to date, and when one changed the next prediction linearises them
-with the status (one Josephy–Newton step for both), instead of a further solve for the weights
-once the status has settled (gait envelope, twist 60-90 deg: the first level 17-20 → 10-13 Newton
-iterations).
+after it they are brought up to date, and when one changed the next prediction linearises them with
+the status (one Josephy–Newton step for both), instead of a further solve for the weights once the
+status has settled (gait envelope, twist 60-90 deg: the first level 17-20 → 10-13 iterations).
 
 **From the converged state.**  The load predictor (secant, tangent) moves X off an equilibrium,
 and the complementarity problem is linearised there.  Where that path loses its predictions (S
@@ -30,9 +29,8 @@ equilibrium, before the phases: on the gait envelope at twist 90 deg the secant'
 indefinite S (one eigenvalue −5.6e9 against 7.5e9) after a prediction that changed 4 constraints
 and 3 more at its check, and the phases then took 16 Newton iterations (32 for the level, 600 N,
 gastrocnemius-biased); from the converged state the level takes 19, the lost path's 10 included.
-Where there is no prediction already at the load predictor's state, the kept-status solve and
-the phases run as before (restarting there took the 135 deg gastrocnemius-biased column into a
-state it failed at, 1072 N).  Where the check sets a status it set before in the increment, the
+Without a prediction already at the load predictor's state the kept-status solve and the phases
+run as before (restarting took the 135 deg gastrocnemius-biased column to a failure, 1072 N).  Where the check sets a status it set before in the increment, the
 predictions cycle (an indefinite S has several complementary solutions: period 3 at 1000 N on
 the 120 deg gastrocnemius-biased column) and the phases take over from that state.
 
@@ -50,9 +48,10 @@ to change the status there:
   converged state and solved again until it no longer changes (at most ``MAX_STATUS_UPDATES``).
 
 Above the predictor's size the first increment from rest is first solved with every constraint
-held (the sliding problem), whose multipliers' signs start the phases.
-After the solves, contact points whose partners slid past B's ends get their new weights
-(Contact.refresh_weights) and the state is solved again until the weights settle.
+held (the sliding problem), whose multipliers' signs start the phases.  After the solves, contact
+points whose partners slid past B's ends get their new weights (Contact.refresh_weights) and the
+state is solved again until the weights settle.  An increment that changes no load (a stride's
+swing frames) starts with the check of the converged state it starts from, no prediction.
 
 **Friction's bounds** (issue 27): where the semi-smooth iteration for Coulomb's law fails, the
 increment is solved again from its start as a fixed point of Tresca problems (Nečas, Jarušek &
@@ -195,17 +194,18 @@ class PhasedNewton:
         self.bound_updates = 0
 
     def solve(self, X: PETSc.Vec, lam: float, from_rest: bool,
-              converged: PETSc.Vec | None = None) -> tuple[int, int]:
+              converged: PETSc.Vec | None = None, unchanged: bool = False) -> tuple[int, int]:
         """(reason of the last solve, Newton iterations of all of them).  ``converged``: the
         converged state a load predictor moved X from (module docstring, "From the converged
-        state")."""
+        state"); ``unchanged``: X is the last increment's converged state and this one changes
+        no load (``_predicted``)."""
         P = self.steps
         P.frozen = self.between_solves
         P.begin_increment(from_rest)
         its, solved = 0, None
         start = X.copy() if P.bounded else None
         if self.predictor is not None and P.decides_activity:
-            solved, its, lost = self._predicted(X, lam, converged is not None)
+            solved, its, lost = self._predicted(X, lam, converged is not None, unchanged)
             if lost:
                 # the load predictor's path lost the predictions: the Josephy–Newton iteration
                 # again from the converged state, linearised at an equilibrium
@@ -245,17 +245,17 @@ class PhasedNewton:
             self.unsettled = P.residual_norm(X)
         return reason, its
 
-    def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False) -> tuple[int | None, int, bool]:
+    def _predicted(self, X: PETSc.Vec, lam: float, moved: bool = False,
+                   unchanged: bool = False) -> tuple[int | None, int, bool]:
         """Josephy–Newton (module docstring): (reason, iterations, lost), reason None when the
-        increment is left to the phases (from X as it is then).  A prediction counts as one
-        Newton iteration.  Without one the status is kept for the solve; the phases take over
-        when the check then changes it.  ``moved``: X is a load predictor's state; ``lost``:
-        this path made a prediction and lost the next one or its solve failed (the caller
-        starts again from the converged state)."""
+        increment is left to the phases (from X as it is then).  A prediction is one Newton
+        iteration; without one the status is kept, and the phases take over when the check then
+        changes it.  ``moved``: X is a load predictor's state; ``lost``: this path predicted and
+        lost the next prediction or its solve (the caller starts again from the converged state)."""
         P, c, its, predicted_once, weighed, seen = self.steps, self.steps.contact, 0, False, None, set()
         for k in range(MAX_PREDICTIONS):
             status = c.status.copy()
-            ok = self.predictor.predict(X)
+            ok = not (unchanged and k == 0) and self.predictor.predict(X)
             predicted = int((status != c.status).sum())          # this rank's, for the trace
             its += int(ok)
             if not ok and moved and predicted_once:

@@ -93,20 +93,20 @@ class LoadStepper:
         self.branches.destroy()
         self.solver.destroy()
 
-    def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float,
-                 from_rest: bool = False, converged: PETSc.Vec | None = None) -> tuple[int, int, float]:
+    def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float, from_rest: bool = False,
+                 converged: PETSc.Vec | None = None, unchanged: bool = False) -> tuple[int, int, float]:
         """Newton at load factor ``lam`` from ``X`` (``newton.PhasedNewton``: the contact law's
         phases; ``converged``: the converged state a load predictor moved X from, where a
-        Josephy–Newton iteration that loses its predictions starts again).  Returns the last
-        solve's reason, the iterations of all of them and the final residual norm; ``history``
-        the residuals."""
+        Josephy–Newton iteration that loses its predictions starts again; ``unchanged``: X is
+        converged at the same loads).  Returns the last solve's reason, the iterations of all of
+        them and the final residual norm; ``history`` the residuals."""
         self.problem.load_factor = lam
         self.problem.impose(X)                  # prescribed displacements at this load factor
         S = self.solver
         S.history = []
         newton = PhasedNewton(S.contact_steps, lambda Y: S.solve(Y, target, lam, reached),
                               self.predictor, S.linesearch)
-        reason, its = newton.solve(X, lam, from_rest, converged)
+        reason, its = newton.solve(X, lam, from_rest, converged, unchanged)
         self.tresca_solves = newton.bound_updates
         if newton.bound_updates:
             self.log(f"  load factor {lam:.6g}: friction's semi-smooth iteration failed; solved again "
@@ -179,7 +179,9 @@ class LoadStepper:
                 self._stop_if_requested(target, level)
                 step = self.control.step(path.lam, path.dlam, target)
                 X.copy(X_prev)
-                predictor = self.spec.predictor if not self._contact_formed(path) else "none"
+                # a converged state at loads the increment leaves unchanged: nothing to predict
+                still = path.lam > 0.0 and self.problem.loads.unchanged(path.lam, path.lam + step)
+                predictor = "none" if still or self._contact_formed(path) else self.spec.predictor
                 moved = False
                 if predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
@@ -188,9 +190,8 @@ class LoadStepper:
                 elif predictor == "tangent" and self.tangent.predict(X, path.lam + step):
                     self.problem.limits.limit_predictor(X_prev, X)
                     moved = True
-                reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam,
-                                                    from_rest=path.lam == 0.0,
-                                                    converged=X_prev if moved else None)
+                reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam, path.lam == 0.0,
+                                                    X_prev if moved else None, still)
                 tally.its += its
                 tally.tresca_solves += self.tresca_solves
                 history.append(list(self.history))
@@ -222,8 +223,7 @@ class LoadStepper:
         starts at the converged state.  From the path and status alone, as a restart (collective)."""
         if self.predictor is None or path.dlam_last <= 0.0 or path.lam != path.dlam_last:
             return False
-        c = self.problem.contact
-        return bool(self.predictor.global_status(c.status).any())
+        return bool(self.predictor.global_status(self.problem.contact.status).any())
 
     def _check_budget(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float) -> None:
         if self.control.over_budget(self.newton_iterations):

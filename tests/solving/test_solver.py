@@ -299,7 +299,8 @@ def test_chord_steps_keep_every_newton_count_and_answer(tmp_path):
 
 def test_chord_rule_from_the_third_iterate_never_twice_and_on_its_estimate():
     """chord.TangentReuse: the estimate 2‖F_k‖²/‖F_k−1‖ against a tenth of the tolerance, only
-    from the third iterate of a solve, never twice in a row, off when disabled."""
+    from the third iterate of a solve, never twice in a row, never after a step that raised the
+    residual, off when disabled."""
     from ancf_petsc.solving.chord import TangentReuse
     atol, rtol = 4e-8, 1e-10
     rule = TangentReuse(True)
@@ -315,6 +316,9 @@ def test_chord_rule_from_the_third_iterate_never_twice_and_on_its_estimate():
     assert rule.decide([1.0, 1e-2, 1e-6], atol, rtol)               # a new solve
     rule.start_solve()
     assert rule.decide([1e6, 1e-2, 1e-5], atol, rtol)               # tolerance rtol ‖F_0‖ = 1e-4
+    rule.start_solve()                     # a walking-stride frame: the step before raised |F|
+    assert not rule.decide([24.1, 0.06, 0.243, 6.2e-6], 2.2e-7, rtol)
+    assert rule.decide([24.1, 0.06, 0.0243, 6.2e-6], 2.2e-7, rtol)
     off = TangentReuse(False)
     assert not off.decide([1.0, 1e-2, 1e-6], atol, rtol) and off.count == 0
 

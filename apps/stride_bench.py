@@ -1,6 +1,7 @@
 """scripts/bench_stride.py: frames per second of the walking stride by elements, contact law and
 material, this tree's ancf-solve (one load history) beside another's (each frame its own run from
-rest), in alternating turns (workflows/stride_bench.py)."""
+rest), in alternating turns (workflows/stride_bench.py); with --tolerances, frames per second
+against the answers' change as the absolute tolerance grows."""
 from __future__ import annotations
 
 import argparse
@@ -10,7 +11,7 @@ import sys
 import numpy as np
 
 from ancf_petsc.workflows.envelope import GOH, NEO, EnvelopeCell
-from ancf_petsc.workflows.stride_bench import StrideCase, after, before
+from ancf_petsc.workflows.stride_bench import StrideCase, after, before, tolerance_sweep
 
 
 def cases(twist: float, bias: str) -> list[StrideCase]:
@@ -24,6 +25,26 @@ def cases(twist: float, bias: str) -> list[StrideCase]:
     return out
 
 
+def tolerances(args, factors: list[float]) -> int:
+    """Per case and factor of the absolute tolerance: Newton iterations, frames/s of solve (median
+    over the repeats) and the largest relative change of the probes and the differential
+    displacements over the stride against the run's own tolerance."""
+    print(f"{'case':32s} {'atol factor':>11s} {'atol [N]':>9s} {'Newton':>7s} {'frames/s (solve)':>17s} "
+          f"{'probes change':>14s} {'differential change':>20s}")
+    for case in cases(args.twist, args.bias):
+        if args.only and args.only not in case.label:
+            continue
+        runs = [tolerance_sweep(case, [args.solver], args.work, factors) for _ in range(args.repeats)]
+        for k, row in enumerate(runs[-1]):
+            if row["status"] == "crashed":
+                print(f"{case.label:32s} {row['factor']:11g}  crashed", flush=True)
+                continue
+            fps = np.median([r[k].get("per_solve", 0.0) for r in runs])
+            print(f"{case.label:32s} {row['factor']:11g} {row['atol']:9.1e} {row['iterations']:7d} {fps:17.1f} "
+                  f"{row['changes'][0]:14.1e} {row['changes'][1]:20.1e}  {row['status']}", flush=True)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="bench_stride", description=__doc__.splitlines()[0])
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
@@ -34,7 +55,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sample", type=int, default=10, help="frames of the stride the before side solves")
     ap.add_argument("--work", default="results/bench_stride")
     ap.add_argument("--only", help="cases whose label contains this")
+    ap.add_argument("--tolerances", help="factors of the run's own absolute tolerance, e.g. 1,10,100,1000: "
+                                         "frames/s against the answers' change (speed against accuracy)")
     args = ap.parse_args(argv)
+    if args.tolerances:
+        return tolerances(args, [float(f) for f in args.tolerances.split(",")])
     print(f"{'case':40s} {'frames/s (solve)':>17s} {'frames/s (wall)':>16s} {'Newton/frame':>12s}"
           + ("  before: frames/s (wall), Newton/frame, ratio" if args.before else ""))
     for case in cases(args.twist, args.bias):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,3 +60,40 @@ def before(case: StrideCase, cmd: list[str], work: str, sample: int) -> dict:
             its.append(s["newton_iterations"])
     return {"frames": len(frames), "completed": done, "per_wall": len(frames) / total,
             "median_iterations": float(np.median(its)) if its else float("nan")}
+
+
+def _outputs(summary: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Every frame's probe displacements and differential-displacement profiles, flattened."""
+    probes = [v for st in summary["steps"] for n in sorted(st["probes"]) for v in st["probes"][n]["displacement"]]
+    diffs = [v for st in summary["steps"] for k in sorted(st.get("displacement_differences", {}))
+             for v in st["displacement_differences"][k]["profile"]]
+    return np.array(probes), np.array(diffs)
+
+
+def tolerance_sweep(case: StrideCase, cmd: list[str], work: str, factors: list[float]) -> list[dict]:
+    """The stride with the absolute tolerance at ``factors`` × the run's own (1e-10 of the load,
+    solving/snes_solver.py; ``petsc: {snes_atol}``): per factor the tolerance, Newton iterations,
+    frames/s of solve and the largest change of the probes' displacements and of the
+    differential displacements over every frame against the run's own tolerance, relative to
+    their largest value (speed against accuracy)."""
+    rows, ref = [], None
+    for f in [1.0] + [f for f in factors if f != 1.0]:
+        cfg = cell_config(case.cell)
+        cfg["output"] = {"vtk": False}
+        if ref is not None:
+            cfg["petsc"] = dict(cfg.get("petsc") or {}, snes_atol=f * ref["atol"])
+        _, _, s = solve_config(cmd, cfg, os.path.join(work, case.label, f"atol_x{f:g}"))
+        if s is None:
+            rows.append({"factor": f, "status": "crashed"})
+            continue
+        atol = float(re.search(r"atol ([0-9.eE+-]+)", s["solver"]).group(1))
+        row = {"factor": f, "atol": atol, "status": s["status"], "iterations": s["newton_iterations"],
+               "per_solve": len(s["steps"]) / max(s["timings"]["solve"], 1e-9), "outputs": _outputs(s)}
+        if ref is None:
+            ref = row
+        same = ref["status"] == row["status"] and all(
+            a.shape == b.shape for a, b in zip(ref["outputs"], row["outputs"]))
+        row["changes"] = tuple(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300) if same and a.size else float("nan")
+                               for a, b in zip(row["outputs"], ref["outputs"]))
+        rows.append(row)
+    return rows

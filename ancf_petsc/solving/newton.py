@@ -6,8 +6,7 @@ when the complementarity predictor applies (petsc/complementarity.py, up to its 
 
 1. the linearised complementarity problem is solved exactly at the increment's start (the secant
    predictor's state): its solution sets the status and the first step;
-2. one SNES solve keeps that status (the smooth problem of one active set: quadratic
-   convergence, any line search);
+2. one SNES solve keeps that status (one active set's smooth problem: quadratic convergence);
 3. at the converged state the exact rule checks the status (``Contact`` evaluates it; no change:
    the state satisfies the exact conditions, done); otherwise the predictor is solved again
    there, and so on, at most ``MAX_PREDICTIONS`` times.
@@ -30,9 +29,10 @@ indefinite S (one eigenvalue −5.6e9 against 7.5e9) after a prediction that cha
 and 3 more at its check, and the phases then took 16 Newton iterations (32 for the level, 600 N,
 gastrocnemius-biased); from the converged state the level takes 19, the lost path's 10 included.
 Without a prediction already at the load predictor's state the kept-status solve and the phases
-run as before (restarting took the 135 deg gastrocnemius-biased column to a failure, 1072 N).  Where the check sets a status it set before in the increment, the
-predictions cycle (an indefinite S has several complementary solutions: period 3 at 1000 N on
-the 120 deg gastrocnemius-biased column) and the phases take over from that state.
+run as before (restarting took the 135 deg gastrocnemius-biased column to a failure, 1072 N).
+Where the check sets a status it set before in the increment, the predictions cycle (an indefinite
+S has several complementary solutions: period 3 at 1000 N on the 120 deg gastrocnemius-biased
+column) and the phases take over from that state.
 
 Where there is no prediction (S too far from positive definite, a failed factorisation) and the
 kept status does not pass the check, where a solve fails (restarted from the predicted state)

@@ -83,10 +83,13 @@ def tolerance_sweep(case: StrideCase, cmd: list[str], work: str, factors: list[f
         if ref is not None:
             cfg["petsc"] = dict(cfg.get("petsc") or {}, snes_atol=f * ref["atol"])
         _, _, s = solve_config(cmd, cfg, os.path.join(work, case.label, f"atol_x{f:g}"))
-        if s is None:
+        found = re.search(r"atol ([0-9.eE+-]+)", (s or {}).get("solver", ""))
+        if found is None:                     # no summary, or none of a solver: no tolerance
             rows.append({"factor": f, "status": "crashed"})
+            if ref is None:
+                return rows
             continue
-        atol = float(re.search(r"atol ([0-9.eE+-]+)", s["solver"]).group(1))
+        atol = float(found.group(1))
         row = {"factor": f, "atol": atol, "status": s["status"], "iterations": s["newton_iterations"],
                "per_solve": len(s["steps"]) / max(s["timings"]["solve"], 1e-9), "outputs": _outputs(s)}
         if ref is None:

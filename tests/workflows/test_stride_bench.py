@@ -27,3 +27,11 @@ def test_tolerance_sweep_scales_the_runs_own_tolerance_and_measures_against_it(m
     # probes: the largest change at the last frame, 10 (atol - 2.2e-7) 3, over the largest value 2
     assert np.isclose(rows[2]["changes"][0], 30.0 * (2.2e-5 - 2.2e-7) / 2.0)
     assert np.isclose(rows[1]["changes"][1], (2.2e-6 - 2.2e-7) / (1e-3 + 2.2e-7))
+
+
+def test_tolerance_sweep_stops_when_the_reference_run_gives_no_summary(monkeypatch, tmp_path):
+    """Without the reference run's tolerance there is nothing to scale: one crashed row."""
+    monkeypatch.setattr(stride_bench, "solve_config", lambda cmd, cfg, out: (None, 1.0, None))
+    case = stride_bench.StrideCase("x", EnvelopeCell(NEO, 45.0, "uniform", "sliding", 0.0, 4, stride=True))
+    assert stride_bench.tolerance_sweep(case, ["ancf-solve"], str(tmp_path), [10.0]) == [
+        {"factor": 1.0, "status": "crashed"}]

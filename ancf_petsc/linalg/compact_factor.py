@@ -216,6 +216,15 @@ def multiplier_mask(problem) -> np.ndarray:
     return mask
 
 
+def install_for(problem, ksp: PETSc.KSP, wanted: bool, prefix: str = "",
+                ordering: dict | None = None) -> CompactCholesky | None:
+    """``install`` on ``ksp`` with ``problem``'s held DOFs and multiplier blocks where
+    ``compact_applies`` (``wanted``: ``solver.compact_factor``); the context, or None."""
+    if not compact_applies(problem, ksp.getPC(), wanted):
+        return None
+    return install(ksp, problem.fixed_mask, multiplier_mask(problem), prefix, ordering)
+
+
 def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
             ordering: dict | None = None) -> CompactCholesky:
     """Make ``ksp``'s preconditioner the compact factorisation (one rank, SBAIJ J, Cholesky);

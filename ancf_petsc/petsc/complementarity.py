@@ -58,7 +58,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..contact.laws import HELD, PROBE
-from ..linalg.compact_factor import compact_applies, install, multiplier_mask
+from ..linalg.compact_factor import install_for
 from ..linalg.inertia import mumps_factor
 from .lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
 
@@ -127,9 +127,8 @@ class ComplementarityPredictor:
         pc.setType("cholesky" if problem.symmetric else "lu")
         pc.setFactorSolverType("mumps")
         self.ksp.setOptionsPrefix("ancf_lcp_")
-        if compact_applies(problem, pc, compact):
-            # K's multiplier rows are diagonal: no saddle point, MUMPS's own ordering
-            install(self.ksp, problem.fixed_mask, multiplier_mask(problem), "ancf_lcp_", ordering={})
+        # K's multiplier rows are diagonal: no saddle point, MUMPS's own ordering
+        install_for(problem, self.ksp, compact, "ancf_lcp_", ordering={})
         self.solves = 0
         self._z = np.zeros(len(self.dofs))        # the multipliers at the last linearisation
         self._select = None                       # E: the multipliers' columns (``_columns``)

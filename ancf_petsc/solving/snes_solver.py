@@ -12,7 +12,7 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
-from ..linalg.compact_factor import compact_applies, install, multiplier_mask
+from ..linalg.compact_factor import install_for
 from ..linalg.database import remove
 from ..linalg.diagnostics import petsc_message, used_anywhere
 from ..linalg.inertia import mumps_error, pivot_counts
@@ -125,8 +125,7 @@ class SNESSolver:
             self.close()
             raise SolverOptionError("", refused(exc, self.petsc_options, self.problem.comm.size,
                                                 self.prefix, self.problem.symmetric)) from None
-        if compact_applies(self.problem, pc, self.spec.compact_factor):
-            install(ksp, self.problem.fixed_mask, multiplier_mask(self.problem), self.prefix)
+        install_for(self.problem, ksp, self.spec.compact_factor, self.prefix)
 
     def close(self, collective: bool = True) -> None:
         """Remove the options this stepper left in PETSc's database; config options PETSc never

@@ -27,16 +27,19 @@ class StrideCase:
     cell: EnvelopeCell
 
 
-def after(case: StrideCase, cmd: list[str], work: str) -> dict:
-    """The stride as one history: frames, status, Newton iterations, frames/s (solve, wall)."""
+def after(case: StrideCase, cmd: list[str], work: str, petsc: dict | None = None, tag: str = "after") -> dict:
+    """The stride as one history (``petsc``: options for its config, run in ``tag``): frames,
+    status, Newton iterations, frames/s (solve, wall) and the summary."""
     cfg = cell_config(case.cell)
     cfg["output"] = {"vtk": False}
-    _, wall, s = solve_config(cmd, cfg, os.path.join(work, case.label, "after"))
+    if petsc:
+        cfg["petsc"] = dict(cfg.get("petsc") or {}, **petsc)
+    _, wall, s = solve_config(cmd, cfg, os.path.join(work, case.label, tag))
     if s is None:
-        return {"status": "crashed", "frames": 0}
+        return {"status": "crashed", "frames": 0, "summary": None}
     frames = len(s["steps"])
     return {"status": s["status"], "frames": frames, "iterations": s["newton_iterations"],
-            "per_solve": frames / max(s["timings"]["solve"], 1e-9), "per_wall": frames / wall}
+            "per_solve": frames / max(s["timings"]["solve"], 1e-9), "per_wall": frames / wall, "summary": s}
 
 
 def before(case: StrideCase, cmd: list[str], work: str, sample: int) -> dict:
@@ -78,20 +81,15 @@ def tolerance_sweep(case: StrideCase, cmd: list[str], work: str, factors: list[f
     their largest value (speed against accuracy)."""
     rows, ref = [], None
     for f in [1.0] + [f for f in factors if f != 1.0]:
-        cfg = cell_config(case.cell)
-        cfg["output"] = {"vtk": False}
-        if ref is not None:
-            cfg["petsc"] = dict(cfg.get("petsc") or {}, snes_atol=f * ref["atol"])
-        _, _, s = solve_config(cmd, cfg, os.path.join(work, case.label, f"atol_x{f:g}"))
+        run = after(case, cmd, work, None if ref is None else {"snes_atol": f * ref["atol"]}, f"atol_x{f:g}")
+        s = run["summary"]
         found = re.search(r"atol ([0-9.eE+-]+)", (s or {}).get("solver", ""))
         if found is None:                     # no summary, or none of a solver: no tolerance
             rows.append({"factor": f, "status": "crashed"})
             if ref is None:
                 return rows
             continue
-        atol = float(found.group(1))
-        row = {"factor": f, "atol": atol, "status": s["status"], "iterations": s["newton_iterations"],
-               "per_solve": len(s["steps"]) / max(s["timings"]["solve"], 1e-9), "outputs": _outputs(s)}
+        row = dict(run, factor=f, atol=float(found.group(1)), outputs=_outputs(s))
         if ref is None:
             ref = row
         same = ref["status"] == row["status"] and all(

@@ -52,10 +52,28 @@ from ..contact.partners import HISTORY
 class TangentPredictor:
     """J⁻¹ of the load increment with the SNES's last factored tangent (module docstring);
     ``valid`` while that factor belongs to a converged state."""
+    _valid: bool
+    _growths: int                     # the contact pattern's growths when ``valid`` was set
 
     def __init__(self, problem, snes: PETSc.SNES):
         self.problem, self.snes = problem, snes
         self.valid = False
+
+    @property
+    def valid(self) -> bool:
+        """The SNES's factor is a converged state's and still there.  The complementarity
+        predictor assembles the Jacobian with the SNES, and where the contact pattern grows then
+        (a point onto another B element) the SBAIJ preconditioner is reset (problem.py
+        ``_contact_jacobian``); if the increment then converged with no Newton iteration, nothing
+        factored again.  So no prediction after a growth until a converged state's factor
+        (seen with a trial second-order predictor on the unilateral walking stride at twist 0°:
+        PETSc's 'Preconditioner number of local rows -1', a traceback; an AIJ factor would
+        survive a growth, but its prediction is given up too, in that rare frame)."""
+        return self._valid and self._growths == self.problem.pattern_growths
+
+    @valid.setter
+    def valid(self, value: bool) -> None:
+        self._valid, self._growths = value, self.problem.pattern_growths
 
     def prime(self, X: PETSc.Vec, lam: float, previous_history: dict | None) -> None:
         """A restart: factor the tangent the interrupted run's last solve left, that of the

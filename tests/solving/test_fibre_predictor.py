@@ -77,3 +77,42 @@ def test_tangent_predictor_solves_with_the_snes_factor_after_the_matrix_changed(
     assert diff < 1e-10, diff
     for obj in solvers + [snes, K]:
         obj.destroy()
+
+
+def test_tangent_predictor_makes_no_prediction_once_the_contact_pattern_grew():
+    """An assembly that grows the contact pattern (here the soleus moved 20 mm along its axis:
+    its points project onto other elements) resets the SNES's SBAIJ preconditioner, also when
+    the complementarity predictor assembled and the increment then converged with no Newton
+    iteration: the next increment has no factor to predict with, so no prediction (it was a
+    PETSc error and a traceback) and X stays at the converged state; a converged state's new
+    factor predicts again."""
+    from helpers import build_problem
+    from ancf_petsc.solving.predictor import TangentPredictor
+    P, PETSc = build_problem(load_raw("achilles_type3_psi45.yaml"), "sbaij")
+    X = P.q0.copy()
+    P.load_factor = 1.0
+    snes = PETSc.SNES().create(comm=P.comm)
+    ksp = snes.getKSP()
+    ksp.setType("preonly")
+    ksp.getPC().setType("cholesky")
+    ksp.getPC().setFactorSolverType("mumps")
+    P.jacobian(snes, X, P.J, P.J)
+    ksp.setOperators(P.J)
+    ksp.setUp()
+    tangent = TangentPredictor(P, snes)
+    tangent.valid = True
+    assert tangent.predict(X.copy(), 2.0)            # with the factor
+    moved = X.copy()
+    soleus = P.layout.perm[:2 * P.model.beams[0].n_elements + 1]
+    moved.getArray().reshape(-1, 18)[soleus, 0] += 0.02
+    growths = P.pattern_growths
+    P.jacobian(snes, moved, P.J, P.J)
+    assert P.pattern_growths == growths + 1 and not tangent.valid
+    got = X.copy()
+    assert not tangent.predict(got, 2.0)
+    assert (got - X).norm() == 0.0                   # no held DOF moves on this model
+    ksp.setOperators(P.J)                            # a later solve factors again
+    ksp.setUp()
+    tangent.valid = True
+    assert tangent.predict(X.copy(), 2.0)
+    snes.destroy()

@@ -87,7 +87,12 @@ def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.n
     in the points' order, i.e. exactly what ``np.add.at`` on those indices adds, entry by entry
     in the same order, without its per-entry cost (1 ms for the two fade-band points of the
     Achilles column's Jacobian).  Pass r adds the r-th point of every segment: no segment twice
-    in a pass."""
+    in a pass.  Compiled (contact/blocks_native.pyx: bitwise this) or numpy."""
+    module = native.load("contact.blocks_native")
+    if module is not None and K.flags.c_contiguous and K.dtype == float:
+        module.add_point_blocks(K, np.ascontiguousarray(seg, dtype=np.int64), np.ascontiguousarray(j, dtype=np.int64),
+                                np.ascontiguousarray(values, dtype=float), el, stride)
+        return
     order = np.argsort(seg, kind="stable")
     grouped = seg[order]
     start = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])
@@ -125,6 +130,27 @@ def add_gap_hessian(K: np.ndarray, sub, tau: np.ndarray, spread, s_loc: np.ndarr
                                 We.transpose(0, 1, 3, 2).reshape(n_s, 4 * P_s, Dq))
 
 
+def _band_blocks(K: np.ndarray, lay: segment_layout.SegmentLayout, band: np.ndarray, pgrad: np.ndarray,
+                 gw: np.ndarray, coef: np.ndarray, hess: np.ndarray | None, variational: bool,
+                 el: int, stride: int) -> None:
+    """The fade band's stiffness per band point (∇w is zero elsewhere) over its 108 unknowns:
+    −p_p ∇g ∇wᵀ (forces τ_p ∇g_p), or −p_p (∇g ∇wᵀ + ∇w ∇gᵀ + g_p ∇²w_p) (variational);
+    ``pgrad`` = p_p ∇g_p, ``coef`` = p_p g_p.  Compiled (blocks_native.pyx, no temporaries:
+    bitwise these values through ``add_point_blocks``) or numpy."""
+    module = native.load("contact.blocks_native")
+    seg, j = lay.s_loc[band], lay.j[band]
+    if module is not None and K.flags.c_contiguous:
+        f = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
+        module.add_band_blocks(K, np.ascontiguousarray(seg, dtype=np.int64), np.ascontiguousarray(j, dtype=np.int64),
+                               f(pgrad), f(gw), f(coef), f(hess) if variational else np.zeros((0, 0, 0)),
+                               el, stride, variational)
+        return
+    values = -pgrad[:, :, None] * gw[:, None, :]
+    if variational:
+        values = values + values.transpose(0, 2, 1) - coef[:, None, None] * hess
+    add_point_blocks(K, seg, j, values, el, stride)
+
+
 def _segment_blocks(c, st: ContactState, lay: segment_layout.SegmentLayout):
     """The block rows and values (n_s, D, D) of the segments of the layout ``lay``."""
     pr, sel, spread, Dq = st.pr, lay.sel, lay.spread, lay.Dq
@@ -140,15 +166,9 @@ def _segment_blocks(c, st: ContactState, lay: segment_layout.SegmentLayout):
         gw, band, hess = fade_derivatives(c, st).of(sel, nodes)
         if len(band):
             Vg = V + spread(sub.g[:, None] * gw)            # ∇(w_p g_p) with w = w(ζ(q))
-            Pe, Ge = spread(grad * st.pressure[sel][:, None]), spread(gw)
-            PG = np.matmul(Pe.transpose(0, 2, 1), Ge)
-            if not c.weights.variational:                  # forces τ_p ∇g_p: −Σ p_p ∇g ∇wᵀ
-                K[:, :Dq, :Dq] -= PG
-            else:
-                K[:, :Dq, :Dq] -= PG + PG.transpose(0, 2, 1)   # −Σ p_p (∇g ∇wᵀ + ∇w ∇gᵀ)
-                # −Σ p_p g_p ∇²w_p over each band point's 108 unknowns
-                coef = -(st.pressure[sel][band] * sub.g[band])[:, None, None]
-                add_point_blocks(K, lay.s_loc[band], lay.j[band], coef * hess, EL, k * DOFS_PER_NODE)
+            p_b = st.pressure[sel][band]
+            _band_blocks(K, lay, band, grad[band] * p_b[:, None], gw[band], p_b * sub.g[band], hess,
+                         c.weights.variational, EL, k * DOFS_PER_NODE)
     tau = st.tau[sel]
     if np.any(tau != 0.0):
         # −Σ_p τ_p ∇²g_p = Σ_p τ_p W_p C_p W_pᵀ, one product per segment

@@ -147,6 +147,56 @@ cdef void _point_w(Py_ssize_t p, double[:, ::1] W, const double[:, ::1] NA, cons
                 W[r, 3] = NBz[p, slot - S, 1] * n[p, i]
 
 
+def add_point_blocks(double[:, :, ::1] K, const long[::1] seg, const long[::1] j,
+                     const double[:, :, ::1] values, int el, int stride):
+    """K[seg_p] += values_p (2 el × 2 el) over point p's unknowns in its segment's block: A's
+    element (the block's first ``el``) and its B element j_p (``el`` from el + stride j_p on),
+    point after point, so every entry gets its additions in the points' order: bitwise what
+    blocks.add_point_blocks's numpy passes (and ``np.add.at``) add."""
+    cdef Py_ssize_t n = seg.shape[0], p, a, b, ra, rb, s, b0
+    cdef Py_ssize_t two = 2 * el, D = K.shape[1]
+    if j.shape[0] != n or values.shape[0] != n or values.shape[1] != two or values.shape[2] != two:
+        raise ValueError("seg, j and values (n, 2 el, 2 el) do not match")
+    for p in range(n):
+        if seg[p] < 0 or seg[p] >= K.shape[0] or j[p] < 0 or el + stride * j[p] + el > D or K.shape[2] != D:
+            raise ValueError("a point outside the blocks")
+    for p in range(n):
+        s, b0 = seg[p], el + stride * j[p]
+        for a in range(two):
+            ra = a if a < el else b0 + a - el
+            for b in range(two):
+                rb = b if b < el else b0 + b - el
+                K[s, ra, rb] = K[s, ra, rb] + values[p, a, b]
+
+
+def add_band_blocks(double[:, :, ::1] K, const long[::1] seg, const long[::1] j,
+                    const double[:, ::1] pgrad, const double[:, ::1] gw, const double[::1] coef,
+                    const double[:, :, ::1] hess, int el, int stride, bint variational):
+    """The fade band's terms of each point p straight into its segment's block (blocks.py,
+    ``_band_blocks``: bitwise its numpy values and ``add_point_blocks``): t_ab = −(p ∇g)_a ∇w_b,
+    and with ``variational`` t_ab + t_ba − (p g)_p ∇²w_ab, point after point."""
+    cdef Py_ssize_t n = seg.shape[0], p, a, b, ra, rb, s, b0
+    cdef Py_ssize_t two = 2 * el, D = K.shape[1]
+    cdef double v
+    if (j.shape[0] != n or pgrad.shape[0] != n or gw.shape[0] != n or pgrad.shape[1] != two
+            or gw.shape[1] != two or (variational and (coef.shape[0] != n or hess.shape[0] != n
+                                                       or hess.shape[1] != two or hess.shape[2] != two))):
+        raise ValueError("seg, j, pgrad, gw (n, 2 el), coef (n,) and hess (n, 2 el, 2 el) do not match")
+    for p in range(n):
+        if seg[p] < 0 or seg[p] >= K.shape[0] or j[p] < 0 or el + stride * j[p] + el > D or K.shape[2] != D:
+            raise ValueError("a point outside the blocks")
+    for p in range(n):
+        s, b0 = seg[p], el + stride * j[p]
+        for a in range(two):
+            ra = a if a < el else b0 + a - el
+            for b in range(two):
+                rb = b if b < el else b0 + b - el
+                v = (-pgrad[p, a]) * gw[p, b]
+                if variational:
+                    v = (v + (-pgrad[p, b]) * gw[p, a]) - coef[p] * hess[p, a, b]
+                K[s, ra, rb] = K[s, ra, rb] + v
+
+
 def add_point_forces(double[::1] floc, const long[:, ::1] pos, const double[:, ::1] N,
                      const double[:, ::1] traction, double sign, int dofs_per_node):
     """floc += Σ_p sign N_p ⊗ traction_p over the DOFs of each point's element (node positions

@@ -87,12 +87,7 @@ def add_point_blocks(K: np.ndarray, seg: np.ndarray, j: np.ndarray, values: np.n
     in the points' order, i.e. exactly what ``np.add.at`` on those indices adds, entry by entry
     in the same order, without its per-entry cost (1 ms for the two fade-band points of the
     Achilles column's Jacobian).  Pass r adds the r-th point of every segment: no segment twice
-    in a pass.  Compiled (contact/blocks_native.pyx: bitwise this) or numpy."""
-    module = native.load("contact.blocks_native")
-    if module is not None and K.flags.c_contiguous and K.dtype == float:
-        module.add_point_blocks(K, np.ascontiguousarray(seg, dtype=np.int64), np.ascontiguousarray(j, dtype=np.int64),
-                                np.ascontiguousarray(values, dtype=float), el, stride)
-        return
+    in a pass.  (The fade band's terms come compiled, ``_band_blocks``: bitwise this.)"""
     order = np.argsort(seg, kind="stable")
     grouped = seg[order]
     start = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])

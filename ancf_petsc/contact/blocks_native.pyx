@@ -147,28 +147,6 @@ cdef void _point_w(Py_ssize_t p, double[:, ::1] W, const double[:, ::1] NA, cons
                 W[r, 3] = NBz[p, slot - S, 1] * n[p, i]
 
 
-def add_point_blocks(double[:, :, ::1] K, const long[::1] seg, const long[::1] j,
-                     const double[:, :, ::1] values, int el, int stride):
-    """K[seg_p] += values_p (2 el × 2 el) over point p's unknowns in its segment's block: A's
-    element (the block's first ``el``) and its B element j_p (``el`` from el + stride j_p on),
-    point after point, so every entry gets its additions in the points' order: bitwise what
-    blocks.add_point_blocks's numpy passes (and ``np.add.at``) add."""
-    cdef Py_ssize_t n = seg.shape[0], p, a, b, ra, rb, s, b0
-    cdef Py_ssize_t two = 2 * el, D = K.shape[1]
-    if j.shape[0] != n or values.shape[0] != n or values.shape[1] != two or values.shape[2] != two:
-        raise ValueError("seg, j and values (n, 2 el, 2 el) do not match")
-    for p in range(n):
-        if seg[p] < 0 or seg[p] >= K.shape[0] or j[p] < 0 or el + stride * j[p] + el > D or K.shape[2] != D:
-            raise ValueError("a point outside the blocks")
-    for p in range(n):
-        s, b0 = seg[p], el + stride * j[p]
-        for a in range(two):
-            ra = a if a < el else b0 + a - el
-            for b in range(two):
-                rb = b if b < el else b0 + b - el
-                K[s, ra, rb] = K[s, ra, rb] + values[p, a, b]
-
-
 def add_band_blocks(double[:, :, ::1] K, const long[::1] seg, const long[::1] j,
                     const double[:, ::1] pgrad, const double[:, ::1] gw, const double[::1] coef,
                     const double[:, :, ::1] hess, int el, int stride, bint variational):

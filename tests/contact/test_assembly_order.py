@@ -8,15 +8,9 @@ from ancf_petsc.contact.blocks import add_point_blocks
 EL, DOFS_PER_NODE = 54, 18          # element 3363: 3 nodes x 18 DOFs
 
 
-@pytest.mark.parametrize("path", ["compiled", "numpy"])
-def test_point_blocks_add_what_add_at_adds_bitwise(path, monkeypatch):
+def test_point_blocks_add_what_add_at_adds_bitwise():
     """Repeated, unsorted segments and B elements 0-2 of a block three B elements wide: every
-    entry gets the same additions in the same order as np.add.at's, so the sums are bitwise
-    equal, with the compiled loop (contact/blocks_native.pyx) and the numpy passes."""
-    if path == "numpy":
-        monkeypatch.setenv("ANCF_NATIVE", "0")
-    elif native.load("contact.blocks_native") is None:
-        pytest.fail(native.status("contact.blocks_native"))
+    entry gets the same additions in the same order as np.add.at's, so the sums are bitwise equal."""
     rng = np.random.default_rng(4)
     width, n_s, n = 3, 5, 23
     D = DOFS_PER_NODE * (2 * width + 6)

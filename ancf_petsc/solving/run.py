@@ -173,6 +173,7 @@ class Run:
         return {"output_dir": os.path.abspath(spec.output.dir), "twist_deg": spec.twist_deg,
                 "dofs": model.n_dofs, "elements": model.n_elements, "ranks": self.comm.size,
                 "partition": self.partition, "solver": self.stepper.describe(),
+                "tolerances": dict(zip(("rtol", "atol", "stol", "max_it"), self.stepper.solver.snes.getTolerances())),
                 "linear_solver": self._linear_solver(),
                 "sections": {b.name: {"area": b.section.area, "centroid": b.section.centroid.tolist(),
                                       "points": int(len(b.section.weights))} for b in model.beams},

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,7 +74,7 @@ def _outputs(summary: dict) -> tuple[np.ndarray, np.ndarray]:
 
 def tolerance_sweep(case: StrideCase, cmd: list[str], work: str, factors: list[float]) -> list[dict]:
     """The stride with the absolute tolerance at ``factors`` × the run's own (1e-10 of the load,
-    solving/snes_solver.py; ``petsc: {snes_atol}``): per factor the tolerance, Newton iterations,
+    solving/snes_solver.py, summary.json ``tolerances``; ``petsc: {snes_atol}``): per factor the tolerance, Newton iterations,
     frames/s of solve and the largest change of the probes' displacements and of the
     differential displacements over every frame against the run's own tolerance, relative to
     their largest value (speed against accuracy)."""
@@ -83,13 +82,12 @@ def tolerance_sweep(case: StrideCase, cmd: list[str], work: str, factors: list[f
     for f in [1.0] + [f for f in factors if f != 1.0]:
         run = after(case, cmd, work, None if ref is None else {"snes_atol": f * ref["atol"]}, f"atol_x{f:g}")
         s = run["summary"]
-        found = re.search(r"atol ([0-9.eE+-]+)", (s or {}).get("solver", ""))
-        if found is None:                     # no summary, or none of a solver: no tolerance
+        if s is None:                         # no summary: no tolerance to scale or compare
             rows.append({"factor": f, "status": "crashed"})
             if ref is None:
                 return rows
             continue
-        row = dict(run, factor=f, atol=float(found.group(1)), outputs=_outputs(s))
+        row = dict(run, factor=f, atol=float(s["tolerances"]["atol"]), outputs=_outputs(s))
         if ref is None:
             ref = row
         same = ref["status"] == row["status"] and all(

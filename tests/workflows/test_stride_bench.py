@@ -15,7 +15,7 @@ def test_tolerance_sweep_scales_the_runs_own_tolerance_and_measures_against_it(m
         seen.append(cfg.get("petsc"))
         steps = [{"probes": {"a": {"displacement": [1.0 + 10.0 * atol * k, 0.0, 2.0]}},
                   "displacement_differences": {"a|b": {"profile": [0.0, 1e-3 + atol]}}} for k in range(4)]
-        return None, 1.0, {"status": "completed", "solver": f"SNES newtonls; rtol 1.0e-10 atol {atol:.1e} stol 1e-12",
+        return None, 1.0, {"status": "completed", "tolerances": {"rtol": 1e-10, "atol": atol, "stol": 1e-12},
                            "newton_iterations": 10, "steps": steps, "timings": {"solve": 0.5}}
 
     monkeypatch.setattr(stride_bench, "solve_config", fake_solve)

@@ -100,7 +100,8 @@ def test_grid_runs_and_collects(grid):
         log = fh.read()
     assert "-snes_rtol 1e-09" in log.splitlines()[0] and "[ancf] completed" in log
     with open(os.path.join(runs[0].dir, "summary.json")) as fh:
-        assert "rtol 1.0e-09" in json.load(fh)["solver"]
+        s = json.load(fh)
+        assert "rtol 1.0e-09" in s["solver"] and s["tolerances"]["rtol"] == 1e-9
 
 
 def test_rerun_skips_done_and_redoes_missing(grid):

@@ -51,6 +51,37 @@ def test_a_cell_that_switched_to_pointwise_fade_forces_says_where():
     assert CellResult(cell, "completed").row()["fade_forces_pointwise_from"] == ""
 
 
+def test_a_cell_that_snapped_past_a_critical_point_says_where(tmp_path):
+    """A run that snapped (solving/critical_point.py) ends its table cell with the critical
+    states' load levels; the ``CellResult`` row carries them from summary.json's branch switches
+    (a bifurcation's switch has no ``critical_load_factor`` and is not listed)."""
+    import json
+    from ancf_petsc.workflows.envelope import NEO, CellResult, EnvelopeCell, markdown_table, run_cell
+    base = {"base": "a.yaml", "law": "own", "friction": "0.0", "bias": "soleus", "elements": "4",
+            "status": "completed", "last_level": "3000", "iterations": "1500", "iterations_to_1200": "1400",
+            "cutbacks": "20", "cutbacks_to_1200": "20", "cutback_levels": "1", "median_iterations": "3",
+            "fade_forces_pointwise_from": ""}
+    rows = [dict(base, twist="120", stride="False", snaps="7.27152"), dict(base, twist="105", stride="False")]
+    text = markdown_table(rows)
+    assert "| 120 | 1400 (20 cut-backs), snap at 7.272 N |" in text and "| 105 | 1400 (20 cut-backs) |" in text
+    strides = [dict(base, twist="150", stride="True", snaps="41.5;60.25")]
+    assert "snap at frame 41.5, snap at frame 60.25" in markdown_table(strides, key="median_iterations")
+    cell = EnvelopeCell(NEO, 120.0, "soleus", "unilateral")
+    assert CellResult(cell, "completed", snaps=(7.27152,)).row()["snaps"] == "7.27152"
+    assert CellResult(cell, "completed").row()["snaps"] == ""
+    # from summary.json: a fake ancf-solve that writes one
+    summary = {"status": "completed", "newton_iterations": 9, "steps": [
+        {"load_factor": 30.0, "iterations": 9, "cutbacks": 0, "branch_switches": [
+            {"kind": "bifurcation", "load_factor": 12.0},
+            {"kind": "limit point", "load_factor": 20.02, "critical_load_factor": 20.0}]}]}
+    fake = tmp_path / "fake-solve"
+    fake.write_text("#!/bin/sh\nmkdir -p \"$3\"\ncat > \"$3/summary.json\" <<'END'\n" + json.dumps(summary)
+                    + "\nEND\n")
+    fake.chmod(0o755)
+    res = run_cell(cell, [str(fake)], str(tmp_path / "work"))
+    assert res.status == "completed" and res.snaps == (20.0,) and res.row()["snaps"] == "20"
+
+
 def test_a_stride_cell_states_its_cut_backs_and_total_newton_iterations():
     """A stride's median per frame hides a frame that cut back many times: the cell also says
     how many cut-backs in how many frames and the stride's Newton iterations in all (the 120 deg

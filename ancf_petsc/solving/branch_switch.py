@@ -48,22 +48,42 @@ MAX_MODES = 2
 #: ``SPARSE_PAIRS`` nearest zero from below (a 16-element tendon has ~2 500)
 DENSE_LIMIT = 4000
 SPARSE_PAIRS = 24
+#: a snap's load factors (``BranchSwitch.snap``), as shares beyond the critical state's, tried in
+#: turn (capped at the level): the second subject's sliding columns (critical_point.py) were
+#: passed at the first
+SNAP_STEPS = (1e-3, 1e-2, 1e-1)
+#: a snap's perturbation sizes: the stable states found beyond the envelope's critical points lay
+#: 0.24-0.63 mm (and 2.7 mm on a soft-matrix column) from them, 0.05-0.6 section sizes
+SNAP_AMPLITUDES = AMPLITUDES[:4]
+
+
+#: a switch's ``kind`` in its report: from an unstable state at its load, or (``snap``) from a
+#: stable critical point to a load just beyond it (critical_point.py)
+BIFURCATION, LIMIT_POINT = "bifurcation", "limit point"
 
 
 @dataclass
 class BranchPoint:
     """An unstable converged state ahead of the path: its load factor, state, the tangent it
-    converged with, its negative eigenvalues and whether a switch from it was tried."""
+    converged with, its negative eigenvalues and whether a switch from it was tried.  A snap's
+    (``kind`` LIMIT_POINT) is the critical state to be left at the load factor ``lam`` beyond
+    it (``origin``: its own and its critical_point share), along the given ``modes`` and
+    ``amplitudes`` (no tangent kept)."""
     lam: float
     X: PETSc.Vec
-    J: PETSc.Mat
+    J: PETSc.Mat | None
     negative: int
     step: float                 # the sub-step that reached it (the increment after a switch)
     tried: bool = False
+    kind: str = BIFURCATION
+    origin: tuple[float, float] | None = None    # a snap's: the critical state's load factor, share
+    modes: list | None = None
+    amplitudes: tuple = AMPLITUDES
 
     def destroy(self) -> None:
         self.X.destroy()
-        self.J.destroy()
+        if self.J is not None:
+            self.J.destroy()
 
 
 class BranchSwitch:
@@ -127,7 +147,8 @@ class BranchSwitch:
         its0 = stepper.newton_iterations
         report = self.switch(stepper, point, path, target)
         if report is None:
-            stepper.log(f"  branch switch at load factor {point.lam:.6g}: {self.outcome}")
+            stepper.log(f"  {'snap' if point.kind == LIMIT_POINT else 'branch switch'} at load factor "
+                        f"{point.lam:.6g}: {self.outcome}")
             if resume:
                 self.resume(stepper, path, target)
             else:
@@ -150,6 +171,35 @@ class BranchSwitch:
         path.dlam = max(point.step, stepper.spec.min_increment)
         return True
 
+    def snaps(self, path) -> bool:
+        """Whether a snap is tried from ``path``'s state: switching is on (LDLᵀ's inertia tells a
+        stable state), the path is stable and has left rest."""
+        return self.enabled and not path.accepted_negative and path.lam > 0.0
+
+    def snap(self, stepper, path, X_prev: PETSc.Vec, target: float, tally, critical) -> bool:
+        """Past the critical point ``critical`` (critical_point.CriticalPoint: the stable state
+        of ``path`` in ``problem.X``, where the stepper gave up): the switch along its mode to each
+        load factor of ``SNAP_STEPS`` beyond it in turn, until one reaches a stable state (``take``).
+        Collective."""
+        if not self.snaps(path):
+            return False
+        X = self.problem.X.copy()
+        try:
+            for share in SNAP_STEPS:
+                lam = min(path.lam * (1.0 + share), target)
+                if self.point is not None:
+                    self.point.destroy()
+                self.point = BranchPoint(lam, X.copy(), None, 0, lam - path.lam, kind=LIMIT_POINT,
+                                         origin=(path.lam, critical.share),
+                                         modes=[(critical.eigenvalue, critical.mode.copy())],
+                                         amplitudes=SNAP_AMPLITUDES)
+                if self.take(stepper, path, X_prev, target, tally, resume=False):
+                    return True
+                X.copy(self.problem.X)
+        finally:
+            X.destroy()
+        return False
+
     def switch(self, stepper, point: BranchPoint, path, target: float) -> dict | None:
         """Perturb the branch point ``point`` (reached from a stable path) along its critical
         modes (``AMPLITUDES``, both signs) and solve at its load; on success leave the chosen
@@ -158,7 +208,8 @@ class BranchSwitch:
         P = self.problem
         point.tried = True
         size = section_size(P.model)
-        modes = critical_modes(P, point.J, min(MAX_MODES, point.negative))
+        modes = (point.modes if point.modes is not None
+                 else critical_modes(P, point.J, min(MAX_MODES, point.negative)))
         self.outcome = ("no stable state along the critical mode(s)" if modes else
                         "its tangent has no negative eigenvalue whose vector is on the beam nodes (the "
                         "count's saddle lies mostly on the contact multipliers): nothing to switch along")
@@ -177,7 +228,7 @@ class BranchSwitch:
         P = self.problem
         for eigenvalue, mode in modes:
             scale = size / max(section_displacement(P, mode), 1e-300)
-            for amplitude in AMPLITUDES:
+            for amplitude in point.amplitudes:
                 found = []
                 for sign in (1.0, -1.0):
                     neg = self._attempt(stepper, point, mode, sign * amplitude * scale, path, target)
@@ -186,12 +237,14 @@ class BranchSwitch:
                 side = self._keep(stepper, point, mode, found, amplitude * scale, path, target,
                                   "potential" if conservative else "jump")
                 if side is not None:
-                    report = {"load_factor": point.lam, "negative_before": point.negative,
+                    report = {"kind": point.kind, "load_factor": point.lam, "negative_before": point.negative,
                               "negative_after": side["negative"], "sign": side["sign"],
                               "jump": side["jump"], "eigenvalue": eigenvalue, "amplitude": amplitude * size,
                               "sides": len(found), "rule": "lower potential" if conservative else "smaller jump"}
                     if base is not None:
                         report["potential_drop"] = base - side["potential"]
+                    if point.origin is not None:
+                        report["critical_load_factor"], report["critical_share"] = point.origin
                     return report
         P.restore()
         return None

@@ -34,6 +34,8 @@ class LoadStepFailure(Exception):
     """A requested load level could not be reached; raised identically on every rank.
     ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...)."""
 
+    args: tuple             # (the message,): ``amend`` adds to it
+
     def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
                  detail: str = ""):
         msg = (f"could not reach load factor {target:g}: SNES failed at load factor {attempted:.6g} "
@@ -44,6 +46,13 @@ class LoadStepFailure(Exception):
         self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
         self.code = reason.split()[0] if reason else "FAILED"
         self.inverted = inverted
+
+    def amend(self, detail: str) -> "LoadStepFailure":
+        """The same failure with ``detail`` added to its message (what the stepper found after
+        giving up: solving/critical_point.py)."""
+        if detail:
+            self.args = (self.args[0] + detail,)
+        return self
 
 
 @dataclass

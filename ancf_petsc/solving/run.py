@@ -88,7 +88,7 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
                 f"{len(unstable)} of {len(records)} levels are unstable equilibria (negative tangent "
                 f"eigenvalues at load factor {', '.join(f'{x:g}' for x in unstable)}): a buckled "
                 "or under-supported model; set solver.allow_unstable: true to accept them")
-    switched = [s["load_factor"] for r in records for s in r.branch_switches]
+    switched = [s for r in records for s in r.branch_switches]
     unsettled = [r.load_factor for r in records if r.weights_unsettled]
     weights = (f"contact weights not settled at {len(unsettled)} of {len(records)} levels (load factor "
                f"{', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is |F| with the state's own "

@@ -184,24 +184,38 @@ class SNESSolver:
         failed (no count, as for a solver without inertia).  Collective."""
         if self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies:
             return True
-        c = self.problem.contact
-        update = c is not None and c.allow_update
-        if c is not None:
-            c.allow_update = False
         if self.fascicle_schur is not None:
             self.fascicle_schur.keep_factors = False
         J, P, _ = self.snes.getJacobian()
         ksp = self.snes.getKSP()
         try:
-            self._assemble(self.snes, X, J, P)
+            self._assemble_at(X, J, P)
             ksp.setOperators(J, P)
             ksp.setUp()
         except PETSc.Error:                     # the same on every rank (MUMPS's own error)
             return False
+        return True
+
+    def tangent_at(self, X: PETSc.Vec) -> PETSc.Mat | None:
+        """The tangent at X assembled into the SNES's preconditioning matrix (returned); nothing
+        is factored.  None where that is no assembled matrix (``-snes_mf``).  Collective."""
+        J, P, _ = self.snes.getJacobian()
+        if P.getType() in (PETSc.Mat.Type.MFFD, PETSc.Mat.Type.SHELL, PETSc.Mat.Type.PYTHON):
+            return None
+        self._assemble_at(X, J, P)
+        return P
+
+    def _assemble_at(self, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
+        """The Jacobian at X with the contact status kept (the stepper has checked it at X)."""
+        c = self.problem.contact
+        update = c is not None and c.allow_update
+        if c is not None:
+            c.allow_update = False
+        try:
+            self._assemble(self.snes, X, J, P)
         finally:
             if c is not None:
                 c.allow_update = update
-        return True
 
     def _assemble(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         self.assemblies += 1

@@ -78,23 +78,42 @@ def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:
 
 
 def switch_line(report: dict) -> str:
-    """The log line of a branch switch (branch_switch.py's report)."""
-    how = (f"total potential {report['potential_drop']:.3g} J below the unstable state's, the lower of "
+    """The log line of a branch switch or a snap (branch_switch.py's report)."""
+    how = (f"total potential {report['potential_drop']:.3g} J below the {_left(report)}'s, the lower of "
            f"{report['sides']} side(s)" if "potential_drop" in report
            else f"the smaller jump of {report['sides']} side(s)")
+    move = (f"perturbed by {report['sign'] * report['amplitude'] * 1e3:+.3g} mm, Newton reached a state with "
+            f"{report['negative_after']}, {report['jump'] * 1e3:.3g} mm away ({how}; {report['iterations']} "
+            "Newton iterations)")
+    if "critical_load_factor" in report:
+        return (f"  snap past a critical point at load factor {report['critical_load_factor']:.6g} (its "
+                f"tangent's smallest scaled eigenvalue {report['critical_share']:.1e} of the next; load control "
+                f"found no equilibrium beyond it): along that mode at load factor {report['load_factor']:.6g}, "
+                f"{move}")
     return (f"  branch switch at load factor {report['load_factor']:.6g}: the state there had "
             f"{report['negative_before']} negative tangent eigenvalue(s); along its critical mode "
-            f"(eigenvalue {report['eigenvalue']:.3g}), perturbed by {report['sign'] * report['amplitude'] * 1e3:+.3g} mm, "
-            f"Newton reached a state with {report['negative_after']}, {report['jump'] * 1e3:.3g} mm away "
-            f"({how}; {report['iterations']} Newton iterations)")
+            f"(eigenvalue {report['eigenvalue']:.3g}), {move}")
 
 
-def switched_message(load_factors: list[float]) -> str:
-    """The final message of a run that switched branch at ``load_factors``."""
-    return (f"completed, switching branch {len(load_factors)} time(s) at a bifurcation (load factor "
-            f"{', '.join(f'{x:g}' for x in load_factors)}): load control met an unstable state and "
-            "could not pass it; the path went on from a stable state along its critical mode "
-            "(summary.json steps[].branch_switches; solver.branch_switch: false stops there instead)")
+def _left(report: dict) -> str:
+    return "critical state" if "critical_load_factor" in report else "unstable state"
+
+
+def switched_message(reports: list[dict]) -> str:
+    """The final message of a run that switched branch or snapped (branch_switch.py's reports)."""
+    snaps = [r["critical_load_factor"] for r in reports if "critical_load_factor" in r]
+    switches = [r["load_factor"] for r in reports if "critical_load_factor" not in r]
+    parts = []
+    if switches:
+        parts.append(f"switching branch {len(switches)} time(s) at a bifurcation (load factor "
+                     f"{', '.join(f'{x:g}' for x in switches)}): load control met an unstable state and "
+                     "could not pass it; the path went on from a stable state along its critical mode")
+    if snaps:
+        parts.append(f"snapping {len(snaps)} time(s) past a critical point (load factor "
+                     f"{', '.join(f'{x:g}' for x in snaps)}): load control found no equilibrium just beyond "
+                     "it; the path went on from a stable state reached along its critical mode (a jump)")
+    return ("completed, " + "; ".join(parts) + " (summary.json steps[].branch_switches; "
+            "solver.branch_switch: false stops there instead)")
 
 
 def lost_detail(contact, smallest: float, lost: bool) -> str:

@@ -28,6 +28,7 @@ from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .predictor import TangentPredictor
+from .critical_point import critical_point
 from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
@@ -296,9 +297,29 @@ class LoadStepper:
             failure = LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
                                       cause + solver_messages.lost_detail(P.contact, step, lost and not inverted)
                                       + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
-            if self.branches.take(self, path, X_prev, target, tally, resume=False):
-                return                                  # on from a stable branch (branch_switch.py)
-            if self.fade_switch.take(self, path, tally):
-                return                                  # on with pointwise fade forces
-            P.load_factor = path.lam
-            raise failure
+            last_resorts(self, path, X_prev, target, tally, failure)
+
+
+def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, target: float, tally: LevelTally,
+            failure: LoadStepFailure) -> None:
+    """What the stepper tries where every cut-back failed, in turn: the switch from a pending
+    branch point (branch_switch.py), a snap past a critical point (critical_point.py: the same
+    model's answer, so before the other), the pointwise fade forces (fade_switch.py: on with
+    another form of the contact forces).  Returns when the path goes on from a state one of
+    them reached; else raises ``failure``, naming the critical point if the path is at one.
+    Collective."""
+    if stepper.branches.take(stepper, path, X_prev, target, tally, resume=False):
+        return
+    critical = critical_point(stepper, path.lam)
+    tried = False
+    try:
+        tried = critical is not None and stepper.branches.snaps(path)
+        if tried and stepper.branches.snap(stepper, path, X_prev, target, tally, critical):
+            return
+    finally:
+        if critical is not None:
+            critical.destroy()
+    if stepper.fade_switch.take(stepper, path, tally):
+        return
+    stepper.problem.load_factor = path.lam
+    raise failure.amend(critical.sentence(tried) if critical is not None else "")

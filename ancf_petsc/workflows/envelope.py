@@ -119,8 +119,9 @@ def cell_config(cell: EnvelopeCell) -> dict:
 class CellResult:
     """How a cell ended: status (completed | failed | unstable | interrupted | crashed | timeout),
     the last converged load [N], Newton iterations (all, and up to 1.2 kN), cut-backs, wall time
-    [s], the run's message and where it went on with pointwise fade forces (``contact.fade_forces:
-    auto``, solving/fade_switch.py; None: it did not)."""
+    [s], the run's message, where it went on with pointwise fade forces (``contact.fade_forces:
+    auto``, solving/fade_switch.py; None: it did not) and where it snapped past a critical point
+    (solving/critical_point.py: the critical states' load levels)."""
     cell: EnvelopeCell
     status: str
     last_level: float = 0.0
@@ -133,6 +134,7 @@ class CellResult:
     per_level: list = field(default_factory=list)
     solve_time: float = 0.0         # summary.json's timings.solve [s]
     pointwise_from: float | None = None   # summary.json's fade_forces_pointwise_from
+    snaps: tuple = ()                     # summary.json's steps[].branch_switches[].critical_load_factor
 
     @property
     def frames(self) -> int:
@@ -158,7 +160,8 @@ class CellResult:
                 "median_iterations": self.median_iterations, "cutback_levels": self.cutback_levels,
                 "solve_time": round(self.solve_time, 3), "wall_time": round(self.wall_time, 2),
                 "message": self.message,
-                "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from}
+                "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from,
+                "snaps": ";".join(f"{x:.6g}" for x in self.snaps)}
 
 
 def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None = None):
@@ -204,7 +207,9 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
                       message="" if status == "completed" else str(data.get("message", ""))[:300],
                       per_level=[(s["load_factor"], s["iterations"], s["cutbacks"]) for s in steps],
                       solve_time=float(data.get("timings", {}).get("solve", 0.0)),
-                      pointwise_from=data.get("fade_forces_pointwise_from"))
+                      pointwise_from=data.get("fade_forces_pointwise_from"),
+                      snaps=tuple(sw["critical_load_factor"] for s in steps for sw in s.get("branch_switches", [])
+                                  if "critical_load_factor" in sw))
 
 
 def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
@@ -280,16 +285,20 @@ def summary_line(rows: list[dict], tag: str) -> str:
 
 
 def _cell_text(r: dict | None, key: str) -> str:
-    """A row in a table cell, with where it switched to pointwise fade forces (fade_switch.py)."""
+    """A row in a table cell, with where it switched to pointwise fade forces (fade_switch.py) and
+    snapped past a critical point (critical_point.py)."""
     if r is None:
         return "–"
     if r["status"] == "crashed":
         return "**traceback**"
     stride = str(r.get("stride", "")).lower() in ("true", "1")
     text, at = _outcome_text(r, key, stride), r.get("fade_forces_pointwise_from") or ""
-    if not at:
-        return text
-    return text + (f", pointwise from frame {float(at):.4g}" if stride else f", pointwise from {float(at):.4g} N")
+    unit, where = ("frame ", "") if stride else ("", " N")
+    if at:
+        text += f", pointwise from {unit}{float(at):.4g}{where}"
+    for snap in filter(None, (r.get("snaps") or "").split(";")):
+        text += f", snap at {unit}{float(snap):.4g}{where}"
+    return text
 
 
 def _outcome_text(r: dict, key: str, stride: bool) -> str:

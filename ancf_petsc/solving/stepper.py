@@ -301,7 +301,7 @@ class LoadStepper:
 
 
 def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, target: float, tally: LevelTally,
-            failure: LoadStepFailure) -> None:
+                 failure: LoadStepFailure) -> None:
     """What the stepper tries where every cut-back failed, in turn: the switch from a pending
     branch point (branch_switch.py), a snap past a critical point (critical_point.py: the same
     model's answer, so before the other), the pointwise fade forces (fade_switch.py: on with

@@ -55,6 +55,13 @@ def exit_process(code: int) -> NoReturn:
             pass
     petsc = sys.modules.get("petsc4py.PETSc")
     if petsc is not None:
+        # parallel PETSc objects that a rank's garbage collector freed (from reference cycles, at
+        # times that differ between ranks: rank 0 allocates more) wait in petsc4py's garbage; the
+        # collective clean-up destroys them together.  Without it PetscFinalize hung on one rank
+        # while the others waited in MPI_Finalize (a 2-rank unilateral GOH column that failed;
+        # tests/parallel/test_exit.py makes such garbage on purpose)
+        gc.collect()
+        petsc.garbage_cleanup()
         petsc._finalize()
     mpi = sys.modules.get("mpi4py.MPI")
     if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():

@@ -178,26 +178,21 @@ class BranchSwitch:
 
     def snap(self, stepper, path, X_prev: PETSc.Vec, target: float, tally, critical) -> bool:
         """Past the critical point ``critical`` (critical_point.CriticalPoint: the stable state
-        of ``path`` in ``problem.X``, where the stepper gave up): the switch along its mode to each
-        load factor of ``SNAP_STEPS`` beyond it in turn, until one reaches a stable state (``take``).
+        of ``path`` in ``X_prev``, which ``take`` restores after a failure): the switch along its
+        mode to each load factor of ``SNAP_STEPS`` beyond it in turn, until one reaches a stable state.
         Collective."""
         if not self.snaps(path):
             return False
-        X = self.problem.X.copy()
-        try:
-            for share in SNAP_STEPS:
-                lam = min(path.lam * (1.0 + share), target)
-                if self.point is not None:
-                    self.point.destroy()
-                self.point = BranchPoint(lam, X.copy(), None, 0, lam - path.lam, kind=LIMIT_POINT,
-                                         origin=(path.lam, critical.share),
-                                         modes=[(critical.eigenvalue, critical.mode.copy())],
-                                         amplitudes=SNAP_AMPLITUDES)
-                if self.take(stepper, path, X_prev, target, tally, resume=False):
-                    return True
-                X.copy(self.problem.X)
-        finally:
-            X.destroy()
+        for share in SNAP_STEPS:
+            lam = min(path.lam * (1.0 + share), target)
+            if self.point is not None:
+                self.point.destroy()
+            self.point = BranchPoint(lam, X_prev.copy(), None, 0, lam - path.lam, kind=LIMIT_POINT,
+                                     origin=(path.lam, critical.share),
+                                     modes=[(critical.eigenvalue, critical.mode.copy())],
+                                     amplitudes=SNAP_AMPLITUDES)
+            if self.take(stepper, path, X_prev, target, tally, resume=False):
+                return True
         return False
 
     def switch(self, stepper, point: BranchPoint, path, target: float) -> dict | None:
@@ -325,23 +320,35 @@ def critical_modes(problem, J: PETSc.Mat, count: int) -> list[tuple[float, PETSc
     if problem.comm.rank == 0:
         free = ~problem.fixed_mask
         w, V = eigenpairs(A[free][:, free])
-        D = problem.model.dofs_per_node
-        node = np.repeat(np.argsort(problem.layout.perm) < problem.model.n_nodes, D)[free]
+        node = node_rows(problem, free)
         for i in np.argsort(np.abs(w)):
             if w[i] < 0.0 and np.sum(V[node, i] ** 2) >= NODE_SHARE:
-                full = np.zeros(len(free))
-                full[free] = V[:, i]
-                pairs.append((float(w[i]), full * orientation(problem, full)))
+                pairs.append((float(w[i]), oriented_mode(problem, free, V[:, i])))
             if len(pairs) == count:
                 break
     pairs = problem.comm.tompi4py().bcast(pairs, root=0)
-    out = []
-    lo, hi = problem.X.getOwnershipRange()
-    for w, full in pairs:
-        v = problem.X.duplicate()
-        v.setArray(full[lo:hi])
-        out.append((w, v))
-    return out
+    return [(w, scattered(problem, full)) for w, full in pairs]
+
+
+def node_rows(problem, free: np.ndarray) -> np.ndarray:
+    """Which of the ``free`` DOFs (the global order, rank 0) are beam-node DOFs, not multipliers'."""
+    return np.repeat(np.argsort(problem.layout.perm) < problem.model.n_nodes, problem.model.dofs_per_node)[free]
+
+
+def oriented_mode(problem, free: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """A mode over the ``free`` DOFs as an array over every DOF (0 on the held ones), its sign
+    the same on every rank count (``orientation``)."""
+    full = np.zeros(len(free))
+    full[free] = values
+    return full * orientation(problem, full)
+
+
+def scattered(problem, full: np.ndarray) -> PETSc.Vec:
+    """An array over every DOF (the same on every rank) as a vector laid out as problem.X."""
+    v = problem.X.duplicate()
+    lo, hi = v.getOwnershipRange()
+    v.setArray(full[lo:hi])
+    return v
 
 
 def eigenpairs(A: sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from petsc4py import PETSc
 
-from .branch_switch import DENSE_LIMIT, NODE_SHARE, matrix_on_zero, orientation
+from .branch_switch import DENSE_LIMIT, NODE_SHARE, matrix_on_zero, node_rows, oriented_mode, scattered
 
 #: the smallest scaled eigenvalue counts as a critical point's below this share of the next
 #: (0.0033 at the alex fold above, 0.05 there 0.03 N before it; 0.9 far from it): at or near one
@@ -99,18 +99,10 @@ def critical_point(stepper, lam: float) -> CriticalPoint | None:
     if P.comm.rank == 0:
         free = ~P.fixed_mask
         if 2 <= int(free.sum()) <= DENSE_LIMIT:
-            node = np.repeat(np.argsort(P.layout.perm) < P.model.n_nodes, P.model.dofs_per_node)[free]
-            found = singular_mode(A[free][:, free].toarray(), node)
+            found = singular_mode(A[free][:, free].toarray(), node_rows(P, free))
             if found is not None and found[0] < ISOLATED:
-                full = np.zeros(len(free))
-                full[free] = found[2]
-                found = (found[0], found[1], full * orientation(P, full))
+                found = (found[0], found[1], oriented_mode(P, free, found[2]))
             else:
                 found = None
     found = P.comm.tompi4py().bcast(found, root=0)
-    if found is None:
-        return None
-    mode = P.X.duplicate()
-    lo, hi = mode.getOwnershipRange()
-    mode.setArray(found[2][lo:hi])
-    return CriticalPoint(lam, found[0], found[1], mode)
+    return None if found is None else CriticalPoint(lam, found[0], found[1], scattered(P, found[2]))

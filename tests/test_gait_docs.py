@@ -82,6 +82,31 @@ def test_a_cell_that_snapped_past_a_critical_point_says_where(tmp_path):
     assert res.status == "completed" and res.snaps == (20.0,) and res.row()["snaps"] == "20"
 
 
+def test_a_cell_whose_search_windows_widened_says_from_where(tmp_path):
+    """A run whose contact search windows became the whole partner beam (solving/window_widening.py)
+    says from which load in its table cell; the row carries summary.json's
+    ``search_window_whole_from`` (empty without a widening, and in the CSVs written before it)."""
+    import json
+    from ancf_petsc.workflows.envelope import NEO, CellResult, EnvelopeCell, markdown_table, run_cell
+    base = {"base": "a.yaml", "law": "own", "friction": "0.0", "bias": "soleus", "elements": "4",
+            "status": "completed", "last_level": "3000", "iterations": "1500", "iterations_to_1200": "1400",
+            "cutbacks": "20", "cutbacks_to_1200": "20", "cutback_levels": "1", "median_iterations": "3",
+            "fade_forces_pointwise_from": "", "snaps": "4.6705", "stride": "False"}
+    text = markdown_table([dict(base, twist="150", search_window_whole_from="4.6705"), dict(base, twist="135")])
+    assert "| 150 | 1400 (20 cut-backs), whole windows from 4.67 N, snap at 4.67 N |" in text
+    assert "| 135 | 1400 (20 cut-backs), snap at 4.67 N |" in text
+    cell = EnvelopeCell(NEO, 150.0, "soleus", "unilateral")
+    assert CellResult(cell, "completed").row()["search_window_whole_from"] == ""
+    summary = {"status": "completed", "newton_iterations": 9, "search_window_whole_from": 4.6705,
+               "steps": [{"load_factor": 30.0, "iterations": 9, "cutbacks": 0}]}
+    fake = tmp_path / "fake-solve"
+    fake.write_text("#!/bin/sh\nmkdir -p \"$3\"\ncat > \"$3/summary.json\" <<'END'\n" + json.dumps(summary)
+                    + "\nEND\n")
+    fake.chmod(0o755)
+    res = run_cell(cell, [str(fake)], str(tmp_path / "work"))
+    assert res.windows_from == 4.6705 and res.row()["search_window_whole_from"] == 4.6705
+
+
 def test_a_stride_cell_states_its_cut_backs_and_total_newton_iterations():
     """A stride's median per frame hides a frame that cut back many times: the cell also says
     how many cut-backs in how many frames and the stride's Newton iterations in all (the 120 deg

@@ -147,6 +147,8 @@ def write_restart_group(gid, record, path: dict) -> None:
                         "accepted_negative": path["accepted_negative"]})
     if path.get("fade_forces_pointwise_from") is not None:        # solving/fade_switch.py
         fast.attribute(r, "fade_forces_pointwise_from", path["fade_forces_pointwise_from"])
+    if path.get("search_window_whole_from") is not None:          # solving/window_widening.py
+        fast.attribute(r, "search_window_whole_from", path["search_window_whole_from"])
 
 
 def write_contact_group(gid, contact: dict, multipliers: np.ndarray) -> None:

@@ -53,6 +53,7 @@ class RestartPoint:
     #: the level before's (None: the first level, whose increment started from rest)
     previous_contact_fields: dict | None = None
     pointwise_from: float | None = None  # the run's switch to pointwise fade forces (fade_switch.py)
+    window_whole_from: float | None = None  # its contact search windows widened (window_widening.py)
 
 
 def fingerprint(model) -> dict[str, np.ndarray]:
@@ -286,7 +287,9 @@ def read_restart(directory: str) -> RestartPoint:
                                  previous_contact_fields=(_contact_fields(steps[f"step_{k - 1:04d}"])
                                                           if k > 1 else None),
                                  pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
-                                                 if "fade_forces_pointwise_from" in r.attrs else None))
+                                                 if "fade_forces_pointwise_from" in r.attrs else None),
+                                 window_whole_from=(float(r.attrs["search_window_whole_from"])
+                                                    if "search_window_whole_from" in r.attrs else None))
     except (OSError, KeyError) as exc:
         raise InputError("--restart", f"{path}: not a readable results file ({exc})") from None
     summary["steps"] = summary.get("steps", [])[:point.step]

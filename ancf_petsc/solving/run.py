@@ -206,6 +206,7 @@ class Run:
                          lam=point.load_factor, dlam=point.increment, dlam_last=point.last_increment,
                          accepted_negative=point.accepted_negative)
         self.stepper.fade_switch.resume(self.stepper, point.pointwise_from, self.spec.output.dir)
+        self.stepper.windows.resume(point.window_whole_from)
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
         if self.stepper.spec.predictor == "tangent":            # the factor the interrupted run had
             self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
@@ -241,7 +242,8 @@ class Run:
                 "blocks": blocks.reshape(-1, self.model.dofs_per_node),
                 "increment_blocks": increment.reshape(-1, self.model.dofs_per_node),
                 "accepted_negative": stepper.path.accepted_negative,
-                "fade_forces_pointwise_from": stepper.fade_switch.at}
+                "fade_forces_pointwise_from": stepper.fade_switch.at,
+                "search_window_whole_from": stepper.windows.at}
             self.writer.write_step(rec, q, extra, fields, path)
             self.converged.append(rec)
             self.timings["output"] += time.perf_counter() - t0
@@ -353,7 +355,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     spec, comm, say, stepper = run.spec, run.comm, run.say, run.stepper
     records = run.converged
     status, code, message = final_status(records, failure, spec.solver.allow_unstable)
-    message += stepper.fade_switch.note()
+    message += stepper.fade_switch.note() + stepper.windows.note()
     unused = [f"petsc.{k}" for k in stepper.solver.unused_config_options] + unused_command_line_options(comm)
     timings = dict(run.timings, total=total)
     timings["solve"] = timings["total"] - timings["setup"] - timings["output"]
@@ -377,6 +379,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         allow_unstable=spec.solver.allow_unstable,
         stability_checked=all(r.negative_eigenvalues is not None for r in records),
         **stepper.fade_switch.summary(stepper),
+        **stepper.windows.summary(),
         unused_petsc_options=unused)
     if comm.size > 1:
         problem_writing = comm.tompi4py().bcast(problem_writing, root=0)

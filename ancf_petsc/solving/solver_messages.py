@@ -116,23 +116,6 @@ def switched_message(reports: list[dict]) -> str:
             "solver.branch_switch: false stops there instead)")
 
 
-def lost_detail(contact, smallest: float, lost: bool) -> str:
-    """The cause of a failure whose last attempts lost a contact point's projection: the point
-    slid out of its search window (``contact.search_margin`` of the partner beam per load step)
-    within one Newton solve, down to the smallest increment.  Seen on the unilateral,
-    soleus-biased column at twist 180° with 8 elements (docs/gait.md): at every increment from
-    the converged 1972 N; with ``search_margin: 0.3`` the solve reached 2000 N, whose tangent had
-    a negative eigenvalue (a limit or bifurcation point)."""
-    if not lost or contact is None:
-        return ""
-    margin = contact.projector.search_margin
-    return (f" (a contact point slid out of its search window, {margin:g} of the partner beam per load "
-            f"step, within a Newton solve at every increment down to {smallest:.3g}: the Newton steps "
-            f"from the last converged state are large, as near a limit or bifurcation point where the "
-            f"tangent is nearly singular; a larger contact.search_margin lets the solve reach the state "
-            f"beyond, whose stability check then says which)")
-
-
 def failure_detail(solver, reason: int) -> str:
     """What to try after a failed level: the linear solver's reason and what works, a
     preconditioner that solves nothing, or a Newton budget too small for an active set."""

@@ -33,6 +33,7 @@ from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
+from .window_widening import WindowWidening
 
 
 #: failures whose last iterates are scanned for a jump of the residual (continuity.py): Newton
@@ -73,6 +74,7 @@ class LoadStepper:
         self.tresca_solves = 0                  # friction's fixed point in the last solve_at
         self.branches = BranchSwitch(problem, spec.branch_switch and not spec.allow_unstable)  # saddles
         self.fade_switch = FadeForcesSwitch(self, petsc_options, max_level, linear)   # fade_switch.py
+        self.windows = WindowWidening(problem)                                         # window_widening.py
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -295,20 +297,23 @@ class LoadStepper:
             cause = (solver_messages.floor_detail(step, path.lam, self.spec.min_increment)
                      if self.control.floored(step, tally) else solver_messages.failure_detail(self.solver, reason))
             failure = LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                      cause + solver_messages.lost_detail(P.contact, step, lost and not inverted)
-                                      + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
+                                      cause + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
+            tally.lost = lost and not inverted
             last_resorts(self, path, X_prev, target, tally, failure)
 
 
 def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, target: float, tally: LevelTally,
                  failure: LoadStepFailure) -> None:
     """What the stepper tries where every cut-back failed, in turn: the switch from a pending
-    branch point (branch_switch.py), a snap past a critical point (critical_point.py: the same
-    model's answer, so before the other), the pointwise fade forces (fade_switch.py: on with
-    another form of the contact forces).  Returns when the path goes on from a state one of
-    them reached; else raises ``failure``, naming the critical point if the path is at one.
-    Collective."""
+    branch point (branch_switch.py), the whole partner beam as every contact point's search
+    window where the last attempt lost a point from its window (window_widening.py), a snap past
+    a critical point (critical_point.py: the same model's answer, so before the other), the
+    pointwise fade forces (fade_switch.py: on with another form of the contact forces).  Returns
+    when the path goes on from a state one of them reached; else raises ``failure``, naming the
+    critical point if the path is at one.  Collective."""
     if stepper.branches.take(stepper, path, X_prev, target, tally, resume=False):
+        return
+    if stepper.windows.take(stepper, path, tally):
         return
     critical = critical_point(stepper, path.lam)
     tried = False

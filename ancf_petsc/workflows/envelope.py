@@ -120,8 +120,9 @@ class CellResult:
     """How a cell ended: status (completed | failed | unstable | interrupted | crashed | timeout),
     the last converged load [N], Newton iterations (all, and up to 1.2 kN), cut-backs, wall time
     [s], the run's message, where it went on with pointwise fade forces (``contact.fade_forces:
-    auto``, solving/fade_switch.py; None: it did not) and where it snapped past a critical point
-    (solving/critical_point.py: the critical states' load levels)."""
+    auto``, solving/fade_switch.py; None: it did not), where it snapped past a critical point
+    (solving/critical_point.py: the critical states' load levels) and where its contact search
+    windows became the whole partner beam (solving/window_widening.py; None: they did not)."""
     cell: EnvelopeCell
     status: str
     last_level: float = 0.0
@@ -135,6 +136,7 @@ class CellResult:
     solve_time: float = 0.0         # summary.json's timings.solve [s]
     pointwise_from: float | None = None   # summary.json's fade_forces_pointwise_from
     snaps: tuple = ()                     # summary.json's steps[].branch_switches[].critical_load_factor
+    windows_from: float | None = None     # summary.json's search_window_whole_from
 
     @property
     def frames(self) -> int:
@@ -161,7 +163,8 @@ class CellResult:
                 "solve_time": round(self.solve_time, 3), "wall_time": round(self.wall_time, 2),
                 "message": self.message,
                 "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from,
-                "snaps": ";".join(f"{x:.6g}" for x in self.snaps)}
+                "snaps": ";".join(f"{x:.6g}" for x in self.snaps),
+                "search_window_whole_from": "" if self.windows_from is None else self.windows_from}
 
 
 def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None = None):
@@ -208,6 +211,7 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
                       per_level=[(s["load_factor"], s["iterations"], s["cutbacks"]) for s in steps],
                       solve_time=float(data.get("timings", {}).get("solve", 0.0)),
                       pointwise_from=data.get("fade_forces_pointwise_from"),
+                      windows_from=data.get("search_window_whole_from"),
                       snaps=tuple(sw["critical_load_factor"] for s in steps for sw in s.get("branch_switches", [])
                                   if "critical_load_factor" in sw))
 
@@ -285,8 +289,9 @@ def summary_line(rows: list[dict], tag: str) -> str:
 
 
 def _cell_text(r: dict | None, key: str) -> str:
-    """A row in a table cell, with where it switched to pointwise fade forces (fade_switch.py) and
-    snapped past a critical point (critical_point.py)."""
+    """A row in a table cell, with where it switched to pointwise fade forces (fade_switch.py),
+    widened its contact search windows (window_widening.py) and snapped past a critical point
+    (critical_point.py)."""
     if r is None:
         return "–"
     if r["status"] == "crashed":
@@ -294,6 +299,8 @@ def _cell_text(r: dict | None, key: str) -> str:
     stride = str(r.get("stride", "")).lower() in ("true", "1")
     text, at = _outcome_text(r, key, stride), r.get("fade_forces_pointwise_from") or ""
     unit, where = ("frame ", "") if stride else ("", " N")
+    if r.get("search_window_whole_from"):
+        text += f", whole windows from {unit}{float(r['search_window_whole_from']):.4g}{where}"
     if at:
         text += f", pointwise from {unit}{float(at):.4g}{where}"
     for snap in filter(None, (r.get("snaps") or "").split(";")):

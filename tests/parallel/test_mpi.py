@@ -47,14 +47,44 @@ def test_ranks_agree_with_serial(tmp_path, name):
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
 
 
-#: ancf-solve with the variational fade forces made to fail past the first level (argv: config, level)
-FORCED_SWITCH = """import sys
+#: ancf-solve with a failure forced past a level (argv: config, level) by ``function`` of the
+#: tests' module ``module``: the variational fade forces failing, contact points leaving their windows
+FORCED = """import sys
 sys.path[:0] = [{root!r}, {tests!r}]
-from solving.test_fade_switch import fail_variational_past
-fail_variational_past(float(sys.argv.pop()))
+from solving.{module} import {function}
+{function}(float(sys.argv.pop()))
 from apps.ancf_solve import cli
 cli()
 """
+
+
+def forced_on_ranks(tmp_path, module: str, function: str, key: str) -> None:
+    """The column of the tests' module ``module`` with ``function``'s failure forced past its first
+    level, on 1, 2 and 3 ranks: each completes with summary.json's ``key`` at that level, and
+    they give the serial probes and Newton counts."""
+    import importlib
+    import subprocess
+    import sys
+    from helpers import MPI_ENV, ROOT
+    case = importlib.import_module(f"solving.{module}")
+    driver = tmp_path / "driver.py"
+    driver.write_text(FORCED.format(root=ROOT, tests=os.path.join(ROOT, "tests"), module=module, function=function))
+    tables, its = {}, set()
+    for n in (1, 2, 3):
+        raw = case.column()
+        raw["output"]["dir"] = str(tmp_path / f"n{n}")
+        for b in raw["beams"]:
+            b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        cmd = [sys.executable, str(driver), write_config(raw, tmp_path / f"c{n}.yaml"), "--quiet", str(case.STEPS[0])]
+        if n > 1:
+            cmd = ["mpirun", "--oversubscribe", "-n", str(n)] + cmd
+        p = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ, **MPI_ENV), timeout=600)
+        assert p.returncode == 0, p.stdout + p.stderr
+        s = read_summary(tmp_path / f"n{n}")
+        assert s["status"] == "completed" and s["ranks"] == n and s[key] == case.STEPS[0]
+        tables[n], _ = probes_table(s), its.add(s["newton_iterations"])
+    assert_same_as_serial(tables)
+    assert len(its) == 1
 
 
 @pytest.mark.mpi
@@ -63,28 +93,16 @@ def test_the_switch_to_pointwise_fade_forces_gives_the_serial_answer(tmp_path):
     """``contact.fade_forces: auto`` (solving/fade_switch.py) with the variational solves made to
     fail past the first level: 1, 2 and 3 ranks switch there, rebuild the Jacobian as AIJ with
     LU, and give the serial probes and Newton counts."""
-    import subprocess
-    import sys
-    from helpers import MPI_ENV, ROOT
-    from solving.test_fade_switch import STEPS, column
-    driver = tmp_path / "driver.py"
-    driver.write_text(FORCED_SWITCH.format(root=ROOT, tests=os.path.join(ROOT, "tests")))
-    tables, its = {}, set()
-    for n in (1, 2, 3):
-        raw = column()
-        raw["output"]["dir"] = str(tmp_path / f"n{n}")
-        for b in raw["beams"]:
-            b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
-        cmd = [sys.executable, str(driver), write_config(raw, tmp_path / f"c{n}.yaml"), "--quiet", str(STEPS[0])]
-        if n > 1:
-            cmd = ["mpirun", "--oversubscribe", "-n", str(n)] + cmd
-        p = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ, **MPI_ENV), timeout=600)
-        assert p.returncode == 0, p.stdout + p.stderr
-        s = read_summary(tmp_path / f"n{n}")
-        assert s["status"] == "completed" and s["ranks"] == n and s["fade_forces_pointwise_from"] == STEPS[0]
-        tables[n], _ = probes_table(s), its.add(s["newton_iterations"])
-    assert_same_as_serial(tables)
-    assert len(its) == 1
+    forced_on_ranks(tmp_path, "test_fade_switch", "fail_variational_past", "fade_forces_pointwise_from")
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_the_widened_search_windows_give_the_serial_answer(tmp_path):
+    """solving/window_widening.py with the solves made to lose a contact point from its window
+    past the first level: 1, 2 and 3 ranks widen there and give the serial probes and Newton
+    counts."""
+    forced_on_ranks(tmp_path, "test_window_widening", "lose_points_past", "search_window_whole_from")
 
 
 @pytest.mark.mpi

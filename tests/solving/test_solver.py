@@ -458,21 +458,6 @@ def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
     assert ("more iterations do not help" in text) != helps and (more in text) == helps, text
 
 
-def test_a_failure_that_lost_the_contact_projection_names_the_search_window():
-    """When the last attempts of a level lost a contact point's projection (it slid out of its
-    search window within a Newton solve), the failure says so, with the window and the smallest
-    increment, instead of a bare DIVERGED_FNORM_NAN (the unilateral soleus-biased column at twist
-    180° with 8 elements, docs/gait.md); nothing is added when the projection held."""
-    from types import SimpleNamespace
-    petsc_init()
-    from ancf_petsc.solving.solver_messages import lost_detail
-    contact = SimpleNamespace(projector=SimpleNamespace(search_margin=0.1))
-    text = lost_detail(contact, 0.001144, True)
-    assert "slid out of its search window, 0.1 of the partner beam" in text
-    assert "down to 0.00114" in text and "contact.search_margin" in text
-    assert lost_detail(contact, 0.001, False) == "" and lost_detail(None, 0.001, True) == ""
-
-
 def test_a_wandering_friction_solve_is_ended_early():
     """Friction's semi-smooth iteration that finds no new smallest |F| in WANDER_WINDOW iterations
     ends (DIVERGED_MAX_IT: the Tresca fixed point takes over) instead of running to its 200: the

@@ -51,7 +51,7 @@ class WindowWidening:
         if not tally.lost or c is None or self.at is not None or whole_windows(c.projector):
             return False
         before = c.projector.search_margin
-        self.widen(path.lam)
+        self.widen_from(path.lam)
         stepper.log(f"  load factor {path.lam:.6g}: a contact point slid out of its search window "
                     f"({before:g} of the partner beam per load step) at every increment; on with the "
                     "whole partner beam as every point's window (the Newton steps from the last converged "
@@ -61,7 +61,7 @@ class WindowWidening:
         path.dlam = tally.first_failed or path.dlam
         return True
 
-    def widen(self, at: float) -> None:
+    def widen_from(self, at: float) -> None:
         """The whole partner beam as every window from the load factor ``at`` on."""
         widen(self.contact.projector, WHOLE)
         self.at = at
@@ -69,7 +69,7 @@ class WindowWidening:
     def resume(self, at: float | None) -> None:
         """A restart of a run that widened at ``at`` (None: it did not) widens again."""
         if at is not None and self.contact is not None:
-            self.widen(at)
+            self.widen_from(at)
 
     def summary(self) -> dict:
         """summary.json's record of the widening (nothing without one)."""

@@ -8,6 +8,8 @@ linearisation are held as equalities (``held_lcp``), whose Schur complement is s
 where the bodies' tangent is on the motions they allow."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import scipy.linalg as la
 
@@ -90,7 +92,11 @@ def exact_on_support(S: np.ndarray, d: np.ndarray, z: np.ndarray) -> np.ndarray:
     if not A.any():
         return z
     try:
-        zA = la.solve(S[np.ix_(A, A)], -d[A])
+        with warnings.catch_warnings():
+            # an ill-conditioned S_AA (scipy's LinAlgWarning on stderr, mid-run): its answer is
+            # judged below like any other (finite, z_A ≥ 0, w ≥ −tol), else the clipped z stands
+            warnings.simplefilter("ignore", la.LinAlgWarning)
+            zA = la.solve(S[np.ix_(A, A)], -d[A])
     except np.linalg.LinAlgError:
         return z
     out = np.zeros_like(z)

@@ -96,6 +96,25 @@ def test_lcp_solution_is_complementary():
         assert len(sols) == 1 and np.allclose(sols[0], z, atol=1e-9)
 
 
+def test_an_ill_conditioned_active_set_is_judged_without_a_warning():
+    """``exact_on_support`` on an S_AA with rcond below machine precision (scipy's LinAlgWarning,
+    which printed mid-run on the 16-element 180° column): no warning, and its answer is judged as
+    any other; here z_A has a negative entry, so the clipped z stands."""
+    import warnings
+    import scipy.linalg as la
+    from ancf_petsc.petsc.lcp import exact_on_support
+    S = np.array([[1.0, 1.0], [1.0, 1.0 + 4.5e-16]])
+    d = np.array([-1.0, -1.0 - 9e-16])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert la.solve(S, -d).min() < 0.0                  # what the exact S gives: z_A < 0
+        assert any(issubclass(w.category, la.LinAlgWarning) for w in caught)   # the test can tell
+        caught.clear()
+        z = np.array([0.5, 0.5])
+        assert np.array_equal(exact_on_support(S, d, z), z)
+        assert not caught
+
+
 def test_lcp_with_a_nearly_semidefinite_schur_complement():
     """Away from rest S can be indefinite (the bodies' tangent without the constraints is):
     within INDEFINITE_SHARE of semidefinite the LCP of its nearest semidefinite matrix is

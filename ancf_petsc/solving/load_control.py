@@ -32,8 +32,6 @@ class LevelTally:
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)
     unstable_at: tuple[float, int, int] | None = None
-    #: the last failed attempt lost a contact point from its search window (window_widening.py)
-    lost: bool = False
     #: the branch switches of this level (solving/branch_switch.py reports)
     switches: list = field(default_factory=list)
 

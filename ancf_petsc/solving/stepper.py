@@ -298,22 +298,21 @@ class LoadStepper:
                      if self.control.floored(step, tally) else solver_messages.failure_detail(self.solver, reason))
             failure = LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
                                       cause + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
-            tally.lost = lost and not inverted
-            last_resorts(self, path, X_prev, target, tally, failure)
+            last_resorts(self, path, X_prev, target, tally, failure, lost and not inverted)
 
 
 def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, target: float, tally: LevelTally,
-                 failure: LoadStepFailure) -> None:
+                 failure: LoadStepFailure, lost: bool) -> None:
     """What the stepper tries where every cut-back failed, in turn: the switch from a pending
     branch point (branch_switch.py), the whole partner beam as every contact point's search
-    window where the last attempt lost a point from its window (window_widening.py), a snap past
-    a critical point (critical_point.py: the same model's answer, so before the other), the
+    window where the last attempt lost a point from its window (``lost``; window_widening.py), a
+    snap past a critical point (critical_point.py: the same model's answer, so before the other), the
     pointwise fade forces (fade_switch.py: on with another form of the contact forces).  Returns
     when the path goes on from a state one of them reached; else raises ``failure``, naming the
     critical point if the path is at one.  Collective."""
     if stepper.branches.take(stepper, path, X_prev, target, tally, resume=False):
         return
-    if stepper.windows.take(stepper, path, tally):
+    if stepper.windows.take(stepper, path, tally, lost):
         return
     critical = critical_point(stepper, path.lam)
     tried = False

@@ -43,12 +43,12 @@ class WindowWidening:
         self.contact = problem.contact
         self.at: float | None = None
 
-    def take(self, stepper, path, tally) -> bool:
-        """At a give-up whose last attempt lost a contact point from its window (``tally.lost``,
-        the same on every rank): widen (logged) and start the level again from ``path`` with the
+    def take(self, stepper, path, tally, lost: bool) -> bool:
+        """At a give-up whose last attempt lost a contact point from its window (``lost``, the
+        same on every rank): widen (logged) and start the level again from ``path`` with the
         increment of its first attempt; False when widened already or nothing to widen."""
         c = self.contact
-        if not tally.lost or c is None or self.at is not None or whole_windows(c.projector):
+        if not lost or c is None or self.at is not None or whole_windows(c.projector):
             return False
         before = c.projector.search_margin
         self.widen_from(path.lam)
@@ -57,7 +57,6 @@ class WindowWidening:
                     "whole partner beam as every point's window (the Newton steps from the last converged "
                     "state are large, as near a limit or bifurcation point)")
         tally.consecutive = 0
-        tally.lost = False
         path.dlam = tally.first_failed or path.dlam
         return True
 

@@ -31,6 +31,23 @@ def petsc_init():
     petsc4py.init([])
 
 
+def fail_solves(when, put=setattr, lost: bool = False) -> None:
+    """Every SNES solve for which ``when(solver, lam)`` holds fails with DIVERGED_FNORM_NAN (as a
+    projection lost, marked so with ``lost``), without a Newton iteration; the others run.  ``put``:
+    a monkeypatch's setattr, or setattr in a driver process (tests/parallel/test_mpi.py)."""
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.solving.snes_solver import SNESSolver
+    solve = SNESSolver.solve
+
+    def failing(self, X, target, lam, reached):
+        if when(self, lam):
+            self.problem.contact_failed |= lost
+            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN, 0
+        return solve(self, X, target, lam, reached)
+    put(SNESSolver, "solve", failing)
+
+
 def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | None = None):
     """Run a raw config dict in this process (1 rank); returns the summary dict."""
     petsc_init()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from contact.test_contact import achilles
-from helpers import petsc_init, probes_table
+from helpers import fail_solves, petsc_init, probes_table
 
 STEPS = [100.0, 250.0, 400.0]
 
@@ -29,16 +29,9 @@ def fail_variational_past(above: float, put=setattr) -> None:
     """Every SNES solve with variational fade forces at a load factor above ``above`` fails
     (DIVERGED_FNORM_NAN, as a projection lost): a level those forces cannot reach (``put``:
     a monkeypatch's setattr, or setattr in a driver process, tests/parallel/test_mpi.py)."""
-    petsc_init()
-    from petsc4py import PETSc
-    from ancf_petsc.solving.snes_solver import SNESSolver
-    solve = SNESSolver.solve
-
-    def failing(self, X, target, lam, reached):
-        if self.problem.contact.weights.variational and lam > above * (1.0 + 1e-12):
-            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN, 0
-        return solve(self, X, target, lam, reached)
-    put(SNESSolver, "solve", failing)
+    def variational_past(solver, lam):
+        return solver.problem.contact.weights.variational and lam > above * (1.0 + 1e-12)
+    fail_solves(variational_past, put)
 
 
 def run(raw: dict, out, restart=None, log=None):

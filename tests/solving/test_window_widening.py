@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from contact.test_contact import achilles
-from helpers import petsc_init, probes_table
+from helpers import fail_solves, petsc_init, probes_table
 from solving.test_fade_switch import run
 
 STEPS = [100.0, 250.0, 400.0]
@@ -29,17 +29,11 @@ def lose_points_past(above: float, put=setattr) -> None:
     window (DIVERGED_FNORM_NAN, the projection lost) while the windows are narrower than the
     whole partner beam (``put``: a monkeypatch's setattr, or setattr in a driver process)."""
     petsc_init()
-    from petsc4py import PETSc
-    from ancf_petsc.solving.snes_solver import SNESSolver
     from ancf_petsc.solving.window_widening import whole_windows
-    solve = SNESSolver.solve
 
-    def losing(self, X, target, lam, reached):
-        if lam > above * (1.0 + 1e-12) and not whole_windows(self.problem.contact.projector):
-            self.problem.contact_failed = True
-            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN, 0
-        return solve(self, X, target, lam, reached)
-    put(SNESSolver, "solve", losing)
+    def narrow_past(solver, lam):
+        return lam > above * (1.0 + 1e-12) and not whole_windows(solver.problem.contact.projector)
+    fail_solves(narrow_past, put, lost=True)
 
 
 @pytest.fixture(scope="module")

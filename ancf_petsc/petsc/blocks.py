@@ -3,7 +3,8 @@
 The Jacobian is AIJ, or SBAIJ with 18 × 18 node blocks (``linalg.options.matrix_type``): the upper
 triangle of node blocks, inserted one block at a time (``insert_node_blocks``).  That is ~15×
 faster than AIJ's entry-by-entry insertion of the same dense element and contact blocks and halves
-the stored entries; MUMPS's LDLᵀ takes SBAIJ directly, but PETSc's LU, ILU and GAMG do not.
+the stored entries; MUMPS's LDLᵀ takes SBAIJ directly, but PETSc's LU, ILU and GAMG do not.  On one
+rank a Problem adds an AIJ Jacobian's blocks into its value array at once instead (aij_blocks.py).
 DOFs held by boundary conditions are −1 in the element rows (AIJ drops them) or zeroed inside
 their node block (SBAIJ), so the Jacobian stays symmetric.
 """

@@ -25,7 +25,8 @@ from ..model.beams import Model
 from ..parallel.layout import Layout
 from ..physics import kernels
 from ..linalg import logging
-from .blocks import ADD, INSERT, check_matrix_type, element_blocks, insert_node_blocks
+from .aij_blocks import blocks_into, jacobian_matrix
+from .blocks import ADD, INSERT, check_matrix_type, element_blocks
 from .exchange import GhostExchange
 from .loading import AppliedLoads, every_block, held_dofs
 from .pattern import JacobianPattern
@@ -79,7 +80,8 @@ class Problem:
         self.support_rows = support_rows(model, layout)     # reactions.py
         self.limits = StepLimits(self)                     # the line-search pre-check
         self.pattern = JacobianPattern(model, layout, self.fixed_mask, contact, comm, matrix_type)
-        self.J = self.pattern.create_matrix()
+        #: the Jacobian, and the collector of its blocks where it is one-rank AIJ (aij_blocks.py)
+        self.J, self.aij_blocks = jacobian_matrix(self.pattern)
         set_near_null_space(self)
 
     def global_vector(self, arr_model: np.ndarray) -> PETSc.Vec:
@@ -177,19 +179,10 @@ class Problem:
         logging.stage(logging.ASSEMBLY).push()
         try:
             P.zeroEntries()
-            xl = self._contact_jacobian(snes, X, P) if self.contact is not None \
+            into = blocks_into(self.aij_blocks, P)
+            xl = self._contact_jacobian(snes, X, P, into) if self.contact is not None \
                 else self.exchange.local_state(X)
-            logging.event(logging.ELEMENTS).begin()
-            for blk in self.blocks:
-                qe = blk.element_vectors(xl)
-                t0 = time.perf_counter()
-                K = sum(kernels.internal_force_and_tangent(qe, G, w, material)[1]
-                        for G, w, material in blk.parts)
-                t1 = time.perf_counter()
-                insert_node_blocks(P, blk.rows, K)
-                self.timers["element_kernels"] += t1 - t0
-                self.timers["element_assembly"] += time.perf_counter() - t1
-            logging.event(logging.ELEMENTS).end()
+            add_element_blocks(self, xl, into)
             d = (self.owned_fixed_local + self.model.dofs_per_node * self.layout.owned_nodes[0]).astype(PETSc.IntType)
             if len(d):
                 P.setValuesRCV(d[:, None], d[:, None], np.ones((len(d), 1, 1)), ADD)
@@ -199,9 +192,10 @@ class Problem:
         finally:
             logging.stage(logging.ASSEMBLY).pop()
 
-    def _contact_jacobian(self, snes, X: PETSc.Vec, P: PETSc.Mat) -> np.ndarray:
-        """Contact blocks into P, first: the exchange may grow the local array, and the blocks
-        are only added once no rank had to exchange again.  Returns the local state."""
+    def _contact_jacobian(self, snes, X: PETSc.Vec, P: PETSc.Mat, into) -> np.ndarray:
+        """Contact blocks into P (``into``: aij_blocks.py), first: the exchange may grow the local
+        array, and the blocks are only added once no rank had to exchange again.  Returns the
+        local state."""
         with self._contact_timer():
             blocks = []
 
@@ -217,8 +211,10 @@ class Problem:
                     # re-preallocating an SBAIJ matrix does not mark its pattern as new, so
                     # the factorisation would reuse the old symbolic analysis: start afresh
                     snes.getKSP().getPC().reset()
+                if self.aij_blocks is not None:
+                    self.aij_blocks.reset()
             for block in blocks:
-                insert_node_blocks(P, *block)
+                into.add(*block)
         return xl
 
     def objective(self, snes, X: PETSc.Vec) -> float:
@@ -284,6 +280,25 @@ class Problem:
         for obj in (self.X, self.F, self.q0, self.J):
             obj.destroy()
 
+
+
+def add_element_blocks(problem: Problem, xl: np.ndarray, into) -> None:
+    """The element tangents at the local state ``xl`` into the Jacobian (``into``: after the
+    contact's blocks), then every held-back block (aij_blocks.py), timed."""
+    logging.event(logging.ELEMENTS).begin()
+    timers = problem.timers
+    for blk in problem.blocks:
+        qe = blk.element_vectors(xl)
+        t0 = time.perf_counter()
+        K = sum(kernels.internal_force_and_tangent(qe, G, w, material)[1] for G, w, material in blk.parts)
+        t1 = time.perf_counter()
+        into.add(blk.rows, K)
+        timers["element_kernels"] += t1 - t0
+        timers["element_assembly"] += time.perf_counter() - t1
+    t1 = time.perf_counter()
+    into.flush()                                        # mostly the contact's entries
+    timers["contact_assembly" if problem.contact is not None else "element_assembly"] += time.perf_counter() - t1
+    logging.event(logging.ELEMENTS).end()
 
 def unclean(problem: Problem) -> str | None:
     """After SNES converged, what keeps the last residual's state from being an answer:

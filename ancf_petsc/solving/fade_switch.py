@@ -20,6 +20,7 @@ from __future__ import annotations
 from ..contact import forget_evaluation
 from ..errors import InputError
 from ..linalg.options import SYMMETRIC_PCS, factor_package, matrix_type
+from ..petsc.aij_blocks import jacobian_matrix
 from ..petsc.complementarity import ComplementarityPredictor
 from ..petsc.potential import set_near_null_space
 from .predictor import TangentPredictor
@@ -103,7 +104,7 @@ class FadeForcesSwitch:
         stepper.branches.destroy()              # LU has no inertia: no branch points from here on
         stepper.branches.enabled = False
         P.J.destroy()
-        P.J = P.pattern.create_matrix()
+        P.J, P.aij_blocks = jacobian_matrix(P.pattern)
         set_near_null_space(P)
         # the floor as measured at the start: measuring it again evaluates the contact at q0
         stepper.solver = SNESSolver(P, stepper.spec, petsc_options, max_level, linear, old.rounding_floor)

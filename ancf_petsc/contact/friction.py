@@ -96,11 +96,13 @@ def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held=True) ->
     return proj, S, direction, stick, slide
 
 
-def stick_fraction(tPhi, area: np.ndarray, m_stick: np.ndarray) -> np.ndarray:
+def stick_fraction(tPhi, area: np.ndarray, m_stick: np.ndarray, tPhiT=None) -> np.ndarray:
     """Per point the share of its tangential functions that stick, each weighted by its value
-    φ_k at the point (tΦ_kp = φ_k(x_p) w_p / A_k, ``area`` the functions' A_k); 0 where none."""
-    weight = tPhi.T @ area
-    return np.divide(tPhi.T @ (area * m_stick), weight, out=np.zeros(len(weight)), where=weight > 0.0)
+    φ_k at the point (tΦ_kp = φ_k(x_p) w_p / A_k, ``area`` the functions' A_k); 0 where none.
+    ``tPhiT``: tΦᵀ as CSR, if kept (the same sums as tΦ.T's)."""
+    T = tPhi.T if tPhiT is None else tPhiT
+    weight = T @ area
+    return np.divide(T @ (area * m_stick), weight, out=np.zeros(len(weight)), where=weight > 0.0)
 
 
 def reference_axial(model, points) -> np.ndarray:
@@ -143,7 +145,7 @@ class CoulombFriction(PartnerTerm):
         self.node_dofs = model.dofs_per_node
         self.tdof = np.zeros((0, 3), dtype=np.int64)       # PETSc DOF of every y_k (M, 3)
         self.seg_tblocks = np.zeros((0, 0), dtype=np.int64)  # each segment's y blocks (S, 3K)
-        self.tPhi = None
+        self.tPhi = self.tPhiT = None
         #: the local multipliers' bounds μ ẑ of the last evaluation (M,) and, while Tresca's
         #: problem is solved (``hold_bounds``), the bounds held fixed (else None)
         self.live_bound = np.zeros(0)
@@ -161,6 +163,8 @@ class CoulombFriction(PartnerTerm):
         sp = c.space
         #: the tangential functions' Φ over the local multipliers and points (fold_tangential)
         self.tPhi = c.Phi if sp.tPhi is sp.Phi else sp.tPhi[c.mults][:, c.local].tocsr()
+        #: its transpose as CSR: its products are summed as tΦ.T's are, without a transpose per use
+        self.tPhiT = c.PhiT if self.tPhi is c.Phi else self.tPhi.T.tocsr()
         self.tdof = self.node_dofs * perm[self.n_nodes + sp.tnode] + sp.tslot
         sm = sp.seg_mults
         blocks = perm[self.n_nodes + sp.tnode[np.maximum(sm, 0)]]                # (S, K, 3)
@@ -185,10 +189,11 @@ class CoulombFriction(PartnerTerm):
         u = tangential(du, n)
         wp = self.points.w[idx]
         zl = st.z * st.rows.load
-        positive = c.Phi.T @ zl > 0.0                  # the points that press (p > 0)
+        pz = c.PhiT @ zl
+        positive = pz > 0.0                            # the points that press (p > 0)
         tPhi = self.tPhi                               # the tangential functions (folded ends)
         sums = np.hstack([tPhi @ (w[:, None] * u), tPhi @ (w[:, None] * n),
-                          tPhi @ (w * positive * (c.Phi.T @ zl) / wp)[:, None]])
+                          tPhi @ (w * positive * pz / wp)[:, None]])
         if c.sum_over_ranks is not None:
             sums = c.sum_over_ranks(sums)
         U, m = sums[:, :3], sums[:, 3:6]
@@ -213,12 +218,12 @@ class CoulombFriction(PartnerTerm):
             g[free] = 0.0
         na = np.einsum("ki,ki->k", nbar, a)
         dRdn = -T @ (na[:, None, None] * EYE + nbar[:, :, None] * a[:, None, :])
-        Y = tPhi.T @ y
+        Y = self.tPhiT @ y
         sigma = c.stiffness * tangential(Y, n) / wp[:, None]
         # a point sticks where most of its functions (by their value φ_k there) stick; tΦ_kp is
         # φ_k(x_p) w_p / A_k, so the weights are tΦ_kp A_k (not tΦ_kp: their sum is not 1)
-        on = stick_fraction(tPhi, c.space.tarea[c.mults], m_stick)
-        pressure = c.stiffness * (c.Phi.T @ (st.z * st.rows.load)) / wp
+        on = stick_fraction(tPhi, c.space.tarea[c.mults], m_stick, self.tPhiT)
+        pressure = c.stiffness * pz / wp
         share = c.Phi @ np.ones(len(idx)) if c.sum_over_ranks is not None else np.ones(len(c.mults))
         return FrictionEvaluation(d=d, du=du, sigma=sigma, Y=Y, stick=on > 0.5, omega=wp * w,
                                   pressure=pressure, y=y, a=a, nbar=nbar, mnorm=mnorm, T=T, g=g,

@@ -35,26 +35,24 @@ MAX_NODES = 4096
 class AIJStructure:
     """Where every (row, column) of a seqaij matrix's pattern sits in its value array."""
 
-    def __init__(self, mat: PETSc.Mat, bs: int):
+    def __init__(self, mat: PETSc.Mat, bs: int, held: np.ndarray):
         ia, ja = mat.getRowIJ(symmetric=False, compressed=False)
         self.indptr = np.asarray(ia, dtype=np.int64)
         indices = np.asarray(ja, dtype=np.int64)
         self.nnz, self.bs = len(indices), bs
-        n = len(self.indptr) - 1
-        self.nodes = nodes = n // bs
-        lengths = np.diff(self.indptr)
-        held = (lengths == 1) & (indices[np.minimum(self.indptr[:-1], max(self.nnz - 1, 0))] == np.arange(n))
-        free = np.zeros(n, dtype=bool)                  # a held column is in no free row
-        free[indices[~np.repeat(held, lengths)]] = True
-        free = free.reshape(nodes, bs)
+        self.nodes = nodes = (len(self.indptr) - 1) // bs
+        free = ~np.asarray(held, dtype=bool).reshape(nodes, bs)
         #: a DOF's place among its node's free DOFs
         self.rank = (np.cumsum(free, axis=1) - free).ravel()
         #: offset(I, J): where node J's columns start in a free row of node I (−1: not coupled)
         self.offsets = np.full((nodes, nodes), -1, dtype=np.int32)
-        for node in np.flatnonzero(free.any(axis=1)):
+        count = free.sum(axis=1)
+        for node in np.flatnonzero(count):
             r = node * bs + np.argmax(free[node])       # every free row of a node has the same columns
             col_nodes = indices[self.indptr[r]:self.indptr[r + 1]] // bs
             coupled, first = np.unique(col_nodes, return_index=True)
+            if not np.array_equal(np.diff(np.append(first, len(col_nodes))), count[coupled]):
+                raise ValueError(f"row {r} of the AIJ matrix is not the node pattern's (petsc/pattern.py)")
             self.offsets[node, coupled] = first
 
     def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -78,8 +76,8 @@ class AIJBlocks:
     block set of an assembly keeps its positions while its rows and columns are those of the
     k-th of the last one (the contact pairs did not change): only the values are new."""
 
-    def __init__(self, mat: PETSc.Mat, bs: int):
-        self.mat, self.bs = mat, bs
+    def __init__(self, mat: PETSc.Mat, bs: int, held: np.ndarray):
+        self.mat, self.bs, self.held = mat, bs, held
         self.structure: AIJStructure | None = None
         self._values: list[np.ndarray] = []
         self._slots: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []   # (rows, cols, positions)
@@ -87,12 +85,13 @@ class AIJBlocks:
         self._hits = 0
 
     @classmethod
-    def of(cls, mat: PETSc.Mat, bs: int) -> "AIJBlocks | None":
-        """The collector of a one-rank AIJ ``mat`` with ``bs``-DOF node blocks, None for any other
-        matrix (SBAIJ, MPI, more than ``MAX_NODES`` nodes): those keep ``insert_node_blocks``."""
+    def of(cls, mat: PETSc.Mat, bs: int, held: np.ndarray) -> "AIJBlocks | None":
+        """The collector of a one-rank AIJ ``mat`` with ``bs``-DOF node blocks and the DOFs
+        ``held`` (a mask in its numbering), None for any other matrix (SBAIJ, MPI, more than
+        ``MAX_NODES`` nodes): those keep ``insert_node_blocks``."""
         if mat.getType() != PETSc.Mat.Type.SEQAIJ or mat.getSize()[0] > bs * MAX_NODES:
             return None
-        return cls(mat, bs)
+        return cls(mat, bs, held)
 
     def begin(self) -> None:
         """A new assembly: blocks an interrupted one collected are dropped."""
@@ -105,7 +104,7 @@ class AIJBlocks:
     def add(self, rows: np.ndarray, *values: np.ndarray) -> None:
         """``insert_node_blocks(mat, rows, values)`` or ``(mat, rows, cols, values)``, deferred."""
         if self.structure is None:
-            self.structure = AIJStructure(self.mat, self.bs)
+            self.structure = AIJStructure(self.mat, self.bs, self.held)
         cols, vals = (rows, values[0]) if len(values) == 1 else values
         k = len(self._values)
         if k < len(self._slots) and _same(self._slots[k][0], rows) and _same(self._slots[k][1], cols):
@@ -167,4 +166,4 @@ def jacobian_matrix(pattern) -> tuple[PETSc.Mat, "AIJBlocks | None"]:
     """A new Jacobian from ``pattern`` (petsc/pattern.py ``JacobianPattern``) and the collector of
     its blocks (None unless one-rank AIJ)."""
     J = pattern.create_matrix()
-    return J, AIJBlocks.of(J, pattern.model.dofs_per_node)
+    return J, AIJBlocks.of(J, pattern.model.dofs_per_node, pattern.fixed_mask)

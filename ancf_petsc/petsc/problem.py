@@ -281,7 +281,6 @@ class Problem:
             obj.destroy()
 
 
-
 def add_element_blocks(problem: Problem, xl: np.ndarray, into) -> None:
     """The element tangents at the local state ``xl`` into the Jacobian (``into``: after the
     contact's blocks), then every held-back block (aij_blocks.py), timed."""
@@ -299,6 +298,7 @@ def add_element_blocks(problem: Problem, xl: np.ndarray, into) -> None:
     into.flush()                                        # mostly the contact's entries
     timers["contact_assembly" if problem.contact is not None else "element_assembly"] += time.perf_counter() - t1
     logging.event(logging.ELEMENTS).end()
+
 
 def unclean(problem: Problem) -> str | None:
     """After SNES converged, what keeps the last residual's state from being an answer:

@@ -71,10 +71,12 @@ def test_an_entry_outside_the_pattern_is_refused():
     root, end = P.layout.perm[[beam.node_offset, beam.node_offset + beam.n_nodes - 1]]
     free = ~P.fixed_mask
     rows, cols = (np.where(free[d], d, -1)[None, :] for d in (D * root + np.arange(D), D * end + np.arange(D)))
-    structure = AIJStructure(P.J, D)
+    structure = AIJStructure(P.J, D, P.fixed_mask)
     structure.positions(rows, rows)                 # within the pattern
     with pytest.raises(ValueError, match="outside the AIJ pattern"):
         structure.positions(rows, cols)
+    with pytest.raises(ValueError, match="not the node pattern"):      # the held DOFs mistaken
+        AIJStructure(P.J, D, np.zeros_like(P.fixed_mask))
 
 
 def test_sbaij_and_large_matrices_keep_matsetvalues(monkeypatch):
@@ -82,6 +84,6 @@ def test_sbaij_and_large_matrices_keep_matsetvalues(monkeypatch):
     P, _ = build_problem(achilles(contact={"mode": "sliding"}), matrix_type="sbaij")
     assert P.aij_blocks is None
     P, _ = build_problem(achilles(contact={"mode": "sliding", "tangential": dict(FRICTION)}))
-    assert aij_blocks.AIJBlocks.of(P.J, P.model.dofs_per_node) is not None
+    assert aij_blocks.AIJBlocks.of(P.J, P.model.dofs_per_node, P.fixed_mask) is not None
     monkeypatch.setattr(aij_blocks, "MAX_NODES", 3)
-    assert aij_blocks.AIJBlocks.of(P.J, P.model.dofs_per_node) is None
+    assert aij_blocks.AIJBlocks.of(P.J, P.model.dofs_per_node, P.fixed_mask) is None

@@ -30,7 +30,7 @@ del h
 if MPI.COMM_WORLD.rank == 0:
     gc.collect()
 import os
-os.write(1, f"done {MPI.COMM_WORLD.rank}\n".encode())   # one write: ranks' lines do not interleave
+os.write(1, f"done {MPI.COMM_WORLD.rank}\\n".encode())   # one write: ranks' lines do not interleave
 exit_process(7)
 """
 

@@ -48,19 +48,22 @@ PC_FACTOR_OTHER = 4
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 
 
-class _Values:
-    """The value array of a sequential SBAIJ matrix as a numpy view, for the ``with`` block only."""
+class ValueArray:
+    """The value array of a sequential SBAIJ or AIJ matrix (``size`` values) as a numpy view, for
+    the ``with`` block only (``MatSeq{SB,}AIJGetArray``; the restore marks the matrix changed)."""
 
     def __init__(self, mat: PETSc.Mat, size: int):
         self.mat, self.size, self.ptr = mat, size, _DOUBLE_P()
+        kind = "SBAIJ" if mat.getType() == PETSc.Mat.Type.SEQSBAIJ else "AIJ"
+        self.get, self.restore = f"MatSeq{kind}GetArray", f"MatSeq{kind}RestoreArray"
 
     def __enter__(self) -> np.ndarray:
-        if petsc_library().MatSeqSBAIJGetArray(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr)):
-            raise RuntimeError("MatSeqSBAIJGetArray failed")
+        if getattr(petsc_library(), self.get)(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr)):
+            raise RuntimeError(f"{self.get} failed")
         return np.ctypeslib.as_array(self.ptr, shape=(self.size,))
 
     def __exit__(self, *exc) -> None:
-        petsc_library().MatSeqSBAIJRestoreArray(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr))
+        getattr(petsc_library(), self.restore)(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr))
 
 
 def stored_entries(J: PETSc.Mat) -> tuple[np.ndarray, np.ndarray]:
@@ -82,7 +85,7 @@ class CompactStructure:
 
     def __init__(self, J: PETSc.Mat, held: np.ndarray, multiplier: np.ndarray, kept: np.ndarray):
         rows, cols = stored_entries(J)
-        with _Values(J, len(rows)) as a:
+        with ValueArray(J, len(rows)) as a:
             values = a.copy()
         self.n, self.size = J.getSize()[0], len(rows)
         self.key = rows.astype(np.int64) * self.n + cols
@@ -107,11 +110,11 @@ class CompactStructure:
     def copy(self, J: PETSc.Mat, C: PETSc.Mat) -> np.ndarray:
         """Copy J's values into C; returns the positions (keys) of J's nonzero values that the
         structure dropped (then nothing is copied: the structure must grow)."""
-        with _Values(J, self.size) as a:
+        with ValueArray(J, self.size) as a:
             stray = self.dropped[a[self.dropped] != 0.0]
             if len(stray):
                 return self.key[stray]
-            with _Values(C, len(self.src)) as c:
+            with ValueArray(C, len(self.src)) as c:
                 c[:] = a[self.src]
         C.assemble()                              # a new state: the inner PC factors again
         return stray

@@ -16,16 +16,11 @@ only (``seqaij``); an MPI AIJ matrix keeps ``MatSetValues``.
 """
 from __future__ import annotations
 
-import ctypes
-
 import numpy as np
 from petsc4py import PETSc
 
-from ..linalg.diagnostics import petsc_library
+from ..linalg.compact_factor import ValueArray
 from .blocks import insert_node_blocks
-
-_DOUBLE_P = ctypes.POINTER(ctypes.c_double)
-
 
 #: node blocks up to which the node-pair offsets are one dense table (int32, 64 MB at the limit);
 #: a larger one-rank model keeps ``MatSetValues``
@@ -107,7 +102,7 @@ class AIJBlocks:
             self.structure = AIJStructure(self.mat, self.bs, self.held)
         cols, vals = (rows, values[0]) if len(values) == 1 else values
         k = len(self._values)
-        if k < len(self._slots) and _same(self._slots[k][0], rows) and _same(self._slots[k][1], cols):
+        if k < len(self._slots) and np.array_equal(self._slots[k][0], rows) and np.array_equal(self._slots[k][1], cols):
             self._hits += 1
         else:
             pos = self.structure.positions(rows, cols).ravel().astype(np.int32)     # nnz < 2**31
@@ -126,18 +121,8 @@ class AIJBlocks:
         vals = np.concatenate(self._values)
         self._values, self._hits = [], 0
         summed = np.bincount(self._all, vals, minlength=self.structure.nnz + 1)[:-1]   # the last: dropped
-        lib, ptr = petsc_library(), _DOUBLE_P()
-        handle = ctypes.c_void_p(self.mat.handle)
-        if lib.MatSeqAIJGetArray(handle, ctypes.byref(ptr)):
-            raise RuntimeError("MatSeqAIJGetArray failed")
-        try:
-            np.ctypeslib.as_array(ptr, shape=(self.structure.nnz,))[:] += summed
-        finally:
-            lib.MatSeqAIJRestoreArray(handle, ctypes.byref(ptr))
-
-
-def _same(a: np.ndarray, b: np.ndarray) -> bool:
-    return a.shape == b.shape and np.array_equal(a, b)
+        with ValueArray(self.mat, self.structure.nnz) as a:
+            a += summed
 
 
 class DirectBlocks:

@@ -43,7 +43,7 @@ def test_stored_entries_name_the_value_array_in_order():
     """Entry i of a sequential SBAIJ value array is J[rows[i], cols[i]] (blocks by columns)."""
     petsc_init()
     from petsc4py import PETSc
-    from ancf_petsc.linalg.compact_factor import _Values, stored_entries
+    from ancf_petsc.linalg.compact_factor import ValueArray, stored_entries
     rng = np.random.default_rng(3)
     D, nb = 3, 3
     A = rng.standard_normal((D * nb, D * nb))
@@ -59,7 +59,7 @@ def test_stored_entries_name_the_value_array_in_order():
     rows, cols = stored_entries(J)
     assert len(rows) == 5 * D * D
     upper = cols >= rows
-    with _Values(J, len(rows)) as a:
+    with ValueArray(J, len(rows)) as a:
         assert np.array_equal(a[upper], A[rows[upper], cols[upper]])
     J.destroy()
 

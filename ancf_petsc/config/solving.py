@@ -22,6 +22,7 @@ SOLVER_KEYS = {
     "growth": (lambda v, p: number(v, p, lo=1.0, hi=10.0), False),
     "min_det_f": (lambda v, p: number(v, p, lo=0.0, hi=0.9), False),
     "merit": (lambda v, p: string(v, p, ("energy", "residual")), False),
+    "section_update": (lambda v, p: string(v, p, ("rotation", "linear")), False),
     "predictor": (lambda v, p: string(v, p, ("none", "secant", "tangent")), False),
     "easy_iterations": (lambda v, p: integer(v, p, lo=1), False),
     "matrix": (lambda v, p: string(v, p, ("auto", "aij", "sbaij")), False),

@@ -174,6 +174,8 @@ class SolverSpec:
                                           # (linalg/compact_factor.py)
     merit: str = "energy"                 # what bt/l2 line searches decrease: energy | residual
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
+    section_update: str = "linear"        # linear | rotation: a Newton step adds to the section
+                                          # vectors or turns them (petsc/section_rotation.py)
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (linalg.options.matrix_type)

@@ -13,6 +13,7 @@ from petsc4py import PETSc
 
 from ..physics import kernels
 from ..physics.materials import determinant
+from .section_rotation import SectionTurns
 
 #: largest node move of one Newton step, in section sizes; full Newton steps with contact are
 #: held to fewer (solving/stepper.py): a step of several sections makes the closest-point pairing
@@ -61,9 +62,18 @@ class StepLimits:
     def __init__(self, problem, j_min: float = 0.1, halvings: int = 12):
         self.problem, self.j_min, self.halvings = problem, j_min, halvings
         self.sections = MAX_STEP_SECTIONS
+        self.turns: SectionTurns | None = None      # Newton steps turn the sections (section_rotation.py)
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
         local = any(hasattr(m, "fibre_exponent") for blk in problem.blocks for _, _, m in blk.parts)
         self.fibres = bool(problem.comm.tompi4py().allreduce(int(local), op=MPI.MAX))
+
+    def configure(self, min_det_f: float, section_update: str) -> bool:
+        """Set the det F floor (0: none) and whether Newton steps turn the sections
+        (``solver.min_det_f``, ``solver.section_update``); returns whether the pre-check has
+        anything to do."""
+        self.turns = SectionTurns(self.problem) if section_update == "rotation" else None
+        self.j_min = min_det_f if min_det_f > 0.0 else -np.inf
+        return min_det_f > 0.0 or self.turns is not None
 
     def exponent_growth(self, start: np.ndarray | None, trial: PETSc.Vec) -> float:
         """Largest growth of k2 Ē² from ``start`` (``fibre_exponents`` at the step's start) to
@@ -88,6 +98,8 @@ class StepLimits:
         changed = False
         if big > 1.0:
             Y.scale(1.0 / big)
+            changed = True
+        if self.turns is not None and self.turns(X, Y):
             changed = True
         start = fibre_exponents(P, X) if self.fibres else None
         trial = X.duplicate()

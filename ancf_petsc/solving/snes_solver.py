@@ -64,8 +64,7 @@ class SNESSolver:
             # with contact multipliers the residual is the gradient of a Lagrangian (a saddle):
             # line searches then decrease ‖F‖²
             self.snes.setObjective(problem.objective)
-        if spec.min_det_f > 0.0:
-            problem.limits.j_min = spec.min_det_f
+        if problem.limits.configure(spec.min_det_f, spec.section_update):
             self.snes.setLineSearchPreCheck(problem.limits.precheck)
         # absolute tolerance: 1e-10 of the largest load, at least the residual's rounding floor ‖F(q0, 0)‖
         # (zero in exact arithmetic; ``floor``: the replaced solver's, not re-measured mid-run, fade_switch.py)

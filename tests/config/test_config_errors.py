@@ -110,6 +110,7 @@ CASES += [
     ("bundle arc of hexagons", _bundle(fascicle_section="hexagon", arc_deg=40), "bundle.arc_deg", "remove it"),
     ("matrix format", _set(["solver"], {"matrix": "dense"}), "solver.matrix", "one of"),
     ("linear solver", _set(["solver"], {"linear": "gmres"}), "solver.linear", "fieldsplit"),
+    ("section update", _set(["solver"], {"section_update": "twist"}), "solver.section_update", "rotation"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
 ]
 

@@ -4,8 +4,8 @@ Newton's step adds δ to the nodal vectors.  Where a section turns by ω, its di
 r_y, r_z change by ω × r_y, ω × r_z to first order, and the straight update r + ω × r stretches
 them by |ω|²/2: the nearly incompressible section (κ = 0.86 GPa on the paper's tendon) then
 carries a spurious volume change of second order, which the next iterate has to remove.  This is
-the slow second step of the walking stride's loading frames (|F| 2.8 → 1.4e-2 → 5.0e-6 → 4.0e-8 N while
-the sections turn by ~3e-4 rad, docs/gait.md).
+part of the slow second step of the walking stride's loading frames (|F| 2.8 → 1.4e-2 → 5.0e-6 →
+4.0e-8 N while the sections turn by ~3e-4 rad, docs/gait.md).
 
 With ``rotation`` each beam node's step is split into the rotation ω that best explains its
 director steps (least squares, ``director_rotation``) and the rest, and the directors and the
@@ -20,11 +20,13 @@ regime: when no node turns by more than ``ROTATION_MAX`` (the correction is then
 2.5 % of the step); a larger step is taken as it is (one far from a solution, whose rotation fit
 means little: on the traced subject at 90° a 2500 N increment's first steps fitted turns of up
 to 3 rad, and turning them cost two cut-backs).  Nodes with a held director component keep the
-plain step (a turn would move it), and held higher vectors (3333's) keep theirs.  Each rank updates its own nodes from their own values only:
-the update is the same on any number of ranks.  Not the default (``linear``): on the gait
-envelope it cuts the Newton iterations of the columns at ψ ≤ 90° to 0.86 (median) but moves the
-strongly twisted unilateral columns both ways, three of them from completed to failed
-(docs/running.md, "Newton steps that turn the sections").
+plain step (a turn would move it), and held higher vectors (3333's) keep theirs.  Each rank
+updates its own nodes from their own values only: the update is the same on any number of ranks.
+
+Not the default (``linear``): on the gait envelope without friction it cuts the Newton
+iterations of the columns at ψ ≤ 90° to 0.82–0.86 (median) but moves the strongly twisted
+unilateral columns and strides both ways, and the failing cells over the grids rise from 32 to
+36 (docs/running.md, "Newton steps that turn the sections").
 """
 from __future__ import annotations
 
@@ -56,8 +58,8 @@ def second_order_part(omega: np.ndarray, vectors: np.ndarray) -> np.ndarray:
 
 class SectionTurns:
     """The turned Newton steps of ``problem``'s beam nodes whose directors are free (its held
-    DOFs are fixed for the run): ``__call__(X, Y)`` changes the step Y (the update is X − Y) as the module
-    docstring says and returns whether it did; collective."""
+    DOFs are fixed for the run): ``__call__(X, Y)`` changes the step Y (the update is X − Y) as
+    the module docstring says and returns whether it did; collective."""
 
     def __init__(self, problem):
         V = problem.model.block.vectors_per_node

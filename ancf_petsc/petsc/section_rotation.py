@@ -62,9 +62,9 @@ class SectionTurns:
     the module docstring says and returns whether it did; collective."""
 
     def __init__(self, problem):
-        V = problem.model.block.vectors_per_node
+        V, D = problem.model.block.vectors_per_node, problem.model.dofs_per_node
         lo, hi = problem.layout.owned_nodes
-        held = problem.fixed_mask[3 * V * lo:3 * V * hi].reshape(-1, V, 3)
+        held = problem.fixed_mask[D * lo:D * hi].reshape(-1, V, 3)
         self.nodes = np.flatnonzero(problem.owned_physical & ~held[:, 1:3].any(axis=(1, 2)))
         self.free = ~held[self.nodes, 1:]          # held higher vectors (3333's) keep the plain step
         self.vectors = V

@@ -107,7 +107,7 @@ class StepLimits:
             for _ in range(self.halvings):
                 X.copy(trial)
                 trial.axpy(-1.0, Y)
-                if (min_jacobian(P, trial) >= self.j_min
+                if ((self.j_min == -np.inf or min_jacobian(P, trial) >= self.j_min)
                         and self.exponent_growth(start, trial) <= MAX_EXPONENT_GROWTH):
                     return changed
                 Y.scale(0.5)

@@ -96,8 +96,9 @@ class AIJBlocks:
         """The matrix's pattern changed (``JacobianPattern.grow``): read it again."""
         self.structure, self._slots, self._all = None, [], None
 
-    def add(self, rows: np.ndarray, *values: np.ndarray) -> None:
-        """``insert_node_blocks(mat, rows, values)`` or ``(mat, rows, cols, values)``, deferred."""
+    def add(self, rows: np.ndarray, *values: np.ndarray, nodes=None) -> None:
+        """``insert_node_blocks(mat, rows, values)`` or ``(mat, rows, cols, values)``, deferred
+        (``nodes``, SBAIJ's node ids, is not needed here)."""
         if self.structure is None:
             self.structure = AIJStructure(self.mat, self.bs, self.held)
         cols, vals = (rows, values[0]) if len(values) == 1 else values
@@ -131,8 +132,8 @@ class DirectBlocks:
     def __init__(self, mat: PETSc.Mat):
         self.mat = mat
 
-    def add(self, rows: np.ndarray, *values: np.ndarray) -> None:
-        insert_node_blocks(self.mat, rows, *values)
+    def add(self, rows: np.ndarray, *values: np.ndarray, nodes=None) -> None:
+        insert_node_blocks(self.mat, rows, *values, nodes=nodes)
 
     def flush(self) -> None:
         """Nothing is held back."""

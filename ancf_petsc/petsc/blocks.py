@@ -10,7 +10,7 @@ their node block (SBAIJ), so the Jacobian stays symmetric.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from petsc4py import PETSc
@@ -32,6 +32,7 @@ class ElementBlock:
     rows: np.ndarray     # (E, 3S) PETSc DOF ids, −1 for DOFs held by BCs
     node_dofs: np.ndarray  # (3S/k,) offsets of the active DOFs inside a node's block (18 DOFs for 3363)
     lnodes: np.ndarray | None = None   # (E, k) positions of the nodes in the local array (exchange.py)
+    _node_ids: tuple | None = field(default=None, repr=False)   # (bs, node_blocks(rows, bs))
 
     @property
     def G(self) -> np.ndarray:
@@ -40,7 +41,16 @@ class ElementBlock:
 
     def element_vectors(self, xl: np.ndarray) -> np.ndarray:
         """Active nodal vectors of the elements (E, S, 3) from the local state (n, V, 3)."""
-        return xl[self.lnodes][:, :, list(self.beam.vectors)].reshape(len(self.nodes), -1, 3)
+        vectors = list(self.beam.vectors)
+        if vectors == list(range(xl.shape[1])):          # every vector of the node (3363): one gather
+            return xl[self.lnodes].reshape(len(self.nodes), -1, 3)
+        return xl[self.lnodes][:, :, vectors].reshape(len(self.nodes), -1, 3)
+
+    def node_ids(self, bs: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """``node_blocks(rows, bs)`` of the elements' fixed rows, made once (SBAIJ insertion)."""
+        if self._node_ids is None or self._node_ids[0] != bs:
+            self._node_ids = (bs, node_blocks(self.rows, bs))
+        return self._node_ids[1]
 
     def local_dofs(self) -> np.ndarray:
         """Positions of the elements' active DOFs in the local array (E, 3S)."""
@@ -86,10 +96,11 @@ def zero_held(values: np.ndarray, held: np.ndarray | None) -> np.ndarray:
     return values
 
 
-def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, *values: np.ndarray) -> None:
+def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, *values: np.ndarray, nodes=None) -> None:
     """Add dense blocks ``values`` (n, D, D) at DOF indices ``rows`` (n, D; −1 = dropped) to an
     AIJ or SBAIJ ``mat``.  For SBAIJ the DOFs must come as whole nodes (18 consecutive indices
-    18 k … 18 k + 17, held ones −1); its lower triangle is ignored (the blocks are symmetric).
+    18 k … 18 k + 17, held ones −1); its lower triangle is ignored (the blocks are symmetric);
+    ``nodes(bs)``: ``node_blocks(rows, bs)`` when the caller keeps them (``ElementBlock.node_ids``).
     ``insert_node_blocks(mat, rows, columns, values)``: rectangular blocks (n, R, C), AIJ only."""
     if len(values) == 2:
         if mat.getType().endswith("sbaij"):
@@ -99,7 +110,8 @@ def insert_node_blocks(mat: PETSc.Mat, rows: np.ndarray, *values: np.ndarray) ->
         return
     values = values[0]
     if mat.getType().endswith("sbaij"):
-        node, held = node_blocks(rows, mat.getBlockSize())
+        bs = mat.getBlockSize()
+        node, held = node_blocks(rows, bs) if nodes is None else nodes(bs)
         mat.setValuesBlockedRCV(node, node, zero_held(values, held), ADD)
     else:
         rows = rows.astype(PETSc.IntType)

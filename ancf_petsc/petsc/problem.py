@@ -291,7 +291,7 @@ def add_element_blocks(problem: Problem, xl: np.ndarray, into) -> None:
         t0 = time.perf_counter()
         K = sum(kernels.internal_force_and_tangent(qe, G, w, material)[1] for G, w, material in blk.parts)
         t1 = time.perf_counter()
-        into.add(blk.rows, K)
+        into.add(blk.rows, K, nodes=blk.node_ids)
         timers["element_kernels"] += t1 - t0
         timers["element_assembly"] += time.perf_counter() - t1
     t1 = time.perf_counter()

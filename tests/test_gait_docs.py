@@ -122,3 +122,22 @@ def test_a_stride_cell_states_its_cut_backs_and_total_newton_iterations():
     assert "| 120 | 4 (19 cut-backs in 1 frame; 1546 in all) |" in text
     assert "| 150 | 4 (6 cut-backs in 3 frames; 858 in all) |" in text
     assert "| 90 | 4 |" in text
+
+
+def test_fibre_strides_grid_runs_the_walking_stride_on_every_goh_config_with_its_own_law():
+    """The ``fibre_strides`` grid (docs/gait.md, "Fibre-reinforced (GOH) strides"): every shipped
+    GOH config × twist × bias, each cell the walking stride of its bias with the config's own
+    contact law and material."""
+    import yaml
+    from ancf_petsc.workflows.envelope import GOH, cell_config, grid
+    cells = grid("fibre_strides", [0.0, 90.0], ["uniform", "soleus"])
+    assert len(cells) == 2 * 2 * len(GOH) and all(c.stride and c.law is None for c in cells)
+    assert sorted({c.base for c in cells}) == sorted(GOH)
+    alex = next(c for c in cells if c.base.endswith("_alex.yaml") and c.twist == 90.0 and c.bias == "soleus")
+    raw = cell_config(alex)
+    with open(alex.base) as fh:
+        own = yaml.safe_load(fh)
+    assert raw["history"]["file"].endswith("stride_walking_soleus.csv") and "steps" not in raw
+    assert raw["contact"]["mode"] == own["contact"]["mode"]
+    assert [b["material"] for b in raw["beams"]] == [b["material"] for b in own["beams"]]
+    assert raw["geometry"]["twist_deg"] == 90.0

@@ -23,6 +23,9 @@ to 3 rad, and turning them cost two cut-backs).  Nodes with a held director comp
 plain step (a turn would move it), and held higher vectors (3333's) keep theirs.  Each rank
 updates its own nodes from their own values only: the update is the same on any number of ranks.
 
+Only whole steps are turned (``StepLimits.configure``: the line search ``basic``): a line
+search's step λ·Y would scale the second-order part by λ instead of λ².
+
 Not the default (``linear``): on the gait envelope without friction it cuts the Newton
 iterations of the columns at ψ ≤ 90° to 0.82–0.86 (median) but moves the strongly twisted
 unilateral columns and strides both ways, and the failing cells over the grids rise from 32 to

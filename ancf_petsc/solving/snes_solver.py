@@ -18,7 +18,6 @@ from ..linalg.diagnostics import petsc_message, used_anywhere
 from ..linalg.inertia import mumps_error, pivot_counts
 from ..petsc.potential import rounding_floor
 from ..petsc.problem import Problem
-from ..petsc.step_limits import MAX_STEP_SECTIONS_CONTACT
 from . import solver_messages
 from .chord import TangentReuse
 from .continuity import IterateTrail
@@ -64,8 +63,6 @@ class SNESSolver:
             # with contact multipliers the residual is the gradient of a Lagrangian (a saddle):
             # line searches then decrease ‖F‖²
             self.snes.setObjective(problem.objective)
-        if problem.limits.configure(spec.min_det_f, spec.section_update):
-            self.snes.setLineSearchPreCheck(problem.limits.precheck)
         # absolute tolerance: 1e-10 of the largest load, at least the residual's rounding floor ‖F(q0, 0)‖
         # (zero in exact arithmetic; ``floor``: the replaced solver's, not re-measured mid-run, fade_switch.py)
         self.load_norm = problem.loads.scale(max_level)
@@ -87,9 +84,8 @@ class SNESSolver:
                          saddle_point=problem.n_constraints > 0, symmetric=problem.symmetric,
                          law_defaults=problem.solver_defaults), self.prefix,
             problem.symmetric)
-        if problem.contact is not None and self.linesearch == "basic":
-            # full Newton steps with contact: the pairing holds for steps small beside a section
-            problem.limits.sections = MAX_STEP_SECTIONS_CONTACT
+        if problem.limits.configure(spec.min_det_f, spec.section_update, self.linesearch):
+            self.snes.setLineSearchPreCheck(problem.limits.precheck)
         schur = None
         if linear == "fieldsplit":
             # imported here: scipy.linalg is start-up time the direct solver does not need

@@ -28,7 +28,15 @@ def describe(solver) -> str:
             f"{name}{extra} on {solver.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "
             f"stol {stol:.1e} max_it {maxit}; "
             f"rounding floor |F(q0,0)| {solver.rounding_floor:.1e}"
-            + ("; chord steps near convergence" if solver.spec.reuse_tangent else ""))
+            + ("; chord steps near convergence" if solver.spec.reuse_tangent else "")
+            + (_turns_text(solver) if solver.spec.section_update == "rotation" else ""))
+
+
+def _turns_text(solver) -> str:
+    """What ``solver.section_update: rotation`` does in this run (step_limits.StepLimits.configure)."""
+    if solver.problem.limits.turns is not None:
+        return "; Newton steps turn the sections"
+    return f"; Newton steps not turned (solver.section_update: rotation needs full steps, line search {solver.linesearch})"
 
 
 #: what works on the saddle-point Jacobian of a model with contact multipliers (measured on

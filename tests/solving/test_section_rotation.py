@@ -132,3 +132,24 @@ def test_held_quadratic_vectors_of_3333_stay_zero_while_the_directors_turn(tmp_p
     with h5py.File(tmp_path / "rotation" / "results.h5", "r") as fh:
         q = fh["steps"][sorted(fh["steps"])[-1]]["nodal_vectors"][()]   # (nodes, vectors, 3)
     assert np.abs(q[:, 1:3]).max() > 0.5 and np.all(q[:, 3:] == 0.0)   # r, r_y, r_z, then quadratic
+
+
+def test_steps_are_turned_only_where_the_line_search_takes_them_whole(tmp_path):
+    """The turn adds the second-order part of the whole step's rotation, which a line search's
+    shortened step would scale wrongly: with -snes_linesearch_type l2 no step is turned (the
+    run is the plain update's, iteration for iteration) and the run's header says why."""
+    from ancf_petsc.petsc.step_limits import StepLimits
+    P, _ = build_problem(_column())
+    limits = StepLimits(P)
+    assert limits.configure(0.0, "rotation", "basic") and limits.turns is not None
+    assert not limits.configure(0.0, "rotation", "l2") and limits.turns is None
+    runs = {}
+    for update in ("linear", "rotation"):
+        raw = _column()
+        raw["steps"] = [100.0, 400.0]
+        raw.setdefault("solver", {})["section_update"] = update
+        runs[update] = run_inline(raw, tmp_path / update, petsc={"snes_linesearch_type": "l2"})
+    assert runs["linear"]["newton_iterations"] == runs["rotation"]["newton_iterations"]
+    assert runs["linear"]["steps"][-1]["probes"] == runs["rotation"]["steps"][-1]["probes"]
+    assert "not turned (solver.section_update: rotation needs full steps, line search l2)" in \
+        runs["rotation"]["solver"]

@@ -36,7 +36,8 @@ def _turns_text(solver) -> str:
     """What ``solver.section_update: rotation`` does in this run (step_limits.StepLimits.configure)."""
     if solver.problem.limits.turns is not None:
         return "; Newton steps turn the sections"
-    return f"; Newton steps not turned (solver.section_update: rotation needs full steps, line search {solver.linesearch})"
+    return ("; Newton steps not turned (solver.section_update: rotation needs full steps, "
+            f"line search {solver.linesearch})")
 
 
 #: what works on the saddle-point Jacobian of a model with contact multipliers (measured on

@@ -24,6 +24,7 @@ SOLVER_KEYS = {
     "merit": (lambda v, p: string(v, p, ("energy", "residual")), False),
     "section_update": (lambda v, p: string(v, p, ("rotation", "linear")), False),
     "predictor": (lambda v, p: string(v, p, ("none", "secant", "tangent")), False),
+    "tangent": (lambda v, p: string(v, p, ("standard", "mixed")), False),
     "easy_iterations": (lambda v, p: integer(v, p, lo=1), False),
     "matrix": (lambda v, p: string(v, p, ("auto", "aij", "sbaij")), False),
     "linear": (lambda v, p: string(v, p, ("auto", "direct", "fieldsplit")), True),

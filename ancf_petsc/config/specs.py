@@ -176,6 +176,8 @@ class SolverSpec:
     min_det_f: float = 0.1                # Newton steps are shortened to keep det F above this
     section_update: str = "linear"        # linear | rotation: a Newton step adds to the section
                                           # vectors or turns them (petsc/section_rotation.py)
+    tangent: str = "standard"             # standard | mixed: the initial-stress part from the stress
+                                          # of the linearised strain (petsc/mixed_tangent.py)
     max_newton_iterations: int | None = None   # budget for the whole run (None: no limit)
     stability_cutbacks: int = 4           # retries with smaller steps when a step lands less stable
     matrix: str = "auto"                  # Jacobian storage: auto | aij | sbaij (linalg.options.matrix_type)

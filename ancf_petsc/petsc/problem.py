@@ -29,6 +29,7 @@ from .aij_blocks import blocks_into, jacobian_matrix
 from .blocks import ADD, INSERT, check_matrix_type, element_blocks
 from .exchange import GhostExchange
 from .loading import AppliedLoads, every_block, held_dofs
+from .mixed_tangent import MixedTangent
 from .pattern import JacobianPattern
 from .potential import set_near_null_space, total_potential
 from .reactions import support_rows
@@ -79,6 +80,7 @@ class Problem:
                                   [self.global_vector(m) for m in moved], self.q0)
         self.support_rows = support_rows(model, layout)     # reactions.py
         self.limits = StepLimits(self)                     # the line-search pre-check
+        self.mixed: MixedTangent | None = None             # solver.tangent: mixed (mixed_tangent.py)
         self.pattern = JacobianPattern(model, layout, self.fixed_mask, contact, comm, matrix_type)
         #: the Jacobian, and the collector of its blocks where it is one-rank AIJ (aij_blocks.py)
         self.J, self.aij_blocks = jacobian_matrix(self.pattern)
@@ -286,10 +288,12 @@ def add_element_blocks(problem: Problem, xl: np.ndarray, into) -> None:
     contact's blocks), then every held-back block (aij_blocks.py), timed."""
     logging.event(logging.ELEMENTS).begin()
     timers = problem.timers
-    for blk in problem.blocks:
+    for n, blk in enumerate(problem.blocks):
         qe = blk.element_vectors(xl)
         t0 = time.perf_counter()
         K = sum(kernels.internal_force_and_tangent(qe, G, w, material)[1] for G, w, material in blk.parts)
+        if problem.mixed is not None:
+            K = problem.mixed.correct(n, qe, blk.parts, K)
         t1 = time.perf_counter()
         into.add(blk.rows, K, nodes=blk.node_ids)
         timers["element_kernels"] += t1 - t0

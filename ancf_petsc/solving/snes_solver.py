@@ -9,6 +9,7 @@ is one SNES solve from a state; the load stepping around it is stepper.py.
 """
 from __future__ import annotations
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
@@ -16,6 +17,7 @@ from ..linalg.compact_factor import install_for
 from ..linalg.database import remove
 from ..linalg.diagnostics import petsc_message, used_anywhere
 from ..linalg.inertia import mumps_error, pivot_counts
+from ..petsc.mixed_tangent import mixed_tangent
 from ..petsc.potential import rounding_floor
 from ..petsc.problem import Problem
 from . import solver_messages
@@ -99,7 +101,7 @@ class SNESSolver:
         self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
         self.fascicle_schur = schur            # linalg/fieldsplit.py (solver.linear: fieldsplit)
-        self.chord = TangentReuse(spec.reuse_tangent, schur)
+        self.chord, problem.mixed = TangentReuse(spec.reuse_tangent, schur), mixed_tangent(spec.tangent)
         self.contact_steps = ContactSteps(problem)
         self.ksp_reason, self.stalled_at = 0, 0.0   # the last KSP reason, |F| of a step-length stop
         self.assemblies = self.accepted_assemblies = 0   # tangents factored; at the last accept
@@ -176,8 +178,11 @@ class SNESSolver:
         negative eigenvalue: the diverging attempt's before it).  Without a factor since the
         accepted state (a stride frame whose loads did not change) that state's is kept.  The
         contact status is kept (the stepper has checked it at X).  False where the factorisation
-        failed (no count, as for a solver without inertia).  Collective."""
-        if self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies:
+        failed (no count, as for a solver without inertia).  With ``solver.tangent: mixed`` a
+        factor whose tangent was corrected (petsc/mixed_tangent.py) is replaced too.  Collective."""
+        mixed = self.problem.mixed is not None and pivot_counts(self.snes.getKSP()) is not None \
+            and self.problem.comm.tompi4py().allreduce(self.problem.mixed.corrected, op=MPI.LOR)
+        if not mixed and (self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies):
             return True
         if self.fascicle_schur is not None:
             self.fascicle_schur.keep_factors = False
@@ -222,7 +227,14 @@ class SNESSolver:
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
-        self.chord.jacobian(snes, self._history, lambda: self._assemble(snes, X, J, P))
+        mixed = self.problem.mixed
+        if mixed is not None:                   # the Newton iterate the tangent is formed at
+            mixed.iterate = (mixed.solves, snes.getIterationNumber())
+        try:
+            self.chord.jacobian(snes, self._history, lambda: self._assemble(snes, X, J, P))
+        finally:
+            if mixed is not None:
+                mixed.iterate = None
         self.contact_steps.next_iterate()
 
     def describe(self) -> str:
@@ -234,6 +246,8 @@ class SNESSolver:
         level ``target``, for messages): its reason and iterations."""
         self._history = []
         self.chord.start_solve()
+        if self.problem.mixed is not None:
+            self.problem.mixed.start_solve()
         try:
             self.snes.solve(None, X)
         except PETSc.Error as exc:

@@ -29,7 +29,8 @@ def describe(solver) -> str:
             f"stol {stol:.1e} max_it {maxit}; "
             f"rounding floor |F(q0,0)| {solver.rounding_floor:.1e}"
             + ("; chord steps near convergence" if solver.spec.reuse_tangent else "")
-            + (_turns_text(solver) if solver.spec.section_update == "rotation" else ""))
+            + (_turns_text(solver) if solver.spec.section_update == "rotation" else "")
+            + ("; tangent: mixed (initial stress of the linearised strain)" if solver.problem.mixed else ""))
 
 
 def _turns_text(solver) -> str:

@@ -63,6 +63,7 @@ class EnvelopeCell:
     levels: tuple[float, ...] = LEVELS
     stride: bool = False
     predictor: str | None = None          # solver.predictor (None: the config's default)
+    tangent: str | None = None            # solver.tangent (None: the config's default)
 
     @property
     def name(self) -> str:
@@ -70,7 +71,7 @@ class EnvelopeCell:
         mu = f"_mu{self.friction:g}" if self.friction else ""
         stem = os.path.splitext(os.path.basename(self.base))[0]
         kind = "_stride" if self.stride else ""
-        pred = f"_{self.predictor}" if self.predictor else ""
+        pred = (f"_{self.predictor}" if self.predictor else "") + (f"_{self.tangent}" if self.tangent else "")
         return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
@@ -112,6 +113,8 @@ def cell_config(cell: EnvelopeCell) -> dict:
     cfg["output"] = {"vtk": False}
     if cell.predictor:
         cfg.setdefault("solver", {})["predictor"] = cell.predictor
+    if cell.tangent:
+        cfg.setdefault("solver", {})["tangent"] = cell.tangent
     return cfg
 
 
@@ -242,12 +245,13 @@ GRIDS = {
 }
 
 
-def grid(name: str, twists, biases, elements: int = 4, predictor: str | None = None) -> list[EnvelopeCell]:
-    """The cells of a named grid (``GRIDS``), with ``solver.predictor`` set when given."""
+def grid(name: str, twists, biases, elements: int = 4, predictor: str | None = None,
+         tangent: str | None = None) -> list[EnvelopeCell]:
+    """The cells of a named grid (``GRIDS``), with ``solver.predictor`` and ``solver.tangent``
+    set when given."""
     if name not in GRIDS:
         raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
-    cells = GRIDS[name](twists, biases, elements)
-    return cells if predictor is None else [replace(c, predictor=predictor) for c in cells]
+    return [replace(c, predictor=predictor, tangent=tangent) for c in GRIDS[name](twists, biases, elements)]
 
 
 def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir: str, jobs: int,

@@ -111,6 +111,7 @@ CASES += [
     ("matrix format", _set(["solver"], {"matrix": "dense"}), "solver.matrix", "one of"),
     ("linear solver", _set(["solver"], {"linear": "gmres"}), "solver.linear", "fieldsplit"),
     ("section update", _set(["solver"], {"section_update": "twist"}), "solver.section_update", "rotation"),
+    ("tangent", _set(["solver"], {"tangent": "mip"}), "solver.tangent", "mixed"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
 ]
 

@@ -141,3 +141,51 @@ def test_fibre_strides_grid_runs_the_walking_stride_on_every_goh_config_with_its
     assert raw["contact"]["mode"] == own["contact"]["mode"]
     assert [b["material"] for b in raw["beams"]] == [b["material"] for b in own["beams"]]
     assert raw["geometry"]["twist_deg"] == 90.0
+
+
+#: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
+#: the committed default ones (docs/gait_envelope_GRID.csv)
+MIXED_GRIDS = ("core", "core8", "subject2", "friction", "fibres", "strides")
+
+
+def _rows(path):
+    import csv
+    with open(path) as fh:
+        return {(r["base"], r["law"], float(r["friction"]), float(r["twist"]), r["bias"], r["stride"]): r
+                for r in csv.DictReader(fh)}
+
+
+def _grid_counts(rows):
+    """Cells not completed, columns at ψ ≤ 90° over 60 Newton iterations or cut back to 1.2 kN
+    (strides: frames cut back), and the Newton iterations of every cell."""
+    bad = sum(r["status"] != "completed" for r in rows)
+    over = sum(int(r["cutback_levels"] or 0) if r["stride"] == "True" else float(r["twist"]) <= 90
+               and (int(r["iterations_to_1200"] or 0) > 60 or int(r["cutbacks_to_1200"] or 0) > 0) for r in rows)
+    return f"{bad} / {over} / {sum(int(r['iterations']) for r in rows):,}".replace(",", " ")
+
+
+def mixed_tangent_table() -> str:
+    """The docs/gait.md table of ``solver.tangent: mixed`` against the default, from the CSVs."""
+    import numpy as np
+    lines = ["| grid (cells) | `standard`: not completed / over the target / Newton iterations | `mixed` "
+             "| `mixed` ÷ `standard` at ψ ≤ 90°, median (range) |", "|---|---|---|---|"]
+    for name in MIXED_GRIDS:
+        mixed_path = os.path.join(DOCS, f"gait_envelope_{name}_mixed.csv")
+        if not os.path.exists(mixed_path):
+            continue
+        std, mix = _rows(os.path.join(DOCS, f"gait_envelope_{name}.csv")), _rows(mixed_path)
+        keys = sorted(set(std) & set(mix))
+        key = "iterations" if name == "strides" else "iterations_to_1200"
+        ratios = [int(mix[k][key]) / int(std[k][key]) for k in keys
+                  if k[3] <= 90 and std[k]["status"] == mix[k]["status"] == "completed" and int(std[k][key])]
+        lines.append(f"| {name} ({len(keys)}) | {_grid_counts([std[k] for k in keys])} | "
+                     f"{_grid_counts([mix[k] for k in keys])} | {np.median(ratios):.2f} "
+                     f"({min(ratios):.2f}–{max(ratios):.2f}) |")
+    return "\n".join(lines)
+
+
+def test_the_mixed_tangent_table_is_its_csvs():
+    text = open(os.path.join(DOCS, "gait.md")).read()
+    start, end = "<!-- mixed-tangent-grids -->\n", "\n<!-- /mixed-tangent-grids -->"
+    assert start in text and end in text
+    assert text.split(start, 1)[1].split(end, 1)[0] == mixed_tangent_table()

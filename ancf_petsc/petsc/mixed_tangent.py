@@ -7,7 +7,9 @@ check's, the predictors', the supports') is the displacement model's own tangent
 on, each element part keeps the previous iterate's F and adds the correction.  A tangent skipped
 by a chord step (solving/chord.py) breaks the chain: the next one is the plain tangent again.  A
 converged state's stability is read from its own plain tangent (``SNESSolver.factor_at``), not
-from a corrected one."""
+from a corrected one.  After a failed sub-step the retries to the same level use the plain tangent
+(``paused``, set and cleared by solving/stepper.py): the corrected iterates take another course,
+not a safer one, and the plain tangent's is the default's."""
 from __future__ import annotations
 
 import numpy as np
@@ -28,6 +30,8 @@ class MixedTangent:
         self._previous: dict = {}                     # (block, part) → ((solve, it), F)
         #: the last tangent assembled was corrected: its inertia is not the state's own
         self.corrected = False
+        #: the plain tangent for now (after a failed sub-step, until the level is reached)
+        self.paused = False
 
     def start_solve(self) -> None:
         """A new SNES solve: its first tangent is the plain one."""
@@ -37,7 +41,7 @@ class MixedTangent:
     def correct(self, key: int, qe: np.ndarray, parts: list, K: np.ndarray) -> np.ndarray:
         """K (E, 3S, 3S) of block ``key`` at nodal vectors qe, corrected when the tangent is a
         Newton iterate's and the previous iterate's F is known."""
-        if self.iterate is None:
+        if self.iterate is None or self.paused:
             self.corrected = False
             return K
         solve, it = self.iterate

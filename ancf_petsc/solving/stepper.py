@@ -177,6 +177,7 @@ class LoadStepper:
         tally = LevelTally()
         history = []
         X_prev = X.duplicate()
+        mixed = self.problem.mixed                     # solver.tangent: mixed (petsc/mixed_tangent.py)
         try:
             while path.lam < target * (1.0 - 1e-14):
                 self._stop_if_requested(target, level)
@@ -211,6 +212,8 @@ class LoadStepper:
                     self._cut_back(path, X_prev, target, step, reason, neg, tally)
         finally:
             X_prev.destroy()
+            if mixed is not None:
+                mixed.paused = False
         return StepRecord(load_factor=target, iterations=tally.its, substeps=tally.substeps,
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
                           tresca_solves=tally.tresca_solves,
@@ -277,6 +280,8 @@ class LoadStepper:
         inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
         lost = bool(P.comm.tompi4py().allreduce(int(P.contact_failed)))
         self.tangent.valid = False                     # the factor is the failed attempt's
+        if P.mixed is not None:                        # the retries: the plain tangent's course
+            P.mixed.paused = True
         X_prev.copy(P.X)
         P.restore()
         path.dlam, give_up = self.control.after_failure(step, reason == UNSTABLE_STEP, tally)

@@ -123,3 +123,39 @@ def test_the_mixed_tangent_gives_the_serial_answer_on_two_and_three_ranks(tmp_pa
     its = {n: [st["iterations"] for st in s["steps"]] for n, (_, s) in runs.items()}
     assert its[1] == its[2] == its[3], its
     assert os.path.isdir(CONFIGS)
+
+
+def test_after_a_failed_sub_step_the_retries_take_the_plain_tangent(tmp_path, monkeypatch):
+    """A level's retries after a cut-back use the plain tangent (the corrected iterates' course is
+    another, not a safer one: the 180° soleus-biased unilateral column failed at 2 kN with the
+    correction kept through its cut-backs and completes with this); the next level corrects again.
+    The 135° soleus-biased sliding column to 400 and 1200 N cuts back once in each level."""
+    from ancf_petsc.petsc.mixed_tangent import MixedTangent
+    from ancf_petsc.solving.stepper import LoadStepper
+    events = []
+    correct, cut_back = MixedTangent.correct, LoadStepper._cut_back
+
+    def recording_correct(self, key, qe, parts, K):
+        out = correct(self, key, qe, parts, K)
+        events.append(("corrected" if self.corrected else "plain", self.paused))
+        return out
+
+    def recording_cut_back(self, *args, **kwargs):
+        events.append(("cut back", None))
+        return cut_back(self, *args, **kwargs)
+
+    monkeypatch.setattr(MixedTangent, "correct", recording_correct)
+    monkeypatch.setattr(LoadStepper, "_cut_back", recording_cut_back)
+    raw = cell_config(EnvelopeCell(NEO, 135.0, "soleus", "sliding", levels=(400.0, 1200.0)))
+    raw.setdefault("solver", {})["tangent"] = "mixed"
+    summary = run_inline(raw, tmp_path)
+    assert summary["status"] == "completed"
+    assert [s["cutbacks"] for s in summary["steps"]] == [1, 1]
+    cuts = [i for i, e in enumerate(events) if e[0] == "cut back"]
+    assert len(cuts) == 2
+    first, second = events[:cuts[0]], events[cuts[0] + 1:cuts[1]]
+    assert ("corrected", False) in first
+    retries = second[:next(i for i, e in enumerate(second) if not e[1])]   # until the level ends
+    assert retries and all(e == ("plain", True) for e in retries)
+    assert ("corrected", False) in second[len(retries):]                 # the next level corrects
+    assert all(e[0] != "corrected" for e in events if e[1])

@@ -7,6 +7,7 @@ import csv
 import os
 import sys
 
+from ancf_petsc.config.specs import TANGENTS
 from ancf_petsc.workflows.envelope import BIASES, GRIDS, TWISTS, grid, run_cells, summary_line
 
 
@@ -17,7 +18,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--biases", default=",".join(BIASES))
     ap.add_argument("--elements", type=int, default=4)
     ap.add_argument("--predictor", choices=("secant", "tangent", "none"), help="solver.predictor of every cell")
-    ap.add_argument("--tangent", choices=("standard", "mixed"), help="solver.tangent of every cell")
+    ap.add_argument("--tangent", choices=TANGENTS, help="solver.tangent of every cell")
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="another ancf-solve to run the same cells with (before/after)")
     ap.add_argument("--jobs", type=int, default=2)

@@ -6,7 +6,7 @@ import os
 import re
 
 from ..linalg.option_syntax import START_UP_OPTIONS, check_value, option_kind
-from .specs import PARTITION_METHODS, AccuracySpec, OutputSpec, SolverSpec
+from .specs import PARTITION_METHODS, TANGENTS, AccuracySpec, OutputSpec, SolverSpec
 from .values import ConfigError, boolean, integer, mapping, number, shown, string
 
 #: ``accuracy.section_order``: none, or check the start rung one rung up the section ladder
@@ -24,7 +24,7 @@ SOLVER_KEYS = {
     "merit": (lambda v, p: string(v, p, ("energy", "residual")), False),
     "section_update": (lambda v, p: string(v, p, ("rotation", "linear")), False),
     "predictor": (lambda v, p: string(v, p, ("none", "secant", "tangent")), False),
-    "tangent": (lambda v, p: string(v, p, ("standard", "mixed")), False),
+    "tangent": (lambda v, p: string(v, p, TANGENTS), False),
     "easy_iterations": (lambda v, p: integer(v, p, lo=1), False),
     "matrix": (lambda v, p: string(v, p, ("auto", "aij", "sbaij")), False),
     "linear": (lambda v, p: string(v, p, ("auto", "direct", "fieldsplit")), True),

@@ -21,6 +21,8 @@ TANGENTIAL_LAW_NAMES = tuple(TANGENTIAL_LAWS)   # contact.tangential.law (contac
 DEFAULT_CONTACT_MODE = SlidingLaw.name
 PARTITION_METHODS = ("blocks", "metis", "beams")
 TWIST_RULES = ("centroid", "origin", "junction")
+#: ``solver.tangent``: the displacement model's, or the mixed-integration-point one (petsc/mixed_tangent.py)
+TANGENTS = ("standard", "mixed")
 #: contact keys of the penalty formulation, gone since contact is enforced by Lagrange multipliers
 REMOVED_CONTACT_KEYS = ("penalty", "penalty_scale", "augmented", "gap_tolerance", "max_augmentations",
                         "smoothing")

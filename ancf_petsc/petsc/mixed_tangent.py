@@ -17,9 +17,6 @@ import numpy as np
 from ..physics.kernels import deformation_gradient
 from ..physics.mixed_point import initial_stress_correction
 
-#: ``solver.tangent`` values
-TANGENTS = ("standard", "mixed")
-
 
 class MixedTangent:
     """The previous Newton iterate's deformation gradients per (block, part), and the step."""

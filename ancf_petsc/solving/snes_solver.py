@@ -101,7 +101,8 @@ class SNESSolver:
         self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
         self.fascicle_schur = schur            # linalg/fieldsplit.py (solver.linear: fieldsplit)
-        self.chord, problem.mixed = TangentReuse(spec.reuse_tangent, schur), mixed_tangent(spec.tangent)
+        self.chord = TangentReuse(spec.reuse_tangent, schur)
+        problem.mixed = mixed_tangent(spec.tangent)     # solver.tangent (petsc/mixed_tangent.py)
         self.contact_steps = ContactSteps(problem)
         self.ksp_reason, self.stalled_at = 0, 0.0   # the last KSP reason, |F| of a step-length stop
         self.assemblies = self.accepted_assemblies = 0   # tangents factored; at the last accept

@@ -25,11 +25,17 @@ demo: setup
 report: setup
 	$(VENV)/bin/ancf-report --jobs 2
 
+# the tests without the mpi mark on TEST_JOBS pytest-xdist workers, then the MPI tests one at a
+# time (each starts mpirun with 2 or 3 ranks; beside another worker they would oversubscribe the
+# cores).  tests/conftest.py refuses mpirun in a test without the mark.
+TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+
 test: setup
-	$(PY) -m pytest -q -rs tests
+	$(PY) -m pytest -q -rs -n $(TEST_JOBS) -m "not mpi" tests
+	$(PY) -m pytest -q -rs -m mpi tests
 
 test-fast: setup
-	$(PY) -m pytest -q -rs -m "not slow and not mpi" tests
+	$(PY) -m pytest -q -rs -n $(TEST_JOBS) -m "not slow and not mpi" tests
 
 bench: setup
 	$(PY) scripts/bench_kernel.py

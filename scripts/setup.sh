@@ -9,10 +9,11 @@ cd "$(dirname "$0")/.."
 
 DEB_PKGS=(python3-petsc4py python3-mpi4py python3-h5py-mpi openmpi-bin libopenmpi-dev
           libpetsc-real3.18-dev libopenblas0-pthread python3-numpy python3-scipy
-          python3-matplotlib python3-yaml python3-pytest python3-venv python3-dev python3-pip
-          python3-skimage python3-nibabel python3-svgelements python3-pil cython3)
-# the last line: geometry importers (label masks, NIfTI volumes, SVG paths; imported lazily) and
-# Cython for the compiled kernels (scripts/build_native.py)
+          python3-matplotlib python3-yaml python3-pytest python3-pytest-xdist python3-venv
+          python3-dev python3-pip python3-skimage python3-nibabel python3-svgelements python3-pil cython3)
+# python3-pytest-xdist: make test's parallel workers; skimage, nibabel, svgelements, pil: geometry
+# importers (label masks, NIfTI volumes, SVG paths; imported lazily); cython3: the compiled kernels
+# (scripts/build_native.py)
 
 missing=()
 for p in "${DEB_PKGS[@]}"; do

@@ -68,6 +68,23 @@ def write_config(raw: dict, path) -> str:
     return str(path)
 
 
+#: a test's ``ranks`` parameter on one rank and, marked ``mpi``, on two (make test runs the
+#: marked tests one at a time: tests/conftest.py)
+ONE_AND_TWO_RANKS = [1, pytest.param(2, marks=pytest.mark.mpi)]
+
+
+def mpirun_ranks(cmd) -> int:
+    """The rank count of an mpirun/mpiexec command line (a list); 1 for any other command."""
+    if isinstance(cmd, (str, bytes)) or not cmd or \
+            os.path.basename(str(cmd[0])) not in ("mpirun", "mpiexec"):
+        return 1
+    args = [str(a) for a in cmd]
+    for flag in ("-n", "-np"):
+        if flag in args:
+            return int(args[args.index(flag) + 1])
+    return 2                                  # no count given: every slot of the machine
+
+
 def solve_cli(config_path: str, ranks: int = 1, extra: list | None = None, cwd: str | None = None,
               timeout: float = 600) -> subprocess.CompletedProcess:
     """Run ancf-solve (under mpirun when ranks > 1); returns the completed process."""

@@ -21,8 +21,8 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, petsc_init, read_summary, \
-    run_inline, solve_cli, write_config
+from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT, VENV_BIN, load_raw, petsc_init, \
+    read_summary, run_inline, solve_cli, write_config
 
 TIMEOUT = 120
 UNIAXIAL = load_raw("uniaxial_neohookean.yaml")
@@ -322,7 +322,7 @@ def test_help_goes_to_petsc_and_version_is_recorded(tmp_path):
         assert h5.attrs["status"] == "completed"
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_unused_options_are_reported(tmp_path, ranks):
     raw = tiny(petsc={"snes_linesearch_typo": "bt", "ksp_converged_reason": None})
     p = run_cfg(tmp_path, raw, ranks, extra=["-snes_lnesearch_type", "bt", "-snes_rtol", "1e-9",
@@ -400,7 +400,7 @@ if MPI.COMM_WORLD.rank == 0:
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_standard_solver_options_run_or_say_what_works(tmp_path, ranks):
     petsc_init()
     from petsc4py import PETSc
@@ -546,7 +546,7 @@ def test_output_dir_problems(tmp_path, case, ranks):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_unwritable_output_dir(tmp_path, ranks):
     cfg = write_config(tiny(), tmp_path / "c.yaml")
     plain_dir, mount_point = _readonly_dir(tmp_path)
@@ -581,7 +581,7 @@ def _check_agreement(out_dir, n_levels=None):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_full_disk_on_a_small_tmpfs(tmp_path, ranks):
     """A 300 KB file system: the run stops before the level that would not fit, exit 2, one line
     naming the directory, and both result files agree on what converged."""
@@ -674,7 +674,7 @@ def buckled_bar(allow=None) -> dict:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_unstable_levels_end_in_status_unstable(tmp_path, ranks):
     p = run_cfg(tmp_path, buckled_bar(), ranks)        # --quiet: the warning is printed anyway
     line = assert_one_line(p, 4, "ancf-solve: unstable: 1 of 2 levels are unstable equilibria",
@@ -733,8 +733,10 @@ def _interrupt(tmp_path, ranks: int, sig: int, to_ranks: bool):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("ranks,sig,to_ranks", [(1, signal.SIGTERM, False), (1, signal.SIGINT, False),
-                                                (2, signal.SIGTERM, True), (2, signal.SIGINT, False)])
+@pytest.mark.parametrize("ranks,sig,to_ranks", [
+    (1, signal.SIGTERM, False), (1, signal.SIGINT, False),
+    pytest.param(2, signal.SIGTERM, True, marks=pytest.mark.mpi),
+    pytest.param(2, signal.SIGINT, False, marks=pytest.mark.mpi)])
 def test_signals_stop_cleanly(tmp_path, ranks, sig, to_ranks):
     p, out, levels = _interrupt(tmp_path, ranks, sig, to_ranks)
     # mpirun forwards a signal it receives as SIGTERM and then exits 1 itself (Open MPI)
@@ -749,7 +751,7 @@ def test_signals_stop_cleanly(tmp_path, ranks, sig, to_ranks):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_closed_stdout_pipe_does_not_stop_the_solve(tmp_path, ranks):
     """`ancf-solve ... | head -1`: one rank stops printing and solves on.  Under mpirun the
     launcher itself aborts the job after ten writes to the closed pipe (hard-wired in Open MPI;

@@ -10,13 +10,13 @@ import os
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, read_summary, solve_cli
+from helpers import CONFIGS, ONE_AND_TWO_RANKS, read_summary, solve_cli
 from test_edges import assert_one_line, run_cfg, tiny
 
 MF = "-snes_mf leaves no matrix to precondition with, so PETSc sets -pc_type none"
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_snes_mf_failure_names_snes_mf_and_what_works(tmp_path, ranks):
     p = run_cfg(tmp_path, tiny(), ranks, extra=["-snes_mf"])
     line = assert_one_line(p, 3, "DIVERGED_MAX_IT", MF, "with -ksp_type preonly every Newton step is the "

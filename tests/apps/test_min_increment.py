@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 
+from helpers import ONE_AND_TWO_RANKS
 from test_edges import assert_one_line, run_cfg, tiny
 
 from ancf_petsc.solving.load_control import LevelTally, LoadControl
@@ -20,7 +21,7 @@ def heavy(**solver) -> dict:
     return raw
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_a_min_increment_that_forbids_every_cut_back_is_named_at_the_failure(tmp_path, ranks):
     p = run_cfg(tmp_path, heavy(min_increment=0.3), ranks)
     line = assert_one_line(p, 3, "could not reach load factor 0.5: SNES failed at load factor 0.5 (last "

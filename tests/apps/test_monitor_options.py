@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from helpers import CONFIGS, MPI_ENV, ROOT
+from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT
 from test_edges import TIMEOUT, UNIAXIAL, assert_one_line, run_cfg, tiny
 
 from ancf_petsc.linalg.option_syntax import AT_FINISH_OPTIONS, VIEWERS, check_value
@@ -97,7 +97,7 @@ def test_petsc_reads_each_viewer_option_as_a_viewer(tmp_path):
         assert p.stdout.strip().splitlines()[-1:] == ["REFUSED"], (name, p.stdout, p.stderr[-2000:])
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_monitor_false_on_the_command_line(tmp_path, ranks):
     p = run_cfg(tmp_path, tiny(), ranks, extra=["-snes_monitor", "false"])
     line = assert_one_line(p, 2, f"ancf-solve: PETSc option -snes_monitor false: {MONITOR}")
@@ -105,7 +105,7 @@ def test_monitor_false_on_the_command_line(tmp_path, ranks):
     assert not (tmp_path / "out").exists()                       # refused before PETSc starts
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_options_under_the_config_prefix_are_checked(tmp_path, ranks):
     raw = tiny(solver={"options_prefix": "left_"})
     p = run_cfg(tmp_path, raw, ranks, extra=["-left_snes_max_it", "abc"], out="a")

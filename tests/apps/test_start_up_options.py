@@ -12,7 +12,7 @@ import sys
 
 import pytest
 
-from helpers import CONFIGS, MPI_ENV, ROOT
+from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT
 from test_edges import TIMEOUT, UNIAXIAL, assert_one_line, run_cfg, solver_lines, tiny
 
 from ancf_petsc.config.parse import parse_config
@@ -49,7 +49,7 @@ def test_petsc_reads_start_up_options_only_while_it_starts():
     assert "Nonlinear solver (SNES) options" in p.stdout and "Options for all PETSc programs" not in p.stdout
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_help_in_the_config_on_the_command_line(tmp_path, ranks):
     p = run_cfg(tmp_path, tiny(petsc={"help": None}), ranks)
     assert_one_line(p, 2, "ancf-solve: config error: petsc.help: PETSc reads -help only while it "
@@ -57,7 +57,7 @@ def test_help_in_the_config_on_the_command_line(tmp_path, ranks):
     assert "Nonlinear solver (SNES) options" not in p.stdout
 
 
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_log_view_in_the_config_is_applied(tmp_path, ranks):
     log = tmp_path / "log.txt"
     p = run_cfg(tmp_path, tiny(petsc={"log_view": f":{log}"}), ranks)

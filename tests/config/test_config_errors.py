@@ -159,6 +159,7 @@ def test_cli_config_error_under_mpi_is_one_line(tmp_path):
     assert sum("config error" in ln for ln in p.stderr.splitlines()) == 1, p.stderr
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("arg", [["-snes_max_it", "abc"], ["-pc_type", "nosuch"], ["--outputdir", "x"]])
 def test_command_line_errors_under_mpi_are_one_line(tmp_path, arg):
     """Found before MPI starts, printed by the launcher's rank 0 only (it was once per rank)."""

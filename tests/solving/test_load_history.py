@@ -12,7 +12,8 @@ import pytest
 
 from ancf_petsc.config.parse import parse_config
 from ancf_petsc.config.values import ConfigError
-from helpers import CONFIGS, load_raw, read_summary, run_inline, solve_cli, write_config
+from helpers import CONFIGS, ONE_AND_TWO_RANKS, load_raw, read_summary, run_inline, solve_cli, \
+    write_config
 
 PLANE = {"r": "xyz", "r_y": "xz", "r_z": "x", "r_yy": "x", "r_zz": "x", "r_yz": "x"}
 
@@ -177,7 +178,7 @@ def test_a_history_run_stopped_midway_restarts_to_the_uninterrupted_answers(tmp_
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_a_friction_history_restarts_with_its_load_predictor(tmp_path, ranks):
     """With friction the answer follows the Newton path, so a restart must start each frame where
     the uninterrupted run does: the tangent predictor needs the factor of the last converged state,
@@ -247,7 +248,7 @@ def test_a_unilateral_history_at_large_twist_restarts(tmp_path):
         assert np.abs(a - b).max() <= 1e-8 * np.abs(a).max()
 
 
-@pytest.mark.parametrize("contact", ["sliding", "unilateral", "coulomb"])
+@pytest.mark.parametrize("contact", ["sliding", pytest.param("unilateral", marks=pytest.mark.mpi), "coulomb"])
 def test_a_frame_that_repeats_its_loads_takes_no_newton_iteration(tmp_path, contact):
     """A frame whose forces are the frame before's (a stride's swing) starts at that converged
     state, which already holds them: no load predictor and, with unilateral contact, no

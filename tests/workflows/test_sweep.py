@@ -240,6 +240,7 @@ def test_slurm_numbered_logs_and_environment(tmp_path):
     assert p.returncode == 1 and "no ancf-solve at " + str(tmp_path / "nowhere") in p.stderr
 
 
+@pytest.mark.mpi
 def test_single_run_on_two_ranks(tmp_path, monkeypatch):
     for k, v in MPI_ENV.items():
         monkeypatch.setenv(k, v)

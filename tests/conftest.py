@@ -9,6 +9,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+import apps  # noqa: E402,F401  (OpenBLAS's threads and kernels, set before numpy is imported)
 from helpers import mpirun_ranks  # noqa: E402
 
 _POPEN_INIT = subprocess.Popen.__init__

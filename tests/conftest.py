@@ -22,8 +22,9 @@ def pytest_configure(config):
 
 @pytest.fixture(autouse=True)
 def _mpirun_only_in_mpi_tests(request, monkeypatch):
-    """A test that starts mpirun with 2 or more ranks carries the ``mpi`` mark: ``make test`` runs
-    the other tests on parallel workers and the marked ones one at a time (Makefile)."""
+    """A test that starts mpirun with 2 or more ranks (from its own process, through subprocess)
+    carries the ``mpi`` mark: ``make test`` runs the other tests on parallel workers and the marked
+    ones one at a time (Makefile)."""
     if request.node.get_closest_marker("mpi") is not None:
         return
 

@@ -6,6 +6,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import apps  # noqa: E402,F401  (the programs' BLAS threads and kernels, before numpy: apps/__init__.py)
 from ancf_petsc.workflows.kernel_bench import main  # noqa: E402
 
 if __name__ == "__main__":

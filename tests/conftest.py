@@ -4,12 +4,11 @@ import sys
 
 import pytest
 
-# Single-threaded BLAS keeps test timings honest and avoids oversubscription under mpirun.
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-import apps  # noqa: E402,F401  (OpenBLAS's threads and kernels, set before numpy is imported)
+# the programs' process environment, before numpy is imported (apps/__init__.py): single-threaded
+# BLAS (honest timings, no oversubscription under mpirun) and OpenBLAS's kernels for this CPU
+import apps  # noqa: E402,F401
 from helpers import mpirun_ranks  # noqa: E402
 
 _POPEN_INIT = subprocess.Popen.__init__

@@ -43,8 +43,9 @@ from .database import option
 #: scaled each factorisation again (ICNTL(8) = 77: iterative, ~0.8 of its 2.5 ms on the walking
 #: stride; docs/parallel.md, 2026-12-02).  Residuals of a random right-hand side 3e-8 instead of
 #: 1e-8 on the stride's Jacobians, 4e-11 instead of 3e-13 on bundle_hex7, the same Newton
-#: iterations.  4 takes 170 ms an analysis on the 8-element stride (3 and 5: 20 ms); AMD
-#: without matching factors the strides as fast but bundle_hex7 in 2.0e8 flops against 7.7e7
+#: iterations.  An analysis costs more with 5 (the 8-element stride: ~50 ms against ~30 with 3,
+#: which there eats what its factorisations save; 4: 170 ms); AMD without matching factors the
+#: strides as fast but bundle_hex7 in 2.0e8 flops against 7.7e7
 ORDERING = {12: 2, 6: 5}
 #: PETSc's PCFailedReason for a factorisation that failed otherwise than on a zero pivot
 PC_FACTOR_OTHER = 4

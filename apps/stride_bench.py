@@ -11,7 +11,8 @@ import sys
 import numpy as np
 
 from ancf_petsc.workflows.envelope import GOH, NEO, EnvelopeCell
-from ancf_petsc.workflows.stride_bench import StrideCase, after, before, tolerance_sweep
+from ancf_petsc.workflows.stride_bench import (StrideCase, after, before, option_pairs, parse_options,
+                                                tolerance_sweep)
 
 
 def cases(twist: float, bias: str) -> list[StrideCase]:
@@ -45,6 +46,23 @@ def tolerances(args, factors: list[float]) -> int:
     return 0
 
 
+def versus_options(args, petsc: dict) -> int:
+    """Per case: this tree in turns without and with ``petsc`` options (``--vs-petsc``)."""
+    text = ",".join(f"{k}={v}" for k, v in petsc.items())
+    print(f"{'case':32s} {'frames/s (solve)':>17s} {'with ' + text:>24s} {'ratio (pairs)':>22s} "
+          f"{'linear solve [s]':>17s} {'with':>7s}  Newton, with")
+    for case in cases(args.twist, args.bias):
+        if args.only and args.only not in case.label:
+            continue
+        r = option_pairs(case, [args.solver], args.work, petsc, args.repeats)
+        a, b = r["without"], r["with"]
+        print(f"{case.label:32s} {a['per_solve']:17.1f} {b['per_solve']:24.1f} "
+              f"{r['ratio'][0]:8.3f} ({r['ratio'][1]:.2f}-{r['ratio'][2]:.2f}) "
+              f"{a['linear_solve']:17.3f} {b['linear_solve']:7.3f}  {a['iterations']}, {b['iterations']}"
+              f"  {'/'.join(a['statuses'])}, {'/'.join(b['statuses'])}", flush=True)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="bench_stride", description=__doc__.splitlines()[0])
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
@@ -57,7 +75,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", help="cases whose label contains this")
     ap.add_argument("--tolerances", help="factors of the run's own absolute tolerance, e.g. 1,10,100,1000: "
                                          "frames/s against the answers' change (speed against accuracy)")
+    ap.add_argument("--vs-petsc", help="PETSc options, e.g. mat_mumps_icntl_6=3: this tree in turns "
+                                       "without and with them in the config (a control's before/after)")
     args = ap.parse_args(argv)
+    if args.vs_petsc:
+        try:
+            petsc = parse_options(args.vs_petsc)
+        except ValueError as exc:
+            ap.error(f"--vs-petsc: {exc}")
+        return versus_options(args, petsc)
     if args.tolerances:
         return tolerances(args, [float(f) for f in args.tolerances.split(",")])
     print(f"{'case':40s} {'frames/s (solve)':>17s} {'frames/s (wall)':>16s} {'Newton/frame':>12s}"

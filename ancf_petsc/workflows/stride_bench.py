@@ -96,3 +96,39 @@ def tolerance_sweep(case: StrideCase, cmd: list[str], work: str, factors: list[f
                                for a, b in zip(row["outputs"], ref["outputs"]))
         rows.append(row)
     return rows
+
+
+def option_pairs(case: StrideCase, cmd: list[str], work: str, petsc: dict, repeats: int) -> dict:
+    """The stride on this tree in turns without and with ``petsc`` options in its config (a
+    solver control's before/after on one build: the machine's drift falls on both sides of each
+    pair).  Per side the medians of frames/s of solve and of the linear solve's seconds
+    (summary.json ``timings``), the Newton iterations and statuses seen, and the pairs' ratios
+    (without / with) of frames/s: median, least and largest."""
+    sides: dict[str, list[dict]] = {"without": [], "with": []}
+    for _ in range(repeats):
+        sides["without"].append(after(case, cmd, work, None, "without_options"))
+        sides["with"].append(after(case, cmd, work, petsc, "with_options"))
+    out: dict = {}
+    for name, runs in sides.items():
+        done = [r for r in runs if r["summary"] is not None]
+        out[name] = {"per_solve": float(np.median([r["per_solve"] for r in done])) if done else float("nan"),
+                     "linear_solve": float(np.median([r["summary"]["timings"].get("linear_solve", np.nan)
+                                                      for r in done])) if done else float("nan"),
+                     "iterations": sorted({r["iterations"] for r in done}),
+                     "statuses": sorted({r["status"] for r in runs})}
+    ratios = [a["per_solve"] / b["per_solve"] for a, b in zip(sides["without"], sides["with"])
+              if a["summary"] is not None and b["summary"] is not None and b["per_solve"] > 0.0]
+    out["ratio"] = (float(np.median(ratios)), min(ratios), max(ratios)) if ratios else (float("nan"),) * 3
+    return out
+
+
+def parse_options(text: str) -> dict[str, str]:
+    """``"mat_mumps_icntl_6=3,snes_atol=1e-6"`` (or with leading dashes) as a ``petsc:`` mapping;
+    a ValueError names a pair without ``=``."""
+    out = {}
+    for pair in filter(None, (p.strip() for p in text.split(","))):
+        key, sep, value = pair.partition("=")
+        if not sep or not key.strip("- "):
+            raise ValueError(f"{pair!r}: give OPTION=VALUE, e.g. mat_mumps_icntl_6=3")
+        out[key.strip().lstrip("-")] = value.strip()
+    return out

@@ -2,6 +2,7 @@
 gets factor × the reference run's own absolute tolerance, and the changes are the largest over
 every frame relative to the reference's largest value."""
 import numpy as np
+import pytest
 
 from ancf_petsc.workflows import stride_bench
 from ancf_petsc.workflows.envelope import NEO, EnvelopeCell
@@ -35,3 +36,31 @@ def test_tolerance_sweep_stops_when_the_reference_run_gives_no_summary(monkeypat
     case = stride_bench.StrideCase("x", EnvelopeCell(NEO, 45.0, "uniform", "sliding", 0.0, 4, stride=True))
     assert stride_bench.tolerance_sweep(case, ["ancf-solve"], str(tmp_path), [10.0]) == [
         {"factor": 1.0, "status": "crashed"}]
+
+
+def test_option_pairs_alternate_the_sides_and_take_the_ratio_pair_by_pair(monkeypatch, tmp_path):
+    """scripts/bench_stride.py --vs-petsc: without, with, without, with …; each pair's ratio of
+    frames/s (without / with), medians per side, the options only on the 'with' side."""
+    seen, solve = [], iter([0.5, 1.0, 0.25, 1.0, 0.5, 0.5])
+
+    def fake_solve(cmd, cfg, out):
+        seen.append(((cfg.get("petsc") or {}).get("mat_mumps_icntl_6"), out.rsplit("/", 1)[-1]))
+        t = next(solve)
+        return None, 1.0, {"status": "completed", "newton_iterations": 7, "steps": [{}] * 10,
+                           "timings": {"solve": t, "linear_solve": t / 2}}
+
+    monkeypatch.setattr(stride_bench, "solve_config", fake_solve)
+    case = stride_bench.StrideCase("x", EnvelopeCell(NEO, 45.0, "uniform", "sliding", 0.0, 4, stride=True))
+    r = stride_bench.option_pairs(case, ["ancf-solve"], str(tmp_path), {"mat_mumps_icntl_6": "3"}, 3)
+    assert seen == [(None, "without_options"), ("3", "with_options")] * 3
+    # frames/s: without 20, 40, 20; with 10, 10, 20 -> pairs 2, 4, 1
+    assert r["ratio"] == (2.0, 1.0, 4.0)
+    assert r["without"]["per_solve"] == 20.0 and r["with"]["per_solve"] == 10.0
+    assert r["without"]["linear_solve"] == 0.25 and r["with"]["iterations"] == [7]
+
+
+def test_parse_options_reads_pairs_and_names_a_bad_one():
+    assert stride_bench.parse_options("mat_mumps_icntl_6=3, -snes_atol=1e-6") == {
+        "mat_mumps_icntl_6": "3", "snes_atol": "1e-6"}
+    with pytest.raises(ValueError, match="OPTION=VALUE"):
+        stride_bench.parse_options("mat_mumps_icntl_6")

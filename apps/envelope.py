@@ -19,6 +19,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--elements", type=int, default=4)
     ap.add_argument("--predictor", choices=("secant", "tangent", "none"), help="solver.predictor of every cell")
     ap.add_argument("--tangent", choices=TANGENTS, help="solver.tangent of every cell")
+    ap.add_argument("--augmentation", type=float, help="contact.tangential.augmentation of every friction cell")
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="another ancf-solve to run the same cells with (before/after)")
     ap.add_argument("--jobs", type=int, default=2)
@@ -26,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--csv", help="write the rows here")
     args = ap.parse_args(argv)
     cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements,
-                 args.predictor, args.tangent)
+                 args.predictor, args.tangent, args.augmentation)
     solvers = {"after": [args.solver], **({"before": [args.before]} if args.before else {})}
     rows = run_cells(cells, solvers, args.work, args.jobs, lambda line: print(line, flush=True))
     if args.csv and rows:

@@ -143,6 +143,21 @@ def test_fibre_strides_grid_runs_the_walking_stride_on_every_goh_config_with_its
     assert raw["geometry"]["twist_deg"] == 90.0
 
 
+def test_friction_strides_grid_and_the_augmentation_of_its_cells():
+    """The ``friction_strides`` grid (the μ = 0.3 strides alone, "Friction's augmentation: G/E")
+    and ``--augmentation``: set on friction cells (their name says it), ignored elsewhere."""
+    from ancf_petsc.workflows.envelope import cell_config, grid
+    cells = grid("friction_strides", [0.0, 90.0], ["uniform"], augmentation=1.0)
+    assert len(cells) == 2 and all(c.stride and c.friction == 0.3 and c.law == "sliding" for c in cells)
+    raw = cell_config(cells[0])
+    assert raw["contact"]["tangential"] == {"law": "coulomb", "friction": 0.3, "augmentation": 1.0}
+    assert cells[0].name.endswith("_c1") and raw["name"] == cells[0].name
+    plain = grid("friction_strides", [0.0], ["uniform"])[0]
+    assert "augmentation" not in cell_config(plain)["contact"]["tangential"] and not plain.name.endswith("_c1")
+    core = grid("core", [0.0], ["uniform"], augmentation=1.0)[0]
+    assert "tangential" not in cell_config(core)["contact"] and "_c1" not in core.name
+
+
 #: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
 #: the committed default ones (docs/gait_envelope_GRID.csv)
 MIXED_GRIDS = ("core", "core8", "subject2", "friction", "fibres", "strides")

@@ -125,3 +125,16 @@ def test_the_dated_tables_are_their_csvs(after, first, name, columns):
     holds u_medial − u_soleus: the keys before issue 39)."""
     rows = table(after, first)
     assert check(rows, csv_runs(name, "-end_medial_gastrocnemius|soleus_mm"), columns) == len(rows) > 0
+
+
+def test_the_augmentation_table_is_its_two_csvs():
+    """"The augmentation's default": each cell "c = 1 → G/E" (one value: both the same) is the
+    main study's CSV on the left and docs/interface_study_augmentation.csv on the right."""
+    rows = table("### The augmentation's default", "loading")
+    columns = {"newton": "Newton", "cutbacks": "cut-backs", "tresca": "Tresca solves", "soleus": "soleus at 400 N [mm]"}
+    sides = [csv_runs(name, "end_soleus|medial_gastrocnemius_mm")
+             for name in ("interface_study.csv", "interface_study_augmentation.csv")]
+    for k, runs in enumerate(sides):
+        picked = [{h: (row[h].split(" → ")[k] if " → " in row[h] else row[h]) if h in columns.values() else row[h]
+                   for h in row} for row in rows]
+        assert check(picked, runs, columns) == len(rows) == 20

@@ -118,7 +118,7 @@ class TangentialSpec:
     law: str = TANGENTIAL_LAW_NAMES[0]     # a name of TANGENTIAL_LAWS; the first is frictionless
     stiffness: float | None = None         # elastic matrix: k_t = G / thickness [Pa/m]
     friction: float | None = None          # Coulomb: the friction coefficient μ
-    augmentation: float | None = None      # Coulomb: the stick test's c in units of k_s / A (None: 1)
+    augmentation: float | None = None      # Coulomb: the stick test's c in units of k_s / A (None: G/E)
     # Coulomb: the end tangential functions where both bodies' positions are held, folded into
     # their neighbours (merge, as the normal ones: unique root multipliers) or kept
     # (contact/multipliers.py fold_tangential; docs/interface.md Limits)

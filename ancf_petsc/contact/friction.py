@@ -23,10 +23,13 @@ function's share of the pressing normal force, ẑ_k = ∫ φ_k p⁺ dA / k_s = 
 sign (the pressed strips: z_k from −84 to 219 Pa where p is 57 … 158 Pa), and Σ_k μ z_k⁺ let
 the strips carry 1.18 μN.  Σ_k ẑ_k is the pressing normal force, so a sliding interface carries
 μN exactly where p ≥ 0.  The sliding law's pulled parts (p < 0) and an open unilateral interface
-carry none.  c (``augmentation``, 1 by default, in units of k_s / A_k: the stiffness of the
-structure under a function's traction) only steers the semi-smooth Newton iteration; the answer
-does not depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN).  At rest (no
-pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
+carry none.  c (``augmentation``, in units of k_s / A_k) is the stiffness of the structure
+under a function's traction: by default G/E of the beam that sets k_s (1/3 for a nearly
+incompressible solid, a shear traction meets G h, not E h; until 2026-12-02 it was 1, with which
+the 39 μ = 0.3 walking strides cut back in 12 frames against 4: docs/gait.md).  It only steers
+the semi-smooth Newton iteration: where the increment has one solution the answer does not
+depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN); where it has several, c can
+pick another (docs/interface.md, Limits).  At rest (no pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
 The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the generalised derivative of
 R and of the forces, with the rotation of n and n̄ (gap.normal_gradient) and the bounds' coupling
 to the pressures, unsymmetric (MUMPS LU).  ``hold_bounds`` turns the law into Tresca's for a
@@ -40,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import friction_blocks
+from .multipliers import reference_shear_ratio
 from .partners import PartnerTerm, tangential
 from .reports import output_signs
 
@@ -153,8 +157,9 @@ class CoulombFriction(PartnerTerm):
 
     @classmethod
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
-        """From ``contact.tangential`` (``friction`` μ, ``augmentation`` c's factor, default 1)."""
-        aug = spec.augmentation if spec.augmentation is not None else 1.0
+        """From ``contact.tangential`` (``friction`` μ, ``augmentation`` c's factor, default G/E
+        of the beam that sets k_s: module docstring)."""
+        aug = spec.augmentation if spec.augmentation is not None else reference_shear_ratio(projector.interfaces)
         return cls(spec.friction, aug, model, points, projector, spec.free_zone)
 
     # ------------------------------------------------------------------ numbering

@@ -197,6 +197,15 @@ def reference_stiffness(interfaces) -> float:
     return min(reference_modulus(b) * reference_size(b) for itf in interfaces for b in (itf.a, itf.b))
 
 
+def reference_shear_ratio(interfaces) -> float:
+    """G/E of the beam that sets k_s (``reference_stiffness``): μ / E at small strain, 1/3 for
+    a nearly incompressible solid.  A tangential traction meets the shear stiffness G h of the
+    structure beneath it, not E h: the Coulomb law's default augmentation (friction.py)."""
+    beams = [b for itf in interfaces for b in (itf.a, itf.b)]
+    softest = min(beams, key=lambda b: reference_modulus(b) * reference_size(b))
+    return float(softest.material.mu / reference_modulus(softest))
+
+
 def _axial_functions(xi: np.ndarray, degree: int, per_element: bool) -> tuple[np.ndarray, int]:
     """Values (n, degree + 1) of one element's axial functions at ξ and the offset between
     consecutive elements' first function (``degree``: they share an end; degree + 1 when each

@@ -64,6 +64,7 @@ class EnvelopeCell:
     stride: bool = False
     predictor: str | None = None          # solver.predictor (None: the config's default)
     tangent: str | None = None            # solver.tangent (None: the config's default)
+    augmentation: float | None = None     # contact.tangential.augmentation (None: the default)
 
     @property
     def name(self) -> str:
@@ -72,6 +73,7 @@ class EnvelopeCell:
         stem = os.path.splitext(os.path.basename(self.base))[0]
         kind = "_stride" if self.stride else ""
         pred = (f"_{self.predictor}" if self.predictor else "") + (f"_{self.tangent}" if self.tangent else "")
+        pred += f"_c{self.augmentation:g}" if self.augmentation is not None and self.friction else ""
         return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
@@ -110,6 +112,8 @@ def cell_config(cell: EnvelopeCell) -> dict:
         contact["mode"] = cell.law
     if cell.friction:
         contact["tangential"] = {"law": "coulomb", "friction": float(cell.friction)}
+        if cell.augmentation is not None:
+            contact["tangential"]["augmentation"] = float(cell.augmentation)
     cfg["output"] = {"vtk": False}
     if cell.predictor:
         cfg.setdefault("solver", {})["predictor"] = cell.predictor
@@ -229,7 +233,7 @@ def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
 SLIDING, UNILATERAL = LAWS                    # contact/laws.py, in its order
 #: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
 #: Coulomb μ 0.1 / 0.3 / 0.5, every shipped fibre-reinforced (GOH) config with its own law,
-#: strides (sliding, unilateral, μ 0.3), the traced second subject, and the walking stride on
+#: strides (sliding, unilateral, μ 0.3; the μ 0.3 ones alone), the traced second subject, and the walking stride on
 #: every shipped GOH config with its own law
 GRIDS = {
     "core": _columns(NEO, (SLIDING, UNILATERAL)),
@@ -239,6 +243,7 @@ GRIDS = {
     "strides": lambda twists, biases, elements: (
         _columns(NEO, (SLIDING, UNILATERAL), stride=True)(twists, biases, elements)
         + _columns(NEO, (SLIDING,), (0.3,), stride=True)(twists, biases, elements)),
+    "friction_strides": _columns(NEO, (SLIDING,), (0.3,), stride=True),
     "subject2": _columns(SUBJECT2, (SLIDING, UNILATERAL)),
     "fibre_strides": lambda twists, biases, elements: [c for base in GOH for c in _columns(
         base, (None,), stride=True)(twists, biases, elements)],
@@ -246,12 +251,13 @@ GRIDS = {
 
 
 def grid(name: str, twists, biases, elements: int = 4, predictor: str | None = None,
-         tangent: str | None = None) -> list[EnvelopeCell]:
-    """The cells of a named grid (``GRIDS``), with ``solver.predictor`` and ``solver.tangent``
-    set when given."""
+         tangent: str | None = None, augmentation: float | None = None) -> list[EnvelopeCell]:
+    """The cells of a named grid (``GRIDS``), with ``solver.predictor``, ``solver.tangent`` and
+    (friction cells) ``contact.tangential.augmentation`` set when given."""
     if name not in GRIDS:
         raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
-    return [replace(c, predictor=predictor, tangent=tangent) for c in GRIDS[name](twists, biases, elements)]
+    return [replace(c, predictor=predictor, tangent=tangent, augmentation=augmentation)
+            for c in GRIDS[name](twists, biases, elements)]
 
 
 def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir: str, jobs: int,

@@ -64,7 +64,8 @@ def main(argv=None) -> int:
     ap.add_argument("--stick", type=float, default=100.0, help="solid stick stiffness k in mu_max/h")
     ap.add_argument("--elements", default="4,8,16", help="ANCF elements per subtendon")
     ap.add_argument("--ancf-augmentations", default="default,10,0.1",
-                    help="ANCF augmentation factors c of contact.tangential ('default': the law's, 1)")
+                    help="ANCF augmentation factors c of contact.tangential ('default': the law's, "
+                         "G/E of the softer beam since 2026-12-02, 1 before)")
     ap.add_argument("--ancf-spaces", default="default",
                     help="ANCF pressure spaces separated by ';': 'default' (quadratic along × linear across) and/or "
                          + ", ".join(f"'{n}'" for n in SPACES))

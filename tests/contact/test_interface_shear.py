@@ -159,6 +159,21 @@ def _state(P, seed, history):
     return X, free
 
 
+def test_the_default_augmentation_is_the_shear_over_young_ratio():
+    """Coulomb's c defaults to G/E = (3K + μ) / 9K of the beam that sets k_s = E h (the softest
+    E h: a tangential traction meets G h); a given ``augmentation`` wins."""
+    from ancf_petsc.contact.multipliers import reference_modulus, reference_size
+    P, _ = build_problem(_achilles({"law": "coulomb", "friction": 0.3}))
+    beams = [b for itf in P.contact.interfaces for b in (itf.a, itf.b)]
+    soft = min(beams, key=lambda b: reference_modulus(b) * reference_size(b))
+    K, mu = soft.material.K, soft.material.mu
+    assert len({b.material.mu for b in beams}) > 1              # the beams differ: the choice matters
+    assert P.contact.terms[0].augmentation == pytest.approx((3 * K + mu) / (9 * K), rel=1e-12)
+    assert 1 / 3 < P.contact.terms[0].augmentation < 0.36
+    P, _ = build_problem(_achilles({"law": "coulomb", "friction": 0.3, "augmentation": 2.0}))
+    assert P.contact.terms[0].augmentation == 2.0
+
+
 @pytest.mark.parametrize("tangential, history", [
     ({"law": "elastic", "stiffness": 1e10}, False),
     ({"law": "coulomb", "friction": 0.3}, False),

@@ -19,7 +19,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--elements", type=int, default=4)
     ap.add_argument("--predictor", choices=("secant", "tangent", "none"), help="solver.predictor of every cell")
     ap.add_argument("--tangent", choices=TANGENTS, help="solver.tangent of every cell")
-    ap.add_argument("--augmentation", type=float, help="contact.tangential.augmentation of every friction cell")
+    ap.add_argument("--augmentation", type=float,
+                    help="contact.tangential.augmentation of every friction cell")
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="another ancf-solve to run the same cells with (before/after)")
     ap.add_argument("--jobs", type=int, default=2)

@@ -29,7 +29,8 @@ incompressible solid, a shear traction meets G h, not E h; until 2026-12-02 it w
 the 39 μ = 0.3 walking strides cut back in 12 frames against 4: docs/gait.md).  It only steers
 the semi-smooth Newton iteration: where the increment has one solution the answer does not
 depend on it (the strips: c = 0.1, 0.01, 0.001 agree to 4e-9 μN); where it has several, c can
-pick another (docs/interface.md, Limits).  At rest (no pressure, no slip) the sticking derivative is taken, so Newton's first step holds the interface.
+pick another (docs/interface.md, Limits).  At rest (no pressure, no slip) the sticking
+derivative is taken, so Newton's first step holds the interface.
 The residual rows are k_s R_k; the Jacobian (friction_blocks.py) is the generalised derivative of
 R and of the forces, with the rotation of n and n̄ (gap.normal_gradient) and the bounds' coupling
 to the pressures, unsymmetric (MUMPS LU).  ``hold_bounds`` turns the law into Tresca's for a
@@ -159,7 +160,9 @@ class CoulombFriction(PartnerTerm):
     def from_spec(cls, spec, model, points, projector, reference: float) -> "CoulombFriction":
         """From ``contact.tangential`` (``friction`` μ, ``augmentation`` c's factor, default G/E
         of the beam that sets k_s: module docstring)."""
-        aug = spec.augmentation if spec.augmentation is not None else reference_shear_ratio(projector.interfaces)
+        aug = spec.augmentation
+        if aug is None:
+            aug = reference_shear_ratio(projector.interfaces)
         return cls(spec.friction, aug, model, points, projector, spec.free_zone)
 
     # ------------------------------------------------------------------ numbering

@@ -233,8 +233,8 @@ def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
 SLIDING, UNILATERAL = LAWS                    # contact/laws.py, in its order
 #: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
 #: Coulomb μ 0.1 / 0.3 / 0.5, every shipped fibre-reinforced (GOH) config with its own law,
-#: strides (sliding, unilateral, μ 0.3; the μ 0.3 ones alone), the traced second subject, and the walking stride on
-#: every shipped GOH config with its own law
+#: strides (sliding, unilateral, μ 0.3; and the μ 0.3 ones alone), the traced second subject,
+#: and the walking stride on every shipped GOH config with its own law
 GRIDS = {
     "core": _columns(NEO, (SLIDING, UNILATERAL)),
     "friction": _columns(NEO, (SLIDING,), (0.1, 0.3, 0.5)),

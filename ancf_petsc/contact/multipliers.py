@@ -190,20 +190,26 @@ def reference_size(beam) -> float:
     return float(min(beam.x_nodes[k] - beam.x_nodes[0], np.sqrt(beam.section.area)))
 
 
+def reference_beam(interfaces):
+    """The softest beam of the interfaces: the least E h (``reference_modulus``, ``reference_size``)."""
+    return min((b for itf in interfaces for b in (itf.a, itf.b)),
+               key=lambda b: reference_modulus(b) * reference_size(b))
+
+
 def reference_stiffness(interfaces) -> float:
     """k_s = E_min h [N/m]: E the small-strain Young's modulus of the softer beam, h = min(element
     length, √area).  It only scales the multiplier unknowns (the constraint rows then have the
     size of the stiffness rows); the answer does not depend on it."""
-    return min(reference_modulus(b) * reference_size(b) for itf in interfaces for b in (itf.a, itf.b))
+    beam = reference_beam(interfaces)
+    return reference_modulus(beam) * reference_size(beam)
 
 
 def reference_shear_ratio(interfaces) -> float:
-    """G/E of the beam that sets k_s (``reference_stiffness``): μ / E at small strain, 1/3 for
-    a nearly incompressible solid.  A tangential traction meets the shear stiffness G h of the
-    structure beneath it, not E h: the Coulomb law's default augmentation (friction.py)."""
-    beams = [b for itf in interfaces for b in (itf.a, itf.b)]
-    softest = min(beams, key=lambda b: reference_modulus(b) * reference_size(b))
-    return float(softest.material.mu / reference_modulus(softest))
+    """G/E of the beam that sets k_s (``reference_beam``): μ / E at small strain, 1/3 for a nearly
+    incompressible solid.  A tangential traction meets the shear stiffness G h of the structure
+    beneath it, not E h: the Coulomb law's default augmentation (friction.py)."""
+    beam = reference_beam(interfaces)
+    return float(beam.material.mu / reference_modulus(beam))
 
 
 def _axial_functions(xi: np.ndarray, degree: int, per_element: bool) -> tuple[np.ndarray, int]:

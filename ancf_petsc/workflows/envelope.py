@@ -231,19 +231,19 @@ def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
 
 
 SLIDING, UNILATERAL = LAWS                    # contact/laws.py, in its order
+_FRICTION_STRIDES = _columns(NEO, (SLIDING,), (0.3,), stride=True)
 #: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
-#: Coulomb μ 0.1 / 0.3 / 0.5, every shipped fibre-reinforced (GOH) config with its own law,
-#: strides (sliding, unilateral, μ 0.3; and the μ 0.3 ones alone), the traced second subject,
-#: and the walking stride on every shipped GOH config with its own law
+#: Coulomb μ 0.1 / 0.3 / 0.5, every shipped GOH config with its own law, strides (sliding,
+#: unilateral, μ 0.3; and the μ 0.3 ones alone), the traced second subject, and the walking
+#: stride on every shipped GOH config with its own law
 GRIDS = {
     "core": _columns(NEO, (SLIDING, UNILATERAL)),
     "friction": _columns(NEO, (SLIDING,), (0.1, 0.3, 0.5)),
     "fibres": lambda twists, biases, elements: [c for base in GOH for c in _columns(base, (None,))(
         twists, biases, elements)],
-    "strides": lambda twists, biases, elements: (
-        _columns(NEO, (SLIDING, UNILATERAL), stride=True)(twists, biases, elements)
-        + _columns(NEO, (SLIDING,), (0.3,), stride=True)(twists, biases, elements)),
-    "friction_strides": _columns(NEO, (SLIDING,), (0.3,), stride=True),
+    "strides": lambda twists, biases, elements: (_columns(NEO, (SLIDING, UNILATERAL), stride=True)(
+        twists, biases, elements) + _FRICTION_STRIDES(twists, biases, elements)),
+    "friction_strides": _FRICTION_STRIDES,
     "subject2": _columns(SUBJECT2, (SLIDING, UNILATERAL)),
     "fibre_strides": lambda twists, biases, elements: [c for base in GOH for c in _columns(
         base, (None,), stride=True)(twists, biases, elements)],

@@ -159,8 +159,12 @@ def test_friction_strides_grid_and_the_augmentation_of_its_cells():
 
 
 #: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
-#: the committed default ones (docs/gait_envelope_GRID.csv)
+#: the committed default ones (docs/gait_envelope_GRID.csv; where the default load predictor has
+#: changed since, the ones on the predictor the mixed runs had, docs/gait_envelope_GRID_secant.csv)
 MIXED_GRIDS = ("core", "core8", "subject2", "friction", "fibres", "strides")
+#: the proportional grids with contact re-run with the tangent load predictor, contact's default
+#: since 2026-12-02 (docs/gait_envelope_GRID.csv), against the secant's (…_secant.csv)
+PREDICTOR_GRIDS = ("core", "core8", "subject2", "friction")
 
 
 def _rows(path):
@@ -179,28 +183,64 @@ def _grid_counts(rows):
     return f"{bad} / {over} / {sum(int(r['iterations']) for r in rows):,}".replace(",", " ")
 
 
+def _same_predictor(name: str) -> str:
+    """The default grid the mixed runs of ``name`` compare with (``MIXED_GRIDS``)."""
+    secant = os.path.join(DOCS, f"gait_envelope_{name}_secant.csv")
+    return secant if os.path.exists(secant) else os.path.join(DOCS, f"gait_envelope_{name}.csv")
+
+
+def _ratios(before, after, keys, key="iterations_to_1200"):
+    """after ÷ before of ``key`` per column at ψ ≤ 90° that both complete."""
+    return [int(after[k][key]) / int(before[k][key]) for k in keys
+            if k[3] <= 90 and before[k]["status"] == after[k]["status"] == "completed" and int(before[k][key])]
+
+
+def _comparison_row(name: str, before: dict, after: dict, key: str = "iterations_to_1200") -> str:
+    """One grid's row of a before/after table: counts of each side, ratio at ψ ≤ 90°."""
+    import numpy as np
+    keys = sorted(set(before) & set(after))
+    ratios = _ratios(before, after, keys, key)
+    return (f"| {name} ({len(keys)}) | {_grid_counts([before[k] for k in keys])} | "
+            f"{_grid_counts([after[k] for k in keys])} | {np.median(ratios):.2f} "
+            f"({min(ratios):.2f}–{max(ratios):.2f}) |")
+
+
+def _block(marker: str) -> str:
+    """The text between ``<!-- marker -->`` and ``<!-- /marker -->`` in docs/gait.md."""
+    text = open(os.path.join(DOCS, "gait.md")).read()
+    start, end = f"<!-- {marker} -->\n", f"\n<!-- /{marker} -->"
+    assert start in text and end in text
+    return text.split(start, 1)[1].split(end, 1)[0]
+
+
+def predictor_table() -> str:
+    """The docs/gait.md table of the tangent load predictor against the secant, from the CSVs."""
+    lines = ["| grid (cells) | secant: not completed / over the target / Newton iterations | tangent "
+             "| tangent ÷ secant at ψ ≤ 90°, median (range) |", "|---|---|---|---|"]
+    for name in PREDICTOR_GRIDS:
+        sec = _rows(os.path.join(DOCS, f"gait_envelope_{name}_secant.csv"))
+        tan = _rows(os.path.join(DOCS, f"gait_envelope_{name}.csv"))
+        assert set(sec) == set(tan), name
+        lines.append(_comparison_row(name, sec, tan))
+    return "\n".join(lines)
+
+
+def test_the_predictor_table_is_its_csvs():
+    assert _block("predictor-grids") == predictor_table()
+
+
 def mixed_tangent_table() -> str:
     """The docs/gait.md table of ``solver.tangent: mixed`` against the default, from the CSVs."""
-    import numpy as np
     lines = ["| grid (cells) | `standard`: not completed / over the target / Newton iterations | `mixed` "
              "| `mixed` ÷ `standard` at ψ ≤ 90°, median (range) |", "|---|---|---|---|"]
     for name in MIXED_GRIDS:
         mixed_path = os.path.join(DOCS, f"gait_envelope_{name}_mixed.csv")
         if not os.path.exists(mixed_path):
             continue
-        std, mix = _rows(os.path.join(DOCS, f"gait_envelope_{name}.csv")), _rows(mixed_path)
-        keys = sorted(set(std) & set(mix))
-        key = "iterations" if name == "strides" else "iterations_to_1200"
-        ratios = [int(mix[k][key]) / int(std[k][key]) for k in keys
-                  if k[3] <= 90 and std[k]["status"] == mix[k]["status"] == "completed" and int(std[k][key])]
-        lines.append(f"| {name} ({len(keys)}) | {_grid_counts([std[k] for k in keys])} | "
-                     f"{_grid_counts([mix[k] for k in keys])} | {np.median(ratios):.2f} "
-                     f"({min(ratios):.2f}–{max(ratios):.2f}) |")
+        lines.append(_comparison_row(name, _rows(_same_predictor(name)), _rows(mixed_path),
+                                     "iterations" if name == "strides" else "iterations_to_1200"))
     return "\n".join(lines)
 
 
 def test_the_mixed_tangent_table_is_its_csvs():
-    text = open(os.path.join(DOCS, "gait.md")).read()
-    start, end = "<!-- mixed-tangent-grids -->\n", "\n<!-- /mixed-tangent-grids -->"
-    assert start in text and end in text
-    assert text.split(start, 1)[1].split(end, 1)[0] == mixed_tangent_table()
+    assert _block("mixed-tangent-grids") == mixed_tangent_table()

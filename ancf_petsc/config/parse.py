@@ -81,10 +81,12 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 
 def default_predictor(spec: ModelSpec) -> str:
     """``solver.predictor`` when the config gives none (solving/predictor.py): ``tangent`` for a
-    load history (non-proportional frames) and for a model with a fibre-reinforced law (a
-    stiffening path, where the secant overshoots: docs/gait.md), else ``secant``."""
+    load history (non-proportional frames), for a model with a fibre-reinforced law (a
+    stiffening path, where the secant overshoots) and for a model with contact (the gait
+    envelope's columns, docs/gait.md: 11-23 % fewer Newton iterations, columns over the target
+    at twist <= 90 deg 27 -> 12, the failing cells as many); else ``secant``."""
     fibres = any(b.material.get("model") == GOH.name for b in spec.beams)
-    return "tangent" if spec.history is not None or fibres else "secant"
+    return "tangent" if spec.history is not None or fibres or spec.contact is not None else "secant"
 
 
 def _steps(raw: dict, history) -> list[float]:

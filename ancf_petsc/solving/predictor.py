@@ -15,20 +15,27 @@ prescribed displacements by Δq̄ = Σ_g Δm_g ū_g (load groups, model/loading.
   load change (non-proportional, unloading included, nothing when nothing changes).  J includes
   the contact constraints, so the multipliers are predicted with the state.  After a cut-back (the
   factor belongs to a failed attempt) or from rest there is no prediction.
-The default (config/parse.py ``default_predictor``) is ``secant`` for proportional ``steps`` (its
-direction is the path's, and it carries the path's curvature from the last increment),
-``tangent`` for a load history (config history:), whose frames change the loads' direction, and
-``tangent`` for a model with a fibre-reinforced law: its path stiffens (the untwist of a soft
-matrix saturates, the fibres stiffen exponentially) and the secant of the last increment,
-scaled to a grown one, overshoots it (measured on the GOH grid at twist 0/45/90°: 6899 → 5189
-Newton iterations to 1.2 kN over 54 columns, docs/gait.md).  On proportional columns ``tangent`` is an
-option worth trying at large twist: the paper's six columns took 0-7 fewer Newton iterations with
-it (47 → 40 on the ψ = 45° sliding column, answers equal to 4e-11) and the gait envelope's
-unilateral columns at ψ = 90° 60-94 instead of 83-109 with no cut-back; but a path it follows
-continuously may stop at a limit point a secant step jumps over (the lone soleus of the stiffest
-published GOH set stops at its limit point near 99.5 N, where the secant path lands on a second
-stable branch and reaches 400 N: tests/solving/test_step_limits.py), and it takes the
-preconditioner reuse and the calibration's warm starts their measured advantage.
+The default (config/parse.py ``default_predictor``) is ``tangent`` for a load history (config
+history:), whose frames change the loads' direction; for a model with a fibre-reinforced law,
+whose path stiffens (the untwist of a soft matrix saturates, the fibres stiffen exponentially) so
+that the secant of the last increment, scaled to a grown one, overshoots it (the GOH grid at
+twist 0/45/90°: 6899 → 5189 Newton iterations to 1.2 kN over 54 columns, docs/gait.md); and for a
+model with contact (2026-12-02): at large twist the secant's state carried the sections' turn
+of the last increment into the next, where the complementarity prediction then changed
+constraints the level's answer did not (the unilateral 90° column at 600 N: 4 changed, 3 of
+them back at the check, 9 Newton iterations on a state whose medial gastrocnemius was turned
+8.7° from the answer).  Over the envelope's proportional grids the tangent took 13, 22 and 21 %
+fewer Newton iterations (the paper's outlines at 4 and 8 elements, friction; the second subject
+5 % more), the columns over the target at twist ≤ 90° fell from 32 to 11, and as many cells fail
+(11; different ones where unilateral, docs/gait.md); Table 1's sliding columns 45/45/47 → 40/38/40, answers equal to
+7e-15 m.  Without contact ``secant`` (its direction is the path's, and it carries the path's
+curvature from the last increment).  A path the tangent follows continuously may stop at a limit
+point a secant step jumps over (the lone soleus of the stiffest published GOH set stops at its
+limit point near 99.5 N, where the secant path lands on a second stable branch and reaches
+400 N: tests/solving/test_step_limits.py; the second subject's 120° gastrocnemius-biased sliding
+column goes the other way: the secant meets a fold at 2567 N, the tangent passes it), and a
+cold column with it is about as cheap as a warm start from a sample 2 % away (37 against 39
+Newton iterations, tests/solving/test_samples.py).
 
 **Unilateral contact** (the complementarity predictor of petsc/complementarity.py predicts each
 increment's contact state): the increment after the first one from rest starts at the converged

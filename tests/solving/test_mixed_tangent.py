@@ -146,7 +146,8 @@ def test_after_a_failed_sub_step_the_retries_take_the_plain_tangent(tmp_path, mo
 
     monkeypatch.setattr(MixedTangent, "correct", recording_correct)
     monkeypatch.setattr(LoadStepper, "_cut_back", recording_cut_back)
-    raw = cell_config(EnvelopeCell(NEO, 135.0, "soleus", "sliding", levels=(400.0, 1200.0)))
+    raw = cell_config(EnvelopeCell(NEO, 135.0, "soleus", "sliding", levels=(400.0, 1200.0),
+                                   predictor="secant"))       # the path with a cut-back per level
     raw.setdefault("solver", {})["tangent"] = "mixed"
     summary = run_inline(raw, tmp_path)
     assert summary["status"] == "completed"

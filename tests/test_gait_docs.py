@@ -162,9 +162,11 @@ def test_friction_strides_grid_and_the_augmentation_of_its_cells():
 #: the committed default ones (docs/gait_envelope_GRID.csv; where the default load predictor has
 #: changed since, the ones on the predictor the mixed runs had, docs/gait_envelope_GRID_secant.csv)
 MIXED_GRIDS = ("core", "core8", "subject2", "friction", "fibres", "strides")
-#: the proportional grids with contact re-run with the tangent load predictor, contact's default
-#: since 2026-12-02 (docs/gait_envelope_GRID.csv), against the secant's (…_secant.csv)
-PREDICTOR_GRIDS = ("core", "core8", "subject2", "friction")
+#: the proportional grids with contact run with the secant and the tangent load predictor (CSV
+#: names after gait_envelope_): frictionless contact's default since 2026-12-02 is the tangent
+#: (GRID.csv, the secant's GRID_secant.csv); friction's is still the secant (GRID_tangent.csv)
+PREDICTOR_GRIDS = {"core": ("core_secant", "core"), "core8": ("core8_secant", "core8"),
+                   "subject2": ("subject2_secant", "subject2"), "friction": ("friction", "friction_tangent")}
 
 
 def _rows(path):
@@ -217,9 +219,8 @@ def predictor_table() -> str:
     """The docs/gait.md table of the tangent load predictor against the secant, from the CSVs."""
     lines = ["| grid (cells) | secant: not completed / over the target / Newton iterations | tangent "
              "| tangent ÷ secant at ψ ≤ 90°, median (range) |", "|---|---|---|---|"]
-    for name in PREDICTOR_GRIDS:
-        sec = _rows(os.path.join(DOCS, f"gait_envelope_{name}_secant.csv"))
-        tan = _rows(os.path.join(DOCS, f"gait_envelope_{name}.csv"))
+    for name, files in PREDICTOR_GRIDS.items():
+        sec, tan = (_rows(os.path.join(DOCS, f"gait_envelope_{f}.csv")) for f in files)
         assert set(sec) == set(tan), name
         lines.append(_comparison_row(name, sec, tan))
     return "\n".join(lines)

@@ -82,11 +82,14 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 def default_predictor(spec: ModelSpec) -> str:
     """``solver.predictor`` when the config gives none (solving/predictor.py): ``tangent`` for a
     load history (non-proportional frames), for a model with a fibre-reinforced law (a
-    stiffening path, where the secant overshoots) and for a model with contact (the gait
-    envelope's proportional grids, docs/gait.md: columns over the target at twist <= 90 deg
-    32 -> 11, Newton iterations 85 925 -> 80 545, 11 failing cells either way); else ``secant``."""
+    stiffening path, where the secant overshoots) and for a model with frictionless contact (the
+    gait envelope's proportional grids, docs/gait.md: columns over the target at twist <= 90 deg
+    28 -> 10, Newton iterations 70 896 -> 68 617, 10 failing cells either way); else ``secant``,
+    also with a tangential law (the interface study's mu = 3 columns took 2-8 times the Newton
+    iterations with the tangent, and the soleus-loaded one ended on another branch)."""
     fibres = any(b.material.get("model") == GOH.name for b in spec.beams)
-    return "tangent" if spec.history is not None or fibres or spec.contact is not None else "secant"
+    frictionless = spec.contact is not None and spec.contact.tangential is None
+    return "tangent" if spec.history is not None or fibres or frictionless else "secant"
 
 
 def _steps(raw: dict, history) -> list[float]:

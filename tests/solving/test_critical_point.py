@@ -98,7 +98,8 @@ def test_without_switching_the_fold_stops_the_run_naming_the_critical_point(tmp_
 def _sliding_fold() -> dict:
     """The second subject's outlines, twist 120°, gastrocnemius-biased, sliding: its path folds
     at 2567 N (the subject2 grid's cell, which stopped there before the snap) on the secant
-    predictor's path; the tangent predictor's (contact's default since 2026-12-02) passes it."""
+    predictor's path; the tangent predictor's (frictionless contact's default since 2026-12-02)
+    passes it."""
     from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
     return cell_config(EnvelopeCell(SUBJECT2, 120, "gastrocnemius", "sliding", predictor="secant"))
 

@@ -2,8 +2,9 @@
 (config/parse.py ``default_predictor``): its path stiffens (the untwist of a soft-matrix set
 saturates, the fibres' exponential law), and the secant of the last increment overshoots it
 (docs/gait.md, "Fibre-reinforced (GOH) sets").  Measured over the GOH grid at twist 0/45/90°,
-4 elements: 6899 → 5189 Newton iterations to 1.2 kN over the 54 columns.  A model with contact
-(sliding, unilateral, friction) starts from it too; one without, from the secant."""
+4 elements: 6899 → 5189 Newton iterations to 1.2 kN over the 54 columns.  A model with
+frictionless contact (sliding, unilateral) starts from it too; one without contact or with a
+tangential law (friction, elastic interfaces), from the secant."""
 import pytest
 
 from ancf_petsc.config.parse import parse_config
@@ -14,6 +15,7 @@ from helpers import CONFIGS, load_raw, run_inline
 @pytest.mark.parametrize("name,predictor", [("achilles_type3_psi45.yaml", "tangent"),      # sliding
                                             ("bundle_circle7.yaml", "tangent"),           # unilateral
                                             ("uniaxial_neohookean.yaml", "secant"),       # no contact
+                                            ("friction_pressed_strips.yaml", "secant"),   # friction
                                             ("achilles_type3_psi45_goh.yaml", "tangent"),
                                             ("achilles_type3_psi45_goh_alex.yaml", "tangent"),
                                             ("gait_stride_walking.yaml", "tangent")])

@@ -21,7 +21,7 @@ from ancf_petsc.solving.samples import SampleSolver, changed_paths  # noqa: E402
 
 RAW = yamlio.load(open(os.path.join(CONFIGS, "achilles_type3_psi0.yaml")).read())
 #: the secant load predictor, whose cold path docs/calibration.md's costs were measured on: with
-#: the tangent one (contact's default since 2026-12-02) the cold column takes 37 Newton
+#: the tangent one (frictionless contact's default, 2026-12-02) the cold column takes 37 Newton
 #: iterations against 39 for the warm start from NEAR (2 % away)
 RAW["solver"] = dict(RAW.get("solver") or {}, predictor="secant")
 

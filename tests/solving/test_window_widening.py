@@ -22,7 +22,7 @@ def column(steps=STEPS) -> dict:
     raw["steps"] = list(steps)
     raw["output"] = {"vtk": False}
     # the secant predictor: a level retried after cut-backs starts as its first attempt did, so the
-    # widened run repeats the narrow one bitwise; the tangent predictor (contact's default) has no
+    # widened run repeats the narrow one bitwise; the tangent predictor (the default here) has no
     # factor of a converged state there and starts the retried level unpredicted
     raw["solver"] = {"predictor": "secant"}
     return raw

@@ -158,15 +158,16 @@ def test_friction_strides_grid_and_the_augmentation_of_its_cells():
     assert "tangential" not in cell_config(core)["contact"] and "_c1" not in core.name
 
 
-#: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
-#: the committed default ones (docs/gait_envelope_GRID.csv; where the default load predictor has
-#: changed since, the ones on the predictor the mixed runs had, docs/gait_envelope_GRID_secant.csv)
-MIXED_GRIDS = ("core", "core8", "subject2", "friction", "fibres", "strides")
 #: the proportional grids with contact run with the secant and the tangent load predictor (CSV
 #: names after gait_envelope_): frictionless contact's default since 2026-12-02 is the tangent
 #: (GRID.csv, the secant's GRID_secant.csv); friction's is still the secant (GRID_tangent.csv)
 PREDICTOR_GRIDS = {"core": ("core_secant", "core"), "core8": ("core8_secant", "core8"),
-                   "subject2": ("subject2_secant", "subject2"), "friction": ("friction", "friction_tangent")}
+                   "subject2": ("subject2_secant", "subject2"),
+                   "friction": ("friction", "friction_tangent")}
+#: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
+#: the committed default ones on the load predictor the mixed runs had, the secant's where the
+#: default changed since (``PREDICTOR_GRIDS``)
+MIXED_GRIDS = ("core", "core8", "subject2", "friction", "fibres", "strides")
 
 
 def _rows(path):
@@ -186,9 +187,8 @@ def _grid_counts(rows):
 
 
 def _same_predictor(name: str) -> str:
-    """The default grid the mixed runs of ``name`` compare with (``MIXED_GRIDS``)."""
-    secant = os.path.join(DOCS, f"gait_envelope_{name}_secant.csv")
-    return secant if os.path.exists(secant) else os.path.join(DOCS, f"gait_envelope_{name}.csv")
+    """The default grid the mixed runs of ``name`` compare with (``MIXED_GRIDS``): the secant's."""
+    return os.path.join(DOCS, f"gait_envelope_{PREDICTOR_GRIDS.get(name, (name,))[0]}.csv")
 
 
 def _ratios(before, after, keys, key="iterations_to_1200"):

@@ -46,6 +46,7 @@ class LoadStepFailure(Exception):
         self.target, self.attempted, self.reached, self.reason = target, attempted, reached, reason
         self.code = reason.split()[0] if reason else "FAILED"
         self.inverted = inverted
+        self.detail = detail      # the cause after the reason (``stepper._first_give_up`` repeats it)
 
     def amend(self, detail: str) -> "LoadStepFailure":
         """The same failure with ``detail`` added to its message (what the stepper found after

@@ -75,6 +75,9 @@ class LoadStepper:
         self.branches = BranchSwitch(problem, spec.branch_switch and not spec.allow_unstable)  # saddles
         self.fade_switch = FadeForcesSwitch(self, petsc_options, max_level, linear)   # fade_switch.py
         self.windows = WindowWidening(problem)                                         # window_widening.py
+        #: the level's first give-up a last resort went on from: (its load factor, the failure, the
+        #: resorts taken) (``last_resorts``)
+        self.first_give_up: tuple[float, LoadStepFailure, str] | None = None
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -318,6 +321,7 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
     if stepper.branches.take(stepper, path, X_prev, target, tally, resume=False):
         return
     if stepper.windows.take(stepper, path, tally, lost):
+        _went_on(stepper, path.lam, failure, "the whole partner beam as every contact point's search window")
         return
     critical = critical_point(stepper, path.lam)
     tried = False
@@ -329,6 +333,29 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
         if critical is not None:
             critical.destroy()
     if stepper.fade_switch.take(stepper, path, tally):
+        _went_on(stepper, path.lam, failure, "the pointwise fade forces")
         return
     stepper.problem.load_factor = path.lam
-    raise failure.amend(critical.sentence(tried) if critical is not None else "")
+    raise failure.amend(critical.sentence(tried) if critical is not None else "").amend(_first_give_up(stepper, failure))
+
+
+def _went_on(stepper: LoadStepper, lam: float, failure: LoadStepFailure, resort: str) -> None:
+    """Keep the give-up a last resort went on from: the level's first (a resort that fails too
+    ends the level elsewhere, often farther from equilibrium, where what Newton meets is not what
+    stopped the path first)."""
+    first = stepper.first_give_up
+    if first is None or first[1].target != failure.target:
+        stepper.first_give_up = (lam, failure, resort)
+    else:
+        stepper.first_give_up = (first[0], first[1], f"{first[2]}, then {resort}")
+
+
+def _first_give_up(stepper: LoadStepper, failure: LoadStepFailure) -> str:
+    """The final message's part for the level's first give-up where last resorts went on from it
+    (empty otherwise): where it was, its reason and cause."""
+    first = stepper.first_give_up
+    if first is None or first[1].target != failure.target:
+        return ""
+    f = first[1]
+    return (f"; before going on with {first[2]}, the level's first give-up was from load factor "
+            f"{first[0]:.6g}, at {f.attempted:.6g} with {f.reason}{f.detail}")

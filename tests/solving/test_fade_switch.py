@@ -99,6 +99,45 @@ def test_a_restart_after_the_switch_goes_on_with_pointwise_forces(tmp_path, monk
         run(column("variational"), tmp_path / "part", restart=str(tmp_path / "part"))
 
 
+def test_a_level_no_last_resort_reaches_names_its_first_give_up_too(tmp_path, monkeypatch):
+    """The final message names the level's first give-up (the variational forces') after the
+    failure of the resort that went on from it (the pointwise forces): on a strongly twisted
+    unilateral column that ends far from equilibrium, and its cause hid the first one (a C0 edge
+    of B's surface, docs/gait.md)."""
+    def pointwise_past(solver, lam):
+        return not solver.problem.contact.weights.variational and lam > 1.5 * STEPS[0]
+    fail_solves(pointwise_past, monkeypatch.setattr)
+    fail_variational_past(STEPS[0], monkeypatch.setattr)                # wraps the one above
+    res = run(column(), tmp_path)
+    assert res.status == "failed"
+    assert res.summary["fade_forces_pointwise_from"] == STEPS[0]
+    assert res.summary["steps"][-1]["load_factor"] == STEPS[0]
+    # the pointwise forces stop at 150 (their own give-up leads), the variational ones at 100
+    head, tail = res.message.split("; before going on with the pointwise fade forces, the level's "
+                                   "first give-up was from load factor 100, at ")
+    assert "SNES failed at load factor 150 (last converged 150)" in head
+    assert tail.startswith("100.") and "with DIVERGED_FNORM_NAN" in tail
+
+
+def test_the_first_give_up_is_named_for_its_own_level_only():
+    from types import SimpleNamespace
+
+    from ancf_petsc.solving.records import LoadStepFailure
+    from ancf_petsc.solving.stepper import _first_give_up, _went_on
+    stepper = SimpleNamespace(first_give_up=None)
+    first = LoadStepFailure(600.0, 596.902, 596.901, "DIVERGED_MAX_IT", False, " (Newton cycles)")
+    _went_on(stepper, 596.901, first, "the pointwise fade forces")
+    _went_on(stepper, 597.5, LoadStepFailure(600.0, 597.6, 597.5, "X", False), "whole windows")
+    later = LoadStepFailure(600.0, 598.0, 597.9, "DIVERGED_MAX_IT", False)
+    assert _first_give_up(stepper, later) == (
+        "; before going on with the pointwise fade forces, then whole windows, the level's first "
+        "give-up was from load factor 596.901, at 596.902 with DIVERGED_MAX_IT (Newton cycles)")
+    assert _first_give_up(stepper, LoadStepFailure(800.0, 601.0, 600.0, "X", False)) == ""
+    _went_on(stepper, 700.0, LoadStepFailure(800.0, 701.0, 700.0, "Y", False), "whole windows")
+    assert "from load factor 700, at 701 with Y" in _first_give_up(
+        stepper, LoadStepFailure(800.0, 702.0, 701.5, "Z", False))
+
+
 @pytest.mark.parametrize("change, switches", [
     ({}, True),
     ({"contact": {"fade_forces": "variational"}}, False),

@@ -67,17 +67,14 @@ class LoadStepper:
         #: a unilateral law's complementarity predictor (complementarity.MAX_MULTIPLIERS; newton.py)
         self.predictor = (ComplementarityPredictor(problem, self.solver.snes, spec.compact_factor)
                           if ComplementarityPredictor.applies(problem) else None)
-        #: the tangent load predictor (solver.predictor: tangent; predictor.py)
-        self.tangent = TangentPredictor(problem, self.solver.snes)
+        self.tangent = TangentPredictor(problem, self.solver.snes)     # solver.predictor: tangent
         self.history: list[float] = []         # residual norms of the solves of an increment
         self.unsettled = False                  # the last solve's contact weights did not settle
         self.tresca_solves = 0                  # friction's fixed point in the last solve_at
         self.branches = BranchSwitch(problem, spec.branch_switch and not spec.allow_unstable)  # saddles
         self.fade_switch = FadeForcesSwitch(self, petsc_options, max_level, linear)   # fade_switch.py
         self.windows = WindowWidening(problem)                                         # window_widening.py
-        #: the level's first give-up a last resort went on from: (its load factor, the failure, the
-        #: resorts taken) (``last_resorts``)
-        self.first_give_up: tuple[float, LoadStepFailure, str] | None = None
+        self.first_give_up: tuple[float, LoadStepFailure, str] | None = None    # last_resorts' (lam, failure, resorts)
 
     def describe(self) -> str:
         """The solver in one line (the run's header)."""
@@ -336,7 +333,8 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
         _went_on(stepper, path.lam, failure, "the pointwise fade forces")
         return
     stepper.problem.load_factor = path.lam
-    raise failure.amend(critical.sentence(tried) if critical is not None else "").amend(_first_give_up(stepper, failure))
+    failure = failure.amend(critical.sentence(tried) if critical is not None else "")
+    raise failure.amend(_first_give_up(stepper, failure))
 
 
 def _went_on(stepper: LoadStepper, lam: float, failure: LoadStepFailure, resort: str) -> None:

@@ -159,11 +159,11 @@ def test_friction_strides_grid_and_the_augmentation_of_its_cells():
 
 
 #: the proportional grids with contact run with the secant and the tangent load predictor (CSV
-#: names after gait_envelope_): frictionless contact's default since 2026-12-02 is the tangent
-#: (GRID.csv, the secant's GRID_secant.csv); friction's is still the secant (GRID_tangent.csv)
+#: names after gait_envelope_): the tangent is the default with contact (GRID.csv; frictionless
+#: since 2026-12-02, with a tangential law since 2026-12-03), the secant's runs are GRID_secant.csv
 PREDICTOR_GRIDS = {"core": ("core_secant", "core"), "core8": ("core8_secant", "core8"),
                    "subject2": ("subject2_secant", "subject2"),
-                   "friction": ("friction", "friction_tangent")}
+                   "friction": ("friction_secant", "friction")}
 #: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
 #: the committed default ones on the load predictor the mixed runs had, the secant's where the
 #: default changed since (``PREDICTOR_GRIDS``)

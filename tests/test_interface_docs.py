@@ -138,3 +138,21 @@ def test_the_augmentation_table_is_its_two_csvs():
         picked = [{h: (row[h].split(" → ")[k] if " → " in row[h] else row[h]) if h in columns.values() else row[h]
                    for h in row} for row in rows]
         assert check(picked, runs, columns) == len(rows) == 20
+
+
+def test_the_predictor_table_is_its_two_csvs():
+    """"The load predictor's default": each cell "secant → tangent" is
+    docs/interface_study_predictor_secant.csv on the left, ``…_tangent.csv`` on the right, and the
+    page's totals (Newton iterations over the 52 columns) are theirs."""
+    rows = table("### The load predictor's default", "loading")
+    columns = {"newton": "Newton (secant → tangent)", "cutbacks": "cut-backs", "tresca": "Tresca solves",
+               "soleus": "soleus at 400 N [mm]"}
+    sides = [csv_runs(f"interface_study_predictor_{name}.csv", "end_soleus|medial_gastrocnemius_mm")
+             for name in ("secant", "tangent")]
+    for k, runs in enumerate(sides):
+        picked = [{h: (row[h].split(" → ")[k] if " → " in row[h] else row[h]).replace(" ", "")
+                   if h in columns.values() else row[h] for h in row} for row in rows]
+        assert check(picked, runs, columns) == len(rows) == 4
+    totals = [sum(r["newton"] for r in runs.values()) for runs in sides]
+    assert all(len(runs) == 52 and all(r["status"] == "completed" for r in runs.values()) for runs in sides)
+    assert f"{totals[0]:,} → {totals[1]:,} Newton iterations".replace(",", " ") in open(PAGE).read()

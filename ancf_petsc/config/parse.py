@@ -82,14 +82,16 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
 def default_predictor(spec: ModelSpec) -> str:
     """``solver.predictor`` when the config gives none (solving/predictor.py): ``tangent`` for a
     load history (non-proportional frames), for a model with a fibre-reinforced law (a
-    stiffening path, where the secant overshoots) and for a model with frictionless contact (the
-    gait envelope's proportional grids, docs/gait.md: columns over the target at twist <= 90 deg
-    28 -> 10, Newton iterations 70 896 -> 68 617, 10 failing cells either way); else ``secant``,
-    also with a tangential law (the interface study's mu = 3 columns took 2-8 times the Newton
-    iterations with the tangent, and the soleus-loaded one ended on another branch)."""
+    stiffening path, where the secant overshoots) and for a model with contact (the gait
+    envelope's proportional grids, docs/gait.md: frictionless, columns over the target at twist
+    <= 90 deg 28 -> 10, Newton iterations 70 896 -> 68 617, 10 failing cells either way; Coulomb
+    mu 0.1-0.5, 4 -> 1 and 15 029 -> 11 928; the interface study's 52 tangential-law columns
+    25 491 -> 21 148); else ``secant``.  One of those columns loses (soleus-loaded, mu = 3, 4
+    elements: 148 -> 1 137): the tangent's cut-backs creep toward the stuck interface's
+    breakaway, a limit point near 90.11 N the secant's 10 N steps jump over; past it the answer
+    depends on the increments whatever the predictor (docs/interface.md, Limits)."""
     fibres = any(b.material.get("model") == GOH.name for b in spec.beams)
-    frictionless = spec.contact is not None and spec.contact.tangential is None
-    return "tangent" if spec.history is not None or fibres or frictionless else "secant"
+    return "tangent" if spec.history is not None or fibres or spec.contact is not None else "secant"
 
 
 def _steps(raw: dict, history) -> list[float]:

@@ -90,8 +90,8 @@ def test_fold_failure_is_solved_on_1_2_and_3_ranks(tmp_path):
     reached without a cut-back, with the same probes on 1, 2 and 3 ranks."""
     raw = _equal_loading([45.0, 60.0, 80.0])
     raw["petsc"] = {"snes_max_it": "60"}        # the failing iteration cycles: stop it sooner
-    # the secant predictor's path (friction's default) meets the fold at 80 N; the tangent one's
-    # solves that level plainly
+    # the secant predictor's path (friction's default until 2026-12-03) meets the fold at 80 N;
+    # the tangent one's solves that level plainly
     raw.setdefault("solver", {})["predictor"] = "secant"
     runs = run_on_ranks(raw, tmp_path, ranks=(1, 2, 3))
     for _, s in runs.values():

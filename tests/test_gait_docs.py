@@ -245,3 +245,22 @@ def mixed_tangent_table() -> str:
 
 def test_the_mixed_tangent_table_is_its_csvs():
     assert _block("mixed-tangent-grids") == mixed_tangent_table()
+
+
+
+def _total(rows: dict, key: str) -> str:
+    """The sum of ``key`` over the rows, written as the docs write it (1 647 → "1 647")."""
+    return f"{sum(int(r[key]) for r in rows.values()):,}".replace(",", " ")
+
+
+def test_the_eight_element_friction_sample_is_its_csvs():
+    """The bullet "Friction: the tangent too": the 8-element Coulomb sample's totals (all levels,
+    and to 1.2 kN) and its cells over the target, secant → tangent, are what the two CSVs say."""
+    sec, tan = (_rows(os.path.join(DOCS, f"gait_envelope_friction8{s}.csv")) for s in ("_secant", ""))
+    assert sec.keys() == tan.keys() and len(tan) == 27
+    assert all(r["status"] == "completed" for r in list(sec.values()) + list(tan.values()))
+    over = [_grid_counts(list(rows.values())).split(" / ")[1] for rows in (sec, tan)]
+    text = " ".join(open(os.path.join(DOCS, "gait.md")).read().split())
+    assert f"{_total(sec, 'iterations')} → {_total(tan, 'iterations')} Newton iterations" in text
+    assert f"to 1.2 kN {_total(sec, 'iterations_to_1200')} → {_total(tan, 'iterations_to_1200')}" in text
+    assert f"over the target {over[0]} → {over[1]}" in text

@@ -16,28 +16,28 @@ prescribed displacements by Δq̄ = Σ_g Δm_g ū_g (load groups, model/loading.
   the contact constraints, so the multipliers are predicted with the state.  After a cut-back (the
   factor belongs to a failed attempt) or from rest there is no prediction.
 The default (config/parse.py ``default_predictor``) is ``tangent`` for a load history (config
-history:), whose frames change the loads' direction; for a model with a fibre-reinforced law,
-whose path stiffens (the untwist of a soft matrix saturates, the fibres stiffen exponentially) so
-that the secant of the last increment, scaled to a grown one, overshoots it (the GOH grid at
-twist 0/45/90°: 6899 → 5189 Newton iterations to 1.2 kN over 54 columns, docs/gait.md); and for a
-model with contact (frictionless since 2026-12-02, with a tangential law since 2026-12-03): from the secant's state the complementarity
-prediction changed constraints the level's answer did not (the unilateral 90° column at 600 N: 4
-changed, 3 of them back at the check, after 9 Newton iterations on a state whose medial
-gastrocnemius was turned 8.7° from the answer).  Over the envelope's proportional grids the tangent took 13 and
-22 % fewer Newton iterations (the paper's outlines at 4 and 8 elements; the second subject 5 %
-more), the columns over the target at twist ≤ 90° fell from 28 to 10, and as many cells fail
-(10; different ones where unilateral, docs/gait.md); Table 1's sliding columns 45/45/47 →
-40/38/40, answers equal to 7e-15 m.  The Coulomb grid (μ 0.1–0.5) took 21 % fewer, the
-interface study's 52 friction and elastic-interface columns 17 % fewer (one soleus-loaded μ = 3
-column 7.7 times more, creeping toward a breakaway the secant jumps over, docs/interface.md).
-Without contact ``secant`` (its direction is the path's, and it carries the path's curvature
-from the last increment).  A path the tangent follows
-continuously may stop at a limit point a secant step jumps over (the lone soleus of the stiffest published GOH set stops at its
-limit point near 99.5 N, where the secant path lands on a second stable branch and reaches
-400 N: tests/solving/test_step_limits.py; the second subject's 120° gastrocnemius-biased sliding
-column goes the other way: the secant meets a fold at 2567 N, the tangent passes it), and a
-cold column with it is about as cheap as a warm start from a sample 2 % away (37 against 39
-Newton iterations, tests/solving/test_samples.py).
+history:), whose frames change the loads' direction; for a model with a fibre-reinforced law, whose
+path stiffens (the untwist of a soft matrix saturates, the fibres stiffen exponentially) so that
+the secant of the last increment, scaled to a grown one, overshoots it (the GOH grid at twist
+0/45/90°: 6899 → 5189 Newton iterations to 1.2 kN over 54 columns, docs/gait.md); and for a model
+with contact (frictionless since 2026-12-02, with a tangential law since 2026-12-03): from the
+secant's state the complementarity prediction changed constraints the level's answer did not (the
+unilateral 90° column at 600 N: 4 changed, 3 of them back at the check, after 9 Newton iterations
+on a state whose medial gastrocnemius was turned 8.7° from the answer). Over the envelope's
+proportional grids the tangent took 13 and 22 % fewer Newton iterations (the paper's outlines at 4
+and 8 elements; the second subject 5 % more), the columns over the target at twist ≤ 90° fell from
+28 to 10, and as many cells fail (10; different ones where unilateral, docs/gait.md); Table 1's
+sliding columns 45/45/47 → 40/38/40, answers equal to 7e-15 m. The Coulomb grid (μ 0.1–0.5) took
+21 % fewer, the interface study's 52 friction and elastic-interface columns 17 % fewer (one
+soleus-loaded μ = 3 column 7.7 times more, creeping toward a breakaway the secant jumps over,
+docs/interface.md). Without contact ``secant`` (its direction is the path's, and it carries the
+path's curvature from the last increment). A path the tangent follows continuously may stop at a
+limit point a secant step jumps over (the lone soleus of the stiffest published GOH set stops at
+its limit point near 99.5 N, where the secant path lands on a second stable branch and reaches
+400 N: tests/solving/test_step_limits.py; the second subject's 120° gastrocnemius-biased sliding column
+goes the other way: the secant meets a fold at 2567 N, the tangent passes it), and a cold column
+with it is about as cheap as a warm start from a sample 2 % away (37 against 39 Newton iterations,
+tests/solving/test_samples.py).
 
 **Unilateral contact** (the complementarity predictor of petsc/complementarity.py predicts each
 increment's contact state): the increment after the first one from rest starts at the converged

@@ -247,7 +247,6 @@ def test_the_mixed_tangent_table_is_its_csvs():
     assert _block("mixed-tangent-grids") == mixed_tangent_table()
 
 
-
 def _total(rows: dict, key: str) -> str:
     """The sum of ``key`` over the rows, written as the docs write it (1 647 → "1 647")."""
     return f"{sum(int(r[key]) for r in rows.values()):,}".replace(",", " ")

@@ -101,6 +101,13 @@ def check(rows: list[dict], runs: dict, columns: dict) -> int:
     return seen
 
 
+def side(rows: list[dict], k: int, columns: dict) -> list[dict]:
+    """The rows of a "before → after" table as one side reads them (k = 0 before, 1 after): a
+    cell with one value holds for both; thousands written "1 137" read as 1137."""
+    return [{h: (row[h].split(" → ")[k] if " → " in row[h] else row[h]).replace(" ", "")
+             if h in columns.values() else row[h] for h in row} for row in rows]
+
+
 def test_the_study_table_is_its_csv():
     rows = table("## The paper's tendon between sliding and bonded", "loading")
     runs = csv_runs("interface_study.csv", "end_soleus|medial_gastrocnemius_mm")
@@ -135,9 +142,7 @@ def test_the_augmentation_table_is_its_two_csvs():
     sides = [csv_runs(name, "end_soleus|medial_gastrocnemius_mm")
              for name in ("interface_study.csv", "interface_study_augmentation.csv")]
     for k, runs in enumerate(sides):
-        picked = [{h: (row[h].split(" → ")[k] if " → " in row[h] else row[h]) if h in columns.values() else row[h]
-                   for h in row} for row in rows]
-        assert check(picked, runs, columns) == len(rows) == 20
+        assert check(side(rows, k, columns), runs, columns) == len(rows) == 20
 
 
 def test_the_predictor_table_is_its_two_csvs():
@@ -150,9 +155,7 @@ def test_the_predictor_table_is_its_two_csvs():
     sides = [csv_runs(f"interface_study_predictor_{name}.csv", "end_soleus|medial_gastrocnemius_mm")
              for name in ("secant", "tangent")]
     for k, runs in enumerate(sides):
-        picked = [{h: (row[h].split(" → ")[k] if " → " in row[h] else row[h]).replace(" ", "")
-                   if h in columns.values() else row[h] for h in row} for row in rows]
-        assert check(picked, runs, columns) == len(rows) == 4
+        assert check(side(rows, k, columns), runs, columns) == len(rows) == 4
     totals = [sum(r["newton"] for r in runs.values()) for runs in sides]
     assert all(len(runs) == 52 and all(r["status"] == "completed" for r in runs.values()) for runs in sides)
     assert f"{totals[0]:,} → {totals[1]:,} Newton iterations".replace(",", " ") in open(PAGE).read()

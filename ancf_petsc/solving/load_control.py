@@ -105,8 +105,11 @@ class LoadControl:
         below ``min_increment``: no cut-back was tried.  A min_increment above half the spacing
         of the load levels (or of ``max_increment``) does that to every failure; the config is
         valid still (a run whose steps all converge never cuts back: the ψ = 45° config with
-        min_increment 6 between its levels 40 and 45 completes), so this is said at the failure."""
-        return (tally.consecutive == 1 and tally.consecutive <= self.spec.max_cutbacks
+        min_increment 6 between its levels 40 and 45 completes), so this is said at the failure.
+        Only at the level's first cut-back: a level that crept on by cut-backs to a step below
+        the floor (the 180° soleus-biased stride, 14 of them from frame 41 to 41.8398) gave up on
+        Newton's course, which its message names (until 2026-12-03 it said "no cut-back was tried")."""
+        return (tally.cutbacks == 1 and tally.consecutive == 1 and tally.consecutive <= self.spec.max_cutbacks
                 and 0.5 * step < self.spec.min_increment)
 
     def over_budget(self, newton_iterations: int) -> bool:

@@ -59,3 +59,19 @@ def test_floored_only_when_no_cut_back_was_tried():
     dlam, give_up = control.after_failure(0.5, False, tally)
     assert give_up and not control.floored(0.5, tally)
     assert control.stop_reason(dlam, tally) == "1 failures in a row (solver.max_cutbacks = 0)"
+
+
+def test_not_floored_where_the_level_crept_on_by_cut_backs():
+    """A level whose cut-backs shrank the step, then accepted sub-steps, then failed at a step
+    whose half is below the floor: cut-backs were tried, so Newton's cause is named, not the
+    floor (the 180° soleus-biased unilateral stride at frame 41.84)."""
+    control = LoadControl(SolverSpec(min_increment=2e-4, max_cutbacks=12))
+    tally = LevelTally()
+    step = 1.0
+    for _ in range(12):                                   # 1 → 2**-12, below twice the floor
+        step, give_up = control.after_failure(step, False, tally)
+        assert not give_up
+    tally.consecutive = 0                                 # a sub-step converged (stepper._accept)
+    dlam, give_up = control.after_failure(step, False, tally)
+    assert give_up and not control.floored(step, tally)
+    assert control.stop_reason(dlam, tally).startswith("the increment 0.0001221 would be below")

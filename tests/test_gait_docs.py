@@ -183,7 +183,12 @@ def _grid_counts(rows):
     bad = sum(r["status"] != "completed" for r in rows)
     over = sum(int(r["cutback_levels"] or 0) if r["stride"] == "True" else float(r["twist"]) <= 90
                and (int(r["iterations_to_1200"] or 0) > 60 or int(r["cutbacks_to_1200"] or 0) > 0) for r in rows)
-    return f"{bad} / {over} / {sum(int(r['iterations']) for r in rows):,}".replace(",", " ")
+    return f"{bad} / {over} / {_spaced(sum(int(r['iterations']) for r in rows))}"
+
+
+def _spaced(n: int) -> str:
+    """``n`` with its thousands spaced, as the docs write it (1647 → "1 647")."""
+    return f"{n:,}".replace(",", " ")
 
 
 def _same_predictor(name: str) -> str:
@@ -248,8 +253,8 @@ def test_the_mixed_tangent_table_is_its_csvs():
 
 
 def _total(rows: dict, key: str) -> str:
-    """The sum of ``key`` over the rows, written as the docs write it (1 647 → "1 647")."""
-    return f"{sum(int(r[key]) for r in rows.values()):,}".replace(",", " ")
+    """The sum of ``key`` over the rows, written as the docs write it (``_spaced``)."""
+    return _spaced(sum(int(r[key]) for r in rows.values()))
 
 
 def test_the_eight_element_friction_sample_is_its_csvs():

@@ -126,9 +126,11 @@ class Contact:
         return self.model.dofs_per_node * np.searchsorted(needed, self.mult_block[self.mults]) + self.space.slot[self.mults]
 
     def required_nodes(self) -> np.ndarray:
-        """Node blocks (PETSc) read locally: A, B, neighbouring and wanted elements', multipliers'."""
+        """Node blocks (PETSc) read locally: A, B (now and at the checkpoint), neighbouring and
+        wanted elements', multipliers'."""
         els = np.concatenate([self.points.eA[self.local], self.projector.eB[self.local], self.projector.wanted,
-                              self.projector.neighbours(self.local)] + [t.required_elements(self) for t in self.terms])
+                              self.projector.neighbours(self.local), self.projector.saved_places(self.local)[0]]
+                             + [t.required_elements(self) for t in self.terms])
         return np.unique(np.concatenate([self.conn[els[els >= 0]].ravel(), self.mult_block[self.mults]]
                                         + [t.required_blocks(self) for t in self.terms]))
 

@@ -29,6 +29,8 @@ optimized_SEE unilateral column at 336.35 N instead of 400 N).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 #: sufficient decrease of φ (Armijo's constant)
@@ -117,3 +119,25 @@ class Backtracking:
     def full(self) -> np.ndarray:
         """Points taking a whole step (only those may be pinned as bouncing)."""
         return self.alpha == 1.0
+
+
+@dataclass
+class Found:
+    """What ``Projector.descend`` found for its points (arrays over them)."""
+    eB: np.ndarray
+    xiB: np.ndarray
+    tB: np.ndarray
+    weight: np.ndarray
+    valid: np.ndarray
+    done: np.ndarray       # converged (or off B: weight 0)
+    phi: np.ndarray        # ½|d|² at the last surface evaluation
+    Y: np.ndarray
+    Yz: np.ndarray
+    Yzz: np.ndarray
+    NB: np.ndarray
+    NBz: np.ndarray
+
+    def take(self, rows: np.ndarray, other: "Found", sel: np.ndarray) -> None:
+        """Replace the points ``rows`` by the points ``sel`` of ``other``."""
+        for name in self.__dataclass_fields__:
+            getattr(self, name)[rows] = getattr(other, name)[sel]

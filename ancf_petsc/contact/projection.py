@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .control import DescentControl
-from .descent import ROUNDING, Backtracking
+from .descent import Backtracking, Found
 from .fade import CURVE_FADE_END, END_FADE, end_weight
+from .starts import SecondStarts
 from .surface import InterfaceCurves, SurfaceKernels, closest_parameter, section_shift, shape_third_on_curve
 
 PROJECTION_TOL = 1e-11                    # closest-point update (in ξ, and in t / curve length)
@@ -27,8 +28,6 @@ MAX_ITERATIONS = 40
 #: projection 5x slower (the unilateral 90 deg stride: 0.9 -> 4.9 s of 8.5); with 1 pass the
 #: bundle's fixed increments lose a point from its search window (tests/contact/test_unilateral.py)
 OFF_B_PASSES = 3
-#: a partner place within this much of a B element boundary (in ξ) is sought across it too
-NEIGHBOUR_BAND = 0.1
 #: a start this close (in ξ) to the boundary it stepped across is on it
 EDGE = 1e-9
 
@@ -55,8 +54,10 @@ class Projection:
     converged: bool        # every local Newton iteration converged
 
 
-class Projector:
+class Projector(SecondStarts):
     """Projection state of every contact point and the Newton iteration that updates it."""
+
+    tolerance = PROJECTION_TOL
 
     def __init__(self, model, interfaces, points, search_margin: float):
         self.model, self.interfaces, self.points = model, interfaces, points
@@ -197,39 +198,27 @@ class Projector:
     def neighbours(self, idx: np.ndarray) -> np.ndarray:
         """B element across the element boundary within NEIGHBOUR_BAND of each point's partner
         place (the second start of ``project``), −1 where there is none."""
-        itf, e, xi = self.points.itf[idx], self.eB[idx], self.xiB[idx]
-        first = np.array([i.b.element_offset for i in self.interfaces], dtype=np.int64)[itf]
-        last = first + np.array([i.b.n_elements - 1 for i in self.interfaces], dtype=np.int64)[itf]
-        other = e + np.where(xi > 0.0, 1, -1)
-        return np.where((other >= first) & (other <= last) & (np.abs(xi) > 1.0 - NEIGHBOUR_BAND), other, -1)
+        return self.across(self.points.itf[idx], self.eB[idx], self.xiB[idx])
+
+    def saved_places(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(e_B, ξ_B, t_B) of the points ``idx`` at the checkpoint (copies; ``from_checkpoint``)."""
+        return tuple(a[idx] for a in self._saved)
+
+    def ask_for(self, elements: np.ndarray) -> None:
+        """Record B elements this rank does not hold (the caller exchanges them, projects again)."""
+        if len(elements):
+            self.missing = True
+            self.wanted = np.union1d(self.wanted, elements)
 
     def project(self, idx: np.ndarray, xA: np.ndarray, x_of) -> Projection:
         """Project the points ``idx`` (positions ``xA``) onto B; updates the state of those points.
 
-        Each point descends from its last partner place (``descend``).  B's surface is only C0
-        across its element boundaries, and on either side of one a point may have a closest
-        point of its own (two minima 3.6e-4 apart in ξ, distances 4.83 and 4.74 μm, measured on
-        a soft GOH column): which one the descent found then depended on where it started, i.e.
-        on the iterate before, and Newton on the beams cycled between the two residuals.  So a
-        point ending within NEIGHBOUR_BAND of a boundary descends again from the mirror image of
-        its place in the element across it, and the nearer of the two results is taken (the first on a tie):
-        the projection is a function of the state.  A second start on an element this rank does
-        not hold asks for it (``wanted``; ``neighbours`` are among the elements it reads)."""
+        Each point descends from its last partner place, and again across a near element
+        boundary (``closest``); a point whose descent ends on the clamp of the curve's
+        continuation descends again from its place at the checkpoint (``from_checkpoint``)."""
         itf, T = self.points.itf[idx], self.t_end[idx]
-        f = self.descend(itf, T, xA, x_of, self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy())
-        self.eB[idx], self.xiB[idx] = f.eB, f.xiB
-        other = np.where(f.valid, self.neighbours(idx), -1)
-        absent = (other >= 0) & ~self.available[np.maximum(other, 0)]
-        if np.any(absent):
-            self.missing = True
-            self.wanted = np.union1d(self.wanted, other[absent])
-        two = np.flatnonzero((other >= 0) & ~absent)
-        if len(two):
-            g = self.descend(itf[two], T[two], xA[two], x_of, other[two], -f.xiB[two],
-                             f.tB[two].copy())
-            slack = ROUNDING * T[two] * (np.sqrt(2.0 * f.phi[two]) + ROUNDING * T[two])
-            better = g.done & g.valid & (g.phi < f.phi[two] - slack)
-            f.take(two[better], g, better)
+        f = self.closest(itf, T, xA, x_of, self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy())
+        self.from_checkpoint(idx, xA, x_of, f)
         self.eB[idx], self.xiB[idx], self.tB[idx] = f.eB, f.xiB, f.tB
         in_window = not np.any((f.eB < self.lo[idx]) | (f.eB > self.hi[idx]))
         d = xA - f.Y
@@ -241,7 +230,7 @@ class Projector:
                           weight=f.weight, NA=self.points.NA[idx], NB=f.NB, NBz=f.NBz, Yz=f.Yz,
                           Yzz=f.Yzz, in_window=in_window, converged=bool(np.all(f.done)))
 
-    def descend(self, itf, t_end, xA, x_of, eB, xiB, tB) -> "Found":
+    def descend(self, itf, t_end, xA, x_of, eB, xiB, tB) -> Found:
         """Closest points from the partner places (e_B, ξ_B, t_B): each step Newton's or
         Gauss–Newton's, halved while it raises the distance (descent.py).  A point whose closest
         point sits on a boundary between two B elements makes Newton jump back and forth: it is
@@ -274,8 +263,7 @@ class Projector:
             valid = weight > 0.0
             miss = ~self.available[eB]
             if np.any(miss):
-                self.missing = True
-                self.wanted = np.union1d(self.wanted, eB[miss])
+                self.ask_for(eB[miss])
                 xiB[miss] = np.where(eB[miss] > search.e[miss], 1.0, -1.0)
                 eB[miss] = search.e[miss]
             bounce = search.full & (eB == search.e_back) & (eB != search.e) & ~pinned & ~stopped
@@ -324,28 +312,6 @@ def surface_third(projector: Projector, x_of, itf, eB, xiB, tB) -> tuple[np.ndar
             S3[sel] = c(t, 3)
     NBzz, NBzzz = shape_third_on_curve(xiB, S, S1, S2, S3, projector.block)
     return NBzz, np.einsum("psi,psabc->piabc", x_of(eB), NBzzz)
-
-
-@dataclass
-class Found:
-    """What ``Projector.descend`` found for its points (arrays over them)."""
-    eB: np.ndarray
-    xiB: np.ndarray
-    tB: np.ndarray
-    weight: np.ndarray
-    valid: np.ndarray
-    done: np.ndarray       # converged (or off B: weight 0)
-    phi: np.ndarray        # ½|d|² at the last surface evaluation
-    Y: np.ndarray
-    Yz: np.ndarray
-    Yzz: np.ndarray
-    NB: np.ndarray
-    NBz: np.ndarray
-
-    def take(self, rows: np.ndarray, other: "Found", sel: np.ndarray) -> None:
-        """Replace the points ``rows`` by the points ``sel`` of ``other``."""
-        for name in self.__dataclass_fields__:
-            getattr(self, name)[rows] = getattr(other, name)[sel]
 
 
 def subset(pr: Projection, sel: np.ndarray) -> Projection:

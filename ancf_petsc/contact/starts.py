@@ -73,12 +73,12 @@ class SecondStarts:
         if len(rows):
             T = self.t_end[idx][rows]
             g = self.closest(itf[rows], T, xA[rows], x_of, e0[rows], xi0[rows], t0[rows])
-            keep_nearer(f, rows, g, T, np.ones(len(rows), dtype=bool))
+            keep_nearer(f, rows, g, T)
 
 
-def keep_nearer(f: Found, rows: np.ndarray, g: Found, T: np.ndarray, eligible: np.ndarray) -> None:
-    """Take ``g``'s results into ``f``'s ``rows`` where they are done, ``eligible`` and nearer
-    by more than the rounding of φ (the first result on a tie)."""
+def keep_nearer(f: Found, rows: np.ndarray, g: Found, T: np.ndarray, eligible: np.ndarray | bool = True) -> None:
+    """Take ``g``'s results into ``f``'s ``rows`` where they are done, ``eligible`` (all: True)
+    and nearer by more than the rounding of φ (the first result on a tie)."""
     slack = ROUNDING * T * (np.sqrt(2.0 * f.phi[rows]) + ROUNDING * T)
     better = g.done & eligible & (g.phi < f.phi[rows] - slack)
     f.take(rows[better], g, better)

@@ -2,7 +2,9 @@
 complementarity predictor of unilateral contact (petsc/complementarity.py: S = G K⁻¹ Gᵀ, the
 Schur complement of the saddle-point system, one row per contact multiplier).  For a positive
 semidefinite S the LCP is the dual of a convex quadratic programme (``solve_lcp``: NNLS on a
-factor of S); slightly indefinite, its nearest semidefinite matrix chooses the active set and the
+factor of S); slightly indefinite, it may have several solutions, and the one block principal
+pivoting reaches from the linearisation's status is taken first (``pivoted_from``), else its
+nearest semidefinite matrix chooses the active set and the
 exact S solves it (``exact_on_support``); far from semidefinite, the constraints active at the
 linearisation are held as equalities (``held_lcp``), whose Schur complement is semidefinite
 where the bodies' tangent is on the motions they allow."""
@@ -23,13 +25,16 @@ INDEFINITE_SHARE = 1e-2
 LCP_TOL = 1e-9
 #: rounds of ``held_lcp`` at most (each releases the held constraints that came out pulling)
 HELD_ROUNDS = 4
+#: rounds of ``pivoted_from`` at most (each flips every constraint the last one left infeasible)
+PIVOT_ROUNDS = 4
 
 
-def solve_lcp(S: np.ndarray, d: np.ndarray) -> np.ndarray:
+def solve_lcp(S: np.ndarray, d: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
     """z ≥ 0, S z + d ≥ 0, complementary: min ½ zᵀ S z + dᵀ z over z ≥ 0 by NNLS on a
     factor S = L Lᵀ (‖Lᵀ z + L⁻¹ d‖²): Cholesky's, or, for an indefinite S within
-    INDEFINITE_SHARE of positive semidefinite, L = V Λ₊^½ of its nearest positive
-    semidefinite matrix (LinAlgError when it is farther), whose active set is then solved
+    INDEFINITE_SHARE of positive semidefinite (LinAlgError when it is farther: ``held_lcp``),
+    first the exact solution pivoted from the active set ``start`` (``pivoted_from``), else
+    L = V Λ₊^½ of its nearest positive semidefinite matrix, whose active set is then solved
     with the exact S (``exact_on_support``)."""
     M = len(d)
     if M == 0:
@@ -43,12 +48,44 @@ def solve_lcp(S: np.ndarray, d: np.ndarray) -> np.ndarray:
         lam, V = la.eigh(S)
         if -lam[0] > INDEFINITE_SHARE * lam[-1]:
             raise
+        z = None if start is None else pivoted_from(S, d, start)
+        if z is not None:
+            return z
         L = V * np.sqrt(np.maximum(lam, reg))
         b = -la.solve(L, d)
         clipped = True
     import scipy.optimize as so          # here only: ~40 ms of every run's start-up
     z, _ = so.nnls(L.T, b, maxiter=50 * M)
     return exact_on_support(S, d, z) if clipped else z
+
+
+def pivoted_from(S: np.ndarray, d: np.ndarray, start: np.ndarray) -> np.ndarray | None:
+    """An exact solution of LCP(S, d) reached from the active set ``start`` by block principal
+    pivoting on the exact S: z_A = −S_AA⁻¹ d_A, then every active constraint pulling (z < 0)
+    released and every inactive one penetrating (w < 0) made active, to ``LCP_TOL`` of d, at
+    most ``PIVOT_ROUNDS`` times; None when that does not end.  For an indefinite S the LCP may
+    have several solutions (petsc/complementarity.py's docstring): this one continues the
+    status the linearisation started from, where the clipped S's may be another one or none
+    (the 180° soleus-biased unilateral stride at frame 18.5, docs/gait.md: the converged
+    status is an exact solution with no change, the clipped S's changed 6 constraints)."""
+    A, tol = start.astype(bool).copy(), LCP_TOL * float(np.max(np.abs(d)))
+    for _ in range(PIVOT_ROUNDS + 1):
+        z = np.zeros_like(d)
+        if A.any():
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", la.LinAlgWarning)
+                    z[A] = la.solve(S[np.ix_(A, A)], -d[A])
+            except np.linalg.LinAlgError:
+                return None
+        if not np.all(np.isfinite(z)):
+            return None
+        w = d + S @ z
+        pulling, penetrating = A & (z < -tol), ~A & (w < -tol)
+        if not (pulling.any() or penetrating.any()):
+            return np.maximum(z, 0.0)
+        A = (A & ~pulling) | penetrating
+    return None
 
 
 def held_lcp(S: np.ndarray, d: np.ndarray, held: np.ndarray) -> np.ndarray | None:

@@ -228,3 +228,28 @@ def test_a_state_the_exact_rule_would_change_is_not_accepted(tmp_path, monkeypat
     for step in s["steps"]:
         for name, c in step["contact"].items():
             assert c["tension_force"] >= -1e-9 and c["normal_force"] >= 0.0, (step["load_factor"], name)
+
+
+@pytest.mark.slow
+def test_unilateral_twist_180_soleus_biased_stride_stays_stable_through_frame_19(tmp_path):
+    """The soleus-biased stride at ψ = 180°, unilateral contact, met frame 19 from a converged
+    frame-18.5 state whose multiplier 40 was about to let go (1 kPa against 120–770 kPa): there S
+    = G K⁻¹ Gᵀ is slightly indefinite (−3.2e8 against 5.9e10), the converged status is an exact
+    solution of the increment's LCP, and the nearest semidefinite S's chose another, 6 constraints
+    changed, whatever the increment (down to 1e-4).  Newton then landed on a saddle 1.5 mm away
+    (a neighbour pressed at 13: one negative eigenvalue) or failed; the whole stride went on from
+    there to frame 100 on saddles (status unstable, 985 Newton iterations at frame 19).  The LCP is
+    now solved from the status it starts at (petsc/lcp.py ``pivoted_from``): frame 19 is reached on
+    stable states, 40 released, 105 iterations.  The stride's first 25 frames as a history of their
+    own."""
+    raw = cell_config(EnvelopeCell(NEO, 180, "soleus", "unilateral", stride=True))
+    with open(raw["history"]["file"]) as fh:
+        lines = fh.readlines()
+    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    (tmp_path / "frames.csv").write_text("".join(lines[:header + 1 + 25]))
+    raw["history"]["file"] = str(tmp_path / "frames.csv")
+    s = run_inline(raw, tmp_path, base_dir=CONFIGS)
+    assert s["status"] == "completed", s["message"]
+    assert len(s["steps"]) == 25 and all(st["negative_eigenvalues"] == 0 for st in s["steps"])
+    assert not any(st.get("branch_switches") for st in s["steps"])
+    assert s["steps"][18]["iterations"] <= 250, s["steps"][18]["iterations"]

@@ -428,3 +428,58 @@ def test_unilateral_law_asks_for_more_newton_iterations_than_the_general_default
         s = run_inline(raw, tmp_path / name)
         assert s["status"] == "completed", name
         assert expected in s["solver"], (name, s["solver"])
+
+
+def _exact_solutions(S, d):
+    """Every solution of LCP(S, d) by enumeration of the active sets (to 1e-10)."""
+    M, out = len(d), []
+    for act in itertools.product([0, 1], repeat=M):
+        a = np.array(act, dtype=bool)
+        z = np.zeros(M)
+        if a.any():
+            try:
+                z[a] = np.linalg.solve(S[np.ix_(a, a)], -d[a])
+            except np.linalg.LinAlgError:
+                continue
+        if z.min() >= -1e-10 and (d + S @ z).min() >= -1e-10:
+            out.append(np.maximum(z, 0.0))
+    return out
+
+
+def test_an_indefinite_lcp_keeps_the_solution_of_the_status_it_starts_from():
+    """An indefinite S can give LCP(S, d) several solutions (the bodies' tangent without the
+    constraints is indefinite: a subtendon buckles free of its neighbours).  Started from the
+    active set of any one of them, ``solve_lcp`` returns that one (``pivoted_from``: the
+    continuation of the converged status), where the nearest semidefinite matrix's NNLS picks
+    one regardless of the status, or a z that solves only the clipped problem.  Measured on the
+    180° soleus-biased unilateral stride at frame 18.5 (tests/solving/test_load_history.py's
+    stride test): the converged status was an exact solution; the clipped S changed 6 constraints."""
+    import numpy.linalg as npl
+    from ancf_petsc.petsc.lcp import INDEFINITE_SHARE, solve_lcp
+    several = other = 0
+    for seed in range(400):
+        rng = np.random.default_rng(seed)
+        V, _ = npl.qr(rng.standard_normal((6, 6)))
+        lam = np.array([-0.5 * INDEFINITE_SHARE, 0.3, 0.5, 0.8, 0.9, 1.0])
+        S, d = (V * lam) @ V.T, rng.standard_normal(6)
+        solutions = _exact_solutions(S, d)
+        if len(solutions) < 2:
+            continue
+        several += 1
+        free = solve_lcp(S, d)
+        for zs in solutions:
+            z = solve_lcp(S, d, start=zs > 1e-12)
+            assert np.allclose(z, zs, atol=1e-9), (seed, z, zs)
+            other += not np.allclose(free, zs, atol=1e-9)
+    assert several >= 3 and other >= 3, (several, other)        # the test can tell
+
+
+def test_a_positive_definite_lcp_ignores_the_start():
+    """Its solution is unique: the start changes nothing (the same NNLS solve)."""
+    from ancf_petsc.petsc.lcp import solve_lcp
+    rng = np.random.default_rng(11)
+    A = rng.standard_normal((6, 6))
+    S, d = A @ A.T + 0.1 * np.eye(6), rng.standard_normal(6)
+    z = solve_lcp(S, d)
+    for start in (np.zeros(6, bool), np.ones(6, bool), z == 0.0):
+        assert np.array_equal(solve_lcp(S, d, start=start), z)

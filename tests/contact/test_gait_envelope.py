@@ -24,6 +24,15 @@ def _cutbacks(s):
     return sum(st["cutbacks"] for st in s["steps"])
 
 
+def _first_frames(raw: dict, frames: int, out) -> None:
+    """The config ``raw``'s history file cut to its first ``frames`` frames (a file in ``out``)."""
+    with open(raw["history"]["file"]) as fh:
+        lines = fh.readlines()
+    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    (out / "frames.csv").write_text("".join(lines[:header + 1 + frames]))
+    raw["history"]["file"] = str(out / "frames.csv")
+
+
 def _stride_frames(bias: str, first: int, stop: int, out, fade_forces: str | None = None,
                    solver: dict | None = None):
     """Frames first+1 … stop of the shipped stride in ``bias`` at ψ = 90°, unilateral contact, as
@@ -169,11 +178,7 @@ def test_unilateral_twist_180_uniform_stride_switches_branch_at_frame_13(tmp_pat
     history of their own (the same frames; the whole stride, 78 s, also switches at a second
     saddle at frame 37.5, eigenvalue −3.8, by 1.0 mm: docs/gait.md)."""
     raw = cell_config(EnvelopeCell(NEO, 180, "uniform", "unilateral", stride=True))
-    with open(raw["history"]["file"]) as fh:
-        lines = fh.readlines()
-    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
-    (tmp_path / "frames.csv").write_text("".join(lines[:header + 1 + 16]))
-    raw["history"]["file"] = str(tmp_path / "frames.csv")
+    _first_frames(raw, 16, tmp_path)
     s = run_inline(raw, tmp_path, base_dir=CONFIGS, petsc={"snes_max_it": 15, "snes_convergence_test": "default"})
     assert s["status"] == "completed" and s["reason_code"] == "BRANCH_SWITCHED", s["message"]
     switches = [x for st in s["steps"] for x in st.get("branch_switches", [])]
@@ -243,11 +248,7 @@ def test_unilateral_twist_180_soleus_biased_stride_stays_stable_through_frame_19
     stable states, 40 released, 105 iterations.  The stride's first 25 frames as a history of their
     own."""
     raw = cell_config(EnvelopeCell(NEO, 180, "soleus", "unilateral", stride=True))
-    with open(raw["history"]["file"]) as fh:
-        lines = fh.readlines()
-    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
-    (tmp_path / "frames.csv").write_text("".join(lines[:header + 1 + 25]))
-    raw["history"]["file"] = str(tmp_path / "frames.csv")
+    _first_frames(raw, 25, tmp_path)
     s = run_inline(raw, tmp_path, base_dir=CONFIGS)
     assert s["status"] == "completed", s["message"]
     assert len(s["steps"]) == 25 and all(st["negative_eigenvalues"] == 0 for st in s["steps"])

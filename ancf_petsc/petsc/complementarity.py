@@ -21,14 +21,15 @@ The predictor is solved at the start of every load increment (at the secant pred
 and again at a converged state whose status the exact rule would change (solving/newton.py): a
 Josephy–Newton iteration whose inner solves keep the status.  Away from rest the tangent of the
 bodies alone can be indefinite (a neighbour pressed by its contact forces and free of its
-constraints buckles), and so can S.  The LCP may then have several solutions; the one reached
-by block principal pivoting on the exact S from the status at X is taken first
-(``lcp.pivoted_from``: at a converged state that status is one, and a small increment continues
-it; at frame 18.5 of the 180° soleus-biased unilateral stride it was, while the semidefinite S
-below changed 6 constraints and Newton went on to a saddle, docs/gait.md).  Where pivoting
-ends on none, S is replaced by its nearest positive semidefinite
-matrix (its negative eigenvalues set to zero) when that changes it by at most ``INDEFINITE_SHARE``
-of its norm (the paper's tendon and the second subject: 1e-5 … 5e-3).  Farther from
+constraints buckles), and so can S.  Where its most negative eigenvalue is at most
+``INDEFINITE_SHARE`` of its largest (the paper's tendon and the second subject: 1e-5 … 5e-3)
+the LCP may then have several
+solutions; the one reached by block principal pivoting on the exact S from the status at X is
+taken first (``lcp.pivoted_from``: at a converged state that status is one, and a small
+increment continues it; at frame 18.5 of the 180° soleus-biased unilateral stride it was, while
+the clipped S below changed 6 constraints and Newton went on to a saddle, docs/gait.md).  Where
+pivoting ends on none, S is replaced by its nearest positive semidefinite matrix (its negative
+eigenvalues set to zero).  Farther from
 semidefinite (the gait envelope at twist ≥ 75°: −5.6e9 against 7.5e9 at 90°, 600 N) the
 constraints active at X are held as equalities (``lcp.held_lcp``): the Schur complement of the
 saddle-point system with them held is semidefinite where K is on the motions they allow, and its

@@ -245,7 +245,7 @@ def test_unilateral_twist_180_soleus_biased_stride_stays_stable_through_frame_19
     (a neighbour pressed at 13: one negative eigenvalue) or failed; the whole stride went on from
     there to frame 100 on saddles (status unstable, 985 Newton iterations at frame 19).  The LCP is
     now solved from the status it starts at (petsc/lcp.py ``pivoted_from``): frame 19 is reached on
-    stable states, 40 released, 105 iterations.  The stride's first 25 frames as a history of their
+    stable states, 40 released, 122 iterations.  The stride's first 25 frames as a history of their
     own."""
     raw = cell_config(EnvelopeCell(NEO, 180, "soleus", "unilateral", stride=True))
     _first_frames(raw, 25, tmp_path)

@@ -29,6 +29,12 @@ CURVE_FADE_END = 0.5
 END_FADE = 0.25
 
 
+def curve_limits(t_end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the continuation of a curve of length ``t_end`` ends (weight 0): −CURVE_FADE_END·T
+    and (1 + CURVE_FADE_END)·T, the clamp of ``Projector.wrap``."""
+    return -CURVE_FADE_END * t_end, (1.0 + CURVE_FADE_END) * t_end
+
+
 def fade(u: np.ndarray) -> np.ndarray:
     """1 − (10u³ − 15u⁴ + 6u⁵) on [0, 1], 1 below, 0 above: a C² step from 1 to 0 (its slope
     and curvature vanish at both ends, so that a partner place held at the end of a fade band

@@ -16,7 +16,7 @@ import numpy as np
 
 from .control import DescentControl
 from .descent import Backtracking, Found
-from .fade import CURVE_FADE_END, END_FADE, end_weight
+from .fade import END_FADE, curve_limits, end_weight
 from .starts import SecondStarts
 from .surface import InterfaceCurves, SurfaceKernels, closest_parameter, section_shift, shape_third_on_curve
 
@@ -176,7 +176,7 @@ class Projector(SecondStarts):
         e_new = np.minimum(np.maximum(eB + shift, b_first), b_last)
         x = xiB - 2.0 * (e_new - eB)
         x = np.minimum(np.maximum(x, -1.0 - 2.0 * END_FADE), 1.0 + 2.0 * END_FADE)
-        t = np.minimum(np.maximum(tB, -CURVE_FADE_END * T), (1.0 + CURVE_FADE_END) * T)
+        t = np.clip(tB, *curve_limits(T))
         eB[:], xiB[:], tB[:] = e_new, x, t
         weight = end_weight(x, t, T, e_new == b_first, e_new == b_last)
         return eB, xiB, tB, weight

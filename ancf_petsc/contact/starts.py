@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .descent import ROUNDING, Found
-from .fade import CURVE_FADE_END
+from .fade import curve_limits
 
 #: a partner place within this much of a B element boundary (in ξ) is sought across it too
 NEIGHBOUR_BAND = 0.1
@@ -55,10 +55,11 @@ class SecondStarts:
 
     def at_clamp(self, itf: np.ndarray, tB: np.ndarray) -> np.ndarray:
         """Whether the curve parameters t_B sit at the clamp of the curve's continuation
-        (``wrap``: −CURVE_FADE_END·T or (1 + CURVE_FADE_END)·T)."""
+        (``wrap``: fade.curve_limits)."""
         T = self.wrap_bounds(itf)[2]
+        lo, hi = curve_limits(T)
         tol = self.tolerance * T
-        return (tB <= -CURVE_FADE_END * T + tol) | (tB >= (1.0 + CURVE_FADE_END) * T - tol)
+        return (tB <= lo + tol) | (tB >= hi - tol)
 
     def from_checkpoint(self, idx: np.ndarray, xA: np.ndarray, x_of, f: Found) -> None:
         """Points ``idx`` whose result in ``f`` is on the clamp descend again (``closest``) from

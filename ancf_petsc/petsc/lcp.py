@@ -70,15 +70,8 @@ def pivoted_from(S: np.ndarray, d: np.ndarray, start: np.ndarray) -> np.ndarray 
     status is an exact solution with no change, the clipped S's changed 6 constraints)."""
     A, tol = start.astype(bool).copy(), LCP_TOL * float(np.max(np.abs(d)))
     for _ in range(PIVOT_ROUNDS + 1):
-        z = np.zeros_like(d)
-        if A.any():
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", la.LinAlgWarning)
-                    z[A] = la.solve(S[np.ix_(A, A)], -d[A])
-            except np.linalg.LinAlgError:
-                return None
-        if not np.all(np.isfinite(z)):
+        z = on_active_set(S, d, A)
+        if z is None:
             return None
         w = d + S @ z
         pulling, penetrating = A & (z < -tol), ~A & (w < -tol)
@@ -128,18 +121,27 @@ def exact_on_support(S: np.ndarray, d: np.ndarray, z: np.ndarray) -> np.ndarray:
     A = z > 0.0
     if not A.any():
         return z
-    try:
-        with warnings.catch_warnings():
-            # an ill-conditioned S_AA (scipy's LinAlgWarning on stderr, mid-run): its answer is
-            # judged below like any other (finite, z_A ≥ 0, w ≥ −tol), else the clipped z stands
-            warnings.simplefilter("ignore", la.LinAlgWarning)
-            zA = la.solve(S[np.ix_(A, A)], -d[A])
-    except np.linalg.LinAlgError:
+    out = on_active_set(S, d, A)
+    if out is None:
         return z
-    out = np.zeros_like(z)
-    out[A] = zA
     w = d + S @ out
     tol = LCP_TOL * float(np.max(np.abs(d)))
-    if not np.all(np.isfinite(out)) or zA.min() < 0.0 or w[~A].min(initial=0.0) < -tol:
+    if out[A].min() < 0.0 or w[~A].min(initial=0.0) < -tol:
         return z
     return out
+
+
+def on_active_set(S: np.ndarray, d: np.ndarray, A: np.ndarray) -> np.ndarray | None:
+    """z with S_AA z_A = −d_A and 0 off the active set ``A`` (the saddle-point Newton step of
+    that active set), None where S_AA is singular or the answer not finite.  An ill-conditioned
+    S_AA (scipy's LinAlgWarning on stderr, mid-run) is solved quietly: the callers judge its
+    answer like any other (``exact_on_support``, ``pivoted_from``)."""
+    z = np.zeros_like(d)
+    if A.any():
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", la.LinAlgWarning)
+                z[A] = la.solve(S[np.ix_(A, A)], -d[A])
+        except np.linalg.LinAlgError:
+            return None
+    return z if np.all(np.isfinite(z)) else None

@@ -182,12 +182,13 @@ class ComplementarityPredictor:
         law_phase, status = c.law.phase, c.status.copy()
         vecs, self.last_held = [], False
         lcp = self._linearised(X, vecs)
-        z_new = None
+        z_new = start = None
         if lcp is not None:
+            start = self.global_status(status)   # every rank's multipliers (collective)
             try:
-                z_new = solve_lcp(lcp[0], lcp[1], self.global_status(status))
+                z_new = solve_lcp(lcp[0], lcp[1], start)
             except np.linalg.LinAlgError:        # S far from positive definite: no convex LCP
-                z_new = held_lcp(lcp[0], lcp[1], self.global_status(status))
+                z_new = held_lcp(lcp[0], lcp[1], start)
                 self.last_held = z_new is not None
             except RuntimeError:                 # NNLS past its iteration limit: no prediction
                 z_new = None
@@ -200,8 +201,7 @@ class ComplementarityPredictor:
             # and a status set by the sign of rounding made predictions and checks alternate
             # (the paper's ψ = 45° column with k_s x 10: 79 instead of 54 Newton iterations)
             w = (lcp[1] + lcp[0] @ z_new) / c.stiffness
-            keep = self.global_status(status)
-            active = np.where(z_new > c.tie_tolerance, True, np.where(w > c.tie_tolerance, False, keep))
+            active = np.where(z_new > c.tie_tolerance, True, np.where(w > c.tie_tolerance, False, start))
             self._step(X, z_new, active, *vecs[:3])
             self.solves += 1
         for v in vecs:

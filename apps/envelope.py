@@ -8,7 +8,8 @@ import os
 import sys
 
 from ancf_petsc.config.specs import TANGENTS
-from ancf_petsc.workflows.envelope import BIASES, GRIDS, TWISTS, grid, run_cells, summary_line
+from ancf_petsc.workflows.envelope import BIASES, GRIDS, TWISTS, grid, run_cells
+from ancf_petsc.workflows.envelope_summary import cell_key, not_completed, summary_line
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -26,9 +27,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--work", default="results/envelope")
     ap.add_argument("--csv", help="write the rows here")
+    ap.add_argument("--failed-in", help="a CSV of the same grid: run only its cells that did not complete")
     args = ap.parse_args(argv)
     cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements,
                  args.predictor, args.tangent, args.augmentation)
+    if args.failed_in:
+        failed = not_completed(args.failed_in)
+        cells = [c for c in cells if cell_key(c) in failed]
     solvers = {"after": [args.solver], **({"before": [args.before]} if args.before else {})}
     rows = run_cells(cells, solvers, args.work, args.jobs, lambda line: print(line, flush=True))
     if args.csv and rows:

@@ -90,6 +90,7 @@ class Jump:
     scale: float       # max |F| along the step [N]
     where: str         # the DOF it acts on, in words
     cause: str = ""    # what the contact's projections show changing there, in words
+    kind: str = "residual_jump"   # its code (failure_cause.JUMP_CAUSES)
 
 
 def residual_jump(problem, trail: IterateTrail, load_factor: float, tolerance: float = 0.0) -> Jump | None:
@@ -152,14 +153,14 @@ def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
     if not np.isfinite(size) or size <= max(JUMP_SHARE * scale, tolerance):
         return None
     where = _where(problem, np.abs(f_hi - f_lo), comm)
-    cause = ""
+    cause, kind = "", "residual_jump"
     if problem.contact is not None:
-        cause = contact_cause(problem.contact, projections[lo], projections[hi], comm)
+        kind, cause = contact_cause(problem.contact, projections[lo], projections[hi], comm)
         again = at(lo)
         if largest(at(hi), again) < 0.5 * size:
             cause += ("; evaluated again one after the other the two states agree: each projection "
                       "starts from the last one, and a contact point has two closest points there")
-    return Jump(size=size, scale=scale, where=where, cause=cause)
+    return Jump(size=size, scale=scale, where=where, cause=cause, kind=kind)
 
 
 def _projection(problem, Y: PETSc.Vec):
@@ -169,10 +170,11 @@ def _projection(problem, Y: PETSc.Vec):
     return problem.contact.evaluate(problem.exchange.local_state(Y).copy(), problem.exchange.needed).pr
 
 
-def contact_cause(contact, a, b, comm) -> str:
+def contact_cause(contact, a, b, comm) -> tuple[str, str]:
     """What changes between the projections ``a`` and ``b`` (of this rank's points) of two states
-    a rounding apart, in words: the point whose closest point is on another B element, with the
-    largest turn of its normal, else the point whose weight changes most (collective)."""
+    a rounding apart: (its code, failure_cause.JUMP_CAUSES; in words): the point whose closest
+    point is on another B element, with the largest turn of its normal, else the point whose
+    weight changes most (collective)."""
     switched = np.flatnonzero((a.eB != b.eB) & (a.valid | b.valid))
     turn = np.nan_to_num(np.degrees(np.arccos(np.clip(np.einsum("pi,pi->p", a.n, b.n), -1.0, 1.0))))
     dw = np.nan_to_num(np.abs(a.weight - b.weight))
@@ -183,7 +185,7 @@ def contact_cause(contact, a, b, comm) -> str:
         k = int(np.argmax(dw)) if dw.size else -1
         key = min(float(dw[k]), 1.0) if dw.size else 0.0
     best, rank = comm.allreduce((key, comm.rank), op=MPI.MAXLOC)
-    text = ""
+    text, kind = "", "residual_jump"
     if comm.rank == rank and best > 1e-9:
         p = int(a.idx[k])
         itf = contact.interfaces[int(contact.points.itf[p])]
@@ -195,12 +197,14 @@ def contact_cause(contact, a, b, comm) -> str:
             why = ("B's surface is only C0 across its element boundaries, and the point's normal "
                    "turns by {:.3g} deg there (docs/contact.md, \"Limits\")" if at_node else
                    "two places of B about as near to the point, their normals {:.3g} deg apart")
+            kind = "c0_kink" if at_node else "two_closest_points"
             text = (f"; there {point} has its closest point on {itf.b.name}'s element "
                     f"{int(a.eB[k]) - off} at xi = {a.xiB[k]:+.4f} on one side and on element "
                     f"{int(b.eB[k]) - off} at xi = {b.xiB[k]:+.4f} on the other: " + why.format(turn[k]))
         else:
+            kind = "fade_weight_jump"
             text = f"; there the weight of {point} changes from {a.weight[k]:.4g} to {b.weight[k]:.4g}"
-    return comm.bcast(text, root=rank)
+    return comm.bcast((kind, text), root=rank)
 
 
 def _where(problem, change: np.ndarray, comm) -> str:

@@ -32,12 +32,14 @@ def reason_name(reason: int) -> str:
 
 class LoadStepFailure(Exception):
     """A requested load level could not be reached; raised identically on every rank.
-    ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...)."""
+    ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...);
+    ``cause`` what stopped the path, one of ``solver_messages.CAUSES`` (summary.json
+    ``failure_cause``; by default the code in lower case)."""
 
     args: tuple             # (the message,): ``amend`` adds to it
 
     def __init__(self, target: float, attempted: float, reached: float, reason: str, inverted: bool,
-                 detail: str = ""):
+                 detail: str = "", cause: str = ""):
         msg = (f"could not reach load factor {target:g}: SNES failed at load factor {attempted:.6g} "
                f"(last converged {reached:.6g}) with {reason}{detail}")
         if inverted:
@@ -47,6 +49,7 @@ class LoadStepFailure(Exception):
         self.code = reason.split()[0] if reason else "FAILED"
         self.inverted = inverted
         self.detail = detail      # the cause after the reason (``stepper._first_give_up`` repeats it)
+        self.cause = cause or self.code.lower()
 
     def amend(self, detail: str) -> "LoadStepFailure":
         """The same failure with ``detail`` added to its message (what the stepper found after

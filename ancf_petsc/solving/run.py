@@ -82,7 +82,7 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
     """(status, reason code, message) of a run from its converged levels and how it stopped."""
     unstable = [r.load_factor for r in records if r.negative_eigenvalues]
     if failure is not None:
-        return failure
+        return failure[:3]
     if unstable and not allow_unstable:
         return ("unstable", st.NEGATIVE_EIGENVALUES,
                 f"{len(unstable)} of {len(records)} levels are unstable equilibria (negative tangent "
@@ -266,12 +266,12 @@ class Run:
                     self.say(f"[ancf]   {note}")
 
     def step_through(self, levels: list[float], start: PathState | None) -> tuple[tuple | None, int, bool]:
-        """Step through ``levels``: (failure (status, code, message) or None, signal, inverted)."""
+        """Step through ``levels``: (failure (status, code, message[, cause]) or None, signal, inverted)."""
         try:
             if levels:
                 self.stepper.run(levels, self.on_level, start)
         except LoadStepFailure as exc:
-            return ("failed", exc.code, str(exc)), 0, exc.inverted
+            return ("failed", exc.code, str(exc), exc.cause), 0, exc.inverted
         except RunInterrupted as exc:
             return ("interrupted", st.signal_reason(exc.signum), str(exc)), exc.signum, False
         except OutputError as exc:
@@ -373,7 +373,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         status, reason_code=code, message=message, timings=timings,
         newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.solver.chord.count,
         preconditioner_reuses=stepper.solver.chord.kept,
-        exchange=exchange,
+        exchange=exchange, failure_cause=failure[3] if failure is not None and len(failure) > 3 else "",
         jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,

@@ -8,6 +8,7 @@ from ..config.specs import SolverSpec
 from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.options import factor_package, solver_options
+from .failure_cause import Detail
 from .records import VIOLATED_STATE
 
 
@@ -65,13 +66,13 @@ def matrix_free(snes: PETSc.SNES) -> bool:
     return P is not None and P.getType() == PETSc.Mat.Type.MFFD
 
 
-def floor_detail(step: float, lam: float, floor: float) -> str:
+def floor_detail(step: float, lam: float, floor: float) -> Detail:
     """The cause of a level given up at its first failure: half the failed step is below
     ``solver.min_increment`` (``floor``), so no smaller step was tried (load_control.floored)."""
-    return (f" (no cut-back was tried: half the failed step from load factor {lam:.6g} to {lam + step:.6g} "
-            f"is {0.5 * step:.4g}, below solver.min_increment = {floor:g}; lower solver.min_increment "
-            f"to at most {0.5 * step:.4g} (the default is {SolverSpec.min_increment:g}) so that the step can "
-            "be cut back)")
+    return Detail(f" (no cut-back was tried: half the failed step from load factor {lam:.6g} to {lam + step:.6g} "
+                  f"is {0.5 * step:.4g}, below solver.min_increment = {floor:g}; lower solver.min_increment "
+                  f"to at most {0.5 * step:.4g} (the default is {SolverSpec.min_increment:g}) so that the step "
+                  "can be cut back)", "min_increment")
 
 
 def stability_detail(unstable_at: tuple[float, int, int] | None) -> str:
@@ -126,38 +127,40 @@ def switched_message(reports: list[dict]) -> str:
             "solver.branch_switch: false stops there instead)")
 
 
-def failure_detail(solver, reason: int) -> str:
+def failure_detail(solver, reason: int) -> Detail:
     """What to try after a failed level: the linear solver's reason and what works, a
-    preconditioner that solves nothing, or a Newton budget too small for an active set."""
+    preconditioner that solves nothing, or a Newton budget too small for an active set; its
+    ``kind`` the cause's code (failure_cause.py)."""
     if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
-        return linear_solver_detail(solver, reason)
+        return Detail(linear_solver_detail(solver, reason), "linear_solver")
     if reason == VIOLATED_STATE:
-        return (" (the solves converged on active sets with a multiplier pulling or a gap penetrating "
-                "at their states, which are no answers of unilateral contact)")
+        return Detail(" (the solves converged on active sets with a multiplier pulling or a gap penetrating "
+                      "at their states, which are no answers of unilateral contact)", "violated_state")
     if reason != PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT:
-        return ""
+        return Detail("")
     ksp = solver.snes.getKSP()
     if ksp.getType() == "preonly" and ksp.getPC().getType() == "none":
         if matrix_free(solver.snes):
-            return (f" ({MF_NO_MATRIX}, and with -ksp_type preonly every Newton step is the residual "
-                    f"itself; for matrix-free products use {MF_OPERATOR}, or add -ksp_type gmres "
-                    "(unpreconditioned: slow, and on a contact model's saddle-point Jacobian unlikely "
-                    "to converge))")
-        return (" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
-                "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
-                                               f"; {SADDLE_POINT_HINT}") + ")")
+            return Detail(f" ({MF_NO_MATRIX}, and with -ksp_type preonly every Newton step is the residual "
+                          f"itself; for matrix-free products use {MF_OPERATOR}, or add -ksp_type gmres "
+                          "(unpreconditioned: slow, and on a contact model's saddle-point Jacobian unlikely "
+                          "to converge))", "linear_solver")
+        return Detail(" (-pc_type none with -ksp_type preonly solves nothing: every Newton step is the residual "
+                      "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
+                                                     f"; {SADDLE_POINT_HINT}") + ")", "linear_solver")
     contact = solver.problem.contact
     friction = "" if contact is None or not any(t.bounded for t in contact.terms) else FRICTION_WHY
     cycle = newton_cycle(solver.last_solve_history)
     if cycle is not None:
         period, low, high = cycle
         if period == 1:
-            return (f" (Newton stalls at |F| {high:.2e} N, above the tolerance "
-                    f"{solver.snes.getTolerances()[1]:.1e}: more iterations do not help{friction})")
-        return (f" (Newton cycles: |F| repeats every {period} iterations, between {low:.1e} and {high:.1e} N, "
-                f"so more iterations do not help{friction})")
+            return Detail(f" (Newton stalls at |F| {high:.2e} N, above the tolerance "
+                          f"{solver.snes.getTolerances()[1]:.1e}: more iterations do not help{friction})",
+                          "newton_stall")
+        return Detail(f" (Newton cycles: |F| repeats every {period} iterations, between {low:.1e} and "
+                      f"{high:.1e} N, so more iterations do not help{friction})", "newton_cycle")
     if friction:
-        return f" ({friction.removeprefix('; ')})"
+        return Detail(f" ({friction.removeprefix('; ')})", "friction_statuses")
     if contact is not None and contact.law.decides_activity:
         maxit, stop = solver.snes.getTolerances()[3], solver.cycle_stop
         if stop is not None and stop.wandered:
@@ -166,10 +169,12 @@ def failure_detail(solver, reason: int) -> str:
             hint = ("; at large twist, contact.fade_forces: auto or pointwise may converge where the fade "
                     "bands' forces stall Newton (docs/contact.md)"
                     if contact.spec.fade_forces == "variational" and contact.weights.rule == "newton" else "")
-            return (f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
-                    f"{stop.window} iterations, so the solve ended: more iterations are unlikely to help{hint})")
-        return (f" (unilateral contact changes its active set within a level and may need more than "
-                f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})")
+            return Detail(f" (unilateral contact: Newton found no |F| below {min(h):.2e} N in its last "
+                          f"{stop.window} iterations, so the solve ended: more iterations are unlikely to "
+                          f"help{hint})", "newton_wander")
+        return Detail(f" (unilateral contact changes its active set within a level and may need more than "
+                      f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})",
+                      "active_set_iterations")
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])
 
 
@@ -177,7 +182,7 @@ def failure_detail(solver, reason: int) -> str:
 COURSE_WINDOW = 6
 
 
-def newton_course(history: list[float], maxit: int) -> str:
+def newton_course(history: list[float], maxit: int) -> Detail:
     """How a solve that ran out of iterations moved, when it neither cycled nor stalled: |F|
     falling in every one of the last ``COURSE_WINDOW`` iterations (Newton converging only
     linearly: a nearly singular tangent) or not (wandering).  Measured on a traced subject's
@@ -185,19 +190,19 @@ def newton_course(history: list[float], maxit: int) -> str:
     small increments, wandering at 0.03–8 N on larger ones, and with -snes_max_it 30 the state
     beyond had a negative tangent eigenvalue: a limit or bifurcation point."""
     if len(history) < COURSE_WINDOW + 1:
-        return ""
+        return Detail("")
     tail = history[-(COURSE_WINDOW + 1):]
     ratios = [b / a for a, b in zip(tail, tail[1:]) if a > 0.0]
     advice = (f"a smaller solver.max_increment or -snes_max_it {3 * maxit} may reach a state "
               "whose stability check then says whether a limit or bifurcation point is ahead")
     if len(ratios) == COURSE_WINDOW and max(ratios) < 1.0:
-        return (f" (Newton converges only linearly here, |F| x {min(ratios):.2f}-{max(ratios):.2f} per "
-                f"iteration down to {tail[-1]:.1e} N: a nearly singular tangent, as near a limit or "
-                f"bifurcation point; {advice})")
-    return (f" (Newton's iterates wander: |F| between {min(tail):.1e} and {max(tail):.1e} N over the "
-            f"last {COURSE_WINDOW + 1} iterations, neither converging nor repeating: the tangent does not "
-            f"predict the residual over these steps, as near a limit or bifurcation point or where the "
-            f"residual is not smooth; {advice})")
+        return Detail(f" (Newton converges only linearly here, |F| x {min(ratios):.2f}-{max(ratios):.2f} per "
+                      f"iteration down to {tail[-1]:.1e} N: a nearly singular tangent, as near a limit or "
+                      f"bifurcation point; {advice})", "newton_linear")
+    return Detail(f" (Newton's iterates wander: |F| between {min(tail):.1e} and {max(tail):.1e} N over the "
+                  f"last {COURSE_WINDOW + 1} iterations, neither converging nor repeating: the tangent does "
+                  f"not predict the residual over these steps, as near a limit or bifurcation point or where "
+                  f"the residual is not smooth; {advice})", "newton_wander")
 
 
 #: why a friction increment fails (docs/interface.md, "Limits")

@@ -24,6 +24,7 @@ from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
 from .continuity import jump_detail, residual_jump
+from .failure_cause import give_up_cause, with_critical_point
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
@@ -298,12 +299,21 @@ class LoadStepper:
                                      self.solver.snes.getTolerances()[1])
                 X_prev.copy(P.X)
                 P.restore()
-            # a min_increment that forbade every cut-back is the cause, not Newton's course
-            cause = (solver_messages.floor_detail(step, path.lam, self.spec.min_increment)
-                     if self.control.floored(step, tally) else solver_messages.failure_detail(self.solver, reason))
-            failure = LoadStepFailure(target, path.lam + step, path.lam, reason_name(reason), inverted,
-                                      cause + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump))
+            failure = _given_up(self, path.lam, step, target, reason, tally, inverted, lost, jump)
             last_resorts(self, path, X_prev, target, tally, failure, lost and not inverted)
+
+
+def _given_up(stepper: LoadStepper, lam: float, step: float, target: float, reason: int, tally: LevelTally,
+              inverted: bool, lost: bool, jump) -> LoadStepFailure:
+    """The failure of a level whose cut-backs gave out at the step from ``lam``: its message (what
+    Newton did, a less stable state on the way, a jump of the residual) and its cause's code
+    (failure_cause.py)."""
+    # a min_increment that forbade every cut-back is the cause, not Newton's course
+    newton = (solver_messages.floor_detail(step, lam, stepper.spec.min_increment)
+              if stepper.control.floored(step, tally) else solver_messages.failure_detail(stepper.solver, reason))
+    return LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted,
+                           newton + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump),
+                           give_up_cause(inverted, lost, jump, tally.unstable_at, newton))
 
 
 def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, target: float, tally: LevelTally,
@@ -333,6 +343,8 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
         _went_on(stepper, path.lam, failure, "the pointwise fade forces")
         return
     stepper.problem.load_factor = path.lam
+    if critical is not None:
+        failure.cause = with_critical_point(failure.cause)
     failure = failure.amend(critical.sentence(tried) if critical is not None else "")
     raise failure.amend(_first_give_up(stepper, failure))
 

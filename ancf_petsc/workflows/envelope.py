@@ -9,9 +9,8 @@ built from a shipped config: its twist, the end tractions split by the bias, roo
 frictionless plane (u_x = 0 over the root face, the section free in its plane), 2 axial points and
 the requested levels (or a walking stride).  ``run_cell`` solves it with a given ``ancf-solve``
 (this tree's or an older commit's, for before/after tables) in a child process, so that a crash is
-recorded, not raised; ``grid`` names the grids of scripts/bench_envelope.py and ``summary_line``
-states them against the targets (monotonic columns to 1.2 kN within 60 Newton iterations and no
-cut-back at twist <= 90 deg; strides at a median of at most 8 per frame, cut-backs on under 1 %).
+recorded, not raised; ``grid`` names the grids of scripts/bench_envelope.py, and
+envelope_summary.py states them against the targets.
 """
 from __future__ import annotations
 
@@ -144,6 +143,7 @@ class CellResult:
     pointwise_from: float | None = None   # summary.json's fade_forces_pointwise_from
     snaps: tuple = ()                     # summary.json's steps[].branch_switches[].critical_load_factor
     windows_from: float | None = None     # summary.json's search_window_whole_from
+    cause: str = ""                       # summary.json's failure_cause (solving/failure_cause.py)
 
     @property
     def frames(self) -> int:
@@ -171,7 +171,8 @@ class CellResult:
                 "message": self.message,
                 "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from,
                 "snaps": ";".join(f"{x:.6g}" for x in self.snaps),
-                "search_window_whole_from": "" if self.windows_from is None else self.windows_from}
+                "search_window_whole_from": "" if self.windows_from is None else self.windows_from,
+                "cause": self.cause}
 
 
 def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None = None):
@@ -215,6 +216,7 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
                       cutbacks=sum(s["cutbacks"] for s in steps),
                       cutbacks_to_1200=sum(s["cutbacks"] for s in early), wall_time=wall,
                       message="" if status == "completed" else str(data.get("message", ""))[:300],
+                      cause=str(data.get("failure_cause", "")),
                       per_level=[(s["load_factor"], s["iterations"], s["cutbacks"]) for s in steps],
                       solve_time=float(data.get("timings", {}).get("solve", 0.0)),
                       pointwise_from=data.get("fade_forces_pointwise_from"),
@@ -278,27 +280,6 @@ def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir:
 
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         return list(pool.map(one, work))
-
-
-def summary_line(rows: list[dict], tag: str) -> str:
-    """The rows of one solver against the envelope's targets, in one line."""
-    mine = [r for r in rows if r["solver"] == tag]
-    bad = [r for r in mine if r["status"] != "completed"]
-    columns = [r for r in mine if not r["stride"]]
-    strides = [r for r in mine if r["stride"]]
-    line = f"[{tag}] {len(mine)} cells: {len(bad)} not completed"
-    if columns:
-        over = [r for r in columns if r["twist"] <= 90 and (r["iterations_to_1200"] > 60 or r["cutbacks_to_1200"])]
-        line += f"; {len(over)} columns at twist <= 90 over 60 Newton iterations or with a cut-back to 1.2 kN"
-    if strides:
-        frames = sum(r["levels"] for r in strides)
-        cut = sum(r["cutback_levels"] for r in strides)
-        solve = sum(r["solve_time"] for r in strides)
-        line += (f"; strides: {frames} frames, median of the strides' medians "
-                 f"{np.median([r['median_iterations'] for r in strides]):g} Newton iterations per frame, "
-                 f"cut-backs on {cut} frames ({100.0 * cut / max(frames, 1):.2f} %), "
-                 f"{frames / max(solve, 1e-9):.1f} frames/s (solve)")
-    return line
 
 
 def _cell_text(r: dict | None, key: str) -> str:

@@ -61,6 +61,7 @@ assert jump is not None and abs(jump.size - 1.0) < 1e-6, jump
 assert jump.where == f"beam {beam.name}, node 3", jump.where
 assert "jumps by 1 N" in jump_detail(jump) and jump_detail(None) == ""
 assert jump.cause == "" and "please report it" in jump_detail(jump)   # not the contact's doing
+assert jump.kind == "residual_jump", jump.kind
 
 # the cause on real projections: a point's closest point moved to the next element, at their
 # common node; the rank that holds it says, every rank gets the same words
@@ -78,9 +79,9 @@ mine = np.flatnonzero(a.idx == pid)
 for k in mine:
     xa[k], eb[k], xb[k] = 1.0, a.eB[k] + 1, -1.0
     nb[k] = [a.n[k, 0], -a.n[k, 2], a.n[k, 1]]             # turned by 90 deg about x
-text = contact_cause(c, dataclasses.replace(a, xiB=xa), dataclasses.replace(a, eB=eb, xiB=xb, n=nb),
-                     P.comm.tompi4py())
-assert P.comm.tompi4py().allgather(text) == [text] * P.comm.size
+kind, text = contact_cause(c, dataclasses.replace(a, xiB=xa), dataclasses.replace(a, eB=eb, xiB=xb, n=nb),
+                           P.comm.tompi4py())
+assert P.comm.tompi4py().allgather((kind, text)) == [(kind, text)] * P.comm.size and kind == "c0_kink"
 itf = c.interfaces[int(c.points.itf[pid])]
 assert text.startswith(f"; there contact point {pid} (on {itf.a.name}) of interface {itf.name} has its closest point")
 assert "only C0 across its element boundaries" in text and "turns by 90 deg" in text, text
@@ -158,17 +159,18 @@ def test_the_cause_names_a_closest_point_that_changes_element():
     t = np.radians(5.0)
     a = _projection([5, 5], [0.2, 1.0], [[0, 0, 1], [0, 0, 1]], [1.0, 0.5])
     b = _projection([5, 6], [0.2, -1.0], [[0, 0, 1], [0, np.sin(t), np.cos(t)]], [1.0, 0.5])
-    text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
+    kind, text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
+    assert kind == "c0_kink"
     assert ("contact point 8 (on medial_gastrocnemius) of interface mg_sol has its closest point on "
             "soleus's element 1 at xi = +1.0000 on one side and on element 2 at xi = -1.0000") in text
     assert "only C0 across its element boundaries" in text and "turns by 5 deg" in text
     detail = jump_detail(Jump(size=0.12, scale=0.14, where="beam soleus, node 4", cause=text))
     assert "node 4; there contact point 8" in detail and "please report" not in detail
     b = _projection([5, 6], [0.2, -0.4], [[0, 0, 1], [0, np.sin(t), np.cos(t)]], [1.0, 0.5])
-    text = contact_cause(_contact(), a, b, MPI.COMM_SELF)      # element 2 but not near the node
-    assert text.endswith("element 2 at xi = -0.4000 on the other: two places of B about as near to "
+    kind, text = contact_cause(_contact(), a, b, MPI.COMM_SELF)      # element 2 but not near the node
+    assert kind == "two_closest_points" and text.endswith("element 2 at xi = -0.4000 on the other: two places of B about as near to "
                          "the point, their normals 5 deg apart")
     b = _projection([5, 5], [0.2, 1.0], [[0, 0, 1], [0, 0, 1]], [1.0, 0.25])
-    text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
-    assert text == "; there the weight of contact point 8 (on medial_gastrocnemius) of interface mg_sol changes from 0.5 to 0.25"
-    assert contact_cause(_contact(), a, a, MPI.COMM_SELF) == ""
+    kind, text = contact_cause(_contact(), a, b, MPI.COMM_SELF)
+    assert kind == "fade_weight_jump" and text == "; there the weight of contact point 8 (on medial_gastrocnemius) of interface mg_sol changes from 0.5 to 0.25"
+    assert contact_cause(_contact(), a, a, MPI.COMM_SELF) == ("residual_jump", "")

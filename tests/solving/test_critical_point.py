@@ -91,6 +91,7 @@ def test_without_switching_the_fold_stops_the_run_naming_the_critical_point(tmp_
     assert "SNES failed at load factor 7.27" in message, message
     assert "is nearly singular" in message and "at or near a critical point there" in message, message
     assert "no stable state was found" not in message          # no snap was tried
+    assert s["failure_cause"] == "critical_point", s["failure_cause"]
     share = float(message.split("diagonally scaled, is ")[1].split(" of the next")[0])
     assert share < 0.01
 

@@ -456,6 +456,9 @@ def test_a_failed_level_says_when_newton_cycles_or_stalls(history, expected):
     assert expected in text, text
     helps = "linearly" in expected or "wander" in expected
     assert ("more iterations do not help" in text) != helps and (more in text) == helps, text
+    kind = {"cycles": "newton_cycle", "stalls": "newton_stall", "linearly": "newton_linear",
+            "wander": "newton_wander"}
+    assert text.kind == next(v for k, v in kind.items() if k in expected), text.kind   # failure_cause.py
 
 
 def test_a_wandering_friction_solve_is_ended_early():
@@ -515,6 +518,7 @@ def test_a_unilateral_solve_ended_by_its_window_says_so():
     reason = PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
     stop.wandered = True
     assert "found no |F| below 4.00e+00 N in its last 15 iterations" in failure_detail(solver, reason)
+    assert failure_detail(solver, reason).kind == "newton_wander"
     assert "contact.fade_forces: auto or pointwise" in failure_detail(solver, reason)    # the way out
     contact.spec.fade_forces = "auto"               # switched where it could, or refused on a saddle
     assert "fade_forces" not in failure_detail(solver, reason)
@@ -523,4 +527,5 @@ def test_a_unilateral_solve_ended_by_its_window_says_so():
     assert "fade_forces" not in failure_detail(solver, reason)
     stop.wandered = False
     assert "try -snes_max_it 240" in failure_detail(solver, reason)
+    assert failure_detail(solver, reason).kind == "active_set_iterations"
     snes.destroy()

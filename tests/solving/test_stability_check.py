@@ -139,7 +139,7 @@ def test_a_step_onto_a_saddle_is_cut_back(tmp_path):
     """The same model with the default guard: the 50 N step is retried with smaller steps,
     which stay on the stable branch."""
     s = run_inline(coarse_achilles(), tmp_path / "guarded")
-    assert s["status"] == "completed"
+    assert s["status"] == "completed" and s["failure_cause"] == ""
     assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 0]
     assert s["steps"][1]["cutbacks"] > 0
 
@@ -154,7 +154,9 @@ def test_a_failure_after_a_stability_retry_names_the_instability(tmp_path):
     p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "run"), "--quiet"])
     assert p.returncode != 0
     assert "negative tangent eigenvalue(s) against 0 at the last accepted one" in p.stderr, p.stderr
-    assert "limit or bifurcation point" in read_summary(tmp_path / "run")["message"]
+    s = read_summary(tmp_path / "run")
+    assert "limit or bifurcation point" in s["message"]
+    assert s["failure_cause"] == "unstable_state", s["failure_cause"]        # solving/failure_cause.py
 
 
 def test_at_that_give_up_the_branch_switch_goes_on_from_a_stable_state(tmp_path):

@@ -15,7 +15,7 @@ stride's Jacobians (630 rows) PETSc passed 89 000 upper entries, 55 000 of them 
 context, ``install``): its structure is J's nonzeros when its pattern last changed; each
 set-up copies J's entries at that structure into a scalar SBAIJ matrix through a fixed index
 map between the two value arrays (``MatSeqSBAIJGetArray``, 0.4 ms on the walking stride) and
-factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 5 unless the solve's -mat_mumps_*
+factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 3 unless the solve's -mat_mumps_*
 options say otherwise (they reach this factor: it has the solve's prefix).  A nonzero of J
 outside the structure (a contact pair that comes into use, a law that writes there) adds its
 position to the structure, and MUMPS analyses the grown one: the factor is J's whatever the law.
@@ -37,16 +37,19 @@ from .diagnostics import petsc_library
 from .database import option
 
 #: MUMPS controls of the compact factor unless the solve's options say otherwise: ordering on the
-#: compressed graph of matched pairs (ICNTL(12) = 2) after the matching that also gives the
-#: scaling (ICNTL(6) = 5, MUMPS's default for it).  That scaling is the analysis's, kept by every
-#: factorisation until the structure grows; the bottleneck matching (3) has none, so MUMPS
-#: scaled each factorisation again (ICNTL(8) = 77: iterative, ~0.8 of its 2.5 ms on the walking
-#: stride; docs/parallel.md, 2026-12-02).  Residuals of a random right-hand side 3e-8 instead of
-#: 1e-8 on the stride's Jacobians, 4e-11 instead of 3e-13 on bundle_hex7, the same Newton
-#: iterations.  An analysis costs more with 5 (the 8-element stride: ~50 ms against ~30 with 3,
-#: which there eats what its factorisations save; 4: 170 ms); AMD without matching factors the
-#: strides as fast but bundle_hex7 in 2.0e8 flops against 7.7e7
-ORDERING = {12: 2, 6: 5}
+#: compressed graph of matched pairs (ICNTL(12) = 2) after the bottleneck matching (ICNTL(6) = 3),
+#: which computes no scaling, so that MUMPS scales every factorisation again for its own values
+#: (ICNTL(8) = 77: iterative, ~0.8 of its 2.5 ms on the walking stride).  The matching that also
+#: gives a scaling (5, MUMPS's default for it) keeps the analysis's scaling for every later
+#: factorisation until the structure grows: 1.09x the sliding stride's frames/s, but where the
+#: values move by orders of magnitude after the analysis (a soft matrix whose fibres take the load)
+#: that scaling ruins the factors: the solver_default set's 0 deg columns, 87 Newton iterations to
+#: 3 kN with 3, took Newton steps to |F| 1e26 at the first level and stalled at every cut-back
+#: with 5 (docs/parallel.md, 2026-12-03).  Residuals of a random right-hand side 1e-8 (5: 3e-8)
+#: on the stride's Jacobians, 3e-13 (4e-11) on bundle_hex7.  4 takes 170 ms an analysis on the
+#: 8-element stride (3: ~30 ms); AMD without matching factors the strides as fast but bundle_hex7
+#: in 2.0e8 flops against 7.7e7
+ORDERING = {12: 2, 6: 3}
 #: PETSc's PCFailedReason for a factorisation that failed otherwise than on a zero pivot
 PC_FACTOR_OTHER = 4
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)

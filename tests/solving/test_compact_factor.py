@@ -205,3 +205,23 @@ def test_the_complementarity_predictor_factors_its_k_compactly_with_the_same_pre
     (xa, sa), (xb, sb) = out[True], out[False]
     assert np.array_equal(sa, sb) and sa.any()
     assert np.abs(xa - xb).max() <= 1e-8 * np.abs(xb).max()
+
+
+def test_a_soft_matrix_column_keeps_accurate_factors_as_its_fibres_stiffen(tmp_path):
+    """The published solver_default set (matrix μ 15 kPa, stiff fibres), twist 0°, uniform bias,
+    its own unilateral contact, to 3 kN: the Jacobian's values grow by orders of magnitude from
+    the analysis at rest to the loaded fibres.  The compact factor scales every factorisation for
+    its own values (ICNTL(6) = 3); with the analysis's scaling kept (matching 5, 5edf9cb to
+    2026-12-03) the first level's Newton steps reached |F| 1e26 N, every cut-back stalled, and the
+    run spent this budget of 400 Newton iterations without converging a level.  Now: 87, as on
+    the fibre grid before that change (docs/gait_envelope_fibres.csv)."""
+    from ancf_petsc.linalg.compact_factor import ORDERING
+    from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
+    from helpers import run_inline
+    assert ORDERING[6] == 3
+    base = [g for g in GOH if g.endswith("_solver_default.yaml")][0]
+    raw = cell_config(EnvelopeCell(base, 0.0, "uniform", None, 0.0, 4))
+    raw.setdefault("solver", {})["max_newton_iterations"] = 400
+    s = run_inline(raw, tmp_path / "run")
+    assert s["status"] == "completed", s["message"]
+    assert s["newton_iterations"] <= 100, s["newton_iterations"]

@@ -49,7 +49,7 @@ class Detail(str):
         return out
 
 
-def give_up_cause(inverted: bool, lost: bool, jump, unstable_at, newton: str) -> str:
+def give_up_cause(inverted: bool, lost: bool, jump, unstable_at: tuple | None, newton: str) -> str:
     """The code of a level given up by the stepper (module docstring's order): ``jump`` the
     residual's jump (continuity.Jump) or None, ``unstable_at`` the level's less stable state or
     None, ``newton`` the message part on Newton's course (a ``Detail``, or plain text: "")."""

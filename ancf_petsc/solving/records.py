@@ -33,7 +33,7 @@ def reason_name(reason: int) -> str:
 class LoadStepFailure(Exception):
     """A requested load level could not be reached; raised identically on every rank.
     ``code`` is the machine-readable reason (the SNES reason name, NEWTON_BUDGET_EXCEEDED, ...);
-    ``cause`` what stopped the path, one of ``solver_messages.CAUSES`` (summary.json
+    ``cause`` what stopped the path, one of ``failure_cause.CAUSES`` (summary.json
     ``failure_cause``; by default the code in lower case)."""
 
     args: tuple             # (the message,): ``amend`` adds to it

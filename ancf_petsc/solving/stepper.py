@@ -23,7 +23,7 @@ from ..petsc.problem import Problem, unclean
 from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
-from .continuity import jump_detail, residual_jump
+from .continuity import Jump, jump_detail, residual_jump
 from .failure_cause import give_up_cause, with_critical_point
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
@@ -304,7 +304,7 @@ class LoadStepper:
 
 
 def _given_up(stepper: LoadStepper, lam: float, step: float, target: float, reason: int, tally: LevelTally,
-              inverted: bool, lost: bool, jump) -> LoadStepFailure:
+              inverted: bool, lost: bool, jump: Jump | None) -> LoadStepFailure:
     """The failure of a level whose cut-backs gave out at the step from ``lam``: its message (what
     Newton did, a less stable state on the way, a jump of the residual) and its cause's code
     (failure_cause.py)."""

@@ -34,9 +34,11 @@ CAUSES = {
     "newton_budget_exceeded": "the run spent solver.max_newton_iterations",
     "petsc_error": "PETSc or an external package raised an error (e.g. MUMPS could not factor the tangent)",
 }
-#: (any other failure: its SNES reason in lower case, e.g. diverged_fnorm_nan)
+# (any other failure: its SNES reason in lower case, e.g. diverged_fnorm_nan)
 #: the codes of a jump of the residual (continuity.py ``Jump.kind``)
 JUMP_CAUSES = ("c0_kink", "two_closest_points", "fade_weight_jump", "residual_jump")
+#: the findings that come before a critical point in the order (module docstring)
+BEFORE_CRITICAL = ("inverted_element", "projection_lost") + JUMP_CAUSES
 
 
 class Detail(str):
@@ -67,4 +69,4 @@ def give_up_cause(inverted: bool, lost: bool, jump, unstable_at: tuple | None, n
 def with_critical_point(cause: str) -> str:
     """The code once the tangent at the last converged state shows a critical point: that, unless
     a finding before it in the order explains the failure."""
-    return cause if cause in JUMP_CAUSES or cause in ("inverted_element", "projection_lost") else "critical_point"
+    return cause if cause in BEFORE_CRITICAL else "critical_point"

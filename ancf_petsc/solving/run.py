@@ -266,16 +266,16 @@ class Run:
                     self.say(f"[ancf]   {note}")
 
     def step_through(self, levels: list[float], start: PathState | None) -> tuple[tuple | None, int, bool]:
-        """Step through ``levels``: (failure (status, code, message[, cause]) or None, signal, inverted)."""
+        """Step through ``levels``: (failure (status, code, message, cause) or None, signal, inverted)."""
         try:
             if levels:
                 self.stepper.run(levels, self.on_level, start)
         except LoadStepFailure as exc:
             return ("failed", exc.code, str(exc), exc.cause), 0, exc.inverted
         except RunInterrupted as exc:
-            return ("interrupted", st.signal_reason(exc.signum), str(exc)), exc.signum, False
+            return ("interrupted", st.signal_reason(exc.signum), str(exc), ""), exc.signum, False
         except OutputError as exc:
-            return ("failed", st.OUTPUT_ERROR, f"output error: {exc}"), 0, False
+            return ("failed", st.OUTPUT_ERROR, f"output error: {exc}", ""), 0, False
         except BaseException as exc:
             # a bug, possibly on this rank only: no collective calls; record it where we can
             self.stepper.close(collective=False)
@@ -373,7 +373,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         status, reason_code=code, message=message, timings=timings,
         newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.solver.chord.count,
         preconditioner_reuses=stepper.solver.chord.kept,
-        exchange=exchange, failure_cause=failure[3] if failure is not None and len(failure) > 3 else "",
+        exchange=exchange, failure_cause=failure[3] if failure is not None else "",
         jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,

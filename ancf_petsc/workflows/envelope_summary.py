@@ -6,26 +6,29 @@ solving/failure_cause.py); and the cells a grid's CSV records as not completed, 
 from __future__ import annotations
 
 import csv
-import os
 from collections import Counter
 
 import numpy as np
 
-from .envelope import EnvelopeCell
+from .envelope import CellResult, EnvelopeCell
+
+
+def row_key(row: dict) -> tuple:
+    """What identifies a cell in a row of a grid (``CellResult.row``, or its CSV's strings)."""
+    return (row["base"], row["law"], float(row["friction"]), float(row["twist"]), row["bias"],
+            int(row["elements"]), str(row["stride"]) == "True")
 
 
 def cell_key(cell: EnvelopeCell) -> tuple:
-    """What identifies a cell in a grid's CSV (``CellResult.row``'s first columns)."""
-    return (os.path.basename(cell.base), cell.law or "own", float(cell.friction), float(cell.twist), cell.bias,
-            int(cell.elements), bool(cell.stride))
+    """The ``row_key`` of ``cell``'s rows."""
+    return row_key(CellResult(cell, "").row())
 
 
 def not_completed(path: str) -> set[tuple]:
-    """The ``cell_key`` of every row of the CSV at ``path`` (bench_envelope.py --csv) whose cell
+    """The ``row_key`` of every row of the CSV at ``path`` (bench_envelope.py --csv) whose cell
     did not complete."""
     with open(path, newline="") as fh:
-        return {(r["base"], r["law"], float(r["friction"]), float(r["twist"]), r["bias"], int(r["elements"]),
-                 r["stride"] == "True") for r in csv.DictReader(fh)
+        return {row_key(r) for r in csv.DictReader(fh)
                 if r["status"] != "completed" and r.get("solver", "after") == "after"}
 
 

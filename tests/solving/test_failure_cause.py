@@ -21,7 +21,7 @@ def test_the_most_specific_finding_names_the_cause():
     # a critical point of the tangent outranks what Newton did, not a jump or a lost projection
     assert with_critical_point("newton_linear") == with_critical_point("unstable_state") == "critical_point"
     assert with_critical_point("min_increment") == "critical_point"
-    for cause in JUMP_CAUSES + ("inverted_element", "projection_lost"):
+    for cause in JUMP_CAUSES + ("inverted_element", "projection_lost"):     # the order, written out
         assert with_critical_point(cause) == cause
     assert set(JUMP_CAUSES) <= set(CAUSES)
 

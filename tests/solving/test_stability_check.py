@@ -214,4 +214,5 @@ def test_the_inertia_is_read_from_the_converged_state_after_a_solve_without_an_i
         assert stepper.solve_at(10.0, X, 10.0, 10.0)[1] == 0
         assert S.negative_eigenvalues(X) == 0 and S.assemblies == made   # no refactorisation
     finally:
+        stepper.close()                  # its options out of PETSc's database, as a run does
         stepper.destroy()

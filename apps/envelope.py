@@ -32,6 +32,8 @@ def main(argv: list[str] | None = None) -> int:
     cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements,
                  args.predictor, args.tangent, args.augmentation)
     if args.failed_in:
+        if not os.path.isfile(args.failed_in):
+            ap.error(f"--failed-in {args.failed_in}: no such file (a CSV written by --csv)")
         failed = not_completed(args.failed_in)
         cells = [c for c in cells if cell_key(c) in failed]
     solvers = {"after": [args.solver], **({"before": [args.before]} if args.before else {})}

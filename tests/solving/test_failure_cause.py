@@ -64,3 +64,13 @@ def test_a_grid_csv_names_the_cells_to_run_again(tmp_path):
         w.writerows(rows)
     assert not_completed(str(tmp_path / "grid.csv")) == {cell_key(cells[1]), cell_key(cells[2])}
     assert rows[1]["cause"] == "c0_kink"
+
+
+def test_a_missing_failed_in_csv_is_one_line_not_a_traceback(tmp_path, capsys):
+    import pytest
+    from apps.envelope import main
+    with pytest.raises(SystemExit) as exc:
+        main(["--grid", "core", "--failed-in", str(tmp_path / "none.csv"), "--work", str(tmp_path)])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--failed-in" in err and "no such file" in err and "Traceback" not in err

@@ -15,7 +15,7 @@ stride's Jacobians (630 rows) PETSc passed 89 000 upper entries, 55 000 of them 
 context, ``install``): its structure is J's nonzeros when its pattern last changed; each
 set-up copies J's entries at that structure into a scalar SBAIJ matrix through a fixed index
 map between the two value arrays (``MatSeqSBAIJGetArray``, 0.4 ms on the walking stride) and
-factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 3 unless the solve's -mat_mumps_*
+factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 5 unless the solve's -mat_mumps_*
 options say otherwise (they reach this factor: it has the solve's prefix).  A nonzero of J
 outside the structure (a contact pair that comes into use, a law that writes there) adds its
 position to the structure, and MUMPS analyses the grown one: the factor is J's whatever the law.
@@ -25,6 +25,12 @@ of the time with every stored entry, the same Newton iterations.  Negative and n
 diagonals, so the stability check reads the same counts (``inertia.pivot_counts`` reads this
 factor through ``factor``).  A failed
 factorisation fails the outer preconditioner (PCSetFailedReason), as MUMPS's own does.
+
+The scaling of matching 5 is the analysis's, kept by every factorisation after it; values that
+moved far since (fibres taking the load of a soft matrix) leave it stale and the factors wrong.
+So every solve is checked: where ‖C y − x‖ > ``GUARD`` ‖x‖, or MUMPS gave up, on factors of an
+earlier analysis, C is analysed again at its present values and the solve repeated (one MatMult
+a solve; a factor read for its inertia before any solve is checked with x = 1 first).
 """
 from __future__ import annotations
 
@@ -37,19 +43,22 @@ from .diagnostics import petsc_library
 from .database import option
 
 #: MUMPS controls of the compact factor unless the solve's options say otherwise: ordering on the
-#: compressed graph of matched pairs (ICNTL(12) = 2) after the bottleneck matching (ICNTL(6) = 3),
-#: which computes no scaling, so that MUMPS scales every factorisation again for its own values
-#: (ICNTL(8) = 77: iterative, ~0.8 of its 2.5 ms on the walking stride).  The matching that also
-#: gives a scaling (5, MUMPS's default for it) keeps the analysis's scaling for every later
-#: factorisation until the structure grows: 1.09x the sliding stride's frames/s, but where the
-#: values move by orders of magnitude after the analysis (a soft matrix whose fibres take the load)
-#: that scaling ruins the factors: the solver_default set's 0 deg columns, 87 Newton iterations to
-#: 3 kN with 3, took Newton steps to |F| 1e26 at the first level and stalled at every cut-back
-#: with 5 (docs/parallel.md, 2026-12-03).  Residuals of a random right-hand side 1e-8 (5: 3e-8)
-#: on the stride's Jacobians, 3e-13 (4e-11) on bundle_hex7.  4 takes 170 ms an analysis on the
-#: 8-element stride (3: ~30 ms); AMD without matching factors the strides as fast but bundle_hex7
-#: in 2.0e8 flops against 7.7e7
-ORDERING = {12: 2, 6: 3}
+#: compressed graph of matched pairs (ICNTL(12) = 2) after the matching that also gives a scaling
+#: (ICNTL(6) = 5, MUMPS's default for it), which every later factorisation keeps until the next
+#: analysis: 1.09x the sliding stride's frames/s against the bottleneck matching (3), after which
+#: MUMPS scales every factorisation again (ICNTL(8) = 77, iterative, ~0.8 of its 2.5 ms).  Where
+#: the values move by orders of magnitude after the analysis (a soft matrix whose fibres take the
+#: load) the kept scaling ruins the factors: ``GUARD`` catches that and analyses again (module
+#: docstring; docs/parallel.md, 2026-12-03).  Residuals of a random right-hand side 3e-8 (3:
+#: 1e-8) on the stride's Jacobians, 4e-11 (3e-13) on bundle_hex7.  4 takes 170 ms an analysis on
+#: the 8-element stride (3: ~30 ms); AMD without matching factors the strides as fast but
+#: bundle_hex7 in 2.0e8 flops against 7.7e7
+ORDERING = {12: 2, 6: 5}
+#: the largest relative residual ‖C y − x‖ / ‖x‖ of a solve with factors from an earlier analysis;
+#: above it the structure is analysed again at the present values (a new scaling) and the solve
+#: repeated.  Measured: 1e-15 – 9e-11 on the walking stride's solves with either matching; 0.3 –
+#: 1.0 where the kept scaling had gone stale (the solver_default column at twist 0°)
+GUARD = 1e-6
 #: PETSc's PCFailedReason for a factorisation that failed otherwise than on a zero pivot
 PC_FACTOR_OTHER = 4
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
@@ -137,14 +146,18 @@ class CompactCholesky:
         self.kept = np.zeros(0, dtype=np.int64)
         self.structure: CompactStructure | None = None
         self.C: PETSc.Mat | None = None
+        self._residual: PETSc.Vec | None = None
         self.ksp: PETSc.KSP | None = None
         self._source: tuple | None = None
+        self.fresh = self.verified = False       # factors of this set-up's analysis; checked
         self.analyses = 0                        # structures MUMPS analysed (growths included)
+        self.reanalyses = 0                      # of them, for kept scalings gone stale (GUARD)
 
     def setUp(self, pc: PETSc.PC) -> None:
         _, J = pc.getOperators()
         source = (J.handle, J.getInfo()["nz_allocated"])
-        if self.structure is None or source != self._source:
+        self.fresh = self.structure is None or source != self._source
+        if self.fresh:
             self._build(J)
         self._source = source
         stray = self.structure.copy(J, self.C)
@@ -152,6 +165,8 @@ class CompactCholesky:
             self.kept = np.union1d(self.kept, stray)
             self._build(J)                       # from J's values now: nothing strays
             self.structure.copy(J, self.C)
+            self.fresh = True
+        self.verified = False
         self.ksp.setOperators(self.C, self.C)
         self.ksp.setUp()
 
@@ -159,6 +174,13 @@ class CompactCholesky:
         self.structure = CompactStructure(J, self.held, self.multiplier, self.kept)
         self.destroy()
         self.C = self.structure.matrix()
+        self._residual = self.C.createVecLeft()
+        self._analyse()
+
+    def _analyse(self) -> None:
+        """A new MUMPS factor of C: the next set-up analyses C's structure and values."""
+        if self.ksp is not None:
+            self.ksp.destroy()
         ksp = self.ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
         ksp.setOptionsPrefix(self.prefix)        # -mat_mumps_* of the solve reach this factor
         ksp.setType(PETSc.KSP.Type.PREONLY)
@@ -173,14 +195,42 @@ class CompactCholesky:
         self.analyses += 1
 
     def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        self.ksp.solve(x, y)
-        if self.ksp.getConvergedReason() < 0:    # MUMPS gave up (its own factor error)
+        if not self._solve_checked(x, y):
             petsc_library().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(PC_FACTOR_OTHER))
 
+    def _solve_checked(self, x: PETSc.Vec, y: PETSc.Vec) -> bool:
+        """y = C⁻¹ x; where the factors are an earlier analysis's and MUMPS gave up or the
+        residual exceeds ``GUARD``, analyse again at the present values and solve again.
+        False where MUMPS gave up on factors of a fresh analysis (its own factor error)."""
+        self.ksp.solve(x, y)
+        good = self.ksp.getConvergedReason() >= 0 and self._accurate(x, y)
+        if not good and not self.fresh:
+            self._analyse()                      # C's values now: a new scaling
+            self.ksp.setUp()
+            self.fresh, self.reanalyses = True, self.reanalyses + 1
+            self.ksp.solve(x, y)
+        self.verified = True
+        return self.ksp.getConvergedReason() >= 0
+
+    def _accurate(self, x: PETSc.Vec, y: PETSc.Vec) -> bool:
+        """‖C y − x‖ ≤ GUARD ‖x‖ (finite)."""
+        r = self._residual
+        self.C.mult(y, r)
+        r.axpy(-1.0, x)
+        rn, xn = r.norm(), x.norm()
+        return bool(np.isfinite(rn) and rn <= GUARD * xn)
+
     def factor(self) -> PETSc.Mat | None:
-        """The MUMPS factor (None before the first set-up)."""
+        """The MUMPS factor (None before the first set-up), checked by a solve (``GUARD``) when no
+        solve has used it yet: its pivots count the inertia (linalg/inertia.py)."""
         if self.ksp is None:
             return None
+        if not self.verified:
+            x, y = self.C.createVecs()
+            x.set(1.0)
+            self._solve_checked(x, y)
+            x.destroy()
+            y.destroy()
         try:
             return self.ksp.getPC().getFactorMatrix()
         except PETSc.Error:
@@ -202,10 +252,10 @@ class CompactCholesky:
         """Free the factor and the compact matrix (nothing after PETSc finalized: the outer
         PC of an object still alive at interpreter exit is destroyed then)."""
         if not PETSc.Sys.isFinalized():
-            for obj in (self.ksp, self.C):
+            for obj in (self.ksp, self.C, self._residual):
                 if obj is not None:
                     obj.destroy()
-        self.ksp = self.C = None
+        self.ksp = self.C = self._residual = None
 
 
 def compact_applies(problem, pc: PETSc.PC, wanted: bool) -> bool:

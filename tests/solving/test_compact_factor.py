@@ -207,21 +207,74 @@ def test_the_complementarity_predictor_factors_its_k_compactly_with_the_same_pre
     assert np.abs(xa - xb).max() <= 1e-8 * np.abs(xb).max()
 
 
-def test_a_soft_matrix_column_keeps_accurate_factors_as_its_fibres_stiffen(tmp_path):
+def _soft_column(tmp_path, monkeypatch, budget: int) -> tuple[dict, list]:
     """The published solver_default set (matrix μ 15 kPa, stiff fibres), twist 0°, uniform bias,
-    its own unilateral contact, to 3 kN: the Jacobian's values grow by orders of magnitude from
-    the analysis at rest to the loaded fibres.  The compact factor scales every factorisation for
-    its own values (ICNTL(6) = 3); with the analysis's scaling kept (matching 5, 5edf9cb to
-    2026-12-03) the first level's Newton steps reached |F| 1e26 N, every cut-back stalled, and the
-    run spent this budget of 400 Newton iterations without converging a level.  Now: 87, as on
-    the fibre grid before that change (docs/gait_envelope_fibres.csv)."""
-    from ancf_petsc.linalg.compact_factor import ORDERING
+    its own unilateral contact, to 3 kN within ``budget`` Newton iterations; the summary and the
+    compact factors' contexts."""
+    from ancf_petsc.linalg import compact_factor
     from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
     from helpers import run_inline
-    assert ORDERING[6] == 3
+    contexts = []
+    init = compact_factor.CompactCholesky.__init__
+
+    def recorded(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        contexts.append(self)
+    monkeypatch.setattr(compact_factor.CompactCholesky, "__init__", recorded)
     base = [g for g in GOH if g.endswith("_solver_default.yaml")][0]
     raw = cell_config(EnvelopeCell(base, 0.0, "uniform", None, 0.0, 4))
-    raw.setdefault("solver", {})["max_newton_iterations"] = 400
-    s = run_inline(raw, tmp_path / "run")
+    raw.setdefault("solver", {})["max_newton_iterations"] = budget
+    return run_inline(raw, tmp_path / "run"), contexts
+
+
+def test_a_soft_matrix_column_keeps_accurate_factors_as_its_fibres_stiffen(tmp_path, monkeypatch):
+    """The soft column to 3 kN: the Jacobian's values grow by orders of magnitude from the
+    analysis at rest to the loaded fibres, and the scaling the analysis's matching gave (ICNTL(6)
+    = 5) goes stale.  The guard (``GUARD``) finds solves with residuals 0.3–1.0 of the right-hand
+    side and analyses again: 87 Newton iterations, as with a scaling per factorisation (ICNTL(6)
+    = 3, docs/gait_envelope_fibres.csv).  Without the guard (5edf9cb to 2026-12-03) the first
+    level's Newton steps reached |F| 1e26 N and every cut-back stalled (next test)."""
+    from ancf_petsc.linalg.compact_factor import ORDERING
+    assert ORDERING[6] == 5
+    s, contexts = _soft_column(tmp_path, monkeypatch, 400)
     assert s["status"] == "completed", s["message"]
     assert s["newton_iterations"] <= 100, s["newton_iterations"]
+    assert sum(c.reanalyses for c in contexts) >= 1
+
+
+def test_without_the_guard_the_soft_column_stalls_on_stale_scaling(tmp_path, monkeypatch):
+    """The guard switched off (a residual bound no solve exceeds): the same column spends a
+    budget of 120 Newton iterations without reaching 3 kN (it failed at 0.27 N with 400)."""
+    from ancf_petsc.linalg import compact_factor
+    monkeypatch.setattr(compact_factor, "GUARD", np.inf)
+    s, contexts = _soft_column(tmp_path, monkeypatch, 120)
+    assert s["status"] != "completed"
+    assert sum(c.reanalyses for c in contexts) == 0
+
+
+def test_the_guard_analyses_again_only_factors_of_an_earlier_analysis(monkeypatch):
+    """With a guard no solve passes (GUARD < 0): the first solve's factors are its own
+    analysis's and stand; a later set-up's are checked, analysed again once, and the solve
+    repeated on the new factors gives the step of plain MUMPS; a factor read for its inertia
+    before any solve is checked too."""
+    P, PETSc, F = hex7_problem(loaded=True, matrix="sbaij")
+    from ancf_petsc.linalg import compact_factor
+    monkeypatch.setattr(compact_factor, "GUARD", -1.0)
+    ksp, ctx = _compact(PETSc, P)
+    x = F.duplicate()
+    ksp.solve(F, x)
+    assert (ctx.analyses, ctx.reanalyses) == (1, 0)
+    P.J.scale(3.0)                                  # new values, the same structure
+    ksp.setOperators(P.J, P.J)
+    ksp.solve(F, x)
+    assert (ctx.analyses, ctx.reanalyses) == (2, 1) and ksp.getConvergedReason() > 0
+    plain = _mumps(PETSc, P.J)
+    y = F.duplicate()
+    plain.solve(F, y)
+    assert (x - y).norm() <= 1e-7 * y.norm()
+    P.J.scale(0.5)
+    ksp.setOperators(P.J, P.J)
+    ksp.setUp()
+    assert ctx.factor() is not None and (ctx.analyses, ctx.reanalyses) == (3, 2)
+    for obj in (ksp, plain):
+        obj.destroy()

@@ -97,6 +97,7 @@ class SNESSolver:
             pc.setType(PETSc.PC.Type.PYTHON)
             schur = FascicleSchur(fascicle_split(problem), problem.comm, self.prefix)
             pc.setPythonContext(schur)
+        self.compact = None                    # linalg/compact_factor.py's context, where it applies
         self._check_factorisation()
         self.history: list[float] = []         # ... of all solves of the current increment
         self.snes.setMonitor(self._monitor)
@@ -123,7 +124,12 @@ class SNESSolver:
             self.close()
             raise SolverOptionError("", refused(exc, self.petsc_options, self.problem.comm.size,
                                                 self.prefix, self.problem.symmetric)) from None
-        install_for(self.problem, ksp, self.spec.compact_factor, self.prefix)
+        self.compact = install_for(self.problem, ksp, self.spec.compact_factor, self.prefix)
+
+    @property
+    def factor_reanalyses(self) -> int:
+        """Analyses of the compact factor for scalings gone stale (linalg/compact_factor.py)."""
+        return self.compact.reanalyses if self.compact is not None else 0
 
     def close(self, collective: bool = True) -> None:
         """Remove the options this stepper left in PETSc's database; config options PETSc never

@@ -25,7 +25,8 @@ from ..model.build import build_model
 from ..model.contact_setup import contact_for
 from ..parallel.partition import make_layout, partition_stats
 from ..linalg import logging
-from ..contact.reports import made_at_the_end, path_notes, penetration_warnings
+from ..contact.kinks import add_normal_turns
+from ..contact.reports import end_notes, made_at_the_end
 from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
@@ -238,6 +239,7 @@ class Run:
                 if q is not None:          # rank 0
                     extra["displacement_differences"] = displacement_differences(
                         self.model, q, interface_pairs(self.contact.interfaces))
+                    add_normal_turns(gaps, self.contact, q, self.model.connectivity())
             path = None if blocks is None else {
                 "blocks": blocks.reshape(-1, self.model.dofs_per_node),
                 "increment_blocks": increment.reshape(-1, self.model.dofs_per_node),
@@ -366,7 +368,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         notes = run.writer.summary["warnings"]
         notes[:] = [w for w in notes if not made_at_the_end(w)]     # a restarted run's, made again
         steps = run.writer.summary["steps"]
-        for note in penetration_warnings(run.contact, steps[-1].get("contact", {})) + path_notes(run.contact, steps):
+        for note in end_notes(run.contact, steps):
             run.writer.summary["warnings"].append(note)
             say(f"[ancf] {note}")
     problem_writing = run.writer.finish(

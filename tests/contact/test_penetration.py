@@ -150,7 +150,8 @@ def test_too_many_pressure_functions_across_is_a_config_error():
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_local_pressure_functions_and_the_warning_on_ranks_are_serial(tmp_path, ranks):
     """The B-splines across (`curve_spans: 4`) and the penetration report on 2 and 3 ranks: the
-    serial probes and the serial largest penetration (the warning's figure) to 1e-9."""
+    serial probes and the serial largest penetration (the warning's figure) to 1e-9, and the
+    surfaces' normal turns at element boundaries (contact/kinks.py) to 1e-6."""
     from helpers import CONFIGS, read_summary, solve_cli, write_config
     raw = _column("unilateral", steps=(10.0, 20.0))
     raw["contact"]["projection"] = {"curve": 1, "curve_spans": 4}
@@ -169,6 +170,9 @@ def test_local_pressure_functions_and_the_warning_on_ranks_are_serial(tmp_path, 
                            rtol=1e-9, atol=1e-15)
         assert b["contact"][MG_SOL]["max_penetration"] == pytest.approx(a["contact"][MG_SOL]["max_penetration"],
                                                                        rel=1e-9, abs=1e-12)
+        for name, rep in a["contact"].items():          # contact/kinks.py, from rank 0's gathered state
+            assert rep["normal_turn_deg"] > 0.0
+            assert b["contact"][name]["normal_turn_deg"] == pytest.approx(rep["normal_turn_deg"], rel=1e-6)
 
 
 def test_a_restart_warns_of_its_own_last_level_only(tmp_path):

@@ -252,6 +252,27 @@ def test_the_mixed_tangent_table_is_its_csvs():
     assert _block("mixed-tangent-grids") == mixed_tangent_table()
 
 
+#: the grids run with the complementarity predictor's step not held to the fibres' exponent
+#: growth (docs/gait_envelope_GRID_unheld.csv, the same host and tree as GRID.csv, 2026-12-04)
+UNHELD_GRIDS = ("fibres", "fibre_strides")
+
+
+def exponent_hold_table() -> str:
+    """The docs/gait.md table of the predictor's exponent hold against its absence, from the CSVs."""
+    lines = ["| grid (cells) | step not held: not completed / over the target or frames cut back / "
+             "Newton iterations | held | held ÷ not held at ψ ≤ 90°, median (range) |", "|---|---|---|---|"]
+    for name in UNHELD_GRIDS:
+        unheld, held = (_rows(os.path.join(DOCS, f"gait_envelope_{name}{s}.csv")) for s in ("_unheld", ""))
+        assert set(unheld) == set(held), name
+        lines.append(_comparison_row(name, unheld, held,
+                                     "iterations" if name == "fibre_strides" else "iterations_to_1200"))
+    return "\n".join(lines)
+
+
+def test_the_exponent_hold_table_is_its_csvs():
+    assert _block("exponent-hold-grids") == exponent_hold_table()
+
+
 def _total(rows: dict, key: str) -> str:
     """The sum of ``key`` over the rows, written as the docs write it (``_spaced``)."""
     return _spaced(sum(int(r[key]) for r in rows.values()))

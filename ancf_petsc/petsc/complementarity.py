@@ -67,6 +67,7 @@ from ..contact.laws import HELD, PROBE
 from ..linalg.compact_factor import install_for
 from ..linalg.inertia import mumps_factor
 from .lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
+from .step_limits import MAX_EXPONENT_GROWTH, fibre_exponents
 
 #: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
 MAX_MULTIPLIERS = 2500
@@ -282,8 +283,11 @@ class ComplementarityPredictor:
     def _step(self, X: PETSc.Vec, z_new: np.ndarray, active: np.ndarray, B, Xs, y) -> None:
         """X += (Δq = y − Xs Δz, Δz), as far as it leaves a state the residual is defined at
         (no inverted element, every projection found: a large first increment's linearised
-        step may not), halving it up to MAX_HALVINGS times; the status from z_new."""
+        step may not) and no fibre law's exponent k2 Ē² grows by more than
+        ``MAX_EXPONENT_GROWTH`` (the Newton steps' and load predictors' limit, step_limits.py),
+        halving it up to MAX_HALVINGS times; the status from z_new."""
         P, c = self.problem, self.problem.contact
+        exponents = fibre_exponents(P, X) if P.limits.fibres else None
         dz = z_new - self._z
         step, F = y.duplicate(), y.duplicate()
         dzv = self._dense_vec(Xs, dz)
@@ -297,7 +301,8 @@ class ComplementarityPredictor:
             P.residual(None, X, F)
             # the flags are this rank's: every rank must take the same branch (else one halves
             # and evaluates again while the other waits in the SNES: a hang on 2 ranks)
-            if not self.comm.allreduce(int(P.inverted or P.contact_failed)):
+            if (not self.comm.allreduce(int(P.inverted or P.contact_failed))
+                    and P.limits.exponent_growth(exponents, X) <= MAX_EXPONENT_GROWTH):
                 break
             X.axpy(-alpha, step)
             c.projector.restore()              # the failed trial's projections are no start

@@ -121,3 +121,49 @@ def test_tangent_predictor_makes_no_prediction_once_the_contact_pattern_grew():
     tangent.valid = True
     assert tangent.predict(X.copy(), 2.0)
     snes.destroy()
+
+
+@pytest.mark.parametrize("held", [True, False])
+def test_the_complementarity_predictor_step_is_held_to_the_fibres_exponent_growth(tmp_path, monkeypatch, held):
+    """solver_default_2025 (k2 = 524.6, unilateral), twist 0°, gastrocnemius-biased, 4 elements,
+    the envelope's levels to 3 kN (the first increment is the whole first level, 30 N, only when
+    the last level is far: contact/laws.py's share).  The complementarity predictor's
+    Josephy–Newton step from rest is a whole linear step: it stretched the fibres to k2 Ē² ≈ 90
+    and the first solve started at |F| ~ 1e38 N, from which Newton removes ~1 from the exponent
+    per iteration (50 iterations, a saddle, a cut-back; 77 Newton iterations for the level).
+    Held to the growth of k2 Ē² the Newton steps and load predictors are held to
+    (step_limits.MAX_EXPONENT_GROWTH), the level takes 9, the column 49 instead of 117.
+    Without the hold (``held`` False) the old start comes back."""
+    from ancf_petsc.petsc import complementarity
+    if not held:
+        monkeypatch.setattr(complementarity, "MAX_EXPONENT_GROWTH", float("inf"))
+    base = next(g for g in GOH if g.endswith("_solver_default.yaml"))
+    cell = EnvelopeCell(base, 0.0, "gastrocnemius", elements=4)
+    s = run_inline(cell_config(cell), tmp_path / cell.name, base_dir=CONFIGS)
+    assert s["status"] == "completed"
+    first = s["steps"][0]["newton_history"][0][0]          # |F| where the first solve starts
+    if held:
+        assert first < 1e4, first
+        assert s["steps"][0]["cutbacks"] == 0
+        assert s["steps"][0]["iterations"] <= 15, s["steps"][0]["iterations"]
+    else:
+        assert first > 1e20, first
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_the_held_complementarity_predictor_step_is_the_serial_one_on_2_and_3_ranks(tmp_path):
+    """The same column to 100 N on 1, 2 and 3 ranks: the exponent growth is the largest over
+    every rank's Gauss points, so every rank halves the predictor's step alike and the first
+    solve starts from the serial |F| (not ~1e38 N), with the serial answer."""
+    import os
+    from helpers import assert_same_as_serial, probes_table, run_on_ranks
+    base = next(g for g in GOH if g.endswith("_solver_default.yaml"))
+    raw = cell_config(EnvelopeCell(base, 0.0, "gastrocnemius", elements=4))
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"] = [30.0, 100.0]
+    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2, 3))
+    assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
+    first = {n: s["steps"][0]["newton_history"][0][0] for n, (_, s) in runs.items()}
+    assert first[1] < 1e4 and all(abs(f - first[1]) <= 1e-6 * first[1] for f in first.values()), first

@@ -252,25 +252,41 @@ def test_the_mixed_tangent_table_is_its_csvs():
     assert _block("mixed-tangent-grids") == mixed_tangent_table()
 
 
-#: the grids run with the complementarity predictor's step not held to the fibres' exponent
-#: growth (docs/gait_envelope_GRID_unheld.csv, the same host and tree as GRID.csv, 2026-12-04)
-UNHELD_GRIDS = ("fibres", "fibre_strides")
+#: the fibre grids of 2026-12-04, one host: the complementarity predictor's step not held to
+#: the fibres' exponent growth (GRID_unheld.csv), held with the linear section update
+#: (GRID_linear.csv), and held with turned sections, the default with fibres (GRID.csv)
+FIBRE_GRIDS = ("fibres", "fibre_strides")
+
+
+def _fibre_table(head: str, before: str, after: str) -> str:
+    lines = [head, "|---|---|---|---|"]
+    for name in FIBRE_GRIDS:
+        b, a = (_rows(os.path.join(DOCS, f"gait_envelope_{name}{s}.csv")) for s in (before, after))
+        assert set(b) == set(a), name
+        lines.append(_comparison_row(name, b, a, "iterations" if name == "fibre_strides" else "iterations_to_1200"))
+    return "\n".join(lines)
 
 
 def exponent_hold_table() -> str:
     """The docs/gait.md table of the predictor's exponent hold against its absence, from the CSVs."""
-    lines = ["| grid (cells) | step not held: not completed / over the target or frames cut back / "
-             "Newton iterations | held | held ÷ not held at ψ ≤ 90°, median (range) |", "|---|---|---|---|"]
-    for name in UNHELD_GRIDS:
-        unheld, held = (_rows(os.path.join(DOCS, f"gait_envelope_{name}{s}.csv")) for s in ("_unheld", ""))
-        assert set(unheld) == set(held), name
-        lines.append(_comparison_row(name, unheld, held,
-                                     "iterations" if name == "fibre_strides" else "iterations_to_1200"))
-    return "\n".join(lines)
+    return _fibre_table("| grid (cells) | step not held: not completed / over the target or frames cut back / "
+                        "Newton iterations | held | held ÷ not held at ψ ≤ 90°, median (range) |",
+                        "_unheld", "_linear")
+
+
+def section_turn_table() -> str:
+    """The docs/gait.md table of turned sections (the default with fibres) against the linear update."""
+    return _fibre_table("| grid (cells) | `linear`: not completed / over the target or frames cut back / "
+                        "Newton iterations | `rotation` | `rotation` ÷ `linear` at ψ ≤ 90°, median (range) |",
+                        "_linear", "")
 
 
 def test_the_exponent_hold_table_is_its_csvs():
     assert _block("exponent-hold-grids") == exponent_hold_table()
+
+
+def test_the_section_turn_table_is_its_csvs():
+    assert _block("section-turn-grids") == section_turn_table()
 
 
 def _total(rows: dict, key: str) -> str:

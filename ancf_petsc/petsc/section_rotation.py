@@ -16,19 +16,26 @@ section's higher vectors are turned by the exact rotation R(ω) instead of I + [
 i.e. δ_k plus the second-order part R(ω) r_k − r_k − ω × r_k.  The update agrees with Newton's to
 first order, so the iteration keeps its quadratic convergence, and it is exact for a rigid turn
 of a section.  It is applied where it is a small correction of a step in Newton's asymptotic
-regime: when no node turns by more than ``ROTATION_MAX`` (the correction is then under |ω|/2 =
-2.5 % of the step); a larger step is taken as it is (one far from a solution, whose rotation fit
-means little: on the traced subject at 90° a 2500 N increment's first steps fitted turns of up
-to 3 rad, and turning them cost two cut-backs).  Nodes with a held director component keep the
-plain step (a turn would move it), and held higher vectors (3333's) keep theirs.  Each rank
+regime: turned steps are held to direction-vector changes of ``step_limits.MAX_STEP_TURN`` (0.1,
+about the turn in radians), and a step is turned when no node turns by more than
+``ROTATION_MAX`` (the correction is then under |ω|/2 = 10 % of the step); a larger fit is
+taken as it is (one that explains the director steps poorly: before the turn limit, on the
+traced subject at 90° a 2500 N increment's first steps fitted turns of up to 3 rad, and turning
+them cost two cut-backs; the gate was 0.05 rad, which left the soft GOH sets' 0.08–0.1 rad
+steps of their first levels unturned, docs/gait.md, thirty-fourth session).  Nodes with a held
+director component keep the plain step (a turn would move it), and held higher vectors (3333's)
+keep theirs.  Each rank
 updates its own nodes from their own values only: the update is the same on any number of ranks.
 
 Only whole steps are turned (``StepLimits.configure``: the line search ``basic``): a line
 search's step λ·Y would scale the second-order part by λ instead of λ².
 
-Not the default (``linear``): on the gait envelope without friction it cuts the Newton
-iterations of the columns at ψ ≤ 90° to 0.82–0.86 (median) but moves the strongly twisted
-unilateral columns and strides both ways, and the failing cells over the grids rise from 32 to
+The default for a model with a fibre-reinforced law (config/parse.py ``default_section_update``):
+the director stretch |ω|²/2 of a linear turn meets the fibres' exponential stiffness (the soft
+sets' first levels rose by 0.1–1 N every other iteration).  Not for the others (``linear``): on
+the neo-Hookean gait envelope without friction (gate 0.05, no turn limit) it cut the Newton
+iterations of the columns at ψ ≤ 90° to 0.82–0.86 (median) but moved the strongly twisted
+unilateral columns and strides both ways, and the failing cells over the grids rose from 32 to
 36 (docs/running.md, "Newton steps that turn the sections").
 """
 from __future__ import annotations
@@ -38,7 +45,7 @@ from mpi4py import MPI
 from scipy.spatial.transform import Rotation
 
 #: largest turn [rad] of any node for which a Newton step is turned (module docstring)
-ROTATION_MAX = 0.05
+ROTATION_MAX = 0.2
 
 
 def director_rotation(directors: np.ndarray, steps: np.ndarray) -> np.ndarray:

@@ -1,8 +1,9 @@
 """Limits on a Newton step before the line search takes it (SNES line-search pre-check): a step
 that moves a node by more than a few section sizes is scaled down (a near-singular tangent gives
 absurd steps; with contact the closest-point pairing holds only for steps small beside a
-section), then halved until no Gauss point has det F below a floor (inverted elements) and no
-fibre law's exponent k2 Ē² grows by more than ``MAX_EXPONENT_GROWTH`` (a strongly stiffening
+section), a step whose sections are turned (``section_rotation.py``) to a turn of about
+``MAX_STEP_TURN``, then halved until no Gauss point has det F below a floor (inverted elements)
+and no fibre law's exponent k2 Ē² grows by more than ``MAX_EXPONENT_GROWTH`` (a strongly stiffening
 law: Newton's linear step overshoots on the exponential).  The load predictor of an increment is
 held to the same exponent growth (``limit_predictor``)."""
 from __future__ import annotations
@@ -28,6 +29,12 @@ MAX_STEP_SECTIONS_CONTACT = 2.0
 #: Newton removes ~1 from the exponent per iteration (docs/fibres.md, "The published parameter
 #: sets"); 2 and 8 both ran that lone soleus to 400 N, 8 with fewer Newton iterations
 MAX_EXPONENT_GROWTH = 8.0
+#: largest change of a direction vector r_y, r_z of any node in one turned Newton step
+#: (``solver.section_update: rotation``), about the section's turn in radians: a larger linear
+#: step leaves its fitted rotation unturned (``section_rotation.ROTATION_MAX``), and one
+#: near-singular step asked for a 1.01 rad turn at |F| 0.2 N (soft GOH, docs/gait.md, thirty-fourth
+#: session); held to 0.1, every step of the soft sets' first levels is turned
+MAX_STEP_TURN = 0.1
 
 
 def min_jacobian(problem, X: PETSc.Vec) -> float:
@@ -95,14 +102,18 @@ class StepLimits:
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
         """Line-search pre-check (collective): scale the step X − Y down to ``sections``
-        section sizes, then halve it until no Gauss point has det F below ``j_min`` and no fibre
-        exponent grows by more than ``MAX_EXPONENT_GROWTH``; if that fails, Y is filled with NaN
-        so that SNES reports a domain failure and the load step is cut back.  Returns whether Y
-        was changed."""
+        section sizes (a turned step also to direction-vector changes of ``MAX_STEP_TURN``),
+        then halve it until no Gauss point has det F below ``j_min`` and no fibre exponent grows
+        by more than ``MAX_EXPONENT_GROWTH``; if that fails, Y is filled with NaN so that SNES
+        reports a domain failure and the load step is cut back.  Returns whether Y was changed."""
         P = self.problem
         y = Y.getArray(readonly=True).reshape(-1, P.model.block.vectors_per_node, 3)[P.owned_physical]
         big = P.comm.tompi4py().allreduce(float(np.abs(y[:, 0]).max(initial=0.0)), op=MPI.MAX) / (
             self.sections * self.size)
+        if self.turns is not None:          # and each turned step to MAX_STEP_TURN
+            turn = P.comm.tompi4py().allreduce(float(np.linalg.norm(y[:, 1:3], axis=2).max(initial=0.0)),
+                                               op=MPI.MAX) / MAX_STEP_TURN
+            big = max(big, turn)
         changed = False
         if big > 1.0:
             Y.scale(1.0 / big)

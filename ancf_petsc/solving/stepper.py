@@ -331,22 +331,27 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
         _went_on(stepper, path.lam, failure, "the whole partner beam as every contact point's search window")
         return
     critical = critical_point(stepper, path.lam)
-    tried = False
+    tried, sentence = False, ""
     try:
         tried = critical is not None and stepper.branches.snaps(path)
         if tried and stepper.branches.snap(stepper, path, X_prev, target, tally, critical):
             return
+        sentence = critical.sentence(tried) if critical is not None else ""
     finally:
         if critical is not None:
             critical.destroy()
+    if critical is not None:
+        failure.cause = with_critical_point(failure.cause)
+        failure.detail += sentence           # _first_give_up repeats it if a resort goes on
     if stepper.fade_switch.take(stepper, path, tally):
         _went_on(stepper, path.lam, failure, "the pointwise fade forces")
         return
     stepper.problem.load_factor = path.lam
-    if critical is not None:
+    first = _first(stepper, failure)
+    if critical is None and first is not None and first.cause == "critical_point":
+        # the resort ended elsewhere, off the critical point that stopped the path first
         failure.cause = with_critical_point(failure.cause)
-    failure = failure.amend(critical.sentence(tried) if critical is not None else "")
-    raise failure.amend(_first_give_up(stepper, failure))
+    raise failure.amend(sentence).amend(_first_give_up(stepper, failure))
 
 
 def _went_on(stepper: LoadStepper, lam: float, failure: LoadStepFailure, resort: str) -> None:
@@ -360,12 +365,18 @@ def _went_on(stepper: LoadStepper, lam: float, failure: LoadStepFailure, resort:
         stepper.first_give_up = (first[0], first[1], f"{first[2]}, then {resort}")
 
 
+def _first(stepper: LoadStepper, failure: LoadStepFailure) -> LoadStepFailure | None:
+    """The level's first give-up where last resorts went on from it, else None."""
+    first = stepper.first_give_up
+    return None if first is None or first[1].target != failure.target else first[1]
+
+
 def _first_give_up(stepper: LoadStepper, failure: LoadStepFailure) -> str:
     """The final message's part for the level's first give-up where last resorts went on from it
-    (empty otherwise): where it was, its reason and cause."""
-    first = stepper.first_give_up
-    if first is None or first[1].target != failure.target:
+    (empty otherwise): where it was, its reason and cause (a critical point found there too)."""
+    f = _first(stepper, failure)
+    if f is None:
         return ""
-    f = first[1]
+    first = stepper.first_give_up
     return (f"; before going on with {first[2]}, the level's first give-up was from load factor "
             f"{first[0]:.6g}, at {f.attempted:.6g} with {f.reason}{f.detail}")

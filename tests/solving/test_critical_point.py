@@ -84,12 +84,23 @@ def _folding_column(switch: bool | None = None) -> dict:
 
 
 @pytest.mark.slow
-def test_without_switching_the_fold_stops_the_run_naming_the_critical_point(tmp_path):
-    s = run_inline(_folding_column(switch=False), tmp_path / "stop")
+@pytest.mark.parametrize("update", ["linear", "rotation"])
+def test_without_switching_the_fold_stops_the_run_naming_the_critical_point(tmp_path, update):
+    """alex at 120°, soleus-biased, to 30 N: the path folds at 7.2715 N with either section
+    update.  With turned sections (the default with fibres) the first give-up finds the critical
+    point, the pointwise fade forces go on from it and stop at a state that is not near-singular
+    (scaled share 0.19, Newton wandering): the run still names the critical point, from its
+    first give-up."""
+    raw = _folding_column(switch=False)
+    raw["solver"]["section_update"] = update
+    s = run_inline(raw, tmp_path / "stop")
     assert s["status"] == "failed", s["message"]
     message = s["message"]
     assert "SNES failed at load factor 7.27" in message, message
     assert "is nearly singular" in message and "at or near a critical point there" in message, message
+    if "before going on with" in message:        # the critical point was the first give-up's
+        assert "is nearly singular" in message.split("the level's first give-up was")[1], message
+    assert update == "linear" or "before going on with the pointwise fade forces" in message, message
     assert "no stable state was found" not in message          # no snap was tried
     assert s["failure_cause"] == "critical_point", s["failure_cause"]
     share = float(message.split("diagonally scaled, is ")[1].split(" of the next")[0])

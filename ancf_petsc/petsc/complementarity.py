@@ -67,7 +67,7 @@ from ..contact.laws import HELD, PROBE
 from ..linalg.compact_factor import install_for
 from ..linalg.inertia import mumps_factor
 from .lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
-from .step_limits import MAX_EXPONENT_GROWTH, fibre_exponents
+from .step_limits import MAX_EXPONENT_GROWTH
 
 #: the predictor's limit: S is dense (multipliers²) and costs a solve per multiplier
 MAX_MULTIPLIERS = 2500
@@ -287,7 +287,7 @@ class ComplementarityPredictor:
         ``MAX_EXPONENT_GROWTH`` (the Newton steps' and load predictors' limit, step_limits.py),
         halving it up to MAX_HALVINGS times; the status from z_new."""
         P, c = self.problem, self.problem.contact
-        exponents = fibre_exponents(P, X) if P.limits.fibres else None
+        exponents = P.limits.exponents(X)
         dz = z_new - self._z
         step, F = y.duplicate(), y.duplicate()
         dzv = self._dense_vec(Xs, dz)

@@ -90,6 +90,11 @@ class StepLimits:
             self.sections = MAX_STEP_SECTIONS_CONTACT
         return min_det_f > 0.0 or self.turns is not None
 
+    def exponents(self, X: PETSc.Vec) -> np.ndarray | None:
+        """``fibre_exponents`` at X, the start ``exponent_growth`` measures from (None without
+        fibres: no growth to hold)."""
+        return fibre_exponents(self.problem, X) if self.fibres else None
+
     def exponent_growth(self, start: np.ndarray | None, trial: PETSc.Vec) -> float:
         """Largest growth of k2 Ē² from ``start`` (``fibre_exponents`` at the step's start) to
         the state ``trial``, over every rank (collective; 0 without fibres)."""
@@ -120,7 +125,7 @@ class StepLimits:
             changed = True
         if self.turns is not None and self.turns(X, Y):
             changed = True
-        start = fibre_exponents(P, X) if self.fibres else None
+        start = self.exponents(X)
         trial = X.duplicate()
         try:
             for _ in range(self.halvings):

@@ -192,7 +192,10 @@ def _spaced(n: int) -> str:
 
 
 def _same_predictor(name: str) -> str:
-    """The default grid the mixed runs of ``name`` compare with (``MIXED_GRIDS``): the secant's."""
+    """The default grid the mixed runs of ``name`` compare with (``MIXED_GRIDS``): the secant's;
+    the fibres' the thirty-fourth session's (turned Newton steps, linear predictions)."""
+    if name == "fibres":
+        return os.path.join(DOCS, "gait_envelope_fibres_rotation.csv")
     return os.path.join(DOCS, f"gait_envelope_{PREDICTOR_GRIDS.get(name, (name,))[0]}.csv")
 
 
@@ -252,9 +255,11 @@ def test_the_mixed_tangent_table_is_its_csvs():
     assert _block("mixed-tangent-grids") == mixed_tangent_table()
 
 
-#: the fibre grids of 2026-12-04, one host: the complementarity predictor's step not held to
+#: the fibre grids of 2026-12-04: on one host the complementarity predictor's step not held to
 #: the fibres' exponent growth (GRID_unheld.csv), held with the linear section update
-#: (GRID_linear.csv), and held with turned sections, the default with fibres (GRID.csv)
+#: (GRID_linear.csv) and held with turned Newton steps (GRID_rotation.csv); on another the turned
+#: Newton steps with the predictions not turned (GRID_plain_predictions.csv) and turned, the
+#: default with fibres (GRID.csv)
 FIBRE_GRIDS = ("fibres", "fibre_strides")
 
 
@@ -278,7 +283,14 @@ def section_turn_table() -> str:
     """The docs/gait.md table of turned sections (the default with fibres) against the linear update."""
     return _fibre_table("| grid (cells) | `linear`: not completed / over the target or frames cut back / "
                         "Newton iterations | `rotation` | `rotation` ÷ `linear` at ψ ≤ 90°, median (range) |",
-                        "_linear", "")
+                        "_linear", "_rotation")
+
+
+def prediction_turn_table() -> str:
+    """The docs/gait.md table of turned load predictions (fibre models' default) against plain ones."""
+    return _fibre_table("| grid (cells) | predictions not turned: not completed / over the target or frames cut "
+                        "back / Newton iterations | turned | turned ÷ not turned at ψ ≤ 90°, median (range) |",
+                        "_plain_predictions", "")
 
 
 def test_the_exponent_hold_table_is_its_csvs():
@@ -287,6 +299,10 @@ def test_the_exponent_hold_table_is_its_csvs():
 
 def test_the_section_turn_table_is_its_csvs():
     assert _block("section-turn-grids") == section_turn_table()
+
+
+def test_the_prediction_turn_table_is_its_csvs():
+    assert _block("prediction-turn-grids") == prediction_turn_table()
 
 
 def _total(rows: dict, key: str) -> str:

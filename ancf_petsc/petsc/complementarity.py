@@ -285,7 +285,8 @@ class ComplementarityPredictor:
         (no inverted element, every projection found: a large first increment's linearised
         step may not) and no fibre law's exponent k2 Ē² grows by more than
         ``MAX_EXPONENT_GROWTH`` (the Newton steps' and load predictors' limit, step_limits.py),
-        halving it up to MAX_HALVINGS times; the status from z_new."""
+        halving it up to MAX_HALVINGS times; the status from z_new.  Its sections are turned
+        where Newton's are (``StepLimits.turned``)."""
         P, c = self.problem, self.problem.contact
         exponents = P.limits.exponents(X)
         dz = z_new - self._z
@@ -294,6 +295,9 @@ class ComplementarityPredictor:
         Xs.mult(dzv, step)
         step.aypx(-1.0, y)
         self._set_owned(step, dz)
+        step.scale(-1.0)                       # turned sections: the update X − (−step)
+        P.limits.turned(X, step)
+        step.scale(-1.0)
         c.status[:] = active
         alpha = 1.0
         for _ in range(MAX_HALVINGS + 1):

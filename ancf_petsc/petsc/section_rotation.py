@@ -28,7 +28,9 @@ keep theirs.  Each rank
 updates its own nodes from their own values only: the update is the same on any number of ranks.
 
 Only whole steps are turned (``StepLimits.configure``: the line search ``basic``): a line
-search's step λ·Y would scale the second-order part by λ instead of λ².
+search's step λ·Y would scale the second-order part by λ instead of λ².  A fibre model's load
+predictions (the tangent predictor's step, the complementarity predictor's) are turned by the
+same update (``StepLimits.turned``).
 
 The default for a model with a fibre-reinforced law (config/parse.py ``default_section_update``):
 the director stretch |ω|²/2 of a linear turn meets the fibres' exponential stiffness (the soft

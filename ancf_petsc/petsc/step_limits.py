@@ -90,6 +90,17 @@ class StepLimits:
             self.sections = MAX_STEP_SECTIONS_CONTACT
         return min_det_f > 0.0 or self.turns is not None
 
+    def turned(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
+        """Turn the sections of the whole update X − Y of a model with a fibre law where Newton
+        steps turn them (``section_rotation.py``): the tangent load predictor's and the
+        complementarity predictor's steps, neither line-searched nor scaled to ``MAX_STEP_TURN``
+        (a step that turns a node by more than ``ROTATION_MAX`` stays linear).  Their linear turns
+        stretched the soft GOH sets' directors as Newton's did (docs/gait.md, thirty-fifth
+        session).  Not without fibres: the paper's neo-Hookean column with turned Newton steps
+        (opt-in) took 39 → 41 Newton iterations with turned predictions.  Whether Y changed
+        (collective)."""
+        return self.fibres and self.turns is not None and self.turns(X, Y)
+
     def exponents(self, X: PETSc.Vec) -> np.ndarray | None:
         """``fibre_exponents`` at X, the start ``exponent_growth`` measures from (None without
         fibres: no growth to hold)."""

@@ -16,9 +16,9 @@ prescribed displacements by Δq̄ = Σ_g Δm_g ū_g (load groups, model/loading.
   the contact constraints, so the multipliers are predicted with the state.  After a cut-back (the
   factor belongs to a failed attempt) or from rest there is no prediction.  Where Newton steps
   turn the sections (``solver.section_update: rotation``) a fibre model's prediction is turned too
-  (``StepLimits.turned``): on the soft GOH sets' first levels its linear turn of 0.1–0.2 rad
-  stretched the directors, and the sub-steps started at |F| up to 10 N (alex 45° unilateral:
-  75 → 45 Newton iterations to 200 N with the complementarity step turned as well).
+  (``StepLimits.turned``): on the soft GOH sets' first levels (turns of 0.1–0.2 rad a sub-step)
+  the linear step stretched the directors (alex 45° unilateral: 75 → 45 Newton iterations to
+  200 N with the complementarity step turned as well).
 The default (config/parse.py ``default_predictor``) is ``tangent`` for a load history (config
 history:), whose frames change the loads' direction; for a model with a fibre-reinforced law, whose
 path stiffens (the untwist of a soft matrix saturates, the fibres stiffen exponentially) so that

@@ -81,8 +81,9 @@ def test_a_step_is_turned_at_the_free_nodes_only_and_not_when_it_turns_too_far()
 
 def test_the_paper_column_takes_fewer_newton_iterations_to_the_same_answer(tmp_path):
     """The ψ = 45° column to 400 N: the turned steps reach the plain steps' answers in fewer
-    iterations (measured 44 against 47; 39 against 40 with the tangent predictor, 2026-12-04).  Both stop within the Newton tolerance (|F| up to
-    1.6e-8 N against 4e-8), so the probes agree to its order: 1.5e-8 of the largest displacement."""
+    iterations (measured 44 against 47; 39 against 40 with the tangent predictor, 2026-12-04).
+    Both stop within the Newton tolerance (|F| up to 1.6e-8 N against 4e-8), so the probes
+    agree to its order: 1.5e-8 of the largest displacement."""
     runs = {}
     for update in ("linear", "rotation"):
         raw = _column()
@@ -203,18 +204,26 @@ def test_a_model_with_a_fibre_law_turns_its_sections_by_default(name, update):
     assert parse_config(raw, CONFIGS).solver.section_update == "linear"
 
 
+def _alex_column(steps):
+    """The fibre envelope's alex cell (soft matrix, stiff fibres) at twist 45°, uniform bias, its
+    unilateral law, 4 elements, with the load levels ``steps``."""
+    from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
+    base = next(g for g in GOH if g.endswith("_alex.yaml"))
+    raw = cell_config(EnvelopeCell(base, 45.0, "uniform", elements=4))
+    raw["steps"] = steps
+    return raw
+
+
 def test_a_soft_goh_column_takes_fewer_newton_iterations_with_turned_sections(tmp_path):
     """alex (soft matrix, stiff fibres), twist 45°, uniform bias, its unilateral law, 4
     elements, to 1.2 kN: the linear update's turns stretch the directors by |ω|²/2, which the
     fibres answer with residual rises every other iteration (78 Newton iterations in 9 sub-steps
-    to the first level, 30 N).  Turned (the default with fibres): 107 → 88 iterations to 1.2 kN
-    (the envelope, docs/gait.md), the same answer to the Newton tolerance."""
-    from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
-    base = next(g for g in GOH if g.endswith("_alex.yaml"))
+    to the first level, 30 N).  Turned (the default with fibres): 107 → 88 iterations to 1.2 kN,
+    56 since the predictions turn too (the envelope, docs/gait.md), the same answer to the
+    Newton tolerance."""
     runs = {}
     for update in ("linear", None):
-        raw = cell_config(EnvelopeCell(base, 45.0, "uniform", elements=4))
-        raw["steps"] = [s for s in raw["steps"] if s <= 1200.0]
+        raw = _alex_column([30.0, 100.0, 200.0, 400.0, 600.0, 800.0, 1000.0, 1200.0])
         if update:
             raw.setdefault("solver", {})["section_update"] = update
         runs[update] = run_inline(raw, tmp_path / str(update), base_dir=CONFIGS)
@@ -229,24 +238,15 @@ def test_a_soft_goh_column_takes_fewer_newton_iterations_with_turned_sections(tm
 
 
 def test_the_load_predictions_turn_the_sections_where_newton_steps_do(tmp_path, monkeypatch):
-    """alex, twist 45°, uniform bias, its unilateral law, to 200 N: the tangent load predictor's
-    and the complementarity predictor's steps turned as Newton's are (``StepLimits.turned``)
-    start the first level's sub-steps closer (|F| 10 → 1.4 N at its second): measured 75 → 45
-    Newton iterations, the same answer to the Newton tolerance.  Linear predictions
-    (``turned`` a no-op) are the path before 2026-12-04."""
+    """The alex column to 200 N: the tangent load predictor's and the complementarity
+    predictor's steps turned as Newton's are (``StepLimits.turned``) start closer (the first
+    sub-step from rest at |F| 0.60 N instead of 3.8 N; one of the first level's sub-steps needs
+    a second prediction instead of three): measured 75 → 45 Newton iterations, the same answer to
+    the Newton tolerance.  Linear predictions (``turned`` a no-op) are the path before 2026-12-04."""
     from ancf_petsc.petsc.step_limits import StepLimits
-    from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
-    base = next(g for g in GOH if g.endswith("_alex.yaml"))
-    runs = {}
-    for turned in (False, True):
-        if not turned:
-            monkeypatch.setattr(StepLimits, "turned", lambda self, X, Y: False)
-        else:
-            monkeypatch.undo()
-        raw = cell_config(EnvelopeCell(base, 45.0, "uniform", elements=4))
-        raw["steps"] = [30.0, 100.0, 200.0]
-        runs[turned] = run_inline(raw, tmp_path / str(turned), base_dir=CONFIGS)
-    plain, turned = runs[False], runs[True]
+    turned = run_inline(_alex_column([30.0, 100.0, 200.0]), tmp_path / "turned", base_dir=CONFIGS)
+    monkeypatch.setattr(StepLimits, "turned", lambda self, X, Y: False)
+    plain = run_inline(_alex_column([30.0, 100.0, 200.0]), tmp_path / "plain", base_dir=CONFIGS)
     assert plain["status"] == turned["status"] == "completed"
     assert turned["newton_iterations"] <= 0.75 * plain["newton_iterations"], \
         (turned["newton_iterations"], plain["newton_iterations"])
@@ -257,16 +257,11 @@ def test_the_load_predictions_turn_the_sections_where_newton_steps_do(tmp_path, 
 
 @pytest.mark.mpi
 def test_turned_predictions_give_the_serial_answer_on_two_and_three_ranks(tmp_path):
-    """The alex column's first level (30 N from rest, 7 sub-steps whose load and complementarity
-    predictions turn the sections by 0.1–0.2 rad) on 1, 2 and 3 ranks: whether a prediction is
-    turned is decided over every rank, so each takes the serial Newton iterations to the serial
-    answer."""
+    """The alex column's first level (30 N from rest in 6 sub-steps whose predictions are
+    turned) on 1, 2 and 3 ranks: whether a step is turned is decided over every rank, so each
+    takes the serial Newton iterations to the serial answer."""
     from helpers import assert_same_as_serial, probes_table, run_on_ranks
-    from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
-    base = next(g for g in GOH if g.endswith("_alex.yaml"))
-    raw = cell_config(EnvelopeCell(base, 45.0, "uniform", elements=4))
-    raw["steps"] = [30.0]
-    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2, 3))
+    runs = run_on_ranks(_alex_column([30.0]), tmp_path, ranks=(1, 2, 3))
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})
     its = {n: [st["iterations"] for st in s["steps"]] for n, (_, s) in runs.items()}
     assert its[1] == its[2] == its[3], its

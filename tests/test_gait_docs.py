@@ -143,6 +143,20 @@ def test_fibre_strides_grid_runs_the_walking_stride_on_every_goh_config_with_its
     assert raw["geometry"]["twist_deg"] == 90.0
 
 
+def test_subject2_strides_grid_runs_the_walking_stride_on_the_traced_outlines():
+    """The ``subject2_strides`` grid (docs/gait.md, "A second subject's strides"): the traced
+    subject's walking stride sliding, unilateral and with Coulomb μ = 0.3, every twist and bias."""
+    from ancf_petsc.workflows.envelope import SUBJECT2, cell_config, grid
+    cells = grid("subject2_strides", [0.0, 90.0], ["uniform", "soleus"])
+    assert len(cells) == 3 * 2 * 2 and all(c.stride and c.base == SUBJECT2 for c in cells)
+    assert sorted({(c.law, c.friction) for c in cells}) == [("sliding", 0.0), ("sliding", 0.3),
+                                                           ("unilateral", 0.0)]
+    raw = cell_config(next(c for c in cells if c.friction and c.twist == 90.0 and c.bias == "soleus"))
+    assert raw["history"]["file"].endswith("stride_walking_soleus.csv") and "steps" not in raw
+    assert raw["contact"]["tangential"] == {"law": "coulomb", "friction": 0.3}
+    assert raw["geometry"]["twist_deg"] == 90.0
+
+
 def test_friction_strides_grid_and_the_augmentation_of_its_cells():
     """The ``friction_strides`` grid (the μ = 0.3 strides alone, "Friction's augmentation: G/E")
     and ``--augmentation``: set on friction cells (their name says it), ignored elsewhere."""

@@ -236,8 +236,9 @@ SLIDING, UNILATERAL = LAWS                    # contact/laws.py, in its order
 _FRICTION_STRIDES = _columns(NEO, (SLIDING,), (0.3,), stride=True)
 #: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
 #: Coulomb μ 0.1 / 0.3 / 0.5, every shipped GOH config with its own law, strides (sliding,
-#: unilateral, μ 0.3; and the μ 0.3 ones alone), the traced second subject, and the walking
-#: stride on every shipped GOH config with its own law
+#: unilateral, μ 0.3; and the μ 0.3 ones alone), the traced second subject (columns, and the
+#: walking stride sliding, unilateral and with μ 0.3), and the walking stride on every shipped GOH
+#: config with its own law
 GRIDS = {
     "core": _columns(NEO, (SLIDING, UNILATERAL)),
     "friction": _columns(NEO, (SLIDING,), (0.1, 0.3, 0.5)),
@@ -247,6 +248,8 @@ GRIDS = {
         twists, biases, elements) + _FRICTION_STRIDES(twists, biases, elements)),
     "friction_strides": _FRICTION_STRIDES,
     "subject2": _columns(SUBJECT2, (SLIDING, UNILATERAL)),
+    "subject2_strides": lambda twists, biases, elements: (_columns(SUBJECT2, (SLIDING, UNILATERAL), stride=True)(
+        twists, biases, elements) + _columns(SUBJECT2, (SLIDING,), (0.3,), stride=True)(twists, biases, elements)),
     "fibre_strides": lambda twists, biases, elements: [c for base in GOH for c in _columns(
         base, (None,), stride=True)(twists, biases, elements)],
 }

@@ -124,9 +124,11 @@ class StepLimits:
         reports a domain failure and the load step is cut back.  Returns whether Y was changed."""
         P = self.problem
         y = Y.getArray(readonly=True).reshape(-1, P.model.block.vectors_per_node, 3)[P.owned_physical]
-        local = np.array([np.abs(y[:, 0]).max(initial=0.0) / (self.sections * self.size),
-                          np.linalg.norm(y[:, 1:3], axis=2).max(initial=0.0) / MAX_STEP_TURN
-                          if self.turns is not None else 0.0])   # and a turned step to MAX_STEP_TURN
+        move = np.abs(y[:, 0]).max(initial=0.0) / (self.sections * self.size)
+        turn = 0.0                          # and a turned step to MAX_STEP_TURN
+        if self.turns is not None:
+            turn = np.linalg.norm(y[:, 1:3], axis=2).max(initial=0.0) / MAX_STEP_TURN
+        local = np.array([move, turn])      # one reduction for both
         P.comm.tompi4py().Allreduce(MPI.IN_PLACE, local, op=MPI.MAX)
         big = float(local.max())
         changed = False

@@ -290,29 +290,27 @@ class ComplementarityPredictor:
         P, c = self.problem, self.problem.contact
         exponents = P.limits.exponents(X)
         dz = z_new - self._z
-        step, F = y.duplicate(), y.duplicate()
+        back, F = y.duplicate(), y.duplicate()
         dzv = self._dense_vec(Xs, dz)
-        Xs.mult(dzv, step)
-        step.aypx(-1.0, y)
-        self._set_owned(step, dz)
-        step.scale(-1.0)                       # turned sections: the update X − (−step)
-        P.limits.turned(X, step)
-        step.scale(-1.0)
+        Xs.mult(dzv, back)
+        back.axpy(-1.0, y)                     # −(Δq, Δz): the state is X − back, the update
+        self._set_owned(back, -dz)             # form StepLimits.turned takes
+        P.limits.turned(X, back)
         c.status[:] = active
         alpha = 1.0
         for _ in range(MAX_HALVINGS + 1):
-            X.axpy(alpha, step)
+            X.axpy(-alpha, back)
             P.residual(None, X, F)
             # the flags are this rank's: every rank must take the same branch (else one halves
             # and evaluates again while the other waits in the SNES: a hang on 2 ranks)
             if (not self.comm.allreduce(int(P.inverted or P.contact_failed))
                     and P.limits.exponent_growth(exponents, X) <= MAX_EXPONENT_GROWTH):
                 break
-            X.axpy(-alpha, step)
+            X.axpy(alpha, back)
             c.projector.restore()              # the failed trial's projections are no start
             alpha *= 0.5
         c.status[:] = active                   # the residual evaluations keep the status
-        for v in (step, F, dzv):
+        for v in (back, F, dzv):
             v.destroy()
 
     def _set_owned(self, vec: PETSc.Vec, values: np.ndarray) -> None:

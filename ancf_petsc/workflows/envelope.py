@@ -234,6 +234,16 @@ def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
 
 SLIDING, UNILATERAL = LAWS                    # contact/laws.py, in its order
 _FRICTION_STRIDES = _columns(NEO, (SLIDING,), (0.3,), stride=True)
+
+
+def _strides(base: str):
+    """A grid builder: the walking stride of ``base`` sliding and unilateral, then with μ = 0.3."""
+    frictionless = _columns(base, (SLIDING, UNILATERAL), stride=True)
+    friction = _columns(base, (SLIDING,), (0.3,), stride=True)
+    return lambda twists, biases, elements: (frictionless(twists, biases, elements)
+                                             + friction(twists, biases, elements))
+
+
 #: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
 #: Coulomb μ 0.1 / 0.3 / 0.5, every shipped GOH config with its own law, strides (sliding,
 #: unilateral, μ 0.3; and the μ 0.3 ones alone), the traced second subject (columns, and the
@@ -244,12 +254,10 @@ GRIDS = {
     "friction": _columns(NEO, (SLIDING,), (0.1, 0.3, 0.5)),
     "fibres": lambda twists, biases, elements: [c for base in GOH for c in _columns(base, (None,))(
         twists, biases, elements)],
-    "strides": lambda twists, biases, elements: (_columns(NEO, (SLIDING, UNILATERAL), stride=True)(
-        twists, biases, elements) + _FRICTION_STRIDES(twists, biases, elements)),
+    "strides": _strides(NEO),
     "friction_strides": _FRICTION_STRIDES,
     "subject2": _columns(SUBJECT2, (SLIDING, UNILATERAL)),
-    "subject2_strides": lambda twists, biases, elements: (_columns(SUBJECT2, (SLIDING, UNILATERAL), stride=True)(
-        twists, biases, elements) + _columns(SUBJECT2, (SLIDING,), (0.3,), stride=True)(twists, biases, elements)),
+    "subject2_strides": _strides(SUBJECT2),
     "fibre_strides": lambda twists, biases, elements: [c for base in GOH for c in _columns(
         base, (None,), stride=True)(twists, biases, elements)],
 }

@@ -326,3 +326,15 @@ def assert_jacobian_and_gradient(P, X, free, rng, gradient_rel: float, samples: 
         P.residual(None, X, F)
         assert dE == pytest.approx(F.dot(v), rel=gradient_rel)
 
+
+def unilateral_stride_frames(first: int = 4, stop: int = 22) -> dict:
+    """Frames first+1 … stop of the shipped walking stride (uniform bias) at ψ = 45°, unilateral
+    contact, as a history of their own: loading frames whose active set settles."""
+    from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, cell_config
+    from ancf_petsc.workflows.stride import OPENSIM_COLUMNS, synthetic_stride
+    times, forces = synthetic_stride("uniform")
+    raw = cell_config(EnvelopeCell(NEO, 45, "uniform", "unilateral", stride=True))
+    sel = slice(first, stop)
+    raw["history"] = {"table": {"time": times[sel].tolist(), **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
+    raw["output"] = {"vtk": False}
+    return raw

@@ -190,7 +190,8 @@ class Contact:
         rows = active_set_rows(gbar, z, active, self.law.phase.probe)
         pressure = self.stiffness * (self.PhiT @ (z * rows.load))
         st = ContactState(pr=pr, xA=xA, gbar=gbar, z=z, active=active, tau=pressure * weight,
-                          pressure=pressure, lpos=lpos, rows=rows, weight=weight, xl=xl.copy())
+                          pressure=pressure, lpos=lpos, rows=rows, weight=weight, xl=xl.copy(),
+                          support=support)
         st.terms = {t.name: t.evaluate(self, st, x_of) for t in self.terms}
         self._cache = None if self.missing else (st.xl, needed, st)
         if self.timers is not None:
@@ -280,6 +281,31 @@ class Contact:
         self.projector.metric_steps |= bool(lost)
         self._cache = None if change > WEIGHT_TOL or lost else self._cache     # the residual changed
         return bool(change > WEIGHT_TOL or lost)
+
+
+def decide_kept(contact: Contact, xl: np.ndarray, needed: np.ndarray) -> bool:
+    """Whether the law's rule keeps the status at the kept evaluation, if that is of the
+    local state ``xl`` (a converged solve's last residual was evaluated at its state): then
+    that evaluation is what one there with ``allow_update`` makes, and no projection is
+    made again.  False, the status as it was, without one or where the rule changes it (the
+    caller evaluates: its forces, and the fade weights the next solve starts from, are the
+    new status').  Collective with the parallel hooks set."""
+    c = contact._cache
+    hit = c is not None and c[1] is needed and np.array_equal(c[0], xl)
+    if contact.all_ranks is not None:
+        hit = contact.all_ranks(hit)
+    if not hit:
+        return False
+    st, status, changes, memory = c[2], contact.status.copy(), contact.status_changes, contact.law.memory()
+    contact.allow_update = True
+    decide_status(contact, st.gbar, st.z, st.support)
+    kept = contact.status_changes == changes
+    if contact.all_ranks is not None:
+        kept = contact.all_ranks(kept)
+    if not kept:
+        contact.status[:], contact.status_changes = status, changes
+        contact.law.recall(memory)
+    return kept
 
 
 def decide_status(contact: Contact, gbar: np.ndarray, z: np.ndarray, support: np.ndarray) -> np.ndarray:

@@ -121,6 +121,13 @@ class SlidingLaw:
     def update(self, gbar, z, previous, tol, ids, owned, reduce) -> np.ndarray:
         return np.ones(len(gbar), dtype=bool)
 
+    def memory(self) -> tuple:
+        """What ``update`` remembers between calls (none), for ``recall``."""
+        return ()
+
+    def recall(self, memory: tuple) -> None:
+        pass
+
     @staticmethod
     def describe() -> str:
         return "sliding (normal gap held at zero)"
@@ -157,6 +164,15 @@ class UnilateralLaw:
         self.phase = phase
         self._best, self._patience = np.iinfo(np.int64).max, PATIENCE
         self._flips: dict[int, int] = {}
+
+    def memory(self) -> tuple:
+        """What ``update`` remembers between calls (the pivoting rule's patience, the banded
+        phases' flips), for ``recall``: an update tried and taken back leaves no trace."""
+        return self._best, self._patience, dict(self._flips), self.single_pivots
+
+    def recall(self, memory: tuple) -> None:
+        self._best, self._patience, flips, self.single_pivots = memory
+        self._flips = dict(flips)
 
     def update(self, gbar: np.ndarray, z: np.ndarray, previous: np.ndarray, tol: float,
                ids: np.ndarray, owned: np.ndarray, reduce) -> np.ndarray:

@@ -23,5 +23,6 @@ class ContactState:
     lpos: object           # PETSc node id → position in the local array
     rows: Rows             # the law's constraint rows (laws.Rows)
     xl: np.ndarray         # the local state (n, 6, 3) it was evaluated at
+    support: np.ndarray | None = None   # (M_loc,) bool: the function has a weighted point
     terms: dict = field(default_factory=dict)   # each contact term's evaluation (Contact.terms)
     fade: object = None    # the fade weights' derivatives here (weights.FadeDerivatives), once asked

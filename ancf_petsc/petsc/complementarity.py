@@ -17,9 +17,10 @@ guessing is hard: from the exactly touching, pressure-free reference, S is ill-c
 and the primal–dual active set rule needs 12–38 exact iterations at any constant, and cycles on
 bundle_hex7 (scripts/bench_contact.py --lcp).
 
-The predictor is solved at the start of every load increment (at the secant predictor's state)
-and again at a converged state whose status the exact rule would change (solving/newton.py): a
-Josephy–Newton iteration whose inner solves keep the status.  Away from rest the tangent of the
+The predictor is solved at the start of every load increment (at the load predictor's state;
+not where the active set has settled: solving/newton.py, "A settled active set") and again at a
+converged state whose status the exact rule would change: a Josephy–Newton iteration whose inner
+solves keep the status.  Away from rest the tangent of the
 bodies alone can be indefinite (a neighbour pressed by its contact forces and free of its
 constraints buckles), and so can S.  Where its most negative eigenvalue is at most
 ``INDEFINITE_SHARE`` of its largest (the paper's tendon and the second subject: 1e-5 … 5e-3)
@@ -142,6 +143,8 @@ class ComplementarityPredictor:
         self._zero_rows = True                    # the matrix type can zero rows and columns
         self._kept = KeptOperator(self.ksp)        # K between linearisations
         self.last_held = False                     # the last prediction held the active set
+        #: increments in a row whose prediction and check changed no status (solving/newton.py)
+        self.settled = 0
 
     @staticmethod
     def applies(problem) -> bool:

@@ -24,7 +24,7 @@ from . import solver_messages
 from .chord import TangentReuse
 from .continuity import IterateTrail
 from .cycle_stop import DEFAULT_DIVTOL, WANDER_WINDOW, CycleStop
-from .newton import ContactSteps
+from .contact_steps import ContactSteps
 from ..linalg.options import DEFAULT_OPTIONS, SolverOptionError, configure_options, refused, run_defaults
 from .records import LoadStepFailure
 

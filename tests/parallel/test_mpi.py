@@ -6,7 +6,7 @@ import pytest
 from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, cell_config
 
 from helpers import (CONFIGS, assert_same_as_serial, load_raw, probes_table, read_summary, run_on_ranks,
-                     two_beam_twisted, write_config)
+                     two_beam_twisted, unilateral_stride_frames, write_config)
 
 
 def _cases():
@@ -32,8 +32,12 @@ def _cases():
     tendon["steps"] = [10.0, 100.0]
     # unilateral at 90 deg: S far from semidefinite at 600 N, predicted with the active set held
     held = cell_config(EnvelopeCell(NEO, 90, "gastrocnemius", "unilateral", levels=(30.0, 100.0, 200.0, 400.0, 600.0)))
+    # loading frames of the unilateral walking stride: settled active sets solved before they are
+    # predicted, checks read from the converged evaluation (solving/newton.py)
+    stride = unilateral_stride_frames(4, 16)
     return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
-            "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon, "tendon-unilateral-held": held}
+            "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon, "tendon-unilateral-held": held,
+            "tendon-unilateral-stride": stride}
 
 
 CASES = _cases()

@@ -15,7 +15,7 @@ class _Steps:
     """A contact law's part whose weights change ``changes`` times (no statuses)."""
 
     decides_activity = False
-    bounded = False            # no friction bounds (newton.ContactSteps.bounded)
+    bounded = False            # no friction bounds (contact_steps.ContactSteps.bounded)
 
     def __init__(self, changes: int):
         self.changes, self.refreshes, self.frozen = changes, 0, False

@@ -14,10 +14,11 @@ when the complementarity predictor applies (petsc/complementarity.py, up to its 
 **A settled active set.**  Where the last ``SETTLED_INCREMENTS`` increments' predictions and checks
 changed no status (a stride's loading frames: 57 of the 60 predictions of the 45° uniform
 unilateral stride changed none), the increment is solved with the status kept first, from the
-load predictor's state, and predicted only where the check then changes it (or that solve fails).  With the status unchanged the
-Josephy–Newton step is the saddle-point Newton step of that active set, which the SNES's first
-iteration takes for the price of one iteration instead of the predictor's linearisation (the held
-Jacobian, a factorisation of K, a solve per multiplier): the same residuals, one iteration later
+load predictor's state, and predicted only where the check then changes it or that solve fails
+(without a prediction then, the phases).  With the status unchanged the Josephy–Newton step is
+the saddle-point Newton step of that active set, which the SNES's first iteration takes for the
+price of one iteration instead of the predictor's linearisation (the held Jacobian, a
+factorisation of K, a solve per multiplier): the same residuals, one iteration later
 (docs/gait.md, "Frames per second").  The check itself reads the status from the converged
 solve's last evaluation at that state (``contact.decide_kept``), evaluating again only where the
 rule changes it.
@@ -193,16 +194,15 @@ class PhasedNewton:
         lost the next prediction or its solve (the caller starts again from the converged state).
         A settled active set is solved as it is first (module docstring)."""
         P, c, its, predicted_once, weighed, seen = self.steps, self.steps.contact, 0, False, None, set()
-        streak, self.predictor.settled = self.predictor.settled, 0
+        (streak, self.predictor.settled), retry = (self.predictor.settled, 0), False
         for k in range(MAX_PREDICTIONS):
-            before = c.status.copy()
-            skipped = k == 0 and streak >= SETTLED_INCREMENTS and not unchanged
+            before, skipped = c.status.copy(), k == 0 and streak >= SETTLED_INCREMENTS and not unchanged
             ok = not (unchanged and k == 0) and not skipped and self.predictor.predict(X)
             predicted = int((before != c.status).sum())          # this rank's, for the trace
             its += int(ok)
-            if not ok and moved and predicted_once:
-                self._trace(lam, f"no prediction {k} on the load predictor's path", 0, 0)
-                return None, its, True
+            if not ok and (retry or moved and predicted_once):   # retry: the settled solve failed
+                self._trace(lam, f"no prediction {k}{'' if retry else ' on the load predictor path'}", 0, 0)
+                return None, its, not retry
             predicted_once |= ok
             start, status = X.copy(), c.status.copy()
             P.keep_status(CHECK)
@@ -223,7 +223,8 @@ class PhasedNewton:
                 start.destroy()
                 c.status[:] = status
                 if skipped:
-                    continue            # the settled set's solve failed: predicted after all
+                    retry = True        # the settled set's solve failed: predicted after all
+                    continue
                 # the predicted state's solve failed: the phases from the prediction (they
                 # rescue increments that may not be cut back: fixed increments)
                 return None, its, moved and predicted_once

@@ -38,7 +38,8 @@ def test_a_settled_active_set_is_solved_before_it_is_predicted(tmp_path, monkeyp
     settled = run_inline(raw, tmp_path / "settled", base_dir=CONFIGS)
     made = sum(predictions.values())
     predictions.clear()
-    monkeypatch.setattr(ComplementarityPredictor, "settled", property(lambda self: False, lambda self, v: None), raising=False)
+    never = property(lambda self: False, lambda self, value: None)         # no increment settles
+    monkeypatch.setattr(ComplementarityPredictor, "settled", never, raising=False)
     every = run_inline(raw, tmp_path / "every", base_dir=CONFIGS)
     assert settled["status"] == every["status"] == "completed"
     assert len(settled["steps"]) == len(every["steps"]) == 18

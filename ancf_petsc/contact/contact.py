@@ -162,13 +162,9 @@ class Contact:
 
         SNES evaluates the Jacobian at the state of the residual before it: that evaluation is
         reused.  With the parallel hooks set (``sum_over_ranks``) every rank calls it."""
-        c = self._cache
-        hit = (c is not None and c[1] is needed and np.array_equal(c[0], xl)
-               and not (self.allow_update and self.law.decides_activity))
-        if self.all_ranks is not None:
-            hit = self.all_ranks(hit)
-        if hit:
-            return c[2]
+        c = kept_evaluation(self, xl, needed, not (self.allow_update and self.law.decides_activity))
+        if c is not None:
+            return c
         t0 = time.perf_counter()
 
         lpos = functools.partial(np.searchsorted, needed)       # PETSc node id → local position
@@ -283,6 +279,16 @@ class Contact:
         return bool(change > WEIGHT_TOL or lost)
 
 
+def kept_evaluation(contact: Contact, xl: np.ndarray, needed: np.ndarray, usable: bool = True):
+    """The kept evaluation (``ContactState``) if it is of the local state ``xl`` over ``needed``
+    and ``usable`` on every rank, else None (collective with the parallel hooks set)."""
+    c = contact._cache
+    hit = usable and c is not None and c[1] is needed and np.array_equal(c[0], xl)
+    if contact.all_ranks is not None:
+        hit = contact.all_ranks(hit)
+    return c[2] if hit else None
+
+
 def decide_kept(contact: Contact, xl: np.ndarray, needed: np.ndarray) -> bool:
     """Whether the law's rule keeps the status at the kept evaluation, if that is of the
     local state ``xl`` (a converged solve's last residual was evaluated at its state): then
@@ -290,13 +296,10 @@ def decide_kept(contact: Contact, xl: np.ndarray, needed: np.ndarray) -> bool:
     made again.  False, the status as it was, without one or where the rule changes it (the
     caller evaluates: its forces, and the fade weights the next solve starts from, are the
     new status').  Collective with the parallel hooks set."""
-    c = contact._cache
-    hit = c is not None and c[1] is needed and np.array_equal(c[0], xl)
-    if contact.all_ranks is not None:
-        hit = contact.all_ranks(hit)
-    if not hit:
+    st = kept_evaluation(contact, xl, needed)
+    if st is None:
         return False
-    st, status, changes, memory = c[2], contact.status.copy(), contact.status_changes, contact.law.memory()
+    status, changes, memory = contact.status.copy(), contact.status_changes, contact.law.memory()
     contact.allow_update = True
     decide_status(contact, st.gbar, st.z, st.support)
     kept = contact.status_changes == changes

@@ -201,7 +201,7 @@ class PhasedNewton:
             predicted = int((before != c.status).sum())          # this rank's, for the trace
             its += int(ok)
             if not ok and (retry or moved and predicted_once):   # retry: the settled solve failed
-                self._trace(lam, f"no prediction {k}{'' if retry else ' on the load predictor path'}", 0, 0)
+                self._trace(lam, f"no prediction {k}" + ("" if retry else " on the load predictor's path"), 0, 0)
                 return None, its, not retry
             predicted_once |= ok
             start, status = X.copy(), c.status.copy()

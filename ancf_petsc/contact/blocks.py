@@ -32,7 +32,7 @@ def fade_derivatives(c, st: ContactState) -> FadeDerivatives:
     """The fade weights' derivatives at the evaluation ``st``, computed once for its residual
     and Jacobian (``weights.FadeDerivatives``)."""
     if st.fade is None:
-        st.fade = FadeDerivatives(c.projector, st.pr)
+        st.fade = FadeDerivatives(c.projector, st.pr, loaded=st.pressure != 0.0)
     return st.fade
 
 
@@ -113,6 +113,10 @@ def add_gap_hessian(K: np.ndarray, sub, tau: np.ndarray, spread, s_loc: np.ndarr
     if module is not None:
         f = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
         i = lambda a: np.ascontiguousarray(a, dtype=np.int64)     # noqa: E731
+        pushed = np.flatnonzero(tau)              # a point with τ_p = 0 adds nothing: left out
+        if len(pushed) < len(tau):
+            sub, tau, s_loc, p_loc, col_b = (subset(sub, pushed), tau[pushed], s_loc[pushed],
+                                             p_loc[pushed], col_b[pushed])
         Ct = gap_hessian_core(sub) * tau[:, None, None]
         module.add_gap_hessian(K, f(sub.NA), f(sub.NB), f(sub.NBz), f(sub.Yz), f(sub.n), Ct,
                                i(s_loc), i(p_loc), i(col_b), P_s, Dq)
@@ -162,6 +166,9 @@ def _segment_blocks(c, st: ContactState, lay: segment_layout.SegmentLayout):
         if len(band):
             Vg = V + spread(sub.g[:, None] * gw)            # ∇(w_p g_p) with w = w(ζ(q))
             p_b = st.pressure[sel][band]
+            on = np.flatnonzero(p_b)                         # the others' stiffness is zero
+            hess = None if hess is None else hess[on]
+            band, p_b = band[on], p_b[on]
             _band_blocks(K, lay, band, grad[band] * p_b[:, None], gw[band], p_b * sub.g[band], hess,
                          c.weights.variational, EL, k * DOFS_PER_NODE)
     tau = st.tau[sel]

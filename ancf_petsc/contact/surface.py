@@ -171,15 +171,17 @@ def shape_third_on_curve(xi: np.ndarray, S: np.ndarray, S1: np.ndarray, S2: np.n
     """N_ζζ (P, S, 2, 2) and N_ζζζ (P, S, 2, 2, 2) at section points S(t) with derivatives S1,
     S2, S3 (for the second-order sensitivity of the closest point, contact/gap.py)."""
     L, dL = block.axial(xi)
-    _, _, N_zz = shape_on_curve(xi, S, S1, S2, block)
-    _, mt, mtt, mttt = _monomials_on_curve(block, S, S1, S2, S3)
+    m, mt, mtt, mttt = _monomials_on_curve(block, S, S1, S2, S3)     # once for both (as shape_on_curve's)
     P, SLOTS = len(xi), block.slots
 
     def outer(a, b):
         return (a[:, :, None] * b[:, None, :]).reshape(P, SLOTS)
 
-    out = np.zeros((P, SLOTS, 2, 2, 2))
     ddl = block.axial_second(xi)
+    N_zz = np.empty((P, SLOTS, 2, 2))
+    N_zz[:, :, 0, 0], N_zz[:, :, 1, 1] = outer(ddl, m), outer(L, mtt)
+    N_zz[:, :, 0, 1] = N_zz[:, :, 1, 0] = outer(dL, mt)
+    out = np.zeros((P, SLOTS, 2, 2, 2))
     out[:, :, 0, 0, 1] = out[:, :, 0, 1, 0] = out[:, :, 1, 0, 0] = outer(ddl, mt)    # L″ m_t
     out[:, :, 0, 1, 1] = out[:, :, 1, 0, 1] = out[:, :, 1, 1, 0] = outer(dL, mtt)    # L′ m_tt
     out[:, :, 1, 1, 1] = outer(L, mttt)                                              # L m_ttt

@@ -88,11 +88,14 @@ class FadeDerivatives:
     (``hessians``: the Jacobian's; a residual alone never needs them).  One evaluation serves the
     residual's forces and every segment group of the Jacobian (``of``), instead of one each."""
 
-    def __init__(self, projector, pr):
+    def __init__(self, projector, pr, loaded: np.ndarray | None = None):
         itf = projector.points.itf[pr.idx]
         first = np.array([i.b.element_offset for i in projector.interfaces], dtype=np.int64)[itf]
         last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
         self._projector, self._pr, self._itf = projector, pr, itf
+        #: the points under pressure (all without ``loaded``): only their ∇²w enter the Jacobian
+        #: (−p_p g_p ∇²w_p), so the others' are left zero
+        self._loaded = np.ones(len(pr.idx), dtype=bool) if loaded is None else loaded
         self._args = (pr.xiB, pr.tB, projector.t_end[pr.idx], pr.eB == first, pr.eB == last)
         self._slope = end_weight_slope(*self._args)
         # a partner place far off B's surface (an early iterate) is ill-determined (det H → 0): its
@@ -113,18 +116,19 @@ class FadeDerivatives:
                 self.grad[self.band] *= self.share[:, None]
 
     def hessians(self, x_of) -> np.ndarray:
-        """∇²w_p (B, 108, 108) of the band's points; ``x_of(elements)``: B's nodal vectors."""
+        """∇²w_p (B, 108, 108) of the band's points, zero for those not ``loaded`` (their
+        p_p g_p ∇²w_p is zero: 6 of the 14 band points of the unilateral stride's Jacobians);
+        ``x_of(elements)``: B's nodal vectors."""
         if self._hess is None:
-            band, pr = self.band, self._pr
-            if not len(band):
-                self._hess = np.zeros((0,) + 2 * self.grad.shape[1:])
-            else:
+            self._hess = np.zeros((len(self.band),) + 2 * self.grad.shape[1:])
+            on = np.flatnonzero(self._loaded[self.band])
+            if len(on):
+                band, pr = self.band[on], self._pr
                 curv = end_weight_curvature(*(a[band] for a in self._args))
                 NBzz, Yzzz = surface_third(self._projector, x_of, self._itf[band], pr.eB[band],
                                            pr.xiB[band], pr.tB[band])
-                self._hess = closest_point_hessian(self._sub, self._slope[band], NBzz, Yzzz, curv)
-                if np.any(self.share < 1.0):
-                    self._hess *= self.share[:, None, None]
+                self._hess[on] = closest_point_hessian(subset(self._sub, on), self._slope[band], NBzz,
+                                                       Yzzz, curv) * self.share[on, None, None]
         return self._hess
 
     def of(self, sel: np.ndarray, x_of=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:

@@ -142,6 +142,31 @@ def test_jacobian_with_partly_weighted_points_matches_finite_differences(mode, f
     assert asymmetry < 1e-12 if forces == "variational" else asymmetry > 1e-9
 
 
+def test_weight_hessians_of_unpressed_points_are_left_out():
+    """``FadeDerivatives(loaded=…)``: the ∇²w of a band point with no pressure (its stiffness
+    p g ∇²w is zero) is not computed; the loaded points' are those of the whole band, to the
+    last bit, and ``shape_third_on_curve``'s N_ζζ is ``shape_on_curve``'s."""
+    from ancf_petsc.contact.blocks import state_nodes
+    from ancf_petsc.contact.surface import shape_on_curve, shape_third_on_curve
+    from ancf_petsc.contact.weights import FadeDerivatives
+    P, _ = build_problem(achilles(contact={"mode": "sliding", "fade": "newton"}))
+    c = P.contact
+    X, _ = fade_state(P)
+    st = contact_evaluation(P, X)
+    nodes = state_nodes(c, st)
+    whole = FadeDerivatives(c.projector, st.pr).hessians(nodes)
+    loaded = np.random.default_rng(2).random(len(st.pr.idx)) < 0.5
+    fd = FadeDerivatives(c.projector, st.pr, loaded=loaded)
+    part = fd.hessians(nodes)
+    on = loaded[fd.band]
+    assert len(fd.band) >= 10 and 0 < on.sum() < len(on)
+    assert np.array_equal(part[on], whole[on]) and not np.any(part[~on])
+    assert np.abs(whole[on]).max() > 0.0
+    rng = np.random.default_rng(4)
+    xi, (S, S1, S2, S3) = rng.uniform(-1, 1, 50), (rng.standard_normal((50, 2)) * 1e-3 for _ in range(4))
+    assert np.array_equal(shape_third_on_curve(xi, S, S1, S2, S3)[0], shape_on_curve(xi, S, S1, S2)[2])
+
+
 def test_fade_key_errors_name_the_key_path():
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.config.values import ConfigError

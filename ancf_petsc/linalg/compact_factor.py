@@ -11,12 +11,17 @@ ordering for saddle points (ICNTL(12) = 2: each multiplier matched with a displa
 constrains), which it applies only where a diagonal is structurally empty.  On the walking
 stride's Jacobians (630 rows) PETSc passed 89 000 upper entries, 55 000 of them nonzero.
 
-``CompactCholesky`` is the preconditioner of the direct solve on one rank (a PETSc PCPYTHON
+``CompactFactor`` is the preconditioner of the direct solve on one rank (a PETSc PCPYTHON
 context, ``install``): its structure is J's nonzeros when its pattern last changed; each
 set-up copies J's entries at that structure into a scalar SBAIJ matrix through a fixed index
 map between the two value arrays (``MatSeqSBAIJGetArray``, 0.4 ms on the walking stride) and
 factors that with MUMPS LDLᵀ, ICNTL(12) = 2 and ICNTL(6) = 5 unless the solve's -mat_mumps_*
-options say otherwise (they reach this factor: it has the solve's prefix).  A nonzero of J
+options say otherwise (they reach this factor: it has the solve's prefix).  An unsymmetric
+Jacobian (friction, pointwise fade forces: AIJ, MUMPS LU) is factored the same way, both
+triangles of its nonzeros into a scalar AIJ matrix: on the μ = 0.3 stride's Jacobians (846 rows,
+224 000 stored entries, 140 000 of them kept) a factorisation took 11.5 ms on every stored entry
+and 4.1 ms compact with ICNTL(6) = 5 (5.6 ms with MUMPS's automatic scaling), with smaller
+residuals.  A nonzero of J
 outside the structure (a contact pair that comes into use, a law that writes there) adds its
 position to the structure, and MUMPS analyses the grown one: the factor is J's whatever the law.
 Measured (docs/parallel.md): the walking stride's factorisations 5.5 → 3.6 ms, whole runs 0.75–0.99
@@ -66,12 +71,15 @@ _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 
 class ValueArray:
     """The value array of a sequential SBAIJ or AIJ matrix (``size`` values) as a numpy view, for
-    the ``with`` block only (``MatSeq{SB,}AIJGetArray``; the restore marks the matrix changed)."""
+    the ``with`` block only (``MatSeq{SB,}AIJGetArray``; the restore marks the matrix changed).
+    ``read``: an AIJ matrix's values for reading (``MatSeqAIJGetArrayRead``: its state kept, so
+    that a solver whose operator it is does not set up again; SBAIJ's restore keeps it anyway)."""
 
-    def __init__(self, mat: PETSc.Mat, size: int):
+    def __init__(self, mat: PETSc.Mat, size: int, read: bool = False):
         self.mat, self.size, self.ptr = mat, size, _DOUBLE_P()
         kind = "SBAIJ" if mat.getType() == PETSc.Mat.Type.SEQSBAIJ else "AIJ"
-        self.get, self.restore = f"MatSeq{kind}GetArray", f"MatSeq{kind}RestoreArray"
+        mode = "Read" if read and kind == "AIJ" else ""
+        self.get, self.restore = f"MatSeq{kind}GetArray{mode}", f"MatSeq{kind}RestoreArray{mode}"
 
     def __enter__(self) -> np.ndarray:
         if getattr(petsc_library(), self.get)(ctypes.c_void_p(self.mat.handle), ctypes.byref(self.ptr)):
@@ -84,7 +92,11 @@ class ValueArray:
 
 def stored_entries(J: PETSc.Mat) -> tuple[np.ndarray, np.ndarray]:
     """(row, column) of every stored value of a sequential SBAIJ J, in its value array's order:
-    the blocks in block-CSR order, each bs × bs by columns."""
+    the blocks in block-CSR order, each bs × bs by columns; of a sequential AIJ J, its CSR
+    order (not inode-compressed)."""
+    if J.getType() == PETSc.Mat.Type.SEQAIJ:
+        ia, ja = J.getRowIJ(symmetric=False, compressed=False)
+        return np.repeat(np.arange(len(ia) - 1), np.diff(ia)), np.asarray(ja)
     ia, ja = J.getRowIJ(symmetric=False, compressed=True)
     D = J.getBlockSize()
     brow = np.repeat(np.arange(len(ia) - 1), np.diff(ia))
@@ -94,18 +106,19 @@ def stored_entries(J: PETSc.Mat) -> tuple[np.ndarray, np.ndarray]:
 
 class CompactStructure:
     """Which stored values of J MUMPS gets (``src``, the compact matrix's CSR order) and which it
-    does not (``dropped``, upper entries only): off the diagonal, a held DOF's entries, the
+    does not (``dropped``; upper entries only of an SBAIJ J): off the diagonal, a held DOF's entries, the
     multiplier–multiplier ones and those zero in J now (couplings of contact pairs no point
     uses at present, contact curvature at rest), unless ``kept`` (positions row · n + column
     found nonzero since)."""
 
     def __init__(self, J: PETSc.Mat, held: np.ndarray, multiplier: np.ndarray, kept: np.ndarray):
         rows, cols = stored_entries(J)
-        with ValueArray(J, len(rows)) as a:
+        with ValueArray(J, len(rows), read=True) as a:
             values = a.copy()
         self.n, self.size = J.getSize()[0], len(rows)
         self.key = rows.astype(np.int64) * self.n + cols
-        upper = cols >= rows
+        self.symmetric = J.getType() == PETSc.Mat.Type.SEQSBAIJ
+        upper = cols >= rows if self.symmetric else np.ones(len(rows), dtype=bool)
         diag = rows == cols
         zero = ~diag & ((values == 0.0) | held[rows] | held[cols] | (multiplier[rows] & multiplier[cols]))
         zero &= ~np.isin(self.key, kept)
@@ -116,17 +129,17 @@ class CompactStructure:
         self.indices = cols[take]
 
     def matrix(self) -> PETSc.Mat:
-        """An empty scalar SBAIJ matrix with this structure."""
-        C = PETSc.Mat().createSBAIJ(self.n, 1, csr=(self.indptr.astype(PETSc.IntType),
-                                                   self.indices.astype(PETSc.IntType)),
-                                    comm=PETSc.COMM_SELF)
+        """An empty scalar matrix with this structure: SBAIJ (upper) or AIJ, as J."""
+        csr = (self.indptr.astype(PETSc.IntType), self.indices.astype(PETSc.IntType))
+        C = (PETSc.Mat().createSBAIJ(self.n, 1, csr=csr, comm=PETSc.COMM_SELF) if self.symmetric
+             else PETSc.Mat().createAIJ(self.n, csr=csr, comm=PETSc.COMM_SELF))
         C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         return C
 
     def copy(self, J: PETSc.Mat, C: PETSc.Mat) -> np.ndarray:
         """Copy J's values into C; returns the positions (keys) of J's nonzero values that the
         structure dropped (then nothing is copied: the structure must grow)."""
-        with ValueArray(J, self.size) as a:
+        with ValueArray(J, self.size, read=True) as a:
             stray = self.dropped[a[self.dropped] != 0.0]
             if len(stray):
                 return self.key[stray]
@@ -136,8 +149,9 @@ class CompactStructure:
         return stray
 
 
-class CompactCholesky:
-    """PCPYTHON context: MUMPS LDLᵀ of J's structural nonzeros (module docstring)."""
+class CompactFactor:
+    """PCPYTHON context: MUMPS LDLᵀ (SBAIJ J) or LU (AIJ J) of J's structural nonzeros (module
+    docstring)."""
 
     def __init__(self, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
                  ordering: dict | None = None):
@@ -150,6 +164,7 @@ class CompactCholesky:
         self.ksp: PETSc.KSP | None = None
         self._source: tuple | None = None
         self.fresh = self.verified = False       # factors of this set-up's analysis; checked
+        self.symmetric = True                    # LDLᵀ (SBAIJ J), else LU (AIJ): known at set-up
         self.analyses = 0                        # structures MUMPS analysed (growths included)
         self.reanalyses = 0                      # of them, for kept scalings gone stale (GUARD)
 
@@ -172,6 +187,7 @@ class CompactCholesky:
 
     def _build(self, J: PETSc.Mat) -> None:
         self.structure = CompactStructure(J, self.held, self.multiplier, self.kept)
+        self.symmetric = self.structure.symmetric
         self.destroy()
         self.C = self.structure.matrix()
         self._residual = self.C.createVecLeft()
@@ -185,7 +201,7 @@ class CompactCholesky:
         ksp.setOptionsPrefix(self.prefix)        # -mat_mumps_* of the solve reach this factor
         ksp.setType(PETSc.KSP.Type.PREONLY)
         inner = ksp.getPC()
-        inner.setType(PETSc.PC.Type.CHOLESKY)
+        inner.setType(PETSc.PC.Type.CHOLESKY if self.structure.symmetric else PETSc.PC.Type.LU)
         inner.setFactorSolverType("mumps")
         ksp.setOperators(self.C, self.C)
         inner.setFactorSetUpSolverType()
@@ -238,9 +254,10 @@ class CompactCholesky:
 
     def view(self, pc: PETSc.PC, viewer: PETSc.Viewer) -> None:
         if self.ksp is not None:
-            viewer.printfASCII("  MUMPS LDLT of the Jacobian's structural nonzeros "
+            kind, part = ("LDLT", "upper entries") if self.structure.symmetric else ("LU", "entries")
+            viewer.printfASCII(f"  MUMPS {kind} of the Jacobian's structural nonzeros "
                                f"({len(self.structure.src)} of {len(self.structure.src) + len(self.structure.dropped)} "
-                               "upper entries):\n")
+                               f"{part}):\n")
             self.ksp.view(viewer)
 
     def reset(self, pc: PETSc.PC) -> None:
@@ -260,11 +277,12 @@ class CompactCholesky:
 
 def compact_applies(problem, pc: PETSc.PC, wanted: bool) -> bool:
     """Whether the compact factorisation replaces ``pc`` (``solver.compact_factor``): one rank,
-    MUMPS Cholesky of an SBAIJ Jacobian with contact multipliers (their slots and blocks are the
-    zeros it leaves out; without multipliers only the held DOFs' entries would go)."""
+    MUMPS Cholesky of an SBAIJ Jacobian or LU of an AIJ one, with contact multipliers (their
+    slots and blocks are the zeros it leaves out; without multipliers only the held DOFs'
+    entries would go)."""
+    kind = {PETSc.PC.Type.CHOLESKY: PETSc.Mat.Type.SEQSBAIJ, PETSc.PC.Type.LU: PETSc.Mat.Type.SEQAIJ}
     return (wanted and problem.comm.size == 1 and problem.n_constraints > 0
-            and pc.getType() == PETSc.PC.Type.CHOLESKY and pc.getFactorSolverType() == "mumps"
-            and problem.J.getType() == PETSc.Mat.Type.SEQSBAIJ)
+            and pc.getFactorSolverType() == "mumps" and kind.get(pc.getType()) == problem.J.getType())
 
 
 def multiplier_mask(problem) -> np.ndarray:
@@ -277,7 +295,7 @@ def multiplier_mask(problem) -> np.ndarray:
 
 
 def install_for(problem, ksp: PETSc.KSP, wanted: bool, prefix: str = "",
-                ordering: dict | None = None) -> CompactCholesky | None:
+                ordering: dict | None = None) -> CompactFactor | None:
     """``install`` on ``ksp`` with ``problem``'s held DOFs and multiplier blocks where
     ``compact_applies`` (``wanted``: ``solver.compact_factor``); the context, or None."""
     if not compact_applies(problem, ksp.getPC(), wanted):
@@ -286,11 +304,12 @@ def install_for(problem, ksp: PETSc.KSP, wanted: bool, prefix: str = "",
 
 
 def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
-            ordering: dict | None = None) -> CompactCholesky:
-    """Make ``ksp``'s preconditioner the compact factorisation (one rank, SBAIJ J, Cholesky);
-    ``ordering``: its MUMPS controls (default ``ORDERING``, for a saddle-point matrix)."""
+            ordering: dict | None = None) -> CompactFactor:
+    """Make ``ksp``'s preconditioner the compact factorisation (one rank; SBAIJ J: Cholesky, AIJ
+    J: LU); ``ordering``: its MUMPS controls (default ``ORDERING``, for a saddle-point matrix)."""
     pc = ksp.getPC()
-    context = CompactCholesky(held, multiplier, prefix, ordering)
+    context = CompactFactor(held, multiplier, prefix, ordering)
+    context.symmetric = pc.getType() != PETSc.PC.Type.LU
     pc.setType(PETSc.PC.Type.PYTHON)
     pc.setPythonContext(context)
     return context

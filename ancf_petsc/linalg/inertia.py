@@ -38,6 +38,8 @@ def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
         counts = getattr(pc.getPythonContext(), "pivot_counts", None)
         if counts is not None:
             return counts()
+    if pc.getType() == "python" and not getattr(pc.getPythonContext(), "symmetric", True):
+        return None                             # the compact factorisation's LU: no inertia
     factor = mumps_factor(ksp) if pc.getType() in ("cholesky", "python") else None
     if factor is None:
         return None

@@ -23,7 +23,8 @@ def describe(solver) -> str:
     if solver.linear == "fieldsplit":
         extra = " (fascicle Schur: dense fascicle factors, MUMPS LDLT on the multipliers)"
     elif name == "python":                      # linalg/compact_factor.py
-        name, extra = "cholesky", " (mumps, of the Jacobian's structural nonzeros)"
+        name = "cholesky" if solver.problem.J.getType() == "seqsbaij" else "lu"
+        extra = " (mumps, of the Jacobian's structural nonzeros)"
     rtol, atol, stol, maxit = solver.snes.getTolerances()
     return (f"SNES {solver.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "
             f"{name}{extra} on {solver.problem.matrix_type.upper()}; rtol {rtol:.1e} atol {atol:.1e} "

@@ -235,12 +235,12 @@ def _soft_column(tmp_path, monkeypatch, budget: int, held: bool = False) -> tupl
     from ancf_petsc.workflows.envelope import GOH, EnvelopeCell, cell_config
     from helpers import run_inline
     contexts = []
-    init = compact_factor.CompactCholesky.__init__
+    init = compact_factor.CompactFactor.__init__
 
     def recorded(self, *args, **kwargs):
         init(self, *args, **kwargs)
         contexts.append(self)
-    monkeypatch.setattr(compact_factor.CompactCholesky, "__init__", recorded)
+    monkeypatch.setattr(compact_factor.CompactFactor, "__init__", recorded)
     base = [g for g in GOH if g.endswith("_solver_default.yaml")][0]
     raw = cell_config(EnvelopeCell(base, 0.0, "uniform", None, 0.0, 4))
     raw.setdefault("solver", {})["max_newton_iterations"] = budget
@@ -304,3 +304,89 @@ def test_the_guard_analyses_again_only_factors_of_an_earlier_analysis(monkeypatc
     assert ctx.factor() is not None and (ctx.analyses, ctx.reanalyses) == (3, 2)
     for obj in (ksp, plain):
         obj.destroy()
+
+
+def test_stored_entries_of_an_aij_matrix_and_its_read_view_keep_its_state():
+    """Entry i of a sequential AIJ value array is J[rows[i], cols[i]] (CSR order, not
+    inode-compressed); reading it (``read=True``) leaves J's state, so a solver whose operator J
+    is does not factor again (an unsymmetric Jacobian was factored twice a set-up without it)."""
+    petsc_init()
+    from petsc4py import PETSc
+    from ancf_petsc.linalg.compact_factor import ValueArray, stored_entries
+    rng = np.random.default_rng(4)
+    n = 12
+    A = rng.standard_normal((n, n)) * (rng.random((n, n)) < 0.4) + np.eye(n)
+    J = PETSc.Mat().createAIJ(n, nnz=n, comm=PETSc.COMM_SELF)
+    J.setBlockSize(3)
+    for i, j in zip(*np.nonzero(A)):
+        J.setValue(int(i), int(j), A[i, j])
+    J.assemble()
+    rows, cols = stored_entries(J)
+    assert len(rows) == np.count_nonzero(A)
+    state = J.stateGet()
+    with ValueArray(J, len(rows), read=True) as a:
+        assert np.array_equal(a, A[rows, cols])
+    assert J.stateGet() == state
+    with ValueArray(J, len(rows)) as a:
+        a[0] = a[0]
+    assert J.stateGet() > state
+    J.destroy()
+
+
+def test_the_compact_lu_gives_the_newton_step_of_mumps_lu():
+    """An AIJ Jacobian (unsymmetric laws: friction, pointwise fade forces) under MUMPS LU: the
+    compact factor is LU of its structural nonzeros, both triangles, and gives the step of LU on
+    every stored entry; it counts no inertia (LU's pivots are not J's eigenvalues), and a set-up
+    leaves J's state (one factorisation)."""
+    P, PETSc, F = hex7_problem(loaded=True, matrix="aij")
+    from ancf_petsc.linalg.compact_factor import install, multiplier_mask
+    from ancf_petsc.linalg.inertia import pivot_counts
+
+    def lu(compact):
+        ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+        ksp.setOperators(P.J, P.J)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        return ksp, install(ksp, P.fixed_mask, multiplier_mask(P)) if compact else None
+    (plain, _), (ksp, ctx) = lu(False), lu(True)
+    x0, x1 = F.duplicate(), F.duplicate()
+    plain.solve(F, x0)
+    state = P.J.stateGet()
+    ksp.solve(F, x1)
+    assert ksp.getConvergedReason() > 0 and P.J.stateGet() == state
+    assert not ctx.symmetric and ctx.C.getType() == "seqaij"
+    s = ctx.structure
+    assert len(s.dropped) > 0 and len(s.src) + len(s.dropped) == s.size
+    assert ctx.ksp.getPC().getType() == "lu"
+    assert _backward_error(PETSc, P.J, x1, F) <= 4.0 * np.finfo(float).eps
+    assert (x1 - x0).norm() <= 1e-7 * x0.norm()
+    assert pivot_counts(ksp) is None
+    for obj in (ksp, plain):
+        obj.destroy()
+
+
+def test_a_friction_column_is_the_same_with_every_stored_entry(tmp_path):
+    """ψ = 45°, Coulomb μ = 0.3 to 100 N (an unsymmetric Jacobian, AIJ and LU): the compact LU
+    and MUMPS LU on every stored entry take the same Newton iterations and agree to rounding;
+    the header names the factorisation."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = f"{CONFIGS}/{b['section']['file']}"
+    raw["steps"] = [10.0, 100.0]
+    raw["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
+    out = {}
+    for compact in (True, False):
+        raw["solver"] = {"compact_factor": compact}
+        raw["output"] = {"dir": str(tmp_path / f"out_{compact}"), "vtk": False}
+        cfg = write_config(raw, tmp_path / f"c_{compact}.yaml")
+        assert solve_cli(cfg).returncode == 0
+        out[compact] = read_summary(tmp_path / f"out_{compact}")
+    a, b = out[True], out[False]
+    assert "PC lu (mumps, of the Jacobian's structural nonzeros)" in a["solver"]
+    assert "structural nonzeros" not in b["solver"]
+    assert a["newton_iterations"] == b["newton_iterations"]
+    for sa, sb in zip(a["steps"], b["steps"]):
+        for name, pa in sa["probes"].items():
+            d = np.asarray(pa["displacement"]) - np.asarray(sb["probes"][name]["displacement"])
+            assert np.abs(d).max() <= 1e-10 * np.abs(pa["displacement"]).max()

@@ -69,7 +69,7 @@ def test_a_level_the_variational_forces_cannot_reach_is_solved_with_pointwise_on
     s = res.summary
     assert s["fade_forces_pointwise_from"] == STEPS[0]
     assert not s["stability_checked"]                      # LU from the switch on: no inertia
-    assert "PC lu (mumps) on AIJ" in s["solver"]
+    assert "PC lu (mumps, of the Jacobian's structural nonzeros) on AIJ" in s["solver"]
     assert s["steps"][0]["negative_eigenvalues"] == 0 and s["steps"][1]["negative_eigenvalues"] is None
     assert any("on with the pointwise ones" in line and f"load factor {STEPS[0]:g}" in line for line in lines)
     # the first level is the variational run's; the last one the pointwise run's equilibrium

@@ -166,6 +166,25 @@ def test_a_failed_factorisation_fails_the_preconditioner():
         J.destroy()
 
 
+def _both_ways(raw: dict, tmp_path) -> tuple[dict, dict]:
+    """The config ``raw`` solved with the compact factor and with every stored entry: their
+    summaries, after checking the same Newton iterations and probes within 1e-10."""
+    out = {}
+    for compact in (True, False):
+        raw["solver"] = {"compact_factor": compact}
+        raw["output"] = {"dir": str(tmp_path / f"out_{compact}"), "vtk": False}
+        cfg = write_config(raw, tmp_path / f"c_{compact}.yaml")
+        assert solve_cli(cfg).returncode == 0
+        out[compact] = read_summary(tmp_path / f"out_{compact}")
+    a, b = out[True], out[False]
+    assert a["newton_iterations"] == b["newton_iterations"]
+    for sa, sb in zip(a["steps"], b["steps"]):
+        for name, pa in sa["probes"].items():
+            d = np.asarray(pa["displacement"]) - np.asarray(sb["probes"][name]["displacement"])
+            assert np.abs(d).max() <= 1e-10 * np.abs(pa["displacement"]).max()
+    return a, b
+
+
 @pytest.mark.parametrize("mode", ["sliding", "unilateral"])
 def test_the_paper_column_is_the_same_with_every_stored_entry(tmp_path, mode):
     """ψ = 45° to 100 N: the compact factorisation (the default on one rank) and MUMPS on
@@ -176,20 +195,8 @@ def test_the_paper_column_is_the_same_with_every_stored_entry(tmp_path, mode):
         b["section"]["file"] = f"{CONFIGS}/{b['section']['file']}"
     raw["steps"] = [10.0, 100.0]
     raw["contact"]["mode"] = mode
-    out = {}
-    for compact in (True, False):
-        raw["solver"] = {"compact_factor": compact}
-        raw["output"] = {"dir": str(tmp_path / f"out_{compact}"), "vtk": False}
-        cfg = write_config(raw, tmp_path / f"c_{compact}.yaml")
-        assert solve_cli(cfg).returncode == 0
-        out[compact] = read_summary(tmp_path / f"out_{compact}")
-    a, b = out[True], out[False]
+    a, b = _both_ways(raw, tmp_path)
     assert "structural nonzeros" in a["solver"] and "structural nonzeros" not in b["solver"]
-    assert a["newton_iterations"] == b["newton_iterations"]
-    for sa, sb in zip(a["steps"], b["steps"]):
-        for name, pa in sa["probes"].items():
-            d = np.asarray(pa["displacement"]) - np.asarray(sb["probes"][name]["displacement"])
-            assert np.abs(d).max() <= 1e-10 * np.abs(pa["displacement"]).max()
 
 
 def test_the_complementarity_predictor_factors_its_k_compactly_with_the_same_prediction():
@@ -375,18 +382,6 @@ def test_a_friction_column_is_the_same_with_every_stored_entry(tmp_path):
         b["section"]["file"] = f"{CONFIGS}/{b['section']['file']}"
     raw["steps"] = [10.0, 100.0]
     raw["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
-    out = {}
-    for compact in (True, False):
-        raw["solver"] = {"compact_factor": compact}
-        raw["output"] = {"dir": str(tmp_path / f"out_{compact}"), "vtk": False}
-        cfg = write_config(raw, tmp_path / f"c_{compact}.yaml")
-        assert solve_cli(cfg).returncode == 0
-        out[compact] = read_summary(tmp_path / f"out_{compact}")
-    a, b = out[True], out[False]
+    a, b = _both_ways(raw, tmp_path)
     assert "PC lu (mumps, of the Jacobian's structural nonzeros)" in a["solver"]
     assert "structural nonzeros" not in b["solver"]
-    assert a["newton_iterations"] == b["newton_iterations"]
-    for sa, sb in zip(a["steps"], b["steps"]):
-        for name, pa in sa["probes"].items():
-            d = np.asarray(pa["displacement"]) - np.asarray(sb["probes"][name]["displacement"])
-            assert np.abs(d).max() <= 1e-10 * np.abs(pa["displacement"]).max()

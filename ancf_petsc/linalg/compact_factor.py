@@ -154,7 +154,7 @@ class CompactFactor:
     docstring)."""
 
     def __init__(self, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
-                 ordering: dict | None = None):
+                 ordering: dict | None = None, symmetric: bool = True):
         self.held, self.multiplier, self.prefix = held, multiplier, prefix
         self.ordering = ORDERING if ordering is None else ordering
         self.kept = np.zeros(0, dtype=np.int64)
@@ -164,7 +164,7 @@ class CompactFactor:
         self.ksp: PETSc.KSP | None = None
         self._source: tuple | None = None
         self.fresh = self.verified = False       # factors of this set-up's analysis; checked
-        self.symmetric = True                    # LDLᵀ (SBAIJ J), else LU (AIJ): known at set-up
+        self.symmetric = symmetric               # LDLᵀ (SBAIJ J), else LU (AIJ J): no inertia
         self.analyses = 0                        # structures MUMPS analysed (growths included)
         self.reanalyses = 0                      # of them, for kept scalings gone stale (GUARD)
 
@@ -187,7 +187,6 @@ class CompactFactor:
 
     def _build(self, J: PETSc.Mat) -> None:
         self.structure = CompactStructure(J, self.held, self.multiplier, self.kept)
-        self.symmetric = self.structure.symmetric
         self.destroy()
         self.C = self.structure.matrix()
         self._residual = self.C.createVecLeft()
@@ -308,8 +307,7 @@ def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: st
     """Make ``ksp``'s preconditioner the compact factorisation (one rank; SBAIJ J: Cholesky, AIJ
     J: LU); ``ordering``: its MUMPS controls (default ``ORDERING``, for a saddle-point matrix)."""
     pc = ksp.getPC()
-    context = CompactFactor(held, multiplier, prefix, ordering)
-    context.symmetric = pc.getType() != PETSc.PC.Type.LU
+    context = CompactFactor(held, multiplier, prefix, ordering, symmetric=pc.getType() != PETSc.PC.Type.LU)
     pc.setType(PETSc.PC.Type.PYTHON)
     pc.setPythonContext(context)
     return context

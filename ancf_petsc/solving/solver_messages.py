@@ -23,7 +23,7 @@ def describe(solver) -> str:
     if solver.linear == "fieldsplit":
         extra = " (fascicle Schur: dense fascicle factors, MUMPS LDLT on the multipliers)"
     elif name == "python":                      # linalg/compact_factor.py
-        name = "cholesky" if solver.problem.J.getType() == "seqsbaij" else "lu"
+        name = "cholesky" if pc.getPythonContext().symmetric else "lu"
         extra = " (mumps, of the Jacobian's structural nonzeros)"
     rtol, atol, stol, maxit = solver.snes.getTolerances()
     return (f"SNES {solver.snes.getType()} line search {ls}; KSP {ksp.getType()} PC "

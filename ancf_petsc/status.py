@@ -26,6 +26,8 @@ NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
 WEIGHTS_UNSETTLED = "WEIGHTS_UNSETTLED"
 #: completed, after switching to a stable branch at a bifurcation (solving/branch_switch.py)
 BRANCH_SWITCHED = "BRANCH_SWITCHED"
+#: completed, with levels inside a gap of the load path reported just past it (solving/step_over.py)
+LEVELS_PASSED_OVER = "LEVELS_PASSED_OVER"
 OUTPUT_ERROR = "OUTPUT_ERROR"
 PETSC_ERROR = "PETSC_ERROR"
 INTERNAL_ERROR = "INTERNAL_ERROR"         # a bug (exit code 1, with a traceback)

@@ -31,6 +31,7 @@ SOLVER_KEYS = {
     "stability_cutbacks": (lambda v, p: integer(v, p, lo=0, hi=20), False),
     "allow_unstable": (boolean, False),
     "branch_switch": (boolean, False),
+    "step_over_jumps": (boolean, False),
     "reuse_tangent": (boolean, False),
     "compact_factor": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),

@@ -187,6 +187,8 @@ class SolverSpec:
     allow_unstable: bool = False          # True: levels with negative tangent eigenvalues are accepted
     branch_switch: bool = True            # at a give-up, switch to a stable branch from an unstable
                                           # state met ahead (solving/branch_switch.py)
+    step_over_jumps: bool = True          # a level inside a band without equilibrium (a jump of the
+                                          # residual) is reported just past it (solving/step_over.py)
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 
 

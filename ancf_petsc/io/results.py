@@ -77,6 +77,25 @@ def compact_summary(summary: dict, cache: list) -> str:
     return head.replace(f'"steps":"{STEPS_MARK}"', '"steps":[' + ",".join(t for _, t in cache) + "]", 1)
 
 
+def step_entry(record, probes: dict) -> dict:
+    """A converged level's entry of summary.json's ``steps`` (and results.h5's): the stepper's
+    StepRecord (solving/records.py) with the level's ``probes``."""
+    entry = {"load_factor": record.load_factor, "probes": probes,
+             "iterations": record.iterations, "substeps": record.substeps,
+             "cutbacks": record.cutbacks, "tresca_solves": record.tresca_solves,
+             "reason": record.reason,
+             "residual_norm": record.residual_norm, "wall_time": record.wall_time,
+             "negative_eigenvalues": record.negative_eigenvalues,
+             "weights_unsettled": record.weights_unsettled,
+             "newton_history": record.iteration_history}
+    if record.branch_switches:
+        entry["branch_switches"] = record.branch_switches
+    if record.passed_over:                 # a level in a gap of the load path (solving/step_over.py)
+        level, last, at = record.passed_over
+        entry["passed_over"] = {"level": level, "no_equilibrium_from": last, "reported_at": at}
+    return entry
+
+
 class ResultsWriter:
     """Writes results.h5, summary.json and the VTU series (rank 0 does the I/O; every method is
     called on every rank, and a file-system error becomes an ``OutputError`` on every rank)."""
@@ -248,16 +267,7 @@ class ResultsWriter:
     def _write_step(self, record, q: np.ndarray, extra: dict | None, contact: dict | None,
                     path: dict | None) -> None:
         k = len(self.summary["steps"]) + 1
-        entry = {"load_factor": record.load_factor, "probes": self.probe_values(q),
-                 "iterations": record.iterations, "substeps": record.substeps,
-                 "cutbacks": record.cutbacks, "tresca_solves": record.tresca_solves,
-                 "reason": record.reason,
-                 "residual_norm": record.residual_norm, "wall_time": record.wall_time,
-                 "negative_eigenvalues": record.negative_eigenvalues,
-                 "weights_unsettled": record.weights_unsettled,
-                 "newton_history": record.iteration_history}
-        if record.branch_switches:
-            entry["branch_switches"] = record.branch_switches
+        entry = step_entry(record, self.probe_values(q))
         if extra:
             entry.update(extra)
         text = json.dumps(entry, separators=(",", ":"))          # summary.json's, and results.h5's

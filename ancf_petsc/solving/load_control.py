@@ -28,6 +28,9 @@ class LevelTally:
     first_failed: float = 0.0   # the increment of the first of them
     stability: int = 0      # retries because a step landed on a less stable state
     unsettled: bool = False  # a sub-step accepted with its contact weights unsettled
+    start: float = 0.0      # the load factor the level starts from (the last level's)
+    increment: float = 0.0  # the increment it starts with
+    passed_over: tuple | None = None   # (last converged, reported, reason, |F|): step_over.py
     tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)

@@ -83,6 +83,9 @@ class StepRecord:
     weights_unsettled: bool = False
     #: switches to a stable branch at a bifurcation within this level (branch_switch.py reports)
     branch_switches: list = field(default_factory=list)
+    #: (requested level, last converged, reported load factor) where the level lay in a gap of the
+    #: load path without equilibrium and is reported past it (step_over.py); None normally
+    passed_over: tuple | None = None
 
 
 @dataclass

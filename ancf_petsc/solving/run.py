@@ -31,7 +31,7 @@ from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
 from ..petsc.reactions import reactions as support_reactions
-from . import solver_messages
+from . import solver_messages, step_over
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
@@ -91,14 +91,14 @@ def final_status(records: list, failure: tuple | None, allow_unstable: bool) -> 
                 "or under-supported model; set solver.allow_unstable: true to accept them")
     switched = [s for r in records for s in r.branch_switches]
     unsettled = [r.load_factor for r in records if r.weights_unsettled]
-    weights = (f"contact weights not settled at {len(unsettled)} of {len(records)} levels (load factor "
-               f"{', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is |F| with the state's own "
-               "weights): contact.fade: newton solves for them")
+    passed = [r.passed_over for r in records if r.passed_over]
+    notes = [step_over.sentence(passed), solver_messages.unsettled_message(unsettled, len(records))]
+    rest = "; ".join(n for n in notes if n)
     if switched:
         return ("completed", st.BRANCH_SWITCHED,
-                solver_messages.switched_message(switched) + (f"; {weights}" if unsettled else ""))
-    if unsettled:
-        return "completed", st.WEIGHTS_UNSETTLED, f"completed, but with {weights}"
+                "; ".join(x for x in (solver_messages.switched_message(switched), rest) if x))
+    if rest:
+        return "completed", st.LEVELS_PASSED_OVER if passed else st.WEIGHTS_UNSETTLED, f"completed, but {rest}"
     return "completed", st.COMPLETED, "completed"
 
 

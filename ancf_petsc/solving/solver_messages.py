@@ -263,3 +263,13 @@ def solver_text(solver) -> str:
     if matrix_free(solver.snes):
         return f"-snes_mf -ksp_type {solver.snes.getKSP().getType()} (no preconditioner)"
     return solver_options(solver.petsc_options, solver.prefix, solver.problem.symmetric)
+
+
+def unsettled_message(unsettled: list[float], levels: int) -> str:
+    """The final message's part for levels accepted with their contact weights unsettled (their
+    load factors; empty without any)."""
+    if not unsettled:
+        return ""
+    return (f"contact weights not settled at {len(unsettled)} of {levels} levels (load factor "
+            f"{', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is |F| with the state's own "
+            "weights): contact.fade: newton solves for them")

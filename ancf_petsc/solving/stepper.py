@@ -34,12 +34,15 @@ from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
+from .step_over import step_over
 from .window_widening import WindowWidening
 
 
 #: failures whose last iterates are scanned for a jump of the residual (continuity.py): Newton
-#: ran out of iterations (cycling, wandering, stalling) or its line search found no descent
+#: ran out of iterations (cycling, wandering, stalling), its line search found no descent or its
+#: residual grew past the divergence tolerance
 JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH,
+                PETSc.SNES.ConvergedReason.DIVERGED_DTOL,
                 STALLED_STEP)
 
 
@@ -175,7 +178,7 @@ class LoadStepper:
         increment after easy ones), cut back failed ones; raises LoadStepFailure."""
         X = self.problem.X
         t0 = time.perf_counter()
-        tally = LevelTally()
+        tally = LevelTally(start=level, increment=path.dlam)
         history = []
         X_prev = X.duplicate()
         mixed = self.problem.mixed                     # solver.tangent: mixed (petsc/mixed_tangent.py)
@@ -201,27 +204,31 @@ class LoadStepper:
                 tally.tresca_solves += self.tresca_solves
                 history.append(list(self.history))
                 self._check_budget(path, X_prev, target, step)
-                reason, neg = self._judge(path, reason, fnorm, step, tally)
+                reason, neg = self.judge(path, reason, fnorm, step, tally)
                 if reason > 0 and self.branches.applies(path, neg):       # branch_switch.py
                     if self.branches.take(self, path, X_prev, target, tally, resume=True):
                         continue
                     reason, neg = self.branches.resumed
                 if reason > 0:
                     tally.unsettled |= self.unsettled
-                    self._accept(path, X_prev, step, its, neg, tally)
+                    self.accept(path, X_prev, step, its, neg, tally)
                 else:
                     self._cut_back(path, X_prev, target, step, reason, neg, tally)
         finally:
             X_prev.destroy()
             if mixed is not None:
                 mixed.paused = False
-        return StepRecord(load_factor=target, iterations=tally.its, substeps=tally.substeps,
+        reported, over = target, tally.passed_over
+        if over:                                       # the level reported past a gap: that solve's
+            reported, reason, fnorm = over[1:]
+        return StepRecord(load_factor=reported, iterations=tally.its, substeps=tally.substeps,
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
                           tresca_solves=tally.tresca_solves,
                           residual_norm=float(fnorm), wall_time=time.perf_counter() - t0,
                           iteration_history=history, negative_eigenvalues=self.solver.negative_eigenvalues(),
                           increment=path.dlam, last_increment=path.dlam_last,
-                          weights_unsettled=tally.unsettled, branch_switches=tally.switches)
+                          weights_unsettled=tally.unsettled, branch_switches=tally.switches,
+                          passed_over=over and (target, over[0], over[1]))
 
     def _contact_formed(self, path: PathState) -> bool:
         """Whether the last increment was the first from rest and formed the contact state: no
@@ -241,7 +248,7 @@ class LoadStepper:
                                   f" after {self.newton_iterations} Newton iterations "
                                   f"(solver.max_newton_iterations = {self.spec.max_newton_iterations})")
 
-    def _judge(self, path: PathState, reason: int, fnorm: float, step: float, tally: LevelTally):
+    def judge(self, path: PathState, reason: int, fnorm: float, step: float, tally: LevelTally):
         """The sub-step's verdict: SNES's reason, made a failure when the residual is not small
         (stalled), the state no answer (problem.unclean) or less stable than the last accepted."""
         P = self.problem
@@ -259,7 +266,7 @@ class LoadStepper:
             reason = UNSTABLE_STEP
         return reason, neg
 
-    def _accept(self, path: PathState, X_prev: PETSc.Vec, step: float, its: int, neg, tally: LevelTally):
+    def accept(self, path: PathState, X_prev: PETSc.Vec, step: float, its: int, neg, tally: LevelTally):
         if neg is not None:
             path.accepted_negative = neg
         self.tangent.valid = True                      # the SNES's factor: a converged state's
@@ -321,10 +328,11 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
     """What the stepper tries where every cut-back failed, in turn: the switch from a pending
     branch point (branch_switch.py), the whole partner beam as every contact point's search
     window where the last attempt lost a point from its window (``lost``; window_widening.py), a
-    snap past a critical point (critical_point.py: the same model's answer, so before the other), the
-    pointwise fade forces (fade_switch.py: on with another form of the contact forces).  Returns
-    when the path goes on from a state one of them reached; else raises ``failure``, naming the
-    critical point if the path is at one.  Collective."""
+    snap past a critical point (critical_point.py: the same model's answer, so before the other), a
+    step past a gap of the load path at a jump of the residual (step_over.py), the pointwise fade
+    forces (fade_switch.py: on with another form of the contact forces).  Returns when the path
+    goes on from a state one of them reached; else raises ``failure``, naming the critical point
+    if the path is at one.  Collective."""
     if stepper.branches.take(stepper, path, X_prev, target, tally, resume=False):
         return
     if stepper.windows.take(stepper, path, tally, lost):
@@ -343,6 +351,8 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
     if critical is not None:
         failure.cause = with_critical_point(failure.cause)
         failure.detail += sentence           # _first_give_up repeats it if a resort goes on
+    if step_over(stepper, path, X_prev, target, tally, failure):
+        return
     if stepper.fade_switch.take(stepper, path, tally):
         _went_on(stepper, path.lam, failure, "the pointwise fade forces")
         return

@@ -376,11 +376,13 @@ def test_the_compact_lu_gives_the_newton_step_of_mumps_lu():
 def test_a_friction_column_is_the_same_with_every_stored_entry(tmp_path):
     """ψ = 45°, Coulomb μ = 0.3 to 100 N (an unsymmetric Jacobian, AIJ and LU): the compact LU
     and MUMPS LU on every stored entry take the same Newton iterations and agree to rounding;
-    the header names the factorisation."""
+    the header names the factorisation.  Levels 1 … 100 N: with 10 N from rest in one increment
+    Newton hops 50 iterations among stick patterns and rounding picks one of several frictional
+    equilibria (docs/gait.md, Limits, "Friction from rest in one large increment")."""
     raw = load_raw("achilles_type3_psi45.yaml")
     for b in raw["beams"]:
         b["section"]["file"] = f"{CONFIGS}/{b['section']['file']}"
-    raw["steps"] = [10.0, 100.0]
+    raw["steps"] = [1.0, 2.5, 5.0, 10.0, 25.0, 50.0, 100.0]
     raw["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
     a, b = _both_ways(raw, tmp_path)
     assert "PC lu (mumps, of the Jacobian's structural nonzeros)" in a["solver"]

@@ -1,0 +1,82 @@
+"""A level inside a band of load factors where the discrete model has no equilibrium, reported at
+the first converged state just past it (a last resort of the stepper: stepper.py ``last_resorts``).
+
+Where the residual jumps (continuity.py: a contact point whose closest point passes a C⁰ edge of
+B's surface, two closest places, a fade weight's jump), the load path can have a gap: no state
+solves F = 0 for the load factors inside it.  Measured on the second subject's sliding 30°
+soleus-biased column (4 elements): no equilibrium from 2499.64 N (loading) nor down to 2500.15 N
+(unloading from 2500.5 N), so the level of 2500 N lies inside the gap, and the stepper crept up
+to it in 28 halvings; a step from 2000 N to 2500.5 N, 2550 N or 2700 N converges and the column
+reaches 3 kN.  Of the envelope's columns that stopped this way, those whose level lay in such a
+gap (the 8-element 135° soleus-biased unilateral column at 1199.42 N, μ = 0.1 at 150° at
+2999.32 N) complete with the level 1 N later, and with this step over.  The cure of the kink is
+a C¹ partner surface (not built); until then the level is reported where the path continues,
+beyond the gap, with its own load factor, and the run says so (summary ``passed_over``, reason
+code LEVELS_PASSED_OVER).  Docs: docs/running.md, "Levels in a gap of the load path".
+"""
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+from .failure_cause import JUMP_CAUSES
+
+#: the load factors tried past the level, as shares of the level's own increment, in turn (the
+#: second subject's sliding 165° gastrocnemius-biased column, no equilibrium from 1597.57 N on,
+#: needs the last: 1600 N is reported at 1640 N, 10 % of its 400 N increment past it)
+STEP_OVER = (1e-3, 1e-2, 1e-1)
+
+
+def applies(stepper, failure) -> bool:
+    """Whether a give-up ``failure`` (records.LoadStepFailure) is stepped over: on in the config
+    (``solver.step_over_jumps``) and the failure a jump of the residual (the same on every rank)."""
+    return bool(stepper.spec.step_over_jumps) and failure.cause in JUMP_CAUSES
+
+
+def step_over(stepper, path, X_prev: PETSc.Vec, target: float, tally, failure) -> bool:
+    """From the last converged state (``path``, also in ``X_prev``), solve at load factors just
+    past ``target`` (``STEP_OVER``); accept the first that converges to a state no less stable
+    than the last, recording (last converged, reported load factor, its reason, its |F|) in
+    ``tally.passed_over``.  False (the state restored) when none does.  Collective."""
+    if not applies(stepper, failure):
+        return False
+    P = stepper.problem
+    span = target - tally.start
+    for share in STEP_OVER:
+        lam = target + share * span
+        if not moves_the_loads(P.loads.groups, lam, target):
+            continue
+        X_prev.copy(P.X)
+        P.restore()
+        reason, its, fnorm = stepper.solve_at(lam, P.X, lam, path.lam)
+        tally.its += its
+        reason, neg = stepper.judge(path, reason, fnorm, lam - path.lam, tally)
+        if reason > 0:
+            tally.passed_over = (path.lam, lam, reason, fnorm)
+            stepper.log(f"  load factor {target:g}: no equilibrium found from {path.lam:.6g} on ({failure.cause}: "
+                        f"the residual jumps); past it at {lam:.6g}, {its} Newton iterations: the level is "
+                        "reported there (solver.step_over_jumps)")
+            stepper.accept(path, X_prev, lam - path.lam, its, neg, tally)
+            path.dlam = max(path.dlam, tally.increment)
+            return True
+    X_prev.copy(P.X)
+    P.restore()
+    P.load_factor = path.lam
+    return False
+
+
+def moves_the_loads(groups: list, lam: float, target: float) -> bool:
+    """Whether the loads (model/loading.py LoadGroup) at ``lam`` differ from the level's: past a
+    load curve's last point (a history's last frame) they are held, and a solve there would be
+    the level itself, not a step over its gap.  The same on every rank (the model's arrays)."""
+    return any(g.multiplier(lam) != g.multiplier(target) for g in groups if g.forces.any() or g.moves.any())
+
+
+def sentence(passed: list) -> str:
+    """The final message's part for the levels reported past a gap: [(level, last converged,
+    reported)]; empty without any."""
+    if not passed:
+        return ""
+    parts = ", ".join(f"{lv:g} at {at:.6g} (no equilibrium from {fr:.6g})" for lv, fr, at in passed)
+    return (f"{len(passed)} level(s) lie in a gap of the load path where the discrete model has no "
+            "equilibrium (a jump of the residual, e.g. at a C0 edge of B's surface: docs/running.md, "
+            f"\"Levels in a gap of the load path\") and are reported just past it: {parts}")

@@ -1,0 +1,82 @@
+"""A level inside a gap of the load path (solving/step_over.py): the second subject's sliding 30°
+soleus-biased column (4 elements) has no equilibrium from ~2499.6 N to past 2500 N (a contact
+point on a C0 edge of the soleus); its level of 2500 N is reported at 2500.5 N, near the state a
+direct step to 2500.5 N converges to; 2 and 3 ranks: tests/parallel/test_mpi.py."""
+import re
+
+import numpy as np
+import pytest
+
+from ancf_petsc import status
+from ancf_petsc.solving.records import StepRecord
+from ancf_petsc.solving.run import final_status
+from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
+
+from solving.test_fade_switch import run
+
+
+def gap_column(last: float = 2500.0, step_over: bool = True) -> dict:
+    """The column to ``last`` in three levels (a coarser min_increment: fewer halvings into the gap)."""
+    raw = cell_config(EnvelopeCell(SUBJECT2, 30.0, "soleus", "sliding", levels=(1000.0, 2000.0, last)))
+    raw["output"] = {"vtk": False}
+    raw["solver"] = dict(raw.get("solver") or {}, min_increment=0.05, step_over_jumps=step_over)
+    return raw
+
+
+def tips(summary: dict) -> np.ndarray:
+    return np.array([p["displacement"] for p in summary["steps"][-1]["probes"].values()])
+
+
+@pytest.mark.slow
+def test_a_level_in_a_gap_is_reported_just_past_it(tmp_path):
+    res = run(gap_column(), tmp_path / "over")
+    s = res.summary
+    assert res.status == "completed" and s["reason_code"] == status.LEVELS_PASSED_OVER, res.message
+    last = s["steps"][-1]
+    # 2500 + 1e-3 of the level's increment (500 N): step_over.STEP_OVER's first share
+    assert last["load_factor"] == pytest.approx(2500.5, abs=1e-9) and last["residual_norm"] < 1e-6
+    gap = last["passed_over"]
+    assert gap["level"] == 2500.0 and 2499.0 < gap["no_equilibrium_from"] < 2500.0 and gap["reported_at"] == last["load_factor"]
+    assert "2500 at 2500.5" in res.message and "no equilibrium" in res.message
+    # the state a direct step from 2000 N to 2500.5 N reaches: near it (two closest places of the
+    # contact point make the states at 2500.5 N differ by 3 um of 63 mm)
+    direct = run(gap_column(2500.5), tmp_path / "direct")
+    assert direct.status == "completed" and direct.summary["reason_code"] == status.COMPLETED
+    assert np.abs(tips(s) - tips(direct.summary)).max() < 1e-3 * np.abs(tips(direct.summary)).max()
+
+
+@pytest.mark.slow
+def test_without_the_step_over_the_level_fails_on_the_jump(tmp_path):
+    """``solver.step_over_jumps: false``: the column stops below the level, naming the C0 kink."""
+    raw = gap_column(step_over=False)
+    raw["contact"]["fade_forces"] = "variational"        # no switch to pointwise forces after it
+    res = run(raw, tmp_path)
+    assert res.status == "failed" and res.summary["failure_cause"] == "c0_kink", res.message
+    last = float(re.search(r"\(last converged ([0-9.]+)\)", res.message).group(1))
+    assert 2499.0 < last < 2500.0, res.message
+
+
+def record(lam: float, passed=None, unsettled=False) -> StepRecord:
+    return StepRecord(load_factor=lam, iterations=3, substeps=1, cutbacks=0, reason="CONVERGED_FNORM_ABS",
+                      residual_norm=1e-9, wall_time=0.0, weights_unsettled=unsettled, passed_over=passed)
+
+
+def test_the_final_status_names_the_levels_passed_over():
+    state, code, message = final_status([record(1.0), record(2.001, (2.0, 1.9996, 2.001))], None, False)
+    assert (state, code) == ("completed", status.LEVELS_PASSED_OVER)
+    assert message.startswith("completed, but 1 level(s) lie in a gap") and "2 at 2.001 (no equilibrium from 1.9996)" in message
+    state, code, message = final_status([record(1.0, unsettled=True), record(2.001, (2.0, 1.9996, 2.001))], None, False)
+    assert code == status.LEVELS_PASSED_OVER and "contact weights not settled at 1 of 2 levels" in message
+    assert final_status([record(1.0), record(2.0)], None, False) == ("completed", status.COMPLETED, "completed")
+
+
+def test_no_step_over_past_a_history_last_frame():
+    """Past a load curve's last point the loads are held: a solve there is the level itself."""
+    from ancf_petsc.model.loading import LoadCurve, LoadGroup
+    from ancf_petsc.solving.step_over import moves_the_loads
+    force = np.array([0.0, 1.0])
+    proportional = LoadGroup(None, np.zeros(2), np.zeros(2))       # empty: λ moves nothing
+    history = LoadGroup(LoadCurve(((1.0, 0.0), (2.0, 1.0), (3.0, 0.5))), force, np.zeros(2))
+    assert moves_the_loads([proportional, history], 2.001, 2.0)
+    assert not moves_the_loads([proportional, history], 3.001, 3.0)
+    assert moves_the_loads([LoadGroup(None, force, np.zeros(2))], 3.001, 3.0)

@@ -362,3 +362,34 @@ def test_the_eight_element_friction_sample_is_its_csvs():
     assert f"{_total(sec, 'iterations')} → {_total(tan, 'iterations')} Newton iterations" in text
     assert f"to 1.2 kN {_total(sec, 'iterations_to_1200')} → {_total(tan, 'iterations_to_1200')}" in text
     assert f"over the target {over[0]} → {over[1]}" in text
+
+
+def test_a_cell_with_a_level_past_a_gap_says_where(tmp_path):
+    """A run that reported a level past a gap of the load path (solving/step_over.py) ends its
+    table cell with the level and where it was reported; the ``CellResult`` row carries them from
+    summary.json's ``steps[].passed_over``."""
+    from ancf_petsc.workflows.envelope import CellResult, EnvelopeCell, markdown_table
+    base = {"base": "a.yaml", "law": "sliding", "friction": "0.0", "bias": "soleus", "elements": "4",
+            "status": "completed", "last_level": "3000", "iterations": "602", "iterations_to_1200": "48",
+            "cutbacks": "28", "cutbacks_to_1200": "0", "cutback_levels": "1", "median_iterations": "4",
+            "stride": "False"}
+    rows = [dict(base, twist="30", passed_over="2500@2500.5"), dict(base, twist="45", passed_over="")]
+    text = markdown_table(rows, law="sliding")
+    assert "| 30 | 48, 2500 N past a gap at 2500.5 N |" in text and "| 45 | 48 |" in text
+    cell = EnvelopeCell("a.yaml", 30.0, "soleus", "sliding")
+    row = CellResult(cell, "completed", passed_over=((2500.0, 2500.5), (1600.0, 1640.0))).row()
+    assert row["passed_over"] == "2500@2500.5;1600@1640"
+    assert CellResult(cell, "completed").row()["passed_over"] == ""
+    # from summary.json: a fake ancf-solve that writes one
+    import json
+    from ancf_petsc.workflows.envelope import NEO, run_cell
+    summary = {"status": "completed", "newton_iterations": 9, "steps": [
+        {"load_factor": 2000.0, "iterations": 4, "cutbacks": 0},
+        {"load_factor": 2500.5, "iterations": 5, "cutbacks": 28, "passed_over":
+            {"level": 2500.0, "no_equilibrium_from": 2499.57, "reported_at": 2500.5}}]}
+    fake = tmp_path / "fake-solve"
+    fake.write_text("#!/bin/sh\nmkdir -p \"$3\"\ncat > \"$3/summary.json\" <<'END'\n" + json.dumps(summary)
+                    + "\nEND\n")
+    fake.chmod(0o755)
+    res = run_cell(EnvelopeCell(NEO, 30.0, "soleus", "sliding"), [str(fake)], str(tmp_path / "work"))
+    assert res.status == "completed" and res.passed_over == ((2500.0, 2500.5),)

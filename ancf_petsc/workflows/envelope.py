@@ -144,6 +144,8 @@ class CellResult:
     snaps: tuple = ()                     # summary.json's steps[].branch_switches[].critical_load_factor
     windows_from: float | None = None     # summary.json's search_window_whole_from
     cause: str = ""                       # summary.json's failure_cause (solving/failure_cause.py)
+    #: (level, reported at) of the levels reported past a gap of the load path (step_over.py)
+    passed_over: tuple = ()
 
     @property
     def frames(self) -> int:
@@ -172,7 +174,8 @@ class CellResult:
                 "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from,
                 "snaps": ";".join(f"{x:.6g}" for x in self.snaps),
                 "search_window_whole_from": "" if self.windows_from is None else self.windows_from,
-                "cause": self.cause}
+                "cause": self.cause,
+                "passed_over": ";".join(f"{lv:.6g}@{at:.6g}" for lv, at in self.passed_over)}
 
 
 def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None = None):
@@ -222,7 +225,9 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
                       pointwise_from=data.get("fade_forces_pointwise_from"),
                       windows_from=data.get("search_window_whole_from"),
                       snaps=tuple(sw["critical_load_factor"] for s in steps for sw in s.get("branch_switches", [])
-                                  if "critical_load_factor" in sw))
+                                  if "critical_load_factor" in sw),
+                      passed_over=tuple((s["passed_over"]["level"], s["passed_over"]["reported_at"])
+                                        for s in steps if "passed_over" in s))
 
 
 def _columns(base: str, laws, frictions=(0.0,), stride: bool = False):
@@ -295,8 +300,8 @@ def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir:
 
 def _cell_text(r: dict | None, key: str) -> str:
     """A row in a table cell, with where it switched to pointwise fade forces (fade_switch.py),
-    widened its contact search windows (window_widening.py) and snapped past a critical point
-    (critical_point.py)."""
+    widened its contact search windows (window_widening.py), snapped past a critical point
+    (critical_point.py) and reported a level past a gap of the load path (step_over.py)."""
     if r is None:
         return "–"
     if r["status"] == "crashed":
@@ -310,6 +315,9 @@ def _cell_text(r: dict | None, key: str) -> str:
         text += f", pointwise from {unit}{float(at):.4g}{where}"
     for snap in filter(None, (r.get("snaps") or "").split(";")):
         text += f", snap at {unit}{float(snap):.4g}{where}"
+    for gap in filter(None, (r.get("passed_over") or "").split(";")):
+        level, at = (float(x) for x in gap.split("@"))
+        text += f", {unit}{level:g}{where} past a gap at {unit}{at:.6g}{where}"
     return text
 
 

@@ -386,7 +386,7 @@ def test_a_cell_with_a_level_past_a_gap_says_where(tmp_path):
     summary = {"status": "completed", "newton_iterations": 9, "steps": [
         {"load_factor": 2000.0, "iterations": 4, "cutbacks": 0},
         {"load_factor": 2500.5, "iterations": 5, "cutbacks": 28, "passed_over":
-            {"level": 2500.0, "no_equilibrium_from": 2499.57, "reported_at": 2500.5}}]}
+            {"level": 2500.0, "last_converged": 2496.09, "reported_at": 2500.5}}]}
     fake = tmp_path / "fake-solve"
     fake.write_text("#!/bin/sh\nmkdir -p \"$3\"\ncat > \"$3/summary.json\" <<'END'\n" + json.dumps(summary)
                     + "\nEND\n")

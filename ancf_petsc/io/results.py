@@ -92,7 +92,7 @@ def step_entry(record, probes: dict) -> dict:
         entry["branch_switches"] = record.branch_switches
     if record.passed_over:                 # a level in a gap of the load path (solving/step_over.py)
         level, last, at = record.passed_over
-        entry["passed_over"] = {"level": level, "no_equilibrium_from": last, "reported_at": at}
+        entry["passed_over"] = {"level": level, "last_converged": last, "reported_at": at}
     return entry
 
 

@@ -31,6 +31,7 @@ class LevelTally:
     start: float = 0.0      # the load factor the level starts from (the last level's)
     increment: float = 0.0  # the increment it starts with
     passed_over: tuple | None = None   # (last converged, reported, reason, |F|): step_over.py
+    at_level_failures: int = 0  # failed sub-steps whose end was the level itself (step_over.py)
     tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)

@@ -34,7 +34,7 @@ from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
-from .step_over import step_over
+from .step_over import creeping, early_step_over, reported_level, step_over
 from .window_widening import WindowWidening
 
 
@@ -218,9 +218,8 @@ class LoadStepper:
             X_prev.destroy()
             if mixed is not None:
                 mixed.paused = False
-        reported, over = target, tally.passed_over
-        if over:                                       # the level reported past a gap: that solve's
-            reported, reason, fnorm = over[1:]
+        reported, reason, fnorm = reported_level(target, reason, fnorm, tally)
+        over = tally.passed_over
         return StepRecord(load_factor=reported, iterations=tally.its, substeps=tally.substeps,
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
                           tresca_solves=tally.tresca_solves,
@@ -282,8 +281,8 @@ class LoadStepper:
 
     def _cut_back(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float,
                   reason: int, neg, tally: LevelTally) -> None:
-        """Back to the last converged state with half the increment (collective: the reason is
-        global); raises LoadStepFailure after ``max_cutbacks`` in a row."""
+        """Back to the last converged state with half the increment (collective); raises
+        LoadStepFailure after ``max_cutbacks`` in a row (a creep into a gap: step_over.creeping)."""
         P = self.problem
         inverted = bool(P.comm.tompi4py().allreduce(int(P.inverted)))
         lost = bool(P.comm.tompi4py().allreduce(int(P.contact_failed)))
@@ -299,7 +298,7 @@ class LoadStepper:
                 else f"retry with increment {path.dlam:.4g}")
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}"
                  f"{_attempt_why(self.solver, reason, neg, inverted, lost, path.accepted_negative)}; {then}")
-        if give_up:
+        if give_up or creeping(self, tally, path.lam + step == target):
             jump = None
             if not (inverted or lost) and reason in JUMP_REASONS:
                 jump = residual_jump(P, self.solver.trail, path.lam + step,         # collective
@@ -307,7 +306,8 @@ class LoadStepper:
                 X_prev.copy(P.X)
                 P.restore()
             failure = _given_up(self, path.lam, step, target, reason, tally, inverted, lost, jump)
-            last_resorts(self, path, X_prev, target, tally, failure, lost and not inverted)
+            resort = last_resorts if give_up else early_step_over
+            resort(self, path, X_prev, target, tally, failure, lost and not inverted)
 
 
 def _given_up(stepper: LoadStepper, lam: float, step: float, target: float, reason: int, tally: LevelTally,

@@ -111,6 +111,6 @@ def sentence(passed: list) -> str:
     if not passed:
         return ""
     parts = ", ".join(f"{lv:g} at {at:.6g} (not reached from {fr:.6g})" for lv, fr, at in passed)
-    return (f"{len(passed)} level(s) lie in a gap of the load path where the discrete model has no "
-            "equilibrium (a jump of the residual, e.g. at a C0 edge of B's surface: docs/running.md, "
-            f"\"Levels in a gap of the load path\") and are reported just past it: {parts}")
+    return (f"{len(passed)} level(s) not reached where the residual jumps (a gap of the load path "
+            "without equilibrium, e.g. at a C0 edge of B's surface: docs/running.md, "
+            f"\"Levels in a gap of the load path\") and reported just past it: {parts}")

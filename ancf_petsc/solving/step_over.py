@@ -38,19 +38,10 @@ CREEP_FAILURES = 8
 def creeping(stepper, tally, at_level: bool) -> bool:
     """Count a failed sub-step (``at_level``: one that ended at the level itself); True from the
     level's ``CREEP_FAILURES``-th such failure on: its path is creeping into a gap at the level,
-    and a jump of the residual in a failed attempt steps over at once (``early_step_over``) rather
-    than after every halving down to the give-up.  The same on every rank."""
+    and a jump of the residual in a failed attempt steps over at once (stepper.py ``_cut_back``)
+    rather than after every halving down to the give-up.  The same on every rank."""
     tally.at_level_failures += at_level
     return bool(stepper.spec.step_over_jumps) and tally.at_level_failures >= CREEP_FAILURES
-
-
-def early_step_over(stepper, path, X_prev: PETSc.Vec, target: float, tally, failure, lost: bool = False) -> None:
-    """``step_over`` of a creeping level (``creeping``), where ``failure`` names a jump; otherwise,
-    or where no state past it converges, the cut-backs go on from the last converged state (its
-    load factor restored).  ``lost`` is the give-up's argument (stepper.py ``last_resorts``),
-    unused here.  Collective."""
-    stepper.problem.load_factor = path.lam
-    step_over(stepper, path, X_prev, target, tally, failure)
 
 
 def reported_level(target: float, reason: int, fnorm: float, tally) -> tuple[float, int, float]:
@@ -70,14 +61,16 @@ def step_over(stepper, path, X_prev: PETSc.Vec, target: float, tally, failure) -
     """From the last converged state (``path``, also in ``X_prev``), solve at load factors just
     past ``target`` (``STEP_OVER``); accept the first that converges to a state no less stable
     than the last, recording (last converged, reported load factor, its reason, its |F|) in
-    ``tally.passed_over``.  False (the state restored) when none does.  Collective."""
-    if not applies(stepper, failure):
-        return False
+    ``tally.passed_over``.  False (the last converged state and load factor restored) when none
+    does or the failure is no jump.  Collective."""
     P = stepper.problem
+    if not applies(stepper, failure):
+        P.load_factor = path.lam
+        return False
     span = target - tally.start
     for share in STEP_OVER:
         lam = target + share * span
-        if not moves_the_loads(P.loads.groups, lam, target):
+        if P.loads.unchanged(target, lam):           # past a history's last frame: the level itself
             continue
         X_prev.copy(P.X)
         P.restore()
@@ -96,13 +89,6 @@ def step_over(stepper, path, X_prev: PETSc.Vec, target: float, tally, failure) -
     P.restore()
     P.load_factor = path.lam
     return False
-
-
-def moves_the_loads(groups: list, lam: float, target: float) -> bool:
-    """Whether the loads (model/loading.py LoadGroup) at ``lam`` differ from the level's: past a
-    load curve's last point (a history's last frame) they are held, and a solve there would be
-    the level itself, not a step over its gap.  The same on every rank (the model's arrays)."""
-    return any(g.multiplier(lam) != g.multiplier(target) for g in groups if g.forces.any() or g.moves.any())
 
 
 def sentence(passed: list) -> str:

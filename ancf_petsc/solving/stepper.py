@@ -23,7 +23,7 @@ from ..petsc.problem import Problem, unclean
 from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
-from .continuity import Jump, jump_detail, residual_jump
+from .continuity import jump_detail, residual_jump
 from .failure_cause import give_up_cause, with_critical_point
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
@@ -34,7 +34,7 @@ from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
-from .step_over import creeping, early_step_over, reported_level, step_over
+from .step_over import creeping, reported_level, step_over
 from .window_widening import WindowWidening
 
 
@@ -299,22 +299,24 @@ class LoadStepper:
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}"
                  f"{_attempt_why(self.solver, reason, neg, inverted, lost, path.accepted_negative)}; {then}")
         if give_up or creeping(self, tally, path.lam + step == target):
-            jump = None
-            if not (inverted or lost) and reason in JUMP_REASONS:
-                jump = residual_jump(P, self.solver.trail, path.lam + step,         # collective
-                                     self.solver.snes.getTolerances()[1])
-                X_prev.copy(P.X)
-                P.restore()
-            failure = _given_up(self, path.lam, step, target, reason, tally, inverted, lost, jump)
-            resort = last_resorts if give_up else early_step_over
-            resort(self, path, X_prev, target, tally, failure, lost and not inverted)
+            failure = _given_up(self, path, X_prev, step, target, reason, tally, inverted, lost)
+            if give_up:
+                last_resorts(self, path, X_prev, target, tally, failure, lost and not inverted)
+            else:                                      # a creep into a gap at the level
+                step_over(self, path, X_prev, target, tally, failure)
 
 
-def _given_up(stepper: LoadStepper, lam: float, step: float, target: float, reason: int, tally: LevelTally,
-              inverted: bool, lost: bool, jump: Jump | None) -> LoadStepFailure:
-    """The failure of a level whose cut-backs gave out at the step from ``lam``: its message (what
-    Newton did, a less stable state on the way, a jump of the residual) and its cause's code
-    (failure_cause.py)."""
+def _given_up(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, step: float, target: float, reason: int,
+              tally: LevelTally, inverted: bool, lost: bool) -> LoadStepFailure:
+    """The failure of a level whose cut-backs gave out at the step from ``path.lam``: its message
+    (what Newton did, a less stable state on the way, a jump of the residual, looked for in the
+    failed attempt's iterates, the state restored to ``X_prev`` after) and its cause's code
+    (failure_cause.py).  Collective."""
+    lam, jump, P = path.lam, None, stepper.problem
+    if not (inverted or lost) and reason in JUMP_REASONS:
+        jump = residual_jump(P, stepper.solver.trail, lam + step, stepper.solver.snes.getTolerances()[1])
+        X_prev.copy(P.X)
+        P.restore()
     # a min_increment that forbade every cut-back is the cause, not Newton's course
     newton = (solver_messages.floor_detail(step, lam, stepper.spec.min_increment)
               if stepper.control.floored(step, tally) else solver_messages.failure_detail(stepper.solver, reason))

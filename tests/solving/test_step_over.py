@@ -74,12 +74,18 @@ def test_the_final_status_names_the_levels_passed_over():
 
 
 def test_no_step_over_past_a_history_last_frame():
-    """Past a load curve's last point the loads are held: a solve there is the level itself."""
+    """Past a load curve's last point the loads are held: a solve there is the level itself
+    (step_over.py skips it: petsc/loading.py ``AppliedLoads.unchanged``)."""
+    from petsc4py import PETSc
     from ancf_petsc.model.loading import LoadCurve, LoadGroup
-    from ancf_petsc.solving.step_over import moves_the_loads
+    from ancf_petsc.petsc.loading import AppliedLoads
+
+    def applied(groups):
+        vec = lambda a: PETSc.Vec().createWithArray(np.array(a, dtype=float), comm=PETSc.COMM_SELF)
+        return AppliedLoads(groups, [vec(g.forces) for g in groups], [vec(g.moves) for g in groups], vec([0, 0]))
     force = np.array([0.0, 1.0])
     proportional = LoadGroup(None, np.zeros(2), np.zeros(2))       # empty: λ moves nothing
     history = LoadGroup(LoadCurve(((1.0, 0.0), (2.0, 1.0), (3.0, 0.5))), force, np.zeros(2))
-    assert moves_the_loads([proportional, history], 2.001, 2.0)
-    assert not moves_the_loads([proportional, history], 3.001, 3.0)
-    assert moves_the_loads([LoadGroup(None, force, np.zeros(2))], 3.001, 3.0)
+    assert not applied([proportional, history]).unchanged(2.0, 2.001)
+    assert applied([proportional, history]).unchanged(3.0, 3.001)
+    assert not applied([LoadGroup(None, force, np.zeros(2))]).unchanged(3.0, 3.001)

@@ -32,6 +32,7 @@ SOLVER_KEYS = {
     "allow_unstable": (boolean, False),
     "branch_switch": (boolean, False),
     "step_over_jumps": (boolean, False),
+    "full_step_first": (boolean, False),
     "reuse_tangent": (boolean, False),
     "compact_factor": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),

@@ -50,6 +50,7 @@ class Problem:
         self._load_factor = 0.0
         self.timers = {"element_kernels": 0.0, "element_assembly": 0.0, "contact_projection": 0.0,
                        "contact_assembly": 0.0}
+        self.residual_evaluations = 0           # F(X) callbacks of the run (summary.json)
         self.inverted = False                   # the last residual met det F <= 0
         self.contact_failed = False             # the last residual's contact projection failed
         lo, hi = layout.owned_nodes
@@ -111,6 +112,7 @@ class Problem:
     # ------------------------------------------------------------------ SNES callbacks
     def residual(self, snes, X: PETSc.Vec, F: PETSc.Vec) -> None:
         """F(X) (SNES function callback)."""
+        self.residual_evaluations += 1
         logging.stage(logging.ASSEMBLY).push()
         try:
             floc, bad = self.exchange.evaluate(X, self._local_residual)

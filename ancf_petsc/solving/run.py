@@ -374,9 +374,9 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
     problem_writing = run.writer.finish(
         status, reason_code=code, message=message, timings=timings,
         newton_iterations=stepper.newton_iterations, tangent_reuses=stepper.solver.chord.count,
-        preconditioner_reuses=stepper.solver.chord.kept, factor_reanalyses=stepper.solver.factor_reanalyses,
-        exchange=exchange, failure_cause=failure[3] if failure is not None else "",
-        jacobian_pattern_growths=run.problem.pattern_growths,
+        residual_evaluations=run.problem.residual_evaluations, preconditioner_reuses=stepper.solver.chord.kept,
+        factor_reanalyses=stepper.solver.factor_reanalyses, exchange=exchange,
+        failure_cause=failure[3] if failure is not None else "", jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,
         stability_checked=all(r.negative_eigenvalues is not None for r in records),

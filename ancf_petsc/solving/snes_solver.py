@@ -9,12 +9,14 @@ is one SNES solve from a state; the load stepping around it is stepper.py.
 """
 from __future__ import annotations
 
+
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
 from ..linalg.compact_factor import install_for
 from ..linalg.database import remove
+from ..linalg.full_step_first import install_full_step_first
 from ..linalg.diagnostics import petsc_message, used_anywhere
 from ..linalg.inertia import mumps_error, pivot_counts
 from ..petsc.mixed_tangent import mixed_tangent
@@ -61,7 +63,8 @@ class SNESSolver:
             self.snes.setOptionsPrefix(self.prefix)
         self.snes.setFunction(problem.residual, problem.F)
         self.snes.setJacobian(self._jacobian, problem.J, problem.J)
-        if spec.merit == "energy" and problem.has_potential:
+        objective = spec.merit == "energy" and problem.has_potential
+        if objective:
             # with contact multipliers the residual is the gradient of a Lagrangian (a saddle):
             # line searches then decrease ‖F‖²
             self.snes.setObjective(problem.objective)
@@ -79,13 +82,14 @@ class SNESSolver:
         if stop is not None:
             self.cycle_stop = CycleStop(lambda: self._history, petsc_options, self.prefix, *stop)
             self.snes.setConvergenceTest(self.cycle_stop)
-        self._kept_options: list[str] = []
         self.linesearch, self._kept_options = configure_options(
             self.snes, petsc_options,
             run_defaults(petsc_options, problem.comm.size, atol, self.prefix, linear,
                          saddle_point=problem.n_constraints > 0, symmetric=problem.symmetric,
                          law_defaults=problem.solver_defaults), self.prefix,
             problem.symmetric)
+        self.full_step_first = install_full_step_first(        # friction's l2, whole step first
+            self.snes, self.linesearch, spec.full_step_first and not objective, self.prefix)
         if problem.limits.configure(spec.min_det_f, spec.section_update, self.linesearch):
             self.snes.setLineSearchPreCheck(problem.limits.precheck)
         schur = None

@@ -16,7 +16,7 @@ def describe(solver) -> str:
     """The solver in one line (the run's header)."""
     ksp = solver.snes.getKSP()
     pc = ksp.getPC()
-    ls = solver.linesearch
+    ls = solver.linesearch + (" (the whole step first)" if solver.full_step_first is not None else "")
     name, extra = pc.getType(), ""
     if name in ("lu", "cholesky"):
         extra = f" ({pc.getFactorSolverType()})"

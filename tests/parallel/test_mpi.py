@@ -35,9 +35,18 @@ def _cases():
     # loading frames of the unilateral walking stride: settled active sets solved before they are
     # predicted, checks read from the converged evaluation (solving/newton.py)
     stride = unilateral_stride_frames(4, 16)
+    # Coulomb friction (AIJ, LU): the l2 line search with the whole step first decides on global
+    # norms only (linalg/full_step_first.py)
+    coulomb = load_raw("achilles_type3_psi45.yaml")
+    for b in coulomb["beams"]:
+        b["elements"] = 4
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    coulomb["steps"] = [1.0, 2.5, 5.0, 10.0]
+    coulomb["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
     return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
             "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon, "tendon-unilateral-held": held,
-            "tendon-unilateral-stride": stride}
+            "tendon-unilateral-stride": stride,
+            "tendon-coulomb": coulomb}
 
 
 CASES = _cases()

@@ -21,7 +21,7 @@ Jacobian (friction, pointwise fade forces: AIJ, MUMPS LU) is factored the same w
 triangles of its nonzeros into a scalar AIJ matrix: on the μ = 0.3 stride's Jacobians (846 rows,
 224 000 stored entries, 140 000 of them kept) a factorisation took 11.5 ms on every stored entry
 and 4.1 ms compact with ICNTL(6) = 5 (5.6 ms with MUMPS's automatic scaling), with smaller
-residuals.  A nonzero of J
+residuals; ordered by QAMD (``ORDERING_LU``) it takes half the flops.  A nonzero of J
 outside the structure (a contact pair that comes into use, a law that writes there) adds its
 position to the structure, and MUMPS analyses the grown one: the factor is J's whatever the law.
 Measured (docs/parallel.md): the walking stride's factorisations 5.5 → 3.6 ms, whole runs 0.75–0.99
@@ -45,7 +45,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from .diagnostics import petsc_library
-from .database import option
+from .database import insert, option, remove
 
 #: MUMPS controls of the compact factor unless the solve's options say otherwise: ordering on the
 #: compressed graph of matched pairs (ICNTL(12) = 2) after the matching that also gives a scaling
@@ -59,6 +59,13 @@ from .database import option
 #: the 8-element stride (3: ~30 ms); AMD without matching factors the strides as fast but
 #: bundle_hex7 in 2.0e8 flops against 7.7e7
 ORDERING = {12: 2, 6: 5}
+#: ... of the compact LU (unsymmetric J: friction, pointwise fade forces): the same matching and
+#: scaling, ordered by QAMD (ICNTL(7) = 6) instead of MUMPS's automatic choice (METIS here).
+#: Measured on Coulomb μ = 0.3 stride Jacobians (2026-12-06, RINFOG(3)): 6.7e7 → 3.4e7 and
+#: 7.8e7 → 3.8e7 flops at 4 elements (846 rows), 1.8e8 → 8.4–9.7e7 at 8, 7.8–8.3e7 → 4.1e7 on
+#: the second subject, 3.7–7.7e8 → 3.0–7.5e8 on bundle_hex7 with μ = 0.3; the same Newton
+#: iterations and answers, no analysis repeated (docs/parallel.md, 2026-12-06)
+ORDERING_LU = {6: 5, 7: 6}
 #: the largest relative residual ‖C y − x‖ / ‖x‖ of a solve with factors from an earlier analysis;
 #: above it the structure is analysed again at the present values (a new scaling) and the solve
 #: repeated.  Measured: 1e-15 – 9e-11 on the walking stride's solves with either matching; 0.3 –
@@ -156,7 +163,7 @@ class CompactFactor:
     def __init__(self, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
                  ordering: dict | None = None, symmetric: bool = True):
         self.held, self.multiplier, self.prefix = held, multiplier, prefix
-        self.ordering = ORDERING if ordering is None else ordering
+        self.ordering = (ORDERING if symmetric else ORDERING_LU) if ordering is None else ordering
         self.kept = np.zeros(0, dtype=np.int64)
         self.structure: CompactStructure | None = None
         self.C: PETSc.Mat | None = None
@@ -167,6 +174,7 @@ class CompactFactor:
         self.symmetric = symmetric               # LDLᵀ (SBAIJ J), else LU (AIJ J): no inertia
         self.analyses = 0                        # structures MUMPS analysed (growths included)
         self.reanalyses = 0                      # of them, for kept scalings gone stale (GUARD)
+        self._analysed = False                   # the factor's analysis is done
 
     def setUp(self, pc: PETSc.PC) -> None:
         _, J = pc.getOperators()
@@ -183,7 +191,7 @@ class CompactFactor:
             self.fresh = True
         self.verified = False
         self.ksp.setOperators(self.C, self.C)
-        self.ksp.setUp()
+        self._factor()
 
     def _build(self, J: PETSc.Mat) -> None:
         self.structure = CompactStructure(J, self.held, self.multiplier, self.kept)
@@ -208,6 +216,22 @@ class CompactFactor:
             if option(f"mat_mumps_icntl_{k}", self.prefix) is None:
                 inner.getFactorMatrix().setMumpsIcntl(k, v)
         self.analyses += 1
+        self._analysed = False                   # the next set-up analyses (``_factor``)
+
+    def _factor(self) -> None:
+        """Factor C (``ksp.setUp``).  PETSc 3.18's MUMPS interface resets an ICNTL(7) set on the
+        factor before its analysis; the analysis reads the database, so the ordering's value is
+        put there for it (under the solve's prefix, unless the solve's options give one)."""
+        order, key = self.ordering.get(7), f"{self.prefix}mat_mumps_icntl_7"
+        put = order is not None and not self._analysed and option("mat_mumps_icntl_7", self.prefix) is None
+        if put:
+            insert(key, str(order))
+        try:
+            self.ksp.setUp()
+        finally:
+            if put:
+                remove(key)
+            self._analysed = True
 
     def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
         if not self._solve_checked(x, y):
@@ -221,7 +245,7 @@ class CompactFactor:
         good = self.ksp.getConvergedReason() >= 0 and self._accurate(x, y)
         if not good and not self.fresh:
             self._analyse()                      # C's values now: a new scaling
-            self.ksp.setUp()
+            self._factor()
             self.fresh, self.reanalyses = True, self.reanalyses + 1
             self.ksp.solve(x, y)
         self.verified = True
@@ -305,7 +329,7 @@ def install_for(problem, ksp: PETSc.KSP, wanted: bool, prefix: str = "",
 def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: str = "",
             ordering: dict | None = None) -> CompactFactor:
     """Make ``ksp``'s preconditioner the compact factorisation (one rank; SBAIJ J: Cholesky, AIJ
-    J: LU); ``ordering``: its MUMPS controls (default ``ORDERING``, for a saddle-point matrix)."""
+    J: LU); ``ordering``: its MUMPS controls (default ``ORDERING``, ``ORDERING_LU`` for LU)."""
     pc = ksp.getPC()
     context = CompactFactor(held, multiplier, prefix, ordering, symmetric=pc.getType() != PETSc.PC.Type.LU)
     pc.setType(PETSc.PC.Type.PYTHON)

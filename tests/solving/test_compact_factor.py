@@ -369,8 +369,36 @@ def test_the_compact_lu_gives_the_newton_step_of_mumps_lu():
     assert _backward_error(PETSc, P.J, x1, F) <= 4.0 * np.finfo(float).eps
     assert (x1 - x0).norm() <= 1e-7 * x0.norm()
     assert pivot_counts(ksp) is None
+    # ordered by QAMD (ORDERING_LU: half METIS's flops on friction Jacobians), the option put
+    # into the database for the analysis only
+    factor = ctx.ksp.getPC().getFactorMatrix()
+    assert factor.getMumpsIcntl(7) == 6 and factor.getMumpsInfog(7) == 6
+    assert not PETSc.Options().hasName("mat_mumps_icntl_7")
     for obj in (ksp, plain):
         obj.destroy()
+
+
+def test_the_solve_options_choose_the_compact_lus_ordering():
+    """``-mat_mumps_icntl_7`` of the solve reaches the compact LU (AMD here), and stays set."""
+    P, PETSc, F = hex7_problem(loaded=True, matrix="aij")
+    from ancf_petsc.linalg.compact_factor import install, multiplier_mask
+    opts = PETSc.Options()
+    opts["mat_mumps_icntl_7"] = 0
+    try:
+        ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+        ksp.setOperators(P.J, P.J)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        ctx = install(ksp, P.fixed_mask, multiplier_mask(P))
+        x = F.duplicate()
+        ksp.solve(F, x)
+        assert ksp.getConvergedReason() > 0
+        assert ctx.ksp.getPC().getFactorMatrix().getMumpsInfog(7) == 0
+        assert opts.getString("mat_mumps_icntl_7", None) == "0"
+        ksp.destroy()
+    finally:
+        opts.delValue("mat_mumps_icntl_7")
 
 
 def test_a_friction_column_is_the_same_with_every_stored_entry(tmp_path):

@@ -190,7 +190,7 @@ class SolverSpec:
     step_over_jumps: bool = True          # a level inside a band without equilibrium (a jump of the
                                           # residual) is reported just past it (solving/step_over.py)
     full_step_first: bool = True          # the l2 line search takes the whole Newton step where it
-                                          # halves |F| (linalg/full_step_first.py)
+                                          # cuts |F| to a quarter (linalg/full_step_first.py)
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 
 

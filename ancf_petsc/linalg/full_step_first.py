@@ -58,16 +58,21 @@ class FullStepFirst:
         if code != 0:
             raise PETSc.Error(code)
 
+    def _evaluate(self, snes, at, F) -> bool:
+        """F(at) into F; True where the residual left its domain (SNESSetFunctionDomainError)."""
+        self._check(self.lib.SNESComputeFunction(snes, at, F))
+        self.evaluations += 1
+        domain = _B(0)
+        self._check(self.lib.SNESGetFunctionDomainError(snes, ctypes.byref(domain)))
+        return bool(domain.value)
+
     def _residual(self, snes, X, Y, W, F, lam: float) -> float:
         """‖F(X − λY)‖² into F, W = X − λY; inf where F is not finite or the domain was left."""
-        lib = self.lib
-        self._check(lib.VecWAXPY(W, _D(-lam), Y, X))
-        self._check(lib.SNESComputeFunction(snes, W, F))
-        self.evaluations += 1
-        domain, norm = _B(0), _D(0.0)
-        self._check(lib.SNESGetFunctionDomainError(snes, ctypes.byref(domain)))
-        self._check(lib.VecNorm(F, _NORM_2, ctypes.byref(norm)))
-        return math.inf if domain.value or not math.isfinite(norm.value) else norm.value ** 2
+        self._check(self.lib.VecWAXPY(W, _D(-lam), Y, X))
+        left = self._evaluate(snes, W, F)
+        norm = _D(0.0)
+        self._check(self.lib.VecNorm(F, _NORM_2, ctypes.byref(norm)))
+        return math.inf if left or not math.isfinite(norm.value) else norm.value ** 2
 
     def _apply(self, ls, _ctx) -> int:
         try:
@@ -81,8 +86,8 @@ class FullStepFirst:
 
     def _search(self, ls) -> None:
         lib = self.lib
-        X, F, Y, W, G, snes = _P(), _P(), _P(), _P(), _P(), _P()
-        self._check(lib.SNESLineSearchGetVecs(ls, *(ctypes.byref(v) for v in (X, F, Y, W, G))))
+        X, F, Y, W, snes = _P(), _P(), _P(), _P(), _P()
+        self._check(lib.SNESLineSearchGetVecs(ls, *(ctypes.byref(v) for v in (X, F, Y, W)), None))
         self._check(lib.SNESLineSearchGetSNES(ls, ctypes.byref(snes)))
         xnorm, gnorm, ynorm, lam = _D(), _D(), _D(), _D()
         self._check(lib.SNESLineSearchGetNorms(ls, ctypes.byref(xnorm), ctypes.byref(gnorm), ctypes.byref(ynorm)))
@@ -126,14 +131,9 @@ class FullStepFirst:
         if changed_y.value and not changed_w.value:
             self._check(lib.VecWAXPY(W, _D(-lam), Y, X))
         self._check(lib.VecCopy(W, X))
-        if not evaluated or changed_y.value or changed_w.value:
-            self._check(lib.SNESComputeFunction(snes, X, F))
-            self.evaluations += 1
-            domain = _B(0)
-            self._check(lib.SNESGetFunctionDomainError(snes, ctypes.byref(domain)))
-            if domain.value:
-                self._check(lib.SNESLineSearchSetReason(ls, _FAILED_DOMAIN))
-                return
+        if (not evaluated or changed_y.value or changed_w.value) and self._evaluate(snes, X, F):
+            self._check(lib.SNESLineSearchSetReason(ls, _FAILED_DOMAIN))
+            return
         self._check(lib.SNESLineSearchComputeNorms(ls))
 
 

@@ -9,15 +9,14 @@ is one SNES solve from a state; the load stepping around it is stepper.py.
 """
 from __future__ import annotations
 
-
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
 from ..linalg.compact_factor import install_for
 from ..linalg.database import remove
-from ..linalg.full_step_first import install_full_step_first
 from ..linalg.diagnostics import petsc_message, used_anywhere
+from ..linalg.full_step_first import install_full_step_first
 from ..linalg.inertia import mumps_error, pivot_counts
 from ..petsc.mixed_tangent import mixed_tangent
 from ..petsc.potential import rounding_floor

@@ -21,7 +21,8 @@ price of one iteration instead of the predictor's linearisation (the held Jacobi
 factorisation of K, a solve per multiplier): the same residuals, one iteration later
 (docs/gait.md, "Frames per second").  The check itself reads the status from the converged
 solve's last evaluation at that state (``contact.decide_kept``), evaluating again only where the
-rule changes it.
+rule changes it.  Where that solve fails and the prediction made then changes no status, the
+prediction's step is the failed solve's first, and its solve is not made again (``_repeats``).
 
 Measured over the unilateral grid (scripts/bench_contact_grid.py, docs/contact.md) this finds
 the contact state of an increment in one prediction in most increments and two in the others,
@@ -204,6 +205,9 @@ class PhasedNewton:
                 self._trace(lam, f"no prediction {k}" + ("" if retry else " on the load predictor's path"), 0, 0)
                 return None, its, not retry
             predicted_once |= ok
+            if ok and retry and self._repeats(before):
+                self._trace(lam, f"prediction {k} (0 changes) repeats the failed solve", 0, 0)
+                return None, its, moved
             start, status = X.copy(), c.status.copy()
             P.keep_status(CHECK)
             reason, n = self.snes_solve(X)
@@ -257,6 +261,14 @@ class PhasedNewton:
             return None
         self._trace(lam, "weights differentiated", 0, reason)
         return X.copy(), self.steps.contact.status.copy()
+
+    def _repeats(self, status) -> bool:
+        """Whether a prediction after the settled solve failed kept every rank's status: it then
+        steps as that solve's first Newton iteration did from the same state, and its solve would
+        repeat the failure (the second subject's 90° gastrocnemius-biased unilateral column at
+        600 N: 15 Newton iterations to the same cycle of period 5).  The caller goes on as after
+        that solve's failure, without it.  Collective."""
+        return self._unchanged(status)
 
     def _unchanged(self, status) -> bool:
         """Whether the prediction kept every rank's status (collective)."""

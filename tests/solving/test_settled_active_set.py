@@ -66,3 +66,27 @@ def test_the_check_reads_the_converged_evaluation(tmp_path, monkeypatch):
     assert [st["iterations"] for st in read["steps"]] == [st["iterations"] for st in evaluated["steps"]]
     a, b = _probes(read), _probes(evaluated)
     assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+
+
+@pytest.mark.slow
+def test_a_prediction_that_repeats_the_failed_settled_solve_is_not_solved(tmp_path, monkeypatch):
+    """The second subject's 90° gastrocnemius-biased unilateral column to 600 N: the settled solve
+    of 600 N fails (a Newton cycle), and the prediction after it changes no status.  Solving that
+    prediction repeats the failure (the same 15 iterations); skipping it reaches the same states
+    in exactly those iterations fewer."""
+    from ancf_petsc.solving.newton import PhasedNewton
+    from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
+
+    raw = cell_config(EnvelopeCell(SUBJECT2, 90.0, "gastrocnemius", "unilateral",
+                                   levels=(30.0, 100.0, 200.0, 400.0, 600.0)))
+    seen: dict = {}
+    _counted(monkeypatch, PhasedNewton, "_repeats", seen)
+    skipped = run_inline(raw, tmp_path / "skipped", base_dir=CONFIGS)
+    monkeypatch.setattr(PhasedNewton, "_repeats", lambda self, status: False)
+    solved = run_inline(raw, tmp_path / "solved", base_dir=CONFIGS)
+    assert skipped["status"] == solved["status"] == "completed"
+    assert seen == {True: 1}, seen
+    a, b = _probes(skipped), _probes(solved)
+    assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+    its = [st["iterations"] for st in skipped["steps"]], [st["iterations"] for st in solved["steps"]]
+    assert its[0][:4] == its[1][:4] and its[1][4] - its[0][4] >= 10, its

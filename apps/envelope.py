@@ -22,6 +22,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tangent", choices=TANGENTS, help="solver.tangent of every cell")
     ap.add_argument("--augmentation", type=float,
                     help="contact.tangential.augmentation of every friction cell")
+    ap.add_argument("--band-step", type=float, help="solver.band_step of every cell (docs/running.md)")
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="another ancf-solve to run the same cells with (before/after)")
     ap.add_argument("--jobs", type=int, default=2)
@@ -30,7 +31,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--failed-in", help="a CSV of the same grid: run only its cells that did not complete")
     args = ap.parse_args(argv)
     cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements,
-                 args.predictor, args.tangent, args.augmentation)
+                 predictor=args.predictor, tangent=args.tangent, augmentation=args.augmentation,
+                 band_step=args.band_step)
     if args.failed_in:
         if not os.path.isfile(args.failed_in):
             ap.error(f"--failed-in {args.failed_in}: no such file (a CSV written by --csv)")

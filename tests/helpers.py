@@ -327,6 +327,19 @@ def assert_jacobian_and_gradient(P, X, free, rng, gradient_rel: float, samples: 
         assert dE == pytest.approx(F.dot(v), rel=gradient_rel)
 
 
+def subject2_stride_frames(twist: float, bias: str, stop: int) -> dict:
+    """Frames 1 … ``stop`` of the shipped walking stride of ``bias`` (its CSV's rows, as the
+    envelope's strides read them) on the traced second subject at ``twist`` degrees, unilateral
+    contact, 4 elements."""
+    from ancf_petsc.workflows.envelope import DATA, STRIDE_COLUMNS, SUBJECT2, EnvelopeCell, cell_config
+    with open(os.path.join(DATA, f"stride_walking_{bias}.csv")) as fh:
+        lines = [line.strip().split(",") for line in fh if not line.startswith("#")]
+    columns = dict(zip(lines[0], zip(*[[float(v) for v in row] for row in lines[1:stop + 1]])))
+    raw = cell_config(EnvelopeCell(SUBJECT2, twist, bias, "unilateral", stride=True))
+    raw["history"] = {"table": {c: list(columns[c]) for c in ("time",) + STRIDE_COLUMNS}}
+    return raw
+
+
 def unilateral_stride_frames(first: int = 4, stop: int = 22) -> dict:
     """Frames first+1 … stop of the shipped walking stride (uniform bias) at ψ = 45°, unilateral
     contact, as a history of their own: loading frames whose active set settles."""

@@ -33,6 +33,7 @@ SOLVER_KEYS = {
     "branch_switch": (boolean, False),
     "step_over_jumps": (boolean, False),
     "full_step_first": (boolean, False),
+    "band_step": (lambda v, p: number(v, p, lo=0.0), False),
     "reuse_tangent": (boolean, False),
     "compact_factor": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),

@@ -191,6 +191,9 @@ class SolverSpec:
                                           # residual) is reported just past it (solving/step_over.py)
     full_step_first: bool = True          # the l2 line search takes the whole Newton step where it
                                           # cuts |F| to a quarter (linalg/full_step_first.py)
+    band_step: float = 0.0                # full Newton steps with contact carry no partner place through
+                                          # more fade-band widths than this (0: no limit, the
+                                          # default; contact/band_step.py)
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
 
 

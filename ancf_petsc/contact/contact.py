@@ -194,6 +194,11 @@ class Contact:
             self.timers["contact_projection"] += time.perf_counter() - t0
         return st
 
+    @property
+    def last_evaluation(self) -> ContactState | None:
+        """The evaluation the next residual or Jacobian at its state would reuse (or None)."""
+        return None if self._cache is None else self._cache[2]
+
     def add_residual(self, xl: np.ndarray, needed: np.ndarray, floc: np.ndarray) -> bool:
         """Add the contact forces and the constraint rows to the local residual ``floc``;
         False when a point slid out of its search window."""

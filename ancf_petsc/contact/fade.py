@@ -71,6 +71,15 @@ def _fade_arguments(xiB, tB, t_end, at_first, at_last) -> tuple:
     return u_t, np.maximum(raw, 0.0) / (2.0 * END_FADE), below, raw
 
 
+def band_positions(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
+                   at_last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where partner places sit against the fade bands: u_t past the curve's nearer end (0 at the
+    band's start, 1 at its end, −CURVE_OVERHANG / band at the curve's end) and ξ_B's overhang past
+    the beam's end (signed; B's first/last element only)."""
+    u_t, _, _, raw = _fade_arguments(xiB, tB, t_end, at_first, at_last)
+    return u_t, raw
+
+
 def end_weight(xiB: np.ndarray, tB: np.ndarray, t_end: np.ndarray, at_first: np.ndarray,
                at_last: np.ndarray) -> np.ndarray:
     """Weight of a partner place (ξ_B, t_B): 1 on B's surface, falling past the curve's ends

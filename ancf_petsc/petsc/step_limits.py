@@ -1,10 +1,11 @@
 """Limits on a Newton step before the line search takes it (SNES line-search pre-check): a step
 that moves a node by more than a few section sizes is scaled down (a near-singular tangent gives
 absurd steps; with contact the closest-point pairing holds only for steps small beside a
-section), a step whose sections are turned (``section_rotation.py``) to a turn of about
-``MAX_STEP_TURN``, then halved until no Gauss point has det F below a floor (inverted elements)
-and no fibre law's exponent k2 Ē² grows by more than ``MAX_EXPONENT_GROWTH`` (a strongly stiffening
-law: Newton's linear step overshoots on the exponential).  The load predictor of an increment is
+section, nor one that carries partner places across a fade band: ``contact/band_step.py``), a
+step whose sections are turned (``section_rotation.py``) to a turn of about ``MAX_STEP_TURN``,
+then halved until no Gauss point has det F below a floor (inverted elements) and no fibre law's
+exponent k2 Ē² grows by more than ``MAX_EXPONENT_GROWTH`` (a strongly stiffening law: Newton's
+linear step overshoots on the exponential).  The load predictor of an increment is
 held to the same exponent growth (``limit_predictor``)."""
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from ..contact.band_step import band_moves
 from ..physics import kernels
 from ..physics.materials import determinant
 from .section_rotation import SectionTurns
@@ -70,11 +72,15 @@ class StepLimits:
         self.problem, self.j_min, self.halvings = problem, j_min, halvings
         self.sections = MAX_STEP_SECTIONS
         self.turns: SectionTurns | None = None      # Newton steps turn the sections (section_rotation.py)
+        self.band_step = 0.0               # fade-band widths a full Newton step with contact may carry a
+                                           # partner place (``solver.band_step``; 0: no limit)
+        self._local: PETSc.Vec | None = None
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
         local = any(hasattr(m, "fibre_exponent") for blk in problem.blocks for _, _, m in blk.parts)
         self.fibres = bool(problem.comm.tompi4py().allreduce(int(local), op=MPI.MAX))
 
-    def configure(self, min_det_f: float, section_update: str, linesearch: str) -> bool:
+    def configure(self, min_det_f: float, section_update: str, linesearch: str,
+                  band_step: float = 0.0) -> bool:
         """Set the det F floor (0: none), whether Newton steps turn the sections
         (``solver.min_det_f``, ``solver.section_update``) and, with contact and full Newton steps
         (``linesearch`` basic), the tighter section-size limit; returns whether the pre-check has
@@ -88,7 +94,8 @@ class StepLimits:
         if self.problem.contact is not None and full:
             # full Newton steps with contact: the pairing holds for steps small beside a section
             self.sections = MAX_STEP_SECTIONS_CONTACT
-        return min_det_f > 0.0 or self.turns is not None
+            self.band_step = band_step
+        return min_det_f > 0.0 or self.turns is not None or self.band_step > 0.0
 
     def turned(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
         """Turn the sections of the whole update X − Y of a model with a fibre law where Newton
@@ -128,7 +135,7 @@ class StepLimits:
         turn = 0.0                          # and a turned step to MAX_STEP_TURN
         if self.turns is not None:
             turn = np.linalg.norm(y[:, 1:3], axis=2).max(initial=0.0) / MAX_STEP_TURN
-        local = np.array([move, turn])      # one reduction for both
+        local = np.array([move, turn, self.band_moves(X, Y)])      # one reduction for all
         P.comm.tompi4py().Allreduce(MPI.IN_PLACE, local, op=MPI.MAX)
         big = float(local.max())
         changed = False
@@ -152,6 +159,26 @@ class StepLimits:
             return True
         finally:
             trial.destroy()
+
+    def band_moves(self, X: PETSc.Vec, Y: PETSc.Vec) -> float:
+        """This rank's largest move of a partner place through a fade band by the step X − Y, over
+        ``band_step`` band widths (contact/band_step.py); 0 without the limit, or where the
+        contact's last evaluation was not at X."""
+        c = self.problem.contact
+        if self.band_step <= 0.0:
+            return 0.0
+        ex = self.problem.exchange
+        if self._local is None:
+            self._local = ex.xloc.duplicate()
+        free = np.ones(self._local.getLocalSize(), dtype=bool)
+        free[ex.held_local] = False
+        ex.scatter.scatter(X, self._local, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        st = c.last_evaluation
+        if st is None or not np.array_equal(self._local.getArray()[free], st.xl.reshape(-1)[free]):
+            return 0.0
+        ex.scatter.scatter(Y, self._local, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        step = np.where(free, -self._local.getArray(), 0.0)
+        return band_moves(c, step.reshape(st.xl.shape)) / self.band_step
 
     def limit_predictor(self, X0: PETSc.Vec, X: PETSc.Vec) -> int:
         """Halve the load predictor's move X − X0 (X0 the converged state) until no fibre exponent

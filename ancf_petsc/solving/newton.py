@@ -215,17 +215,9 @@ class PhasedNewton:
             what = f"prediction {k} ({predicted} changes{self._held})" if ok else f"no prediction {k}"
             if reason <= 0:
                 self._trace(lam, what, n, reason)
-                c.projector.restore()
+                self._undo(X, start, status, weighed)
                 if weighed is not None:
-                    # the step that linearised the weights with the status failed: the weights
-                    # alone from the state they were updated at, its status kept
-                    weighed[0].copy(X)
-                    c.status[:] = weighed[1]
-                    start.destroy()
                     return self._reweigh(X, lam, its, weighed)
-                start.copy(X)
-                start.destroy()
-                c.status[:] = status
                 if skipped:
                     retry = True        # the settled set's solve failed: predicted after all
                     continue
@@ -261,6 +253,16 @@ class PhasedNewton:
             return None
         self._trace(lam, "weights differentiated", 0, reason)
         return X.copy(), self.steps.contact.status.copy()
+
+    def _undo(self, X: PETSc.Vec, start: PETSc.Vec, status, weighed) -> None:
+        """After a prediction's failed solve: X and the status it started from (``start`` is
+        destroyed), or, where the step that linearised the weights with the status failed
+        (``weighed``), the state the weights were updated at with its status kept."""
+        c = self.steps.contact
+        c.projector.restore()
+        (start if weighed is None else weighed[0]).copy(X)
+        c.status[:] = status if weighed is None else weighed[1]
+        start.destroy()
 
     def _repeats(self, status) -> bool:
         """Whether a prediction after the settled solve failed kept every rank's status: it then

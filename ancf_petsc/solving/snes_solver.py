@@ -89,7 +89,7 @@ class SNESSolver:
             problem.symmetric)
         self.full_step_first = install_full_step_first(        # friction's l2, whole step first
             self.snes, self.linesearch, spec.full_step_first and not objective, self.prefix)
-        if problem.limits.configure(spec.min_det_f, spec.section_update, self.linesearch):
+        if problem.limits.configure(spec.min_det_f, spec.section_update, self.linesearch, spec.band_step):
             self.snes.setLineSearchPreCheck(problem.limits.precheck)
         schur = None
         if linear == "fieldsplit":

@@ -36,8 +36,7 @@ PLANE_ROOT = {"r": "xyz", "r_y": "xz", "r_z": "x", "r_yy": "x", "r_zz": "x", "r_
 BEAMS = ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")
 #: the stride files' muscle columns (OpenSim's names), in the order of BEAMS
 STRIDE_COLUMNS = ("soleus_r", "gasmed_r", "gaslat_r")
-CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
-                       "configs")
+CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "configs")
 DATA = os.path.join(CONFIGS, "data")
 NEO = os.path.join(CONFIGS, "achilles_type3_psi45.yaml")
 GOH = tuple(os.path.join(CONFIGS, f"achilles_type3_psi45_goh{s}.yaml")
@@ -64,6 +63,7 @@ class EnvelopeCell:
     predictor: str | None = None          # solver.predictor (None: the config's default)
     tangent: str | None = None            # solver.tangent (None: the config's default)
     augmentation: float | None = None     # contact.tangential.augmentation (None: the default)
+    band_step: float | None = None        # solver.band_step (None: the default)
 
     @property
     def name(self) -> str:
@@ -73,6 +73,7 @@ class EnvelopeCell:
         kind = "_stride" if self.stride else ""
         pred = (f"_{self.predictor}" if self.predictor else "") + (f"_{self.tangent}" if self.tangent else "")
         pred += f"_c{self.augmentation:g}" if self.augmentation is not None and self.friction else ""
+        pred += f"_band{self.band_step:g}" if self.band_step is not None else ""
         return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
@@ -114,10 +115,9 @@ def cell_config(cell: EnvelopeCell) -> dict:
         if cell.augmentation is not None:
             contact["tangential"]["augmentation"] = float(cell.augmentation)
     cfg["output"] = {"vtk": False}
-    if cell.predictor:
-        cfg.setdefault("solver", {})["predictor"] = cell.predictor
-    if cell.tangent:
-        cfg.setdefault("solver", {})["tangent"] = cell.tangent
+    for key in ("predictor", "tangent", "band_step"):          # the solver's, where the cell sets them
+        if getattr(cell, key) is not None:
+            cfg.setdefault("solver", {})[key] = getattr(cell, key)
     return cfg
 
 
@@ -268,14 +268,12 @@ GRIDS = {
 }
 
 
-def grid(name: str, twists, biases, elements: int = 4, predictor: str | None = None,
-         tangent: str | None = None, augmentation: float | None = None) -> list[EnvelopeCell]:
-    """The cells of a named grid (``GRIDS``), with ``solver.predictor``, ``solver.tangent`` and
-    (friction cells) ``contact.tangential.augmentation`` set when given."""
+def grid(name: str, twists, biases, elements: int = 4, **settings) -> list[EnvelopeCell]:
+    """The cells of a named grid (``GRIDS``), with the ``EnvelopeCell`` settings given (predictor,
+    tangent, band_step: the solver's; augmentation: friction cells' contact.tangential)."""
     if name not in GRIDS:
         raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
-    return [replace(c, predictor=predictor, tangent=tangent, augmentation=augmentation)
-            for c in GRIDS[name](twists, biases, elements)]
+    return [replace(c, **settings) for c in GRIDS[name](twists, biases, elements)]
 
 
 def run_cells(cells: list[EnvelopeCell], solvers: dict[str, list[str]], workdir: str, jobs: int,

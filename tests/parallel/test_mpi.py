@@ -6,7 +6,7 @@ import pytest
 from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, cell_config
 
 from helpers import (CONFIGS, assert_same_as_serial, load_raw, probes_table, read_summary, run_on_ranks,
-                     two_beam_twisted, unilateral_stride_frames, write_config)
+                     subject2_stride_frames, two_beam_twisted, unilateral_stride_frames, write_config)
 
 
 def _cases():
@@ -43,10 +43,14 @@ def _cases():
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
     coulomb["steps"] = [1.0, 2.5, 5.0, 10.0]
     coulomb["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
+    # the second subject's stride from rest at 90 deg: Newton steps held to the fade bands
+    # (contact/band_step.py: 10 of the first two frames' steps, each rank's points, one reduction)
+    band = subject2_stride_frames(90.0, "uniform", 2)
+    band["solver"] = {"band_step": 1.5}
     return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
             "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon, "tendon-unilateral-held": held,
             "tendon-unilateral-stride": stride,
-            "tendon-coulomb": coulomb}
+            "tendon-coulomb": coulomb, "subject2-band-step": band}
 
 
 CASES = _cases()

@@ -90,8 +90,7 @@ class FadeDerivatives:
 
     def __init__(self, projector, pr, loaded: np.ndarray | None = None):
         itf = projector.points.itf[pr.idx]
-        first = np.array([i.b.element_offset for i in projector.interfaces], dtype=np.int64)[itf]
-        last = first + np.array([i.b.n_elements - 1 for i in projector.interfaces], dtype=np.int64)[itf]
+        first, last, _ = projector.wrap_bounds(itf)
         self._projector, self._pr, self._itf = projector, pr, itf
         #: the points under pressure (all without ``loaded``): only their ∇²w enter the Jacobian
         #: (−p_p g_p ∇²w_p), so the others' are left zero

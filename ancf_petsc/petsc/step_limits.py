@@ -91,10 +91,11 @@ class StepLimits:
         full = linesearch == "basic"
         self.turns = SectionTurns(self.problem) if section_update == "rotation" and full else None
         self.j_min = min_det_f if min_det_f > 0.0 else -np.inf
-        if self.problem.contact is not None and full:
+        contact_full = self.problem.contact is not None and full
+        if contact_full:
             # full Newton steps with contact: the pairing holds for steps small beside a section
             self.sections = MAX_STEP_SECTIONS_CONTACT
-            self.band_step = band_step
+        self.band_step = band_step if contact_full else 0.0
         return min_det_f > 0.0 or self.turns is not None or self.band_step > 0.0
 
     def turned(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
@@ -168,7 +169,9 @@ class StepLimits:
         if self.band_step <= 0.0:
             return 0.0
         ex = self.problem.exchange
-        if self._local is None:
+        if self._local is None or self._local.getSize() != ex.xloc.getSize():
+            if self._local is not None:             # the exchange was rebuilt for new contact pairs
+                self._local.destroy()
             self._local = ex.xloc.duplicate()
         free = np.ones(self._local.getLocalSize(), dtype=bool)
         free[ex.held_local] = False

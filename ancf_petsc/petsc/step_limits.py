@@ -37,6 +37,11 @@ MAX_EXPONENT_GROWTH = 8.0
 #: near-singular step asked for a 1.01 rad turn at |F| 0.2 N (soft GOH, docs/gait.md, thirty-fourth
 #: session); held to 0.1, every step of the soft sets' first levels is turned
 MAX_STEP_TURN = 0.1
+#: a band-limited step's scale is rounded to the grid 2^(k / BAND_GRID) (a 4.4 % spacing): each
+#: rank's rounding of the same Newton step moved the band ratio by ~1e-10, and the 3-rank run of
+#: the second subject's 90° stride left the serial path in frame 1 (states 1.2e-8 m apart); on the
+#: grid frames 1-13 equal serial to 1e-17 m on 2 and 3 ranks (tests/parallel/test_mpi.py)
+BAND_GRID = 16
 
 
 def min_jacobian(problem, X: PETSc.Vec) -> float:
@@ -61,6 +66,14 @@ def fibre_exponents(problem, X: PETSc.Vec) -> np.ndarray:
                 F = kernels.deformation_gradient(blk.element_vectors(xl), G)
                 out.append(material.fibre_exponent(F).ravel())
     return np.concatenate(out)
+
+
+def quantised(ratio: float) -> float:
+    """A positive ``ratio`` rounded up to the grid 2^(k / ``BAND_GRID``), so that the ranks'
+    rounding of one step (band moves ~1e-10 apart) scales it alike; 0 stays 0."""
+    if ratio <= 0.0:
+        return ratio
+    return float(2.0 ** (np.ceil(np.log2(ratio) * BAND_GRID) / BAND_GRID))
 
 
 class StepLimits:
@@ -181,7 +194,7 @@ class StepLimits:
             return 0.0
         ex.scatter.scatter(Y, self._local, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
         step = np.where(free, -self._local.getArray(), 0.0)
-        return band_moves(c, step.reshape(st.xl.shape)) / self.band_step
+        return quantised(band_moves(c, step.reshape(st.xl.shape)) / self.band_step)
 
     def limit_predictor(self, X0: PETSc.Vec, X: PETSc.Vec) -> int:
         """Halve the load predictor's move X − X0 (X0 the converged state) until no fibre exponent

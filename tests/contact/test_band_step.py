@@ -3,21 +3,18 @@ import numpy as np
 import pytest
 
 from ancf_petsc.contact import band_step
-from helpers import CONFIGS, run_inline, subject2_stride_frames
-
-
-def _tips(summary: dict) -> np.ndarray:
-    last = summary["steps"][-1]["probes"]
-    return np.array([last[n]["displacement"] for n in sorted(last)])
+from helpers import CONFIGS, probes_table, run_inline, subject2_stride_frames
 
 
 @pytest.mark.slow
 def test_steps_held_to_the_band_reach_the_same_states_in_fewer_iterations(tmp_path, monkeypatch):
     """The second subject's 90° uniform unilateral stride, frames 1-19: with full Newton steps
     partner places crossed a fade band in one iterate (1.4 mm against a 0.9 mm band) and Newton
-    cycled (frame 19: period 3, |F| 0.044 / 0.465 / 0.421 N; frames 1, 14 and 19 cut back, 967
-    Newton iterations).  Held to ``solver.band_step`` (1.5) band widths per step, the same
-    states in under half the iterations (412 measured)."""
+    cycled (frame 19: period 3, |F| 0.044 / 0.465 / 0.421 N; 967 Newton iterations measured).
+    Held to ``solver.band_step`` (1.5) band widths per step, under half the iterations and the
+    same states through frame 13.  Frame 14 has two stable equilibria 11 µm apart (both converge
+    to |F| < 1e-8 N with no negative tangent eigenvalue): which one a solve reaches depends on its
+    path, so from there on both runs are only checked to converge near each other."""
     raw = subject2_stride_frames(90.0, "uniform", 19)
     raw.setdefault("solver", {})["band_step"] = 1.5
     calls = []
@@ -36,8 +33,11 @@ def test_steps_held_to_the_band_reach_the_same_states_in_fewer_iterations(tmp_pa
     assert len(calls) == n_held, "band_step: 0 still limits"
     its = held["newton_iterations"], free["newton_iterations"]
     assert 2 * its[0] < its[1], its
-    a, b = _tips(held), _tips(free)
-    assert np.abs(a - b).max() <= 1e-7 * np.abs(b).max()
+    a, b = probes_table(held).reshape(19, -1), probes_table(free).reshape(19, -1)
+    scale = np.abs(b).max()
+    assert np.abs(a[:13] - b[:13]).max() <= 1e-7 * scale
+    assert np.abs(a[13:] - b[13:]).max() <= 1e-2 * scale            # the equilibria 11 µm apart
+    assert all(s["negative_eigenvalues"] == 0 for r in (held, free) for s in r["steps"][13:14])
 
 
 def test_band_step_is_checked():

@@ -44,8 +44,9 @@ def _cases():
     coulomb["steps"] = [1.0, 2.5, 5.0, 10.0]
     coulomb["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
     # the second subject's stride from rest at 90 deg: Newton steps held to the fade bands
-    # (contact/band_step.py: 10 of the first two frames' steps, each rank's points, one reduction)
-    band = subject2_stride_frames(90.0, "uniform", 2)
+    # (contact/band_step.py: each rank's points, one reduction, the scale on a grid): frames 1-13, to
+    # frame 14, which has two equilibria (tests/contact/test_band_step.py)
+    band = subject2_stride_frames(90.0, "uniform", 13)
     band["solver"] = {"band_step": 1.5}
     return {"uniaxial-1-element": uni, "elastica": elastica, "pretwisted": twisted, "two-beams": two,
             "two-beams-3363-3333": mixed, "tendon-clamped-roots": tendon, "tendon-unilateral-held": held,

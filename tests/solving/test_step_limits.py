@@ -112,3 +112,17 @@ def test_lone_soleus_of_the_stiffest_published_set_reaches_400_newtons(tmp_path)
     assert np.all(np.diff(u) > 0.0)                                  # stretches at every level
     area = s["sections"]["soleus"]["area"]
     assert u[-1] / raw["geometry"]["length"] < 400.0 / (area * 3.0 * 2 * C10)   # stiffer than the matrix
+
+
+def test_band_ratio_on_its_grid():
+    """The band limit's ratio is rounded up to 2^(k/16): never below the ratio (the step stays
+    within the limit), at most one grid step above it, and the same for ratios 1e-10 apart (the
+    ranks' rounding of one Newton step) unless a grid point falls between them."""
+    from ancf_petsc.petsc.step_limits import BAND_GRID, quantised
+    r = np.geomspace(1e-3, 1e3, 2001)
+    q = np.array([quantised(x) for x in r])
+    assert np.all(q >= r) and np.all(q <= r * 2.0 ** (1.0 / BAND_GRID) * (1 + 1e-15))
+    assert np.allclose(np.log2(q) * BAND_GRID, np.round(np.log2(q) * BAND_GRID), atol=1e-9)
+    same = [quantised(x) == quantised(x * (1 + 1e-10)) for x in r]
+    assert sum(same) >= len(r) - 1
+    assert quantised(0.0) == 0.0

@@ -116,6 +116,8 @@ def test_tangent_predictor_makes_no_prediction_once_the_contact_pattern_grew():
     got = X.copy()
     assert not tangent.predict(got, 2.0)
     assert (got - X).norm() == 0.0                   # no held DOF moves on this model
+    tangent.valid = True                             # a sub-step accepted with no Newton iteration
+    assert not tangent.predict(got, 2.0)             # (the stepper's accept): still no factor
     ksp.setOperators(P.J)                            # a later solve factors again
     ksp.setUp()
     tangent.valid = True

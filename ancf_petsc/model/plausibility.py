@@ -13,7 +13,7 @@ from ..physics.materials import NeoHookean
 __all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "MIN_OVERFLOW_STRETCH",
            "MIN_SHEAR_MODULUS", "MAX_BULK_RATIO", "MAX_TWIST_DEG", "TWIST_AXIS_REACH", "fibre_warnings",
            "load_warnings", "material_warnings", "size_warnings", "strain_warning", "point_force_warnings",
-           "twist_warnings"]
+           "reversed_load_warnings", "twist_warnings"]
 
 #: a tendon, fascicle or bar longer than this [m] is most likely given in mm
 MAX_LENGTH = 5.0
@@ -129,6 +129,37 @@ def load_warnings(spec) -> list[str]:
         return []
     return ["warning: loads: every load and prescribed displacement is zero at every level: the solution is "
             "the reference state; give a load a nonzero force (or a history column with nonzero values)"]
+
+
+def _frames(ks: list[int]) -> str:
+    """Frame numbers as ranges: 9-10, 14."""
+    runs, start = [], ks[0]
+    for a, b in zip(ks, ks[1:] + [None]):
+        if b != a + 1:
+            runs.append(f"{start}-{a}" if a > start else f"{a}")
+            start = b
+    return ", ".join(runs[:4]) + (", ..." if len(runs) > 4 else "")
+
+
+def reversed_load_warnings(spec) -> list[str]:
+    """One warning per load of a ``history`` whose column is negative at some frames: the load
+    then points against its force vector.  Muscle forces pull only (OpenSim writes them
+    positive), and a tendon pushed at its end buckles: on the paper's tendon at 90° the frames
+    at −20 and −50 N stopped the sliding, unilateral and μ = 0.3 runs (docs/gait.md, "A load
+    history")."""
+    if spec.history is None:
+        return []
+    out = []
+    for ld in spec.loads:
+        if ld.curve is None:
+            continue
+        neg = [int(round(k)) for k, m in ld.curve if m < 0.0]
+        if neg:
+            low = min(m for _, m in ld.curve)
+            out.append(f"warning: {ld.path or 'loads'}: its history column is negative at frame(s) {_frames(neg)} "
+                       f"(down to {low:g} x its {ld.kind}): the load then pushes the end instead of pulling "
+                       f"(muscle forces are positive; a pushed tendon buckles); check the column's sign or scale")
+    return out
 
 
 def fibre_warnings(spec, beams) -> list[str]:

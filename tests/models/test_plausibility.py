@@ -161,3 +161,17 @@ def test_a_model_nothing_moves_is_named():
     assert "zero at every level" in w
     raw["history"]["table"]["pull"] = [0.0, 2.0]
     assert _warnings(raw) == []
+
+
+def test_a_history_column_that_turns_negative_is_named():
+    """A load whose history column is negative at some frames pushes the tendon's end (muscle
+    forces pull only): one warning naming the load, the frames and the lowest value; positive
+    columns give none."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["history"] = {"table": {"time": [0.0, 0.1, 0.2, 0.3, 0.4], "pull": [1.0, -2.0, -5.0, 3.0, -1.0]}}
+    raw["loads"][0]["column"] = "pull"
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: loads[0]: its history column is negative at frame(s) 2-3, 5 (down to -5")
+    raw["history"]["table"]["pull"] = [1.0, 2.0, 0.0, 3.0, 1.0]
+    assert _warnings(raw) == []

@@ -32,6 +32,7 @@ def describe(solver) -> str:
             f"rounding floor |F(q0,0)| {solver.rounding_floor:.1e}"
             + ("; chord steps near convergence" if solver.spec.reuse_tangent else "")
             + (_turns_text(solver) if solver.spec.section_update == "rotation" else "")
+            + (_band_text(solver) if solver.spec.band_step > 0.0 else "")
             + ("; tangent: mixed (initial stress of the linearised strain)" if solver.problem.mixed else ""))
 
 
@@ -41,6 +42,15 @@ def _turns_text(solver) -> str:
         return "; Newton steps turn the sections"
     return ("; Newton steps not turned (solver.section_update: rotation needs full steps, "
             f"line search {solver.linesearch})")
+
+
+def _band_text(solver) -> str:
+    """What ``solver.band_step`` does in this run (step_limits.StepLimits.configure): nothing
+    without contact or where a line search scales the steps (friction's l2)."""
+    if solver.problem.limits.band_step > 0.0:
+        return f"; Newton steps held to {solver.spec.band_step:g} fade-band widths"
+    why = "no contact" if solver.problem.contact is None else f"line search {solver.linesearch}"
+    return f"; Newton steps not held to the fade bands (solver.band_step needs full steps with contact, {why})"
 
 
 #: what works on the saddle-point Jacobian of a model with contact multipliers (measured on

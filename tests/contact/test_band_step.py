@@ -48,3 +48,19 @@ def test_band_step_is_checked():
     assert parse_solver({}).band_step == 0.0
     with pytest.raises(ConfigError, match="solver.band_step"):
         parse_solver({"band_step": -1})
+
+
+def test_the_run_header_says_whether_steps_are_held(tmp_path):
+    """With full Newton steps and contact the header says the steps are held; where a line search
+    scales the steps (l2, friction's) ``solver.band_step`` does nothing, and the header says why."""
+    from helpers import load_raw
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["steps"] = [10.0]
+    raw.setdefault("solver", {})["band_step"] = 1.5
+    held = run_inline(raw, tmp_path / "held")
+    assert "Newton steps held to 1.5 fade-band widths" in held["solver"]
+    scaled = run_inline(raw, tmp_path / "l2", petsc={"snes_linesearch_type": "l2"})
+    assert ("Newton steps not held to the fade bands (solver.band_step needs full steps with contact, "
+            "line search l2)") in scaled["solver"]
+    raw["solver"]["band_step"] = 0.0
+    assert "fade-band" not in run_inline(raw, tmp_path / "off")["solver"]

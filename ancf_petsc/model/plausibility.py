@@ -157,8 +157,9 @@ def reversed_load_warnings(spec) -> list[str]:
         if neg:
             low = min(m for _, m in ld.curve)
             out.append(f"warning: {ld.path or 'loads'}: its history column is negative at frame(s) {_frames(neg)} "
-                       f"(down to {low:g} x its {ld.kind}): the load then pushes the end instead of pulling "
-                       f"(muscle forces are positive; a pushed tendon buckles); check the column's sign or scale")
+                       f"(down to {low:g} x its {ld.kind}): the load then points against its vector, a pull "
+                       f"turned into a push (muscle forces are positive; a pushed tendon buckles); check the "
+                       f"column's sign or scale")
     return out
 
 

@@ -150,7 +150,14 @@ class SNESSolver:
         self._kept_options = []
 
     def destroy(self) -> None:
-        """Free the SNES (with its KSP, PC and factor); not collective."""
+        """Free the SNES (with its KSP, PC and factor); not collective.  On one rank a Python
+        preconditioner (the compact factor, the fascicle Schur one) lets go of its context first:
+        a wrapper of this SNES that outlives the run (the one PETSc passed to a callback, kept by
+        the frames of an exception's traceback) would otherwise leave the PC to PETSc's final
+        clean-up, which resets it after Python has finalised: a SEGV at exit."""
+        pc = self.snes.getKSP().getPC()
+        if self.problem.comm.size == 1 and pc.getType() == PETSc.PC.Type.PYTHON:
+            pc.setType(PETSc.PC.Type.NONE)
         self.trail.destroy()
         self.snes.destroy()
 

@@ -189,6 +189,44 @@ def test_a_bug_still_leaves_a_final_status(tmp_path, monkeypatch):
     assert s["message"] == "RuntimeError: simulated bug"
 
 
+INLINE_BUG = """
+import sys
+sys.path.insert(0, {tests!r})
+from helpers import load_raw, petsc_init
+petsc_init()
+from ancf_petsc.api import solve
+from ancf_petsc.config.parse import parse_config
+from ancf_petsc.petsc.problem import Problem
+real, calls = Problem.residual, []
+
+def broken(self, *args):
+    calls.append(1)
+    if len(calls) == 12:                # within the first level's Newton solve
+        raise RuntimeError("simulated bug in a callback")
+    return real(self, *args)
+Problem.residual = broken
+raw = load_raw("achilles_type3_psi45.yaml")
+raw["steps"] = [30.0]
+raw["output"] = {{"dir": sys.argv[1], "vtk": False}}
+solve(parse_config(raw, base_dir={configs!r}), log=lambda *_: None)
+"""
+
+
+def test_an_inline_run_that_raises_exits_with_its_traceback_not_a_segv(tmp_path):
+    """A bug raised inside a PETSc callback of an inline (API) run propagates uncaught: the
+    traceback's frames keep the SNES that PETSc passed the callback alive to the interpreter's
+    exit, and PETSc's final clean-up reset its Python preconditioner (the compact factor) after
+    Python had finalised: a SEGV and MPI_ABORT (exit 59) after the traceback.  The run's destroy
+    now lets go of the preconditioner's context first (solving/snes_solver.py)."""
+    script = tmp_path / "bug.py"
+    script.write_text(INLINE_BUG.format(tests=os.path.join(ROOT, "tests"), configs=CONFIGS))
+    p = subprocess.run([sys.executable, str(script), str(tmp_path / "out")], capture_output=True,
+                       text=True, cwd=ROOT, timeout=TIMEOUT, env=dict(os.environ, PYTHONPATH=ROOT))
+    assert p.returncode == 1, p.stdout + p.stderr
+    assert p.stderr.rstrip().endswith("RuntimeError: simulated bug in a callback"), p.stderr
+    assert "SEGV" not in p.stderr and "MPI_ABORT" not in p.stderr
+
+
 ROOT_ONLY_FAILURE = """
 import sys
 sys.path.insert(0, {tests!r})

@@ -8,6 +8,16 @@ import pytest
 from helpers import hex7_problem, load_raw, petsc_init, read_summary, solve_cli, write_config, CONFIGS
 
 
+@pytest.fixture(autouse=True)
+def _no_mumps_option_left():
+    """``_compact`` puts -mat_mumps_icntl_24 in PETSc's global database: taken out after each
+    test, or later runs of the same process factor with it (tests/apps/test_edges.py's run whose
+    MUMPS must give up on a singular tangent then found an unstable state instead)."""
+    yield
+    from petsc4py import PETSc
+    PETSc.Options().delValue("mat_mumps_icntl_24")
+
+
 def _mumps(PETSc, J, icntl24=True):
     ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
     ksp.setOperators(J, J)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import time
 
 import h5py
@@ -95,6 +96,19 @@ def step_entry(record, probes: dict) -> dict:
         entry["passed_over"] = {"level": level, "last_converged": last, "reported_at": at}
     return entry
 
+
+
+#: the files a run writes, which a new run in the same directory replaces (``stale_output``)
+RUN_SERIES = re.compile(r"(surface|contact)(_[0-9]{4,}\.vtu|\.pvd)")
+
+
+def stale_output(name: str) -> bool:
+    """Whether ``name`` in an output directory is a file a run writes (results.h5, summary.json,
+    the reserve, the VTU series and their .pvd collections), which a new run replaces.  Nothing
+    else is touched: a user's ``surface_plots/`` or ``contact_notes.txt`` beside the results
+    stays (every name starting with surface/contact was removed before, and a folder so named
+    stopped the run half-way through the clean-up)."""
+    return name in ("results.h5", "summary.json", RESERVE) or RUN_SERIES.fullmatch(name) is not None
 
 class ResultsWriter:
     """Writes results.h5, summary.json and the VTU series (rank 0 does the I/O; every method is
@@ -173,7 +187,7 @@ class ResultsWriter:
         model = self.model
         prepare_output_dir(self.dir)
         for stale in os.listdir(self.dir):
-            if stale.startswith(("surface", "contact")) or stale in ("results.h5", "summary.json", RESERVE):
+            if stale_output(stale) and os.path.isfile(os.path.join(self.dir, stale)):
                 os.remove(os.path.join(self.dir, stale))
         self.summary["version"] = version_info()
         try:

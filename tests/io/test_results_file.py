@@ -76,3 +76,26 @@ def test_fibre_fields_are_in_results_h5(tmp_path):
         g = h5["steps/step_0001/surface"]
         assert g["fibre_stress"].attrs["units"] == "Pa" and g["fibre_stress"].dtype == np.float64
         assert np.all(g["fibre_stretch"][()] > 1.0) and np.all(g["fibre_stress"][()] > 0.0)
+
+
+def test_a_new_run_replaces_only_the_files_a_run_writes(tmp_path):
+    """A run in a directory that holds an older run's files replaces those (results.h5,
+    summary.json, the VTU series and their .pvd) and nothing else: a user's ``surface_plots/``
+    folder and ``contact_notes.txt`` stay.  Before, every name starting with surface or contact
+    was removed, and a folder so named stopped the run with 'Is a directory' half-way through
+    the clean-up, leaving the old series mixed with the new."""
+    import os
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.05, 0.1, 0.15]
+    run_inline(raw, tmp_path)
+    assert (tmp_path / "surface_0003.vtu").exists()
+    (tmp_path / "surface_plots").mkdir()
+    (tmp_path / "contact_notes.txt").write_text("mine")
+    (tmp_path / "surface_analysis.py").write_text("mine")
+    raw["steps"] = [0.1]
+    run_inline(raw, tmp_path)
+    names = set(os.listdir(tmp_path))
+    assert {"surface_plots", "contact_notes.txt", "surface_analysis.py"} <= names
+    assert {"surface_0000.vtu", "surface_0001.vtu", "surface.pvd"} <= names
+    assert "surface_0002.vtu" not in names and "surface_0003.vtu" not in names
+    assert (tmp_path / "contact_notes.txt").read_text() == "mine"

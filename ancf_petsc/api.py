@@ -6,6 +6,9 @@
     result = ap.solve(spec)                      # collective on PETSc.COMM_WORLD
     print(result.status, ap.read_results("/tmp/bar").probe("tip")[-1])
 
+A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, ``spec.steps``): ``solve``
+places 'first'/'last' of the supports, loads and probes on the beams as they are then, checks
+the steps as the config's, and stores the element counts and steps solved with in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
 """
@@ -30,6 +33,7 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
 
     from .solving.run import run_model
     comm = PETSc.COMM_WORLD if comm is None else comm
+    check_edited(spec)
     if spec.accuracy is not None:
         if restart is not None:
             raise InputError("--restart", "a run with accuracy: chooses its mesh first; restart "
@@ -37,6 +41,39 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
         from .workflows.accuracy import select_and_run
         return select_and_run(spec, comm, log, run_model)
     return run_model(spec, comm, log, restart=restart)
+
+
+def check_edited(spec: ModelSpec) -> None:
+    """What a spec changed after parsing must still satisfy: its supports, loads and probes
+    follow its beams' element counts ('last' is the last node of the beam as it is now), and its
+    steps increase strictly (a spec edited to decreasing steps raised an UnboundLocalError in the
+    load stepping).  Raises ConfigError, as the config itself would."""
+    from .config.conditions import parse_steps, resolve_nodes
+    resolve_nodes(spec)
+    if spec.history is None:
+        spec.steps = parse_steps(spec.steps)
+    _raw_as_solved(spec)
+
+
+def _raw_as_solved(spec: ModelSpec) -> None:
+    """The config stored with the results (results.h5 ``/model`` ``config_yaml``) says the element
+    counts, axial points and steps the spec is solved with, also where they were changed after
+    parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's record of its config)."""
+    import copy
+
+    from .config.specs import DEFAULT_AXIAL_POINTS
+    raw = copy.deepcopy(spec.raw)
+    beams = raw.get("beams") if isinstance(raw, dict) else None
+    if isinstance(beams, list) and len(beams) == len(spec.beams):
+        for entry, beam in zip(beams, spec.beams):
+            if isinstance(entry, dict) and entry.get("name") == beam.name:
+                entry["elements"] = beam.elements
+                if entry.get("axial_points", DEFAULT_AXIAL_POINTS) != beam.axial_points:
+                    entry["axial_points"] = beam.axial_points
+    if isinstance(raw, dict) and "steps" in raw and spec.history is None:
+        raw["steps"] = list(spec.steps)
+    if raw != spec.raw:
+        spec.raw = raw
 
 
 def _init_petsc() -> None:

@@ -130,7 +130,7 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
         curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None
         if moved:
             curve = history_curve(bc, history, p, curve)
-        bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve))
+        bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve, bc["node"]))
     return bcs
 
 
@@ -151,8 +151,24 @@ def parse_loads(value, names: list[str], n_nodes: list[int],
         if kind == "traction_force" and node not in (0, n_nodes[bi] - 1):
             raise ConfigError(f"{p}.node", "a traction_force acts on an end section: use first or last")
         curve = history_curve(ld, history, p, _curve(ld["curve"], f"{p}.curve") if "curve" in ld else None)
-        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p, curve))
+        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p, curve, ld["node"]))
     return loads
+
+
+def resolve_nodes(spec) -> None:
+    """The nodes of the supports, loads and probes of ``spec`` for its beams' element counts as
+    they are now: a spec changed through the Python API after parsing (``spec.beams[0].elements
+    = 8``) kept the nodes its config's 'last' named for the old count, so that the load, the
+    support and the probe sat on an interior node and the run completed with another model's
+    answers (or an IndexError).  Raises ConfigError for an index the beam no longer has."""
+    n_nodes = [ELEMENTS[b.element].block.nodes_of(b.elements) for b in spec.beams]
+    for item in [*spec.boundary_conditions, *spec.loads, *spec.probes]:
+        if item.given is None or not 0 <= item.beam < len(n_nodes):
+            continue
+        item.node = node_ref(item.given, f"{item.path}.node", n_nodes[item.beam])
+    for ld in spec.loads:
+        if ld.kind == "traction_force" and ld.given is not None and ld.node not in (0, n_nodes[ld.beam] - 1):
+            raise ConfigError(f"{ld.path}.node", "a traction_force acts on an end section: use first or last")
 
 
 def parse_steps(value) -> list[float]:
@@ -177,5 +193,6 @@ def parse_probes(value, names: list[str], n_nodes: list[int], blocks: list | Non
         if pname in [x.name for x in probes]:
             raise ConfigError(f"{p}.name", f"duplicate probe name {pname!r}")
         probes.append(ProbeSpec(pname, bi, node_ref(pr["node"], f"{p}.node", n_nodes[bi]),
-                                string(pr.get("vector", "r"), f"{p}.vector", blocks[bi].names + ("mean",))))
+                                string(pr.get("vector", "r"), f"{p}.vector", blocks[bi].names + ("mean",)),
+                                pr["node"], p))
     return probes

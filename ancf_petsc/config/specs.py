@@ -92,6 +92,7 @@ class BCSpec:
     displacement: list[tuple[int, int, float]] = field(default_factory=list)
     name: str = ""                        # the support's name in the reported reactions
     curve: tuple | None = None            # ((λ, m), ...): displacement × m(λ) (None: × λ)
+    given: object = None                  # the node as written (first, last, an index): conditions.resolve_nodes
 
 
 @dataclass
@@ -102,6 +103,7 @@ class LoadSpec:
     force: tuple[float, float, float]
     path: str = ""
     curve: tuple | None = None            # ((λ, m), ...): force × m(λ) (None: × λ)
+    given: object = None                  # the node as written: conditions.resolve_nodes
 
 
 @dataclass
@@ -110,6 +112,8 @@ class ProbeSpec:
     beam: int
     node: int
     vector: str = "r"
+    given: object = None                  # the node as written: conditions.resolve_nodes
+    path: str = ""
 
 
 @dataclass

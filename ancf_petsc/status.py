@@ -42,6 +42,16 @@ def signal_reason(signum: int) -> str:
         return f"SIGNAL_{signum}"
 
 
+def crash_status(exc: BaseException, converged: list[float]) -> tuple[str, str, str]:
+    """(reason code, message, status) of a run ended by an exception that is not the solver's
+    (``converged``: the load factors reached): a Ctrl-C of a Python session (KeyboardInterrupt)
+    is ``interrupted`` by SIGINT, anything else a bug (``failed``, INTERNAL_ERROR)."""
+    if isinstance(exc, KeyboardInterrupt):
+        return (signal_reason(signal.SIGINT), "interrupted by SIGINT (KeyboardInterrupt) after load "
+                f"factor {converged[-1] if converged else 0.0:g}", "interrupted")
+    return INTERNAL_ERROR, f"{type(exc).__name__}: {exc}", "failed"
+
+
 def exit_code(status: str, reason_code: str = "", signum: int = 0) -> int:
     """The exit code of a run that ended with ``status`` (``signum`` for interrupted runs)."""
     if reason_code == OUTPUT_ERROR:

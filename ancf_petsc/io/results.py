@@ -352,18 +352,18 @@ class ResultsWriter:
         return problem
 
 
-def record_crash(writer: ResultsWriter, reason_code: str, message: str) -> None:
-    """A bug raised on this rank, possibly on it alone: the final status ``failed`` in
-    summary.json without a collective call.  Rank 0 finishes as usual; another rank (whose rank
-    0 waits in a collective until the abort) rewrites rank 0's summary.json itself, so that the
-    run does not stay ``running``."""
+def record_crash(writer: ResultsWriter, reason_code: str, message: str, status: str = "failed") -> None:
+    """A bug raised on this rank, possibly on it alone: the final status (``failed``; a Ctrl-C
+    of a Python session: ``interrupted``) in summary.json without a collective call.  Rank 0
+    finishes as usual; another rank (whose rank 0 waits in a collective until the abort) rewrites
+    rank 0's summary.json itself, so that the run does not stay ``running``."""
     if writer.rank == 0:
-        writer.finish("failed", reason_code=reason_code, message=message)
+        writer.finish(status, reason_code=reason_code, message=message)
         return
     try:
         with open(writer.summary_path) as fh:
             summary = json.load(fh)
-        summary.update(status="failed", reason_code=reason_code, message=f"rank {writer.rank}: {message}",
+        summary.update(status=status, reason_code=reason_code, message=f"rank {writer.rank}: {message}",
                        updated=time.strftime("%Y-%m-%dT%H:%M:%S"))
         atomic_write(writer.summary_path, json.dumps(summary, indent=1))
     except (OSError, ValueError):

@@ -279,9 +279,9 @@ class Run:
         except OutputError as exc:
             return ("failed", st.OUTPUT_ERROR, f"output error: {exc}", ""), 0, False
         except BaseException as exc:
-            # a bug, possibly on this rank only: no collective calls; record it where we can
+            # a bug (maybe this rank's alone: no collective calls) or a Python session's Ctrl-C
             self.stepper.close(collective=False)
-            record_crash(self.writer, st.INTERNAL_ERROR, f"{type(exc).__name__}: {exc}")
+            record_crash(self.writer, *st.crash_status(exc, [r.load_factor for r in self.converged]))
             raise
         return None, 0, False
 

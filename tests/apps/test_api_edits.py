@@ -61,3 +61,24 @@ def test_edited_steps_are_checked_as_the_configs(tmp_path):
     with pytest.raises(ap.ConfigError, match="steps: load factors must increase strictly"):
         ap.solve(spec, log=lambda *_: None)
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_ctrl_c_in_a_python_session_is_an_interruption_not_a_bug(tmp_path):
+    """Ctrl-C during ``solve`` in a Python session raises KeyboardInterrupt (no handler is
+    installed there); the run is recorded as interrupted by SIGINT with its converged levels,
+    not as a bug (it was ``failed``, INTERNAL_ERROR, 'KeyboardInterrupt: '), and the
+    KeyboardInterrupt reaches the caller."""
+    import json
+    import os
+    import signal
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    spec.steps = [0.1 * k for k in range(1, 11)]
+
+    def log(line):
+        if "step 3/" in line:
+            os.kill(os.getpid(), signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        ap.solve(spec, log=log)
+    s = json.load(open(tmp_path / "o" / "summary.json"))
+    assert (s["status"], s["reason_code"]) == ("interrupted", "SIGINT")
+    assert len(s["steps"]) == 3 and "after load factor 0.3" in s["message"]

@@ -8,7 +8,6 @@ reported as such: the levels reached, the levels not reached, the level a figure
 """
 from __future__ import annotations
 
-import json
 import os
 
 import h5py
@@ -17,6 +16,7 @@ import yaml
 
 from ..config.parse import load_config
 from ..errors import InputError
+from ..io.reader import read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
 from .inputs import TWISTS, PaperInputs
@@ -49,10 +49,11 @@ class ExistingRun:
         if not os.path.exists(path):
             raise InputError("--existing", f"{path}: no summary.json (run ancf-solve first)")
         try:
-            with open(path) as fh:
-                self.summary = json.load(fh)
-        except (OSError, ValueError) as exc:
-            raise InputError("--existing", f"{path}: not a readable summary ({exc})") from None
+            # read_results: a run still 'running' (or killed) gets the levels results.h5 holds
+            # beyond summary.json's, as read_results and --restart see them
+            self.summary = read_results(directory).summary
+        except InputError as exc:
+            raise InputError("--existing", f"{path}: not a readable summary ({exc.message})") from None
         s = self.summary
         self.name = s.get("name", os.path.basename(directory))
         self.status = s.get("status", "unknown")
@@ -101,7 +102,9 @@ class ExistingRun:
         """How the run ended, in words."""
         s = self.summary
         text = f"{self.status}"
-        if self.status != "completed":
+        if self.status == "running":
+            text += " (no final status: still running, or killed)"
+        elif self.status != "completed":
             text += f" ({s.get('reason_code', '')}: {s.get('message', '')})"
         return text
 

@@ -82,3 +82,4 @@ def test_ctrl_c_in_a_python_session_is_an_interruption_not_a_bug(tmp_path):
     s = json.load(open(tmp_path / "o" / "summary.json"))
     assert (s["status"], s["reason_code"]) == ("interrupted", "SIGINT")
     assert len(s["steps"]) == 3 and "after load factor 0.3" in s["message"]
+

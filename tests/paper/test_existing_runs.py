@@ -63,3 +63,27 @@ def test_a_history_run_reports_the_load_of_each_frame(tmp_path):
     head = "| load factor | applied load along x [N] |"
     rows = [line.split("|") for line in text.split(head)[1].splitlines()[2:5]]
     assert [float(r[2]) for r in rows] == [40.0, 120.0, 20.0]
+
+
+def test_a_killed_run_is_reported_with_the_levels_results_h5_holds(tmp_path):
+    """A run killed while summary.json lagged results.h5 (status still 'running', the last level
+    only in results.h5): the report lists the levels read_results sees, and says the run has no
+    final status, not 'running (: )'."""
+    import json
+    from ancf_petsc.io.reader import read_results
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["steps"] = raw["steps"][:3]
+    p = solve_cli(write_config(raw, tmp_path / "bar.yaml"), extra=["--output-dir", str(tmp_path / "bar"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    path = tmp_path / "bar" / "summary.json"
+    s = json.load(open(path))
+    s["steps"] = s["steps"][:1]
+    s["status"] = "running"
+    for key in ("reason_code", "message"):
+        s.pop(key, None)
+    json.dump(s, open(path, "w"))
+    assert len(read_results(str(tmp_path / "bar")).summary["steps"]) == 3
+    text = _report([str(tmp_path / "bar")], tmp_path / "rep")
+    assert "running (no final status: still running, or killed)" in text and "(: )" not in text
+    row = next(line for line in text.splitlines() if line.startswith(f"| {tmp_path / 'bar'} |"))
+    assert row.rstrip().endswith("| 3 |"), row

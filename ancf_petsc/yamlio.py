@@ -19,13 +19,15 @@ class StrictLoader(yaml.SafeLoader):
                 if key_node.tag == "tag:yaml.org,2002:merge":
                     continue
                 key = self.construct_object(key_node, deep=True)
+                here = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
                 try:
-                    first = seen.setdefault(key, key_node.start_mark.line + 1)
+                    first = seen.setdefault(key, here)
                 except TypeError:              # an unhashable key: PyYAML's own error follows
                     continue
-                if first != key_node.start_mark.line + 1:
+                if first != here:              # by line and column: {a: 1, a: 2} on one line too
+                    where = f"line {first[0]}" + (f", column {first[1]}" if first[0] == here[0] else "")
                     raise ConstructorError(
-                        None, None, f"duplicate key {key!r} (first at line {first}); a mapping "
+                        None, None, f"duplicate key {key!r} (first at {where}); a mapping "
                         "holds each key once: remove one of them", key_node.start_mark)
         return super().construct_mapping(node, deep=deep)
 

@@ -183,6 +183,18 @@ def test_repeated_keys_are_an_error_naming_both_lines(tmp_path):
     assert "duplicate key 'steps'" in lines[0] and f"first at line {first}" in lines[0]
 
 
+def test_a_key_repeated_on_one_line_is_an_error_too():
+    """``{..., column: sol, column: gm}`` loaded the second value silently (the duplicate test
+    compared lines only): a load history then took another muscle's column."""
+    from ancf_petsc import yamlio
+    with pytest.raises(yamlio.ConstructorError, match=r"duplicate key 'column' \(first at line 2, column 32\)"):
+        yamlio.load("loads:\n  - {beam: soleus, node: last, column: sol, column: gm}\n")
+    with pytest.raises(yamlio.ConstructorError, match=r"duplicate key 'name' \(first at line 1\)"):
+        yamlio.load("name: x\nname: y\n")
+    anchors = "a: &d {k: 1}\nb: *d\nc: {<<: *d, k: 2}\n"      # aliases and merges are no repeats
+    assert yamlio.load(anchors) == {"a": {"k": 1}, "b": {"k": 1}, "c": {"k": 2}}
+
+
 def test_an_alias_bomb_is_shown_by_its_first_elements():
     """A 400-byte YAML document whose aliases expand to 9^10 values under ``name``: the error
     message shows a few elements (building the whole value took ~1 GB)."""

@@ -25,9 +25,11 @@ from .section_order import check_section_order
 
 
 def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> dict:
-    """The scene up to ``level`` with every beam's element count scaled by ``factor``."""
+    """The scene up to ``level`` with every beam's element count scaled by ``factor`` (a load
+    history's rungs run its frames: a history has no ``steps`` to cut, and refused one)."""
     raw = copy.deepcopy({k: v for k, v in spec.raw.items() if k != "accuracy"})
-    raw["steps"] = [s for s in spec.steps if s <= level * (1 + 1e-12)]
+    if spec.history is None:
+        raw["steps"] = [s for s in spec.steps if s <= level * (1 + 1e-12)]
     raw["output"] = {"dir": out_dir, "vtk": spec.output.vtk, "vtk_samples": spec.output.vtk_samples}
     for b in raw.get("beams", []):
         b["elements"] = max(1, int(round(b["elements"] * factor)))

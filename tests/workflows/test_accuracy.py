@@ -85,6 +85,21 @@ def test_uniaxial_tension_needs_one_element(tmp_path):
     assert max(values) - min(values) < 1e-12 * abs(values[0])
 
 
+def test_a_load_historys_ladder_runs_its_frames(tmp_path):
+    """``accuracy:`` with ``history:``: each rung runs the history's frames and the probe is read
+    at the level asked for.  Before, every rung was given ``steps``, which a history refuses: a
+    config error about a key the config did not have."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["history"] = {"table": {"time": [0.0, 1.0, 2.0], "f": [10.0, 30.0, 20.0]}}
+    raw["loads"][0]["column"] = "f"
+    raw["accuracy"] = {"probe": "tip", "component": "x", "rtol": 1e-6, "level": 2}
+    s = run_inline(raw, tmp_path)
+    acc = s["accuracy"]
+    assert acc["met"] and acc["chosen_elements"] == 1 and len(s["steps"]) == 3
+    assert acc["ladder"][0]["value"] == pytest.approx(s["steps"][1]["probes"]["tip"]["displacement"][0], rel=1e-9)
+
+
 def test_bending_choice_meets_tolerance_against_a_fine_reference(tmp_path):
     rtol = 2e-3
     raw = load_raw("bending_neohookean.yaml")

@@ -52,9 +52,12 @@ class HistorySpec:
     def curve(self, column: str, path: str) -> tuple:
         """The multiplier curve ((λ, m), ...) of a load that reads ``column``: 0 at rest, then
         the column's value × scale at every frame."""
+        have = ", ".join(c for c in self.columns if c != self.time_column)
         if column not in self.columns:
-            have = ", ".join(c for c in self.columns if c != self.time_column)
             raise ConfigError(path, f"no column {column!r} in {self.source} (columns: {have})")
+        if column == self.time_column:
+            raise ConfigError(path, f"{column!r} is the history's clock (history.time, seconds), not "
+                                    f"a load: name a load column ({have})")
         values = self.scale * self.columns[column]
         return ((0.0, 0.0),) + tuple((float(k + 1), float(v)) for k, v in enumerate(values))
 

@@ -34,21 +34,24 @@ class LoadTable:
         return len(next(iter(self.columns.values())))
 
 
-def _storage_body(lines: list[str], path: str, where: str) -> tuple[list[str], int]:
-    """The lines after an OpenSim header (``endheader``) and the line number of the first."""
+def _storage_body(lines: list[str], path: str, where: str) -> tuple[list[str], int, dict]:
+    """The lines after an OpenSim header (``endheader``), the line number of the first, and the
+    header's ``key=value`` entries."""
     for k, line in enumerate(lines):
         if line.strip().lower() == "endheader":
-            return lines[k + 1:], k + 2
+            meta = dict(ln.split("=", 1) for ln in lines[:k] if "=" in ln)
+            return lines[k + 1:], k + 2, {a.strip(): b.strip() for a, b in meta.items()}
     raise ConfigError(where, f"{path}: no 'endheader' line: not an OpenSim storage file "
                              "(.sto/.mot); give a CSV file with a header line instead")
 
 
-def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int]]:
-    """Header and data rows (fields as strings) with their line numbers."""
+def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int], dict]:
+    """Header and data rows (fields as strings) with their line numbers, and an OpenSim header's
+    entries (empty for a CSV file)."""
     lines = text.splitlines()
-    first_line = 1
+    first_line, meta = 1, {}
     if os.path.splitext(path)[1].lower() in STORAGE:
-        lines, first_line = _storage_body(lines, path, where)
+        lines, first_line, meta = _storage_body(lines, path, where)
         split = (lambda s: s.split("\t")) if any("\t" in ln for ln in lines) else str.split
         rows = [(first_line + k, [f.strip() for f in split(ln)]) for k, ln in enumerate(lines)
                 if ln.strip()]
@@ -57,9 +60,36 @@ def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int]]
         for k, ln in enumerate(lines):
             if ln.strip() and not ln.lstrip().startswith("#"):
                 rows.append((first_line + k, [f.strip() for f in next(csv.reader(io.StringIO(ln)))]))
+        _check_csv_form(path, text, rows[0][1] if rows else [], where)
     if len(rows) < 2:
         raise ConfigError(where, f"{path}: expected a line of column names and at least one row of numbers")
-    return [r for _, r in rows], [n for n, _ in rows]
+    return [r for _, r in rows], [n for n, _ in rows], meta
+
+
+def _check_csv_form(path: str, text: str, header: list[str], where: str) -> None:
+    """A file read as CSV that is not comma-separated: an OpenSim table under another extension,
+    or fields separated by semicolons or tabs (a header of one column holding them)."""
+    if any(ln.strip().lower() == "endheader" for ln in text.splitlines()):
+        raise ConfigError(where, f"{path}: an OpenSim storage file (it has an 'endheader' line): give "
+                                 "it the extension .sto or .mot, or write its table as CSV")
+    if len(header) == 1:
+        for sep, name in ((";", "semicolons"), ("\t", "tabs"), ("|", "bars")):
+            if sep in header[0]:
+                raise ConfigError(where, f"{path}: the header line is one column {header[0]!r}: its "
+                                         f"fields are separated by {name}; a CSV file here separates "
+                                         "them by commas (and uses '.' as the decimal point)")
+
+
+def _check_storage_size(path: str, meta: dict, rows: list[list[str]], where: str) -> None:
+    """The sizes an OpenSim header states (nRows/nColumns, or datarows/datacolumns of older
+    files) against the table: a file cut short would otherwise be a shorter history."""
+    for keys, have, what in ((("nrows", "datarows"), len(rows) - 1, "data rows"),
+                             (("ncolumns", "datacolumns"), len(rows[0]), "columns")):
+        key = next((k for k in meta if k.lower() in keys), None)
+        stated = meta.get(key, "")
+        if stated.isdigit() and int(stated) != have:
+            raise ConfigError(where, f"{path}: its header says {key}={stated}, the table has {have} "
+                                     f"{what}: a file cut short? (complete it, or correct {key})")
 
 
 def read_load_table(path: str, where: str) -> LoadTable:
@@ -71,7 +101,8 @@ def read_load_table(path: str, where: str) -> LoadTable:
             text = fh.read()
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(where, f"{path}: cannot read it as UTF-8 text ({type(exc).__name__})") from None
-    rows, line_no = _rows(path, text, where)
+    rows, line_no, meta = _rows(path, text, where)
+    _check_storage_size(path, meta, rows, where)
     header = rows[0]
     empty = [k for k, h in enumerate(header) if not h]
     if empty:

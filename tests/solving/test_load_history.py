@@ -75,9 +75,22 @@ def test_tables_give_frames_and_curves(tmp_path):
      r"^loads\[0\]\.column: no column 'gastrocnemius' in history\.table \(columns: soleus, medial, lateral\)"),
     (lambda r, p: r["history"]["table"].update(medial=[1.0]), r"history\.table\.medial: has 1 values"),
     (lambda r, p: r.pop("history"), r"^loads\[0\]\.column: a column names a load table's column"),
+    (lambda r, p: r["loads"][0].update(column="time"),
+     r"^loads\[0\]\.column: 'time' is the history's clock \(history\.time, seconds\), not a load"),
+    (lambda r, p: r["history"].update(file=str(p / "semi.csv"), table=None) or r["history"].pop("table"),
+     r"semi\.csv: the header line is one column 'time;soleus;medial;lateral': its fields are separated "
+     r"by semicolons; a CSV file here separates them by commas"),
+    (lambda r, p: r["history"].update(file=str(p / "opensim.csv"), table=None) or r["history"].pop("table"),
+     r"opensim\.csv: an OpenSim storage file \(it has an 'endheader' line\): give it the extension \.sto"),
+    (lambda r, p: r["history"].update(file=str(p / "cut.sto"), table=None) or r["history"].pop("table"),
+     r"cut\.sto: its header says nRows=10, the table has 2 data rows: a file cut short\?"),
 ])
 def test_history_errors_name_the_key_row_and_column(tmp_path, edit, match):
     (tmp_path / "bad.csv").write_text("time,soleus,medial,lateral\n0,1,2,3\n0.1,1,nan,3\n")
+    (tmp_path / "semi.csv").write_text("time;soleus;medial;lateral\n0;1;2;3\n0.1;1;2;3\n")
+    opensim = "version=1\nnRows=10\nnColumns=4\nendheader\ntime\tsoleus\tmedial\tlateral\n0\t1\t2\t3\n0.1\t1\t2\t3\n"
+    (tmp_path / "opensim.csv").write_text(opensim)
+    (tmp_path / "cut.sto").write_text(opensim)           # a truncated OpenSim file
     raw = tendon()
     edit(raw, tmp_path)
     if "steps" not in raw and "history" not in raw:

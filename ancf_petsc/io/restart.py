@@ -165,6 +165,8 @@ def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
             return key, _words_difference(a, b)
         if key.endswith("/element") and not np.array_equal(a, b):
             return key, f"{_text(a)} → {_text(b)}"
+        if key.startswith("load_curve_") and "reference_nodal_vectors" in now and not np.array_equal(a, b):
+            return key, _curve_difference(a, b, np.asarray(now["reference_nodal_vectors"]).size)
         if a.shape != b.shape:
             return key, f"shape {a.shape} → {b.shape}"
         if not np.allclose(a, b, rtol=1e-12, atol=1e-300 + 1e-12 * float(np.max(np.abs(a), initial=0.0))):
@@ -175,6 +177,42 @@ def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
                 return key, f"{a.ravel()[0]:.9g} → {b.ravel()[0]:.9g}"
             return key, f"largest change at entry {k}: {a.ravel()[k]:.9g} → {b.ravel()[k]:.9g}"
     return None
+
+
+def _curve_difference(a: np.ndarray, b: np.ndarray, n_dofs: int) -> str:
+    """What differs between two ``load_curve_k`` items (the curve's (λ, m) points, then the
+    group's forces and displacements at multiplier 1, ``n_dofs`` each), in words: a history's
+    frame k is the point at load factor k."""
+    na, nb = (a.size - 2 * n_dofs) // 2, (b.size - 2 * n_dofs) // 2
+    if na != nb:
+        return f"its curve has {na} → {nb} points (a load history: frames and the rest state)"
+    k = int(np.argmax(np.abs(a - b)))
+    if k < 2 * na:
+        j = k // 2
+        if k % 2:
+            return f"its multiplier at load factor {a[2 * j]:g} (a history: frame {a[2 * j]:g}) {a[k]:.9g} → {b[k]:.9g}"
+        return f"the load factor of its point {j}: {a[k]:.9g} → {b[k]:.9g}"
+    return "its loads or prescribed displacements at multiplier 1 differ"
+
+
+def _curve_owner(model, key: str) -> str:
+    """``load_curve_k`` of the fingerprint as the config entries that follow that curve, with the
+    history columns they read."""
+    k = int(key.rpartition("_")[2])
+    groups = [g for g in model.loading if g.curve is not None]
+    if k >= len(groups):
+        return key
+    points = np.asarray(groups[k].curve.points, dtype=float)
+    owners = []
+    for item, name in [*((x, "loads") for x in model.spec.loads),
+                       *((x, "boundary_conditions") for x in model.spec.boundary_conditions)]:
+        if item.curve is None or np.shape(item.curve) != points.shape or not np.allclose(item.curve, points):
+            continue
+        raw = model.spec.raw.get(name, []) if isinstance(model.spec.raw, dict) else []
+        index = int(item.path.rpartition("[")[2].rstrip("]")) if item.path.endswith("]") else -1
+        column = raw[index].get("column") if 0 <= index < len(raw) and isinstance(raw[index], dict) else None
+        owners.append(item.path + (f" (column {column!r})" if column else ""))
+    return "the load curve of " + ", ".join(owners) if owners else key
 
 
 def _words_difference(a: np.ndarray, b: np.ndarray) -> str:
@@ -188,14 +226,18 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
     """InputError naming the first difference between the restart's run and this model and
     steps (fingerprint of the resolved model; the converged levels must start the steps)."""
     if point.fingerprint is not None:
-        differs = model_difference(point.fingerprint, fingerprint(model))
+        found = first_difference(point.fingerprint, fingerprint(model))
+        differs = None if found is None else f"{found[0]} ({found[1]}) differs"
+        if found is not None and found[0].startswith("load_curve_"):
+            differs = f"{_curve_owner(model, found[0])}: {found[1]}"
     else:                                         # written before fingerprints: the YAML keys
         raw = model.spec.raw
         differs = _first_difference({k: point.stored_config.get(k) for k in MODEL_KEYS},
                                     {k: raw.get(k) for k in MODEL_KEYS})
+        differs = differs and f"{differs} differs"
     if differs:
-        raise InputError("--restart", f"{directory} was written by another model: {differs} "
-                                      "differs; restart with the config (and data files) that made it")
+        raise InputError("--restart", f"{directory} was written by another model: {differs}; "
+                                      "restart with the config (and data files) that made it")
     for k, lam in enumerate(point.levels):
         if k >= len(steps) or abs(steps[k] - lam) > 1e-12 * max(1.0, abs(lam)):
             now = f"{steps[k]:g}" if k < len(steps) else "none (the config has fewer levels)"

@@ -190,6 +190,22 @@ def test_a_history_run_stopped_midway_restarts_to_the_uninterrupted_answers(tmp_
         assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
 
 
+def test_a_restart_with_a_changed_table_names_the_load_and_the_frame(tmp_path):
+    """A table changed between a run and its restart is refused naming the load, its column and
+    the frame, not the fingerprint's 'load_curve_0 (largest change at entry 7: ...)'."""
+    raw = tendon({"time": [0.0, 0.1, 0.2], "soleus": [10.0, 20.0, 30.0], "medial": [0.0, 5.0, 10.0],
+                  "lateral": [0.0, 5.0, 10.0]})
+    assert run_inline(raw, tmp_path / "run")["status"] == "completed"
+    raw["history"]["table"]["soleus"][1] = 21.0
+    p = solve_cli(write_config(raw, tmp_path / "again.yaml"), extra=["--restart", str(tmp_path / "run")])
+    assert p.returncode == 2, p.stderr
+    assert ("was written by another model: the load curve of loads[0] (column 'soleus'): its multiplier "
+            "at load factor 2 (a history: frame 2) 20 → 21; restart with") in p.stderr, p.stderr
+    raw["history"]["table"] = {k: v + [v[-1] + 0.1 if k == "time" else 0.0] for k, v in raw["history"]["table"].items()}
+    p = solve_cli(write_config(raw, tmp_path / "longer.yaml"), extra=["--restart", str(tmp_path / "run")])
+    assert p.returncode == 2 and "its curve has 4 → 5 points" in p.stderr, p.stderr
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_a_friction_history_restarts_with_its_load_predictor(tmp_path, ranks):

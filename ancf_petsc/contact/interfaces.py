@@ -18,9 +18,9 @@ class ContactSetupError(ValueError):
     """Contact cannot be set up as given; ``interface`` is the index of the interface concerned
     (``contact.interfaces[k]``) or None for the contact as a whole."""
 
-    def __init__(self, message: str, interface: int | None = None):
+    def __init__(self, message: str, interface: int | None = None, key: str | None = None):
         super().__init__(message)
-        self.interface = interface
+        self.interface, self.key = interface, key        # key: the config key to name, if not contact's
 
 
 @dataclass
@@ -107,9 +107,11 @@ def find_interfaces(model, spec) -> list[Interface]:
     out = []
     for a, b, c, fb, cb in pairs:
         if a.n_elements != b.n_elements:
-            raise ContactSetupError(f"interface {c.name}: beams {a.name} ({a.n_elements} "
-                             f"elements) and {b.name} ({b.n_elements}) must have the same number "
-                             "of elements so that the interface is conforming")
+            raise ContactSetupError(
+                f"{a.n_elements} element(s) against {b.n_elements} of {b.name} (beams[{b.index}]."
+                f"elements), its contact partner across curve {c.name}: the beams of an interface need "
+                f"the same number of elements (a conforming interface); give both {max(a.n_elements, b.n_elements)}",
+                key=f"beams[{a.index}].elements")
         first, second = (a, b) if a.index < b.index else (b, a)
         out.append(Interface(f"{c.name} ({first.name}|{second.name})", a, b, c, fb, cb))
     return out

@@ -14,7 +14,7 @@ def contact_for(model: Model, spec: ContactSpec, log=print) -> Contact:
     try:
         return build_contact(model, spec, log)
     except ContactSetupError as exc:
-        key = "contact" if exc.interface is None else f"contact.interfaces[{exc.interface}]"
+        key = exc.key or ("contact" if exc.interface is None else f"contact.interfaces[{exc.interface}]")
         raise ConfigError(key, str(exc)) from None
 
 

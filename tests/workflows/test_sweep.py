@@ -425,7 +425,8 @@ def test_a_config_error_found_by_the_contact_setup_keeps_its_reason(tmp_path):
         yaml.safe_dump(raw, fh)
     status, reason = classify(str(tmp_path), 2)
     assert status == "config_error"
-    assert reason.startswith("config error: contact: interface ") and "same number of elements" in reason
+    assert reason.startswith("config error: beams[1].elements: 4 element(s) against 3 of soleus") \
+        and "same number of elements" in reason, reason
 
 
 def test_a_run_that_completed_as_the_sweep_was_stopped_is_recorded_completed(tmp_path, monkeypatch):

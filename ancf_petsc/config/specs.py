@@ -92,7 +92,7 @@ class BCSpec:
     displacement: list[tuple[int, int, float]] = field(default_factory=list)
     name: str = ""                        # the support's name in the reported reactions
     curve: tuple | None = None            # ((λ, m), ...): displacement × m(λ) (None: × λ)
-    given: object = None                  # the node as written (first, last, an index): conditions.resolve_nodes
+    given: object = None                  # the node as written (first, last, an index): resolve_nodes
 
 
 @dataclass

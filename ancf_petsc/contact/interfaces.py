@@ -107,10 +107,11 @@ def find_interfaces(model, spec) -> list[Interface]:
     out = []
     for a, b, c, fb, cb in pairs:
         if a.n_elements != b.n_elements:
+            more = max(a.n_elements, b.n_elements)
             raise ContactSetupError(
                 f"{a.n_elements} element(s) against {b.n_elements} of {b.name} (beams[{b.index}]."
                 f"elements), its contact partner across curve {c.name}: the beams of an interface need "
-                f"the same number of elements (a conforming interface); give both {max(a.n_elements, b.n_elements)}",
+                f"the same number of elements (a conforming interface); give both {more}",
                 key=f"beams[{a.index}].elements")
         first, second = (a, b) if a.index < b.index else (b, a)
         out.append(Interface(f"{c.name} ({first.name}|{second.name})", a, b, c, fb, cb))

@@ -190,7 +190,9 @@ def _curve_difference(a: np.ndarray, b: np.ndarray, n_dofs: int) -> str:
     if k < 2 * na:
         j = k // 2
         if k % 2:
-            return f"its multiplier at load factor {a[2 * j]:g} (a history: frame {a[2 * j]:g}) {a[k]:.9g} → {b[k]:.9g}"
+            lam = a[2 * j]
+            return (f"its multiplier at load factor {lam:g} (a history: frame {lam:g}) "
+                    f"{a[k]:.9g} → {b[k]:.9g}")
         return f"the load factor of its point {j}: {a[k]:.9g} → {b[k]:.9g}"
     return "its loads or prescribed displacements at multiplier 1 differ"
 

@@ -97,7 +97,6 @@ def step_entry(record, probes: dict) -> dict:
     return entry
 
 
-
 #: the files a run writes, which a new run in the same directory replaces (``stale_output``)
 RUN_SERIES = re.compile(r"(surface|contact)(_[0-9]{4,}\.vtu|\.pvd)")
 
@@ -109,6 +108,7 @@ def stale_output(name: str) -> bool:
     stays (every name starting with surface/contact was removed before, and a folder so named
     stopped the run half-way through the clean-up)."""
     return name in ("results.h5", "summary.json", RESERVE) or RUN_SERIES.fullmatch(name) is not None
+
 
 class ResultsWriter:
     """Writes results.h5, summary.json and the VTU series (rank 0 does the I/O; every method is

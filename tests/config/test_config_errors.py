@@ -187,7 +187,8 @@ def test_a_key_repeated_on_one_line_is_an_error_too():
     """``{..., column: sol, column: gm}`` loaded the second value silently (the duplicate test
     compared lines only): a load history then took another muscle's column."""
     from ancf_petsc import yamlio
-    with pytest.raises(yamlio.ConstructorError, match=r"duplicate key 'column' \(first at line 2, column 32\)"):
+    with pytest.raises(yamlio.ConstructorError,
+                       match=r"duplicate key 'column' \(first at line 2, column 32\)"):
         yamlio.load("loads:\n  - {beam: soleus, node: last, column: sol, column: gm}\n")
     with pytest.raises(yamlio.ConstructorError, match=r"duplicate key 'name' \(first at line 1\)"):
         yamlio.load("name: x\nname: y\n")

@@ -73,7 +73,8 @@ def test_a_killed_run_is_reported_with_the_levels_results_h5_holds(tmp_path):
     from ancf_petsc.io.reader import read_results
     raw = load_raw("pretwisted_bar.yaml")
     raw["steps"] = raw["steps"][:3]
-    p = solve_cli(write_config(raw, tmp_path / "bar.yaml"), extra=["--output-dir", str(tmp_path / "bar"), "--quiet"])
+    p = solve_cli(write_config(raw, tmp_path / "bar.yaml"),
+                  extra=["--output-dir", str(tmp_path / "bar"), "--quiet"])
     assert p.returncode == 0, p.stderr
     path = tmp_path / "bar" / "summary.json"
     s = json.load(open(path))

@@ -88,7 +88,8 @@ def test_tables_give_frames_and_curves(tmp_path):
 def test_history_errors_name_the_key_row_and_column(tmp_path, edit, match):
     (tmp_path / "bad.csv").write_text("time,soleus,medial,lateral\n0,1,2,3\n0.1,1,nan,3\n")
     (tmp_path / "semi.csv").write_text("time;soleus;medial;lateral\n0;1;2;3\n0.1;1;2;3\n")
-    opensim = "version=1\nnRows=10\nnColumns=4\nendheader\ntime\tsoleus\tmedial\tlateral\n0\t1\t2\t3\n0.1\t1\t2\t3\n"
+    opensim = ("version=1\nnRows=10\nnColumns=4\nendheader\n"
+               "time\tsoleus\tmedial\tlateral\n0\t1\t2\t3\n0.1\t1\t2\t3\n")
     (tmp_path / "opensim.csv").write_text(opensim)
     (tmp_path / "cut.sto").write_text(opensim)           # a truncated OpenSim file
     raw = tendon()
@@ -201,7 +202,8 @@ def test_a_restart_with_a_changed_table_names_the_load_and_the_frame(tmp_path):
     assert p.returncode == 2, p.stderr
     assert ("was written by another model: the load curve of loads[0] (column 'soleus'): its multiplier "
             "at load factor 2 (a history: frame 2) 20 → 21; restart with") in p.stderr, p.stderr
-    raw["history"]["table"] = {k: v + [v[-1] + 0.1 if k == "time" else 0.0] for k, v in raw["history"]["table"].items()}
+    table = raw["history"]["table"]
+    raw["history"]["table"] = {k: v + [v[-1] + 0.1 if k == "time" else 0.0] for k, v in table.items()}
     p = solve_cli(write_config(raw, tmp_path / "longer.yaml"), extra=["--restart", str(tmp_path / "run")])
     assert p.returncode == 2 and "its curve has 4 → 5 points" in p.stderr, p.stderr
 

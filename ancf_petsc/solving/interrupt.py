@@ -1,8 +1,9 @@
 """Clean stops on SIGTERM / SIGINT, and output that survives a closed pipe.
 
 A signal handler only records the signal.  The load stepper asks ``stop_requested`` between
-Newton solves; it reduces the record over all ranks (an allreduce), so every rank stops at the
-same safe point even when only one of them got the signal.  A second signal of either kind ends
+Newton solves, and the SNES monitor at every Newton iteration (snes_solver.py: mpirun kills 1 s
+after forwarding a SIGTERM); it reduces the record over all ranks (an allreduce), so every rank
+stops at the same safe point even when only one of them got the signal.  A second signal of either kind ends
 the process at once (converged levels are on disk already; summary.json then still says running).
 
 SIGPIPE (``ancf-solve ... | head``) is ignored: a write to the closed pipe fails with EPIPE,

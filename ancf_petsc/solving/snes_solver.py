@@ -25,6 +25,7 @@ from . import solver_messages
 from .chord import TangentReuse
 from .continuity import IterateTrail
 from .cycle_stop import DEFAULT_DIVTOL, WANDER_WINDOW, CycleStop
+from .interrupt import RunInterrupted, stop_requested
 from .contact_steps import ContactSteps
 from ..linalg.options import DEFAULT_OPTIONS, SolverOptionError, configure_options, refused, run_defaults
 from .records import LoadStepFailure
@@ -74,6 +75,7 @@ class SNESSolver:
         atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._history: list[float] = []        # residual norms of the current SNES solve
+        self._where = "in a Newton solve"       # for an interruption inside one (_monitor)
         self.trail = IterateTrail()             # its last iterates: a failed level's jump scan
         #: friction, unilateral contact: a Newton cycle or wandering ends the solve early
         #: (cycle_stop.py; set before the options, so that -snes_convergence_test replaces it)
@@ -241,6 +243,12 @@ class SNESSolver:
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
         self.trail.record(its, snes.getSolution(), fnorm)
+        # SIGTERM/SIGINT inside a Newton solve (collective, every iteration): Open MPI's mpirun
+        # sends SIGKILL 1 s after the SIGTERM it forwards, and one solve of a friction column
+        # takes seconds; the stepper's check between solves came too late (summary 'running')
+        signum = stop_requested(self.problem.comm)
+        if signum:
+            raise RunInterrupted(signum, self._where)
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""
@@ -262,6 +270,7 @@ class SNESSolver:
         """One SNES solve from ``X`` at load factor ``lam`` (on the way from ``reached`` to the
         level ``target``, for messages): its reason and iterations."""
         self._history = []
+        self._where = f"in the Newton solve at load factor {lam:g} (last converged {reached:g})"
         self.chord.start_solve()
         if self.problem.mixed is not None:
             self.problem.mixed.start_solve()

@@ -788,6 +788,38 @@ def test_signals_stop_cleanly(tmp_path, ranks, sig, to_ranks):
     assert 1 <= k < len(levels) and [st["load_factor"] for st in s["steps"]] == levels[:k]
 
 
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
+def test_a_signal_inside_a_long_newton_solve_stops_it_cleanly(tmp_path, ranks):
+    """SIGTERM while one Newton solve runs for long (here one that never converges: tolerances
+    0): the run stops within an iteration, interrupted with SIGTERM.  The stepper asked only
+    between solves, and Open MPI's mpirun sends SIGKILL 1 s after the SIGTERM it forwards: a
+    friction column whose solves take seconds was killed, its summary.json left 'running'."""
+    raw = tiny()
+    raw["output"]["dir"] = str(tmp_path / "out")
+    raw["petsc"] = {"snes_atol": 0.0, "snes_rtol": 0.0, "snes_stol": 0.0, "snes_max_it": 10000000}
+    cmd = [os.path.join(VENV_BIN, "ancf-solve"), write_config(raw, tmp_path / "c.yaml"), "--quiet"]
+    if ranks > 1:
+        cmd = ["mpirun", "--oversubscribe", "-n", str(ranks)] + cmd
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    try:
+        t0 = time.monotonic()
+        while not os.path.exists(tmp_path / "out" / "summary.json") and time.monotonic() - t0 < TIMEOUT:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        time.sleep(1.0)                                  # well inside the first Newton solve
+        proc.send_signal(signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=TIMEOUT)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    p = subprocess.CompletedProcess(cmd, proc.returncode, stdout, stderr)
+    assert_one_line(p, 1 if ranks > 1 else 128 + signal.SIGTERM, "interrupted by SIGTERM in the Newton solve at "
+                    "load factor")
+    s = _check_agreement(tmp_path / "out")
+    assert (s["status"], s["reason_code"], len(s["steps"])) == ("interrupted", "SIGTERM", 0)
+
+
 @pytest.mark.mpi
 @pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
 def test_closed_stdout_pipe_does_not_stop_the_solve(tmp_path, ranks):

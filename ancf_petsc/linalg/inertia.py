@@ -50,6 +50,31 @@ def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
     return int(factor.getMumpsInfog(12)), int(factor.getMumpsInfog(28))
 
 
+def exact_pivot_counts(J: PETSc.Mat) -> tuple[int, int] | None:
+    """(negative, null) pivots of a MUMPS LDLᵀ of ``J`` itself, made for the count (sequential
+    root, null-pivot detection as the direct solver's defaults): the check of a preconditioner
+    that counts another matrix's inertia (fieldsplit.py's J − K_×).  None where MUMPS fails.
+    Collective."""
+    ksp = PETSc.KSP().create(comm=J.getComm())
+    try:
+        ksp.setOperators(J, J)
+        ksp.setType("preonly")
+        pc = ksp.getPC()
+        pc.setType("cholesky")
+        pc.setFactorSolverType("mumps")
+        pc.setFactorSetUpSolverType()
+        F = pc.getFactorMatrix()
+        F.setMumpsIcntl(13, 1)
+        F.setMumpsIcntl(24, 1)
+        F.setMumpsCntl(3, 1e-11)
+        ksp.setUp()
+        return int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28))
+    except PETSc.Error:
+        return None
+    finally:
+        ksp.destroy()
+
+
 def mumps_error(ksp: PETSc.KSP) -> int | None:
     """MUMPS's error code INFOG(1) (< 0) after a failed factorisation by ``ksp``'s preconditioner,
     None when it did not fail or is not MUMPS."""

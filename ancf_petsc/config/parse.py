@@ -23,7 +23,8 @@ from .conditions import beam_ref, check_curves, parse_boundary_conditions, parse
 from .contact import parse_contact
 from .history import parse_history
 from .sections import parse_sections
-from .solving import parse_accuracy, parse_output, parse_partition, parse_petsc, parse_solver
+from .solving import (check_increments, parse_accuracy, parse_output, parse_partition, parse_petsc,
+                      parse_solver)
 from .specs import TWIST_RULES, ModelSpec
 from .values import ConfigError, mapping, number, shown, string, vector
 
@@ -74,6 +75,7 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
         sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo, history=history)
     check_curves(spec)
+    check_increments(spec.solver, spec.steps)
     if "predictor" not in (raw.get("solver") or {}):
         spec.solver.predictor = default_predictor(spec)
     if "section_update" not in (raw.get("solver") or {}):

@@ -33,12 +33,38 @@ SOLVER_KEYS = {
     "branch_switch": (boolean, False),
     "step_over_jumps": (boolean, False),
     "full_step_first": (boolean, False),
-    "band_step": (lambda v, p: number(v, p, lo=0.0), False),
+    "band_step": (lambda v, p: band_step(v, p), False),
     "reuse_tangent": (boolean, False),
     "compact_factor": (boolean, False),
     "max_newton_iterations": (lambda v, p: integer(v, p, lo=1), True),
     "options_prefix": (lambda v, p: options_prefix(v, p), False),
 }
+
+
+#: the most increments the largest load factor may take at ``solver.max_increment``
+MAX_INCREMENTS = 100_000
+#: the smallest ``solver.band_step`` besides 0 (off): steps held to a millionth of a band width
+#: crawled (693 Newton iterations and a stall at 45 N at 1e-9); 1.5 is the measured choice
+MIN_BAND_STEP = 0.1
+
+
+def band_step(value, path: str) -> float:
+    """``solver.band_step``: 0 (off) or at least MIN_BAND_STEP band widths."""
+    v = number(value, path, lo=0.0)
+    if 0.0 < v < MIN_BAND_STEP:
+        raise ConfigError(path, f"{v:g} band widths would hold Newton's steps to crawling; give 0 (off) "
+                                f"or at least {MIN_BAND_STEP:g} (1.5 measured best, docs/running.md)")
+    return v
+
+
+def check_increments(solver, steps: list[float]) -> None:
+    """``solver.max_increment`` against the largest load factor: more than MAX_INCREMENTS
+    increments is no run (1e-12 to 100 N ran until killed)."""
+    top = max(steps, default=0.0)
+    if solver.max_increment is not None and top / solver.max_increment > MAX_INCREMENTS:
+        raise ConfigError("solver.max_increment", f"{solver.max_increment:g} would take "
+                          f"{top / solver.max_increment:.3g} increments to load factor {top:g}; give at "
+                          f"least {top / MAX_INCREMENTS:g}")
 
 
 def options_prefix(value, path: str) -> str:

@@ -112,6 +112,11 @@ CASES += [
     ("linear solver", _set(["solver"], {"linear": "gmres"}), "solver.linear", "fieldsplit"),
     ("section update", _set(["solver"], {"section_update": "twist"}), "solver.section_update", "rotation"),
     ("tangent", _set(["solver"], {"tangent": "mip"}), "solver.tangent", "mixed"),
+    # values that ran until killed or crawled (2026-12-06): 4e14 increments, steps held to 1e-9
+    # band widths
+    ("max increment too small", _set(["solver"], {"max_increment": 1e-12}), "solver.max_increment",
+     "increments to load factor 1; give at least 1e-05"),
+    ("band step too small", _set(["solver"], {"band_step": 1e-9}), "solver.band_step", "give 0 (off) or at least 0.1"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
 ]
 

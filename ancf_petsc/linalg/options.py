@@ -83,8 +83,10 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
     at an interface) takes AIJ and refuses a symmetric factorisation."""
     pc, factor = factor_package(config_options, prefix, symmetric)
     if not symmetric and pc in SYMMETRIC_PCS:
-        raise InputError("petsc.pc_type", f"{pc} factors a symmetric matrix, but the Jacobian is "
-                                           "unsymmetric (friction of contact.tangential); use lu")
+        # named where it was given: the command line wins over the config's petsc: section
+        key = f"-{prefix}pc_type" if option("pc_type", prefix) is not None else "petsc.pc_type"
+        raise InputError(key, f"{pc} factors a symmetric matrix, but the Jacobian is "
+                              "unsymmetric (friction of contact.tangential); use lu")
     if linear == "fieldsplit":
         pc, factor = "cholesky", "mumps"        # symmetric sub-blocks and MUMPS on the multipliers
     full = node_blocks_fit(model)

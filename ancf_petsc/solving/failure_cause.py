@@ -32,6 +32,7 @@ CAUSES = {
     "friction_statuses": "friction's stick-slip statuses do not settle",
     "active_set_iterations": "unilateral contact's active set still changed when the iterations ran out",
     "newton_budget_exceeded": "the run spent solver.max_newton_iterations",
+    "newton_budget": "a solve ran out of a -snes_max_it given below the run's own budget",
     "petsc_error": "PETSc or an external package raised an error (e.g. MUMPS could not factor the tangent)",
 }
 # (any other failure: its SNES reason in lower case, e.g. diverged_fnorm_nan)

@@ -7,7 +7,8 @@ from petsc4py import PETSc
 from ..config.specs import SolverSpec
 from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
-from ..linalg.options import factor_package, solver_options
+from ..linalg.database import option
+from ..linalg.options import DEFAULT_OPTIONS, factor_package, solver_options
 from .failure_cause import Detail
 from .records import VIOLATED_STATE
 
@@ -170,6 +171,9 @@ def failure_detail(solver, reason: int) -> Detail:
                           "newton_stall")
         return Detail(f" (Newton cycles: |F| repeats every {period} iterations, between {low:.1e} and "
                       f"{high:.1e} N, so more iterations do not help{friction})", "newton_cycle")
+    budget = small_newton_budget(solver)
+    if budget is not None:
+        return budget
     if friction:
         return Detail(f" ({friction.removeprefix('; ')})", "friction_statuses")
     if contact is not None and contact.law.decides_activity:
@@ -187,6 +191,25 @@ def failure_detail(solver, reason: int) -> Detail:
                       f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})",
                       "active_set_iterations")
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])
+
+
+def small_newton_budget(solver) -> Detail | None:
+    """A solve out of iterations under a -snes_max_it (command line or config ``petsc:``) below
+    the run's own budget (15, unilateral contact 60, friction 200): the budget given is the
+    cause, whatever the model does (with -snes_max_it 3 a friction column blamed μ)."""
+    given = option("snes_max_it", getattr(solver, "prefix", ""))
+    if given is None:
+        given = getattr(solver, "petsc_options", {}).get("snes_max_it")
+    laws = getattr(solver.problem, "solver_defaults", None) or {}
+    own = int(laws.get("snes_max_it", DEFAULT_OPTIONS["snes_max_it"]))
+    try:
+        given = int(given)
+    except (TypeError, ValueError):
+        return None
+    if given >= own:
+        return None
+    return Detail(f" (-snes_max_it {given}, given in the run's options, is below the run's own {own}: the "
+                  f"solve ran out of the iterations given; leave it out or raise it)", "newton_budget")
 
 
 #: iterations at the end of a solve whose course ``newton_course`` describes

@@ -5,7 +5,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import FAILURE_MESSAGE, build_problem as _problem, jacobian_and_difference, load_raw, perturbed_state, petsc_init, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
+from helpers import CONFIGS, FAILURE_MESSAGE, build_problem as _problem, jacobian_and_difference, load_raw, perturbed_state, petsc_init, read_summary, run_inline, solve_cli, two_beam_twisted, write_config
 
 
 def test_assembled_jacobian_matches_finite_differences():
@@ -326,7 +326,8 @@ def test_chord_rule_from_the_third_iterate_never_twice_and_on_its_estimate():
 @pytest.mark.parametrize("mode, extra, expect", [
     ("sliding", ["-ksp_type", "gmres", "-pc_type", "bjacobi", "-ksp_max_it", "200"], "saddle-point matrix"),
     ("sliding", ["-pc_type", "none"], "solves nothing"),
-    ("unilateral", ["-snes_max_it", "1"], "try -snes_max_it 4"),
+    ("unilateral", ["-snes_max_it", "1"], "(-snes_max_it 1, given in the run's options, is below the run's "
+                                          "own 60: the solve ran out of the iterations given; leave it out"),
 ])
 def test_failure_hints_for_contact_models(tmp_path, mode, extra, expect):
     """Issue 25: a contact model is not told to use gmres with gamg/bjacobi (they fail on its
@@ -341,6 +342,26 @@ def test_failure_hints_for_contact_models(tmp_path, mode, extra, expect):
     line = p.stderr.strip().splitlines()[-1]
     assert expect in line, line
     assert "-ksp_type gmres with -pc_type gamg" not in line
+
+
+def test_a_friction_run_blames_a_small_newton_budget_and_names_a_command_line_pc(tmp_path):
+    """With friction -snes_max_it 3 ran out and the message blamed the stick-slip statuses and μ
+    (μ = 0.3, which the run's own 200 solve); -pc_type cholesky on the command line was named
+    petsc.pc_type, a config key the config did not have."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        b["elements"] = 2
+    raw["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
+    raw["steps"] = [100.0]
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    p = solve_cli(cfg, extra=["-snes_max_it", "3"])
+    line = p.stderr.strip().splitlines()[-1]
+    assert p.returncode == 3 and "(-snes_max_it 3, given in the run's options, is below the run's own 200" in line
+    assert "stick-slip" not in line, line
+    p = solve_cli(cfg, extra=["-pc_type", "cholesky"])
+    assert p.returncode == 2 and "config error: -pc_type: cholesky factors a symmetric matrix" in p.stderr, p.stderr
 
 
 @pytest.mark.parametrize("last,substeps", [(2.5, 1), (2.6, 2)])

@@ -37,8 +37,9 @@ def _coulomb(value: dict, p: str, t: TangentialSpec) -> None:
     if value.get("augmentation") is not None:
         # from 1e-4: c = 1e-9 took 20 698 Newton iterations without a level (0.001 is measured fine)
         t.augmentation = number(value["augmentation"], f"{p}.augmentation", lo=1e-4, hi=1e6,
-                                hint=" (the stick test's stiffness in units of k_s / A; default 1; "
-                                     "it steers Newton's iteration, not the answer)")
+                                hint=" (the stick test's stiffness in units of k_s / A; default G/E; "
+                                     "it steers Newton's iteration; where an increment has several "
+                                     "solutions it can pick another: docs/interface.md, Limits)")
     t.supported_ends = string(value.get("supported_ends", t.supported_ends), f"{p}.supported_ends",
                               SUPPORTED_END_RULES)
 

@@ -45,7 +45,7 @@ class Contact:
         self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         #: contact terms beside the normal constraints (a tangential law's interface shear)
-        self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector)
+        self.terms = make_terms(model, spec.tangential, interfaces, self.points, self.projector, spec.scaling)
         self.space = with_tangential(build_space(
             self.points, interfaces, spec.projection, reference_stiffness(interfaces) * spec.scaling,
             spec.per_element, spec.group, supported_ends(model, interfaces, spec.supported_ends), spec.curve_spans),

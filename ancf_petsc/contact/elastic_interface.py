@@ -55,7 +55,8 @@ class ElasticMatrix(PartnerTerm):
         self.stiffness = float(stiffness)
 
     @classmethod
-    def from_spec(cls, spec, model, points, projector, reference: float) -> "ElasticMatrix":
+    def from_spec(cls, spec, model, points, projector, reference: float,
+                  scaling: float = 1.0) -> "ElasticMatrix":
         """From ``contact.tangential`` (``stiffness`` k_t [Pa/m])."""
         return cls(spec.stiffness, model, points, projector)
 

@@ -10,9 +10,10 @@ from .partners import reference_scale
 TANGENTIAL_LAWS = {"none": None, ElasticMatrix.law: ElasticMatrix, CoulombFriction.law: CoulombFriction}
 
 
-def make_terms(model, spec, interfaces, points, projector) -> list:
-    """The contact terms of ``contact.tangential`` (``spec``; None or law "none": no term)."""
+def make_terms(model, spec, interfaces, points, projector, scaling: float = 1.0) -> list:
+    """The contact terms of ``contact.tangential`` (``spec``; None or law "none": no term);
+    ``scaling``: ``contact.scaling``, the factor of the multipliers' k_s."""
     cls = TANGENTIAL_LAWS[spec.law] if spec is not None else None
     if cls is None:
         return []
-    return [cls.from_spec(spec, model, points, projector, reference_scale(interfaces))]
+    return [cls.from_spec(spec, model, points, projector, reference_scale(interfaces), scaling)]

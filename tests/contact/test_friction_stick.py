@@ -90,3 +90,24 @@ def test_the_normal_force_is_split_into_pressing_and_pulling_and_bounds_the_fric
             assert shear <= 0.3 * c["pressing_force"] * (1 + 1e-6), (name, shear, c["pressing_force"])
             beyond_net += shear > 0.3 * abs(c["normal_force"])
     assert beyond_net >= 1          # where the net force alone would read as a broken Coulomb law
+
+
+def test_the_multipliers_scaling_changes_no_friction_answer(tmp_path):
+    """``contact.scaling`` scales the multipliers' k_s (README: it changes no answer).  Friction's
+    trial traction y + c U has y in units of k_s: with c as given, s = 1000 ran the iteration of
+    c × 1000 and the paper's tendon (2 elements, μ = 0.3) ended on another solution, the soleus
+    at 4.81 mm against 4.11 mm at 400 N; c / s keeps the iteration's physics."""
+    import os
+    from helpers import CONFIGS
+    ends = []
+    for s in (1.0, 1000.0):
+        raw = load_raw("achilles_type3_psi45.yaml")
+        for b in raw["beams"]:
+            b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+            b["elements"] = 2
+        raw["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}, "scaling": s}
+        raw["steps"] = [100.0, 400.0]
+        summary = run_inline(raw, tmp_path / f"s{s:g}")
+        assert summary["status"] == "completed"
+        ends.append(np.array(summary["steps"][-1]["probes"]["soleus"]["displacement"]))
+    assert np.abs(ends[1] - ends[0]).max() <= 1e-7 * np.abs(ends[0]).max(), ends

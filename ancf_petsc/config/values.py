@@ -25,7 +25,7 @@ _REPR.maxlevel, _REPR.maxlist, _REPR.maxdict, _REPR.maxtuple, _REPR.maxstring, _
 def shown(v) -> str:
     """A value for a message, at most ~60 characters: a deeply nested or aliased value (a YAML
     alias "bomb") is shown by its first elements only, never built in full."""
-    s = _REPR.repr(v)
+    s = "null" if v is None else _REPR.repr(v)       # YAML's word: a key left empty
     return s if len(s) < 60 else s[:57] + "..."
 
 
@@ -82,7 +82,8 @@ def integer(value, path: str, *, lo: int | None = None, hi: int | None = None) -
 
 def string(value, path: str, choices: tuple | None = None) -> str:
     if not isinstance(value, str) or not value:
-        raise ConfigError(path, f"expected a non-empty string; got {shown(value)}")
+        what = f"one of {', '.join(choices)}" if choices else "a non-empty string"
+        raise ConfigError(path, f"expected {what}; got {shown(value)}")
     if choices is not None and value not in choices:
         raise ConfigError(path, f"must be one of {', '.join(choices)}; got {shown(value)}")
     return value

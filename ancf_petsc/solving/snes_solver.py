@@ -50,6 +50,17 @@ def stop_window(contact) -> tuple[int, float] | None:
     return None if window is None else (window, float(DEFAULT_OPTIONS["snes_divergence_tolerance"]))
 
 
+def confirmed_count(solver, count: int) -> int:
+    """The negative tangent eigenvalues ``count`` read from the factors, confirmed with J's own
+    LDLᵀ where the fascicle Schur factors counted J − K_×'s (linalg/fieldsplit.py) and found some:
+    the contact curvature between fascicles tips it (the paper's tendon at 2 elements, sliding:
+    1 negative eigenvalue of J − K_× at 100 and 400 N, none of J)."""
+    if count <= 0 or solver.fascicle_schur is None:
+        return count
+    exact = exact_pivot_counts(solver.problem.J)
+    return count if exact is None else exact[0] - solver.problem.n_constraints + exact[1]
+
+
 class SNESSolver:
     """One SNES for ``problem`` (its options, callbacks, preconditioner and counters)."""
 
@@ -75,7 +86,6 @@ class SNESSolver:
         atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._history: list[float] = []        # residual norms of the current SNES solve
-        self._where = "in a Newton solve"       # for an interruption inside one (_monitor)
         self.trail = IterateTrail()             # its last iterates: a failed level's jump scan
         #: friction, unilateral contact: a Newton cycle or wandering ends the solve early
         #: (cycle_stop.py; set before the options, so that -snes_convergence_test replaces it)
@@ -152,11 +162,9 @@ class SNESSolver:
         self._kept_options = []
 
     def destroy(self) -> None:
-        """Free the SNES (with its KSP, PC and factor); not collective.  On one rank a Python
-        preconditioner (the compact factor, the fascicle Schur one) lets go of its context first:
-        a wrapper of this SNES that outlives the run (the one PETSc passed to a callback, kept by
-        the frames of an exception's traceback) would otherwise leave the PC to PETSc's final
-        clean-up, which resets it after Python has finalised: a SEGV at exit."""
+        """Free the SNES (with its KSP, PC and factor); not collective.  On one rank a Python PC
+        lets go of its context first: a wrapper of this SNES kept by a traceback's frames left it
+        to PETSc's final clean-up, after Python had finalised (a SEGV at exit)."""
         pc = self.snes.getKSP().getPC()
         if self.problem.comm.size == 1 and pc.getType() == PETSc.PC.Type.PYTHON:
             pc.setType(PETSc.PC.Type.NONE)
@@ -181,15 +189,7 @@ class SNESSolver:
         if counts is None:
             return None
         negative, null = counts
-        count = negative - self.problem.n_constraints + null
-        if count > 0 and self.fascicle_schur is not None:
-            # the fascicle Schur factors count J − K_×'s (linalg/fieldsplit.py), which the contact
-            # curvature between fascicles can tip: confirm with J's own (2 elements, sliding, the
-            # paper's tendon: 1 negative eigenvalue of J − K_× at 100 and 400 N, none of J)
-            exact = exact_pivot_counts(self.problem.J)
-            if exact is not None:
-                count = exact[0] - self.problem.n_constraints + exact[1]
-        return count
+        return confirmed_count(self, negative - self.problem.n_constraints + null)
 
     def accepted(self) -> None:
         """The stepper accepted the state the last solve converged to."""
@@ -251,12 +251,11 @@ class SNESSolver:
     def _monitor(self, snes, its, fnorm):
         self._history.append(float(fnorm))
         self.trail.record(its, snes.getSolution(), fnorm)
-        # SIGTERM/SIGINT inside a Newton solve (collective, every iteration): Open MPI's mpirun
-        # sends SIGKILL 1 s after the SIGTERM it forwards, and one solve of a friction column
-        # takes seconds; the stepper's check between solves came too late (summary 'running')
+        # SIGTERM/SIGINT at every iteration (collective): mpirun sends SIGKILL 1 s after the SIGTERM
+        # it forwards, and a friction column's solves take seconds (interrupt.py)
         signum = stop_requested(self.problem.comm)
         if signum:
-            raise RunInterrupted(signum, self._where)
+            raise RunInterrupted(signum, getattr(self, "_where", "in a Newton solve"))
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""

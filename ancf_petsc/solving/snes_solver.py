@@ -63,6 +63,7 @@ def confirmed_count(solver, count: int) -> int:
 
 class SNESSolver:
     """One SNES for ``problem`` (its options, callbacks, preconditioner and counters)."""
+    _where: str = "in a Newton solve"           # the solve under way, for an interruption (_monitor)
 
     def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict, max_level: float = 1.0,
                  linear: str = "direct", floor: float | None = None):
@@ -255,7 +256,7 @@ class SNESSolver:
         # it forwards, and a friction column's solves take seconds (interrupt.py)
         signum = stop_requested(self.problem.comm)
         if signum:
-            raise RunInterrupted(signum, getattr(self, "_where", "in a Newton solve"))
+            raise RunInterrupted(signum, self._where)
 
     def _jacobian(self, snes, X: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         """SNES Jacobian callback: the problem's tangent, or none for a chord step (chord.py)."""

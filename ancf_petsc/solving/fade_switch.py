@@ -109,6 +109,7 @@ class FadeForcesSwitch:
         # the floor as measured at the start: measuring it again evaluates the contact at q0
         stepper.solver = SNESSolver(P, stepper.spec, petsc_options, max_level, linear, old.rounding_floor)
         stepper.solver.chord.count, stepper.solver.chord.kept = old.chord.count, old.chord.kept
+        stepper.solver.spent = old.spent
         stepper.predictor = (ComplementarityPredictor(P, stepper.solver.snes, stepper.spec.compact_factor)
                              if ComplementarityPredictor.applies(P) else None)
         stepper.tangent = TangentPredictor(P, stepper.solver.snes)

@@ -205,7 +205,8 @@ class SampleSolver:
         t0, c0 = time.perf_counter(), time.process_time()
         rebuilt = self._prepare(spec)
         run = self.run
-        run.stepper.newton_iterations = 0       # solver.max_newton_iterations is per sample
+        # solver.max_newton_iterations is per sample
+        run.stepper.newton_iterations = run.stepper.solver.spent = 0
         levels = [float(s) for s in spec.steps]
         out = SampleOutcome("completed", st.COMPLETED, "completed", [], {}, {}, rebuilt=rebuilt)
         records = []

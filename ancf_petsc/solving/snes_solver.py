@@ -50,6 +50,25 @@ def stop_window(contact) -> tuple[int, float] | None:
     return None if window is None else (window, float(DEFAULT_OPTIONS["snes_divergence_tolerance"]))
 
 
+def budget_left(budget: int | None, spent: int, snes: PETSc.SNES) -> tuple[int, int]:
+    """(-snes_max_it, the iterations the next solve may take): capped so that the run's SNES
+    iterations pass ``solver.max_newton_iterations`` by one at most (the stepper's over_budget
+    then stops it); checked between solves only, a friction history with a budget of 110 ran to
+    197."""
+    maxit = snes.getTolerances()[3]
+    return maxit, (maxit if budget is None else min(maxit, budget + 1 - spent))
+
+
+def release_python_pc(snes: PETSc.SNES, comm) -> None:
+    """On one rank, a Python preconditioner (compact factor, fascicle Schur) lets go of its
+    context before the SNES is destroyed: a wrapper of the SNES kept by an exception's traceback
+    (the one PETSc passed a callback) left the PC to PETSc's final clean-up, which reset it after
+    Python had finalised (a SEGV at exit)."""
+    pc = snes.getKSP().getPC()
+    if comm.size == 1 and pc.getType() == PETSc.PC.Type.PYTHON:
+        pc.setType(PETSc.PC.Type.NONE)
+
+
 def confirmed_count(solver, count: int) -> int:
     """The negative tangent eigenvalues ``count`` read from the factors, confirmed with J's own
     LDLᵀ where the fascicle Schur factors counted J − K_×'s (linalg/fieldsplit.py) and found some:
@@ -64,6 +83,7 @@ def confirmed_count(solver, count: int) -> int:
 class SNESSolver:
     """One SNES for ``problem`` (its options, callbacks, preconditioner and counters)."""
     _where: str = "in a Newton solve"           # the solve under way, for an interruption (_monitor)
+    spent: int = 0                              # SNES iterations so far: solver.max_newton_iterations' cap
 
     def __init__(self, problem: Problem, spec: SolverSpec, petsc_options: dict, max_level: float = 1.0,
                  linear: str = "direct", floor: float | None = None):
@@ -148,9 +168,8 @@ class SNESSolver:
         return self.compact.reanalyses if self.compact is not None else 0
 
     def close(self, collective: bool = True) -> None:
-        """Remove the options this stepper left in PETSc's database; config options PETSc never
-        read go to ``unused_config_options`` (collective unless ``collective`` is False).  The
-        fascicle Schur preconditioner's parallel objects are destroyed here, collectively."""
+        """Remove this stepper's options from PETSc's database (config ones PETSc never read go to
+        ``unused_config_options``) and the fascicle Schur PC's parallel objects (collective)."""
         n = len(self.prefix)
         if collective and self.linear == "fieldsplit":
             self.snes.getKSP().getPC().setType(PETSc.PC.Type.NONE)
@@ -166,9 +185,7 @@ class SNESSolver:
         """Free the SNES (with its KSP, PC and factor); not collective.  On one rank a Python PC
         lets go of its context first: a wrapper of this SNES kept by a traceback's frames left it
         to PETSc's final clean-up, after Python had finalised (a SEGV at exit)."""
-        pc = self.snes.getKSP().getPC()
-        if self.problem.comm.size == 1 and pc.getType() == PETSc.PC.Type.PYTHON:
-            pc.setType(PETSc.PC.Type.NONE)
+        release_python_pc(self.snes, self.problem.comm)
         self.trail.destroy()
         self.snes.destroy()
 
@@ -178,12 +195,11 @@ class SNESSolver:
         return list(self._history)
 
     def negative_eigenvalues(self, X: PETSc.Vec | None = None) -> int | None:
-        """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ
-        inertia less one per contact constraint (a saddle-point matrix with m independent
-        constraints has m negative eigenvalues besides those of the constrained tangent), plus
-        the null pivots (a singular tangent: a mechanism the supports leave free).  ``X``: the
-        state a solve just converged to, whose tangent is factored first where the last factor
-        is no Newton iterate of it (``factor_at``)."""
+        """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ inertia
+        less one per contact constraint (m independent constraints give m negative eigenvalues
+        besides the constrained tangent's), plus the null pivots (a mechanism the supports leave
+        free).  ``X``: the converged state, factored first where the last factor is no Newton
+        iterate of it (``factor_at``)."""
         if X is not None and not self.factor_at(X):
             return None
         counts = pivot_counts(self.snes.getKSP())
@@ -275,14 +291,17 @@ class SNESSolver:
         return solver_messages.describe(self)
 
     def solve(self, X: PETSc.Vec, target: float, lam: float, reached: float) -> tuple[int, int]:
-        """One SNES solve from ``X`` at load factor ``lam`` (on the way from ``reached`` to the
-        level ``target``, for messages): its reason and iterations."""
+        """One SNES solve from ``X`` at ``lam`` (from ``reached`` to ``target``): reason, iterations."""
         self._history = []
         self._where = f"in the Newton solve at load factor {lam:g} (last converged {reached:g})"
+        maxit, left = budget_left(self.spec.max_newton_iterations, self.spent, self.snes)
+        if left <= 0:                           # the stepper stops the run (over_budget)
+            return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, 0
         self.chord.start_solve()
         if self.problem.mixed is not None:
             self.problem.mixed.start_solve()
         try:
+            self.snes.setTolerances(max_it=left)
             self.snes.solve(None, X)
         except PETSc.Error as exc:
             # an error inside PETSc or an external package (a factorisation MUMPS gave up on,
@@ -295,6 +314,9 @@ class SNESSolver:
             raise LoadStepFailure(target, lam, reached, "PETSC_ERROR", False,
                                   f" in the linear solver ({solver_messages.solver_text(self)}): "
                                   f"{why}") from None
+        finally:
+            self.snes.setTolerances(max_it=maxit)
+            self.spent += self.snes.getIterationNumber()
         self.ksp_reason = self.snes.getKSP().getConvergedReason()
         self.history += self._history
         return self.snes.getConvergedReason(), self.snes.getIterationNumber()

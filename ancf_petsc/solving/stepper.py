@@ -95,7 +95,10 @@ class LoadStepper:
         self.path = None
 
     def destroy(self) -> None:
-        """Free the SNES and the path's vectors; not collective."""
+        """Free the SNES and the path's vectors, and take the solver's options out of PETSc's
+        database if a run that raised left them (a refused restart left MUMPS's null-pivot
+        options to the next run of the process); not collective."""
+        self.close(collective=False)
         self.release_path()
         self.branches.destroy()
         self.solver.destroy()
@@ -239,12 +242,13 @@ class LoadStepper:
         return bool(self.predictor.global_status(self.problem.contact.status).any())
 
     def _check_budget(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float) -> None:
-        if self.control.over_budget(self.newton_iterations):
+        spent = max(self.newton_iterations, self.solver.spent)      # the SNES's count caps its solves
+        if self.control.over_budget(spent):
             self.problem.load_factor = path.lam
             X_prev.copy(self.problem.X)
             self.problem.restore()
             raise LoadStepFailure(target, path.lam + step, path.lam, "NEWTON_BUDGET_EXCEEDED", False,
-                                  f" after {self.newton_iterations} Newton iterations "
+                                  f" after {spent} Newton iterations "
                                   f"(solver.max_newton_iterations = {self.spec.max_newton_iterations})")
 
     def judge(self, path: PathState, reason: int, fnorm: float, step: float, tally: LevelTally):

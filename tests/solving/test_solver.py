@@ -99,10 +99,26 @@ def test_newton_budget_stops_a_run_cleanly(tmp_path):
     p = solve_cli(write_config(raw, tmp_path / "c.yaml"))
     assert p.returncode == 3, p.stdout + p.stderr
     msg = p.stderr.strip().splitlines()[-1]
-    assert "NEWTON_BUDGET_EXCEEDED after" in msg and "solver.max_newton_iterations = 12" in msg
+    assert "NEWTON_BUDGET_EXCEEDED after 13 Newton iterations (solver.max_newton_iterations = 12)" in msg, msg
     s = read_summary(tmp_path / "out")
     assert s["status"] == "failed" and FAILURE_MESSAGE.match(s["message"])
     assert 1 <= len(s["steps"]) < 4 and s["newton_iterations"] > 12
+
+
+def test_a_newton_budget_caps_a_long_friction_solve(tmp_path):
+    """The budget was checked between solves only: a friction column (a solve may take 200
+    iterations) given 20 stopped after 35, a friction history given 110 after 197.  Each solve's
+    -snes_max_it is now capped at what is left of it: the run stops at the budget plus one."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        b["elements"] = 2
+    raw["contact"] = {"mode": "sliding", "tangential": {"law": "coulomb", "friction": 0.3}}
+    raw["steps"] = [100.0, 200.0, 300.0, 400.0]
+    raw["solver"] = {"max_newton_iterations": 20}
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"))
+    assert p.returncode == 3 and "NEWTON_BUDGET_EXCEEDED after 21 Newton iterations" in p.stderr, p.stderr
 
 
 @pytest.mark.parametrize("snes_type", ["ksponly", "ms"])

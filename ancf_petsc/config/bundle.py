@@ -16,6 +16,7 @@ Packing: 1, 7, 19, 37, 61, 91, ... fascicles = the centre plus 0, 1, 2, ... hexa
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -99,6 +100,40 @@ def circle_beams(centres: np.ndarray, radius: float, pitch: float, arc_deg: floa
     return loops, pairs
 
 
+#: keys of the beams and loads a bundle generates, as the bundle's own (``bundle_key``)
+GENERATED_KEYS = ((re.compile(r"beams\[\d+\]\.section\.cubature_degree"), "bundle.cubature_degree"),
+                  (re.compile(r"beams\[\d+\]\.(material|element|locking|elements|axial_points)"), r"bundle.\1"),
+                  (re.compile(r"loads\[\d+\]\.traction_force"), "bundle.force"),
+                  (re.compile(r"loads\[\d+\]"), "bundle.force"))
+
+
+def bundle_key(path: str) -> str:
+    """A config error's key path in the beams and loads a bundle generated, as the bundle key the
+    user wrote (``beams[0].material.mu`` → ``bundle.material.mu``): the generated keys are not
+    the user's, and writing them is refused."""
+    for pattern, key in GENERATED_KEYS:
+        m = pattern.match(path)
+        if m:
+            return m.expand(key) + path[m.end():]
+    return path
+
+
+def _circle_contact(contact: dict) -> None:
+    """Circle fascicles touch along lines, their facing arcs apart elsewhere: sliding contact
+    (gaps held at zero) and a tangential law (whose relative slip is zero only where the partners
+    coincide: an elastic layer pulled on the arcs at rest, 8.3e-4 N at 1e10 Pa/m, and a run that
+    loosened its tolerance from it) need interfaces that coincide, as hexagons share their edges."""
+    if contact.get("mode") != UnilateralLaw.name:
+        raise ConfigError("contact.mode", "circle fascicles touch along lines only: their contact is "
+                                          "unilateral (remove mode), or use fascicle_section: hexagon")
+    law = (contact.get("tangential") or {}).get("law", "none") if isinstance(contact.get("tangential"), dict) \
+        else "none"
+    if law != "none":
+        raise ConfigError("contact.tangential", "a tangential law needs interfaces that coincide at rest; "
+                                                "circle fascicles touch along lines only: use fascicle_section: "
+                                                "hexagon, or remove contact.tangential")
+
+
 def expand_bundle(raw: dict) -> dict:
     """Replace ``bundle:`` by beams, boundary conditions, loads, probes and contact (in place copy)."""
     b = mapping(raw["bundle"], "bundle", required=KEYS_REQUIRED, optional=KEYS_OPTIONAL)
@@ -112,6 +147,9 @@ def expand_bundle(raw: dict) -> dict:
     radius = number(b["radius"], "bundle.radius", positive=True, hint=" (fascicle radius in m)")
     elements = integer(b["elements"], "bundle.elements", lo=1, hi=10000)
     force = vector(b["force"], "bundle.force", 3)
+    if b.get("pulled_end", "grip") == "grip" and any(force[1:]):
+        raise ConfigError("bundle.force", "the grip (pulled_end: grip) holds the pulled ends' y and z: "
+                                          "give an axial force [F, 0, 0], or pulled_end: free")
     for key in ("beams", "boundary_conditions", "loads"):
         if key in raw:
             raise ConfigError(key, "a bundle generates its beams, supports and loads; remove this key")
@@ -156,6 +194,7 @@ def expand_bundle(raw: dict) -> dict:
         contact = dict(out.get("contact") or {})
         if shape == "circle":
             contact.setdefault("mode", UnilateralLaw.name)
+            _circle_contact(contact)
             # closing contact from a touching start: the bt line search halves the iterations
             # (157 against 290 with basic on bundle_circle7)
             petsc = dict(out.get("petsc") or {})

@@ -18,7 +18,7 @@ from ..physics.elements import ELEMENTS
 from ..physics.goh import GOH
 
 from .beams import check_imported_loops, parse_beams
-from .bundle import expand_bundle
+from .bundle import bundle_key, expand_bundle
 from .conditions import beam_ref, check_curves, parse_boundary_conditions, parse_loads, parse_probes, parse_steps
 from .contact import parse_contact
 from .history import parse_history
@@ -37,6 +37,15 @@ def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> Model
     """Validate a loaded YAML document and return the ``ModelSpec``."""
     if isinstance(raw, dict) and "bundle" in raw:
         raw = expand_bundle(raw)
+        try:
+            return _parse(raw, base_dir, source)
+        except ConfigError as exc:             # the generated beams' keys are the bundle's
+            raise ConfigError(bundle_key(exc.path), exc.message, exc.kind) from None
+    return _parse(raw, base_dir, source)
+
+
+def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
+    """``parse_config`` of a document whose bundle is expanded."""
     history = None
     if isinstance(raw, dict) and raw.get("history") is not None:
         history = parse_history(raw["history"], base_dir)

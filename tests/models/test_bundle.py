@@ -46,6 +46,36 @@ def test_circles_pair_facing_arcs():
     assert all("curve_b" in it for it in raw["contact"]["interfaces"])
 
 
+@pytest.mark.parametrize("change, key, words", [
+    ({"material": {"model": "neo-hookean", "mu": -1e6, "bulk_modulus": 1e9}}, "bundle.material.mu", "> 0"),
+    ({"material": {"model": "neo-hookean", "mu": 1e8}}, "bundle.material.bulk_modulus", "missing"),
+    ({"element": "9999"}, "bundle.element", "one of"),
+    ({"locking": "foo"}, "bundle.locking", "one of"),
+    ({"force": [10.0, 1.0, 0.0]}, "bundle.force", "give an axial force [F, 0, 0], or pulled_end: free"),
+    ({"fascicle_section": "circle", "contact": {"mode": "sliding"}}, "contact.mode", "unilateral"),
+    ({"fascicle_section": "circle", "contact": {"tangential": {"law": "elastic", "stiffness": 1e10}}},
+     "contact.tangential", "coincide at rest"),
+])
+def test_bundle_errors_name_the_bundle_keys(change, key, words):
+    """Errors in the beams and loads a bundle generates named keys the user never wrote and may
+    not write (beams[0].material.mu, loads[0]); circle fascicles with sliding contact got
+    'neighbours must share their interface curve', and with a tangential law started out of
+    equilibrium (an elastic layer pulled on the apart arcs: |F(q0, 0)| 8.3e-4 N) and 'completed'
+    under a tolerance loosened from it."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.errors import InputError
+    contact = change.pop("contact", None)
+    raw = {"name": "b", "geometry": {"length": 0.02, "twist_deg": 30.0}, "steps": [1.0],
+           "bundle": {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2,
+                      "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9},
+                      "force": [10.0, 0, 0], **change}}
+    if contact is not None:
+        raw["contact"] = contact
+    with pytest.raises(InputError) as info:
+        parse_config(raw)
+    assert info.value.path == key and words in info.value.message, (info.value.path, info.value.message)
+
+
 @pytest.mark.mpi
 @pytest.mark.slow
 def test_touching_circles_close_contact_on_one_and_two_ranks(tmp_path):

@@ -41,6 +41,9 @@ def write_files(tmp):
     lab = np.zeros((60, 60), dtype=np.uint8)
     lab[10:30, 10:30], lab[30:50, 10:30] = 1, 2
     Image.fromarray(lab, mode="L").save(tmp / "m.png")
+    small = np.zeros((40, 40), dtype=np.uint8)
+    small[18:21, 18:21] = 1                              # 3 x 3 pixels: 2-pixel smoothing took 42 %
+    Image.fromarray(small, mode="L").save(tmp / "small.png")
     (tmp / "open.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 20 20">'
                                   '<path id="a" d="M 1,1 L 10,1 L 10,10"/>'
                                   '<path id="b" d="M 12,12 C 14,12 16,14 16,16"/></svg>')
@@ -66,6 +69,10 @@ CASES = [
     ("mask without the label", config(inline({"a": {"label": 7}}, units="px", pixel_size="0.05 mm",
                                              axes="image", source="m.png")),
      "geometry.sections.outlines.a", "m.png: no pixel has label 7 (labels present: 0, 1, 2)"),
+    ("a region smoothing erases", config(inline({"a": {"label": 1}}, units="px", pixel_size="0.05 mm",
+                                                axes="image", source="small.png")),
+     "geometry.sections.outlines.a", "change its area by -41.8 % (0.02125 -> 0.01236 mm^2): it is small "
+                                     "against them; give geometry.sections.smoothing a smaller value"),
     ("SVG without closed paths", config(inline({"a": {"file": "open.svg"}}, axes="image")),
      "geometry.sections.outlines.a", "open.svg: none of its 2 path(s) is closed"),
     ("overlap", config(inline({"a": {"points": disc(2.0)}, "b": {"points": disc(2.0, c=(3.5, 0.0))}}),

@@ -67,6 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     from ancf_petsc.solving import interrupt
     from ancf_petsc.solving.spread import world
     from ancf_petsc.errors import InputError
+    from ancf_petsc.io.files import OutputError, prepare_output_dir
     from ancf_petsc.workflows.calibration import CalibrationInterrupted, load_fit
 
     interrupt.install()
@@ -78,10 +79,15 @@ def main(argv: list[str] | None = None) -> int:
         if args.out:
             spec.output = os.path.abspath(args.out)
         log_path = os.path.join(spec.output, "samples.jsonl")
+        prepare_output_dir(spec.output)        # every rank: a file in the way fails them all alike
         return _run(spec, args, say)
     except InputError as exc:
         if rank == 0:
             print(f"{PROG}: {args.fit}: {exc}", file=sys.stderr, flush=True)
+        return 2
+    except OutputError as exc:
+        if rank == 0:
+            print(f"{PROG}: output error: {exc}", file=sys.stderr, flush=True)
         return 2
     except CalibrationInterrupted as exc:
         if rank == 0:

@@ -47,7 +47,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ancf-report: {exc}", file=sys.stderr)
         return 2
     out = os.path.abspath(args.out)
-    os.makedirs(out, exist_ok=True)
+    from ancf_petsc.io.files import OutputError, prepare_output_dir
+    try:
+        prepare_output_dir(out)
+    except OutputError as exc:
+        print(f"ancf-report: output error: {exc} (--out)", file=sys.stderr)
+        return 2
     sections = []
     heading = "Type III Achilles tendon: reproduction of Obrezkov et al. (2022)"
     log = (lambda msg: print(msg, flush=True))

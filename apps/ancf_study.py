@@ -26,6 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     import petsc4py
     petsc4py.init([sys.argv[0]] + petsc_args)
 
+    from ancf_petsc.io.files import OutputError
     from ancf_petsc.workflows.study import StudyError, read_yaml
     log = (lambda msg: print(msg, flush=True))
     try:
@@ -47,6 +48,9 @@ def main(argv: list[str] | None = None) -> int:
             raise StudyError("kind", f"must be pareto or stability; got {kind!r}")
     except StudyError as exc:
         print(f"ancf-study: {args.study}: {exc}", file=sys.stderr)
+        return 2
+    except OutputError as exc:
+        print(f"ancf-study: output error: {exc}", file=sys.stderr)
         return 2
     return 0
 

@@ -96,6 +96,9 @@ def read_results(directory: str) -> Results:
         raise InputError("results", f"{directory}: no summary.json (not a run's output directory)") from None
     except (OSError, ValueError) as exc:
         raise InputError("results", f"{path}: cannot read: {exc}") from None
+    if not isinstance(summary, dict) or not isinstance(summary.get("steps", []), list):
+        raise InputError("results", f"{path}: not a run's summary (a JSON object with its status and "
+                                    f"steps); got {type(summary).__name__}")
     h5_path = os.path.join(directory, "results.h5")
     if summary.get("status") == "running" and os.path.exists(h5_path):
         try:                         # no file lock: the run's next level must not find one

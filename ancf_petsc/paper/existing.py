@@ -53,7 +53,7 @@ class ExistingRun:
             # beyond summary.json's, as read_results and --restart see them
             self.summary = read_results(directory).summary
         except InputError as exc:
-            raise InputError("--existing", f"{path}: not a readable summary ({exc.message})") from None
+            raise InputError("--existing", exc.message) from None
         s = self.summary
         self.name = s.get("name", os.path.basename(directory))
         self.status = s.get("status", "unknown")
@@ -81,7 +81,9 @@ class ExistingRun:
 
     def _paper_difference(self, inputs: PaperInputs) -> str | None:
         """None when the run's model is the paper's at its pretwist, else what differs."""
-        if self.twist is None or not any(abs(self.twist - p) < 1e-9 for p in TWISTS):
+        if self.twist is None:
+            return "its summary gives no pretwist (twist_deg)"
+        if not any(abs(self.twist - p) < 1e-9 for p in TWISTS):
             return f"ψ = {self.twist}° is not one of the paper's {', '.join(f'{p}°' for p in TWISTS)}"
         h5 = os.path.join(self.dir, "results.h5")
         try:
@@ -130,8 +132,9 @@ def runs_markdown(runs: list[ExistingRun]) -> str:
     paper's model (those are compared in Table 1)."""
     lines = ["| run | model | ψ | status | levels reached |", "|---|---|---:|---|---:|"]
     for r in runs:
+        twist = "?" if r.twist is None else f"{r.twist:g}"
         lines.append(f"| {r.dir} | {r.name}{'' if r.is_paper else ' (not the paper’s model)'} | "
-                     f"{r.twist:g} | {r.ended()} | {len(r.levels)} |")
+                     f"{twist} | {r.ended()} | {len(r.levels)} |")
     for r in runs:
         if r.is_paper:
             continue

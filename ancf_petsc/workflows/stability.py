@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 
+from ..io.files import prepare_output_dir
 from ..config.specs import LOCKING
 from ..contact.laws import LAWS
 from ..physics.elements import ELEMENTS
@@ -120,7 +121,7 @@ def _physical(cell: dict) -> tuple:
 def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> dict:
     """Solve every cell (and the references); write stability.csv and stability.png."""
     from ..viz.charts import stability_chart
-    os.makedirs(spec.output, exist_ok=True)
+    prepare_output_dir(spec.output)            # OutputError naming the path (a file in the way)
     t0 = time.perf_counter()
     keys = [k for k in AXES if k in spec.axes]
     cells = [dict(zip(keys, combo)) for combo in itertools.product(*(spec.axes[k] for k in keys))]

@@ -38,6 +38,7 @@ from typing import Any, Callable
 
 import yaml
 
+from ..io.files import prepare_output_dir
 from .. import yamlio
 from ..config.specs import DEFAULT_AXIAL_POINTS
 from ..physics.elements import DEFAULT_ELEMENT
@@ -240,7 +241,7 @@ def write_csv(rows: list[Row], path: str) -> None:
 def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
     """Solve the reference and every grid point; write study.csv and pareto.png."""
     from ..viz.charts import pareto_chart
-    os.makedirs(spec.output, exist_ok=True)
+    prepare_output_dir(spec.output)            # OutputError naming the path (a file in the way)
     t0 = time.perf_counter()
     ref, ref_rows, ref_text = reference_value(spec.scene, spec.reference, spec.richardson,
                                               spec.output, log)

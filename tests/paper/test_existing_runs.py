@@ -88,3 +88,32 @@ def test_a_killed_run_is_reported_with_the_levels_results_h5_holds(tmp_path):
     assert "running (no final status: still running, or killed)" in text and "(: )" not in text
     row = next(line for line in text.splitlines() if line.startswith(f"| {tmp_path / 'bar'} |"))
     assert row.rstrip().endswith("| 3 |"), row
+
+
+def test_odd_summaries_and_an_output_path_that_is_a_file_are_one_line_errors(tmp_path):
+    """A summary.json that is JSON but no run's summary ([], or one without twist_deg) and an
+    --out that is a file ended in tracebacks (AttributeError, TypeError, FileExistsError), in
+    ancf-report and likewise in ancf-study and ancf-fit."""
+    from helpers import CONFIGS
+    (tmp_path / "afile").write_text("")
+    (tmp_path / "list").mkdir()
+    (tmp_path / "list" / "summary.json").write_text("[]")
+    (tmp_path / "bare").mkdir()
+    (tmp_path / "bare" / "summary.json").write_text('{"status": "completed", "name": "x", "steps": []}')
+    bin_ = lambda name: os.path.join(VENV_BIN, name)      # noqa: E731
+    runs = [([bin_("ancf-report"), "--existing", str(tmp_path / "list"), "--out", str(tmp_path / "o1")],
+             2, "not a run's summary (a JSON object with its status and steps); got list"),
+            ([bin_("ancf-report"), "--existing", str(tmp_path / "bare"), "--out", str(tmp_path / "o2")], 0, ""),
+            ([bin_("ancf-report"), "--existing", str(tmp_path / "bare"), "--out", str(tmp_path / "afile")],
+             2, "afile: exists and is not a directory"),
+            ([bin_("ancf-study"), os.path.join(CONFIGS, "studies", "bending_pareto.yaml"), "--out",
+              str(tmp_path / "afile")], 2, "afile: exists and is not a directory"),
+            ([bin_("ancf-fit"), os.path.join(CONFIGS, "fits", "bar_twin.yaml"), "--out", str(tmp_path / "afile")],
+             2, "afile: exists and is not a directory")]
+    for cmd, code, words in runs:
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV),
+                           timeout=300)
+        assert p.returncode == code and "Traceback" not in p.stderr, (cmd, p.stderr)
+        assert words in p.stderr and len(p.stderr.strip().splitlines()) <= 1, (cmd, p.stderr)
+    text = open(tmp_path / "o2" / "report.md").read()
+    assert "| ? | completed | 0 |" in text and "its summary gives no pretwist (twist_deg)" in text

@@ -233,7 +233,7 @@ class Run:
                 extra["frame"] = self.spec.history.frame_of(rec.load_factor)
                 extra["time"] = self.spec.history.time_of(rec.load_factor)
             if q is not None:              # rank 0
-                extra["subtendons"] = subtendon_report(self.model, q, rec.load_factor)
+                extra["subtendons"] = subtendon_report(self.model, q, rec.load_factor, reactions)
             if gaps is not None:
                 extra["contact"] = gaps
                 if q is not None:          # rank 0

@@ -99,3 +99,24 @@ def test_a_new_run_replaces_only_the_files_a_run_writes(tmp_path):
     assert {"surface_0000.vtu", "surface_0001.vtu", "surface.pvd"} <= names
     assert "surface_0002.vtu" not in names and "surface_0003.vtu" not in names
     assert (tmp_path / "contact_notes.txt").read_text() == "mine"
+
+
+def test_a_subtendons_end_force_includes_a_grips_reaction(tmp_path):
+    """``subtendons.<beam>.end_force`` is what acts on the beam's last node from outside: under
+    displacement control the grip's reaction (it was the sum of the beam's loads: 0 here, and a
+    pressed strip's pressing loads along it), and no other beam's."""
+    import os
+    from helpers import CONFIGS
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+        b["elements"] = 2
+    raw["loads"] = []
+    raw["boundary_conditions"].append({"beam": "soleus", "node": "last", "name": "grip",
+                                       "displacement": {"r": {"x": 2e-3}}})
+    raw["steps"] = [1.0]
+    raw["output"] = {"vtk": False}
+    st = run_inline(raw, tmp_path)["steps"][-1]
+    assert st["reactions"]["grip"][0] > 50.0
+    assert st["subtendons"]["soleus"]["end_force"] == st["reactions"]["grip"]
+    assert st["subtendons"]["medial_gastrocnemius"]["end_force"] == [0.0, 0.0, 0.0]

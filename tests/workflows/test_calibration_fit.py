@@ -108,3 +108,21 @@ def test_a_failing_sample_is_recorded_and_penalised_not_fatal(tmp_path):
     assert np.all(soft.r[n:] == spec.penalty)
     assert soft.r[:n] == pytest.approx((np.array(soft.model[data.name][:n]) - data.values[:n]) / data.sigmas[:n])
     assert [s.status for s in SampleLog(os.path.join(d, "out"), spec).samples] == ["failed", "completed"]
+
+
+def test_the_log_fingerprint_follows_the_files_the_model_reads(tmp_path):
+    """A fit resumed its log after an outline file the model reads had changed (the log's
+    fingerprint hashed the model YAML only): the old geometry's samples, mu 1.07e8 where a fresh
+    fit gives 2.60e7.  The files' contents are now part of it."""
+    import copy
+    from ancf_petsc.workflows.calibration.log import fingerprint
+    d = str(tmp_path)
+    spec = load_fit(bar_case(d, parameters=(MU,), lateral=False))
+    (tmp_path / "secs.yaml").write_text("scale_m_per_px: 1.0e-5\n")
+    spec.model_raw = copy.deepcopy(spec.model_raw)
+    spec.model_raw["beams"][0]["section"] = {"shape": "outline", "file": "secs.yaml", "loop": "a"}
+    spec.model_dir = d
+    before = fingerprint(spec)
+    assert fingerprint(spec) == before
+    (tmp_path / "secs.yaml").write_text("scale_m_per_px: 2.0e-5\n")
+    assert fingerprint(spec) != before

@@ -23,10 +23,33 @@ from .spec import FitSpec
 LOG_NAME = "samples.jsonl"
 
 
+def _read_files(raw, base: str) -> dict:
+    """The content hashes of the files a model config reads (every ``file`` and ``source`` value:
+    outlines, label images, load tables), by their path as written."""
+    out = {}
+    if isinstance(raw, dict):
+        for key, value in raw.items():
+            if key in ("file", "source") and isinstance(value, str):
+                path = value if os.path.isabs(value) else os.path.join(base, value)
+                try:
+                    with open(path, "rb") as fh:
+                        out[value] = hashlib.sha256(fh.read()).hexdigest()[:16]
+                except OSError:
+                    out[value] = "unreadable"
+            else:
+                out.update(_read_files(value, base))
+    elif isinstance(raw, list):
+        for value in raw:
+            out.update(_read_files(value, base))
+    return out
+
+
 def fingerprint(spec: FitSpec) -> str:
-    """What makes residuals comparable: the model config, parameters, data, levels, penalty."""
+    """What makes residuals comparable: the model config and the files it reads (a changed
+    outline file resumed a log of the old geometry: mu 1.07e8 against 2.60e7 fitted afresh),
+    parameters, data, levels, penalty."""
     words = json.dumps({
-        "model": spec.model_raw,
+        "model": spec.model_raw, "files": _read_files(spec.model_raw, spec.model_dir),
         "parameters": [[p.name, [list(k) for k in p.keys], p.lower, p.upper, p.log, p.factor, p.start]
                        for p in spec.parameters],
         "data": [[d.name, d.quantity, d.options, d.levels.tolist(), d.values.tolist(), d.sigmas.tolist()]

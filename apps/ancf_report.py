@@ -68,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
                 sections.append(("Figures of the other runs", "\n\n".join(
                     f"![{os.path.basename(f)}]({os.path.basename(f)})" for f in drawn)))
             found = existing.paper_summaries(runs)
+            left = existing.shadowed(runs)
+            if left:
+                sections.append(("Runs not in Table 1 (a later one has the same pretwist)", left))
             if found:
                 t1 = rp.table1_from(inputs, found)
                 missing = existing.levels_missing(t1, found)

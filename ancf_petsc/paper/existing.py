@@ -147,8 +147,22 @@ def runs_markdown(runs: list[ExistingRun]) -> str:
 
 
 def other_figures(runs: list[ExistingRun], out: str) -> list[str]:
-    """The figures of the runs that are not the paper's model (``run_outputs.run_figures``)."""
-    return [f for r in runs if not r.is_paper for f in run_figures(r.dir, r.summary, r.config, out)]
+    """The figures of the runs that are not the paper's model (``run_outputs.run_figures``); two
+    runs of one model name get the run's place in the list too (the second's figures overwrote
+    the first's, and the report linked one file twice)."""
+    others = [r for r in runs if not r.is_paper]
+    names = [r.name for r in others]
+    stems = [f"{r.name}_{k}" if names.count(r.name) > 1 else None for k, r in enumerate(others, start=1)]
+    return [f for r, stem in zip(others, stems) for f in run_figures(r.dir, r.summary, r.config, out, stem)]
+
+
+def shadowed(runs: list[ExistingRun]) -> str:
+    """The paper runs Table 1 leaves out: an earlier one of two at the same pretwist (the last
+    given is the column), in words (empty when none)."""
+    last = {r.psi: r for r in runs if r.is_paper}
+    left = [f"{r.dir} (ψ = {r.psi}°: {last[r.psi].dir} is the column)" for r in runs
+            if r.is_paper and last[r.psi] is not r]
+    return "; ".join(left)
 
 
 def title(runs: list[ExistingRun]) -> str:

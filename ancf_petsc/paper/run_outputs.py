@@ -102,14 +102,15 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     return lines
 
 
-def run_figures(directory: str, summary: dict, config: dict, out: str) -> list[str]:
+def run_figures(directory: str, summary: dict, config: dict, out: str,
+                stem: str | None = None) -> list[str]:
     """The run's force–elongation and differences chart and, with contact fields in results.h5,
-    slip and pressure along the tendon; the PNG paths (files named after the run)."""
+    slip and pressure along the tendon; the PNG paths (files named after the run, or ``stem``)."""
     steps = summary.get("steps", [])
     pairs = list(dict.fromkeys(p for st in steps for p in st.get("displacement_differences", {})))
     if not steps or (not pairs and not moved_supports(config)):
         return []
-    name = summary.get("name") or os.path.basename(os.path.normpath(directory))
+    name = stem or summary.get("name") or os.path.basename(os.path.normpath(directory))
     force, label = force_axis(summary, config)
     vectors = probe_vectors(config)
     elong = {p: np.array([st["probes"][p]["displacement"][0] for st in steps])

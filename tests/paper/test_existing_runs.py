@@ -117,3 +117,36 @@ def test_odd_summaries_and_an_output_path_that_is_a_file_are_one_line_errors(tmp
         assert words in p.stderr and len(p.stderr.strip().splitlines()) <= 1, (cmd, p.stderr)
     text = open(tmp_path / "o2" / "report.md").read()
     assert "| ? | completed | 0 |" in text and "its summary gives no pretwist (twist_deg)" in text
+
+
+def test_two_runs_of_one_model_keep_their_own_figures(tmp_path):
+    """Two runs of friction_pressed_strips: the second's figures overwrote the first's and the
+    report linked one file twice; each run now has its own."""
+    strips = load_raw("friction_pressed_strips.yaml")
+    strips["steps"] = [1.0, 1.5, 2.0]
+    runs = []
+    for k in (1, 2):
+        p = solve_cli(write_config(strips, tmp_path / f"s{k}.yaml"),
+                      extra=["--output-dir", str(tmp_path / f"s{k}"), "--quiet"])
+        assert p.returncode == 0, p.stderr
+        runs.append(str(tmp_path / f"s{k}"))
+    text = _report(runs, tmp_path / "rep")
+    for k in (1, 2):
+        png = f"friction_pressed_strips_{k}_force.png"
+        assert os.path.getsize(tmp_path / "rep" / png) > 10_000 and f"]({png})" in text
+
+
+def test_a_second_run_at_one_pretwist_is_named_not_dropped_silently(tmp_path):
+    """Table 1 takes the last run given per pretwist; the earlier one was left out silently."""
+    from helpers import CONFIGS
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    runs = []
+    for k in (1, 2):
+        p = solve_cli(write_config(raw, tmp_path / f"a{k}.yaml"),
+                      extra=["--output-dir", str(tmp_path / f"a{k}"), "--quiet"])
+        assert p.returncode == 0, p.stderr
+        runs.append(str(tmp_path / f"a{k}"))
+    text = _report(runs, tmp_path / "rep")
+    assert f"{tmp_path / 'a1'} (ψ = 45°: {tmp_path / 'a2'} is the column)" in text, text[:3000]

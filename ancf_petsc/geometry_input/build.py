@@ -81,7 +81,9 @@ def _close(P: np.ndarray, closed: bool, name: str, src: GeometrySource) -> np.nd
     size = float(np.ptp(P, axis=0).max()) if len(P) else 0.0
     if size == 0.0:
         raise src.err(f"outlines.{name}", "all points coincide; an outline needs a region")
-    P = pl.drop_duplicates(P, 1e-9 * size, closed=False)
+    # points a millionth of the outline apart are one (each point of a list written twice with
+    # 1e-6 mm added: the median spacing was 0 and the closed outline called open)
+    P = pl.drop_duplicates(P, 1e-6 * size, closed=False)
     gap = float(np.linalg.norm(P[-1] - P[0]))
     if gap <= 1e-9 * size:
         P = P[:-1]

@@ -36,6 +36,19 @@ def three(mirror=False, r=3.0):
     return out
 
 
+def test_points_written_twice_a_hair_apart_are_one_outline(tmp_path):
+    """Each point of a closed point list repeated with 1e-6 mm added: the median spacing was 0
+    and the outline was refused as open ('points are 0.000 mm apart')."""
+    t = np.linspace(0.0, 2 * np.pi, 60, endpoint=False)
+    P = np.column_stack([3.0 * np.cos(t), 1.5 * np.sin(t)])
+    twice = np.repeat(P, 2, axis=0)
+    twice[1::2] += 1e-6
+    raw = config(inline({"a": {"points": twice.tolist()}}))
+    raw["beams"][0]["material"] = {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--check", "--output", str(tmp_path / "g.png")])
+    assert p.returncode == 0 and "open" not in p.stderr, p.stderr
+
+
 def write_files(tmp):
     from PIL import Image
     lab = np.zeros((60, 60), dtype=np.uint8)

@@ -228,7 +228,14 @@ def _axial_points(value, path: str, nodes: int = 3) -> int:
 
 def check_imported_loops(beams: list, sections) -> None:
     """beams[i].section {shape: outline, loop: <name>} without file/curves names an outline of
-    geometry.sections."""
+    geometry.sections, and geometry.sections is used by a beam (outlines beside a bundle's
+    generated beams were ignored with no word)."""
+    imported = [b for b in beams if b.section.shape == "outline" and b.section.file is None
+                and b.section.curves is None]
+    if sections is not None and not imported:
+        raise ConfigError("geometry.sections", f"no beam uses its outlines ({', '.join(sections.names)}): "
+                                               "give a beam section: {shape: outline, loop: <name>}, or "
+                                               "remove geometry.sections")
     for i, b in enumerate(beams):
         s = b.section
         if s.shape != "outline" or s.file is not None or s.curves is not None:

@@ -55,6 +55,8 @@ def test_circles_pair_facing_arcs():
     ({"fascicle_section": "circle", "contact": {"mode": "sliding"}}, "contact.mode", "unilateral"),
     ({"fascicle_section": "circle", "contact": {"tangential": {"law": "elastic", "stiffness": 1e10}}},
      "contact.tangential", "coincide at rest"),
+    ({"sections": {"units": "mm", "axes": ["y", "z"], "outlines": {"a": {"points": [[0, 0], [2, 0], [2, 3], [0, 3]]}}}},
+     "geometry.sections", "no beam uses its outlines (a)"),
 ])
 def test_bundle_errors_name_the_bundle_keys(change, key, words):
     """Errors in the beams and loads a bundle generates named keys the user never wrote and may
@@ -64,13 +66,15 @@ def test_bundle_errors_name_the_bundle_keys(change, key, words):
     under a tolerance loosened from it."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.errors import InputError
-    contact = change.pop("contact", None)
+    contact, sections = change.pop("contact", None), change.pop("sections", None)
     raw = {"name": "b", "geometry": {"length": 0.02, "twist_deg": 30.0}, "steps": [1.0],
            "bundle": {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2,
                       "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9},
                       "force": [10.0, 0, 0], **change}}
     if contact is not None:
         raw["contact"] = contact
+    if sections is not None:                     # outlines beside the bundle's beams were ignored
+        raw["geometry"]["sections"] = sections
     with pytest.raises(InputError) as info:
         parse_config(raw)
     assert info.value.path == key and words in info.value.message, (info.value.path, info.value.message)

@@ -230,16 +230,13 @@ def check_imported_loops(beams: list, sections) -> None:
     """beams[i].section {shape: outline, loop: <name>} without file/curves names an outline of
     geometry.sections, and geometry.sections is used by a beam (outlines beside a bundle's
     generated beams were ignored with no word)."""
-    imported = [b for b in beams if b.section.shape == "outline" and b.section.file is None
-                and b.section.curves is None]
+    imported = [(i, b.section) for i, b in enumerate(beams) if b.section.shape == "outline"
+                and b.section.file is None and b.section.curves is None]
     if sections is not None and not imported:
         raise ConfigError("geometry.sections", f"no beam uses its outlines ({', '.join(sections.names)}): "
                                                "give a beam section: {shape: outline, loop: <name>}, or "
                                                "remove geometry.sections")
-    for i, b in enumerate(beams):
-        s = b.section
-        if s.shape != "outline" or s.file is not None or s.curves is not None:
-            continue
+    for i, s in imported:
         p = f"beams[{i}].section"
         if sections is None:
             raise ConfigError(f"{p}.loop", "names an outline of geometry.sections, which this config "

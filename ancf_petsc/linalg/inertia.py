@@ -50,29 +50,40 @@ def pivot_counts(ksp: PETSc.KSP) -> tuple[int, int] | None:
     return int(factor.getMumpsInfog(12)), int(factor.getMumpsInfog(28))
 
 
-def exact_pivot_counts(J: PETSc.Mat) -> tuple[int, int] | None:
-    """(negative, null) pivots of a MUMPS LDLᵀ of ``J`` itself, made for the count (sequential
-    root, null-pivot detection as the direct solver's defaults): the check of a preconditioner
-    that counts another matrix's inertia (fieldsplit.py's J − K_×).  None where MUMPS fails.
-    Collective."""
+def mumps_ldlt(J: PETSc.Mat, null_pivots: bool = True) -> PETSc.KSP:
+    """A KSP (preonly) whose preconditioner is a MUMPS LDLᵀ of ``J`` made for its inertia: a
+    sequential root (ICNTL(13) = 1, so that the count is whole on several ranks) and, with
+    ``null_pivots``, the direct solver's null-pivot detection (ICNTL(24), CNTL(3) 1e-11).  Not
+    set up; the caller destroys it."""
     ksp = PETSc.KSP().create(comm=J.getComm())
+    ksp.setOperators(J, J)
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("cholesky")
+    pc.setFactorSolverType("mumps")
+    pc.setFactorSetUpSolverType()
+    F = pc.getFactorMatrix()
+    F.setMumpsIcntl(13, 1)
+    F.setMumpsIcntl(24, 1 if null_pivots else 0)
+    F.setMumpsCntl(3, 1e-11)
+    return ksp
+
+
+def exact_pivot_counts(J: PETSc.Mat) -> tuple[int, int] | None:
+    """(negative, null) pivots of a MUMPS LDLᵀ of ``J`` itself (``mumps_ldlt``): the check of a
+    preconditioner that counts another matrix's inertia (fieldsplit.py's J − K_×).  None where
+    MUMPS fails.  Collective."""
+    ksp = None
     try:
-        ksp.setOperators(J, J)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("cholesky")
-        pc.setFactorSolverType("mumps")
-        pc.setFactorSetUpSolverType()
-        F = pc.getFactorMatrix()
-        F.setMumpsIcntl(13, 1)
-        F.setMumpsIcntl(24, 1)
-        F.setMumpsCntl(3, 1e-11)
+        ksp = mumps_ldlt(J)
         ksp.setUp()
+        F = ksp.getPC().getFactorMatrix()
         return int(F.getMumpsInfog(12)), int(F.getMumpsInfog(28))
     except PETSc.Error:
         return None
     finally:
-        ksp.destroy()
+        if ksp is not None:
+            ksp.destroy()
 
 
 def mumps_error(ksp: PETSc.KSP) -> int | None:

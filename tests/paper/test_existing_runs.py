@@ -119,18 +119,23 @@ def test_odd_summaries_and_an_output_path_that_is_a_file_are_one_line_errors(tmp
     assert "| ? | completed | 0 |" in text and "its summary gives no pretwist (twist_deg)" in text
 
 
+def _solved_twice(raw: dict, tmp_path, stem: str) -> list[str]:
+    """``raw`` solved into tmp_path/<stem>1 and <stem>2; the two output directories."""
+    runs = []
+    for k in (1, 2):
+        p = solve_cli(write_config(raw, tmp_path / f"{stem}{k}.yaml"),
+                      extra=["--output-dir", str(tmp_path / f"{stem}{k}"), "--quiet"])
+        assert p.returncode == 0, p.stderr
+        runs.append(str(tmp_path / f"{stem}{k}"))
+    return runs
+
+
 def test_two_runs_of_one_model_keep_their_own_figures(tmp_path):
     """Two runs of friction_pressed_strips: the second's figures overwrote the first's and the
     report linked one file twice; each run now has its own."""
     strips = load_raw("friction_pressed_strips.yaml")
     strips["steps"] = [1.0, 1.5, 2.0]
-    runs = []
-    for k in (1, 2):
-        p = solve_cli(write_config(strips, tmp_path / f"s{k}.yaml"),
-                      extra=["--output-dir", str(tmp_path / f"s{k}"), "--quiet"])
-        assert p.returncode == 0, p.stderr
-        runs.append(str(tmp_path / f"s{k}"))
-    text = _report(runs, tmp_path / "rep")
+    text = _report(_solved_twice(strips, tmp_path, "s"), tmp_path / "rep")
     for k in (1, 2):
         png = f"friction_pressed_strips_{k}_force.png"
         assert os.path.getsize(tmp_path / "rep" / png) > 10_000 and f"]({png})" in text
@@ -142,11 +147,5 @@ def test_a_second_run_at_one_pretwist_is_named_not_dropped_silently(tmp_path):
     raw = load_raw("achilles_type3_psi45.yaml")
     for b in raw["beams"]:
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
-    runs = []
-    for k in (1, 2):
-        p = solve_cli(write_config(raw, tmp_path / f"a{k}.yaml"),
-                      extra=["--output-dir", str(tmp_path / f"a{k}"), "--quiet"])
-        assert p.returncode == 0, p.stderr
-        runs.append(str(tmp_path / f"a{k}"))
-    text = _report(runs, tmp_path / "rep")
+    text = _report(_solved_twice(raw, tmp_path, "a"), tmp_path / "rep")
     assert f"{tmp_path / 'a1'} (ψ = 45°: {tmp_path / 'a2'} is the column)" in text, text[:3000]

@@ -19,17 +19,8 @@ def _no_mumps_option_left():
 
 
 def _mumps(PETSc, J, icntl24=True):
-    ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
-    ksp.setOperators(J, J)
-    ksp.setType("preonly")
-    pc = ksp.getPC()
-    pc.setType("cholesky")
-    pc.setFactorSolverType("mumps")
-    pc.setFactorSetUpSolverType()
-    F = pc.getFactorMatrix()
-    F.setMumpsIcntl(24, 1 if icntl24 else 0)
-    F.setMumpsCntl(3, 1e-11)
-    return ksp
+    from ancf_petsc.linalg.inertia import mumps_ldlt
+    return mumps_ldlt(J, icntl24)
 
 
 def _residual(J, x, b) -> float:

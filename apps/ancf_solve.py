@@ -101,13 +101,13 @@ def _main(argv: list[str], interrupt) -> int:
         return 2
     if "--version" in ours:
         from ancf_petsc.version import version_line
-        print(version_line(), flush=True)
+        interrupt.SafePrinter()(version_line())
         return 0
     parser = _parser()
     if petsc_help and not [a for a in ours if not a.startswith("-")]:
-        parser.print_help()
-        print("\nPETSc's own options are listed by running a model: ancf-solve CONFIG.yaml -help",
-              flush=True)
+        say = interrupt.SafePrinter()    # ancf-solve -help | head: no BrokenPipeError
+        say(parser.format_help() + "\nPETSc's own options are listed by running a model: "
+                                    "ancf-solve CONFIG.yaml -help")
         return 0
     try:
         if launch_rank():                # argparse's usage error from rank 0 only
@@ -115,6 +115,9 @@ def _main(argv: list[str], interrupt) -> int:
         args, petsc_args = parser.parse_known_args(ours)
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0
+    except BrokenPipeError:              # ancf-solve --help | head
+        interrupt.SafePrinter().close_stdout()
+        return 0
     for name in ("output_dir", "restart"):
         if getattr(args, name) == "":    # else silently the config's output.dir
             _error(f"--{name.replace('_', '-')}: an empty path; give a directory")

@@ -342,6 +342,17 @@ def test_command_line_edges(tmp_path):
     assert p.returncode == 0 and "usage: ancf-solve" in p.stdout and "ancf-solve CONFIG.yaml -help" in p.stdout
 
 
+@pytest.mark.parametrize("flag", ["-help", "--help", "--version"])
+def test_usage_and_version_into_a_closed_pipe(flag):
+    """`ancf-solve -help | head`: a reader gone before the text is written is no traceback."""
+    r, w = os.pipe()
+    os.close(r)                                       # like `| head -0`
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-solve"), flag], stdout=w, stderr=subprocess.PIPE,
+                       text=True, timeout=TIMEOUT, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    os.close(w)
+    assert (p.returncode, p.stderr) == (0, "")
+
+
 def test_help_goes_to_petsc_and_version_is_recorded(tmp_path):
     raw = tiny()
     raw["steps"] = [1.0]

@@ -108,3 +108,71 @@ def test_geometry_guide_names_every_outline_format():
             assert e in text, f"docs/geometry.md: no source row names {e} ({f.title})"
         for k in f.keys:
             assert f"{k.name}:" in text, f"docs/geometry.md: no source row shows {k.name}: ({f.title})"
+
+
+def _config_reference() -> dict:
+    """The README's config reference, read as YAML."""
+    from ancf_petsc import yamlio
+    with open(README, encoding="utf-8") as fh:
+        text = fh.read()
+    return yamlio.load(re.search(r"## Config reference.*?```yaml\n(.*?)```", text, re.S).group(1))
+
+
+#: values the reference shows as examples, not as the defaults (its comments say so)
+REFERENCE_EXAMPLES = {("solver", "initial_increment"), ("solver", "max_increment"),
+                      ("solver", "max_newton_iterations"), ("solver", "options_prefix"),
+                      ("contact", "interfaces"), ("contact", "tangential"), ("output", "dir"),
+                      ("accuracy", "level"), ("accuracy", "probe")}
+
+
+def test_config_reference_is_a_config_the_code_accepts():
+    """Every key the README's config reference shows is accepted where it stands, and reaches
+    the spec (the reference's two beam names made real; steps instead of history and bundle)."""
+    import copy
+    from ancf_petsc.config.parse import parse_config
+    raw = _config_reference()
+    for key in ("bundle", "history"):
+        raw.pop(key)
+    raw["geometry"].pop("sections")
+    section = raw["beams"][0]["section"]
+    section.pop("compress"), section.pop("spline_degree")     # outline only
+    section["semi_axes"] = [0.003, 0.002]
+    other = copy.deepcopy(raw["beams"][0])
+    other["name"], other["section"]["center"] = "other", [0.0, 0.006]
+    raw["beams"].append(other)
+    spec = parse_config(raw, base_dir=os.path.join(ROOT, "configs"))
+    assert (spec.solver.options_prefix, spec.solver.max_newton_iterations, spec.partition) == ("left_", 2000, "blocks")
+    assert spec.contact.tangential.law == "elastic" and spec.contact.tangential.stiffness == 1e10
+    assert [b.dofs for b in spec.boundary_conditions][2] == [(0, 1), (0, 2), (1, 0)]
+    assert spec.boundary_conditions[3].displacement == [(0, 0, 6e-3)] and spec.boundary_conditions[3].name == "grip"
+
+
+def test_config_reference_shows_the_defaults():
+    """A value the reference shows is the code's default (of a model with contact, whose
+    predictor is tangent), unless it is one of the examples its comments name as such."""
+    from ancf_petsc.config.parse import parse_config
+    ref = _config_reference()
+    beam = {"name": "a", "section": {"shape": "circle", "radius": 0.002}, "elements": 2,
+            "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 5e7}}
+    raw = {"name": "m", "geometry": {"length": 0.07}, "beams": [beam], "steps": [1.0],
+           "boundary_conditions": [{"beam": "a", "node": "first", "fix": "clamped"}],
+           "probes": [{"name": "tip", "beam": "a", "node": "last"}], "contact": {},
+           "accuracy": {"probe": "tip"}}
+    spec = parse_config(raw)
+    parts = {"solver": spec.solver, "contact": spec.contact, "output": spec.output,
+             "accuracy": spec.accuracy}
+    for part, obj in parts.items():
+        for key, shown in ref[part].items():
+            if (part, key) in REFERENCE_EXAMPLES:
+                continue
+            default = getattr(obj, key)
+            if part == "contact" and key == "projection":
+                shown = (shown["axial"], shown["curve"])
+            if part == "output" and key == "vtk_compress":
+                shown = None if shown == "auto" else shown
+            assert default == shown, f"README config reference: {part}.{key}: {shown!r}, the code's default {default!r}"
+    b, shown = spec.beams[0], ref["beams"][0]
+    for key in ("axial_points", "element", "locking"):
+        assert getattr(b, key) == shown[key], key
+    for key in ("cubature_degree", "spline_degree", "compress"):
+        assert getattr(b.section, key) == shown["section"][key], key

@@ -176,3 +176,26 @@ def test_config_reference_shows_the_defaults():
         assert getattr(b, key) == shown[key], key
     for key in ("cubature_degree", "spline_degree", "compress"):
         assert getattr(b.section, key) == shown["section"][key], key
+
+
+@pytest.mark.slow
+def test_globalisation_table_is_what_the_pretwisted_bar_gives():
+    """docs/model.md, "Which Newton globalisation?": the pretwisted bar's row is what
+    ``ancf-solve configs/pretwisted_bar.yaml -snes_linesearch_type TYPE`` gives (1 rank)."""
+    import json
+    import tempfile
+
+    from helpers import solve_cli
+    rows = _table_rows(os.path.join(DOCS, "model.md"), "**Which Newton globalisation?**")
+    row = [r for r in rows if "configs/pretwisted_bar.yaml" in r[0]][0]
+    stated = [int(c.strip("*")) for c in row[1:]]
+    kinds = [["-snes_linesearch_type", t] for t in ("basic", "bt", "cp", "l2")] + [["-snes_type", "newtontr"]]
+    got = []
+    with tempfile.TemporaryDirectory() as out:
+        for extra in kinds:
+            p = solve_cli(os.path.join(ROOT, "configs", "pretwisted_bar.yaml"), timeout=120,
+                          extra=["--output-dir", out, "--quiet"] + extra)
+            assert p.returncode == 0, p.stderr
+            with open(os.path.join(out, "summary.json"), encoding="utf-8") as fh:
+                got.append(json.load(fh)["newton_iterations"])
+    assert got == stated, f"docs/model.md says {stated}, ancf-solve gives {got}"

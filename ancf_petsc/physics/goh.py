@@ -148,8 +148,9 @@ class GOH:
     def energy(self, F: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Ψ per point (``theta``: the matrix's volumetric term on a dilatation field, physics/mixed.py)."""
         W = self.matrix.energy(F, theta)
-        for _, _, _, E, _ in self._fibres(F):
-            W = W + self.k1 / (2.0 * self.k2) * (self._exp(E) - 1.0)
+        for _, _, _, E, _ in self._fibres(F):      # expm1: exp(k2Ē²) − 1 cancels for a small k2
+            with np.errstate(over="ignore"):
+                W = W + self.k1 / (2.0 * self.k2) * np.expm1(self.k2 * E * E)
         return W
 
     def stress(self, F: np.ndarray, theta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

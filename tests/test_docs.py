@@ -199,3 +199,22 @@ def test_globalisation_table_is_what_the_pretwisted_bar_gives():
             with open(os.path.join(out, "summary.json"), encoding="utf-8") as fh:
                 got.append(json.load(fh)["newton_iterations"])
     assert got == stated, f"docs/model.md says {stated}, ancf-solve gives {got}"
+
+
+def test_readme_sweep_example_names_its_runs(tmp_path):
+    """The README's sweep file, beside a copy of configs/: ``ancf-sweep sweep.yaml --dry-run``
+    lists the run id the README gives as an example, and writes nothing."""
+    import contextlib
+    import io
+
+    from apps.ancf_sweep import main
+    with open(README, encoding="utf-8") as fh:
+        text = fh.read()
+    (tmp_path / "sweep.yaml").write_text(re.search(r"```yaml\n(# sweep\.yaml.*?)```", text, re.S).group(1))
+    os.symlink(os.path.join(ROOT, "configs"), tmp_path / "configs")
+    example = re.search(r"stable id such as\s+`(run_\d+__[^`]+)`", text).group(1)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        assert main([str(tmp_path / "sweep.yaml"), "--dry-run"]) == 0
+    assert re.search(rf"^\s+{re.escape(example)}\s+todo", out.getvalue(), re.M), out.getvalue()
+    assert not (tmp_path / "sweeps").exists()

@@ -218,3 +218,16 @@ def test_readme_sweep_example_names_its_runs(tmp_path):
         assert main([str(tmp_path / "sweep.yaml"), "--dry-run"]) == 0
     assert re.search(rf"^\s+{re.escape(example)}\s+todo", out.getvalue(), re.M), out.getvalue()
     assert not (tmp_path / "sweeps").exists()
+
+
+CODE_PATH = re.compile(r"(?<![\w/.])((?:scripts|ancf_petsc|ancf_verify|apps|tests)/[\w/]+\.(?:pyx|py|sh))\b")
+
+
+@pytest.mark.parametrize("path", [README] + _pages(), ids=lambda p: os.path.relpath(p, ROOT))
+def test_named_code_files_exist(path):
+    """Every script, module or test a page names by its path exists (a script moved into a
+    package leaves no `scripts/...py` for a reader to run)."""
+    with open(path, encoding="utf-8") as fh:
+        named = set(CODE_PATH.findall(fh.read()))
+    missing = sorted(p for p in named if not os.path.exists(os.path.join(ROOT, p)))
+    assert not missing, f"{os.path.relpath(path, ROOT)} names files that do not exist: {missing}"

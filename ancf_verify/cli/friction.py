@@ -2,7 +2,7 @@
 
 The solid of scripts/verify_solid_contact.py (dolfinx P2 tetrahedra, three bodies, mortar-type
 weighted gaps held at zero by exact multipliers: the ``sliding`` normal law) with the beam
-model's Coulomb law at the slave Gauss points (scripts/solid_friction.py: reference partners,
+model's Coulomb law at the slave Gauss points (ancf_verify/friction/model.py: reference partners,
 incremental return mapping from the last accepted increment, bound μ max(p, 0) with p the solid's
 contact pressure, stick regularised by k = ``stick`` μ_max/h).  Clamped roots, uniform dead
 traction on the soleus end face, Table 1's load levels 10 … 400 N, every increment accepted into

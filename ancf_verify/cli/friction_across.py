@@ -7,7 +7,7 @@ measures that distribution at a load level: per interface and axial window |x �
 (the arc length along the interface curve of the section from the triple point where the three
 subtendons meet, at the point's untwisted section position), p̄(s) = Σ w p / Σ w, and the
 window's mean compressive and tensile pressures Σ w p± / Σ w (μ times the first is the mean
-friction bound per area).  Solid: the slave Gauss points of scripts/solid_friction.py (reference area weights w,
+friction bound per area).  Solid: the slave Gauss points of ancf_verify/friction/model.py (reference area weights w,
 interpolated pressure p).  Beams: the contact points of results.h5 (``x0``, ``area``,
 ``pressure`` = the pressure field Σ_k φ_k λ_k at the point).
 

@@ -223,7 +223,7 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
     L += ["Issue 27, verification point 3: the three-subtendon tendon of `docs/solid_contact.md` (dolfinx P2 "
           "tetrahedra, three bodies, mortar-type weighted gaps held at zero by exact multipliers, clamped roots, "
           "uniform dead traction on the soleus end face) with the beam model's Coulomb law at μ = "
-          + ", ".join(f"{m:g}" for m in mus) + " on the sliding normal law (`scripts/solid_friction.py`): every "
+          + ", ".join(f"{m:g}" for m in mus) + " on the sliding normal law (`ancf_verify/friction/model.py`): every "
           "slave Gauss point keeps its reference partner on the master, the incremental return mapping "
           "σ = proj_{|σ| ≤ μ p⁺}(P(σ₀ + k (d − d₀))) runs from the last accepted increment, P projects on the "
           "master's tangent plane at the current closest point, p is the solid's contact pressure at the point "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import os
 
+from ..errors import MISSING_KEY
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from ..physics.goh import GOH
 from ..physics.laws import VOLUMETRIC_LAWS
@@ -132,9 +133,10 @@ def parse_material(value, path: str) -> dict:
 
 
 def _no_fibres(value, path: str) -> None:
-    if any(k in value for k in GOH_KEYS):
-        extra = ", ".join(k for k in GOH_KEYS if k in value)
-        raise ConfigError(path, f"{extra}: fibre parameters belong to model: {GOH.name}, not {value['model']}")
+    extra = [k for k in GOH_KEYS if k in value]
+    if extra:
+        raise ConfigError(key_path(path, extra[0]), f"a fibre parameter of model: {GOH.name}, not of "
+                          f"{value['model']}; remove {', '.join(extra)} or give model: {GOH.name}")
 
 
 def _goh_material(value, path: str) -> dict:
@@ -177,9 +179,11 @@ def _neo_hookean(value, path: str) -> dict:
 
 def _goh(value, path: str) -> dict:
     """The fibre part of ``model: goh`` (physics/goh.py): k1, k2, kappa and the fibre field."""
-    if "k1" not in value or "k2" not in value:
-        raise ConfigError(path, "goh needs k1 (fibre stiffness, Pa) and k2 (dimensionless) besides "
-                                "the matrix's mu and bulk_modulus (or c10 and d)")
+    for key in ("k1", "k2"):
+        if value.get(key) is None:
+            raise ConfigError(key_path(path, key), "missing value (required): goh needs k1 (fibre stiffness, "
+                              "Pa) and k2 (dimensionless) besides the matrix's mu and bulk_modulus "
+                              "(or c10 and d)", MISSING_KEY)
     k1 = number(value["k1"], key_path(path, "k1"), nonneg=True,
                 hint=" (fibre stiffness in Pa; 0 switches the fibres off)")
     k2 = number(value["k2"], key_path(path, "k2"), positive=True,

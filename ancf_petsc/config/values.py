@@ -58,16 +58,25 @@ def number(value, path: str, *, positive=False, nonneg=False, lo=None, hi=None,
             raise ConfigError(path, f"expected a number{hint}; got {shown(value)}")
     value = float(value)
     if not math.isfinite(value):
-        raise ConfigError(path, f"must be finite; got {value}")
+        bounds = [b for b, on in (("> 0", positive), (">= 0", nonneg), (f">= {lo:g}", lo is not None),
+                                  (f"<= {hi:g}", hi is not None)) if on]
+        raise ConfigError(path, f"must be a finite number{' ' if bounds else ''}{' and '.join(bounds)}"
+                                f"{hint}; got {value}")
     if positive and value <= 0:
         raise ConfigError(path, f"must be > 0{hint}; got {value:g}")
     if nonneg and value < 0:
         raise ConfigError(path, f"must be >= 0{hint}; got {value:g}")
     if lo is not None and value < lo:
-        raise ConfigError(path, f"must be >= {lo:g}{hint}; got {value:g}")
+        raise ConfigError(path, f"must be >= {lo:g}{hint}; got {_beside(value, lo)}")
     if hi is not None and value > hi:
-        raise ConfigError(path, f"must be <= {hi:g}{hint}; got {value:g}")
+        raise ConfigError(path, f"must be <= {hi:g}{hint}; got {_beside(value, hi)}")
     return value
+
+
+def _beside(value: float, bound: float) -> str:
+    """``value`` for a message beside the bound it breaks: %g, unless that rounds it onto the
+    bound's text (kappa 0.33333334 against <= 0.333333), then all its digits."""
+    return repr(value) if f"{value:g}" == f"{bound:g}" else f"{value:g}"
 
 
 def integer(value, path: str, *, lo: int | None = None, hi: int | None = None) -> int:

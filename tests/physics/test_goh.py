@@ -357,6 +357,12 @@ def test_fibres_on_imported_sections_that_vary_along_x(tmp_path):
     ({"fibres": {"follow": "helix"}}, "beams[0].material.fibres.follow", "twist, axis"),
     ({"fibres": {"angle_deg": 120}}, "beams[0].material.fibres.angle_deg", "<= 90"),
     ({"fibres": {"pitch": 3}}, "beams[0].material.fibres.pitch", "allowed here"),
+    # the allowed range with a NaN (was 'must be finite'), the value's digits where %g rounds it
+    # onto the bound (was 'must be <= 0.333333 ...; got 0.333333'), a missing k1 by its key path
+    ({"kappa": float("nan")}, "beams[0].material.kappa", "finite number >= 0 and <= 0.333333 (fibre"),
+    ({"kappa": 0.33333334}, "beams[0].material.kappa", "<= 0.333333 (fibre dispersion: 0 aligned, "
+                                                       "1/3 isotropic); got 0.33333334"),
+    ({"k1": None}, "beams[0].material.k1", "missing value"),
 ])
 def test_bad_goh_values_are_refused_with_key_path(change, path, words):
     raw = load_raw("pretwisted_bar.yaml")
@@ -369,5 +375,6 @@ def test_bad_goh_values_are_refused_with_key_path(change, path, words):
 def test_fibre_keys_on_an_isotropic_law_are_refused():
     raw = load_raw("pretwisted_bar.yaml")
     raw["beams"][0]["material"]["k1"] = 1.0e6
-    with pytest.raises(ConfigError, match="model: goh"):
+    with pytest.raises(ConfigError, match="model: goh") as exc:
         parse_config(raw, base_dir=CONFIGS)
+    assert exc.value.path == "beams[0].material.k1"         # the key, not its mapping

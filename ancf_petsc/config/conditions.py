@@ -131,7 +131,25 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
         if moved:
             curve = history_curve(bc, history, p, curve)
         bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve, bc["node"]))
+    check_one_support(bcs, names, blocks)
     return bcs
+
+
+def check_one_support(bcs: list[BCSpec], names: list[str], blocks: list) -> None:
+    """Each nodal component is held by one support: of two named supports on one node that both
+    held r_x (a fix and a displacement, two displacements, two fixes) the later one's value, or
+    the sum of two curves' moves, was applied and each reported the whole reaction."""
+    holder: dict = {}
+    for bc in bcs:
+        names_of = blocks[bc.beam].names
+        for v, c, key in [(v, c, "fix") for v, c in bc.dofs] + [(v, c, None) for v, c, _ in bc.displacement]:
+            comp = f"{names_of[v]}.{'xyz'[c]}"
+            other = holder.setdefault((bc.beam, bc.node, v, c), bc)
+            if other is not bc:
+                where = f"{bc.path}.{key or 'displacement.' + comp}"
+                raise ConfigError(where, f"{names[bc.beam]} node {bc.given}: {comp} is also held by "
+                                         f"{other.path} ({other.name!r}); a component has one support, "
+                                         "whose value and reaction it is: remove it from one of them")
 
 
 def parse_loads(value, names: list[str], n_nodes: list[int],
@@ -166,6 +184,8 @@ def resolve_nodes(spec) -> None:
         if item.given is None or not 0 <= item.beam < len(n_nodes):
             continue
         item.node = node_ref(item.given, f"{item.path}.node", n_nodes[item.beam])
+    check_one_support(spec.boundary_conditions, [b.name for b in spec.beams],
+                      [ELEMENTS[b.element].block for b in spec.beams])
     for ld in spec.loads:
         if ld.kind == "traction_force" and ld.given is not None and ld.node not in (0, n_nodes[ld.beam] - 1):
             raise ConfigError(f"{ld.path}.node", "a traction_force acts on an end section: use first or last")

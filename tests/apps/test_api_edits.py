@@ -53,6 +53,23 @@ def test_an_edited_index_the_beam_no_longer_has_is_a_config_error(tmp_path):
         ap.solve(spec, log=lambda *_: None)
 
 
+def test_an_edit_that_puts_two_supports_on_one_component_is_a_config_error(tmp_path):
+    """node 2 and node last are apart at 2 elements, one node at 1: the grip's displacement and
+    the other support's fix of r_x met there and the later one's value was applied."""
+    from ancf_petsc.config.parse import parse_config
+    raw = yaml.safe_load(open(f"{CONFIGS}/uniaxial_neohookean.yaml"))
+    raw["beams"][0]["elements"], raw["loads"] = 2, []
+    raw["boundary_conditions"] += [{"beam": "bar", "node": 2, "name": "hold", "fix": {"r": "x"}},
+                                   {"beam": "bar", "node": "last", "name": "grip", "displacement": {"r": {"x": 1e-3}}}]
+    ap, _ = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    spec = parse_config(raw, base_dir=CONFIGS)
+    spec.output.dir = str(tmp_path / "o")
+    spec.beams[0].elements = 1
+    with pytest.raises(ap.ConfigError, match=r"boundary_conditions\[2\]\.displacement\.r\.x: bar node last: "
+                                             r"r\.x is also held by boundary_conditions\[1\] \('hold'\)"):
+        ap.solve(spec, log=lambda *_: None)
+
+
 def test_edited_steps_are_checked_as_the_configs(tmp_path):
     """Decreasing steps set on a spec raised an UnboundLocalError in the load stepping and left
     INTERNAL_ERROR in summary.json; now the config's own error, before anything is written."""

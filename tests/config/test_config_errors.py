@@ -86,6 +86,17 @@ CASES = [
     ("support names",
      lambda raw: raw["boundary_conditions"].append({"beam": "bar", "node": "last", "fix": {"r": "y"}, "name": "bar.0"}),
      "boundary_conditions[1].name", "duplicate support name 'bar.0' (also boundary_conditions[0])"),
+    # two named supports on one node that both held r_x: the later one's value (or the sum of
+    # two curves' moves: 0.02 + 0.01) was applied and each reported the whole reaction
+    ("one component, two supports",
+     lambda raw: raw["boundary_conditions"].append({"beam": "bar", "node": 0, "name": "grip",
+                                                    "displacement": {"r": {"x": 0.01}}}),
+     "boundary_conditions[1].displacement.r.x", "bar node 0: r.x is also held by boundary_conditions[0] ('bar.0')"),
+    ("two displacements of one component",
+     lambda raw: (raw.update(loads=[]), raw["boundary_conditions"].extend([
+         {"beam": "bar", "node": "last", "name": "a", "displacement": {"r": {"x": 0.02}}},
+         {"beam": "bar", "node": -1, "name": "b", "displacement": {"r": {"x": 0.01}}, "curve": [[0, 0], [1, 1]]}])),
+     "boundary_conditions[2].displacement.r.x", "r.x is also held by boundary_conditions[1] ('a')"),
 ]
 
 BUNDLE = {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2, "force": [1, 0, 0],

@@ -6,7 +6,8 @@ plus the reactions of supports there (a prescribed displacement's grip; until 20
 of the beam's loads wherever applied: 0 under displacement control, and a pressed strip's
 pressing loads along it), the elongation — the x-displacement of its last node averaged over the
 end section, Σ_k m̄_k Δq_k (m̄_k = ∫ m_k dA / A), the quantity ultrasound speckle tracking
-follows [m] — and the mean axial strain elongation / L."""
+follows, less the same of its first node (0 at a held root; a beam held at its last node and
+pulled at its first was reported unstretched) [m] — and the mean axial strain elongation / L."""
 from __future__ import annotations
 
 import numpy as np
@@ -29,7 +30,9 @@ def subtendon_report(model, q: np.ndarray, lam: float, reactions: np.ndarray | N
         for sup, r in zip(model.supports, reactions if reactions is not None else []):
             if sup.node == last:
                 force += np.asarray(r)
-        du = model.end_means[b.index] @ (q[last] - model.q0[last])
+        first = b.node_offset
+        du = (model.end_means[b.index] @ (q[last] - model.q0[last])
+              - model.root_means[b.index] @ (q[first] - model.q0[first]))
         out[b.name] = {"end_force": force.tolist(), "elongation": float(du[0]),
                        "strain": float(du[0] / spec.length)}
     return out

@@ -149,6 +149,8 @@ class Model:
     supports: list = field(default_factory=list)         # the boundary conditions (Support)
     #: per beam, the section-mean weights m̄_k = ∫ m_k dA / A of its last node (elongations)
     end_means: list = field(default_factory=list)
+    #: the same of its first node (an elongation is last minus first)
+    root_means: list = field(default_factory=list)
 
     @property
     def f_ext(self) -> np.ndarray:

@@ -266,6 +266,8 @@ def build_model(spec: ModelSpec) -> Model:
     warnings = (size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
                 + material_warnings(spec, beams) + twist_warnings(spec, beams) + load_warnings(spec)
                 + reversed_load_warnings(spec))
-    end_means = [_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[-1]) for b in beams]
+    end_means, root_means = ([_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[k]) for b in beams]
+                             for k in (-1, 0))
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,
-                 geometry_report=report, warnings=warnings, supports=supports, end_means=end_means)
+                 geometry_report=report, warnings=warnings, supports=supports, end_means=end_means,
+                 root_means=root_means)

@@ -120,3 +120,20 @@ def test_a_subtendons_end_force_includes_a_grips_reaction(tmp_path):
     assert st["reactions"]["grip"][0] > 50.0
     assert st["subtendons"]["soleus"]["end_force"] == st["reactions"]["grip"]
     assert st["subtendons"]["medial_gastrocnemius"]["end_force"] == [0.0, 0.0, 0.0]
+
+
+def test_a_subtendons_elongation_is_last_minus_first(tmp_path):
+    """A bar held at its last node and pulled at its first by 45 N stretches as the uniaxial bar
+    pulled the other way (2.4604e-2 m); its elongation and strain were the last node's x-motion
+    alone: 0 and 0."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["boundary_conditions"][0]["node"] = "last"
+    raw["loads"][0].update(node="first", traction_force=[-45.0, 0.0, 0.0])
+    raw["probes"][0]["node"] = "first"
+    raw["steps"] = [1.0]
+    raw["output"] = {"vtk": False}
+    st = run_inline(raw, tmp_path)["steps"][-1]
+    bar = st["subtendons"]["bar"]
+    assert abs(st["probes"]["tip"]["displacement"][0] + 2.4604212883e-2) < 1e-12
+    assert abs(bar["elongation"] - 2.4604212883e-2) < 1e-12
+    assert abs(bar["strain"] - 0.24604212883) < 1e-10

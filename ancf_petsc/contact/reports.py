@@ -119,7 +119,8 @@ def output_signs(c, interface: np.ndarray) -> np.ndarray:
 
 def point_fields(c, st: ContactState, q0_of) -> dict:
     """Per local point: id, interface, current and reference position on A (the beam carrying
-    the points), its reference area w_p [m²] (pressure × area × weight is the point's force),
+    the points), its reference area w_p [m²] (pressure × area is the point's force: the
+    pressure includes the point's weight),
     gap, pressure, slip u_first − u_second [m] of the two material points in contact now (the
     reference position of the second beam's minus the first's: first and second in config
     order) and the projection state (e_B, ξ_B, t_B); per owned multiplier: id, pressure

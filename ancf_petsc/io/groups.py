@@ -36,6 +36,25 @@ CONTACT_UNITS = ("SI: m, Pa, N; interfaces 'curve (first|second)' in config orde
                  "contact_interfaces); x, x0 on the beam carrying the points; slip, tangential_slip "
                  "= u_first - u_second [m]; shear_stress, multiplier_shear = the first beam's "
                  "traction on the second [Pa]; pressure > 0 presses [Pa] (docs/running.md)")
+#: the "units" attribute of each dataset of steps/…/contact (a law's ``history_*``: its state)
+CONTACT_FIELD_UNITS = {
+    "interface": "1: the interface's index in summary.json contact_interfaces",
+    "x": "m: current position on the beam carrying the points",
+    "x0": "m: reference position on the beam carrying the points",
+    "area": "m^2: reference area w_p (pressure x area is the point's normal force)",
+    "weight": "1: the point's weight in the weighted gaps (0: out of contact)",
+    "gap": "m", "pressure": "Pa: > 0 presses, the point's weight included",
+    "slip": "m: u_first - u_second of the material points in contact now",
+    "projection": "B's element [1], xi [1], curve parameter [m]",
+    "tangential_slip": "m: u_first - u_second from the reference partner, in B's tangent plane",
+    "shear_stress": "Pa: the first beam's traction on the second",
+    "stick": "1: 1 sticks, 0 slips", "slip_increment": "m: tangential slip in the level's last increment",
+    "multiplier_pressure": "Pa: pressure coefficient (0 where inactive)",
+    "multiplier_active": "1: 1 active, 0 open",
+    "multiplier_shear": "Pa: tangential traction coefficient, the first beam's on the second",
+    "multiplier_stick": "1: 1 sticks, 0 slips",
+    "multiplier_blocks": "m: the multipliers' unknowns z (pressure coefficient = k_s z / area; restart state)",
+    "history_anchor": "m: the tangential law's state (restart)"}
 
 
 def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
@@ -157,10 +176,10 @@ def write_contact_group(gid, contact: dict, multipliers: np.ndarray) -> None:
     fast.attribute(c, "units", CONTACT_UNITS)
     # every field the contact and its terms report (contact.reports.point_fields); the points
     # and multipliers are in id order, so the ids themselves are not stored
-    for key, value in contact.items():
+    for key, value in list(contact.items()) + [("multiplier_blocks", multipliers)]:
         if key not in ("id", "multiplier_id"):
-            fast.dataset(c, key, value)
-    fast.dataset(c, "multiplier_blocks", multipliers)
+            state = "the tangential law's state (restart)" if key.startswith("history_") else CONTACT_UNITS
+            fast.attribute(fast.dataset(c, key, value), "units", CONTACT_FIELD_UNITS.get(key, state))
 
 
 def recover_level(h5_path: str, name: str) -> bool:

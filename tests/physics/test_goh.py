@@ -211,6 +211,37 @@ def test_a_small_k2_keeps_the_energy_and_the_energy_line_search(tmp_path):
     assert s["status"] == "completed", s.get("message")
 
 
+@pytest.mark.parametrize("kappa", [0.0, 0.1, 1.0 / 3.0])
+@pytest.mark.parametrize("k2", [K2, 1e-8])
+def test_law_tangent_matches_finite_differences_at_unusual_states(kappa, k2):
+    """The law's 𝔸 against central differences of its P (and P against those of Ψ) where the
+    element-level test does not go: shear of 2, det F = 0.11 (near solver.min_det_f = 0.1), two
+    families with one in compression, the isotropic end κ = 1/3 and a nearly linear fibre (k2 →
+    0); states away from the switch Ē = 0, where the tangent jumps on purpose."""
+    states = [np.array([[1.0, 2.0, 0.3], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+              np.array([[0.5, 0.3, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.44]]),
+              np.diag([1.2, 0.93, 0.93]), np.diag([0.8, 1.1, 1.1])]
+    a0 = np.array([[0.6, 0.8, 0.0], [0.0, 0.6, 0.8]])[:, None, :]      # two families
+    two = {"follow": "axis", "extra_twist_deg": 0.0, "angles_deg": (0.0, 0.0)}
+    law = GOH(MU, K, K1, k2, kappa, two).with_directions(np.broadcast_to(a0, (2, len(states), 3)))
+    F = np.array(states)
+    E = np.stack([kappa * (np.einsum("pij,pij->p", F, F) - 3) + (1 - 3 * kappa)
+                  * (np.einsum("pij,j->pi", F, a[0]) ** 2).sum(-1) - (1 - 3 * kappa) for a in a0])
+    assert np.abs(E).min() > 1e-3 and (E < 0).any() and (E > 0).any()
+    P, _, terms = law.stress_and_tangent(F)
+    A, h = terms.full(), 1e-7
+    Afd, Pfd = np.zeros_like(A), np.zeros_like(P)
+    for k in range(3):
+        for l in range(3):
+            dF = np.zeros((3, 3))
+            dF[k, l] = h
+            Afd[..., k, l] = (law.stress(F + dF)[0] - law.stress(F - dF)[0]) / (2 * h)
+            Pfd[:, k, l] = (law.energy(F + dF) - law.energy(F - dF)) / (2 * h)
+    assert np.abs(A - Afd).max() <= 1e-6 * np.abs(A).max()
+    assert np.abs(P - Pfd).max() <= 1e-6 * np.abs(P).max()
+    assert np.allclose(A, A.transpose(0, 3, 4, 1, 2), atol=1e-10 * np.abs(A).max())
+
+
 def test_hydrostatic_tension_is_not_isotropic_without_the_split():
     """All-round Cauchy tension σ = p I on a fibre-reinforced cube: the law (fibre term not split)
     stretches less along the fibres, a sphere becomes an ellipsoid; the split form (Ī4) would

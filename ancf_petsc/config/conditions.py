@@ -129,7 +129,7 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
                                            "give each support its own name")
         curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None
         if moved:
-            curve = history_curve(bc, history, p, curve)
+            curve = history_curve(bc, history, p, curve, scaled=False)
         bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve, bc["node"]))
     check_one_support(bcs, names, blocks)
     return bcs

@@ -4,7 +4,8 @@
       file: data/stride_walking.sto    # CSV or OpenSim storage (.sto/.mot), relative to the config;
       # table: {time: [...], soleus: [...]}   or the columns written inline
       time: time                       # the clock column [s] (default: time)
-      scale: 1.0                       # multiplies every column a load reads (e.g. 1000 for kN)
+      scale: 1.0                       # multiplies every column a load reads (e.g. 1000 for kN);
+                                       # a prescribed displacement's column is read as written [m]
     loads:
       - {beam: soleus, node: last, traction_force: [1, 0, 0], column: soleus_r}
 
@@ -49,16 +50,16 @@ class HistorySpec:
         """The time [s] of the frame a load factor reports (between frames: interpolated)."""
         return float(np.interp(load_factor, np.arange(1, self.n_frames + 1), self.times))
 
-    def curve(self, column: str, path: str) -> tuple:
+    def curve(self, column: str, path: str, scaled: bool = True) -> tuple:
         """The multiplier curve ((λ, m), ...) of a load that reads ``column``: 0 at rest, then
-        the column's value × scale at every frame."""
+        the column's value × scale at every frame (``scaled`` False: × 1, a displacement's)."""
         have = ", ".join(c for c in self.columns if c != self.time_column)
         if column not in self.columns:
             raise ConfigError(path, f"no column {column!r} in {self.source} (columns: {have})")
         if column == self.time_column:
             raise ConfigError(path, f"{column!r} is the history's clock (history.time, seconds), not "
                                     f"a load: name a load column ({have})")
-        values = self.scale * self.columns[column]
+        values = (self.scale if scaled else 1.0) * self.columns[column]
         return ((0.0, 0.0),) + tuple((float(k + 1), float(v)) for k, v in enumerate(values))
 
 
@@ -87,20 +88,22 @@ def parse_history(value, base_dir: str) -> HistorySpec:
         raise ConfigError(f"{p}.time", f"the times of {source} must increase from frame to frame; "
                                        f"frame {k + 2} ({times[k + 1]:g} s) follows {times[k]:g} s")
     scale = number(value.get("scale", 1.0), f"{p}.scale", positive=True,
-                   hint=" (multiplies every load column, e.g. 1000 for a table in kN)")
+                   hint=" (multiplies every load column, e.g. 1000 for a table in kN; not a displacement's)")
     return HistorySpec(source, time_column, times.copy(), dict(table.columns), scale)
 
 
-def history_curve(item: dict, history: HistorySpec | None, path: str, curve) -> tuple | None:
+def history_curve(item: dict, history: HistorySpec | None, path: str, curve, scaled: bool = True) -> tuple | None:
     """The curve of a load or prescribed displacement (``item`` its config mapping): its
-    ``column`` of the history, its own ``curve``, or None (proportional to λ)."""
+    ``column`` of the history, its own ``curve``, or None (proportional to λ).  ``scaled``:
+    history.scale multiplies the column (a load's: forces in kN; not a displacement's, which
+    the kN scale made 1000 times too long)."""
     if "column" in item:
         if history is None:
             raise ConfigError(f"{path}.column", "a column names a load table's column: add "
                                                 "history: {file: ...} (docs/gait.md), or remove it")
         if "curve" in item:
             raise ConfigError(path, "give column (a history's) or curve, not both")
-        return history.curve(string(item["column"], f"{path}.column"), f"{path}.column")
+        return history.curve(string(item["column"], f"{path}.column"), f"{path}.column", scaled)
     if history is not None and curve is None:
         raise ConfigError(path, f"with history every load follows a column of {history.source} "
                                 f"(e.g. column: {shown(next(iter(_load_columns(history)), 'name'))}); "

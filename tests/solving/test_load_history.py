@@ -64,6 +64,20 @@ def test_tables_give_frames_and_curves(tmp_path):
     assert parse_config(raw, base_dir=CONFIGS).loads[0].curve[-1] == (2.0, 20000.0)
 
 
+def test_history_scale_multiplies_the_loads_columns_not_a_displacements():
+    """history.scale is the loads' unit (1000 for kN): a grip's displacement column in metres
+    was multiplied too (2 mm in the table moved the grip by 2 m)."""
+    raw = tendon()
+    raw["history"]["scale"] = 1000.0
+    raw["history"]["table"]["grip"] = [1.0e-3, 2.0e-3]
+    raw["loads"] = raw["loads"][1:]
+    raw["boundary_conditions"].append({"beam": "soleus", "node": "last", "name": "grip",
+                                       "displacement": {"r": {"x": 1.0}}, "column": "grip"})
+    spec = parse_config(raw, base_dir=CONFIGS)
+    assert spec.boundary_conditions[-1].curve == ((0.0, 0.0), (1.0, 1.0e-3), (2.0, 2.0e-3))
+    assert spec.loads[0].curve[-1] == (2.0, 5000.0)
+
+
 @pytest.mark.parametrize("edit,match", [
     (lambda r, p: r["history"].update(file=str(p / "bad.csv"), table=None) or r["history"].pop("table"),
      r"history\.file: .*bad\.csv: data row 2 \(line 3\), column 'medial': 'nan' is not a finite number"),

@@ -231,3 +231,19 @@ def test_named_code_files_exist(path):
         named = set(CODE_PATH.findall(fh.read()))
     missing = sorted(p for p in named if not os.path.exists(os.path.join(ROOT, p)))
     assert not missing, f"{os.path.relpath(path, ROOT)} names files that do not exist: {missing}"
+
+
+def test_step_table_names_every_group_a_level_writes(tmp_path):
+    """docs/running.md, "What each level writes": every dataset and group of a level of a
+    run without contact (the uniaxial bar, one level) has its row."""
+    import h5py
+
+    from helpers import load_raw, run_inline
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.1]
+    run_inline(raw, tmp_path / "out")
+    rows = _table_rows(os.path.join(DOCS, "running.md"), "### What each level writes")
+    documented = {m for r in rows for m in re.findall(r"`([a-z_]+)[/`]", r[0])}
+    with h5py.File(tmp_path / "out" / "results.h5", "r") as f:
+        written = set(f["steps/step_0001"])
+    assert written <= documented, f"docs/running.md has no row for {sorted(written - documented)}"

@@ -247,3 +247,35 @@ def test_step_table_names_every_group_a_level_writes(tmp_path):
     with h5py.File(tmp_path / "out" / "results.h5", "r") as f:
         written = set(f["steps/step_0001"])
     assert written <= documented, f"docs/running.md has no row for {sorted(written - documented)}"
+
+
+def _anchors(path: str) -> set[str]:
+    """The heading anchors of a page as GitHub makes them (lower case, punctuation dropped,
+    blanks to '-', repeats numbered), outside code blocks."""
+    out, seen, code = set(), {}, False
+    with open(path, encoding="utf-8") as fh:
+        for line in fh:
+            if line.startswith("```"):
+                code = not code
+            m = None if code else re.match(r"^#+\s+(.*?)\s*#*\s*$", line)
+            if m:
+                s = re.sub(r"[^\w\- ]", "", m.group(1).strip().lower()).replace(" ", "-")
+                n = seen.get(s, 0)
+                seen[s] = n + 1
+                out.add(s if n == 0 else f"{s}-{n}")
+    return out
+
+
+@pytest.mark.parametrize("path", [README] + _pages(), ids=lambda p: os.path.relpath(p, ROOT))
+def test_link_anchors_resolve(path):
+    """A link to a section (page.md#anchor, or #anchor on the page) names a heading there."""
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    broken = []
+    for target, frag in re.findall(r"\]\(([^)#\s]*)(#[^)\s]*)\)", text):
+        if re.match(r"[a-z]+://", target):
+            continue
+        dest = os.path.normpath(os.path.join(os.path.dirname(path), target)) if target else path
+        if dest.endswith(".md") and os.path.exists(dest) and frag[1:] not in _anchors(dest):
+            broken.append(target + frag)
+    assert not broken, f"{os.path.relpath(path, ROOT)}: links to no heading: {broken}"

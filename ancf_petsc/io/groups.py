@@ -57,6 +57,12 @@ CONTACT_FIELD_UNITS = {
     "history_anchor": "m: the tangential law's state (restart)"}
 
 
+def config_text(spec) -> str:
+    """/model's ``config_yaml``: the config the levels were solved with (a restart's, which may
+    add steps, replaces the stopped run's)."""
+    return yaml.safe_dump(plain(spec.raw), sort_keys=False)
+
+
 def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     """The file's attributes and ``/model``: config, reference nodal vectors, the fingerprint a
     restart compares, the partition, the beams' connectivity and sections; an empty ``/steps``."""
@@ -66,7 +72,7 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     h5.attrs["status"] = "running"
     g = h5.create_group("model")
     g.attrs["name"] = spec.name
-    g.attrs["config_yaml"] = yaml.safe_dump(plain(spec.raw), sort_keys=False)
+    g.attrs["config_yaml"] = config_text(spec)
     g.attrs["dof_order"] = "per node: " + ", ".join(model.block.names) + " (x, y, z each)"
     g.create_dataset("reference_nodal_vectors", data=model.q0).attrs["units"] = nodal_units(model.block)
     fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
@@ -199,10 +205,13 @@ def recover_level(h5_path: str, name: str) -> bool:
     return False
 
 
-def truncate_levels(h5_path: str, step: int, load_factor: float) -> None:
-    """Continue results.h5 after level ``step`` (a restart): the later and partial levels go."""
+def truncate_levels(h5_path: str, step: int, load_factor: float, config: str | None = None) -> None:
+    """Continue results.h5 after level ``step`` (a restart): the later and partial levels go,
+    and ``config`` (the restarted run's ``config_text``) is stored as the one solved with."""
     try:
         with h5py.File(h5_path, "a") as h5:
+            if config is not None:
+                h5["model"].attrs["config_yaml"] = config
             steps = h5["steps"]
             for name in list(steps):
                 if name.endswith(".partial") or int(name.split("_")[1]) > step:

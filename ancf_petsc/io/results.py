@@ -40,7 +40,7 @@ from ..status import OUTPUT_ERROR
 from ..version import version_info
 from . import h5fast
 from .files import NO_SPACE, OutputError, atomic_write, os_reason, prepare_output_dir, remove_quietly
-from .groups import recover_level, truncate_levels, write_level_group, write_model_group
+from .groups import config_text, recover_level, truncate_levels, write_level_group, write_model_group
 from .vtk import SurfaceSampler, VtkSeries, contact_cells, surface_cells
 
 #: space set aside for the final summary.json (released on a write error and at the end)
@@ -216,7 +216,7 @@ class ResultsWriter:
         self.summary["steps"] = list(point.summary.get("steps", []))
         self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
         self.vtk.resume([0.0] + [st["load_factor"] for st in self.summary["steps"]])
-        truncate_levels(self.h5_path, point.step, point.load_factor)
+        truncate_levels(self.h5_path, point.step, point.load_factor, config_text(self.model.spec))
         with open(os.path.join(self.dir, RESERVE), "wb") as fh:
             fh.write(b"\0" * RESERVE_BYTES)
         self._write_summary()

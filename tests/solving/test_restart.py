@@ -223,3 +223,23 @@ def test_restart_refuses_a_run_with_another_pressure_space_at_clamped_ends(tmp_p
     lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
     assert p.returncode == 2 and len(lines) == 1, p.stderr
     assert "written by another model" in lines[0] and "supported_ends: absent →" in lines[0], lines[0]
+
+
+def test_a_restart_with_more_steps_stores_the_config_it_solved_with(tmp_path):
+    """The pretwisted bar solved to 0.5, then restarted to 1.0 with the config's four steps:
+    results.h5 /model config_yaml said steps [0.25, 0.5] beside four levels (the first run's
+    config); now the restarted config's, whose steps are the levels there."""
+    import h5py
+    import yaml
+    from helpers import run_inline
+    from ancf_petsc.api import solve
+    from ancf_petsc.config.parse import parse_config
+    raw = load_raw("pretwisted_bar.yaml")
+    short = dict(raw, steps=[0.25, 0.5], output={"vtk": False})
+    run_inline(short, tmp_path)
+    spec = parse_config(dict(raw, output={"dir": str(tmp_path), "vtk": False}), base_dir=CONFIGS)
+    assert solve(spec, log=lambda s: None, restart=str(tmp_path)).status == "completed"
+    with h5py.File(tmp_path / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
+        levels = [h5["steps"][k].attrs["load_factor"] for k in sorted(h5["steps"])]
+    assert levels == [0.25, 0.5, 0.75, 1.0] and stored["steps"] == levels, stored["steps"]

@@ -64,6 +64,12 @@ def _curve(value, path: str) -> tuple:
     if len(pts) < 2 or any(b[0] <= a[0] for a, b in zip(pts, pts[1:])):
         raise ConfigError(path, "give at least two [load factor, multiplier] points with the load "
                                 "factors increasing")
+    # m(λ) before the first point is m₀; a load or displacement there at λ = 0 was never solved
+    # for (the levels repeating it took 0 Newton iterations and reported the rest state)
+    if pts[0][1] != 0.0:
+        raise ConfigError(key_path(key_path(path, 0), 1), "the multiplier at load factor 0 (the first "
+                          "point's) must be 0: a run starts at rest, every load and displacement zero; "
+                          f"start the curve at [0, 0]; got {pts[0][1]:g}")
     return tuple(pts)
 
 

@@ -97,6 +97,14 @@ CASES = [
          {"beam": "bar", "node": "last", "name": "a", "displacement": {"r": {"x": 0.02}}},
          {"beam": "bar", "node": -1, "name": "b", "displacement": {"r": {"x": 0.01}}, "curve": [[0, 0], [1, 1]]}])),
      "boundary_conditions[2].displacement.r.x", "r.x is also held by boundary_conditions[1] ('a')"),
+    # a curve not at 0 at load factor 0: its load was never solved for (0 Newton iterations, the
+    # bar reported unloaded; a displacement's reactions 129 and 898 N, out of equilibrium)
+    ("load curve from a load", _set(["loads", 0, "curve"], [[0.5, 1.0], [1.0, 1.0]]),
+     "loads[0].curve[0][1]", "must be 0: a run starts at rest"),
+    ("displacement curve from a displacement",
+     lambda raw: (raw.update(loads=[]), raw["boundary_conditions"].append(
+         {"beam": "bar", "node": "last", "displacement": {"r": {"x": 0.01}}, "curve": [[0, 1], [1, 1]]})),
+     "boundary_conditions[1].curve[0][1]", "start the curve at [0, 0]; got 1"),
 ]
 
 BUNDLE = {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2, "force": [1, 0, 0],

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import MISSING_KEY
+from ..errors import MISSING_KEY, UNKNOWN_KEY
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from ..physics.goh import GOH
 from ..physics.laws import VOLUMETRIC_LAWS
@@ -121,14 +121,26 @@ def _outline(value, path: str, base_dir: str, s: SectionSpec, common: tuple) -> 
 
 
 GOH_KEYS = ("k1", "k2", "kappa", "fibres")
+NEO_HOOKEAN_KEYS = ("model", "mu", "bulk_modulus", "c10", "d")
+#: each model's keys (a fibre key on an isotropic law has its own message: ``_no_fibres``)
+MATERIAL_KEYS = {NeoHookean.name: NEO_HOOKEAN_KEYS, StVenantKirchhoff.name: ("model", "E", "nu"),
+                 GOH.name: NEO_HOOKEAN_KEYS + GOH_KEYS}
 
 
 def parse_material(value, path: str) -> dict:
     """``beams[i].material``: neo-Hookean (mu, K or the paper's c10, d; eq. 14), SVK, or GOH
-    (a neo-Hookean matrix given the same way, plus k1, k2, kappa, fibres)."""
-    model = string(mapping(value, path, required=("model",),
-                           optional=("mu", "bulk_modulus", "c10", "d", "E", "nu") + GOH_KEYS)["model"],
+    (a neo-Hookean matrix given the same way, plus k1, k2, kappa, fibres); a key is checked
+    against its model's keys (a goh key on another law: ``_no_fibres``)."""
+    every = tuple(dict.fromkeys(k for keys in MATERIAL_KEYS.values() for k in keys))
+    given = tuple(value) if isinstance(value, dict) else ()
+    model = string(mapping(value, path, required=("model",), optional=given or every)["model"],
                    key_path(path, "model"), MATERIAL_MODELS)
+    for key in value:
+        if key not in MATERIAL_KEYS[model] + GOH_KEYS:
+            owner = next((m for m, keys in MATERIAL_KEYS.items() if key in keys), None)
+            raise ConfigError(key_path(path, key), f"unknown key for model: {model}"
+                              + (f" (a key of model: {owner})" if owner else "")
+                              + f"; allowed here: {', '.join(sorted(MATERIAL_KEYS[model]))}", UNKNOWN_KEY)
     return MATERIAL_PARSERS[model](value, path)
 
 

@@ -409,3 +409,22 @@ def test_fibre_keys_on_an_isotropic_law_are_refused():
     with pytest.raises(ConfigError, match="model: goh") as exc:
         parse_config(raw, base_dir=CONFIGS)
     assert exc.value.path == "beams[0].material.k1"         # the key, not its mapping
+
+
+@pytest.mark.parametrize("material,key,words", [
+    (dict(goh_material(0.1), E=1e6), "E", "for model: goh (a key of model: svk); allowed here: bulk_modulus, "
+                                          "c10, d, fibres, k1, k2, kappa, model, mu"),
+    ({"model": "neo-hookean", "E": 1e6, "nu": 0.3}, "E", "for model: neo-hookean (a key of model: svk)"),
+    ({"model": "svk", "E": 1e6, "nu": 0.3, "bulk_modulus": 1e7}, "bulk_modulus", "allowed here: E, model, nu"),
+    ({"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7, "mue": 1}, "mue", "allowed here: bulk_modulus, c10"),
+])
+def test_a_key_of_another_model_is_named_with_the_keys_of_this_one(material, key, words):
+    """A goh material's unknown key listed 'allowed here: bulk_modulus, model, mu' (its matrix's
+    keys, as if k1, k2, kappa and fibres were not allowed); the keys of each model now, and whose
+    key it is."""
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["beams"][0]["material"] = material
+    with pytest.raises(ConfigError) as exc:
+        parse_config(raw, base_dir=CONFIGS)
+    assert exc.value.path == f"beams[0].material.{key}" and words in exc.value.message
+    assert exc.value.kind == "unknown_key"

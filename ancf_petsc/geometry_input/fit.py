@@ -21,6 +21,9 @@ __all__ = ["FittedCurve", "fit_curve", "corners"]
 MAX_REFINEMENTS = 12
 CHORD_FACTOR = 4.0
 CORNER_DEG = 45.0
+#: arc lengths closer than this (relative to the trace's) are one: a spacing target that falls on a
+#: trace point within rounding takes it, whichever way the section is turned
+TIE = 1e-9
 
 
 @dataclass
@@ -118,7 +121,8 @@ def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
         k = int(np.ceil((s[j] - s[i]) / spacing - 1e-9))
         if k > 1:
             targets = s[i] + (s[j] - s[i]) * np.arange(1, k) / k
-            extra.append(np.searchsorted(s, targets))
+            # a target on a trace point within rounding takes that point (else the next one)
+            extra.append(np.searchsorted(s, targets - TIE * s[-1]))
     if extra:
         idx = np.unique(np.concatenate([idx] + extra))
     curve = SplineCurve(_local_means(Q, s, idx, traced), degree, name)

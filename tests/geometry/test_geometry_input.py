@@ -283,3 +283,20 @@ def test_twist_axis_rules_and_stated_default():
     d = [np.linalg.norm(np.asarray(s.twist_axis) - (cv.start if not f else cv.end))
          for b in model.beams for cv, f in b.section.loop]
     assert min(d) < 1e-12
+
+
+def test_fitted_control_points_turn_with_the_trace():
+    """A spacing target that falls on a trace point within rounding takes that point whichever
+    way the trace is turned: before, rounding picked the next point at some angles (6 of 52
+    here), and the Achilles outlines given as point lists, turned by 180 deg, moved the soleus
+    elongation by 1e-5 (6.333960 -> 6.333898 mm)."""
+    from ancf_petsc.geometry_input.fit import fit_curve
+    t = np.linspace(0.0, 1.0, 41)
+    Q = np.c_[3e-3 * t, 2e-4 * np.sin(np.pi * t)] + [5e-3, -2e-3]
+    ref = fit_curve(Q, 3, 1e-3, "arc", max_spacing=1.55e-3).curve.points
+    assert len(ref) == 3
+    for deg in range(0, 360, 7):
+        c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
+        R = np.array([[c, -s], [s, c]])
+        P = fit_curve(Q @ R.T, 3, 1e-3, "arc", max_spacing=1.55e-3).curve.points @ R
+        assert P.shape == ref.shape and np.abs(P - ref).max() < 1e-12, deg

@@ -128,9 +128,12 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
         name = string(bc.get("name", f"{names[bi]}.{node}"), f"{p}.name")
         if name in [b.name for b in bcs]:
             other = next(b for b in bcs if b.name == name)
-            if "name" not in bc:
+            if "name" not in bc and (other.beam, other.node) == (bi, node):
                 raise ConfigError(p, f"{names[bi]} node {bc['node']} already has a support ({other.path}): "
                                      "merge the two into one entry, or give both a name")
+            if "name" not in bc:
+                raise ConfigError(p, f"this support's default name {name!r} is the name of {other.path} "
+                                     "(on another node); give this one a name")
             raise ConfigError(f"{p}.name", f"duplicate support name {name!r} (also {other.path}); "
                                            "give each support its own name")
         curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None

@@ -86,6 +86,11 @@ CASES = [
     ("support names",
      lambda raw: raw["boundary_conditions"].append({"beam": "bar", "node": "last", "fix": {"r": "y"}, "name": "bar.0"}),
      "boundary_conditions[1].name", "duplicate support name 'bar.0' (also boundary_conditions[0])"),
+    # a support named like another's default: it said "bar node last already has a support"
+    ("a default name taken",
+     lambda raw: (raw.update(loads=[]), raw["boundary_conditions"][0].update(name="bar.2"), raw["boundary_conditions"].append(
+         {"beam": "bar", "node": "last", "displacement": {"r": {"x": 0.01}}})),
+     "boundary_conditions[1]", "this support's default name 'bar.2' is the name of boundary_conditions[0] (on another node)"),
     # two named supports on one node that both held r_x: the later one's value (or the sum of
     # two curves' moves: 0.02 + 0.01) was applied and each reported the whole reaction
     ("one component, two supports",

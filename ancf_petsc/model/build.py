@@ -172,6 +172,17 @@ def _end_moments(beam: Beam, tendon, bs, x: float) -> np.ndarray:
     return sec.weights @ m / sec.weights.sum()
 
 
+def _interpolated(bc, beam: Beam, vector: int, comp: int, value: float) -> None:
+    """A prescribed displacement moves a vector the beam's element interpolates: 3333's r_yy,
+    r_zz and r_yz are held at 0 outside it, and moving them changed nothing (completed, no word)."""
+    if vector in beam.layout.held:
+        name = beam.layout.block.names[vector]
+        moved = ", ".join(beam.layout.block.names[k] for k in beam.vectors)
+        raise ConfigError(f"{bc.path}.displacement.{name}.{'xyz'[comp]}", f"element {beam.element} of beam "
+                          f"{beam.name} does not interpolate {name} (held at 0); prescribe one of {moved}; "
+                          f"got {value:g}")
+
+
 def build_model(spec: ModelSpec) -> Model:
     """Assemble the replicated model description from a validated spec."""
     beams: list[Beam] = []
@@ -237,6 +248,7 @@ def build_model(spec: ModelSpec) -> Model:
         dofs = [D * node + 3 * v + c for v, c in bc.dofs]
         group = group_for(loading, None if bc.curve is None else LoadCurve(bc.curve), n_dofs)
         for v, c, value in bc.displacement:
+            _interpolated(bc, beams[bc.beam], v, c, value)
             dofs.append(D * node + 3 * v + c)
             group.moves[dofs[-1]] = value
         fixed.update(dofs)

@@ -86,6 +86,11 @@ CASES = [
     ("support names",
      lambda raw: raw["boundary_conditions"].append({"beam": "bar", "node": "last", "fix": {"r": "y"}, "name": "bar.0"}),
      "boundary_conditions[1].name", "duplicate support name 'bar.0' (also boundary_conditions[0])"),
+    # 3333 holds r_yy at 0 outside its interpolation: moving it changed nothing (completed)
+    ("displacement of a vector 3333 holds",
+     lambda raw: (raw["beams"][0].update(element="3333"), raw["boundary_conditions"].append(
+         {"beam": "bar", "node": "last", "displacement": {"r_yy": {"x": 0.1}}})),
+     "boundary_conditions[1].displacement.r_yy.x", "element 3333 of beam bar does not interpolate r_yy"),
     # a support named like another's default: it said "bar node last already has a support"
     ("a default name taken",
      lambda raw: (raw.update(loads=[]), raw["boundary_conditions"][0].update(name="bar.2"), raw["boundary_conditions"].append(

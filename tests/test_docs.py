@@ -279,3 +279,31 @@ def test_link_anchors_resolve(path):
         if dest.endswith(".md") and os.path.exists(dest) and frag[1:] not in _anchors(dest):
             broken.append(target + frag)
     assert not broken, f"{os.path.relpath(path, ROOT)}: links to no heading: {broken}"
+
+
+def test_paper_refinement_numbers_are_what_the_psi45_column_gives(tmp_path):
+    """docs/paper.md, Table 2's refinement notes: the soleus at 400 N with 2 axial points and with
+    an end traction (4/8/16 elements) is what configs/achilles_type3_psi45.yaml gives (they said
+    6.379/6.370/6.381 and 6.110/6.158/6.178 mm after the runs gave 6.383/6.364/6.367 and
+    6.131/6.162/6.191)."""
+    import copy
+
+    from helpers import load_raw, probe, run_inline
+    with open(os.path.join(DOCS, "paper.md"), encoding="utf-8") as fh:
+        text = " ".join(fh.read().split())
+    two = re.search(r"With 2 axial points, 4/8/16 elements give ([\d.]+)/([\d.]+)/([\d.]+) mm", text)
+    trac = re.search(r"uniform traction weakens the effect \(4/8/16 elements, 3 points: ([\d.]+), "
+                     r"([\d.]+), ([\d.]+) mm\)", text)
+    base = load_raw("achilles_type3_psi45.yaml")
+    for stated, change in ((two, {"axial_points": 2}), (trac, None)):
+        got = []
+        for n in (4, 8, 16):
+            raw = copy.deepcopy(base)
+            raw["steps"] = [200.0, 400.0]             # the 400 N state does not depend on the path
+            for b in raw["beams"]:
+                b["elements"] = n
+                b.update(change or {})
+            if change is None:
+                raw["loads"] = [{"beam": "soleus", "node": "last", "traction_force": [1.0, 0.0, 0.0]}]
+            got.append(f"{probe(run_inline(raw, tmp_path / f'{n}_{change}'), 'soleus')[0] * 1e3:.3f}")
+        assert list(stated.groups()) == got, f"docs/paper.md says {stated.groups()}, the runs give {got}"

@@ -64,6 +64,7 @@ class EnvelopeCell:
     tangent: str | None = None            # solver.tangent (None: the config's default)
     augmentation: float | None = None     # contact.tangential.augmentation (None: the default)
     band_step: float | None = None        # solver.band_step (None: the default)
+    section_update: str | None = None     # solver.section_update (None: the default)
 
     @property
     def name(self) -> str:
@@ -74,6 +75,7 @@ class EnvelopeCell:
         pred = (f"_{self.predictor}" if self.predictor else "") + (f"_{self.tangent}" if self.tangent else "")
         pred += f"_c{self.augmentation:g}" if self.augmentation is not None and self.friction else ""
         pred += f"_band{self.band_step:g}" if self.band_step is not None else ""
+        pred += f"_{self.section_update}" if self.section_update else ""
         return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
@@ -115,7 +117,7 @@ def cell_config(cell: EnvelopeCell) -> dict:
         if cell.augmentation is not None:
             contact["tangential"]["augmentation"] = float(cell.augmentation)
     cfg["output"] = {"vtk": False}
-    for key in ("predictor", "tangent", "band_step"):          # the solver's, where the cell sets them
+    for key in ("predictor", "tangent", "band_step", "section_update"):          # the solver's, where the cell sets them
         if getattr(cell, key) is not None:
             cfg.setdefault("solver", {})[key] = getattr(cell, key)
     return cfg
@@ -270,7 +272,7 @@ GRIDS = {
 
 def grid(name: str, twists, biases, elements: int = 4, **settings) -> list[EnvelopeCell]:
     """The cells of a named grid (``GRIDS``), with the ``EnvelopeCell`` settings given (predictor,
-    tangent, band_step: the solver's; augmentation: friction cells' contact.tangential)."""
+    tangent, band_step, section_update: the solver's; augmentation: friction cells' contact.tangential)."""
     if name not in GRIDS:
         raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
     return [replace(c, **settings) for c in GRIDS[name](twists, biases, elements)]

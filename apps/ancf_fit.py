@@ -21,6 +21,8 @@ import argparse
 import os
 import sys
 
+from apps.cli import Parser, printer, start_petsc
+
 PROG = "ancf-fit"
 
 
@@ -36,7 +38,7 @@ def _count(text: str) -> int:
 
 
 def _args(argv: list[str]):
-    ap = argparse.ArgumentParser(prog=PROG, allow_abbrev=False, description=__doc__,
+    ap = Parser(prog=PROG, allow_abbrev=False, description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("fit", help="fit file (YAML)")
     ap.add_argument("--out", help="output directory (default: the fit file's output)")
@@ -61,9 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:
         return int(exc.code or 0)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from mpi4py import MPI  # noqa: F401  (before petsc4py)
-    import petsc4py
-    petsc4py.init([sys.argv[0]] + petsc_args)
+    start_petsc(petsc_args)
     from ancf_petsc.solving import interrupt
     from ancf_petsc.solving.spread import world
     from ancf_petsc.errors import InputError
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
 
     interrupt.install()
     rank = world()[0]
-    say = (lambda msg: None) if (args.quiet or rank != 0) else (lambda msg: print(msg, flush=True))
+    say = printer(quiet=args.quiet or rank != 0)     # ancf-fit ... | head: no BrokenPipeError
     log_path = "samples.jsonl"
     try:
         spec = load_fit(args.fit)

@@ -13,12 +13,14 @@ import argparse
 import os
 import sys
 
+from apps.cli import Parser, printer
+
 #: the configs shipped beside the command lines (a checkout or an editable install)
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="ancf-report", allow_abbrev=False, description=__doc__,
+    ap = Parser(prog="ancf-report", allow_abbrev=False, description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="results/achilles_report", help="output directory")
     ap.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
@@ -55,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     sections = []
     heading = "Type III Achilles tendon: reproduction of Obrezkov et al. (2022)"
-    log = (lambda msg: print(msg, flush=True))
+    log = printer()                       # ancf-report ... | head: no BrokenPipeError
     try:
         t1 = t2 = None
         if args.existing:
@@ -104,8 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
     with open(os.path.join(out, "report.md"), "w") as fh:
         fh.write(f"# {heading}\n\n" + text + "\n")
-    print(text)
-    print(f"\n[report] {os.path.join(out, 'report.md')}")
+    log(text)
+    log(f"\n[report] {os.path.join(out, 'report.md')}")
     return 0
 
 

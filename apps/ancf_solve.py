@@ -14,6 +14,7 @@ import os
 import sys
 
 from ancf_petsc.parallel.launch import launch_rank
+from apps.cli import Parser
 
 OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help", "--check", "--output")
 
@@ -44,14 +45,8 @@ def _split_argv(argv: list[str]) -> tuple[list[str], list[str], str | None]:
     return ours, petsc, None
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str):
-        """One line (argparse prints the usage too), exit 2 like every input error."""
-        self.exit(2, f"ancf-solve: {message} (see ancf-solve --help)\n")
-
-
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = Parser(
         prog="ancf-solve", allow_abbrev=False,
         description="Solve an ANCF continuum-beam model described by a YAML config. "
                     "Options with one dash (-snes_*, -ksp_*, -pc_*, -log_view, -help) go to PETSc.",
@@ -115,9 +110,6 @@ def _main(argv: list[str], interrupt) -> int:
         args, petsc_args = parser.parse_known_args(ours)
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0
-    except BrokenPipeError:              # ancf-solve --help | head
-        interrupt.SafePrinter().close_stdout()
-        return 0
     for name in ("output_dir", "restart"):
         if getattr(args, name) == "":    # else silently the config's output.dir
             _error(f"--{name.replace('_', '-')}: an empty path; give a directory")

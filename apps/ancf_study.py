@@ -14,21 +14,21 @@ import argparse
 import os
 import sys
 
+from apps.cli import Parser, printer, start_petsc
+
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="ancf-study", allow_abbrev=False, description=__doc__,
+    ap = Parser(prog="ancf-study", allow_abbrev=False, description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("study", help="study file (YAML)")
     ap.add_argument("--out", help="output directory (default: the study file's 'output')")
     args, petsc_args = ap.parse_known_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from mpi4py import MPI  # noqa: F401  (before petsc4py)
-    import petsc4py
-    petsc4py.init([sys.argv[0]] + petsc_args)
+    start_petsc(petsc_args)
 
     from ancf_petsc.io.files import OutputError
     from ancf_petsc.workflows.study import StudyError, read_yaml
-    log = (lambda msg: print(msg, flush=True))
+    log = printer()                       # ancf-study ... | head: no BrokenPipeError
     try:
         doc = read_yaml(args.study)
         kind = doc.get("kind", "pareto") if isinstance(doc, dict) else "pareto"

@@ -16,6 +16,8 @@ import os
 import signal
 import sys
 
+from apps.cli import Parser, printer
+
 
 def _positive(text: str) -> int:
     try:
@@ -37,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="ancf-sweep", allow_abbrev=False,
         epilog="Exit codes: 0 all runs completed, 1 some did not, 2 bad sweep file or option, "
                "130 interrupted. See docs/running.md.",
@@ -72,8 +74,7 @@ def _main(argv: list[str]) -> int:
     from ancf_petsc.workflows.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done,
         load_sweep, run_sweep, slurm_spec, write_slurm)
 
-    def say(msg: str) -> None:
-        print(msg, flush=True)
+    say = printer()                       # ancf-sweep ... --dry-run | head: no BrokenPipeError
 
     try:
         overrides = {}

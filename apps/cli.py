@@ -1,0 +1,45 @@
+"""What the command lines share: option errors in one line, and stdout that may be a closed pipe.
+
+``Parser`` is argparse with the project's errors (``ancf-sweep: argument --jobs: expected a
+positive integer; got 'x' (see ancf-sweep --help)``, exit 2, no usage block) and a help that
+survives a reader gone before it is written (``ancf-fit --help | head -0``).  Progress lines go
+through ``printer`` (``interrupt.SafePrinter``): once stdout is a closed pipe (``ancf-sweep S.yaml
+--dry-run | head -1``) they stop quietly, the work goes on and its exit code is unchanged;
+``start_petsc`` keeps PETSc's SIGPIPE handler from aborting the process meanwhile."""
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+
+from ancf_petsc.solving.interrupt import SafePrinter
+
+
+def printer(quiet: bool = False) -> SafePrinter:
+    """``print`` to stdout, flushed, that stops quietly once stdout is a closed pipe."""
+    return SafePrinter(quiet=quiet)
+
+
+def start_petsc(petsc_args: list[str]) -> None:
+    """MPI, then PETSc with these options; a write into a closed pipe is then EPIPE (which
+    ``printer`` takes) instead of PETSc's SIGPIPE handler aborting the process (exit 59)."""
+    from mpi4py import MPI  # noqa: F401  (before petsc4py)
+    import petsc4py
+    petsc4py.init([sys.argv[0]] + petsc_args)
+    from petsc4py import PETSc  # noqa: F401  (PetscInitialize installs PETSc's signal handlers)
+    signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse whose errors are one line and exit 2, and whose help survives a closed pipe."""
+
+    def error(self, message: str):
+        """One line naming the option (argparse prints the usage too), exit 2."""
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+    def print_help(self, file=None) -> None:
+        """The help on stdout through ``printer`` (``--help | head``: no BrokenPipeError)."""
+        if file is not None and file is not sys.stdout:
+            super().print_help(file)
+            return
+        printer()(self.format_help().rstrip("\n"))

@@ -21,7 +21,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, printer, start_petsc
+from apps.cli import Parser, path, printer, start_petsc
 
 PROG = "ancf-fit"
 
@@ -39,9 +39,9 @@ def _count(text: str) -> int:
 
 def _args(argv: list[str]):
     ap = Parser(prog=PROG, allow_abbrev=False, description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("fit", help="fit file (YAML)")
-    ap.add_argument("--out", help="output directory (default: the fit file's output)")
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("fit", type=path, help="fit file (YAML)")
+    ap.add_argument("--out", type=path, help="output directory (default: the fit file's output)")
     ap.add_argument("--fresh", action="store_true", help="start over: ignore (and replace) the log")
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
     what = ap.add_mutually_exclusive_group()
@@ -49,11 +49,7 @@ def _args(argv: list[str]):
     what.add_argument("--slurm", action="store_true", help="write <output>/fit.slurm and stop")
     what.add_argument("--collect", action="store_true", help="gather the starts' logs, then analyse")
     ap.add_argument("--ranks", type=_count, default=1, help="MPI ranks per array task (with --slurm)")
-    args, rest = ap.parse_known_args(argv)
-    unknown = [a for a in rest if a.startswith("--")]
-    if unknown:
-        ap.error(f"unknown option {unknown[0]} (PETSc options take one dash)")
-    return args, rest
+    return ap.parse_with_petsc(argv)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -13,7 +13,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, printer
+from apps.cli import Parser, path, positive, printer
 
 #: the configs shipped beside the command lines (a checkout or an editable install)
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
@@ -21,19 +21,19 @@ CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 def main(argv: list[str] | None = None) -> int:
     ap = Parser(prog="ancf-report", allow_abbrev=False, description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default="results/achilles_report", help="output directory")
-    ap.add_argument("--ranks", type=int, default=1, help="MPI ranks per run")
-    ap.add_argument("--jobs", type=int, default=1, help="runs at the same time")
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", type=path, default="results/achilles_report", help="output directory")
+    ap.add_argument("--ranks", type=positive, default=1, help="MPI ranks per run")
+    ap.add_argument("--jobs", type=positive, default=1, help="runs at the same time")
     ap.add_argument("--table1", action="store_true")
     ap.add_argument("--table2", action="store_true")
     ap.add_argument("--contact", action="store_true",
                     help="contact study: Table 1 for both laws, k_s scaling (psi = 45)")
     ap.add_argument("--fit-bulk-modulus", action="store_true")
     ap.add_argument("--figures", action="store_true")
-    ap.add_argument("--configs", default=CONFIGS, metavar="DIR",
+    ap.add_argument("--configs", type=path, default=CONFIGS, metavar="DIR",
                     help="the Achilles configs and data/paper_table*.csv (default: this checkout's configs/)")
-    ap.add_argument("--existing", nargs="+", metavar="RUN_DIR",
+    ap.add_argument("--existing", type=path, nargs="+", metavar="RUN_DIR",
                     help="finished ancf-solve output directories to report on (no solving)")
     args = ap.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

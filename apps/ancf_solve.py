@@ -14,7 +14,7 @@ import os
 import sys
 
 from ancf_petsc.parallel.launch import launch_rank
-from apps.cli import Parser
+from apps.cli import Parser, path
 
 OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help", "--check", "--output")
 
@@ -52,7 +52,7 @@ def _parser() -> argparse.ArgumentParser:
                     "Options with one dash (-snes_*, -ksp_*, -pc_*, -log_view, -help) go to PETSc.",
         epilog="Exit codes: 0 completed, 2 input or file-system error, 3 a load level not "
                "reached, 4 unstable levels, 130/143 interrupted (SIGINT/SIGTERM). See docs/running.md.")
-    parser.add_argument("config", help="YAML model description")
+    parser.add_argument("config", type=path, help="YAML model description")
     parser.add_argument("--output-dir", help="override output.dir of the config")
     parser.add_argument("--restart", metavar="DIR",
                         help="continue the run in DIR (its output directory) from its last "

@@ -14,15 +14,15 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, printer, start_petsc
+from apps.cli import Parser, path, printer, start_petsc
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = Parser(prog="ancf-study", allow_abbrev=False, description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("study", help="study file (YAML)")
-    ap.add_argument("--out", help="output directory (default: the study file's 'output')")
-    args, petsc_args = ap.parse_known_args(argv)
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("study", type=path, help="study file (YAML)")
+    ap.add_argument("--out", type=path, help="output directory (default: the study file's 'output')")
+    args, petsc_args = ap.parse_with_petsc(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     start_petsc(petsc_args)
 

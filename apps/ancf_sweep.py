@@ -11,22 +11,11 @@ interrupted (the runs are stopped at their next safe point and recorded as inter
 """
 from __future__ import annotations
 
-import argparse
 import os
 import signal
 import sys
 
-from apps.cli import Parser, printer
-
-
-def _positive(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer; got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
-    return value
+from apps.cli import Parser, path, positive, printer
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -45,7 +34,7 @@ def _main(argv: list[str]) -> int:
                "130 interrupted. See docs/running.md.",
         description="Run ancf-solve over a grid or list of parameter values of a base config, "
                     "then collect every run into <output>/results.csv and <output>/failed.txt.")
-    parser.add_argument("sweep", help="sweep file (YAML: base, parameters, mode, run, output, name)")
+    parser.add_argument("sweep", type=path, help="sweep file (YAML: base, parameters, mode, run, output, name)")
     what = parser.add_mutually_exclusive_group()
     what.add_argument("--dry-run", action="store_true",
                       help="list the runs (and which are already done); write nothing")
@@ -54,13 +43,13 @@ def _main(argv: list[str]) -> int:
                            "(a job array) and runs.txt instead of running")
     what.add_argument("--collect", action="store_true",
                       help="only collect results.csv and failed.txt (also of a partial sweep)")
-    parser.add_argument("--jobs", type=_positive, help="concurrent runs (overrides run.jobs)")
-    parser.add_argument("--ranks", type=_positive, help="MPI ranks per run (overrides run.ranks)")
+    parser.add_argument("--jobs", type=positive, help="concurrent runs (overrides run.jobs)")
+    parser.add_argument("--ranks", type=positive, help="MPI ranks per run (overrides run.ranks)")
     parser.add_argument("--force", action="store_true", help="rerun runs that already completed")
     slurm = parser.add_argument_group("SLURM (with --slurm; override the sweep file's slurm:)")
-    slurm.add_argument("--throttle", type=_positive,
+    slurm.add_argument("--throttle", type=positive,
                        help="most array tasks running at once (--array=0-N%%T; not run.jobs)")
-    slurm.add_argument("--cpus-per-task", type=_positive, help="#SBATCH --cpus-per-task")
+    slurm.add_argument("--cpus-per-task", type=positive, help="#SBATCH --cpus-per-task")
     slurm.add_argument("--mem", help="#SBATCH --mem (e.g. 4G)")
     slurm.add_argument("--time", help="#SBATCH --time (e.g. 02:00:00; default run.timeout + 2 min)")
     slurm.add_argument("--partition", help="#SBATCH --partition")

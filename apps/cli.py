@@ -5,10 +5,12 @@ positive integer; got 'x' (see ancf-sweep --help)``, exit 2, no usage block) and
 survives a reader gone before it is written (``ancf-fit --help | head -0``).  Progress lines go
 through ``printer`` (``interrupt.SafePrinter``): once stdout is a closed pipe (``ancf-sweep S.yaml
 --dry-run | head -1``) they stop quietly, the work goes on and its exit code is unchanged;
-``start_petsc`` keeps PETSc's SIGPIPE handler from aborting the process meanwhile."""
+``start_petsc`` keeps PETSc's SIGPIPE handler from aborting the process meanwhile.  ``path`` and
+``positive`` are option types whose errors say what to give."""
 from __future__ import annotations
 
 import argparse
+import difflib
 import signal
 import sys
 
@@ -18,6 +20,24 @@ from ancf_petsc.solving.interrupt import SafePrinter
 def printer(quiet: bool = False) -> SafePrinter:
     """``print`` to stdout, flushed, that stops quietly once stdout is a closed pipe."""
     return SafePrinter(quiet=quiet)
+
+
+def path(text: str) -> str:
+    """A file or directory option: an empty one is refused (``--out=`` was taken for no ``--out``)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a path; got {text!r}")
+    return text
+
+
+def positive(text: str) -> int:
+    """A count option (``--jobs``, ``--ranks``): an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
+    return value
 
 
 def start_petsc(petsc_args: list[str]) -> None:
@@ -43,3 +63,19 @@ class Parser(argparse.ArgumentParser):
             super().print_help(file)
             return
         printer()(self.format_help().rstrip("\n"))
+
+    def parse_with_petsc(self, argv: list[str] | None) -> tuple[argparse.Namespace, list[str]]:
+        """(our options, PETSc's): an unknown option with two dashes (``--output`` for ``--out``)
+        or one of ours with one dash (``-out``) is an error, not a PETSc option left unread."""
+        args, petsc = self.parse_known_args(argv)
+        ours = [s for a in self._actions for s in a.option_strings if s.startswith("--")]
+        for arg in petsc:
+            name = arg.split("=", 1)[0]
+            if name.startswith("--") and len(name) > 2:
+                near = difflib.get_close_matches(name, ours, n=1, cutoff=0.7)
+                hint = f"did you mean {near[0]}?" if near else "PETSc options take one dash"
+                self.error(f"unknown option {name} ({hint})")
+            if name.startswith("-") and "-" + name in ours and name != "-help":
+                self.error(f"{name}: {self.prog}'s own options take two dashes (-{name}); "
+                           "one dash is for PETSc options such as -snes_monitor")
+        return args, petsc

@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.out:
             spec.output = os.path.abspath(args.out)
         log_path = os.path.join(spec.output, "samples.jsonl")
-        prepare_output_dir(spec.output)        # every rank: a file in the way fails them all alike
+        prepare_output_dir(spec.output, "output / --out")   # every rank: a file in the way fails them all alike
         return _run(spec, args, say)
     except InputError as exc:
         if rank == 0:

@@ -51,9 +51,9 @@ def main(argv: list[str] | None = None) -> int:
     out = os.path.abspath(args.out)
     from ancf_petsc.io.files import OutputError, prepare_output_dir
     try:
-        prepare_output_dir(out)
+        prepare_output_dir(out, "--out")
     except OutputError as exc:
-        print(f"ancf-report: output error: {exc} (--out)", file=sys.stderr)
+        print(f"ancf-report: output error: {exc}", file=sys.stderr)
         return 2
     sections = []
     heading = "Type III Achilles tendon: reproduction of Obrezkov et al. (2022)"

@@ -71,21 +71,20 @@ def _dangling_link(path: str) -> str | None:
     return None
 
 
-def prepare_output_dir(path: str) -> None:
+def prepare_output_dir(path: str, keys: str = "output.dir / --output-dir") -> None:
     """Create ``path`` if needed and check that files can be written in it (rank 0 only);
-    raises ``OutputError`` naming the path and the reason."""
+    raises ``OutputError`` naming the path, the reason and the ``keys`` that choose it."""
     if not path:
-        raise OutputError("''", "the output directory is an empty path (give output.dir or "
-                                "--output-dir a directory)")
+        raise OutputError("''", f"the output directory is an empty path (give {keys} a directory)")
     if os.path.realpath(path) == os.path.realpath(os.sep):
         raise OutputError(path, "is the root directory: give the results a directory of their "
-                                "own (output.dir / --output-dir)")
+                                f"own ({keys})")
     dangling = _dangling_link(path)
     if dangling:
         raise OutputError(dangling, f"is a dangling symbolic link (to {os.readlink(dangling)}): "
-                                    "create its target or choose another output.dir / --output-dir")
+                                    f"create its target or choose another {keys}")
     if os.path.exists(path) and not os.path.isdir(path):
-        raise OutputError(path, "exists and is not a directory (choose another output.dir / --output-dir)")
+        raise OutputError(path, f"exists and is not a directory (choose another {keys})")
     try:
         os.makedirs(path, exist_ok=True)
     except OSError as exc:

@@ -121,7 +121,7 @@ def _physical(cell: dict) -> tuple:
 def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> dict:
     """Solve every cell (and the references); write stability.csv and stability.png."""
     from ..viz.charts import stability_chart
-    prepare_output_dir(spec.output)            # OutputError naming the path (a file in the way)
+    prepare_output_dir(spec.output, "output / --out")   # OutputError naming the path and keys
     t0 = time.perf_counter()
     keys = [k for k in AXES if k in spec.axes]
     cells = [dict(zip(keys, combo)) for combo in itertools.product(*(spec.axes[k] for k in keys))]

@@ -241,7 +241,7 @@ def write_csv(rows: list[Row], path: str) -> None:
 def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
     """Solve the reference and every grid point; write study.csv and pareto.png."""
     from ..viz.charts import pareto_chart
-    prepare_output_dir(spec.output)            # OutputError naming the path (a file in the way)
+    prepare_output_dir(spec.output, "output / --out")   # OutputError naming the path and keys
     t0 = time.perf_counter()
     ref, ref_rows, ref_text = reference_value(spec.scene, spec.reference, spec.richardson,
                                               spec.output, log)

@@ -93,7 +93,8 @@ def test_a_killed_run_is_reported_with_the_levels_results_h5_holds(tmp_path):
 def test_odd_summaries_and_an_output_path_that_is_a_file_are_one_line_errors(tmp_path):
     """A summary.json that is JSON but no run's summary ([], or one without twist_deg) and an
     --out that is a file ended in tracebacks (AttributeError, TypeError, FileExistsError), in
-    ancf-report and likewise in ancf-study and ancf-fit."""
+    ancf-report and likewise in ancf-study and ancf-fit; then their fix named ancf-solve's
+    output.dir / --output-dir (ancf-report's twice, with "(--out)" after it)."""
     from helpers import CONFIGS
     (tmp_path / "afile").write_text("")
     (tmp_path / "list").mkdir()
@@ -105,11 +106,11 @@ def test_odd_summaries_and_an_output_path_that_is_a_file_are_one_line_errors(tmp
              2, "not a run's summary (a JSON object with its status and steps); got list"),
             ([bin_("ancf-report"), "--existing", str(tmp_path / "bare"), "--out", str(tmp_path / "o2")], 0, ""),
             ([bin_("ancf-report"), "--existing", str(tmp_path / "bare"), "--out", str(tmp_path / "afile")],
-             2, "afile: exists and is not a directory"),
+             2, "afile: exists and is not a directory (choose another --out)\n"),
             ([bin_("ancf-study"), os.path.join(CONFIGS, "studies", "bending_pareto.yaml"), "--out",
-              str(tmp_path / "afile")], 2, "afile: exists and is not a directory"),
+              str(tmp_path / "afile")], 2, "afile: exists and is not a directory (choose another output / --out)"),
             ([bin_("ancf-fit"), os.path.join(CONFIGS, "fits", "bar_twin.yaml"), "--out", str(tmp_path / "afile")],
-             2, "afile: exists and is not a directory")]
+             2, "afile: exists and is not a directory (choose another output / --out)")]
     for cmd, code, words in runs:
         p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV),
                            timeout=300)

@@ -3,6 +3,7 @@ both lines (PyYAML would keep the last one silently: ``steps: [1.0]`` appended t
 replaced its levels), and a file that is not UTF-8 text says so."""
 from __future__ import annotations
 
+import reprlib
 from typing import Any
 
 import yaml
@@ -53,3 +54,9 @@ def syntax_error(exc: yaml.YAMLError) -> str:
     at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
     problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
     return f"YAML syntax error{at}: {problem}"
+
+
+def not_a_mapping(doc: Any, keys: tuple[str, ...]) -> str:
+    """What a file whose document is not a mapping (empty, a list, a word) should hold."""
+    got = "an empty file" if doc is None else f"{type(doc).__name__} {reprlib.repr(doc)}"
+    return f"expected a mapping with keys {', '.join(keys)}; got {got}"

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 
+from .. import yamlio
 from ..io.files import prepare_output_dir
 from ..config.specs import LOCKING
 from ..contact.laws import LAWS
@@ -188,7 +189,7 @@ def default_strategy_converged(result: dict) -> bool:
 def load_stability(path: str) -> StabilitySpec:
     """Read and check a stability file."""
     doc = read_yaml(path)
-    expect(isinstance(doc, dict), "", "expected a mapping")
+    expect(isinstance(doc, dict), "", yamlio.not_a_mapping(doc, KEYS))
     for key in doc:
         expect(key in KEYS, key, f"unknown key; allowed: {', '.join(KEYS)}")
     here = os.path.dirname(os.path.abspath(path))

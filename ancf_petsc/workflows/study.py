@@ -347,7 +347,7 @@ def parse_grid(value: Any, path: str = "grid") -> dict[str, list]:
 def load_study(path: str) -> StudySpec:
     """Read and check a study file (``kind: pareto``)."""
     doc = read_yaml(path)
-    expect(isinstance(doc, dict), "", f"{path}: expected a mapping")
+    expect(isinstance(doc, dict), "", yamlio.not_a_mapping(doc, STUDY_KEYS))
     for key in doc:
         expect(key in STUDY_KEYS, key, f"unknown key; allowed: {', '.join(STUDY_KEYS)}")
     here = os.path.dirname(os.path.abspath(path))

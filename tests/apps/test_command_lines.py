@@ -119,3 +119,33 @@ def test_an_option_error_is_one_line(args, words, tmp_path):
     assert p.stderr.startswith(f"{args[0]}: ") and p.stderr.count("\n") == 1, p.stderr
     assert words in p.stderr and p.stderr.endswith(f"(see {args[0]} --help)\n"), p.stderr
     assert os.listdir(tmp_path) == []
+
+
+#: a file argument that is not a model/study/sweep/fit file: (how to make it, words of the line)
+BAD_FILES = {
+    "missing": (lambda p: None, "no such"),
+    "a directory": (lambda p: os.mkdir(p), "is a directory, not a"),
+    "empty": (lambda p: open(p, "w").close(), "empty"),
+    "a list": (lambda p: open(p, "w").write("- a\n"), "list ['a']"),
+    "broken YAML": (lambda p: open(p, "w").write("a: [1,\n"), "YAML syntax error at line 2, column 1"),
+    "binary": (lambda p: open(p, "wb").write(b"\xff\xfe\x00bin"), "not a text (UTF-8) YAML file"),
+}
+
+
+@pytest.mark.parametrize("program", ["ancf-solve", "ancf-study", "ancf-sweep", "ancf-fit"])
+@pytest.mark.parametrize("case", list(BAD_FILES))
+def test_a_bad_file_argument_is_one_line(program, case, tmp_path):
+    """ancf-fit DIR said 'is a directory, not a sweep file'; ancf-study EMPTY.yaml said
+    'EMPTY.yaml: EMPTY.yaml: expected a mapping' (neither the keys nor what it got)."""
+    make, words = BAD_FILES[case]
+    f = str(tmp_path / "f.yaml")
+    make(f)
+    p = subprocess.run([os.path.join(VENV_BIN, program), f], capture_output=True, text=True,
+                       timeout=TIMEOUT, cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.startswith(f"{program}: ") and p.stderr.count("\n") == 1, p.stderr
+    assert words in p.stderr and "sweep file" not in p.stderr, p.stderr
+    if program != "ancf-solve":           # ancf-solve's config error of a list names no file
+        assert p.stderr.count("f.yaml") == 1, p.stderr
+        if case in ("empty", "a list"):
+            assert "expected a mapping with keys " in p.stderr, p.stderr

@@ -21,6 +21,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
+from ... import yamlio
 from ...config.parse import parse_config
 from ...config.values import ConfigError
 from ..sweep.base import SweepLoader, format_key_path, load_yaml, path_exists, parse_key_path
@@ -250,7 +251,7 @@ def load_fit(path: str) -> FitSpec:
     """Read and check a fit file; every problem raises ``CalibrationError`` naming its key."""
     path = os.path.abspath(path)
     doc = load_yaml(path, "", SweepLoader)
-    expect(isinstance(doc, dict), "", f"expected a mapping with keys {', '.join(FIT_KEYS)}")
+    expect(isinstance(doc, dict), "", yamlio.not_a_mapping(doc, FIT_KEYS))
     for k in doc:
         expect(k in FIT_KEYS, str(k), "unknown key; allowed: " + ", ".join(FIT_KEYS))
     here = os.path.dirname(path)

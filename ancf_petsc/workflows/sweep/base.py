@@ -136,7 +136,7 @@ def load_yaml(path: str, key: str, loader: type = yamlio.StrictLoader) -> Any:
     """Load a YAML file; errors name ``key`` (and the path, unless it is the sweep file itself)."""
     where = f"{path}: " if key else ""
     if os.path.isdir(path):
-        raise SweepError(key, f"{path}: is a directory, not a YAML file" if key else "is a directory, not a sweep file")
+        raise SweepError(key, f"{path}: is a directory, not a YAML file" if key else "is a directory, not a YAML file")
     if not os.path.isfile(path):
         raise SweepError(key, f"no such file: {path}" if key else "no such file")
     try:

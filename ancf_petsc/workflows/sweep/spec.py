@@ -11,6 +11,7 @@ from typing import Any
 
 from ...config.parse import parse_config
 from ...config.values import ConfigError
+from ... import yamlio
 from ...errors import UNKNOWN_KEY
 from .base import (LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, as_int, load_yaml,
                    SweepLoader, path_exists, as_str, format_key_path, parse_key_path, set_key_path)
@@ -201,7 +202,7 @@ def load_sweep(path: str) -> Sweep:
     path = os.path.abspath(path)
     raw = load_yaml(path, "", SweepLoader)
     if not isinstance(raw, dict):
-        raise SweepError("", f"expected a mapping with keys {', '.join(SWEEP_KEYS)}")
+        raise SweepError("", yamlio.not_a_mapping(raw, SWEEP_KEYS))
     for k in raw:
         if k not in SWEEP_KEYS:
             raise SweepError(str(k), "unknown key; allowed: " + ", ".join(SWEEP_KEYS))

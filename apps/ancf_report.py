@@ -45,6 +45,9 @@ def main(argv: list[str] | None = None) -> int:
         args.table1 = args.table2 = args.figures = True
     try:
         inputs = rp.PaperInputs(os.path.abspath(args.configs)).check()
+        if args.existing:                # every run read before anything is written
+            from ancf_petsc.paper import existing
+            runs = existing.read_existing(args.existing, inputs)
     except InputError as exc:
         print(f"ancf-report: {exc}", file=sys.stderr)
         return 2
@@ -61,8 +64,6 @@ def main(argv: list[str] | None = None) -> int:
     try:
         t1 = t2 = None
         if args.existing:
-            from ancf_petsc.paper import existing
-            runs = existing.read_existing(args.existing, inputs)
             heading = existing.title(runs)
             sections.append(("The runs", existing.runs_markdown(runs)))
             drawn = existing.other_figures(runs, out)

@@ -95,7 +95,8 @@ def read_results(directory: str) -> Results:
     except FileNotFoundError:
         raise InputError("results", f"{directory}: no summary.json (not a run's output directory)") from None
     except (OSError, ValueError) as exc:
-        raise InputError("results", f"{path}: cannot read: {exc}") from None
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise InputError("results", f"{path}: cannot read: {reason}") from None
     if not isinstance(summary, dict) or not isinstance(summary.get("steps", []), list):
         raise InputError("results", f"{path}: not a run's summary (a JSON object with its status and "
                                     f"steps); got {type(summary).__name__}")

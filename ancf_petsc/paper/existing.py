@@ -46,6 +46,9 @@ class ExistingRun:
     def __init__(self, directory: str, inputs: PaperInputs):
         self.dir = directory
         path = os.path.join(directory, "summary.json")
+        if not os.path.isdir(directory):
+            what = "not a directory" if os.path.exists(directory) else "no such directory"
+            raise InputError("--existing", f"{directory}: {what} (give ancf-solve output directories)")
         if not os.path.exists(path):
             raise InputError("--existing", f"{path}: no summary.json (run ancf-solve first)")
         try:

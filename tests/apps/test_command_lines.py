@@ -149,3 +149,26 @@ def test_a_bad_file_argument_is_one_line(program, case, tmp_path):
         assert p.stderr.count("f.yaml") == 1, p.stderr
         if case in ("empty", "a list"):
             assert "expected a mapping with keys " in p.stderr, p.stderr
+
+
+EXISTING = {
+    "no such directory": (lambda d: None, "no such directory (give ancf-solve output directories)"),
+    "a file": (lambda d: open(d, "w").close(), "not a directory (give ancf-solve output directories)"),
+    "no run": (lambda d: os.mkdir(d), "summary.json: no summary.json (run ancf-solve first)"),
+    "an unreadable summary": (lambda d: os.makedirs(os.path.join(d, "summary.json")),
+                              "summary.json: cannot read: Is a directory"),
+}
+
+
+@pytest.mark.parametrize("case", list(EXISTING))
+def test_existing_runs_that_are_none_are_refused_before_anything_is_written(case, tmp_path):
+    """ancf-report --existing FILE said 'FILE/summary.json: no summary.json', an unreadable
+    summary '[Errno 21] Is a directory: ...', each after creating results/achilles_report."""
+    make, words = EXISTING[case]
+    run = str(tmp_path / "run")
+    make(run)
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", "run"], capture_output=True,
+                       text=True, timeout=TIMEOUT, cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
+    assert p.stderr.startswith("ancf-report: --existing: run") and words in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == (["run"] if case != "no such directory" else [])

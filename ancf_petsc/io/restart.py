@@ -354,3 +354,17 @@ def read_restart_on_every_rank(directory: str, comm) -> RestartPoint:
     if err:
         raise InputError(*err)
     return point
+
+
+def restart_directory(directory: str, comm) -> str:
+    """``directory`` (--restart DIR) if it is one, else InputError on every rank: before the
+    output directory is prepared, which would create a mistyped DIR empty.  Collective."""
+    err = None
+    if comm.rank == 0 and not os.path.isdir(directory):
+        what = "not a directory" if os.path.exists(directory) else "no such directory"
+        err = f"{directory}: {what} (restart from a run's output directory)"
+    if comm.size > 1:
+        err = comm.tompi4py().bcast(err, root=0)
+    if err:
+        raise InputError("--restart", err)
+    return directory

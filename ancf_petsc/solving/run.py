@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..io.derived import displacement_differences, interface_pairs
 from ..io.subtendons import subtendon_report
 from ..io.files import DirectoryLock, OutputError, prepare_output_dir
-from ..io.restart import check_same_run, read_restart_on_every_rank
+from ..io.restart import check_same_run, read_restart_on_every_rank, restart_directory
 from ..io.results import ResultsWriter, record_crash
 from ..model.build import build_model
 from ..model.contact_setup import contact_for
@@ -311,7 +311,7 @@ def run_model(spec: ModelSpec, comm=None, log=print, info: dict | None = None,
     say = log if comm.rank == 0 else (lambda *_: None)
     point = None
     if restart is not None:
-        spec.output.dir = restart
+        spec.output.dir = restart_directory(restart, comm)
     lock = check_output_dir(spec.output.dir, comm, say)
     try:
         if restart is not None:

@@ -8,7 +8,7 @@ import subprocess
 import pytest
 import yaml
 
-from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, solve_cli
+from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT, VENV_BIN, solve_cli
 
 TIMEOUT = 300
 PROGRAMS = ("ancf-solve", "ancf-report", "ancf-study", "ancf-sweep", "ancf-fit")
@@ -172,3 +172,20 @@ def test_existing_runs_that_are_none_are_refused_before_anything_is_written(case
     assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
     assert p.stderr.startswith("ancf-report: --existing: run") and words in p.stderr, p.stderr
     assert sorted(os.listdir(tmp_path)) == (["run"] if case != "no such directory" else [])
+
+
+@pytest.mark.parametrize("ranks", ONE_AND_TWO_RANKS)
+@pytest.mark.parametrize("case", ["no such directory", "not a directory"])
+def test_a_restart_directory_that_is_none_is_refused_and_not_created(case, ranks, tmp_path):
+    """ancf-solve C --restart TYPO created TYPO empty, then said 'TYPO/results.h5: no such file';
+    --restart FILE said 'exists and is not a directory (choose another output.dir / --output-dir)'."""
+    where = tmp_path / "typo"
+    if case == "not a directory":
+        where.write_text("")
+    p = solve_cli(os.path.join(CONFIGS, "uniaxial_neohookean.yaml"), ranks=ranks,
+                  extra=["--restart", str(where), "--quiet"], cwd=str(tmp_path), timeout=TIMEOUT)
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-solve:")]
+    assert p.returncode == 2 and len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert lines[0] == (f"ancf-solve: config error: --restart: {where}: {case} "
+                        "(restart from a run's output directory)"), lines[0]
+    assert os.listdir(tmp_path) == ([] if case == "no such directory" else ["typo"])

@@ -119,7 +119,8 @@ def test_restart_refuses_another_model(tmp_path):
     assert "beams/medial_gastrocnemius/elements (4 → 8)" in lines[0]
     assert str(tmp_path / "run") in lines[0]
     p = solve_cli(cfg, extra=["--restart", str(tmp_path / "nowhere")])
-    assert p.returncode == 2 and "results.h5: no such file" in p.stderr
+    assert p.returncode == 2 and "nowhere: no such directory" in p.stderr
+    assert not os.path.exists(tmp_path / "nowhere")
 
 
 # ------------------------------------------------------------------------------ free motions

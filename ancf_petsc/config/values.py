@@ -58,8 +58,8 @@ def number(value, path: str, *, positive=False, nonneg=False, lo=None, hi=None,
             raise ConfigError(path, f"expected a number{hint}; got {shown(value)}")
     value = float(value)
     if not math.isfinite(value):
-        bounds = [b for b, on in (("> 0", positive), (">= 0", nonneg), (f">= {lo:g}", lo is not None),
-                                  (f"<= {hi:g}", hi is not None)) if on]
+        bounds = [b for b, on in (("> 0", positive), (">= 0", nonneg)) if on]
+        bounds += [f"{op} {b:g}" for op, b in ((">=", lo), ("<=", hi)) if b is not None]
         raise ConfigError(path, f"must be a finite number{' ' if bounds else ''}{' and '.join(bounds)}"
                                 f"{hint}; got {value}")
     if positive and value <= 0:

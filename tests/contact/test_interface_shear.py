@@ -270,6 +270,11 @@ def test_displacement_control_gives_the_state_of_the_force(tmp_path):
     ({"tangential": {"law": "friction"}}, "contact.tangential.law", "elastic"),
     ({"tangential": {"law": "coulomb"}}, "contact.tangential.friction", "missing"),
     ({"tangential": {"law": "coulomb", "friction": -0.1}}, "contact.tangential.friction", "> 0"),
+    # YAML's .nan / .inf: a TypeError traceback (the message's '>= {lo:g}' with no lower bound)
+    ({"tangential": {"law": "coulomb", "friction": float("nan")}}, "contact.tangential.friction",
+     "must be a finite number > 0 and <= 10"),
+    ({"tangential": {"law": "elastic", "stiffness": float("inf")}}, "contact.tangential.stiffness",
+     "must be a finite number > 0 (k_t"),
     ({"tangential": {"law": "coulomb", "friction": 0.3, "stiffness": 1e6}}, "contact.tangential.stiffness",
      "not a value of law coulomb"),
     ({"tangential": {"law": "elastic"}}, "contact.tangential.stiffness", "thickness"),

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""``accuracy: {probe, rtol}`` on three scenes: does the chosen model meet the tolerance against a
+"""``accuracy: {probe, rtol}`` on three scenes: is the tolerance met, at less cost than a fixed fine model?
 
 A command line over ``ancf_verify.demos.accuracy_demo`` (its docstring: what it does and how).
 """

@@ -92,3 +92,12 @@ def build(root: str) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """scripts/build_native.py: ``build`` on this checkout (``--help``: what it does)."""
+    import argparse
+    argparse.ArgumentParser(prog="build_native.py", allow_abbrev=False, description=(
+        "Build the package's Cython modules in place: every ancf_petsc/**/*.pyx newer than its "
+        "extension (run by scripts/setup.sh; quick when current).")).parse_args(argv)
+    return build(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))

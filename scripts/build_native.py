@@ -7,7 +7,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from ancf_petsc.native import build  # noqa: E402
+from ancf_petsc.native import main  # noqa: E402
 
 if __name__ == "__main__":
-    sys.exit(build(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+    sys.exit(main())

@@ -2,8 +2,7 @@
 configs/data/stride_walking_<bias>.csv, and the uniform one also as an OpenSim storage file."""
 import sys
 
-from ancf_petsc.workflows.envelope import DATA
-from ancf_petsc.workflows.stride import write_stride_files
+from ancf_petsc.workflows.stride import main
 
 if __name__ == "__main__":
-    sys.exit(not write_stride_files(DATA))
+    sys.exit(main())

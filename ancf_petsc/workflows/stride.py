@@ -83,3 +83,16 @@ def write_stride_files(directory: str) -> list[str]:
             write_storage(out[-1], times, forces,
                           "synthetic_walking_stride_uniform (ancf-petsc scripts/make_stride.py; not measured)")
     return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """scripts/make_stride.py: ``write_stride_files`` into ``--out`` (default configs/data)."""
+    import argparse
+    from .envelope import DATA
+    ap = argparse.ArgumentParser(prog="make_stride.py", allow_abbrev=False, description=(
+        "Write the synthetic walking stride in its three biases to stride_walking_<bias>.csv, and "
+        "the uniform one also as an OpenSim storage file (ancf_petsc/workflows/stride.py says how)."))
+    ap.add_argument("--out", default=DATA, help="directory (default: %(default)s)")
+    for path in write_stride_files(ap.parse_args(argv).out):
+        print(path)
+    return 0

@@ -10,7 +10,7 @@ import sys
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-__all__ = ["run"]
+__all__ = ["run", "study_parts"]
 
 
 def run(command: str, name: str, argv: list[str] | None = None) -> int:
@@ -24,3 +24,13 @@ def run(command: str, name: str, argv: list[str] | None = None) -> int:
     except Exception as exc:   # a failed solve deep in dolfinx or PETSc: one line, no traceback
         print(f"{name}: {type(exc).__name__}: {exc}", file=sys.stderr)
     return 1
+
+
+def study_parts(prog: str, doc: str, names, argv: list[str] | None, more: str = "") -> list[str]:
+    """The parts named on a study's command line (``[]``: all of them); ``--help`` prints ``doc``
+    and the parts, bad options exit 2 (argparse)."""
+    import argparse
+    ap = argparse.ArgumentParser(prog=prog, description=doc, allow_abbrev=False,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("parts", nargs="*", help=f"some of {', '.join(names)} (default: all){more}")
+    return ap.parse_args(argv).parts

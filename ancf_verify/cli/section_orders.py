@@ -1,5 +1,5 @@
-"""usr/bin/env python3
-"""
+"""The section order as a rung (issue 42): 3363, 33103 and 33153 measured against beam theory, the
+committed 3D solids and each other (ancf_verify.studies.section_orders; one markdown table per part)."""
 from __future__ import annotations
 
 import argparse
@@ -9,7 +9,7 @@ from ancf_verify.studies.section_orders import PARTS
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], allow_abbrev=False)
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split()), allow_abbrev=False)
     ap.add_argument("parts", nargs="*", help=f"some of {', '.join(PARTS)} (default: all)")
     args = ap.parse_args(argv)
     unknown = [p for p in args.parts if p not in PARTS]

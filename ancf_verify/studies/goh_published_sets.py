@@ -32,8 +32,6 @@ reduced``) and on the whole ψ = 45° column:
    over the soleus' end section (``traction_force``) against the paper's point force on r; the
    fibre strain Ē (min, max) at 10 N under both; with the traction both contact laws and fade
    modes at 4 elements, and unilateral contact at 8.
-
-Usage: OPENBLAS_NUM_THREADS=1 python scripts/goh_published_sets.py [reference bulk eigen sets fold fade column_fold column_limit traction]
 """
 from __future__ import annotations
 
@@ -381,11 +379,13 @@ def column_limit() -> None:
         run.destroy()
 
 def main(argv: list[str]) -> int:
+    from ancf_verify.cli import study_parts
+    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade,
+             "column_fold": column_fold, "column_limit": column_limit, "traction": traction}
+    argv = study_parts("goh_published_sets.py", __doc__, parts, argv, "; or fade set:mode ...: those columns")
     from mpi4py import MPI  # noqa: F401
     import petsc4py
     petsc4py.init([])
-    parts = {"reference": reference, "bulk": bulk, "eigen": eigen, "sets": sets, "fold": fold, "fade": fade,
-             "column_fold": column_fold, "column_limit": column_limit, "traction": traction}
     if argv[:1] == ["fade"] and len(argv) > 1:          # fade set:mode ...
         print("## fade", flush=True)
         fade(argv[1:])

@@ -232,7 +232,8 @@ PARTS = {"space": space, "solids": solids, "pretwisted": pretwisted, "paper": pa
 
 
 def main(argv: list[str]) -> int:
-    for name in argv or list(PARTS):
+    from ancf_verify.cli import study_parts
+    for name in study_parts("locking_study.py", __doc__, PARTS, argv) or list(PARTS):
         if name not in PARTS:
             print(f"locking_study: unknown part {name!r}; parts: {', '.join(PARTS)}", file=sys.stderr)
             return 2

@@ -1,0 +1,22 @@
+"""Every script in scripts/ answers --help with its usage and exit 0, without running: make_stride.py
+and build_native.py ignored it (and wrote the stride files / built the kernels),
+goh_published_sets.py and locking_study.py said "unknown part '--help'" (exit 2), and
+section_orders.py described itself as "usr/bin/env python3"."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from helpers import MPI_ENV, ROOT
+
+SCRIPTS = sorted(f for f in os.listdir(os.path.join(ROOT, "scripts")) if f.endswith(".py"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_script_answers_help(script, tmp_path):
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", script), "--help"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=120, env={**os.environ, **MPI_ENV})
+    assert p.returncode == 0 and p.stdout.startswith("usage:"), (p.returncode, p.stdout[-300:], p.stderr[-600:])
+    assert "usr/bin/env" not in p.stdout and not os.listdir(tmp_path), p.stdout

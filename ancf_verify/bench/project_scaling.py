@@ -121,7 +121,7 @@ def iteration_time(n: int, P: int, fit: dict, sub: dict, sigma_alpha: float, com
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="project_scaling.py", description=__doc__.splitlines()[0])
     ap.add_argument("--growth", default=os.path.join(ROOT, "results", "bench_growth"))
     ap.add_argument("--scaling", default=os.path.join(ROOT, "results", "bench_scaling"))
     ap.add_argument("--fascicles", type=int, default=1027, help="strong-scaling scene (19 rings)")
@@ -131,9 +131,15 @@ def main(argv=None) -> int:
     ap.add_argument("--sigma-alpha", type=float, default=0.11,
                     help="MUMPS's parallel efficiency on the distributed interface system")
     a = ap.parse_args(argv)
-    fit = growth_fits(a.growth)
-    sub = substructure_split(a.scaling)
-    comm = comm_model(a.scaling)
+    try:
+        fit = growth_fits(a.growth)
+    except FileNotFoundError as exc:
+        ap.error(f"--growth: {exc.filename}: no such file (run scripts/bench_growth.py first)")
+    try:
+        sub, comm = substructure_split(a.scaling), comm_model(a.scaling)
+    except FileNotFoundError as exc:
+        ap.error(f"--scaling: {exc.filename}: no such file (run scripts/bench_scaling.py --quick "
+                 "and --messages first)")
     print("Measured (one Newton iteration):")
     for k, m, t, s in fit["rows"]:
         print(f"  {k:4d} fascicles, {m:6d} multipliers: {t:6.2f} s, of which Schur factor+solves {s:5.2f} s")

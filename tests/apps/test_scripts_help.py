@@ -20,3 +20,15 @@ def test_script_answers_help(script, tmp_path):
                        capture_output=True, text=True, timeout=120, env={**os.environ, **MPI_ENV})
     assert p.returncode == 0 and p.stdout.startswith("usage:"), (p.returncode, p.stdout[-300:], p.stderr[-600:])
     assert "usr/bin/env" not in p.stdout and not os.listdir(tmp_path), p.stdout
+
+
+def test_project_scaling_without_measurements_names_the_option_and_the_command(tmp_path, capsys):
+    """scripts/project_scaling.py before scripts/bench_growth.py raised FileNotFoundError with a
+    traceback; now one line naming --growth / --scaling and the benchmark that makes the file, exit 2."""
+    from ancf_verify.bench.project_scaling import main
+    with pytest.raises(SystemExit) as exc:
+        main(["--growth", str(tmp_path)])
+    assert exc.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"project_scaling.py: error: --growth: {tmp_path}/bench_growth.json: no such file "
+        "(run scripts/bench_growth.py first)")

@@ -120,7 +120,7 @@ def compare(before: dict, after: dict, rtol: float) -> bool:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="snapshot_results.py", description=__doc__.splitlines()[0])
     ap.add_argument("--write", help="record the snapshot to this JSON file")
     ap.add_argument("--compare", help="re-run and compare with this JSON file")
     ap.add_argument("--only", nargs="*", help="case names (default: all)")
@@ -128,6 +128,9 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=1, help="runs per case; the best wall time is kept")
     ap.add_argument("--rtol", type=float, default=1e-12, help="relative to the case's largest value")
     args = ap.parse_args()
+    unknown = [k for k in args.only or () if k not in cases()]
+    if unknown:
+        ap.error(f"--only: no case {unknown[0]!r}; cases: {', '.join(cases())}")
     chosen = {k: v for k, v in cases().items() if not args.only or k in args.only}
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -141,5 +144,8 @@ def main() -> int:
     if args.compare:
         with open(args.compare) as fh:
             before = json.load(fh)
-        return 0 if compare({k: v for k, v in before.items() if k in results}, results, args.rtol) else 1
+        for name in (k for k in results if k not in before):
+            print(f"{name:28s} not in {args.compare}: nothing to compare")
+        same = compare({k: v for k, v in before.items() if k in results}, results, args.rtol)
+        return 0 if same and set(results) <= set(before) else 1
     return 0

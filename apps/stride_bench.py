@@ -78,6 +78,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--vs-petsc", help="PETSc options, e.g. mat_mumps_icntl_6=3: this tree in turns "
                                        "without and with them in the config (a control's before/after)")
     args = ap.parse_args(argv)
+    labels = [c.label for c in cases(args.twist, args.bias)]
+    if args.only and not any(args.only in label for label in labels):
+        ap.error(f"--only: no case's label contains {args.only!r}; cases: {'; '.join(labels)}")
     if args.vs_petsc:
         try:
             petsc = parse_options(args.vs_petsc)

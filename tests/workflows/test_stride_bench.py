@@ -64,3 +64,16 @@ def test_parse_options_reads_pairs_and_names_a_bad_one():
         "mat_mumps_icntl_6": "3", "snes_atol": "1e-6"}
     with pytest.raises(ValueError, match="OPTION=VALUE"):
         stride_bench.parse_options("mat_mumps_icntl_6")
+
+
+def test_only_that_matches_no_case_is_refused(capsys):
+    """scripts/bench_stride.py --only X with no case labelled X printed the header, ran nothing and
+    exited 0; now it names the option and the cases, exit 2."""
+    import importlib
+    main = importlib.import_module("apps.stride_bench").main
+    with pytest.raises(SystemExit) as exc:
+        main(["--only", "nothing", "--work", "unused"])
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert exc.value.code == 2
+    assert err.startswith("bench_stride: error: --only: no case's label contains 'nothing'; cases: "
+                          "neo-Hookean sliding 4 el.;"), err

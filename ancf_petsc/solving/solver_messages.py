@@ -161,7 +161,7 @@ def failure_detail(solver, reason: int) -> Detail:
                       "itself; drop -pc_type none" + ("" if solver.problem.contact is None else
                                                      f"; {SADDLE_POINT_HINT}") + ")", "linear_solver")
     contact = solver.problem.contact
-    friction = "" if contact is None or not any(t.bounded for t in contact.terms) else FRICTION_WHY
+    friction = friction_why(contact)
     cycle = newton_cycle(solver.last_solve_history)
     if cycle is not None:
         period, low, high = cycle
@@ -245,6 +245,17 @@ FRICTION_WHY = ("; friction: the stick-slip statuses of the tangential functions
                 "large friction coefficient the quasi-static incremental problem need not have a "
                 "unique solution near this path (docs/interface.md, Limits): another increment "
                 "(solver.max_increment) or mu may pass")
+
+
+def friction_why(contact) -> str:
+    """FRICTION_WHY for a model with Coulomb friction (else ""), naming its augmentation c: the
+    pressed strips at c = 1e3 or 1e6 cycle at the first reversal, where c = 0.1 passes."""
+    bounded = [t for t in getattr(contact, "terms", ()) if t.bounded]
+    if not bounded:
+        return ""
+    c = max(getattr(t, "augmentation", 0.0) for t in bounded)
+    return (FRICTION_WHY[:-len(" may pass")] + ", or a smaller contact.tangential.augmentation "
+            f"(c = {c:g} here; it steers Newton's iteration) may pass")
 #: relative agreement of |F| one period apart that counts as a repeat (a Newton cycle): 1e-3 missed
 #: the period-5 cycle of the soleus-biased unilateral stride at ψ = 90° (2.35 kN, frame 46.8 of
 #: the gait envelope), whose norms drift by up to 1.8e-3 per period while raising -snes_max_it to

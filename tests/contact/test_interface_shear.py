@@ -116,6 +116,18 @@ def test_friction_answers_do_not_depend_on_the_augmentation(pressed):
         assert sum(st["cutbacks"] for st in pressed[c]["steps"]) == 0, c
 
 
+@pytest.mark.slow
+def test_a_friction_failure_names_the_augmentation(tmp_path):
+    """c = 1e3 on the pressed strips cycles at the first reversal (c = 0.1 passes): the message
+    names contact.tangential.augmentation and its value, not only the increment and mu (21 s)."""
+    raw = load_raw("friction_pressed_strips.yaml")
+    raw["contact"]["tangential"]["augmentation"] = 1e3
+    raw["steps"] = [1, 2, 2.05]
+    s = run_inline(raw, tmp_path)
+    assert s["status"] == "failed" and "tangential functions flip" in s["message"], s["message"]
+    assert "a smaller contact.tangential.augmentation (c = 1000 here" in s["message"], s["message"]
+
+
 def _achilles(tangential, elements=2, mode="sliding", fix=None):
     raw = load_raw("achilles_type3_psi45.yaml")
     for bc in raw["boundary_conditions"] if fix else ():

@@ -40,8 +40,7 @@ def run(law: str, elements: int, mode: str, out: str) -> dict:
     text = p.stdout + p.stderr
     with open(os.path.join(out, tag + ".log"), "w") as fh:
         fh.write(text)
-    with open(os.path.join(out, tag, "summary.json")) as fh:
-        s = json.load(fh)
+    s = paths.run_summary(os.path.join(out, tag), p, "bench_goh_achilles")
     last = s["steps"][-1]["probes"]["soleus"]["displacement"][0] if s["steps"] else float("nan")
     return {"law": law, "elements": elements, "mode": mode, "status": s["status"], "exit": p.returncode,
             "cutbacks": sum(st.get("cutbacks", 0) for st in s["steps"]),
@@ -52,7 +51,7 @@ def run(law: str, elements: int, mode: str, out: str) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(allow_abbrev=False)
     ap.add_argument("--elements", type=int, nargs="+", default=[4, 8])
-    ap.add_argument("--modes", nargs="+", default=["sliding", "unilateral"])
+    ap.add_argument("--modes", nargs="+", default=["sliding", "unilateral"], choices=["sliding", "unilateral"])
     ap.add_argument("--laws", nargs="+", default=["neo-hookean", "goh"], choices=list(CONFIGS))
     ap.add_argument("--out", default="/tmp/ancf-bench-goh")
     args = ap.parse_args()

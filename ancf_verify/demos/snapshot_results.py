@@ -78,8 +78,7 @@ def run_case(cfg: str, changes: dict, out: str, ranks: int, repeat: int) -> dict
         p = subprocess.run(exe, cwd=ROOT, capture_output=True, text=True, env=dict(os.environ, **ENV))
         wall = time.perf_counter() - t0
         best = wall if best is None else min(best, wall)
-    with open(os.path.join(run_dir, "summary.json")) as fh:
-        s = json.load(fh)
+    s = paths.run_summary(run_dir, p, "snapshot_results")
     levels = [{"load_factor": st["load_factor"], "iterations": st["iterations"],
                "negative_eigenvalues": st.get("negative_eigenvalues"),
                "probes": {k: v["displacement"] for k, v in st["probes"].items()}} for st in s["steps"]]

@@ -117,8 +117,7 @@ def run(psi: int, law: str, elements: int, mode: str, out: str) -> dict:
     wall = time.perf_counter() - t
     with open(os.path.join(out, tag + ".log"), "w") as fh:
         fh.write(p.stdout + p.stderr)
-    with open(os.path.join(out_dir, "summary.json")) as fh:
-        s = json.load(fh)
+    s = paths.run_summary(out_dir, p, "table1_goh")
     x, end, along = rotations(os.path.join(out_dir, "results.h5"), PROBE)
     return {"psi": psi, "law": law, "elements": elements, "mode": mode, "status": s["status"],
             "exit": p.returncode, "wall_s": wall,

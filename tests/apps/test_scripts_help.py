@@ -32,3 +32,17 @@ def test_project_scaling_without_measurements_names_the_option_and_the_command(t
     assert capsys.readouterr().err.splitlines()[-1] == (
         f"project_scaling.py: error: --growth: {tmp_path}/bench_growth.json: no such file "
         "(run scripts/bench_growth.py first)")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script, argv", [("table1_goh.py", ["--twists", "0"]),
+                                          ("bench_goh_achilles.py", ["--modes", "sliding", "--laws", "goh"])])
+def test_a_run_that_writes_no_summary_stops_the_script_with_its_message(script, argv, tmp_path):
+    """table1_goh.py / bench_goh_achilles.py --elements 0 ended in a FileNotFoundError traceback
+    ('.../summary.json'); now one line with the run's own config error, exit 1."""
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", script), "--elements", "0", *argv,
+                        "--out", str(tmp_path)], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, **MPI_ENV})
+    assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.strip().endswith("ancf-solve wrote no summary.json (exit 2): ancf-solve: config error: "
+                                     "beams[0].elements: must be >= 1; got 0"), p.stderr

@@ -64,7 +64,7 @@ def versus_options(args, petsc: dict) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="bench_stride", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="bench_stride", description=__doc__.split("\n\n")[0])
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="an ancf-solve without load histories (e.g. 38a07d3's)")
     ap.add_argument("--twist", type=float, default=45.0)

@@ -162,7 +162,7 @@ def fmt(q: str, v: float | None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """The command line: run the rounds, print the table (and --json every run's figures)."""
-    ap = argparse.ArgumentParser(prog="bench_iteration.py", allow_abbrev=False, description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="bench_iteration.py", allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--baseline", action="append", default=[], metavar="NAME=DIR",
                     help="another checkout with its own .venv (make setup there)")

@@ -190,7 +190,7 @@ def runs() -> None:
 def main(argv: list[str] | None = None) -> int:
     """Usage: OPENBLAS_NUM_THREADS=1 python scripts/bench_kernel.py [--elements 64] [--repeat 20]
     [--skip-runs] [--compiled-only]"""
-    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--elements", type=int, default=64)
     ap.add_argument("--repeat", type=int, default=20)
     ap.add_argument("--skip-runs", action="store_true")

@@ -49,7 +49,7 @@ def run(law: str, elements: int, mode: str, out: str) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--elements", type=int, nargs="+", default=[4, 8])
     ap.add_argument("--modes", nargs="+", default=["sliding", "unilateral"], choices=["sliding", "unilateral"])
     ap.add_argument("--laws", nargs="+", default=["neo-hookean", "goh"], choices=list(CONFIGS))

@@ -157,7 +157,7 @@ def chart(rows: list, path: str) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--counts", type=int, nargs="+", default=[7, 19, 37, 61, 91])
     ap.add_argument("--elements", type=int, nargs="+", default=[16], help="elements per fascicle")
     ap.add_argument("--solvers", nargs="+", default=["direct", "fieldsplit"], choices=list(LABELS))

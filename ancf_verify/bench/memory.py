@@ -50,7 +50,7 @@ def petsc_malloc_mb() -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--models", type=int, default=50)
     ap.add_argument("--config", default=os.path.join(ROOT, "configs", "achilles_type3_psi45.yaml"))
     ap.add_argument("--elements", type=int, default=2, help="elements per beam (default 2)")

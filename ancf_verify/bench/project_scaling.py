@@ -121,7 +121,7 @@ def iteration_time(n: int, P: int, fit: dict, sub: dict, sigma_alpha: float, com
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="project_scaling.py", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="project_scaling.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("--growth", default=os.path.join(ROOT, "results", "bench_growth"))
     ap.add_argument("--scaling", default=os.path.join(ROOT, "results", "bench_scaling"))
     ap.add_argument("--fascicles", type=int, default=1027, help="strong-scaling scene (19 rings)")

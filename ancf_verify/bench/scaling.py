@@ -213,7 +213,7 @@ def print_runs(rows: list[dict], scaled) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--config", default=os.path.join(ROOT, "configs", "bundle_hex37.yaml"))
     ap.add_argument("--steps", type=float, nargs="+", default=None)
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "bench_scaling"))

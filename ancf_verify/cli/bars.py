@@ -69,7 +69,7 @@ def run_case(case: Case, args, tmp: str) -> tuple:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarser set (smoke run)")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="output directory (default docs/)")
     ap.add_argument("--cases", default=",".join(c.key for c in CASES), help="comma-separated case keys")

@@ -71,7 +71,7 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--psi", default="0,15,45", help="pretwist angles [deg]")
     ap.add_argument("--laws", default="sliding", help="contact laws: sliding,unilateral")
     ap.add_argument("--h", default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m], coarse to fine")

@@ -28,7 +28,7 @@ from ancf_verify.studies.contact_variants import VARIANTS, reference, run_column
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--variants", default=";".join(VARIANTS), help="names separated by ;")
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--psi", default="0,15,45")

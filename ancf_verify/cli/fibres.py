@@ -58,7 +58,7 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarse meshes, K/mu = 50 only (smoke run)")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV and figures/")
     ap.add_argument("--doc", default=DOC, help="the page with the marked block (default docs/fibres.md)")

@@ -50,7 +50,7 @@ from ancf_verify.stack import import_stack
 # Driver
 # ============================================================================================
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--psi", default="45,0", help="pretwist angles [deg]")
     ap.add_argument("--mu", type=float, default=0.3, help="friction coefficient")
     ap.add_argument("--h", default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m] at the first pretwist, coarse to fine")

@@ -37,7 +37,7 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--load", type=float, default=100.0)
     ap.add_argument("--mu", default="0,0.3", help="friction coefficients (0: frictionless)")
     ap.add_argument("--h", default="2e-3", help="solid mesh sizes [m]")

@@ -25,7 +25,7 @@ from ancf_verify.paths import ROOT
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--infsup", action="store_true", help="measure the inf-sup constants first")
     ap.add_argument("--elements", default="4,8,16", help="elements per subtendon of the inf-sup study")
     ap.add_argument("--orders", default="3363,33103,33153", help="the elements of the inf-sup study")

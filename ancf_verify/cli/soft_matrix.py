@@ -45,7 +45,7 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV")
     ap.add_argument("--doc", default=DOC, help="the page with the marked block (default docs/fibres.md)")
     ap.add_argument("--replot", action="store_true", help="the block from <out>/solid_soft_matrix.csv")

@@ -18,7 +18,7 @@ from ancf_verify.summary import references, table
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="only the table from the committed CSVs (no solving)")
     ap.add_argument("--docs", default=DOCS, help="directory of the CSVs (default docs/)")
     args = ap.parse_args(argv)

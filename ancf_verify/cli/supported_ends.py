@@ -20,7 +20,7 @@ from ancf_verify.studies.supported_ends import friction, pressure
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("part", choices=("pressure", "friction"))
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--loads", default="10,100", help="pressure: load levels [N]")

@@ -120,7 +120,7 @@ def figure(config: str, out_png: str, mask: str) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], allow_abbrev=False)
     ap.add_argument("--out", default=os.path.join(ROOT, "configs", "data"))
     ap.add_argument("--figure", default=os.path.join(ROOT, "docs", "figures", "geometry_demo_outlines.png"))
     ap.add_argument("--no-figure", action="store_true")

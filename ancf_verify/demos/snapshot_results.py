@@ -119,7 +119,7 @@ def compare(before: dict, after: dict, rtol: float) -> bool:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(prog="snapshot_results.py", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="snapshot_results.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("--write", help="record the snapshot to this JSON file")
     ap.add_argument("--compare", help="re-run and compare with this JSON file")
     ap.add_argument("--only", nargs="*", help="case names (default: all)")

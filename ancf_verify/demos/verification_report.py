@@ -142,7 +142,7 @@ def pretwisted(tmp, figdir):
 
 
 def main():
-    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "figures"))
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)

@@ -56,7 +56,7 @@ def problem(tangential, elements: int, ends: str = "keep"):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--elements", type=int, default=4)
     ap.add_argument("--tangential-ends", choices=("keep", "merge"), default="keep",
                     help="contact.tangential.supported_ends of the Coulomb case (merge: the root "

@@ -112,7 +112,7 @@ def rows_of(r: dict) -> list[dict]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--elements", type=int, nargs="+", default=[4, 8])
     ap.add_argument("--loadings", nargs="+", default=list(LOADINGS), choices=list(LOADINGS))
     ap.add_argument("--laws", nargs="+", default=[law[0] for law in LAWS], choices=[law[0] for law in LAWS],

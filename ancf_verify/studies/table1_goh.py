@@ -273,7 +273,7 @@ def write_docs(block: str, text: str) -> None:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(allow_abbrev=False)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--elements", type=int, default=4)
     ap.add_argument("--mode", default="sliding", choices=["sliding", "unilateral"])
     ap.add_argument("--twists", type=int, nargs="+", default=list(TWISTS), choices=list(TWISTS))

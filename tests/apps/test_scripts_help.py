@@ -1,7 +1,8 @@
 """Every script in scripts/ answers --help with its usage and exit 0, without running: make_stride.py
 and build_native.py ignored it (and wrote the stride files / built the kernels),
 goh_published_sets.py and locking_study.py said "unknown part '--help'" (exit 2), and
-section_orders.py described itself as "usr/bin/env python3"."""
+section_orders.py described itself as "usr/bin/env python3"; seven descriptions stopped mid-sentence
+at their docstring's first line, six scripts had none."""
 import os
 import subprocess
 import sys
@@ -11,6 +12,14 @@ import pytest
 from helpers import MPI_ENV, ROOT
 
 SCRIPTS = sorted(f for f in os.listdir(os.path.join(ROOT, "scripts")) if f.endswith(".py"))
+#: descriptions still cut at their docstring's first line (apps/envelope.py: another change edits it)
+CUT = {"bench_envelope.py"}
+
+
+def _description(help_text: str) -> str:
+    """The text between --help's usage and its first argument section, on one line."""
+    body = help_text.split("\n\n", 1)[1] if "\n\n" in help_text else ""
+    return " ".join(body.split("\npositional arguments:")[0].split("\noptions:")[0].split())
 
 
 @pytest.mark.slow
@@ -20,6 +29,11 @@ def test_script_answers_help(script, tmp_path):
                        capture_output=True, text=True, timeout=120, env={**os.environ, **MPI_ENV})
     assert p.returncode == 0 and p.stdout.startswith("usage:"), (p.returncode, p.stdout[-300:], p.stderr[-600:])
     assert "usr/bin/env" not in p.stdout and not os.listdir(tmp_path), p.stdout
+    # a whole paragraph, not its first line: 'with this tree's', 'twisted hexagonal', 'contact law and'
+    described = _description(p.stdout)
+    if script in CUT:
+        pytest.xfail(f"{script}'s description is cut off: {described[-40:]!r}")
+    assert described[-1:] in tuple(".)]:?"), described
 
 
 def test_project_scaling_without_measurements_names_the_option_and_the_command(tmp_path, capsys):

@@ -9,6 +9,8 @@ linear step overshoots on the exponential).  The load predictor of an increment 
 held to the same exponent growth (``limit_predictor``)."""
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -121,6 +123,17 @@ class StepLimits:
         (opt-in) took 39 → 41 Newton iterations with turned predictions.  Whether Y changed
         (collective)."""
         return self.fibres and self.turns is not None and self.turns(X, Y)
+
+    @contextmanager
+    def straight(self):
+        """Newton steps taken straight (not turned, no turn limit) within the block: for solves
+        from states far from equilibrium, outside the asymptotic regime the turn is made for
+        (branch_switch.py)."""
+        turns, self.turns = self.turns, None
+        try:
+            yield
+        finally:
+            self.turns = turns
 
     def exponents(self, X: PETSc.Vec) -> np.ndarray | None:
         """``fibre_exponents`` at X, the start ``exponent_growth`` measures from (None without

@@ -18,8 +18,9 @@ found nothing) goes on as it is.  Of the two sides, the
 lower total potential Π = Σ∫Ψ dV − f·q is taken with a frictionless law (at a converged state
 the multipliers' term vanishes: gaps closed or multipliers zero), the smaller jump with friction
 or an elastic interface (no potential); a larger amplitude is only tried when neither side
-reached a stable state at a smaller one.  Runs that never meet a less stable state at those two
-points are not touched.  Every switch is logged, kept in the level's record (summary.json
+reached a stable state at a smaller one; where turned Newton steps find none, with straight ones
+(``StepLimits.straight``: the solves start far from equilibrium).  Runs that never meet a less
+stable state are not touched.  Every switch is logged, kept in the level's record (summary.json
 ``branch_switches``) and named in the final message.
 """
 from __future__ import annotations
@@ -40,10 +41,8 @@ from .solver_messages import switch_line
 #: the post-buckled elastica's deflection, ~0.5 L at 1.09 P_cr (tests/solving/test_branch_switch.py)
 AMPLITUDES = (0.07, 0.22, 0.67, 2.0, 6.0, 20.0, 60.0)
 #: a mode is mechanical when this share of its squared norm is on beam-node DOFs (the KKT
-#: tangent's constraint eigenvectors live on the multipliers)
-NODE_SHARE = 0.5
-#: at most this many critical modes are tried
-MAX_MODES = 2
+#: tangent's constraint eigenvectors live on the multipliers); at most MAX_MODES modes are tried
+NODE_SHARE, MAX_MODES = 0.5, 2
 #: free DOFs up to which the tangent's eigenpairs are all computed (dense); beyond, the
 #: ``SPARSE_PAIRS`` nearest zero from below (a 16-element tendon has ~2 500)
 DENSE_LIMIT = 4000
@@ -160,14 +159,12 @@ class BranchSwitch:
         tally.its += report["iterations"]
         stepper.log(switch_line(report))
         tally.switches.append(report)
-        tally.substeps += 1
-        tally.consecutive = 0
+        tally.substeps, tally.consecutive = tally.substeps + 1, 0
         P.checkpoint()
         stepper.tangent.valid = False           # the SNES's factor: the chosen side's settling solve
         path.accepted_negative = report["negative_after"]
         path.dX_last.set(0.0)                   # no load predictor across the jump
-        path.dlam_last = 0.0
-        path.lam = report["load_factor"]
+        path.dlam_last, path.lam = 0.0, report["load_factor"]
         path.dlam = max(point.step, stepper.spec.min_increment)
         return True
 
@@ -212,7 +209,12 @@ class BranchSwitch:
         P.load_factor = point.lam
         base = constrained_potential(P, point.X) if conservative else None
         try:
-            return self._switch_along(stepper, point, modes, size, conservative, base, path, target)
+            args = (stepper, point, modes, size, conservative, base, path, target)
+            report = self._switch_along(*args)
+            if report is None and P.limits.turns is not None:   # an Euler column's elastica at 0.46 L
+                with P.limits.straight():
+                    report = self._switch_along(*args)
+            return report
         finally:
             for _, mode in modes:
                 mode.destroy()
@@ -263,8 +265,8 @@ class BranchSwitch:
         d.axpy(-1.0, point.X)
         jump = section_displacement(P, d)
         d.destroy()
-        potential = constrained_potential(P, P.X) if conservative else None
-        return {"sign": sign, "negative": neg, "jump": jump, "potential": potential}
+        return {"sign": sign, "negative": neg, "jump": jump,
+                "potential": constrained_potential(P, P.X) if conservative else None}
 
     def _keep(self, stepper, point: BranchPoint, mode: PETSc.Vec, found: list[dict], offset: float,
               path, target: float, key: str) -> dict | None:
@@ -346,8 +348,7 @@ def oriented_mode(problem, free: np.ndarray, values: np.ndarray) -> np.ndarray:
 def scattered(problem, full: np.ndarray) -> PETSc.Vec:
     """An array over every DOF (the same on every rank) as a vector laid out as problem.X."""
     v = problem.X.duplicate()
-    lo, hi = v.getOwnershipRange()
-    v.setArray(full[lo:hi])
+    v.setArray(full[slice(*v.getOwnershipRange())])
     return v
 
 
@@ -385,8 +386,7 @@ def matrix_on_zero(J: PETSc.Mat) -> sparse.csr_matrix | None:
     """The whole matrix ``J`` as a symmetric scipy CSR matrix on rank 0 (None elsewhere); an
     upper-triangle storage (SBAIJ, or AIJ holding one triangle for Cholesky) is mirrored."""
     A = J.convert("aij", PETSc.Mat()) if J.getType() not in ("seqaij", "mpiaij") else J
-    n = A.getSize()[0]
-    rank = A.getComm().getRank()
+    n, rank = A.getSize()[0], A.getComm().getRank()
     rows = PETSc.IS().createStride(n if rank == 0 else 0, 0, 1, comm=PETSc.COMM_SELF)
     sub = A.createSubMatrices(rows, rows)[0]
     out = None

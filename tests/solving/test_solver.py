@@ -51,8 +51,9 @@ def compression_case(tmp_path, force, steps, cutbacks=12, material=None):
     raw["loads"][0]["traction_force"] = [force, 0.0, 0.0]
     raw["steps"] = steps
     # these tests are about the step control: at ~58 % compression the states reached are
-    # saddles (2-7 negative tangent eigenvalues, depending on the path), accepted here
-    raw["solver"] = {"max_cutbacks": cutbacks, "allow_unstable": True}
+    # saddles (2-7 negative tangent eigenvalues, depending on the path), accepted here; straight
+    # Newton steps (turned ones are held to a turn of 0.1, and no iterate inverts)
+    raw["solver"] = {"max_cutbacks": cutbacks, "allow_unstable": True, "section_update": "linear"}
     raw["output"]["dir"] = str(tmp_path / "out")
     return raw
 
@@ -263,8 +264,9 @@ def test_options_prefix_tunes_two_solves_in_one_process_apart(tmp_path):
     assert "line search bt" in runs["a_"]["solver"] and "line search basic" in runs["b_"]["solver"]
     assert all("max_it 20" in s["solver"] for s in runs.values())
     assert all(s["status"] == "completed" for s in runs.values())
-    assert runs["a_"]["steps"][-1]["probes"]["tip"]["displacement"] == pytest.approx(
-        runs["b_"]["steps"][-1]["probes"]["tip"]["displacement"], rel=1e-8)
+    u = np.asarray(runs["b_"]["steps"][-1]["probes"]["tip"]["displacement"])   # to Newton's tolerance
+    assert np.abs(np.asarray(runs["a_"]["steps"][-1]["probes"]["tip"]["displacement"]) - u).max() \
+        <= 1e-8 * np.abs(u).max()
     assert not runs["b_"]["unused_petsc_options"], runs["b_"]["unused_petsc_options"]
     assert before - already == {"a_snes_linesearch_type"}      # the prefixed config options are gone
 

@@ -13,7 +13,7 @@ from ancf_petsc.workflows.envelope_summary import cell_key, not_completed, summa
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="bench_envelope", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="bench_envelope", description=__doc__.split("\n\n")[0])
     ap.add_argument("--grid", default="core", choices=list(GRIDS))
     ap.add_argument("--twists", default=",".join(str(t) for t in TWISTS), help="degrees, comma-separated")
     ap.add_argument("--biases", default=",".join(BIASES))

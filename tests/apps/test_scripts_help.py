@@ -12,8 +12,8 @@ import pytest
 from helpers import MPI_ENV, ROOT
 
 SCRIPTS = sorted(f for f in os.listdir(os.path.join(ROOT, "scripts")) if f.endswith(".py"))
-#: descriptions still cut at their docstring's first line (apps/envelope.py: another change edits it)
-CUT = {"bench_envelope.py"}
+#: descriptions still cut at their docstring's first line
+CUT: set = set()
 
 
 def _description(help_text: str) -> str:

@@ -45,6 +45,7 @@ import numpy as np
 
 from . import friction_blocks
 from .multipliers import reference_shear_ratio
+from .oscillation import pull_within_elements
 from .partners import PartnerTerm, tangential
 from .reports import output_signs
 
@@ -308,17 +309,20 @@ class CoulombFriction(PartnerTerm):
             "slip_increment": output_signs(c, c.points.itf[c.local])[:, None] * tangential(ev.du, st.pr.n),
             "multiplier_shear": lam[own], "multiplier_stick": ev.m_stick[own].astype(np.int8)}
 
-    columns = PartnerTerm.columns + (("max_slip_increment", "max"),)
+    columns = PartnerTerm.columns + (("max_slip_increment", "max"), ("pull_within_elements", "sum"))
 
     def sums(self, c, st, on: np.ndarray) -> list[float]:
-        """The base's statistics and the largest slip in the level's last load increment."""
+        """The base's statistics, the largest slip in the level's last load increment and the
+        pull that cancels within elements (oscillation.py)."""
         du = tangential(st.terms[self.name].du[on], st.pr.n[on])
-        return super().sums(c, st, on) + [float(np.linalg.norm(du, axis=1).max(initial=0.0))]
+        return super().sums(c, st, on) + [float(np.linalg.norm(du, axis=1).max(initial=0.0)),
+                                          pull_within_elements(c, st, on)]
 
     @staticmethod
     def report(values: dict, sign: float) -> dict:
-        """The base's entries and ``max_slip_increment`` [m]."""
-        return PartnerTerm.report(values, sign) | {"max_slip_increment": values["max_slip_increment"]}
+        """The base's entries, ``max_slip_increment`` [m] and ``pull_within_elements`` [N]."""
+        return PartnerTerm.report(values, sign) | {"max_slip_increment": values["max_slip_increment"],
+                                                   "pull_within_elements": values["pull_within_elements"]}
 
     def describe(self) -> str:
         return (f"Coulomb friction, mu = {self.mu:g} (tangential multipliers, exact stick; "

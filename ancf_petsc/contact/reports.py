@@ -6,6 +6,7 @@ import numpy as np
 
 from .interfaces import held_ends, supported_ends
 from .kinks import TURN_NOTE, turn_notes
+from .oscillation import OSCILLATION_NOTE, oscillation_notes
 from .state import ContactState
 
 #: per-interface statistics of ``gap_sums``: (name, how ranks combine it)
@@ -154,17 +155,19 @@ PATH_NOTE = "note: Coulomb friction's answer follows the load path"
 
 def made_at_the_end(note: str) -> bool:
     """Whether a warning line is one made at the end of a run (``penetration_warnings`` about its
-    last level, ``path_notes`` about its levels): a restarted run makes it again."""
-    return ((note.startswith("warning: contact interface ") and LAST_LEVEL in note) or note.startswith(PATH_NOTE)
-            or note.startswith(TURN_NOTE))
+    last level, ``path_notes``, ``turn_notes`` and ``oscillation_notes`` about its levels): a
+    restarted run makes it again."""
+    return ((note.startswith("warning: contact interface ") and (LAST_LEVEL in note or OSCILLATION_NOTE in note))
+            or note.startswith(PATH_NOTE) or note.startswith(TURN_NOTE))
 
 
 def end_notes(c, steps: list[dict]) -> list[str]:
     """The lines a run's end adds to its warnings (``steps``: summary.json's, at least one):
     penetration at the last level, a friction path chosen by the solver, B's normal turning at
-    element boundaries (kinks.turn_notes)."""
+    element boundaries (kinks.turn_notes), a pressure oscillating under friction
+    (oscillation.oscillation_notes)."""
     return (penetration_warnings(c, steps[-1].get("contact", {})) + path_notes(c, steps)
-            + turn_notes(c, steps))
+            + turn_notes(c, steps) + oscillation_notes(c, steps))
 
 
 def path_notes(c, steps: list[dict]) -> list[str]:

@@ -58,7 +58,8 @@ def report_columns(c) -> tuple:
 
 def gap_sums(c, st: ContactState) -> np.ndarray:
     """Per interface (rows) the local parts of ``report_columns`` of the ``Contact`` c at its
-    evaluation st."""
+    evaluation st.  The forces are the points' τ_p (with their fade weights: what acts on the
+    beams), not Σ_k λ_k A_k: past the ends a function's points weigh less than its A_k."""
     out = np.zeros((len(c.interfaces), len(report_columns(c))))
     if len(c.local) == 0:
         return out
@@ -76,7 +77,7 @@ def gap_sums(c, st: ContactState) -> np.ndarray:
         out[k] = [np.abs(pr.g[v]).max(initial=0.0), np.max(-pr.g[on & over], initial=0.0),
                   float(np.sum(pr.g[v] ** 2)), v.sum(),
                   np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
-                  lam[m].max(initial=0.0), float(lam[m] @ area[m]),
+                  lam[m].max(initial=0.0), float(st.tau[v].sum()),
                   float(np.maximum(st.tau[v], 0.0).sum()), float(np.minimum(st.tau[v], 0.0).sum()),
                   on.sum(), float(np.abs(st.tau[v & ~over]).sum())] + [
                   x for t in c.terms for x in t.sums(c, st, on)]

@@ -81,3 +81,52 @@ def test_the_force_past_the_ends_is_the_serial_one_on_every_rank_count(tmp_path)
                 got = step["contact"][name]
                 scale = max(ref_r["pressing_force"] - ref_r["tension_force"] for ref_r in ref["contact"].values())
                 assert abs(got["past_ends_force"] - r["past_ends_force"]) <= 1e-9 * scale, (n, step["load_factor"], name)
+
+
+def _beam_balance(raw: dict, out_dir) -> tuple[dict, np.ndarray]:
+    """At the last level written to results.h5: per interface Σ_p τ_p (the contact points' forces
+    along their normals, τ_p with its fade weight, from the contact evaluated at the written state)
+    and per beam the across components (y, z: the end loads pull along x) of its support reaction
+    plus the contact forces it receives, Σ ±τ_p n_p: zero where the τ_p are the forces acting."""
+    P, _ = build_problem(raw)
+    c = P.contact
+    beams = [b.name for b in P.model.beams]
+    with h5py.File(out_dir / "results.h5") as f:
+        g = f["steps"][sorted(f["steps"])[-1]]
+        c.restore_state(g["contact/projection"][()], g["contact/multiplier_active"][()])
+        X = P.global_vector(g["restart/blocks"][()].ravel())
+        balance = g["reactions"][()][:, 1:].copy()
+    c.allow_update = False
+    st = c.evaluate(P.exchange.local_state(X).copy(), P.exchange.needed)
+    forces = {}
+    for k, itf in enumerate(c.interfaces):
+        on = c.points.itf[c.local] == k
+        f = st.tau[on] @ st.pr.n[on]                     # on A (the points' beam), −f on B
+        balance[beams.index(itf.a.name)] += f[1:]
+        balance[beams.index(itf.b.name)] -= f[1:]
+        forces[itf.name] = float(st.tau[on].sum())
+    return forces, balance
+
+
+def test_the_normal_force_is_what_acts_on_the_beams_where_points_fade(tmp_path):
+    """normal_force was Σ_k λ_k A_k, the functions' coefficients times their whole areas, while the
+    forces acting are the points' τ_p, whose weights fade past the ends: twist 0, sliding,
+    gastrocnemius-biased, at 3 kN it read −87.35 N on mg_sol against pressing + tension = −111.52 N
+    (the walking stride, frame 51: 392.5 against −87.9 N, λ_k up to 72 MPa on a function a third
+    of whose area still counts).  The τ_p balance each beam's support reaction (to 0.01 N here;
+    Σ λ_k φ_k without the weights leaves 24 N); normal_force is now their sum, = pressing_force +
+    tension_force, on every level and interface."""
+    raw = cell_config(EnvelopeCell(NEO, 0, "gastrocnemius", "sliding", levels=(1200.0, 2000.0, 3000.0)))
+    s = run_inline(raw, tmp_path)
+    assert s["status"] == "completed"
+    for step in s["steps"]:
+        for name, r in step["contact"].items():
+            both = r["pressing_force"] - r["tension_force"]
+            assert r["normal_force"] == pytest.approx(r["pressing_force"] + r["tension_force"],
+                                                      rel=1e-12, abs=1e-12 * both), (step["load_factor"], name)
+    report = s["steps"][-1]["contact"]
+    assert report["mg_sol (soleus|medial_gastrocnemius)"]["past_ends_force"] > 1.0     # points fade here
+    forces, balance = _beam_balance(raw, tmp_path)
+    assert np.abs(balance).max() < 0.01
+    for name, force in forces.items():
+        assert report[name]["normal_force"] == pytest.approx(force, rel=1e-9, abs=1e-9)

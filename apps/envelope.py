@@ -25,6 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--band-step", type=float, help="solver.band_step of every cell (docs/running.md)")
     ap.add_argument("--section-update", choices=("linear", "rotation"),
                     help="solver.section_update of every cell (docs/running.md)")
+    ap.add_argument("--pressure-axial", type=int, help="contact.projection.axial of every cell (docs/contact.md)")
     ap.add_argument("--solver", default=os.path.join(os.path.dirname(sys.executable), "ancf-solve"))
     ap.add_argument("--before", help="another ancf-solve to run the same cells with (before/after)")
     ap.add_argument("--jobs", type=int, default=2)
@@ -34,7 +35,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     cells = grid(args.grid, [float(t) for t in args.twists.split(",")], args.biases.split(","), args.elements,
                  predictor=args.predictor, tangent=args.tangent, augmentation=args.augmentation,
-                 band_step=args.band_step, section_update=args.section_update)
+                 band_step=args.band_step, section_update=args.section_update,
+                 pressure_axial=args.pressure_axial)
     if args.failed_in:
         if not os.path.isfile(args.failed_in):
             ap.error(f"--failed-in {args.failed_in}: no such file (a CSV written by --csv)")

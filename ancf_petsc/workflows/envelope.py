@@ -34,8 +34,7 @@ LEVELS = (30.0, 100.0, 200.0, 400.0, 600.0, 800.0, 1000.0, 1200.0, 1600.0, 2000.
 #: the root on a frictionless plane: u_x = 0 over the face, the section free in its plane
 PLANE_ROOT = {"r": "xyz", "r_y": "xz", "r_z": "x", "r_yy": "x", "r_zz": "x", "r_yz": "x"}
 BEAMS = ("soleus", "medial_gastrocnemius", "lateral_gastrocnemius")
-#: the stride files' muscle columns (OpenSim's names), in the order of BEAMS
-STRIDE_COLUMNS = ("soleus_r", "gasmed_r", "gaslat_r")
+STRIDE_COLUMNS = ("soleus_r", "gasmed_r", "gaslat_r")     # the stride files' (OpenSim's) names, BEAMS' order
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "configs")
 DATA = os.path.join(CONFIGS, "data")
 NEO = os.path.join(CONFIGS, "achilles_type3_psi45.yaml")
@@ -65,6 +64,7 @@ class EnvelopeCell:
     augmentation: float | None = None     # contact.tangential.augmentation (None: the default)
     band_step: float | None = None        # solver.band_step (None: the default)
     section_update: str | None = None     # solver.section_update (None: the default)
+    pressure_axial: int | None = None     # contact.projection.axial (None: the default)
 
     @property
     def name(self) -> str:
@@ -75,7 +75,8 @@ class EnvelopeCell:
         pred = (f"_{self.predictor}" if self.predictor else "") + (f"_{self.tangent}" if self.tangent else "")
         pred += f"_c{self.augmentation:g}" if self.augmentation is not None and self.friction else ""
         pred += f"_band{self.band_step:g}" if self.band_step is not None else ""
-        pred += f"_{self.section_update}" if self.section_update else ""
+        pred += (f"_{self.section_update}" if self.section_update else "") + (
+            f"_p{self.pressure_axial}" if self.pressure_axial is not None else "")
         return f"{stem}{kind}_{law}{mu}_tw{self.twist:g}_{self.bias}_e{self.elements}{pred}"
 
 
@@ -112,6 +113,8 @@ def cell_config(cell: EnvelopeCell) -> dict:
     contact = cfg.setdefault("contact", {})
     if cell.law is not None:
         contact["mode"] = cell.law
+    if cell.pressure_axial is not None:
+        contact.setdefault("projection", {})["axial"] = cell.pressure_axial
     if cell.friction:
         contact["tangential"] = {"law": "coulomb", "friction": float(cell.friction)}
         if cell.augmentation is not None:
@@ -146,8 +149,7 @@ class CellResult:
     snaps: tuple = ()                     # summary.json's steps[].branch_switches[].critical_load_factor
     windows_from: float | None = None     # summary.json's search_window_whole_from
     cause: str = ""                       # summary.json's failure_cause (solving/failure_cause.py)
-    #: (level, reported at) of the levels reported past a gap of the load path (step_over.py)
-    passed_over: tuple = ()
+    passed_over: tuple = ()               # (level, reported at) past a gap of the load path (step_over.py)
 
     @property
     def frames(self) -> int:
@@ -175,8 +177,7 @@ class CellResult:
                 "message": self.message,
                 "fade_forces_pointwise_from": "" if self.pointwise_from is None else self.pointwise_from,
                 "snaps": ";".join(f"{x:.6g}" for x in self.snaps),
-                "search_window_whole_from": "" if self.windows_from is None else self.windows_from,
-                "cause": self.cause,
+                "search_window_whole_from": "" if self.windows_from is None else self.windows_from, "cause": self.cause,
                 "passed_over": ";".join(f"{lv:.6g}@{at:.6g}" for lv, at in self.passed_over)}
 
 
@@ -195,8 +196,7 @@ def solve_config(solver: list[str], cfg: dict, out: str, timeout: float | None =
                               env=dict(os.environ, OMPI_MCA_rmaps_base_oversubscribe="1"))
     except subprocess.TimeoutExpired:
         return None, time.perf_counter() - t0, None
-    wall = time.perf_counter() - t0
-    summary = os.path.join(out, "run", "summary.json")
+    wall, summary = time.perf_counter() - t0, os.path.join(out, "run", "summary.json")
     if not os.path.isfile(summary):
         return proc, wall, None
     with open(summary) as fh:
@@ -245,10 +245,9 @@ _FRICTION_STRIDES = _columns(NEO, (SLIDING,), (0.3,), stride=True)
 
 def _strides(base: str):
     """A grid builder: the walking stride of ``base`` sliding and unilateral, then with μ = 0.3."""
-    frictionless = _columns(base, (SLIDING, UNILATERAL), stride=True)
-    friction = _columns(base, (SLIDING,), (0.3,), stride=True)
-    return lambda twists, biases, elements: (frictionless(twists, biases, elements)
-                                             + friction(twists, biases, elements))
+    frictionless, friction = _columns(base, (SLIDING, UNILATERAL), stride=True), _columns(
+        base, (SLIDING,), (0.3,), stride=True)
+    return lambda twists, biases, elements: frictionless(twists, biases, elements) + friction(twists, biases, elements)
 
 
 #: the named grids of scripts/bench_envelope.py: neo-Hookean columns (sliding and unilateral),
@@ -272,7 +271,8 @@ GRIDS = {
 
 def grid(name: str, twists, biases, elements: int = 4, **settings) -> list[EnvelopeCell]:
     """The cells of a named grid (``GRIDS``), with the ``EnvelopeCell`` settings given (predictor,
-    tangent, band_step, section_update: the solver's; augmentation: friction cells' contact.tangential)."""
+    tangent, band_step, section_update: the solver's; pressure_axial: contact.projection.axial;
+    augmentation: friction cells' contact.tangential)."""
     if name not in GRIDS:
         raise ValueError(f"unknown grid {name!r}; grids: {', '.join(GRIDS)}")
     return [replace(c, **settings) for c in GRIDS[name](twists, biases, elements)]

@@ -91,6 +91,8 @@ def main(argv: list[str] | None = None) -> int:
                   f"{log_path}: run the same command to go on",
                   file=sys.stderr, flush=True)
         return 128 + exc.signum
+    finally:
+        interrupt.uninstall()            # back to the caller's handlers (main() called in-process)
 
 
 def _run(spec, args, say) -> int:

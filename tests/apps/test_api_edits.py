@@ -86,17 +86,28 @@ def test_ctrl_c_in_a_python_session_is_an_interruption_not_a_bug(tmp_path):
     not as a bug (it was ``failed``, INTERNAL_ERROR, 'KeyboardInterrupt: '), and the
     KeyboardInterrupt reaches the caller."""
     import json
-    import os
     import signal
     ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
     spec.steps = [0.1 * k for k in range(1, 11)]
 
     def log(line):
-        if "step 3/" in line:
-            os.kill(os.getpid(), signal.SIGINT)
+        if "step 3/" in line:              # in this thread: os.kill may reach another thread of
+            signal.raise_signal(signal.SIGINT)    # the worker, the interrupt then lands later
     with pytest.raises(KeyboardInterrupt):
         ap.solve(spec, log=log)
     s = json.load(open(tmp_path / "o" / "summary.json"))
     assert (s["status"], s["reason_code"]) == ("interrupted", "SIGINT")
     assert len(s["steps"]) == 3 and "after load factor 0.3" in s["message"]
 
+
+
+def test_ancf_fit_called_in_process_gives_back_the_callers_signal_handlers(tmp_path):
+    """apps/ancf_fit.main installs the clean-stop handlers (solving/interrupt.py) and, like
+    ancf-solve's, restores the caller's on return: it left its own SIGINT handler behind, under
+    which a later Ctrl-C in the same session only recorded the signal."""
+    import signal
+
+    from apps.ancf_fit import main
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    assert main([str(tmp_path / "missing.yaml")]) == 2
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before

@@ -21,20 +21,13 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, path, printer, start_petsc
+from apps.cli import Parser, at_least, path, printer, start_petsc
 
 PROG = "ancf-fit"
 
 
-def _count(text: str) -> int:
-    """A non-negative integer option (--task, --ranks)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0; got {value}")
-    return value
+#: --task and --ranks: a non-negative integer
+_count = at_least(0)
 
 
 def _args(argv: list[str]):

@@ -29,15 +29,24 @@ def path(text: str) -> str:
     return text
 
 
-def positive(text: str) -> int:
-    """A count option (``--jobs``, ``--ranks``): an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer; got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
-    return value
+def at_least(lo: int):
+    """The type of an integer option >= ``lo``: counts (``--jobs``, ``--ranks``) take 1
+    (``positive``), ancf-fit's ``--task`` 0."""
+    what = "a positive integer" if lo == 1 else "an integer"
+    bound = what if lo == 1 else f"an integer >= {lo}"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}; got {text!r}") from None
+        if value < lo:
+            raise argparse.ArgumentTypeError(f"expected {bound}; got {value}")
+        return value
+    return parse
+
+
+positive = at_least(1)
 
 
 def start_petsc(petsc_args: list[str]) -> None:

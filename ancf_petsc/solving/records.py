@@ -99,3 +99,22 @@ class PathState:
     dlam: float
     dlam_last: float
     accepted_negative: int = 0
+
+
+def restored_records(point) -> list[StepRecord]:
+    """The levels a restarted run continues after (``io.restart.RestartPoint``'s summary entries)
+    as StepRecords: the run's status and counts cover every level on disk, not the restarted
+    process's alone (an unstable run restarted read ``completed``)."""
+    if point is None:
+        return []
+    out = []
+    for e in point.summary.get("steps") or []:
+        passed = e.get("passed_over")
+        out.append(StepRecord(
+            e["load_factor"], e.get("iterations", 0), e.get("substeps", 0), e.get("cutbacks", 0),
+            e.get("reason", ""), e.get("residual_norm", 0.0), e.get("wall_time", 0.0),
+            negative_eigenvalues=e.get("negative_eigenvalues"),
+            weights_unsettled=bool(e.get("weights_unsettled")),
+            branch_switches=list(e.get("branch_switches") or []),
+            passed_over=None if not passed else (passed["level"], passed["last_converged"], passed["reported_at"])))
+    return out

@@ -35,7 +35,7 @@ from . import solver_messages, step_over
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
-from .records import LoadStepFailure, PathState
+from .records import LoadStepFailure, PathState, restored_records
 from .restart_check import check_restart_state
 from .stepper import LoadStepper
 from .supports import free_rigid_motions
@@ -355,7 +355,7 @@ def _run(spec: ModelSpec, comm, say, info: dict | None, point) -> RunResult:
 def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver_events0: float) -> RunResult:
     """Write the run's final summary and say how it ended (collective)."""
     spec, comm, say, stepper = run.spec, run.comm, run.say, run.stepper
-    records = run.converged
+    records = restored_records(run.point) + run.converged    # a restart's earlier levels too
     status, code, message = final_status(records, failure, spec.solver.allow_unstable)
     message += stepper.fade_switch.note() + stepper.windows.note()
     unused = [f"petsc.{k}" for k in stepper.solver.unused_config_options] + unused_command_line_options(comm)

@@ -1,0 +1,28 @@
+"""A restarted run's status, counts and final line cover every level on disk, not only the
+levels the restarted process solved."""
+from helpers import CONFIGS, load_raw, run_inline
+
+
+def _restart(raw, out):
+    from ancf_petsc.api import solve
+    from ancf_petsc.config.parse import parse_config
+    spec = parse_config(dict(raw, output={"dir": str(out), "vtk": False}), base_dir=CONFIGS)
+    return solve(spec, log=lambda *_: None, restart=str(out))
+
+
+def test_a_restarted_unstable_run_stays_unstable(tmp_path):
+    """The bar pushed at its tip (-400 N, every level an unstable equilibrium) restarted with no
+    level to go read 'completed', exit 0, unstable_levels [] (the restarted process's levels
+    alone); now 'unstable' naming both levels, and the result lists both."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["loads"][0]["traction_force"] = [-400.0, 0.0, 0.0]
+    raw["steps"] = [0.1, 0.2]
+    s = run_inline(dict(raw, output={"vtk": False}), tmp_path)
+    assert s["status"] == "unstable" and s["unstable_levels"] == [0.1, 0.2], s["message"]
+    res = _restart(raw, tmp_path)
+    assert res.status == "unstable" and res.exit_code == 4, res.message
+    assert res.summary["unstable_levels"] == [0.1, 0.2] and "2 of 2 levels" in res.message
+    assert len(res.records) == 2 == len(res.summary["steps"])
+    res = _restart(dict(raw, steps=[0.1, 0.2, 0.3]), tmp_path)
+    assert res.status == "unstable" and "3 of 3 levels" in res.message, res.message
+    assert len(res.records) == 3 == len(res.summary["steps"])

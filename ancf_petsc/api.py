@@ -77,10 +77,22 @@ def _raw_as_solved(spec: ModelSpec) -> None:
 
 
 def _init_petsc() -> None:
-    """Initialise MPI, then PETSc (once; a no-op when the program already did)."""
+    """Initialise MPI, then PETSc (once; a no-op when the program already did).  The session's
+    SIGPIPE handler is kept: PETSc's (PetscInitialize) aborted the process (exit 59, a PETSc
+    error dump) at a later write into a closed pipe (``script.py | head``), not BrokenPipeError."""
+    import signal
+    import sys
+    import threading
+
     import petsc4py
     from mpi4py import MPI  # noqa: F401  (MPI before PETSc)
+    if "petsc4py.PETSc" in sys.modules:
+        return
+    session = signal.getsignal(signal.SIGPIPE)
     petsc4py.init()
+    from petsc4py import PETSc  # noqa: F401  (PetscInitialize installs PETSc's signal handlers)
+    if session is not None and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGPIPE, session)
 
 
 __all__ = ["ConfigError", "InputError", "Model", "ModelSpec", "Results", "build_model", "load_config",

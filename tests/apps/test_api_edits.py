@@ -126,3 +126,28 @@ def test_ancf_fit_called_in_process_gives_back_the_callers_signal_handlers(tmp_p
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     assert main([str(tmp_path / "missing.yaml")]) == 2
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_a_solve_leaves_the_sessions_sigpipe_handler(tmp_path):
+    """The API's first ``solve`` initialises PETSc, whose SIGPIPE handler replaced Python's: a
+    script that solved, then printed into a closed pipe (``python script.py | head -1``) ended in
+    a PETSc error dump and MPI_ABORT (exit 59) instead of Python's BrokenPipeError."""
+    import subprocess
+    import sys
+    script = (
+        "import sys, ancf_petsc as ap\n"
+        f"spec = ap.load_config('{CONFIGS}/uniaxial_neohookean.yaml')\n"
+        f"spec.output.dir, spec.steps = '{tmp_path / 'o'}', [1.0]\n"
+        "ap.solve(spec, log=lambda line: None)\n"
+        "try:\n"
+        "    for i in range(10 ** 6):\n"
+        "        print(i, flush=True)\n"
+        "except BrokenPipeError:\n"
+        "    sys.stderr.write('BrokenPipeError\\n')\n"
+        "    sys.stdout = None\n")
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    proc.stdout.readline()
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert (proc.wait(timeout=120), err.strip().splitlines()[-1:]) == (0, ["BrokenPipeError"]), err

@@ -68,7 +68,7 @@ def parse_section(value, path: str, base_dir: str) -> SectionSpec:
     if "center" in value:
         s.center = vector(value["center"], key_path(path, "center"), 2)
     if "cubature_degree" in value:
-        s.cubature_degree = integer(value["cubature_degree"], key_path(path, "cubature_degree"), lo=1, hi=30)
+        s.cubature_degree = _cubature_degree(value["cubature_degree"], key_path(path, "cubature_degree"))
     if shape == "ellipse":
         s.semi_axes = vector(value["semi_axes"], key_path(path, "semi_axes"), 2, positive=True)
     elif shape == "circle":
@@ -239,6 +239,16 @@ def _axial_points(value, path: str, nodes: int = 3) -> int:
         raise ConfigError(path, f"must be >= {nodes} for an element with {nodes} nodes along the beam; "
                                 f"got {n}: fewer points leave its stiffness singular (zero-energy "
                                 f"modes); use {nodes}")
+    return n
+
+
+def _cubature_degree(value, path: str) -> int:
+    """The section rule's degree: 1 does not integrate y², z² (one point on a rectangle, points on
+    one line of an ellipse), so bending had no stiffness: the elastica failed or ended unstable."""
+    n = integer(value, path, hi=30)
+    if n < 2:
+        raise ConfigError(path, f"must be >= 2; got {n}: a rule of degree {n} does not integrate y^2, z^2, "
+                                "so bending has no (or a wrong) stiffness; use 2 or more (6, the default)")
     return n
 
 

@@ -147,6 +147,11 @@ CASES += [
      "increments to load factor 1; give at least 1e-05"),
     ("band step too small", _set(["solver"], {"band_step": 1e-9}), "solver.band_step", "give 0 (off) or at least 0.1"),
     ("bundle with beams", lambda raw: (raw.__setitem__("bundle", copy.deepcopy(BUNDLE))), "beams", "bundle"),
+    # a degree-1 section rule (one point on a rectangle, two angles on the z axis of an ellipse):
+    # the 8-element elastica failed after 165 Newton iterations, or ended unstable at a third of its deflection
+    ("cubature degree one", _set(["beams", 0, "section", "cubature_degree"], 1),
+     "beams[0].section.cubature_degree", "must be >= 2; got 1: a rule of degree 1 does not integrate y^2, z^2"),
+    ("bundle cubature degree one", _bundle(cubature_degree=1), "bundle.cubature_degree", "must be >= 2; got 1"),
 ]
 
 

@@ -33,6 +33,7 @@ CAUSES = {
     "active_set_iterations": "unilateral contact's active set still changed when the iterations ran out",
     "newton_budget_exceeded": "the run spent solver.max_newton_iterations",
     "newton_budget": "a solve ran out of a -snes_max_it given below the run's own budget",
+    "unreachable_tolerance": "a -snes_atol given below 20 x the residual's rounding floor: Newton cannot reach it",
     "petsc_error": "PETSc or an external package raised an error (e.g. MUMPS could not factor the tangent)",
 }
 # (any other failure: its SNES reason in lower case, e.g. diverged_fnorm_nan)

@@ -10,7 +10,7 @@ from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.database import option
 from ..linalg.options import DEFAULT_OPTIONS, factor_package, solver_options
 from .failure_cause import Detail
-from .records import VIOLATED_STATE
+from .records import STALLED_STEP, VIOLATED_STATE
 
 
 def describe(solver) -> str:
@@ -139,12 +139,33 @@ def switched_message(reports: list[dict]) -> str:
             "solver.branch_switch: false stops there instead)")
 
 
+def reachable_tolerance(solver) -> float:
+    """The smallest |F| Newton can be held to: 20 x the residual's rounding floor, as the run's
+    own absolute tolerance (below it a change of F is rounding, not a jump of the residual)."""
+    return 20.0 * getattr(solver, "rounding_floor", 0.0)
+
+
+def unreachable_atol(solver) -> Detail | None:
+    """A -snes_atol (command line or ``petsc:``) below ``reachable_tolerance``: the cause of a
+    solve stalled above it (-snes_atol 1e-14 on configs/bending_neohookean.yaml, floor 4.9e-11:
+    12 cut-backs, then blamed on a 2.4e-11 N 'discontinuity of the discrete model')."""
+    atol, least = solver.snes.getTolerances()[1], reachable_tolerance(solver)
+    if atol >= least:
+        return None
+    return Detail(f" (-snes_atol {atol:.1e}, given in the run's options, is below 20 x the residual's rounding "
+                  f"floor |F(q0,0)| {solver.rounding_floor:.1e}: Newton's |F| cannot get that small; leave "
+                  f"-snes_atol out or give at least {least:.1e})", "unreachable_tolerance")
+
+
 def failure_detail(solver, reason: int) -> Detail:
     """What to try after a failed level: the linear solver's reason and what works, a
-    preconditioner that solves nothing, or a Newton budget too small for an active set; its
-    ``kind`` the cause's code (failure_cause.py)."""
+    preconditioner that solves nothing, a -snes_atol below rounding, or a Newton budget too
+    small for an active set; its ``kind`` the cause's code (failure_cause.py)."""
     if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
         return Detail(linear_solver_detail(solver, reason), "linear_solver")
+    unreachable = unreachable_atol(solver)
+    if unreachable is not None and reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT):
+        return unreachable
     if reason == VIOLATED_STATE:
         return Detail(" (the solves converged on active sets with a multiplier pulling or a gap penetrating "
                       "at their states, which are no answers of unilateral contact)", "violated_state")

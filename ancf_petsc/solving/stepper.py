@@ -318,7 +318,8 @@ def _given_up(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, step: fl
     (failure_cause.py).  Collective."""
     lam, jump, P = path.lam, None, stepper.problem
     if not (inverted or lost) and reason in JUMP_REASONS:
-        jump = residual_jump(P, stepper.solver.trail, lam + step, stepper.solver.snes.getTolerances()[1])
+        tol = max(stepper.solver.snes.getTolerances()[1], solver_messages.reachable_tolerance(stepper.solver))
+        jump = residual_jump(P, stepper.solver.trail, lam + step, tol)
         X_prev.copy(P.X)
         P.restore()
     # a min_increment that forbade every cut-back is the cause, not Newton's course

@@ -106,6 +106,21 @@ def test_newton_budget_stops_a_run_cleanly(tmp_path):
     assert 1 <= len(s["steps"]) < 4 and s["newton_iterations"] > 12
 
 
+def test_an_atol_below_the_rounding_floor_is_named_not_taken_for_a_jump(tmp_path):
+    """-snes_atol below 20 x the residual's rounding floor cannot be met: the failure names it
+    (it was blamed on a 2.4e-11 N 'discontinuity of the discrete model, please report it')."""
+    raw = load_raw("bending_neohookean.yaml")          # floor 4.9e-11 N
+    raw["steps"] = [0.25]
+    raw["solver"] = {"max_cutbacks": 1}
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-snes_atol", "1e-15"])
+    assert p.returncode == 3, p.stdout + p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert "(-snes_atol 1.0e-15, given in the run's options, is below 20 x the residual's rounding floor" in line, line
+    assert "leave -snes_atol out or give at least" in line and "discontinuity" not in line, line
+    assert read_summary(tmp_path / "out")["failure_cause"] == "unreachable_tolerance"
+
+
 def test_a_newton_budget_caps_a_long_friction_solve(tmp_path):
     """The budget was checked between solves only: a friction column (a solve may take 200
     iterations) given 20 stopped after 35, a friction history given 110 after 197.  Each solve's

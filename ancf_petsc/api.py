@@ -44,11 +44,14 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
 
 
 def check_edited(spec: ModelSpec) -> None:
-    """What a spec changed after parsing must still satisfy: its supports, loads and probes
-    follow its beams' element counts ('last' is the last node of the beam as it is now), and its
-    steps increase strictly (a spec edited to decreasing steps raised an UnboundLocalError in the
-    load stepping).  Raises ConfigError, as the config itself would."""
+    """What a spec changed after parsing must still satisfy: its beams' element counts, types
+    and axial points are the config's kinds (a changed type takes its own locking remedy), its
+    supports, loads and probes follow its beams' element counts ('last' is the last node of the
+    beam as it is now), and its steps increase strictly (a spec edited to decreasing steps raised
+    an UnboundLocalError in the load stepping).  Raises ConfigError, as the config itself would."""
+    from .config.beams import check_edited_beams
     from .config.conditions import parse_steps, resolve_nodes
+    check_edited_beams(spec.beams)
     resolve_nodes(spec)
     if spec.history is None:
         spec.steps = parse_steps(spec.steps)
@@ -57,11 +60,13 @@ def check_edited(spec: ModelSpec) -> None:
 
 def _raw_as_solved(spec: ModelSpec) -> None:
     """The config stored with the results (results.h5 ``/model`` ``config_yaml``) says the element
-    counts, axial points and steps the spec is solved with, also where they were changed after
-    parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's record of its config)."""
+    counts, types, locking remedies, axial points and steps the spec is solved with, also where
+    they were changed after parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's
+    record of its config)."""
     import copy
 
     from .config.specs import DEFAULT_AXIAL_POINTS
+    from .physics.elements import DEFAULT_ELEMENT, ELEMENTS
     raw = copy.deepcopy(spec.raw)
     beams = raw.get("beams") if isinstance(raw, dict) else None
     if isinstance(beams, list) and len(beams) == len(spec.beams):
@@ -70,6 +75,10 @@ def _raw_as_solved(spec: ModelSpec) -> None:
                 entry["elements"] = beam.elements
                 if entry.get("axial_points", DEFAULT_AXIAL_POINTS) != beam.axial_points:
                     entry["axial_points"] = beam.axial_points
+                if str(entry.get("element", DEFAULT_ELEMENT)) != beam.element:
+                    entry["element"] = beam.element
+                if entry.get("locking", ELEMENTS[beam.element].default_locking) != beam.locking:
+                    entry["locking"] = beam.locking
     if isinstance(raw, dict) and "steps" in raw and spec.history is None:
         raw["steps"] = list(spec.steps)
     if raw != spec.raw:

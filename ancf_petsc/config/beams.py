@@ -1,6 +1,7 @@
 """``beams:`` of a config: sections, materials, elements (paper Secs. 2.1-2.3)."""
 from __future__ import annotations
 
+import numbers
 import os
 
 from ..errors import MISSING_KEY, UNKNOWN_KEY
@@ -43,6 +44,44 @@ def _element_choices(beam: BeamSpec, raw: dict, p: str) -> None:
     e = ELEMENTS[beam.element]
     beam.section.cubature_degree = max(beam.section.cubature_degree, e.section_degree)
     beam.locking = string(raw.get("locking", e.default_locking), f"{p}.locking", LOCKING)
+    beam.parsed = (beam.element, "locking" in raw)
+    _check_remedy(beam, p)
+
+
+def check_edited_beams(beams: list[BeamSpec]) -> None:
+    """``parse_beams``' checks and element choices again, for beams changed after parsing (the
+    Python API): element count, type and axial points refused as in a config; a changed element
+    type takes its own locking remedy unless the config gave one or it was changed too (3333 kept
+    3363's 'none': Poisson locking, the bending tip 12x short), and one with another node block
+    is refused (33103 kept 3363's 18 clamped DOFs of its 30: the tip 8 % off)."""
+    for i, beam in enumerate(beams):
+        p = f"beams[{i}]"
+        beam.elements = integer(_plain(beam.elements), f"{p}.elements", lo=1, hi=100000)
+        beam.element = string(str(beam.element), f"{p}.element", tuple(ELEMENTS))
+        now = ELEMENTS[beam.element]
+        beam.axial_points = _axial_points(_plain(beam.axial_points), f"{p}.axial_points", now.block.axial_nodes)
+        if beam.parsed is not None and beam.parsed[0] != beam.element:
+            was, locking_given = ELEMENTS[beam.parsed[0]], beam.parsed[1]
+            if was.block != now.block:
+                raise ConfigError(f"{p}.element", f"changed after parsing from {was.name}, whose node block "
+                                  f"({', '.join(was.block.names)}) the supports, loads, probes and contact "
+                                  f"were read for; set it in the config and parse that (parse_config) instead; "
+                                  f"got {beam.element!r}")
+            if not locking_given and beam.locking == was.default_locking:
+                beam.locking = now.default_locking
+            beam.parsed = (beam.element, locking_given)
+        beam.locking = string(beam.locking, f"{p}.locking", LOCKING)
+        _check_remedy(beam, p)
+
+
+def _plain(value):
+    """A numpy integer as a Python int (``spec.beams[0].elements = np.int64(4)``)."""
+    return int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else value
+
+
+def _check_remedy(beam: BeamSpec, p: str) -> None:
+    """The locking remedy of ``beams[i]`` is one its element and material accept."""
+    e = ELEMENTS[beam.element]
     if beam.locking not in e.remedies:
         raise ConfigError(f"{p}.locking", f"{beam.locking!r} is not a remedy of element {e.name} "
                           f"({e.refused_because}, docs/locking.md); use " + " or ".join(repr(r) for r in e.remedies))

@@ -80,6 +80,9 @@ class BeamSpec:
     volumetric_degree: int | None = None
     #: ``locking: mixed`` on other pressure columns (set in code, no config key): model.Beam.pressure_columns
     pressure_columns: tuple | None = None
+    #: what parse_beams read from the config: (element, locking given); an element changed after
+    #: parsing is judged against it (beams.check_edited_beams)
+    parsed: tuple | None = None
 
 
 @dataclass

@@ -70,6 +70,47 @@ def test_an_edit_that_puts_two_supports_on_one_component_is_a_config_error(tmp_p
         ap.solve(spec, log=lambda *_: None)
 
 
+@pytest.mark.parametrize("field,value,message", [
+    ("elements", 0, r"beams\[0\]\.elements: must be >= 1; got 0"),              # was loads[0]: ... fixed component
+    ("elements", 2.5, r"beams\[0\]\.elements: expected an integer; got 2\.5"),   # was a TypeError
+    ("elements", "3", r"beams\[0\]\.elements: expected an integer; got '3'"),
+    ("axial_points", 0, r"beams\[0\]\.axial_points: must be >= 2; got 0"),       # was a ValueError
+    ("element", "bogus", r"beams\[0\]\.element: must be one of .*; got 'bogus'"),  # was a KeyError
+    ("element", "33103", r"beams\[0\]\.element: changed after parsing from 3363, whose node block"),
+])
+def test_edited_beams_are_checked_as_the_configs(tmp_path, field, value, message):
+    """33103 edited onto a parsed 3363 beam kept its 18 clamped DOFs of 30 (the bending tip
+    44.0 mm against the parsed config's 40.7 mm): its node block is refused."""
+    ap, spec = _spec("bending_neohookean.yaml", tmp_path / "o")
+    setattr(spec.beams[0], field, value)
+    with pytest.raises(ap.ConfigError, match=message):
+        ap.solve(spec, log=lambda *_: None)
+    assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_an_edited_element_type_takes_its_own_locking_remedy(tmp_path):
+    """bending_neohookean edited to element 3333 kept 3363's remedy 'none' instead of 3333's
+    'ecm' and completed Poisson-locked, the tip u_z 3.27 mm against the parsed config's 41.57 mm;
+    now the same answer to the last bit, and the stored config says 3333.  A numpy count is an
+    integer (np.int64 ended in an OutputError: not JSON serializable)."""
+    import numpy as np
+    from ancf_petsc.config.parse import parse_config
+    ap, spec = _spec("bending_neohookean.yaml", tmp_path / "edited")
+    spec.beams[0].element, spec.beams[0].elements, spec.steps = "3333", np.int64(8), [1.0]
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    raw = yaml.safe_load(open(f"{CONFIGS}/bending_neohookean.yaml"))
+    raw["beams"][0]["element"] = 3333
+    parsed = parse_config(raw, base_dir=CONFIGS)
+    parsed.steps, parsed.output.dir = [1.0], str(tmp_path / "parsed")
+    ap.solve(parsed, log=lambda *_: None)
+    u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
+    u_parse = ap.read_results(tmp_path / "parsed").probe("tip")[-1]
+    assert spec.beams[0].locking == "ecm" and np.array_equal(u_edit, u_parse) and u_parse[2] > 0.04
+    with h5py.File(tmp_path / "edited" / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])["beams"][0]
+    assert (stored["element"], stored["elements"], stored.get("locking")) == ("3333", 8, None)
+
+
 def test_edited_steps_are_checked_as_the_configs(tmp_path):
     """Decreasing steps set on a spec raised an UnboundLocalError in the load stepping and left
     INTERNAL_ERROR in summary.json; now the config's own error, before anything is written."""

@@ -27,12 +27,17 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
     """Solve ``spec`` and return a ``solving.run.RunResult`` (status, message, exit code, summary
     on rank 0); every converged level is written to ``spec.output.dir`` as it is reached.
     With ``accuracy:`` in the config the element count is chosen first (workflows/accuracy.py);
-    ``restart``: continue the run in that directory from its last converged level."""
+    ``restart``: continue the run in that directory from its last converged level.  ``comm``: a
+    PETSc or mpi4py communicator (default PETSc.COMM_WORLD)."""
     _init_petsc()
+    from mpi4py import MPI
     from petsc4py import PETSc
 
     from .solving.run import run_model
-    comm = PETSc.COMM_WORLD if comm is None else comm
+    if not isinstance(spec, ModelSpec):
+        raise TypeError(f"solve: expected a ModelSpec (load_config, parse_config); got {type(spec).__name__}")
+    # an mpi4py communicator ended in an AttributeError ('Intracomm' has no 'tompi4py') mid-setup
+    comm = PETSc.COMM_WORLD if comm is None else PETSc.Comm(comm) if isinstance(comm, MPI.Comm) else comm
     check_edited(spec)
     if spec.accuracy is not None:
         if restart is not None:

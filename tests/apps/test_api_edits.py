@@ -192,3 +192,14 @@ def test_a_solve_leaves_the_sessions_sigpipe_handler(tmp_path):
     proc.stdout.close()
     err = proc.stderr.read()
     assert (proc.wait(timeout=120), err.strip().splitlines()[-1:]) == (0, ["BrokenPipeError"]), err
+
+
+def test_solve_takes_an_mpi4py_communicator_and_refuses_a_dict(tmp_path):
+    """``solve(spec, comm=MPI.COMM_WORLD)`` ended in an AttributeError mid-setup ('Intracomm'
+    object has no attribute 'tompi4py'), a raw config dict in one ('dict' has no 'beams')."""
+    from mpi4py import MPI
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    spec.steps = [1.0]
+    assert ap.solve(spec, comm=MPI.COMM_WORLD, log=lambda *_: None).status == "completed"
+    with pytest.raises(TypeError, match="solve: expected a ModelSpec .*; got dict"):
+        ap.solve(spec.raw)

@@ -152,6 +152,12 @@ CASES += [
     ("cubature degree one", _set(["beams", 0, "section", "cubature_degree"], 1),
      "beams[0].section.cubature_degree", "must be >= 2; got 1: a rule of degree 1 does not integrate y^2, z^2"),
     ("bundle cubature degree one", _bundle(cubature_degree=1), "bundle.cubature_degree", "must be >= 2; got 1"),
+    # ecm's nu = 0 part loads 3363's quadratic modes with another axial stress than a GOH law's: one
+    # element in uniaxial tension (kappa 0.2 along x) completed 0.92 % long, r_yy.x -13.6 /m, r_y.y != r_z.z
+    ("ecm on 3363 with GOH",
+     lambda raw: raw["beams"][0].update(locking="ecm", material={
+         "model": "goh", "mu": 1e6, "bulk_modulus": 50e6, "k1": 2e6, "k2": 5.0, "kappa": 0.2}),
+     "beams[0].locking", "'ecm' on element 3363 with a fibre law loads the quadratic modes"),
 ]
 
 

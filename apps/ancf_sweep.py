@@ -58,7 +58,13 @@ def _main(argv: list[str]) -> int:
                                       "(default: the one running ancf-sweep; ANCF_VENV at submission wins)")
     slurm.add_argument("--logs", choices=("append", "numbered"),
                        help="log.txt of a resubmitted task: appended (default) or log.N.txt")
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    petsc = [a for a in extra if a.startswith("-") and not a.startswith("--")]
+    if petsc:                             # the runs' PETSc options come from the sweep file
+        parser.error(f"{petsc[0]}: PETSc options of the runs go in the sweep file's run.petsc, "
+                     f'e.g. run: {{petsc: ["-snes_max_it", "30"]}}')
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
 
     from ancf_petsc.workflows.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done,
         load_sweep, run_sweep, slurm_spec, write_slurm)

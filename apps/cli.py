@@ -74,8 +74,9 @@ class Parser(argparse.ArgumentParser):
         printer()(self.format_help().rstrip("\n"))
 
     def parse_with_petsc(self, argv: list[str] | None) -> tuple[argparse.Namespace, list[str]]:
-        """(our options, PETSc's): an unknown option with two dashes (``--output`` for ``--out``)
-        or one of ours with one dash (``-out``) is an error, not a PETSc option left unread."""
+        """(our options, PETSc's): an unknown option with two dashes (``--output`` for ``--out``),
+        one of ours with one dash (``-out``), a stray word or a value PETSc would refuse is an
+        error (one line, exit 2), not a PETSc option left unread or blamed on a solve."""
         args, petsc = self.parse_known_args(argv)
         ours = [s for a in self._actions for s in a.option_strings if s.startswith("--")]
         for arg in petsc:
@@ -87,4 +88,8 @@ class Parser(argparse.ArgumentParser):
             if name.startswith("-") and "-" + name in ours and name != "-help":
                 self.error(f"{name}: {self.prog}'s own options take two dashes (-{name}); "
                            "one dash is for PETSc options such as -snes_monitor")
+        from ancf_petsc.config.options_files import check_all_options
+        problem = check_all_options(petsc, tuple(ours))   # stray words, values, options files
+        if problem:
+            self.exit(2, f"{self.prog}: {problem}\n")
         return args, petsc

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 
-from ..linalg.option_syntax import check_value, command_line_options
+from ..linalg.option_syntax import check_value, command_line_options, stray_words
 
 #: options whose value is a file of options (``-options_file_yaml``: only checked for existence)
 FILE_OPTIONS = ("options_file", "options_file_yaml")
@@ -136,6 +136,11 @@ def check_all_options(args: list[str], own: tuple[str, ...] = (), environ=None) 
 
     ``own``: the program's own options (``--restart``): written with one dash in a file they
     would go to PETSc, so they are refused there too."""
+    stray = stray_words(args)
+    if stray:
+        return (f"{stray[0]}: neither an option nor an option's value on the command line (PETSc would "
+                "skip it); give one input file, and PETSc options with one dash and at most one value "
+                "each, e.g. -snes_max_it 30")
     try:
         options = all_options(args, environ)
     except OptionsFileError as exc:

@@ -250,6 +250,20 @@ def command_line_options(args: list[str]) -> list[tuple[str, str | None]]:
     return out
 
 
+def stray_words(args: list[str]) -> list[str]:
+    """The words of a command line that are neither an option nor its value, which PETSc skips
+    without a word (``PetscOptionsInsertArgs``: an option takes the next word unless it is an
+    option): a second config, ``snes_max_it 3`` without its dash, the 4 of ``-snes_max_it 3 4``."""
+    out, i = [], 0
+    while i < len(args):
+        if not _is_key(args[i]):
+            out.append(args[i])
+            i += 1
+        else:
+            i += 2 if i + 1 < len(args) and not _is_key(args[i + 1]) else 1
+    return out
+
+
 def check_command_line(args: list[str]) -> str | None:
     """The first PETSc option on a command line that PETSc would reject, as one line."""
     for name, value in command_line_options(args):

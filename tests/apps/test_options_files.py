@@ -47,6 +47,39 @@ def test_good_files_nested_files_and_the_environment(tmp_path):
     assert "is a directory" in check_all_options(["-options_file", str(tmp_path)], OWN, environ={})
 
 
+@pytest.mark.parametrize("args,stray", [
+    (["other.yaml"], "other.yaml"), (["snes_max_it", "3"], "snes_max_it"), (["-snes_max_it", "3", "4"], "4"),
+    (["-snes_monitor", "-snes_max_it", "30"], None), (["-snes_divergence_tolerance", "-1"], None),
+    (["-snes_monitor", "ascii:m.txt", "-help"], None),
+])
+def test_a_word_petsc_would_skip_is_refused(args, stray):
+    """PETSc skips a word that is neither an option nor its value: a second config or a
+    dash-less option was ignored without a word (max_it stayed 15)."""
+    line = check_all_options(args, OWN, environ={})
+    if stray is None:
+        assert line is None, line
+    else:
+        assert line.startswith(f"{stray}: neither an option nor an option's value"), line
+
+
+def test_stray_words_on_the_command_lines(tmp_path, capsys):
+    raw = tiny()
+    raw["output"]["dir"] = str(tmp_path / "out")
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    assert_one_line(solve_cli(cfg, extra=["--quiet", "other.yaml"], timeout=TIMEOUT), 2,
+                    "ancf-solve: other.yaml: neither an option nor an option's value")
+    assert not (tmp_path / "out").exists()
+    from apps.ancf_study import main
+    with pytest.raises(SystemExit) as exc:                  # before PETSc starts, nothing solved
+        main([cfg, "snes_max_it", "3"])
+    assert exc.value.code == 2
+    assert "ancf-study: snes_max_it: neither an option" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:                  # named as given, not -study1_snes_max_it
+        main([cfg, "-snes_max_it", "abc"])
+    assert exc.value.code == 2
+    assert "ancf-study: PETSc option -snes_max_it abc: expected an integer" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("case", ["missing", "bad value"])
 def test_options_file_problems_on_the_command_line(tmp_path, case):
     raw = tiny()

@@ -269,6 +269,12 @@ BAD = {
     "bad run value": ({"parameters": {"geometry.length": [1]}, "run": {"jobs": 0}}, "run.jobs:"),
     "a grid value twice": ({"parameters": {"geometry.length": [0.1, 0.2, 0.1e0]}},
                            "parameters.geometry.length: values 1 and 3 are equal (0.1, 0.1)"),
+    # each run skipped the word (max_it stayed 15) or stopped on the value: refused before any run
+    "a PETSc option without its dash": ({"parameters": {"geometry.length": [1]},
+                                         "run": {"petsc": ["snes_max_it", "3"]}},
+                                        "run.petsc: 'snes_max_it' is neither an option nor an option's value"),
+    "a PETSc value refused": ({"parameters": {"geometry.length": [1]}, "run": {"petsc": {"snes_max_it": 2.5}}},
+                              "run.petsc: PETSc option -snes_max_it 2.5: expected an integer"),
 }
 
 
@@ -280,6 +286,15 @@ def test_bad_sweep_file(tmp_path, case):
     assert rc == 2
     assert len(err.splitlines()) == 1 and message in err, err
     assert not (tmp_path / "sweeps").exists()
+
+
+def test_petsc_options_on_the_sweeps_command_line_are_pointed_to_run_petsc(tmp_path, capsys):
+    path = write_sweep(str(tmp_path), {"parameters": {"geometry.length": [1]}})
+    with pytest.raises(SystemExit) as exc:
+        main([path, "--dry-run", "-snes_max_it", "3"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and len(err.splitlines()) == 1, err
+    assert "-snes_max_it: PETSc options of the runs go in the sweep file's run.petsc" in err, err
 
 
 def test_bad_sweep_file_console_script(tmp_path):

@@ -11,6 +11,7 @@ from typing import Any
 
 from ...config.parse import parse_config
 from ...config.values import ConfigError
+from ...linalg.option_syntax import check_command_line, stray_words
 from ... import yamlio
 from ...errors import UNKNOWN_KEY
 from .base import (LOG_MODES, MODES, RUN_KEYS, SLURM_KEYS, SWEEP_KEYS, SweepError, Token, as_int, load_yaml,
@@ -141,6 +142,20 @@ class Sweep:
 
 
 def _petsc_args(value: Any) -> list[str]:
+    """run.petsc as ancf-solve's PETSc arguments, refused (SweepError) where every run would be: a
+    stray word PETSc skips (``["snes_max_it", "3"]``: each run ignored it) or a value PETSc refuses."""
+    args = _petsc_list(value)
+    stray = stray_words(args)
+    if stray:
+        raise SweepError("run.petsc", f"{stray[0]!r} is neither an option nor an option's value (PETSc would "
+                                      'skip it); write options with their dash, e.g. ["-snes_max_it", "30"]')
+    problem = check_command_line(args)
+    if problem:
+        raise SweepError("run.petsc", f"PETSc option {problem}")
+    return args
+
+
+def _petsc_list(value: Any) -> list[str]:
     path = "run.petsc"
     if isinstance(value, dict):
         args: list[str] = []

@@ -129,6 +129,11 @@ def factor_package(config_options: dict, prefix: str = "", symmetric: bool = Tru
     return pc, factor
 
 
+#: SNES types that take no line search, so no line-search pre-check either (sections neither
+#: turned nor steps held: -snes_type newtontr ran configs/bending_neohookean.yaml in 203 Newton
+#: iterations with solver.section_update rotation and linear alike, its header saying "line
+#: search basic; Newton steps turn the sections")
+NO_LINE_SEARCH = ("newtontr", "ksponly", "ksptransposeonly")
 #: options read only when the factorisation is first set up, after ``setFromOptions``
 DEFERRED_OPTIONS = ("mat_mumps_", "mat_superlu")
 
@@ -143,7 +148,8 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     The SNES must carry ``prefix`` already (``snes.setOptionsPrefix``).  Returns the line-search
     type in effect (petsc4py 3.18 cannot query it from the SNES) and the option names (with the
     prefix) left in the database.  A value or combination PETSc refuses raises
-    ``SolverOptionError`` (the same on every rank: the options are).
+    ``SolverOptionError`` (the same on every rank: the options are).  A type without a line
+    search (``NO_LINE_SEARCH``) has line search 'none'.
     """
     bad = prefixed_option_problem(prefix)
     if bad:
@@ -158,7 +164,8 @@ def configure_options(snes: PETSc.SNES, config_options: dict, defaults: dict,
     kept = [k for k in inserted if k[n:] in config_options or k[n:].startswith(DEFERRED_OPTIONS)]
     try:
         snes.setFromOptions()
-        linesearch = option("snes_linesearch_type", prefix) or "bt"        # PETSc's own default
+        linesearch = ("none" if snes.getType() in NO_LINE_SEARCH
+                      else option("snes_linesearch_type", prefix) or "bt")      # PETSc's own default
     except PETSc.Error as exc:
         for key in kept:
             remove(key)

@@ -162,6 +162,18 @@ def test_steps_are_turned_only_where_the_line_search_takes_them_whole(tmp_path):
         runs["rotation"]["solver"]
 
 
+def test_a_snes_type_without_a_line_search_says_its_steps_are_not_turned(tmp_path):
+    """-snes_type newtontr takes no line search, so no pre-check: its header said "line search
+    basic; Newton steps turn the sections" while no step was turned (203 Newton iterations on
+    configs/bending_neohookean.yaml with rotation and linear alike)."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.5, 1.0]
+    summary = run_inline(raw, tmp_path / "tr", petsc={"snes_type": "newtontr"})
+    assert summary["status"] == "completed"
+    assert "SNES newtontr line search none;" in summary["solver"], summary["solver"]
+    assert "Newton steps not turned" in summary["solver"] and "turn the sections" not in summary["solver"]
+
+
 def test_a_turned_step_is_held_to_a_direction_vector_change_of_max_step_turn():
     """A step that turns every free node by 0.5 rad (beyond the gate, ROTATION_MAX) is scaled
     to direction-vector changes of MAX_STEP_TURN and then turned, as a whole step would be;

@@ -88,6 +88,29 @@ def test_edited_beams_are_checked_as_the_configs(tmp_path, field, value, message
     assert not (tmp_path / "o" / "summary.json").exists()
 
 
+@pytest.mark.parametrize("key,value,message", [
+    ("mu", -1e6, r"beams\[0\]\.material\.mu: must be > 0 \(shear modulus in Pa\); got -1e\+06"),  # ran: 'unstable'
+    ("model", "bogus", r"beams\[0\]\.material\.model: must be one of .*; got 'bogus'"),           # a KeyError
+    ("c10", 5e5, r"beams\[0\]\.material: give either mu and bulk_modulus or the paper's c10 and d"),
+])
+def test_an_edited_material_is_checked_as_the_configs(tmp_path, key, value, message):
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    spec.beams[0].material[key] = value
+    with pytest.raises(ap.ConfigError, match=message):
+        ap.solve(spec, log=lambda *_: None)
+
+
+def test_an_edited_goh_material_is_read_again_unchanged():
+    """A parsed GOH material (fibres.angles_deg) reads again as itself."""
+    from ancf_petsc.config.beams import check_edited_beams
+    _, spec = _spec("achilles_type3_psi45_goh.yaml", "unused")
+    before = [dict(b.material) for b in spec.beams]
+    spec.beams[0].material["k1"] = 2.0 * before[0]["k1"]
+    check_edited_beams(spec.beams)
+    assert spec.beams[0].material == dict(before[0], k1=2.0 * before[0]["k1"])
+    assert [b.material for b in spec.beams[1:]] == before[1:]
+
+
 def test_an_edited_element_type_takes_its_own_locking_remedy(tmp_path):
     """bending_neohookean edited to element 3333 kept 3363's remedy 'none' instead of 3333's
     'ecm' and completed Poisson-locked, the tip u_z 3.27 mm against the parsed config's 41.57 mm;

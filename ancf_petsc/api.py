@@ -6,9 +6,10 @@
     result = ap.solve(spec)                      # collective on PETSc.COMM_WORLD
     print(result.status, ap.read_results("/tmp/bar").probe("tip")[-1])
 
-A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, ``spec.steps``): ``solve``
-places 'first'/'last' of the supports, loads and probes on the beams as they are then, checks
-the steps as the config's, and stores the element counts and steps solved with in results.h5.
+A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, its ``material['mu']``,
+``element`` within one node block: 3363/3333, ``spec.steps``): ``solve`` places 'first'/'last'
+of the supports, loads and probes on the beams as they are then, checks the beams and steps as
+the config's, and stores the element counts, types and steps solved with in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
 """

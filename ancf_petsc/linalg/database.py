@@ -10,7 +10,7 @@ from contextlib import contextmanager
 
 from petsc4py import PETSc
 
-__all__ = ["option", "option_names", "insert", "remove", "own_prefix", "SOLVE_FAMILIES"]
+__all__ = ["option", "option_names", "option_values", "insert", "remove", "own_prefix", "SOLVE_FAMILIES"]
 
 #: the option families of one solve (its SNES and line search, KSP, PC, matrix and factorisation
 #: package) that a workflow's solves inherit from the command line
@@ -32,6 +32,13 @@ def option(name: str, prefix: str = "") -> str | None:
 def option_names() -> list[str]:
     """The names of every option set (without the leading '-'), sorted."""
     return sorted(PETSc.Options().getAll())
+
+
+def option_values() -> dict[str, str | None]:
+    """Every option set, name (without the '-') to value (None for a flag given without one),
+    read without marking any as used: a check of their values must leave PETSc's unused report
+    intact."""
+    return dict(PETSc.Options().getAll())
 
 
 def insert(name: str, value: str) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from ..errors import InputError
-from .database import insert, option, option_names, remove
+from .database import insert, option, option_values, remove
 from .diagnostics import petsc_message, solver_hint
 from .option_syntax import AT_FINISH_OPTIONS, check_value
 
@@ -184,9 +184,10 @@ def prefixed_option_problem(prefix: str) -> str | None:
     (config/options_files.py); the prefix of a solve is known only from its config."""
     if not prefix:
         return None
-    for name in option_names():
+    # read without marking them used: -left_snes_maxit (options_prefix left_) was never reported
+    for name, value in sorted(option_values().items()):
         if name.startswith(prefix):
-            value = option(name) or None           # a flag without a value: None
+            value = value or None                  # a flag without a value: None
             why = check_value(name[len(prefix):], value)
             if why:
                 return f"PETSc option -{name}" + (f" {value}" if value else "") + f": {why}"

@@ -286,6 +286,22 @@ def test_options_prefix_tunes_two_solves_in_one_process_apart(tmp_path):
     assert before - already == {"a_snes_linesearch_type"}      # the prefixed config options are gone
 
 
+def test_a_misspelt_option_under_the_options_prefix_is_reported_unused(tmp_path):
+    """The check of the prefixed options' values read each one, which PETSc counts as a use:
+    -c_snes_maxit with options_prefix c_ (as -study1_snes_maxit in a study) went unreported."""
+    from petsc4py import PETSc
+    raw = load_raw("bending_neohookean.yaml")
+    raw["steps"] = [0.25]
+    opts = PETSc.Options()
+    opts["c_snes_maxit"] = "3"
+    try:
+        summary = run_inline(dict(raw, solver={"options_prefix": "c_"}), tmp_path / "c")
+    finally:
+        opts.delValue("c_snes_maxit")
+    assert summary["status"] == "completed" and "max_it 15" in summary["solver"]
+    assert summary["unused_petsc_options"] == ["-c_snes_maxit"], summary["unused_petsc_options"]
+
+
 def test_a_failed_mumps_factorisation_says_what_to_change(tmp_path):
     """MUMPS's own error code (INFOG(1)) reaches the one-line failure with the option that
     cures it: a working-memory cap that is too small (-mat_mumps_icntl_23 1, INFOG(1) = -19);

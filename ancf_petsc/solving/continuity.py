@@ -48,6 +48,8 @@ JUMP_SHARE = 1e-4
 #: a closest point this near (in ξ) to the ends of two neighbouring B elements sits at their
 #: common node, where B's surface is C⁰ (``contact_cause``)
 NODE_XI = 0.01
+#: units in the last place by which ``rounding_noise`` moves every unknown of a state
+NOISE_ULPS = 4.0
 
 
 class IterateTrail:
@@ -90,7 +92,8 @@ class Jump:
     scale: float       # max |F| along the step [N]
     where: str         # the DOF it acts on, in words
     cause: str = ""    # what the contact's projections show changing there, in words
-    kind: str = "residual_jump"   # its code (failure_cause.JUMP_CAUSES)
+    kind: str = "residual_jump"   # its code (failure_cause.JUMP_CAUSES, or rounding_noise)
+    noise: float = 0.0  # with kind rounding_noise: max |ΔF| when the state moves by its rounding [N]
 
 
 def residual_jump(problem, trail: IterateTrail, load_factor: float, tolerance: float = 0.0) -> Jump | None:
@@ -153,6 +156,11 @@ def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
     if not np.isfinite(size) or size <= max(JUMP_SHARE * scale, tolerance):
         return None
     where = _where(problem, np.abs(f_hi - f_lo), comm)
+    A.copy(Y)
+    Y.axpy(lo, d)
+    noise = rounding_noise(problem, Y, F, f_lo, comm)
+    if size <= noise:
+        return Jump(size=size, scale=scale, where=where, kind="rounding_noise", noise=noise)
     cause, kind = "", "residual_jump"
     if problem.contact is not None:
         kind, cause = contact_cause(problem.contact, projections[lo], projections[hi], comm)
@@ -161,6 +169,27 @@ def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
             cause += ("; evaluated again one after the other the two states agree: each projection "
                       "starts from the last one, and a contact point has two closest points there")
     return Jump(size=size, scale=scale, where=where, cause=cause, kind=kind)
+
+
+def rounding_noise(problem, Y: PETSc.Vec, F: PETSc.Vec, f_Y: np.ndarray, comm) -> float:
+    """max |ΔF| over the DOFs when every unknown of the state Y moves by ``NOISE_ULPS`` units in
+    its last place, up or down by a fixed pseudo-random sign per model DOF (the same on any rank
+    count): the residual's rounding at Y, below which no |F| is meaningful.  It grows with the
+    stiffness that multiplies the positions' rounding: an elastic interface of k_t = 1e12 Pa/m
+    between bars of E = 1 MPa (configs/shear_lag_sandwich.yaml) 3.6e-10 N, where the rounding
+    at rest |F(q0, 0)| is 1.5e-13 N and Newton stalled at 1.1-1.9e-10 N.  Y and F are
+    overwritten; ``f_Y`` is F(Y)'s local array (collective)."""
+    D = Y.getBlockSize()
+    lo, hi = Y.getOwnershipRange()
+    node = np.argsort(problem.layout.perm)[np.arange(lo, hi) // D]      # PETSc → model node
+    dof = node * D + np.arange(lo, hi) % D
+    sign = np.where(np.modf(np.sin(dof * 12.9898) * 43758.5453)[0] > 0.0, 1.0, -1.0)
+    y = Y.getArray()
+    y += sign * NOISE_ULPS * np.spacing(np.abs(y))
+    if problem.contact is not None:
+        problem.contact.allow_update = False
+    problem.residual(None, Y, F)
+    return comm.allreduce(float(np.max(np.abs(F.getArray() - f_Y), initial=0.0)), op=MPI.MAX)
 
 
 def _projection(problem, Y: PETSc.Vec):
@@ -229,6 +258,14 @@ def jump_detail(jump: Jump | None) -> str:
     """The failure message's part for a jump (empty without one)."""
     if jump is None:
         return ""
+    if jump.kind == "rounding_noise":
+        return (f"; |F| is at the residual's rounding there: moving every unknown of the state by "
+                f"{NOISE_ULPS:g} units in the last place changes F by up to {jump.noise:.2g} N, more than "
+                f"any change found along Newton's last steps ({jump.size:.2g} N at {jump.where}); stiff "
+                f"terms (e.g. contact.tangential's stiffness k_t) magnify the rounding of the positions, "
+                f"so the run's absolute tolerance, set from the rounding at rest, cannot be reached: "
+                f"give -snes_atol {2.0 * jump.noise:.1e} or more (e.g. petsc: {{snes_atol: "
+                f"{2.0 * jump.noise:.1e}}})")
     explained = "has its closest point on" in jump.cause
     return (f"; the residual jumps by {jump.size:.3g} N (max |F| {jump.scale:.3g} N along the step) "
             f"between two states of Newton's last steps closer than 1e-13 of a step, at {jump.where}"

@@ -34,13 +34,15 @@ CAUSES = {
     "newton_budget_exceeded": "the run spent solver.max_newton_iterations",
     "newton_budget": "a solve ran out of a -snes_max_it given below the run's own budget",
     "unreachable_tolerance": "a -snes_atol given below 20 x the residual's rounding floor: Newton cannot reach it",
+    "rounding_noise": "|F| is at the residual's rounding at the failing state, above the run's absolute "
+                      "tolerance (stiff terms magnify the rounding of the positions)",
     "petsc_error": "PETSc or an external package raised an error (e.g. MUMPS could not factor the tangent)",
 }
 # (any other failure: its SNES reason in lower case, e.g. diverged_fnorm_nan)
 #: the codes of a jump of the residual (continuity.py ``Jump.kind``)
 JUMP_CAUSES = ("c0_kink", "two_closest_points", "fade_weight_jump", "residual_jump")
 #: the findings that come before a critical point in the order (module docstring)
-BEFORE_CRITICAL = ("inverted_element", "projection_lost") + JUMP_CAUSES
+BEFORE_CRITICAL = ("inverted_element", "projection_lost") + JUMP_CAUSES + ("rounding_noise",)
 
 
 class Detail(str):

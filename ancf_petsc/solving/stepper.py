@@ -24,7 +24,7 @@ from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
 from .continuity import jump_detail, residual_jump
-from .failure_cause import give_up_cause, with_critical_point
+from .failure_cause import Detail, give_up_cause, with_critical_point
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
@@ -322,9 +322,10 @@ def _given_up(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, step: fl
         jump = residual_jump(P, stepper.solver.trail, lam + step, tol)
         X_prev.copy(P.X)
         P.restore()
-    # a min_increment that forbade every cut-back is the cause, not Newton's course
-    newton = (solver_messages.floor_detail(step, lam, stepper.spec.min_increment)
-              if stepper.control.floored(step, tally) else solver_messages.failure_detail(stepper.solver, reason))
+    # a min_increment that forbade every cut-back is the cause, not Newton's course (nor at rounding)
+    rounding = jump is not None and jump.kind == "rounding_noise"
+    newton = (solver_messages.floor_detail(step, lam, stepper.spec.min_increment) if stepper.control.floored(
+        step, tally) else Detail("") if rounding else solver_messages.failure_detail(stepper.solver, reason))
     return LoadStepFailure(target, lam + step, lam, reason_name(reason), inverted,
                            newton + solver_messages.stability_detail(tally.unstable_at) + jump_detail(jump),
                            give_up_cause(inverted, lost, jump, tally.unstable_at, newton))
@@ -345,7 +346,7 @@ def last_resorts(stepper: LoadStepper, path: PathState, X_prev: PETSc.Vec, targe
     if stepper.windows.take(stepper, path, tally, lost):
         _went_on(stepper, path.lam, failure, "the whole partner beam as every contact point's search window")
         return
-    critical = critical_point(stepper, path.lam)
+    critical = None if failure.cause == "rounding_noise" else critical_point(stepper, path.lam)
     tried, sentence = False, ""
     try:
         tried = critical is not None and stepper.branches.snaps(path)

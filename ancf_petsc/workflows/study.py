@@ -33,15 +33,15 @@ import itertools
 import math
 import os
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any, Callable
 
 import yaml
 
 from ..io.files import prepare_output_dir
 from .. import yamlio
-from ..config.specs import DEFAULT_AXIAL_POINTS
-from ..physics.elements import DEFAULT_ELEMENT
+from ..config.specs import DEFAULT_AXIAL_POINTS, SectionSpec
+from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from ..errors import InputError
 from ..status import CONFIG_ERROR, EXIT_INPUT
 from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
@@ -147,10 +147,15 @@ def solve_raw(raw: dict, base_dir: str, out_dir: str, comm=None) -> tuple[Any, d
 
 
 def _discretisation_of(raw: dict) -> tuple[str, int, int, int | None]:
-    """(element, elements, axial points, cubature degree) of the first beam of a raw config."""
+    """(element, elements, axial points, cubature degree) of the first beam of a raw config; the
+    degree the run integrates with (33103, 33153 raise it to ``Element.section_degree``: a grid's
+    degree 2 and 4 of 33103 were two rows 'deg 2', 'deg 4' of one degree-6 run)."""
     b = raw["beams"][0]
-    return (str(b.get("element", DEFAULT_ELEMENT)), int(b["elements"]), int(b.get("axial_points", DEFAULT_AXIAL_POINTS)),
-            b["section"].get("cubature_degree"))
+    element = str(b.get("element", DEFAULT_ELEMENT))
+    deg, least = b["section"].get("cubature_degree"), ELEMENTS[element].section_degree if element in ELEMENTS else 0
+    if least and (deg is None or deg < least):
+        deg = max(least, SectionSpec.cubature_degree if deg is None else deg)
+    return element, int(b["elements"]), int(b.get("axial_points", DEFAULT_AXIAL_POINTS)), deg
 
 
 def measure(scene: Scene, disc: Discretisation, out_dir: str, repeats: int = 1) -> Row:
@@ -166,6 +171,8 @@ def measure(scene: Scene, disc: Discretisation, out_dir: str, repeats: int = 1) 
         if res.status != "completed":
             break
     element, n, ax, deg = _discretisation_of(raw)
+    if disc.cubature_degree is not None and deg != disc.cubature_degree:
+        disc = replace(disc, cubature_degree=deg)               # the label says the degree integrated
     ok = res.status == "completed"
     value = quantity(summary, scene.probe, scene.component, scene.level) if ok else math.nan
     dofs = int(summary["dofs"]) if summary else 0

@@ -48,6 +48,23 @@ def test_pareto_study_ranks_discretisations_against_the_reference(tmp_path):
     assert os.path.getsize(res["png"]) > 10_000
 
 
+def test_rows_give_the_cubature_degree_the_run_integrates_with(tmp_path):
+    """33103 raises its section rule to degree 6: the grid's degrees 2 and 4 were two rows
+    'deg 2' and 'deg 4' (CSV cubature_degree 2, 4) of one degree-6 run; 3363 keeps its own."""
+    petsc_init()
+    from ancf_petsc.workflows.study import load_study, run_study
+    spec = load_study(_write(tmp_path, {
+        "kind": "pareto", "base": BASE, "probe": "tip", "component": "z",
+        "grid": {"element": ["33103", "3363"], "cubature_degree": [2, 4], "elements": [1]},
+        "reference": {"elements": 2, "element": "3363"}, "output": str(tmp_path / "out")}))
+    rows = run_study(spec, log=lambda *_: None)["rows"]
+    got = sorted((r.element, r.cubature_degree, r.label) for r in rows)
+    assert got == [("33103", 6, "33103, 1 el, deg 6")] * 2 + [("3363", 2, "3363, 1 el, deg 2"),
+                                                               ("3363", 4, "3363, 1 el, deg 4")], got
+    r33103 = [r.value for r in rows if r.element == "33103"]
+    assert r33103[0] == r33103[1]
+
+
 def test_stability_map_default_strategy_converges_and_failures_are_clean(tmp_path):
     petsc_init()
     from ancf_petsc.workflows.stability import default_strategy_converged, load_stability, run_stability

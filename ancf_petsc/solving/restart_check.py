@@ -11,6 +11,7 @@ import math
 
 from ..contact import forget_evaluation
 from ..errors import InputError
+from ..io.restart_probes import check_same_probes
 
 #: a stored level's residual recomputed may exceed the one recorded only by rounding (another
 #: rank count sums in another order): this factor, on top of the rounding floor
@@ -60,15 +61,20 @@ def allowed_residual(atol: float, recorded: float | None, rounding_floor: float)
 
 def check_restart_state(problem, stepper, point, X, directory: str) -> None:
     """InputError on every rank (the norm is collective) if the stored state at ``point`` is not
-    converged."""
+    converged, or (then) if the config's probes measure other places at it."""
     steps = point.summary.get("steps") or []
     recorded = steps[-1].get("residual_norm") if steps else None
     _, atol, _, _ = stepper.solver.snes.getTolerances()
     bound = allowed_residual(atol, recorded, stepper.solver.rounding_floor)
+    sound = False
     for _ in fade_modes(problem):
         fnorm = stored_residual(problem, X, point.load_factor)
         if math.isfinite(fnorm) and fnorm <= bound:
-            return
+            sound = True
+            break
+    if sound:
+        check_same_probes(point, problem.model, directory)
+        return
     what = ("an element of it is inverted (J <= 0)" if not math.isfinite(fnorm)
             else f"its residual |F| = {fnorm:.3e} is above the tolerance {bound:.3e}"
             + (f" (recorded when it converged: {recorded:.3e})" if recorded is not None else ""))

@@ -52,3 +52,23 @@ def test_a_restart_keeps_older_files_and_allowed_edits(tmp_path):
         h5["model/fingerprint/contact"] = [float(b) for b in json.dumps(words, sort_keys=True).encode()]
     res = _run(_column(search_margin=0.3, fade="settle"), tmp_path, restart=True)
     assert res.status == "completed" and len(res.summary["steps"]) == 2, res.message
+
+
+def test_a_restart_refuses_other_probes_and_takes_the_same_written_otherwise(tmp_path):
+    """The bar solved to 0.1, restarted with its probe renamed or moved: the levels after the
+    restart carried other probes than the ones before (summary.json steps with 'tip' then
+    'end'; read_results(DIR).probe('tip') ended in KeyError: 'tip'); now refused with one line
+    naming the probe.  ``node: 2`` for ``last`` is the same probe and restarts."""
+    import copy
+    raw = load_raw("uniaxial_neohookean.yaml")
+    _run(dict(raw, steps=[0.1]), tmp_path)
+    renamed, moved, same = (copy.deepcopy(raw) for _ in range(3))
+    renamed["probes"][0]["name"] = "end"
+    moved["probes"][0]["node"] = 1
+    same["probes"][0]["node"] = 2
+    with pytest.raises(InputError, match="probes differ from the run's .*: added end; removed tip"):
+        _run(renamed, tmp_path, restart=True)
+    with pytest.raises(InputError, match="tip measures another place or vector"):
+        _run(moved, tmp_path, restart=True)
+    res = _run(same, tmp_path, restart=True)
+    assert res.status == "completed" and len(res.summary["steps"]) == 10, res.message

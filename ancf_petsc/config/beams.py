@@ -24,7 +24,7 @@ def parse_beams(value, base_dir: str) -> list[BeamSpec]:
         bname = string(b["name"], f"{p}.name")
         if bname in [x.name for x in beams]:
             raise ConfigError(f"{p}.name", f"duplicate beam name {bname!r}; names must be unique")
-        element = string(str(b.get("element", DEFAULT_ELEMENT)), f"{p}.element", tuple(ELEMENTS))
+        element = _element_name(b.get("element", DEFAULT_ELEMENT), f"{p}.element")
         beams.append(BeamSpec(
             name=bname,
             section=parse_section(b["section"], f"{p}.section", base_dir),
@@ -58,7 +58,7 @@ def check_edited_beams(beams: list[BeamSpec]) -> None:
     for i, beam in enumerate(beams):
         p = f"beams[{i}]"
         beam.elements = integer(_plain(beam.elements), f"{p}.elements", lo=1, hi=100000)
-        beam.element = string(str(beam.element), f"{p}.element", tuple(ELEMENTS))
+        beam.element = _element_name(beam.element, f"{p}.element")
         now = ELEMENTS[beam.element]
         beam.axial_points = _axial_points(_plain(beam.axial_points), f"{p}.axial_points", now.block.axial_nodes)
         if beam.parsed is not None and beam.parsed[0] != beam.element:
@@ -295,6 +295,13 @@ def _axial_points(value, path: str, nodes: int = 3) -> int:
                                 f"got {n}: fewer points leave its stiffness singular (zero-energy "
                                 f"modes); use {nodes}")
     return n
+
+
+def _element_name(value, path: str) -> str:
+    """An element's registry name; an integer (element: 3363) is its name written as a number
+    (element: null read "got 'None'", a list "got '[3363]'")."""
+    return string(str(value) if isinstance(value, int) and not isinstance(value, bool) else value, path,
+                  tuple(ELEMENTS))
 
 
 def _cubature_degree(value, path: str) -> int:

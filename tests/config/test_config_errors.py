@@ -158,6 +158,10 @@ CASES += [
      lambda raw: raw["beams"][0].update(locking="ecm", material={
          "model": "goh", "mu": 1e6, "bulk_modulus": 50e6, "k1": 2e6, "k2": 5.0, "kappa": 0.2}),
      "beams[0].locking", "'ecm' on element 3363 with a fibre law loads the quadratic modes"),
+    # element: null read "got 'None'", a list "got '[3363]'" (the value turned into a string)
+    ("element null", _set(["beams", 0, "element"], None), "beams[0].element",
+     "expected one of 3363, 33103, 33153, 3333; got null"),
+    ("element list", _set(["beams", 0, "element"], [3363]), "beams[0].element", "; got [3363]"),
 ]
 
 

@@ -200,11 +200,21 @@ def resolve_nodes(spec) -> None:
             raise ConfigError(f"{ld.path}.node", "a traction_force acts on an end section: use first or last")
 
 
+#: the relative distance below which two load factors are one level (the stepper's and a
+#: restart's resolution)
+STEP_RESOLUTION = 1e-12
+
+
 def parse_steps(value) -> list[float]:
     """``steps``: strictly increasing load factors."""
     steps = [number(s, f"steps[{i}]", positive=True) for i, s in enumerate(sequence(value, "steps"))]
     if any(b <= a for a, b in zip(steps, steps[1:])):
         raise ConfigError("steps", f"load factors must increase strictly; got {steps}")
+    for i, (a, b) in enumerate(zip(steps, steps[1:])):
+        if b <= a * (1.0 + STEP_RESOLUTION):     # the stepper would take it as reached: no record
+            raise ConfigError(f"steps[{i + 1}]", f"must exceed steps[{i}] = {a!r} by more than "
+                                                 f"{STEP_RESOLUTION:g} of it (closer, they are one "
+                                                 f"level); got {b!r}")
     return steps
 
 

@@ -351,7 +351,8 @@ def read_restart(directory: str) -> RestartPoint:
                                  window_whole_from=(float(r.attrs["search_window_whole_from"])
                                                     if "search_window_whole_from" in r.attrs else None))
     except (OSError, KeyError) as exc:
-        raise InputError("--restart", f"{path}: not a readable results file ({exc})") from None
+        raise InputError("--restart", f"{path}: not a readable results file ({exc}); a run killed "
+                                      "while writing it leaves it so: run afresh with --output-dir") from None
     summary["steps"] = summary.get("steps", [])[:point.step]
     point.summary = summary
     return point

@@ -70,3 +70,17 @@ def test_an_intact_restart_state_is_accepted(tmp_path):
     s = read_summary(out)
     assert s["status"] == "completed" and [st["load_factor"] for st in s["steps"]] == [0.5, 1.0]
     assert np.isfinite(s["steps"][-1]["residual_norm"])
+
+
+def test_a_truncated_results_file_names_the_way_on(tmp_path):
+    """results.h5 cut short (a kill while it was written): the refusal named the HDF5 error
+    alone ('not a readable results file (Unable to open file (truncated file: ...))'); now it
+    says what to do."""
+    from ancf_petsc.errors import InputError
+    from ancf_petsc.io.restart import read_restart
+    _, out = _cut_to_level_1(tmp_path)
+    with open(out / "results.h5", "r+b") as fh:
+        fh.truncate(4096)
+    with pytest.raises(InputError, match=r"not a readable results file \(.*truncated.*\); a run killed "
+                                         r"while writing it leaves it so: run afresh with --output-dir"):
+        read_restart(str(out))

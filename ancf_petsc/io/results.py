@@ -214,6 +214,7 @@ class ResultsWriter:
         self.summary["version"] = version_info()
         self.summary["restarted_from"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["steps"] = list(point.summary.get("steps", []))
+        self.summary["last_converged"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
         self.vtk.resume([0.0] + [st["load_factor"] for st in self.summary["steps"]])
         truncate_levels(self.h5_path, point.step, point.load_factor, config_text(self.model.spec))

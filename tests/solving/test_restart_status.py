@@ -26,3 +26,14 @@ def test_a_restarted_unstable_run_stays_unstable(tmp_path):
     res = _restart(dict(raw, steps=[0.1, 0.2, 0.3]), tmp_path)
     assert res.status == "unstable" and "3 of 3 levels" in res.message, res.message
     assert len(res.records) == 3 == len(res.summary["steps"])
+
+
+def test_a_restart_that_converges_no_level_keeps_the_last_converged_one(tmp_path):
+    """The bar to 0.1, then restarted towards 0.2 with a Newton budget of one iteration: it fails
+    at once, and summary.json had no last_converged (the restarted process had converged
+    nothing) though level 1 is on disk; now {"step": 1, "load_factor": 0.1}."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    run_inline(dict(raw, steps=[0.1], output={"vtk": False}), tmp_path)
+    res = _restart(dict(raw, steps=[0.1, 0.2], solver={"max_newton_iterations": 1}), tmp_path)
+    assert res.status == "failed" and len(res.summary["steps"]) == 1, res.message
+    assert res.summary["last_converged"] == {"step": 1, "load_factor": 0.1}

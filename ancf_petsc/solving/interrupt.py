@@ -7,15 +7,22 @@ stops at the same safe point even when only one of them got the signal.  A secon
 the process at once (converged levels are on disk already; summary.json then still says running).
 
 SIGPIPE (``ancf-solve ... | head``) is ignored: a write to the closed pipe fails with EPIPE,
-``SafePrinter`` then stops printing for the rest of the run and the solve goes on.
+``SafePrinter`` then stops printing for the rest of the run and the solve goes on; so it does when
+stdout is a terminal that went away (EIO: the closed terminal or ssh session of a detached run;
+the ranks of a killed mpirun, whose stdout is its pseudo-terminal, no longer end 'failed' with
+INTERNAL_ERROR but as killed processes do: summary.json 'running', --restart goes on).
 """
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import sys
 
 _pending = 0                    # the signal number received (0: none)
+
+#: write errors that mean stdout's reader is gone for good: a closed pipe, a closed terminal
+GONE = (errno.EPIPE, errno.EIO)
 
 
 class RunInterrupted(Exception):
@@ -81,8 +88,9 @@ def stop_requested(comm) -> int:
 
 
 class SafePrinter:
-    """``print`` to stdout that stops quietly once stdout is a closed pipe (EPIPE): the file
-    descriptor is pointed at /dev/null, so PETSc's own printing (-snes_monitor) goes there too."""
+    """``print`` to stdout that stops quietly once stdout is a closed pipe or terminal (``GONE``):
+    the file descriptor is pointed at /dev/null, so PETSc's own printing (-snes_monitor) goes
+    there too."""
 
     def __init__(self, quiet: bool = False):
         self.quiet = quiet
@@ -93,8 +101,8 @@ class SafePrinter:
             return
         try:
             print(msg, flush=True)
-        except (BrokenPipeError, OSError) as exc:
-            if isinstance(exc, BrokenPipeError) or getattr(exc, "errno", None) == 32:
+        except OSError as exc:
+            if exc.errno in GONE:
                 self.close_stdout()
             else:
                 raise

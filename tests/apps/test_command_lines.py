@@ -79,6 +79,31 @@ def test_progress_lines_into_a_closed_pipe(program, tmp_path):
     assert os.path.isfile(written)
 
 
+def into_gone_terminal(args: list[str], cwd=ROOT) -> subprocess.CompletedProcess:
+    """Run a command line with stdout a terminal that went away (a pseudo-terminal whose other
+    end is closed: the closed ssh session of a detached run, a killed mpirun): every write to it
+    fails with EIO."""
+    master, slave = os.openpty()
+    os.close(master)
+    try:
+        return subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=slave,
+                              stderr=subprocess.PIPE, text=True, timeout=TIMEOUT, cwd=cwd,
+                              start_new_session=True, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    finally:
+        os.close(slave)
+
+
+@pytest.mark.parametrize("program", ["ancf-solve", "ancf-sweep"])
+def test_progress_lines_into_a_terminal_that_went_away(program, tmp_path):
+    """The work goes on as into a closed pipe: ancf-solve ended 'failed', INTERNAL_ERROR
+    'OSError: [Errno 5] Input/output error', exit 1 with a traceback, at its first line (the gait
+    stride whose terminal closed after frame 3: 4 of 100 frames solved)."""
+    args, written = _work(program, tmp_path)
+    p = into_gone_terminal([program] + args, cwd=tmp_path)
+    assert (p.returncode, p.stderr) == (0, "")
+    assert os.path.isfile(written)
+
+
 #: (command line, words of its one error line); the last ones were accepted: an empty --out or
 #: --configs for the default directory (ancf-report --out= wrote report.md into the working
 #: directory), a misspelt or one-dash option given to PETSc and left unread (ancf-study S.yaml

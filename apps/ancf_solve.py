@@ -14,6 +14,7 @@ import os
 import sys
 
 from ancf_petsc.parallel.launch import launch_rank
+from ancf_petsc.solving.interrupt import say_stderr
 from apps.cli import Parser, path
 
 OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help", "--check", "--output")
@@ -71,7 +72,7 @@ def _parser() -> argparse.ArgumentParser:
 def _error(line: str, rank: int | None = None) -> None:
     """One line on stderr from rank 0 (before MPI starts: the launcher's rank 0)."""
     if (launch_rank() if rank is None else rank) == 0:
-        print(f"ancf-solve: {line}", file=sys.stderr, flush=True)
+        say_stderr(f"ancf-solve: {line}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -182,9 +183,9 @@ def _main(argv: list[str], interrupt) -> int:
             for name in result.unused_options:
                 source = "config" if name.startswith("petsc.") else ""
                 option = "-" + name[len("petsc."):] if source else name
-                print(unused_line(option, source), file=sys.stderr, flush=True)
+                say_stderr(unused_line(option, source))
         for note in (result.summary or {}).get("warnings", []):   # e.g. a first level strained > 50 %
-            print(f"ancf-solve: {note}", file=sys.stderr, flush=True)
+            say_stderr(f"ancf-solve: {note}")
         if result.status == "unstable":
             _error(f"unstable: {result.message}; results in {spec.output.dir}")
         elif result.status == "interrupted":

@@ -109,9 +109,26 @@ class SafePrinter:
 
     def close_stdout(self) -> None:
         self.closed = True
-        try:
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, sys.stdout.fileno())
-            os.close(devnull)
-        except OSError:
-            pass
+        _to_devnull(sys.stdout)
+
+
+def say_stderr(line: str) -> None:
+    """One line on stderr, flushed; once stderr is a closed pipe or terminal (``GONE``:
+    ``ancf-solve C.yaml 2>&1 | head -1``, a closed ssh session) it is pointed at /dev/null, so
+    the run's last lines cannot turn its exit code into a bug's (1)."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except OSError as exc:
+        if exc.errno not in GONE:
+            raise
+        _to_devnull(sys.stderr)
+
+
+def _to_devnull(stream) -> None:
+    """Point ``stream``'s file descriptor at /dev/null (what is buffered goes there too)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, stream.fileno())
+        os.close(devnull)
+    except OSError:
+        pass

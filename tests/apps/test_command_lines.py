@@ -79,15 +79,16 @@ def test_progress_lines_into_a_closed_pipe(program, tmp_path):
     assert os.path.isfile(written)
 
 
-def into_gone_terminal(args: list[str], cwd=ROOT) -> subprocess.CompletedProcess:
-    """Run a command line with stdout a terminal that went away (a pseudo-terminal whose other
-    end is closed: the closed ssh session of a detached run, a killed mpirun): every write to it
-    fails with EIO."""
+def into_gone_terminal(args: list[str], cwd=ROOT, stderr_too: bool = False) -> subprocess.CompletedProcess:
+    """Run a command line with stdout (and stderr) a terminal that went away (a pseudo-terminal
+    whose other end is closed: the closed ssh session of a detached run, a killed mpirun): every
+    write to it fails with EIO."""
     master, slave = os.openpty()
     os.close(master)
     try:
         return subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=slave,
-                              stderr=subprocess.PIPE, text=True, timeout=TIMEOUT, cwd=cwd,
+                              stderr=slave if stderr_too else subprocess.PIPE, text=True,
+                              timeout=TIMEOUT, cwd=cwd,
                               start_new_session=True, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
     finally:
         os.close(slave)
@@ -101,6 +102,26 @@ def test_progress_lines_into_a_terminal_that_went_away(program, tmp_path):
     args, written = _work(program, tmp_path)
     p = into_gone_terminal([program] + args, cwd=tmp_path)
     assert (p.returncode, p.stderr) == (0, "")
+    assert os.path.isfile(written)
+
+
+@pytest.mark.parametrize("into", ["pipe", "terminal"])
+@pytest.mark.parametrize("extra, code", [(["-snes_maxit", "3"], 0), (["-snes_max_it", "1"], 3)])
+def test_the_last_lines_on_a_gone_stderr_keep_the_runs_exit_code(into, extra, code, tmp_path):
+    """``ancf-solve C.yaml 2>&1 | head -0`` (or a closed terminal): the line on stderr after the
+    run (an unused option's warning, the failure) raised BrokenPipeError / EIO out of main, exit
+    1 (a bug's code) for a run that completed (exit 0) or could not reach a level (exit 3)."""
+    args, written = _work("ancf-solve", tmp_path)
+    args = ["ancf-solve"] + args + extra
+    if into == "terminal":
+        p = into_gone_terminal(args, cwd=tmp_path, stderr_too=True)
+    else:
+        r, w = os.pipe()
+        os.close(r)
+        p = subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=w, stderr=w,
+                           timeout=TIMEOUT, cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+        os.close(w)
+    assert p.returncode == code
     assert os.path.isfile(written)
 
 

@@ -156,9 +156,11 @@ def _scan(problem, A, d, Y, F, comm, tolerance: float) -> Jump | None:
     if not np.isfinite(size) or size <= max(JUMP_SHARE * scale, tolerance):
         return None
     where = _where(problem, np.abs(f_hi - f_lo), comm)
-    A.copy(Y)
-    Y.axpy(lo, d)
-    noise = rounding_noise(problem, Y, F, f_lo, comm)
+    noise = np.inf                      # at the step's ends, away from the jump (a state within
+    for end, f_end in ((0.0, values[0]), (1.0, values[-1])):    # rounding of it would cross it)
+        A.copy(Y)
+        Y.axpy(end, d)
+        noise = min(noise, rounding_noise(problem, Y, F, f_end, comm))
     if size <= noise:
         return Jump(size=size, scale=scale, where=where, kind="rounding_noise", noise=noise)
     cause, kind = "", "residual_jump"

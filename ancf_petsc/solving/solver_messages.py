@@ -187,8 +187,9 @@ def failure_detail(solver, reason: int) -> Detail:
     small for an active set; its ``kind`` the cause's code (failure_cause.py)."""
     if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
         return Detail(linear_solver_detail(solver, reason), "linear_solver")
-    unreachable = unreachable_atol(solver)
-    if unreachable is not None and reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT):
+    unreachable = (unreachable_atol(solver)
+                   if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)
+    if unreachable is not None:
         return unreachable
     if reason == VIOLATED_STATE:
         return Detail(" (the solves converged on active sets with a multiplier pulling or a gap penetrating "

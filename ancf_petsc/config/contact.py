@@ -118,6 +118,21 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
     return c
 
 
+def default_axial(c) -> int:
+    """``contact.projection.axial`` when the config gives none: the contact points' degree along
+    the beam (axial_points - 1, quadratic by default), but at most linear under Coulomb friction.
+    Friction's bounds μ p⁺ read the pointwise pressure, and the quadratic one oscillates along the
+    beam (41 % of the pressing force cancelled within elements on the walking stride): its
+    strides' strains then differ by 1-2 % and their end differences by 2-7 % from mesh to mesh
+    (2, 4, 8, 16 elements), not falling; with a linear pressure by 0.1-0.2 % and 0.3-0.5 % from 8
+    to 16 (docs/gait.md, "How many elements a stride needs").  Frictionless answers converge
+    with either, faster with the quadratic one."""
+    law = TANGENTIAL_LAWS[c.tangential.law] if c.tangential is not None else None
+    if getattr(law, "bounded", False):          # Coulomb's bounds μ p⁺ (contact/friction.py)
+        return min(1, c.axial_points - 1)
+    return c.axial_points - 1
+
+
 def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
     """``contact.projection`` (at key path ``pp``) into ``c`` (a ContactSpec): the pressure
     space's degrees along the beam and across, its spans across, continuity and supported-end
@@ -125,11 +140,12 @@ def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
     if proj == "pointwise":
         raise ConfigError(pp, "a multiplier per point over-constrains the quadratic "
                               "section fields; give {axial: .., curve: ..} degrees")
+    axial = default_axial(c)
     if proj is None:
-        c.projection = (c.axial_points - 1, 1)
+        c.projection = (axial, 1)
     else:
         mapping(proj, pp, optional=("axial", "curve", "curve_spans", "per_element", "supported_ends"))
-        c.projection = (integer(proj.get("axial", c.axial_points - 1), f"{pp}.axial", lo=0,
+        c.projection = (integer(proj.get("axial", axial), f"{pp}.axial", lo=0,
                                 hi=c.axial_points - 1),
                         integer(proj.get("curve", 1), f"{pp}.curve", lo=0, hi=8))
         c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")

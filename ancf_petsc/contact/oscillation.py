@@ -76,6 +76,6 @@ def oscillation_notes(c, steps: list[dict]) -> list[str]:
             f"bound mu * (pressing force) reach {1.0 + excess:.4g} x mu N (N = {net:.4g} N the net "
             f"pressing force; the friction force is {friction:.4g} x mu N). Likely an inf-sup "
             "instability: the pressure space is too rich for the mesh near a supported end. "
-            "contact.projection: {axial: 1} or contact.axial_points: 2 remove it (the pressed strips "
+            "contact.projection: {axial: 1} (friction's default) or contact.axial_points: 2 remove it (the pressed strips "
             "at 16 elements, mu = 0.5: 1.087 x mu N, with them 1.003 and 1.000; docs/interface.md, "
             "\"Limits\")"]

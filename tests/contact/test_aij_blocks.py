@@ -12,7 +12,9 @@ from helpers import build_problem
 
 
 def _friction_state():
-    P, _ = build_problem(achilles(contact={"mode": "sliding", "tangential": dict(FRICTION)}))
+    # the quadratic pressure along the beam, whose tangential rows straddle two multiplier nodes
+    P, _ = build_problem(achilles(contact={"mode": "sliding", "tangential": dict(FRICTION),
+                                           "projection": {"axial": 2}}))
     P.contact.weights.differentiated = True
     P.load_factor = 50.0
     X, free = fade_state(P)

@@ -67,7 +67,7 @@ def main(argv=None) -> int:
                     help="ANCF augmentation factors c of contact.tangential ('default': the law's, "
                          "G/E of the softer beam since 2026-12-02, 1 before)")
     ap.add_argument("--ancf-spaces", default="default",
-                    help="ANCF pressure spaces separated by ';': 'default' (quadratic along × linear across) and/or "
+                    help="ANCF pressure spaces separated by ';': 'default' (linear along × linear across) and/or "
                          + ", ".join(f"'{n}'" for n in SPACES))
     ap.add_argument("--element", default="",
                     help="every beam's element of the ANCF columns, e.g. 33103 ('': the config's default, 3363); "

@@ -234,7 +234,9 @@ def section(rows: list, prof: list, meta: dict, notes: str = "", across: list | 
           "2 axial points) with `contact.tangential: {law: coulomb, friction: 0.3}` (tangential multipliers, "
           "exact stick: `docs/interface.md`, first sections), at the default augmentation c (1) and at c = 10 and "
           "0.1 (c only steers the semi-smooth Newton iteration; the answer must not depend on it); in the default "
-          "pressure (and tangential multiplier) space, quadratic along × linear across, and in richer ones (the "
+          "pressure (and tangential multiplier) space, linear along × linear across (friction's default since "
+          "2026-12-07: \"Friction's pressure along the beam\"; the quadratic pressure's rows before are in the "
+          "history of docs/solid_friction.csv), and in richer ones (the "
           "first two: those of `docs/solid_contact.md`): " + "; ".join(f"{n}: `{spaces_keys(k)}`" for n, k in SPACES.items())
           + " (`--ancf-spaces`).  Quantities: u_x at the end-section centroids (the soleus' is its "
           "elongation; the gastrocnemii move by tens of µm).", ""]

@@ -21,13 +21,14 @@ SPACE = ", pressure "                # a pressure-space variant: "<variant>, pre
 LOCAL = " mm at "                    # a locally refined mesh's resolution: "h 2.00 mm, 0.70 mm at mg_sol"
 
 
-#: the beams' contact pressure (and tangential multiplier) spaces beside the default (quadratic
-#: along x linear across, 3 x 2 points): name -> contact keys (docs/solid_contact.md's variants)
+#: the beams' contact pressure (and tangential multiplier) spaces beside the default (linear along
+#: x linear across under friction since 2026-12-07, quadratic along before; 3 x 2 points): name ->
+#: contact keys (docs/solid_contact.md's variants)
 SPACES = {"quadratic across": {"curve_points": 3, "projection": {"axial": 2, "curve": 2}},
           "cubic along": {"axial_points": 4, "projection": {"axial": 3, "curve": 1}},
           "cubic across": {"curve_points": 4, "projection": {"axial": 2, "curve": 3}}}
 
-DEFAULT_SPACE = "quadratic along × linear across"
+DEFAULT_SPACE = "linear along × linear across"
 
 
 def ancf_model(element: str | None = None) -> str:

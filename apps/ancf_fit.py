@@ -21,7 +21,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, at_least, path, printer, start_petsc
+from apps.cli import Parser, at_least, path, printer, say_stderr, start_petsc
 
 PROG = "ancf-fit"
 
@@ -72,17 +72,16 @@ def main(argv: list[str] | None = None) -> int:
         return _run(spec, args, say)
     except InputError as exc:
         if rank == 0:
-            print(f"{PROG}: {args.fit}: {exc}", file=sys.stderr, flush=True)
+            say_stderr(f"{PROG}: {args.fit}: {exc}")
         return 2
     except OutputError as exc:
         if rank == 0:
-            print(f"{PROG}: output error: {exc}", file=sys.stderr, flush=True)
+            say_stderr(f"{PROG}: output error: {exc}")
         return 2
     except CalibrationInterrupted as exc:
         if rank == 0:
-            print(f"{PROG}: interrupted (signal {exc.signum}); every sample so far is in "
-                  f"{log_path}: run the same command to go on",
-                  file=sys.stderr, flush=True)
+            say_stderr(f"{PROG}: interrupted (signal {exc.signum}); every sample so far is in "
+                       f"{log_path}: run the same command to go on")
         return 128 + exc.signum
     finally:
         interrupt.uninstall()            # back to the caller's handlers (main() called in-process)

@@ -13,7 +13,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, path, positive, printer
+from apps.cli import Parser, path, positive, printer, say_stderr
 
 #: the configs shipped beside the command lines (a checkout or an editable install)
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
@@ -49,14 +49,14 @@ def main(argv: list[str] | None = None) -> int:
             from ancf_petsc.paper import existing
             runs = existing.read_existing(args.existing, inputs)
     except InputError as exc:
-        print(f"ancf-report: {exc}", file=sys.stderr)
+        say_stderr(f"ancf-report: {exc}")
         return 2
     out = os.path.abspath(args.out)
     from ancf_petsc.io.files import OutputError, prepare_output_dir
     try:
         prepare_output_dir(out, "--out")
     except OutputError as exc:
-        print(f"ancf-report: output error: {exc}", file=sys.stderr)
+        say_stderr(f"ancf-report: output error: {exc}")
         return 2
     sections = []
     heading = "Type III Achilles tendon: reproduction of Obrezkov et al. (2022)"
@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.figures and t1 is not None:
             rp.figures(inputs, t1, out, t2, log)
     except InputError as exc:
-        print(f"ancf-report: {exc}", file=sys.stderr)
+        say_stderr(f"ancf-report: {exc}")
         return 2
     text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
     with open(os.path.join(out, "report.md"), "w") as fh:

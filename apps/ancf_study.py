@@ -14,7 +14,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, path, printer, start_petsc
+from apps.cli import Parser, path, printer, say_stderr, start_petsc
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -47,10 +47,10 @@ def main(argv: list[str] | None = None) -> int:
         else:
             raise StudyError("kind", f"must be pareto or stability; got {kind!r}")
     except StudyError as exc:
-        print(f"ancf-study: {args.study}: {exc}", file=sys.stderr)
+        say_stderr(f"ancf-study: {args.study}: {exc}")
         return 2
     except OutputError as exc:
-        print(f"ancf-study: output error: {exc}", file=sys.stderr)
+        say_stderr(f"ancf-study: output error: {exc}")
         return 2
     return 0
 

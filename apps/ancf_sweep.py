@@ -15,7 +15,7 @@ import os
 import signal
 import sys
 
-from apps.cli import Parser, path, positive, printer
+from apps.cli import Parser, path, positive, printer, say_stderr
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -23,7 +23,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return _main(sys.argv[1:] if argv is None else argv)
     except KeyboardInterrupt:
-        print("ancf-sweep: interrupted", file=sys.stderr, flush=True)
+        say_stderr("ancf-sweep: interrupted")
         return 130
 
 
@@ -82,7 +82,7 @@ def _main(argv: list[str]) -> int:
                     raise SweepError("--" + key.replace("_", "-"), exc.message) from None
         sweep = load_sweep(args.sweep).with_overrides(jobs=args.jobs, ranks=args.ranks, **overrides)
     except SweepError as exc:
-        print(f"ancf-sweep: {args.sweep}: {exc}", file=sys.stderr, flush=True)
+        say_stderr(f"ancf-sweep: {args.sweep}: {exc}")
         return 2
     runs = expand(sweep)
     say(f"[sweep] {sweep.name}: {len(runs)} runs ({sweep.shape()}) of {sweep.base}; "
@@ -135,10 +135,10 @@ def _main(argv: list[str]) -> int:
         return 0 if report.ok() and col.all_completed() else 1
     except OSError as exc:
         where = f": {exc.filename}" if exc.filename else ""
-        print(f"ancf-sweep: {exc.strerror or exc}{where}", file=sys.stderr, flush=True)
+        say_stderr(f"ancf-sweep: {exc.strerror or exc}{where}")
         return 1
     except KeyboardInterrupt:
-        print("ancf-sweep: interrupted", file=sys.stderr, flush=True)
+        say_stderr("ancf-sweep: interrupted")
         return 130
 
 

@@ -5,8 +5,10 @@ positive integer; got 'x' (see ancf-sweep --help)``, exit 2, no usage block) and
 survives a reader gone before it is written (``ancf-fit --help | head -0``).  Progress lines go
 through ``printer`` (``interrupt.SafePrinter``): once stdout is a closed pipe (``ancf-sweep S.yaml
 --dry-run | head -1``) they stop quietly, the work goes on and its exit code is unchanged;
-``start_petsc`` keeps PETSc's SIGPIPE handler from aborting the process meanwhile.  ``path`` and
-``positive`` are option types whose errors say what to give."""
+``start_petsc`` keeps PETSc's SIGPIPE handler from aborting the process meanwhile.  One-line
+errors and warnings go through ``say_stderr`` (``interrupt.say_stderr``): on a stderr that is gone
+(``ancf-study S.yaml 2>&1 | head -0``) the exit code stays the error's (2), not a bug's (1).
+``path`` and ``positive`` are option types whose errors say what to give."""
 from __future__ import annotations
 
 import argparse
@@ -14,7 +16,9 @@ import difflib
 import signal
 import sys
 
-from ancf_petsc.solving.interrupt import SafePrinter
+from ancf_petsc.solving.interrupt import SafePrinter, say_stderr
+
+__all__ = ["Parser", "at_least", "path", "positive", "printer", "say_stderr", "start_petsc"]
 
 
 def printer(quiet: bool = False) -> SafePrinter:
@@ -65,6 +69,12 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str):
         """One line naming the option (argparse prints the usage too), exit 2."""
         self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+    def exit(self, status: int = 0, message: str | None = None):
+        """``message`` through ``say_stderr`` (a gone stderr keeps ``status``), then exit."""
+        if message:
+            say_stderr(message.rstrip("\n"))
+        sys.exit(status)
 
     def print_help(self, file=None) -> None:
         """The help on stdout through ``printer`` (``--help | head``: no BrokenPipeError)."""

@@ -125,6 +125,28 @@ def test_the_last_lines_on_a_gone_stderr_keep_the_runs_exit_code(into, extra, co
     assert os.path.isfile(written)
 
 
+#: one-line errors of every command line (exit 2): the last is apps/cli.py's Parser
+GONE_STDERR_ERRORS = [["ancf-solve"], ["ancf-report", "--existing", "nosuch"], ["ancf-study", "nosuch.yaml"],
+                      ["ancf-sweep", "nosuch.yaml"], ["ancf-fit", "nosuch.yaml"],
+                      ["ancf-sweep", "s.yaml", "--jobs", "x"]]
+
+
+@pytest.mark.parametrize("into", ["pipe", "terminal"])
+@pytest.mark.parametrize("args", GONE_STDERR_ERRORS)
+def test_an_error_line_on_a_gone_stderr_keeps_exit_2(into, args, tmp_path):
+    """``ancf-study NOSUCH.yaml 2>&1 | head -0``: the one-line error raised BrokenPipeError, exit 1
+    (a bug's code) instead of 2, for every command but ancf-solve's config errors."""
+    if into == "terminal":
+        p = into_gone_terminal(args, cwd=tmp_path, stderr_too=True)
+    else:
+        r, w = os.pipe()
+        os.close(r)
+        p = subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=w, stderr=w,
+                           timeout=TIMEOUT, cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+        os.close(w)
+    assert p.returncode == 2
+
+
 #: (command line, words of its one error line); the last ones were accepted: an empty --out or
 #: --configs for the default directory (ancf-report --out= wrote report.md into the working
 #: directory), a misspelt or one-dash option given to PETSc and left unread (ancf-study S.yaml

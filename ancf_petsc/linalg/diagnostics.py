@@ -3,45 +3,13 @@
 names the option and what works instead.  The input-side checks are in option_syntax.py."""
 from __future__ import annotations
 
-import ctypes
-import os
 import re
 
 import numpy as np
 from mpi4py import MPI
 
-from .database import option_names
+from .database import copies, option_names, options_used, petsc_library  # noqa: F401 (imported from here)
 from .option_syntax import PREFIX
-
-_LIB = None
-
-
-def petsc_library():
-    """The libpetsc that petsc4py runs on (already loaded)."""
-    global _LIB
-    if _LIB is None:
-        import petsc4py
-        base = os.path.join(petsc4py.get_config()["PETSC_DIR"], "lib")
-        names = sorted((f for f in os.listdir(base) if f.startswith("libpetsc") and ".so" in f), key=len)
-        if not names:
-            raise OSError(f"no libpetsc in {base}")
-        # RTLD_NOLOAD: the copy petsc4py loaded, with its symbols kept local (RTLD_GLOBAL would
-        # let them shadow later libraries': pymetis then called PT-Scotch's METIS shim and hung)
-        _LIB = ctypes.CDLL(os.path.join(base, names[0]), mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
-    return _LIB
-
-
-def options_used(names: list[str]) -> list[bool]:
-    """PETSc's own 'used' flag of each option in the global database (this rank's view)."""
-    lib = petsc_library()
-    out = []
-    for name in names:
-        flag = ctypes.c_int(0)                   # PetscBool is a C enum
-        if lib.PetscOptionsUsed(None, name.encode(), ctypes.byref(flag)) != 0:
-            flag.value = 1                        # cannot tell: do not accuse it
-        out.append(bool(flag.value))
-    return out
-
 
 #: options PETSc reads only in PetscFinalize, after the report is made
 READ_AT_FINALIZE = ("options_left", "log_view", "log_summary", "malloc_dump", "memory_view",
@@ -52,10 +20,15 @@ HINTS = {"mat_type": "the Jacobian's format is solver.matrix in the config (auto
 
 def unused_command_line_options(comm) -> list[str]:
     """Options in PETSc's database (command line, PETSC_OPTIONS, .petscrc) that no PETSc object
-    ever read, as ``-name``; collective (an option read on any rank counts as used)."""
-    names = option_names()
-    names = [n for n in names if n not in READ_AT_FINALIZE]
-    return [f"-{n}" for n, u in zip(names, used_anywhere(names, comm)) if not u]
+    ever read, as ``-name``; collective (an option read on any rank counts as used).  An option
+    a workflow's solve reads through its copy (``database.own_prefix``) is used; the copy is not
+    listed."""
+    made = copies()
+    names = [n for n in option_names() if n not in READ_AT_FINALIZE and n not in made]
+    copy_of = {original: copy for copy, original in made.items()}
+    used = used_anywhere(names, comm)
+    through_copy = used_anywhere([copy_of.get(n, n) for n in names], comm)
+    return [f"-{n}" for n, u, c in zip(names, used, through_copy) if not (u or c)]
 
 
 def used_anywhere(names: list[str], comm) -> list[bool]:
@@ -70,12 +43,12 @@ def used_anywhere(names: list[str], comm) -> list[bool]:
     return [bool(u) for u in used]
 
 
-def unused_line(option: str, source: str = "") -> str:
-    """One warning line for an unused option (``source``: where it was set)."""
+def unused_line(option: str, source: str = "", prog: str = "ancf-solve") -> str:
+    """One warning line of ``prog`` for an unused option (``source``: where it was set)."""
     base = option.lstrip("-")
     hint = HINTS.get(PREFIX.sub("", base)) or "misspelt, or not read by the solver in use"
     where = f" ({source})" if source else ""
-    return f"ancf-solve: warning: PETSc option {option}{where} was never used: {hint}"
+    return f"{prog}: warning: PETSc option {option}{where} was never used: {hint}"
 
 
 # ------------------------------------------------------------------ PETSc errors → one line

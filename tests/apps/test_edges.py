@@ -393,6 +393,31 @@ def test_unused_options_are_reported(tmp_path, ranks):
     assert p.returncode == 0 and not solver_lines(p.stderr), p.stderr
 
 
+def test_ancf_study_reports_a_misspelt_option_once(tmp_path):
+    """``ancf-study S.yaml -snes_maxit 3`` said nothing: copying the solver options under each
+    solve's prefix read the originals (PETSc counts a read as a use), and the study printed no
+    report; each run's summary listed -snes_maxit, -study1_snes_maxit and the used
+    -snes_linesearch_type.  Now one line, as ancf-solve's, and only -snes_maxit in the summaries."""
+    study = {"kind": "pareto", "name": "tiny", "base": os.path.join(CONFIGS, "bending_neohookean.yaml"),
+             "probe": "tip", "component": "z",
+             "grid": {"element": ["3363"], "axial_points": [2], "cubature_degree": [2], "elements": [1, 2]},
+             "reference": {"element": "3363", "axial_points": 2, "cubature_degree": 2, "elements": 4},
+             "output": str(tmp_path / "st")}
+    f = write_config(study, tmp_path / "st.yaml")
+    run = [os.path.join(VENV_BIN, "ancf-study"), f, "-snes_maxit", "3", "-snes_linesearch_type", "bt"]
+    p = subprocess.run(run, capture_output=True, text=True, timeout=TIMEOUT, cwd=tmp_path,
+                       env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode == 0, p.stderr
+    assert [ln for ln in p.stderr.splitlines() if ln.startswith("ancf-")] == [
+        "ancf-study: warning: PETSc option -snes_maxit was never used: misspelt, or not read by "
+        "the solver in use"], p.stderr
+    for run_dir in ("run_000", "run_001", "reference_4"):
+        assert read_summary(tmp_path / "st" / run_dir)["unused_petsc_options"] == ["-snes_maxit"]
+    p = subprocess.run(run + ["-options_left", "0"], capture_output=True, text=True, timeout=TIMEOUT,
+                       cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    assert p.returncode == 0 and "ancf-study:" not in p.stderr, p.stderr
+
+
 # ------------------------------------------------------------------------------ PETSc solvers
 def _tip(tmp_path, out):
     return np.array(read_summary(tmp_path / out)["steps"][-1]["probes"]["tip"]["displacement"])

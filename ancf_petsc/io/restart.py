@@ -12,7 +12,8 @@ same model; a section file whose pixel scale changed between the kill and the re
 the resolved model is compared, item by item (``fingerprint``: reference nodal vectors, every
 beam's connectivity, nodes, section rule and material, the supported DOFs, the loads and the
 contact spec), and the first difference is named.  The converged levels must be the first
-levels of the config's steps.
+levels of the config's steps; a load curve may differ after the restart's level
+(restart_curves.py: frames appended to a history).
 """
 from __future__ import annotations
 
@@ -27,6 +28,7 @@ from ..config.specs import LOCKING
 from ..contact.interfaces import ContactSetupError, find_interfaces, supported_ends
 from ..contact.tangential import TANGENTIAL_LAWS
 from ..errors import InputError
+from .restart_curves import curve_difference, curve_owner, grown_histories, same_curve
 
 #: config keys that define the model (a restart must not change them; steps, solver, petsc,
 #: output and partition may change)
@@ -169,8 +171,8 @@ def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
             continue
         if key.endswith("/element") and not np.array_equal(a, b):
             return key, f"{_text(a)} → {_text(b)}"
-        if key.startswith("load_curve_") and "reference_nodal_vectors" in now and not np.array_equal(a, b):
-            return key, _curve_difference(a, b, np.asarray(now["reference_nodal_vectors"]).size)
+        if key.startswith("load_curve_") and "reference_nodal_vectors" in now and not same_curve(a, b):
+            return key, curve_difference(a, b, np.asarray(now["reference_nodal_vectors"]).size)
         if a.shape != b.shape:
             return key, f"shape {a.shape} → {b.shape}"
         if not np.allclose(a, b, rtol=1e-12, atol=1e-300 + 1e-12 * float(np.max(np.abs(a), initial=0.0))):
@@ -181,44 +183,6 @@ def first_difference(stored: dict, now: dict) -> tuple[str, str] | None:
                 return key, f"{a.ravel()[0]:.9g} → {b.ravel()[0]:.9g}"
             return key, f"largest change at entry {k}: {a.ravel()[k]:.9g} → {b.ravel()[k]:.9g}"
     return None
-
-
-def _curve_difference(a: np.ndarray, b: np.ndarray, n_dofs: int) -> str:
-    """What differs between two ``load_curve_k`` items (the curve's (λ, m) points, then the
-    group's forces and displacements at multiplier 1, ``n_dofs`` each), in words: a history's
-    frame k is the point at load factor k."""
-    na, nb = (a.size - 2 * n_dofs) // 2, (b.size - 2 * n_dofs) // 2
-    if na != nb:
-        return f"its curve has {na} → {nb} points (a load history: frames and the rest state)"
-    k = int(np.argmax(np.abs(a - b)))
-    if k < 2 * na:
-        j = k // 2
-        if k % 2:
-            lam = a[2 * j]
-            return (f"its multiplier at load factor {lam:g} (a history: frame {lam:g}) "
-                    f"{a[k]:.9g} → {b[k]:.9g}")
-        return f"the load factor of its point {j}: {a[k]:.9g} → {b[k]:.9g}"
-    return "its loads or prescribed displacements at multiplier 1 differ"
-
-
-def _curve_owner(model, key: str) -> str:
-    """``load_curve_k`` of the fingerprint as the config entries that follow that curve, with the
-    history columns they read."""
-    k = int(key.rpartition("_")[2])
-    groups = [g for g in model.loading if g.curve is not None]
-    if k >= len(groups):
-        return key
-    points = np.asarray(groups[k].curve.points, dtype=float)
-    owners = []
-    for item, name in [*((x, "loads") for x in model.spec.loads),
-                       *((x, "boundary_conditions") for x in model.spec.boundary_conditions)]:
-        if item.curve is None or np.shape(item.curve) != points.shape or not np.allclose(item.curve, points):
-            continue
-        raw = model.spec.raw.get(name, []) if isinstance(model.spec.raw, dict) else []
-        index = int(item.path.rpartition("[")[2].rstrip("]")) if item.path.endswith("]") else -1
-        column = raw[index].get("column") if 0 <= index < len(raw) and isinstance(raw[index], dict) else None
-        owners.append(item.path + (f" (column {column!r})" if column else ""))
-    return "the load curve of " + ", ".join(owners) if owners else key
 
 
 #: contact words stored since 2026-12-07 (the fade forces' form: another equilibrium where points
@@ -244,10 +208,11 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
             words = json.loads(_text(stored["contact"]))
             words.pop("fade_forces", None)
             stored = dict(stored, contact=_word(json.dumps(words, sort_keys=True)))
-        found = first_difference(stored, fingerprint(model))
+        now = fingerprint(model)
+        found = first_difference(grown_histories(stored, now, point.load_factor), now)
         differs = None if found is None else f"{found[0]} ({found[1]}) differs"
         if found is not None and found[0].startswith("load_curve_"):
-            differs = f"{_curve_owner(model, found[0])}: {found[1]}"
+            differs = f"{curve_owner(model, found[0])}: {found[1]}"
     else:                                         # written before fingerprints: the YAML keys
         raw = model.spec.raw
         differs = _first_difference({k: point.stored_config.get(k) for k in MODEL_KEYS},

@@ -205,6 +205,29 @@ def test_a_history_run_stopped_midway_restarts_to_the_uninterrupted_answers(tmp_
         assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
 
 
+def test_a_restart_with_frames_appended_to_its_history_goes_on_to_the_longer_runs_answers(tmp_path):
+    """A history run stopped after 3 of its 5 frames, restarted with the table grown to 8 frames
+    (frames 4 and 5 changed too, after the restart point): the uninterrupted 8-frame run's
+    answers (1e-10).  It was refused: 'its curve has 6 → 9 points'."""
+    table = {"time": [0.01 * k for k in range(8)], "soleus": [20, 60, 120, 160, 120, 60, 30, 60],
+             "medial": [5, 20, 60, 100, 140, 100, 40, 20], "lateral": [5, 20, 40, 80, 120, 80, 40, 20]}
+    longer = tendon({k: [float(v) for v in vs] for k, vs in table.items()})
+    full = run_inline(longer, tmp_path / "full")
+    assert full["status"] == "completed"
+    short = copy.deepcopy(longer)
+    short["history"]["table"] = {k: v[:5] for k, v in table.items()}
+    short["history"]["table"]["soleus"][3:5] = [150.0, 100.0]     # after the restart point
+    assert len(_stopped(short, full, 3, tmp_path)["steps"]) == 3
+    p = solve_cli(write_config(longer, tmp_path / "longer.yaml"),
+                  extra=["--restart", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    done = read_summary(tmp_path / "run")
+    assert len(done["steps"]) == 8
+    for k in range(8):
+        a, b = _ends(full, k), _ends(done, k)
+        assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
+
+
 def test_a_restart_with_a_changed_table_names_the_load_and_the_frame(tmp_path):
     """A table changed between a run and its restart is refused naming the load, its column and
     the frame, not the fingerprint's 'load_curve_0 (largest change at entry 7: ...)'."""
@@ -219,7 +242,11 @@ def test_a_restart_with_a_changed_table_names_the_load_and_the_frame(tmp_path):
     table = raw["history"]["table"]
     raw["history"]["table"] = {k: v + [v[-1] + 0.1 if k == "time" else 0.0] for k, v in table.items()}
     p = solve_cli(write_config(raw, tmp_path / "longer.yaml"), extra=["--restart", str(tmp_path / "run")])
-    assert p.returncode == 2 and "its curve has 4 → 5 points" in p.stderr, p.stderr
+    assert p.returncode == 2, p.stderr     # a frame appended, and frame 2 changed: frame 2 named
+    assert "its multiplier at load factor 2 (a history: frame 2) 20 → 21; restart with" in p.stderr, p.stderr
+    raw["history"]["table"]["soleus"][1] = 20.0          # only appended: the run goes on to frame 4
+    p = solve_cli(write_config(raw, tmp_path / "longer.yaml"), extra=["--restart", str(tmp_path / "run")])
+    assert p.returncode == 0 and len(read_summary(tmp_path / "run")["steps"]) == 4, p.stderr
 
 
 @pytest.mark.slow

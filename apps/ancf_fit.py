@@ -21,7 +21,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, at_least, path, printer, say_stderr, start_petsc
+from apps.cli import Parser, at_least, path, printer, report_unused_options, say_stderr, start_petsc
 
 PROG = "ancf-fit"
 
@@ -115,6 +115,7 @@ def _run(spec, args, say) -> int:
     rate = 60.0 * tp["solved_now"] / tp["solve_time"] if tp["solve_time"] > 0 else 0.0
     say(f"[fit] {tp['samples']} samples ({tp['resumed']} from the log, {tp['solved_now']} solved: "
         f"{rate:.0f} per minute of solving); {res.wall_time:.1f} s; results in {res.output}")
+    report_unused_options(PROG, solved=tp["solved_now"] > 0)    # none solved: none could read them
     return 0
 
 

@@ -14,7 +14,7 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, path, printer, say_stderr, start_petsc
+from apps.cli import Parser, path, printer, report_unused_options, say_stderr, start_petsc
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -52,21 +52,8 @@ def main(argv: list[str] | None = None) -> int:
     except OutputError as exc:
         say_stderr(f"ancf-study: output error: {exc}")
         return 2
-    _report_unused()
+    report_unused_options("ancf-study")
     return 0
-
-
-def _report_unused() -> None:
-    """A PETSc option no solve of the study read (misspelt: ``-snes_maxit``), once, as ancf-solve
-    reports it; PETSc reports instead when given -options_left (collective)."""
-    from petsc4py import PETSc
-
-    from ancf_petsc.linalg.database import option
-    from ancf_petsc.linalg.diagnostics import unused_command_line_options, unused_line
-    unused = unused_command_line_options(PETSc.COMM_WORLD)
-    if PETSc.COMM_WORLD.rank == 0 and option("options_left") is None:
-        for name in unused:
-            say_stderr(unused_line(name, prog="ancf-study"))
 
 
 if __name__ == "__main__":

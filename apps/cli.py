@@ -18,7 +18,8 @@ import sys
 
 from ancf_petsc.solving.interrupt import SafePrinter, say_stderr
 
-__all__ = ["Parser", "at_least", "path", "positive", "printer", "say_stderr", "start_petsc"]
+__all__ = ["Parser", "at_least", "path", "positive", "printer", "report_unused_options", "say_stderr",
+           "start_petsc"]
 
 
 def printer(quiet: bool = False) -> SafePrinter:
@@ -61,6 +62,20 @@ def start_petsc(petsc_args: list[str]) -> None:
     petsc4py.init([sys.argv[0]] + petsc_args)
     from petsc4py import PETSc  # noqa: F401  (PetscInitialize installs PETSc's signal handlers)
     signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+
+
+def report_unused_options(prog: str, solved: bool = True) -> None:
+    """After in-process solves (ancf-study, ancf-fit): a PETSc option none of them read
+    (misspelt: ``-snes_maxit``), one line each from rank 0 if it ``solved``, as ancf-solve
+    reports it; PETSc reports instead when given -options_left.  Collective."""
+    from petsc4py import PETSc
+
+    from ancf_petsc.linalg.database import option
+    from ancf_petsc.linalg.diagnostics import unused_command_line_options, unused_line
+    unused = unused_command_line_options(PETSc.COMM_WORLD)
+    if solved and PETSc.COMM_WORLD.rank == 0 and option("options_left") is None:
+        for name in unused:
+            say_stderr(unused_line(name, prog=prog))
 
 
 class Parser(argparse.ArgumentParser):

@@ -418,6 +418,28 @@ def test_ancf_study_reports_a_misspelt_option_once(tmp_path):
     assert p.returncode == 0 and "ancf-study:" not in p.stderr, p.stderr
 
 
+def test_ancf_fit_reports_a_misspelt_option_once(tmp_path):
+    """``ancf-fit F.yaml -snes_maxit 3`` said nothing (as ancf-study); now one line when samples
+    were solved, none when every sample came from the log (no solve could read an option)."""
+    import yaml
+    with open(os.path.join(CONFIGS, "fits", "bar_twin.yaml")) as fh:
+        fit = yaml.safe_load(fh)
+    fit["model"] = os.path.join(CONFIGS, "calibration_bar.yaml")
+    for d in fit["data"]:
+        d["file"] = os.path.join(CONFIGS, "data", os.path.basename(d["file"]))
+    fit["output"] = str(tmp_path / "fit")
+    run = [os.path.join(VENV_BIN, "ancf-fit"), write_config(fit, tmp_path / "fit.yaml"), "--quiet",
+           "-snes_maxit", "3", "-snes_linesearch_type", "bt"]
+    lines = []
+    for _ in range(2):                   # solved, then resumed from the log
+        p = subprocess.run(run, capture_output=True, text=True, timeout=TIMEOUT, cwd=tmp_path,
+                           env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+        assert p.returncode == 0, p.stderr
+        lines.append([ln for ln in p.stderr.splitlines() if ln.startswith("ancf-")])
+    assert lines == [["ancf-fit: warning: PETSc option -snes_maxit was never used: misspelt, or not "
+                      "read by the solver in use"], []], lines
+
+
 # ------------------------------------------------------------------------------ PETSc solvers
 def _tip(tmp_path, out):
     return np.array(read_summary(tmp_path / out)["steps"][-1]["probes"]["tip"]["displacement"])

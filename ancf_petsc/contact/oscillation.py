@@ -76,6 +76,23 @@ def oscillation_notes(c, steps: list[dict]) -> list[str]:
             f"bound mu * (pressing force) reach {1.0 + excess:.4g} x mu N (N = {net:.4g} N the net "
             f"pressing force; the friction force is {friction:.4g} x mu N). Likely an inf-sup "
             "instability: the pressure space is too rich for the mesh near a supported end. "
-            "contact.projection: {axial: 1} (friction's default) or contact.axial_points: 2 remove it (the pressed strips "
-            "at 16 elements, mu = 0.5: 1.087 x mu N, with them 1.003 and 1.000; docs/interface.md, "
-            "\"Limits\")"]
+            + remedies(c.spec)]
+
+
+def remedies(spec) -> str:
+    """The settings that remove the oscillation, given the pressure space ``spec`` (a ContactSpec)
+    has: a lower degree along the beam than its own (the linear one, friction's default, can
+    oscillate too) or fewer contact points, with what they did on the pressed strips."""
+    if spec.projection[0] >= 2:
+        return ("contact.projection: {axial: 1} (friction's default) or contact.axial_points: 2 "
+                "remove it (the pressed strips at 16 elements, mu = 0.5: 1.087 x mu N, with them "
+                "1.003 and 1.000; docs/interface.md, \"Limits\")")
+    fixes = {"contact.projection: {axial: 0}": "1.000"} if spec.projection[0] == 1 else {}
+    if spec.axial_points > 2:
+        fixes["contact.axial_points: 2"] = "1.001"
+    if not fixes:
+        return "docs/interface.md, \"Limits\""
+    return (f"The pressure is of degree {spec.projection[0]} along the beam here (friction's default "
+            f"is 1): {' or '.join(fixes)} remove it (the pressed strips at 16 elements, mu = 1, "
+            f"linear pressure: 1.006 x mu N, with them {' and '.join(fixes.values())}; docs/interface.md, "
+            "\"Limits\")")

@@ -92,3 +92,25 @@ def test_the_warning_is_the_same_on_2_ranks(tmp_path):
     runs = run_on_ranks(strips(8), tmp_path, ranks=(1, 2))
     one, two = (_notes(s) for _, s in runs.values())
     assert len(one) == 1 and one == two, (one, two)
+
+
+def test_the_default_linear_pressure_is_told_other_remedies(tmp_path):
+    """16 elements, mu = 1, friction's default pressure (linear along the beam): pulled back past
+    the reversal the grip carries 1.0055 mu N and the warning named contact.projection: {axial: 1},
+    the setting in use; it now names {axial: 0} and 2 axial points, which carry mu N (5 s)."""
+    raw = strips(16, 1.0)
+    del raw["contact"]["projection"]
+    raw["steps"] = [1, 1.5, 2, 2.1, 2.2, 2.3, 2.4]
+    s = run_inline(raw, tmp_path / "default")
+    assert s["steps"][-1]["reactions"]["grip"][0] / N == pytest.approx(-1.0055, abs=2e-4)
+    notes = _notes(s)
+    assert len(notes) == 1, s["warnings"]
+    assert "{axial: 1}" not in notes[0] and "degree 1 along the beam" in notes[0], notes[0]
+    for words in ("contact.projection: {axial: 0}", "contact.axial_points: 2", "1.006 x mu N"):
+        assert words in notes[0], (words, notes[0])
+    for name, remedy, ratio in (("axial0", {"projection": {"axial": 0}}, 1.0),
+                                ("points2", {"axial_points": 2}, 1.0009)):
+        fixed = dict(raw, contact=dict(raw["contact"], **remedy))
+        s = run_inline(fixed, tmp_path / name)
+        assert s["status"] == "completed" and not _notes(s), s["warnings"]
+        assert -s["steps"][-1]["reactions"]["grip"][0] / N == pytest.approx(ratio, abs=2e-4)

@@ -102,6 +102,19 @@ def return_map(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, held=True) ->
     return proj, S, direction, stick, slide
 
 
+#: a trial within this share of its bound sits on it (rounding: a level with no increment)
+AT_BOUND = 1e-8
+
+
+def reported_stick(a: np.ndarray, nbar: np.ndarray, bound: np.ndarray, stick: np.ndarray) -> np.ndarray:
+    """The stick flags the reports give: the return map's, and a pressed function whose trial
+    sits on its bound to within ``AT_BOUND`` (a level with no slip increment, where the side of
+    the bound it lands on is rounding's: a stride's rest frames read 0.07 or 0.40 of mg_sol
+    sticking on states equal to 5e-17 m).  Newton's own classification is not changed."""
+    trial = a - np.einsum("ki,ki->k", nbar, a)[:, None] * nbar
+    return stick | ((bound > 0.0) & (np.linalg.norm(trial, axis=1) <= bound * (1.0 + AT_BOUND)))
+
+
 def stick_fraction(tPhi, area: np.ndarray, m_stick: np.ndarray, tPhiT=None) -> np.ndarray:
     """Per point the share of its tangential functions that stick, each weighted by its value
     φ_k at the point (tΦ_kp = φ_k(x_p) w_p / A_k, ``area`` the functions' A_k); 0 where none.
@@ -226,6 +239,7 @@ class CoulombFriction(PartnerTerm):
         a = y + self.augmentation * U
         held = ~c.space.tdrop[c.mults] & (not probe)    # a folded function's y is held at zero
         proj, S, direction, m_stick, slide = return_map(a, nbar, bound, held=held)
+        m_stick = reported_stick(a, nbar, bound, m_stick)     # reports only (fields, stick_share)
         R, T, g = y - proj, -S, (0.0 if held_bound else -1.0) * direction
         if free is not None:
             g[free] = 0.0

@@ -122,3 +122,27 @@ def test_the_multipliers_scaling_changes_no_friction_answer(tmp_path):
         assert summary["status"] == "completed"
         ends.append(np.array(summary["steps"][-1]["probes"]["soleus"]["displacement"]))
     assert np.abs(ends[1] - ends[0]).max() <= 1e-7 * np.abs(ends[0]).max(), ends
+
+
+def test_a_level_with_no_slip_sticks_everywhere(tmp_path):
+    """The pressed strips (4 elements, mu = 0.5) pulled out by 0.1 mm and then held: at the held
+    levels nothing moves (slip increment 0, no Newton step), every function's trial sits on its
+    bound, and which side it lands on was rounding's: stick_share 0.0 here, and on a 13-frame
+    stride's rest frames 0.07 / 0.04 / 0.12 in one run, 0.40 / 0 / 0 restarted (states equal to
+    5e-17 m).  They now stick (1.0), as the zero slip says; the sliding levels still slide."""
+    raw = load_raw("friction_pressed_strips.yaml")
+    raw["boundary_conditions"][-1]["curve"] = [[0, 0], [1, 0], [2, 1], [3, 1]]
+    for load in raw["loads"]:
+        load["curve"] = [[0, 0], [1, 1], [3, 1]]
+    raw["steps"] = [1, 1.5, 2, 2.5, 3]
+    raw["output"] = {"vtk": False}
+    s = run_inline(raw, tmp_path)
+    assert s["status"] == "completed"
+    (sliding, held) = ([st for st in s["steps"] if lo <= st["load_factor"] <= hi] for lo, hi in ((1.5, 2), (2.5, 3)))
+    for st in sliding:
+        assert st["contact"]["interface (base|slider)"]["stick_share"] == 0.0
+    for st in held:
+        rep = st["contact"]["interface (base|slider)"]
+        assert rep["max_slip_increment"] == 0.0 and rep["stick_share"] == 1.0, rep
+        c = read_contact(str(tmp_path / "results.h5"), s["steps"].index(st) + 1)
+        assert c["multiplier_stick"].all()

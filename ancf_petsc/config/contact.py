@@ -127,10 +127,16 @@ def default_axial(c) -> int:
     (2, 4, 8, 16 elements), not falling; with a linear pressure by 0.1-0.2 % and 0.3-0.5 % from 8
     to 16 (docs/gait.md, "How many elements a stride needs").  Frictionless answers converge
     with either, faster with the quadratic one."""
-    law = TANGENTIAL_LAWS[c.tangential.law] if c.tangential is not None else None
-    if getattr(law, "bounded", False):          # Coulomb's bounds μ p⁺ (contact/friction.py)
+    if bounded(c):
         return min(1, c.axial_points - 1)
     return c.axial_points - 1
+
+
+def bounded(c) -> bool:
+    """Whether the tangential law of ``c`` (a ContactSpec) bounds its forces by the pointwise
+    pressure: Coulomb's μ p⁺ (contact/friction.py)."""
+    law = TANGENTIAL_LAWS[c.tangential.law] if c.tangential is not None else None
+    return bool(getattr(law, "bounded", False))
 
 
 def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
@@ -152,6 +158,13 @@ def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
         c.curve_spans = integer(proj.get("curve_spans", 1), f"{pp}.curve_spans", lo=1, hi=16)
         c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",
                                   SUPPORTED_END_RULES)
+    if c.per_element and c.projection[0] >= 2 and bounded(c):
+        raise ConfigError(f"{pp}.per_element", "a pressure discontinuous between elements of degree "
+                          f"{c.projection[0]} along the beam has arbitrary multipliers (its constraints "
+                          "repeat the elements' continuity: docs/contact.md), and Coulomb's bounds "
+                          "mu p+ read them (the pressed strips at 2 elements carried 28.8 x mu N, the "
+                          "paper's tendon failed at its first step); give axial: 1 or 0 with it, or "
+                          "leave per_element out; got true")
     if (c.projection[0] + 1) * (c.projection[1] + c.curve_spans) > node_dofs:
         raise ConfigError(pp, "(axial + 1) x (curve + curve_spans) pressure functions per "
                               f"element must not exceed {node_dofs} (one node block)")

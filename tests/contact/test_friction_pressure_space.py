@@ -40,3 +40,20 @@ def test_friction_at_mu_3_presses_about_its_load(tmp_path):
     assert max(pressing) < 5.0, pressing
     ux = s["steps"][-1]["probes"]["soleus"]["displacement"][0]
     assert abs(ux - 1.0967e-4) < 2e-7, ux
+
+
+def test_a_quadratic_pressure_per_element_is_refused_under_friction():
+    """projection {axial: 2, per_element: true} has arbitrary multipliers (docs/contact.md) and
+    Coulomb's bounds read them: the pressed strips at 2 elements, mu = 0.5, completed with the grip
+    at 5.5-28.8 x mu N (39 x at 4 elements), the tendon failed at its first step.  Refused, naming
+    the key and the fix; axial 1 per element (mu N to 1e-12) and the frictionless model run."""
+    import pytest
+    from ancf_petsc.config import ConfigError
+    coulomb = {"tangential": {"law": "coulomb", "friction": 0.5}}
+    with pytest.raises(ConfigError) as err:
+        parse_config(_tendon(coulomb | {"projection": {"axial": 2, "per_element": True}}))
+    assert str(err.value).startswith("contact.projection.per_element: "), str(err.value)
+    assert "give axial: 1 or 0 with it" in str(err.value) and str(err.value).endswith("got true")
+    for contact in (coulomb | {"projection": {"axial": 1, "per_element": True}},
+                    {"projection": {"axial": 2, "per_element": True}}):
+        assert parse_config(_tendon(contact)).contact.per_element, contact

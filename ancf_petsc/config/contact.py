@@ -151,9 +151,13 @@ def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
         c.projection = (axial, 1)
     else:
         mapping(proj, pp, optional=("axial", "curve", "curve_spans", "per_element", "supported_ends"))
-        c.projection = (integer(proj.get("axial", axial), f"{pp}.axial", lo=0,
-                                hi=c.axial_points - 1),
+        c.projection = (integer(proj.get("axial", axial), f"{pp}.axial", lo=0),
                         integer(proj.get("curve", 1), f"{pp}.curve", lo=0, hi=8))
+        if c.projection[0] > c.axial_points - 1:
+            raise ConfigError(f"{pp}.axial", f"must be <= contact.axial_points - 1 = {c.axial_points - 1} "
+                              "(the contact points along the beam determine no higher degree): give "
+                              f"contact.axial_points: {c.projection[0] + 1} or a lower axial; "
+                              f"got {c.projection[0]}")
         c.per_element = boolean(proj.get("per_element", False), f"{pp}.per_element")
         c.curve_spans = integer(proj.get("curve_spans", 1), f"{pp}.curve_spans", lo=1, hi=16)
         c.supported_ends = string(proj.get("supported_ends", c.supported_ends), f"{pp}.supported_ends",

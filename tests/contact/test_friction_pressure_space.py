@@ -57,3 +57,15 @@ def test_a_quadratic_pressure_per_element_is_refused_under_friction():
     for contact in (coulomb | {"projection": {"axial": 1, "per_element": True}},
                     {"projection": {"axial": 2, "per_element": True}}):
         assert parse_config(_tendon(contact)).contact.per_element, contact
+
+
+def test_a_degree_above_the_contact_points_names_them():
+    """contact.axial_points: 2 with projection {axial: 2} said only 'must be <= 1; got 2'."""
+    import pytest
+    from ancf_petsc.config import ConfigError
+    with pytest.raises(ConfigError) as err:
+        parse_config(_tendon({"axial_points": 2, "projection": {"axial": 2},
+                              "tangential": {"law": "coulomb", "friction": 0.5}}))
+    assert str(err.value) == ("contact.projection.axial: must be <= contact.axial_points - 1 = 1 (the "
+                              "contact points along the beam determine no higher degree): give "
+                              "contact.axial_points: 3 or a lower axial; got 2"), str(err.value)

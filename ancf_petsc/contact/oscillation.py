@@ -6,8 +6,8 @@ sliding interface carries beyond μ × its net pressing force N = ∫ p dA.  On 
 (configs/friction_pressed_strips.yaml, N = 0.01 N, a uniform 100 Pa) the pressure along the
 beam is too rich for the mesh near the gripped end at 8 and 16 elements: it swings from
 −1 078 to 2 128 Pa within the last elements, and the grip force while sliding is 1.011 / 1.087 μN
-(μ = 0.5; 1.348 at μ = 1, 16 elements); with ``contact.projection: {axial: 1}`` 1.003, with
-``contact.axial_points: 2`` 1.000.  Each level reports ``pull_within_elements`` [N] per
+(μ = 0.5; 1.348 at μ = 1, 16 elements); with ``contact.projection: {axial: 1}`` 1.000 (1.003
+at μ = 1), with ``contact.axial_points: 2`` 1.000.  Each level reports ``pull_within_elements`` [N] per
 interface (friction.py): the pull that cancels, along the beam within each element (per A
 element and place across the curve), against pressed points.  An interface whose net pressing
 force is positive, whose pull lies there (at least ``WITHIN_SHARE`` of ``tension_force``: an
@@ -85,8 +85,8 @@ def remedies(spec) -> str:
     oscillate too) or fewer contact points, with what they did on the pressed strips."""
     if spec.projection[0] >= 2:
         return ("contact.projection: {axial: 1} (friction's default) or contact.axial_points: 2 "
-                "remove it (the pressed strips at 16 elements, mu = 0.5: 1.087 x mu N, with them "
-                "1.003 and 1.000; docs/interface.md, \"Limits\")")
+                "remove it (the pressed strips at 16 elements, mu = 0.5: 1.087 x mu N, with either "
+                "1.000; docs/interface.md, \"Limits\")")
     fixes = {"contact.projection: {axial: 0}": "1.000"} if spec.projection[0] == 1 else {}
     if spec.axial_points > 2:
         fixes["contact.axial_points: 2"] = "1.001"

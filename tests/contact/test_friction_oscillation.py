@@ -59,7 +59,7 @@ def test_an_oscillating_pressure_under_friction_is_reported(tmp_path):
     assert note.startswith("warning: contact interface interface (base|slider): "), note
     for words in ("at 2 level(s) (worst at load factor 1.5)", "reach 1.011 x mu N",
                   "the friction force is 1.011 x mu N", "inf-sup", "near a supported end",
-                  "contact.projection: {axial: 1}", "contact.axial_points: 2", "1.003", "1.000"):
+                  "contact.projection: {axial: 1}", "contact.axial_points: 2", "with either 1.000"):
         assert words in note, (words, note)
     assert made_at_the_end(note)                      # a restart makes it again, not twice
     rep = s["steps"][-1]["contact"]["interface (base|slider)"]

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from ..config.contact import bounded
 from ..config.specs import LOCKING
 from ..contact.interfaces import ContactSetupError, find_interfaces, supported_ends
 from ..contact.tangential import TANGENTIAL_LAWS
@@ -220,7 +221,8 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
         differs = differs and f"{differs} differs"
     if differs:
         raise InputError("--restart", f"{directory} was written by another model: {differs}; "
-                                      "restart with the config (and data files) that made it")
+                                      + (_friction_default_hint(point, model)
+                                         or "restart with the config (and data files) that made it"))
     for k, lam in enumerate(point.levels):
         if k >= len(steps) or abs(steps[k] - lam) > 1e-12 * max(1.0, abs(lam)):
             now = f"{steps[k]:g}" if k < len(steps) else "none (the config has fewer levels)"
@@ -228,6 +230,21 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
                                           f"levels at step {k + 1}: {lam:g} was solved, the config asks "
                                           f"for {now}; restart with the steps that made them, or "
                                           "run afresh into another directory")
+
+
+def _friction_default_hint(point: RestartPoint, model) -> str | None:
+    """What to give when the run's pressure along the beam was friction's default before
+    2026-12-07 (quadratic) and the config, giving none, now takes the linear one."""
+    spec = model.spec.contact
+    given = ((model.spec.raw.get("contact") or {}).get("projection") or {})
+    if point.fingerprint is None or spec is None or "axial" in given or not bounded(spec):
+        return None
+    stored = json.loads(_text(point.fingerprint["contact"])).get("projection")
+    if not stored or stored[0] <= spec.projection[0]:
+        return None
+    return (f"friction's pressure along the beam is linear by default since 2026-12-07 "
+            "(docs/interface.md, \"Friction's pressure along the beam\"): give contact.projection: "
+            f"{{axial: {stored[0]}}} in the config to continue this run")
 
 
 def _first_difference(old, new, path: str = "") -> str | None:

@@ -72,3 +72,20 @@ def test_a_restart_refuses_other_probes_and_takes_the_same_written_otherwise(tmp
         _run(moved, tmp_path, restart=True)
     res = _run(same, tmp_path, restart=True)
     assert res.status == "completed" and len(res.summary["steps"]) == 10, res.message
+
+
+def test_a_friction_run_on_the_former_default_pressure_is_told_how_to_go_on(tmp_path):
+    """A Coulomb run on the quadratic pressure along the beam (friction's default before
+    2026-12-07), restarted with its config, which gives no projection and now means linear, was
+    told 'restart with the config (and data files) that made it', the config it had given.  The
+    refusal now names contact.projection: {axial: 2}, with which the restart goes on."""
+    friction = {"tangential": {"law": "coulomb", "friction": 0.5}}
+    _run(dict(_column(**friction, projection={"axial": 2}), steps=[10]), tmp_path)
+    with pytest.raises(InputError) as err:
+        _run(_column(**friction), tmp_path, restart=True)
+    text = str(err.value)
+    assert "projection: [2, 1] → [1, 1]" in text and "that made it" not in text, text
+    assert text.endswith("give contact.projection: {axial: 2} in the config to continue this run"), text
+    assert _run(_column(**friction, projection={"axial": 2}), tmp_path, restart=True).status == "completed"
+    with pytest.raises(InputError, match="restart with the config \\(and data files\\) that made it"):
+        _run(_column(**friction, projection={"axial": 0}), tmp_path, restart=True)

@@ -207,5 +207,14 @@ def penetration_warnings(c, report: dict) -> list[str]:
                        f"thinner section ({width * 1e3:.3g} mm wide): each pressure function's weighted "
                        "gap holds, the points between them are not held; local functions across "
                        "(contact.projection.curve_spans: 4 with contact.curve_points: 4) held them to 14 um "
-                       "on the paper's tendon; see docs/contact.md, \"Pointwise penetration\"")
+                       "on the paper's tendon" + (FRICTION_ACROSS if any(t.bounded for t in c.terms) else "")
+                       + "; see docs/contact.md, \"Pointwise penetration\"")
     return out
+
+
+#: the penetration warning's remedy under Coulomb friction (measured 2026-12-07, the paper's tendon,
+#: 4 elements, unilateral, mu 0.1 / 0.5: curve_spans 4, degree 0 on 5 spans and Bernstein 3 across
+#: all failed at load factor 0.0006-0.0024 of the first 10 N level, 1 066-18 517 Newton iterations)
+FRICTION_ACROSS = (" without friction; under Coulomb friction every richer pressure across tried "
+                   "(curve_spans 4 or 5, curve: 3) failed at the first level, so none is known: read "
+                   "max_penetration")

@@ -200,3 +200,17 @@ def test_a_restart_warns_of_its_own_last_level_only(tmp_path):
         assert p.returncode == 0, p.stderr
         assert _notes(read_summary(tmp_path / "run")) == _notes(full)
         assert p.stderr.count("interpenetrate") == 1
+
+
+def test_under_friction_the_warning_does_not_send_to_a_space_that_fails(tmp_path):
+    """The paper's tendon, unilateral with Coulomb friction (mu = 0.5), 10 N: mg_sol
+    interpenetrates and the warning named curve_spans 4 with curve_points 4 as the remedy; with
+    friction that run fails at load factor 0.0006 of its first level (DIVERGED_DTOL, 2 502 Newton
+    iterations; so do 5 spans of degree 0 and Bernstein 3 across).  The warning now says so;
+    frictionless runs keep the advice (the test above)."""
+    raw = _column("unilateral")
+    raw["contact"]["tangential"] = {"law": "coulomb", "friction": 0.5}
+    notes = _notes(run_inline(raw, tmp_path / "friction"))
+    assert len(notes) == 1 and notes[0].startswith(f"warning: contact interface {MG_SOL}"), notes
+    assert "under Coulomb friction every richer pressure across tried" in notes[0], notes[0]
+    assert "none is known: read max_penetration" in notes[0], notes[0]

@@ -123,8 +123,8 @@ def default_axial(c) -> int:
     the beam (axial_points - 1, quadratic by default), but at most linear under Coulomb friction.
     Friction's bounds μ p⁺ read the pointwise pressure, and the quadratic one oscillates along the
     beam (41 % of the pressing force cancelled within elements on the walking stride): its
-    strides' strains then differ by 1-2 % and their end differences by 2-7 % from mesh to mesh
-    (2, 4, 8, 16 elements), not falling; with a linear pressure by 0.1-0.2 % and 0.3-0.5 % from 8
+    strides' strains then differ by 1-2 % and their end differences by 2-6 % from mesh to mesh
+    (2, 4, 8, 16 elements), not falling; with a linear pressure by 0.1-0.2 % and 0.3-0.6 % from 8
     to 16 (docs/gait.md, "How many elements a stride needs").  Frictionless answers converge
     with either, faster with the quadratic one."""
     if bounded(c):

@@ -145,14 +145,19 @@ def reachable_tolerance(solver) -> float:
     return 20.0 * getattr(solver, "rounding_floor", 0.0)
 
 
+def given_option(solver, name: str):
+    """The value of the PETSc option ``name`` the run was given (the command line under the
+    solver's prefix, else the config's ``petsc:``), or None where the run's own default holds."""
+    given = option(name, getattr(solver, "prefix", ""))
+    return getattr(solver, "petsc_options", {}).get(name) if given is None else given
+
+
 def given_stol(solver) -> str:
     """For a solve stopped on its step length: a -snes_stol given (command line or ``petsc:``)
     above the run's own, which ends solves before |F| is small (-snes_stol 1e-3 on
     configs/bending_neohookean.yaml: 3 497 Newton iterations in 399 sub-steps instead of 36, and
     no word of it); empty otherwise."""
-    given = option("snes_stol", getattr(solver, "prefix", ""))
-    if given is None:
-        given = getattr(solver, "petsc_options", {}).get("snes_stol")
+    given = given_option(solver, "snes_stol")
     own = float(DEFAULT_OPTIONS.get("snes_stol", 1e-12))
     try:
         given = float(given)
@@ -169,9 +174,7 @@ def unreachable_atol(solver) -> Detail | None:
     solve stalled above it (-snes_atol 1e-14 on configs/bending_neohookean.yaml, floor 4.9e-11:
     12 cut-backs, then blamed on a 2.4e-11 N 'discontinuity of the discrete model')."""
     atol, least = solver.snes.getTolerances()[1], reachable_tolerance(solver)
-    given = option("snes_atol", getattr(solver, "prefix", ""))
-    if given is None:
-        given = getattr(solver, "petsc_options", {}).get("snes_atol")
+    given = given_option(solver, "snes_atol")
     # the run's own atol is at least ``least`` up to its rounding (max(1e-10 load, 20 floor)):
     # a shear-lag run at k_t = 1e12 Pa/m was told its own 3.1e-12 was "given in the run's options"
     if given is None or atol >= least * (1.0 - 1e-9):
@@ -243,9 +246,7 @@ def small_newton_budget(solver) -> Detail | None:
     """A solve out of iterations under a -snes_max_it (command line or config ``petsc:``) below
     the run's own budget (15, unilateral contact 60, friction 200): the budget given is the
     cause, whatever the model does (with -snes_max_it 3 a friction column blamed μ)."""
-    given = option("snes_max_it", getattr(solver, "prefix", ""))
-    if given is None:
-        given = getattr(solver, "petsc_options", {}).get("snes_max_it")
+    given = given_option(solver, "snes_max_it")
     laws = getattr(solver.problem, "solver_defaults", None) or {}
     own = int(laws.get("snes_max_it", DEFAULT_OPTIONS["snes_max_it"]))
     try:

@@ -62,6 +62,19 @@ def run_inline(raw: dict, out_dir: str, base_dir: str = CONFIGS, petsc: dict | N
     return res.summary
 
 
+def bar_twin_fit(out_dir) -> dict:
+    """configs/fits/bar_twin.yaml with its model and data files absolute and its output in
+    ``out_dir`` (an ancf-fit input to write anywhere)."""
+    import yaml
+    with open(os.path.join(CONFIGS, "fits", "bar_twin.yaml")) as fh:
+        fit = yaml.safe_load(fh)
+    fit["model"] = os.path.join(CONFIGS, "calibration_bar.yaml")
+    for d in fit["data"]:
+        d["file"] = os.path.join(CONFIGS, "data", os.path.basename(d["file"]))
+    fit["output"] = str(out_dir)
+    return fit
+
+
 def write_config(raw: dict, path) -> str:
     with open(path, "w") as fh:
         yaml.safe_dump(raw, fh, sort_keys=False)

@@ -8,7 +8,7 @@ import subprocess
 import pytest
 import yaml
 
-from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT, VENV_BIN, solve_cli
+from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT, VENV_BIN, bar_twin_fit, solve_cli
 
 TIMEOUT = 300
 PROGRAMS = ("ancf-solve", "ancf-report", "ancf-study", "ancf-sweep", "ancf-fit")
@@ -45,13 +45,7 @@ def _work(program: str, tmp) -> tuple[list[str], str]:
                  "output": str(tmp / "st")}
         return [_write(tmp / "st.yaml", study)], str(tmp / "st" / "study.csv")
     if program == "ancf-fit":
-        with open(os.path.join(CONFIGS, "fits", "bar_twin.yaml")) as fh:
-            fit = yaml.safe_load(fh)
-        fit["model"] = os.path.join(CONFIGS, "calibration_bar.yaml")
-        for d in fit["data"]:
-            d["file"] = os.path.join(CONFIGS, "data", os.path.basename(d["file"]))
-        fit["output"] = str(tmp / "fit")
-        return [_write(tmp / "fit.yaml", fit)], str(tmp / "fit" / "fit.json")
+        return [_write(tmp / "fit.yaml", bar_twin_fit(tmp / "fit"))], str(tmp / "fit" / "fit.json")
     if program == "ancf-report":
         run = tmp / "run"
         assert solve_cli(uniaxial, extra=["--output-dir", str(run), "--quiet"]).returncode == 0
@@ -105,6 +99,20 @@ def test_progress_lines_into_a_terminal_that_went_away(program, tmp_path):
     assert os.path.isfile(written)
 
 
+def into_gone_stderr(args: list[str], into: str, cwd) -> subprocess.CompletedProcess:
+    """Run a command line with stdout and stderr a pipe closed by its reader (``2>&1 | head -0``,
+    ``into`` "pipe") or a terminal that went away ("terminal")."""
+    if into == "terminal":
+        return into_gone_terminal(args, cwd=cwd, stderr_too=True)
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        return subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=w, stderr=w,
+                              timeout=TIMEOUT, cwd=cwd, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    finally:
+        os.close(w)
+
+
 @pytest.mark.parametrize("into", ["pipe", "terminal"])
 @pytest.mark.parametrize("extra, code", [(["-snes_maxit", "3"], 0), (["-snes_max_it", "1"], 3)])
 def test_the_last_lines_on_a_gone_stderr_keep_the_runs_exit_code(into, extra, code, tmp_path):
@@ -113,14 +121,7 @@ def test_the_last_lines_on_a_gone_stderr_keep_the_runs_exit_code(into, extra, co
     1 (a bug's code) for a run that completed (exit 0) or could not reach a level (exit 3)."""
     args, written = _work("ancf-solve", tmp_path)
     args = ["ancf-solve"] + args + extra
-    if into == "terminal":
-        p = into_gone_terminal(args, cwd=tmp_path, stderr_too=True)
-    else:
-        r, w = os.pipe()
-        os.close(r)
-        p = subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=w, stderr=w,
-                           timeout=TIMEOUT, cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
-        os.close(w)
+    p = into_gone_stderr(args, into, tmp_path)
     assert p.returncode == code
     assert os.path.isfile(written)
 
@@ -136,14 +137,7 @@ GONE_STDERR_ERRORS = [["ancf-solve"], ["ancf-report", "--existing", "nosuch"], [
 def test_an_error_line_on_a_gone_stderr_keeps_exit_2(into, args, tmp_path):
     """``ancf-study NOSUCH.yaml 2>&1 | head -0``: the one-line error raised BrokenPipeError, exit 1
     (a bug's code) instead of 2, for every command but ancf-solve's config errors."""
-    if into == "terminal":
-        p = into_gone_terminal(args, cwd=tmp_path, stderr_too=True)
-    else:
-        r, w = os.pipe()
-        os.close(r)
-        p = subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], stdout=w, stderr=w,
-                           timeout=TIMEOUT, cwd=tmp_path, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
-        os.close(w)
+    p = into_gone_stderr(args, into, tmp_path)
     assert p.returncode == 2
 
 

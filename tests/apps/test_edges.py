@@ -21,8 +21,8 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT, VENV_BIN, load_raw, petsc_init, \
-    read_summary, run_inline, solve_cli, write_config
+from helpers import CONFIGS, MPI_ENV, ONE_AND_TWO_RANKS, ROOT, VENV_BIN, bar_twin_fit, load_raw, \
+    petsc_init, read_summary, run_inline, solve_cli, write_config
 
 TIMEOUT = 120
 UNIAXIAL = load_raw("uniaxial_neohookean.yaml")
@@ -421,13 +421,7 @@ def test_ancf_study_reports_a_misspelt_option_once(tmp_path):
 def test_ancf_fit_reports_a_misspelt_option_once(tmp_path):
     """``ancf-fit F.yaml -snes_maxit 3`` said nothing (as ancf-study); now one line when samples
     were solved, none when every sample came from the log (no solve could read an option)."""
-    import yaml
-    with open(os.path.join(CONFIGS, "fits", "bar_twin.yaml")) as fh:
-        fit = yaml.safe_load(fh)
-    fit["model"] = os.path.join(CONFIGS, "calibration_bar.yaml")
-    for d in fit["data"]:
-        d["file"] = os.path.join(CONFIGS, "data", os.path.basename(d["file"]))
-    fit["output"] = str(tmp_path / "fit")
+    fit = bar_twin_fit(tmp_path / "fit")
     run = [os.path.join(VENV_BIN, "ancf-fit"), write_config(fit, tmp_path / "fit.yaml"), "--quiet",
            "-snes_maxit", "3", "-snes_linesearch_type", "bt"]
     lines = []

@@ -16,6 +16,18 @@ def _spec(name: str, out):
     return ap, spec
 
 
+def _parsed_tip(ap, name: str, edit: dict, tmp_path):
+    """The tip of ``name`` with ``edit`` (beam 0's keys) written into the config and parsed, one
+    level at 1 (the answer an edit of the parsed spec must give)."""
+    from ancf_petsc.config.parse import parse_config
+    raw = yaml.safe_load(open(f"{CONFIGS}/{name}"))
+    raw["beams"][0].update(edit)
+    parsed = parse_config(raw, base_dir=CONFIGS)
+    parsed.steps, parsed.output.dir = [1.0], str(tmp_path / "parsed")
+    ap.solve(parsed, log=lambda *_: None)
+    return ap.read_results(tmp_path / "parsed").probe("tip")[-1]
+
+
 def test_an_edited_element_count_moves_last_with_it(tmp_path):
     """uniaxial_neohookean with its 1 element edited to 3: the load, the support and the tip
     probe stay at the bar's end.  Before, they stayed at node 2, now an interior node, and the
@@ -27,14 +39,8 @@ def test_an_edited_element_count_moves_last_with_it(tmp_path):
     res = ap.solve(spec, log=lambda *_: None)
     assert res.status == "completed"
     assert spec.loads[0].node == spec.probes[0].node == 6            # 3 elements of 3 nodes
-    from ancf_petsc.config.parse import parse_config
-    raw = yaml.safe_load(open(f"{CONFIGS}/uniaxial_neohookean.yaml"))
-    raw["beams"][0]["elements"] = 3
-    parsed = parse_config(raw, base_dir=CONFIGS)
-    parsed.steps, parsed.output.dir = [1.0], str(tmp_path / "parsed")
-    ap.solve(parsed, log=lambda *_: None)
     u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
-    u_parse = ap.read_results(tmp_path / "parsed").probe("tip")[-1]
+    u_parse = _parsed_tip(ap, "uniaxial_neohookean.yaml", {"elements": 3}, tmp_path)
     assert u_edit[0] == pytest.approx(u_parse[0], rel=1e-12) and u_parse[0] > 0.02
     with h5py.File(tmp_path / "edited" / "results.h5") as h5:
         stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
@@ -117,17 +123,11 @@ def test_an_edited_element_type_takes_its_own_locking_remedy(tmp_path):
     now the same answer to the last bit, and the stored config says 3333.  A numpy count is an
     integer (np.int64 ended in an OutputError: not JSON serializable)."""
     import numpy as np
-    from ancf_petsc.config.parse import parse_config
     ap, spec = _spec("bending_neohookean.yaml", tmp_path / "edited")
     spec.beams[0].element, spec.beams[0].elements, spec.steps = "3333", np.int64(8), [1.0]
     assert ap.solve(spec, log=lambda *_: None).status == "completed"
-    raw = yaml.safe_load(open(f"{CONFIGS}/bending_neohookean.yaml"))
-    raw["beams"][0]["element"] = 3333
-    parsed = parse_config(raw, base_dir=CONFIGS)
-    parsed.steps, parsed.output.dir = [1.0], str(tmp_path / "parsed")
-    ap.solve(parsed, log=lambda *_: None)
     u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
-    u_parse = ap.read_results(tmp_path / "parsed").probe("tip")[-1]
+    u_parse = _parsed_tip(ap, "bending_neohookean.yaml", {"element": 3333}, tmp_path)
     assert spec.beams[0].locking == "ecm" and np.array_equal(u_edit, u_parse) and u_parse[2] > 0.04
     with h5py.File(tmp_path / "edited" / "results.h5") as h5:
         stored = yaml.safe_load(h5["model"].attrs["config_yaml"])["beams"][0]

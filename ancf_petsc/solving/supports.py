@@ -8,14 +8,18 @@ DOFs (their rows of the Jacobian are unit rows) and the contact constraints (the
 constraint gradients), both read off J·v at zero load.  Rigid modes give no strain, so J·v is
 exactly the constraint violation of v; combinations of modes with J·v = 0 (the null space of the
 Gram matrix of J·R) are the free motions.  Unilateral contact is counted as holding (it stops a
-beam from moving into its neighbour, not from lifting off).
+beam from moving into its neighbour, not from lifting off): its constraints are evaluated held
+(every one active, laws.HELD), as at rest, pressure-free, the law's status leaves them all out.
 """
 from __future__ import annotations
+
+from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
+from ..contact.laws import HELD
 from ..physics.rigid import rigid_modes
 
 #: a combination of unit modes is free when its constraint violation (held DOFs in metres or
@@ -100,8 +104,6 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
         V[r, 6 * colours[owner[r]] + m] = modes[r, m] / norms[owner[r], m]
     P.load_factor = 0.0
     X = P.q0.copy()
-    P.residual(None, X, P.F)                 # the contact projections of the reference state
-    P.jacobian(None, X, P.J, P.J)
     lo, hi = P.layout.owned_nodes
     held = P.fixed_mask[D * lo:D * hi]
     constraint = np.repeat(~P.owned_physical, D) & ~held
@@ -109,7 +111,8 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     Vf = np.asfortranarray(V)                        # PETSc's dense storage; kept alive below
     Vmat = PETSc.Mat().createDense(((len(V), None), (None, V.shape[1])), array=Vf, comm=P.comm)
     Vmat.assemble()
-    JV = P.J.matMult(Vmat)
+    with _held_jacobian(P, X):
+        JV = P.J.matMult(Vmat)
     # rigid modes give no strain: only the held and constraint rows are nonzero
     nz = np.flatnonzero(scale)
     JVs = JV.getDenseArray()[nz] * scale[nz, None]
@@ -130,6 +133,30 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     labels = [(beam.name, "translation" if m < 3 else "rotation", m % 3)
               for beam in model.beams for m in range(6)]
     return comm.allreduce((Y.T @ Y).toarray()), labels
+
+
+@contextmanager
+def _held_jacobian(P, X):
+    """P.J at X with every contact constraint active within the block, the unilateral law's too
+    (at rest, pressure-free, its status has none active, and the check found the pressed strips'
+    slider free along z).  After it the law's phase and status are as they were, and X is
+    evaluated again under them (the state the solve starts from)."""
+    c = P.contact
+    held = c is not None and c.law.decides_activity
+    kept = (c.law.phase, c.status.copy(), c.status_changes, c.law.memory()) if held else None
+    if held:
+        c.begin_phase(HELD)
+    P.residual(None, X, P.F)                 # the contact projections of the reference state
+    P.jacobian(None, X, P.J, P.J)
+    try:
+        yield
+    finally:
+        if held:
+            c.begin_phase(kept[0])
+            c.status[:], c.status_changes = kept[1], kept[2]
+            c.law.recall(kept[3])
+            P.residual(None, X, P.F)
+            P.jacobian(None, X, P.J, P.J)
 
 
 def _summary(motions: list[tuple[tuple[str, ...], str]]) -> list[str]:

@@ -483,3 +483,26 @@ def test_a_positive_definite_lcp_ignores_the_start():
     z = solve_lcp(S, d)
     for start in (np.zeros(6, bool), np.ones(6, bool), z == 0.0):
         assert np.array_equal(solve_lcp(S, d, start=start), z)
+
+
+def test_unilateral_contact_holds_the_pressed_strips(tmp_path):
+    """configs/friction_pressed_strips.yaml with contact.mode: unilateral (2 elements): the
+    slider, free along z but for the contact, was refused ('nothing holds slider (free:
+    translation along z, rotation about x, rotation about y)') though docs/running.md counts
+    unilateral contact as holding: the check read the constraints under the law's status at rest,
+    where none is active.  Now it runs, to the sliding law's grip force, and the check leaves the
+    status as it found it."""
+    from test_friction_oscillation import strips
+    from ancf_petsc.solving.supports import free_rigid_motions
+    raw = strips(2)
+    raw["contact"] = {"mode": "unilateral", "tangential": raw["contact"]["tangential"]}
+    raw["steps"] = [1, 1.05]
+    P, _ = build_problem(raw)
+    assert free_rigid_motions(P) == [] and not P.contact.status.any() and P.contact.status_changes == 0
+    grip = {}
+    for mode in ("unilateral", "sliding"):
+        raw["contact"]["mode"] = mode
+        s = run_inline(raw, tmp_path / mode)
+        assert s["status"] == "completed"
+        grip[mode] = s["steps"][-1]["reactions"]["grip"][0]
+    assert abs(grip["unilateral"] - grip["sliding"]) <= 1e-6 * abs(grip["sliding"]), grip

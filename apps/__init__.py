@@ -10,11 +10,18 @@ OpenBLAS chooses its kernels from the CPU's family and model, and a CPU newer th
 is taken for the oldest x86-64 it knows: Debian 12's OpenBLAS 0.3.21 runs this machine's Xeon
 (family 6, model 207) on its SSE3 "Prescott" kernels.  Unless the user set OPENBLAS_CORETYPE, it
 is chosen here from the instruction sets the CPU reports (``openblas_core``): the walking stride
-took 4.89 s wall instead of 5.89 (farm-bench, 7 pairs, A/B 0.835)."""
+took 4.89 s wall instead of 5.89 (farm-bench, 7 pairs, A/B 0.835).
+
+A stdout or stderr closed at start (``2>&-`` in a batch script) is /dev/null for the program
+(``interrupt.hold_standard_streams``): ancf-solve exited 1 there, also after a completed run."""
 import os
 
 for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
+
+from ancf_petsc.solving.interrupt import hold_standard_streams  # noqa: E402  (no numpy)
+
+hold_standard_streams()                 # ancf-sweep S.yaml 2>&- : exit codes as with a stderr
 
 
 def openblas_core(flags: set[str]) -> str | None:

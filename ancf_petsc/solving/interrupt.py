@@ -124,6 +124,23 @@ def say_stderr(line: str) -> None:
         _to_devnull(sys.stderr)
 
 
+def hold_standard_streams() -> None:
+    """A standard stream closed at start (``ancf-solve C.yaml >&-``, ``2>&-``): its descriptor
+    pointed at /dev/null and ``sys.stdout`` / ``sys.stderr`` made a writer on it, so that lines go
+    nowhere and keep the exit code, and no file the run opens takes descriptor 1 or 2 (PETSc's
+    printing would go into it)."""
+    for fd, name in ((1, "stdout"), (2, "stderr")):
+        try:
+            os.fstat(fd)
+        except OSError:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            if devnull != fd:
+                os.dup2(devnull, fd)
+                os.close(devnull)
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(fd, "w", closefd=False))
+
+
 def _to_devnull(stream) -> None:
     """Point ``stream``'s file descriptor at /dev/null (what is buffered goes there too)."""
     try:

@@ -251,3 +251,30 @@ def test_a_restart_directory_that_is_none_is_refused_and_not_created(case, ranks
     assert lines[0] == (f"ancf-solve: config error: --restart: {where}: {case} "
                         "(restart from a run's output directory)"), lines[0]
     assert os.listdir(tmp_path) == ([] if case == "no such directory" else ["typo"])
+
+
+def with_closed(fd: int, args: list[str], cwd) -> subprocess.CompletedProcess:
+    """Run a command line with stdout (``fd`` 1: ``>&-``) or stderr (2: ``2>&-``) closed, the
+    other captured."""
+    return subprocess.run([os.path.join(VENV_BIN, args[0])] + args[1:], capture_output=True, text=True,
+                          timeout=TIMEOUT, cwd=cwd, env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT),
+                          preexec_fn=lambda: os.close(fd))
+
+
+@pytest.mark.parametrize("fd", [1, 2])
+def test_a_closed_stream_keeps_a_completed_runs_exit_0(fd, tmp_path):
+    """``ancf-solve C.yaml >&-`` (or ``2>&-``) completed its run and exited 1 (AttributeError on
+    sys.stdout None, a traceback; with stderr closed a silent 1)."""
+    args, written = _work("ancf-solve", tmp_path)
+    p = with_closed(fd, ["ancf-solve"] + args + ["-snes_maxit", "3"], tmp_path)
+    assert p.returncode == 0
+    assert os.path.isfile(written)
+    assert "Traceback" not in p.stdout + p.stderr
+
+
+@pytest.mark.parametrize("args", GONE_STDERR_ERRORS)
+def test_an_error_line_on_a_closed_stderr_keeps_exit_2_and_stays_off_stdout(args, tmp_path):
+    """``ancf-study NOSUCH.yaml 2>&-``: the one-line error went to stdout (print to a stderr of
+    None), and ancf-solve exited 1."""
+    p = with_closed(2, args, tmp_path)
+    assert (p.returncode, p.stdout) == (2, "")

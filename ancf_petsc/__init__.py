@@ -6,8 +6,8 @@ package loads neither PETSc nor MPI; ``solve`` does, on first use.
 """
 from .version import __version__
 
-_API = ("ConfigError", "InputError", "Model", "ModelSpec", "Results", "build_model", "load_config",
-        "parse_config", "read_results", "solve")
+_API = ("ConfigError", "InputError", "Model", "ModelSpec", "OutputError", "Results", "build_model",
+        "load_config", "parse_config", "read_results", "solve")
 __all__ = ["__version__", *_API]
 
 

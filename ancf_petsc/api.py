@@ -12,13 +12,18 @@ of the supports, loads and probes on the beams as they are then, checks the beam
 the config's, and stores the element counts, types and steps solved with in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
+
+Errors: ``InputError`` (``ConfigError`` is the same class) for the config and options;
+``OutputError`` when ``spec.output.dir`` cannot hold results (a file in the way, no permission,
+another run's lock).  A write failing after the run started ends it instead: ``status``
+'failed', ``reason_code`` OUTPUT_ERROR, ``exit_code`` 2.
 """
 from __future__ import annotations
 
 from typing import Callable
 
 from .config import ConfigError, ModelSpec, load_config, parse_config
-from .errors import InputError
+from .errors import InputError, OutputError
 from .io.reader import Results, read_results
 from .model.beams import Model
 from .model.build import build_model
@@ -110,5 +115,5 @@ def _init_petsc() -> None:
         signal.signal(signal.SIGPIPE, session)
 
 
-__all__ = ["ConfigError", "InputError", "Model", "ModelSpec", "Results", "build_model", "load_config",
-           "parse_config", "read_results", "solve"]
+__all__ = ["ConfigError", "InputError", "Model", "ModelSpec", "OutputError", "Results", "build_model",
+           "load_config", "parse_config", "read_results", "solve"]

@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 
+from ..errors import OutputError  # noqa: F401  (raised here; its home is errors.py, the API's)
+
 #: errno values that mean the disk (or quota) is full
 NO_SPACE = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
@@ -29,14 +31,6 @@ def atomic_write(path: str, text: str) -> None:
         except OSError:
             pass
         raise
-
-
-class OutputError(Exception):
-    """A file-system problem with the output; ``path`` is the file or directory concerned."""
-
-    def __init__(self, path: str, reason: str):
-        super().__init__(f"{path}: {reason}")
-        self.path, self.reason = path, reason
 
 
 def os_reason(exc: BaseException) -> str:

@@ -68,3 +68,15 @@ def test_a_full_disk_before_level_1_leaves_failed_not_running(tmp_path, monkeypa
             assert h5.attrs["status"] == "failed" and h5.attrs["reason_code"] == "OUTPUT_ERROR"
     assert target != "first vtu" or (out / "results.h5").exists()
     assert not [f for f in os.listdir(out) if f.startswith(".ancf") or f.endswith(".tmp")]
+
+
+def test_the_api_exports_the_error_of_an_output_directory_that_cannot_hold_results(tmp_path):
+    """``ancf_petsc.solve`` on an output.dir under a file raised io.files.OutputError, which the
+    API (``ancf_petsc``, ``ancf_petsc.api``) did not export: a script caught it by a private path."""
+    import ancf_petsc
+    from ancf_petsc import api
+    (tmp_path / "afile").write_text("")
+    with pytest.raises(ancf_petsc.OutputError) as info:
+        run_inline(UNIAXIAL, tmp_path / "afile" / "out")
+    assert info.value.path == str(tmp_path / "afile" / "out")
+    assert "OutputError" in api.__all__ and "OutputError" in ancf_petsc.__all__

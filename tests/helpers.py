@@ -265,7 +265,8 @@ def perturbed_state(P, rng, amplitude: float):
 #: the solver's one-line failure message (solver.LoadStepFailure), checked by tests as users read it
 FAILURE_MESSAGE = re.compile(r"^could not reach load factor \S+: SNES failed at load factor \S+ "
                              r"\(last converged \S+\) with [A-Z_]+"
-                             r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+\))?"
+                             r"( after \d+ Newton iterations \(solver.max_newton_iterations = \d+"
+                             r"(; \d+ of them before --restart)?\))?"
                              r"( \(an element was inverted, J <= 0\))?"
                              r"( \(Newton( converges only linearly|'s iterates wander)[^()]*\))?$")
 

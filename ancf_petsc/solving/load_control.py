@@ -120,3 +120,10 @@ class LoadControl:
         """Whether the run has spent more Newton iterations than ``max_newton_iterations``."""
         budget = self.spec.max_newton_iterations
         return budget is not None and newton_iterations > budget
+
+    def budget_spent(self, spent: int, before: int) -> str:
+        """The failure's words for a spent budget (``before``: the iterations of the levels a
+        restart continued after, which count)."""
+        restart = f"; {before} of them before --restart" if before else ""
+        return (f" after {spent} Newton iterations (solver.max_newton_iterations = "
+                f"{self.spec.max_newton_iterations}{restart})")

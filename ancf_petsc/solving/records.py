@@ -99,6 +99,8 @@ class PathState:
     dlam: float
     dlam_last: float
     accepted_negative: int = 0
+    #: Newton iterations spent before it: a restart's levels on disk (the budget is the run's)
+    spent: int = 0
 
 
 def restored_records(point) -> list[StepRecord]:
@@ -118,3 +120,9 @@ def restored_records(point) -> list[StepRecord]:
             branch_switches=list(e.get("branch_switches") or []),
             passed_over=None if not passed else (passed["level"], passed["last_converged"], passed["reported_at"])))
     return out
+
+
+def spent_before(point) -> int:
+    """The Newton iterations of the levels a restarted run continues after (each level's count
+    includes its cut-back attempts): what an uninterrupted run had spent there."""
+    return sum(r.iterations for r in restored_records(point))

@@ -35,7 +35,7 @@ from . import solver_messages, step_over
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
-from .records import LoadStepFailure, PathState, restored_records
+from .records import LoadStepFailure, PathState, restored_records, spent_before
 from .restart_check import check_restart_state
 from .stepper import LoadStepper
 from .supports import free_rigid_motions
@@ -205,7 +205,7 @@ class Run:
         path = PathState(X=self.problem.global_vector(point.blocks.ravel()),
                          dX_last=self.problem.global_vector(point.increment_blocks.ravel()),
                          lam=point.load_factor, dlam=point.increment, dlam_last=point.last_increment,
-                         accepted_negative=point.accepted_negative)
+                         accepted_negative=point.accepted_negative, spent=spent_before(point))
         self.stepper.fade_switch.resume(self.stepper, point.pointwise_from, self.spec.output.dir)
         self.stepper.windows.resume(point.window_whole_from)
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)

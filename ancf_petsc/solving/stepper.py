@@ -151,6 +151,7 @@ class LoadStepper:
         ``start``: continue a path (a restart) instead of starting from the reference state."""
         P = self.problem
         self.path = path = start or self.initial_path(levels[0], levels[-1])
+        self.solver.spent += path.spent         # solver.max_newton_iterations: the whole run's
         path.X.copy(P.X)
         P.checkpoint()
         records = []
@@ -242,14 +243,13 @@ class LoadStepper:
         return bool(self.predictor.global_status(self.problem.contact.status).any())
 
     def _check_budget(self, path: PathState, X_prev: PETSc.Vec, target: float, step: float) -> None:
-        spent = max(self.newton_iterations, self.solver.spent)      # the SNES's count caps its solves
+        spent = max(self.newton_iterations + path.spent, self.solver.spent)   # the SNES's count caps its solves
         if self.control.over_budget(spent):
             self.problem.load_factor = path.lam
             X_prev.copy(self.problem.X)
             self.problem.restore()
             raise LoadStepFailure(target, path.lam + step, path.lam, "NEWTON_BUDGET_EXCEEDED", False,
-                                  f" after {spent} Newton iterations "
-                                  f"(solver.max_newton_iterations = {self.spec.max_newton_iterations})")
+                                  self.control.budget_spent(spent, path.spent))
 
     def judge(self, path: PathState, reason: int, fnorm: float, step: float, tally: LevelTally):
         """The sub-step's verdict: SNES's reason, made a failure when the residual is not small

@@ -37,3 +37,18 @@ def test_a_restart_that_converges_no_level_keeps_the_last_converged_one(tmp_path
     res = _restart(dict(raw, steps=[0.1, 0.2], solver={"max_newton_iterations": 1}), tmp_path)
     assert res.status == "failed" and len(res.summary["steps"]) == 1, res.message
     assert res.summary["last_converged"] == {"step": 1, "load_factor": 0.1}
+
+
+def test_a_restarted_run_counts_the_newton_budget_of_its_levels_on_disk(tmp_path):
+    """solver.max_newton_iterations is the whole run's: the bar given 20 stops at 0.7 after 21
+    iterations; solved to 0.5 (16) and restarted to 1.0 with the same budget, it completed (31 in
+    all, the budget started again at 0).  Now it stops where the uninterrupted run does."""
+    raw = dict(load_raw("uniaxial_neohookean.yaml"), solver={"max_newton_iterations": 20})
+    whole = run_inline(dict(raw, output={"vtk": False}), tmp_path / "whole")
+    assert whole["status"] == "failed" and whole["steps"][-1]["load_factor"] == 0.6
+    run_inline(dict(raw, steps=raw["steps"][:5], output={"vtk": False}), tmp_path / "run")
+    res = _restart(raw, tmp_path / "run")
+    assert res.status == "failed" and res.summary["reason_code"] == "NEWTON_BUDGET_EXCEEDED", res.message
+    assert res.summary["steps"][-1]["load_factor"] == 0.6
+    assert "after 21 Newton iterations (solver.max_newton_iterations = 20; 16 of them before --restart)" \
+        in res.message, res.message

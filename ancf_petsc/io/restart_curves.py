@@ -1,6 +1,8 @@
 """A restart's load curves (``load_curve_k`` of the fingerprint, io/restart.py): what differs, in
 words, and which config entries follow the curve; a load history that only grows past the
-restart point is the run's (the levels up to it read no later frame)."""
+restart point is the run's (the levels up to it read no later frame), also where loads that
+shared one curve up to it follow different ones after it (two columns equal in every frame
+solved: the model groups loads by curve)."""
 from __future__ import annotations
 
 import numpy as np
@@ -15,6 +17,9 @@ def grown_histories(stored: dict, now: dict, lam: float) -> dict:
     for key, a in stored.items():
         if key.startswith("load_curve_") and key in now and n_dofs and _extends(a, now[key], lam, n_dofs):
             out[key] = now[key]
+    if n_dofs and _same_groups(_groups_up_to(out, lam, n_dofs), _groups_up_to(now, lam, n_dofs)):
+        out = {k: v for k, v in out.items() if not k.startswith("load_curve_")}
+        out.update((k, v) for k, v in now.items() if k.startswith("load_curve_"))
     return out
 
 
@@ -26,12 +31,44 @@ def _extends(a: np.ndarray, b: np.ndarray, lam: float, n_dofs: int) -> bool:
     if min(na, nb) < 2 or na % 2 or nb % 2 or not _close(a[na:], b[nb:]):
         return False
     pa, pb = a[:na].reshape(-1, 2), b[:nb].reshape(-1, 2)
+    n = _points_through(pa, lam)
+    return n is not None and n <= len(pb) and _close(pa[:n], pb[:n])
+
+
+def _points_through(points: np.ndarray, lam: float) -> int | None:
+    """How many of a curve's (λ, m) ``points`` define it on [0, lam] (through the first at or
+    past lam); None when lam lies past its end (m held there)."""
     lam_past = lam - 1e-12 * max(1.0, abs(lam))
-    past = np.nonzero(pa[:, 0] >= lam_past)[0]
-    if not past.size:                            # the run went on past the curve's end: m held
+    past = np.nonzero(points[:, 0] >= lam_past)[0]
+    if not past.size:
+        return None
+    return max(int(past[0]) + 1, int(np.count_nonzero(points[:, 0] <= lam + (lam - lam_past))))
+
+
+def _groups_up_to(items: dict, lam: float, n_dofs: int) -> list | None:
+    """The load curves of a fingerprint on [0, lam], those equal there merged: [points, forces,
+    moves] each (the loads they give there); None if one is not a curve item."""
+    groups: list = []
+    for key in sorted(k for k in items if k.startswith("load_curve_")):
+        a = np.asarray(items[key], dtype=float)
+        na = a.size - 2 * n_dofs
+        n = None if na < 2 or na % 2 else _points_through(a[:na].reshape(-1, 2), lam)
+        if n is None:
+            return None
+        points, forces, moves = a[:na].reshape(-1, 2)[:n], a[na:na + n_dofs], a[na + n_dofs:]
+        same = [g for g in groups if _close(g[0], points)]
+        if same:
+            same[0][1], same[0][2] = same[0][1] + forces, same[0][2] + moves
+        else:
+            groups.append([points, forces, moves])
+    return groups
+
+
+def _same_groups(a: list | None, b: list | None) -> bool:
+    """Whether two fingerprints' merged curves (``_groups_up_to``) give the same loads."""
+    if a is None or b is None or len(a) != len(b):
         return False
-    n = max(int(past[0]) + 1, int(np.count_nonzero(pa[:, 0] <= lam + (lam - lam_past))))
-    return n <= len(pb) and _close(pa[:n], pb[:n])
+    return all(any(all(_close(x, y) for x, y in zip(ga, gb)) for gb in b) for ga in a)
 
 
 def same_curve(a: np.ndarray, b: np.ndarray) -> bool:

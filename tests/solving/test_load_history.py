@@ -345,3 +345,32 @@ def test_a_frame_that_repeats_its_loads_takes_no_newton_iteration(tmp_path, cont
         # the same answers to the Newton tolerance along those paths (1.5e-9 measured at frame 1)
         for k in range(5):
             assert np.abs(_ends(two, k) - _ends(s, k)).max() <= 1e-8 * np.abs(_ends(s, k)).max()
+
+
+def test_a_restart_goes_on_where_loads_that_shared_a_curve_part_after_it(tmp_path):
+    """Two loads on the bar whose columns are equal in the 2 frames solved share one load curve;
+    a third frame that parts them (30 and 25 N) was refused as 'the load curve of loads[0]
+    (column 'a'): its loads or prescribed displacements at multiplier 1 differ', though nothing
+    at or before the restart's frame changed.  Now it goes on to the 3-frame run's answers; a
+    change of one of them at frame 2 is still refused."""
+    from ancf_petsc.api import solve
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["loads"] = [{"beam": "bar", "node": "last", "traction_force": [1.0, 0.0, 0.0], "column": "a"},
+                    {"beam": "bar", "node": "last", "traction_force": [0.0, 0.1, 0.0], "column": "b"}]
+    raw["history"] = {"table": {"time": [0.0, 0.1], "a": [10.0, 20.0], "b": [10.0, 20.0]}}
+    longer = copy.deepcopy(raw)
+    longer["history"]["table"] = {"time": [0.0, 0.1, 0.2], "a": [10.0, 20.0, 30.0], "b": [10.0, 20.0, 25.0]}
+    full = run_inline(longer, tmp_path / "full")
+    changed = copy.deepcopy(longer)
+    changed["history"]["table"]["b"][1] = 21.0
+    for out in ("run", "changed"):
+        run_inline(raw, tmp_path / out)
+    done = solve(parse_config(dict(longer, output={"dir": str(tmp_path / "run"), "vtk": False}), base_dir=CONFIGS),
+                 log=lambda s: None, restart=str(tmp_path / "run")).summary
+    assert done["status"] == "completed" and len(done["steps"]) == 3
+    tip = [np.array(s["steps"][-1]["probes"]["tip"]["displacement"]) for s in (full, done)]
+    assert np.abs(tip[0] - tip[1]).max() <= 1e-10 * np.abs(tip[0]).max()
+    with pytest.raises(ConfigError, match="written by another model"):
+        solve(parse_config(dict(changed, output={"dir": str(tmp_path / "changed"), "vtk": False}),
+                           base_dir=CONFIGS), log=lambda s: None, restart=str(tmp_path / "changed"))

@@ -223,7 +223,9 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
         raise InputError("--restart", f"{directory} was written by another model: {differs}; "
                                       + (_friction_default_hint(point, model)
                                          or "restart with the config (and data files) that made it"))
-    for k, lam in enumerate(point.levels):
+    entries = point.summary.get("steps") or []
+    for k, lam in enumerate(point.levels):       # a level passed over: the one it was asked for
+        lam = ((entries[k].get("passed_over") or {}) if k < len(entries) else {}).get("level", lam)
         if k >= len(steps) or abs(steps[k] - lam) > 1e-12 * max(1.0, abs(lam)):
             now = f"{steps[k]:g}" if k < len(steps) else "none (the config has fewer levels)"
             raise InputError("--restart", f"the config's steps differ from the run's converged "

@@ -59,6 +59,22 @@ def test_without_the_step_over_the_level_fails_on_the_jump(tmp_path):
     assert 2499.0 < last < 2500.0, res.message
 
 
+@pytest.mark.slow
+def test_a_run_with_a_level_passed_over_restarts(tmp_path):
+    """The column whose 2500 N is reported at 2500.5 N, restarted (with 2600 N added) was refused:
+    'the config's steps differ from the run's converged levels at step 3: 2500.5 was solved, the
+    config asks for 2500; restart with the steps that made them', its own steps.  Now it goes on
+    to the uninterrupted run's 2600 N (1e-10) and still says the level was passed over."""
+    whole = run(dict(gap_column(), steps=[1000.0, 2000.0, 2500.0, 2600.0]), tmp_path / "whole")
+    assert whole.status == "completed" and whole.summary["steps"][2]["passed_over"], whole.message
+    assert run(gap_column(), tmp_path / "run").summary["reason_code"] == status.LEVELS_PASSED_OVER
+    res = run(dict(gap_column(), steps=[1000.0, 2000.0, 2500.0, 2600.0]), tmp_path / "run",
+              restart=str(tmp_path / "run"))
+    assert res.status == "completed" and res.summary["reason_code"] == status.LEVELS_PASSED_OVER, res.message
+    assert [s["load_factor"] for s in res.summary["steps"]] == [1000.0, 2000.0, 2500.5, 2600.0]
+    assert np.abs(tips(res.summary) - tips(whole.summary)).max() <= 1e-10 * np.abs(tips(whole.summary)).max()
+
+
 def record(lam: float, passed=None, unsettled=False) -> StepRecord:
     return StepRecord(load_factor=lam, iterations=3, substeps=1, cutbacks=0, reason="CONVERGED_FNORM_ABS",
                       residual_norm=1e-9, wall_time=0.0, weights_unsettled=unsettled, passed_over=passed)

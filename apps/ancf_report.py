@@ -6,11 +6,15 @@
     ancf-report --existing results/achilles_type3_psi45   # report on finished runs, no solving
 
 Runs are sweeps (see ancf-sweep): finished runs are reused, so re-running is cheap.
+Exit codes: 0 done, 2 bad option, configs or run directory (one line), 130 interrupted (Ctrl-C
+or SIGTERM: the runs stop at their next safe point, no report is written; the same command
+goes on, reusing the finished runs).
 """
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 
 from apps.cli import Parser, path, positive, printer, say_stderr
@@ -20,6 +24,20 @@ CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``ancf-report`` command; Ctrl-C or SIGTERM stops its runs and exits 130 (one line)."""
+    from ancf_petsc.workflows.sweep.processes import raise_interrupted
+    previous = signal.signal(signal.SIGTERM, raise_interrupted)   # the runs would outlive a kill
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        say_stderr("ancf-report: interrupted; no report written (the finished runs are kept: "
+                   "run the same command to go on)")
+        return 130
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str] | None) -> int:
     ap = Parser(prog="ancf-report", allow_abbrev=False, description=__doc__,
                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=path, default="results/achilles_report", help="output directory")

@@ -6,7 +6,8 @@
 
 The study file's ``kind`` (pareto | stability) chooses the study; see ancf_petsc/workflows/study.py and
 ancf_petsc/workflows/stability.py for the keys.  Runs are solved in this process, one after another, on
-one core.  Exit codes: 0 done, 2 study-file error.
+one core.  Exit codes: 0 done, 2 study-file error, 130 interrupted by Ctrl-C (one line; the
+run being solved is kept as interrupted, the study's CSV and chart are not written).
 """
 from __future__ import annotations
 
@@ -52,6 +53,10 @@ def main(argv: list[str] | None = None) -> int:
     except OutputError as exc:
         say_stderr(f"ancf-study: output error: {exc}")
         return 2
+    except KeyboardInterrupt:
+        say_stderr("ancf-study: interrupted (Ctrl-C); no study.csv written: run the same command "
+                   "to start it again")
+        return 130
     report_unused_options("ancf-study")
     return 0
 

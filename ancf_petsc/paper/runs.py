@@ -29,9 +29,13 @@ def make_sweep(inputs: PaperInputs, out: str, name: str, parameters: dict, mode:
 
 
 def execute(sweep: sw.Sweep, log=print) -> list[sw.RunState]:
-    """Run what is not done yet; the state of every run afterwards."""
-    sw.run_sweep(sweep, log=log)
+    """Run what is not done yet; the state of every run afterwards.  A sweep stopped by Ctrl-C
+    or SIGTERM (its runs stopped at their next safe point) raises KeyboardInterrupt: a report
+    does not read its runs stopped half-way as levels not reached."""
+    report = sw.run_sweep(sweep, log=log)
     sw.collect(sweep)
+    if report.interrupted:
+        raise KeyboardInterrupt
     return [sw.run_state(r) for r in sw.expand(sweep)]
 
 

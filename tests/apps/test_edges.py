@@ -974,3 +974,27 @@ def test_a_level_is_accepted_only_at_the_stated_tolerance(tmp_path):
     atol = float(re.search(r"atol ([0-9.e+-]+)", p.stdout).group(1))
     assert all(st["reason"].startswith("CONVERGED_FNORM") for st in s["steps"])
     assert all(st["residual_norm"] <= atol for st in s["steps"] if st["reason"] == "CONVERGED_FNORM_ABS")
+
+
+def test_ancf_study_stopped_by_ctrl_c_says_so_in_one_line(tmp_path):
+    """Ctrl-C during ``ancf-study S.yaml`` ended in a KeyboardInterrupt traceback from inside the
+    Newton solve (exit by SIGINT); ancf-sweep, ancf-fit and ancf-solve say one line.  Now
+    'ancf-study: interrupted ...', exit 130."""
+    import yaml
+    study = {"kind": "pareto", "name": "long", "base": os.path.join(CONFIGS, "bending_neohookean.yaml"),
+             "probe": "tip", "component": "z", "grid": {"elements": [1, 2, 4, 8, 16, 32, 64]},
+             "reference": {"elements": 128}, "repeats": 20, "output": str(tmp_path / "st")}
+    f = str(tmp_path / "st.yaml")
+    with open(f, "w") as fh:
+        yaml.safe_dump(study, fh)
+    p = subprocess.Popen([os.path.join(VENV_BIN, "ancf-study"), f], stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=dict(os.environ, **MPI_ENV),
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.time() + 120
+    while not os.path.isdir(tmp_path / "st" / "run_000") and time.time() < deadline:
+        time.sleep(0.1)
+    p.send_signal(signal.SIGINT)
+    err = p.communicate(timeout=120)[1]
+    assert p.returncode == 130 and "Traceback" not in err, err
+    assert err.strip().splitlines() == ["ancf-study: interrupted (Ctrl-C); no study.csv written: run the "
+                                        "same command to start it again"], err

@@ -177,3 +177,23 @@ def test_bulk_modulus_fit_reports_a_failed_column_and_an_unbracketed_minimum(mon
     _fake_columns(monkeypatch, 2.0e9)
     with pytest.raises(SweepError, match="outside 0.6-1.4 GPa; widen the grid"):
         rp.fit_bulk_modulus(None, str(tmp_path))
+
+
+def test_an_interrupted_report_writes_no_report_and_exits_130(monkeypatch, tmp_path):
+    """Ctrl-C during ``ancf-report --table1`` stopped the ψ = 45° column at its first level, and
+    the report went on: report.md said 'not reached' at every load of that column (as if the
+    solver had failed there), exit 0.  Now the sweep's interruption reaches ancf-report: one
+    line, exit 130, no report.md."""
+    from apps import ancf_report
+    from ancf_petsc.workflows import sweep as sw
+
+    def stopped(sweep, log=print, force=False):
+        report = sw.SweepReport(sw.expand(sweep), {}, [])
+        report.interrupted = True
+        return report
+    monkeypatch.setattr(sw, "run_sweep", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        rp.runs.execute(rp.runs.make_sweep(rp.PaperInputs(CONFIGS).check(), str(tmp_path / "s"), "t",
+                                           {"geometry.twist_deg": [0.0]}))
+    assert ancf_report.main(["--table1", "--out", str(tmp_path / "rep")]) == 130
+    assert not (tmp_path / "rep" / "report.md").exists()

@@ -21,12 +21,12 @@ import argparse
 import os
 import sys
 
-from apps.cli import Parser, at_least, path, printer, report_unused_options, say_stderr, start_petsc
+from apps.cli import Parser, at_least, path, positive, printer, report_unused_options, say_stderr, start_petsc
 
 PROG = "ancf-fit"
 
 
-#: --task and --ranks: a non-negative integer
+#: --task: a non-negative integer
 _count = at_least(0)
 
 
@@ -41,8 +41,13 @@ def _args(argv: list[str]):
     what.add_argument("--task", type=_count, help="one start of a multi-start fit (a SLURM array task)")
     what.add_argument("--slurm", action="store_true", help="write <output>/fit.slurm and stop")
     what.add_argument("--collect", action="store_true", help="gather the starts' logs, then analyse")
-    ap.add_argument("--ranks", type=_count, default=1, help="MPI ranks per array task (with --slurm)")
-    return ap.parse_with_petsc(argv)
+    ap.add_argument("--ranks", type=positive, help="MPI ranks per array task (with --slurm)")
+    args, petsc = ap.parse_with_petsc(argv)
+    if args.ranks is not None and not args.slurm:    # else a fit on one rank, --ranks unread
+        ap.error(f"--ranks {args.ranks}: sets the ranks of --slurm's array tasks; to solve here "
+                 f"on {args.ranks} ranks, run mpirun -n {args.ranks} {PROG} {args.fit}")
+    args.ranks = args.ranks or 1
+    return args, petsc
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -94,7 +99,6 @@ def _run(spec, args, say) -> int:
     from ancf_petsc.workflows.calibration.slurm import merge_starts, write_slurm
 
     starts = spec.optimizer.starts
-    expect(args.ranks >= 1, "--ranks", f"expected ranks >= 1; got {args.ranks}")
     if args.slurm:
         script = write_slurm(spec, args.fit, args.ranks)
         say(f"[fit] wrote {script}: submit with cd {spec.output} && sbatch fit.slurm, "

@@ -168,6 +168,9 @@ OPTION_ERRORS = [
     (["ancf-study", "s.yaml", "-out", "o"], "-out: ancf-study's own options take two dashes (--out)"),
     (["ancf-fit", "f.yaml", "--outdir=o"], "unknown option --outdir (did you mean --out?)"),
     (["ancf-fit", "f.yaml", "-fresh"], "-fresh: ancf-fit's own options take two dashes (--fresh)"),
+    (["ancf-fit", "f.yaml", "--ranks", "4"], "--ranks 4: sets the ranks of --slurm's array tasks; to solve "
+                                             "here on 4 ranks, run mpirun -n 4 ancf-fit f.yaml"),
+    (["ancf-fit", "f.yaml", "--slurm", "--ranks", "0"], "argument --ranks: expected a positive integer; got 0"),
 ]
 
 

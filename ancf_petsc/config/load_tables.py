@@ -4,8 +4,9 @@ A load history (config/history.py) reads its muscle forces from a table of colum
 with a header line ('#' lines are comments; an Excel "CSV UTF-8" byte-order mark is accepted), or
 an OpenSim storage file (a header of ``key=value`` lines closed by ``endheader``, then a line of
 tab- or space-separated column names and rows of numbers: what OpenSim's static optimisation or
-computed muscle control writes, e.g. ``*_StaticOptimization_force.sto``).  Every value must be a
-finite number; an error names the file, the data row (and its line) and the column.
+computed muscle control writes, e.g. ``*_StaticOptimization_force.sto``).  A separator ending
+every line (MATLAB's or Excel's exports) and rows of separators only are dropped.  Every value must
+be a finite number; an error names the file, the data row (and its line) and the column.
 """
 from __future__ import annotations
 
@@ -61,9 +62,24 @@ def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int],
             if ln.strip() and not ln.lstrip().startswith("#"):
                 rows.append((first_line + k, [f.strip() for f in next(csv.reader(io.StringIO(ln)))]))
         _check_csv_form(path, text, rows[0][1] if rows else [], where)
+    rows = _without_trailing_separators(rows)
     if len(rows) < 2:
         raise ConfigError(where, f"{path}: expected a line of column names and at least one row of numbers")
     return [r for _, r in rows], [n for n, _ in rows], meta
+
+
+def _without_trailing_separators(rows: list[tuple[int, list[str]]]) -> list[tuple[int, list[str]]]:
+    """Rows without the empty fields a separator at the end of every line leaves (a MATLAB or
+    Excel export: 'time,soleus,' or a tab after each value), and without rows of separators only
+    (',,,'); an empty field under a named column stays (a missing value, refused by name)."""
+    rows = [(n, r) for n, r in rows if any(r)]
+    if not rows:
+        return rows
+    header = rows[0][1]
+    width = len(header)
+    while width and not header[width - 1]:
+        width -= 1
+    return [(n, r[:width] if len(r) > width and not any(r[width:]) else r) for n, r in rows]
 
 
 def _check_csv_form(path: str, text: str, header: list[str], where: str) -> None:
@@ -88,8 +104,10 @@ def _check_storage_size(path: str, meta: dict, rows: list[list[str]], where: str
         key = next((k for k in meta if k.lower() in keys), None)
         stated = meta.get(key, "")
         if stated.isdigit() and int(stated) != have:
+            why = ("a file cut short? (complete it, or correct {})" if have < int(stated) else
+                   "more than it states: correct {}").format(key)
             raise ConfigError(where, f"{path}: its header says {key}={stated}, the table has {have} "
-                                     f"{what}: a file cut short? (complete it, or correct {key})")
+                                     f"{what}: {why}")
 
 
 def read_load_table(path: str, where: str) -> LoadTable:
@@ -106,7 +124,8 @@ def read_load_table(path: str, where: str) -> LoadTable:
     header = rows[0]
     empty = [k for k, h in enumerate(header) if not h]
     if empty:
-        raise ConfigError(where, f"{path}: column {empty[0] + 1} of the header line has no name")
+        raise ConfigError(where, f"{path}: column {empty[0] + 1} of the header line has no name: "
+                                 "name it, or remove the column")
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         raise ConfigError(where, f"{path}: column {dup[0]!r} appears twice in the header line")

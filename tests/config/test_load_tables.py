@@ -1,0 +1,47 @@
+"""The load tables of a history (config/load_tables.py) in the forms real exports take: OpenSim
+storage files and CSV files with a separator ending every line; what stays refused names the
+file, row and column and what to do."""
+import numpy as np
+import pytest
+
+from ancf_petsc.config.load_tables import read_load_table
+from ancf_petsc.config.values import ConfigError
+
+HEADER = "name\nversion=1\nnRows=2\nnColumns=3\ninDegrees=yes\nendheader\n"
+FRAMES = {"time": [0.25, 0.27], "soleus_r": [9.5, 120.0], "gasmed_r": [8.0, 95.5]}
+
+
+def _read(tmp_path, name: str, text: str, newline: str = "\n"):
+    path = tmp_path / name
+    path.write_bytes(text.replace("\n", newline).encode())
+    return read_load_table(str(path), "history.file")
+
+
+@pytest.mark.parametrize("name,text", [
+    ("tab_each.sto", HEADER + "time\tsoleus_r\tgasmed_r\t\n0.25\t9.5\t8\t\n0.27\t120\t95.5\t\n"),
+    ("tab_each.mot", HEADER + "time\tsoleus_r\tgasmed_r\t\n0.25\t9.5\t8\t\n0.27\t120\t95.5\t\n\n"),
+    ("comma_each.csv", "time,soleus_r,gasmed_r,\n0.25,9.5,8,\n0.27,120,95.5,\n"),
+    ("excel.csv", "time,soleus_r,gasmed_r,,\n0.25,9.5,8,,\n0.27,120,95.5,,\n,,,,\n"),
+], ids=lambda v: v if "." in v and "\n" not in v else "")
+@pytest.mark.parametrize("newline", ["\n", "\r\n"], ids=["lf", "crlf"])
+def test_a_separator_ending_every_line_is_no_column(tmp_path, name, text, newline):
+    """A tab after each value of an OpenSim file was refused 'its header says nColumns=3, the
+    table has 4 columns: a file cut short?', a CSV file's trailing comma 'column 4 of the header
+    line has no name'; both are read as the frames written."""
+    table = _read(tmp_path, name, text, newline)
+    assert list(table.columns) == list(FRAMES)
+    for k, v in FRAMES.items():
+        assert np.array_equal(table.columns[k], v)
+
+
+@pytest.mark.parametrize("name,text,match", [
+    ("missing.sto", HEADER + "time\tsoleus_r\tgasmed_r\t\n0.25\t9.5\t\t\n0.27\t120\t95.5\t\n",
+     r"missing\.sto: data row 1 \(line 8\), column 'gasmed_r': '' is not a finite number"),
+    ("wide.sto", HEADER + "time\tsoleus_r\tgasmed_r\ttibpost_r\n0.25\t9.5\t8\t1\n0.27\t120\t95.5\t1\n",
+     r"wide\.sto: its header says nColumns=3, the table has 4 columns: more than it states: correct nColumns"),
+    ("unnamed.csv", "time,,gasmed_r\n0.25,9.5,8\n0.27,120,95.5\n",
+     r"unnamed\.csv: column 2 of the header line has no name: name it, or remove the column"),
+], ids=["missing", "wide", "unnamed"])
+def test_what_stays_refused_says_where_and_what_to_do(tmp_path, name, text, match):
+    with pytest.raises(ConfigError, match=match):
+        _read(tmp_path, name, text)

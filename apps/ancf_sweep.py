@@ -17,6 +17,9 @@ import sys
 
 from apps.cli import Parser, path, positive, printer, say_stderr
 
+#: the options of --slurm's script (the sweep file's slurm: keys)
+SLURM_OPTIONS = ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs")
+
 
 def main(argv: list[str] | None = None) -> int:
     """The ``ancf-sweep`` command; a Ctrl-C at any point (also while importing) exits 130."""
@@ -65,6 +68,11 @@ def _main(argv: list[str]) -> int:
                      f'e.g. run: {{petsc: ["-snes_max_it", "30"]}}')
     if extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    given = [k for k in SLURM_OPTIONS if getattr(args, k) is not None]
+    if given and not args.slurm:          # else unread: a local run, --dry-run or --collect
+        parser.error(f"--{given[0].replace('_', '-')}: a SLURM option, for the script of --slurm; "
+                     + ("the runs at once here are --jobs" if given[0] == "throttle" else
+                        "add --slurm, or leave it out"))
 
     from ancf_petsc.workflows.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done,
         load_sweep, run_sweep, slurm_spec, write_slurm)
@@ -73,7 +81,7 @@ def _main(argv: list[str]) -> int:
 
     try:
         overrides = {}
-        for key in ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs"):
+        for key in SLURM_OPTIONS:
             value = getattr(args, key)
             if value is not None:
                 try:

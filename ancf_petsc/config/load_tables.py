@@ -53,8 +53,7 @@ def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int],
     first_line, meta = 1, {}
     if os.path.splitext(path)[1].lower() in STORAGE:
         lines, first_line, meta = _storage_body(lines, path, where)
-        split = (lambda s: s.split("\t")) if any("\t" in ln for ln in lines) else str.split
-        rows = [(first_line + k, [f.strip() for f in split(ln)]) for k, ln in enumerate(lines)
+        rows = [(first_line + k, [f.strip() for f in _storage_fields(ln)]) for k, ln in enumerate(lines)
                 if ln.strip()]
     else:
         rows = []
@@ -66,6 +65,12 @@ def _rows(path: str, text: str, where: str) -> tuple[list[list[str]], list[int],
     if len(rows) < 2:
         raise ConfigError(where, f"{path}: expected a line of column names and at least one row of numbers")
     return [r for _, r in rows], [n for n, _ in rows], meta
+
+
+def _storage_fields(line: str) -> list[str]:
+    """The fields of an OpenSim line: tab-separated where it has a tab (column names may hold
+    spaces), else separated by spaces (a row written with spaces under a tab-separated header)."""
+    return line.split("\t") if "\t" in line else line.split()
 
 
 def _without_trailing_separators(rows: list[tuple[int, list[str]]]) -> list[tuple[int, list[str]]]:

@@ -1,6 +1,6 @@
 """The load tables of a history (config/load_tables.py) in the forms real exports take: OpenSim
-storage files and CSV files with a separator ending every line; what stays refused names the
-file, row and column and what to do."""
+storage files and CSV files with a separator ending every line, rows written with spaces under a
+tab-separated header; what stays refused names the file, row and column and what to do."""
 import numpy as np
 import pytest
 
@@ -30,6 +30,14 @@ def test_a_separator_ending_every_line_is_no_column(tmp_path, name, text, newlin
     line has no name'; both are read as the frames written."""
     table = _read(tmp_path, name, text, newline)
     assert list(table.columns) == list(FRAMES)
+    for k, v in FRAMES.items():
+        assert np.array_equal(table.columns[k], v)
+
+
+def test_rows_written_with_spaces_under_a_tab_separated_header(tmp_path):
+    """A hand-edited storage file whose header is tab-separated and rows space-separated was
+    refused 'data row 1 (line 8) has 1 fields, the header 3'."""
+    table = _read(tmp_path, "mixed.sto", HEADER + "time\tsoleus_r\tgasmed_r\n0.25  9.5  8\n0.27 120 95.5\n")
     for k, v in FRAMES.items():
         assert np.array_equal(table.columns[k], v)
 

@@ -64,9 +64,10 @@ def parse_tangential(value, p: str = "contact.tangential") -> TangentialSpec:
     return t
 
 
-def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
+def parse_contact(value, names: list[str], node_dofs: int = 18, section_order: int = 2) -> ContactSpec:
     """The contact law (sliding | unilateral), Gauss points, pressure space and interfaces;
-    ``node_dofs``: the slots of a multiplier node (the beams' node block, physics/elements)."""
+    ``node_dofs``: the slots of a multiplier node (the beams' node block, physics/elements);
+    ``section_order``: the lowest degree of the beams' section fields (3363: 2)."""
     p = "contact"
     if isinstance(value, dict):
         for key in REMOVED_CONTACT_KEYS:
@@ -106,7 +107,7 @@ def parse_contact(value, names: list[str], node_dofs: int = 18) -> ContactSpec:
     if law is not None and c.fade_forces == "variational":
         raise ConfigError(f"{p}.fade_forces", "a tangential law's forces are pointwise (τ_p ∇g_p); "
                                               "remove fade_forces or set it to pointwise")
-    _parse_projection(c, value.get("projection", None), f"{p}.projection", node_dofs)
+    _parse_projection(c, value.get("projection", None), f"{p}.projection", node_dofs, section_order)
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []
@@ -146,10 +147,10 @@ def bounded(c) -> bool:
     return bool(getattr(law, "bounded", False))
 
 
-def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
+def _parse_projection(c, proj, pp: str, node_dofs: int, section_order: int = 2) -> None:
     """``contact.projection`` (at key path ``pp``) into ``c`` (a ContactSpec): the pressure
     space's degrees along the beam and across, its spans across, continuity and supported-end
-    rule."""
+    rule (``section_order``: the beams' lowest section degree, ``_bounded_across``)."""
     if proj == "pointwise":
         raise ConfigError(pp, "a multiplier per point over-constrains the quadratic "
                               "section fields; give {axial: .., curve: ..} degrees")
@@ -179,3 +180,25 @@ def _parse_projection(c, proj, pp: str, node_dofs: int) -> None:
     if (c.projection[0] + 1) * (c.projection[1] + c.curve_spans) > node_dofs:
         raise ConfigError(pp, "(axial + 1) x (curve + curve_spans) pressure functions per "
                               f"element must not exceed {node_dofs} (one node block)")
+    _bounded_across(c, pp, section_order)
+
+
+def _bounded_across(c, pp: str, order: int) -> None:
+    """Under Coulomb friction at most order + 1 pressure functions across (curve + curve_spans):
+    the gap between two section fields of degree p has p + 1 modes across a straight strip, and
+    more functions are not determined (docs/interface.md, "The gap's degree across": on 3363 the
+    paper's tendon's inf-sup constant over the interfaces, columns scaled, 2e-2 / 3e-3 / 1e-4 /
+    8e-7 with 2 / 3 / 4 / 5 functions).  Frictionless runs keep them (their answers read only
+    the multipliers' forces); Coulomb's bounds mu p+ read the multipliers themselves."""
+    across = c.projection[1] + c.curve_spans
+    if not bounded(c) or across <= order + 1:
+        return
+    key = f"{pp}.curve_spans" if c.curve_spans > 1 else f"{pp}.curve"
+    got = c.curve_spans if c.curve_spans > 1 else c.projection[1]
+    raise ConfigError(key, f"under Coulomb friction at most {order + 1} pressure functions across "
+                      f"(curve + curve_spans) on section fields of degree {order}, here {across}: "
+                      "more are not determined by the gap (inf-sup), their multipliers oscillate "
+                      "and the bounds mu p+ read them (the paper's tendon failed at its first level "
+                      "with curve: 3 or curve_spans: 4, and completed 57 % too stiff with "
+                      f"curve_spans: 3); give curve + curve_spans <= {order + 1}, or a beam element "
+                      f"with richer sections; got {got}")

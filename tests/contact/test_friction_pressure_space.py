@@ -69,3 +69,33 @@ def test_a_degree_above_the_contact_points_names_them():
     assert str(err.value) == ("contact.projection.axial: must be <= contact.axial_points - 1 = 1 (the "
                               "contact points along the beam determine no higher degree): give "
                               "contact.axial_points: 3 or a lower axial; got 2"), str(err.value)
+
+
+def test_more_pressure_functions_across_than_the_sections_determine_are_refused_under_friction():
+    """The paper's tendon (ψ = 45°, 4 elements, 10 N) under Coulomb friction with more than p + 1
+    pressure functions across sections of degree p: curve: 3 and curve_spans: 4 failed at the
+    first level (Newton cycles, stick-slip flips; 33103 with 5 functions too), curve_spans: 3
+    (4 functions, μ = 0.5) completed with the soleus end at 0.069 mm against the default space's
+    0.160, the interfaces pressed by 102 / 1 081 / 395 N (default 0.7 / 0.2 / 0.6 N).  Refused,
+    naming the key;
+    p + 1 functions, other elements' richer sections and frictionless models still run."""
+    import pytest
+    from ancf_petsc.config import ConfigError
+    coulomb = {"tangential": {"law": "coulomb", "friction": 0.5}}
+    for projection, key, got in (({"curve": 3}, "curve", 3), ({"curve_spans": 4}, "curve_spans", 4),
+                                 ({"curve_spans": 3}, "curve_spans", 3),
+                                 ({"curve": 0, "curve_spans": 4}, "curve_spans", 4)):
+        with pytest.raises(ConfigError) as err:
+            parse_config(_tendon(coulomb | {"curve_points": 4, "projection": projection}))
+        text = str(err.value)
+        assert text.startswith(f"contact.projection.{key}: under Coulomb friction at most 3 pressure "
+                               "functions across"), text
+        assert "give curve + curve_spans <= 3" in text and text.endswith(f"; got {got}"), text
+    richer = _tendon(coulomb | {"curve_points": 4, "projection": {"curve": 3}})
+    for b in richer["beams"]:
+        b["element"] = 33103
+    assert parse_config(richer).contact.projection == (1, 3)
+    for contact in (coulomb | {"curve_points": 3, "projection": {"curve": 2}},
+                    coulomb | {"projection": {"curve_spans": 2}},
+                    {"curve_points": 4, "projection": {"curve_spans": 4}}):
+        assert parse_config(_tendon(contact)).contact is not None, contact

@@ -38,28 +38,62 @@ def _complex(P: np.ndarray) -> np.ndarray:
     return P[:, 0] + 1j * P[:, 1]
 
 
-def match_rings(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """B resampled (``len(A)`` points, same orientation) so that B[i] corresponds to A[i]: the
-    cyclic start that maximises |Σ conj(a_i) b_{i+j}| (centred points), refined by a parabola
-    through the best shift and its neighbours.  Both are closed counter-clockwise polylines
-    sampled at equal arc length."""
+def _starts(A: np.ndarray, B: np.ndarray) -> list[float]:
+    """Cyclic starts (in samples, refined by a parabola through each peak and its neighbours) of
+    B's matches to A as good as the best, |Σ conj(a_i) b_{i+j}| (centred points), the smallest
+    turn first: one for most outlines, two for an ellipse, many for a circle."""
     n = len(A)
     a = _complex(A - A.mean(axis=0))
     b = _complex(B - B.mean(axis=0))
     C = np.fft.ifft(np.conj(np.fft.fft(a)) * np.fft.fft(b))     # ∝ Σ_i conj(a_i) b_{i+j}
     mag = np.abs(C)
-    # among the peaks as good as the best (symmetric shapes), the smallest rotation
     peaks = np.flatnonzero((mag >= np.roll(mag, 1)) & (mag >= np.roll(mag, -1)))
     good = peaks[mag[peaks] >= (1.0 - TIE) * mag.max()]
-    j = int(good[np.argmin(np.abs(np.angle(C[good])))])
-    y0, y1, y2 = mag[(j - 1) % n], mag[j], mag[(j + 1) % n]
-    den = y0 - 2.0 * y1 + y2
-    frac = float(np.clip(0.5 * (y0 - y2) / den, -0.5, 0.5)) if den < 0 else 0.0
-    # re-sample B starting at arc-length position (j + frac) / n of its perimeter
+    good = good[np.argsort(np.abs(np.angle(C[good])), kind="stable")]
+    out = []
+    for j in good:
+        y0, y1, y2 = mag[(j - 1) % n], mag[j], mag[(j + 1) % n]
+        den = y0 - 2.0 * y1 + y2
+        out.append(int(j) + (float(np.clip(0.5 * (y0 - y2) / den, -0.5, 0.5)) if den < 0 else 0.0))
+    return out
+
+
+def _resampled(B: np.ndarray, start: float, n: int) -> np.ndarray:
+    """B re-sampled at n points of equal arc length from arc-length position start / n."""
     Q = np.vstack([B, B[:1]])
     s = pl.arclength(Q)
-    t = (s[-1] * ((np.arange(n) + j + frac) / n)) % s[-1]
+    t = (s[-1] * ((np.arange(n) + start) / n)) % s[-1]
     return np.column_stack([np.interp(t, s, Q[:, 0]), np.interp(t, s, Q[:, 1])])
+
+
+def match_rings(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """B resampled (``len(A)`` points, same orientation) so that B[i] corresponds to A[i]: the
+    cyclic start that maximises |Σ conj(a_i) b_{i+j}| (centred points); of equally good starts
+    (symmetric shapes), the smallest turn.  Both are closed counter-clockwise polylines sampled at
+    equal arc length."""
+    return _resampled(B, _starts(A, B)[0], len(A))
+
+
+def _whole_section_picks(terms: dict[str, list[complex]]) -> dict[str, int]:
+    """Per outline, which of its equally good matches (``terms``: each one's Σ conj(a_i - c_k)
+    (b_i - c_{k+1}) about the whole section's centroids) superposes the whole section best: the
+    largest |Σ over outlines| (coordinate ascent from the smallest turns).  An ellipse matched on
+    its own by its smallest turn (-80 deg) in a section turning by +100 deg was blended with its
+    points reversed and shrank to nothing half-way."""
+    pick = {n: 0 for n in terms}
+    for _ in range(len(terms)):
+        changed = False
+        for n, t in terms.items():
+            if len(t) < 2:
+                continue
+            rest = sum(terms[m][pick[m]] for m in terms if m != n)
+            val = np.abs(rest + np.array(t))
+            best = int(np.argmax(val))
+            if val[best] > val[pick[n]] * (1.0 + 1e-9):
+                pick[n], changed = best, True
+        if not changed:
+            break
+    return pick
 
 
 class SectionField:
@@ -132,12 +166,15 @@ class SectionField:
             cents = np.array([pl.centroid(rings[n]) for n in self.names])
             self.centres.append(areas @ cents / areas.sum())
         for k in range(len(self.stations) - 1):
-            A, B = self.rings[k], self.rings[k + 1]
-            C = 0j
+            A, B = self.rings[k], self.rings[k + 1]          # station k is already matched to k - 1
+            ca, cb = self.centres[k], self.centres[k + 1]
+            options = {n: [_resampled(B[n], j, RING) for j in _starts(A[n], B[n])] for n in self.names}
+            terms = {n: [complex(np.sum(np.conj(_complex(A[n] - ca)) * _complex(Bn - cb))) for Bn in opts]
+                     for n, opts in options.items()}
+            pick = _whole_section_picks(terms)
             for n in self.names:
-                B[n] = match_rings(A[n], B[n])          # station k is already matched to k - 1
-                C += np.sum(np.conj(_complex(A[n] - self.centres[k])) * _complex(B[n] - self.centres[k + 1]))
-            self.theta.append(float(np.angle(C)))
+                B[n] = options[n][pick[n]]
+            self.theta.append(float(np.angle(sum(terms[n][pick[n]] for n in self.names))))
 
     def _segment(self, x: float) -> tuple[int, float]:
         xs = self.xs

@@ -91,6 +91,32 @@ def test_bar_whose_section_turns_in_place(tmp_path):
     assert u == pytest.approx(F * L / (E * A), rel=5e-4)
 
 
+@pytest.mark.parametrize("second", ["egg", "circle"])
+def test_symmetric_subtendon_in_a_section_turning_by_more_than_90_degrees(second):
+    """An elliptic subtendon beside an egg-shaped (or circular) one, the whole section turned by
+    100 degrees between the stations: the ellipse on its own matches equally at +100 and -80
+    degrees; the smallest turn reversed its points against the section's and it shrank to 0 mm^2
+    half-way (6.28 mm^2 at the stations).  Every outline keeps its area all along."""
+    from ancf_petsc.config.sections import parse_sections
+    from ancf_petsc.geometry_input import polyline as pl
+    from ancf_petsc.geometry_input.tendon import build_tendon
+    t = np.linspace(0.0, 2 * np.pi, 120, endpoint=False)
+    a = np.column_stack([2.0 * np.cos(t) - 3.0, np.sin(t)])
+    b = np.column_stack([1.5 * np.cos(t) + 0.4 * np.cos(2 * t) + 3.0, 1.2 * np.sin(t)]) if second == "egg" \
+        else np.column_stack([1.3 * np.cos(t) + 3.0, 1.3 * np.sin(t)])
+    th = np.deg2rad(100.0)
+    R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    st = [{"x": x, "units": "mm", "axes": ["y", "z"],
+           "outlines": {"a": {"points": (a @ Q.T).tolist()}, "b": {"points": (b @ Q.T).tolist()}}}
+          for x, Q in ((0.0, np.eye(2)), (0.05, R))]
+    tendon = build_tendon(parse_sections({"stations": st}, "geometry.sections", ".", 0.05))
+    assert np.rad2deg(tendon.field.theta[0]) == pytest.approx(100.0, abs=0.05)
+    for n, P in (("a", a), ("b", b)):
+        for x in (0.0125, 0.025, 0.0375):
+            ring = tendon.field.ring_at(n, x)
+            assert pl.signed_area(ring) == pytest.approx(pl.signed_area(P) * 1e-6, rel=2e-3), (n, x)
+
+
 def two_halves(bulge_right: float, iface_end: float = 1.0) -> dict:
     """Two subtendons sharing the straight interface 'mid' (curves form); the right one bulges."""
     return {"units": "mm", "axes": ["y", "z"],

@@ -11,7 +11,7 @@ from ..physics.laws import VOLUMETRIC_LAWS
 from ..physics.materials import NeoHookean, StVenantKirchhoff
 from .specs import (DEFAULT_AXIAL_POINTS, FIBRE_FOLLOW, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec,
                     SectionSpec)
-from .values import ConfigError, boolean, integer, key_path, mapping, number, sequence, string, vector
+from .values import ConfigError, boolean, integer, key_path, mapping, number, sequence, shown, string, vector
 
 
 def parse_beams(value, base_dir: str) -> list[BeamSpec]:
@@ -335,3 +335,32 @@ def check_imported_loops(beams: list, sections) -> None:
         if s.spline_degree_given:
             raise ConfigError(f"{p}.spline_degree", "imported outlines share one spline degree: set "
                                                     "geometry.sections.spline_degree instead")
+    _check_outline_places(beams)
+
+
+def _check_outline_places(beams: list) -> None:
+    """A measured outline (geometry.sections, or a sections file shared by several beams) is the
+    section of one beam, where its file places it: two beams with the outline 'l' filled one region,
+    and a beam's center moved it 1 mm into its neighbour across their shared border, with no word."""
+    owner: dict[tuple, int] = {}
+    files: dict[str | None, int] = {}
+    for b in beams:
+        s = b.section
+        if s.shape == "outline" and s.curves is None:
+            files[s.file] = files.get(s.file, 0) + 1
+    for i, b in enumerate(beams):
+        s, p = b.section, f"beams[{i}].section"
+        if s.shape != "outline" or s.curves is not None:
+            continue
+        if (s.file, s.loop) in owner:
+            j = owner[(s.file, s.loop)]
+            raise ConfigError(f"{p}.loop", f"outline {s.loop!r} is already the section of beams[{j}] "
+                                           f"({beams[j].name}): two beams would fill one region; give each "
+                                           f"beam its own outline; got {s.loop!r}")
+        owner[(s.file, s.loop)] = i
+        if any(float(c) != 0.0 for c in s.center) and (s.file is None or files[s.file] > 1):
+            where = "geometry.sections" if s.file is None else "a sections file with its neighbours"
+            raise ConfigError(f"{p}.center", f"an outline of {where} sits where its file places it, against "
+                                             "its neighbours (their shared borders are the interfaces): move it "
+                                             f"there, not by center (twist axis: geometry.twist_axis); got "
+                                             f"{shown(list(s.center))}")

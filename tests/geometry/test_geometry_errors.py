@@ -94,6 +94,15 @@ CASES = [
     ("outlines on each other", config(inline({"a": {"points": disc(1.0, c=(2.0, 0.0))},
                                               "b": {"points": disc(1.0, c=(2.0, 0.0))}}), beams=("a", "b")),
      "geometry.sections.outlines", "subtendons 'a' and 'b' overlap: the inside of 'a' near "),
+    # two beams on one outline filled one region; a center moved an outline into its neighbour by 1 mm
+    ("one outline for two beams", dict(config(inline(three()), beams=("p", "q")), beams=[
+        {"name": b, "section": {"shape": "outline", "loop": "p"}, "elements": 1,
+         "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}} for b in ("p", "q")]),
+     "beams[1].section.loop", "outline 'p' is already the section of beams[0] (p): two beams would fill one region"),
+    ("an outline moved by center", dict(config(inline(three()), beams=("p", "q", "r")), beams=[
+        {"name": b, "section": {"shape": "outline", "loop": b, **({"center": [0.001, 0.0]} if b == "q" else {})},
+         "elements": 1, "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}} for b in ("p", "q", "r")]),
+     "beams[1].section.center", "an outline of geometry.sections sits where its file places it"),
     ("contact with stations whose interfaces differ", config(
         {"stations": [dict(inline(three()), x=0.0), dict(inline(three(r=2.5)), x=0.02)]},
         beams=("p", "q", "r"), contact=True),

@@ -36,6 +36,16 @@ def perimeter(P: np.ndarray, closed: bool = True) -> float:
     return float(np.linalg.norm(np.diff(Q, axis=0), axis=1).sum())
 
 
+def smallest_width(P: np.ndarray) -> float:
+    """The least distance between two parallel lines enclosing the polyline (on a hull edge)."""
+    from scipy.spatial import ConvexHull
+    hull = P[ConvexHull(P).vertices]
+    edge = np.roll(hull, -1, axis=0) - hull
+    normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.linalg.norm(edge, axis=1)[:, None]
+    heights = hull @ normal.T
+    return float((heights.max(axis=0) - heights.min(axis=0)).min())
+
+
 def drop_duplicates(P: np.ndarray, tol: float, closed: bool = True) -> np.ndarray:
     """Remove points closer than ``tol`` to their predecessor (and a repeated closing point)."""
     P = np.asarray(P, dtype=float)

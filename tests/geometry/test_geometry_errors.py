@@ -36,6 +36,15 @@ def three(mirror=False, r=3.0):
     return out
 
 
+def halves():
+    """The two halves of an ellipse 6 x 4 mm, each traced with its own copy of the border y = 0."""
+    arc = np.linspace(np.pi / 2, 3 * np.pi / 2, 60)
+    border = np.column_stack([np.zeros(19), np.linspace(-1.8, 1.8, 19)])
+    left = np.vstack([np.column_stack([3 * np.cos(arc), 2 * np.sin(arc)]), border])
+    right = np.vstack([np.column_stack([-3 * np.cos(arc), -2 * np.sin(arc)]), border[::-1]])
+    return {"l": {"points": left.tolist()}, "r": {"points": right.tolist()}}
+
+
 def test_points_written_twice_a_hair_apart_are_one_outline(tmp_path):
     """Each point of a closed point list repeated with 1e-6 mm added: the median spacing was 0
     and the outline was refused as open ('points are 0.000 mm apart')."""
@@ -94,6 +103,15 @@ CASES = [
     ("outlines on each other", config(inline({"a": {"points": disc(1.0, c=(2.0, 0.0))},
                                               "b": {"points": disc(1.0, c=(2.0, 0.0))}}), beams=("a", "b")),
      "geometry.sections.outlines", "subtendons 'a' and 'b' overlap: the inside of 'a' near "),
+    # millimetres written as metres: smoothing 0.05 collapsed the outline (a NaN traceback), merge_tolerance
+    # 0.05 said 'no neighbour within the merge tolerance' of two touching halves; 0.74 mm blamed smoothing (0)
+    ("smoothing in mm", config(inline({"a": {"points": disc()}}, smoothing=0.05)),
+     "geometry.sections.smoothing", "0.05 m is 6.27 x the width of the narrowest outline, a (7.975 mm), which it "
+                                    "would erase: it is in metres (50 um = 5e-05); give at most 0.002 m; got 0.05"),
+    ("merge tolerance in mm", config(inline(halves(), merge_tolerance=0.05), beams=("l", "r")),
+     "geometry.sections.merge_tolerance", "0.05 m is 16.7 x the width of the narrowest outline"),
+    ("merge tolerance that moves a border", config(inline(halves(), merge_tolerance=0.00074), beams=("l", "r")),
+     "geometry.sections.outlines.l", "give geometry.sections.merge_tolerance (0.74 mm) a smaller value"),
     # two beams on one outline filled one region; a center moved an outline into its neighbour by 1 mm
     ("one outline for two beams", dict(config(inline(three()), beams=("p", "q")), beams=[
         {"name": b, "section": {"shape": "outline", "loop": "p"}, "elements": 1,

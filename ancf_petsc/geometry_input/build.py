@@ -102,6 +102,9 @@ def _close(P: np.ndarray, closed: bool, name: str, src: GeometrySource) -> np.nd
     if hit is not None:
         raise src.err(f"outlines.{name}", f"the outline crosses itself near {_fmt_mm(hit)}; "
                       "fix the tracing so that it is a simple loop")
+    if abs(pl.signed_area(P)) <= 1e-9 * size * size:
+        raise src.err(f"outlines.{name}", f"the outline encloses no area: its {len(P)} points lie on one line; "
+                      "trace the region's border all the way round")
     return P
 
 
@@ -128,12 +131,12 @@ def _check_scales(raw: dict[str, np.ndarray], opts: SectionsSpec) -> None:
     """A smoothing or merge tolerance given wider than a quarter of the narrowest outline erases it
     (millimetres written as metres: smoothing 0.05 collapsed the outline and raised a NaN traceback,
     merge_tolerance 0.05 said 'no neighbour within the merge tolerance' of two touching halves)."""
-    width = {n: pl.smallest_width(P) for n, P in raw.items()}
-    narrow = min(width, key=width.get)
-    w = width[narrow]
-    for key in ("smoothing", "merge_tolerance"):
-        v = getattr(opts, key)
-        if v is not None and v > MAX_SCALE * w:
+    given = [k for k in ("smoothing", "merge_tolerance") if getattr(opts, k) is not None]
+    width = {n: pl.smallest_width(P) for n, P in raw.items()} if given else {}
+    for key in given:
+        narrow = min(width, key=width.get)
+        v, w = getattr(opts, key), width[narrow]
+        if v > MAX_SCALE * w:
             raise ConfigError(key_path(opts.key, key), f"{v:g} m is {v / w:.3g} x the width of the narrowest "
                               f"outline, {narrow} ({w * 1e3:.4g} mm), which it would erase: it is in metres "
                               f"(50 um = 5e-05); give at most {MAX_SCALE * w:.2g} m; got {v:g}")

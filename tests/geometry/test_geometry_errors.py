@@ -74,6 +74,9 @@ def write_files(tmp):
 CASES = [
     ("self-intersecting", config(inline({"a": {"points": [[0, 0], [2, 2], [2, 0], [0, 2]]}})),
      "geometry.sections.outlines.a", "crosses itself near (1.000, 1.000) mm"),
+    # points on one line: 'too small for a tendon: check units: mm (in m the outlines would enclose 0 mm^2)'
+    ("outline on a line", config(inline({"a": {"points": [[0, 0], [1, 0], [2, 0]]}})),
+     "geometry.sections.outlines.a", "the outline encloses no area: its 3 points lie on one line"),
     ("open outline", config(inline({"a": {"points": disc()[:25]}})),
      "geometry.sections.outlines.a", "the outline is open"),
     ("wrong orientation of a curve", config(inline(

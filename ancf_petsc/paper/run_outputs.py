@@ -50,28 +50,40 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
     return lines
 
 
-def moved_supports(config: dict) -> list[str]:
-    """The names of the supports with a prescribed displacement (displacement control)."""
+def moved_supports(config: dict, summary: dict | None = None) -> list[str]:
+    """The names of the supports with a prescribed displacement (displacement control), as the
+    run's ``reactions`` name them: the k-th support of the config is their k-th (one without a
+    name is '<beam>.<node index>' there, e.g. 'slider.0' for node: first)."""
+    bcs = config.get("boundary_conditions", []) or []
+    steps = (summary or {}).get("steps") or [{}]
+    names = list(steps[0].get("reactions") or {})
     out = []
-    for k, bc in enumerate(config.get("boundary_conditions", []) or []):
+    for k, bc in enumerate(bcs):
         if isinstance(bc, dict) and "displacement" in bc:
-            node = bc.get("node", "")
-            out.append(bc.get("name") or f"{bc.get('beam')}.{node}")
+            given = bc.get("name") or f"{bc.get('beam')}.{bc.get('node', '')}"
+            out.append(names[k] if len(names) == len(bcs) else given)
     return out
+
+
+#: an x-sum of the reactions within this share of their magnitudes is rounding: no load along x
+REACTION_ROUNDING = 1e-8
 
 
 def force_axis(summary: dict, config: dict) -> tuple[np.ndarray, str]:
     """The force each level carried and its label: the x-reactions of the moved supports under
-    displacement control, else the x-sum of the loads applied at each level (``subtendons``'
-    end forces: curves and history columns included), else (files without them) the load factor
-    times the loads' x-sum (a load curve: the load factor itself)."""
+    displacement control, else the x-sum of the loads applied at each level (minus the supports'
+    reactions, by equilibrium: curves, history columns and loads anywhere included; a beam's
+    ``subtendons`` end force also holds the reactions of supports at its last node), else (files
+    without reactions) the load factor times the loads' x-sum (a load curve: the load factor)."""
     steps = summary["steps"]
-    moved = [n for n in moved_supports(config) if all(n in st.get("reactions", {}) for st in steps)]
+    moved = [n for n in moved_supports(config, summary) if all(n in st.get("reactions", {}) for st in steps)]
     if moved:
         return (np.array([sum(st["reactions"][n][0] for n in moved) for st in steps]),
                 f"reaction of {', '.join(moved)} along x [N]")
-    if steps and all("subtendons" in st for st in steps):
-        fx = np.array([sum(b["end_force"][0] for b in st["subtendons"].values()) for st in steps])
+    if steps and all(st.get("reactions") for st in steps):
+        rx = [np.array([r[0] for r in st["reactions"].values()]) for st in steps]
+        fx = -np.array([x.sum() for x in rx])
+        fx[np.abs(fx) <= REACTION_ROUNDING * max(np.abs(x).sum() for x in rx)] = 0.0
         if np.any(fx != 0.0):
             return fx, "applied load along x [N]"
     loads = [ld for ld in config.get("loads", []) or [] if isinstance(ld, dict)]
@@ -88,7 +100,7 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     nothing for a run without interfaces or moved supports."""
     steps = summary["steps"]
     pairs = list(dict.fromkeys(p for st in steps for p in st.get("displacement_differences", {})))
-    if not pairs and not moved_supports(config):
+    if not pairs and not moved_supports(config, summary):
         return []
     force, label = force_axis(summary, config)
     lines = ["", "How far the subtendons moved against each other (`displacement_differences`: u_x of "
@@ -108,7 +120,7 @@ def run_figures(directory: str, summary: dict, config: dict, out: str,
     slip and pressure along the tendon; the PNG paths (files named after the run, or ``stem``)."""
     steps = summary.get("steps", [])
     pairs = list(dict.fromkeys(p for st in steps for p in st.get("displacement_differences", {})))
-    if not steps or (not pairs and not moved_supports(config)):
+    if not steps or (not pairs and not moved_supports(config, summary)):
         return []
     name = stem or summary.get("name") or os.path.basename(os.path.normpath(directory))
     force, label = force_axis(summary, config)

@@ -150,3 +150,42 @@ def test_a_second_run_at_one_pretwist_is_named_not_dropped_silently(tmp_path):
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
     text = _report(_solved_twice(raw, tmp_path, "a"), tmp_path / "rep")
     assert f"{tmp_path / 'a1'} (ψ = 45°: {tmp_path / 'a2'} is the column)" in text, text[:3000]
+
+
+def _force_column(text: str, head: str) -> dict[float, float]:
+    """Load factor → the force column of the report's differences table under ``head``."""
+    assert head in text, text[:3000]
+    rows = [line.split("|") for line in text.split(head)[1].splitlines()[2:] if line.startswith("| ")]
+    return {float(r[1]): float(r[2]) for r in rows}
+
+
+def test_the_force_column_is_the_moved_supports_reaction_or_the_applied_load(tmp_path):
+    """The pressed strips pulled by a grip without a name at the slider's first node: the force
+    column said 'applied load along x' and showed the base's last support's reaction (-0.00023 N at
+    load factor 1.5) instead of the grip's, 'slider.0', sliding at mu N = 0.005 N (the moved
+    support was looked up as 'slider.first'). The same strips held at the slider's last node and
+    pulled by a force of 0.004 N x (0..1 from load factor 1 to 2) at its middle node: 'applied
+    load along x' was the end forces of the beams' last nodes (2.97e-05 / -7.8e-05 N: the
+    reactions of the supports there), not the 0.002 / 0.004 N applied."""
+    grip = load_raw("friction_pressed_strips.yaml")
+    grip["steps"] = [1.0, 1.5]
+    bcs = grip["boundary_conditions"]
+    bcs[9] = {"beam": "slider", "node": "last", "fix": {"r": "y"}}
+    bcs[10] = {k: v for k, v in bcs[10].items() if k != "name"} | {"node": "first"}
+    grip["probes"][0]["node"] = "first"
+    held = load_raw("friction_pressed_strips.yaml")
+    held["steps"] = [1.0, 1.5, 2.0]
+    held["boundary_conditions"][10] = {"beam": "slider", "node": "last", "fix": {"r": "xy"}}
+    held["loads"].append({"beam": "slider", "node": 4, "force": [0.004, 0.0, 0.0],
+                          "curve": [[0, 0], [1, 0], [2, 1], [4, 1]]})
+    for name, raw in (("grip", grip), ("held", held)):
+        raw["output"] = {"vtk": False}
+        p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"),
+                      extra=["--output-dir", str(tmp_path / name), "--quiet"])
+        assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "grip")], tmp_path / "rep1")
+    force = _force_column(text, "| load factor | reaction of slider.0 along x [N] | base − slider [mm] |")
+    assert abs(force[1.5] - 0.5 * 0.01) < 1e-3 * 0.005
+    text = _report([str(tmp_path / "held")], tmp_path / "rep2")
+    force = _force_column(text, "| load factor | applied load along x [N] | base − slider [mm] |")
+    assert force == {1.0: 0.0, 1.5: 0.002, 2.0: 0.004}

@@ -11,7 +11,8 @@ from ..physics.laws import VOLUMETRIC_LAWS
 from ..physics.materials import NeoHookean, StVenantKirchhoff
 from .specs import (DEFAULT_AXIAL_POINTS, FIBRE_FOLLOW, LOCKING, MATERIAL_MODELS, SECTION_SHAPES, BeamSpec,
                     SectionSpec)
-from .values import ConfigError, boolean, integer, key_path, mapping, number, sequence, shown, string, vector
+from .values import (ConfigError, boolean, integer, key_path, mapping, number, sequence, shown, spline_degree, string,
+                     vector)
 
 
 def parse_beams(value, base_dir: str) -> list[BeamSpec]:
@@ -169,7 +170,7 @@ def _outline(value, path: str, base_dir: str, s: SectionSpec, common: tuple) -> 
             out.append(entry)
         s.curves = out
     if "spline_degree" in value:
-        s.spline_degree = integer(value["spline_degree"], key_path(path, "spline_degree"), lo=1, hi=7)
+        s.spline_degree = spline_degree(value["spline_degree"], key_path(path, "spline_degree"), hi=7)
         s.spline_degree_given = True
     if "compress" in value:
         s.compress = boolean(value["compress"], key_path(path, "compress"))

@@ -20,7 +20,7 @@ import yaml
 from .. import yamlio
 from ..outline_formats import FORMATS, Importer, format_of, known_types, outline_keys
 
-from .values import ConfigError, integer, key_path, mapping, number, sequence, shown, string
+from .values import ConfigError, integer, key_path, mapping, number, sequence, shown, spline_degree, string
 
 __all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS"]
 
@@ -314,7 +314,7 @@ def parse_sections(value, key: str, base_dir: str, length: float) -> SectionsSpe
     spec = SectionsSpec(stations=[], key=key)
     for k, v in opts.items():
         if k == "spline_degree":
-            spec.spline_degree = integer(v, key_path(key, k), lo=1, hi=5)
+            spec.spline_degree = spline_degree(v, key_path(key, k), hi=5)
         elif v != "auto":
             setattr(spec, k, number(v, key_path(key, k), nonneg=(k == "smoothing"), positive=(k != "smoothing"),
                                     hint=" (metres, or auto)"))

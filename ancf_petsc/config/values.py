@@ -89,6 +89,16 @@ def integer(value, path: str, *, lo: int | None = None, hi: int | None = None) -
     return value
 
 
+def spline_degree(value, path: str, hi: int) -> int:
+    """A spline degree: 1, 2 or odd up to ``hi`` (even degrees above 2 are not built)."""
+    p = integer(value, path, lo=1, hi=hi)
+    if p > 2 and p % 2 == 0:
+        ok = ", ".join(str(k) for k in range(1, hi + 1) if k <= 2 or k % 2)
+        raise ConfigError(path, f"must be one of {ok}: interpolating splines of even degree above 2 are not "
+                                f"built (not-a-knot ends need an odd degree); got {p}")
+    return p
+
+
 def string(value, path: str, choices: tuple | None = None) -> str:
     if not isinstance(value, str) or not value:
         what = f"one of {', '.join(choices)}" if choices else "a non-empty string"

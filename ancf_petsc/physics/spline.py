@@ -10,6 +10,14 @@ from .cubature import CurvePiece
 DEFAULT_SPLINE_DEGREE = 3
 
 
+def usable_degree(degree: int, n_points: int) -> int:
+    """The spline degree built through ``n_points`` points: ``degree`` capped at n_points - 1, and
+    an even cap above 2 lowered by one (not-a-knot interpolation has degrees 1, 2 and odd ones: 5
+    points at degree 5 gave degree 4 and a ValueError 'Odd degree for now only')."""
+    p = min(int(degree), n_points - 1)
+    return p - 1 if p > 2 and p % 2 == 0 else p
+
+
 class SectionError(ValueError):
     """Invalid cross-section input; the message says what is wrong and how to fix it."""
 
@@ -21,7 +29,7 @@ class SplineCurve:
     """Interpolating spline S(t) = (S_1(t), S_2(t)) through control points (Sec. 2.2).
 
     Parameter: cumulative chordal, t_1 = 0, t_{j+1} = t_j + |P_{j+1} - P_j|.  Degree
-    p = min(degree, m - 1) (``bspline.interpolating_spline``: scipy's ``make_interp_spline``,
+    p = :func:`usable_degree` (degree, m) (``bspline.interpolating_spline``: scipy's ``make_interp_spline``,
     not-a-knot, to the last bit; p = 1
     is the polygon through the points).  ``breakpoints`` are the parameters between which
     the spline is one polynomial; :meth:`pieces` hands them to the Gauss-Green rule (eq. 11).
@@ -62,7 +70,7 @@ class SplineCurve:
                                f"({P[j, 0]:g}, {P[j, 1]:g}) consecutively; "
                                "remove the duplicate")
         t = np.concatenate([[0.0], np.cumsum(chords)])
-        p = min(int(degree), P.shape[0] - 1)
+        p = usable_degree(degree, P.shape[0])
         spl = interpolating_spline(t, P, p)
         t_end = float(t[-1])
         bp = np.unique(np.concatenate([spl.t, t]))

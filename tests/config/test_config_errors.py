@@ -73,6 +73,8 @@ CASES = [
     ("petsc nested", _set(["petsc"], {"snes": {"rtol": 1}}), "petsc.snes", "scalars"),
     ("load on fixed", _set(["boundary_conditions", 0, "node"], "last"), "loads[0]", "fixed"),
     ("self-intersecting outline", _set(["beams", 0, "section"], BOWTIE), "beams[0].section", "intersect"),
+    ("even spline degree", _set(["beams", 0, "section"], dict(BOWTIE, spline_degree=6)),     # was a traceback
+     "beams[0].section.spline_degree", "must be one of 1, 2, 3, 5, 7: interpolating splines of even degree"),
     ("semi axes", _set(["beams", 0, "section", "semi_axes"], [0.01, -0.002]),
      "beams[0].section.semi_axes[1]", "> 0"),
     ("missing file", _set(["beams", 0, "section"], {"shape": "outline", "file": "nope.yaml", "loop": "x"}),

@@ -150,6 +150,9 @@ KEY_CASES = [
     ("unknown outline", inline({"b": {"points": disc()}}), "beams[0].section.loop", "available: b"),
     ("material in the geometry file", {"file": "g.yaml"}, "geometry.sections.file", "g.yaml: length_m: a geometry description holds geometry only"),
     ("label on a point list", inline({"a": {"file": "g.yaml", "label": 3}}), "geometry.sections.outlines.a.label", "mask images"),
+    # degree 4 raised a ValueError traceback ('Odd degree for now only. Got 4.')
+    ("even spline degree", inline({"a": {"points": disc()}}, spline_degree=4), "geometry.sections.spline_degree",
+     "must be one of 1, 2, 3, 5: interpolating splines of even degree above 2 are not built"),
     ("station beyond the tendon", {"stations": [dict(inline({"a": {"points": disc()}}), x=0.0),
                                                 dict(inline({"a": {"points": disc()}}), x=0.5)]},
      "geometry.sections.stations[1].x", "beyond the tendon"),

@@ -49,6 +49,16 @@ def test_spline_curve_parametrisation_and_degree():
         SplineCurve([[0, 0]], 3, "one")
 
 
+def test_spline_degree_capped_at_points_minus_one_stays_buildable():
+    """Degree 5 through 5 points was capped at 4 and raised ValueError 'Odd degree for now only.
+    Got 4.' (a traceback through ancf-solve); an even cap above 2 is now lowered by one."""
+    t = np.linspace(0.0, 2.0, 5)
+    P = np.column_stack([t, np.sin(t)])
+    assert SplineCurve(P, 5).degree == 3 and SplineCurve(P[:3], 5).degree == 2
+    assert SplineCurve(np.column_stack([np.linspace(0, 2, 7), np.cos(np.linspace(0, 2, 7))]), 7).degree == 5
+    assert np.allclose(SplineCurve(P, 5)(SplineCurve(P, 5).params), P, atol=1e-12)
+
+
 def test_reversed_curve_same_geometry():
     P = np.array([[0.0, 0.0], [1.0, 0.3], [2.0, -0.2], [2.5, 1.0], [3.5, 1.2]])
     c = SplineCurve(P, 3, "iface")

@@ -36,6 +36,11 @@ CONTACT_UNITS = ("SI: m, Pa, N; interfaces 'curve (first|second)' in config orde
                  "contact_interfaces); x, x0 on the beam carrying the points; slip, tangential_slip "
                  "= u_first - u_second [m]; shear_stress, multiplier_shear = the first beam's "
                  "traction on the second [Pa]; pressure > 0 presses [Pa] (docs/running.md)")
+#: the "units" attribute of each dataset of steps/…/restart (one row per node block)
+RESTART_UNITS = {
+    "blocks": "the state, a row per node block: each node's nodal vectors (the slots of dof_order: "
+              "r [m], r_y, r_z [1], ...), then the contact multipliers' z [m] (restart state)",
+    "increment_blocks": "the last accepted increment of blocks, in their units (restart state)"}
 #: the "units" attribute of each dataset of steps/…/contact (a law's ``history_*``: its state)
 CONTACT_FIELD_UNITS = {
     "interface": "1: the interface's index in summary.json contact_interfaces",
@@ -87,7 +92,7 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     for beam in model.beams:
         b = g.create_group(f"beams/{beam.name}")
         b.create_dataset("connectivity", data=beam.connectivity)
-        b.create_dataset("x_nodes", data=beam.x_nodes)
+        b.create_dataset("x_nodes", data=beam.x_nodes).attrs["units"] = "m: reference x of each node"
         # (y, z) relative to the section's area centroid (the beam axis), not the tendon frame
         b.create_dataset("section_points", data=beam.section.points).attrs["frame"] = CENTROID_FRAME
         b.create_dataset("section_weights", data=beam.section.weights).attrs["units"] = "m^2"
@@ -166,8 +171,8 @@ def write_section_forces(gid, forces: dict | None, model) -> None:
 def write_restart_group(gid, record, path: dict) -> None:
     """What ``restart.read_restart`` continues from (``steps/…/restart``)."""
     r = fast.group(gid, "restart")
-    fast.dataset(r, "blocks", path["blocks"])
-    fast.dataset(r, "increment_blocks", path["increment_blocks"])
+    for key in ("blocks", "increment_blocks"):
+        fast.attribute(fast.dataset(r, key, path[key]), "units", RESTART_UNITS[key])
     fast.attributes(r, {"increment": record.increment, "last_increment": record.last_increment,
                         "accepted_negative": path["accepted_negative"]})
     if path.get("fade_forces_pointwise_from") is not None:        # solving/fade_switch.py

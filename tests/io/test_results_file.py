@@ -43,6 +43,12 @@ def test_every_level_has_units_probes_section_forces_and_surface_fields(tmp_path
         assert f.shape == (2, 4) and np.allclose(f[:, 1], 45.0, rtol=1e-6) and np.allclose(f[:, 2:], 0.0, atol=1e-6)
         assert g["surface/displacement"].attrs["units"] == "m" and g["surface/points"].shape[1] == 3
         assert "fibre_stress" not in g["surface"]
+        # every dataset says its units, as docs/running.md states (restart/blocks and
+        # increment_blocks did not, nor /model/beams/<beam>/x_nodes)
+        bare = []
+        g.visititems(lambda name, obj: bare.append(name) if isinstance(obj, h5py.Dataset)
+                     and not {"units", "columns"} & set(obj.attrs) else None)
+        assert bare == [] and h5["model/beams/bar/x_nodes"].attrs["units"].startswith("m")
 
 
 def test_section_forces_carry_the_tendon_load_between_the_subtendons(tmp_path):

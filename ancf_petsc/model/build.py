@@ -21,7 +21,8 @@ from .beams import Beam, Model, Support
 from .fibre_setup import set_fibre_directions
 from .loading import LoadCurve, LoadGroup, group_for
 from .plausibility import (fibre_warnings, load_warnings, material_warnings, point_force_warnings,
-                           pretwist_resolution_warnings, reversed_load_warnings, size_warnings, twist_warnings)
+                           pretwist_resolution_warnings, reversed_load_warnings, section_warnings, size_warnings,
+                           twist_warnings)
 
 _SECTIONS_FILE_CACHE: dict = {}
 
@@ -124,6 +125,8 @@ def _varying_rules(beam: Beam, tendon, bs, length: float) -> None:
     xg = (np.arange(beam.n_elements)[:, None] + 0.5 * (xa[None, :] + 1.0)) * h      # (E, na)
     c0 = beam.section.centroid
     secs = [[build_section_at(bs.section, tendon, x) for x in row] for row in xg]
+    beam.section.notes += sorted({f"at x = {x * 1e3:.4g} mm: {n}" for row, xr in zip(secs, xg)
+                                  for s, x in zip(row, xr) for n in s.notes})[:1]
     n = max(len(s.weights) for row in secs for s in row)
     E, na = xg.shape
     yz = np.zeros((E, na, n, 2))
@@ -275,7 +278,7 @@ def build_model(spec: ModelSpec) -> Model:
                        _end_moments(beams[p.beam], tendon, spec.beams[p.beam], beams[p.beam].x_nodes[p.node])
                        if p.vector == "mean" else np.eye(block.vectors_per_node)[block.index(p.vector)])
               for p in spec.probes}
-    warnings = (size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
+    warnings = (section_warnings(spec, beams) + size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
                 + material_warnings(spec, beams) + twist_warnings(spec, beams)
                 + pretwist_resolution_warnings(spec, beams, q0) + load_warnings(spec) + reversed_load_warnings(spec))
     end_means, root_means = ([_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[k]) for b in beams]

@@ -57,6 +57,13 @@ def _section_key(spec, i: int) -> str:
     return f"beams[{i}].section" + (".file" if bs.file else "")
 
 
+def section_warnings(spec, beams) -> list[str]:
+    """The notes of the beams' section rules (a cubature compression that failed: the raw rule kept,
+    points possibly outside the section, negative weights), which were built and never shown."""
+    return [f"warning: {_section_key(spec, i)}: beam {b.name}: {n}" for i, b in enumerate(beams)
+            for n in b.section.notes]
+
+
 def size_warnings(spec, beams) -> list[str]:
     """Warnings (one line each) for a length or section sizes that look like millimetres
     (SI units: metres), else for a beam length / sqrt(area) outside ``SLENDERNESS``."""

@@ -152,6 +152,25 @@ def test_compression_fallback_note(monkeypatch):
     assert np.array_equal(sec.weights, raw.weights)
 
 
+def test_compression_fallback_is_a_warning_of_the_model(monkeypatch):
+    """The note of a failed compression (raw rule: points possibly outside, negative weights) was
+    kept on the Section and never shown; the model's warnings now carry it with the beam's key."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.model.build import build_model
+
+    def fail(*args, **kwargs):
+        raise CompressionError("forced")
+    monkeypatch.setattr(section_mod, "compress_rule", fail)
+    pts = [[float(y), float(z)] for y, z in blob_loop()[0][0].points] + \
+        [[float(y), float(z)] for cv, _ in blob_loop()[1:] for y, z in cv.points[1:]]
+    raw = {"name": "x", "geometry": {"length": 0.02},
+           "beams": [{"name": "b", "elements": 1, "section": {"shape": "outline", "curves": [{"points": pts}]},
+                      "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}}],
+           "steps": [1.0]}
+    warn = [w for w in build_model(parse_config(raw)).warnings if "compression" in w]
+    assert warn and warn[0].startswith("warning: beams[0].section.curves: beam b: cubature compression failed"), warn
+
+
 def test_outline_center_offset():
     a = make_outline(blob_loop())
     b = make_outline(blob_loop(), center=(0.5, -0.25))

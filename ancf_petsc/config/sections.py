@@ -343,4 +343,9 @@ def parse_sections(value, key: str, base_dir: str, length: float) -> SectionsSpe
                                   "every station needs the same subtendons")
     else:
         spec.stations.append(_station(rest, key, base_dir, False))
+    if all(src.curves for _, src in spec.stations):
+        for k in ("smoothing", "merge_tolerance"):
+            if getattr(spec, k) is not None:
+                raise ConfigError(key_path(key, k), "loops of named curves are taken exactly as given (no smoothing "
+                                                    f"or merging): remove it; got {shown(opts[k])}")
     return spec

@@ -354,6 +354,10 @@ def _check_chain(loop, refs, name: str, src: GeometrySource) -> None:
     eff = [cv.reversed() if f else cv for cv, f in loop]
     size = float(np.ptp(np.vstack([c.points for c in eff]), axis=0).max())
     tol = 1e-9 * size
+    if len(eff) == 1 and np.linalg.norm(eff[0].end - eff[0].start) > tol:
+        raise src.err(f"outlines.{name}.curves", f"curve '{refs[0].strip().lstrip('-')}' alone does not close the "
+                      f"loop: it starts at {_fmt_mm(eff[0].start)} and ends at {_fmt_mm(eff[0].end)}; list all "
+                      "the curves around the outline")
     for k, cv in enumerate(eff):
         nxt = eff[(k + 1) % len(eff)]
         if np.linalg.norm(cv.end - nxt.start) <= tol:

@@ -151,6 +151,13 @@ KEY_CASES = [
     ("material in the geometry file", {"file": "g.yaml"}, "geometry.sections.file", "g.yaml: length_m: a geometry description holds geometry only"),
     ("label on a point list", inline({"a": {"file": "g.yaml", "label": 3}}), "geometry.sections.outlines.a.label", "mask images"),
     # degree 4 raised a ValueError traceback ('Odd degree for now only. Got 4.')
+    # a loop of one open curve was told to reverse it; merging options beside named curves were ignored
+    ("one open curve as a loop", inline({"a": {"curves": ["-mid"]}}, curves={"mid": [[0, -2], [1, 0], [0, 2]]}),
+     "geometry.sections.outlines.a.curves", "curve 'mid' alone does not close the loop: it starts at (0.000, 2.000) mm"),
+    ("merge tolerance beside named curves", inline({"a": {"curves": ["c"]}}, merge_tolerance=1e-4,
+                                                   curves={"c": [[0, 0], [2, 0], [1, 2], [0, 0]]}),
+     "geometry.sections.merge_tolerance", "loops of named curves are taken exactly as given (no smoothing or "
+                                          "merging): remove it; got 0.0001"),
     ("even spline degree", inline({"a": {"points": disc()}}, spline_degree=4), "geometry.sections.spline_degree",
      "must be one of 1, 2, 3, 5: interpolating splines of even degree above 2 are not built"),
     ("station beyond the tendon", {"stations": [dict(inline({"a": {"points": disc()}}), x=0.0),

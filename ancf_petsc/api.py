@@ -9,7 +9,7 @@
 A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, its ``material['mu']``,
 ``element`` within one node block: 3363/3333, ``spec.steps``): ``solve`` places 'first'/'last'
 of the supports, loads and probes on the beams as they are then, checks the beams and steps as
-the config's, and stores the element counts, types and steps solved with in results.h5.
+the config's, and stores the element counts, types, materials and steps solved with in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
 
@@ -71,11 +71,12 @@ def check_edited(spec: ModelSpec) -> None:
 
 def _raw_as_solved(spec: ModelSpec) -> None:
     """The config stored with the results (results.h5 ``/model`` ``config_yaml``) says the element
-    counts, types, locking remedies, axial points and steps the spec is solved with, also where
+    counts, types, locking remedies, axial points, materials and steps the spec is solved with, also where
     they were changed after parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's
     record of its config)."""
     import copy
 
+    from .config.beams import material_as_written
     from .config.specs import DEFAULT_AXIAL_POINTS
     from .physics.elements import DEFAULT_ELEMENT, ELEMENTS
     raw = copy.deepcopy(spec.raw)
@@ -90,10 +91,21 @@ def _raw_as_solved(spec: ModelSpec) -> None:
                     entry["element"] = beam.element
                 if entry.get("locking", ELEMENTS[beam.element].default_locking) != beam.locking:
                     entry["locking"] = beam.locking
+                if _material_of(entry) != beam.material:
+                    entry["material"] = material_as_written(beam.material)
     if isinstance(raw, dict) and "steps" in raw and spec.history is None:
         raw["steps"] = list(spec.steps)
     if raw != spec.raw:
         spec.raw = raw
+
+
+def _material_of(entry: dict) -> dict | None:
+    """A config beam entry's material as parsed (None where it does not parse)."""
+    from .config.beams import parse_material
+    try:
+        return parse_material(entry.get("material"), "material")
+    except ConfigError:
+        return None
 
 
 def _init_petsc() -> None:

@@ -72,13 +72,13 @@ def check_edited_beams(beams: list[BeamSpec]) -> None:
             if not locking_given and beam.locking == was.default_locking:
                 beam.locking = now.default_locking
             beam.parsed = (beam.element, locking_given)
-        beam.material = parse_material(_as_written(beam.material), f"{p}.material")
+        beam.material = parse_material(material_as_written(beam.material), f"{p}.material")
         beam.locking = string(beam.locking, f"{p}.locking", LOCKING)
         _check_remedy(beam, p)
 
 
-def _as_written(material):
-    """A parsed material as a config gives it (GOH's fibres.angles_deg back to angle_deg)."""
+def material_as_written(material):
+    """A parsed material as a config gives it (results.h5's config_yaml of an edited spec, api.py) (GOH's fibres.angles_deg back to angle_deg)."""
     fibres = material.get("fibres") if isinstance(material, dict) else None
     if not isinstance(fibres, dict) or "angles_deg" not in fibres:
         return material

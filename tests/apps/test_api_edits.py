@@ -226,3 +226,20 @@ def test_solve_takes_an_mpi4py_communicator_and_refuses_a_dict(tmp_path):
     assert ap.solve(spec, comm=MPI.COMM_WORLD, log=lambda *_: None).status == "completed"
     with pytest.raises(TypeError, match="solve: expected a ModelSpec .*; got dict"):
         ap.solve(spec.raw)
+
+
+def test_the_stored_config_says_the_edited_material(tmp_path):
+    """uniaxial_neohookean with mu edited to 2 MPa on the parsed spec: results.h5's config_yaml
+    ('the config the levels were solved with') said mu 1.0e6 beside the 2 MPa bar's answer (tip
+    u_x 11.18 mm; 24.60 mm with 1 MPa); now it says the material solved, and that config parsed
+    again gives the same tip."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "edited")
+    spec.steps = [1.0]
+    spec.beams[0].material["mu"] = 2.0e6
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
+    with h5py.File(tmp_path / "edited" / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])["beams"][0]["material"]
+    assert float(stored["mu"]) == 2.0e6
+    u_parse = _parsed_tip(ap, "uniaxial_neohookean.yaml", {"material": stored}, tmp_path)
+    assert u_edit[0] == pytest.approx(u_parse[0], rel=1e-12) and u_parse[0] < 0.02

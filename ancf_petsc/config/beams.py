@@ -77,8 +77,9 @@ def check_edited_beams(beams: list[BeamSpec]) -> None:
         _check_remedy(beam, p)
 
 
-def material_as_written(material):
-    """A parsed material as a config gives it (results.h5's config_yaml of an edited spec, api.py) (GOH's fibres.angles_deg back to angle_deg)."""
+def material_as_written(material: dict) -> dict:
+    """A parsed material as a config gives it (GOH's fibres.angles_deg back to angle_deg): what
+    results.h5's config_yaml stores for a material edited through the API (api.py)."""
     fibres = material.get("fibres") if isinstance(material, dict) else None
     if not isinstance(fibres, dict) or "angles_deg" not in fibres:
         return material

@@ -338,6 +338,27 @@ def check_imported_loops(beams: list, sections) -> None:
             raise ConfigError(f"{p}.spline_degree", "imported outlines share one spline degree: set "
                                                     "geometry.sections.spline_degree instead")
     _check_outline_places(beams)
+    _check_shared_curve_offsets(beams)
+
+
+def _check_shared_curve_offsets(beams: list) -> None:
+    """Inline curves named alike in two beams are one curve, their interface: a center on one side
+    moved that side only (0.5 mm off its neighbour, the border still listed as shared)."""
+    users: dict[str, list[int]] = {}
+    for i, b in enumerate(beams):
+        if b.section.shape == "outline" and b.section.curves is not None:
+            for c in b.section.curves:
+                if "name" in c:
+                    users.setdefault(c["name"], []).append(i)
+    for name, idx in users.items():
+        centres = {tuple(float(v) for v in beams[i].section.center) for i in idx}
+        if len(centres) > 1:
+            i = next(k for k in idx if any(float(v) != 0.0 for v in beams[k].section.center))
+            j = next(k for k in idx if k != i)
+            raise ConfigError(f"beams[{i}].section.center", f"its curve {name!r} is also the section curve of "
+                                                            f"beams[{j}] ({beams[j].name}), one curve, their "
+                                                            "interface: a center moves one side only; give the "
+                                                            f"points where they are; got {shown(list(beams[i].section.center))}")
 
 
 def _check_outline_places(beams: list) -> None:

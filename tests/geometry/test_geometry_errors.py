@@ -124,6 +124,12 @@ CASES = [
         {"name": b, "section": {"shape": "outline", "loop": b, **({"center": [0.001, 0.0]} if b == "q" else {})},
          "elements": 1, "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}} for b in ("p", "q", "r")]),
      "beams[1].section.center", "an outline of geometry.sections sits where its file places it"),
+    ("a shared inline curve moved by center", dict(config(None, beams=()), geometry={"length": 0.02}, beams=[
+        {"name": b, "elements": 1, "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7},
+         "section": {"shape": "outline", "curves": [{"name": "mid", "points": [[0, -2e-3], [0, 2e-3]][::sgn]},
+                                                    {"name": b, "points": [[0, 2e-3], [3e-3 * sgn, 0], [0, -2e-3]][::sgn]}],
+                     **({"center": [0.0005, 0.0]} if b == "r" else {})}} for b, sgn in (("l", 1), ("r", -1))]),
+     "beams[1].section.center", "its curve 'mid' is also the section curve of beams[0] (l), one curve, their interface"),
     ("contact with stations whose interfaces differ", config(
         {"stations": [dict(inline(three()), x=0.0), dict(inline(three(r=2.5)), x=0.02)]},
         beams=("p", "q", "r"), contact=True),

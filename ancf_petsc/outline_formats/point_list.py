@@ -4,6 +4,7 @@ or {points: ...}), in the description's units."""
 from __future__ import annotations
 
 import csv
+import re
 
 import numpy as np
 
@@ -46,20 +47,25 @@ def _csv_points(text: str, path: str) -> np.ndarray:
     rows, header = [], None
     for k, row in enumerate(csv.reader(lines, delimiter=delim)):
         row = [c.strip() for c in row if c.strip()]
-        if not row or row[0].startswith("#"):
+        row = row[:next((i for i, c in enumerate(row) if c.startswith("#")), len(row))]   # a comment ends it
+        if not row:
             continue
         try:
-            vals = [float(c) for c in row[:2]]
+            vals = [float(c) for c in row]
         except ValueError:
             if not rows and header is None:
                 header = k                     # one header line, before the numbers
                 continue
+            comma = " (decimal commas are not read: write 1.5, not 1,5)" if any(
+                re.fullmatch(r"[+-]?\d*,\d+", c) for c in row) else ""
             raise OutlineReadError(
                 f"{file_name(path)} line {k + 1}: {row!r} is not two numbers u, v (one header "
                 "line is allowed, before the numbers; columns separated by a comma, "
-                "semicolon, tab or spaces)") from None
+                f"semicolon, tab or spaces){comma}") from None
         if len(vals) != 2:
-            raise OutlineReadError(f"{file_name(path)} line {k + 1}: expected two columns u, v")
+            # an index column or a third coordinate was read as u, v (index, u) with no word
+            raise OutlineReadError(f"{file_name(path)} line {k + 1}: {len(vals)} columns {row!r}; a point list "
+                                   "has two columns u, v: remove the others (an index, a constant coordinate)")
         rows.append(vals)
     return np.array(rows, dtype=float).reshape(-1, 2)
 

@@ -66,6 +66,11 @@ def write_files(tmp):
     small = np.zeros((40, 40), dtype=np.uint8)
     small[18:21, 18:21] = 1                              # 3 x 3 pixels: 2-pixel smoothing took 42 %
     Image.fromarray(small, mode="L").save(tmp / "small.png")
+    t = np.linspace(0.0, 2 * np.pi, 40, endpoint=False)
+    (tmp / "idx.csv").write_text("i,u,v\n" + "".join(f"{k},{4 * np.cos(a):.5f},{3 * np.sin(a):.5f}\n"
+                                                       for k, a in enumerate(t)))
+    (tmp / "dec.csv").write_text("u;v\n" + "".join(f"{4 * np.cos(a):.5f};{3 * np.sin(a):.5f}\n".replace(".", ",")
+                                                    for a in t))
     (tmp / "open.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 20 20">'
                                   '<path id="a" d="M 1,1 L 10,1 L 10,10"/>'
                                   '<path id="b" d="M 12,12 C 14,12 16,14 16,16"/></svg>')
@@ -98,6 +103,12 @@ CASES = [
                                                 axes="image", source="small.png")),
      "geometry.sections.outlines.a", "change its area by -41.8 % (0.02125 -> 0.01236 mm^2): it is small "
                                      "against them; give geometry.sections.smoothing a smaller value"),
+    # an index column was read as u ('the outline is open ... 39 mm apart'), columns past two were dropped
+    ("three columns", config(inline({"a": {"file": "idx.csv"}})),
+     "geometry.sections.outlines.a", "idx.csv line 2: 3 columns ['0', '4.00000', '0.00000']; a point list has two "
+                                     "columns u, v: remove the others"),
+    ("decimal commas", config(inline({"a": {"file": "dec.csv"}})),
+     "geometry.sections.outlines.a", "(decimal commas are not read: write 1.5, not 1,5)"),
     ("SVG without closed paths", config(inline({"a": {"file": "open.svg"}}, axes="image")),
      "geometry.sections.outlines.a", "open.svg: none of its 2 path(s) is closed"),
     ("overlap", config(inline({"a": {"points": disc(2.0)}, "b": {"points": disc(2.0, c=(3.5, 0.0))}}),

@@ -30,6 +30,8 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
     of a direction vector's change [1] (r_y, r_z) or of a curvature vector's [1/m]."""
     steps = summary["steps"]
     names = sorted({p for st in steps for p in st.get("probes", {})})
+    if not names:                       # a run without probes: no table (not an empty one)
+        return []
     vectors = probe_vectors(config)
     heads, cells = [], []
     for name in names:

@@ -189,3 +189,17 @@ def test_the_force_column_is_the_moved_supports_reaction_or_the_applied_load(tmp
     text = _report([str(tmp_path / "held")], tmp_path / "rep2")
     force = _force_column(text, "| load factor | applied load along x [N] | base − slider [mm] |")
     assert force == {1.0: 0.0, 1.5: 0.002, 2.0: 0.004}
+
+
+def test_a_run_without_probes_has_no_probe_table(tmp_path):
+    """The pressed strips without probes: the report had a probe table of a header without
+    columns ('| load factor |  |' over '|---:|', the rows '| 1 |  |'); now none, and the
+    differences table as before."""
+    raw = load_raw("friction_pressed_strips.yaml")
+    raw["steps"], raw["output"] = [1.0, 1.5], {"vtk": False}
+    raw.pop("probes")
+    p = solve_cli(write_config(raw, tmp_path / "s.yaml"), extra=["--output-dir", str(tmp_path / "s"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "s")], tmp_path / "rep")
+    assert "| load factor |  |" not in text and "\n|---:|\n" not in text
+    assert "| load factor | reaction of grip along x [N] | base − slider [mm] |" in text

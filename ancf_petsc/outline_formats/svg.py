@@ -4,6 +4,7 @@ when a file is read).  Curved segments are sampled (``SVG_SAMPLES`` each)."""
 from __future__ import annotations
 
 import os
+import re
 from functools import lru_cache
 
 import numpy as np
@@ -14,6 +15,22 @@ __all__ = ["IMPORTER", "SVG_SAMPLES", "SvgPath", "read_svg_path"]
 
 #: samples per curved SVG segment (Bézier, arc); straight segments keep their two end points
 SVG_SAMPLES = 64
+#: metres per unit of the absolute lengths an SVG's width may be given in
+ABSOLUTE = {"mm": 1e-3, "cm": 1e-2, "q": 0.25e-3, "in": 0.0254, "pt": 0.0254 / 72, "pc": 0.0254 / 6}
+
+
+def _stated_unit(svg) -> tuple[float, str] | None:
+    """Metres per user unit that the document states (an absolute width over its viewBox's), and how."""
+    values = getattr(svg, "values", {}) or {}
+    width, box = str(values.get("width", "")).strip(), str(values.get("viewBox", "")).replace(",", " ").split()
+    m = re.fullmatch(r"([0-9.]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|q|in|pt|pc)", width, re.IGNORECASE)
+    try:
+        wide = float(box[2]) if m and len(box) == 4 else 0.0
+    except ValueError:
+        wide = 0.0
+    if wide <= 0.0 or float(m.group(1)) <= 0.0:
+        return None
+    return float(m.group(1)) * ABSOLUTE[m.group(2).lower()] / wide, f"width {width} over a viewBox {wide:g} wide"
 
 
 @lru_cache(maxsize=8)
@@ -38,7 +55,7 @@ def _svg_shapes(path: str, mtime: float):
             p = p * inv
             p.reify()
         shapes.append((e.id or f"<{type(e).__name__.lower()} #{k}>", p))
-    return shapes
+    return shapes, _stated_unit(svg)
 
 
 def _subpath_points(sub) -> tuple[np.ndarray, bool]:
@@ -61,7 +78,7 @@ def _subpath_points(sub) -> tuple[np.ndarray, bool]:
 def read_svg_path(path: str, element_id: str | None) -> RawOutline:
     """The closed path with id ``element_id``; without an id, the file's only closed path."""
     import svgelements as se
-    shapes = _svg_shapes(path, os.path.getmtime(path))
+    shapes, _ = _svg_shapes(path, os.path.getmtime(path))
     found = []
     for sid, p in shapes:
         if element_id is not None and sid != element_id:
@@ -93,7 +110,15 @@ class SvgPath(Importer):
     keys = (OutlineKey("path", str, "the id of the SVG element, e.g. path: soleus"),)
 
     def read(self, path: str, keys: dict, desc: Description) -> RawOutline:
-        return read_svg_path(path, keys.get("path"))
+        out = read_svg_path(path, keys.get("path"))
+        stated = _svg_shapes(path, os.path.getmtime(path))[1]
+        if stated is not None and desc.units != "px" and desc.scale is not None:
+            ratio = desc.scale[0] / stated[0]
+            if abs(ratio - 1.0) > 1e-3:      # a drawing of 40 mm over a viewBox of 400 read as units: mm
+                out.notes.append(f"warning: {file_name(path)} states a user unit of {stated[0] * 1e3:.4g} mm "
+                                 f"({stated[1]}); units: {desc.units} reads it as {ratio:.4g} x that: check "
+                                 f"units (or give units: px, pixel_size: {stated[0] * 1e3:.4g} mm)")
+        return out
 
 
 IMPORTER = SvgPath()

@@ -116,6 +116,23 @@ def test_svg_half_discs_share_their_diameter(tmp_path):
     assert np.ptp(S[:, 0]) == pytest.approx(2 * r, abs=st.merge_tolerance)
 
 
+def test_svg_whose_stated_size_disagrees_with_the_units_is_reported(tmp_path):
+    """A drawing 40 mm wide over a viewBox 400 wide has user units of 0.1 mm; read with units: mm
+    it gave a 3142 mm^2 section (10 x the size, 100 x the area) with no word."""
+    (tmp_path / "s.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" width="40mm" height="30mm" '
+                                    'viewBox="0 0 400 300"><ellipse id="a" cx="200" cy="150" rx="40" ry="25"/></svg>')
+    desc = {"axes": "image", "outlines": {"a": {"file": "s.svg", "path": "a"}}}
+    st = station(dict(desc, units="mm"), tmp_path)
+    assert any("s.svg states a user unit of 0.1 mm (width 40mm over a viewBox 400 wide); units: mm reads it "
+               "as 10 x that" in ln for ln in st.report), st.report
+    st = station(dict(desc, units="px", pixel_size="0.1 mm"), tmp_path)
+    assert section(st, "a").area == pytest.approx(np.pi * 4e-3 * 2.5e-3, rel=1e-3)
+    assert not any("user unit" in ln for ln in st.report)
+    (tmp_path / "t.svg").write_text(SVG)                     # 40 mm over a viewBox of 40: mm, no word
+    st = station({"units": "mm", "axes": "image", "outlines": {"u": {"file": "t.svg", "path": "upper"}}}, tmp_path)
+    assert not any("user unit" in ln for ln in st.report)
+
+
 # ------------------------------------------------------------------------------ masks
 def _mask_scene():
     shape = (170, 220)

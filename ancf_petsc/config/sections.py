@@ -258,6 +258,7 @@ def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
         if sliced and slc is None:
             raise ConfigError(key_path(inner, "slice"), f"a {sliced[0].title} needs the slice: {{axis: 2, index: 40}} "
                                                      "(axis 0/1/2 or i/j/k, 0-based index)")
+        _check_frame(formats, units, slc, inner)
         if scale is None and not all(f is not None and f.header_scale for f in formats):
             headers = " or ".join(f.title for f in FORMATS.values() if f.header_scale)
             raise ConfigError(key_path(inner, "pixel_size"), f"pixel_size: header reads the voxel size from the "
@@ -267,6 +268,19 @@ def _source(value, key: str, where: str, base_dir: str) -> GeometrySource:
             raise
         raise ConfigError(key, f"{os.path.basename(where)}: {exc}") from None
     return GeometrySource(key, where, units, scale, axes, outlines, curves, slc)
+
+
+def _check_frame(formats: list, units: str, slc, inner: str) -> None:
+    """Images are in pixels and only volumes are sliced: a mask read with units: mm took each pixel
+    for 1 mm (a 0.05 mm pixel image 400 x larger in area), a slice beside a PNG was unread."""
+    images = [f for f in formats if f is not None and f.pixels]
+    if images and units != "px":
+        raise ConfigError(key_path(inner, "units"), f"a {images[0].title} is in pixels: give units: px and its "
+                                                    f"pixel_size (e.g. 0.05 mm); got {units}")
+    if slc is not None and not any(f is not None and f.needs_slice for f in formats):
+        volumes = " or ".join(f.title for f in FORMATS.values() if f.needs_slice)
+        raise ConfigError(key_path(inner, "slice"), f"only a {volumes} is sliced, none of these outlines comes "
+                                                    f"from one: remove it; got {{axis: {slc[0]}, index: {slc[1]}}}")
 
 
 def _load_file(f: str, key: str, base_dir: str) -> GeometrySource:

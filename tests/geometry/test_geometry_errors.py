@@ -99,6 +99,14 @@ CASES = [
     ("mask without the label", config(inline({"a": {"label": 7}}, units="px", pixel_size="0.05 mm",
                                              axes="image", source="m.png")),
      "geometry.sections.outlines.a", "m.png: no pixel has label 7 (labels present: 0, 1, 2)"),
+    # a mask read with units: mm took each pixel for 1 mm; a slice beside a PNG was unread
+    ("mask in millimetres", config(inline({"a": {"label": 1}}, units="mm", axes="image", source="m.png")),
+     "geometry.sections.units", "a label mask image is in pixels: give units: px and its pixel_size (e.g. 0.05 mm); "
+                                "got mm"),
+    ("slice of an image", config(inline({"a": {"label": 1}}, units="px", pixel_size="0.05 mm", axes="image",
+                                        source="m.png", slice={"axis": 2, "index": 0})),
+     "geometry.sections.slice", "only a NIfTI label volume is sliced, none of these outlines comes from one: "
+                                "remove it; got {axis: 2, index: 0}"),
     ("a region smoothing erases", config(inline({"a": {"label": 1}}, units="px", pixel_size="0.05 mm",
                                                 axes="image", source="small.png")),
      "geometry.sections.outlines.a", "change its area by -41.8 % (0.02125 -> 0.01236 mm^2): it is small "

@@ -105,14 +105,15 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     if not pairs and not moved_supports(config, summary):
         return []
     force, label = force_axis(summary, config)
-    lines = ["", "How far the subtendons moved against each other (`displacement_differences`: u_x of "
-             "the first beam's centroid line minus the second's at x = L, first and second in config "
-             "order):", "", f"| load factor | {label} | " + " | ".join(f"{p.replace('|', ' − ')} [mm]" for p in pairs)
-             + " |", "|---:|---:|" + "---:|" * len(pairs)]
+    heads = [label] + [f"{p.replace('|', ' − ')} [mm]" for p in pairs]
+    intro = ("How far the subtendons moved against each other (`displacement_differences`: u_x of the first "
+             "beam's centroid line minus the second's at x = L, first and second in config order):" if pairs
+             else "The force of each level (displacement control):")
+    lines = ["", intro, "", "| load factor | " + " | ".join(heads) + " |", "|---:|" + "---:|" * len(heads)]
     for st, f in zip(steps, force):
         dd = st.get("displacement_differences", {})
-        lines.append(f"| {st['load_factor']:g} | {f:.6g} | " + " | ".join(
-            f"{1e3 * dd[p]['end']:.5f}" if p in dd else "" for p in pairs) + " |")
+        cells = [f"{f:.6g}"] + [f"{1e3 * dd[p]['end']:.5f}" if p in dd else "" for p in pairs]
+        lines.append(f"| {st['load_factor']:g} | " + " | ".join(cells) + " |")
     return lines
 
 

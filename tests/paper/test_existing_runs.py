@@ -203,3 +203,19 @@ def test_a_run_without_probes_has_no_probe_table(tmp_path):
     text = _report([str(tmp_path / "s")], tmp_path / "rep")
     assert "| load factor |  |" not in text and "\n|---:|\n" not in text
     assert "| load factor | reaction of grip along x [N] | base − slider [mm] |" in text
+
+
+def test_a_displacement_controlled_run_without_interfaces_has_a_whole_force_table(tmp_path):
+    """uniaxial_neohookean pulled by an unnamed grip at its last node (no contact): the force table
+    had a third, empty column in its header ('| load factor | ... [N] |  |' over '|---:|---:|') and
+    rows ('| 0.5 | 20.1074 |  |'), under 'How far the subtendons moved against each other'."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["loads"], raw["steps"], raw["output"] = [], [0.5, 1.0], {"vtk": False}
+    raw["boundary_conditions"].append({"beam": "bar", "node": "last", "displacement": {"r": {"x": 0.02}}})
+    p = solve_cli(write_config(raw, tmp_path / "g.yaml"), extra=["--output-dir", str(tmp_path / "g"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "g")], tmp_path / "rep")
+    assert "|  |" not in text and "moved against each other" not in text
+    assert "| load factor | reaction of bar.2 along x [N] |\n|---:|---:|\n" in text
+    force = _force_column(text, "| load factor | reaction of bar.2 along x [N] |")
+    assert set(force) == {0.5, 1.0} and 15.0 < force[0.5] < force[1.0]

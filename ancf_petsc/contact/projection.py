@@ -220,7 +220,7 @@ class Projector(SecondStarts):
         f = self.closest(itf, T, xA, x_of, self.eB[idx].copy(), self.xiB[idx].copy(), self.tB[idx].copy())
         self.from_checkpoint(idx, xA, x_of, f)
         self.eB[idx], self.xiB[idx], self.tB[idx] = f.eB, f.xiB, f.tB
-        in_window = not np.any((f.eB < self.lo[idx]) | (f.eB > self.hi[idx]))
+        in_window = not np.any(outside_window(f.eB, f.xiB, self.lo[idx], self.hi[idx]))
         d = xA - f.Y
         n = np.cross(f.Yz[:, :, 1], f.Yz[:, :, 0])               # outward normal of B
         n /= np.linalg.norm(n, axis=1)[:, None]
@@ -293,6 +293,17 @@ class Projector(SecondStarts):
         eB[sel], xiB[sel], tB[sel], weight[sel] = self.wrap(itf[sel], eB[sel], xiB[sel], tB[sel])
         search.restart(pin)
         return pin
+
+
+def outside_window(eB: np.ndarray, xiB: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Whether each partner place (e_B, ξ_B) lies outside the B elements [lo, hi].  A point on a
+    window's end boundary is inside: a point pinned on a boundary is kept on the element with the
+    lower index at ξ = +1 (``descend``), which at the window's first boundary is element lo − 1,
+    the same place as lo at ξ = −1 (the 12-element unilateral stride's first frame was cut back
+    when one point, pinned there, counted as lost)."""
+    below = (eB < lo) & ~((eB == lo - 1) & (xiB >= 1.0))
+    above = (eB > hi) & ~((eB == hi + 1) & (xiB <= -1.0))
+    return below | above
 
 
 def surface_third(projector: Projector, x_of, itf, eB, xiB, tB) -> tuple[np.ndarray, np.ndarray]:

@@ -185,3 +185,16 @@ def test_a_descent_stopped_at_the_clamp_of_the_curve_is_retried_from_the_checkpo
     assert judged.sum() >= 5
     far = np.linalg.norm(pr.d, axis=1) - np.linalg.norm(ref.d, axis=1)
     assert np.all(far[judged] <= 1e-12), far[judged].max()
+
+
+def test_a_point_on_the_first_boundary_of_its_search_window_is_in_it():
+    """A point pinned on a B element boundary is kept on the lower element at ξ = +1
+    (``descend``); on the window's first boundary that is element lo − 1, the same place as lo at
+    ξ = −1, and it is in the window.  Counted as lost, it failed the first SNES evaluation of the
+    12-element unilateral walking stride's first frame at the very state the predictor had just
+    accepted (one of 576 points, partner 3 at ξ = +1, window [4, 8])."""
+    from ancf_petsc.contact.projection import outside_window
+    lo, hi = np.full(7, 4), np.full(7, 8)
+    eB = np.array([3, 3, 4, 8, 9, 9, 2])
+    xiB = np.array([1.0, 0.999, -1.0, 1.0, -1.0, -0.999, 1.0])
+    assert outside_window(eB, xiB, lo, hi).tolist() == [False, True, False, False, False, True, True]

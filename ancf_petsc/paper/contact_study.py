@@ -6,9 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..io.levels import gap_note, reported_at, step_at
 from ..workflows import sweep as sw
 from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
-from .runs import elongations, execute, make_sweep, summary_of
+from .runs import elongation, elongations, execute, make_sweep, summary_of
 from .tables import Table1
 
 #: factors on k_s, the unit of the multipliers: two decades
@@ -18,6 +19,8 @@ SCALINGS = (0.1, 1.0, 10.0)
 PER_ELEMENT_MEAN = {"axial": 2, "curve": 0, "per_element": True}
 PENALTY_LIMIT_MM = {10: 0.16188, 400: 6.22170}
 PENALTY_DEFAULT_MM = {10: 0.16200, 400: 6.22250}
+#: the scaling study's columns and their loads [N]
+SCALING_LOADS = {"e10": 10.0, "e400": 400.0}
 
 
 def scaling_study(inputs: PaperInputs, out: str, twist: int = 45, scalings=SCALINGS, ranks: int = 1, jobs: int = 1,
@@ -30,18 +33,24 @@ def scaling_study(inputs: PaperInputs, out: str, twist: int = 45, scalings=SCALI
               "contact.scaling": [sc for _, sc, _ in rows],
               "contact.projection": [pr for _, _, pr in rows]}
     states = execute(make_sweep(inputs, out, f"scaling_psi{twist}", params, ranks=ranks, jobs=jobs), log)
-    out_rows = []
-    for (mode, sc, proj), st in zip(rows, states):
-        s = summary_of(st)
-        row = {"mode": mode, "scaling": sc, "space": "per element, mean" if proj else "default",
-               "status": st.status, "e10": np.nan, "e400": np.nan, "iterations": None}
-        if s and s["steps"]:
-            lf, el = elongations(s)
-            row.update(e10=float(el[0]) if np.isclose(lf[0], 10) else np.nan,
-                       e400=float(el[-1]) if np.isclose(lf[-1], 400) else np.nan,
-                       iterations=s.get("newton_iterations"))
-        out_rows.append(row)
-    return out_rows
+    return [scaling_row(summary_of(st), mode, sc, proj, st.status) for (mode, sc, proj), st in zip(rows, states)]
+
+
+def scaling_row(s: dict | None, mode: str, scaling: float, projection: dict | None, status: str,
+                loads: dict = SCALING_LOADS) -> dict:
+    """One run of the scaling study: the elongations at 10 and 400 N (``s`` its summary.json, None
+    if missing); ``reported``: column → (level, load factor it was reported at past a gap)."""
+    row = {"mode": mode, "scaling": scaling, "space": "per element, mean" if projection else "default",
+           "status": status, "e10": np.nan, "e400": np.nan, "iterations": None, "reported": {}}
+    if s and s["steps"]:
+        for key, load in loads.items():
+            step = step_at(s["steps"], load)
+            if step is not None:
+                row[key] = elongation(step)
+                if reported_at(step) is not None:
+                    row["reported"][key] = (load, reported_at(step))
+        row["iterations"] = s.get("newton_iterations")
+    return row
 
 
 def scaling_spread(rows: list[dict], mode: str) -> tuple[float, float]:
@@ -55,8 +64,11 @@ def scaling_markdown(rows: list[dict]) -> str:
     lines = ["| contact | pressure space | k_s scale | 10 N [mm] | 400 N [mm] | Newton its |",
              "|---|---|---:|---:|---:|---:|"]
     for r in rows:
-        lines.append(f"| {r['mode']} | {r['space']} | {r['scaling']:g} | {r['e10']:.6f} | "
-                     f"{r['e400']:.6f} | {r['iterations']} |")
+        mark = {k: "†" if k in r.get("reported", {}) else "" for k in ("e10", "e400")}
+        lines.append(f"| {r['mode']} | {r['space']} | {r['scaling']:g} | {r['e10']:.6f}{mark['e10']} | "
+                     f"{r['e400']:.6f}{mark['e400']} | {r['iterations']} |")
+    lines += [f"\n† {r['mode']}, {r['space']}, k_s scale {r['scaling']:g}, {level:g} N: {gap_note(at)} "
+              "(solver.step_over_jumps)" for r in rows for level, at in r.get("reported", {}).values()]
     for mode in dict.fromkeys(r["mode"] for r in rows):
         d10, d400 = scaling_spread(rows, mode)
         lines.append(f"\n{mode}: over two decades of k_s the elongation changes by {100 * d10:.1e} % "
@@ -80,11 +92,13 @@ def laws_markdown(sliding: Table1, unilateral: Table1) -> str:
         for p in TWISTS:
             s, u = sliding.ours[p][i], unilateral.ours[p][i]
             steps = unilateral.summaries[p]["steps"] if p in unilateral.summaries else []
-            step = next((st for st in steps if np.isclose(st["load_factor"], f)), None)
+            step = step_at(steps, float(f))          # a level passed over in a gap: where reported
             shares = "/".join(f"{100 * c['open_share']:.0f}" for c in step["contact"].values()) if step else ""
-            cells.append(f"{paper[p][i]:.3f} | {s:.3f} ({100 * (s / paper[p][i] - 1):+.1f} %) | "
-                         f"{u:.3f} ({100 * (u / paper[p][i] - 1):+.1f} %) | {shares} %")
+            cells.append(f"{paper[p][i]:.3f} | {s:.3f}{sliding.mark(p, i)} ({100 * (s / paper[p][i] - 1):+.1f} %) | "
+                         f"{u:.3f}{unilateral.mark(p, i)} ({100 * (u / paper[p][i] - 1):+.1f} %) | {shares} %")
         lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
+    notes = sliding.gap_notes("sliding, ") + unilateral.gap_notes("unilateral, ")
+    lines += ["", *notes] if notes else []
     its = " · ".join(f"ψ={p}°: {sliding.summaries[p]['newton_iterations']} / "
                      f"{unilateral.summaries[p]['newton_iterations']}" for p in TWISTS
                      if p in sliding.summaries and p in unilateral.summaries)

@@ -16,6 +16,8 @@ import yaml
 
 from ..config.parse import load_config
 from ..errors import InputError
+from ..status import LEVELS_PASSED_OVER
+from ..io.levels import step_at
 from ..io.reader import read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
@@ -109,7 +111,7 @@ class ExistingRun:
         text = f"{self.status}"
         if self.status == "running":
             text += " (no final status: still running, or killed)"
-        elif self.status != "completed":
+        elif self.status != "completed" or s.get("reason_code") == LEVELS_PASSED_OVER:
             text += f" ({s.get('reason_code', '')}: {s.get('message', '')})"
         return text
 
@@ -187,9 +189,8 @@ def paper_summaries(runs: list[ExistingRun]) -> dict[int, dict]:
 def levels_missing(t1, summaries: dict) -> str:
     """The Table 1 levels a paper run did not reach, per column (empty when every one did)."""
     parts = []
-    for p, s in summaries.items():
-        reached = {round(st["load_factor"], 9) for st in s.get("steps", [])}
-        missing = [f for f in t1.loads if round(float(f), 9) not in reached]
+    for p, s in summaries.items():       # a level passed over in a gap is reached (Table 1's †)
+        missing = [f for f in t1.loads if step_at(s.get("steps", []), float(f)) is None]
         if missing:
             parts.append(f"ψ = {p}°: not reached {', '.join(f'{f:g}' for f in missing)} N "
                          f"(the run ended {s.get('status')})")

@@ -7,6 +7,7 @@ import os
 import numpy as np
 
 from .. import viz
+from ..io.levels import step_at
 from ..io.reader import read_contact
 from .inputs import TWISTS, PaperInputs, read_paper
 from .tables import Table1
@@ -28,8 +29,8 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
     h5 = os.path.join(s.get("output_dir") or "", "results.h5")
     if not os.path.exists(h5):
         return []
-    loads = [st["load_factor"] for st in s["steps"]]
-    levels = [read_contact(h5, loads.index(f) + 1) for f in SLIP_LEVELS if f in loads]
+    at = [step_at(s["steps"], f) for f in SLIP_LEVELS]            # a level passed over: where reported
+    levels = [read_contact(h5, s["steps"].index(st) + 1) for st in at if st is not None]
     names = viz.interface_labels(s["contact_interfaces"])
     soleus = tuple(k for k, n in enumerate(s["contact_interfaces"]) if "soleus" in n)
     return [viz.plot_slip(levels, names, os.path.join(out, f"slip_psi{twist}.png"), soleus,
@@ -40,8 +41,7 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
 def figures(inputs: PaperInputs, t1: Table1, out: str, t2rows: dict | None = None, log=print) -> list[str]:
     """Load-elongation vs the paper, Table 2 convergence, Figure 5 (ψ = 15°, 45°) renders."""
     made = []
-    curves = {f"ψ = {p}°": (list(t1.loads[np.isfinite(t1.ours[p])]), list(t1.ours[p][np.isfinite(t1.ours[p])]))
-              for p in TWISTS if p in t1.summaries}
+    curves = {f"ψ = {p}°": t1.curve(p) for p in TWISTS if p in t1.summaries}
     if curves:
         made.append(viz.plot_load_elongation(curves, inputs.table1_csv, os.path.join(out, "load_elongation.png"),
                                                   {f"ψ = {p}°": f"psi{p}_mm" for p in TWISTS},

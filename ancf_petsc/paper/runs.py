@@ -47,8 +47,13 @@ def summary_of(state: sw.RunState) -> dict | None:
         return json.load(fh)
 
 
+def elongation(step: dict, probe: str = PROBE) -> float:
+    """A converged step's x-elongation [mm] of a probe."""
+    return 1e3 * step["probes"][probe]["displacement"][0]
+
+
 def elongations(summary: dict, probe: str = PROBE) -> tuple[np.ndarray, np.ndarray]:
     """(load levels, x-elongation [mm]) of a probe over the converged steps."""
     steps = summary["steps"]
     return (np.array([s["load_factor"] for s in steps]),
-            np.array([1e3 * s["probes"][probe]["displacement"][0] for s in steps]))
+            np.array([elongation(s, probe) for s in steps]))

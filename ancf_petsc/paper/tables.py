@@ -1,13 +1,14 @@
 """The paper's Tables 1 and 2 beside ours, with relative errors (``configs/data/paper_table*.csv``)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..config.specs import DEFAULT_CONTACT_MODE
+from ..io.levels import gap_note, reported_at, step_at
 from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
-from .runs import elongations, execute, make_sweep, summary_of
+from .runs import elongation, execute, make_sweep, summary_of
 
 
 @dataclass
@@ -17,6 +18,31 @@ class Table1:
     paper: dict[int, np.ndarray]
     others: dict[int, dict[str, np.ndarray]]   # psi -> medial/lateral elongation [mm]
     summaries: dict[int, dict]
+    #: psi -> the load factor a level passed over in a gap of the load path was reported at
+    #: (nan where the level was solved at itself or not reached; io/levels.py)
+    reported: dict[int, np.ndarray] = field(default_factory=dict)
+
+    def passed(self, p: int, i: int) -> float | None:
+        """The load factor the i-th level of column ψ = p was reported at, past a gap (else None)."""
+        at = self.reported.get(p, np.full(len(self.loads), np.nan))[i]
+        return float(at) if np.isfinite(at) else None
+
+    def curve(self, p: int) -> tuple[list[float], list[float]]:
+        """(load [N], elongation [mm]) of column ψ = p at the levels reached, each at the load it
+        was reported at (past a gap of the load path: its reported load factor)."""
+        hit = np.isfinite(self.ours[p])
+        at = np.where(np.isfinite(self.reported.get(p, np.nan)), self.reported.get(p, np.nan), self.loads)
+        return list(at[hit]), list(self.ours[p][hit])
+
+    def mark(self, p: int, i: int) -> str:
+        """'†' after a value reported past a gap of the load path (``gap_notes``), else ''."""
+        return "†" if self.passed(p, i) is not None else ""
+
+    def gap_notes(self, law: str = "") -> list[str]:
+        """One footnote per level reported past a gap of the load path (empty when none)."""
+        return [f"† {law}ψ={p}°, {f:g} N: {gap_note(self.passed(p, i))} (solver.step_over_jumps; the error "
+                "is against the paper's value at the level asked)"
+                for p in self.columns for i, f in enumerate(self.loads) if self.passed(p, i) is not None]
 
     @property
     def columns(self) -> list[int]:
@@ -35,10 +61,11 @@ class Table1:
         lines = ["| load [N] | " + " | ".join(f"ψ={p}° paper | ψ={p}° ours | err" for p in cols) + " |",
                  "|---:|" + "---:|---:|---:|" * len(cols)]
         for i, f in enumerate(self.loads):
-            cells = [f"{self.paper[p][i]:.3f} | {self.ours[p][i]:.3f} | {100 * e[p][i]:+.2f} %"
+            cells = [f"{self.paper[p][i]:.3f} | {self.ours[p][i]:.3f}{self.mark(p, i)} | {100 * e[p][i]:+.2f} %"
                      if np.isfinite(self.ours[p][i]) else f"{self.paper[p][i]:.3f} | not reached | "
                      for p in cols]
             lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
+        lines += ["", *self.gap_notes()] if self.gap_notes() else []
         reached = [v[np.isfinite(v)] for v in e.values()]
         if not any(len(v) for v in reached):
             return "\n".join(lines + ["", "No level of Table 1 was reached."])
@@ -74,23 +101,21 @@ def table1_from(inputs: PaperInputs, summaries: dict[int, dict | None]) -> Table
     """Table 1 from the summaries of the three columns (ψ → summary.json, None if missing)."""
     paper = read_paper(inputs.table1_csv)
     loads = paper["load_N"]
-    ours, others = {}, {}
+    ours, others, reported = {}, {}, {}
     for p in TWISTS:
         s = summaries.get(p)
-        col = np.full(len(loads), np.nan)
+        col, at = np.full(len(loads), np.nan), np.full(len(loads), np.nan)
         oth = {k: np.full(len(loads), np.nan) for k in ("medial_gastrocnemius", "lateral_gastrocnemius")}
-        if s is not None:
-            lf, el = elongations(s)
-            for i, f in enumerate(loads):
-                hit = np.flatnonzero(np.isclose(lf, f))
-                if len(hit):
-                    col[i] = el[hit[0]]
-                    for k in oth:
-                        oth[k][i] = elongations(s, k)[1][hit[0]]
-        ours[p] = col
-        others[p] = oth
+        for i, f in enumerate(loads):
+            step = step_at(s["steps"], float(f)) if s is not None else None
+            if step is not None:           # a level passed over: reached at its reported load
+                col[i] = elongation(step)
+                at[i] = reported_at(step) or np.nan
+                for k in oth:
+                    oth[k][i] = elongation(step, k)
+        ours[p], others[p], reported[p] = col, oth, at
     return Table1(loads, ours, {p: paper[f"psi{p}_mm"] for p in TWISTS}, others,
-                  {p: s for p, s in summaries.items() if s is not None})
+                  {p: s for p, s in summaries.items() if s is not None}, reported)
 
 
 #: the contact pressure spaces Table 2 is computed with (contact.projection): the default, linear
@@ -98,6 +123,8 @@ def table1_from(inputs: PaperInputs, summaries: dict[int, dict | None]) -> Table
 #: one- and two-element models stable, and constant across it (the mean gap)
 T2_VARIANTS = {"linear gap": None, "mean gap": {"axial": 2, "curve": 0}}
 T2_ELEMENTS = (1, 2, 4, 8, 16)
+#: the load of Table 2 [N]
+T2_LOAD = 400.0
 
 
 def table2(inputs: PaperInputs, out: str, elements=T2_ELEMENTS, variants: dict = T2_VARIANTS,
@@ -115,21 +142,22 @@ def table2(inputs: PaperInputs, out: str, elements=T2_ELEMENTS, variants: dict =
         params[f"beams[{b}].elements"] = [n for _, _, n in combos]
     sweep = make_sweep(inputs, out, "table2", params, ranks=ranks, jobs=jobs)
     states = execute(sweep, log)
-    rows = {}
-    for key, st in zip(combos, states):
-        s = summary_of(st)
-        lf, el = elongations(s) if s else (np.array([]), np.array([]))
-        done = len(lf) and np.isclose(lf[-1], 400.0)
-        neg = [(x["load_factor"], x.get("negative_eigenvalues")) for x in (s["steps"] if s else [])]
-        unstable = [f for f, k in neg if k]
-        rows[key] = {"elong": float(el[-1]) if done else np.nan,
-                     "status": st.status, "reason": st.reason,
-                     "reached": float(lf[-1]) if len(lf) else 0.0,
-                     "unstable_from": min(unstable) if unstable else None,
-                     "time": s["timings"]["total"] if s else np.nan,
-                     "iterations": s.get("newton_iterations") if s else None,
-                     "dofs": s.get("dofs") if s else None}
-    return rows
+    return {key: table2_row(summary_of(st), st.status, st.reason) for key, st in zip(combos, states)}
+
+
+def table2_row(s: dict | None, status: str, reason: str, load: float = T2_LOAD) -> dict:
+    """One run's entry of Table 2 (``s`` its summary.json, None if missing): the elongation at
+    ``load`` (also where a gap of the load path had it reported just past: ``reported_at``)."""
+    steps = s["steps"] if s else []
+    top = step_at(steps, load)
+    unstable = [x["load_factor"] for x in steps if x.get("negative_eigenvalues")]
+    return {"elong": elongation(top) if top else np.nan, "reported_at": reported_at(top),
+            "status": status, "reason": reason,
+            "reached": float(steps[-1]["load_factor"]) if steps else 0.0,
+            "unstable_from": min(unstable) if unstable else None,
+            "time": s["timings"]["total"] if s else np.nan,
+            "iterations": s.get("newton_iterations") if s else None,
+            "dofs": s.get("dofs") if s else None}
 
 
 def table2_markdown(inputs: PaperInputs, rows: dict, elements=T2_ELEMENTS) -> str:
@@ -151,7 +179,7 @@ def table2_markdown(inputs: PaperInputs, rows: dict, elements=T2_ELEMENTS) -> st
                 pv = paper[f"psi{p}_mm"][pn[n]] if n in pn else np.nan
                 mark = f" (u ≥ {r['unstable_from']:g} N)" if r["unstable_from"] is not None else ""
                 if np.isfinite(r["elong"]):
-                    ours = f"{r['elong']:.3f}{mark}"
+                    ours = f"{r['elong']:.3f}{'†' if r.get('reported_at') else ''}{mark}"
                     err = f"{100 * (r['elong'] / pv - 1):+.2f} %" if np.isfinite(pv) else ""
                 else:
                     ours, err = f"stopped after {r['reached']:g} N{mark}", ""
@@ -160,6 +188,8 @@ def table2_markdown(inputs: PaperInputs, rows: dict, elements=T2_ELEMENTS) -> st
             lines.append(f"| {n} | {dofs} | " + " | ".join(cells) + " |")
     lines += ["", "(u ≥ F N): from that load on the converged states have a negative tangent "
                   "eigenvalue (a saddle of the total potential, not a stable equilibrium)."]
+    lines += [f"† {v}, ψ={p}°, {n} element(s), {T2_LOAD:g} N: {gap_note(r['reported_at'])} (solver.step_over_jumps)"
+              for (v, p, n), r in rows.items() if r.get("reported_at")]
     for (v, p, n), r in rows.items():
         if r["status"] != "completed":
             lines.append(f"- {v}, ψ={p}°, {n} element(s): {r['status']}: {r['reason']}")

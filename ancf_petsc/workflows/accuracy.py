@@ -20,7 +20,8 @@ import time
 from ..config.parse import parse_config
 from ..config.specs import ModelSpec
 from ..io.files import atomic_write
-from .refinement import choose, quantity
+from ..io.levels import gap_note, reported_at
+from .refinement import choose, level_step, quantity
 from .section_order import check_section_order
 
 
@@ -90,14 +91,18 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         solved = res.status in ("completed", "unstable")    # unstable: the run's verdict, a value still
         value = quantity(res.summary, acc.probe, acc.component, level) if comm.rank == 0 and solved else None
         value = comm.tompi4py().bcast(value if solved else math.nan, root=0)
+        gap = comm.tompi4py().bcast(gap_note(reported_at(level_step(res.summary, level)), "")
+                                    if comm.rank == 0 and solved else "", root=0)
         seconds = time.perf_counter() - t1
         values.append(value)
-        rungs.append({"elements": n, "value": value, "seconds": seconds, "status": res.status})
+        rungs.append({"elements": n, "value": value, "seconds": seconds, "status": res.status,
+                      **({"level_passed_over": gap} if gap else {})})
         chosen, errs, ex = choose(values, acc.rtol)
         est = "" if ex is None or not ex.reliable else (
             f", limit {ex.limit:.8g} (order {ex.order:.2f})" if ex.kind == "richardson" else
             f", {ex.kind}: the last three agree within rtol/2, limit {ex.limit:.8g}")
-        say(f"[accuracy]   {n:5d} elements: {acc.probe} = {value:.8g}  ({res.status}, {seconds:.2f} s){est}")
+        say(f"[accuracy]   {n:5d} elements: {acc.probe} = {value:.8g}  ({res.status}{', ' + gap if gap else ''}, "
+            f"{seconds:.2f} s){est}")
         if chosen is not None:
             break
     for r, e in zip(rungs, errs):

@@ -12,6 +12,8 @@ import copy
 import math
 from dataclasses import dataclass
 
+from ..io.levels import step_at
+
 COMPONENTS = ("x", "y", "z", "norm")
 
 
@@ -51,14 +53,20 @@ def apply(raw: dict, d: Discretisation) -> dict:
     return out
 
 
-def quantity(summary: dict, probe: str, component: str = "norm", level: float | None = None) -> float:
-    """The probe's displacement component (or its norm) at ``level`` (default: the last step)."""
+def level_step(summary: dict, level: float | None = None) -> dict | None:
+    """The converged step at ``level`` (``io.levels.step_at``: also a level passed over in a gap
+    of the load path), or the last one; None when there is none."""
     steps = summary["steps"]
-    if level is not None:
-        steps = [s for s in steps if math.isclose(s["load_factor"], level, rel_tol=1e-12)]
-    if not steps:
+    return step_at(steps, level) if level is not None else (steps[-1] if steps else None)
+
+
+def quantity(summary: dict, probe: str, component: str = "norm", level: float | None = None) -> float:
+    """The probe's displacement component (or its norm) at ``level`` (default: the last step; a
+    level passed over in a gap of the load path at the load factor it was reported at)."""
+    step = level_step(summary, level)
+    if step is None:
         return math.nan
-    u = steps[-1]["probes"][probe]["displacement"]
+    u = step["probes"][probe]["displacement"]
     return math.sqrt(sum(c * c for c in u)) if component == "norm" else u["xyz".index(component)]
 
 

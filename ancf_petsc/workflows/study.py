@@ -44,7 +44,8 @@ from ..config.specs import DEFAULT_AXIAL_POINTS, SectionSpec
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from ..errors import InputError
 from ..status import CONFIG_ERROR, EXIT_INPUT
-from .refinement import COMPONENTS, Discretisation, apply, quantity, richardson
+from ..io.levels import gap_note, reported_at
+from .refinement import COMPONENTS, Discretisation, apply, level_step, quantity, richardson
 
 GRID_KEYS = ("elements", "axial_points", "cubature_degree", "element")
 STUDY_KEYS = ("kind", "name", "base", "probe", "component", "level", "grid", "reference",
@@ -181,7 +182,7 @@ def measure(scene: Scene, disc: Discretisation, out_dir: str, repeats: int = 1) 
                cubature_degree=deg, dofs=dofs, gauss_points=points, status=res.status,
                value=value, wall_time=best if summary else math.nan,
                newton_iterations=int(summary.get("newton_iterations", 0)) if summary else 0,
-               message="" if ok else res.message)
+               message=gap_note(reported_at(level_step(summary, scene.level)), "") if ok else res.message)
 
 
 def reference_value(scene: Scene, ref: Discretisation, extrapolate: bool, out_dir: str,

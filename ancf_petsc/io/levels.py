@@ -1,0 +1,44 @@
+"""A run's converged step at a load level it was asked for (summary.json ``steps``).
+
+A level that lay in a gap of the load path is reported just past it (solving/step_over.py,
+docs/running.md "Levels in a gap of the load path"): its step has the load factor it was solved
+at and ``passed_over: {level, last_converged, reported_at}``.  Every table that matches solved
+levels to asked ones takes such a step as the level reached, at its reported load factor, and
+says so (``gap_note``)."""
+from __future__ import annotations
+
+import math
+
+#: relative tolerance of a step's load factor on an asked level
+LEVEL_RTOL = 1e-9
+
+
+def same_level(a: float, b: float) -> bool:
+    """Whether two load factors are one level (``LEVEL_RTOL``)."""
+    return math.isclose(a, b, rel_tol=LEVEL_RTOL, abs_tol=1e-12)
+
+
+def step_at(steps: list[dict], level: float) -> dict | None:
+    """The converged step of ``level``: the one solved at it, else the one that reports it past
+    a gap of the load path; None when the run did not reach it."""
+    for st in steps:
+        if same_level(st["load_factor"], level):
+            return st
+    for st in steps:
+        asked = (st.get("passed_over") or {}).get("level")
+        if asked is not None and same_level(asked, level):
+            return st
+    return None
+
+
+def reported_at(step: dict | None) -> float | None:
+    """The load factor a level passed over was reported at (None for a level solved at itself)."""
+    if not step or not step.get("passed_over"):
+        return None
+    return float(step["load_factor"])
+
+
+def gap_note(at: float | None, unit: str = " N") -> str:
+    """'reported at 2500.5 N, past a gap of the load path' for a level reported at ``at`` (from
+    ``reported_at``), '' for None."""
+    return "" if at is None else f"reported at {at:g}{unit}, past a gap of the load path"

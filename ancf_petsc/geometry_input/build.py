@@ -307,7 +307,7 @@ def _curve_loops(src: GeometrySource, opts: SectionsSpec, label: str) -> Station
     for cname, pts in src.curves.items():
         P = _to_tendon(np.array(pts, dtype=float), src.scale, src.axes)
         try:
-            curves[cname] = SplineCurve(P, opts.spline_degree, cname)
+            curves[cname] = SplineCurve(P, opts.spline_degree, cname, periodic=True)
         except SectionError as exc:
             raise src.err(f"curves.{cname}", str(exc)) from None
     loops = {}

@@ -19,7 +19,8 @@ def inline_loop(curves: Sequence[Mapping[str, Any]],
     """Loop from config data ``[{name: str (optional), points: [[y, z], ...]}, ...]``.
 
     The curves are taken in order around a closed boundary; names default to ``curve<i>``
-    (1-based).  Returns the list of (SplineCurve, False) for :func:`make_outline`.
+    (1-based); a curve that closes on itself is periodic (smooth there; a corner: split the curve
+    there).  Returns the list of (SplineCurve, False) for :func:`make_outline`.
     """
     if isinstance(curves, (str, bytes, Mapping)) or not isinstance(curves, Sequence):
         raise SectionError("the outline curves must be a list of {name, points} entries")
@@ -35,7 +36,7 @@ def inline_loop(curves: Sequence[Mapping[str, Any]],
             raise SectionError(f"outline curve {i} has unknown keys {sorted(unknown)}; only "
                                "'name' and 'points' are allowed")
         name = str(entry.get("name", f"curve{i}"))
-        out.append((SplineCurve(entry["points"], spline_degree, name), False))
+        out.append((SplineCurve(entry["points"], spline_degree, name, periodic=True), False))
     return out
 
 
@@ -140,7 +141,7 @@ def load_sections_file(path: str | Path,
             raise SectionError(f"curve name '{name}' in '{p}' starts with '-', which marks "
                                "reversal in loops; rename the curve")
         P = _px_to_m(pts, scale, f"curve '{name}' in '{p}'")
-        curves[name] = SplineCurve(P, spline_degree, name)
+        curves[name] = SplineCurve(P, spline_degree, name, periodic=True)
 
     raw_loops = data["subtendons"]
     if not isinstance(raw_loops, Mapping) or not raw_loops:

@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from .bspline import interpolating_spline
+from .bspline import interpolating_spline, periodic_spline
 from .cubature import CurvePiece
 
 DEFAULT_SPLINE_DEGREE = 3
@@ -31,7 +31,10 @@ class SplineCurve:
     Parameter: cumulative chordal, t_1 = 0, t_{j+1} = t_j + |P_{j+1} - P_j|.  Degree
     p = :func:`usable_degree` (degree, m) (``bspline.interpolating_spline``: scipy's ``make_interp_spline``,
     not-a-knot, to the last bit; p = 1
-    is the polygon through the points).  ``breakpoints`` are the parameters between which
+    is the polygon through the points).  ``periodic``: a curve whose last point is its first (within
+    1e-9 of its size), a whole outline, is the periodic spline (``bspline.periodic_spline``), smooth
+    where it closes too; not-a-knot ends left a kink there (8 points on a 4 x 2.5 mm ellipse: the
+    centroid 17 um off, the area -0.3 %).  ``breakpoints`` are the parameters between which
     the spline is one polynomial; :meth:`pieces` hands them to the Gauss-Green rule (eq. 11).
 
     :meth:`reversed` returns the same geometry traversed backwards, t' = t_end - t, built on
@@ -44,9 +47,10 @@ class SplineCurve:
     t_end: float
     params: np.ndarray
     breakpoints: np.ndarray
+    periodic: bool
 
     def __init__(self, points: Any, degree: int = DEFAULT_SPLINE_DEGREE,
-                 name: str = "curve") -> None:
+                 name: str = "curve", periodic: bool = False) -> None:
         name = str(name)
         try:
             P = np.array(points, dtype=float)
@@ -71,7 +75,8 @@ class SplineCurve:
                                "remove the duplicate")
         t = np.concatenate([[0.0], np.cumsum(chords)])
         p = usable_degree(degree, P.shape[0])
-        spl = interpolating_spline(t, P, p)
+        periodic = bool(periodic) and p >= 2 and P.shape[0] >= 4 and float(np.linalg.norm(P[-1] - P[0])) <= 1e-9 * size
+        spl = periodic_spline(t, P, p) if periodic else interpolating_spline(t, P, p)
         t_end = float(t[-1])
         bp = np.unique(np.concatenate([spl.t, t]))
         bp = bp[(bp >= 0.0) & (bp <= t_end)]
@@ -85,6 +90,7 @@ class SplineCurve:
         self.t_end = t_end
         self.params = t
         self.breakpoints = bp
+        self.periodic = periodic
         self._spline = spl
         self._derivs = {0: spl}
         self._flipped = False
@@ -141,6 +147,7 @@ class SplineCurve:
             r.name = "-" + self.name
             r.points = self.points[::-1]
             r.degree = self.degree
+            r.periodic = self.periodic
             r.t_end = self.t_end
             r.params = (self.t_end - self.params)[::-1]
             r.breakpoints = (self.t_end - self.breakpoints)[::-1]

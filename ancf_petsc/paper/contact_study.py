@@ -60,25 +60,45 @@ def scaling_spread(rows: list[dict], mode: str) -> tuple[float, float]:
                  for k in ("e10", "e400"))
 
 
+def _unreached(row: dict) -> str:
+    """The loads a scaling-study run did not reach, in words ('' when it reached both)."""
+    return " and ".join(f"{SCALING_LOADS[k]:g} N" for k in SCALING_LOADS if not np.isfinite(row[k]))
+
+
 def scaling_markdown(rows: list[dict]) -> str:
     lines = ["| contact | pressure space | k_s scale | 10 N [mm] | 400 N [mm] | Newton its |",
              "|---|---|---:|---:|---:|---:|"]
     for r in rows:
-        mark = {k: "†" if k in r.get("reported", {}) else "" for k in ("e10", "e400")}
-        lines.append(f"| {r['mode']} | {r['space']} | {r['scaling']:g} | {r['e10']:.6f}{mark['e10']} | "
-                     f"{r['e400']:.6f}{mark['e400']} | {r['iterations']} |")
+        cell = {k: f"{r[k]:.6f}{'†' if k in r.get('reported', {}) else ''}" if np.isfinite(r[k]) else "not reached"
+                for k in ("e10", "e400")}
+        lines.append(f"| {r['mode']} | {r['space']} | {r['scaling']:g} | {cell['e10']} | {cell['e400']} | "
+                     f"{r['iterations']} |")
     lines += [f"\n† {r['mode']}, {r['space']}, k_s scale {r['scaling']:g}, {level:g} N: {gap_note(at)} "
               "(solver.step_over_jumps)" for r in rows for level, at in r.get("reported", {}).values()]
     for mode in dict.fromkeys(r["mode"] for r in rows):
+        short = [f"k_s scale {r['scaling']:g} did not reach {_unreached(r)}" for r in rows
+                 if r["mode"] == mode and r["space"] == "default" and _unreached(r)]
+        if short:
+            lines.append(f"\n{mode}: no spread over k_s: the run with {'; with '.join(short)}.")
+            continue
         d10, d400 = scaling_spread(rows, mode)
         lines.append(f"\n{mode}: over two decades of k_s the elongation changes by {100 * d10:.1e} % "
                      f"(10 N) and {100 * d400:.1e} % (400 N).")
     pe = next(r for r in rows if r["space"] != "default")
+    if _unreached(pe):
+        lines.append(f"\nThe former penalty formulation's space solved exactly: its run did not reach {_unreached(pe)}.")
+        return "\n".join(lines)
     lines.append(f"\nThe former penalty formulation's space solved exactly: {pe['e10']:.5f} / {pe['e400']:.5f} mm "
                  f"at 10 / 400 N; its penalty answers at daf134a were {PENALTY_DEFAULT_MM[10]:.5f} / "
                  f"{PENALTY_DEFAULT_MM[400]:.5f} mm at the default p_n and {PENALTY_LIMIT_MM[10]:.5f} / "
                  f"{PENALTY_LIMIT_MM[400]:.5f} mm in the limit p_n → ∞.")
     return "\n".join(lines)
+
+
+def _law_cell(t: Table1, p: int, i: int) -> str:
+    """A column's elongation at the i-th level and its error against the paper, or 'not reached'."""
+    v = t.ours[p][i]
+    return f"{v:.3f}{t.mark(p, i)} ({100 * (v / t.paper[p][i] - 1):+.1f} %)" if np.isfinite(v) else "not reached"
 
 
 def laws_markdown(sliding: Table1, unilateral: Table1) -> str:
@@ -94,8 +114,8 @@ def laws_markdown(sliding: Table1, unilateral: Table1) -> str:
             steps = unilateral.summaries[p]["steps"] if p in unilateral.summaries else []
             step = step_at(steps, float(f))          # a level passed over in a gap: where reported
             shares = "/".join(f"{100 * c['open_share']:.0f}" for c in step["contact"].values()) if step else ""
-            cells.append(f"{paper[p][i]:.3f} | {s:.3f}{sliding.mark(p, i)} ({100 * (s / paper[p][i] - 1):+.1f} %) | "
-                         f"{u:.3f}{unilateral.mark(p, i)} ({100 * (u / paper[p][i] - 1):+.1f} %) | {shares} %")
+            cells.append(f"{paper[p][i]:.3f} | {_law_cell(sliding, p, i)} | {_law_cell(unilateral, p, i)} | "
+                         + (f"{shares} %" if step else ""))
         lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
     notes = sliding.gap_notes("sliding, ") + unilateral.gap_notes("unilateral, ")
     lines += ["", *notes] if notes else []

@@ -197,3 +197,25 @@ def test_an_interrupted_report_writes_no_report_and_exits_130(monkeypatch, tmp_p
                                            {"geometry.twist_deg": [0.0]}))
     assert ancf_report.main(["--table1", "--out", str(tmp_path / "rep")]) == 130
     assert not (tmp_path / "rep" / "report.md").exists()
+
+
+def test_the_contact_study_says_not_reached_not_nan(tmp_path):
+    """A ψ = 45° column stopped before 80 N (a Newton budget of 21): the contact-laws table gave
+    'nan (+nan %)' for its levels, the scaling table 'nan' at 400 N, its spread 'changes by ...
+    nan % (400 N)' and the former penalty space '0.16115 / nan mm'; now 'not reached' (as Table 1)."""
+    from ancf_petsc.paper import contact_study as cs
+    from helpers import run_inline
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["solver"] = {"max_newton_iterations": 21}
+    cut = run_inline(raw, tmp_path / "cut")
+    assert cut["status"] == "failed" and cut["steps"][-1]["load_factor"] == 60.0, cut["message"]
+    t1 = rp.table1_from(PAPER_INPUTS, {45: cut})
+    laws = cs.laws_markdown(t1, t1)
+    assert "nan" not in laws
+    assert laws.splitlines()[-3].startswith("| 400 | 6.151 | not reached | not reached |  | 6.155 | not reached")
+    rows = [cs.scaling_row(cut, m, sc, pr, "failed") for m, sc, pr in
+            (("sliding", 1.0, None), ("unilateral", 1.0, None), ("sliding", 1.0, cs.PER_ELEMENT_MEAN))]
+    text = cs.scaling_markdown(rows)
+    assert "nan" not in text and "| sliding | default | 1 | 0.161152 | not reached | 22 |" in text
+    assert "sliding: no spread over k_s: the run with k_s scale 1 did not reach 400 N." in text
+    assert "space solved exactly: its run did not reach 400 N." in text

@@ -81,6 +81,24 @@ def build_section(spec: SectionSpec, path: str, registry: dict | None = None,
         raise ConfigError(path, str(exc)) from None
 
 
+def _check_sides(section: Section, i: int, sspec: SectionSpec, beams: list[Beam]) -> None:
+    """A curve shared with an earlier beam's outline is their border, one on each side: both
+    counter-clockwise loops run along it in opposite senses.  One sense is both on one side,
+    overlapping: two beams on one closed curve, or a half-lens inside its half-disc neighbour,
+    ran to 'completed' with contact around the whole curve."""
+    mine = {id(cv): (cv, flip) for cv, flip in section.loop or []}
+    for other in beams:
+        for cv, flip in other.section.loop or []:
+            if id(cv) in mine and mine[id(cv)][1] == flip:
+                key = "curves" if sspec.curves is not None else "loop"
+                fix = (f"a curve closing on itself is a whole outline: give beams[{i}] its own" if cv.periodic or
+                       np.array_equal(cv.start, cv.end) else f"put this outline on the other side of {cv.name!r}")
+                raise ConfigError(f"beams[{i}].section.{key}", f"its curve {cv.name!r} is also a border of "
+                                  f"beams[{other.index}] ({other.name}), and both sections lie on the same side "
+                                  f"of it: they overlap (a shared curve has one neighbour on each side); {fix}; "
+                                  "got both running along it the same way round")
+
+
 def _measured(bs) -> bool:
     """The beam's section is an outline of geometry.sections."""
     s = bs.section
@@ -208,6 +226,7 @@ def build_model(spec: ModelSpec) -> Model:
             raise ConfigError(f"beams[{i}].element", f"element {bs.element} has another node block than "
                               f"{spec.beams[0].element} (beams[0]); the beams of one model share their node layout")
         section = build_section(bs.section, f"beams[{i}].section", registry, tendon)
+        _check_sides(section, i, bs.section, beams)
         x_nodes = np.linspace(0.0, spec.length, block.nodes_of(bs.elements))
         beam = Beam(index=i, name=bs.name, section=section, material=make_material(bs.material),
                     n_elements=bs.elements, node_offset=node_offset, element_offset=elem_offset,

@@ -149,6 +149,24 @@ CASES = [
                                                     {"name": b, "points": [[0, 2e-3], [3e-3 * sgn, 0], [0, -2e-3]][::sgn]}],
                      **({"center": [0.0005, 0.0]} if b == "r" else {})}} for b, sgn in (("l", 1), ("r", -1))]),
      "beams[1].section.center", "its curve 'mid' is also the section curve of beams[0] (l), one curve, their interface"),
+    # a curve shared by two outlines on the same side of it: overlapping beams ran to 'completed', the
+    # curve a contact interface (the whole 20.7 mm of an ellipse's outline for two beams on one closed curve)
+    ("two inline outlines on one side of their curve", dict(config(None, beams=()), geometry={"length": 0.02}, beams=[
+        {"name": b, "elements": 1, "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7},
+         "section": {"shape": "outline", "curves": [{"name": "mid", "points": [[-2e-3, 0], [2e-3, 0]]},
+                                                    {"points": [[2e-3, 0], [0, -d], [-2e-3, 0]]}]}}
+        for b, d in (("disc", 2e-3), ("lens", 1e-3))]),
+     "beams[1].section.curves", "its curve 'mid' is also a border of beams[0] (disc), and both sections lie on the "
+                                "same side of it: they overlap"),
+    ("two inline outlines on one closed curve", dict(config(None, beams=()), geometry={"length": 0.02}, beams=[
+        {"name": b, "elements": 1, "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7},
+         "section": {"shape": "outline", "curves": [{"name": "c", "points": (1e-3 * np.array(
+             disc(n=8) + disc(n=8)[:1]))[::sgn].tolist()}]}} for b, sgn in (("a", 1), ("b", -1))]),
+     "beams[1].section.curves", "a curve closing on itself is a whole outline: give beams[1] its own"),
+    ("two outlines of geometry.sections on one closed curve", config(
+        inline({"a": {"curves": ["c"]}, "b": {"curves": ["-c"]}}, curves={"c": disc(n=8) + disc(n=8)[:1]}),
+        beams=("a", "b"), contact=True),
+     "beams[1].section.loop", "a curve closing on itself is a whole outline: give beams[1] its own"),
     ("contact with stations whose interfaces differ", config(
         {"stations": [dict(inline(three()), x=0.0), dict(inline(three(r=2.5)), x=0.02)]},
         beams=("p", "q", "r"), contact=True),

@@ -211,7 +211,7 @@ class Run:
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
         if self.stepper.spec.predictor == "tangent":            # the factor the interrupted run had
             self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
-        levels = [f for f in self.spec.steps if f > point.load_factor * (1.0 + 1e-12)]
+        levels = list(self.spec.steps[len(point.levels):])    # the converged ones start the steps
         self.say(f"[ancf] restart from step {point.step} (load factor {point.load_factor:g}) of "
                  f"{self.spec.output.dir}: {len(levels)} level(s) to go")
         return levels, path
@@ -271,7 +271,7 @@ class Run:
         """Step through ``levels``: (failure (status, code, message, cause) or None, signal, inverted)."""
         try:
             if levels:
-                self.stepper.run(levels, self.on_level, start)
+                self.stepper.run(levels, self.on_level, start, (restored_records(self.point) or [None])[-1])
         except LoadStepFailure as exc:
             return ("failed", exc.code, str(exc), exc.cause), 0, exc.inverted
         except RunInterrupted as exc:

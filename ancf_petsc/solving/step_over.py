@@ -19,9 +19,12 @@ code LEVELS_PASSED_OVER).  Docs: docs/running.md, "Levels in a gap of the load p
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 from petsc4py import PETSc
 
 from .failure_cause import JUMP_CAUSES
+from .records import StepRecord
 
 #: the load factors tried past the level, as shares of the level's own increment, in turn (the
 #: second subject's sliding 165° gastrocnemius-biased column, no equilibrium from 1597.57 N on,
@@ -89,6 +92,21 @@ def step_over(stepper, path, X_prev: PETSc.Vec, target: float, tally, failure) -
     P.restore()
     P.load_factor = path.lam
     return False
+
+
+def behind(stepper, path, target: float, last) -> StepRecord | None:
+    """A level the last one's step over has passed already (its reported load factor, up to
+    ``STEP_OVER[-1]`` of its own increment late, lies beyond this level too): reported at the
+    same state, passed over from the same last converged state, with no work of its own (the
+    while loop of stepper.py ``_reach`` had nothing to solve and no reason to report).  None for
+    a level ahead of the path."""
+    if path.lam < target * (1.0 - 1e-14) or last is None or not last.passed_over:
+        return None
+    stepper.log(f"  load factor {target:g}: passed over too by the step over of {last.passed_over[0]:g}, "
+                f"reported at {path.lam:.6g} with it (solver.step_over_jumps)")
+    return replace(last, iterations=0, substeps=0, cutbacks=0, tresca_solves=0, wall_time=0.0,
+                   iteration_history=[], branch_switches=[],
+                   passed_over=(target, last.passed_over[1], last.load_factor))
 
 
 def sentence(passed: list) -> str:

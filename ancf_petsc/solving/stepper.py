@@ -34,7 +34,7 @@ from .rest_response import bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
-from .step_over import creeping, reported_level, step_over
+from .step_over import behind, creeping, reported_level, step_over
 from .window_widening import WindowWidening
 
 
@@ -146,9 +146,9 @@ class LoadStepper:
                                          f"level {level:g})")
 
     def run(self, levels: list[float], on_level: Callable[[StepRecord], None],
-            start: PathState | None = None) -> list[StepRecord]:
-        """Reach every level in ``levels`` (increasing); call ``on_level`` after each one.
-        ``start``: continue a path (a restart) instead of starting from the reference state."""
+            start: PathState | None = None, before: StepRecord | None = None) -> list[StepRecord]:
+        """Reach every level in ``levels`` (increasing); call ``on_level`` after each one.  ``start``:
+        continue a path (a restart, ``before`` its last level) instead of from the reference state."""
         P = self.problem
         self.path = path = start or self.initial_path(levels[0], levels[-1])
         self.solver.spent += path.spent         # solver.max_newton_iterations: the whole run's
@@ -157,8 +157,9 @@ class LoadStepper:
         records = []
         logging.stage(logging.SOLVE).push()
         try:
-            for target in levels:
-                rec = self._reach(path, target, records[-1].load_factor if records else path.lam)
+            for target in levels:           # one a gap's step over passed too: reported with it
+                rec = (behind(self, path, target, records[-1] if records else before)
+                       or self._reach(path, target, records[-1].load_factor if records else path.lam))
                 records.append(rec)
                 on_level(rec)
         finally:
@@ -223,7 +224,6 @@ class LoadStepper:
             if mixed is not None:
                 mixed.paused = False
         reported, reason, fnorm = reported_level(target, reason, fnorm, tally)
-        over = tally.passed_over
         return StepRecord(load_factor=reported, iterations=tally.its, substeps=tally.substeps,
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
                           tresca_solves=tally.tresca_solves,
@@ -231,7 +231,7 @@ class LoadStepper:
                           iteration_history=history, negative_eigenvalues=self.solver.negative_eigenvalues(),
                           increment=path.dlam, last_increment=path.dlam_last,
                           weights_unsettled=tally.unsettled, branch_switches=tally.switches,
-                          passed_over=over and (target, over[0], over[1]))
+                          passed_over=tally.passed_over and (target, *tally.passed_over[:2]))
 
     def _contact_formed(self, path: PathState) -> bool:
         """Whether the last increment was the first from rest and formed the contact state: no

@@ -75,6 +75,27 @@ def test_a_run_with_a_level_passed_over_restarts(tmp_path):
     assert np.abs(tips(res.summary) - tips(whole.summary)).max() <= 1e-10 * np.abs(tips(whole.summary)).max()
 
 
+@pytest.mark.slow
+def test_a_level_the_step_over_passed_too_is_reported_with_it(tmp_path):
+    """Levels of 2500 and 2500.2 N: the step over of 2500 N lands at 2500.5 N, past 2500.2 N too,
+    and the run stopped with a traceback (UnboundLocalError in stepper._reach: nothing left to
+    solve for 2500.2 N), also on a restart after 2500 N.  Now 2500.2 N is reported at 2500.5 N
+    as well, passed over from the same state, and the run goes on to 2600 N."""
+    steps = [1000.0, 2000.0, 2500.0, 2500.2, 2600.0]
+    whole = run(dict(gap_column(), steps=steps), tmp_path / "whole")
+    s = whole.summary
+    assert whole.status == "completed" and s["reason_code"] == status.LEVELS_PASSED_OVER, whole.message
+    assert [st["load_factor"] for st in s["steps"]] == [1000.0, 2000.0, 2500.5, 2500.5, 2600.0]
+    first, second = s["steps"][2], s["steps"][3]
+    assert second["passed_over"] == dict(first["passed_over"], level=2500.2) and second["iterations"] == 0
+    assert second["probes"] == first["probes"]
+    assert "2500 at 2500.5 (not reached from 2496.09), 2500.2 at 2500.5 (not reached" in whole.message
+    assert run(gap_column(), tmp_path / "run").summary["reason_code"] == status.LEVELS_PASSED_OVER
+    res = run(dict(gap_column(), steps=steps), tmp_path / "run", restart=str(tmp_path / "run"))
+    assert res.status == "completed" and res.summary["steps"][3]["passed_over"]["level"] == 2500.2, res.message
+    assert np.abs(tips(res.summary) - tips(s)).max() <= 1e-10 * np.abs(tips(s)).max()
+
+
 def record(lam: float, passed=None, unsettled=False) -> StepRecord:
     return StepRecord(load_factor=lam, iterations=3, substeps=1, cutbacks=0, reason="CONVERGED_FNORM_ABS",
                       residual_norm=1e-9, wall_time=0.0, weights_unsettled=unsettled, passed_over=passed)

@@ -48,8 +48,14 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
             return f"{d[0]:.5f}" if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
         cells.append(cell)
     lines = ["| load factor | " + " | ".join(heads) + " |", "|---:|" + "---:|" * len(heads)]
-    lines += [f"| {st['load_factor']:g} | " + " | ".join(c(st) for c in cells) + " |" for st in steps]
+    lines += [f"| {level_cell(st)} | " + " | ".join(c(st) for c in cells) + " |" for st in steps]
     return lines
+
+
+def level_cell(step: dict) -> str:
+    """A level's load factor; for one reported past a gap of the load path also the level asked."""
+    asked = (step.get("passed_over") or {}).get("level")
+    return f"{step['load_factor']:g}" + ("" if asked is None else f" (level {asked:g}, past a gap of the load path)")
 
 
 def moved_supports(config: dict, summary: dict | None = None) -> list[str]:
@@ -113,7 +119,7 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     for st, f in zip(steps, force):
         dd = st.get("displacement_differences", {})
         cells = [f"{f:.6g}"] + [f"{1e3 * dd[p]['end']:.5f}" if p in dd else "" for p in pairs]
-        lines.append(f"| {st['load_factor']:g} | " + " | ".join(cells) + " |")
+        lines.append(f"| {level_cell(st)} | " + " | ".join(cells) + " |")
     return lines
 
 

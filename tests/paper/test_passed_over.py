@@ -109,3 +109,7 @@ def test_existing_says_the_run_passed_over_a_level(gap):
     run_dir = existing.ExistingRun(res.summary["output_dir"], PAPER_INPUTS)
     assert run_dir.ended().startswith("completed (LEVELS_PASSED_OVER: completed, but 1 level(s) not reached")
     assert "2500 at 2500.5" in run_dir.ended()
+    # the run's own tables name the level asked beside the load factor it was reported at
+    text = "\n".join(existing.runs_markdown([run_dir]).splitlines())
+    assert text.count("| 2500.5 (level 2500, past a gap of the load path) | ") == 2, text
+    assert "| 2000 | " in text

@@ -2,6 +2,8 @@
 scripts/bench_envelope.py --csv), rendered by workflows.envelope.render_docs."""
 import os
 
+import pytest
+
 from ancf_petsc.workflows.envelope import render_docs
 
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
@@ -393,3 +395,19 @@ def test_a_cell_with_a_level_past_a_gap_says_where(tmp_path):
     fake.chmod(0o755)
     res = run_cell(EnvelopeCell(NEO, 30.0, "soleus", "sliding"), [str(fake)], str(tmp_path / "work"))
     assert res.status == "completed" and res.passed_over == ((2500.0, 2500.5),)
+
+
+@pytest.mark.slow
+def test_iterations_to_1200_count_a_1200_level_reported_past_a_gap(tmp_path):
+    """The 8-element unilateral soleus-biased 135° column reports 1200 N at 1200.2 N (a gap of the
+    load path), a level of 330 Newton iterations and 8 cut-backs; the cell counted 'to 1.2 kN' the
+    steps at load factors up to 1200 N and gave 70 iterations and 0 cut-backs
+    (docs/gait_envelope_core8.csv).  Now the steps of the levels asked up to 1.2 kN: 400 and 8."""
+    import shutil
+    from ancf_petsc.workflows.envelope import NEO, EnvelopeCell, run_cell
+    res = run_cell(EnvelopeCell(NEO, 135.0, "soleus", "unilateral", elements=8),
+                   [os.path.join(os.path.dirname(DOCS), ".venv", "bin", "ancf-solve")], str(tmp_path))
+    assert res.status == "completed" and res.passed_over == ((1200.0, 1200.2),), res.message
+    early = res.per_level[:8]
+    assert early[-1][0] == 1200.2 and early[-1][2] == 8
+    assert res.iterations_to_1200 == sum(its for _, its, _ in early) and res.cutbacks_to_1200 == 8

@@ -213,7 +213,7 @@ def run_cell(cell: EnvelopeCell, solver: list[str], workdir: str, timeout: float
         tail = (proc.stderr.strip().splitlines() or ["(no output)"])[-1]
         return CellResult(cell, "crashed", wall_time=wall, message=f"exit {proc.returncode}: {tail[:200]}")
     steps = data.get("steps", [])
-    early = [s for s in steps if s["load_factor"] <= 1200.0 * (1 + 1e-12)] if not cell.stride else steps
+    early = steps if cell.stride else steps[:sum(lv <= 1200.0 * (1 + 1e-12) for lv in cell.levels)]  # a step a level
     status = data.get("status", "unknown")
     return CellResult(cell, status, last_level=steps[-1]["load_factor"] if steps else 0.0,
                       iterations=int(data.get("newton_iterations", sum(s["iterations"] for s in steps))),

@@ -105,7 +105,7 @@ def behind(stepper, path, target: float, last) -> StepRecord | None:
     stepper.log(f"  load factor {target:g}: passed over too by the step over of {last.passed_over[0]:g}, "
                 f"reported at {path.lam:.6g} with it (solver.step_over_jumps)")
     return replace(last, iterations=0, substeps=0, cutbacks=0, tresca_solves=0, wall_time=0.0,
-                   iteration_history=[], branch_switches=[],
+                   iteration_history=[], branch_switches=[], increment=path.dlam, last_increment=path.dlam_last,
                    passed_over=(target, last.passed_over[1], last.load_factor))
 
 

@@ -91,8 +91,12 @@ def test_a_level_the_step_over_passed_too_is_reported_with_it(tmp_path):
     assert second["probes"] == first["probes"]
     assert "2500 at 2500.5 (not reached from 2496.09), 2500.2 at 2500.5 (not reached" in whole.message
     assert run(gap_column(), tmp_path / "run").summary["reason_code"] == status.LEVELS_PASSED_OVER
-    res = run(dict(gap_column(), steps=steps), tmp_path / "run", restart=str(tmp_path / "run"))
+    # restarted after 2500 N to 2500.2 N, then after 2500.2 N to 2600 N (the increment the level
+    # passed over with 2500 N hands on is the path's: it was 0 from a restart's last level)
+    res = run(dict(gap_column(), steps=steps[:4]), tmp_path / "run", restart=str(tmp_path / "run"))
     assert res.status == "completed" and res.summary["steps"][3]["passed_over"]["level"] == 2500.2, res.message
+    res = run(dict(gap_column(), steps=steps), tmp_path / "run", restart=str(tmp_path / "run"))
+    assert res.status == "completed" and len(res.summary["steps"]) == 5, res.message
     assert np.abs(tips(res.summary) - tips(s)).max() <= 1e-10 * np.abs(tips(s)).max()
 
 

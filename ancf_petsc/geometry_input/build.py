@@ -167,7 +167,7 @@ def fit_segment(Q: np.ndarray, closed: bool, degree: int, tol: float, name: str,
         nm = name if len(cuts) == 2 else f"{name}.{k + 1}"
         whole = closed and len(cuts) == 2
         out.append(fit_curve(part, degree, tol, nm, max_spacing, min_points=5 if whole else 2,
-                             traced=traced[i:j + 1]).curve)
+                             traced=traced[i:j + 1], periodic=whole and not cidx.size).curve)
     return out
 
 

@@ -102,11 +102,13 @@ def _local_means(Q: np.ndarray, s: np.ndarray, idx: np.ndarray, traced: np.ndarr
 
 def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
               max_spacing: float | None = None, min_points: int = 2,
-              traced: np.ndarray | None = None) -> FittedCurve:
+              traced: np.ndarray | None = None, periodic: bool = False) -> FittedCurve:
     """Interpolating spline through a few points of the open polyline ``Q`` (ends kept exactly),
     within ``tol`` of it (Hausdorff distance, sampled), control points at most ``max_spacing``
     apart along the trace and at least ``min_points`` of them; ``traced`` marks the points of
-    Q that were traced (the others were added on the chords between them)."""
+    Q that were traced (the others were added on the chords between them).  ``periodic``: Q is
+    a whole closed outline without a corner (Q[-1] = Q[0]), fitted by the periodic spline, smooth
+    where it closes (``SplineCurve``)."""
     Q = np.asarray(Q, dtype=float)
     traced = np.ones(len(Q), dtype=bool) if traced is None else np.asarray(traced, dtype=bool)
     s = arclength(Q)
@@ -125,7 +127,7 @@ def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
             extra.append(np.searchsorted(s, targets - TIE * s[-1]))
     if extra:
         idx = np.unique(np.concatenate([idx] + extra))
-    curve = SplineCurve(_local_means(Q, s, idx, traced), degree, name)
+    curve = SplineCurve(_local_means(Q, s, idx, traced), degree, name, periodic=periodic)
     worst = np.zeros(1)
     for _ in range(MAX_REFINEMENTS):
         worst, arg = _deviation(curve, Q, idx)
@@ -142,7 +144,7 @@ def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
         if not new:
             break
         idx = np.unique(np.r_[idx, new])
-        curve = SplineCurve(_local_means(Q, s, idx, traced), degree, name)
+        curve = SplineCurve(_local_means(Q, s, idx, traced), degree, name, periodic=periodic)
     else:
         worst, _ = _deviation(curve, Q, idx)
     return FittedCurve(curve, float(worst.max()))

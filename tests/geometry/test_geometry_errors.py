@@ -109,7 +109,7 @@ CASES = [
                                 "remove it; got {axis: 2, index: 0}"),
     ("a region smoothing erases", config(inline({"a": {"label": 1}}, units="px", pixel_size="0.05 mm",
                                                 axes="image", source="small.png")),
-     "geometry.sections.outlines.a", "change its area by -41.8 % (0.02125 -> 0.01236 mm^2): it is small "
+     "geometry.sections.outlines.a", "change its area by -41.9 % (0.02125 -> 0.01235 mm^2): it is small "
                                      "against them; give geometry.sections.smoothing a smaller value"),
     # an index column was read as u ('the outline is open ... 39 mm apart'), columns past two were dropped
     ("three columns", config(inline({"a": {"file": "idx.csv"}})),

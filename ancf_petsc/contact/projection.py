@@ -299,8 +299,8 @@ def outside_window(eB: np.ndarray, xiB: np.ndarray, lo: np.ndarray, hi: np.ndarr
     """Whether each partner place (e_B, ξ_B) lies outside the B elements [lo, hi].  A point on a
     window's end boundary is inside: a point pinned on a boundary is kept on the element with the
     lower index at ξ = +1 (``descend``), which at the window's first boundary is element lo − 1,
-    the same place as lo at ξ = −1 (the 12-element unilateral stride's first frame was cut back
-    when one point, pinned there, counted as lost)."""
+    the same place as lo at ξ = −1 (counted as lost, one point pinned there failed the first
+    evaluation of the 12-element unilateral stride's first frame at the predicted state)."""
     below = (eB < lo) & ~((eB == lo - 1) & (xiB >= 1.0))
     above = (eB > hi) & ~((eB == hi + 1) & (xiB <= -1.0))
     return below | above

@@ -129,6 +129,11 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
         r = fast.dataset(gid, "reactions", np.array(list(extra["reactions"].values())))
         fast.attributes(r, {"supports": list(extra["reactions"]),
                             "units": "N: the force (x, y, z) the support exerts on the beam at its node's r"})
+    if "reaction_moments" in extra:     # its moment about the node's section centroid [N m]
+        m = fast.dataset(gid, "reaction_moments", np.array(list(extra["reaction_moments"].values())))
+        fast.attributes(m, {"supports": list(extra["reaction_moments"]),
+                            "units": "N m: the moment (x, y, z) the support exerts on the beam about "
+                                     "its node's section centroid r"})
     for pair, d in extra.get("displacement_differences", {}).items():   # io/derived.py
         dd = fast.dataset(gid, f"displacement_differences/{pair}", np.asarray(d["profile"]))
         fast.attribute(dd, "units", "m: u_x of the first beam's centroid line minus the second's, per node station")

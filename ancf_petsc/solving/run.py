@@ -30,7 +30,7 @@ from ..contact.reports import end_notes, made_at_the_end
 from ..petsc.contact_reports import contact_fields, contact_gaps
 from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
-from ..petsc.reactions import reactions as support_reactions
+from ..petsc.reactions import reaction_entries
 from . import solver_messages, step_over
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
@@ -227,8 +227,7 @@ class Run:
             q = None if blocks is None else blocks[:self.model.n_nodes]
             gaps = contact_gaps(problem, problem.X)        # collective: every rank its own points
             fields = contact_fields(problem, problem.X)
-            reactions = support_reactions(problem, problem.X)
-            extra = {"reactions": {s.name: r.tolist() for s, r in zip(self.model.supports, reactions)}}
+            extra, reactions = reaction_entries(problem, problem.X)
             if self.spec.history is not None:
                 extra["frame"] = self.spec.history.frame_of(rec.load_factor)
                 extra["time"] = self.spec.history.time_of(rec.load_factor)

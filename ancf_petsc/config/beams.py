@@ -79,12 +79,14 @@ def check_edited_beams(beams: list[BeamSpec]) -> None:
 
 def material_as_written(material: dict) -> dict:
     """A parsed material as a config gives it (GOH's fibres.angles_deg back to angle_deg): what
-    results.h5's config_yaml stores for a material edited through the API (api.py)."""
+    results.h5's config_yaml stores for a material edited through the API (api.py).  An
+    angle_deg beside angles_deg is an edit in the config's key (a parsed material has none), and
+    wins (fibres['angle_deg'] = 60 was dropped for the parsed 0 deg: the 0 deg answer)."""
     fibres = material.get("fibres") if isinstance(material, dict) else None
     if not isinstance(fibres, dict) or "angles_deg" not in fibres:
         return material
     written = {k: v for k, v in fibres.items() if k != "angles_deg"}
-    return dict(material, fibres=dict(written, angle_deg=list(fibres["angles_deg"])))
+    return dict(material, fibres=dict(written, angle_deg=written.get("angle_deg", list(fibres["angles_deg"]))))
 
 
 def _plain(value):

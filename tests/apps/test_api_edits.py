@@ -243,3 +243,25 @@ def test_the_stored_config_says_the_edited_material(tmp_path):
     assert float(stored["mu"]) == 2.0e6
     u_parse = _parsed_tip(ap, "uniaxial_neohookean.yaml", {"material": stored}, tmp_path)
     assert u_edit[0] == pytest.approx(u_parse[0], rel=1e-12) and u_parse[0] < 0.02
+
+
+def test_an_edited_fibre_angle_in_the_configs_key_is_solved(tmp_path):
+    """A GOH bar's fibres['angle_deg'] (the config's key) set to 60 on the parsed spec was dropped
+    for the parsed angles_deg [0]: the run solved 0 deg (tip u_x 18.24 mm against 60 deg's 101.3
+    mm) with no word.  Now it is the angle solved and the one stored, as the config's would be."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "edited")
+    spec.steps = [1.0]
+    goh = {"model": "goh", "mu": 1.0e6, "bulk_modulus": 5.0e7, "k1": 2.0e6, "k2": 5.0, "kappa": 0.1,
+           "fibres": {"follow": "axis", "angle_deg": 0.0}}
+    from ancf_petsc.config.beams import parse_material
+    spec.beams[0].material = parse_material(goh, "beams[0].material")
+    spec.beams[0].material["fibres"]["angle_deg"] = 60.0
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    assert spec.beams[0].material["fibres"]["angles_deg"] == [60.0]
+    u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
+    with h5py.File(tmp_path / "edited" / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])["beams"][0]["material"]
+    assert stored["fibres"]["angle_deg"] == [60.0]
+    u_parse = _parsed_tip(ap, "uniaxial_neohookean.yaml",
+                          {"material": dict(goh, fibres={"follow": "axis", "angle_deg": 60.0})}, tmp_path)
+    assert u_edit[0] == pytest.approx(u_parse[0], rel=1e-12)

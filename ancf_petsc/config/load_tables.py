@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .values import ConfigError
+from .values import ConfigError, number
 
 #: OpenSim storage files by extension (anything else is read as CSV)
 STORAGE = (".sto", ".mot")
@@ -162,11 +162,7 @@ def inline_table(value: dict, where: str) -> LoadTable:
         p = f"{where}.{name}"
         if not isinstance(col, (list, tuple)) or not col:
             raise ConfigError(p, "expected a non-empty list of numbers")
-        out = []
-        for k, v in enumerate(col):
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-                raise ConfigError(f"{p}[{k}]", f"expected a finite number; got {v!r}")
-            out.append(float(v))
+        out = [number(v, f"{p}[{k}]") for k, v in enumerate(col)]   # 1e3: a string to PyYAML
         if n is not None and len(out) != n:
             raise ConfigError(p, f"has {len(out)} values, the first column {n}: every column needs one "
                                  "value per frame")

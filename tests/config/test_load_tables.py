@@ -53,3 +53,20 @@ def test_rows_written_with_spaces_under_a_tab_separated_header(tmp_path):
 def test_what_stays_refused_says_where_and_what_to_do(tmp_path, name, text, match):
     with pytest.raises(ConfigError, match=match):
         _read(tmp_path, name, text)
+
+
+def test_an_inline_table_reads_numbers_as_steps_do():
+    """PyYAML reads 1e3 and 1e-2 (no '.') as strings: steps, forces and curves take them as
+    numbers, a history table refused them ('history.table.soleus[0]: expected a finite number;
+    got '1e3''). The same frames written either way are the same table."""
+    from ancf_petsc import yamlio
+    from ancf_petsc.config.load_tables import inline_table
+    table = yamlio.load("{time: [0, 1e-2], soleus: [1e3, 2.5e3]}")
+    got = inline_table(table, "history.table")
+    assert np.array_equal(got.columns["time"], [0.0, 0.01])
+    assert np.array_equal(got.columns["soleus"], [1000.0, 2500.0])
+    for bad, match in (("[1, nan]", r"history\.table\.soleus\[1\]: must be a finite number; got nan"),
+                       ("[1, ten]", r"history\.table\.soleus\[1\]: expected a number; got 'ten'"),
+                       ("[1, true]", r"history\.table\.soleus\[1\]: expected a number; got True")):
+        with pytest.raises(ConfigError, match=match):
+            inline_table(yamlio.load(f"{{time: [0, 1], soleus: {bad}}}"), "history.table")

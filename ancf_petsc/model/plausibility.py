@@ -10,10 +10,10 @@ import numpy as np
 
 from ..physics.cubature import gauss_legendre
 from ..physics.geometry import rotation, twist_angle
-from ..physics.materials import NeoHookean
+from ..physics.materials import NeoHookean, StVenantKirchhoff
 
 __all__ = ["MAX_LENGTH", "MAX_WIDTH", "SLENDERNESS", "MAX_FIRST_STRAIN", "MIN_OVERFLOW_STRETCH",
-           "MIN_SHEAR_MODULUS", "MAX_BULK_RATIO", "MAX_TWIST_DEG", "TWIST_AXIS_REACH", "MAX_SECTION_AREA_ERROR",
+           "MIN_SHEAR_MODULUS", "MIN_FIBRE_STIFFNESS", "MAX_BULK_RATIO", "MAX_TWIST_DEG", "TWIST_AXIS_REACH", "MAX_SECTION_AREA_ERROR",
            "fibre_warnings", "load_warnings", "material_warnings", "size_warnings", "strain_warning",
            "point_force_warnings", "pretwist_resolution_warnings", "reversed_load_warnings",
            "section_area_errors", "twist_warnings"]
@@ -32,6 +32,9 @@ MIN_OVERFLOW_STRETCH = 1.1
 #: a (matrix) shear modulus below this [Pa] is most likely kPa or MPa written as Pa: the softest
 #: published tendon matrix is 15 kPa (docs/fibres.md), the paper's subtendons 103-227 MPa
 MIN_SHEAR_MODULUS = 1e3
+#: a fibre stiffness k1 in (0, this) [Pa] is most likely kPa or MPa written as Pa: the published
+#: sets have k1 = 1.0-135.5 MPa (docs/fibres.md); k1 = 0 switches the fibres off
+MIN_FIBRE_STIFFNESS = 1e4
 #: K / mu beyond this is incompressible past what Newton's tolerance resolves (studies sweep to 1e4)
 MAX_BULK_RATIO = 1e6
 #: a pretwist beyond this [deg] over the tendon's length is more than a full turn (measured: 0-180)
@@ -196,16 +199,27 @@ def fibre_warnings(spec, beams) -> list[str]:
 
 
 def material_warnings(spec, beams) -> list[str]:
-    """One warning per beam whose (matrix) shear modulus mu is below ``MIN_SHEAR_MODULUS`` (a unit
-    slip), else whose bulk modulus K gives a negative small-strain Poisson ratio (K < 2 mu / 3: an
-    auxetic tendon, most likely a unit slip in K) or K / mu above ``MAX_BULK_RATIO``."""
+    """One warning per beam whose (matrix) shear modulus mu is below ``MIN_SHEAR_MODULUS`` (SVK: E
+    below 3x it; a unit slip), else whose bulk modulus K gives a negative small-strain Poisson
+    ratio (K < 2 mu / 3: an auxetic tendon, most likely a unit slip in K) or K / mu above
+    ``MAX_BULK_RATIO``; and one whose fibre stiffness k1 is in (0, ``MIN_FIBRE_STIFFNESS``)
+    (k1: 3.7859 for 3.7859 MPa ran to 'completed' with no word, the bar as soft as its matrix)."""
     out = []
     for i, b in enumerate(beams):
         law = getattr(b.material, "matrix", b.material)         # GOH: its neo-Hookean matrix
+        key = f"warning: beams[{i}].material"
+        k1 = getattr(b.material, "k1", 0.0)
+        if 0.0 < k1 < MIN_FIBRE_STIFFNESS:
+            out.append(f"{key}.k1: {k1:g} Pa for beam {b.name}: fibres this soft add next to nothing to the matrix "
+                       f"(the published sets have k1 = 1.0-135.5 MPa, docs/fibres.md): moduli are in Pa (units: "
+                       f"SI); if you meant {k1:g} MPa, write {k1:g}e6 (k1: 0 switches the fibres off)")
+        if isinstance(law, StVenantKirchhoff) and law.E < 3.0 * MIN_SHEAR_MODULUS:
+            out.append(f"{key}.E: {law.E:g} Pa for beam {b.name} is softer than any tendon (matrices from 15 kPa, "
+                       f"the paper's subtendons 103-227 MPa): moduli are in Pa (units: SI); if you meant "
+                       f"{law.E:g} MPa, write {law.E:g}e6")
         if not isinstance(law, NeoHookean):
             continue
         mu, K = law.mu, law.K
-        key = f"warning: beams[{i}].material"
         if mu < MIN_SHEAR_MODULUS:
             out.append(f"{key}.mu: {mu:g} Pa for beam {b.name} is softer than any tendon (matrices from 15 kPa, "
                        f"the paper's subtendons 103-227 MPa): moduli are in Pa (units: SI); if you meant "

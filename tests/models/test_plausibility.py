@@ -147,6 +147,23 @@ def test_first_level_strain_warning_on_stderr(tmp_path):
     assert lines[k + 1].startswith("[ancf]   warning: at the first converged level"), lines[k:k + 2]
 
 
+@pytest.mark.parametrize("config,material,expected", [
+    ("achilles_type3_psi45_goh.yaml", {"k1": 3.7859},
+     "beams[0].material.k1: 3.7859 Pa for beam soleus: fibres this soft add next to nothing"),
+    ("achilles_type3_psi45_goh.yaml", {"k1": 996.6}, "if you meant 996.6 MPa, write 996.6e6"),
+    ("elastica_svk.yaml", {"E": 1.2}, "beams[0].material.E: 1.2 Pa for beam beam is softer than any tendon")])
+def test_fibre_and_svk_moduli_written_in_mpa_as_pa_are_named(config, material, expected):
+    """k1: 3.7859 (the paper's set in MPa, written as Pa) and an SVK E: 1.2 ran to 'completed' with no
+    word (the GOH bar as soft as its matrix); k1: 0 (fibres off) is not named."""
+    raw = load_raw(config)
+    raw["beams"][0]["material"].update(material)
+    (w,) = _warnings(raw)
+    assert expected in w and "units" in w
+    if "k1" in material:
+        raw["beams"][0]["material"]["k1"] = 0.0
+        assert _warnings(raw) == []
+
+
 def test_paper_column_runs_without_warnings(tmp_path):
     s = run_inline(load_raw("achilles_type3_psi0.yaml"), tmp_path / "psi0")
     assert s["status"] == "completed" and s["warnings"] == []

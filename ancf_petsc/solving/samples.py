@@ -33,6 +33,7 @@ from ..petsc.potential import rounding_floor
 from ..physics.laws import make_material
 from .records import LoadStepFailure, PathState, StepRecord, reason_name
 from .run import Run, serial_comm
+from . import step_over
 from .snes_solver import absolute_tolerance
 from .stepper import LoadStepper
 
@@ -64,6 +65,8 @@ class SampleOutcome:
     rebuilt: bool = False                     # the run was (re)built for this sample
     wall_time: float = 0.0
     cpu_time: float = 0.0                     # this process's CPU seconds for the sample
+    #: levels reported past a gap of the load path: (level, last converged, reported at), step_over.py
+    passed_over: list = field(default_factory=list)
 
 
 def changed_paths(a, b, prefix: tuple = ()) -> list[tuple]:
@@ -220,9 +223,13 @@ class SampleSolver:
         except LoadStepFailure as exc:
             out.status, out.reason_code, out.message, out.inverted = "failed", exc.code, str(exc), exc.inverted
         unstable = [r.load_factor for r in records if r.negative_eigenvalues]
+        out.passed_over = [tuple(r.passed_over) for r in records if r.passed_over]
         if out.status == "completed" and unstable and not spec.solver.allow_unstable:
             out.status, out.reason_code = "unstable", st.NEGATIVE_EIGENVALUES
             out.message = f"negative tangent eigenvalues at load factor {unstable[0]:g}"
+        elif out.status == "completed" and out.passed_over:
+            out.reason_code = st.LEVELS_PASSED_OVER
+            out.message = f"completed, but {step_over.sentence(out.passed_over)}"
         out.newton_iterations = run.stepper.newton_iterations
         for name in run.model.probes:
             out.displacements[name] = np.array(out.displacements.get(name, [])).reshape(-1, 3)

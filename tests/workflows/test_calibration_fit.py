@@ -126,3 +126,25 @@ def test_the_log_fingerprint_follows_the_files_the_model_reads(tmp_path):
     assert fingerprint(spec) == before
     (tmp_path / "secs.yaml").write_text("scale_m_per_px: 2.0e-5\n")
     assert fingerprint(spec) != before
+
+
+def test_a_fitted_level_reported_past_a_gap_is_named(tmp_path, monkeypatch):
+    """A level of the data in a gap of the load path (no solve converges in (0.49, 0.5]; the step
+    over taken for any failure) is reported at 0.5001: the fit compared the model there with the
+    data at 0.5 and said nothing (sample 'COMPLETED'). Now the sample says LEVELS_PASSED_OVER and
+    the level, and the fit's log and report.md name it, one line per level."""
+    from ancf_petsc.solving import step_over
+    from ancf_petsc.workflows.calibration.report import markdown
+    from helpers import fail_solves
+    fail_solves(lambda solver, lam: 0.49 < lam <= 0.5, put=monkeypatch.setattr)
+    monkeypatch.setattr(step_over, "applies", lambda stepper, failure: True)
+    d = str(tmp_path)
+    spec = load_fit(bar_case(d, parameters=(MU,), lateral=False, identifiability={"profiles": False}))
+    said = []
+    res = run_calibration(spec, fresh=True, say=said.append)
+    assert res.best.ok and res.best.reason_code == "LEVELS_PASSED_OVER", res.best
+    assert res.best.passed_over == [[0.5, pytest.approx(0.5001)]]
+    gaps = [s for s in said if "gap of the load path" in s]
+    assert len(gaps) == 1 and gaps[0].startswith("[fit] warning: level 0.5 (elongation)"), said
+    assert "at load factor 0.5001" in gaps[0]
+    assert "- level 0.5 (elongation) lies in a gap" in markdown(res, SampleLog(os.path.join(d, "out"), spec))

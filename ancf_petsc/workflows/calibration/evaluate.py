@@ -73,7 +73,7 @@ class Evaluator:
                         levels_reached=len(out.load_factors), newton_iterations=out.newton_iterations,
                         start=how if start is not None else "cold", warm_levels=out.warm_levels,
                         fallbacks=out.fallbacks, rebuilt=out.rebuilt, wall_time=out.wall_time,
-                        cpu_time=out.cpu_time)
+                        cpu_time=out.cpu_time, passed_over=[[lv, at] for lv, _, at in out.passed_over])
         complete = out.status == "completed" and len(out.states) == len(spec.levels)
         return sample, (out.states if complete else None)
 

@@ -44,6 +44,8 @@ class Sample:
     cpu_time: float = 0.0
     rank: int = 0
     extra: dict = field(default_factory=dict)
+    #: [level, reported at]: levels the solve reported past a gap of the load path (step_over.py)
+    passed_over: list = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -115,4 +117,16 @@ def start_ratios(spec: FitSpec, start: Sample) -> list[str]:
                     f"{QUANTITY_UNITS.get(d.quantity, 'm')}) and of the model's sign? value_scale "
                     f"converts the column {d.value_column!r} (1e-3 for mm; now {d.value_scale:g})")
         out.append(line)
+    return out
+
+
+def passed_over_lines(spec: FitSpec, sample: Sample) -> list[str]:
+    """One warning per level of the data the sample's model reached only past a gap of the load
+    path (its values there are at the reported load factor, not at the level)."""
+    out = []
+    for level, at in sample.passed_over:
+        names = ", ".join(d.name for d in spec.data if np.any(np.isclose(d.all_levels, level, rtol=1e-12, atol=0.0)))
+        out.append(f"warning: level {level:g} ({names}) lies in a gap of the load path at these parameters: "
+                   f"the model's values there are at load factor {at:.6g}, past the gap (solver.step_over_jumps; "
+                   'docs/running.md, "Levels in a gap of the load path")')
     return out

@@ -83,12 +83,7 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     fp = g.create_group("fingerprint")       # what a restart compares (io/restart.py)
     for key, arr in fingerprint(model).items():
         fp.create_dataset(key, data=arr)
-    part = g.create_group("partition")
-    part.create_dataset("element_rank", data=layout.elem_owner)
-    part.create_dataset("node_rank", data=layout.node_owner)
-    part.create_dataset("petsc_node_of_model_node", data=layout.perm)
-    for key, val in (run_info.get("partition") or {}).items():
-        part.attrs[key] = val
+    write_partition(g, layout, run_info.get("partition"))
     for beam in model.beams:
         b = g.create_group(f"beams/{beam.name}")
         b.create_dataset("connectivity", data=beam.connectivity)
@@ -215,13 +210,30 @@ def recover_level(h5_path: str, name: str) -> bool:
     return False
 
 
-def truncate_levels(h5_path: str, step: int, load_factor: float, config: str | None = None) -> None:
+def write_partition(model_group, layout, stats: dict | None) -> None:
+    """``/model/partition``: element and node ranks, the PETSc numbering and ``stats``
+    (``partition_stats``) as attributes; a restart's replaces the stopped run's."""
+    if "partition" in model_group:
+        del model_group["partition"]
+    part = model_group.create_group("partition")
+    part.create_dataset("element_rank", data=layout.elem_owner)
+    part.create_dataset("node_rank", data=layout.node_owner)
+    part.create_dataset("petsc_node_of_model_node", data=layout.perm)
+    for key, val in (stats or {}).items():
+        part.attrs[key] = val
+
+
+def truncate_levels(h5_path: str, step: int, load_factor: float, config: str | None = None,
+                    layout=None, stats: dict | None = None) -> None:
     """Continue results.h5 after level ``step`` (a restart): the later and partial levels go,
-    and ``config`` (the restarted run's ``config_text``) is stored as the one solved with."""
+    ``config`` (the restarted run's ``config_text``) is stored as the one solved with, and
+    ``layout`` with its ``stats`` as the partition (the restart's ranks may differ)."""
     try:
         with h5py.File(h5_path, "a") as h5:
             if config is not None:
                 h5["model"].attrs["config_yaml"] = config
+            if layout is not None:
+                write_partition(h5["model"], layout, stats)
             steps = h5["steps"]
             for name in list(steps):
                 if name.endswith(".partial") or int(name.split("_")[1]) > step:

@@ -131,7 +131,8 @@ class ResultsWriter:
         self._step_texts: list = []            # each level's entry and its JSON (compact_summary)
         self._summary_time = -np.inf           # when summary.json was last written (monotonic)
         self._summary_cost = 0.0                # how long that took [s]
-        self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None else self._resume())
+        self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None
+                      else self._resume(layout, run_info))
 
     def _on_root(self, action) -> None:
         """Run ``action`` on rank 0; its error is raised on every rank as an ``OutputError``
@@ -207,9 +208,10 @@ class ResultsWriter:
             self._write_series("surface", 0, 0.0, surface_cells(self.sampler, model.q0))
         self._write_summary()
 
-    def _resume(self) -> None:
+    def _resume(self, layout, run_info: dict) -> None:
         """Continue the files of ``self.restart`` (a ``restart.RestartPoint``): the levels after
-        its step are dropped from results.h5, summary.json and the VTU series."""
+        its step are dropped from results.h5, summary.json and the VTU series; results.h5's
+        partition becomes this process's (``layout``, as summary.json's)."""
         point = self.restart
         self.summary["version"] = version_info()
         self.summary["restarted_from"] = {"step": point.step, "load_factor": point.load_factor}
@@ -217,7 +219,8 @@ class ResultsWriter:
         self.summary["last_converged"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
         self.vtk.resume([0.0] + [st["load_factor"] for st in self.summary["steps"]])
-        truncate_levels(self.h5_path, point.step, point.load_factor, config_text(self.model.spec))
+        truncate_levels(self.h5_path, point.step, point.load_factor, config_text(self.model.spec),
+                        layout, run_info.get("partition"))
         with open(os.path.join(self.dir, RESERVE), "wb") as fh:
             fh.write(b"\0" * RESERVE_BYTES)
         self._write_summary()

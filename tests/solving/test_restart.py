@@ -244,3 +244,26 @@ def test_a_restart_with_more_steps_stores_the_config_it_solved_with(tmp_path):
         stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
         levels = [h5["steps"][k].attrs["load_factor"] for k in sorted(h5["steps"])]
     assert levels == [0.25, 0.5, 0.75, 1.0] and stored["steps"] == levels, stored["steps"]
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_a_restart_on_other_ranks_stores_its_partition(tmp_path):
+    """A 3-element cantilever solved to 0.5 on one rank, restarted to 1.0 on two: results.h5
+    /model/partition kept the first run's (elements per rank [3], every element on rank 0)
+    while summary.json said ranks 2, [2, 1]; now both describe the restarted process."""
+    import h5py
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0]["elements"] = 3
+    raw["output"] = {"dir": str(tmp_path / "run"), "vtk": False}
+    short = write_config(dict(raw, steps=[0.25, 0.5]), tmp_path / "short.yaml")
+    assert solve_cli(short, extra=["--quiet"]).returncode == 0
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), ranks=2,
+                  extra=["--restart", str(tmp_path / "run"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    s = read_summary(tmp_path / "run")
+    with h5py.File(tmp_path / "run" / "results.h5") as h5:
+        part = h5["model/partition"]
+        stored = part.attrs["elements_per_rank"].tolist(), part["element_rank"][()].tolist()
+    assert s["ranks"] == 2 and s["partition"]["elements_per_rank"] == [2, 1]
+    assert stored == ([2, 1], [0, 0, 1]), stored

@@ -84,10 +84,9 @@ def beam_owner(model: Model, size: int, contact=None) -> np.ndarray:
         return np.zeros(model.n_elements, dtype=np.int64)
     xadj, adjncy, ew, vw = element_graph(model, contact)
     bw = np.bincount(elem_beam, weights=vw, minlength=n_beams).astype(np.int64)
-    rows = np.repeat(elem_beam, np.diff(xadj))
-    G = sp.coo_matrix((ew, (rows, elem_beam[adjncy])), shape=(n_beams, n_beams)).tocsr()
-    G.setdiag(0)
-    G.eliminate_zeros()
+    rows, cols = np.repeat(elem_beam, np.diff(xadj)), elem_beam[adjncy]
+    between = rows != cols                      # couplings within a beam are no edge
+    G = sp.coo_matrix((ew[between], (rows[between], cols[between])), shape=(n_beams, n_beams)).tocsr()
     G.sort_indices()
     owner = None
     if n_beams > size:

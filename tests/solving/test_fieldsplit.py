@@ -139,6 +139,28 @@ def test_whole_beam_partition_balances_fascicles():
         assert counts.max() - counts.min() <= 1, counts                # 37 equal fascicles
 
 
+def test_whole_beam_partition_of_one_element_beams_is_quiet():
+    """Beams of one element each (no coupling within a beam): the beam graph's empty diagonal
+    was set to zero, and scipy printed a SparseEfficiencyWarning on every such run (the
+    walking stride at 1 element on 4 ranks); now no warning and one whole beam per rank."""
+    import warnings
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.parallel.partition import make_layout
+    raw = load_raw("bundle_hex7.yaml")
+    raw["bundle"]["elements"] = 1
+    spec = parse_config(raw, base_dir=CONFIGS)
+    model = build_model(spec)
+    contact = build_contact(model, spec.contact, lambda *a: None)
+    for size in (2, 7, 8):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            lay = make_layout(model, "beams", size, 0, contact)
+        assert np.bincount(lay.elem_owner, minlength=size)[:7].tolist() == \
+            ([4, 3] if size == 2 else [1] * 7), lay.elem_owner
+
+
 def test_auto_rule_and_its_refusals():
     """auto: direct for the 7-fascicle bundle (792 multipliers), fieldsplit for 19 fascicles
     (2 772); direct when PETSc options choose the solver or a beam is not held by its own

@@ -275,10 +275,19 @@ def _goh(value, path: str) -> dict:
             raise ConfigError(ap, f"at most 4 fibre families; got {len(items)}")
         angles = tuple(number(a, key_path(ap, i), lo=-90.0, hi=90.0, hint=" (degrees)")
                        for i, a in enumerate(items))
+        _distinct_families(angles, ap)
     else:
         angles = (number(raw, ap, lo=-90.0, hi=90.0, hint=" (degrees; a list gives one family each)"),)
     return {"k1": k1, "k2": k2, "kappa": kappa,
             "fibres": {"follow": follow, "extra_twist_deg": extra, "angles_deg": list(angles)}}
+
+
+def _distinct_families(angles: tuple, path: str) -> None:
+    """Each fibre family once ([10, 10], or [90, -90]: one line, was k1 doubled along it, no word)."""
+    for i, j in ((i, j) for i in range(len(angles)) for j in range(i) if (angles[i] - angles[j]) % 180.0 == 0.0):
+        raise ConfigError(key_path(path, i), f"the same fibre family as {key_path(path, j)} ({angles[j]:g} deg"
+                          f"{'; +90 and -90 are one line' if angles[i] != angles[j] else ''}): counted twice (k1 doubled "
+                          f"along it); give each once (a pair: [a, -a]); got {shown([float(v) for v in angles])}")
 
 
 #: how each material of the registry (physics/laws.py ``MATERIALS``) is read from a config

@@ -394,6 +394,11 @@ def test_fibres_on_imported_sections_that_vary_along_x(tmp_path):
     ({"kappa": 0.33333334}, "beams[0].material.kappa", "<= 0.333333 (fibre dispersion: 0 aligned, "
                                                        "1/3 isotropic); got 0.33333334"),
     ({"k1": None}, "beams[0].material.k1", "missing value"),
+    # one family twice (accepted: k1 doubled along it, no word); +90 and -90 are one line
+    ({"fibres": {"angle_deg": [10, 10]}}, "beams[0].material.fibres.angle_deg[1]",
+     "the same fibre family as beams[0].material.fibres.angle_deg[0] (10 deg"),
+    ({"fibres": {"angle_deg": [90, 30, -90]}}, "beams[0].material.fibres.angle_deg[2]",
+     "angle_deg[0] (90 deg; +90 and -90 are one line)"),
 ])
 def test_bad_goh_values_are_refused_with_key_path(change, path, words):
     raw = load_raw("pretwisted_bar.yaml")

@@ -2,6 +2,7 @@
 a converged level and the state of the load path (everything a restart needs)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from petsc4py import PETSc
@@ -126,3 +127,19 @@ def spent_before(point) -> int:
     """The Newton iterations of the levels a restarted run continues after (each level's count
     includes its cut-back attempts): what an uninterrupted run had spent there."""
     return sum(r.iterations for r in restored_records(point))
+
+
+def restart_increment(point, levels: list[float], say=lambda *_: None) -> float:
+    """A restart's next load increment: the stored one, unless it is not > 0 (a results.h5
+    written before f0a0e19 for a level passed over with the one before it, or edited), which
+    stepped by 0 forever at the last converged level; then the last accepted increment, else
+    the way to the next level (said in the log)."""
+    dlam = point.increment
+    if math.isfinite(dlam) and dlam > 0.0:
+        return dlam
+    last = point.last_increment
+    ok = math.isfinite(last) and last > 0.0
+    new = last if ok else (levels[0] - point.load_factor if levels else 1.0)
+    say(f"[ancf] restart: results.h5 steps/step_{point.step:04d}/restart gives the next load increment "
+        f"{dlam:g} (not > 0); going on with {new:g}, the {'last accepted increment' if ok else 'way to the next level'}")
+    return new

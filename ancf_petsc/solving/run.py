@@ -35,7 +35,7 @@ from . import solver_messages, step_over
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
-from .records import LoadStepFailure, PathState, restored_records, spent_before
+from .records import LoadStepFailure, PathState, restart_increment, restored_records, spent_before
 from .restart_check import check_restart_state
 from .stepper import LoadStepper
 from .supports import free_rigid_motions
@@ -212,6 +212,7 @@ class Run:
         if self.stepper.spec.predictor == "tangent":            # the factor the interrupted run had
             self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
         levels = list(self.spec.steps[len(point.levels):])    # the converged ones start the steps
+        path.dlam = restart_increment(point, levels, self.say)
         self.say(f"[ancf] restart from step {point.step} (load factor {point.load_factor:g}) of "
                  f"{self.spec.output.dir}: {len(levels)} level(s) to go")
         return levels, path

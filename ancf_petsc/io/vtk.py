@@ -3,6 +3,7 @@ as VTU time series with .pvd collections (``vtu.write_vtu``: meshio's layout, wi
 from __future__ import annotations
 
 import os
+import re
 import time
 
 import numpy as np
@@ -195,13 +196,14 @@ class VtkSeries:
 
     def resume(self, loads: list[float]) -> None:
         """Continue the series of a restarted run whose levels 0 … n have load factors ``loads``:
-        their files are listed again, the VTUs of later levels removed."""
+        their files are listed again, the VTUs of later levels removed (``<series>_NNNN.vtu``
+        only: other files and folders so named are a user's and stay)."""
         for series in self.entries:
             for k in range(len(loads)):
                 if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
                     self.entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
+        ours = re.compile(f"({'|'.join(self.entries)})_([0-9]{{4,}})\\.vtu")
         for name in os.listdir(self.dir):
-            stem = name.split("_")[-1].split(".")[0]
-            if name.startswith(tuple(f"{series}_" for series in self.entries)) and stem.isdigit() \
-                    and int(stem) >= len(loads):
+            match = ours.fullmatch(name)        # a run's VTU, not a user's surface_notes_7.txt
+            if match and int(match.group(2)) >= len(loads) and os.path.isfile(os.path.join(self.dir, name)):
                 os.remove(os.path.join(self.dir, name))

@@ -51,3 +51,23 @@ def test_pvd_collections_rewritten_when_due_and_complete_at_the_end(tmp_path, mo
     pvd.mkdir()                                             # a directory where the file goes
     reason = series.write_indexes()
     assert reason is not None and "surface.pvd: cannot write" in reason
+
+
+def test_a_restart_removes_only_the_run_s_later_vtus(tmp_path):
+    """``VtkSeries.resume`` (a restart after level 1) removed every name starting with
+    surface_/contact_ whose last '_' part was a number past it: a user's surface_notes_7.txt went,
+    and a folder surface_run_9 stopped the restart ('output error: …/surface_run_9: Is a
+    directory', exit 2).  Now only the series' own later VTUs go."""
+    from ancf_petsc.io import vtk
+    ours = ["surface_0000.vtu", "surface_0001.vtu", "surface_0002.vtu", "surface_0003.vtu",
+            "contact_0001.vtu", "contact_0002.vtu"]
+    users = ["surface_notes_7.txt", "contact_figure_12.png", "surface_12.vtu", "surface_0005.vtu.bak"]
+    for name in ours + users:
+        (tmp_path / name).write_text("x")
+    (tmp_path / "surface_run_9").mkdir()
+    series = vtk.VtkSeries(str(tmp_path))
+    series.resume([0.0, 0.5])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["surface_0000.vtu", "surface_0001.vtu", "contact_0001.vtu", "surface_run_9"] + users)
+    assert series.entries == {"surface": [(0.0, "surface_0000.vtu"), (0.5, "surface_0001.vtu")],
+                              "contact": [(0.5, "contact_0001.vtu")]}

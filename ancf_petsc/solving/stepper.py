@@ -30,7 +30,7 @@ from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .predictor import TangentPredictor
 from .critical_point import critical_point
-from .rest_response import bounded_first_increment
+from .rest_response import at_rest, bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
@@ -184,8 +184,7 @@ class LoadStepper:
         X = self.problem.X
         t0 = time.perf_counter()
         tally = LevelTally(start=level, increment=path.dlam)
-        history = []
-        X_prev = X.duplicate()
+        history, X_prev = [], X.duplicate()
         mixed = self.problem.mixed                     # solver.tangent: mixed (petsc/mixed_tangent.py)
         try:
             while path.lam < target * (1.0 - 1e-14):
@@ -194,7 +193,8 @@ class LoadStepper:
                 X.copy(X_prev)
                 # a converged state at loads the increment leaves unchanged: nothing to predict
                 still = path.lam > 0.0 and self.problem.loads.unchanged(path.lam, path.lam + step)
-                predictor = "none" if still or self._contact_formed(path) else self.spec.predictor
+                rest = at_rest(self.problem, path.lam)          # λ = 0, or a frame of zeros
+                predictor = "none" if still or rest or self._contact_formed(path) else self.spec.predictor
                 moved = False
                 if predictor == "secant" and path.dlam_last > 0.0:
                     X.axpy(step / path.dlam_last, path.dX_last)       # secant predictor
@@ -203,7 +203,7 @@ class LoadStepper:
                 elif predictor == "tangent" and self.tangent.predict(X, path.lam + step):
                     self.problem.limits.limit_predictor(X_prev, X)
                     moved = True
-                reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam, path.lam == 0.0,
+                reason, its, fnorm = self.solve_at(path.lam + step, X, target, path.lam, rest,
                                                     X_prev if moved else None, still)
                 tally.its += its
                 tally.tresca_solves += self.tresca_solves

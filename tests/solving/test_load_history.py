@@ -347,6 +347,24 @@ def test_a_frame_that_repeats_its_loads_takes_no_newton_iteration(tmp_path, cont
             assert np.abs(_ends(two, k) - _ends(s, k)).max() <= 1e-8 * np.abs(_ends(s, k)).max()
 
 
+
+def test_a_frame_reloading_from_zero_loads_is_a_first_increment_from_rest(tmp_path):
+    """Without friction a frame of zero loads is the reference state: a table starting with a
+    frame of zeros, or unloading to 0 N, and then loading to 150 / 50 / 50 N took that frame with
+    the tangent load predictor and differentiated contact weights, 30 Newton iterations and a
+    cut-back (DIVERGED_MAX_IT) against 10 in one increment from rest.  Now the frame is the
+    first increment from rest: the iterations and the answer of a run whose only frame it is."""
+    frames = {"soleus": 150.0, "medial": 50.0, "lateral": 50.0}
+    alone = run_inline(tendon({"time": [0.0], **{k: [v] for k, v in frames.items()}}), tmp_path / "alone")
+    for before in ([0.0], [100.0, 0.0]):
+        table = {k: [v * (b > 0.0) for b in before] + [v] for k, v in frames.items()}
+        table["time"] = [0.1 * k for k in range(len(before) + 1)]
+        s = run_inline(tendon(table), tmp_path / f"after_{len(before)}")
+        last = s["steps"][-1]
+        assert (last["cutbacks"], last["iterations"]) == (0, alone["steps"][0]["iterations"]), before
+        assert np.abs(_ends(s) - _ends(alone)).max() <= 1e-10 * np.abs(_ends(alone)).max()
+
+
 def test_a_restart_goes_on_where_loads_that_shared_a_curve_part_after_it(tmp_path):
     """Two loads on the bar whose columns are equal in the 2 frames solved share one load curve;
     a third frame that parts them (30 and 25 N) was refused as 'the load curve of loads[0]

@@ -463,3 +463,27 @@ def test_a_run_that_completed_as_the_sweep_was_stopped_is_recorded_completed(tmp
                               StoppedAfterStart())
     record = json.load(open(tmp_path / "run.json"))
     assert out.status == record["status"] == "completed" and record["reason_code"] == "COMPLETED"
+
+
+def test_a_key_path_sets_one_beams_material_when_beams_share_it_by_an_anchor(tmp_path):
+    """Two bars written ``material: &m {...}`` and ``material: *m`` (one object under both keys):
+    sweeping beams[0].material.mu to 2 MPa set bar2's mu too (its tip 11.18 mm for its 1 MPa's
+    24.60 mm), as did a fit's parameter; now the key path's own."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.workflows.calibration.parameters import Parameter, apply
+    base = yaml.safe_load(open(UNIAXIAL))
+    bar = base["beams"][0]
+    bar2 = dict(bar, name="bar2", section=dict(bar["section"], center=[0.0, 0.02]))
+    text = yaml.safe_dump(dict(base, beams=[bar, bar2]), sort_keys=False)
+    assert "material: *" in text                         # an alias, as a user writes it
+    (tmp_path / "anchored.yaml").write_text(text)
+    with open(tmp_path / "sweep.yaml", "w") as fh:
+        yaml.safe_dump({"base": "anchored.yaml", "parameters": {"beams[0].material.mu": [2.0e6]}}, fh)
+    sweep = load_sweep(str(tmp_path / "sweep.yaml"))
+    run = expand(sweep)[0]
+    mus = [b.material["mu"] for b in parse_config(run_config(sweep, run), base_dir=CONFIGS).beams]
+    assert mus == [2.0e6, 1.0e6]
+    raw = yaml.safe_load(text)
+    fitted = apply(raw, [Parameter("mu", [parse_key_path("beams[0].material.mu")], 1e5, 1e7, 1e6)], [3.0e6])
+    assert [float(b["material"]["mu"]) for b in fitted["beams"]] == [3.0e6, 1.0e6]
+    assert float(raw["beams"][1]["material"]["mu"]) == 1.0e6

@@ -123,11 +123,15 @@ def path_exists(raw: Any, tokens: tuple[Token, ...]) -> bool:
 
 
 def set_key_path(raw: Any, tokens: tuple[Token, ...], value: Any) -> None:
-    """Set ``raw[tokens] = value`` in place, creating missing mappings on the way."""
+    """Set ``raw[tokens] = value`` in place, creating missing mappings on the way; each container
+    on the way becomes the key path's own (a YAML anchor's node is one object under every alias:
+    ``beams[0].material.mu`` set the mu of every beam written ``material: *m``)."""
     node = raw
     for tok in tokens[:-1]:
         if isinstance(tok, str) and tok not in node:
             node[tok] = {}
+        else:
+            node[tok] = copy.copy(node[tok])
         node = node[tok]
     node[tokens[-1]] = copy.deepcopy(value)
 

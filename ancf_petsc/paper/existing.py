@@ -22,7 +22,7 @@ from ..io.reader import read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
 from .inputs import TWISTS, PaperInputs
-from .run_outputs import interface_markdown, probe_markdown, run_figures
+from .run_outputs import interface_markdown, probe_markdown, run_figures, support_markdown
 
 __all__ = ["ExistingRun", "levels_missing", "other_figures", "paper_summaries", "read_existing", "runs_markdown",
            "title"]
@@ -147,7 +147,8 @@ def runs_markdown(runs: list[ExistingRun]) -> str:
         if not r.summary.get("steps"):
             lines.append("No converged level.")
             continue
-        lines += probe_markdown(r.summary, r.config) + interface_markdown(r.summary, r.config)
+        lines += (probe_markdown(r.summary, r.config) + interface_markdown(r.summary, r.config)
+                  + support_markdown(r.summary))
     return "\n".join(lines)
 
 

@@ -123,6 +123,23 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     return lines
 
 
+def support_markdown(summary: dict) -> list[str]:
+    """The supports at the last level: the force each exerts on its beam's r [N] and its moment
+    about the node's section centroid [N m] (summary ``reactions``, ``reaction_moments``); nothing
+    for a run that wrote no moments."""
+    last = (summary.get("steps") or [{}])[-1]
+    forces, moments = last.get("reactions") or {}, last.get("reaction_moments") or {}
+    if not moments:
+        return []
+    lines = ["", f"The supports at the last level (load factor {level_cell(last)}): force on the beam [N] and moment "
+             "about the node's section centroid [N m]:", "",
+             "| support | F_x | F_y | F_z | M_x | M_y | M_z |", "|---|" + "---:|" * 6]
+    for name, m in moments.items():
+        cells = list(forces.get(name, [np.nan] * 3)) + list(m)
+        lines.append(f"| {name} | " + " | ".join(f"{x:.6g}" for x in cells) + " |")
+    return lines
+
+
 def run_figures(directory: str, summary: dict, config: dict, out: str,
                 stem: str | None = None) -> list[str]:
     """The run's force–elongation and differences chart and, with contact fields in results.h5,

@@ -155,7 +155,11 @@ def test_a_second_run_at_one_pretwist_is_named_not_dropped_silently(tmp_path):
 def _force_column(text: str, head: str) -> dict[float, float]:
     """Load factor → the force column of the report's differences table under ``head``."""
     assert head in text, text[:3000]
-    rows = [line.split("|") for line in text.split(head)[1].splitlines()[2:] if line.startswith("| ")]
+    rows = []
+    for line in text.split(head)[1].splitlines()[2:]:
+        if not line.startswith("| "):            # the table ends (the supports' table may follow)
+            break
+        rows.append(line.split("|"))
     return {float(r[1]): float(r[2]) for r in rows}
 
 
@@ -219,3 +223,20 @@ def test_a_displacement_controlled_run_without_interfaces_has_a_whole_force_tabl
     assert "| load factor | reaction of bar.2 along x [N] |\n|---:|---:|\n" in text
     force = _force_column(text, "| load factor | reaction of bar.2 along x [N] |")
     assert set(force) == {0.5, 1.0} and 15.0 < force[0.5] < force[1.0]
+
+
+def test_the_supports_force_and_moment_at_the_last_level(tmp_path):
+    """A clamped cantilever with an end force P along z (4 elements, small load): the report gave
+    no reaction at all; now the support's force (−P along z) and moment (P L about y) at the
+    last level."""
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0]["elements"], raw["steps"], raw["output"] = 4, [1e-3], {"vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "b.yaml"), extra=["--output-dir", str(tmp_path / "b"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "b")], tmp_path / "rep")
+    head = "| support | F_x | F_y | F_z | M_x | M_y | M_z |"
+    assert "The supports at the last level (load factor 0.001)" in text and head in text
+    row = text.split(head)[1].splitlines()[2].split("|")
+    P = raw["loads"][0]["traction_force"][2] * 1e-3
+    assert row[1].strip() == "beam.0" and abs(float(row[4]) + P) < 1e-5 * P
+    assert abs(float(row[6]) - P * 0.1) < 1e-3 * P * 0.1

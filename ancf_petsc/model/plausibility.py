@@ -9,6 +9,7 @@ import re
 import numpy as np
 
 from ..physics.cubature import gauss_legendre
+from ..physics.elements import ELEMENTS
 from ..physics.geometry import rotation, twist_angle
 from ..physics.materials import NeoHookean, StVenantKirchhoff
 
@@ -158,25 +159,41 @@ def _frames(ks: list[int]) -> str:
     return ", ".join(runs[:4]) + (", ..." if len(runs) > 4 else "")
 
 
+def _outward(spec, ld) -> float:
+    """The x component of a load's vector out of its beam: +x on the last node, -x on the first
+    (0 on an interior node: neither pull nor push)."""
+    b = spec.beams[ld.beam]
+    last = ELEMENTS[b.element].block.nodes_of(b.elements) - 1
+    return ld.force[0] if ld.node == last else -ld.force[0] if ld.node == 0 else 0.0
+
+
 def reversed_load_warnings(spec) -> list[str]:
-    """One warning per load of a ``history`` whose column is negative at some frames: the load
-    then points against its force vector.  Muscle forces pull only (OpenSim writes them
-    positive), and a tendon pushed at its end buckles: on the paper's tendon at 90° the frames
-    at −20 and −50 N stopped the sliding, unilateral and μ = 0.3 runs (docs/gait.md, "A load
-    history")."""
+    """One warning per load of a ``history`` that pushes the end section it acts on into its
+    beam at some frames: a negative column under a vector pointing out of the beam, or a
+    positive one under a vector pointing in (forces written negative and mapped with a vector
+    -x pull).  Muscle forces pull only, and a tendon pushed at its end buckles: on the paper's
+    tendon at 90° the frames at −20 and −50 N stopped the sliding, unilateral and μ = 0.3 runs
+    (docs/gait.md, "A load history")."""
     if spec.history is None:
         return []
     out = []
     for ld in spec.loads:
-        if ld.curve is None:
+        outward = _outward(spec, ld)
+        push = [(int(round(k)), m) for k, m in ld.curve or () if outward * m < 0.0]
+        if not push:
             continue
-        neg = [int(round(k)) for k, m in ld.curve if m < 0.0]
-        if neg:
-            low = min(m for _, m in ld.curve)
-            out.append(f"warning: {ld.path or 'loads'}: its history column is negative at frame(s) {_frames(neg)} "
-                       f"(down to {low:g} x its {ld.kind}): the load then points against its vector, a pull "
-                       f"turned into a push (muscle forces are positive; a pushed tendon buckles); check the "
-                       f"column's sign or scale")
+        frames, where = _frames([k for k, _ in push]), ld.path or "loads"
+        if outward > 0.0:
+            out.append(f"warning: {where}: its history column is negative at frame(s) {frames} "
+                       f"(down to {min(m for _, m in push):g} x its {ld.kind}): the load then points against its "
+                       f"vector, a pull turned into a push (muscle forces are positive; a pushed tendon buckles); "
+                       f"check the column's sign or scale")
+        else:
+            end = "last" if ld.force[0] == outward else "first"
+            out.append(f"warning: {where}: its {ld.kind} points into beam {spec.beams[ld.beam].name} at its {end} "
+                       f"node (x component {ld.force[0]:g}): the column positive at frame(s) {frames} (up to "
+                       f"{max(m for _, m in push):g}) pushes the end section (muscle forces pull; a pushed tendon "
+                       f"buckles); point the vector out of the beam, or check the column's sign")
     return out
 
 

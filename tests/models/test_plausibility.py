@@ -222,3 +222,30 @@ def test_a_history_column_that_turns_negative_is_named():
     assert w.startswith("warning: loads[0]: its history column is negative at frame(s) 2-3, 5 (down to -5")
     raw["history"]["table"]["pull"] = [1.0, 2.0, 0.0, 3.0, 1.0]
     assert _warnings(raw) == []
+
+
+def test_the_push_warning_follows_the_force_on_the_end_not_the_columns_sign():
+    """OpenSim forces written negative and mapped with a vector pointing the other way pull the
+    tendon (its end moves +24.6 mm at 45 N, as with both signs positive), yet were warned 'a pull
+    turned into a push'; a positive column under a vector pointing into the beam pushes it (the
+    bar buckles: 3 negative eigenvalues) and was not warned; a lateral load changing sign was
+    warned as a push.  Now the warning names the frames where the force on an end section
+    points into its beam."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["history"] = {"table": {"time": [0.0, 0.1, 0.2], "pull": [-10.0, -45.0, 5.0]}}
+    raw["loads"][0].update(column="pull", traction_force=[-1.0, 0.0, 0.0])
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: loads[0]: its traction_force points into beam bar at its last node "
+                        "(x component -1): the column positive at frame(s) 3 (up to 5) pushes"), w
+    raw["history"]["table"]["pull"] = [-10.0, -45.0, -5.0]
+    assert _warnings(raw) == []
+    raw["loads"][0]["traction_force"] = [0.0, 0.0, 1.0]             # lateral: no pull, no push
+    assert _warnings(raw) == []
+    raw["loads"][0].update(node="first", traction_force=[1.0, 0.0, 0.0])
+    raw["boundary_conditions"][0]["node"] = "last"
+    assert _warnings(raw) == []                                     # -x on the first end: a pull
+    raw["history"]["table"]["pull"] = [-10.0, 45.0, -5.0]
+    raw["loads"][0]["traction_force"] = [-1.0, 0.0, 0.0]
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: loads[0]: its history column is negative at frame(s) 1, 3 (down to -10"), w

@@ -285,7 +285,7 @@ def _goh(value, path: str) -> dict:
 def _distinct_families(angles: tuple, path: str) -> None:
     """Each fibre family once ([10, 10], or [90, -90]: one line, was k1 doubled along it, no word)."""
     for i, j in ((i, j) for i in range(len(angles)) for j in range(i) if (angles[i] - angles[j]) % 180.0 == 0.0):
-        raise ConfigError(key_path(path, i), f"the same fibre family as {key_path(path, j)} ({angles[j]:g} deg"
+        raise ConfigError(key_path(path, i), f"the same fibre family as angle_deg[{j}] ({angles[j]:g} deg"
                           f"{'; +90 and -90 are one line' if angles[i] != angles[j] else ''}): counted twice (k1 doubled "
                           f"along it); give each once (a pair: [a, -a]); got {shown([float(v) for v in angles])}")
 

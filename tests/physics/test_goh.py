@@ -396,7 +396,7 @@ def test_fibres_on_imported_sections_that_vary_along_x(tmp_path):
     ({"k1": None}, "beams[0].material.k1", "missing value"),
     # one family twice (accepted: k1 doubled along it, no word); +90 and -90 are one line
     ({"fibres": {"angle_deg": [10, 10]}}, "beams[0].material.fibres.angle_deg[1]",
-     "the same fibre family as beams[0].material.fibres.angle_deg[0] (10 deg"),
+     "the same fibre family as angle_deg[0] (10 deg)"),
     ({"fibres": {"angle_deg": [90, 30, -90]}}, "beams[0].material.fibres.angle_deg[2]",
      "angle_deg[0] (90 deg; +90 and -90 are one line)"),
 ])
@@ -406,6 +406,15 @@ def test_bad_goh_values_are_refused_with_key_path(change, path, words):
     with pytest.raises(ConfigError) as exc:
         parse_config(raw, base_dir=CONFIGS)
     assert exc.value.path == path and words in str(exc.value)
+
+
+def test_a_fibre_family_given_twice_in_a_bundle_names_the_bundles_keys():
+    """The bundle's error names bundle.material..., and its message no generated beams[0] key."""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["bundle"]["material"] = dict(goh_material(0.1, follow="twist", angle=[5.0, 5.0]))
+    with pytest.raises(ConfigError) as exc:
+        parse_config(raw, base_dir=CONFIGS)
+    assert exc.value.path == "bundle.material.fibres.angle_deg[1]" and "beams[" not in str(exc.value)
 
 
 def test_fibre_keys_on_an_isotropic_law_are_refused():

@@ -14,6 +14,7 @@ from typing import Any
 import yaml
 
 from .. import yamlio
+from ..errors import UNKNOWN_KEY
 from ..physics.elements import ELEMENTS
 from ..physics.goh import GOH
 
@@ -49,6 +50,7 @@ def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
     history = None
     if isinstance(raw, dict) and raw.get("history") is not None:
         history = parse_history(raw["history"], base_dir)
+    _per_beam_key(raw)
     mapping(raw, "", required=("name", "geometry", "beams") + (() if history else ("steps",)),
             optional=TOP_KEYS[1:])
     name = _name(raw["name"])
@@ -91,6 +93,16 @@ def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
     if "section_update" not in (raw.get("solver") or {}):
         spec.solver.section_update = default_section_update(spec)
     return spec
+
+
+def _per_beam_key(raw: Any) -> None:
+    """A material at the top level (one for all beams) was 'unknown key; allowed here: ...',
+    without where it belongs or how to share it."""
+    key = next((k for k in ("material", "materials") if isinstance(raw, dict) and k in raw), None)
+    if key is not None:
+        raise ConfigError(key, "is given per beam, as beams[i].material (one for several beams: material: &m "
+                               "{...} on the first, material: *m on the others; a bundle: bundle.material); "
+                               f"got {key}: at the top level", UNKNOWN_KEY)
 
 
 def default_section_update(spec: ModelSpec) -> str:

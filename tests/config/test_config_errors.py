@@ -164,6 +164,10 @@ CASES += [
     ("element null", _set(["beams", 0, "element"], None), "beams[0].element",
      "expected one of 3363, 33103, 33153, 3333; got null"),
     ("element list", _set(["beams", 0, "element"], [3363]), "beams[0].element", "; got [3363]"),
+    # one material for all beams at the top level: was 'unknown key; allowed here: ...', no place or fix
+    ("top-level material", _set(["material"], dict(BASE["beams"][0]["material"])), "material",
+     "is given per beam, as beams[i].material (one for several beams: material: &m {...} on the first, "
+     "material: *m on the others; a bundle: bundle.material); got material: at the top level"),
 ]
 
 

@@ -89,6 +89,16 @@ def test_a_negative_or_zero_value_scale_is_refused(tmp_path, scale):
     assert info.value.path == "data[0].value_scale" and "must be > 0" in info.value.message
 
 
+@pytest.mark.parametrize("quantity", ["elongation", "stiffness"])
+def test_an_elongation_of_a_direction_vector_probe_is_refused(tmp_path, quantity):
+    """The bar's r_y probe (tip_ry) as an elongation: its x-change (dimensionless, ~1e-18) was
+    fitted as metres (mu 'not determined', cost 3e5); now refused, naming the probe."""
+    with pytest.raises(CalibrationError) as info:
+        load_fit(_elongation_fit(str(tmp_path), GOOD, quantity=quantity, probe=None, probes=["tip", "tip_ry"]))
+    assert info.value.path == "data[0].probes[1]" and "measures r_y" in info.value.message
+    assert "got 'tip_ry'" in info.value.message
+
+
 def test_a_misspelt_parameter_key_is_blamed_on_the_key_not_the_bounds(tmp_path):
     """Before: "the model config refuses mu = 200000 ...; change the bounds"."""
     path = _elongation_fit(str(tmp_path), GOOD, parameters=(dict(MU, key="beams[0].material.muu"),))

@@ -94,8 +94,23 @@ def _check_probe(o, where, raw, levels, scale):
     return {"probes": _probes(o, where, raw), "component": _component(o, where, "norm")}
 
 
+#: probe vectors that are positions (a displacement in m): ``elongation`` and ``stiffness`` read their x
+POSITIONS = ("r", "mean")
+
+
+def _positions(names: list[str], o: dict, where: str, raw: dict) -> list[str]:
+    """``names``, each a probe of a position (``POSITIONS``), not of a direction vector's change."""
+    vectors = {p.get("name"): p.get("vector", "r") for p in raw.get("probes", []) or [] if isinstance(p, dict)}
+    for k, n in enumerate(names):
+        key = f"{where}.probe" if "probe" in o else f"{where}.probes[{k}]"
+        expect(vectors.get(n, "r") in POSITIONS, key,
+               f"probe {n!r} measures {vectors.get(n)} (a direction vector's change, not a displacement "
+               f"in m): an elongation needs a probe of r or mean; got {n!r}")
+    return names
+
+
 def _check_elongation(o, where, raw, levels, scale):
-    return {"probes": _probes(o, where, raw)}
+    return {"probes": _positions(_probes(o, where, raw), o, where, raw)}
 
 
 def _check_difference(o, where, raw, levels, scale):
@@ -103,7 +118,8 @@ def _check_difference(o, where, raw, levels, scale):
 
 
 def _check_stiffness(o, where, raw, levels, scale):
-    out = {"probes": _probes({k: v for k, v in o.items() if k in ("probe", "probes")}, where, raw)}
+    out = {"probes": _positions(_probes({k: v for k, v in o.items() if k in ("probe", "probes")}, where, raw),
+                                o, where, raw)}
     out["force"] = (number(o["force"], f"{where}.force", positive=True) if "force" in o
                     else _total_load(raw))
     expect(out["force"] > 0, f"{where}.force", "the model config has no load; give force (N per load factor)")

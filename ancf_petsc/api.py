@@ -59,13 +59,13 @@ def check_edited(spec: ModelSpec) -> None:
     and axial points are the config's kinds (a changed type takes its own locking remedy), its
     supports, loads and probes follow its beams' element counts ('last' is the last node of the
     beam as it is now), and its steps increase strictly (a spec edited to decreasing steps raised
-    an UnboundLocalError in the load stepping).  Raises ConfigError, as the config itself would."""
+    an UnboundLocalError in the load stepping; with a history they are its first frames).  Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
     from .config.conditions import parse_steps, resolve_nodes
+    from .config.history import check_frames
     check_edited_beams(spec.beams)
     resolve_nodes(spec)
-    if spec.history is None:
-        spec.steps = parse_steps(spec.steps)
+    spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
     _raw_as_solved(spec)
 
 

@@ -92,6 +92,20 @@ def parse_history(value, base_dir: str) -> HistorySpec:
     return HistorySpec(source, time_column, times.copy(), dict(table.columns), scale)
 
 
+def check_frames(steps, history: HistorySpec) -> list[float]:
+    """The load factors of a history spec whose ``steps`` were edited through the Python API:
+    the frames 1, 2, … (its first frames, or all).  Decreasing steps stopped the stepping with an
+    UnboundLocalError; 2.5 was reported as frame 2 and 7 of a 6-frame table as frame 7, the
+    loads held at frame 6's."""
+    n = history.n_frames
+    if not isinstance(steps, (list, tuple)) or not 1 <= len(steps) <= n or \
+            any(isinstance(s, bool) or s != k for k, s in enumerate(steps, start=1)):
+        raise ConfigError("steps", f"with history every frame of {history.source} is a reported step "
+                                   f"(load factor k = frame k): give 1, 2, … up to at most {n} (the first "
+                                   f"frames), or leave the steps as parsed; got {shown(steps)}")
+    return [float(s) for s in steps]
+
+
 def history_curve(item: dict, history: HistorySpec | None, path: str, curve, scaled: bool = True) -> tuple | None:
     """The curve of a load or prescribed displacement (``item`` its config mapping): its
     ``column`` of the history, its own ``curve``, or None (proportional to λ).  ``scaled``:

@@ -365,6 +365,29 @@ def test_a_frame_reloading_from_zero_loads_is_a_first_increment_from_rest(tmp_pa
         assert np.abs(_ends(s) - _ends(alone)).max() <= 1e-10 * np.abs(_ends(alone)).max()
 
 
+
+@pytest.mark.parametrize("steps", [[3.0, 1.0], [2.5, 6.0], [7.0], [2.0, 3.0]])
+def test_steps_edited_on_a_history_spec_must_be_its_first_frames(tmp_path, steps):
+    """Through the Python API a history spec's steps were solved as edited: [3, 1] stopped with
+    an UnboundLocalError, 2.5 was reported as frame 2 (time 0.15 s), 7 of a 6-frame table as
+    frame 7 (time 0.5 s, the loads held at frame 6's), all 'completed'.  Now they must be the
+    first frames, 1, 2, …; those run as a shorter table does."""
+    from ancf_petsc.api import solve
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["loads"][0].update(traction_force=[1.0, 0.0, 0.0], column="f")
+    raw["history"] = {"table": {"time": [0.1 * k for k in range(6)], "f": [10.0, 45.0, 0.0, 0.0, 20.0, 45.0]}}
+    raw["output"] = {"dir": str(tmp_path / "run"), "vtk": False}
+    spec = parse_config(raw, base_dir=CONFIGS)
+    spec.steps = steps
+    with pytest.raises(ConfigError, match=r"^steps: with history every frame of history\.table is a reported "
+                                          r"step \(load factor k = frame k\): give 1, 2, … up to at most 6"):
+        solve(spec, log=lambda s: None)
+    spec.steps = [1, 2, 3]
+    done = solve(spec, log=lambda s: None).summary
+    assert [(s["frame"], s["time"]) for s in done["steps"]] == [(1, 0.0), (2, 0.1), (3, 0.2)]
+
+
 def test_a_restart_goes_on_where_loads_that_shared_a_curve_part_after_it(tmp_path):
     """Two loads on the bar whose columns are equal in the 2 frames solved share one load curve;
     a third frame that parts them (30 and 25 N) was refused as 'the load curve of loads[0]

@@ -17,7 +17,7 @@ import os
 import signal
 import sys
 
-from apps.cli import Parser, path, positive, printer, say_stderr
+from apps.cli import Parser, path, positive, printer, say_stderr, started_by_mpirun
 
 #: the configs shipped beside the command lines (a checkout or an editable install)
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
@@ -54,6 +54,8 @@ def _main(argv: list[str] | None) -> int:
     ap.add_argument("--existing", type=path, nargs="+", metavar="RUN_DIR",
                     help="finished ancf-solve output directories to report on (no solving)")
     args = ap.parse_args(argv)
+    if started_by_mpirun("ancf-report", "it is one process that starts its runs itself (--ranks: ranks per run)"):
+        return 2
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     from ancf_petsc import paper as rp
     from ancf_petsc.errors import InputError

@@ -15,7 +15,7 @@ import os
 import signal
 import sys
 
-from apps.cli import Parser, path, positive, printer, say_stderr
+from apps.cli import Parser, path, positive, printer, say_stderr, started_by_mpirun
 
 #: the options of --slurm's script (the sweep file's slurm: keys)
 SLURM_OPTIONS = ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs")
@@ -68,6 +68,8 @@ def _main(argv: list[str]) -> int:
                      f'e.g. run: {{petsc: ["-snes_max_it", "30"]}}')
     if extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    if started_by_mpirun("ancf-sweep", "it is one process that starts its runs itself (run.ranks: ranks per run)"):
+        return 2
     given = [k for k in SLURM_OPTIONS if getattr(args, k) is not None]
     if given and not args.slurm:          # else unread: a local run, --dry-run or --collect
         parser.error(f"--{given[0].replace('_', '-')}: a SLURM option, for the script of --slurm; "

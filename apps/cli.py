@@ -19,7 +19,7 @@ import sys
 from ancf_petsc.solving.interrupt import SafePrinter, say_stderr
 
 __all__ = ["Parser", "at_least", "path", "positive", "printer", "report_unused_options", "say_stderr",
-           "start_petsc"]
+           "start_petsc", "started_by_mpirun"]
 
 
 def printer(quiet: bool = False) -> SafePrinter:
@@ -52,6 +52,19 @@ def at_least(lo: int):
 
 
 positive = at_least(1)
+
+
+def started_by_mpirun(prog: str, how: str) -> bool:
+    """Whether ``prog``, a program that starts or solves its runs itself (``how``), was started
+    by mpirun/mpiexec; rank 0 then says so in one line (the caller exits 2).  Its copies ran the
+    same runs into the same directories: ``mpirun -n 2 ancf-sweep`` crashed half of them, and
+    the runs' own mpirun failed in the children of any launched copy."""
+    from ancf_petsc.parallel.launch import launch_rank, launch_size
+    n = launch_size()
+    if n and launch_rank() == 0:
+        say_stderr(f"{prog}: started by mpirun ({n} process{'es' if n > 1 else ''}): {how}; "
+                   "run it without mpirun")
+    return n > 0
 
 
 def start_petsc(petsc_args: list[str]) -> None:

@@ -19,6 +19,15 @@ def launch_rank() -> int:
     return 0
 
 
+def launch_size() -> int:
+    """How many processes mpirun/mpiexec started (Open MPI, MPICH), read before MPI starts: 0
+    without such a launcher."""
+    for key in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE"):
+        if os.environ.get(key, "").isdigit():
+            return int(os.environ[key])
+    return 0
+
+
 def prepare_environment() -> None:
     """Single-threaded BLAS (small dense kernels: threads only contend with MPI ranks) and, for a
     process started without an MPI launcher (a singleton), Open MPI's ob1 messaging layer and no

@@ -285,3 +285,22 @@ def test_an_error_line_on_a_closed_stderr_keeps_exit_2_and_stays_off_stdout(args
     None), and ancf-solve exited 1."""
     p = with_closed(2, args, tmp_path)
     assert (p.returncode, p.stdout) == (2, "")
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("program", ["ancf-sweep", "ancf-study", "ancf-report"])
+def test_a_program_that_starts_its_own_runs_refuses_mpirun(program, tmp_path):
+    """``mpirun -n 2 ancf-sweep S.yaml``: both copies ran the sweep into the same directory and
+    the second run of each crashed (its ancf-solve inherited the launcher's variables: orte_init
+    failed, 'crashed: exit code 1'); ``mpirun -n 2 ancf-study``: the second copy stopped on the
+    first one's lock.  Now one line from rank 0, exit 2, nothing written."""
+    args, written = _work(program, tmp_path)
+    if program == "ancf-sweep":
+        args = args[:-1]                                    # run it, not --slurm
+    cmd = ["mpirun", "--oversubscribe", "-n", "2", os.path.join(VENV_BIN, program)] + args
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT, cwd=str(tmp_path),
+                       env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith(f"{program}:")]
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert len(lines) == 1 and lines[0].startswith(f"{program}: started by mpirun (2 processes): "), lines
+    assert lines[0].endswith("; run it without mpirun") and not os.path.exists(os.path.dirname(written))

@@ -197,19 +197,33 @@ def reversed_load_warnings(spec) -> list[str]:
     return out
 
 
+def _material_beams(spec, beams) -> list[tuple[str, object, str]]:
+    """(the config key of its material, beam, its name for a message) per beam; a bundle's
+    fascicles share bundle.material, named once (7 fascicles gave 7 alike warnings, each keyed
+    beams[i].material, which the config does not have)."""
+    out, bundle = [], False
+    for i, b in enumerate(beams):
+        if _section_key(spec, i) != "bundle.radius":
+            out.append((f"beams[{i}].material", b, b.name))
+        elif not bundle:
+            bundle = True
+            out.append(("bundle.material", b, f"{b.name} (and every other fascicle)"))
+    return out
+
+
 def fibre_warnings(spec, beams) -> list[str]:
     """One warning per fibre-reinforced beam whose e^(k2 Ē²) overflows below a fibre stretch of
     ``MIN_OVERFLOW_STRETCH`` (Ē = I4 − 1 without dispersion): its fibre stresses there are inf
     (surface_NNNN.vtu stores single precision, which overflows sooner)."""
     out = []
-    for i, b in enumerate(beams):
+    for key, b, name in _material_beams(spec, beams):
         k2 = getattr(b.material, "k2", None)
         if k2 is None:
             continue
         E = float(np.sqrt(LOG_MAX_DOUBLE / k2))
         stretch = float(np.sqrt(1.0 + E))
         if stretch < MIN_OVERFLOW_STRETCH:
-            out.append(f"warning: beams[{i}].material.k2: {k2:g}: the fibre term e^(k2 E^2) of beam {b.name} "
+            out.append(f"warning: {key}.k2: {k2:g}: the fibre term e^(k2 E^2) of beam {name} "
                        f"overflows (inf stress) from a fibre stretch of {stretch:.4g} (E = {E:.3g}); tendon "
                        f"fibres stretch by several per cent; the published sets have k2 = 4.8 to 525 (docs/fibres.md)")
     return out
@@ -222,29 +236,29 @@ def material_warnings(spec, beams) -> list[str]:
     ``MAX_BULK_RATIO``; and one whose fibre stiffness k1 is in (0, ``MIN_FIBRE_STIFFNESS``)
     (k1: 3.7859 for 3.7859 MPa ran to 'completed' with no word, the bar as soft as its matrix)."""
     out = []
-    for i, b in enumerate(beams):
+    for where, b, name in _material_beams(spec, beams):
         law = getattr(b.material, "matrix", b.material)         # GOH: its neo-Hookean matrix
-        key = f"warning: beams[{i}].material"
+        key = f"warning: {where}"
         k1 = getattr(b.material, "k1", 0.0)
         if 0.0 < k1 < MIN_FIBRE_STIFFNESS:
-            out.append(f"{key}.k1: {k1:g} Pa for beam {b.name}: fibres this soft add next to nothing to the matrix "
+            out.append(f"{key}.k1: {k1:g} Pa for beam {name}: fibres this soft add next to nothing to the matrix "
                        f"(the published sets have k1 = 1.0-135.5 MPa, docs/fibres.md): moduli are in Pa (units: "
                        f"SI); if you meant {k1:g} MPa, write {k1:g}e6 (k1: 0 switches the fibres off)")
         if isinstance(law, StVenantKirchhoff) and law.E < 3.0 * MIN_SHEAR_MODULUS:
-            out.append(f"{key}.E: {law.E:g} Pa for beam {b.name} is softer than any tendon (matrices from 15 kPa, "
+            out.append(f"{key}.E: {law.E:g} Pa for beam {name} is softer than any tendon (matrices from 15 kPa, "
                        f"the paper's subtendons 103-227 MPa): moduli are in Pa (units: SI); if you meant "
                        f"{law.E:g} MPa, write {law.E:g}e6")
         if not isinstance(law, NeoHookean):
             continue
         mu, K = law.mu, law.K
         if mu < MIN_SHEAR_MODULUS:
-            out.append(f"{key}.mu: {mu:g} Pa for beam {b.name} is softer than any tendon (matrices from 15 kPa, "
+            out.append(f"{key}.mu: {mu:g} Pa for beam {name} is softer than any tendon (matrices from 15 kPa, "
                        f"the paper's subtendons 103-227 MPa): moduli are in Pa (units: SI); if you meant "
                        f"{mu:g} MPa, write {mu:g}e6")
         elif K < 2.0 * mu / 3.0 or K > MAX_BULK_RATIO * mu:
             nu = law.poisson
             what = "negative (auxetic)" if nu < 0 else f"incompressible beyond K/mu = {MAX_BULK_RATIO:g}"
-            out.append(f"{key}.bulk_modulus: K = {K:g} Pa is {K / mu:.3g} x mu for beam {b.name}: a small-strain "
+            out.append(f"{key}.bulk_modulus: K = {K:g} Pa is {K / mu:.3g} x mu for beam {name}: a small-strain "
                        f"Poisson ratio of {nu:.7g}, {what}; tendon is nearly incompressible (the paper's "
                        f"K/mu 3.8-8.3); check K's units (Pa)")
     return out

@@ -164,6 +164,19 @@ def test_fibre_and_svk_moduli_written_in_mpa_as_pa_are_named(config, material, e
         assert _warnings(raw) == []
 
 
+def test_a_bundles_material_is_named_once_by_its_key():
+    """A bundle's fascicles share bundle.material: mu 100 Pa on bundle_hex7 gave 7 alike warnings
+    keyed beams[0..6].material.mu (keys the config does not have), k2 1e6 7 more."""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["bundle"]["material"] = {"model": "goh", "mu": 100.0, "bulk_modulus": 1.0e9, "k1": 2.0e6, "k2": 1.0e6}
+    w = _warnings(raw)
+    assert len(w) == 2, w
+    assert w[0].startswith("warning: bundle.material.k2: 1e+06: the fibre term e^(k2 E^2) of beam fascicle0 "
+                           "(and every other fascicle) overflows")
+    assert w[1].startswith("warning: bundle.material.mu: 100 Pa for beam fascicle0 (and every other fascicle) "
+                           "is softer than any tendon")
+
+
 def test_paper_column_runs_without_warnings(tmp_path):
     s = run_inline(load_raw("achilles_type3_psi0.yaml"), tmp_path / "psi0")
     assert s["status"] == "completed" and s["warnings"] == []

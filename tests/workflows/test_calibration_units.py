@@ -103,6 +103,30 @@ def test_quantities_from_probe_displacements():
     assert mean == pytest.approx([0.75, 1.5])
 
 
+def test_a_stiffness_reads_the_load_its_curve_applies(tmp_path):
+    """The bar's 45 N ramped to load factor 0.5 and held (a load curve), stiffness data without
+    ``force``: F was λ × 45 N, so the stiffness grew 2x from 0.5 to 1.0 at a constant elongation;
+    now F follows the curve (45 N from 0.5 on). A history column's load is refused."""
+    path = bar_case(str(tmp_path), parameters=(MU,), lateral=False)
+    _edit(os.path.join(str(tmp_path), "bar.yaml"),
+          lambda d: d["loads"][0].update(curve=[[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]]))
+    _edit(path, lambda d: d["data"][0].update(quantity="stiffness", value_scale=1.0, sigma=10.0))
+    data = load_fit(path).data[0]
+    disp = {"tip": np.array([[2.0e-3, 0, 0], [4.0e-3, 0, 0], [4.0e-3, 0, 0]])}
+    k = evaluate("stiffness", data.options, disp, np.array([0.25, 0.5, 1.0]), [0.25, 0.5, 1.0])
+    assert k == pytest.approx([22.5 / 2e-3, 45.0 / 4e-3, 45.0 / 4e-3])
+
+    def history(d):
+        d.pop("steps")
+        d["history"] = {"table": {"time": [0.0, 0.1, 0.2], "s": [10.0, 30.0, 45.0]}}
+        d["loads"][0].update(column="s", traction_force=[1.0, 0.0, 0.0])
+        d["loads"][0].pop("curve")
+    _edit(os.path.join(str(tmp_path), "bar.yaml"), history)
+    with pytest.raises(CalibrationError) as info:
+        load_fit(path)
+    assert info.value.path == "data[0].force" and "history column" in info.value.message, info.value
+
+
 @dataclass
 class _State:                       # the fields of solving.samples.LevelState
     x: np.ndarray

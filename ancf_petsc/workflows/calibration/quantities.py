@@ -12,7 +12,7 @@ which load levels it needs besides the data's own, and evaluates itself on a sol
 * ``stiffness``   the secant stiffness (F − F_lower) / (u − u_lower) of the elongation between the
                   load level ``lower`` (default 0, the reference) and the data's level [N/m]; F is the
                   load factor times ``force`` (N per unit load factor; default: the size of the
-                  config's total load at factor 1)
+                  config's total load at that level, load curves included)
 
 A new quantity is one entry here (a reaction force, say, once probes carry one).
 """
@@ -62,12 +62,25 @@ def _probes(opts: dict, where: str, raw: dict, pair: bool = False) -> list[str]:
     return [_probe(n, f"{where}.probes[{k}]", raw) for k, n in enumerate(names)]
 
 
-def _total_load(raw: dict) -> float:
-    total = np.zeros(3)
-    for ld in raw.get("loads", []) or []:
+def _model_loads(raw: dict, where: str) -> list:
+    """The config's loads as [curve points or None (× λ), force at multiplier 1]; a load that
+    reads a history column has no force per load factor (refused: give ``force``)."""
+    out = []
+    for i, ld in enumerate(raw.get("loads", []) or []):
         if isinstance(ld, dict):
+            expect("column" not in ld, f"{where}.force", f"the model's loads[{i}] follows a history column: "
+                   "its force is no function of the load factor alone; give force (N per load factor)")
             f = ld.get("force", ld.get("traction_force", [0, 0, 0]))
-            total += np.array([float(x) for x in f])
+            out.append([ld.get("curve"), [float(x) for x in f]])
+    return out
+
+
+def load_at(loads: list, lam: float) -> float:
+    """|Σ m(λ) F| of ``_model_loads`` at load factor λ (m = λ, or a load's curve through its points)."""
+    total = np.zeros(3)
+    for curve, f in loads:
+        m = lam if curve is None else np.interp(lam, *np.asarray(curve, dtype=float).T)
+        total += m * np.asarray(f)
     return float(np.linalg.norm(total))
 
 
@@ -120,9 +133,15 @@ def _check_difference(o, where, raw, levels, scale):
 def _check_stiffness(o, where, raw, levels, scale):
     out = {"probes": _positions(_probes({k: v for k, v in o.items() if k in ("probe", "probes")}, where, raw),
                                 o, where, raw)}
-    out["force"] = (number(o["force"], f"{where}.force", positive=True) if "force" in o
-                    else _total_load(raw))
-    expect(out["force"] > 0, f"{where}.force", "the model config has no load; give force (N per load factor)")
+    if "force" in o:
+        out["force"] = number(o["force"], f"{where}.force", positive=True)
+    else:                                   # the config's loads; proportional ones: one force per λ
+        loads = _model_loads(raw, where)
+        expect(any(np.any(f) for _, f in loads), f"{where}.force", "the model config has no load; give force (N per load factor)")
+        if any(curve is not None for curve, _ in loads):
+            out["loads"] = loads
+        else:
+            out["force"] = load_at(loads, 1.0)
     lower = number(o.get("lower", 0.0), f"{where}.lower") * scale
     if lower < 0 or np.any(levels <= lower):
         raise CalibrationError(f"{where}.lower", f"must be >= 0 and below every load level of the data; "
@@ -144,10 +163,18 @@ def _difference(o, disp, rows, levels):
     return _of(u[0] - u[1], o["component"])
 
 
+def _force(o: dict, lam) -> np.ndarray:
+    """F at load factors ``lam``: λ × ``force``, or the config's loads there (their curves)."""
+    lam = np.asarray(lam, dtype=float)
+    if "force" in o:
+        return lam * o["force"]
+    return np.array([load_at(o["loads"], x) for x in lam])
+
+
 def _stiffness(o, disp, rows, levels):
     u = _elongation(o, disp, rows, levels)
     u0 = _elongation(o, disp, rows, [o["lower"]])[0] if o["lower"] > 0 else 0.0
-    return (np.asarray(levels) - o["lower"]) * o["force"] / (u - u0)
+    return (_force(o, levels) - _force(o, [o["lower"]])[0]) / (u - u0)
 
 
 #: the quantities a data set can measure, by name (module docstring)

@@ -232,6 +232,21 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
                                           f"levels at step {k + 1}: {lam:g} was solved, the config asks "
                                           f"for {now}; restart with the steps that made them, or "
                                           "run afresh into another directory")
+    _check_clock(entries[:len(point.levels)], model.spec.history, directory)
+
+
+def _check_clock(entries: list, history, directory: str) -> None:
+    """The times [s] of the frames solved must be the history's: a clock column changed between
+    the kill and the restart (ms for s) was taken, and the run's outputs went 0.04, 0.14, 240,
+    340 s."""
+    for k, e in enumerate(entries if history is not None else []):
+        now = history.time_of(e["load_factor"])
+        if "time" in e and not np.isclose(e["time"], now, rtol=1e-12, atol=0.0):
+            raise InputError("--restart", f"{directory} was written with another clock: frame "
+                                          f"{e.get('frame', k + 1)} was at {e['time']:g} s, the column "
+                                          f"{history.time_column!r} of {history.source} gives {now:g} s; "
+                                          "restart with the table that made it, or run afresh into "
+                                          "another directory")
 
 
 def _friction_default_hint(point: RestartPoint, model) -> str | None:

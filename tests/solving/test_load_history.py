@@ -388,6 +388,28 @@ def test_steps_edited_on_a_history_spec_must_be_its_first_frames(tmp_path, steps
     assert [(s["frame"], s["time"]) for s in done["steps"]] == [(1, 0.0), (2, 0.1), (3, 0.2)]
 
 
+
+def test_a_restart_with_another_clock_is_refused(tmp_path):
+    """A history restarted with its time column changed (ms for s) went on, and its outputs
+    mixed the two: frames 0.04, 0.14 s then 240, 340 s.  Now the restart names the frame and
+    both times; the same clock (frames appended) goes on."""
+    from ancf_petsc.api import solve
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["loads"][0].update(traction_force=[1.0, 0.0, 0.0], column="f")
+    raw["history"] = {"table": {"time": [0.04, 0.14], "f": [10.0, 20.0]}}
+    run_inline(raw, tmp_path / "run")
+    longer = copy.deepcopy(raw)
+    longer["history"]["table"] = {"time": [40.0, 140.0, 240.0], "f": [10.0, 20.0, 30.0]}
+    longer["output"] = {"dir": str(tmp_path / "run"), "vtk": False}
+    with pytest.raises(ConfigError, match=r"^--restart: .* was written with another clock: frame 1 was at "
+                                          r"0\.04 s, the column 'time' of history\.table gives 40 s; restart"):
+        solve(parse_config(longer, base_dir=CONFIGS), log=lambda s: None, restart=str(tmp_path / "run"))
+    longer["history"]["table"]["time"] = [0.04, 0.14, 0.24]
+    done = solve(parse_config(longer, base_dir=CONFIGS), log=lambda s: None, restart=str(tmp_path / "run")).summary
+    assert [s["time"] for s in done["steps"]] == [0.04, 0.14, 0.24]
+
+
 def test_a_restart_goes_on_where_loads_that_shared_a_curve_part_after_it(tmp_path):
     """Two loads on the bar whose columns are equal in the 2 frames solved share one load curve;
     a third frame that parts them (30 and 25 N) was refused as 'the load curve of loads[0]

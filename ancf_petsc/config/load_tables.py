@@ -120,10 +120,17 @@ def read_load_table(path: str, where: str) -> LoadTable:
     if not os.path.isfile(path):
         raise ConfigError(where, f"no such file: {path}")
     try:
-        with open(path, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(where, f"{path}: cannot read it as UTF-8 text ({type(exc).__name__})") from None
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as exc:
+        raise ConfigError(where, f"{path}: cannot read: {exc.strerror}") from None
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        utf16 = ", UTF-16: Excel Unicode text" if data[:2] in (b"\xff\xfe", b"\xfe\xff") else ""
+        raise ConfigError(where, f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} in line {line}{utf16}): "
+                                 "save it as UTF-8 (Excel: CSV UTF-8)") from None
     rows, line_no, meta = _rows(path, text, where)
     _check_storage_size(path, meta, rows, where)
     header = rows[0]

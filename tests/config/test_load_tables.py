@@ -70,3 +70,14 @@ def test_an_inline_table_reads_numbers_as_steps_do():
                        ("[1, true]", r"history\.table\.soleus\[1\]: expected a number; got True")):
         with pytest.raises(ConfigError, match=match):
             inline_table(yamlio.load(f"{{time: [0, 1], soleus: {bad}}}"), "history.table")
+
+
+@pytest.mark.parametrize("data,match", [
+    ("time,soleus_r\n0,1\n0.1,2\n".encode("utf-16"), r"byte 0xff in line 1, UTF-16: Excel Unicode text\): save it as UTF-8"),
+    ("# Kraft in N, 20 \u00b0C\ntime,soleus_r\n0,1\n".encode("cp1252"), r"byte 0xb0 in line 1\): save it as UTF-8"),
+], ids=["utf16", "cp1252"])
+def test_a_table_not_in_utf8_says_where_and_how_to_save_it(tmp_path, data, match):
+    """'cannot read it as UTF-8 text (UnicodeDecodeError)' said neither where nor what to do."""
+    (tmp_path / "t.csv").write_bytes(data)
+    with pytest.raises(ConfigError, match=r"^history\.file: .*t\.csv: not UTF-8 text \(" + match):
+        read_load_table(str(tmp_path / "t.csv"), "history.file")

@@ -127,6 +127,26 @@ def test_a_stiffness_reads_the_load_its_curve_applies(tmp_path):
     assert info.value.path == "data[0].force" and "history column" in info.value.message, info.value
 
 
+def test_one_level_written_two_ways_is_one_level(tmp_path):
+    """Two data files at 0.3 and 0.1 x 3 = 0.30000000000000004: both were solved as levels, which
+    the model config refuses (closer than its step resolution), so every sample was a config
+    error and the fit 'converged' at its start, 'not determined', exit 0. Now one level."""
+    from ancf_petsc.config.parse import parse_config
+    from calibration_cases import write_csv
+    path = bar_case(str(tmp_path), parameters=(MU,), lateral=False)
+    write_csv(tmp_path / "d2.csv", {"level": [0.1, 0.1 * 3, 0.5], "u_mm": [1.0, 5.0, 9.0]})
+    write_csv(tmp_path / "d3.csv", {"level": [0.3, 0.5], "u_mm": [5.0, 9.0]})
+
+    def two_files(d):
+        d["data"] = [dict(d["data"][0], file="d2.csv"), dict(d["data"][0], name="e2", file="d3.csv")]
+    spec = load_fit(_edit(path, two_files))
+    assert len(spec.levels) == 3 and spec.levels[1] == pytest.approx(0.3, rel=1e-15), spec.levels
+    parse_config(spec.config([1e6]), base_dir=spec.model_dir)         # refused before
+    disp = {"tip": np.array([[1.0, 0, 0], [3.0, 0, 0], [5.0, 0, 0]])}
+    for d in spec.data:
+        assert evaluate(d.quantity, d.options, disp, d.levels, spec.levels)[-2:] == pytest.approx([3.0, 5.0])
+
+
 @dataclass
 class _State:                       # the fields of solving.samples.LevelState
     x: np.ndarray

@@ -190,7 +190,7 @@ QUANTITIES = {
 def evaluate(name: str, options: dict, disp: dict, levels: np.ndarray, solved: list[float]) -> np.ndarray:
     """The quantity at ``levels`` from a sample's probe displacements at its ``solved`` levels
     (every level of the fit; rows of levels a failed sample did not reach are NaN)."""
-    row = {lam: k for k, lam in enumerate(solved)}
+    solved = np.asarray(solved, dtype=float)        # a level is the solved one nearest (spec.merged_levels)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.asarray(QUANTITIES[name].evaluate(options, disp, lambda ls: [row[float(x)] for x in ls],
-                                                    levels), dtype=float)
+        return np.asarray(QUANTITIES[name].evaluate(
+            options, disp, lambda ls: [int(np.argmin(np.abs(solved - float(x)))) for x in ls], levels), dtype=float)

@@ -24,6 +24,7 @@ from typing import Any
 from ... import yamlio
 from ...config.parse import parse_config
 from ...config.values import ConfigError
+from ...config.conditions import STEP_RESOLUTION
 from ..sweep.base import SweepLoader, format_key_path, load_yaml, path_exists, parse_key_path
 from ..sweep.spec import SlurmSpec, slurm_spec
 from .data import DataSet, parse_data
@@ -247,6 +248,17 @@ def _identifiability(doc: dict) -> IdentifiabilitySpec:
     return spec
 
 
+def merged_levels(values: list[float]) -> list[float]:
+    """The load levels to solve, increasing: values within the config's step resolution of the
+    last kept one are that level (two files' 0.3 and 0.1 x 3 = 0.30000000000000004 made steps
+    the model config refuses, and every sample a config error)."""
+    out: list[float] = []
+    for x in sorted(values):
+        if not out or x > out[-1] * (1.0 + STEP_RESOLUTION):
+            out.append(x)
+    return out
+
+
 def load_fit(path: str) -> FitSpec:
     """Read and check a fit file; every problem raises ``CalibrationError`` naming its key."""
     path = os.path.abspath(path)
@@ -261,7 +273,7 @@ def load_fit(path: str) -> FitSpec:
     model_path, raw = _model(doc, here)
     params = _parameters(doc, raw, os.path.dirname(model_path))
     data = parse_data(doc.get("data"), here, raw)
-    levels = sorted({float(x) for d in data for x in d.all_levels})
+    levels = merged_levels([float(x) for d in data for x in d.all_levels])
     obj = _options(doc, "objective", ("loss", "penalty", "absolute_sigma"))
     absolute = obj.get("absolute_sigma", False)
     expect(isinstance(absolute, bool), "objective.absolute_sigma", "expected true or false")

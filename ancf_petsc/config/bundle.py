@@ -29,7 +29,7 @@ COUNTS = {1 + 3 * r * (r + 1): r for r in range(MAX_RINGS + 1)}     # fascicles 
 SECTIONS = ("hexagon", "circle")
 KEYS_REQUIRED = ("count", "fascicle_section", "radius", "elements", "material", "force")
 KEYS_OPTIONAL = ("packing", "gap", "arc_deg", "cubature_degree", "axial_points", "pulled_end",
-                 "element", "locking")
+                 "element", "locking", "column")
 # a grip holds the pulled end's section orientation and transverse position (as a testing
 # machine's clamp); the end moves along x only.  "free" lets every fascicle end align with the
 # pull, and a frictionless twisted bundle then untwists like a rope (a near-mechanism at load 0)
@@ -104,6 +104,7 @@ def circle_beams(centres: np.ndarray, radius: float, pitch: float, arc_deg: floa
 GENERATED_KEYS = ((re.compile(r"beams\[\d+\]\.section\.cubature_degree"), "bundle.cubature_degree"),
                   (re.compile(r"beams\[\d+\]\.(material|element|locking|elements|axial_points)"), r"bundle.\1"),
                   (re.compile(r"loads\[\d+\]\.traction_force"), "bundle.force"),
+                  (re.compile(r"loads\[\d+\]\.column"), "bundle.column"),
                   (re.compile(r"loads\[\d+\]"), "bundle.force"))
 
 
@@ -184,8 +185,9 @@ def expand_bundle(raw: dict) -> dict:
     if string(b.get("pulled_end", "grip"), "bundle.pulled_end", ("grip", "free")) == "grip":
         out["boundary_conditions"] += [{"beam": f"fascicle{i}", "node": "last", "fix": dict(GRIP)}
                                        for i in range(count)]
+    follows = {"column": b["column"]} if "column" in b else {}     # a load history's (history.py)
     out["loads"] = [{"beam": f"fascicle{i}", "node": "last",
-                     "traction_force": [f / count for f in force]} for i in range(count)]
+                     "traction_force": [f / count for f in force], **follows} for i in range(count)]
     if "probes" not in out:
         outer = int(np.argmax(np.linalg.norm(centres, axis=1)))
         out["probes"] = [{"name": "centre", "beam": "fascicle0", "node": "last"},

@@ -80,6 +80,27 @@ def test_bundle_errors_name_the_bundle_keys(change, key, words):
     assert info.value.path == key and words in info.value.message, (info.value.path, info.value.message)
 
 
+
+def test_a_bundle_follows_a_history_column():
+    """With a load history a bundle was refused 'bundle.force: with history every load follows a
+    column of history.table (e.g. column: 'f')', and bundle.column was an unknown key: a
+    bundle could not follow a history.  Now bundle.column is its loads' column."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.errors import InputError
+    raw = {"name": "b", "geometry": {"length": 0.02, "twist_deg": 30.0},
+           "history": {"table": {"time": [0.0, 0.1], "f": [0.5, 2.0]}},
+           "bundle": {"count": 7, "fascicle_section": "hexagon", "radius": 0.5e-3, "elements": 2,
+                      "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9},
+                      "force": [10.0, 0, 0], "column": "f"}}
+    spec = parse_config(raw)
+    assert spec.steps == [1.0, 2.0]
+    assert all(ld.curve == ((0.0, 0.0), (1.0, 0.5), (2.0, 2.0)) for ld in spec.loads) and len(spec.loads) == 7
+    raw["bundle"]["column"] = "g"
+    with pytest.raises(InputError, match=r"no column 'g' in history\.table \(columns: f\)") as info:
+        parse_config(raw)
+    assert info.value.path == "bundle.column"
+
+
 @pytest.mark.mpi
 @pytest.mark.slow
 def test_touching_circles_close_contact_on_one_and_two_ranks(tmp_path):

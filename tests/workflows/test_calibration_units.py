@@ -147,6 +147,22 @@ def test_one_level_written_two_ways_is_one_level(tmp_path):
         assert evaluate(d.quantity, d.options, disp, d.levels, spec.levels)[-2:] == pytest.approx([3.0, 5.0])
 
 
+def test_a_model_with_a_load_history_is_refused_before_any_solve(tmp_path):
+    """A model solved through a load history (its frames are its steps): every sample was a
+    config error ('with history every frame ... remove steps'), and the fit 'converged' at its
+    start, 'not determined', exit 0. Now load_fit refuses it, naming data."""
+    path = bar_case(str(tmp_path), parameters=(MU,), lateral=False)
+
+    def history(d):
+        d.pop("steps")
+        d["history"] = {"table": {"time": [0.0, 0.1, 0.2], "s": [10.0, 30.0, 45.0]}}
+        d["loads"][0].update(column="s", traction_force=[1.0, 0.0, 0.0])
+    _edit(os.path.join(str(tmp_path), "bar.yaml"), history)
+    with pytest.raises(CalibrationError) as info:
+        load_fit(path)
+    assert info.value.path == "data" and "with history every frame" in info.value.message, info.value
+
+
 @dataclass
 class _State:                       # the fields of solving.samples.LevelState
     x: np.ndarray

@@ -286,8 +286,14 @@ def load_fit(path: str) -> FitSpec:
     penalty = number(obj.get("penalty", 1e3), "objective.penalty", positive=True)
     output = doc.get("output", os.path.join("fits", name))
     expect(isinstance(output, str) and output, "output", "expected a directory (relative to the fit file)")
-    return FitSpec(file=path, name=name, model_path=model_path, model_raw=raw,
+    spec = FitSpec(file=path, name=name, model_path=model_path, model_raw=raw,
                    model_dir=os.path.dirname(model_path), parameters=params, data=data, levels=levels,
                    loss=loss, penalty=penalty, absolute_sigma=absolute, optimizer=_optimizer(doc),
                    identifiability=_identifiability(doc), output=os.path.normpath(os.path.join(here, output)),
                    slurm=slurm_spec(doc.get("slurm"), here))
+    try:                                 # the data's levels as the model's steps (a history has its frames)
+        parse_config(spec.config([p.start for p in params]), base_dir=spec.model_dir)
+    except ConfigError as exc:
+        raise CalibrationError("data", f"the model config refuses the data's load levels as its steps: "
+                                       f"{exc}; fit a model solved at load levels (steps)") from None
+    return spec

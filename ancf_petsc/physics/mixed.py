@@ -92,6 +92,12 @@ class ProjectedDilatation:
     def describe(self) -> str:
         return self.law.describe() + "; volumetric term on the dilatation projected per station (mixed)"
 
+    @property
+    def fibre_exponent(self):
+        """The law's k2 Ē² per point (petsc/step_limits.py holds Newton steps to its growth; it was
+        off under ``mixed``); an AttributeError for a law without fibres, as the law's own."""
+        return self.law.fibre_exponent
+
     def _projection(self, F: np.ndarray):
         """θ (E, P), J (E, P), Wφ = w Φ (E, P, m) and M⁻¹ (E, m, m)."""
         if self.w is None or self.w.shape != F.shape[:2]:

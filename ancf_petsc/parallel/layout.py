@@ -48,10 +48,14 @@ class Layout:
         node, local = np.divmod(np.maximum(model_dofs, 0), D)
         return np.where(model_dofs < 0, model_dofs, D * self.perm[node] + local)
 
-    def summary(self) -> str:
+    def summary(self, asked: str | None = None) -> str:
+        """The log's partition line; ``asked``: the config's partition.method, named when the
+        ranks are split otherwise (the fieldsplit solver keeps every beam whole on one rank)."""
         counts = np.bincount(self.elem_owner, minlength=self.size)
         nodes = np.diff(self.ranges)
-        return (f"partition ({self.method}): elements per rank {counts.tolist()}, "
+        note = f", not partition.method {asked}: the fieldsplit solver keeps every beam whole on " \
+               "one rank" if self.size > 1 and asked not in (None, self.method) else ""
+        return (f"partition ({self.method}{note}): elements per rank {counts.tolist()}, "
                 f"nodes per rank {nodes.tolist()}")
 
 

@@ -163,7 +163,7 @@ class Run:
             self.say("[ancf]   " + line)
         for line in self.contact_lines:
             self.say(line)
-        self.say("[ancf]   " + layout.summary() + (
+        self.say("[ancf]   " + layout.summary((self.spec.raw.get("partition") or {}).get("method")) + (
             f", cut contact pairs {partition['cut_contact_pairs']}/{partition['contact_pairs']}"
             if "contact_pairs" in partition else "") + f", cut beam nodes {partition['cut_beam_nodes']}")
         self.say("[ancf]   " + self.stepper.describe() + "; linear solver %s (%s)" % self.linear)

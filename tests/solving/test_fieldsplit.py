@@ -224,6 +224,10 @@ def test_fieldsplit_gives_the_direct_answer_on_1_2_3_ranks(tmp_path):
         s = read_summary(tmp_path / name)
         assert s["status"] == "completed" and s["linear_solver"]["choice"] == linear
         summaries[name], tables[name] = s, probes_table(s)
+        # the config's METIS partition gives way to whole beams, and the log says so (it said
+        # 'partition (beams)' only, the config's partition.method: metis unmentioned)
+        assert ("partition (beams, not partition.method metis: the fieldsplit solver keeps every "
+                "beam whole on one rank)" in p.stdout) == (n > 1 and linear == "fieldsplit"), p.stdout
     ref = tables["direct"]
     for name in ("fs1", "fs2", "fs3"):
         assert np.abs(tables[name] - ref).max() <= 1e-9 * np.abs(ref).max(), name

@@ -99,6 +99,14 @@ def test_an_elongation_of_a_direction_vector_probe_is_refused(tmp_path, quantity
     assert "got 'tip_ry'" in info.value.message
 
 
+def test_a_difference_of_a_position_and_a_direction_probe_is_refused(tmp_path):
+    """tip (r, m) minus tip_ry (r_y, dimensionless) was fitted as a displacement difference."""
+    with pytest.raises(CalibrationError) as info:
+        load_fit(_elongation_fit(str(tmp_path), GOOD, quantity="difference", probe=None, probes=["tip", "tip_ry"]))
+    assert info.value.path == "data[0].probes" and "mixes units" in info.value.message
+    assert "got ['tip', 'tip_ry']" in info.value.message
+
+
 def test_a_misspelt_parameter_key_is_blamed_on_the_key_not_the_bounds(tmp_path):
     """Before: "the model config refuses mu = 200000 ...; change the bounds"."""
     path = _elongation_fit(str(tmp_path), GOOD, parameters=(dict(MU, key="beams[0].material.muu"),))

@@ -127,7 +127,12 @@ def _check_elongation(o, where, raw, levels, scale):
 
 
 def _check_difference(o, where, raw, levels, scale):
-    return {"probes": _probes(o, where, raw, pair=True), "component": _component(o, where, "x")}
+    names = _probes(o, where, raw, pair=True)
+    vectors = {p.get("name"): p.get("vector", "r") for p in raw.get("probes", []) or [] if isinstance(p, dict)}
+    kinds = ["position" if vectors[n] in POSITIONS else vectors[n] for n in names]
+    expect(kinds[0] == kinds[1], f"{where}.probes", f"{names[0]!r} measures {vectors[names[0]]} and {names[1]!r} "
+           f"{vectors[names[1]]}: their difference mixes units; give two probes of one vector; got {names}")
+    return {"probes": names, "component": _component(o, where, "x")}
 
 
 def _check_stiffness(o, where, raw, levels, scale):

@@ -62,10 +62,11 @@ def check_edited(spec: ModelSpec) -> None:
     an UnboundLocalError in the load stepping; with a history they are its first frames).  Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
     from .config.conditions import parse_steps, resolve_nodes
-    from .config.history import check_frames
+    from .config.history import check_frames, check_history_edits
     check_edited_beams(spec.beams)
     resolve_nodes(spec)
     spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
+    check_history_edits(spec)
     _raw_as_solved(spec)
 
 

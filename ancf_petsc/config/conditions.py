@@ -139,7 +139,7 @@ def parse_boundary_conditions(value, names: list[str], n_nodes: list[int],
         curve = _curve(bc["curve"], f"{p}.curve") if "curve" in bc else None
         if moved:
             curve = history_curve(bc, history, p, curve, scaled=False)
-        bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve, bc["node"]))
+        bcs.append(BCSpec(bi, node, fixed, p, moved, name, curve, bc["node"], moved and bc.get("column") or None))
     check_one_support(bcs, names, blocks)
     return bcs
 
@@ -178,7 +178,8 @@ def parse_loads(value, names: list[str], n_nodes: list[int],
         if kind == "traction_force" and node not in (0, n_nodes[bi] - 1):
             raise ConfigError(f"{p}.node", "a traction_force acts on an end section: use first or last")
         curve = history_curve(ld, history, p, _curve(ld["curve"], f"{p}.curve") if "curve" in ld else None)
-        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p, curve, ld["node"]))
+        loads.append(LoadSpec(bi, node, kind, vector(ld[kind], f"{p}.{kind}", 3), p, curve, ld["node"],
+                              ld.get("column")))
     return loads
 
 

@@ -106,6 +106,21 @@ def check_frames(steps, history: HistorySpec) -> list[float]:
     return [float(s) for s in steps]
 
 
+def check_history_edits(spec) -> None:
+    """A history edited through the Python API after parsing (``spec.history.scale = 1000``, a
+    column changed) was ignored: the loads' curves were made from the table as parsed, and the
+    run solved those.  Raises ConfigError naming the first load or support whose column now
+    gives another curve."""
+    items = [(ld, True) for ld in spec.loads] + [(bc, False) for bc in spec.boundary_conditions]
+    for item, scaled in items:
+        if spec.history is None or item.column is None:
+            continue
+        if item.curve != spec.history.curve(item.column, f"{item.path}.column", scaled):
+            raise ConfigError("history", f"edited after parsing (its scale or table): the curve of {item.path} "
+                                         f"(column {item.column!r}) was made from the table as parsed, and the "
+                                         "edit would be ignored; edit the config's history and parse it again")
+
+
 def history_curve(item: dict, history: HistorySpec | None, path: str, curve, scaled: bool = True) -> tuple | None:
     """The curve of a load or prescribed displacement (``item`` its config mapping): its
     ``column`` of the history, its own ``curve``, or None (proportional to λ).  ``scaled``:

@@ -96,6 +96,7 @@ class BCSpec:
     name: str = ""                        # the support's name in the reported reactions
     curve: tuple | None = None            # ((λ, m), ...): displacement × m(λ) (None: × λ)
     given: object = None                  # the node as written (first, last, an index): resolve_nodes
+    column: str | None = None             # the history column its curve was made from
 
 
 @dataclass
@@ -107,6 +108,7 @@ class LoadSpec:
     path: str = ""
     curve: tuple | None = None            # ((λ, m), ...): force × m(λ) (None: × λ)
     given: object = None                  # the node as written: conditions.resolve_nodes
+    column: str | None = None             # the history column its curve was made from
 
 
 @dataclass

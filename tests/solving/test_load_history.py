@@ -410,6 +410,31 @@ def test_a_restart_with_another_clock_is_refused(tmp_path):
     assert [s["time"] for s in done["steps"]] == [0.04, 0.14, 0.24]
 
 
+
+@pytest.mark.parametrize("edit", ["scale", "column", "grip"])
+def test_a_history_edited_after_parsing_is_refused_not_ignored(tmp_path, edit):
+    """Through the Python API spec.history.scale = 1000 (a table in kN) was ignored: the loads'
+    curves were made at parsing, and the bar was pulled by 0.01 and 0.045 N, 'completed'; so
+    was a column's value changed in place, for a load or a grip's displacement.  Now refused."""
+    from ancf_petsc.api import solve
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["loads"][0].update(traction_force=[1.0, 0.0, 0.0], column="f")
+    raw["boundary_conditions"].append({"beam": "bar", "node": "last", "name": "grip",
+                                       "displacement": {"r": {"y": 1.0}}, "column": "d"})
+    raw["history"] = {"table": {"time": [0.0, 0.1], "f": [0.01, 0.045], "d": [0.0, 1e-4]}}
+    raw["output"] = {"dir": str(tmp_path / "run"), "vtk": False}
+    spec = parse_config(raw, base_dir=CONFIGS)
+    if edit == "scale":
+        spec.history.scale = 1000.0
+    else:
+        spec.history.columns["f" if edit == "column" else "d"][1] *= 2.0
+    path = r"loads\[0\]" if edit != "grip" else r"boundary_conditions\[1\]"
+    with pytest.raises(ConfigError, match=r"^history: edited after parsing .* the curve of " + path +
+                                          r" \(column '[fd]'\) was made from the table as parsed"):
+        solve(spec, log=lambda s: None)
+
+
 def test_a_restart_goes_on_where_loads_that_shared_a_curve_part_after_it(tmp_path):
     """Two loads on the bar whose columns are equal in the 2 frames solved share one load curve;
     a third frame that parts them (30 and 25 N) was refused as 'the load curve of loads[0]

@@ -148,3 +148,20 @@ def test_a_fitted_level_reported_past_a_gap_is_named(tmp_path, monkeypatch):
     assert len(gaps) == 1 and gaps[0].startswith("[fit] warning: level 0.5 (elongation)"), said
     assert "at load factor 0.5001" in gaps[0]
     assert "- level 0.5 (elongation) lies in a gap" in markdown(res, SampleLog(os.path.join(d, "out"), spec))
+
+
+def test_a_fit_whose_optimum_failed_says_so(tmp_path):
+    """A Newton budget (2) no sample meets: every sample failed, the fit 'converged' at its start
+    (mu 2e6, 'not determined') and the log said nothing of the failures (exit 0; report.md: '2
+    failed'). Now one warning names the fitted sample's status, reason and the levels it reached."""
+    from ancf_petsc.workflows.calibration.report import markdown
+    d = str(tmp_path)
+    path = bar_case(d, parameters=(MU,), lateral=False, identifiability={"profiles": False})
+    write_yaml(os.path.join(d, "bar.yaml"), {**BAR, "solver": {"max_newton_iterations": 2}})
+    spec = load_fit(path)
+    said = []
+    res = run_calibration(spec, fresh=True, say=said.append)
+    assert not res.best.ok
+    notes = [s for s in said if "fitted sample is failed" in s]
+    assert len(notes) == 1 and "NEWTON_BUDGET_EXCEEDED" in notes[0] and "reached 0 of 10" in notes[0], said
+    assert "- the fitted sample is failed" in markdown(res, SampleLog(os.path.join(d, "out"), spec))

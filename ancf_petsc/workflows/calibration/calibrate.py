@@ -17,7 +17,7 @@ from .log import SampleLog
 from .optimise import LocalFit, global_fit, local_fit, start_points
 from .parameters import describe, from_u, to_u
 from .profiles import profile
-from .sample import Sample, passed_over_lines, start_ratios
+from .sample import Sample, optimum_notes, start_ratios
 from .spec import FitSpec
 
 
@@ -121,7 +121,7 @@ def run_calibration(spec: FitSpec, fresh: bool = False, task: int | None = None,
         for line in start_ratios(spec, start):
             say(f"[fit] {line}")
         best, starts = fit(ev, spec, task, say)
-        for line in passed_over_lines(spec, best.best):
+        for line in optimum_notes(spec, best.best):
             say(f"[fit] {line}")
         unc, params = analyse(ev, spec, best, say) if task is None else (None, [])
     finally:

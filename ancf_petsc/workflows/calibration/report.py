@@ -12,7 +12,7 @@ from .calibrate import CalibrationResult
 from .identify import CHI2_95, RCOND
 from .log import SampleLog
 from .plots import plot_fit, plot_profiles
-from .sample import n_data, passed_over_lines
+from .sample import n_data, optimum_notes
 
 
 def _finite(x):
@@ -87,7 +87,7 @@ def markdown(res: CalibrationResult, log: SampleLog) -> str:
         prof = "—" if p.profile is None else _span(p.profile.interval, p.profile.closed)
         lines.append(f"| {p.name} | {p.start:.4g} | {p.value:.5g}{bound} | {p.se:.3g} | "
                      f"{_span(p.interval)} | {prof} | {p.width:.3g} | {p.verdict}: {p.reason} |")
-    gaps = passed_over_lines(spec, res.best)
+    gaps = optimum_notes(spec, res.best)
     if gaps:
         lines += [""] + [f"- {g.removeprefix('warning: ')}" for g in gaps]
     if unc is not None and len(res.parameters) > 1:

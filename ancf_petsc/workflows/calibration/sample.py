@@ -120,10 +120,15 @@ def start_ratios(spec: FitSpec, start: Sample) -> list[str]:
     return out
 
 
-def passed_over_lines(spec: FitSpec, sample: Sample) -> list[str]:
-    """One warning per level of the data the sample's model reached only past a gap of the load
-    path (its values there are at the reported load factor, not at the level)."""
+def optimum_notes(spec: FitSpec, sample: Sample) -> list[str]:
+    """Warnings on the fitted sample: that it failed (its levels not reached carry the penalty),
+    and one per level of the data its model reached only past a gap of the load path (its
+    values there are at the reported load factor, not at the level)."""
     out = []
+    if not sample.ok:
+        out.append(f"warning: the fitted sample is {sample.status} ({sample.reason_code}: {sample.message}); "
+                   f"it reached {sample.levels_reached} of {len(spec.levels)} level(s), the others carry "
+                   f"objective.penalty ({spec.penalty:g} sigma): the optimum is not a fit of the data")
     for level, at in sample.passed_over:
         names = ", ".join(d.name for d in spec.data if np.any(np.isclose(d.all_levels, level, rtol=1e-12, atol=0.0)))
         out.append(f"warning: level {level:g} ({names}) lies in a gap of the load path at these parameters: "

@@ -218,7 +218,7 @@ def fibre_warnings(spec, beams) -> list[str]:
     out = []
     for key, b, name in _material_beams(spec, beams):
         k2 = getattr(b.material, "k2", None)
-        if k2 is None:
+        if k2 is None or not b.material.k1:            # k1 = 0: the fibres are off, nothing overflows
             continue
         E = float(np.sqrt(LOG_MAX_DOUBLE / k2))
         stretch = float(np.sqrt(1.0 + E))

@@ -57,6 +57,12 @@ def min_jacobian(problem, X: PETSc.Vec) -> float:
     return val if np.isfinite(val) else -np.inf
 
 
+def _stiff_fibres(law) -> bool:
+    """A law whose fibres carry stress (GOH, also under ``locking: mixed``), not one with k1 = 0
+    (fibres off: its model ran 5x the matrix's Newton iterations under the fibres' limits)."""
+    return hasattr(law, "fibre_exponent") and getattr(getattr(law, "law", law), "k1", 0.0) != 0.0
+
+
 def fibre_exponents(problem, X: PETSc.Vec) -> np.ndarray:
     """k2 Ē² at every Gauss point of this rank's parts with a fibre law (``fibre_exponent``), in a
     fixed order (empty without fibres)."""
@@ -91,7 +97,7 @@ class StepLimits:
                                            # partner place (``solver.band_step``; 0: no limit)
         self._local: PETSc.Vec | None = None
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
-        local = any(hasattr(m, "fibre_exponent") for blk in problem.blocks for _, _, m in blk.parts)
+        local = any(_stiff_fibres(m) for blk in problem.blocks for _, _, m in blk.parts)
         self.fibres = bool(problem.comm.tompi4py().allreduce(int(local), op=MPI.MAX))
 
     def configure(self, min_det_f: float, section_update: str, linesearch: str,

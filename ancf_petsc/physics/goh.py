@@ -122,6 +122,13 @@ class GOH:
             out.append((a0, Fa, I4, np.maximum(E, 0.0), on))
         return out
 
+    def _active(self, F: np.ndarray) -> list:
+        """``_fibres`` of the laws whose fibres carry stress: none with k1 = 0 ("0 switches the
+        fibres off", config/beams.py), where 0 · e^(k2 Ē²) was NaN once the exponential overflowed
+        (k2 524.6 at a fibre stretch of 1.47) and the step limit throttled Newton (5x the matrix's
+        iterations on the lone soleus)."""
+        return self._fibres(F) if self.k1 else []
+
     def _exp(self, E):
         with np.errstate(over="ignore"):
             return np.exp(self.k2 * E * E)
@@ -138,7 +145,9 @@ class GOH:
     def fibre_exponent(self, F: np.ndarray) -> np.ndarray:
         """k2 Ē² per point, the largest of the families (Ē clipped at 0): the fibres' stiffness
         ψ'' grows like e^(k2 Ē²), and the Newton steps are held to a bounded growth of it
-        (petsc/step_limits.py)."""
+        (petsc/step_limits.py); 0 with k1 = 0 (no fibre stiffness to grow)."""
+        if not self.k1:
+            return np.zeros(F.shape[:-2])
         return np.max([self.k2 * E * E for _, _, _, E, _ in self._fibres(F)], axis=0)
 
     def fibre_stretch(self, F: np.ndarray) -> np.ndarray:
@@ -148,14 +157,14 @@ class GOH:
     def energy(self, F: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Ψ per point (``theta``: the matrix's volumetric term on a dilatation field, physics/mixed.py)."""
         W = self.matrix.energy(F, theta)
-        for _, _, _, E, _ in self._fibres(F):      # expm1: exp(k2Ē²) − 1 cancels for a small k2
+        for _, _, _, E, _ in self._active(F):      # expm1: exp(k2Ē²) − 1 cancels for a small k2
             with np.errstate(over="ignore"):
                 W = W + self.k1 / (2.0 * self.k2) * np.expm1(self.k2 * E * E)
         return W
 
     def stress(self, F: np.ndarray, theta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         P, J = self.matrix.stress(F, theta)
-        for a0, Fa, _, E, _ in self._fibres(F):
+        for a0, Fa, _, E, _ in self._active(F):
             self._add_times_FH(P, 2.0 * self.k1 * E * self._exp(E), F, Fa, a0)
         return P, J
 
@@ -181,7 +190,7 @@ class GOH:
         k_F = 1
         assert terms.basis[k_F] is F                          # NeoHookean's basis: [F⁻ᵀ, F]
         c = 1.0 - 3.0 * self.kappa
-        for a0, Fa, _, E, on in self._fibres(F):
+        for a0, Fa, _, E, on in self._active(F):
             ex = self._exp(E)
             d1 = self.k1 * E * ex                              # ψ'
             d2 = np.where(on, self.k1 * ex * (1.0 + 2.0 * self.k2 * E * E), 0.0)   # ψ''

@@ -32,7 +32,7 @@ def compiled_law(material, shape: tuple[int, int]) -> tuple | None:
     if module is None:
         return None
     kind = type(material)
-    if kind is NeoHookean:
+    if kind is NeoHookean or (kind is GOH and not material.k1):      # k1 = 0: the matrix alone
         return module, (material.mu, material.K, 0.0, 0.0, 0.0, 0.0), None
     if kind is GOH and material.a0 is not None:
         a0 = np.broadcast_to(material.a0, (material.families,) + tuple(shape) + (3,))

@@ -200,6 +200,8 @@ def test_a_fibre_exponent_that_overflows_is_warned_of_and_leaks_no_numpy_warning
     assert "fibre stretch of 1.013" in note[0]
     raw["beams"][0]["material"]["k2"] = 524.6                  # the largest published set: no warning
     assert not [w for w in run_inline(raw, tmp_path / "b")["warnings"] if "k2" in w]
+    raw["beams"][0]["material"].update(k1=0.0, k2=1.0e6)       # fibres off: nothing overflows
+    assert not [w for w in _warnings(raw) if "k2" in w]
 
 
 def test_a_model_nothing_moves_is_named():

@@ -147,6 +147,32 @@ def test_fibres_carry_no_compression(tmp_path, kappa):
     assert runs["goh"]["steps"][-1]["probes"]["tip"]["displacement"][0] < -1e-3
 
 
+def test_k1_zero_is_the_matrix_alone(tmp_path):
+    """k1: 0 "switches the fibres off": with k2 524.6 the fibre term 0 e^(k2 Ē²) was NaN once the
+    exponential overflowed (fibre stretch 1.47), so the one-element bar, which the matrix alone
+    takes to 2.2x its length, failed at load factor 0.4989 (DIVERGED_FNORM_NAN).  Now the law
+    (numpy and compiled kernels) is its neo-Hookean matrix's, the run the same to round-off."""
+    F = np.diag([1.6, 0.8, 0.8])[None]
+    law = GOH(MU, K, 0.0, 524.6).with_directions(np.array([[[1.0, 0.0, 0.0]]]))
+    nh = NeoHookean(MU, K)
+    assert np.array_equal(law.stress(F)[0], nh.stress(F)[0]) and law.energy(F) == nh.energy(F)
+    assert np.array_equal(law.stress_and_tangent(F)[2].full(), nh.stress_and_tangent(F)[2].full())
+    assert law.fibre_exponent(F) == 0.0 and law.fibre_stretch(F)[0, 0] == pytest.approx(1.6)
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["output"]["vtk"] = False
+    raw["loads"][0]["traction_force"] = [150.0, 0.0, 0.0]        # 2 MPa: stretch 2.24
+    raw["steps"] = [0.25, 0.5, 1.0]
+    runs = {}
+    for name, mat in (("nh", {"model": "neo-hookean", "mu": MU, "bulk_modulus": K}),
+                      ("goh", dict(goh_material(), k1=0.0, k2=524.6))):
+        raw["beams"][0]["material"] = mat
+        runs[name] = run_inline(copy.deepcopy(raw), tmp_path / name)
+        assert runs[name]["status"] == "completed", runs[name].get("message")
+    for a, b in zip(runs["nh"]["steps"], runs["goh"]["steps"]):
+        ua, ub = (np.array(s["probes"]["tip"]["displacement"]) for s in (a, b))
+        assert np.abs(ua - ub).max() <= 1e-12 * np.abs(ua).max() and a["iterations"] == b["iterations"]
+
+
 def test_the_reference_state_has_the_tension_sides_tangent_despite_rounding():
     """F of the reference state is I only to rounding, so Ē there is ±1e-15.  The tangent must
     still be the tension side's at every point (an exact Ē >= 0 test switched the fibres of

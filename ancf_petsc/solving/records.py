@@ -139,7 +139,8 @@ def restart_increment(point, levels: list[float], say=lambda *_: None) -> float:
         return dlam
     last = point.last_increment
     ok = math.isfinite(last) and last > 0.0
-    new = last if ok else (levels[0] - point.load_factor if levels else 1.0)
+    ahead = [lv - point.load_factor for lv in levels if lv > point.load_factor]   # not one passed over
+    new = last if ok else (ahead[0] if ahead else 1.0)
     say(f"[ancf] restart: results.h5 steps/step_{point.step:04d}/restart gives the next load increment "
         f"{dlam:g} (not > 0); going on with {new:g}, the {'last accepted increment' if ok else 'way to the next level'}")
     return new

@@ -28,7 +28,9 @@ def test_the_next_increment_of_a_restart_is_above_zero():
     said = []
     assert restart_increment(SimpleNamespace(**{**vars(point), "increment": 0.0}), [3.0], said.append) == 0.25
     assert said and "steps/step_0003/restart" in said[0]
-    assert restart_increment(SimpleNamespace(**{**vars(point), "increment": -1.0, "last_increment": 0.0}), [3.0]) == 1.0
+    none = SimpleNamespace(**{**vars(point), "increment": -1.0, "last_increment": 0.0})
+    assert restart_increment(none, [3.0]) == 1.0
+    assert restart_increment(none, [1.9, 2.5]) == 0.5          # 1.9: a level the step over passed too
 
 
 @pytest.mark.parametrize("increment", [0.0, -0.25, float("nan")])

@@ -119,9 +119,9 @@ def default_section_update(spec: ModelSpec) -> str:
 
 
 def _fibres(spec: ModelSpec) -> bool:
-    """Whether a beam of ``spec`` has a fibre-reinforced (GOH) law whose fibres carry stress
-    (k1: 0 switches them off: the model is then its matrix's, defaults included)."""
-    return any(b.material.get("model") == GOH.name and b.material.get("k1") for b in spec.beams)
+    """Whether a beam of ``spec`` has a fibre-reinforced (GOH) law (also with k1 = 0: defaults
+    stay as a calibration's samples change k1 in place)."""
+    return any(b.material.get("model") == GOH.name for b in spec.beams)
 
 
 def default_predictor(spec: ModelSpec) -> str:

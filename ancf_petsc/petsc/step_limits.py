@@ -97,8 +97,14 @@ class StepLimits:
                                            # partner place (``solver.band_step``; 0: no limit)
         self._local: PETSc.Vec | None = None
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
-        local = any(_stiff_fibres(m) for blk in problem.blocks for _, _, m in blk.parts)
-        self.fibres = bool(problem.comm.tompi4py().allreduce(int(local), op=MPI.MAX))
+        self.fibres = False                # a law whose fibres carry stress, on some rank
+        self.find_fibres()
+
+    def find_fibres(self) -> None:
+        """Whether some rank's laws have fibres that carry stress (collective); again after the
+        laws changed in place (a calibration's samples: k1 from 0 to > 0)."""
+        local = any(_stiff_fibres(m) for blk in self.problem.blocks for _, _, m in blk.parts)
+        self.fibres = bool(self.problem.comm.tompi4py().allreduce(int(local), op=MPI.MAX))
 
     def configure(self, min_det_f: float, section_update: str, linesearch: str,
                   band_step: float = 0.0) -> bool:

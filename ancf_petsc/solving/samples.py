@@ -100,6 +100,7 @@ def _update_materials(solver: "SampleSolver", spec: ModelSpec, paths: list[tuple
         set_fibre_directions(beam, run.spec.length, run.spec.twist_deg, run.spec.twist_axis)
         run.spec.beams[i].material = spec.beams[i].material
     refresh_parts(run.problem.blocks, run.model, run.layout, beams)
+    run.problem.limits.find_fibres()
 
 
 #: config values a built run takes in place: (key-path pattern, updater).  A parameter of

@@ -107,3 +107,28 @@ def test_changed_paths_of_config_trees():
     assert changed_paths(a, b) == [("beams", 1, "material", "mu"), ("new",)]
     b["steps"] = [1]
     assert ("steps",) in changed_paths(a, b)
+
+
+def test_fibres_switched_on_in_place_get_the_fibre_step_limits():
+    """A GOH bar built with k1 = 0 (fibres off: no fibre step limits) and sampled with k1 > 0
+    in place: the run's limits see the fibres again, as a fresh build's (same answer and
+    Newton iterations)."""
+    raw = yamlio.load(open(os.path.join(CONFIGS, "uniaxial_neohookean.yaml")).read())
+    raw["beams"][0]["material"] = {"model": "goh", "mu": 1.0e6, "bulk_modulus": 5.0e7, "k1": 0.0, "k2": 5.0,
+                                   "fibres": {"follow": "axis"}}
+    raw["steps"] = [0.5, 1.0]
+    on = copy.deepcopy(raw)
+    on["beams"][0]["material"]["k1"] = 2.0e6
+    solver, fresh = SampleSolver(), SampleSolver()
+    try:
+        solver.solve(parse_config(raw, base_dir=CONFIGS))
+        assert not solver.run.problem.limits.fibres
+        out = solver.solve(parse_config(on, base_dir=CONFIGS))
+        assert solver.builds == 1 and solver.run.problem.limits.fibres
+        ref = fresh.solve(parse_config(copy.deepcopy(on), base_dir=CONFIGS))
+        assert fresh.run.problem.limits.fibres
+        assert np.abs(out.displacements["tip"] - ref.displacements["tip"]).max() < 1e-13
+        assert out.newton_iterations == ref.newton_iterations
+    finally:
+        solver.destroy()
+        fresh.destroy()

@@ -4,6 +4,7 @@ import os
 
 import h5py
 import numpy as np
+import pytest
 
 from helpers import CONFIGS, load_raw, petsc_init, run_inline
 
@@ -83,3 +84,17 @@ def test_centroid_moment_of_a_turned_section():
     f = np.zeros((6, 3))
     f[0], f[1] = [0.0, 0.0, 7.0], [3.0, 0.0, 0.0]
     assert np.allclose(centroid_moment(q, f), np.cross(q[1], f[1]))
+
+
+@pytest.mark.mpi
+def test_reaction_moments_on_two_ranks_are_the_serial_ones(tmp_path):
+    """The cantilever clamped at its last node (owned by rank 1 on 2 ranks), pulled at its
+    first: the support's force and moment equal the serial ones to 1e-9."""
+    from helpers import assert_same_as_serial, run_on_ranks
+    raw = _cantilever([0.5, 1.0])
+    raw["boundary_conditions"][0]["node"] = "last"
+    raw["loads"][0]["node"] = "first"
+    raw["probes"][0]["node"] = "first"
+    runs = run_on_ranks(raw, tmp_path, ranks=(1, 2))
+    assert_same_as_serial({n: np.array([st["reactions"]["beam.8"] + st["reaction_moments"]["beam.8"]
+                                        for st in s["steps"]]) for n, (_, s) in runs.items()})

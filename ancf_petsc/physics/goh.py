@@ -168,10 +168,11 @@ class GOH:
             self._add_times_FH(P, 2.0 * self.k1 * E * self._exp(E), F, Fa, a0)
         return P, J
 
-    def fibre_cauchy_stress(self, F: np.ndarray) -> np.ndarray:
+    def fibre_cauchy_stress(self, F: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Cauchy normal stress along each deformed fibre, n·σn with n = Fa0/|Fa0| and σ = PFᵀ/J
-        (families, ...): the stress a fibre-aligned cut carries, matrix included."""
-        P, J = self.stress(F)
+        (families, ...): the stress a fibre-aligned cut carries, matrix included (``theta``: the
+        matrix's pressure on that dilatation, ``locking: mixed``)."""
+        P, J = self.stress(F, theta)
         out = []
         with np.errstate(over="ignore", invalid="ignore"):      # an overflowed fibre term: inf
             sigma = np.matmul(P, np.swapaxes(F, -1, -2)) / J[..., None, None]

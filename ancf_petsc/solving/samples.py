@@ -11,8 +11,9 @@ Each level is solved either by load stepping from the reference (cold, as ``ancf
 from a given start state (a warm start: the converged state of a nearby parameter set at that
 level, or a prediction from several).  A warm level that does not converge stably is solved
 again by load stepping from this sample's previous level, so a warm start changes the cost of a
-solve, never which equilibrium it finds beyond the solver's tolerance.  Nothing is written to
-disk.  Serial: every sample is solved on a communicator of one rank (one sample per rank).
+solve, never which equilibrium it finds beyond the solver's tolerance; a contact law with a
+history (Coulomb friction) follows its load path, so its samples are always solved cold, each
+from the reference's history.  Nothing is written to disk.  Serial: every sample is solved on a communicator of one rank (one sample per rank).
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from petsc4py import PETSc
 
 from .. import status as st
 from ..config.specs import ModelSpec
+from ..contact.partners import HISTORY
 from ..linalg.database import option, own_prefix
 from ..model.fibre_setup import set_fibre_directions
 from ..petsc.blocks import refresh_parts
@@ -41,10 +43,12 @@ from .stepper import LoadStepper
 @dataclass
 class LevelState:
     """A converged level: every block of the state in model order (n_blocks, V, 3) and the
-    contact's projection state and multiplier status (None without contact)."""
+    contact's projection state, multiplier status and its terms' history (a friction law's
+    anchors, as ``Contact.restore_state`` reads them; None without contact)."""
     x: np.ndarray
     projection: np.ndarray | None = None
     status: np.ndarray | None = None
+    history: dict | None = None
 
 
 @dataclass
@@ -124,6 +128,21 @@ def refresh_tolerance(stepper: LoadStepper) -> None:
     S.snes.setTolerances(atol=float(f"{atol:.3e}"))      # as the options string sets it
 
 
+def contact_state(c) -> tuple | None:
+    """(projection, status, the terms' history fields) of the contact's current state, as
+    ``Contact.restore_state`` takes them (None without contact)."""
+    if c is None:
+        return None
+    history = {HISTORY + k: v.copy() for t in c.terms for k, v in t.state.items()}
+    return c.projector.state().copy(), c.status.copy(), history
+
+
+def path_dependent(c) -> bool:
+    """Whether the contact has a term with a history (Coulomb friction): its answer at a level
+    depends on the path to it, so a level is not solved from another sample's state."""
+    return c is not None and any(t.state for t in c.terms)
+
+
 def solve_level(stepper: LoadStepper, lam: float) -> StepRecord | None:
     """Newton at load factor ``lam`` from the problem's current state X (a warm start, with its
     contact state).  Its record when it converges at the stated tolerances to a stable state
@@ -163,7 +182,7 @@ class SampleSolver:
         self.log = log
         self.run: Run | None = None
         self.raw: dict | None = None            # the config the run holds now
-        self.initial_contact = None             # (projection, status) of the reference
+        self.initial_contact = None             # (projection, status, history) of the reference
         self.builds = 0                         # how often a run was built
         self.options = ExitStack()              # the run's options prefix (``_prepare``)
 
@@ -200,7 +219,7 @@ class SampleSolver:
         self.run = Run(spec, self.comm, self.log)
         self.raw, self.builds = spec.raw, self.builds + 1
         c = self.run.contact
-        self.initial_contact = None if c is None else (c.projector.state().copy(), c.status.copy())
+        self.initial_contact = contact_state(c)
         return True
 
     def solve(self, spec: ModelSpec, start: list[LevelState | None] | None = None) -> SampleOutcome:
@@ -215,7 +234,8 @@ class SampleSolver:
         out = SampleOutcome("completed", st.COMPLETED, "completed", [], {}, {}, rebuilt=rebuilt)
         records = []
         try:
-            if start is None or all(s is None for s in start):
+            # a law with a history (friction) answers along its load path: no warm starts
+            if start is None or all(s is None for s in start) or path_dependent(run.contact):
                 self._set_contact(self.initial_contact)
                 run.stepper.release_path()
                 run.stepper.run(levels, lambda rec: records.append(self._record(rec, out)))
@@ -263,7 +283,7 @@ class SampleSolver:
             self._set_contact(self.initial_contact)
             return None
         s = states[k - 1]
-        self._set_contact(None if s.projection is None else (s.projection, s.status))
+        self._set_contact(None if s.projection is None else (s.projection, s.status, s.history))
         P = self.run.problem
         X = P.global_vector(s.x.reshape(-1))
         dX = X.duplicate()
@@ -281,7 +301,7 @@ class SampleSolver:
         lo, hi = self.run.layout.owned_nodes
         inv = np.argsort(self.run.layout.perm)[lo:hi]
         P.X.setArray(s.x.reshape(-1, P.model.dofs_per_node)[inv].ravel())
-        self._set_contact(None if s.projection is None else (s.projection, s.status))
+        self._set_contact(None if s.projection is None else (s.projection, s.status, s.history))
 
     def _record(self, rec, out: SampleOutcome):
         """Probes and the state of a converged level into ``out``."""
@@ -290,8 +310,6 @@ class SampleSolver:
         for name, (u, v) in run.model.probe_values(x).items():
             out.displacements.setdefault(name, []).append(u)
             out.values.setdefault(name, []).append(v)
-        c = run.contact
-        out.states.append(LevelState(x.copy(), None if c is None else c.projector.state().copy(),
-                                     None if c is None else c.status.copy()))
+        out.states.append(LevelState(x.copy(), *(contact_state(run.contact) or ())))
         out.load_factors.append(rec.load_factor)
         return rec

@@ -132,3 +132,36 @@ def test_fibres_switched_on_in_place_get_the_fibre_step_limits():
     finally:
         solver.destroy()
         fresh.destroy()
+
+
+def _strips(mu: float):
+    """configs/friction_pressed_strips.yaml (Coulomb friction, out and back) at five levels,
+    the slider's shear modulus ``mu``, its free end probed."""
+    raw = yamlio.load(open(os.path.join(CONFIGS, "friction_pressed_strips.yaml")).read())
+    raw["steps"] = [1.5, 2.0, 2.5, 3.0, 3.5]
+    raw["beams"][1]["material"]["mu"] = mu
+    raw["probes"].append({"name": "tail", "beam": "slider", "node": "first"})
+    return parse_config(raw, base_dir=CONFIGS)
+
+
+def test_friction_samples_start_from_the_reference_history_and_step_cold():
+    """A Coulomb friction model in a calibration: every sample stopped with a TypeError (the
+    reference contact state carried no friction history: restore_state(..., None)). A sample
+    now starts from the reference history, whatever was solved before it, and is solved by load
+    stepping even when offered a neighbour's states: warm from them its values moved by up to
+    2.3e-3 (the friction answer follows its path), beyond the solver's tolerance."""
+    one = SampleSolver()
+    try:
+        first = one.solve(_strips(0.5e6))
+        offered = one.solve(_strips(0.55e6), start=first.states)
+    finally:
+        one.destroy()
+    fresh = SampleSolver()
+    try:
+        cold = fresh.solve(_strips(0.55e6))
+    finally:
+        fresh.destroy()
+    assert first.status == offered.status == cold.status == "completed"
+    assert offered.warm_levels == 0
+    u, ref = offered.displacements["tail"], cold.displacements["tail"]
+    assert np.abs(u - ref).max() <= 1e-10 * np.abs(ref).max()

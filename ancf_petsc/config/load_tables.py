@@ -37,11 +37,12 @@ class LoadTable:
 
 def _storage_body(lines: list[str], path: str, where: str) -> tuple[list[str], int, dict]:
     """The lines after an OpenSim header (``endheader``), the line number of the first, and the
-    header's ``key=value`` entries."""
+    header's ``key=value`` entries (key: (value, line number))."""
     for k, line in enumerate(lines):
         if line.strip().lower() == "endheader":
-            meta = dict(ln.split("=", 1) for ln in lines[:k] if "=" in ln)
-            return lines[k + 1:], k + 2, {a.strip(): b.strip() for a, b in meta.items()}
+            meta = {ln.split("=", 1)[0].strip(): (ln.split("=", 1)[1].strip(), n + 1)
+                    for n, ln in enumerate(lines[:k]) if "=" in ln}
+            return lines[k + 1:], k + 2, meta
     raise ConfigError(where, f"{path}: no 'endheader' line: not an OpenSim storage file "
                              "(.sto/.mot); give a CSV file with a header line instead")
 
@@ -107,8 +108,12 @@ def _check_storage_size(path: str, meta: dict, rows: list[list[str]], where: str
     for keys, have, what in ((("nrows", "datarows"), len(rows) - 1, "data rows"),
                              (("ncolumns", "datacolumns"), len(rows[0]), "columns")):
         key = next((k for k in meta if k.lower() in keys), None)
-        stated = meta.get(key, "")
-        if stated.isdigit() and int(stated) != have:
+        stated, line = meta.get(key, ("", 0))
+        if key is not None and not (stated.isascii() and stated.isdigit()):
+            raise ConfigError(where, f"{path}: header line {line} '{key}={stated}' is not a count of "
+                                     f"{what}: write it as a whole number ({key}={have} for this table), "
+                                     "or remove the line")
+        if key is not None and int(stated) != have:
             why = ("a file cut short? (complete it, or correct {})" if have < int(stated) else
                    "more than it states: correct {}").format(key)
             raise ConfigError(where, f"{path}: its header says {key}={stated}, the table has {have} "
@@ -147,15 +152,21 @@ def read_load_table(path: str, where: str) -> LoadTable:
             raise ConfigError(where, f"{path}: data row {i} (line {line}) has {len(row)} fields, the "
                                      f"header {len(header)}")
         for j, field in enumerate(row):
-            try:
-                v = float(field)
-            except ValueError:
-                v = math.nan
+            v = plain_number(field)
             if not math.isfinite(v):
                 raise ConfigError(where, f"{path}: data row {i} (line {line}), column {header[j]!r}: "
                                          f"{field!r} is not a finite number")
             values[i - 1, j] = v
     return LoadTable(path, {h: values[:, j].copy() for j, h in enumerate(header)})
+
+
+def plain_number(field: str) -> float:
+    """A table cell's number, NaN if it is none: float() without its underscores between digits
+    ('1_0' is 10 to Python, a typing slip in a table of forces)."""
+    try:
+        return math.nan if "_" in field else float(field)
+    except ValueError:
+        return math.nan
 
 
 def inline_table(value: dict, where: str) -> LoadTable:

@@ -62,6 +62,9 @@ def _csv_points(text: str, path: str) -> np.ndarray:
                 f"{file_name(path)} line {k + 1}: {row!r} is not two numbers u, v (one header "
                 "line is allowed, before the numbers; columns separated by a comma, "
                 f"semicolon, tab or spaces){comma}") from None
+        if any("_" in c for c in row):        # float('1_0') is 10: a typing slip, not a number
+            raise OutlineReadError(f"{file_name(path)} line {k + 1}: {row!r} is not two numbers u, v "
+                                   "(an underscore in a number: write 10 or 1.0, not 1_0)")
         if len(vals) != 2:
             # an index column or a third coordinate was read as u, v (index, u) with no word
             raise OutlineReadError(f"{file_name(path)} line {k + 1}: {len(vals)} columns {row!r}; a point list "

@@ -89,3 +89,13 @@ def test_rejected_csv_lines_are_named(tmp_path):
         read_point_list(str(tmp_path / "o.csv"))
     assert "o.csv line 2" in str(info.value) and "is not two numbers" in str(info.value)
     assert "0 points" not in str(info.value)
+
+
+def test_an_underscore_in_a_csv_outline_number_is_refused(tmp_path):
+    """float('1_0') is 10: an outline point '1_0, 0' was read at u = 10 with no word."""
+    from ancf_petsc.outline_formats import OutlineReadError
+    from ancf_petsc.outline_formats.point_list import read_point_list
+    (tmp_path / "o.csv").write_text("0, 0\n1_0, 0\n1, 1\n0, 1\n")
+    with pytest.raises(OutlineReadError, match=r"o\.csv line 2: \['1_0', '0'\] is not two numbers u, v "
+                                               r"\(an underscore in a number: write 10 or 1\.0, not 1_0\)"):
+        read_point_list(str(tmp_path / "o.csv"))

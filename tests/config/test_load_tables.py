@@ -81,3 +81,20 @@ def test_a_table_not_in_utf8_says_where_and_how_to_save_it(tmp_path, data, match
     (tmp_path / "t.csv").write_bytes(data)
     with pytest.raises(ConfigError, match=r"^history\.file: .*t\.csv: not UTF-8 text \(" + match):
         read_load_table(str(tmp_path / "t.csv"), "history.file")
+
+
+@pytest.mark.parametrize("name,text,match", [
+    ("words.sto", HEADER.replace("nRows=2", "nRows=three") + "time\tsoleus_r\tgasmed_r\n0.25\t9.5\t8\n",
+     r"words\.sto: header line 3 'nRows=three' is not a count of data rows: write it as a whole "
+     r"number \(nRows=1 for this table\)"),
+    ("blank.sto", HEADER.replace("nColumns=3", "nColumns=") + "time\tsoleus_r\tgasmed_r\n0.25\t9.5\t8\n0.27\t1\t2\n",
+     r"blank\.sto: header line 4 'nColumns=' is not a count of columns"),
+    ("underscore.csv", "time,soleus_r\n0,1_0\n0.1,2\n",
+     r"underscore\.csv: data row 1 \(line 2\), column 'soleus_r': '1_0' is not a finite number"),
+], ids=["nrows-words", "ncolumns-empty", "underscore"])
+def test_a_header_size_or_a_cell_that_is_no_number_is_refused(tmp_path, name, text, match):
+    """nRows=three skipped the size check, so a file cut short was read as a shorter history;
+    a cell 1_0 was read as 10 (Python's float() takes underscores between digits)."""
+    with pytest.raises(ConfigError, match=r"^history\.file: .*" + match):
+        _read(tmp_path, name, text)
+

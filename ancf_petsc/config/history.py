@@ -13,8 +13,9 @@ Frame k (row k of the table, k = 1 … N) is solved at load factor λ = k, each 
 equilibrium continued from the one before (friction and contact history carried, adaptive
 sub-steps in between): a load with ``column: c`` is its config value times c_k · scale at frame
 k, piecewise linear in λ between frames and rising from rest (λ = 0, every load zero) to frame 1.
-Every frame is a reported step; a load without a column (or a ``curve`` over frame numbers) is
-refused, as it would grow with the frame number.
+Every frame is a reported step; a load follows a column or its own ``curve`` over frame numbers
+(λ = frame, e.g. a pressing load held over the frames); one with neither is refused, as it
+would grow with the frame number.
 """
 from __future__ import annotations
 
@@ -78,7 +79,7 @@ def parse_history(value, base_dir: str) -> HistorySpec:
     else:
         table = inline_table(value["table"], f"{p}.table")
         source = "history.table"
-    time_column = string(value.get("time", "time"), f"{p}.time")
+    time_column = column_name(value.get("time", "time"), f"{p}.time")
     if time_column not in table.columns:
         raise ConfigError(f"{p}.time", f"no column {time_column!r} in {source} (columns: "
                                        f"{', '.join(table.columns)}); name the clock column")
@@ -132,12 +133,20 @@ def history_curve(item: dict, history: HistorySpec | None, path: str, curve, sca
                                                 "history: {file: ...} (docs/gait.md), or remove it")
         if "curve" in item:
             raise ConfigError(path, "give column (a history's) or curve, not both")
-        return history.curve(string(item["column"], f"{path}.column"), f"{path}.column", scaled)
+        return history.curve(column_name(item["column"], f"{path}.column"), f"{path}.column", scaled)
     if history is not None and curve is None:
         raise ConfigError(path, f"with history every load follows a column of {history.source} "
-                                f"(e.g. column: {shown(next(iter(_load_columns(history)), 'name'))}); "
-                                "one without would grow with the frame number")
+                                f"(e.g. column: {shown(next(iter(_load_columns(history)), 'name'))}) or its own "
+                                "curve over frame numbers; one with neither would grow with the frame number")
     return curve
+
+
+def column_name(value, path: str) -> str:
+    """A column's name; a number (YAML reads column: 1 as one) is refused with the quoting to write."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        raise ConfigError(path, f"expected a column name; got the number {shown(value)}: a column "
+                                f"named by digits is quoted in YAML (column: \"{shown(value)}\")")
+    return string(value, path)
 
 
 def _load_columns(history: HistorySpec) -> list[str]:

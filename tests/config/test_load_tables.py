@@ -98,3 +98,22 @@ def test_a_header_size_or_a_cell_that_is_no_number_is_refused(tmp_path, name, te
     with pytest.raises(ConfigError, match=r"^history\.file: .*" + match):
         _read(tmp_path, name, text)
 
+
+
+@pytest.mark.parametrize("raw,path", [
+    ({"table": {"time": [0, 1], "1": [5, 6]}, "time": "time"}, None),
+    ({"table": {"1": [0, 1], "f": [5, 6]}, "time": 1}, "history.time"),
+])
+def test_a_column_named_by_a_yaml_number_says_to_quote_it(tmp_path, raw, path):
+    """column: 1 (YAML's int) failed 'expected a non-empty string; got 1', with no word of quoting."""
+    from ancf_petsc.config.history import history_curve, parse_history
+    if path is not None:
+        with pytest.raises(ConfigError, match=r"^history\.time: expected a column name; got the number 1: "
+                                              r"a column named by digits is quoted in YAML \(column: \"1\"\)"):
+            parse_history(raw, str(tmp_path))
+        return
+    history = parse_history(raw, str(tmp_path))
+    with pytest.raises(ConfigError, match=r"^loads\[0\]\.column: expected a column name; got the number 1: "
+                                          r"a column named by digits is quoted in YAML \(column: \"1\"\)"):
+        history_curve({"column": 1}, history, "loads[0]", None)
+    assert history_curve({"column": "1"}, history, "loads[0]", None) == ((0.0, 0.0), (1.0, 5.0), (2.0, 6.0))

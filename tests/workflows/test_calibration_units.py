@@ -115,6 +115,8 @@ def test_a_stiffness_reads_the_load_its_curve_applies(tmp_path):
     disp = {"tip": np.array([[2.0e-3, 0, 0], [4.0e-3, 0, 0], [4.0e-3, 0, 0]])}
     k = evaluate("stiffness", data.options, disp, np.array([0.25, 0.5, 1.0]), [0.25, 0.5, 1.0])
     assert k == pytest.approx([22.5 / 2e-3, 45.0 / 4e-3, 45.0 / 4e-3])
+    held = dict(data.options, loads=[[[[0.0, 1.0], [1.0, 1.0]], [45.0, 0.0, 0.0]]])   # 45 N from the start
+    assert evaluate("stiffness", held, disp, np.array([0.5]), [0.25, 0.5, 1.0]) == pytest.approx([45.0 / 4e-3])
 
     def history(d):
         d.pop("steps")

@@ -179,7 +179,8 @@ def _force(o: dict, lam) -> np.ndarray:
 def _stiffness(o, disp, rows, levels):
     u = _elongation(o, disp, rows, levels)
     u0 = _elongation(o, disp, rows, [o["lower"]])[0] if o["lower"] > 0 else 0.0
-    return (_force(o, levels) - _force(o, [o["lower"]])[0]) / (u - u0)
+    f0 = _force(o, [o["lower"]])[0] if o["lower"] > 0 else 0.0     # the reference carries no load
+    return (_force(o, levels) - f0) / (u - u0)
 
 
 #: the quantities a data set can measure, by name (module docstring)

@@ -18,7 +18,7 @@ GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "s
 
 #: a unilateral interface whose largest pointwise penetration exceeds this share of the smaller of
 #: its two sections' smallest widths draws a warning (issue 42: the weighted gaps hold while the
-#: points between them interpenetrate; 1 % is 27 µm on the paper's Type III outlines)
+#: contact points themselves interpenetrate; 1 % is 27 µm on the paper's Type III outlines)
 PENETRATION_SHARE = 0.01
 
 
@@ -190,26 +190,38 @@ def path_notes(c, steps: list[dict]) -> list[str]:
 
 
 def penetration_warnings(c, report: dict) -> list[str]:
-    """One warning line per interface of the ``Contact`` c, if its law lets the bodies separate
-    (unilateral), whose ``max_penetration`` in ``report`` (a level's ``gap_report``) is above
-    ``PENETRATION_SHARE`` of the smaller smallest section width of its two beams; none for the
-    other laws (their weighted gaps are zero both ways: a pointwise gap of either sign is their
+    """One warning line, if the law of the ``Contact`` c lets the bodies separate (unilateral),
+    for the interfaces whose ``max_penetration`` in ``report`` (a level's ``gap_report``: the
+    largest −gap at a contact point on the partner's surface) is above ``PENETRATION_SHARE`` of
+    the smaller smallest section width of their two beams: the deepest named with its depth, the
+    others after it (a bundle's interfaces alike, one line for all); none for the other laws
+    (their weighted gaps are zero both ways: a pointwise gap of either sign is their
     discretisation's)."""
     if not c.law.decides_activity:          # gaps held at zero both ways (sliding)
         return []
-    out = []
+    deep = []
     for itf in c.interfaces:
         depth = report.get(itf.name, {}).get("max_penetration", 0.0)
         width = min(itf.a.section.smallest_width, itf.b.section.smallest_width)
         if depth > PENETRATION_SHARE * width:
-            out.append(f"warning: contact interface {itf.name}: the bodies interpenetrate by up to "
-                       f"{depth * 1e6:.3g} um {LAST_LEVEL}, above {PENETRATION_SHARE:.0%} of the "
-                       f"thinner section ({width * 1e3:.3g} mm wide): each pressure function's weighted "
-                       "gap holds, the points between them are not held; local functions across "
-                       "(contact.projection.curve_spans: 4 with contact.curve_points: 4) held them to 14 um "
-                       "on the paper's tendon" + (FRICTION_ACROSS if any(t.bounded for t in c.terms) else "")
-                       + "; see docs/contact.md, \"Pointwise penetration\"")
-    return out
+            deep.append((depth, width, itf.name))
+    if not deep:
+        return []
+    deep.sort(key=lambda d: -d[0])
+    depth, width, name = deep[0]
+    others = ""
+    if len(deep) > 1:
+        names = ", ".join(n.split(" (")[0] for _, _, n in deep[1:])
+        others = (f" and {len(deep) - 1} other(s) ({names}: {deep[-1][0] * 1e6:.3g}-"
+                  f"{deep[1][0] * 1e6:.3g} um)")
+    return [f"warning: contact interface {name}{others}: the bodies interpenetrate at the contact points by "
+            f"up to {depth * 1e6:.3g} um {LAST_LEVEL}, above {PENETRATION_SHARE:.0%} of the thinner section "
+            f"({width * 1e3:.3g} mm wide): the unilateral law holds each pressure function's weighted gap "
+            ">= 0, not each point's: a function spanning the interface across lets one edge cross while "
+            "the other opens; local functions across (contact.projection.curve_spans: 4 "
+            "with contact.curve_points: 4) held the points to 14 um on the paper's tendon at 10 and 400 N"
+            + (FRICTION_ACROSS if any(t.bounded for t in c.terms) else "")
+            + "; see docs/contact.md, \"Pointwise penetration\""]
 
 
 #: the penetration warning's remedy under Coulomb friction (measured 2026-12-07, the paper's tendon,

@@ -101,6 +101,21 @@ def step_entry(record, probes: dict) -> dict:
 RUN_SERIES = re.compile(r"(surface|contact)(_[0-9]{4,}\.vtu|\.pvd)")
 
 
+def level_fields(record) -> dict:
+    """A VTU's field data: ``load_factor``, ``negative_eigenvalues`` of the tangent (-1: not
+    counted) and ``stable`` (1; 0 with negative eigenvalues, -1 not counted) of a converged
+    level's StepRecord; the rest state's (None): load factor 0, not counted."""
+    neg = -1 if record is None or record.negative_eigenvalues is None else record.negative_eigenvalues
+    return {"load_factor": np.array([0.0 if record is None else record.load_factor]),
+            "negative_eigenvalues": np.array([neg], dtype=np.int32),
+            "stable": np.array([-1 if neg < 0 else int(neg == 0)], dtype=np.int32)}
+
+
+def series_time(entry: dict, timed: bool) -> float:
+    """A level's time in the VTU series: a history's time [s] (``timed``), else its load factor."""
+    return entry["time"] if timed else entry["load_factor"]
+
+
 def stale_output(name: str) -> bool:
     """Whether ``name`` in an output directory is a file a run writes (results.h5, summary.json,
     the reserve, the VTU series and their .pvd collections), which a new run replaces.  Nothing
@@ -114,8 +129,9 @@ class ResultsWriter:
     """Writes results.h5, summary.json and the VTU series (rank 0 does the I/O; every method is
     called on every rank, and a file-system error becomes an ``OutputError`` on every rank)."""
 
-    def __init__(self, model: Model, layout, comm, run_info: dict, restart=None):
+    def __init__(self, model: Model, layout, comm, run_info: dict, restart=None, rest_contact=None):
         self.model, self.comm = model, comm
+        self.timed = model.spec.history is not None     # the VTU series over the history's clock
         self.restart = restart
         self.rank = comm.rank
         spec = model.spec
@@ -131,7 +147,7 @@ class ResultsWriter:
         self._step_texts: list = []            # each level's entry and its JSON (compact_summary)
         self._summary_time = -np.inf           # when summary.json was last written (monotonic)
         self._summary_cost = 0.0                # how long that took [s]
-        self._on_root(lambda: self._create_or_fail(layout, run_info) if restart is None
+        self._on_root(lambda: self._create_or_fail(layout, run_info, rest_contact) if restart is None
                       else self._resume(layout, run_info))
 
     def _on_root(self, action) -> None:
@@ -155,11 +171,11 @@ class ResultsWriter:
         if err:
             raise OutputError(*err)
 
-    def _create_or_fail(self, layout, run_info: dict) -> None:
+    def _create_or_fail(self, layout, run_info: dict, rest_contact: dict | None) -> None:
         """``_create``; if it fails (a full disk before level 1), the files that exist say
         ``failed`` with ``OUTPUT_ERROR`` (never ``running``), as far as the disk lets them."""
         try:
-            self._create(layout, run_info)
+            self._create(layout, run_info, rest_contact)
         except OutputError as exc:
             self._fail_early(f"output error: {exc}")
             raise
@@ -184,7 +200,7 @@ class ResultsWriter:
             except (OSError, RuntimeError):
                 remove_quietly(self.h5_path)      # a results.h5 that cannot say failed goes
 
-    def _create(self, layout, run_info: dict) -> None:
+    def _create(self, layout, run_info: dict, rest_contact: dict | None) -> None:
         model = self.model
         prepare_output_dir(self.dir)
         for stale in os.listdir(self.dir):
@@ -204,8 +220,11 @@ class ResultsWriter:
         except (OSError, RuntimeError) as exc:
             self._release_reserve()
             raise OutputError(self.h5_path, f"cannot write: {os_reason(exc)}") from None
-        if self.sampler is not None:
-            self._write_series("surface", 0, 0.0, surface_cells(self.sampler, model.q0))
+        if self.sampler is not None:                 # the rest state: no history time (VtkSeries)
+            rest = None if self.timed else 0.0
+            self._write_series("surface", 0, rest, surface_cells(self.sampler, model.q0), level_fields(None))
+            if rest_contact is not None:
+                self._write_series("contact", 0, rest, contact_cells(rest_contact), level_fields(None))
         self._write_summary()
 
     def _resume(self, layout, run_info: dict) -> None:
@@ -218,7 +237,8 @@ class ResultsWriter:
         self.summary["steps"] = list(point.summary.get("steps", []))
         self.summary["last_converged"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
-        self.vtk.resume([0.0] + [st["load_factor"] for st in self.summary["steps"]])
+        rest = None if self.timed else 0.0          # a history's rest state: no time (VtkSeries)
+        self.vtk.resume([rest] + [series_time(st, self.timed) for st in self.summary["steps"]])
         truncate_levels(self.h5_path, point.step, point.load_factor, config_text(self.model.spec),
                         layout, run_info.get("partition"))
         with open(os.path.join(self.dir, RESERVE), "wb") as fh:
@@ -248,10 +268,10 @@ class ResultsWriter:
         self._summary_time = time.monotonic()
         self._summary_cost = self._summary_time - t0
 
-    def _write_series(self, series: str, k: int, lam: float, mesh: tuple) -> None:
-        """One VTU of ``series`` (``vtk.VtkSeries``); a failure is an OutputError."""
+    def _write_series(self, series: str, k: int, t: float | None, mesh: tuple, fields: dict) -> None:
+        """One VTU of ``series`` at time ``t`` (``vtk.VtkSeries``); a failure is an OutputError."""
         try:
-            self._last_sizes["vtu"] += self.vtk.write(series, k, lam, *mesh)
+            self._last_sizes["vtu"] += self.vtk.write(series, k, t, *mesh, field_data=fields)
         except OSError as exc:
             self._release_reserve()
             raise OutputError(os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
@@ -318,9 +338,10 @@ class ResultsWriter:
         self._append(entry, text)
         if self.sampler is not None:
             self._last_sizes["vtu"] = 0                  # the level's VTUs together
-            self._write_series("surface", k, record.load_factor, surface)
+            t, fields = series_time(entry, self.timed), level_fields(record)
+            self._write_series("surface", k, t, surface, fields)
             if contact is not None:
-                self._write_series("contact", k, record.load_factor, contact_cells(contact))
+                self._write_series("contact", k, t, contact_cells(contact), fields)
         if k == 1 or time.monotonic() - self._summary_time >= self._summary_cost / SUMMARY_SHARE:
             self._write_summary()
 

@@ -170,7 +170,10 @@ INDEX_INTERVAL = 0.5
 
 
 class VtkSeries:
-    """VTU files ``<series>_NNNN.vtu`` and their ``<series>.pvd`` collections in one directory."""
+    """VTU files ``<series>_NNNN.vtu`` and their ``<series>.pvd`` collections in one directory.
+    A VTU is listed at its time (a load history's clock [s], else the load factor); one written
+    without a time (a history's rest state) or at the time of the entry before it (a level passed
+    over with the one before it: the same state) is not listed, so each time has one file."""
 
     def __init__(self, directory: str, compress: bool | None = None):
         self.dir = directory
@@ -179,29 +182,36 @@ class VtkSeries:
         self._indexed: dict[str, float] = {}     # when each .pvd was last rewritten (monotonic)
         self._cells: dict[str, tuple] = {}       # per series: (cell blocks, compress, their XML)
 
-    def write(self, series: str, k: int, lam: float, pts, cells, data) -> int:
-        """One VTU of a time series and, when due (``INDEX_INTERVAL``), its .pvd collection
-        (binary, in single precision: for display, results.h5 keeps double; half the size and
-        the write time), zlib-compressed if asked or, by default, from ``AUTO_COMPRESS_POINTS``
-        points on.  A failed write leaves no VTU and raises the OSError.  Returns the file's size."""
+    def write(self, series: str, k: int, t: float | None, pts, cells, data, field_data=None) -> int:
+        """One VTU of a time series at time ``t`` (None: not listed) and, when due
+        (``INDEX_INTERVAL``), its .pvd collection (binary, in single precision: for display,
+        results.h5 keeps double; half the size and the write time), zlib-compressed if asked or,
+        by default, from ``AUTO_COMPRESS_POINTS`` points on; ``field_data``: the level's values
+        (``stable``, ...).  A failed write leaves no VTU and raises the OSError.  Returns the size."""
         name = f"{series}_{k:04d}.vtu"
         path = os.path.join(self.dir, name)
         with np.errstate(over="ignore"):            # beyond single precision: inf (results.h5: double)
             data = {key: np.asarray(v, dtype=np.float32) for key, v in data.items()}
         compress = self.compress if self.compress is not None else len(pts) >= AUTO_COMPRESS_POINTS
+        listed = self._listed(series, t, name)
         try:
             write_vtu(path, np.asarray(pts, dtype=np.float32), cells, data, compress=bool(compress),
-                      cells_text=self._cells_text(series, cells, bool(compress)))
+                      cells_text=self._cells_text(series, cells, bool(compress)), field_data=field_data)
             size = os.path.getsize(path)
             now = time.monotonic()
-            if now - self._indexed.get(series, -np.inf) >= INDEX_INTERVAL:
-                self._write_index(series, self.entries[series] + [(lam, name)])
+            if listed and now - self._indexed.get(series, -np.inf) >= INDEX_INTERVAL:
+                self._write_index(series, self.entries[series] + listed)
                 self._indexed[series] = now
         except OSError:
             remove_quietly(path)                   # never leave a truncated VTU behind
             raise
-        self.entries[series].append((lam, name))
+        self.entries[series] += listed
         return size
+
+    def _listed(self, series: str, t: float | None, name: str) -> list[tuple[float, str]]:
+        """The .pvd entry of a VTU at time ``t``: none without a time or at the last entry's time."""
+        entries = self.entries[series]
+        return [] if t is None or (entries and entries[-1][0] == t) else [(t, name)]
 
     def _cells_text(self, series: str, cells: list, compress: bool) -> str:
         """The ``<Cells>`` XML of ``cells``, encoded again only when the series' cell blocks are
@@ -228,16 +238,16 @@ class VtkSeries:
                      '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                      f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
 
-    def resume(self, loads: list[float]) -> None:
-        """Continue the series of a restarted run whose levels 0 … n have load factors ``loads``:
-        their files are listed again, the VTUs of later levels removed (``<series>_NNNN.vtu``
+    def resume(self, times: list[float | None]) -> None:
+        """Continue the series of a restarted run whose levels 0 … n are at ``times`` (``write``'s
+        t): their files are listed again, the VTUs of later levels removed (``<series>_NNNN.vtu``
         only: other files and folders so named are a user's and stay)."""
         for series in self.entries:
-            for k in range(len(loads)):
+            for k in range(len(times)):
                 if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
-                    self.entries[series].append((loads[k], f"{series}_{k:04d}.vtu"))
+                    self.entries[series] += self._listed(series, times[k], f"{series}_{k:04d}.vtu")
         ours = re.compile(f"({'|'.join(self.entries)})_([0-9]{{4,}})\\.vtu")
         for name in os.listdir(self.dir):
             match = ours.fullmatch(name)        # a run's VTU, not a user's surface_notes_7.txt
-            if match and int(match.group(2)) >= len(loads) and os.path.isfile(os.path.join(self.dir, name)):
+            if match and int(match.group(2)) >= len(times) and os.path.isfile(os.path.join(self.dir, name)):
                 os.remove(os.path.join(self.dir, name))

@@ -49,11 +49,19 @@ def cells_xml(cells: list[tuple[str, np.ndarray]], compress: bool = False) -> st
             + "</Cells>\n")
 
 
+def field_xml(field_data: dict[str, np.ndarray], compress: bool = False) -> str:
+    """The ``<FieldData>`` element: one tuple per array (the level's values, e.g. ``stable``)."""
+    arrays = "".join(_array(k, np.atleast_1d(v), compress).replace(
+        " format=", f' NumberOfTuples="{len(np.atleast_1d(v))}" format=', 1) for k, v in field_data.items())
+    return f"<FieldData>\n{arrays}</FieldData>\n"
+
+
 def write_vtu(path: str, points: np.ndarray, cells: list[tuple[str, np.ndarray]],
               point_data: dict[str, np.ndarray], compress: bool = False,
-              cells_text: str | None = None) -> None:
-    """Write ``points`` (n, 3), cell blocks [(type, (k, nodes))] and ``point_data`` to ``path``
-    (``cells_text``: ``cells_xml(cells, compress)`` if the caller kept it from an earlier file)."""
+              cells_text: str | None = None, field_data: dict[str, np.ndarray] | None = None) -> None:
+    """Write ``points`` (n, 3), cell blocks [(type, (k, nodes))], ``point_data`` and the grid's
+    ``field_data`` (arrays of one tuple) to ``path`` (``cells_text``: ``cells_xml(cells,
+    compress)`` if the caller kept it from an earlier file)."""
     points = np.asarray(points)
     n_cells = sum(len(c) for _, c in cells)
     order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
@@ -61,6 +69,7 @@ def write_vtu(path: str, points: np.ndarray, cells: list[tuple[str, np.ndarray]]
     parts = ['<?xml version="1.0"?>\n',
              f'<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{order}"{compressor}>\n',
              "<!--This file was created by ancf-petsc-->\n<UnstructuredGrid>\n",
+             field_xml(field_data, compress) if field_data else "",
              f'<Piece NumberOfPoints="{len(points)}" NumberOfCells="{n_cells}">\n',
              "<Points>\n", _array("Points", points, compress), "</Points>\n",
              cells_text if cells_text is not None else cells_xml(cells, compress)]

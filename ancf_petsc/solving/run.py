@@ -333,8 +333,9 @@ def _run(spec: ModelSpec, comm, say, info: dict | None, point) -> RunResult:
     try:
         run.describe()
         levels, start = run.start()
+        rest = None if point or not spec.output.vtk else contact_fields(run.problem, run.problem.q0)  # contact.pvd
         try:
-            run.writer = ResultsWriter(run.model, run.layout, comm, run.info(info), restart=point)
+            run.writer = ResultsWriter(run.model, run.layout, comm, run.info(info), point, rest)
         except OutputError:
             run.stepper.close()
             raise
@@ -380,8 +381,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,
         stability_checked=all(r.negative_eigenvalues is not None for r in records),
-        **stepper.fade_switch.summary(stepper),
-        **stepper.windows.summary(),
+        **stepper.fade_switch.summary(stepper), **stepper.windows.summary(),
         unused_petsc_options=unused)
     if comm.size > 1:
         problem_writing = comm.tompi4py().bcast(problem_writing, root=0)

@@ -1,5 +1,7 @@
 """io/vtu.py (issue 40): the VTU files are meshio's, line for line (the comment naming the writer
 aside), compressed or not, and meshio reads them back."""
+import re
+
 import meshio
 import numpy as np
 import pytest
@@ -71,3 +73,38 @@ def test_a_restart_removes_only_the_run_s_later_vtus(tmp_path):
         ["surface_0000.vtu", "surface_0001.vtu", "contact_0001.vtu", "surface_run_9"] + users)
     assert series.entries == {"surface": [(0.0, "surface_0000.vtu"), (0.5, "surface_0001.vtu")],
                               "contact": [(0.5, "contact_0001.vtu")]}
+
+
+def test_each_time_of_a_series_has_one_file(tmp_path):
+    """A level passed over with the one before it (solver.step_over_jumps: 2500 and 2500.2 N both
+    reported at 2500.5 N, the same state) was listed twice at one time in surface.pvd, and ParaView
+    showed either; a history's rest state (no time of its clock) is not listed.  Each VTU is still
+    written, and a restart lists the files the same way."""
+    from ancf_petsc.io import vtk
+    pts, cells = np.zeros((2, 3)), [("vertex", np.arange(2)[:, None])]
+    times = [0.0, 1000.0, 2500.5, 2500.5, 2600.0]
+    series = vtk.VtkSeries(str(tmp_path), compress=False)
+    for k, t in enumerate(times):
+        series.write("surface", k, t, pts, cells, {"a": np.ones(2)})
+    series.write_indexes()
+    listed = re.findall(r'timestep="([^"]+)" part="0" file="([^"]+)"', (tmp_path / "surface.pvd").read_text())
+    assert listed == [("0", "surface_0000.vtu"), ("1000", "surface_0001.vtu"), ("2500.5", "surface_0002.vtu"),
+                      ("2600", "surface_0004.vtu")]
+    assert (tmp_path / "surface_0003.vtu").exists()
+    again = vtk.VtkSeries(str(tmp_path))
+    again.resume([None, 0.1, 0.2, 0.2])                 # a history's rest, then frames at 0.1, 0.2 s
+    assert again.entries["surface"] == [(0.1, "surface_0001.vtu"), (0.2, "surface_0002.vtu")]
+
+
+def test_a_level_s_field_data_is_read_back(tmp_path):
+    """The grid's field data (a level's ``stable`` flag, ...) as VTK reads it: one tuple per array,
+    NumberOfTuples given (VTK's XML reader needs it in FieldData); meshio reads the values."""
+    pts, cells = np.zeros((2, 3), dtype=np.float32), [("vertex", np.arange(2)[:, None])]
+    fields = {"stable": np.array([0], dtype=np.int32), "load_factor": np.array([2500.5])}
+    for compress in (False, True):
+        write_vtu(str(tmp_path / "a.vtu"), pts, cells, {"J": np.ones(2, dtype=np.float32)}, compress,
+                  field_data=fields)
+        text = (tmp_path / "a.vtu").read_text()
+        assert '<DataArray type="Int32" Name="stable" NumberOfTuples="1" format="binary">' in text
+        back = meshio.read(tmp_path / "a.vtu")
+        assert back.field_data["stable"].tolist() == [0] and back.field_data["load_factor"].tolist() == [2500.5]

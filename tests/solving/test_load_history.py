@@ -462,3 +462,31 @@ def test_a_restart_goes_on_where_loads_that_shared_a_curve_part_after_it(tmp_pat
     with pytest.raises(ConfigError, match="written by another model"):
         solve(parse_config(dict(changed, output={"dir": str(tmp_path / "changed"), "vtk": False}),
                            base_dir=CONFIGS), log=lambda s: None, restart=str(tmp_path / "changed"))
+
+
+def _pvd_times(path) -> list[tuple[float, str]]:
+    import re
+    return [(float(t), f) for t, f in re.findall(r'timestep="([^"]+)" part="0" file="([^"]+)"', path.read_text())]
+
+
+def test_a_history_s_paraview_series_runs_on_its_clock(tmp_path):
+    """surface.pvd of a history gave each frame its frame number as time (1, 2, 3 for frames at
+    0, 0.25, 0.5 s), and the rest state time 0, which frame 1 has here.  Now each frame is at its
+    time [s] (the clock column) and the rest state, not a frame, is written (surface_0000.vtu) but
+    not listed; a restart with a frame appended lists them the same way."""
+    import meshio
+    from ancf_petsc.api import solve
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["loads"][0].update(traction_force=[1.0, 0.0, 0.0], column="f")
+    raw["history"] = {"table": {"time": [0.0, 0.25, 0.5], "f": [10.0, 20.0, 30.0]}}
+    run_inline(raw, tmp_path / "run")
+    assert _pvd_times(tmp_path / "run" / "surface.pvd") == [
+        (0.0, "surface_0001.vtu"), (0.25, "surface_0002.vtu"), (0.5, "surface_0003.vtu")]
+    assert (tmp_path / "run" / "surface_0000.vtu").exists()
+    assert meshio.read(tmp_path / "run" / "surface_0002.vtu").field_data["load_factor"].tolist() == [2.0]
+    raw["history"]["table"] = {"time": [0.0, 0.25, 0.5, 0.75], "f": [10.0, 20.0, 30.0, 20.0]}
+    res = solve(parse_config(dict(raw, output={"dir": str(tmp_path / "run")}), base_dir=CONFIGS),
+                log=lambda s: None, restart=str(tmp_path / "run"))
+    assert res.status == "completed" and len(res.summary["steps"]) == 4
+    assert [t for t, _ in _pvd_times(tmp_path / "run" / "surface.pvd")] == [0.0, 0.25, 0.5, 0.75]

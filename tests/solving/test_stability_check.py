@@ -74,6 +74,22 @@ def test_negative_pivots_equal_the_dense_spectrum(tmp_path):
         assert n == expected, w[:4]
 
 
+def test_an_unstable_level_is_marked_in_its_vtus(tmp_path):
+    """A level that ended on a saddle (summary negative_eigenvalues 1) looked like any other in
+    ParaView.  Each level's VTUs carry field data ``stable`` (1, 0 with negative eigenvalues, -1
+    not counted), ``negative_eigenvalues`` and ``load_factor``; the rest state is not counted."""
+    import meshio
+    raw = unguarded(coarse_achilles())
+    raw["output"] = {"vtk": True}
+    s = run_inline(raw, tmp_path / "mean")
+    assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 1]
+    for series in ("surface", "contact"):
+        fields = [meshio.read(tmp_path / "mean" / f"{series}_{k:04d}.vtu").field_data for k in range(3)]
+        assert [int(f["stable"][0]) for f in fields] == [-1, 1, 0]
+        assert [int(f["negative_eigenvalues"][0]) for f in fields] == [-1, 0, 1]
+        assert [float(f["load_factor"][0]) for f in fields] == [0.0, 10.0, 50.0]
+
+
 def test_the_branch_switch_leaves_that_saddle_for_a_stable_state(tmp_path):
     """The same step to 50 N with the branch switch on (the default): the saddle is left along its
     critical mode, and the state it goes on from is stable by the dense spectrum too."""

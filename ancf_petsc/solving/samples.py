@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import time
 from contextlib import ExitStack
+from types import SimpleNamespace
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -264,31 +265,34 @@ class SampleSolver:
         run = self.run
         P, stepper = run.problem, run.stepper
         for k, lam in enumerate(levels):
-            rec = None
-            if start[k] is not None:
+            last = records[-1] if records else None     # a level its step over passed: with it, as cold
+            rec = None if last is None else step_over.behind(stepper, SimpleNamespace(
+                lam=last.load_factor, dlam=last.increment, dlam_last=last.last_increment), lam, last)
+            if rec is None and start[k] is not None:
                 self._set_state(start[k])
                 P.load_factor = lam
                 rec = solve_level(stepper, lam)
                 out.warm_levels += rec is not None
             if rec is None:
                 out.fallbacks += start[k] is not None
-                path = self._path_from(out.states, levels, k)
+                path = self._path_from(out, levels, k)
                 stepper.release_path()
                 rec = stepper.run([lam], lambda r: None, start=path)[-1]
             records.append(self._record(rec, out))
 
-    def _path_from(self, states: list[LevelState], levels: list[float], k: int) -> PathState | None:
-        """The load path at this sample's level k − 1 (None: from the reference)."""
+    def _path_from(self, out: SampleOutcome, levels: list[float], k: int) -> PathState | None:
+        """The load path at this sample's level k − 1, at its reported load factor (None: from
+        the reference)."""
         if k == 0:
             self._set_contact(self.initial_contact)
             return None
-        s = states[k - 1]
+        s, lam = out.states[k - 1], out.load_factors[k - 1]
         self._set_contact(None if s.projection is None else (s.projection, s.status, s.history))
         P = self.run.problem
         X = P.global_vector(s.x.reshape(-1))
         dX = X.duplicate()
         dX.set(0.0)
-        return PathState(X=X, dX_last=dX, lam=levels[k - 1], dlam=levels[k] - levels[k - 1], dlam_last=0.0)
+        return PathState(X=X, dX_last=dX, lam=lam, dlam=levels[k] - lam, dlam_last=0.0)
 
     def _set_contact(self, state) -> None:
         c = self.run.contact

@@ -165,3 +165,35 @@ def test_friction_samples_start_from_the_reference_history_and_step_cold():
     assert offered.warm_levels == 0
     u, ref = offered.displacements["tail"], cold.displacements["tail"]
     assert np.abs(u - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+@pytest.mark.slow
+def test_a_warm_sample_passes_over_a_gap_as_a_cold_one():
+    """The second subject's 30° soleus-biased column (a gap of the load path from ~2499.6 N):
+    cold, its levels 2500 and 2500.3 N are both reported at 2500.5 N. A neighbour (moduli
+    +1e-5) warm from those states solved 2500.3 N directly from the state at 2500.5 N and
+    reported it there, on the far side's branch, not passed over: the soleus end 1.0e-5 m
+    (1.6e-4) from the cold sample's. Now a level the last one's step over passed is reported
+    with it, as cold."""
+    from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
+    raw = cell_config(EnvelopeCell(SUBJECT2, 30.0, "soleus", "sliding", levels=(1000.0, 2000.0, 2500.0, 2500.3)))
+    raw["output"] = {"vtk": False}
+    raw["solver"] = dict(raw.get("solver") or {}, min_increment=0.05)
+
+    def scaled(s):
+        r = copy.deepcopy(raw)
+        for b in r["beams"]:
+            b["material"]["mu"] = float(b["material"]["mu"]) * s
+        return parse_config(r, base_dir=CONFIGS)
+    one, fresh = SampleSolver(), SampleSolver()
+    try:
+        first = one.solve(scaled(1.0))
+        warm = one.solve(scaled(1.00001), start=first.states)
+        cold = fresh.solve(scaled(1.00001))
+    finally:
+        one.destroy()
+        fresh.destroy()
+    assert [p[0] for p in cold.passed_over] == [2500.0, 2500.3] and warm.warm_levels > 0
+    assert warm.load_factors == cold.load_factors and warm.passed_over == cold.passed_over
+    for name, u in cold.displacements.items():
+        assert np.abs(warm.displacements[name] - u).max() <= 1e-9 * np.abs(u).max(), name

@@ -165,3 +165,21 @@ def test_a_fit_whose_optimum_failed_says_so(tmp_path):
     notes = [s for s in said if "fitted sample is failed" in s]
     assert len(notes) == 1 and "NEWTON_BUDGET_EXCEEDED" in notes[0] and "reached 0 of 10" in notes[0], said
     assert "- the fitted sample is failed" in markdown(res, SampleLog(os.path.join(d, "out"), spec))
+
+
+def test_a_sample_past_a_gap_is_no_warm_start(tmp_path, monkeypatch):
+    """A sample whose level was reported past a gap of the load path (0.5 at 0.5001) kept its
+    states in the warm-start library: a neighbour's level 0.5 started from the state at 0.5001,
+    where the neighbour's own path passes over. Such a sample is now left out of the library."""
+    from ancf_petsc.solving import step_over
+    from helpers import fail_solves
+    fail_solves(lambda solver, lam: 0.49 < lam <= 0.5, put=monkeypatch.setattr)
+    monkeypatch.setattr(step_over, "applies", lambda stepper, failure: True)
+    d = str(tmp_path)
+    spec = load_fit(bar_case(d, parameters=(MU,), lateral=False))
+    ev = Evaluator(spec, SampleLog(os.path.join(d, "out"), spec, fresh=True))
+    try:
+        s = ev([to_u(spec.parameters, [2e6])], "test")[0]
+    finally:
+        ev.close()
+    assert s.ok and s.passed_over and len(ev.library) == 0

@@ -74,7 +74,9 @@ class Evaluator:
                         start=how if start is not None else "cold", warm_levels=out.warm_levels,
                         fallbacks=out.fallbacks, rebuilt=out.rebuilt, wall_time=out.wall_time,
                         cpu_time=out.cpu_time, passed_over=[[lv, at] for lv, _, at in out.passed_over])
-        complete = out.status == "completed" and len(out.states) == len(spec.levels)
+        # a state reported past a gap of the load path is no start for its level (a warm solve
+        # there may find the other side's equilibrium, which the sample's own path passes over)
+        complete = out.status == "completed" and len(out.states) == len(spec.levels) and not out.passed_over
         return sample, (out.states if complete else None)
 
     def close(self) -> None:

@@ -90,6 +90,10 @@ def parse_output(value, name: str) -> OutputSpec:
     """``output``: directory (default results/<name>), VTK on/off, its samples per element edge
     and whether the VTUs are zlib-compressed."""
     out = mapping(value, "output", optional=("dir", "vtk", "vtk_samples", "vtk_compress"))
+    for key in ("vtk_samples", "vtk_compress"):
+        if key in out and out.get("vtk") is False:        # read by nothing: no ParaView files
+            raise ConfigError(f"output.{key}", "applies to the ParaView files, which output.vtk: false "
+                                               f"turns off; remove it or set output.vtk: true; got {shown(out[key])}")
     return OutputSpec(dir=string(out.get("dir", os.path.join("results", name)), "output.dir"),
                       vtk=boolean(out.get("vtk", True), "output.vtk"),
                       vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64),

@@ -31,7 +31,9 @@ def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> d
     raw = copy.deepcopy({k: v for k, v in spec.raw.items() if k != "accuracy"})
     if spec.history is None:
         raw["steps"] = [s for s in spec.steps if s <= level * (1 + 1e-12)]
-    raw["output"] = {"dir": out_dir, "vtk": spec.output.vtk, "vtk_samples": spec.output.vtk_samples}
+    raw["output"] = {"dir": out_dir, "vtk": spec.output.vtk}
+    if spec.output.vtk:                      # vtk_samples with vtk off is refused (config/solving.py)
+        raw["output"]["vtk_samples"] = spec.output.vtk_samples
     for b in raw.get("beams", []):
         b["elements"] = max(1, int(round(b["elements"] * factor)))
     return raw

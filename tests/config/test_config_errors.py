@@ -168,6 +168,11 @@ CASES += [
     ("top-level material", _set(["material"], dict(BASE["beams"][0]["material"])), "material",
      "is given per beam, as beams[i].material (one for several beams: material: &m {...} on the first, "
      "material: *m on the others; a bundle: bundle.material); got material: at the top level"),
+    # read by nothing without the ParaView files: accepted, and ignored, before
+    ("vtk_samples, vtk off", lambda raw: raw["output"].update(vtk=False, vtk_samples=8), "output.vtk_samples",
+     "applies to the ParaView files, which output.vtk: false turns off; remove it or set output.vtk: true; got 8"),
+    ("vtk_compress, vtk off", lambda raw: raw["output"].update(vtk=False, vtk_compress=True), "output.vtk_compress",
+     "which output.vtk: false turns off"),
 ]
 
 

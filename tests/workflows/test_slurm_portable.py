@@ -115,3 +115,24 @@ def test_partition_and_account_are_names(tmp_path, option, value):
     rc, _, err = run_main([path, "--slurm", option, value])
     assert rc == 2 and err.startswith(f"ancf-sweep: {path}: {option}: ") and "got " in err, err
     assert not (tmp_path / "p" / "sweep.slurm").exists()
+
+
+def test_a_moved_sweep_keeps_its_completed_runs(tmp_path):
+    """Moved, then --slurm again (a new --time): every completed run lost its summary.json and
+    run.json (their config.yaml named the old output.dir) and a resubmission redid them all."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    shutil.copy(os.path.join(CONFIGS, "uniaxial_neohookean.yaml"), a / "base.yaml")
+    (a / "sweep.yaml").write_text(yaml.safe_dump({
+        "base": "base.yaml", "name": "m", "parameters": {"output.vtk": [False]}, "output": "out"}))
+    assert run_main([str(a / "sweep.yaml")])[0] == 0
+    os.rename(a, b)
+    rc, out, _ = run_main([str(b / "sweep.yaml"), "--slurm", "--time", "00:10:00"])
+    assert rc == 0, out
+    run_dir = b / "out" / "run_0000"
+    assert (run_dir / "summary.json").exists() and (run_dir / "run.json").exists()
+    assert yaml.safe_load((run_dir / "config.yaml").read_text())["output"]["dir"] == str(run_dir)
+    rc, out, _ = run_main([str(b / "sweep.yaml"), "--dry-run"])
+    assert "0 to run, 1 already done" in out, out
+    rc, out, _ = run_main([str(b / "sweep.yaml"), "--collect"])
+    assert rc == 0 and "1 runs: 1 completed" in out, out

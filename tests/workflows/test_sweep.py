@@ -487,3 +487,23 @@ def test_a_key_path_sets_one_beams_material_when_beams_share_it_by_an_anchor(tmp
     fitted = apply(raw, [Parameter("mu", [parse_key_path("beams[0].material.mu")], 1e5, 1e7, 1e6)], [3.0e6])
     assert [float(b["material"]["mu"]) for b in fitted["beams"]] == [3.0e6, 1.0e6]
     assert float(raw["beams"][1]["material"]["mu"]) == 1.0e6
+
+
+def test_collect_does_not_report_a_run_solved_with_an_edited_base_config(tmp_path):
+    """A base config edited after the runs (bulk modulus 50 -> 20 MPa): --dry-run said 'todo',
+    but --collect listed the 50 MPa answers as completed runs of the edited sweep, exit 0."""
+    shutil.copy(UNIAXIAL, tmp_path / "base.yaml")
+    path = write_sweep(str(tmp_path), {"parameters": {"output.vtk": [False]}, "output": "o"})
+    body = yaml.safe_load(open(path))
+    body["base"] = "base.yaml"
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump(body))
+    assert run_main([path])[0] == 0
+    text = (tmp_path / "base.yaml").read_text()
+    (tmp_path / "base.yaml").write_text(text.replace("bulk_modulus: 50.0e6", "bulk_modulus: 20.0e6"))
+    rc, out, _ = run_main([path, "--collect"])
+    row = read_csv(tmp_path / "o" / "results.csv")[0]
+    assert rc == 1 and "1 runs: 0 completed, 1 missing" in out, out
+    assert row["status"] == "missing" and not row.get("tip_dx") and "edited" in row["reason"], row
+    (tmp_path / "base.yaml").write_text(text)       # as it ran: completed again
+    rc, out, _ = run_main([path, "--collect"])
+    assert rc == 0 and read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"] != ""

@@ -10,7 +10,7 @@ from typing import Any
 from ...io.files import atomic_write
 from .base import DONE_STATUSES, FAILED_STATUSES, FINAL_STATUSES, STATUS_ORDER, read_json
 from .execute import reason_code
-from .expand import expand
+from .expand import expand, same_config
 from .spec import RunSpec, Sweep
 
 
@@ -28,8 +28,16 @@ class RunState:
     wall_time: float | None = None
 
 
-def run_state(run: RunSpec) -> RunState:
-    """Combine summary.json (solver) and run.json (sweep) of one run directory."""
+#: the reason of a run directory solved with another config than the sweep's current one
+EDITED = ("its config.yaml is not the one the sweep writes now (the sweep or its base config was "
+          "edited after it ran): rerun the sweep")
+
+
+def run_state(run: RunSpec, current: bool = True) -> RunState:
+    """Combine summary.json (solver) and run.json (sweep) of one run directory; ``current``
+    False (its config.yaml is another config's): missing, its numbers not read."""
+    if not current:
+        return RunState(run, "missing", EDITED)
     summary = read_json(os.path.join(run.dir, "summary.json"))
     record = read_json(os.path.join(run.dir, "run.json"))
     st = RunState(run, "missing")
@@ -98,7 +106,8 @@ class Collection:
 
 def collect(sweep: Sweep) -> Collection:
     """Write ``<output>/results.csv`` (one row per run) and ``<output>/failed.txt``."""
-    states = [run_state(r) for r in expand(sweep)]
+    states = [run_state(r, not os.path.isfile(os.path.join(r.dir, "config.yaml"))
+                        or same_config(sweep, r)) for r in expand(sweep)]
     probes: list[str] = []
     for s in states:
         for name in s.probes:

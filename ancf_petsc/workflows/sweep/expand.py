@@ -117,25 +117,45 @@ def config_text(sweep: Sweep, run: RunSpec) -> str:
     return "\n".join(head) + "\n" + yaml.safe_dump(run_config(sweep, run), sort_keys=False)
 
 
+def _unplaced(text: str | None) -> Any:
+    """A run's config.yaml without ``output.dir``, the one value a move of the sweep changes
+    (data file paths are relative to the run directory; the head's comments are not read)."""
+    try:
+        raw = yaml.safe_load(text) if text is not None else None
+    except yaml.YAMLError:
+        return None
+    if isinstance(raw, dict) and isinstance(raw.get("output"), dict):
+        raw["output"].pop("dir", None)
+    return raw
+
+
+def same_config(sweep: Sweep, run: RunSpec) -> bool:
+    """The run directory's config.yaml is the one this sweep would write now, wherever the sweep
+    directory was prepared (a sweep moved to another machine keeps its runs)."""
+    old = _unplaced(read_text(os.path.join(run.dir, "config.yaml")))
+    return old is not None and old == _unplaced(config_text(sweep, run))
+
+
 def is_done(sweep: Sweep, run: RunSpec) -> bool:
-    """Completed (or unstable: a rerun gives the same), with exactly the config this sweep would
-    write now."""
+    """Completed (or unstable: a rerun gives the same), with the config this sweep would write
+    now (``same_config``)."""
     summary = read_json(os.path.join(run.dir, "summary.json"))
     return (summary is not None and summary.get("status") in DONE_STATUSES
-            and read_text(os.path.join(run.dir, "config.yaml")) == config_text(sweep, run))
+            and same_config(sweep, run))
 
 
 def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     """Write ``config.yaml`` and ``params.json``; True if a completed result of this config exists.
 
     A run directory whose config differs from the current one (the sweep or base config was
-    edited) loses its summary.json/run.json, so neither this tool nor a SLURM task skips it."""
+    edited) loses its summary.json/run.json, so neither this tool nor a SLURM task skips it; one
+    only moved (``same_config``) keeps them and gets its new ``output.dir``."""
     os.makedirs(run.dir, exist_ok=True)
     cfg_path = os.path.join(run.dir, "config.yaml")
     text = config_text(sweep, run)
     old = read_text(cfg_path)
     if old != text:
-        if old is not None:
+        if old is not None and not same_config(sweep, run):
             remove_quietly(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
         atomic_write(cfg_path, text)
     params = {"sweep": sweep.name, "sweep_file": sweep.file, "base": sweep.base,

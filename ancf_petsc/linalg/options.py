@@ -242,8 +242,9 @@ def run_defaults(config_options: dict, ranks: int, atol: float, prefix: str = ""
         # on a few ranks MUMPS's ScaLAPACK root front (a 1×2 process grid: LU, twice the
         # flops of the LDLᵀ root) is slower than factoring the root on one rank (37-fascicle
         # bundle, 22k DOFs, 2 ranks: 0.72 -> 0.65 s per factorisation), and only a sequential
-        # root gives the stability check its negative-pivot count (inertia.py); more ranks
-        # keep MUMPS's default
+        # root gives the stability check its negative-pivot count (inertia.py); on more ranks
+        # PETSc sets it to 1 itself while null-pivot detection (ICNTL(24), DEFAULT_OPTIONS) is on, so
+        # the root is parallel only with -mat_mumps_icntl_24 0 as well
         defaults["mat_mumps_icntl_13"] = "1"
     if factor == "mumps" and saddle_point:
         # the zero multiplier block delays pivots beyond MUMPS's 20 % workspace margin: the

@@ -232,3 +232,23 @@ def test_the_inertia_is_read_from_the_converged_state_after_a_solve_without_an_i
     finally:
         stepper.close()                  # its options out of PETSc's database, as a run does
         stepper.destroy()
+
+
+@pytest.mark.mpi
+def test_the_count_is_made_on_five_ranks_while_null_pivots_are_detected(tmp_path):
+    """docs/running.md said the count is not made with MUMPS's parallel root on more than 4
+    ranks; but PETSc's MUMPS interface factors the root on one rank (ICNTL(13) = 1) whenever
+    null-pivot detection (ICNTL(24) = 1, our default) is on, whatever -mat_mumps_icntl_13 says:
+    5 ranks count what one does. Only with -mat_mumps_icntl_24 0 is the root parallel and the
+    check not made (stability_checked false)."""
+    raw = unguarded(coarse_achilles(elements=2))
+    counts = {}
+    for name, ranks, extra in (("n1", 1, []), ("n5", 5, ["-mat_mumps_icntl_13", "0"]),
+                               ("off", 5, ["-mat_mumps_icntl_13", "0", "-mat_mumps_icntl_24", "0"])):
+        raw["output"] = {"dir": str(tmp_path / name), "vtk": False}
+        p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), ranks=ranks, extra=extra + ["--quiet"])
+        assert p.returncode in (0, 4), p.stderr
+        s = read_summary(tmp_path / name)
+        counts[name] = (s["stability_checked"], [st["negative_eigenvalues"] for st in s["steps"]])
+    assert counts["n1"][0] and counts["n5"] == counts["n1"], counts
+    assert counts["off"] == (False, [None, None]), counts

@@ -76,14 +76,14 @@ def _explicit_pairs(model, spec) -> list:
             if not ca or not cb:
                 raise ContactSetupError(f"no curve {cname!r} in {a.name}'s outline or {cname_b!r} in "
                                         f"{b.name}'s", k)
-            pairs.append((a, b, ca[0], cb[0][1], cb[0][0]))
+            pairs.append((a, b, ca[0], cb[0][1], cb[0][0], k))
             continue
         found = [(c, f) for c, f in _shared(a, b) if cname is None or c.name == cname]
         if not found:
             raise ContactSetupError(f"beams {a.name} and {b.name} share no outline curve"
                                     + (f" named {cname!r}" if cname else "")
                                     + "; interfaces are curves used by both section outlines", k)
-        pairs += [(a, b, c, f, None) for c, f in found]
+        pairs += [(a, b, c, f, None, k) for c, f in found]
     return pairs
 
 
@@ -94,7 +94,7 @@ def _automatic_pairs(model) -> list:
     pairs = []
     for i, first in enumerate(model.beams):
         for second in model.beams[i + 1:]:
-            pairs += [(second, first, c, f, None) for c, f in _shared(second, first)]
+            pairs += [(second, first, c, f, None, None) for c, f in _shared(second, first)]
     if not pairs:
         raise ContactSetupError("no two beam outlines share a curve; give the neighbours a "
                                     "common named curve or remove contact")
@@ -104,8 +104,8 @@ def _automatic_pairs(model) -> list:
 def find_interfaces(model, spec) -> list[Interface]:
     """Interfaces from the contact spec (explicit pairs) or every curve shared by two outlines."""
     pairs = _explicit_pairs(model, spec) if spec.interfaces else _automatic_pairs(model)
-    out = []
-    for a, b, c, fb, cb in pairs:
+    out, entry = [], {}
+    for a, b, c, fb, cb, k in pairs:
         if a.n_elements != b.n_elements:
             more = max(a.n_elements, b.n_elements)
             raise ContactSetupError(
@@ -114,8 +114,22 @@ def find_interfaces(model, spec) -> list[Interface]:
                 f"the same number of elements (a conforming interface); give both {more}",
                 key=f"beams[{a.index}].elements")
         first, second = (a, b) if a.index < b.index else (b, a)
-        out.append(Interface(f"{c.name} ({first.name}|{second.name})", a, b, c, fb, cb))
+        name = f"{c.name} ({first.name}|{second.name})"
+        if name in entry and k is not None:
+            _listed_twice(name, entry[name], k, a, b, c)
+        entry[name] = k
+        out.append(Interface(name, a, b, c, fb, cb))
     return out
+
+
+def _listed_twice(name: str, before: int, k: int, a, b, curve) -> None:
+    """Refuse an interface listed twice in ``contact.interfaces`` (entries ``before`` and ``k``,
+    in either order of a and b): its constraints would repeat (sliding: multipliers not unique,
+    the tendon at 2 elements failed at 312 of 400 N with points on both sides) and its outputs,
+    keyed by name, would keep one copy's arbitrary share of the force."""
+    raise ContactSetupError(
+        f"interface {name} is listed twice (also contact.interfaces[{before}]): list each shared curve of two beams "
+        f"once, in either order of a and b; got {{a: {a.name}, b: {b.name}, curve: {curve.name}}}", k)
 
 
 def supported_ends(model, interfaces, rule: str = "merge", held_slots: int | None = None) -> np.ndarray:

@@ -234,6 +234,11 @@ def test_one_contact_point_along_an_element_is_refused():
     ("elements differ", "beams[1].elements", "3 element.s. against 2 of soleus .beams.0..elements., its "
      "contact partner across curve mg_sol: the beams of an interface need the same number of elements "
      ".*give both 3"),
+    # the same curve in either order of a and b: its constraints repeated (the tendon at 2 elements
+    # failed at 312 of 400 N), or one copy's arbitrary share of the force reported (1613 N, not -189 N)
+    ("listed twice", "contact.interfaces[1]", "interface mg_sol .soleus.medial_gastrocnemius. is listed "
+     "twice .also contact.interfaces.0..: list each shared curve of two beams once.*; got .a: "
+     "medial_gastrocnemius, b: soleus, curve: mg_sol."),
 ])
 def test_contact_setup_errors_name_their_config_key(case, key, words, tmp_path):
     """The contact layer's setup errors reach the user as config errors naming the key
@@ -242,6 +247,9 @@ def test_contact_setup_errors_name_their_config_key(case, key, words, tmp_path):
     from helpers import CONFIGS, two_beam_twisted
     if case == "no shared curve":
         raw = dict(two_beam_twisted(), contact={})
+    elif case == "listed twice":
+        raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius"},
+                                               {"a": "medial_gastrocnemius", "b": "soleus", "curve": "mg_sol"}]})
     elif case == "unknown curve":
         raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius", "curve": "nosuch"}]})
     else:

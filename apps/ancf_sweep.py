@@ -12,6 +12,7 @@ interrupted (the runs are stopped at their next safe point and recorded as inter
 from __future__ import annotations
 
 import os
+import shlex
 import signal
 import sys
 
@@ -119,9 +120,10 @@ def _main(argv: list[str]) -> int:
         if args.slurm:
             script, runs_txt = write_slurm(sweep, force=args.force)
             say(f"[sweep] wrote {script} (array 0-{len(runs) - 1}) and {runs_txt}")
-            say(f"[sweep] submit: cd {os.path.dirname(script)} && sbatch sweep.slurm "
+            q = shlex.quote               # commands to paste: a directory may hold a blank
+            say(f"[sweep] submit: cd {q(os.path.dirname(script))} && sbatch sweep.slurm "
                 "(every path in it is relative to that directory)")
-            say(f"[sweep] afterwards: ancf-sweep {args.sweep} --collect")
+            say(f"[sweep] afterwards: ancf-sweep {q(args.sweep)} --collect")
             return 0
 
         # SIGTERM (kill, a job scheduler) stops the runs like Ctrl-C: they run in their own

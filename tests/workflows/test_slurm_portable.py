@@ -136,3 +136,16 @@ def test_a_moved_sweep_keeps_its_completed_runs(tmp_path):
     assert "0 to run, 1 already done" in out, out
     rc, out, _ = run_main([str(b / "sweep.yaml"), "--collect"])
     assert rc == 0 and "1 runs: 1 completed" in out, out
+
+
+def test_the_commands_to_paste_are_quoted(tmp_path):
+    """A sweep directory with a blank: 'submit: cd /x/my sweeps/out && sbatch ...' failed as
+    pasted (cd: too many arguments); the script's own comment was quoted."""
+    d = tmp_path / "my sweeps"
+    d.mkdir()
+    path = write_sweep(str(d), {"parameters": {"output.vtk": [False]}, "output": "out"})
+    rc, out, _ = run_main([path, "--slurm"])
+    assert rc == 0, out
+    cd = f"cd '{d / 'out'}' && sbatch sweep.slurm"
+    assert cd in out and f"afterwards: ancf-sweep '{path}' --collect" in out, out
+    assert f"# Submit:   {cd}" in (d / "out" / "sweep.slurm").read_text()

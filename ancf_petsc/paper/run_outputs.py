@@ -47,15 +47,38 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
             d = np.asarray(st["probes"][name]["displacement"], dtype=float) * scale
             return f"{d[0]:.5f}" if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
         cells.append(cell)
-    lines = ["| load factor | " + " | ".join(heads) + " |", "|---:|" + "---:|" * len(heads)]
+    lines = [level_head(steps) + " | ".join(heads) + " |", level_rule(steps) + "---:|" * len(heads)]
     lines += [f"| {level_cell(st)} | " + " | ".join(c(st) for c in cells) + " |" for st in steps]
     return lines
 
 
+def timed(steps: list[dict]) -> bool:
+    """Whether the levels are a load history's frames (summary ``frame`` and ``time`` [s])."""
+    return bool(steps) and all("frame" in st and "time" in st for st in steps)
+
+
+def level_head(steps: list[dict]) -> str:
+    """The level columns' header: a history's frame and time [s], else the load factor."""
+    return "| frame | time [s] | " if timed(steps) else "| load factor | "
+
+
+def level_rule(steps: list[dict]) -> str:
+    return "|---:|---:|" if timed(steps) else "|---:|"
+
+
 def level_cell(step: dict) -> str:
-    """A level's load factor; for one reported past a gap of the load path also the level asked."""
+    """A level's load factor, or a history frame's number and time [s] (two cells); for one
+    reported past a gap of the load path also the level asked."""
     asked = (step.get("passed_over") or {}).get("level")
-    return f"{step['load_factor']:g}" + ("" if asked is None else f" (level {asked:g}, past a gap of the load path)")
+    cell = f"{step['frame']} | {step['time']:g}" if "frame" in step and "time" in step else f"{step['load_factor']:g}"
+    return cell + ("" if asked is None else f" (level {asked:g}, past a gap of the load path)")
+
+
+def level_words(step: dict) -> str:
+    """A level in words: 'load factor 4', or a history's 'frame 4, t = 0.75 s'."""
+    if "frame" in step and "time" in step:
+        return f"frame {step['frame']}, t = {step['time']:g} s"
+    return "load factor " + level_cell(step)
 
 
 def moved_supports(config: dict, summary: dict | None = None) -> list[str]:
@@ -115,7 +138,7 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     intro = ("How far the subtendons moved against each other (`displacement_differences`: u_x of the first "
              "beam's centroid line minus the second's at x = L, first and second in config order):" if pairs
              else "The force of each level (displacement control):")
-    lines = ["", intro, "", "| load factor | " + " | ".join(heads) + " |", "|---:|" + "---:|" * len(heads)]
+    lines = ["", intro, "", level_head(steps) + " | ".join(heads) + " |", level_rule(steps) + "---:|" * len(heads)]
     for st, f in zip(steps, force):
         dd = st.get("displacement_differences", {})
         cells = [f"{f:.6g}"] + [f"{1e3 * dd[p]['end']:.5f}" if p in dd else "" for p in pairs]
@@ -131,7 +154,7 @@ def support_markdown(summary: dict) -> list[str]:
     forces, moments = last.get("reactions") or {}, last.get("reaction_moments") or {}
     if not moments:
         return []
-    lines = ["", f"The supports at the last level (load factor {level_cell(last)}): force on the beam [N] and moment "
+    lines = ["", f"The supports at the last level ({level_words(last)}): force on the beam [N] and moment "
              "about the node's section centroid [N m]:", "",
              "| support | F_x | F_y | F_z | M_x | M_y | M_z |", "|---|" + "---:|" * 6]
     for name, m in moments.items():
@@ -142,21 +165,26 @@ def support_markdown(summary: dict) -> list[str]:
 
 def run_figures(directory: str, summary: dict, config: dict, out: str,
                 stem: str | None = None) -> list[str]:
-    """The run's force–elongation and differences chart and, with contact fields in results.h5,
-    slip and pressure along the tendon; the PNG paths (files named after the run, or ``stem``)."""
+    """A load history's figure over its frames (viz/history.py: muscle forces, strains, end
+    differences against time), the run's force–elongation and differences chart and, with contact
+    fields in results.h5, slip and pressure along the tendon; the PNG paths (files named after
+    the run, or ``stem``)."""
     steps = summary.get("steps", [])
     pairs = list(dict.fromkeys(p for st in steps for p in st.get("displacement_differences", {})))
-    if not steps or (not pairs and not moved_supports(config, summary)):
-        return []
     name = stem or summary.get("name") or os.path.basename(os.path.normpath(directory))
+    history = timed(steps) and all("subtendons" in st for st in steps)
+    made = [viz.plot_history(summary, os.path.join(out, f"{name}_history.png"),
+                             title=f"{name}: the load history's frames")] if history else []
+    if not steps or (not pairs and not moved_supports(config, summary)):
+        return made
     force, label = force_axis(summary, config)
     vectors = probe_vectors(config)
     elong = {p: np.array([st["probes"][p]["displacement"][0] for st in steps])
              for p in vectors if vectors[p] in ("r", "mean") and all(p in st["probes"] for st in steps)}
     diffs = {p: np.array([st["displacement_differences"][p]["end"] for st in steps]) for p in pairs
              if all(p in st.get("displacement_differences", {}) for st in steps)}
-    made = [viz.plot_force_and_differences(force, label, elong, diffs, os.path.join(out, f"{name}_force.png"),
-                                           title=f"{name}: force and subtendon displacement differences")]
+    made += [viz.plot_force_and_differences(force, label, elong, diffs, os.path.join(out, f"{name}_force.png"),
+                                            title=f"{name}: force and subtendon displacement differences")]
     h5 = os.path.join(directory, "results.h5")
     itfs = summary.get("contact_interfaces") or []
     if itfs and os.path.exists(h5):
@@ -165,5 +193,5 @@ def run_figures(directory: str, summary: dict, config: dict, out: str,
         made.append(viz.plot_slip(levels, viz.interface_labels(itfs), os.path.join(out, f"{name}_slip.png"),
                                   tuple(range(len(itfs))), float(config.get("geometry", {}).get("length", 0.0)),
                                   title=f"{name}: slip and contact pressure along the tendon",
-                                  level_label="load factor {:g}"))
+                                  level_label="frame {:g}" if timed(steps) else "load factor {:g}"))
     return made

@@ -143,6 +143,10 @@ def read_load_table(path: str, where: str) -> LoadTable:
     if empty:
         raise ConfigError(where, f"{path}: column {empty[0] + 1} of the header line has no name: "
                                  "name it, or remove the column")
+    if all(math.isfinite(plain_number(h)) for h in header):
+        raise ConfigError(where, f"{path}: its header line (line {line_no[0]}) {','.join(header)!r} is numbers, "
+                                 "not column names: a table with no header line would lose its first frame; "
+                                 "add a line naming the columns (e.g. time,soleus_r)")
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         raise ConfigError(where, f"{path}: column {dup[0]!r} appears twice in the header line")

@@ -117,3 +117,16 @@ def test_a_column_named_by_a_yaml_number_says_to_quote_it(tmp_path, raw, path):
                                           r"a column named by digits is quoted in YAML \(column: \"1\"\)"):
         history_curve({"column": 1}, history, "loads[0]", None)
     assert history_curve({"column": "1"}, history, "loads[0]", None) == ((0.0, 0.0), (1.0, 5.0), (2.0, 6.0))
+
+
+@pytest.mark.parametrize("name,text,line", [
+    ("nohead.csv", "0,9.1\n0.01,9.2\n0.02,50\n", 1),
+    ("nohead.sto", HEADER.replace("nRows=2", "nRows=1") + "0\t9.5\t8\n0.27\t120\t95.5\n", 7),
+], ids=["csv", "sto"])
+def test_a_table_without_a_header_line_is_refused(tmp_path, name, text, line):
+    """A CSV file of numbers only was read with its first frame as column names: the error then
+    said 'no column 'time' (columns: 0, 9.1); name the clock column', and history.time: "0" with
+    column: "9.1" ran the other frames, 'completed', the first frame (t = 0, 9.1 N) lost."""
+    with pytest.raises(ConfigError, match=rf"^history\.file: .*{name}: its header line \(line {line}\) "
+                                          r"'0,9\.\d+,?\d*' is numbers, not column names: .* add a line naming"):
+        _read(tmp_path, name, text)

@@ -103,6 +103,8 @@ class ExistingRun:
         paper = fingerprint(build_model(load_config(
             os.path.join(inputs.configs, f"achilles_type3_psi{self.psi}.yaml"))))
         differs = first_difference(paper, stored)
+        if differs is not None and differs[0].endswith("/elements") and differs[1] not in ("added", "removed"):
+            return "its model is not the paper's: " + element_counts(paper, stored)
         return None if differs is None else "its model is not the paper's: " + difference_words(*differs)
 
     def ended(self) -> str:
@@ -126,6 +128,16 @@ def difference_words(key: str, detail: str) -> str:
         return "a load or displacement follows a load curve"
     words = DIFFERENCE_WORDS.get(item, f"{key} differs").format(beam=beam)
     return f"{words} ({detail})" if item in ("elements", "element", "length", "twist_deg", "contact") else words
+
+
+def element_counts(paper: dict, stored: dict) -> str:
+    """Every beam whose element count differs from the paper's, in words (in the paper's order)."""
+    keys = [k for k in paper if k.endswith("/elements") and k in stored and int(paper[k]) != int(stored[k])]
+    changed = [(k.removeprefix("beams/").rpartition("/")[0], int(paper[k]), int(stored[k])) for k in keys]
+    if len(changed) == 1:
+        return difference_words(f"beams/{changed[0][0]}/elements", f"{changed[0][1]} → {changed[0][2]}")
+    beams = [f"{b} ({a} → {n})" for b, a, n in changed]
+    return ", ".join(beams[:-1]) + f" and {beams[-1]} have other numbers of elements"
 
 
 def read_existing(dirs: list[str], inputs: PaperInputs) -> list[ExistingRun]:

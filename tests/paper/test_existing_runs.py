@@ -246,3 +246,25 @@ def test_the_supports_force_and_moment_at_the_last_level(tmp_path):
     P = raw["loads"][0]["traction_force"][2] * 1e-3
     assert row[1].strip() == "beam.0" and abs(float(row[4]) + P) < 1e-5 * P
     assert abs(float(row[6]) - P * 0.1) < 1e-3 * P * 0.1
+
+
+def test_a_run_whose_beams_have_other_element_counts_names_every_one(tmp_path):
+    """The paper's tendon on 1 element per subtendon (the paper's 4): the report named one beam,
+    'lateral_gastrocnemius has another number of elements (4 → 1)', as if the others were the
+    paper's.  Now every beam whose count changed, in the paper's order; one alone as before."""
+    from helpers import CONFIGS
+    from ancf_petsc.paper import existing
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 1
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"] = [10.0]
+    raw["output"] = {"vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "c"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "c")], tmp_path / "rep")
+    assert ("its model is not the paper's: soleus (4 → 1), medial_gastrocnemius (4 → 1) and "
+            "lateral_gastrocnemius (4 → 1) have other numbers of elements.") in text, text[:2000]
+    paper = {"beams/soleus/elements": 4, "beams/medial_gastrocnemius/elements": 4}
+    assert existing.element_counts(paper, dict(paper, **{"beams/soleus/elements": 2})) == \
+        "soleus has another number of elements (4 → 2)"

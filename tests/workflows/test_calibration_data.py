@@ -182,3 +182,22 @@ def test_a_forgotten_value_scale_is_named_at_the_start_without_numpy_warnings(tm
     assert len(hint) == 1 and "value_scale" in hint[0] and "(1e-3 for mm; now 1)" in hint[0], lines
     assert not any("warning: lateral" in line for line in lines)
     assert res.parameters[0].at_bound
+
+
+@pytest.mark.parametrize("text,data,path,match", [
+    ("force_N,u_mm,u_mm\n0.1,1.9,2.0\n0.5,10.2,10.0\n1.0,22.6,22.0\n", {}, "data[0].file",
+     "data.csv: column 'u_mm' appears twice in the header line: rename one"),
+    ("0.1,1.9\n0.5,10.2\n1.0,22.6\n", {"load": "0.1", "value": "1.9"}, "data[0].file",
+     "its header line (line 1) '0.1,1.9' is numbers, not column names"),
+    ("force_N,u_mm\n0.1,1.9\n0.5,10_2\n1.0,22.6\n", {}, "data[0].value",
+     "data.csv, line 3, column 'u_mm': '10_2' is not a finite number"),
+    ("force_N,1\n0.1,1.9\n0.5,10.2\n1.0,22.6\n", {"value": 1}, "data[0].value",
+     "expected a column name; got the number 1: a column named by digits is quoted in YAML ('1')"),
+], ids=["duplicate", "no-header", "underscore", "numeric-name"])
+def test_a_data_table_read_otherwise_than_written_is_refused(tmp_path, text, data, path, match):
+    """Before: a column named twice gave values of both interleaved (u_mm read as 1.9, 2.0, 10.2
+    for 1.9, 10.2, 22.6); a file with no header line lost its first row; a cell 10_2 was read as
+    102; value: 1 (YAML's int) said 'no column 1 in data.csv (columns: force_N, 1)'."""
+    with pytest.raises(CalibrationError) as info:
+        load_fit(_elongation_fit(str(tmp_path), text, **data))
+    assert info.value.path == path and match in info.value.message, (info.value.path, info.value.message)

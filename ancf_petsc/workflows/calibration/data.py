@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ...config.load_tables import plain_number
 from .errors import CalibrationError, expect, number
 from .quantities import QUANTITIES
 
@@ -70,6 +71,11 @@ def read_table(path: str, where: str) -> Table:
     rows = [(k, r) for k, line in lines for r in csv.reader(io.StringIO(line)) if any(c.strip() for c in r)]
     expect(len(rows) >= 2, where, f"{path}: expected a header line and at least one row")
     header = [h.strip() for h in rows[0][1]]
+    dup = next((h for h in header if header.count(h) > 1), None)
+    expect(dup is None, where, f"{path}: column {dup!r} appears twice in the header line: rename one")
+    expect(not all(np.isfinite(plain_number(h)) for h in header), where,
+           f"{path}: its header line (line {rows[0][0]}) {','.join(header)!r} is numbers, not column names: "
+           "a table with no header line would lose its first row; add a line naming the columns")
     cols = {h: [] for h in header}
     for k, row in rows[1:]:
         expect(len(row) == len(header), where, f"{path}: line {k} has {len(row)} fields, "
@@ -83,15 +89,15 @@ def _column(table: Table, name: Any, where: str) -> np.ndarray:
     """A column as finite numbers; an empty, non-numeric, NaN or infinite cell is refused with its
     line and column."""
     cols, base = table.columns, os.path.basename(table.path)
+    expect(isinstance(name, str) or not isinstance(name, (int, float)) or isinstance(name, bool), where,
+           f"expected a column name; got the number {name!r}: a column named by digits is quoted in "
+           f"YAML ('{name}')")
     expect(isinstance(name, str) and name in cols, where,
            f"no column {name!r} in {base} (columns: {', '.join(cols)})")
     out = []
     for line, cell in zip(table.lines, cols[name]):
-        try:
-            value = float(cell)
-        except ValueError:
-            value = None
-        expect(value is not None and np.isfinite(value), where,
+        value = plain_number(cell)             # float() without '1_0' = 10
+        expect(np.isfinite(value), where,
                f"{base}, line {line}, column {name!r}: {cell!r} is not a finite number; "
                "give a measured value there or remove the row")
         out.append(value)

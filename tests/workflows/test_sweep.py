@@ -507,3 +507,45 @@ def test_collect_does_not_report_a_run_solved_with_an_edited_base_config(tmp_pat
     (tmp_path / "base.yaml").write_text(text)       # as it ran: completed again
     rc, out, _ = run_main([path, "--collect"])
     assert rc == 0 and read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"] != ""
+
+
+def _a_stopped_run_that_cannot_restart(tmp_path, name: str):
+    """A completed uniaxial run made 'interrupted' after level 1, its restart data removed:
+    ancf-solve --restart refuses it (exit 2) without writing summary.json."""
+    import h5py
+    path = write_sweep(str(tmp_path), {"parameters": {"output.vtk": [False]}, "output": name}, f"{name}.yaml")
+    assert run_main([path])[0] == 0
+    run = expand(load_sweep(path))[0]
+    summary_path = os.path.join(run.dir, "summary.json")
+    with open(summary_path) as fh:
+        s = json.load(fh)
+    s.update(status="interrupted", reason_code="SIGTERM", steps=s["steps"][:1],
+             message="interrupted by SIGTERM in the Newton solve at load factor 0.2 (last converged 0.1)")
+    with open(summary_path, "w") as fh:
+        json.dump(s, fh)
+    truncate_levels(os.path.join(run.dir, "results.h5"), 1, s["steps"][0]["load_factor"])
+    with h5py.File(os.path.join(run.dir, "results.h5"), "a") as h5:
+        del h5["steps/step_0001/restart"]
+    return path, run
+
+
+def test_an_attempt_that_writes_no_summary_is_not_read_from_the_one_before(tmp_path):
+    """A restart ancf-solve refused (exit 2, 'config error: --restart: ... written without restart
+    data') was recorded 'interrupted by SIGTERM ...' (reason_code SIGTERM), the stopped attempt's
+    summary.json, on every further ancf-sweep; so was a SLURM task whose launch failed."""
+    path, run = _a_stopped_run_that_cannot_restart(tmp_path, "local")
+    rc, out, _ = run_main([path])
+    row = read_csv(tmp_path / "local" / "results.csv")[0]
+    assert rc == 1 and row["status"] == "config_error" and row["reason_code"] == "CONFIG_ERROR", out
+    assert row["reason"].startswith("config error: --restart: ") and "without restart data" in row["reason"]
+    if shutil.which("srun"):
+        return                                    # on a SLURM host, do not launch srun here
+    path, run = _a_stopped_run_that_cannot_restart(tmp_path, "array")
+    assert run_main([path, "--slurm"])[0] == 0
+    env = dict(os.environ, **MPI_ENV, SLURM_ARRAY_TASK_ID="0")
+    p = subprocess.run(["bash", str(tmp_path / "array" / "sweep.slurm")], env=env,
+                       capture_output=True, text=True, timeout=120)
+    with open(os.path.join(run.dir, "run.json")) as fh:
+        record = json.load(fh)
+    assert p.returncode == 2 and record["status"] == "config_error", (p.stdout, p.stderr, record)
+    assert "without restart data" in record["reason"]

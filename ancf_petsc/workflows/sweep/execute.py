@@ -54,6 +54,16 @@ def can_restart(run_dir: str) -> bool:
             and os.path.exists(os.path.join(run_dir, "results.h5")))
 
 
+def summary_mark(run_dir: str) -> str:
+    """summary.json as it is now (inode, mtime, size; '' when there is none): an attempt that
+    leaves this mark wrote no summary, and the one on disk is an earlier attempt's."""
+    try:
+        st = os.stat(os.path.join(run_dir, "summary.json"))
+    except OSError:
+        return ""
+    return f"{st.st_ino}:{st.st_mtime_ns}:{st.st_size}"
+
+
 def solve_command(sweep: Sweep, run: RunSpec) -> list[str]:
     """Full command of one local run (``mpiexec -n ranks`` in front when ranks > 1); a run that
     stopped early is continued from its last converged level."""
@@ -76,9 +86,12 @@ def input_problem(run_dir: str) -> str:
     """Why ancf-solve refused the run's config.yaml (exit code 2 before summary.json): the same
     checks run here, and the error's key path and message are read as data."""
     from ...config.parse import load_config
+    from ...io.restart import read_restart
     from ...model.contact_setup import check_model
     try:
         check_model(load_config(os.path.join(run_dir, "config.yaml")))
+        if can_restart(run_dir):                # the attempt was a restart: did it refuse?
+            read_restart(run_dir)
     except InputError as exc:
         return f"config error: {exc.path}: {exc.message}" if exc.path else f"config error: {exc.message}"
     except Exception:               # noqa: BLE001 - any other failure: the log has it
@@ -87,11 +100,14 @@ def input_problem(run_dir: str) -> str:
 
 
 def classify(run_dir: str, returncode: int | None, timed_out: bool = False,
-             timeout: float | None = None) -> tuple[str, str]:
+             timeout: float | None = None, before: str = "") -> tuple[str, str]:
     """(status, reason) of a finished attempt from summary.json's ``status`` and ``message`` and
-    the exit code; stderr is never read.  An attempt without a final summary is classified by its
-    exit code alone (a config error's reason from ``input_problem``)."""
+    the exit code; stderr is never read.  An attempt without a final summary (none, or still
+    ``before``'s, the ``summary_mark`` of an earlier attempt) is classified by its exit code
+    alone (a config error's reason from ``input_problem``)."""
     summary = read_json(os.path.join(run_dir, "summary.json")) or {}
+    if before and summary_mark(run_dir) == before:
+        summary = {}
     sstat = summary.get("status")
     message = str(summary.get("message") or "")
     if timed_out:
@@ -132,13 +148,13 @@ def reason_code(run_dir: str, status: str) -> str:
 
 def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
                    timed_out: bool = False, timeout: float | None = None, extra: dict | None = None,
-                   verdict: tuple[str, str] | None = None) -> Outcome:
+                   verdict: tuple[str, str] | None = None, before: str = "") -> Outcome:
     """Classify a finished attempt (unless ``verdict`` gives (status, reason)) and write
-    ``run.json``."""
+    ``run.json``; ``before``: summary.json's mark as the attempt started (``classify``)."""
     if verdict is not None:
         status, reason = verdict
     else:
-        status, reason = classify(run_dir, returncode, timed_out, timeout)
+        status, reason = classify(run_dir, returncode, timed_out, timeout, before)
     record = read_json(os.path.join(run_dir, "run.json")) or {}
     record.update(extra or {})
     record.update({"status": status, "reason": reason, "reason_code": reason_code(run_dir, status),
@@ -153,9 +169,10 @@ ATTEMPT_HEADER = "=== ancf-sweep attempt"
 
 
 def finish_slurm_task(run_dir: str, returncode: int, wall_time: float,
-                      timeout: float | None = None) -> Outcome:
-    """Record a run executed by the SLURM script (exit code 124 of ``timeout`` = time limit)."""
-    return record_outcome(run_dir, returncode, wall_time,
+                      timeout: float | None = None, before: str = "") -> Outcome:
+    """Record a run executed by the SLURM script (exit code 124 of ``timeout`` = time limit;
+    ``before``: summary.json's ``summary_mark`` as the task started ancf-solve)."""
+    return record_outcome(run_dir, returncode, wall_time, before=before,
                           timed_out=timeout is not None and returncode == 124, timeout=timeout,
                           extra={"host": socket.gethostname(),
                                  "slurm_job": os.environ.get("SLURM_ARRAY_JOB_ID"),
@@ -184,6 +201,7 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
     cmd = solve_command(sweep, run)              # decides on a restart from summary.json
     if "--restart" not in cmd:
         remove_quietly(os.path.join(run.dir, "summary.json"))
+    before = summary_mark(run.dir)               # a restart's: the stopped attempt's summary
     remove_quietly(os.path.join(run.dir, "run.json"))
     atomic_write(os.path.join(run.dir, "run.json"), json.dumps(
         {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
@@ -231,4 +249,4 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
             else f"killed ({_signal_name(rc) if rc is not None and rc < 0 else f'exit code {rc}'})"
         return record_outcome(run.dir, rc, wall,
                               verdict=("interrupted", f"ancf-sweep was interrupted; the run {how}"))
-    return record_outcome(run.dir, rc, wall, timed_out=timed_out, timeout=sweep.timeout)
+    return record_outcome(run.dir, rc, wall, timed_out=timed_out, timeout=sweep.timeout, before=before)

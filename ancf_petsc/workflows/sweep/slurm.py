@@ -87,7 +87,10 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     sweep_cmd = f"ancf-sweep {q(sweep.file)} --collect"
     record = ("import sys; from ancf_petsc.workflows.sweep import finish_slurm_task as f; "
               "o = f(sys.argv[1], int(sys.argv[2]), float(sys.argv[4]) - float(sys.argv[3]), "
-              f"{sweep.timeout!r}); print(vars(o))")
+              f"{sweep.timeout!r}, sys.argv[5]); print(vars(o))")
+    # summary.json as the attempt starts: one it leaves unchanged is an earlier attempt's
+    mark = ("import sys; from ancf_petsc.workflows.sweep.execute import summary_mark; "
+            "print(summary_mark(sys.argv[1]))")
     lines = [
         "#!/bin/bash",
         f"#SBATCH --job-name={sweep.name}",
@@ -164,6 +167,7 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         'echo "ancf-sweep: task $TASK: $RUN_DIR on $(hostname), $RANKS rank(s)"',
         f'echo "{ATTEMPT_HEADER}: job ${{SLURM_ARRAY_JOB_ID:-?}}_$TASK on $(hostname) at '
         '$(date +%Y-%m-%dT%H:%M:%S) ===" >> "$LOG"',
+        f'BEFORE=$("$PYTHON" -c {q(mark)} "$RUN_DIR" 2>/dev/null)',
         "START=$(date +%s.%N)",
         # a task killed at the time limit (interrupted) or with its node (running) goes on from
         # its last converged level when the array is submitted again
@@ -177,7 +181,7 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         f'{petsc} >> "$LOG" 2>&1',
         "RC=$?",
         "END=$(date +%s.%N)",
-        f"\"$PYTHON\" -c {q(record)} \"$RUN_DIR\" \"$RC\" \"$START\" \"$END\"",
+        f"\"$PYTHON\" -c {q(record)} \"$RUN_DIR\" \"$RC\" \"$START\" \"$END\" \"$BEFORE\"",
         'exit "$RC"',
     ]
     script = os.path.join(sweep.output, "sweep.slurm")

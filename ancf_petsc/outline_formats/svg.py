@@ -19,11 +19,14 @@ SVG_SAMPLES = 64
 ABSOLUTE = {"mm": 1e-3, "cm": 1e-2, "q": 0.25e-3, "in": 0.0254, "pt": 0.0254 / 72, "pc": 0.0254 / 6}
 
 
-def _stated_unit(svg) -> tuple[float, str] | None:
+def _stated_unit(svg, path: str) -> tuple[float, str] | None:
     """Metres per user unit that the document states (an absolute width over its viewBox's), and how."""
     values = getattr(svg, "values", {}) or {}
     width, box = str(values.get("width", "")).strip(), str(values.get("viewBox", "")).replace(",", " ").split()
-    m = re.fullmatch(r"([0-9.]+(?:[eE][-+]?[0-9]+)?)\s*(mm|cm|q|in|pt|pc)", width, re.IGNORECASE)
+    m = re.fullmatch(r"(.*?)\s*(mm|cm|q|in|pt|pc)", width, re.IGNORECASE)
+    if m and not re.fullmatch(r"\+?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?", m.group(1)):
+        raise OutlineReadError(f"{file_name(path)}: its width {width!r} is not a length (a number and a unit, "
+                               "e.g. 40mm): correct it in the file")
     try:
         wide = float(box[2]) if m and len(box) == 4 else 0.0
     except ValueError:
@@ -55,7 +58,7 @@ def _svg_shapes(path: str, mtime: float):
             p = p * inv
             p.reify()
         shapes.append((e.id or f"<{type(e).__name__.lower()} #{k}>", p))
-    return shapes, _stated_unit(svg)
+    return shapes, _stated_unit(svg, path)
 
 
 def _subpath_points(sub) -> tuple[np.ndarray, bool]:

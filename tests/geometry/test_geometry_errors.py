@@ -186,6 +186,17 @@ def test_bad_geometry_is_one_line_exit_2(tmp_path, name, raw, path, text):
     assert text in lines[0], lines[0]
 
 
+def test_an_svg_width_that_is_no_length_is_one_line(tmp_path):
+    """width="1.2.3mm" stopped ancf-solve with a ValueError traceback (float('1.2.3'))."""
+    (tmp_path / "w.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" width="1.2.3mm" viewBox="0 0 10 10">'
+                                    '<rect id="a" x="1" y="1" width="4" height="3"/></svg>')
+    raw = dict(config(inline({"a": {"file": "w.svg"}}, axes="image")), output={"dir": str(tmp_path / "out")})
+    p = solve_cli(write_config(raw, tmp_path / "bad.yaml"), cwd=str(tmp_path))
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.strip() == ("ancf-solve: config error: geometry.sections.outlines.a: w.svg: its width '1.2.3mm' "
+                                "is not a length (a number and a unit, e.g. 40mm): correct it in the file"), p.stderr
+
+
 KEY_CASES = [
     ("units missing", {"axes": ["y", "z"], "outlines": {"a": {"points": disc()}}}, "geometry.sections.units", "missing"),
     ("axes not a frame", inline({"a": {"points": disc()}}, axes=("y", "y")), "geometry.sections.axes", "[y, -z]"),

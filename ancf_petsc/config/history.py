@@ -107,6 +107,16 @@ def check_frames(steps, history: HistorySpec) -> list[float]:
     return [float(s) for s in steps]
 
 
+def check_scale(spec) -> None:
+    """A history ``scale`` that no load reads (every load on its own curve, or only a prescribed
+    displacement on a column: read as written, in metres) was ignored without a word."""
+    h = spec.history
+    if h is not None and h.scale != 1.0 and not any(ld.column is not None for ld in spec.loads):
+        raise ConfigError("history.scale", "multiplies the columns loads read, and no load reads one (a "
+                                           "prescribed displacement's column is read as written, in metres; "
+                                           f"a curve as written): remove it; got {shown(h.scale)}")
+
+
 def check_history_edits(spec) -> None:
     """A history edited through the Python API after parsing (``spec.history.scale = 1000``, a
     column changed) was ignored: the loads' curves were made from the table as parsed, and the

@@ -22,7 +22,7 @@ from .beams import check_imported_loops, parse_beams
 from .bundle import bundle_key, expand_bundle
 from .conditions import beam_ref, check_curves, parse_boundary_conditions, parse_loads, parse_probes, parse_steps
 from .contact import parse_contact
-from .history import parse_history
+from .history import check_scale, parse_history
 from .sections import parse_sections
 from .solving import (check_increments, parse_accuracy, parse_output, parse_partition, parse_petsc,
                       parse_solver)
@@ -87,6 +87,7 @@ def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,
         sections=sections, twist_rule=twist_rule, twist_default="twist_axis" not in geo, history=history)
     check_curves(spec)
+    check_scale(spec)
     check_increments(spec.solver, spec.steps)
     if "predictor" not in (raw.get("solver") or {}):
         spec.solver.predictor = default_predictor(spec)

@@ -98,6 +98,11 @@ def test_history_scale_multiplies_the_loads_columns_not_a_displacements():
      r"opensim\.csv: an OpenSim storage file \(it has an 'endheader' line\): give it the extension \.sto"),
     (lambda r, p: r["history"].update(file=str(p / "cut.sto"), table=None) or r["history"].pop("table"),
      r"cut\.sto: its header says nRows=10, the table has 2 data rows: a file cut short\?"),
+    # a scale no load reads (a grip's column in mm with scale 0.001: moved the grip 1000 times too far)
+    (lambda r, p: r["history"].update(scale=0.001) or r["loads"].clear() or r["boundary_conditions"].append(
+        {"beam": "soleus", "node": "last", "displacement": {"r": {"x": 1.0}}, "column": "soleus"}),
+     r"^history\.scale: multiplies the columns loads read, and no load reads one \(a prescribed displacement's "
+     r"column is read as written, in metres; a curve as written\): remove it; got 0\.001"),
 ])
 def test_history_errors_name_the_key_row_and_column(tmp_path, edit, match):
     (tmp_path / "bad.csv").write_text("time,soleus,medial,lateral\n0,1,2,3\n0.1,1,nan,3\n")

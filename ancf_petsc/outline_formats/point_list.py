@@ -27,6 +27,12 @@ def _yaml_points(text: str, path: str) -> np.ndarray:
                                + (f" ({problem})" if problem else "")) from None
     if isinstance(data, dict) and "points" in data:
         data = data["points"]
+    for k, pair in enumerate(data if isinstance(data, list) else []):
+        bad = [v for v in (pair if isinstance(pair, list) else []) if isinstance(v, bool)
+               or (isinstance(v, str) and "_" in v)]
+        if bad:       # YAML reads yes/no/on/off as true/false (1, 0); float('1_0') is 10
+            raise OutlineReadError(f"{file_name(path)} point {k + 1}: {bad[0]!r} is not a number "
+                                   "(u, v are numbers: yes/no/on/off are YAML's true/false; write 10, not 1_0)")
     try:
         P = np.array(data, dtype=float)
     except (TypeError, ValueError):

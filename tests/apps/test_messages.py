@@ -99,3 +99,14 @@ def test_an_underscore_in_a_csv_outline_number_is_refused(tmp_path):
     with pytest.raises(OutlineReadError, match=r"o\.csv line 2: \['1_0', '0'\] is not two numbers u, v "
                                                r"\(an underscore in a number: write 10 or 1\.0, not 1_0\)"):
         read_point_list(str(tmp_path / "o.csv"))
+
+
+@pytest.mark.parametrize("points,bad", [("[[0, 0], [1, 0], [1, yes], [0, 1]]", "True"),
+                                        ("[[0, 0], ['1_0', 0], [1, 1], [0, 1]]", "'1_0'")])
+def test_a_yaml_outline_point_that_is_no_number_is_refused(tmp_path, points, bad):
+    """A YAML point [1, yes] was read as (1, 1) (YAML's true), ['1_0', 0] as (10, 0), with no word."""
+    from ancf_petsc.outline_formats import OutlineReadError
+    from ancf_petsc.outline_formats.point_list import read_point_list
+    (tmp_path / "o.yaml").write_text(f"points: {points}\n")
+    with pytest.raises(OutlineReadError, match=rf"o\.yaml point [23]: {bad} is not a number"):
+        read_point_list(str(tmp_path / "o.yaml"))

@@ -68,10 +68,12 @@ def level_rule(steps: list[dict]) -> str:
 
 def level_cell(step: dict) -> str:
     """A level's load factor, or a history frame's number and time [s] (two cells); for one
-    reported past a gap of the load path also the level asked."""
+    reported past a gap of the load path also the level asked, for an unstable one its count."""
     asked = (step.get("passed_over") or {}).get("level")
     cell = f"{step['frame']} | {step['time']:g}" if "frame" in step and "time" in step else f"{step['load_factor']:g}"
-    return cell + ("" if asked is None else f" (level {asked:g}, past a gap of the load path)")
+    neg = step.get("negative_eigenvalues")
+    return (cell + ("" if asked is None else f" (level {asked:g}, past a gap of the load path)")
+            + (f" (unstable: {neg} negative tangent eigenvalue(s))" if neg else ""))
 
 
 def level_words(step: dict) -> str:

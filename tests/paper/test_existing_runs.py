@@ -268,3 +268,24 @@ def test_a_run_whose_beams_have_other_element_counts_names_every_one(tmp_path):
     paper = {"beams/soleus/elements": 4, "beams/medial_gastrocnemius/elements": 4}
     assert existing.element_counts(paper, dict(paper, **{"beams/soleus/elements": 2})) == \
         "soleus has another number of elements (4 → 2)"
+
+
+def test_an_accepted_unstable_level_is_marked_in_the_tables(tmp_path):
+    """The paper's tendon on 1 element per subtendon stepped straight to 50 N lands on a saddle
+    (tests/solving/test_stability_check.py); with solver.allow_unstable the run ends 'completed',
+    and the report's rows showed that level like any other.  Now its row says it is unstable."""
+    from helpers import CONFIGS
+    raw = load_raw("achilles_type3_psi0.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 1
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"] = [10.0, 50.0]
+    raw["contact"]["projection"] = {"axial": 2, "curve": 0}
+    raw["solver"] = {"stability_cutbacks": 0, "branch_switch": False, "allow_unstable": True}
+    raw["output"] = {"vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "c"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "c")], tmp_path / "rep")
+    assert "| completed |" in text
+    assert text.count("| 50 (unstable: 1 negative tangent eigenvalue(s)) | ") == 2, text[:3000]
+    assert "| 10 | " in text

@@ -73,16 +73,21 @@ def _explicit_pairs(model, spec) -> list:
         if cname_b is not None:            # two curves: one on each body (non-matching)
             ca = [c for c, _ in (a.section.loop or []) if c.name == cname]
             cb = [(c, f) for c, f in (b.section.loop or []) if c.name == cname_b]
-            if not ca or not cb:
-                raise ContactSetupError(f"no curve {cname!r} in {a.name}'s outline or {cname_b!r} in "
-                                        f"{b.name}'s", k)
+            for found, beam, name, key in ((ca, a, cname, "curve"), (cb, b, cname_b, "curve_b")):
+                if not found:
+                    names = ", ".join(c.name for c, _ in (beam.section.loop or [])) or "none"
+                    raise ContactSetupError(f"no curve {name!r} in {beam.name}'s outline (its curves: "
+                                            f"{names}); got {name!r}", k, f"contact.interfaces[{k}].{key}")
             pairs.append((a, b, ca[0], cb[0][1], cb[0][0], k))
             continue
         found = [(c, f) for c, f in _shared(a, b) if cname is None or c.name == cname]
         if not found:
+            shared = ", ".join(c.name for c, _ in _shared(a, b)) or "none"
             raise ContactSetupError(f"beams {a.name} and {b.name} share no outline curve"
-                                    + (f" named {cname!r}" if cname else "")
-                                    + "; interfaces are curves used by both section outlines", k)
+                                    + (f" named {cname!r} (they share: {shared})" if cname else "")
+                                    + "; interfaces are curves used by both section outlines"
+                                    + (f"; got {cname!r}" if cname else ""), k,
+                                    f"contact.interfaces[{k}].curve" if cname else None)
         pairs += [(a, b, c, f, None, k) for c, f in found]
     return pairs
 

@@ -230,7 +230,12 @@ def test_one_contact_point_along_an_element_is_refused():
 
 @pytest.mark.parametrize("case, key, words", [
     ("no shared curve", "contact", "no two beam outlines share a curve"),
-    ("unknown curve", "contact.interfaces[0]", "share no outline curve named 'nosuch'"),
+    ("unknown curve", "contact.interfaces[0].curve", "share no outline curve named 'nosuch' .they share: "
+     "mg_sol.; .*; got 'nosuch'"),
+    # two curves, one missing: the key and the outline's curves name it (it said "no curve 'mg_sol'
+    # in soleus's outline or 'lg_sol' in medial_gastrocnemius's", mg_sol being there)
+    ("unknown curve_b", "contact.interfaces[0].curve_b", "no curve 'lg_sol' in medial_gastrocnemius's "
+     "outline .its curves: lg_mg, mg_outer, mg_sol.; got 'lg_sol'"),
     ("elements differ", "beams[1].elements", "3 element.s. against 2 of soleus .beams.0..elements., its "
      "contact partner across curve mg_sol: the beams of an interface need the same number of elements "
      ".*give both 3"),
@@ -250,6 +255,9 @@ def test_contact_setup_errors_name_their_config_key(case, key, words, tmp_path):
     elif case == "listed twice":
         raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius"},
                                                {"a": "medial_gastrocnemius", "b": "soleus", "curve": "mg_sol"}]})
+    elif case == "unknown curve_b":
+        raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius", "curve": "mg_sol",
+                                                "curve_b": "lg_sol"}]})
     elif case == "unknown curve":
         raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius", "curve": "nosuch"}]})
     else:

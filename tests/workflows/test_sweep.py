@@ -380,11 +380,15 @@ def test_a_killed_run_is_continued_from_its_last_level(tmp_path):
     # and results.h5 with it (a restart continues from results.h5's last level, whose entry
     # completes summary.json)
     truncate_levels(os.path.join(run.dir, "results.h5"), 1, s["steps"][0]["load_factor"])
+    its = int(read_csv(tmp_path / "again" / "results.csv")[0]["newton_iterations"])
     rc, out, _ = run_main([path])
     assert rc == 0, out
     with open(summary_path) as fh:
         s = json.load(fh)
     assert s["status"] == "completed" and s["restarted_from"]["step"] == 1
+    # results.csv counts the whole run's Newton iterations, not the restarted process's alone
+    assert s["newton_iterations"] < its
+    assert int(read_csv(tmp_path / "again" / "results.csv")[0]["newton_iterations"]) == its
     rc, _, _ = run_main([path, "--slurm"])
     script = (tmp_path / "again" / "sweep.slurm").read_text()
     assert 'WHERE=(--restart "$RUN_DIR")' in script and '"${WHERE[@]}"' in script

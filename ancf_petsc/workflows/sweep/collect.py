@@ -62,8 +62,7 @@ def run_state(run: RunSpec, current: bool = True) -> RunState:
         if steps:
             st.load_factor = steps[-1].get("load_factor")
             st.probes = {k: v.get("displacement") for k, v in (steps[-1].get("probes") or {}).items()}
-        its = summary.get("newton_iterations")
-        st.newton_iterations = its if its is not None else sum(s.get("iterations") or 0 for s in steps)
+        st.newton_iterations = run_iterations(summary)
         st.wall_time = (summary.get("timings") or {}).get("total")
     if st.status in FINAL_STATUSES:
         st.reason_code = reason_code(run.dir, st.status) if rstat != st.status or not record \
@@ -71,6 +70,18 @@ def run_state(run: RunSpec, current: bool = True) -> RunState:
     if record and record.get("wall_time") is not None and rstat != "running":
         st.wall_time = record["wall_time"]
     return st
+
+
+def run_iterations(summary: dict) -> int:
+    """The run's Newton iterations: summary.json's ``newton_iterations`` counts the last process
+    only, so a restarted run adds the levels it continued from (each level's ``iterations``,
+    as the Newton budget counts them; docs/running.md, Restart)."""
+    steps = summary.get("steps") or []
+    its = summary.get("newton_iterations")
+    if its is None:
+        return sum(s.get("iterations") or 0 for s in steps)
+    before = int((summary.get("restarted_from") or {}).get("step") or 0)
+    return its + sum(s.get("iterations") or 0 for s in steps[:before])
 
 
 def _csv_value(v: Any) -> str:

@@ -26,8 +26,10 @@ A sweep file (YAML)::
       logs: append                            # append | numbered: log.txt on resubmission
 
 Every run gets ``<output>/<run id>/`` with ``config.yaml`` (the base config with the values
-substituted, ``output.dir`` set to the run directory and relative section ``file:`` paths made
-absolute), ``params.json`` and, once run, ``log.txt``, ``run.json`` (status, reason, wall time),
+substituted, ``output.dir`` set to the run directory and the base's relative data files, swept
+ones included, made relative to the run directory where they share a tree), ``params.json`` and,
+once run, ``log.txt``,
+``run.json`` (status, reason, wall time),
 plus the solver's own ``summary.json``, ``results.h5`` and VTU files.
 """
 from .base import (DONE_STATUSES, FAILED_STATUSES, FINAL_STATUSES, STATUS_ORDER, SweepError, format_key_path,

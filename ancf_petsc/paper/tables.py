@@ -8,6 +8,7 @@ import numpy as np
 from ..config.specs import DEFAULT_CONTACT_MODE
 from ..io.levels import gap_note, reported_at, step_at
 from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
+from ..workflows.sweep.collect import run_iterations
 from .runs import elongation, execute, make_sweep, summary_of
 
 
@@ -197,15 +198,22 @@ def table2_markdown(inputs: PaperInputs, rows: dict, elements=T2_ELEMENTS) -> st
 
 
 def timing_markdown(t1: Table1) -> str:
-    """Run time per Table 1 column, by part (summary.json ``timings``)."""
+    """Run time per Table 1 column, by part (summary.json ``timings``); a column continued with
+    --restart (a report stopped and run again) counts the whole run's Newton iterations, and
+    its times, the last process's, are marked."""
     keys = ("total", "setup", "element_kernels", "element_assembly", "contact_projection",
             "contact_assembly", "linear_solve", "output")
     lines = ["| ψ | levels | Newton its | " + " | ".join(keys) + " |",
              "|---:|---:|---:|" + "---:|" * len(keys)]
+    notes = []
     for p in TWISTS:
         s = t1.summaries.get(p)
         if s:
             t = s.get("timings") or {}
-            lines.append(f"| {p}° | {len(s['steps'])} | {s.get('newton_iterations')} | "
-                         + " | ".join(f"{t.get(k, float('nan')):.2f}" for k in keys) + " |")
-    return "\n".join(lines)
+            mark = "‡" if s.get("restarted_from") else ""
+            lines.append(f"| {p}° | {len(s['steps'])} | {run_iterations(s)} | "
+                         + " | ".join(f"{t.get(k, float('nan')):.2f}{mark}" for k in keys) + " |")
+            if mark:
+                notes.append(f"‡ ψ={p}°: continued from level {s['restarted_from'].get('step')} "
+                             "(--restart): the times are the last process's, the levels before it not included")
+    return "\n".join(lines + ([""] + notes if notes else []))

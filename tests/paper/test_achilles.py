@@ -219,3 +219,20 @@ def test_the_contact_study_says_not_reached_not_nan(tmp_path):
     assert "nan" not in text and "| sliding | default | 1 | 0.161152 | not reached | 22 |" in text
     assert "sliding: no spread over k_s: the run with k_s scale 1 did not reach 400 N." in text
     assert "space solved exactly: its run did not reach 400 N." in text
+
+
+def test_a_column_continued_with_restart_counts_its_whole_run():
+    """A report stopped and run again continues its columns with --restart: the run-time table
+    gave the last process's Newton iterations (5 of 40) as the column's, with no word."""
+    probes = {k: {"displacement": [1e-3, 0.0, 0.0]} for k in ("soleus", "medial_gastrocnemius",
+                                                             "lateral_gastrocnemius")}
+    steps = [{"load_factor": float(f), "iterations": 4 if i < 9 else 1, "probes": probes}
+             for i, f in enumerate(PAPER["load_N"])]
+    whole = {"steps": steps, "newton_iterations": 40, "timings": {"total": 1.0}}
+    continued = dict(whole, newton_iterations=4, restarted_from={"step": 9, "load_factor": 100.0},
+                     timings={"total": 0.2})
+    t1 = rp.table1_from(PAPER_INPUTS, {0: None, 15: whole, 45: continued})
+    rows = {ln.split(" | ")[0]: ln for ln in rp.timing_markdown(t1).splitlines()}
+    assert rows["| 15°"].startswith("| 15° | 13 | 40 | 1.00 |"), rows
+    assert rows["| 45°"].startswith("| 45° | 13 | 40 | 0.20‡ |"), rows
+    assert "‡ ψ=45°: continued from level 9 (--restart)" in rp.timing_markdown(t1)

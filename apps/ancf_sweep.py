@@ -2,7 +2,7 @@
                   [--throttle N] [--cpus-per-task N] [--mem M] [--time T] [--partition P]
                   [--account A] [--venv DIR] [--logs append|numbered]
 
-Runs a parameter sweep over a base config (format: ancf_petsc/workflows/sweep.py), locally with N
+Runs a parameter sweep over a base config (format: ancf_petsc/workflows/sweep/__init__.py), locally with N
 concurrent ancf-solve processes, or writes a SLURM job-array script (resources from the sweep
 file's ``slurm:`` or the options above; docs/running.md). Completed runs are skipped.
 Exit codes (docs/running.md, "Sweeps run locally"): 0 all runs completed, 1 some did not (or a

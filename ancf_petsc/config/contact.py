@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from ..contact.friction import CoulombFriction
 from ..contact.elastic_interface import ElasticMatrix
+from ..contact.laws import LAWS
 from ..contact.tangential import TANGENTIAL_LAWS
 from .conditions import beam_ref
 from .specs import (CONTACT_MODES, DEFAULT_CONTACT_MODE, FADE_FORCES, FADE_RULES, REMOVED_CONTACT_KEYS,
@@ -184,17 +185,21 @@ def _parse_projection(c, proj, pp: str, node_dofs: int, section_order: int = 2) 
 
 
 def _bounded_across(c, pp: str, order: int) -> None:
-    """Under Coulomb friction at most order + 1 pressure functions across (curve + curve_spans):
-    the gap between two section fields of degree p has p + 1 modes across a straight strip, and
-    more functions are not determined (docs/interface.md, "The gap's degree across": on 3363 the
-    paper's tendon's inf-sup constant over the interfaces, columns scaled, 2e-2 / 3e-3 / 1e-4 /
-    8e-7 with 2 / 3 / 4 / 5 functions).  Frictionless runs keep them (their answers read only
-    the multipliers' forces); Coulomb's bounds mu p+ read the multipliers themselves."""
+    """Under Coulomb friction or the sliding law at most order + 1 pressure functions across
+    (curve + curve_spans): the gap between two section fields of degree p has p + 1 modes across
+    a straight strip, and more functions are not determined (docs/interface.md, "The gap's degree
+    across": on 3363 the paper's tendon's inf-sup constant over the interfaces, columns scaled,
+    2e-2 / 3e-3 / 1e-4 / 8e-7 with 2 / 3 / 4 / 5 functions).  Coulomb's bounds mu p+ read the
+    multipliers themselves; the sliding law holds every function.  Unilateral runs keep them
+    (most functions open: docs/contact.md, "Pointwise penetration")."""
     across = c.projection[1] + c.curve_spans
-    if not bounded(c) or across <= order + 1:
+    held = not LAWS[c.mode].decides_activity          # the sliding law: every function held
+    if across <= order + 1 or not (bounded(c) or held):
         return
     key = f"{pp}.curve_spans" if c.curve_spans > 1 else f"{pp}.curve"
     got = c.curve_spans if c.curve_spans > 1 else c.projection[1]
+    if not bounded(c):
+        raise ConfigError(key, _sliding_across(order, across, got))
     raise ConfigError(key, f"under Coulomb friction at most {order + 1} pressure functions across "
                       f"(curve + curve_spans) on section fields of degree {order}, here {across}: "
                       "more are not determined by the gap (inf-sup), their multipliers oscillate "
@@ -202,3 +207,16 @@ def _bounded_across(c, pp: str, order: int) -> None:
                       "with curve: 3 or curve_spans: 4, and completed 57 % too stiff with "
                       f"curve_spans: 3); give curve + curve_spans <= {order + 1}, or a beam element "
                       f"with richer sections; got {got}")
+
+
+def _sliding_across(order: int, across: int, got: int) -> str:
+    """The refusal of more than order + 1 pressure functions across under the sliding law, with
+    what they did to the paper's tendon (ψ = 45°, 4 elements, 10 and 400 N)."""
+    return (f"under the sliding law (every pressure function held) at most {order + 1} pressure "
+            f"functions across (curve + curve_spans) on section fields of degree {order}, here "
+            f"{across}: more are not determined by the gap (inf-sup) and lock the sections (the "
+            "paper's tendon: curve: 3 ended 1.3 % stiffer at 400 N with its interfaces pressed and "
+            "pulled by up to 5e4 N against 1e3 N, curve_spans: 4 failed at 194 N); give curve + "
+            f"curve_spans <= {order + 1}, mode: unilateral (its functions mostly open: "
+            "docs/contact.md, \"Pointwise penetration\"), or a beam element with richer sections; "
+            f"got {got}")

@@ -97,5 +97,27 @@ def test_more_pressure_functions_across_than_the_sections_determine_are_refused_
     assert parse_config(richer).contact.projection == (1, 3)
     for contact in (coulomb | {"curve_points": 3, "projection": {"curve": 2}},
                     coulomb | {"projection": {"curve_spans": 2}},
-                    {"curve_points": 4, "projection": {"curve_spans": 4}}):
+                    {"mode": "unilateral", "curve_points": 4, "projection": {"curve_spans": 4}}):
+        assert parse_config(_tendon(contact)).contact is not None, contact
+
+
+def test_more_pressure_functions_across_than_the_sections_determine_are_refused_under_sliding():
+    """The sliding law holds every pressure function, so more than p + 1 across lock the
+    sections and leave the multipliers undetermined: the paper's tendon (ψ = 45°, 4 elements)
+    with curve: 3 completed 1.3 % stiffer at 400 N (soleus 6.121 against 6.205 mm) with its
+    interfaces pressed and pulled by 5.2e4 N (default: at most 1.1e3 N), curve_spans: 4 failed at
+    194 N after 652 Newton iterations, curve: 5 at 2 elements at 2.9 N.  Refused, naming the key;
+    p + 1 functions and the unilateral law (its extra functions open) still run."""
+    import pytest
+    from ancf_petsc.config import ConfigError
+    for projection, key, got in (({"curve": 3}, "curve", 3), ({"curve_spans": 4}, "curve_spans", 4),
+                                 ({"curve": 0, "curve_spans": 4}, "curve_spans", 4)):
+        with pytest.raises(ConfigError) as err:
+            parse_config(_tendon({"curve_points": 4, "projection": projection}))
+        text = str(err.value)
+        assert text.startswith(f"contact.projection.{key}: under the sliding law (every pressure function "
+                               "held) at most 3 pressure functions across"), text
+        assert "give curve + curve_spans <= 3, mode: unilateral" in text and text.endswith(f"; got {got}"), text
+    for contact in ({"curve_points": 3, "projection": {"curve": 2}}, {"projection": {"curve_spans": 2}},
+                    {"mode": "unilateral", "curve_points": 4, "projection": {"curve": 5}}):
         assert parse_config(_tendon(contact)).contact is not None, contact

@@ -65,10 +65,10 @@ def parse_tangential(value, p: str = "contact.tangential") -> TangentialSpec:
     return t
 
 
-def parse_contact(value, names: list[str], node_dofs: int = 18, section_order: int = 2) -> ContactSpec:
+def parse_contact(value, names: list[str], node_dofs: int = 18, section_order: int = 2, axial_order: int = 2) -> ContactSpec:
     """The contact law (sliding | unilateral), Gauss points, pressure space and interfaces;
     ``node_dofs``: the slots of a multiplier node (the beams' node block, physics/elements);
-    ``section_order``: the lowest degree of the beams' section fields (3363: 2)."""
+    ``section_order``, ``axial_order``: the beams' lowest degrees across and along (3363: 2, 2)."""
     p = "contact"
     if isinstance(value, dict):
         for key in REMOVED_CONTACT_KEYS:
@@ -108,7 +108,7 @@ def parse_contact(value, names: list[str], node_dofs: int = 18, section_order: i
     if law is not None and c.fade_forces == "variational":
         raise ConfigError(f"{p}.fade_forces", "a tangential law's forces are pointwise (τ_p ∇g_p); "
                                               "remove fade_forces or set it to pointwise")
-    _parse_projection(c, value.get("projection", None), f"{p}.projection", node_dofs, section_order)
+    _parse_projection(c, value.get("projection"), f"{p}.projection", node_dofs, section_order, axial_order)
     inter = value.get("interfaces", "auto")
     if inter == "auto":
         c.interfaces = []
@@ -127,9 +127,11 @@ def parse_contact(value, names: list[str], node_dofs: int = 18, section_order: i
     return c
 
 
-def default_axial(c) -> int:
+def default_axial(c, axial_order: int = 2) -> int:
     """``contact.projection.axial`` when the config gives none: the contact points' degree along
-    the beam (axial_points - 1, quadratic by default), but at most linear under Coulomb friction.
+    the beam (axial_points - 1, quadratic by default) up to the elements' own ``axial_order`` (the
+    trace of their displacements; cubic along 3363, axial_points: 4's default until 2026-12-07, is
+    not stable: docs/solid_contact.md), but at most linear under Coulomb friction.
     Friction's bounds μ p⁺ read the pointwise pressure, and the quadratic one oscillates along the
     beam (41 % of the pressing force cancelled within elements on the walking stride): its
     strides' strains then differ by 1-2 % and their end differences by 2-6 % from mesh to mesh
@@ -138,7 +140,7 @@ def default_axial(c) -> int:
     with either, faster with the quadratic one."""
     if bounded(c):
         return min(1, c.axial_points - 1)
-    return c.axial_points - 1
+    return min(c.axial_points - 1, axial_order)
 
 
 def bounded(c) -> bool:
@@ -148,14 +150,15 @@ def bounded(c) -> bool:
     return bool(getattr(law, "bounded", False))
 
 
-def _parse_projection(c, proj, pp: str, node_dofs: int, section_order: int = 2) -> None:
+def _parse_projection(c, proj, pp: str, node_dofs: int, section_order: int = 2, axial_order: int = 2) -> None:
     """``contact.projection`` (at key path ``pp``) into ``c`` (a ContactSpec): the pressure
     space's degrees along the beam and across, its spans across, continuity and supported-end
-    rule (``section_order``: the beams' lowest section degree, ``_bounded_across``)."""
+    rule (``section_order``: the beams' lowest section degree, ``_bounded_across``; ``axial_order``
+    their degree along, ``default_axial``)."""
     if proj == "pointwise":
         raise ConfigError(pp, "a multiplier per point over-constrains the quadratic "
                               "section fields; give {axial: .., curve: ..} degrees")
-    axial = default_axial(c)
+    axial = default_axial(c, axial_order)
     if proj is None:
         c.projection = (axial, 1)
     else:

@@ -81,7 +81,8 @@ def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
         output=parse_output(raw.get("output", {}), name), solver=parse_solver(raw.get("solver", {})),
         petsc=parse_petsc(raw.get("petsc", {}) or {}),
         contact=parse_contact(raw["contact"], names, blocks[0].dofs_per_node,
-                              min(ELEMENTS[b.element].order for b in beams))
+                              min(ELEMENTS[b.element].order for b in beams),
+                              min(blk.axial_nodes for blk in blocks) - 1)
         if raw.get("contact") is not None else None,
         base_dir=base_dir, raw=raw, partition=parse_partition(raw.get("partition")),
         accuracy=parse_accuracy(raw["accuracy"], probes, steps) if raw.get("accuracy") is not None else None,

@@ -31,6 +31,18 @@ def test_the_pressure_along_the_beam_by_law():
         assert parse_config(_tendon(contact)).contact.projection == expected, contact
 
 
+def test_more_contact_points_along_keep_the_elements_degree():
+    """contact.axial_points: 4 alone made the pressure cubic along the quadratic elements (the
+    default axial_points - 1), richer than their trace: the paper's tendon (ψ = 45°, 4 elements,
+    sliding) 1.1 % stiffer at 400 N (soleus 6.1341 against 6.2046 mm; 6.2015 with axial: 2 on the
+    4 points) and mg_sol pressed by 3 703 N at 10 N (36 N).  The default now stops at the
+    elements' degree along; an explicit axial: 3 is still the config's choice."""
+    for contact, expected in (({"axial_points": 4}, (2, 1)), ({"mode": "unilateral", "axial_points": 5}, (2, 1)),
+                              ({"axial_points": 4, "projection": {"axial": 3}}, (3, 1)),
+                              ({"axial_points": 2}, (1, 1))):
+        assert parse_config(_tendon(contact)).contact.projection == expected, contact
+
+
 def test_friction_at_mu_3_presses_about_its_load(tmp_path):
     """8 elements, μ = 3, 10 N on the soleus: each interface's pressing force stays near the load's
     scale (measured 0.5-1.2 N), not the quadratic pressure's 149-1 154 N."""

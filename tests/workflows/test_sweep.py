@@ -553,3 +553,21 @@ def test_an_attempt_that_writes_no_summary_is_not_read_from_the_one_before(tmp_p
         record = json.load(fh)
     assert p.returncode == 2 and record["status"] == "config_error", (p.stdout, p.stderr, record)
     assert "without restart data" in record["reason"]
+
+
+def test_a_run_made_with_other_petsc_options_is_run_again(tmp_path):
+    """run.petsc changed after the sweep ran (here -snes_atol 1e-4 dropped: tip 0.024604212893
+    against 0.024604212883 m): every run was 'skipped (already done)', the old answer kept with
+    no word (run.petsc is not in config.yaml; params.json records it now)."""
+    body = {"parameters": {"output.vtk": [False]}, "output": "o", "run": {"petsc": ["-snes_atol", "1e-4"]}}
+    path = write_sweep(str(tmp_path), body)
+    assert run_main([path])[0] == 0
+    loose = read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"]
+    write_sweep(str(tmp_path), dict(body, run={}))
+    rc, out, _ = run_main([path, "--dry-run"])
+    assert "1 to run, 0 already done" in out, out
+    rc, out, _ = run_main([path, "--collect"])
+    assert rc == 1 and "run.petsc" in read_csv(tmp_path / "o" / "results.csv")[0]["reason"]
+    rc, out, _ = run_main([path])
+    assert rc == 0 and "skipped" not in out, out
+    assert read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"] != loose

@@ -29,8 +29,8 @@ class RunState:
 
 
 #: the reason of a run directory solved with another config than the sweep's current one
-EDITED = ("its config.yaml is not the one the sweep writes now (the sweep or its base config was "
-          "edited after it ran): rerun the sweep")
+EDITED = ("it ran with another config.yaml or run.petsc than the sweep's now (the sweep or its base "
+          "config was edited after it ran): rerun the sweep")
 
 
 def run_state(run: RunSpec, current: bool = True) -> RunState:

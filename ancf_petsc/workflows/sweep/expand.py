@@ -131,9 +131,11 @@ def _unplaced(text: str | None) -> Any:
 
 def same_config(sweep: Sweep, run: RunSpec) -> bool:
     """The run directory's config.yaml is the one this sweep would write now, wherever the sweep
-    directory was prepared (a sweep moved to another machine keeps its runs)."""
+    directory was prepared (a sweep moved to another machine keeps its runs), and its
+    params.json names the sweep's run.petsc (one written before it named them: taken as the same)."""
     old = _unplaced(read_text(os.path.join(run.dir, "config.yaml")))
-    return old is not None and old == _unplaced(config_text(sweep, run))
+    petsc = (read_json(os.path.join(run.dir, "params.json")) or {}).get("petsc", sweep.petsc)
+    return old is not None and old == _unplaced(config_text(sweep, run)) and petsc == sweep.petsc
 
 
 def is_done(sweep: Sweep, run: RunSpec) -> bool:
@@ -147,19 +149,19 @@ def is_done(sweep: Sweep, run: RunSpec) -> bool:
 def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     """Write ``config.yaml`` and ``params.json``; True if a completed result of this config exists.
 
-    A run directory whose config differs from the current one (the sweep or base config was
-    edited) loses its summary.json/run.json, so neither this tool nor a SLURM task skips it; one
-    only moved (``same_config``) keeps them and gets its new ``output.dir``."""
+    A run directory whose config or PETSc options differ from the current ones (the sweep or
+    base config was edited) loses its summary.json/run.json, so neither this tool nor a SLURM
+    task skips it; one only moved (``same_config``) keeps them and gets its new ``output.dir``."""
     os.makedirs(run.dir, exist_ok=True)
     cfg_path = os.path.join(run.dir, "config.yaml")
     text = config_text(sweep, run)
     old = read_text(cfg_path)
+    if old is not None and not same_config(sweep, run):
+        remove_quietly(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
     if old != text:
-        if old is not None and not same_config(sweep, run):
-            remove_quietly(os.path.join(run.dir, "summary.json"), os.path.join(run.dir, "run.json"))
         atomic_write(cfg_path, text)
     params = {"sweep": sweep.name, "sweep_file": sweep.file, "base": sweep.base,
-              "run_id": run.run_id, "index": run.index, "parameters": run.params}
+              "run_id": run.run_id, "index": run.index, "parameters": run.params, "petsc": sweep.petsc}
     atomic_write(os.path.join(run.dir, "params.json"),
                   json.dumps(params, indent=1, default=str) + "\n")
     return is_done(sweep, run)

@@ -28,7 +28,7 @@ from . import blocks, couplings, reports
 from .interfaces import find_interfaces, held_ends, supported_ends
 from .laws import Phase, active_set_rows, make_law, violated
 from .multipliers import build_space, reference_stiffness, with_tangential
-from .points import build_points
+from .points import build_points, check_points_across
 from .projection import Projector
 from .reference_gaps import check_reference_gaps
 from .tangential import make_terms
@@ -42,6 +42,7 @@ class Contact:
     def __init__(self, model, spec, interfaces):
         self.model, self.spec, self.interfaces = model, spec, interfaces
         self.law = make_law(spec.mode)
+        check_points_across(interfaces, spec.curve_points, spec.projection[1] + spec.curve_spans)
         self.points = build_points(model, interfaces, spec.axial_points, spec.curve_points)
         self.projector = Projector(model, interfaces, self.points, spec.search_margin)
         #: contact terms beside the normal constraints (a tangential law's interface shear)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.cubature import gauss_legendre
+from .interfaces import ContactSetupError
 from .surface import curve_shape
 
 
@@ -77,3 +78,19 @@ def build_points(model, interfaces, axial_points: int, curve_points: int) -> Con
     return ContactPoints(itf=c["itf"], eA=c["eA"], xi=c["xi"], t=c["t"], tau=c["tau"], w=c["w"],
                          eB0=c["eB0"], seg=c["seg"], NA=c["NA"], seg_start=seg_start,
                          seg_size=seg_size, seg_itf=c["itf"][seg_start], seg_eA=c["eA"][seg_start])
+
+
+def check_points_across(interfaces, curve_points: int, across: int) -> None:
+    """Refuse an interface with fewer contact points across (``curve_points`` per piece of its
+    curve) than pressure functions across (``across``: projection.curve + curve_spans): their
+    weighted gaps would repeat each other (the two bars side by side with 1 point across their
+    straight face: both linear functions held its middle only, the bars' transverse end
+    displacement 10 % off, the multipliers' split arbitrary)."""
+    for itf in interfaces:
+        pieces = len(itf.curve.breakpoints) - 1
+        if pieces * curve_points < across:
+            raise ContactSetupError(
+                f"interface {itf.name}: {pieces * curve_points} contact point(s) across ({pieces} piece(s) of "
+                f"curve {itf.curve.name} x {curve_points}) determine fewer than its {across} pressure "
+                f"functions across (projection.curve + curve_spans); give contact.curve_points: "
+                f"{-(-across // pieces)} or more, or fewer functions; got {curve_points}", key="contact.curve_points")

@@ -241,6 +241,11 @@ def test_one_contact_point_along_an_element_is_refused():
      ".*give both 3"),
     # the same curve in either order of a and b: its constraints repeated (the tendon at 2 elements
     # failed at 312 of 400 N), or one copy's arbitrary share of the force reported (1613 N, not -189 N)
+    # one point across a straight face for the two linear functions across: both held its middle
+    # only (two bars side by side: their transverse end displacement 10 % off, no error)
+    ("one point across", "contact.curve_points", "interface interface .base.slider.: 1 contact point.s. "
+     "across .1 piece.s. of curve interface x 1. determine fewer than its 2 pressure functions across "
+     ".*give contact.curve_points: 2 or more, or fewer functions; got 1"),
     ("listed twice", "contact.interfaces[1]", "interface mg_sol .soleus.medial_gastrocnemius. is listed "
      "twice .also contact.interfaces.0..: list each shared curve of two beams once.*; got .a: "
      "medial_gastrocnemius, b: soleus, curve: mg_sol."),
@@ -252,6 +257,9 @@ def test_contact_setup_errors_name_their_config_key(case, key, words, tmp_path):
     from helpers import CONFIGS, two_beam_twisted
     if case == "no shared curve":
         raw = dict(two_beam_twisted(), contact={})
+    elif case == "one point across":
+        raw = load_raw("friction_pressed_strips.yaml")
+        raw["contact"]["curve_points"] = 1
     elif case == "listed twice":
         raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius"},
                                                {"a": "medial_gastrocnemius", "b": "soleus", "curve": "mg_sol"}]})

@@ -33,6 +33,7 @@ class LevelTally:
     passed_over: tuple | None = None   # (last converged, reported, reason, |F|): step_over.py
     at_level_failures: int = 0  # failed sub-steps whose end was the level itself (step_over.py)
     tresca_solves: int = 0  # friction's fixed point (solving/newton.py), all sub-steps
+    polished: float | None = None  # |F| of the last sub-step's state polished for its verdict (critical_point.py)
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)
     unstable_at: tuple[float, int, int] | None = None

@@ -48,10 +48,12 @@ def creeping(stepper, tally, at_level: bool) -> bool:
 
 
 def reported_level(target: float, reason: int, fnorm: float, tally) -> tuple[float, int, float]:
-    """The level's load factor, SNES reason and |F| as reported: the level's own, or where it
-    was stepped over (``tally.passed_over``), that solve's."""
+    """The level's load factor, SNES reason and |F| as reported: the level's own (its state's
+    polished for the stability verdict: ``tally.polished``, critical_point.verdict_count), or
+    where it was stepped over (``tally.passed_over``), that solve's."""
     over = tally.passed_over
-    return (target, reason, fnorm) if not over else tuple(over[1:])
+    own = fnorm if tally.polished is None else tally.polished
+    return (target, reason, own) if not over else tuple(over[1:])
 
 
 def applies(stepper, failure) -> bool:

@@ -29,7 +29,7 @@ from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .predictor import TangentPredictor
-from .critical_point import critical_point
+from .critical_point import critical_point, verdict_count
 from .rest_response import at_rest, bounded_first_increment
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
@@ -262,7 +262,7 @@ class LoadStepper:
         converged = reason > 0 and cause is None
         if reason > 0 and not converged:
             reason = VIOLATED_STATE if cause == "conditions" else UNCLEAN_STATE
-        neg = self.solver.negative_eigenvalues(P.X) if converged else None
+        neg = verdict_count(self, path, step, tally, converged)    # polished where tolerances are loose
         if neg:                                         # a saddle: a branch point to switch from
             self.branches.remember(path.lam + step, P.X, self.solver.snes.getJacobian()[0], neg, path.lam)
         if self.control.wants_stability_retry(neg, path.accepted_negative, tally):

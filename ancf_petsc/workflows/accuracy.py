@@ -119,16 +119,18 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         info["section_order"] = check_section_order(spec, comm, run_model, _scaled_raw(
             spec, rungs[0]["elements"] / base, start, level), values[0], level, say)
     if chosen is None:
-        n = next((r["elements"] for r in reversed(rungs) if r["status"] in ("completed", "unstable")), base)
-        info.update(chosen_elements=n, estimated_error=None, met=False)
+        n = next((r["elements"] for r in reversed(rungs) if r["status"] in ("completed", "unstable")), None)
+        info.update(chosen_elements=n or base, estimated_error=None, met=False)
         say(f"[accuracy] no rung met rtol {acc.rtol:g} with a reliable estimate up to "
-            f"{acc.max_elements} elements; solving with the finest finite rung, {n} elements")
+            f"{acc.max_elements} elements; " + (f"solving with the finest finite rung, {n} elements" if n else
+                                                f"every rung failed: solving the scene as written, {base} elements"))
+        n = n or base
     else:
         n = rungs[chosen]["elements"]
         info.update(chosen_elements=n, estimated_error=errs[chosen], met=True)
         say(f"[accuracy] chosen: {n} elements per beam (first beam), estimated error "
             f"{errs[chosen]:.2e} <= {acc.rtol:g}; ladder {ladder_time:.2f} s")
-    k = next(i for i, r in enumerate(rungs) if r["elements"] == n) if rungs else None
+    k = next((i for i, r in enumerate(rungs) if r["elements"] == n), None)    # None: n is no rung
     if k is not None and results[k].status in ("completed", "unstable") \
             and level >= max(spec.steps) * (1 - 1e-12):
         info["reused_rung"] = True          # the chosen rung is the whole scene: no second solve

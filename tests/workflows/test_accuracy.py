@@ -181,3 +181,19 @@ def test_a_scene_the_ladder_cannot_build_is_refused_with_its_own_counts(tmp_path
     p = solve_cli(write_config(raw, tmp_path / "a.yaml"), extra=["--output-dir", str(tmp_path / "o"), "--quiet"])
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert "4 element(s) against 2 of soleus" in p.stderr and "[accuracy]" not in p.stdout, p.stderr
+
+
+def test_a_ladder_whose_every_rung_fails_solves_the_scene_as_written(tmp_path):
+    """Every rung failing (a 2-iteration Newton budget, no cut-back) left no finite rung: the
+    choice fell back to the config's 3 elements, which is no rung of 1, 2, 4, and the lookup of
+    its rung raised StopIteration (a traceback, exit 1).  Now the scene is solved as written and
+    its failure is the run's."""
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0]["elements"] = 3
+    raw["solver"] = {"max_cutbacks": 0}
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 1e-3, "start": 1, "max_elements": 4}
+    s = run_inline(raw, tmp_path, petsc={"snes_max_it": 2})
+    acc = s["accuracy"]
+    assert [r["status"] for r in acc["ladder"]] == ["failed"] * 3
+    assert acc["met"] is False and acc["chosen_elements"] == 3 and acc["reused_rung"] is False
+    assert s["status"] == "failed" and s["elements_per_beam"] == {"beam": 3}

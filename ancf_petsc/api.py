@@ -7,9 +7,10 @@
     print(result.status, ap.read_results("/tmp/bar").probe("tip")[-1])
 
 A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, its ``material['mu']``,
-``element`` within one node block: 3363/3333, ``spec.steps``): ``solve`` places 'first'/'last'
-of the supports, loads and probes on the beams as they are then, checks the beams and steps as
-the config's, and stores the element counts, types, materials and steps solved with in results.h5.
+``element`` within one node block: 3363/3333, ``spec.steps``, ``spec.petsc``): ``solve`` places
+'first'/'last' of the supports, loads and probes on the beams as they are then, checks the beams,
+steps and PETSc options as the config's, and stores the element counts, types, materials, steps
+and PETSc options solved with in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
 
@@ -58,12 +59,16 @@ def check_edited(spec: ModelSpec) -> None:
     """What a spec changed after parsing must still satisfy: its beams' element counts, types
     and axial points are the config's kinds (a changed type takes its own locking remedy), its
     supports, loads and probes follow its beams' element counts ('last' is the last node of the
-    beam as it is now), and its steps increase strictly (a spec edited to decreasing steps raised
-    an UnboundLocalError in the load stepping; with a history they are its first frames).  Raises ConfigError, as the config itself would."""
+    beam as it is now), its steps increase strictly (a spec edited to decreasing steps raised
+    an UnboundLocalError in the load stepping; with a history they are its first frames), and its
+    ``petsc`` options read as the config's ``petsc:`` (an edited {'snes_rtol': 'abc'} was PETSc's
+    refusal naming no key).  Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
     from .config.conditions import parse_steps, resolve_nodes
     from .config.history import check_frames, check_history_edits
+    from .config.solving import parse_petsc
     check_edited_beams(spec.beams)
+    spec.petsc = parse_petsc(spec.petsc)
     resolve_nodes(spec)
     spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
     check_history_edits(spec)
@@ -96,8 +101,19 @@ def _raw_as_solved(spec: ModelSpec) -> None:
                     entry["material"] = material_as_written(beam.material)
     if isinstance(raw, dict) and "steps" in raw and spec.history is None:
         raw["steps"] = list(spec.steps)
+    if isinstance(raw, dict) and _petsc_of(raw) != spec.petsc:
+        raw["petsc"] = {k: v if v else None for k, v in spec.petsc.items()}   # '': a flag
     if raw != spec.raw:
         spec.raw = raw
+
+
+def _petsc_of(raw: dict) -> dict | None:
+    """A config's ``petsc:`` as parsed (None where it does not parse)."""
+    from .config.solving import parse_petsc
+    try:
+        return parse_petsc(raw.get("petsc") or {})
+    except ConfigError:
+        return None
 
 
 def _material_of(entry: dict) -> dict | None:

@@ -265,3 +265,30 @@ def test_an_edited_fibre_angle_in_the_configs_key_is_solved(tmp_path):
     u_parse = _parsed_tip(ap, "uniaxial_neohookean.yaml",
                           {"material": dict(goh, fibres={"follow": "axis", "angle_deg": 60.0})}, tmp_path)
     assert u_edit[0] == pytest.approx(u_parse[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("petsc,message", [
+    ({"snes_rtol": "abc"}, r"petsc\.snes_rtol: expected a number \(PETSc reads it with strtod\); got 'abc'"),
+    ({"snes_rtol": None}, r"petsc\.snes_rtol: needs a value: a number"),   # ran: 30 Newton iterations
+    ({"help": None}, r"petsc\.help: PETSc reads -help only while it starts"),
+], ids=["not a number", "no value", "start-up option"])
+def test_edited_petsc_options_are_checked_as_the_configs(tmp_path, petsc, message):
+    """spec.petsc edited to {'snes_rtol': 'abc'} was refused by PETSc mid-setup in a line naming
+    no key ('PETSc refused an option while setting up the solver ... Input string abc has no
+    numeric value'); {'snes_rtol': None} ran.  Now the config's one-line errors, nothing written."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    spec.petsc = petsc
+    with pytest.raises(ap.ConfigError, match=message):
+        ap.solve(spec, log=lambda *_: None)
+    assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_the_stored_config_says_the_edited_petsc_options(tmp_path):
+    """spec.petsc edited to a backtracking line search: 54 Newton iterations against 31, and
+    results.h5's config said no petsc: at all."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    spec.steps, spec.petsc = [1.0], {"snes_linesearch_type": "bt", "snes_converged_reason": None, "snes_max_it": 30}
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    with h5py.File(tmp_path / "o" / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])["petsc"]
+    assert stored == {"snes_linesearch_type": "bt", "snes_converged_reason": None, "snes_max_it": "30"}

@@ -4,7 +4,8 @@ A study file (YAML)::
 
     kind: pareto                              # (the default; ``kind: stability`` is stability.py)
     name: bending                             # default: the file's stem
-    base: ../bending_neohookean.yaml          # the scene, relative to the study file
+    base: ../bending_neohookean.yaml          # the scene, relative to the study file (a bundle too;
+                                              #   not a load history: its steps are solved)
     probe: tip                                # quantity of interest: a probe of the base config,
     component: z                              #   x | y | z | norm of its displacement,
     level: 1.0                                #   at this load factor (default: the last step)
@@ -40,6 +41,7 @@ import yaml
 
 from ..io.files import prepare_output_dir
 from .. import yamlio
+from ..config.bundle import expand_bundle
 from ..config.specs import DEFAULT_AXIAL_POINTS, SectionSpec
 from ..physics.elements import DEFAULT_ELEMENT, ELEMENTS
 from ..errors import InputError
@@ -288,8 +290,15 @@ def load_base(path: str, key: str = "base") -> tuple[dict, str]:
     """The base config of a study file: (raw YAML, its directory)."""
     expect(os.path.isfile(path), key, f"file not found: {path} (relative to the study file)")
     raw = read_yaml(path, key)
-    expect(isinstance(raw, dict) and "beams" in raw and "steps" in raw, key,
-            f"{path} is not a model config (no beams/steps)")
+    if isinstance(raw, dict) and "bundle" in raw:    # its beams, loads and probes, as ancf-solve makes them
+        try:
+            raw = expand_bundle(raw)
+        except InputError as exc:
+            raise StudyError(key, f"{path}: {exc}") from None
+    expect(isinstance(raw, dict) and ("beams" in raw or "history" in raw), key,
+            f"{path} is not a model config (no beams or bundle)")
+    expect("steps" in raw, key, f"{path} follows a load history: a study solves a config's steps; "
+                                "give steps instead of history")
     return raw, os.path.dirname(os.path.abspath(path))
 
 

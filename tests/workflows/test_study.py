@@ -112,3 +112,34 @@ def test_study_file_errors_are_one_line_with_the_key(tmp_path, doc, words):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and words in lines[0], proc.stderr
     assert "Traceback" not in proc.stderr and math.isfinite(2.0)
+
+
+def test_a_bundle_is_a_scene_and_a_history_is_refused_by_name(tmp_path):
+    """A ``bundle:`` config (configs/bundle_hex7.yaml) was refused as 'is not a model config (no
+    beams/steps)', and so was a load history, though both are model configs.  A bundle is now
+    expanded as ancf-solve expands it (its probes 'centre' and 'outer'); a cell's value is the
+    single run's; a history is refused as a history."""
+    petsc_init()
+    from ancf_petsc.config.parse import load_config
+    from ancf_petsc.workflows.study import StudyError, load_study, run_study
+    from helpers import run_inline, load_raw
+    spec = load_study(_write(tmp_path, {
+        "kind": "pareto", "base": os.path.join(CONFIGS, "bundle_hex7.yaml"), "probe": "outer",
+        "component": "x", "grid": {"elements": [1]}, "reference": {"elements": 2},
+        "output": str(tmp_path / "out")}))
+    res = run_study(spec, log=lambda *_: None)
+    raw = load_raw("bundle_hex7.yaml")
+    raw["bundle"]["elements"] = 1
+    single = run_inline(raw, tmp_path / "single")["steps"][-1]["probes"]["outer"]["displacement"][0]
+    assert res["rows"][0].status == "completed" and res["rows"][0].value == pytest.approx(single, rel=1e-10)
+    hist = tmp_path / "hist.yaml"
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.pop("steps")
+    raw["history"] = {"table": {"time": [0.0, 1.0], "f": [10.0, 30.0]}}
+    raw["loads"][0]["column"] = "f"
+    hist.write_text(yaml.safe_dump(raw, sort_keys=False))
+    with pytest.raises(StudyError) as exc:
+        load_study(_write(tmp_path, {"kind": "pareto", "base": str(hist), "probe": "tip",
+                                     "grid": {"elements": [1]}}, name="h.yaml"))
+    assert exc.value.path == "base" and "follows a load history" in str(exc.value)
+    assert load_config(str(hist)).history is not None

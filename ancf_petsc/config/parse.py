@@ -90,11 +90,22 @@ def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
     check_curves(spec)
     check_scale(spec)
     check_increments(spec.solver, spec.steps)
-    if "predictor" not in (raw.get("solver") or {}):
-        spec.solver.predictor = default_predictor(spec)
-    if "section_update" not in (raw.get("solver") or {}):
-        spec.solver.section_update = default_section_update(spec)
+    for key, default in MODEL_DEFAULTS.items():
+        if key not in (raw.get("solver") or {}):
+            setattr(spec.solver, key, default(spec))
+            spec.solver.defaulted[key] = getattr(spec.solver, key)
     return spec
+
+
+def refresh_defaults(spec: ModelSpec) -> None:
+    """The solver keys the config left to the model (``MODEL_DEFAULTS``) chosen again for the
+    model as it is now: a neo-Hookean bar edited to GOH through the API kept the secant predictor,
+    where the GOH config parsed takes the tangent (the elastica: 412 Newton iterations against
+    288).  A value changed after parsing is kept."""
+    for key, parsed in spec.solver.defaulted.items():
+        if getattr(spec.solver, key) == parsed:
+            setattr(spec.solver, key, MODEL_DEFAULTS[key](spec))
+            spec.solver.defaulted[key] = getattr(spec.solver, key)
 
 
 def _per_beam_key(raw: Any) -> None:
@@ -138,6 +149,10 @@ def default_predictor(spec: ModelSpec) -> str:
     breakaway, a limit point near 90.11 N the secant's 10 N steps jump over; past it the answer
     depends on the increments whatever the predictor (docs/interface.md, Limits)."""
     return "tangent" if spec.history is not None or _fibres(spec) or spec.contact is not None else "secant"
+
+
+#: solver keys whose default depends on the model: the key -> its default for a spec
+MODEL_DEFAULTS = {"predictor": default_predictor, "section_update": default_section_update}
 
 
 def _steps(raw: dict, history) -> list[float]:

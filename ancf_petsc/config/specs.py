@@ -204,6 +204,9 @@ class SolverSpec:
                                           # more fade-band widths than this (0: no limit, the
                                           # default; contact/band_step.py)
     options_prefix: str = ""              # PETSc options prefix of this solve, e.g. left_ (-left_snes_type)
+    #: the keys parse_config chose by the model (predictor, section_update: parse.MODEL_DEFAULTS)
+    #: and their values then; a model edited after parsing takes its own (parse.refresh_defaults)
+    defaulted: dict = field(default_factory=dict)
 
 
 @dataclass

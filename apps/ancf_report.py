@@ -21,6 +21,8 @@ from apps.cli import Parser, path, positive, printer, say_stderr, started_by_mpi
 
 #: the configs shipped beside the command lines (a checkout or an editable install)
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
+#: the options that choose what to solve and how: none of them applies to --existing
+SOLVING = ("table1", "table2", "contact", "fit_bulk_modulus", "figures", "ranks", "jobs")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -41,8 +43,8 @@ def _main(argv: list[str] | None) -> int:
     ap = Parser(prog="ancf-report", allow_abbrev=False, description=__doc__,
                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=path, default="results/achilles_report", help="output directory")
-    ap.add_argument("--ranks", type=positive, default=1, help="MPI ranks per run")
-    ap.add_argument("--jobs", type=positive, default=1, help="runs at the same time")
+    ap.add_argument("--ranks", type=positive, help="MPI ranks per run (default 1)")
+    ap.add_argument("--jobs", type=positive, help="runs at the same time (default 1)")
     ap.add_argument("--table1", action="store_true")
     ap.add_argument("--table2", action="store_true")
     ap.add_argument("--contact", action="store_true",
@@ -54,6 +56,11 @@ def _main(argv: list[str] | None) -> int:
     ap.add_argument("--existing", type=path, nargs="+", metavar="RUN_DIR",
                     help="finished ancf-solve output directories to report on (no solving)")
     args = ap.parse_args(argv)
+    solving = [f"--{k.replace('_', '-')}" for k in SOLVING if getattr(args, k)]
+    if args.existing and solving:        # they were ignored, or solved runs beside the given ones
+        ap.error(f"--existing reports on finished runs and solves nothing (their figures are drawn "
+                 f"anyway): leave out {', '.join(solving)}; got --existing with {', '.join(solving)}")
+    args.ranks, args.jobs = args.ranks or 1, args.jobs or 1
     if started_by_mpirun("ancf-report", "it is one process that starts its runs itself (--ranks: ranks per run)"):
         return 2
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

@@ -163,6 +163,11 @@ OPTION_ERRORS = [
     (["ancf-report", "--existing="], "argument --existing: expected a path; got ''"),
     (["ancf-report", "--jobs", "-3", "--table1"], "argument --jobs: expected a positive integer; got -3"),
     (["ancf-report", "--ranks", "0", "--table1"], "argument --ranks: expected a positive integer; got 0"),
+    # solving options beside --existing were ignored (--ranks, --figures) or solved the paper's
+    # columns into --out beside the given runs (--table1, --fit-bulk-modulus), exit 0
+    (["ancf-report", "--existing", "run", "--ranks", "2"], "solves nothing (their figures are drawn "
+                                                           "anyway): leave out --ranks; got --existing with --ranks"),
+    (["ancf-report", "--existing", "run", "--table1", "--jobs", "2"], "leave out --table1, --jobs"),
     (["ancf-study", "s.yaml", "--output", "o"], "unknown option --output (did you mean --out?)"),
     (["ancf-study", "s.yaml", "--bogus"], "unknown option --bogus (PETSc options take one dash)"),
     (["ancf-study", "s.yaml", "-out", "o"], "-out: ancf-study's own options take two dashes (--out)"),

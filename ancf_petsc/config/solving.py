@@ -163,8 +163,9 @@ def parse_accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
     if "level" in value:
         acc.level = number(value["level"], f"{p}.level", positive=True)
         if not any(math.isclose(acc.level, s, rel_tol=1e-12) for s in steps):
-            raise ConfigError(f"{p}.level", f"must be one of the steps ({', '.join(f'{s:g}' for s in steps)})")
+            raise ConfigError(f"{p}.level", f"must be one of the steps ({', '.join(f'{s:g}' for s in steps)}); "
+                                            f"got {acc.level:g}")
     if acc.max_elements < 4 * acc.start:
         raise ConfigError(f"{p}.max_elements", "the ladder needs three rungs: use at least 4 x start "
-                                               f"(= {4 * acc.start})")
+                                               f"(= {4 * acc.start}); got {acc.max_elements}")
     return acc

@@ -58,8 +58,8 @@ def test_apply_sets_every_beam_and_keeps_the_rest():
 @pytest.mark.parametrize("accuracy,path,words", [
     ({"probe": "nope"}, "accuracy.probe", "no probe 'nope'"),
     ({"probe": "tip", "rtol": 0.0}, "accuracy.rtol", "must be > 0"),
-    ({"probe": "tip", "level": 0.33}, "accuracy.level", "must be one of the steps"),
-    ({"probe": "tip", "start": 4, "max_elements": 8}, "accuracy.max_elements", "three rungs"),
+    ({"probe": "tip", "level": 0.33}, "accuracy.level", "must be one of the steps (0.25, 0.5, 0.75, 1); got 0.33"),
+    ({"probe": "tip", "start": 4, "max_elements": 8}, "accuracy.max_elements", "(= 16); got 8"),
     ({"probe": "tip", "component": "w"}, "accuracy.component", "must be one of x, y, z, norm"),
     ({"probe": "tip", "section_order": "yes"}, "accuracy.section_order", "must be one of none, check"),
 ])

@@ -71,6 +71,10 @@ def _main(argv: list[str]) -> int:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     if started_by_mpirun("ancf-sweep", "it is one process that starts its runs itself (run.ranks: ranks per run)"):
         return 2
+    unread = [k for k in ("jobs", "ranks", "force") if args.collect and getattr(args, k)]
+    if unread or (args.slurm and args.jobs):   # else ignored: --collect runs nothing
+        parser.error(f"--{(unread or ['jobs'])[0]}: " + ("--collect only reads the runs' outputs: leave it out"
+                     if unread else "the local runs at once; the array's tasks at once are --throttle"))
     given = [k for k in SLURM_OPTIONS if getattr(args, k) is not None]
     if given and not args.slurm:          # else unread: a local run, --dry-run or --collect
         parser.error(f"--{given[0].replace('_', '-')}: a SLURM option, for the script of --slurm; "

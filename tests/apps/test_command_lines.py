@@ -180,6 +180,11 @@ OPTION_ERRORS = [
                                                   "the runs at once here are --jobs"),
     (["ancf-sweep", "s.yaml", "--dry-run", "--mem", "4G"], "--mem: a SLURM option, for the script of --slurm; "
                                                            "add --slurm, or leave it out"),
+    # run options that nothing reads were ignored: --collect runs nothing, --slurm's array has --throttle
+    (["ancf-sweep", "s.yaml", "--collect", "--ranks", "2"], "--ranks: --collect only reads the runs' outputs: leave it out"),
+    (["ancf-sweep", "s.yaml", "--collect", "--force"], "--force: --collect only reads the runs' outputs"),
+    (["ancf-sweep", "s.yaml", "--slurm", "--jobs", "4"], "--jobs: the local runs at once; the array's tasks at "
+                                                         "once are --throttle"),
 ]
 
 

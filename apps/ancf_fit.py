@@ -46,6 +46,10 @@ def _args(argv: list[str]):
     if args.ranks is not None and not args.slurm:    # else a fit on one rank, --ranks unread
         ap.error(f"--ranks {args.ranks}: sets the ranks of --slurm's array tasks; to solve here "
                  f"on {args.ranks} ranks, run mpirun -n {args.ranks} {PROG} {args.fit}")
+    if args.fresh and (args.slurm or args.collect):   # else unread by the tasks, or the merged logs dropped
+        ap.error("--fresh: " + ("the array's tasks go on from their logs, <output>/starts/K: remove those "
+                                "to start over" if args.slurm else "--collect would drop the logs it "
+                                "gathers and solve the fit here again: leave it out"))
     args.ranks = args.ranks or 1
     return args, petsc
 

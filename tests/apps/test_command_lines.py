@@ -176,6 +176,9 @@ OPTION_ERRORS = [
     (["ancf-fit", "f.yaml", "--ranks", "4"], "--ranks 4: sets the ranks of --slurm's array tasks; to solve "
                                              "here on 4 ranks, run mpirun -n 4 ancf-fit f.yaml"),
     (["ancf-fit", "f.yaml", "--slurm", "--ranks", "0"], "argument --ranks: expected a positive integer; got 0"),
+    # --fresh was unread by the array's tasks, and after --collect's merge dropped the starts' samples
+    (["ancf-fit", "f.yaml", "--slurm", "--fresh"], "--fresh: the array's tasks go on from their logs"),
+    (["ancf-fit", "f.yaml", "--collect", "--fresh"], "--fresh: --collect would drop the logs it gathers"),
     (["ancf-sweep", "s.yaml", "--throttle", "2"], "--throttle: a SLURM option, for the script of --slurm; "
                                                   "the runs at once here are --jobs"),
     (["ancf-sweep", "s.yaml", "--dry-run", "--mem", "4G"], "--mem: a SLURM option, for the script of --slurm; "

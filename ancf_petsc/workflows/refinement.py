@@ -113,8 +113,9 @@ def choose(values: list[float], rtol: float) -> tuple[int | None, list[float], E
             ex = Extrapolation(mean, math.nan, True, "plateau")
         else:
             return None, [math.nan] * len(values), ex
-    errs = [abs(v - ex.limit) / abs(ex.limit) if math.isfinite(v) and ex.limit != 0 else math.nan
-            for v in values]
+    scale = abs(ex.limit) or max(abs(v) for v in last)     # a limit 0 (a held component): the rungs' size
+    errs = [math.nan if not math.isfinite(v) else abs(v - ex.limit) / scale if scale else
+            (0.0 if v == ex.limit else math.inf) for v in values]
     for i, e in enumerate(errs):
         if i >= i3 - 2 and e <= rtol:       # trust the estimate only on the rungs it was fitted to
             return i, errs, ex

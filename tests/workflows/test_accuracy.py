@@ -44,6 +44,16 @@ def test_choose_picks_the_coarsest_rung_within_tolerance():
     assert choose([1.0, math.nan, 1.1, 1.2], 1e-2)[0] is None   # no three consecutive finite rungs
 
 
+def test_a_probe_component_held_at_zero_is_met_by_the_first_rungs():
+    """Three rungs of exactly 0 (the y of a gripped bundle's tip) were 'constant, limit 0' with
+    no error (relative to 0: nan), so no rung met rtol and the ladder ran on to max_elements."""
+    idx, errs, ex = choose([0.0, 0.0, 0.0], 1e-3)
+    assert ex.kind == "constant" and idx == 0 and errs == [0.0, 0.0, 0.0]
+    assert choose([1e-3, 0.0, 0.0, 0.0], 1e-3)[0] == 1
+    idx, errs, _ = choose([1.0 + 0.1 * 4.0 ** -k for k in range(3)], 1e-2)    # a limit not 0: as before
+    assert idx == 2 and errs[2] == pytest.approx(0.1 / 16, rel=1e-9)
+
+
 def test_apply_sets_every_beam_and_keeps_the_rest():
     raw = load_raw("achilles_type3_psi45.yaml")
     out = apply(raw, Discretisation(elements=2, axial_points=2, cubature_degree=4, element="3333"))

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..contact.laws import SlidingLaw, UnilateralLaw
 from .specs import DEFAULT_AXIAL_POINTS
-from .values import ConfigError, integer, mapping, number, string, vector
+from .values import ConfigError, integer, mapping, number, shown, string, vector
 
 MAX_RINGS = 20
 COUNTS = {1 + 3 * r * (r + 1): r for r in range(MAX_RINGS + 1)}     # fascicles → rings
@@ -150,7 +150,8 @@ def expand_bundle(raw: dict) -> dict:
     force = vector(b["force"], "bundle.force", 3)
     if b.get("pulled_end", "grip") == "grip" and any(force[1:]):
         raise ConfigError("bundle.force", "the grip (pulled_end: grip) holds the pulled ends' y and z: "
-                                          "give an axial force [F, 0, 0], or pulled_end: free")
+                                          "give an axial force [F, 0, 0], or pulled_end: free; "
+                                          f"got {shown(b['force'])}")
     for key in ("beams", "boundary_conditions", "loads"):
         if key in raw:
             raise ConfigError(key, "a bundle generates its beams, supports and loads; remove this key")

@@ -51,7 +51,7 @@ def test_circles_pair_facing_arcs():
     ({"material": {"model": "neo-hookean", "mu": 1e8}}, "bundle.material.bulk_modulus", "missing"),
     ({"element": "9999"}, "bundle.element", "one of"),
     ({"locking": "foo"}, "bundle.locking", "one of"),
-    ({"force": [10.0, 1.0, 0.0]}, "bundle.force", "give an axial force [F, 0, 0], or pulled_end: free"),
+    ({"force": [10.0, 1.0, 0.0]}, "bundle.force", "give an axial force [F, 0, 0], or pulled_end: free; got [10.0, 1.0, 0.0]"),
     ({"fascicle_section": "circle", "contact": {"mode": "sliding"}}, "contact.mode", "unilateral"),
     ({"fascicle_section": "circle", "contact": {"tangential": {"law": "elastic", "stiffness": 1e10}}},
      "contact.tangential", "coincide at rest"),

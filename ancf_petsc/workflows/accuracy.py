@@ -4,8 +4,8 @@ The model is solved on a ladder of meshes (every beam's element count scaled tog
 beam runs ``start``, 2·start, 4·start, … elements), each rung being the scene up to the probe's
 load level.  After every rung the last three finite rungs give a Richardson estimate of the
 converged probe (``refinement.choose``); the coarsest rung within ``rtol`` of it is chosen.  When
-the probe's level is the scene's last step, the chosen rung already is the full run and its
-files are adopted as the run's output; otherwise the scene is solved again with that element
+the probe's level is the scene's last step (or the scene follows a load history, whose rungs run
+every frame), the chosen rung already is the full run and its files are adopted as the run's output; otherwise the scene is solved again with that element
 count.  The rungs stay on disk under ``<output>/accuracy/``.
 """
 from __future__ import annotations
@@ -132,7 +132,7 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
             f"{errs[chosen]:.2e} <= {acc.rtol:g}; ladder {ladder_time:.2f} s")
     k = next((i for i, r in enumerate(rungs) if r["elements"] == n), None)    # None: n is no rung
     if k is not None and results[k].status in ("completed", "unstable") \
-            and level >= max(spec.steps) * (1 - 1e-12):
+            and (spec.history is not None or level >= max(spec.steps) * (1 - 1e-12)):   # a history's rung: every frame
         info["reused_rung"] = True          # the chosen rung is the whole scene: no second solve
         _adopt(os.path.join(spec.output.dir, "accuracy", f"elements_{n}"), spec.output.dir,
                {"accuracy": info}, comm)

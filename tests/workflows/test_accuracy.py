@@ -107,6 +107,7 @@ def test_a_load_historys_ladder_runs_its_frames(tmp_path):
     s = run_inline(raw, tmp_path)
     acc = s["accuracy"]
     assert acc["met"] and acc["chosen_elements"] == 1 and len(s["steps"]) == 3
+    assert acc["reused_rung"] is True            # the rung ran every frame: no second solve
     at_level = s["steps"][1]["probes"]["tip"]["displacement"][0]
     assert acc["ladder"][0]["value"] == pytest.approx(at_level, rel=1e-9)
 

@@ -46,7 +46,8 @@ from ..contact.laws import LAWS
 from ..physics.elements import ELEMENTS
 from ..physics.materials import NeoHookean
 from .refinement import Discretisation, apply, quantity
-from .study import Scene, StudyError, expect, parse_discretisation, parse_scene, read_yaml, solve_raw
+from .study import (Scene, StudyError, check_reference, expect, parse_discretisation, parse_scene, read_yaml,
+                    solve_raw)
 
 AXES = ("increment", "linesearch", "bulk_ratio", "contact", "element")
 PHYSICAL = ("bulk_ratio", "contact")     # change the model: one reference per value
@@ -132,7 +133,7 @@ def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> di
         res, summary = solve_raw(raw, spec.scene.base_dir, os.path.join(spec.output, "reference"))
         if res.status != "completed":
             raise StudyError("reference", f"the reference at {dict(phys)} did not converge: {res.message}")
-        refs[phys] = quantity(summary, spec.scene.probe, spec.scene.component)
+        refs[phys] = check_reference(spec.scene, quantity(summary, spec.scene.probe, spec.scene.component))
         log(f"[stability] reference {dict(phys)}: {spec.scene.probe} = {refs[phys]:.8g}")
     out = []
     for k, cell in enumerate(cells):

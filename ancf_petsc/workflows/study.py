@@ -216,6 +216,14 @@ def reference_value(scene: Scene, ref: Discretisation, extrapolate: bool, out_di
                             f"elements (observed order {ex.order:.2f})")
 
 
+def check_reference(scene: Scene, ref: float) -> float:
+    """The reference value, refused when it is 0: the errors are relative to it."""
+    expect(ref != 0.0, "component", f"the reference's {scene.probe} {scene.component} is 0 (a held or "
+                                    "symmetric component): errors relative to it are undefined; study "
+                                    f"another component or probe; got {scene.component}")
+    return ref
+
+
 def pareto_front(rows: list[Row]) -> list[int]:
     """Indices of the completed rows that no other completed row beats in both time and error."""
     ok = [i for i, r in enumerate(rows) if r.status == "completed" and math.isfinite(r.rel_error)]
@@ -255,6 +263,7 @@ def run_study(spec: StudySpec, log: Callable[[str], None] = print) -> dict:
     t0 = time.perf_counter()
     ref, ref_rows, ref_text = reference_value(spec.scene, spec.reference, spec.richardson,
                                               spec.output, log)
+    check_reference(spec.scene, ref)
     points = grid_points(spec.grid)
     rows = []
     for k, d in enumerate(points):

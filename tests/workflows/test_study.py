@@ -143,3 +143,19 @@ def test_a_bundle_is_a_scene_and_a_history_is_refused_by_name(tmp_path):
                                      "grid": {"elements": [1]}}, name="h.yaml"))
     assert exc.value.path == "base" and "follows a load history" in str(exc.value)
     assert load_config(str(hist)).history is not None
+
+
+@pytest.mark.parametrize("kind", ["pareto", "stability"])
+def test_a_reference_of_zero_is_refused_by_its_component(tmp_path, kind):
+    """bundle_hex7's outer tip y is held by the grip: its reference is 0 and every row's error
+    divided by it raised ZeroDivisionError (a traceback from ancf-study, exit 1)."""
+    petsc_init()
+    from ancf_petsc.workflows.stability import load_stability, run_stability
+    from ancf_petsc.workflows.study import StudyError, load_study, run_study
+    doc = {"kind": kind, "base": os.path.join(CONFIGS, "bundle_hex7.yaml"), "probe": "outer", "component": "y",
+           "reference": {"elements": 1}, "output": str(tmp_path / "out")}
+    doc.update({"grid": {"elements": [1]}} if kind == "pareto" else {"axes": {"linesearch": ["basic"]}})
+    load, run = (load_study, run_study) if kind == "pareto" else (load_stability, run_stability)
+    with pytest.raises(StudyError) as exc:
+        run(load(_write(tmp_path, doc)), log=lambda *_: None)
+    assert exc.value.path == "component" and "is 0" in exc.value.message and "got y" in exc.value.message

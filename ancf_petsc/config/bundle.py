@@ -210,6 +210,7 @@ def expand_bundle(raw: dict) -> dict:
             # leave each hexagon free to spin about its own axis (mid-edge points move tangentially)
             contact.setdefault("mode", SlidingLaw.name)
             contact.setdefault("curve_points", 2)
-            contact.setdefault("projection", {"axial": contact.get("axial_points", 3) - 1, "curve": 1})
+            # (along the beam: the contact default, capped by the elements' degree and linear under friction)
+            contact.setdefault("projection", {"curve": 1})
         out["contact"] = contact
     return out

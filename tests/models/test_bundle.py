@@ -81,6 +81,24 @@ def test_bundle_errors_name_the_bundle_keys(change, key, words):
 
 
 
+@pytest.mark.parametrize("contact,along", [
+    ({}, 2),                                                        # the shipped scenes: as before
+    ({"axial_points": 4}, 2),                                       # was 3: cubic, beyond 3363's degree
+    ({"tangential": {"law": "coulomb", "friction": 0.3}}, 1),       # was 2: friction reads p+ pointwise
+])
+def test_a_hexagon_bundles_pressure_along_follows_the_contact_default(contact, along):
+    """The bundle set contact.projection.axial to contact.axial_points - 1 itself, past the
+    default's caps (contact.default_axial): 4 contact points along gave a cubic pressure (richer
+    than 3363's displacements along, 9feca21), and Coulomb friction a quadratic one (the default
+    is linear under friction).  Now only the degree across (curve: 1) is the bundle's."""
+    from ancf_petsc.config.parse import parse_config
+    raw = {"name": "b", "geometry": {"length": 0.05, "twist_deg": 30.0}, "steps": [1.0],
+           "bundle": {"count": 7, "fascicle_section": "hexagon", "radius": 0.6e-3, "elements": 2,
+                      "force": [1.0, 0, 0], "material": {"model": "neo-hookean", "mu": 1e8, "bulk_modulus": 1e9}},
+           "contact": {"mode": "sliding", **contact}}
+    assert parse_config(raw).contact.projection == (along, 1)
+
+
 def test_a_bundle_follows_a_history_column():
     """With a load history a bundle was refused 'bundle.force: with history every load follows a
     column of history.table (e.g. column: 'f')', and bundle.column was an unknown key: a

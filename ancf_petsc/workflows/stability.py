@@ -45,6 +45,7 @@ from ..config.specs import LOCKING
 from ..contact.laws import LAWS
 from ..physics.elements import ELEMENTS
 from ..physics.materials import NeoHookean
+from ..status import CONFIG_ERROR
 from .refinement import Discretisation, apply, quantity
 from .study import (Scene, StudyError, check_reference, expect, parse_discretisation, parse_scene, read_yaml,
                     solve_raw)
@@ -131,6 +132,9 @@ def run_stability(spec: StabilitySpec, log: Callable[[str], None] = print) -> di
     for phys in dict.fromkeys(_physical(c) for c in cells):
         raw = apply(cell_config(spec.scene, dict(phys), 100), spec.reference)
         res, summary = solve_raw(raw, spec.scene.base_dir, os.path.join(spec.output, "reference"))
+        if res.reason_code == CONFIG_ERROR:      # the scene refuses this axis value (e.g. sliding circles)
+            raise StudyError("axes." + ", axes.".join(k for k, _ in phys) if phys else "reference",
+                             f"the scene refuses {dict(phys)}: {res.message}")
         if res.status != "completed":
             raise StudyError("reference", f"the reference at {dict(phys)} did not converge: {res.message}")
         refs[phys] = check_reference(spec.scene, quantity(summary, spec.scene.probe, spec.scene.component))

@@ -159,3 +159,19 @@ def test_a_reference_of_zero_is_refused_by_its_component(tmp_path, kind):
     with pytest.raises(StudyError) as exc:
         run(load(_write(tmp_path, doc)), log=lambda *_: None)
     assert exc.value.path == "component" and "is 0" in exc.value.message and "got y" in exc.value.message
+
+
+def test_an_axis_value_the_scene_refuses_is_named_by_its_axis(tmp_path):
+    """configs/bundle_circle7.yaml with axes.contact [sliding] (circles touch along lines only):
+    the reference's config error was reported as 'reference: the reference at {'contact':
+    'sliding'} did not converge: ...', a solver failure at a key the study file did not set."""
+    petsc_init()
+    from ancf_petsc.workflows.stability import load_stability, run_stability
+    from ancf_petsc.workflows.study import StudyError
+    spec = load_stability(_write(tmp_path, {
+        "kind": "stability", "base": os.path.join(CONFIGS, "bundle_circle7.yaml"), "probe": "outer",
+        "component": "x", "axes": {"contact": ["sliding"]}, "reference": {"elements": 1},
+        "output": str(tmp_path / "map")}))
+    with pytest.raises(StudyError) as exc:
+        run_stability(spec, log=lambda *_: None)
+    assert exc.value.path == "axes.contact" and "the scene refuses {'contact': 'sliding'}" in exc.value.message

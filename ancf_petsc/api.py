@@ -62,14 +62,16 @@ def check_edited(spec: ModelSpec) -> None:
     beam as it is now), its steps increase strictly (a spec edited to decreasing steps raised
     an UnboundLocalError in the load stepping; with a history they are its first frames), and its
     ``petsc`` options read as the config's ``petsc:`` (an edited {'snes_rtol': 'abc'} was PETSc's
-    refusal naming no key), its contact's pressure space fits the edited elements, and the solver
-    keys the config left to the model are the edited model's (config.parse.refresh_defaults).  Raises ConfigError, as the config itself would."""
+    refusal naming no key), its contact's pressure space fits the edited elements, its solver,
+    partition and output keys read as the config's (config.solving.check_edited_solver), and the
+    solver keys the config left to the model are the edited model's (config.parse.refresh_defaults).
+    Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
     from .config.conditions import parse_steps, resolve_nodes
     from .config.contact import check_edited_contact
     from .config.history import check_frames, check_history_edits
     from .config.parse import refresh_defaults
-    from .config.solving import parse_petsc
+    from .config.solving import check_edited_solver, parse_petsc
     from .physics.elements import ELEMENTS
     check_edited_beams(spec.beams)
     check_edited_contact(spec.contact, min(ELEMENTS[b.element].order for b in spec.beams))
@@ -77,6 +79,7 @@ def check_edited(spec: ModelSpec) -> None:
     spec.petsc = parse_petsc(spec.petsc)
     resolve_nodes(spec)
     spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
+    check_edited_solver(spec)
     check_history_edits(spec)
     _raw_as_solved(spec)
 
@@ -115,7 +118,7 @@ def _raw_as_solved(spec: ModelSpec) -> None:
 
 def _petsc_of(raw: dict) -> dict | None:
     """A config's ``petsc:`` as parsed (None where it does not parse)."""
-    from .config.solving import parse_petsc
+    from .config.solving import check_edited_solver, parse_petsc
     try:
         return parse_petsc(raw.get("petsc") or {})
     except ConfigError:

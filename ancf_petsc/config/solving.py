@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import re
 
@@ -84,6 +85,28 @@ def parse_solver(value) -> SolverSpec:
         if key in sv and not (nullable and sv[key] is None):
             setattr(solver, key, check(sv[key], f"solver.{key}"))
     return solver
+
+
+def check_edited_solver(spec) -> None:
+    """``solver``, ``partition`` and ``output`` changed on a parsed spec (the Python API) checked as
+    the config's: allow_unstable 'no' was taken as true, options_prefix '-left_' ended in a PETSc
+    error dump, max_increment 1e-9 ran until killed, predictor 'bogus' and partition 'bogus'
+    ran as defaults, output.vtk_samples 0 failed the run's first write."""
+    solver = spec.solver
+    for key, (check, nullable) in SOLVER_KEYS.items():
+        value = getattr(solver, key)
+        if not (nullable and value is None) and not (key == "options_prefix" and value == ""):
+            plain = int(value) if isinstance(value, numbers.Integral) and not isinstance(value, bool) else value
+            setattr(solver, key, check(plain, f"solver.{key}"))
+    check_increments(solver, spec.steps)
+    spec.partition = string(spec.partition, "partition.method", PARTITION_METHODS)
+    out = spec.output
+    if not isinstance(out.dir, (str, os.PathLike)):
+        raise ConfigError("output.dir", f"expected a directory path; got {shown(out.dir)}")
+    out.vtk = boolean(out.vtk, "output.vtk")
+    out.vtk_samples = integer(out.vtk_samples, "output.vtk_samples", lo=1, hi=64)
+    if out.vtk_compress is not None:
+        out.vtk_compress = boolean(out.vtk_compress, "output.vtk_compress")
 
 
 def parse_output(value, name: str) -> OutputSpec:

@@ -339,3 +339,24 @@ def test_an_edited_element_type_is_checked_against_the_contacts_pressure_space(t
                                              r"pressure functions across"):
         ap.solve(spec, log=lambda *_: None)
     assert not (tmp_path / "o").exists()
+
+
+
+@pytest.mark.parametrize("obj,key,value,message", [
+    ("solver", "allow_unstable", "no", r"solver\.allow_unstable: expected true or false; got 'no'"),   # ran as true
+    ("solver", "options_prefix", "-left_", r"solver\.options_prefix: a PETSc options prefix is"),   # PETSc error dump
+    ("solver", "max_increment", 1e-9, r"solver\.max_increment: 1e-09 would take 1e\+09 increments"),  # ran until killed
+    ("solver", "predictor", "bogus", r"solver\.predictor: must be one of none, secant, tangent; got 'bogus'"),
+    ("spec", "partition", "bogus", r"partition\.method: must be one of blocks, metis, beams; got 'bogus'"),
+    ("output", "vtk_samples", 0, r"output\.vtk_samples: must be >= 1; got 0"),   # failed at its first write
+], ids=["allow_unstable", "options_prefix", "max_increment", "predictor", "partition", "vtk_samples"])
+def test_edited_solver_and_output_keys_are_checked_as_the_configs(tmp_path, obj, key, value, message):
+    """solver, partition and output keys set on a parsed spec were taken unchecked: allow_unstable
+    'no' accepted unstable levels, options_prefix '-left_' stopped in PETSc's error dump ('Options
+    prefix should not begin with a hyphen'), max_increment 1e-9 ran until killed, predictor and
+    partition 'bogus' ran as others, vtk_samples 0 ended 'failed' at its first write."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    setattr(spec if obj == "spec" else getattr(spec, obj), key, value)
+    with pytest.raises(ap.ConfigError, match=message):
+        ap.solve(spec, log=lambda *_: None)
+    assert not (tmp_path / "o").exists()

@@ -50,7 +50,8 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
         if restart is not None:
             raise InputError("--restart", "a run with accuracy: chooses its mesh first; restart "
                                           "the chosen run's config instead")
-        from .workflows.accuracy import select_and_run
+        from .workflows.accuracy import check_rungs_carry, select_and_run
+        check_rungs_carry(spec)
         return select_and_run(spec, comm, log, run_model)
     return run_model(spec, comm, log, restart=restart)
 

@@ -18,6 +18,7 @@ import shutil
 import time
 
 from ..config.parse import parse_config
+from ..config.values import ConfigError
 from ..config.specs import ModelSpec
 from ..io.files import atomic_write
 from ..io.levels import gap_note, reported_at
@@ -37,6 +38,39 @@ def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> d
     for b in raw.get("beams", []):
         b["elements"] = max(1, int(round(b["elements"] * factor)))
     return raw
+
+
+#: what a rung takes from the spec itself, not from its config (``_scaled_raw``)
+_RUNG_OWN = ("raw", "output", "accuracy", "steps", "base_dir")
+
+
+def check_rungs_carry(spec: ModelSpec) -> None:
+    """The rungs are the config (``spec.raw``) parsed again: a spec changed after parsing (the
+    Python API) where the config does not say it (``api._raw_as_solved`` writes element counts,
+    materials, steps and PETSc options) would be solved unchanged, as the bending scene with
+    its loads halved was (tip 40.29 mm against 23.07 mm, 'completed').  ConfigError naming the
+    first such change."""
+    import dataclasses
+    import numpy as np
+    again = parse_config(spec.raw, base_dir=spec.base_dir)
+
+    def first(a, b, path: str) -> str | None:
+        if dataclasses.is_dataclass(a) and type(a) is type(b):
+            a, b = vars(a), vars(b)
+        if isinstance(a, dict) and isinstance(b, dict):
+            keys = list(a) + [k for k in b if k not in a]
+            return next((d for k in keys if (d := first(a.get(k), b.get(k), f"{path}.{k}"))), None)
+        if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)) and len(a) == len(b):
+            return next((d for i, (x, y) in enumerate(zip(a, b)) if (d := first(x, y, f"{path}[{i}]"))), None)
+        same = np.array_equal(a, b) if isinstance(a, np.ndarray) or isinstance(b, np.ndarray) else a == b
+        return None if same else path
+    found = next((d for k, v in vars(spec).items() if k not in _RUNG_OWN
+                  and (d := first(v, getattr(again, k), k))), None)
+    if found:
+        raise ConfigError("accuracy", f"the ladder's rungs are made from the config, and spec.{found} was "
+                                      "changed after parsing, which the config does not say: the change "
+                                      "would be ignored; write it into the config and parse that "
+                                      "(parse_config), or set spec.accuracy = None")
 
 
 def _adopt(rung_dir: str, out_dir: str, info: dict, comm) -> None:

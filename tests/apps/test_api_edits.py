@@ -360,3 +360,31 @@ def test_edited_solver_and_output_keys_are_checked_as_the_configs(tmp_path, obj,
     with pytest.raises(ap.ConfigError, match=message):
         ap.solve(spec, log=lambda *_: None)
     assert not (tmp_path / "o").exists()
+
+
+def test_an_edit_the_accuracy_ladder_would_not_see_is_refused(tmp_path):
+    """With accuracy: the rungs are the config parsed again: bending_neohookean with its load
+    halved on the spec solved the config's load, tip u_z 40.29 mm against the halved load's 23.07
+    mm, and 'completed'; so were an edited length and solver.predictor.  Now refused naming the
+    change, nothing written; an edit the stored config says (a material) still runs."""
+    from ancf_petsc.api import check_edited
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.workflows.accuracy import check_rungs_carry
+    raw = yaml.safe_load(open(f"{CONFIGS}/bending_neohookean.yaml"))
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 1e-2, "start": 2}
+    ap, _ = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
+    for edit, key in [(lambda s: setattr(s.loads[0], "force", tuple(0.5 * f for f in s.loads[0].force)),
+                       r"spec\.loads\[0\]\.force\[2\]"),
+                      (lambda s: setattr(s, "length", 2 * s.length), r"spec\.length"),
+                      (lambda s: setattr(s.solver, "predictor", "none"), r"spec\.solver\.predictor")]:
+        spec = parse_config(raw, base_dir=CONFIGS)
+        spec.output.dir = str(tmp_path / "o")
+        edit(spec)
+        with pytest.raises(ap.ConfigError, match=r"accuracy: the ladder's rungs are made from the config, and "
+                                                 + key + " was changed after parsing"):
+            ap.solve(spec, log=lambda *_: None)
+        assert not (tmp_path / "o").exists()
+    spec = parse_config(raw, base_dir=CONFIGS)
+    spec.beams[0].material["mu"] *= 2.0
+    check_edited(spec)
+    check_rungs_carry(spec)

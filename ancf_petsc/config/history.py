@@ -120,12 +120,17 @@ def check_scale(spec) -> None:
 def check_history_edits(spec) -> None:
     """A history edited through the Python API after parsing (``spec.history.scale = 1000``, a
     column changed) was ignored: the loads' curves were made from the table as parsed, and the
-    run solved those.  Raises ConfigError naming the first load or support whose column now
-    gives another curve."""
+    run solved those; so was a history removed (``spec.history = None``: the stride again, frame for
+    frame).  Raises ConfigError naming the first load or support whose column now gives another
+    curve or none."""
     items = [(ld, True) for ld in spec.loads] + [(bc, False) for bc in spec.boundary_conditions]
     for item, scaled in items:
-        if spec.history is None or item.column is None:
+        if item.column is None:
             continue
+        if spec.history is None:        # removed: its curves stayed, and the run was the history's
+            raise ConfigError("history", f"removed after parsing, but the curve of {item.path} was made from "
+                                         f"its column {item.column!r} and would still be followed; remove the "
+                                         "history and the loads' columns in the config and parse it again")
         if item.curve != spec.history.curve(item.column, f"{item.path}.column", scaled):
             raise ConfigError("history", f"edited after parsing (its scale or table): the curve of {item.path} "
                                          f"(column {item.column!r}) was made from the table as parsed, and the "

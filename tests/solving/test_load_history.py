@@ -416,11 +416,13 @@ def test_a_restart_with_another_clock_is_refused(tmp_path):
 
 
 
-@pytest.mark.parametrize("edit", ["scale", "column", "grip"])
+@pytest.mark.parametrize("edit", ["scale", "column", "grip", "removed"])
 def test_a_history_edited_after_parsing_is_refused_not_ignored(tmp_path, edit):
     """Through the Python API spec.history.scale = 1000 (a table in kN) was ignored: the loads'
     curves were made at parsing, and the bar was pulled by 0.01 and 0.045 N, 'completed'; so
-    was a column's value changed in place, for a load or a grip's displacement.  Now refused."""
+    was a column's value changed in place, for a load or a grip's displacement, and a history
+    removed (spec.history = None: the walking stride's first 2 frames at 1 element solved again
+    frame for frame, soleus u_x 0.13661 mm both).  Now refused."""
     from ancf_petsc.api import solve
     raw = load_raw("uniaxial_neohookean.yaml")
     raw.pop("steps")
@@ -432,6 +434,12 @@ def test_a_history_edited_after_parsing_is_refused_not_ignored(tmp_path, edit):
     spec = parse_config(raw, base_dir=CONFIGS)
     if edit == "scale":
         spec.history.scale = 1000.0
+    elif edit == "removed":
+        spec.history = None
+        with pytest.raises(ConfigError, match=r"^history: removed after parsing, but the curve of loads\[0\] "
+                                              r"was made from its column 'f' and would still be followed"):
+            solve(spec, log=lambda s: None)
+        return
     else:
         spec.history.columns["f" if edit == "column" else "d"][1] *= 2.0
     path = r"loads\[0\]" if edit != "grip" else r"boundary_conditions\[1\]"

@@ -25,6 +25,16 @@ def load_raw(name: str) -> dict:
         return yaml.safe_load(fh)
 
 
+def cantilever(steps, elements: int = 4) -> dict:
+    """configs/bending_neohookean.yaml (the clamped cantilever) at ``elements`` elements and
+    ``steps``, without ParaView files."""
+    raw = load_raw("bending_neohookean.yaml")
+    raw["beams"][0]["elements"] = elements
+    raw["steps"] = steps
+    raw["output"] = {"vtk": False}
+    return raw
+
+
 def petsc_init():
     from mpi4py import MPI  # noqa: F401
     import petsc4py

@@ -6,21 +6,13 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, load_raw, petsc_init, run_inline
-
-
-def _cantilever(steps):
-    raw = load_raw("bending_neohookean.yaml")
-    raw["beams"][0]["elements"] = 4
-    raw["steps"] = steps
-    raw["output"] = {"vtk": False}
-    return raw
+from helpers import CONFIGS, cantilever, load_raw, petsc_init, run_inline
 
 
 def test_a_cantilevers_root_moment_is_its_end_force_times_its_length(tmp_path):
     """A clamped neo-Hookean cantilever (L = 0.1 m) with a small end force P along z: the
     root's moment about y is P L to discretisation error; it was not written at all."""
-    raw = _cantilever([1e-3])
+    raw = cantilever([1e-3])
     P = raw["loads"][0]["traction_force"][2] * 1e-3
     s = run_inline(raw, tmp_path)
     M = np.array(s["steps"][-1]["reaction_moments"]["beam.0"])
@@ -55,7 +47,7 @@ def _moment_balance(config: dict, out) -> list[tuple[np.ndarray, float]]:
 def test_reaction_moments_balance_the_loads_in_large_bending(tmp_path):
     """The cantilever bent to 40 % of its length: the root moment balances the end traction's
     moment about the origin (its arm the deformed tip's) to 1e-10."""
-    raw = _cantilever([0.5, 1.0])
+    raw = cantilever([0.5, 1.0])
     run_inline(raw, tmp_path)
     for total, size in _moment_balance(raw, tmp_path):
         assert np.abs(total).max() < 1e-10 * size, (total, size)
@@ -91,7 +83,7 @@ def test_reaction_moments_on_two_ranks_are_the_serial_ones(tmp_path):
     """The cantilever clamped at its last node (owned by rank 1 on 2 ranks), pulled at its
     first: the support's force and moment equal the serial ones to 1e-9."""
     from helpers import assert_same_as_serial, run_on_ranks
-    raw = _cantilever([0.5, 1.0])
+    raw = cantilever([0.5, 1.0])
     raw["boundary_conditions"][0]["node"] = "last"
     raw["loads"][0]["node"] = "first"
     raw["probes"][0]["node"] = "first"

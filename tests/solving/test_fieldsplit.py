@@ -121,16 +121,21 @@ def test_substructured_schur_is_the_exact_inverse_on_several_ranks(tmp_path, ran
     assert negative == expected and null == 0
 
 
-def test_whole_beam_partition_balances_fascicles():
+def _bundle_model(name: str, elements: int):
+    """The model and contact of a shipped bundle config at ``elements`` elements per fascicle."""
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.contact import build_contact
     from ancf_petsc.model.build import build_model
-    from ancf_petsc.parallel.partition import make_layout
-    raw = load_raw("bundle_hex37.yaml")
-    raw["bundle"]["elements"] = 2
+    raw = load_raw(name)
+    raw["bundle"]["elements"] = elements
     spec = parse_config(raw, base_dir=CONFIGS)
     model = build_model(spec)
-    contact = build_contact(model, spec.contact, lambda *a: None)
+    return model, build_contact(model, spec.contact, lambda *a: None)
+
+
+def test_whole_beam_partition_balances_fascicles():
+    from ancf_petsc.parallel.partition import make_layout
+    model, contact = _bundle_model("bundle_hex37.yaml", 2)
     for size in (2, 3, 4):
         lay = make_layout(model, "beams", size, 0, contact)
         per_beam = [np.unique(lay.node_owner[b.node_offset + np.arange(b.n_nodes)]) for b in model.beams]
@@ -144,15 +149,8 @@ def test_whole_beam_partition_of_one_element_beams_is_quiet():
     was set to zero, and scipy printed a SparseEfficiencyWarning on every such run (the
     walking stride at 1 element on 4 ranks); now no warning and one whole beam per rank."""
     import warnings
-    from ancf_petsc.config.parse import parse_config
-    from ancf_petsc.contact import build_contact
-    from ancf_petsc.model.build import build_model
     from ancf_petsc.parallel.partition import make_layout
-    raw = load_raw("bundle_hex7.yaml")
-    raw["bundle"]["elements"] = 1
-    spec = parse_config(raw, base_dir=CONFIGS)
-    model = build_model(spec)
-    contact = build_contact(model, spec.contact, lambda *a: None)
+    model, contact = _bundle_model("bundle_hex7.yaml", 1)
     for size in (2, 7, 8):
         with warnings.catch_warnings():
             warnings.simplefilter("error")

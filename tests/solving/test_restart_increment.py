@@ -6,17 +6,9 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import load_raw
+from helpers import cantilever
 
 from solving.test_fade_switch import run
-
-
-def _cantilever(steps):
-    raw = load_raw("bending_neohookean.yaml")
-    raw["beams"][0]["elements"] = 4
-    raw["steps"] = steps
-    raw["output"] = {"vtk": False}
-    return raw
 
 
 def test_the_next_increment_of_a_restart_is_above_zero():
@@ -35,12 +27,12 @@ def test_the_next_increment_of_a_restart_is_above_zero():
 
 @pytest.mark.parametrize("increment", [0.0, -0.25, float("nan")])
 def test_a_restart_with_a_stored_increment_not_above_zero_goes_on(tmp_path, increment):
-    whole = run(_cantilever([0.5, 1.0]), tmp_path / "whole")
-    assert run(_cantilever([0.5]), tmp_path / "run").status == "completed"
+    whole = run(cantilever([0.5, 1.0]), tmp_path / "whole")
+    assert run(cantilever([0.5]), tmp_path / "run").status == "completed"
     with h5py.File(tmp_path / "run" / "results.h5", "a") as h5:
         h5["steps/step_0001/restart"].attrs["increment"] = increment
     said = []
-    res = run(_cantilever([0.5, 1.0]), tmp_path / "run", restart=str(tmp_path / "run"), log=said.append)
+    res = run(cantilever([0.5, 1.0]), tmp_path / "run", restart=str(tmp_path / "run"), log=said.append)
     assert res.status == "completed", res.message
     assert any("gives the next load increment" in s and "going on with 0.5" in s for s in said), said
     u = [np.array(s["steps"][-1]["probes"]["tip"]["displacement"]) for s in (res.summary, whole.summary)]

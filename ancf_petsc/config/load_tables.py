@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .values import ConfigError, number
+from .values import ConfigError, number, plain_number
 
 #: OpenSim storage files by extension (anything else is read as CSV)
 STORAGE = (".sto", ".mot")
@@ -162,15 +162,6 @@ def read_load_table(path: str, where: str) -> LoadTable:
                                          f"{field!r} is not a finite number")
             values[i - 1, j] = v
     return LoadTable(path, {h: values[:, j].copy() for j, h in enumerate(header)})
-
-
-def plain_number(field: str) -> float:
-    """A table cell's number, NaN if it is none: float() without its underscores between digits
-    ('1_0' is 10 to Python, a typing slip in a table of forces)."""
-    try:
-        return math.nan if "_" in field else float(field)
-    except ValueError:
-        return math.nan
 
 
 def inline_table(value: dict, where: str) -> LoadTable:

@@ -46,14 +46,22 @@ def mapping(value, path: str, required: tuple = (), optional: tuple = ()) -> dic
     return value
 
 
+def plain_number(field: str) -> float:
+    """A written number (a table cell, a quoted config value), NaN if it is none: float() without
+    its underscores between digits ('1_0' is 10 to Python, a typing slip in a table of forces)."""
+    try:
+        return math.nan if "_" in field else float(field)
+    except ValueError:
+        return math.nan
+
+
 def number(value, path: str, *, positive=False, nonneg=False, lo=None, hi=None,
            hint: str = "") -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         if isinstance(value, str):
-            try:
-                value = float(value)
-            except ValueError:
-                raise ConfigError(path, f"expected a number{hint}; got {shown(value)}") from None
+            text, value = value, plain_number(value)
+            if math.isnan(value) and text.strip().lower() not in ("nan", "+nan", "-nan"):
+                raise ConfigError(path, f"expected a number{hint}; got {shown(text)}")
         else:
             raise ConfigError(path, f"expected a number{hint}; got {shown(value)}")
     value = float(value)

@@ -67,7 +67,9 @@ def test_an_inline_table_reads_numbers_as_steps_do():
     assert np.array_equal(got.columns["soleus"], [1000.0, 2500.0])
     for bad, match in (("[1, nan]", r"history\.table\.soleus\[1\]: must be a finite number; got nan"),
                        ("[1, ten]", r"history\.table\.soleus\[1\]: expected a number; got 'ten'"),
-                       ("[1, true]", r"history\.table\.soleus\[1\]: expected a number; got True")):
+                       ("[1, true]", r"history\.table\.soleus\[1\]: expected a number; got True"),
+                       # quoted, '1_0' is a string float() reads as 10: refused as in a CSV cell
+                       ("[1, '1_0']", r"history\.table\.soleus\[1\]: expected a number; got '1_0'")):
         with pytest.raises(ConfigError, match=match):
             inline_table(yamlio.load(f"{{time: [0, 1], soleus: {bad}}}"), "history.table")
 

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ...config.load_tables import plain_number
+from ...config.values import plain_number
 from .errors import CalibrationError, expect, number
 from .quantities import QUANTITIES
 

@@ -375,3 +375,19 @@ def unilateral_stride_frames(first: int = 4, stop: int = 22) -> dict:
     raw["history"] = {"table": {"time": times[sel].tolist(), **{c: forces[c][sel].tolist() for c in OPENSIM_COLUMNS}}}
     raw["output"] = {"vtk": False}
     return raw
+
+
+def bundle_owners() -> dict:
+    """Element owners of bundle_hex37 (2 elements per fascicle) from METIS: whole beams on 2, 3
+    and 4 ranks, the element graph on 2 and 3 (parallel/partition.py)."""
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.parallel.partition import beam_owner, metis_owner
+    raw = load_raw("bundle_hex37.yaml")
+    raw["bundle"]["elements"] = 2
+    spec = parse_config(raw, base_dir=CONFIGS)
+    model = build_model(spec)
+    contact = build_contact(model, spec.contact, lambda *a: None)
+    return {"beams": [beam_owner(model, n, contact).tolist() for n in (2, 3, 4)],
+            "metis": [metis_owner(model, n, contact).tolist() for n in (2, 3)]}

@@ -10,6 +10,11 @@ with few cut couplings; ``layout_from_owner`` then renumbers the nodes rank by r
 """
 from __future__ import annotations
 
+import importlib
+import os
+import sys
+from types import ModuleType
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -57,15 +62,30 @@ def element_graph(model: Model, contact=None) -> tuple[np.ndarray, np.ndarray, n
     return G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data.astype(np.int64), vw
 
 
+def load_pymetis() -> ModuleType:
+    """pymetis, its METIS calls bound to its own METIS (64-bit indices).  Its ``METIS_*`` and
+    ``gk_*`` functions are exported, so a library already loaded with RTLD_GLOBAL took them over:
+    dolfinx (the solid references, ancf_verify) loads Debian's METIS 5.1 (32-bit) that way, and
+    pymetis imported after it segfaulted on the 64-bit arrays.  RTLD_DEEPBIND keeps its own."""
+    if "pymetis" in sys.modules:
+        return sys.modules["pymetis"]
+    flags = sys.getdlopenflags()
+    sys.setdlopenflags(os.RTLD_NOW | os.RTLD_LOCAL | os.RTLD_DEEPBIND)
+    try:
+        return importlib.import_module("pymetis")
+    finally:
+        sys.setdlopenflags(flags)
+
+
 def metis_owner(model: Model, size: int, contact=None) -> np.ndarray:
     """Element → rank from METIS (k-way); identical on every rank (METIS is deterministic)."""
     if size == 1:
         return np.zeros(model.n_elements, dtype=np.int64)
-    import pymetis
+    metis = load_pymetis()
     xadj, adjncy, ew, vw = element_graph(model, contact)
-    opts = pymetis.Options(seed=1)
-    adjacency = pymetis.CSRAdjacency(xadj.tolist(), adjncy.tolist())
-    _, parts = pymetis.part_graph(size, adjacency, vweights=vw.tolist(), eweights=ew.tolist(),
+    opts = metis.Options(seed=1)
+    adjacency = metis.CSRAdjacency(xadj.tolist(), adjncy.tolist())
+    _, parts = metis.part_graph(size, adjacency, vweights=vw.tolist(), eweights=ew.tolist(),
                                   options=opts)
     owner = np.asarray(parts, dtype=np.int64)
     if len(np.unique(owner)) < size:           # tiny graphs: METIS may leave a part empty
@@ -90,11 +110,11 @@ def beam_owner(model: Model, size: int, contact=None) -> np.ndarray:
     G.sort_indices()
     owner = None
     if n_beams > size:
-        import pymetis
-        adjacency = pymetis.CSRAdjacency(G.indptr.tolist(), G.indices.tolist())
-        _, parts = pymetis.part_graph(size, adjacency, vweights=bw.tolist(),
-                                      eweights=G.data.astype(np.int64).tolist(),
-                                      options=pymetis.Options(seed=1, ufactor=10))
+        metis = load_pymetis()
+        adjacency = metis.CSRAdjacency(G.indptr.tolist(), G.indices.tolist())
+        _, parts = metis.part_graph(size, adjacency, vweights=bw.tolist(),
+                                    eweights=G.data.astype(np.int64).tolist(),
+                                    options=metis.Options(seed=1, ufactor=10))
         owner = np.asarray(parts, dtype=np.int64)
     # the heaviest rank may carry at most one beam more than a perfect balance
     limit = bw.sum() / size + bw.max()

@@ -82,10 +82,16 @@ def _csv_points(text: str, path: str) -> np.ndarray:
 def read_point_list(path: str) -> RawOutline:
     """Points from a CSV/TXT or YAML file (see the module docstring); at least 3, all finite."""
     try:
-        with open(path, newline="") as fh:
-            text = fh.read()
+        with open(path, "rb") as fh:
+            data = fh.read()
     except OSError as exc:
         raise OutlineReadError(f"cannot read {file_name(path)} ({exc.strerror})") from None
+    try:        # Excel's "CSV UTF-8" starts with a BOM, which made the first point a header (dropped)
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise OutlineReadError(f"{file_name(path)} line {line}: byte {data[exc.start]:#04x} is not UTF-8 text; "
+                               "save the file as UTF-8 (e.g. Excel's 'CSV UTF-8')") from None
     P = _yaml_points(text, path) if path.lower().endswith(YAML_EXT) else _csv_points(text, path)
     if len(P) < 3:
         raise OutlineReadError(f"{file_name(path)} has {len(P)} points; an outline needs at least 3")

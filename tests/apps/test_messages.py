@@ -81,6 +81,23 @@ def test_matlab_row_ends_in_a_csv_outline_are_read(tmp_path, text):
         [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
 
 
+def test_a_csv_outline_with_a_byte_order_mark_keeps_its_first_point(tmp_path):
+    """Excel's 'CSV UTF-8' starts with a BOM: '\\ufeff0,0' was taken for a header and dropped, so a
+    4-point rectangle 6 x 3 mm became a triangle (18 -> 9 mm^2) with no word."""
+    from ancf_petsc.outline_formats.point_list import read_point_list
+    (tmp_path / "o.csv").write_bytes(b"\xef\xbb\xbf0,0\r\n6,0\r\n6,3\r\n0,3\r\n")
+    assert read_point_list(str(tmp_path / "o.csv")).points.tolist() == [[0, 0], [6, 0], [6, 3], [0, 3]]
+
+
+def test_a_csv_outline_that_is_not_utf8_is_one_line(tmp_path):
+    """A Latin-1 header 'y (\\xb5m)' stopped ancf-solve with a UnicodeDecodeError traceback."""
+    from ancf_petsc.outline_formats import OutlineReadError
+    from ancf_petsc.outline_formats.point_list import read_point_list
+    (tmp_path / "o.csv").write_bytes(b"y (\xb5m),z (\xb5m)\n0,0\n6,0\n6,3\n0,3\n")
+    with pytest.raises(OutlineReadError, match=r"o\.csv line 1: byte 0xb5 is not UTF-8 text; save the file as UTF-8"):
+        read_point_list(str(tmp_path / "o.csv"))
+
+
 def test_rejected_csv_lines_are_named(tmp_path):
     from ancf_petsc.outline_formats import OutlineReadError
     from ancf_petsc.outline_formats.point_list import read_point_list

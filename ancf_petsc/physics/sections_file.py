@@ -105,10 +105,14 @@ def load_sections_file(path: str | Path,
 
     p = Path(path)
     try:
-        text = p.read_text()
+        text = yamlio.read_text(str(p))
     except OSError as exc:
         raise SectionError(f"cannot read the sections file '{p}' ({exc.strerror}); "
                            "check the path") from None
+    except UnicodeDecodeError as exc:     # a Latin-1 comment stopped the run with a traceback
+        line = exc.object[:exc.start].count(b"\n") + 1
+        raise SectionError(f"the sections file '{p}' is not UTF-8 text (byte {exc.object[exc.start]:#04x} "
+                           f"on line {line}); save it as UTF-8") from None
     try:
         data = yamlio.load(text)
     except yaml.YAMLError as exc:

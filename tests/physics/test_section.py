@@ -336,3 +336,11 @@ def test_sections_file_errors(tmp_path):
         load_sections_file(unknown)
     with pytest.raises(SectionError):
         load_sections_file(tmp_path / "does_not_exist.yaml")
+
+
+def test_a_sections_file_that_is_not_utf8_is_a_section_error(tmp_path):
+    """A Latin-1 comment ('# trac\\xe9') stopped ancf-solve with a UnicodeDecodeError traceback."""
+    latin1 = tmp_path / "latin1.yaml"
+    latin1.write_bytes(b"# trac\xe9\n" + SECTIONS.read_bytes())
+    with pytest.raises(SectionError, match=r"latin1\.yaml' is not UTF-8 text \(byte 0xe9 on line 1\); save it as UTF-8"):
+        load_sections_file(latin1)

@@ -121,16 +121,36 @@ def resolve_twist_axis(spec: ModelSpec, beams: list[Beam], tendon) -> tuple[np.n
         a, how = b.section.centroid.copy(), f"centroid of {b.name}'s section at x = 0"
     else:
         names = [bs.section.loop for bs in spec.beams if _measured(bs)]
-        J = tendon.junctions(names) if tendon is not None and len(names) >= 2 else np.zeros((0, 2))
+        if tendon is None:          # outlines of a sections file or inline curves
+            J = outline_junctions(beams)
+        else:
+            J = tendon.junctions(names) if len(names) >= 2 else np.zeros((0, 2))
+            J = J + np.asarray(next((bs.section.center for bs in spec.beams if _measured(bs)), (0.0, 0.0)))
         if len(J) != 1:
             raise ConfigError("geometry.twist_axis", f"junction needs one point where all measured "
                               f"outlines meet; found {len(J)} (use centroid, a point [y, z] or "
-                              "{centroid_of: <beam>})")
-        centre = next(bs.section.center for bs in spec.beams if _measured(bs))
-        a, how = J[0] + np.asarray(centre), "junction of all outlines"
+                              "{centroid_of: <beam>}); got junction")
+        a, how = J[0], "junction of all outlines"
     default = " (default rule; set geometry.twist_axis to change it)" if spec.twist_default else ""
     return a, (f"twist axis: {how} at ({a[0] * 1e3:.4g}, {a[1] * 1e3:.4g}) mm{default}, "
                f"twist {spec.twist_deg:g} deg")
+
+
+def outline_junctions(beams: list[Beam]) -> np.ndarray:
+    """Points (k, 2), tendon frame, where a curve of every outline section ends: the triple point of
+    a sections file's loops (configs/data/achilles_type3_sections.yaml).  ``junction`` looked only
+    at geometry.sections, and on the paper's own file said 'found 0'."""
+    ends = [np.array([p for cv, _ in b.section.loop for p in (cv.start, cv.end)])
+            + b.section.shape_params.get("offset", 0.0) for b in beams if b.section.loop is not None]
+    if len(ends) < 2:
+        return np.zeros((0, 2))
+    tol = 1e-9 * max(float(np.ptp(e, axis=0).max()) for e in ends)
+    out: list[np.ndarray] = []
+    for p in ends[0]:
+        if all(np.linalg.norm(e - p, axis=1).min() <= tol for e in ends[1:]) and \
+                not any(np.linalg.norm(p - q) <= tol for q in out):
+            out.append(p)
+    return np.array(out).reshape(-1, 2)
 
 
 def _varying_rules(beam: Beam, tendon, bs, length: float) -> None:

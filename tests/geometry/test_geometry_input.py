@@ -293,6 +293,17 @@ def test_type3_in_the_geometry_format_gives_the_same_model():
     assert any("twist axis: junction of all outlines" in ln for ln in new.geometry_report)
 
 
+def test_junction_of_a_sections_files_loops_is_its_triple_point():
+    # twist_axis: junction on the paper's own sections file (loops of shared curves, no
+    # geometry.sections) said 'junction needs one point where all measured outlines meet; found 0'
+    raw = load_raw("achilles_type3_psi45.yaml")
+    old = build_model(parse_config(copy.deepcopy(raw), CONFIGS))
+    raw["geometry"]["twist_axis"] = "junction"
+    new = build_model(parse_config(raw, CONFIGS))
+    assert np.allclose(new.q0, old.q0, rtol=0, atol=1e-15)   # the triple point given by hand
+    assert any("twist axis: junction of all outlines at (5.896, -2.984) mm" in ln for ln in new.geometry_report)
+
+
 def test_twist_axis_rules_and_stated_default():
     raw = load_raw("geometry_mask_demo.yaml")
     spec = parse_config(copy.deepcopy(raw), CONFIGS)

@@ -162,6 +162,13 @@ def douglas_peucker(P: np.ndarray, eps: float) -> np.ndarray:
     return np.flatnonzero(keep)
 
 
+def _to_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance from q to the segment ab."""
+    e = b - a
+    s = float(np.clip((q - a) @ e / max(float(e @ e), np.finfo(float).tiny), 0.0, 1.0))
+    return float(np.linalg.norm(q - a - s * e))
+
+
 def self_intersection(P: np.ndarray, tol: float) -> np.ndarray | None:
     """A point where the closed polyline crosses or touches itself, or None."""
     hit = first_self_intersection(P, tol)
@@ -170,8 +177,9 @@ def self_intersection(P: np.ndarray, tol: float) -> np.ndarray | None:
     a, b = P[hit[0]], P[(hit[0] + 1) % len(P)]
     c, d = P[hit[1]], P[(hit[1] + 1) % len(P)]
     M = np.column_stack([b - a, c - d])
-    if abs(np.linalg.det(M)) <= 1e-300:                 # parallel (touching): a shared point
-        return c
+    if abs(np.linalg.det(M)) <= 1e-300:     # parallel, touching: the end nearest the other segment
+        ends = [(q, c, d) for q in (a, b)] + [(q, a, b) for q in (c, d)]   # (not c: a segment away)
+        return min(ends, key=lambda e: _to_segment(*e))[0]
     s = np.linalg.solve(M, c - a)[0]
     return a + np.clip(s, 0.0, 1.0) * (b - a)
 

@@ -79,6 +79,10 @@ def write_files(tmp):
 CASES = [
     ("self-intersecting", config(inline({"a": {"points": [[0, 0], [2, 2], [2, 0], [0, 2]]}})),
      "geometry.sections.outlines.a", "crosses itself near (1.000, 1.000) mm"),
+    # two squares traced as one loop touching at (3, 3): the message said near (3.000, 6.000) mm
+    ("pinched at a point", config(inline({"a": {"points": [[0, 0], [3, 0], [3, 3], [6, 3], [6, 6], [3, 6], [3, 3],
+                                                           [0, 3]]}})),
+     "geometry.sections.outlines.a", "crosses itself near (3.000, 3.000) mm"),
     # points on one line: 'too small for a tendon: check units: mm (in m the outlines would enclose 0 mm^2)'
     ("outline on a line", config(inline({"a": {"points": [[0, 0], [1, 0], [2, 0]]}})),
      "geometry.sections.outlines.a", "the outline encloses no area: its 3 points lie on one line"),

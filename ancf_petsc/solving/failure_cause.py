@@ -34,6 +34,7 @@ CAUSES = {
     "newton_budget_exceeded": "the run spent solver.max_newton_iterations",
     "newton_budget": "a solve ran out of a -snes_max_it given below the run's own budget",
     "unreachable_tolerance": "a -snes_atol given below 20 x the residual's rounding floor: Newton cannot reach it",
+    "step_tolerance": "a -snes_stol given above the run's own ended solves on the step length before |F| was small",
     "rounding_noise": "|F| is at the residual's rounding at the failing state, above the run's absolute "
                       "tolerance (stiff terms magnify the rounding of the positions)",
     "petsc_error": "PETSc or an external package raised an error (e.g. MUMPS could not factor the tangent)",

@@ -169,6 +169,14 @@ def given_stol(solver) -> str:
             f"small beside the state: leave it out or give at most {own:g}")
 
 
+def stalled_text(solver) -> str:
+    """Why a solve that stopped on its step length failed: |F| above the tolerance, and a
+    -snes_stol given above the run's own (the final message too: -snes_stol 1e-2 on
+    configs/uniaxial_neohookean.yaml ended 'with STALLED_ABOVE_TOLERANCE' and no word of it)."""
+    return (f" (stopped on the step length with |F| {solver.stalled_at:.2e} above the tolerance "
+            f"{solver.snes.getTolerances()[1]:.1e}{given_stol(solver)})")
+
+
 def unreachable_atol(solver) -> Detail | None:
     """A -snes_atol (command line or ``petsc:``) below ``reachable_tolerance``: the cause of a
     solve stalled above it (-snes_atol 1e-14 on configs/bending_neohookean.yaml, floor 4.9e-11:
@@ -194,6 +202,8 @@ def failure_detail(solver, reason: int) -> Detail:
                    if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)
     if unreachable is not None:
         return unreachable
+    if reason == STALLED_STEP and given_stol(solver):
+        return Detail(stalled_text(solver), "step_tolerance")
     if reason == VIOLATED_STATE:
         return Detail(" (the solves converged on active sets with a multiplier pulling or a gap penetrating "
                       "at their states, which are no answers of unilateral contact)", "violated_state")

@@ -49,8 +49,7 @@ JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.Converged
 def _attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_negative) -> str:
     """What went wrong with a failed sub-step, for its cut-back line in the log."""
     if reason == STALLED_STEP:
-        return (f" (stopped on the step length with |F| {solver.stalled_at:.2e} above the "
-                f"tolerance {solver.snes.getTolerances()[1]:.1e}{solver_messages.given_stol(solver)})")
+        return solver_messages.stalled_text(solver)
     if reason == UNSTABLE_STEP:
         return f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
     if reason == VIOLATED_STATE:

@@ -26,6 +26,11 @@ def _yaml_points(text: str, path: str) -> np.ndarray:
         raise OutlineReadError(f"{file_name(path)} is not valid YAML"
                                + (f" ({problem})" if problem else "")) from None
     if isinstance(data, dict) and "points" in data:
+        extra = [str(k) for k in data if k not in ("points", "description")]
+        if extra:     # axes: [y, -z] beside the points was ignored: the section came out mirrored
+            raise OutlineReadError(f"{file_name(path)} holds points (and a description) only; its "
+                                   f"{', '.join(extra)} would not be read: units and axes belong to the geometry "
+                                   "description that names the file; remove them here")
         data = data["points"]
     for k, pair in enumerate(data if isinstance(data, list) else []):
         bad = [v for v in (pair if isinstance(pair, list) else []) if isinstance(v, bool)

@@ -118,6 +118,19 @@ def test_an_underscore_in_a_csv_outline_number_is_refused(tmp_path):
         read_point_list(str(tmp_path / "o.csv"))
 
 
+def test_a_yaml_outline_file_with_keys_beside_its_points_is_refused(tmp_path):
+    """axes: [y, -z] and units: um beside the points of a YAML point file were not read: the
+    triangle came out with its centroid at z = +1 mm instead of -1 mm (mirrored), with no word."""
+    from ancf_petsc.outline_formats import OutlineReadError
+    from ancf_petsc.outline_formats.point_list import read_point_list
+    (tmp_path / "o.yaml").write_text("axes: [y, -z]\nunits: um\npoints: [[0, 0], [4, 0], [0, 3]]\n")
+    with pytest.raises(OutlineReadError, match=r"o\.yaml holds points \(and a description\) only; its axes, units "
+                                               r"would not be read"):
+        read_point_list(str(tmp_path / "o.yaml"))
+    (tmp_path / "d.yaml").write_text("description: traced 2026\npoints: [[0, 0], [4, 0], [0, 3]]\n")
+    assert read_point_list(str(tmp_path / "d.yaml")).points.tolist() == [[0, 0], [4, 0], [0, 3]]
+
+
 @pytest.mark.parametrize("points,bad", [("[[0, 0], [1, 0], [1, yes], [0, 1]]", "True"),
                                         ("[[0, 0], ['1_0', 0], [1, 1], [0, 1]]", "'1_0'")])
 def test_a_yaml_outline_point_that_is_no_number_is_refused(tmp_path, points, bad):

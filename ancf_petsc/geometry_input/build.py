@@ -93,6 +93,11 @@ def _close(P: np.ndarray, closed: bool, name: str, src: GeometrySource) -> np.nd
     elif not closed:
         steps = np.linalg.norm(np.diff(P, axis=0), axis=1)
         if gap > 3.0 * float(np.median(steps)):
+            past = pl.self_intersection(P, 1e-9 * size)   # traced past its start: not 'trace it all the way round'
+            if past is not None:
+                raise src.err(f"outlines.{name}", f"the outline runs past its start: it crosses itself near "
+                              f"{_fmt_mm(past)} and ends at {_fmt_mm(P[-1])}, {gap * 1e3:.3f} mm from its start "
+                              f"{_fmt_mm(P[0])}; remove the points traced beyond the start")
             raise src.err(f"outlines.{name}", f"the outline is open: it starts at {_fmt_mm(P[0])} and ends "
                           f"at {_fmt_mm(P[-1])}, {gap * 1e3:.3f} mm apart (points are {np.median(steps) * 1e3:.3f} mm "
                           "apart); trace it all the way round (repeat the first point at the end)")

@@ -88,6 +88,10 @@ CASES = [
      "geometry.sections.outlines.a", "the outline encloses no area: its 3 points lie on one line"),
     ("open outline", config(inline({"a": {"points": disc()[:25]}})),
      "geometry.sections.outlines.a", "the outline is open"),
+    # traced 1.1 times round: 'the outline is open ... trace it all the way round (repeat the first point)'
+    ("traced past its start", config(inline({"a": {"points": [[4 * float(np.cos(t)), 4 * float(np.sin(t))]
+                                                              for t in np.linspace(0.0, 2.2 * np.pi, 111)]}})),
+     "geometry.sections.outlines.a", "the outline runs past its start: it crosses itself near"),
     ("wrong orientation of a curve", config(inline(
         {"a": {"curves": ["base", "right", "left"]}},
         curves={"base": [[0, 0], [2, 0]], "right": [[1, 2], [1.8, 1], [2, 0]], "left": [[1, 2], [0, 0]]})),

@@ -7,9 +7,9 @@ from petsc4py import PETSc
 from ..config.specs import SolverSpec
 from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
-from ..linalg.database import option
 from ..linalg.options import DEFAULT_OPTIONS, factor_package, solver_options
 from .failure_cause import Detail
+from .given_options import given_cause, given_option
 from .records import STALLED_STEP, VIOLATED_STATE
 
 
@@ -145,38 +145,6 @@ def reachable_tolerance(solver) -> float:
     return 20.0 * getattr(solver, "rounding_floor", 0.0)
 
 
-def given_option(solver, name: str):
-    """The value of the PETSc option ``name`` the run was given (the command line under the
-    solver's prefix, else the config's ``petsc:``), or None where the run's own default holds."""
-    given = option(name, getattr(solver, "prefix", ""))
-    return getattr(solver, "petsc_options", {}).get(name) if given is None else given
-
-
-def given_stol(solver) -> str:
-    """For a solve stopped on its step length: a -snes_stol given (command line or ``petsc:``)
-    above the run's own, which ends solves before |F| is small (-snes_stol 1e-3 on
-    configs/bending_neohookean.yaml: 3 497 Newton iterations in 399 sub-steps instead of 36, and
-    no word of it); empty otherwise."""
-    given = given_option(solver, "snes_stol")
-    own = float(DEFAULT_OPTIONS.get("snes_stol", 1e-12))
-    try:
-        given = float(given)
-    except (TypeError, ValueError):
-        return ""
-    if given <= own:
-        return ""
-    return (f"; -snes_stol {given:g}, given in the run's options, ends a solve when a step is that "
-            f"small beside the state: leave it out or give at most {own:g}")
-
-
-def stalled_text(solver) -> str:
-    """Why a solve that stopped on its step length failed: |F| above the tolerance, and a
-    -snes_stol given above the run's own (the final message too: -snes_stol 1e-2 on
-    configs/uniaxial_neohookean.yaml ended 'with STALLED_ABOVE_TOLERANCE' and no word of it)."""
-    return (f" (stopped on the step length with |F| {solver.stalled_at:.2e} above the tolerance "
-            f"{solver.snes.getTolerances()[1]:.1e}{given_stol(solver)})")
-
-
 def unreachable_atol(solver) -> Detail | None:
     """A -snes_atol (command line or ``petsc:``) below ``reachable_tolerance``: the cause of a
     solve stalled above it (-snes_atol 1e-14 on configs/bending_neohookean.yaml, floor 4.9e-11:
@@ -200,10 +168,9 @@ def failure_detail(solver, reason: int) -> Detail:
         return Detail(linear_solver_detail(solver, reason), "linear_solver")
     unreachable = (unreachable_atol(solver)
                    if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)
+    unreachable = unreachable or given_cause(solver, reason)
     if unreachable is not None:
         return unreachable
-    if reason == STALLED_STEP and given_stol(solver):
-        return Detail(stalled_text(solver), "step_tolerance")
     if reason == VIOLATED_STATE:
         return Detail(" (the solves converged on active sets with a multiplier pulling or a gap penetrating "
                       "at their states, which are no answers of unilateral contact)", "violated_state")

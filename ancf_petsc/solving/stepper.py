@@ -23,6 +23,7 @@ from ..petsc.problem import Problem, unclean
 from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
+from .given_options import stalled_text
 from .continuity import jump_detail, residual_jump
 from .failure_cause import Detail, give_up_cause, with_critical_point
 from .interrupt import RunInterrupted, stop_requested
@@ -49,7 +50,7 @@ JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.Converged
 def _attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_negative) -> str:
     """What went wrong with a failed sub-step, for its cut-back line in the log."""
     if reason == STALLED_STEP:
-        return solver_messages.stalled_text(solver)
+        return stalled_text(solver)
     if reason == UNSTABLE_STEP:
         return f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
     if reason == VIOLATED_STATE:

@@ -1,0 +1,81 @@
+"""PETSc options given in a run's options (its command line under the solver's prefix, else its
+config's ``petsc:``) that explain a failed solve: a -snes_stol above the run's own, a -snes_type
+other than Newton, a -snes_linesearch_damping below 1 (solver_messages.failure_detail)."""
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+from ..linalg.database import option
+from ..linalg.options import DEFAULT_OPTIONS
+from .failure_cause import Detail
+from .records import STALLED_STEP
+
+
+def given_option(solver, name: str):
+    """The value of the PETSc option ``name`` the run was given (the command line under the
+    solver's prefix, else the config's ``petsc:``), or None where the run's own default holds."""
+    given = option(name, getattr(solver, "prefix", ""))
+    return getattr(solver, "petsc_options", {}).get(name) if given is None else given
+
+
+def given_stol(solver) -> str:
+    """For a solve stopped on its step length: a -snes_stol given (command line or ``petsc:``)
+    above the run's own, which ends solves before |F| is small (-snes_stol 1e-3 on
+    configs/bending_neohookean.yaml: 3 497 Newton iterations in 399 sub-steps instead of 36, and
+    no word of it); empty otherwise."""
+    given = given_option(solver, "snes_stol")
+    own = float(DEFAULT_OPTIONS.get("snes_stol", 1e-12))
+    try:
+        given = float(given)
+    except (TypeError, ValueError):
+        return ""
+    if given <= own:
+        return ""
+    return (f"; -snes_stol {given:g}, given in the run's options, ends a solve when a step is that "
+            f"small beside the state: leave it out or give at most {own:g}")
+
+
+def stalled_text(solver) -> str:
+    """Why a solve that stopped on its step length failed: |F| above the tolerance, and a
+    -snes_stol given above the run's own (the final message too: -snes_stol 1e-2 on
+    configs/uniaxial_neohookean.yaml ended 'with STALLED_ABOVE_TOLERANCE' and no word of it)."""
+    tol, method = solver.snes.getTolerances()[1], given_method(solver)
+    if method:                                  # ksponly stops after its linear step
+        return f" (|F| {solver.stalled_at:.2e} above the tolerance {tol:.1e}: {method})"
+    return f" (stopped on the step length with |F| {solver.stalled_at:.2e} above the tolerance {tol:.1e}{given_stol(solver)})"
+
+
+#: the failed solves whose cause a method given in the run's options is (``given_method``)
+NEWTON_STOPS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH,
+                PETSc.SNES.ConvergedReason.DIVERGED_DTOL)
+#: the nonlinear methods that take the tangent's Newton step
+NEWTON_TYPES = ("newtonls", "newtontr", "vinewtonrsls", "vinewtonssls")
+
+
+def given_method(solver) -> str:
+    """A -snes_type other than Newton, or a -snes_linesearch_damping below 1, given in the run's
+    options: the cause of its failed solves (on configs/uniaxial_neohookean.yaml ksponly ended
+    'with STALLED_ABOVE_TOLERANCE', damping 0.5 was called 'a nearly singular tangent', ngmres
+    'the tangent does not predict the residual'); empty otherwise."""
+    kind = solver.snes.getType()
+    if kind not in NEWTON_TYPES and given_option(solver, "snes_type") is not None:
+        what = ("takes one linear step per solve and stops" if kind == "ksponly"
+                else "is not Newton's method and did not converge here")
+        return f"-snes_type {kind}, given in the run's options, {what}: leave it out (newtonls, the default)"
+    try:
+        damping = float(given_option(solver, "snes_linesearch_damping"))
+    except (TypeError, ValueError):
+        return ""
+    if damping >= 1.0 or solver.linesearch == "none":      # newtontr: no line search
+        return ""
+    return (f"-snes_linesearch_damping {damping:g}, given in the run's options, shortens every Newton step "
+            f"to {damping:g} of itself, so |F| falls only linearly: leave it out (1, whole steps)")
+
+
+def given_cause(solver, reason: int) -> Detail | None:
+    """The cause of a failed solve (SNES ``reason``) that an option given in the run's options
+    is, as a failure message's part (failure_cause codes step_tolerance, nonlinear_method)."""
+    if reason == STALLED_STEP and given_stol(solver):
+        return Detail(stalled_text(solver), "step_tolerance")
+    method = given_method(solver) if reason in (STALLED_STEP, *NEWTON_STOPS) else ""
+    return Detail(f" ({method})", "nonlinear_method") if method else None

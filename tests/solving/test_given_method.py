@@ -1,0 +1,36 @@
+"""A -snes_type other than Newton or a -snes_linesearch_damping below 1, given in the run's options,
+is named as the cause of the failure it brings: on the uniaxial bar ksponly ended 'with
+STALLED_ABOVE_TOLERANCE' and no word, damping 0.5 was blamed on 'a nearly singular tangent, as near
+a limit or bifurcation point', ngmres on 'the tangent does not predict the residual'."""
+import pytest
+
+from helpers import load_raw, read_summary, solve_cli, write_config
+
+
+@pytest.mark.parametrize("options, named", [
+    (["-snes_type", "ksponly"], "-snes_type ksponly, given in the run's options, takes one linear step"),
+    (["-snes_type", "ngmres"], "-snes_type ngmres, given in the run's options, is not Newton's method"),
+    (["-snes_linesearch_damping", "0.5"], "-snes_linesearch_damping 0.5, given in the run's options"),
+    (["-snes_linesearch_damping", "0.5", "-snes_linesearch_type", "bt"], "-snes_linesearch_damping 0.5, given"),
+])
+def test_a_given_nonlinear_method_is_named_in_the_failure_it_causes(tmp_path, options, named):
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.1]
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=options + ["--quiet"])
+    assert p.returncode == 3, p.stdout + p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert named in line and "singular tangent" not in line and "does not predict" not in line, line
+    assert read_summary(tmp_path / "out")["failure_cause"] == "nonlinear_method"
+
+
+def test_a_damping_of_one_and_newtontr_are_not_blamed(tmp_path):
+    """Damping 1 is the default's whole step; newtontr has no line search to damp (the option is
+    reported unused) and solves the bar."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.1]
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    for options in (["-snes_linesearch_damping", "1"], ["-snes_type", "newtontr", "-snes_linesearch_damping", "0.5"]):
+        p = solve_cli(cfg, extra=options + ["--quiet"])
+        assert p.returncode == 0 and read_summary(tmp_path / "out")["status"] == "completed", p.stderr

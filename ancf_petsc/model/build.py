@@ -5,10 +5,12 @@ The numbering and the Model/Beam types are in beams.py.
 """
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from ..config.specs import ModelSpec, SectionSpec
-from ..config.values import ConfigError
+from ..config.values import ConfigError, shown
 from ..physics import element3363 as el
 from ..physics.cubature import gauss_legendre
 from ..physics.elements import element
@@ -48,6 +50,20 @@ def _share_inline_curves(loop, named: set, registry: dict, path: str):
     return out
 
 
+def _sections_file(path: str, spline_degree: int):
+    """A sections file, read once per version: the cache was keyed on the path alone, so a file
+    edited between two builds in one process (the API, a notebook) kept its first curves."""
+    try:
+        st = os.stat(path)
+        stamp: tuple = (st.st_mtime_ns, st.st_size)
+    except OSError:
+        stamp = ()                                # load_sections_file says what is wrong
+    key = (path, spline_degree)
+    if key not in _SECTIONS_FILE_CACHE or _SECTIONS_FILE_CACHE[key][0] != stamp:
+        _SECTIONS_FILE_CACHE[key] = (stamp, load_sections_file(path, spline_degree))
+    return _SECTIONS_FILE_CACHE[key][1]
+
+
 def build_section(spec: SectionSpec, path: str, registry: dict | None = None,
                   tendon=None) -> Section:
     """Build a beam's cross-section; section problems become ConfigErrors at ``path``.
@@ -63,10 +79,7 @@ def build_section(spec: SectionSpec, path: str, registry: dict | None = None,
         if spec.shape == "rectangle":
             return make_rectangle(spec.size, spec.center, spec.cubature_degree)
         if spec.file is not None:
-            key = (spec.file, spec.spline_degree)
-            if key not in _SECTIONS_FILE_CACHE:
-                _SECTIONS_FILE_CACHE[key] = load_sections_file(spec.file, spec.spline_degree)
-            sf = _SECTIONS_FILE_CACHE[key]
+            sf = _sections_file(spec.file, spec.spline_degree)
             if spec.loop not in sf.loops:
                 raise ConfigError(f"{path}.loop", f"no loop {spec.loop!r} in {spec.file}; "
                                   f"available: {', '.join(sf.loops)}")
@@ -224,6 +237,17 @@ def _interpolated(bc, beam: Beam, vector: int, comp: int, value: float) -> None:
                           f"got {value:g}")
 
 
+def _check_load_on_support(ld, beam: Beam, first_dof: int, spec: ModelSpec, supports: list[Support]) -> None:
+    """A load on a component of r that a support holds goes into that support's reaction: refused,
+    naming the component and the support (it said only 'the load pushes on a fixed component')."""
+    for c in (c for c in range(3) if ld.force[c] != 0.0):
+        for bc, support in zip(spec.boundary_conditions, supports):
+            if first_dof + c in support.dofs:
+                raise ConfigError(f"{ld.path}.{ld.kind}", f"{beam.name} node {ld.node if ld.given is None else ld.given}: "
+                                  f"r.{'xyz'[c]} is held by {bc.path} ({bc.name!r}), whose reaction would take this "
+                                  f"load; load another node or free that component; got {shown(list(ld.force))}")
+
+
 def build_model(spec: ModelSpec) -> Model:
     """Assemble the replicated model description from a validated spec."""
     beams: list[Beam] = []
@@ -308,10 +332,7 @@ def build_model(spec: ModelSpec) -> Model:
             # uniform dead traction t = F / A over the end section: f_k = t ∫ m_k dA
             moments = _end_moments(beam, tendon, spec.beams[ld.beam], beam.x_nodes[ld.node])
             f_ext[D * node:D * node + D] += np.outer(moments, force).ravel()
-        loaded = [D * node + c for c in range(3) if force[c] != 0.0]
-        if np.any(np.isin(loaded, fixed_dofs)):
-            raise ConfigError(ld.path, "the load pushes on a fixed component of r at this node; "
-                                       "load another node or free that component")
+        _check_load_on_support(ld, beam, D * node, spec, supports)
 
     probes = {p.name: (beams[p.beam].node_offset + p.node,
                        _end_moments(beams[p.beam], tendon, spec.beams[p.beam], beams[p.beam].x_nodes[p.node])

@@ -338,6 +338,28 @@ def test_sections_file_errors(tmp_path):
         load_sections_file(tmp_path / "does_not_exist.yaml")
 
 
+def test_a_sections_file_edited_between_two_builds_is_read_again(tmp_path):
+    """build_model cached a sections file by its path: with scale_m_per_px doubled between two
+    builds in one process (the API, a notebook) the soleus kept 16.49 mm^2 instead of 65.96."""
+    import os
+
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.model.build import build_model
+    f = tmp_path / "t3.yaml"
+    f.write_text(SECTIONS.read_text())
+    raw = {"name": "x", "geometry": {"length": 0.02}, "steps": [1.0],
+           "beams": [{"name": "b", "elements": 1, "section": {"shape": "outline", "file": str(f), "loop": "soleus"},
+                      "material": {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 1e7}}]}
+    before = build_model(parse_config(raw)).beams[0].section.area
+    text = SECTIONS.read_text()
+    scale = text.split("scale_m_per_px:")[1].split()[0]
+    f.write_text(text.replace(f"scale_m_per_px: {scale}", f"scale_m_per_px: {2 * float(scale)!r}"))
+    st = os.stat(f)
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    after = build_model(parse_config(raw)).beams[0].section.area
+    assert after / before == pytest.approx(4.0, rel=1e-12)
+
+
 def test_a_sections_file_that_is_not_utf8_is_a_section_error(tmp_path):
     """A Latin-1 comment ('# trac\\xe9') stopped ancf-solve with a UnicodeDecodeError traceback."""
     latin1 = tmp_path / "latin1.yaml"

@@ -71,7 +71,14 @@ CASES = [
      "loads[0].node", "end section"),
     ("units", _set(["units"], "mm"), "units", "SI"),
     ("petsc nested", _set(["petsc"], {"snes": {"rtol": 1}}), "petsc.snes", "scalars"),
-    ("load on fixed", _set(["boundary_conditions", 0, "node"], "last"), "loads[0]", "fixed"),
+    # it said only 'loads[0]: the load pushes on a fixed component of r at this node'
+    ("load on fixed", _set(["boundary_conditions", 0, "node"], "last"), "loads[0].traction_force",
+     "bar node last: r.x is held by boundary_conditions[0] ('bar.2'), whose reaction would take this load; "
+     "load another node or free that component; got [45.0, 0.0, 0.0]"),
+    ("point force on a roller",
+     lambda raw: (raw["boundary_conditions"].append({"beam": "bar", "node": -1, "name": "roller", "fix": {"r": "z"}}),
+                  raw["loads"].__setitem__(0, {"beam": "bar", "node": "last", "force": [45.0, 0.0, 1.0]})),
+     "loads[0].force", "bar node last: r.z is held by boundary_conditions[1] ('roller')"),
     ("self-intersecting outline", _set(["beams", 0, "section"], BOWTIE), "beams[0].section", "intersect"),
     ("even spline degree", _set(["beams", 0, "section"], dict(BOWTIE, spline_degree=6)),     # was a traceback
      "beams[0].section.spline_degree", "must be one of 1, 2, 3, 5, 7: interpolating splines of even degree"),

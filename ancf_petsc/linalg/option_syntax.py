@@ -57,6 +57,9 @@ REALS = {
     "ksp_rtol": 0.0, "ksp_atol": 0.0, "ksp_divtol": None, "pc_factor_shift_amount": 0.0,
     "pc_factor_zeropivot": 0.0, "pc_factor_fill": 0.0, "pc_hypre_boomeramg_strong_threshold": 0.0,
 }
+#: reals PETSc's Set...Tolerances refuse from this value up ("Relative tolerance 1. must be
+#: non-negative and less than 1.0"): -snes_rtol 1 ran a level, then stopped in a traceback, exit 1
+REALS_BELOW = {"snes_rtol": 1.0, "ksp_rtol": 1.0}
 #: integers with the smallest value that makes sense (PETSc parses them with strtol)
 INTS = {
     "snes_max_it": 0, "snes_max_funcs": -1, "snes_max_fail": 0, "snes_max_linear_solve_fail": 0,
@@ -210,6 +213,9 @@ def check_value(name: str, value: str | None) -> str | None:
         lo = REALS.get(base, None)
         if lo is not None and x == x and x < lo:
             return f"must be >= {lo:g}; got {value}"
+        hi = REALS_BELOW.get(base)
+        if hi is not None and x == x and x >= hi:
+            return f"a relative tolerance must be below {hi:g} (PETSc refuses it); got {value}"
         return None
     n = parse_int(value)
     if n is None:

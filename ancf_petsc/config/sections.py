@@ -24,7 +24,9 @@ from .values import ConfigError, integer, key_path, mapping, number, sequence, s
 
 __all__ = ["OutlineSource", "GeometrySource", "SectionsSpec", "parse_sections", "UNITS"]
 
-UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
+#: micrometres as um, the micro sign (U+00B5) or the Greek mu (U+03BC), which look alike: units: μm was
+#: refused as "must be one of m, mm, um, µm, px; got 'μm'"
+UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6}
 AXIS_NAMES = ("y", "-y", "z", "-z")
 NOT_GEOMETRY = ("length", "length_m", "material", "materials", "c10", "c10_MPa", "mu",
                 "bulk_modulus", "twist_deg", "twist_axis", "triple_point_px", "scale_m_per_px")
@@ -92,7 +94,7 @@ def _abs(path: str, base_dir: str) -> str:
 
 def _length_with_unit(value, path: str) -> float:
     """'0.05 mm' / '20 um' / '1.2e-5 m' → metres."""
-    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-zµ]+)\s*", str(value)) if isinstance(value, str) else None
+    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-z\u00b5\u03bc]+)\s*", str(value)) if isinstance(value, str) else None
     if m is None or m.group(2) not in UNITS:
         raise ConfigError(path, f"expected a length with its unit, e.g. '0.05 mm' (units: m, mm, um); "
                                 f"got {shown(value)}")

@@ -54,6 +54,18 @@ def test_csv_disc_area_and_centroid(tmp_path):
     assert 8 <= ctrl <= 30                                  # decimated from 90 points
 
 
+@pytest.mark.parametrize("mu", ["\u00b5", "\u03bc"])           # the micro sign and the Greek mu look alike
+def test_micrometres_written_with_either_mu(mu):
+    """units: \u03bcm (Greek mu, U+03BC) was refused as "must be one of m, mm, um, \u00b5m, px; got
+    '\u03bcm'", the two spellings indistinguishable on screen; pixel_size: 50 \u03bcm likewise."""
+    sq = [[0, 0], [3000, 0], [3000, 2000], [0, 2000]]
+    assert section(station({"units": f"{mu}m", "axes": ["y", "z"], "outlines": {"a": sq}}), "a").area == \
+        pytest.approx(6e-6, rel=1e-12)
+    spec = parse_sections({"units": "px", "pixel_size": f"50 {mu}m", "axes": "image", "outlines": {"a": sq}},
+                          "geometry.sections", ".", 0.05)
+    assert spec.stations[0][1].scale == pytest.approx((5e-5, 5e-5), rel=1e-12)
+
+
 def test_yaml_ellipse_with_declared_axes(tmp_path):
     a, b, rot, c = 4.0, 2.5, np.deg2rad(30.0), np.array([0.5, 1.0])      # file coordinates, mm
     th = np.linspace(0.0, 2 * np.pi, 200, endpoint=False)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from ..linalg.database import option
-from ..linalg.options import DEFAULT_OPTIONS
+from ..linalg.options import DEFAULT_OPTIONS, SolverOptionError
 from .failure_cause import Detail
 from .records import STALLED_STEP
 
@@ -79,3 +79,36 @@ def given_cause(solver, reason: int) -> Detail | None:
         return Detail(stalled_text(solver), "step_tolerance")
     method = given_method(solver) if reason in (STALLED_STEP, *NEWTON_STOPS) else ""
     return Detail(f" ({method})", "nonlinear_method") if method else None
+
+
+
+def first_load(loads, levels: list[float]) -> tuple[float, float]:
+    """(λ, Σ_g |m_g(λ)| ‖f_g‖) of the first of ``levels`` with a load (petsc/loading.AppliedLoads),
+    an upper bound of |F| at rest there; (0, 0) where a prescribed displacement moves first or
+    nothing loads (collective: the vectors' norms)."""
+    norms, moving = [f.norm() for f in loads.forces], [u.norm() > 0.0 for u in loads.moves]
+    for lam in levels:
+        m = loads.multipliers(lam)
+        if any(mk != 0.0 and mv for mk, mv in zip(m, moving)):
+            return 0.0, 0.0
+        size = float(sum(abs(mk) * n for mk, n in zip(m, norms)))
+        if size > 0.0:
+            return lam, size
+    return 0.0, 0.0
+
+
+def check_given_atol(solver, levels: list[float]) -> None:
+    """A -snes_atol given at or above |F| at rest at the first loaded level: the unloaded state
+    meets it there, and the level is accepted without a Newton step (the paper's tendon at 2
+    elements: -snes_atol 150 reported 100 N at zero displacement, 'completed'; -snes_atol 1000
+    100 N at rest and 400 N 'passed over' at rest).  Refused (exit 2) with the run's own."""
+    try:
+        given = float(given_option(solver, "snes_atol"))
+    except (TypeError, ValueError):
+        return
+    lam, size = first_load(solver.problem.loads, levels)
+    if 0.0 < size <= given:
+        raise SolverOptionError("", f"PETSc option -snes_atol {given:g}: at or above the loads of the first "
+                                    f"level (load factor {lam:g}, {size:.4g} N): the unloaded state meets it, so "
+                                    "the level would be accepted without a Newton step; give a tolerance well "
+                                    f"below the loads, or leave it out (the run's own is {solver.own_atol:.1e})")

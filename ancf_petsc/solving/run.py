@@ -15,7 +15,6 @@ from petsc4py import PETSc
 
 from .. import status as st
 from ..config.specs import ModelSpec
-from ..errors import InputError
 from ..io.derived import displacement_differences, interface_pairs
 from ..io.subtendons import subtendon_report
 from ..io.files import DirectoryLock, OutputError, prepare_output_dir
@@ -32,13 +31,14 @@ from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
 from ..petsc.reactions import reaction_entries
 from . import solver_messages, step_over
+from .given_options import check_given_atol
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
 from .records import LoadStepFailure, PathState, restart_increment, restored_records, spent_before
 from .restart_check import check_restart_state
 from .stepper import LoadStepper
-from .supports import free_rigid_motions
+from .supports import check_supports
 
 
 @dataclass
@@ -106,15 +106,6 @@ def _fmt_vec(v) -> str:
     return "[" + ", ".join(f"{x:+.4e}" for x in v) + "]"
 
 
-def _check_supports(problem: Problem) -> None:
-    """One input error naming the beams and motions the supports and contact leave free."""
-    free = free_rigid_motions(problem)
-    if free:
-        held = " (frictionless contact lets beams slide along each other)" if problem.contact else ""
-        raise InputError("boundary_conditions", "nothing holds " + "; ".join(free) + held
-                         + "; add supports so that no beam can move as a rigid body")
-
-
 class Run:
     """The objects of one solve (built in the PETSc stage "ANCF setup"; collective)."""
 
@@ -142,9 +133,10 @@ class Run:
                                                self.linear[0], self.contact is None or self.contact.symmetric))
             self.stepper = None
             if point is None:
-                _check_supports(self.problem)
+                check_supports(self.problem)
             self.stepper = LoadStepper(self.problem, spec.solver, spec.petsc, say,
                                        max_level=max(spec.steps), linear=self.linear[0])
+            check_given_atol(self.stepper.solver, spec.steps)
         except BaseException:
             self.destroy()
             raise

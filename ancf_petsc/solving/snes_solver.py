@@ -104,7 +104,7 @@ class SNESSolver:
         # (zero in exact arithmetic; ``floor``: the replaced solver's, not re-measured mid-run, fade_switch.py)
         self.load_norm = problem.loads.scale(max_level)
         self.rounding_floor = rounding_floor(problem) if floor is None else floor
-        atol = absolute_tolerance(self.load_norm, self.rounding_floor)
+        atol = self.own_atol = absolute_tolerance(self.load_norm, self.rounding_floor)
         self.petsc_options = petsc_options
         self._history: list[float] = []        # residual norms of the current SNES solve
         self.trail = IterateTrail()             # its last iterates: a failed level's jump scan

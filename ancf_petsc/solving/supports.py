@@ -20,6 +20,7 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 
 from ..contact.laws import HELD
+from ..errors import InputError
 from ..physics.rigid import rigid_modes
 
 #: a combination of unit modes is free when its constraint violation (held DOFs in metres or
@@ -64,6 +65,15 @@ def _row_beams(P) -> tuple[np.ndarray, np.ndarray]:
         mine = (dofs >= 0) & (dofs < len(out))
         out[dofs[mine]] = ends[mine]
     return owner, out
+
+
+def check_supports(problem) -> None:
+    """One input error naming the beams and motions the supports and contact leave free."""
+    free = free_rigid_motions(problem)
+    if free:
+        held = " (frictionless contact lets beams slide along each other)" if problem.contact else ""
+        raise InputError("boundary_conditions", "nothing holds " + "; ".join(free) + held
+                         + "; add supports so that no beam can move as a rigid body")
 
 
 def free_rigid_motions(problem) -> list[str]:

@@ -34,3 +34,21 @@ def test_a_damping_of_one_and_newtontr_are_not_blamed(tmp_path):
     for options in (["-snes_linesearch_damping", "1"], ["-snes_type", "newtontr", "-snes_linesearch_damping", "0.5"]):
         p = solve_cli(cfg, extra=options + ["--quiet"])
         assert p.returncode == 0 and read_summary(tmp_path / "out")["status"] == "completed", p.stderr
+
+
+def test_an_atol_the_unloaded_state_meets_is_refused(tmp_path):
+    """-snes_atol at or above |F| at rest at the first loaded level: the level was accepted at
+    rest, without a Newton step (the paper's tendon at 2 elements with -snes_atol 150: 100 N at
+    zero displacement, 'completed'); refused before anything is written, exit 2."""
+    raw = load_raw("uniaxial_neohookean.yaml")         # 4.5 N at the first level, 0.1
+    raw["steps"] = [0.1, 1.0]
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    p = solve_cli(cfg, extra=["-snes_atol", "5", "--quiet"])
+    lines = [s for s in p.stderr.splitlines() if s.startswith("ancf-solve:")]
+    assert p.returncode == 2 and len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert lines[0].startswith("ancf-solve: PETSc option -snes_atol 5: at or above the loads of the first "
+                               "level (load factor 0.1, 4.5 N)"), lines[0]
+    assert not (tmp_path / "out" / "summary.json").exists() and not (tmp_path / "out" / "results.h5").exists()
+    p = solve_cli(cfg, extra=["-snes_atol", "1", "--quiet"])        # loose, but below the loads
+    assert p.returncode == 0 and read_summary(tmp_path / "out")["steps"][0]["iterations"] > 0, p.stderr

@@ -13,7 +13,7 @@ from ..config.specs import ModelSpec, SectionSpec
 from ..config.values import ConfigError, shown
 from ..physics import element3363 as el
 from ..physics.cubature import gauss_legendre
-from ..physics.elements import element
+from ..physics.elements import ELEMENTS, element
 from ..physics.geometry import reference_nodal_vectors
 from ..physics.laws import make_material
 from ..physics.section import Section, make_circle, make_ellipse, make_outline, make_rectangle
@@ -267,8 +267,10 @@ def build_model(spec: ModelSpec) -> Model:
     block = element(spec.beams[0].element).block
     for i, bs in enumerate(spec.beams):
         if element(bs.element).block != block:
-            raise ConfigError(f"beams[{i}].element", f"element {bs.element} has another node block than "
-                              f"{spec.beams[0].element} (beams[0]); the beams of one model share their node layout")
+            same = " or ".join(repr(n) for n, e in ELEMENTS.items() if e.block == block)
+            raise ConfigError(f"beams[{i}].element", f"has another node block than {spec.beams[0].element} "
+                              f"(beams[0].element): the beams of one model share their node layout; give "
+                              f"{same} here, or the same element to every beam; got {bs.element!r}")
         section = build_section(bs.section, f"beams[{i}].section", registry, tendon)
         _check_sides(section, i, bs.section, beams)
         x_nodes = np.linspace(0.0, spec.length, block.nodes_of(bs.elements))

@@ -142,6 +142,18 @@ def test_ecm_is_refused_with_the_measured_reason(name):
     assert msg.startswith("beams[0].locking:") and "'none' or 'mixed'" in msg and "\n" not in msg
 
 
+def test_beams_of_other_node_blocks_are_refused_with_the_fix():
+    """33103 beside 3363 said 'element 3363 has another node block than 33103 (beams[0]); the
+    beams of one model share their node layout', without the value to give or the one given."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    raw["beams"][0]["element"] = "33103"
+    with pytest.raises(ConfigError) as err:
+        _model(raw)
+    msg = str(err.value)
+    assert msg.startswith("beams[1].element: has another node block than 33103") and "\n" not in msg
+    assert msg.endswith("give '33103' here, or the same element to every beam; got '3363'")
+
+
 @pytest.mark.parametrize("name", ORDERS)
 @pytest.mark.parametrize("law", ["neo-hookean mixed", "goh none", "goh mixed"])
 def test_jacobian_matches_finite_differences(name, law):

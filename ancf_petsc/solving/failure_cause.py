@@ -34,8 +34,9 @@ CAUSES = {
     "newton_budget_exceeded": "the run spent solver.max_newton_iterations",
     "newton_budget": "a solve ran out of a -snes_max_it given below the run's own budget",
     "unreachable_tolerance": "a -snes_atol given below 20 x the residual's rounding floor: Newton cannot reach it",
-    "nonlinear_method": "a -snes_type other than Newton or a -snes_linesearch_damping below 1 was given in "
-                        "the run's options and did not converge",
+    "nonlinear_method": "a -snes_type other than Newton, a -snes_lag_jacobian or -snes_lag_preconditioner "
+                        "other than 1, or a -snes_linesearch_damping below 1 was given in the run's options "
+                        "and did not converge",
     "step_tolerance": "a -snes_stol given above the run's own ended solves on the step length before |F| was small",
     "rounding_noise": "|F| is at the residual's rounding at the failing state, above the run's absolute "
                       "tolerance (stiff terms magnify the rounding of the positions)",

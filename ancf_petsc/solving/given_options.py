@@ -53,8 +53,8 @@ NEWTON_TYPES = ("newtonls", "newtontr", "vinewtonrsls", "vinewtonssls")
 
 
 def given_method(solver) -> str:
-    """A -snes_type other than Newton, or a -snes_linesearch_damping below 1, given in the run's
-    options: the cause of its failed solves (on configs/uniaxial_neohookean.yaml ksponly ended
+    """A -snes_type other than Newton, a lagged Jacobian or preconditioner, or a
+    -snes_linesearch_damping below 1, given in the run's options: the cause of its failed solves (on configs/uniaxial_neohookean.yaml ksponly ended
     'with STALLED_ABOVE_TOLERANCE', damping 0.5 was called 'a nearly singular tangent', ngmres
     'the tangent does not predict the residual'); empty otherwise."""
     kind = solver.snes.getType()
@@ -62,6 +62,13 @@ def given_method(solver) -> str:
         what = ("takes one linear step per solve and stops" if kind == "ksponly"
                 else "is not Newton's method and did not converge here")
         return f"-snes_type {kind}, given in the run's options, {what}: leave it out (newtonls, the default)"
+    lagged = [(name, lag) for name in ("snes_lag_jacobian", "snes_lag_preconditioner")
+              if (lag := _integer(given_option(solver, name))) not in (None, 1)]
+    if lagged:               # -2 on the elastica: 'a nearly singular tangent, as near a limit point'
+        name, lag = lagged[0]
+        return (f"-{name} {lag}, given in the run's options, keeps an old tangent over Newton's iterations, "
+                "so its steps do not follow the residual: leave it out (solver.reuse_tangent takes chord "
+                "steps only where they converge)")
     try:
         damping = float(given_option(solver, "snes_linesearch_damping"))
     except (TypeError, ValueError):
@@ -70,6 +77,14 @@ def given_method(solver) -> str:
         return ""
     return (f"-snes_linesearch_damping {damping:g}, given in the run's options, shortens every Newton step "
             f"to {damping:g} of itself, so |F| falls only linearly: leave it out (1, whole steps)")
+
+
+def _integer(value) -> int | None:
+    """An option's integer value, or None (not given, or not an integer)."""
+    try:
+        return int(value)
+    except (TypeError, ValueError):
+        return None
 
 
 def given_cause(solver, reason: int) -> Detail | None:

@@ -24,6 +24,19 @@ def test_a_given_nonlinear_method_is_named_in_the_failure_it_causes(tmp_path, op
     assert read_summary(tmp_path / "out")["failure_cause"] == "nonlinear_method"
 
 
+@pytest.mark.parametrize("option", ["snes_lag_jacobian", "snes_lag_preconditioner"])
+def test_a_lagged_tangent_is_named_in_the_failure_it_causes(tmp_path, option):
+    """-snes_lag_jacobian -2 on the elastica: 'Newton converges only linearly here ... a nearly
+    singular tangent, as near a limit or bifurcation point' at load factor 0.00059 of 0.2."""
+    raw = load_raw("elastica_svk.yaml")
+    raw["steps"] = [0.2]
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=[f"-{option}", "-2", "--quiet"])
+    line = p.stderr.strip().splitlines()[-1]
+    assert p.returncode == 3 and f"(-{option} -2, given in the run's options, keeps an old tangent" in line, line
+    assert "singular tangent" not in line and read_summary(tmp_path / "out")["failure_cause"] == "nonlinear_method"
+
+
 def test_a_damping_of_one_and_newtontr_are_not_blamed(tmp_path):
     """Damping 1 is the default's whole step; newtontr has no line search to damp (the option is
     reported unused) and solves the bar."""

@@ -71,9 +71,10 @@ def check_edited(spec: ModelSpec) -> None:
     from .config.conditions import parse_steps, resolve_nodes
     from .config.contact import check_edited_contact
     from .config.history import check_frames, check_history_edits
-    from .config.parse import refresh_defaults
+    from .config.parse import check_edited_geometry, refresh_defaults
     from .config.solving import check_edited_solver, parse_petsc
     from .physics.elements import ELEMENTS
+    check_edited_geometry(spec)
     check_edited_beams(spec.beams)
     check_edited_contact(spec.contact, min(ELEMENTS[b.element].order for b in spec.beams))
     refresh_defaults(spec)
@@ -109,6 +110,15 @@ def _raw_as_solved(spec: ModelSpec) -> None:
                     entry["locking"] = beam.locking
                 if _material_of(entry) != beam.material:
                     entry["material"] = material_as_written(beam.material)
+    geo = raw.get("geometry") if isinstance(raw, dict) else None
+    if isinstance(geo, dict):                    # an edited length, twist or twist axis
+        from .config.parse import twist_axis_as_written
+        for key, value in (("length", spec.length), ("twist_deg", spec.twist_deg)):
+            if geo.get(key, 0.0) != value:
+                geo[key] = value
+        axis = twist_axis_as_written(spec, geo.get("twist_axis", "centroid"))
+        if axis != geo.get("twist_axis", "centroid"):
+            geo["twist_axis"] = axis
     if isinstance(raw, dict) and "steps" in raw and spec.history is None:
         raw["steps"] = list(spec.steps)
     if isinstance(raw, dict) and _petsc_of(raw) != spec.petsc:

@@ -174,6 +174,34 @@ def _name(value) -> str:
     return name
 
 
+def check_edited_geometry(spec: ModelSpec) -> None:
+    """``geometry`` of a spec edited after parsing (the Python API) read as the config's: length
+    -0.1 or twist_deg '90' raised deep in the build (ValueError; nan: LinAlgError), twist_deg 5000
+    ran (the config refuses it), and a twist_axis point set where the config gave a rule
+    (centroid) was ignored: it is now that point (a rule, e.g. 'junction', that rule)."""
+    spec.length = number(spec.length, "geometry.length", positive=True, hint=" (metres)")
+    spec.twist_deg = number(spec.twist_deg, "geometry.twist_deg", lo=-3600, hi=3600)
+    value = spec.twist_axis.tolist() if hasattr(spec.twist_axis, "tolist") else spec.twist_axis
+    point, rule = _twist_axis(list(value) if isinstance(value, tuple) else value)
+    given = isinstance(value, (str, dict)) or spec.twist_rule[0] == "point"
+    if given or point not in ((0.0, 0.0), spec.twist_resolved):     # else the rule's own point
+        spec.twist_default &= rule == spec.twist_rule
+        spec.twist_rule, spec.twist_axis = rule, point
+    if spec.twist_rule[0] == "centroid_of":
+        beam_ref(spec.twist_rule[1], "geometry.twist_axis.centroid_of", [b.name for b in spec.beams])
+
+
+def twist_axis_as_written(spec: ModelSpec, written: Any = "centroid"):
+    """``geometry.twist_axis`` as a config writes the spec's: ``written`` (the config's) where it
+    says the same, else a point [y, z] or the rule."""
+    point, rule = _twist_axis(written)
+    if rule == spec.twist_rule and (rule[0] != "point" or point == tuple(spec.twist_axis)):
+        return written
+    if spec.twist_rule[0] == "point":
+        return [float(v) for v in spec.twist_axis]
+    return {"centroid_of": spec.twist_rule[1]} if spec.twist_rule[0] == "centroid_of" else spec.twist_rule[0]
+
+
 def _twist_axis(value) -> tuple[tuple[float, float], tuple]:
     """geometry.twist_axis: a point [y, z] (m) or a rule (resolved by model.build.resolve_twist_axis)."""
     p = "geometry.twist_axis"

@@ -252,4 +252,5 @@ class ModelSpec:
     sections: Any = None                   # geometry.sections (config.sections.SectionsSpec)
     twist_rule: tuple = ("point",)         # twist-axis rule (model.build.resolve_twist_axis); twist_axis then
     twist_default: bool = False            # holds the resolved point; True: the rule was not given
+    twist_resolved: tuple | None = None    # the point the rule gave at the last build (an edit differs)
     history: Any = None                    # history: (config.history.HistorySpec): loads over frames

@@ -293,7 +293,7 @@ def build_model(spec: ModelSpec) -> Model:
         node_offset += beam.n_nodes
         elem_offset += beam.n_elements
     axis, line = resolve_twist_axis(spec, beams, tendon)
-    spec.twist_axis = (float(axis[0]), float(axis[1]))
+    spec.twist_axis = spec.twist_resolved = (float(axis[0]), float(axis[1]))
     report.append(line)
     for beam in beams:
         q0_parts.append(reference_nodal_vectors(beam.x_nodes, beam.section.centroid, spec.length,

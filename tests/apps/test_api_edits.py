@@ -366,7 +366,8 @@ def test_an_edit_the_accuracy_ladder_would_not_see_is_refused(tmp_path):
     """With accuracy: the rungs are the config parsed again: bending_neohookean with its load
     halved on the spec solved the config's load, tip u_z 40.29 mm against the halved load's 23.07
     mm, and 'completed'; so were an edited length and solver.predictor.  Now refused naming the
-    change, nothing written; an edit the stored config says (a material) still runs."""
+    change, nothing written; an edit the stored config says (a material; since the stored config
+    says the geometry solved, the length too: its rungs are the edited bar's) still runs."""
     from ancf_petsc.api import check_edited
     from ancf_petsc.config.parse import parse_config
     from ancf_petsc.workflows.accuracy import check_rungs_carry
@@ -375,7 +376,6 @@ def test_an_edit_the_accuracy_ladder_would_not_see_is_refused(tmp_path):
     ap, _ = _spec("uniaxial_neohookean.yaml", tmp_path / "o")
     for edit, key in [(lambda s: setattr(s.loads[0], "force", tuple(0.5 * f for f in s.loads[0].force)),
                        r"spec\.loads\[0\]\.force\[2\]"),
-                      (lambda s: setattr(s, "length", 2 * s.length), r"spec\.length"),
                       (lambda s: setattr(s.solver, "predictor", "none"), r"spec\.solver\.predictor")]:
         spec = parse_config(raw, base_dir=CONFIGS)
         spec.output.dir = str(tmp_path / "o")
@@ -384,7 +384,47 @@ def test_an_edit_the_accuracy_ladder_would_not_see_is_refused(tmp_path):
                                                  + key + " was changed after parsing"):
             ap.solve(spec, log=lambda *_: None)
         assert not (tmp_path / "o").exists()
-    spec = parse_config(raw, base_dir=CONFIGS)
-    spec.beams[0].material["mu"] *= 2.0
-    check_edited(spec)
-    check_rungs_carry(spec)
+    for edit in (lambda s: s.beams[0].material.update(mu=2.0 * s.beams[0].material["mu"]),
+                 lambda s: setattr(s, "length", 2 * s.length)):
+        spec = parse_config(raw, base_dir=CONFIGS)
+        edit(spec)
+        check_edited(spec)
+        check_rungs_carry(spec)
+
+
+@pytest.mark.parametrize("key,value,message", [
+    ("length", -0.1, r"geometry\.length: must be > 0 \(metres\); got -0\.1"),          # ValueError in the build
+    ("twist_deg", float("nan"), r"geometry\.twist_deg: must be a finite number"),       # LinAlgError
+    ("twist_deg", 5000.0, r"geometry\.twist_deg: must be <= 3600; got 5000"),           # ran
+    ("twist_axis", "bogus", r"geometry\.twist_axis: expected a list of 2 numbers"),     # ValueError
+], ids=["length", "twist_nan", "twist_5000", "axis"])
+def test_edited_geometry_is_checked_as_the_configs(tmp_path, key, value, message):
+    ap, spec = _spec("pretwisted_bar.yaml", tmp_path / "g")
+    setattr(spec, key, value)
+    with pytest.raises(ap.ConfigError, match=message):
+        ap.solve(spec, log=lambda *_: None)
+    assert not (tmp_path / "g").exists()
+
+
+@pytest.mark.parametrize("axis", [None, [0.001, 0.0]], ids=["given point", "point over the centroid rule"])
+def test_the_stored_config_says_the_edited_twist_and_axis(tmp_path, axis):
+    """pretwisted_bar with twist_deg edited to 90 and twist_axis to [1 mm, 0]: results.h5's
+    config_yaml said 60 deg and [0, 0] beside the 90 deg answer, and an axis point set where the
+    config gave the centroid rule was ignored (the centroid's answer).  Now the stored config is
+    what was solved, and parsed again gives the same tip."""
+    from ancf_petsc.config.parse import parse_config
+    ap, spec = _spec("pretwisted_bar.yaml", tmp_path / "edited")
+    if axis is not None:                         # the config's rule, then a point set on the spec
+        spec = parse_config(dict(spec.raw, geometry={"length": 0.1, "twist_deg": 60.0}), base_dir=CONFIGS)
+        spec.output.dir = str(tmp_path / "edited")
+        spec.twist_axis = axis
+    spec.steps, spec.twist_deg = [1.0], 90.0
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
+    with h5py.File(tmp_path / "edited" / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
+    assert stored["geometry"]["twist_deg"] == 90.0
+    assert stored["geometry"]["twist_axis"] == (axis or [0.0, 0.0])
+    parsed = parse_config(dict(stored, output={"dir": str(tmp_path / "parsed")}), base_dir=CONFIGS)
+    ap.solve(parsed, log=lambda *_: None)
+    assert ap.read_results(tmp_path / "parsed").probe("tip")[-1] == pytest.approx(u_edit, rel=1e-12, abs=1e-15)

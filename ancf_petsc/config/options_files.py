@@ -148,6 +148,10 @@ def check_all_options(args: list[str], own: tuple[str, ...] = (), environ=None) 
     for name, value, where in options:
         source = f" ({where})" if where else ""
         shown = f"-{name}" + (f" {value}" if value is not None else "")
+        if "=" in name:                   # PETSc reads an option named 'snes_max_it=3' and never uses it
+            key, _, given = name.partition("=")
+            return (f"PETSc option {shown}{source}: PETSc takes an option's value after a space, not '=': "
+                    f"write -{key} {given}")
         if "--" + name.replace("_", "-") in own and where:
             return (f"{shown}{source}: ancf-solve's own options go on the command line with two "
                     f"dashes (--{name.replace('_', '-')}), not in PETSc's options")

@@ -151,6 +151,9 @@ def parse_petsc(value) -> dict[str, str]:
         if isinstance(v, (dict, list)):
             raise ConfigError(f"petsc.{k}", "option values are scalars (number, string, true/false)")
         name = k.lstrip("-")
+        if "=" in name:                   # PETSc would read an option named 'snes_max_it=3'
+            raise ConfigError(f"petsc.{k}", f"an option's name has no '=': write {name.partition('=')[0]}: "
+                                            f"{name.partition('=')[2]}; got {shown(k)}")
         text = "" if v is None or v is True else ("0" if v is False else str(v))
         if name in START_UP_OPTIONS:
             raise ConfigError(f"petsc.{k}", f"PETSc reads -{name} only while it starts, before the "

@@ -79,6 +79,8 @@ CONFIG_CASES = {
     "not a boolean": (lambda r: r.update(petsc={"ksp_initial_guess_nonzero": "maybe"}),
                       "petsc.ksp_initial_guess_nonzero: expected a boolean"),
     "negative tolerance": (lambda r: r.update(petsc={"ksp_rtol": -1}), "petsc.ksp_rtol: must be >= 0"),
+    "an option written with =": (lambda r: r.update(petsc={"snes_max_it=3": True}),
+                                 "petsc.snes_max_it=3: an option's name has no '=': write snes_max_it: 3"),
     # PETSc's SNESSetTolerances refuses it: a level ran, then a traceback, exit 1
     "relative tolerance of 1": (lambda r: r.update(petsc={"snes_rtol": 1}),
                                 "petsc.snes_rtol: a relative tolerance must be below 1 (PETSc refuses it); got 1"),
@@ -338,6 +340,8 @@ def test_command_line_edges(tmp_path):
     assert_one_line(p, 2, "-snes_max_it 10.0: expected an integer")
     p = solve_cli(cfg, extra=["-snes_rtol", "1"], timeout=TIMEOUT)     # was a traceback after a level
     assert_one_line(p, 2, "-snes_rtol 1: a relative tolerance must be below 1")
+    p = solve_cli(cfg, extra=["-snes_max_it=3"], timeout=TIMEOUT)     # was run at 15, 'never used' after
+    assert_one_line(p, 2, "-snes_max_it=3: PETSc takes an option's value after a space, not '=': write -snes_max_it 3")
     p = solve_cli(cfg, extra=["--version"], timeout=TIMEOUT)
     from ancf_petsc import __version__
     assert p.returncode == 0 and p.stdout.startswith(f"ancf-solve {__version__}")

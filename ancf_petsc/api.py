@@ -9,8 +9,8 @@
 A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, its ``material['mu']``,
 ``element`` within one node block: 3363/3333, ``spec.steps``, ``spec.petsc``): ``solve`` places
 'first'/'last' of the supports, loads and probes on the beams as they are then, checks the beams,
-steps and PETSc options as the config's, and stores the element counts, types, materials, steps
-and PETSc options solved with in results.h5.
+sections, geometry, steps and PETSc options as the config's, and stores the element counts, types,
+materials, sections, length, twist, steps and PETSc options solved with in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
 
@@ -76,6 +76,7 @@ def check_edited(spec: ModelSpec) -> None:
     from .physics.elements import ELEMENTS
     check_edited_geometry(spec)
     check_edited_beams(spec.beams)
+    _check_edited_sections(spec)
     check_edited_contact(spec.contact, min(ELEMENTS[b.element].order for b in spec.beams))
     refresh_defaults(spec)
     spec.petsc = parse_petsc(spec.petsc)
@@ -110,6 +111,8 @@ def _raw_as_solved(spec: ModelSpec) -> None:
                     entry["locking"] = beam.locking
                 if _material_of(entry) != beam.material:
                     entry["material"] = material_as_written(beam.material)
+                if _section_of(entry, beam, spec.base_dir) != beam.section:
+                    entry["section"] = _section_as_written(beam.section)
     geo = raw.get("geometry") if isinstance(raw, dict) else None
     if isinstance(geo, dict):                    # an edited length, twist or twist axis
         from .config.parse import twist_axis_as_written
@@ -125,6 +128,49 @@ def _raw_as_solved(spec: ModelSpec) -> None:
         raw["petsc"] = {k: v if v else None for k, v in spec.petsc.items()}   # '': a flag
     if raw != spec.raw:
         spec.raw = raw
+
+
+def _check_edited_sections(spec: ModelSpec) -> None:
+    """Each beam's section read again as a config's, raised to its element's least degree (an
+    edited cubature_degree 1 ran to 'unstable'; the config refuses it)."""
+    from .config.beams import parse_section
+    from .physics.elements import ELEMENTS
+    for i, beam in enumerate(spec.beams):
+        section = parse_section(_section_as_written(beam.section), f"beams[{i}].section", spec.base_dir)
+        section.cubature_degree = max(section.cubature_degree, ELEMENTS[beam.element].section_degree)
+        section.spline_degree_given |= beam.section.spline_degree_given
+        beam.section = section
+
+
+def _section_as_written(s) -> dict:
+    """A parsed ``SectionSpec`` as a config writes it (results.h5's config_yaml)."""
+    out: dict = {"shape": s.shape, "cubature_degree": s.cubature_degree}
+    if tuple(s.center) != (0.0, 0.0):
+        out["center"] = list(s.center)
+    size = {"ellipse": "semi_axes", "circle": "radius", "rectangle": "size"}.get(s.shape)
+    if size is not None:
+        value = getattr(s, size)
+        out[size] = list(value) if isinstance(value, (tuple, list)) else value
+        return out
+    out.update({"curves": s.curves} if s.curves is not None else
+               {"file": s.file, "loop": s.loop} if s.file is not None else {"loop": s.loop})
+    if s.spline_degree_given or s.spline_degree != 3:
+        out["spline_degree"] = s.spline_degree
+    if s.compress is not True:
+        out["compress"] = s.compress
+    return out
+
+
+def _section_of(entry: dict, beam, base_dir: str):
+    """A config beam entry's section as parsed for ``beam``'s element (None where it does not parse)."""
+    from .config.beams import parse_section
+    from .physics.elements import ELEMENTS
+    try:
+        section = parse_section(entry.get("section"), "section", base_dir)
+    except ConfigError:
+        return None
+    section.cubature_degree = max(section.cubature_degree, ELEMENTS[beam.element].section_degree)
+    return section
 
 
 def _petsc_of(raw: dict) -> dict | None:

@@ -428,3 +428,26 @@ def test_the_stored_config_says_the_edited_twist_and_axis(tmp_path, axis):
     parsed = parse_config(dict(stored, output={"dir": str(tmp_path / "parsed")}), base_dir=CONFIGS)
     ap.solve(parsed, log=lambda *_: None)
     assert ap.read_results(tmp_path / "parsed").probe("tip")[-1] == pytest.approx(u_edit, rel=1e-12, abs=1e-15)
+
+
+def test_an_edited_section_is_checked_and_stored_as_solved(tmp_path):
+    """uniaxial_neohookean with semi_axes edited to [12, 4] mm: solved (u_x 11.09 mm, twice the
+    area) while results.h5's config_yaml said [6, 4] mm; cubature_degree 1 ran to 'unstable' (the
+    config refuses it).  Now the stored config parsed again gives the same tip; degree 1 refused."""
+    from ancf_petsc.config.parse import parse_config
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "edited")
+    spec.steps = [1.0]
+    spec.beams[0].section.semi_axes = (0.012, 0.004)
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    u_edit = ap.read_results(tmp_path / "edited").probe("tip")[-1]
+    with h5py.File(tmp_path / "edited" / "results.h5") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
+    assert stored["beams"][0]["section"]["semi_axes"] == [0.012, 0.004]
+    ap.solve(parse_config(dict(stored, output={"dir": str(tmp_path / "parsed")}), base_dir=CONFIGS),
+             log=lambda *_: None)
+    assert ap.read_results(tmp_path / "parsed").probe("tip")[-1] == pytest.approx(u_edit, rel=1e-12, abs=1e-15)
+    assert u_edit[0] == pytest.approx(0.011092, rel=1e-4)
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "degree")
+    spec.beams[0].section.cubature_degree = 1
+    with pytest.raises(ap.ConfigError, match=r"^beams\[0\]\.section\.cubature_degree: must be >= 2; got 1"):
+        ap.solve(spec, log=lambda *_: None)

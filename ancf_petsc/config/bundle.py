@@ -175,7 +175,7 @@ def expand_bundle(raw: dict) -> dict:
         centres = hex_centres(rings, pitch)
         loops, pairs = circle_beams(centres, radius, pitch,
                                     number(b.get("arc_deg", 40.0), "bundle.arc_deg", positive=True, hi=59.0))
-    axial = integer(b.get("axial_points", DEFAULT_AXIAL_POINTS), "bundle.axial_points", lo=1, hi=10)
+    axial = b.get("axial_points", DEFAULT_AXIAL_POINTS)      # checked per beam (0 said '>= 1', 1 '>= 2')
     per_beam = {k: b[k] for k in ("element", "locking") if k in b}     # checked per beam
     out["beams"] = [{"name": f"fascicle{i}", "elements": elements, "axial_points": axial,
                      "material": b["material"], **per_beam,

@@ -51,6 +51,8 @@ def test_circles_pair_facing_arcs():
     ({"material": {"model": "neo-hookean", "mu": 1e8}}, "bundle.material.bulk_modulus", "missing"),
     ({"element": "9999"}, "bundle.element", "one of"),
     ({"locking": "foo"}, "bundle.locking", "one of"),
+    ({"axial_points": 0}, "bundle.axial_points", "must be >= 2; got 0"),     # was 'must be >= 1', then 1 '>= 2'
+    ({"axial_points": "3"}, "bundle.axial_points", "expected an integer; got '3'"),
     ({"force": [10.0, 1.0, 0.0]}, "bundle.force", "give an axial force [F, 0, 0], or pulled_end: free; got [10.0, 1.0, 0.0]"),
     ({"fascicle_section": "circle", "contact": {"mode": "sliding"}}, "contact.mode", "unilateral"),
     ({"fascicle_section": "circle", "contact": {"tangential": {"law": "elastic", "stiffness": 1e10}}},

@@ -54,9 +54,10 @@ NEWTON_TYPES = ("newtonls", "newtontr", "vinewtonrsls", "vinewtonssls")
 
 def given_method(solver) -> str:
     """A -snes_type other than Newton, a lagged Jacobian or preconditioner, or a
-    -snes_linesearch_damping below 1, given in the run's options: the cause of its failed solves (on configs/uniaxial_neohookean.yaml ksponly ended
-    'with STALLED_ABOVE_TOLERANCE', damping 0.5 was called 'a nearly singular tangent', ngmres
-    'the tangent does not predict the residual'); empty otherwise."""
+    -snes_linesearch_damping below 1, given in the run's options: the cause of its failed solves
+    (on configs/uniaxial_neohookean.yaml ksponly ended 'with STALLED_ABOVE_TOLERANCE', damping 0.5
+    was called 'a nearly singular tangent', ngmres 'the tangent does not predict the residual');
+    empty otherwise."""
     kind = solver.snes.getType()
     if kind not in NEWTON_TYPES and given_option(solver, "snes_type") is not None:
         what = ("takes one linear step per solve and stops" if kind == "ksponly"
@@ -96,7 +97,6 @@ def given_cause(solver, reason: int) -> Detail | None:
     return Detail(f" ({method})", "nonlinear_method") if method else None
 
 
-
 def first_load(loads, levels: list[float]) -> tuple[float, float]:
     """(λ, Σ_g |m_g(λ)| ‖f_g‖) of the first of ``levels`` with a load (petsc/loading.AppliedLoads),
     an upper bound of |F| at rest there; (0, 0) where a prescribed displacement moves first or
@@ -116,7 +116,8 @@ def check_given_atol(solver, levels: list[float]) -> None:
     """A -snes_atol given at or above |F| at rest at the first loaded level: the unloaded state
     meets it there, and the level is accepted without a Newton step (the paper's tendon at 2
     elements: -snes_atol 150 reported 100 N at zero displacement, 'completed'; -snes_atol 1000
-    100 N at rest and 400 N 'passed over' at rest).  Refused (exit 2) with the run's own."""
+    100 N at rest and 400 N 'passed over' at rest).  Refused (exit 2) with the run's own.  A
+    restart (no ``levels``) goes on from a loaded state: not checked."""
     try:
         given = float(given_option(solver, "snes_atol"))
     except (TypeError, ValueError):

@@ -65,3 +65,14 @@ def test_an_atol_the_unloaded_state_meets_is_refused(tmp_path):
     assert not (tmp_path / "out" / "summary.json").exists() and not (tmp_path / "out" / "results.h5").exists()
     p = solve_cli(cfg, extra=["-snes_atol", "1", "--quiet"])        # loose, but below the loads
     assert p.returncode == 0 and read_summary(tmp_path / "out")["steps"][0]["iterations"] > 0, p.stderr
+
+
+def test_a_restart_goes_on_from_its_loaded_state_whatever_the_atol(tmp_path):
+    """The atol check is of the rest state at the first level: a restart after converged levels
+    goes on from a loaded state, and was refused all the same (b2ec0c8)."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw.update(steps=[0.1, 0.2, 10.0], solver={"max_cutbacks": 0}, output={"dir": str(tmp_path / "out"), "vtk": False})
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    assert solve_cli(cfg, extra=["-snes_max_it", "4", "--quiet"]).returncode == 3
+    p = solve_cli(cfg, extra=["--restart", str(tmp_path / "out"), "-snes_atol", "5", "--quiet"])
+    assert p.returncode == 0 and read_summary(tmp_path / "out")["status"] == "completed", p.stderr

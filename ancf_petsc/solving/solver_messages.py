@@ -164,8 +164,9 @@ def failure_detail(solver, reason: int) -> Detail:
     """What to try after a failed level: the linear solver's reason and what works, a
     preconditioner that solves nothing, a -snes_atol below rounding, or a Newton budget too
     small for an active set; its ``kind`` the cause's code (failure_cause.py)."""
-    if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
-        return Detail(linear_solver_detail(solver, reason), "linear_solver")
+    linear = PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE    # or failed linear solves let through
+    if reason == linear or (solver.ksp_reason < 0 and reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)):
+        return Detail(linear_solver_detail(solver, linear), "linear_solver")
     unreachable = (unreachable_atol(solver)
                    if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)
     unreachable = unreachable or given_cause(solver, reason)

@@ -550,6 +550,13 @@ def test_a_diverging_linear_solver_says_what_works(tmp_path):
                                                           "DIVERGED_MAX_IT", "use the default direct solver")
     s = read_summary(tmp_path / "out")
     assert s["status"] == "failed" and s["reason_code"] == "DIVERGED_LINEAR_SOLVE" and line
+    # failed linear solves let through (-snes_max_linear_solve_fail 5): it said only 'with
+    # STALLED_ABOVE_TOLERANCE', failure_cause stalled_above_tolerance
+    elastica = dict(load_raw("elastica_svk.yaml"), steps=[0.2], output={"vtk": False})
+    p = run_cfg(tmp_path, elastica, 1, extra=["-ksp_type", "gmres", "-pc_type", "jacobi", "-ksp_max_it", "3",
+                                              "-snes_max_linear_solve_fail", "5"], out="through")
+    assert_one_line(p, 3, "-ksp_type gmres -pc_type jacobi stopped with DIVERGED_MAX_IT", "use the default direct")
+    assert read_summary(tmp_path / "through")["failure_cause"] == "linear_solver"
 
 
 def test_option_tables_match_petsc():

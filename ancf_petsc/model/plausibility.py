@@ -297,12 +297,16 @@ def section_area_errors(beam, q0: np.ndarray, length: float, twist_deg: float) -
 
 
 def _elements_needed(beam, twist_deg: float) -> tuple[int, float] | None:
-    """The fewest elements (more than the beam's) whose interpolation of the uniformly turning
+    """``elements_resolving`` a beam's pretwist, more elements than it has."""
+    return elements_resolving(twist_deg, beam.axial_points, beam.layout.block, beam.n_elements + 1)
+
+
+def elements_resolving(twist_deg: float, axial_points: int, block, fewest: int = 1) -> tuple[int, float] | None:
+    """The fewest elements (at least ``fewest``) whose interpolation of the uniformly turning
     directors keeps the area error within ``MAX_SECTION_AREA_ERROR``, and that error: the area ratio
     at ξ is |Σ_i L_i(ξ) e^(iφ t_i)|² (φ the twist per element, t_i the nodes' places in it)."""
-    block = beam.layout.block
-    L, _ = block.axial(gauss_legendre(beam.axial_points)[0])
-    E = np.arange(beam.n_elements + 1, 10001)
+    L, _ = block.axial(gauss_legendre(axial_points)[0])
+    E = np.arange(fewest, 10001)
     phi = np.deg2rad(twist_deg) / E
     t = np.linspace(0.0, 1.0, block.axial_nodes)
     ratio = np.abs(np.exp(1j * phi[:, None, None] * t[None, None, :]) @ L.T[None, :, :]) ** 2   # (E, 1, na)

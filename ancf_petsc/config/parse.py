@@ -79,7 +79,7 @@ def _parse(raw: Any, base_dir: str, source: str) -> ModelSpec:
                                                       history, blocks),
         loads=parse_loads(raw.get("loads", []), names, n_nodes, history), steps=steps, probes=probes,
         output=parse_output(raw.get("output", {}), name), solver=parse_solver(raw.get("solver", {})),
-        petsc=parse_petsc(raw.get("petsc", {}) or {}),
+        petsc=parse_petsc({} if raw.get("petsc") is None else raw["petsc"]),
         contact=parse_contact(raw["contact"], names, blocks[0].dofs_per_node,
                               min(ELEMENTS[b.element].order for b in beams),
                               min(blk.axial_nodes for blk in blocks) - 1)

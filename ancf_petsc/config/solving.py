@@ -143,7 +143,7 @@ def parse_partition(value) -> str:
 def parse_petsc(value) -> dict[str, str]:
     """``petsc:`` options as PETSc will read them (values checked like PETSc parses them)."""
     if not isinstance(value, dict):
-        raise ConfigError("petsc", "expected a mapping of PETSc options, e.g. {snes_rtol: 1e-10}")
+        raise ConfigError("petsc", f"expected a mapping of PETSc options, e.g. {{snes_rtol: 1e-10}}; got {shown(value)}")
     petsc = {}
     for k, v in value.items():
         if not isinstance(k, str) or not k.strip("-"):

@@ -79,6 +79,9 @@ CONFIG_CASES = {
     "not a boolean": (lambda r: r.update(petsc={"ksp_initial_guess_nonzero": "maybe"}),
                       "petsc.ksp_initial_guess_nonzero: expected a boolean"),
     "negative tolerance": (lambda r: r.update(petsc={"ksp_rtol": -1}), "petsc.ksp_rtol: must be >= 0"),
+    # an empty list (or '', 0) was taken for no options, without a word
+    "petsc as a list": (lambda r: r.update(petsc=[]), "petsc: expected a mapping of PETSc options, e.g. "
+                                                      "{snes_rtol: 1e-10}; got []"),
     "an option written with =": (lambda r: r.update(petsc={"snes_max_it=3": True}),
                                  "petsc.snes_max_it=3: an option's name has no '=': write snes_max_it: 3"),
     # PETSc's SNESSetTolerances refuses it: a level ran, then a traceback, exit 1

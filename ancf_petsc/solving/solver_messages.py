@@ -165,7 +165,7 @@ def failure_detail(solver, reason: int) -> Detail:
     preconditioner that solves nothing, a -snes_atol below rounding, or a Newton budget too
     small for an active set; its ``kind`` the cause's code (failure_cause.py)."""
     linear = PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE    # or failed linear solves let through
-    if reason == linear or (solver.ksp_reason < 0 and reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)):
+    if reason == linear or (getattr(solver, "ksp_reason", 0) < 0 and reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT)):
         return Detail(linear_solver_detail(solver, linear), "linear_solver")
     unreachable = (unreachable_atol(solver)
                    if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)

@@ -160,9 +160,11 @@ def _polish(stepper, path, step: float, tally, rtol: float, atol: float) -> bool
     S, P = stepper.solver, stepper.problem
     old_rtol, old_atol, _, _ = S.snes.getTolerances()
     S.snes.setTolerances(rtol=rtol, atol=atol)
-    loose = P.X.copy()
+    loose, kept = P.X.copy(), stepper.history       # the level's residual norms (newton_history)
     try:
         reason, its, fnorm = stepper.solve_at(path.lam + step, P.X, path.lam + step, path.lam, unchanged=True)
+        kept.extend(stepper.history)
+        stepper.history = kept
         tally.its += its
         if reason <= 0:
             loose.copy(P.X)

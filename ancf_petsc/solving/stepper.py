@@ -207,7 +207,7 @@ class LoadStepper:
                                                     X_prev if moved else None, still)
                 tally.its += its
                 tally.tresca_solves += self.tresca_solves
-                history.append(list(self.history))
+                history.append(self.history)          # a polish adds its own (critical_point._polish)
                 self._check_budget(path, X_prev, target, step)
                 reason, neg = self.judge(path, reason, fnorm, step, tally)
                 if reason > 0 and self.branches.applies(path, neg):       # branch_switch.py

@@ -23,10 +23,7 @@ from .section_rotation import SectionTurns
 #: largest node move of one Newton step, in section sizes; full Newton steps with contact are
 #: held to fewer (solving/stepper.py): a step of several sections makes the closest-point pairing
 #: meaningless (the paper's tendon in fixed steps of 100 N from rest wandered to |F| ~ 1e8 and
-#: failed with 10).  Without contact a step may also move a node by the beams' length L: held to
-#: 10 sections alone, a bar's homogeneous stretch took more Newton iterations the more slender it
-#: was (r = 2 mm, 23 % strain: 5 at L = 0.2 m, 19 at 0.3, 35 at 1.0; the 12 x 8 mm ellipse at
-#: L = 2 m 878, through saddles) where 5 solve it at any L
+#: failed with 10)
 MAX_STEP_SECTIONS = 10.0
 MAX_STEP_SECTIONS_CONTACT = 2.0
 #: largest growth of a fibre law's exponent k2 Ē² at any Gauss point in one Newton step or load
@@ -100,7 +97,6 @@ class StepLimits:
                                            # partner place (``solver.band_step``; 0: no limit)
         self._local: PETSc.Vec | None = None
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
-        self.length = problem.model.spec.length if problem.contact is None else 0.0   # MAX_STEP_SECTIONS
         self.fibres = False                # a law whose fibres carry stress, on some rank
         self.find_fibres()
 
@@ -168,13 +164,13 @@ class StepLimits:
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
         """Line-search pre-check (collective): scale the step X − Y down to ``sections``
-        section sizes or, without contact, the beams' length (a turned step also to direction-vector
-        changes of ``MAX_STEP_TURN``), then halve it until no Gauss point has det F below ``j_min`` and no fibre exponent grows
+        section sizes (a turned step also to direction-vector changes of ``MAX_STEP_TURN``),
+        then halve it until no Gauss point has det F below ``j_min`` and no fibre exponent grows
         by more than ``MAX_EXPONENT_GROWTH``; if that fails, Y is filled with NaN so that SNES
         reports a domain failure and the load step is cut back.  Returns whether Y was changed."""
         P = self.problem
         y = Y.getArray(readonly=True).reshape(-1, P.model.block.vectors_per_node, 3)[P.owned_physical]
-        move = np.abs(y[:, 0]).max(initial=0.0) / max(self.sections * self.size, self.length)
+        move = np.abs(y[:, 0]).max(initial=0.0) / (self.sections * self.size)
         turn = 0.0                          # and a turned step to MAX_STEP_TURN
         if self.turns is not None:
             turn = np.linalg.norm(y[:, 1:3], axis=2).max(initial=0.0) / MAX_STEP_TURN

@@ -6,6 +6,7 @@ import math
 import numpy as np
 
 from ancf_verify.bars.cases import Case
+from ancf_verify.stack import SolidError
 
 
 # --------------------------------------------------------------------------------------------
@@ -38,8 +39,16 @@ def gmsh_section(occ, sec) -> int:
     return occ.addPlaneSurface([occ.addCurveLoop(curves)])
 
 
+def checked_size(h: float) -> float:
+    """``h`` if it is a mesh size gmsh can take (> 0, finite): gmsh aborts the process on others."""
+    if not (h > 0 and math.isfinite(h)):
+        raise SolidError(f"mesh size h must be > 0 [m]; got {h!r}")
+    return h
+
+
 def solid_mesh(case: Case, sec, h: float):
     """P2 tetrahedral dolfinx mesh of the (pretwisted) bar with mesh size ``h``."""
+    checked_size(h)
     import gmsh
     from mpi4py import MPI
     from dolfinx.io import gmshio

@@ -2,7 +2,9 @@
 ``scripts/`` holds only the thin files that call ``run``."""
 from __future__ import annotations
 
+import argparse
 import importlib
+import math
 import os
 import sys
 
@@ -10,7 +12,7 @@ import sys
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-__all__ = ["run", "study_parts"]
+__all__ = ["Parser", "run", "size", "sizes", "study_parts"]
 
 
 def run(command: str, name: str, argv: list[str] | None = None) -> int:
@@ -26,10 +28,35 @@ def run(command: str, name: str, argv: list[str] | None = None) -> int:
     return 1
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse whose errors are one line naming the option (no usage block), exit 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
+def size(text: str) -> float:
+    """One mesh size > 0 (gmsh aborts the whole process on a size <= 0)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a mesh size > 0, e.g. 2e-3; got {text!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"mesh sizes must be > 0; got {text!r}")
+    return value
+
+
+def sizes(text: str) -> list[float]:
+    """Comma-separated mesh sizes, each > 0 (``--h 2e-3,1.4e-3``)."""
+    out = [size(x) for x in text.split(",") if x.strip()]
+    if not out:
+        raise argparse.ArgumentTypeError(f"expected mesh sizes > 0 separated by commas, e.g. 2e-3,1.4e-3; got {text!r}")
+    return out
+
+
 def study_parts(prog: str, doc: str, names, argv: list[str] | None, more: str = "") -> list[str]:
     """The parts named on a study's command line (``[]``: all of them); ``--help`` prints ``doc``
     and the parts, bad options exit 2 (argparse)."""
-    import argparse
     ap = argparse.ArgumentParser(prog=prog, description=doc, allow_abbrev=False,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("parts", nargs="*", help=f"some of {', '.join(names)} (default: all){more}")

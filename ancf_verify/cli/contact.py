@@ -52,12 +52,12 @@ Writes docs/solid_contact.csv, docs/solid_contact.md, docs/figures/solid_contact
 """
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import tempfile
 import time
 
+from ancf_verify.cli import Parser, sizes
 from ancf_verify.contact.beams import run_ancf
 from ancf_verify.contact.report import plot, render_md
 from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_csv, reference_rows, row_key,
@@ -71,10 +71,10 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--psi", default="0,15,45", help="pretwist angles [deg]")
     ap.add_argument("--laws", default="sliding", help="contact laws: sliding,unilateral")
-    ap.add_argument("--h", default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m], coarse to fine")
+    ap.add_argument("--h", type=sizes, default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m], coarse to fine")
     ap.add_argument("--elements", default="2,4,8,16", help="ANCF elements per subtendon")
     ap.add_argument("--quick", action="store_true", help="coarse meshes only (smoke run)")
     ap.add_argument("--selftest", action="store_true", help="only the contact self-tests")
@@ -151,7 +151,7 @@ def main(argv=None) -> int:
     bad = set(laws) - {"sliding", "unilateral"}
     if bad:
         raise ContactError(f"unknown law(s) {sorted(bad)}")
-    hs = [float(h) for h in args.h.split(",")]
+    hs = args.h
     elements = [int(e) for e in args.elements.split(",")]
     loads = [float(f) for f in args.loads.split(",") if f.strip()]
     free_psis = [float(p) for p in args.free_psi.split(",") if p.strip()]

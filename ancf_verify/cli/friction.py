@@ -29,12 +29,12 @@ solid with friction" of docs/interface.md (between its markers; the rest of the 
 """
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import tempfile
 import time
 
+from ancf_verify.cli import Parser, sizes
 from ancf_verify.contact.mesh import LocalSize
 from ancf_verify.contact.tendon import LOADS, tendon_sections
 from ancf_verify.friction.beams import run_ancf, zone_label
@@ -50,11 +50,11 @@ from ancf_verify.stack import import_stack
 # Driver
 # ============================================================================================
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--psi", default="45,0", help="pretwist angles [deg]")
     ap.add_argument("--mu", type=float, default=0.3, help="friction coefficient")
-    ap.add_argument("--h", default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m] at the first pretwist, coarse to fine")
-    ap.add_argument("--h-more", default="2e-3,1.4e-3", help="solid mesh sizes at the other pretwists")
+    ap.add_argument("--h", type=sizes, default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m] at the first pretwist, coarse to fine")
+    ap.add_argument("--h-more", type=sizes, default="2e-3,1.4e-3", help="solid mesh sizes at the other pretwists")
     ap.add_argument("--h-interface", default="",
                     help="local refinement: element size [m] around the --refine-at interface, one per --h (then "
                          "the bulk size; the axial layers follow it; '' or 0: uniform), e.g. --h 2e-3,2e-3 "
@@ -113,13 +113,13 @@ def main(argv=None) -> int:
             finish(paths, rows, {"argv": " ".join(sys.argv[1:])})
             return 0
     psis = [float(p) for p in args.psi.split(",") if p.strip()]
-    hs = [float(h) for h in args.h.split(",")]
+    hs = args.h
     locs = local_sizes(args, len(hs))
     loads = [float(F) for F in args.loads.split(",") if F.strip()] or list(LOADS)
     mu = args.mu
     zone = args.free_zone
     for psi in psis:
-        more = [float(x) for x in args.h_more.split(",")]
+        more = args.h_more
         for h, loc in list(zip(hs, locs) if psi == psis[0] else zip(more, [None] * len(more)))[:1 if zone else None]:
             if args.no_solid:
                 break

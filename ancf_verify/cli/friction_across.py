@@ -25,10 +25,10 @@ table of mean p± per window (docs/interface.md).
 """
 from __future__ import annotations
 
-import argparse
 import os
 import tempfile
 
+from ancf_verify.cli import Parser, sizes
 from ancf_verify.contact.tendon import tendon_sections
 from ancf_verify.friction.across import (CSV, across_coordinates, across_md, ancf_points, binned_rows, key,
     plot, plot_orders, read, solid_points, write)
@@ -37,10 +37,10 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--load", type=float, default=100.0)
     ap.add_argument("--mu", default="0,0.3", help="friction coefficients (0: frictionless)")
-    ap.add_argument("--h", default="2e-3", help="solid mesh sizes [m]")
+    ap.add_argument("--h", type=sizes, default="2e-3", help="solid mesh sizes [m]")
     ap.add_argument("--elements", default="4,8,16")
     ap.add_argument("--spaces", default="default;quadratic across", help="beam pressure spaces (';')")
     ap.add_argument("--element", default="", help="every beam's element, e.g. 33103 ('': the default, 3363)")
@@ -61,7 +61,7 @@ def main(argv=None) -> int:
     secs = tendon_sections()
     old = read() if os.path.exists(CSV) else []
     solids = {}
-    for h in [float(x) for x in args.h.split(",")]:
+    for h in args.h:
         for mu in mus:
             if not args.no_solid:
                 print(f"[across] solid h {1e3 * h:.2f} mm, mu {mu:g}, {F:g} N", flush=True)

@@ -27,12 +27,12 @@ Usage: python scripts/verify_solid_soft_matrix.py [--out docs]
 """
 from __future__ import annotations
 
-import argparse
 import os
 import tempfile
 import time
 
 from ancf_verify.bars.cases import ancf_section
+from ancf_verify.cli import Parser, size
 from ancf_verify.fibres.cases import DOC
 from ancf_verify.fibres.report import COLUMNS, read_csv, write_csv
 from ancf_verify.fibres.solid import run_solid
@@ -45,7 +45,7 @@ from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV")
     ap.add_argument("--doc", default=DOC, help="the page with the marked block (default docs/fibres.md)")
     ap.add_argument("--replot", action="store_true", help="the block from <out>/solid_soft_matrix.csv")
@@ -56,7 +56,7 @@ def main(argv=None) -> int:
     ap.add_argument("--profile", type=float, metavar="H",
                     help="print u_x along the end face's semi-axes: beams and the solid of mesh size H [mm]")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
-    ap.add_argument("--h", type=float, nargs="+", default=[1e3 * h for h in H], help="solid mesh sizes [mm]")
+    ap.add_argument("--h", type=size, nargs="+", default=[1e3 * h for h in H], help="solid mesh sizes [mm]")
     args = ap.parse_args(argv)
     path = os.path.join(args.out, CSV_NAME)
     if args.replot:

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ancf_verify.bars.mesh import gmsh_section
+from ancf_verify.bars.mesh import checked_size, gmsh_section
 from ancf_verify.contact.tendon import AXIS, ContactError, LENGTH, curve_names
 
 
@@ -64,6 +64,7 @@ def tendon_mesh(secs, h: float, psi: float, bodies=(0, 1, 2), layered: bool = Tr
     Cell tags: body b -> b + 1.  Facet tags: root 10 + b, end 20 + b, lateral face on curve c of
     body b -> 100 * (b + 1) + index of c in the loop."""
     from ancf_petsc.physics.geometry import place
+    checked_size(h)
     parts = [gmsh_body(secs, b, h, layered, local) for b in bodies]
     msh, ct, ft = merge_to_dolfinx(parts)
     x = msh.geometry.x          # gmsh (x, y, z) = tendon (y, z, x), then the pretwist map

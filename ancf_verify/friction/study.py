@@ -97,7 +97,7 @@ def profiles(secs, args, levels: list, psi: float) -> None:
     from ancf_verify.friction.profiles import ancf_profile, read, solid_profile, write
     path = os.path.join(args.out, "solid_friction_profiles.csv")
     rows = []
-    h = [float(x) for x in args.h.split(",")][0]
+    h = args.h[0]
     with tempfile.TemporaryDirectory(prefix="solid_friction_profiles_") as tmp:
         for F in levels:
             for mu in (0.0, args.mu):

@@ -1,0 +1,42 @@
+"""Bad options of the 3D-solid command lines (ancf_verify.cli): one line naming the option, exit 2,
+before any solid is meshed or solved."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from helpers import MPI_ENV, ROOT
+
+
+@pytest.mark.parametrize("script, argv, want", [
+    ("verify_solid_contact.py", ["--h=-2e-3"], "argument --h: mesh sizes must be > 0; got '-2e-3'"),
+    ("verify_solid_contact.py", ["--h", "2e-3,0"], "argument --h: mesh sizes must be > 0; got '0'"),
+    ("verify_solid_friction.py", ["--h-more", "2mm"],
+     "argument --h-more: expected a mesh size > 0, e.g. 2e-3; got '2mm'"),
+    ("solid_friction_across.py", ["--h", ","],
+     "argument --h: expected mesh sizes > 0 separated by commas, e.g. 2e-3,1.4e-3; got ','"),
+    ("verify_solid_soft_matrix.py", ["--h", "2", "-1"], "argument --h: mesh sizes must be > 0; got '-1'"),
+])
+def test_a_mesh_size_at_or_below_zero_is_refused_by_its_option(script, argv, want, tmp_path):
+    """verify_solid_contact.py --h=-2e-3 went on to gmsh, which aborted the whole process
+    ('terminate called after throwing ...', a C++ backtrace, exit 134); '2mm' ended in
+    'ValueError: could not convert string to float', exit 1, naming no option."""
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", script), *argv, "--out", str(tmp_path)]
+                       if script != "solid_friction_across.py" else
+                       [sys.executable, os.path.join(ROOT, "scripts", script), *argv],
+                       capture_output=True, text=True, timeout=120, env={**os.environ, **MPI_ENV})
+    assert p.returncode == 2, (p.returncode, p.stderr[-600:])
+    assert p.stderr.splitlines() == [f"{script}: {want} (see {script} --help)"], p.stderr
+
+
+def test_the_meshes_refuse_a_size_gmsh_cannot_take():
+    """The Python API (run_solid, tendon_mesh) is checked too: a SolidError line, not gmsh's abort."""
+    from ancf_verify.bars.cases import CASES
+    from ancf_verify.bars.mesh import solid_mesh
+    from ancf_verify.contact.mesh import tendon_mesh
+    from ancf_verify.stack import SolidError
+    with pytest.raises(SolidError, match=r"mesh size h must be > 0 \[m\]; got -0.002"):
+        solid_mesh(CASES[0], None, -2e-3)
+    with pytest.raises(SolidError, match="got 0.0"):
+        tendon_mesh(None, 0.0, 45.0)

@@ -97,15 +97,16 @@ def tangents(secs, h: float = 4e-3) -> list[Check]:
     return out
 
 
-def every_check(log=print) -> list[Check]:
-    """All of the above, each logged as it completes."""
+def every_check(log=print, docs: str = DOCS) -> list[Check]:
+    """All of the above against the CSVs in ``docs``, each logged as it completes."""
     from ancf_verify.bars.cases import CASES
     from ancf_verify.contact.tendon import tendon_sections
     from ancf_verify.fibres.cases import LAWS
     from ancf_verify.stack import import_stack
     import_stack()
     out = []
-    jobs = [lambda c=c: [bar(c)] for c in CASES] + [lambda: [fibre_bar(LAWS[0])], lambda: [soft_matrix_bar()]]
+    jobs = [lambda c=c: [bar(c, docs)] for c in CASES] + [lambda: [fibre_bar(LAWS[0], docs)],
+                                                        lambda: [soft_matrix_bar(docs)]]
     secs = tendon_sections()
     jobs += [lambda: contact_off(secs), lambda: tangents(secs)]
     for job in jobs:

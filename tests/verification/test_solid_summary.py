@@ -1,9 +1,15 @@
 """``make verify-solid``'s table (ancf_verify.summary) from the committed CSVs: every reference
 of every family is a row, with its convergence and the beams' errors read off the CSVs."""
 import math
+import os
+import shutil
+import sys
+
+import pytest
 
 from ancf_verify.cli.summary import main
 from ancf_verify.summary import bars, contact, fibres, friction, references, soft_matrix, table
+from helpers import ROOT
 
 
 def test_every_committed_reference_is_a_row():
@@ -30,3 +36,27 @@ def test_the_quick_mode_prints_the_table(capsys):
     assert main(["--quick"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("| reference |") and "three subtendons, Coulomb" in out
+
+
+@pytest.mark.parametrize("docs", ["missing", "README.md", "empty"])
+def test_a_docs_directory_without_references_is_refused(docs, tmp_path, capsys):
+    """--quick --docs /nonexistent printed an empty table and exit 0 (a README.md: NotADirectoryError,
+    exit 1); now one line naming --docs, exit 2, before any solid is re-solved."""
+    (tmp_path / "empty").mkdir()
+    path = os.path.join(ROOT, docs) if docs == "README.md" else str(tmp_path / docs)
+    with pytest.raises(SystemExit) as exc:
+        main(["--quick", "--docs", path])
+    assert exc.value.code == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"{os.path.basename(sys.argv[0])}: --docs: no reference CSV (solid_comparison.csv, solid_contact.csv, ...) "
+        f"in {path!r}; give the directory that holds them (default docs/) (see {os.path.basename(sys.argv[0])} --help)"]
+
+
+def test_the_checks_read_the_given_docs(tmp_path, monkeypatch, capsys):
+    """The re-solves were compared with docs/'s CSVs whatever --docs said (the table read --docs)."""
+    import ancf_verify.checks
+    shutil.copy(os.path.join(ROOT, "docs", "solid_comparison.csv"), tmp_path)
+    seen = []
+    monkeypatch.setattr(ancf_verify.checks, "every_check", lambda **kw: seen.append(kw.get("docs")) or [])
+    assert main(["--docs", str(tmp_path)]) == 0
+    assert seen == [str(tmp_path)] and "bar: tension" in capsys.readouterr().out

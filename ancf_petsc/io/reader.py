@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import h5py
@@ -110,11 +111,44 @@ def read_results(directory: str) -> Results:
     return Results(os.path.abspath(directory), summary)
 
 
+@contextmanager
+def opened(results_h5: str, locking: bool | None = None):
+    """results.h5 open for reading; InputError naming it when HDF5 cannot open it (truncated,
+    empty, not HDF5: an OSError traceback in ancf-report --existing before)."""
+    try:
+        h5 = h5py.File(results_h5, "r", locking=locking)
+    except OSError as exc:
+        raise InputError("results", f"{results_h5}: cannot read ({exc}): not a whole results.h5; "
+                                    "run ancf-solve again") from None
+    with h5:
+        yield h5
+
+
+def _level(h5, results_h5: str, step: int):
+    """Group ``steps/step_NNNN`` of an open results.h5; InputError when the file does not hold it."""
+    g = h5["steps"].get(f"step_{step:04d}") if "steps" in h5 else None
+    if g is None:
+        held = len(h5["steps"]) if "steps" in h5 else 0
+        raise InputError("results", f"{results_h5}: no level {step} (it holds {held}): summary.json lists "
+                                    "levels this results.h5 does not (another run's file?); run ancf-solve again")
+    return g
+
+
+def check_levels(directory: str, summary: dict) -> None:
+    """The results.h5 of ``directory``, when there, opens and holds every level ``summary`` lists
+    (InputError naming it if not: a truncated file or another run's ended ancf-report in a traceback)."""
+    path = os.path.join(directory, "results.h5")
+    if os.path.exists(path):
+        with opened(path, locking=False) as h5:
+            for k in range(1, len(summary.get("steps", [])) + 1):
+                _level(h5, path, k)
+
+
 def read_contact(results_h5: str, step: int) -> dict:
     """Contact fields of one converged level of a run (``steps/step_NNNN/contact``) and its
-    load factor."""
-    with h5py.File(results_h5, "r") as h5:
-        g = h5["steps"][f"step_{step:04d}"]
+    load factor; InputError when results.h5 cannot be read or lacks the level."""
+    with opened(results_h5) as h5:
+        g = _level(h5, results_h5, step)
         if "contact" not in g:
             raise KeyError(f"{results_h5}: the run has no contact (no contact fields at level {step})")
         out = {k: g["contact"][k][()] for k in g["contact"]}

@@ -18,7 +18,7 @@ from ..config.parse import load_config
 from ..errors import InputError
 from ..status import LEVELS_PASSED_OVER
 from ..io.levels import step_at
-from ..io.reader import read_results
+from ..io.reader import check_levels, read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
 from .inputs import TWISTS, PaperInputs
@@ -57,6 +57,7 @@ class ExistingRun:
             # read_results: a run still 'running' (or killed) gets the levels results.h5 holds
             # beyond summary.json's, as read_results and --restart see them
             self.summary = read_results(directory).summary
+            check_levels(directory, self.summary)
         except InputError as exc:
             raise InputError("--existing", exc.message) from None
         s = self.summary

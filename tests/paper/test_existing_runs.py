@@ -289,3 +289,35 @@ def test_an_accepted_unstable_level_is_marked_in_the_tables(tmp_path):
     assert "| completed |" in text
     assert text.count("| 50 (unstable: 1 negative tangent eigenvalue(s)) | ") == 2, text[:3000]
     assert "| 10 | " in text
+
+
+def test_a_damaged_or_foreign_results_h5_is_a_one_line_error(tmp_path):
+    """A contact run whose results.h5 was truncated (a full disk, a copy cut short), emptied, or
+    is another run's with fewer levels: ancf-report --existing ended in an OSError or KeyError
+    traceback (exit 1) from the slip figure's read_contact; now one line naming the file, exit 2,
+    before anything is written."""
+    import shutil
+    import h5py
+    from helpers import CONFIGS
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 2
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"], raw["output"] = [10.0, 20.0], {"vtk": False}
+    run = tmp_path / "run"
+    p = solve_cli(write_config(raw, tmp_path / "t.yaml"), extra=["--output-dir", str(run), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    for case in ("truncated", "empty", "foreign"):
+        shutil.copytree(run, tmp_path / case)
+        h5 = tmp_path / case / "results.h5"
+        if case == "foreign":
+            with h5py.File(h5, "a") as f:
+                del f["steps/step_0002"]
+        else:
+            os.truncate(h5, 2000 if case == "truncated" else 0)
+        cmd = [os.path.join(VENV_BIN, "ancf-report"), "--existing", str(tmp_path / case), "--out", str(tmp_path / f"o_{case}")]
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+        assert p.returncode == 2 and "Traceback" not in p.stderr, (case, p.stderr)
+        assert len(p.stderr.strip().splitlines()) == 1 and f"--existing: {h5}: " in p.stderr, (case, p.stderr)
+        assert ("no level 2 (it holds 1)" if case == "foreign" else "cannot read") in p.stderr, p.stderr
+        assert not os.path.exists(tmp_path / f"o_{case}")

@@ -12,7 +12,7 @@ import sys
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-__all__ = ["Parser", "run", "size", "sizes", "study_parts"]
+__all__ = ["Parser", "count", "run", "size", "sizes", "study_parts"]
 
 
 def run(command: str, name: str, argv: list[str] | None = None) -> int:
@@ -52,6 +52,17 @@ def sizes(text: str) -> list[float]:
     if not out:
         raise argparse.ArgumentTypeError(f"expected mesh sizes > 0 separated by commas, e.g. 2e-3,1.4e-3; got {text!r}")
     return out
+
+
+def count(text: str) -> int:
+    """A count >= 1 (``--ancf-repeats``, ``--quad-degree``)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
+    return value
 
 
 def study_parts(prog: str, doc: str, names, argv: list[str] | None, more: str = "") -> list[str]:

@@ -29,7 +29,6 @@ Usage: python scripts/verify_solid.py [--quick] [--out docs] [--cases tension,be
 """
 from __future__ import annotations
 
-import argparse
 import copy
 import os
 import tempfile
@@ -42,9 +41,10 @@ from ancf_verify.bars.mesh import solid_mesh
 from ancf_verify.bars.report import (fmt_u, goal_lines, limit_lines, plot, render_md, replot, summary_table,
     table, write_csv)
 from ancf_verify.bars.solid import run_solid, solve_solid
+from ancf_verify.cli import Parser, count
 from ancf_verify.convergence import goal, richardson
 from ancf_verify.paths import ROOT
-from ancf_verify.stack import SolidError, import_stack
+from ancf_verify.stack import import_stack
 
 
 # --------------------------------------------------------------------------------------------
@@ -69,19 +69,21 @@ def run_case(case: Case, args, tmp: str) -> tuple:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarser set (smoke run)")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="output directory (default docs/)")
     ap.add_argument("--cases", default=",".join(c.key for c in CASES), help="comma-separated case keys")
-    ap.add_argument("--ancf-repeats", type=int, default=3)
-    ap.add_argument("--solid-repeats", type=int, default=2)
+    ap.add_argument("--ancf-repeats", type=count, default=3)
+    ap.add_argument("--solid-repeats", type=count, default=2)
     ap.add_argument("--max-repeat-time", type=float, default=60.0,
                     help="do not repeat a solid solve that took longer than this [s]")
-    ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
+    ap.add_argument("--quad-degree", type=count, default=2, help="solid quadrature degree (default 2)")
     ap.add_argument("--replot", action="store_true",
                     help="only redraw figures/solid_vs_ancf.png from <out>/solid_comparison.csv")
     args = ap.parse_args(argv)
     if args.replot:
+        if not os.path.exists(os.path.join(args.out, "solid_comparison.csv")):
+            ap.error(f"--replot: no solid_comparison.csv in --out {args.out!r}; give the directory of a run's CSV")
         replot(os.path.join(args.out, "solid_comparison.csv"),
                os.path.join(args.out, "figures", "solid_vs_ancf.png"))
         return 0
@@ -89,8 +91,10 @@ def main(argv=None) -> int:
         args.ancf_repeats, args.solid_repeats = min(args.ancf_repeats, 2), 1
     wanted = [k.strip() for k in args.cases.split(",") if k.strip()]
     unknown = set(wanted) - {c.key for c in CASES}
-    if unknown:
-        raise SolidError(f"unknown case(s) {sorted(unknown)}; choose from {[c.key for c in CASES]}")
+    if unknown or not wanted:
+        what = f"unknown case(s) {', '.join(sorted(unknown))}" if unknown else "no case"
+        ap.error(f"--cases: {what}; choose from "
+                 f"{', '.join(c.key for c in CASES)}; got {args.cases!r}")
     import_stack()
     t_start = time.perf_counter()
     figdir = os.path.join(args.out, "figures")

@@ -40,3 +40,23 @@ def test_the_meshes_refuse_a_size_gmsh_cannot_take():
         solid_mesh(CASES[0], None, -2e-3)
     with pytest.raises(SolidError, match="got 0.0"):
         tendon_mesh(None, 0.0, 45.0)
+
+
+@pytest.mark.parametrize("argv, want", [
+    (["--cases", "tensoin"], "--cases: unknown case(s) tensoin; choose from tension, bending, pretwisted, soleus; "
+                             "got 'tensoin'"),
+    (["--cases", ","], "--cases: no case; choose from tension, bending, pretwisted, soleus; got ','"),
+    (["--ancf-repeats", "0"], "argument --ancf-repeats: expected a positive integer; got 0"),
+    (["--quad-degree", "-1"], "argument --quad-degree: expected a positive integer; got -1"),
+    (["--replot", "--out", "/nonexistent"], "--replot: no solid_comparison.csv in --out '/nonexistent'; "
+                                            "give the directory of a run's CSV"),
+])
+def test_verify_solid_names_the_bad_option(argv, want, capsys):
+    """verify_solid.py --cases tensoin said 'unknown case(s) ['tensoin']' naming no option, exit 1;
+    --cases , ended in 'StopIteration', --ancf-repeats 0 in an AttributeError after the solid's JIT,
+    --replot --out /nonexistent in a FileNotFoundError (exit 1 each); now one line, exit 2."""
+    from ancf_verify.cli.bars import main
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    prog = os.path.basename(sys.argv[0])
+    assert exc.value.code == 2 and capsys.readouterr().err.splitlines() == [f"{prog}: {want} (see {prog} --help)"]

@@ -49,9 +49,9 @@ import time
 
 from ancf_verify.bars.cases import ancf_section
 from ancf_verify.fibres.beams import ancf_runs
-from ancf_verify.fibres.cases import (ANCF_MIXED, ANCF_MODELS, BLOCK, BULK_RATIOS, CSV_NAME, DOC, ELEMENTS,
+from ancf_verify.fibres.cases import (ANCF_MIXED, ANCF_MODELS, BLOCK, BULK_RATIOS, CSV_NAME, ELEMENTS,
     FIGURE, LAWS, make_case)
-from ancf_verify.fibres.report import csv_rows, read_csv, render_block, write_csv, write_outputs
+from ancf_verify.fibres.report import csv_rows, page_for, read_csv, render_block, write_csv, write_outputs
 from ancf_verify.fibres.solid import run_solid
 from ancf_verify.paths import ROOT
 from ancf_verify.stack import import_stack
@@ -61,14 +61,14 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarse meshes, K/mu = 50 only (smoke run)")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV and figures/")
-    ap.add_argument("--doc", default=DOC, help="the page with the marked block (default docs/fibres.md)")
+    ap.add_argument("--doc", default=None, help="the page with the marked block (default docs/fibres.md with --out docs, else a copy of it in --out)")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
     ap.add_argument("--replot", action="store_true", help="block and figure from <out>/solid_fibres.csv")
     ap.add_argument("--ancf-only", action="store_true",
                     help="run the ANCF models again and keep the solid rows of <out>/solid_fibres.csv (no dolfinx)")
     args = ap.parse_args(argv)
     if args.replot:
-        write_outputs(args.out, read_csv(os.path.join(args.out, CSV_NAME)), args.doc)
+        write_outputs(args.out, read_csv(os.path.join(args.out, CSV_NAME)), page_for(args.out, args.doc))
         return 0
     solid_rows = [d for d in read_csv(os.path.join(args.out, CSV_NAME)) if d["model"] not in ANCF_MODELS] \
         if args.ancf_only else None
@@ -95,6 +95,7 @@ def main(argv=None) -> int:
                           f"{ANCF_MIXED}: {1e3 * m['u'][0]:.4f} mm, {m['rot']:+.4f} deg)", flush=True)
                 rows += csv_rows(case, law.key, ratio, runs)
     write_csv(os.path.join(args.out, CSV_NAME), rows)
+    args.doc = page_for(args.out, args.doc)
     write_outputs(args.out, rows, args.doc)
     print(render_block(rows))
     print(f"\n[verify-solid-fibres] {time.perf_counter() - t_start:.0f} s; wrote {args.out}/{CSV_NAME}, "

@@ -33,8 +33,7 @@ import time
 
 from ancf_verify.bars.cases import ancf_section
 from ancf_verify.cli import Parser, size
-from ancf_verify.fibres.cases import DOC
-from ancf_verify.fibres.report import COLUMNS, read_csv, write_csv
+from ancf_verify.fibres.report import COLUMNS, page_for, read_csv, write_csv
 from ancf_verify.fibres.solid import run_solid
 from ancf_verify.paths import ROOT
 from ancf_verify.soft_matrix.beams import beam_runs
@@ -47,7 +46,7 @@ from ancf_verify.stack import import_stack
 def main(argv=None) -> int:
     ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV")
-    ap.add_argument("--doc", default=DOC, help="the page with the marked block (default docs/fibres.md)")
+    ap.add_argument("--doc", default=None, help="the page with the marked block (default docs/fibres.md with --out docs, else a copy of it in --out)")
     ap.add_argument("--replot", action="store_true", help="the block from <out>/solid_soft_matrix.csv")
     ap.add_argument("--ancf-only", action="store_true", help="ANCF again, the CSV's solid rows kept (no dolfinx)")
     ap.add_argument("--force", type=float, default=FORCE, help="end force [N] (other than 200: beam only)")
@@ -60,7 +59,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     path = os.path.join(args.out, CSV_NAME)
     if args.replot:
-        write_doc(args.doc, read_csv(path))
+        write_doc(page_for(args.out, args.doc), read_csv(path))
         return 0
     case = make_case(args.force)
     if args.profile:
@@ -94,6 +93,7 @@ def main(argv=None) -> int:
                       f"{r['field_err']:.1e}", flush=True)
             rows = rows_of(case, beams + solids)
     write_csv(path, rows, COLUMNS + EXTRA)
+    args.doc = page_for(args.out, args.doc)
     write_doc(args.doc, rows)
     print(render_block(rows))
     print(f"\n[verify-solid-soft-matrix] {time.perf_counter() - t_start:.0f} s; wrote {path} and the block "

@@ -4,6 +4,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import shutil
 
 import numpy as np
 
@@ -175,6 +176,20 @@ def replace_block(text: str, block: str, name: str = BLOCK, writer: str = "scrip
     if i < 0 or j < i:
         raise SolidError(f"{DOC}: the markers of block {name} are missing")
     return text[:i + len(begin)] + "\n" + block + "\n" + text[j:]
+
+
+def page_for(out: str, doc: str | None) -> str:
+    """The page whose block a run writes: ``doc`` if given; else docs/fibres.md for a run into
+    docs/, and for a run into another ``out`` a copy of it there (the committed page stays as it is)."""
+    if doc is not None:
+        return doc
+    if os.path.realpath(out) == os.path.realpath(os.path.dirname(DOC)):
+        return DOC
+    mine = os.path.join(out, os.path.basename(DOC))
+    if not os.path.exists(mine):
+        os.makedirs(out, exist_ok=True)
+        shutil.copyfile(DOC, mine)
+    return mine
 
 
 def write_block(doc: str, block: str, name: str = BLOCK, writer: str = "scripts/verify_solid_fibres.py") -> None:

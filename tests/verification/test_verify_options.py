@@ -60,3 +60,18 @@ def test_verify_solid_names_the_bad_option(argv, want, capsys):
         main(argv)
     prog = os.path.basename(sys.argv[0])
     assert exc.value.code == 2 and capsys.readouterr().err.splitlines() == [f"{prog}: {want} (see {prog} --help)"]
+
+
+@pytest.mark.parametrize("command, csv_name", [("fibres", "solid_fibres.csv"), ("soft_matrix", "solid_soft_matrix.csv")])
+def test_a_run_into_another_out_leaves_the_committed_page_alone(command, csv_name, tmp_path):
+    """verify_solid_fibres.py / verify_solid_soft_matrix.py with --out elsewhere (a --quick smoke
+    run, a --replot of another CSV) still rewrote the block of docs/fibres.md from that run's rows;
+    the block now goes to a copy of the page in --out unless --doc names a page."""
+    import importlib
+    import shutil
+    page = os.path.join(ROOT, "docs", "fibres.md")
+    before = os.stat(page).st_mtime_ns
+    shutil.copy(os.path.join(ROOT, "docs", csv_name), tmp_path)
+    assert importlib.import_module(f"ancf_verify.cli.{command}").main(["--replot", "--out", str(tmp_path)]) == 0
+    assert os.stat(page).st_mtime_ns == before
+    assert open(tmp_path / "fibres.md").read() == open(page).read()

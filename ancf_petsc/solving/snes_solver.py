@@ -194,13 +194,13 @@ class SNESSolver:
         """|F| of every iterate of the last SNES solve (its failure message reads it)."""
         return list(self._history)
 
-    def negative_eigenvalues(self, X: PETSc.Vec | None = None) -> int | None:
+    def negative_eigenvalues(self, X: PETSc.Vec | None = None, own: bool = False) -> int | None:
         """Eigenvalues ≤ 0 of the last factored tangent on the constraint surface: the LDLᵀ inertia
         less one per contact constraint (m independent constraints give m negative eigenvalues
         besides the constrained tangent's), plus the null pivots (a mechanism the supports leave
         free).  ``X``: the converged state, factored first where the last factor is no Newton
-        iterate of it (``factor_at``)."""
-        if X is not None and not self.factor_at(X):
+        iterate of it (``factor_at``), or (``own``) is not X's own."""
+        if X is not None and not self.factor_at(X, own):
             return None
         counts = pivot_counts(self.snes.getKSP())
         if counts is None:
@@ -212,7 +212,7 @@ class SNESSolver:
         """The stepper accepted the state the last solve converged to."""
         self.accepted_assemblies = self.assemblies
 
-    def factor_at(self, X: PETSc.Vec) -> bool:
+    def factor_at(self, X: PETSc.Vec, own: bool = False) -> bool:
         """Factor the tangent at X (the converged state of the last solve) when that solve took
         no Newton iteration and a tangent was factored since the last accepted state: the factor
         is then another state's, a failed attempt's iterate (after a cut-back a unilateral
@@ -223,10 +223,10 @@ class SNESSolver:
         accepted state (a stride frame whose loads did not change) that state's is kept.  The
         contact status is kept (the stepper has checked it at X).  False where the factorisation
         failed (no count, as for a solver without inertia).  With ``solver.tangent: mixed`` a
-        factor whose tangent was corrected (petsc/mixed_tangent.py) is replaced too.  Collective."""
+        factor whose tangent was corrected (petsc/mixed_tangent.py) is replaced too (``own``: any).  Collective."""
         mixed = self.problem.mixed is not None and pivot_counts(self.snes.getKSP()) is not None \
             and self.problem.comm.tompi4py().allreduce(self.problem.mixed.corrected, op=MPI.LOR)
-        if not mixed and (self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies):
+        if not (mixed or own) and (self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies):
             return True
         if self.fascicle_schur is not None:
             self.fascicle_schur.keep_factors = False

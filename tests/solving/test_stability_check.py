@@ -275,6 +275,24 @@ def test_a_loose_tolerance_polishes_a_state_before_calling_it_unstable(tmp_path,
         assert a["residual_norm"] < 1e-6           # the polished state's |F|, as reported
 
 
+def test_a_rise_in_the_count_is_read_on_the_states_own_tangent(tmp_path):
+    """A neo-Hookean bar of radius 2 mm and L = 1 m stretched 23 % in one step converged to the
+    exact stretch in 10 Newton iterations, but its count was read from an earlier iterate's factor
+    (chord steps near convergence), where a nearly singular mode of the state (+4.5e-7) read −5e-5:
+    'UNSTABLE_STATE', 4 cut-backs, 35 Newton iterations to the same state.  A rise is now counted
+    on the state's own tangent (critical_point.verdict_count)."""
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["geometry"]["length"] = 1.0
+    raw["beams"][0]["section"] = {"shape": "circle", "radius": 0.002}
+    raw["loads"][0]["traction_force"] = [7.2, 0.0, 0.0]
+    raw["steps"], raw["output"] = [1.0], {"vtk": False}
+    s = run_inline(raw, tmp_path)
+    st = s["steps"][-1]
+    assert s["status"] == "completed" and st["cutbacks"] == 0 and st["substeps"] == 1, s["message"]
+    assert s["newton_iterations"] == 10 and st["negative_eigenvalues"] == 0
+    assert st["probes"]["tip"]["displacement"][0] == pytest.approx(0.2342583, rel=1e-6)
+
+
 @pytest.mark.parametrize("rtol", [1e-2, 1e-1])
 def test_a_loose_rtol_is_held_to_its_share_of_the_loads(tmp_path, rtol):
     """PETSc's -snes_rtol is relative to the solve's first |F|, which the secant predictor inflates

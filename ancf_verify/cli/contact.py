@@ -64,7 +64,7 @@ from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_cs
     selftest_rows, solid_rows, write_csv)
 from ancf_verify.contact.selftest import selftest
 from ancf_verify.contact.solid import run_solid
-from ancf_verify.contact.tendon import ContactError, tendon_sections, use_source
+from ancf_verify.contact.tendon import tendon_sections, use_source
 from ancf_verify.paths import ROOT
 from ancf_verify.roots import ROOTS
 from ancf_verify.stack import import_stack
@@ -104,6 +104,9 @@ def main(argv=None) -> int:
     ap.add_argument("--merge", action="store_true",
                     help="keep the rows of the existing CSV that this run does not redo")
     args = ap.parse_args(argv)
+    laws = [law.strip() for law in args.laws.split(",") if law.strip()]
+    if not laws or set(laws) - {"sliding", "unilateral"}:
+        ap.error(f"--laws: expected sliding and/or unilateral separated by commas; got {args.laws!r}")
     use_source(args.ancf_src, args.ancf_label)
     csv_path = os.path.join(args.out, "solid_contact.csv")
     md_path = os.path.join(args.out, "solid_contact.md")
@@ -147,10 +150,6 @@ def main(argv=None) -> int:
             finish(rows, {"argv": " ".join(sys.argv[1:])})
         return 0
     psis = [float(p) for p in args.psi.split(",") if p.strip()]
-    laws = [l.strip() for l in args.laws.split(",") if l.strip()]
-    bad = set(laws) - {"sliding", "unilateral"}
-    if bad:
-        raise ContactError(f"unknown law(s) {sorted(bad)}")
     hs = args.h
     elements = [int(e) for e in args.elements.split(",")]
     loads = [float(f) for f in args.loads.split(",") if f.strip()]

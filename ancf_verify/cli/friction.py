@@ -91,6 +91,10 @@ def main(argv=None) -> int:
         print(f"verify_solid_friction: --ancf-spaces: unknown {unknown}; known: default, {', '.join(SPACES)}",
               file=sys.stderr)
         return 2
+    try:
+        locs = local_sizes(args, len(args.h))
+    except ValueError as exc:
+        ap.error(str(exc))
     paths = Paths(args.out)
     if args.replot:
         finish(paths, read_csv(paths.csv), {})
@@ -114,7 +118,6 @@ def main(argv=None) -> int:
             return 0
     psis = [float(p) for p in args.psi.split(",") if p.strip()]
     hs = args.h
-    locs = local_sizes(args, len(hs))
     loads = [float(F) for F in args.loads.split(",") if F.strip()] or list(LOADS)
     mu = args.mu
     zone = args.free_zone
@@ -159,7 +162,11 @@ def main(argv=None) -> int:
 
 def local_sizes(args, n: int) -> list:
     """One contact.mesh.LocalSize (or None: uniform) per --h from --h-interface and --refine-at."""
-    hi = [float(x) for x in args.h_interface.split(",") if x.strip()]
-    if hi and len(hi) != n:
-        raise SystemExit(f"verify_solid_friction: --h-interface gives {len(hi)} sizes for {n} --h")
+    try:
+        hi = [float(x) for x in args.h_interface.split(",") if x.strip()]
+    except ValueError:
+        raise ValueError(f"--h-interface: expected sizes [m] separated by commas, e.g. 1e-3,7e-4; "
+                         f"got {args.h_interface!r}") from None
+    if hi and len(hi) != n or any(not x >= 0 for x in hi):
+        raise ValueError(f"--h-interface: one size >= 0 per --h ({n}; 0: uniform); got {args.h_interface!r}")
     return [LocalSize(args.refine_at, x) if x > 0 else None for x in hi] or [None] * n

@@ -75,3 +75,23 @@ def test_a_run_into_another_out_leaves_the_committed_page_alone(command, csv_nam
     assert importlib.import_module(f"ancf_verify.cli.{command}").main(["--replot", "--out", str(tmp_path)]) == 0
     assert os.stat(page).st_mtime_ns == before
     assert open(tmp_path / "fibres.md").read() == open(page).read()
+
+
+@pytest.mark.parametrize("command, argv, want", [
+    ("contact", ["--laws", "slidng"], "--laws: expected sliding and/or unilateral separated by commas; got 'slidng'"),
+    ("friction", ["--h", "2e-3,1.4e-3", "--h-interface", "1e-3"],
+     "--h-interface: one size >= 0 per --h (2; 0: uniform); got '1e-3'"),
+    ("friction", ["--h-interface=-7e-4"], "--h-interface: one size >= 0 per --h (3; 0: uniform); got '-7e-4'"),
+    ("friction", ["--h-interface", "x"],
+     "--h-interface: expected sizes [m] separated by commas, e.g. 1e-3,7e-4; got 'x'"),
+])
+def test_a_bad_law_or_local_size_is_refused_before_solving(command, argv, want, tmp_path, capsys):
+    """verify_solid_contact.py --laws slidng said "unknown law(s) ['slidng']" (exit 1, no option
+    named) after loading the stack; verify_solid_friction.py's --h-interface count was checked only
+    after the friction tangent's finite-difference self-test (a minute), exit 1, and a negative size
+    was taken for 'uniform' without a word."""
+    import importlib
+    with pytest.raises(SystemExit) as exc:
+        importlib.import_module(f"ancf_verify.cli.{command}").main([*argv, "--out", str(tmp_path)])
+    prog = os.path.basename(sys.argv[0])
+    assert exc.value.code == 2 and capsys.readouterr().err.splitlines() == [f"{prog}: {want} (see {prog} --help)"]

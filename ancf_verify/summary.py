@@ -20,8 +20,9 @@ class Reference:
     quantity: str
     meshes: str
     convergence: float                    # relative uncertainty of the reference (mesh change)
-    errors: dict = field(default_factory=dict)   # elements → signed relative error (worst over loads)
+    errors: dict = field(default_factory=dict)   # elements → relative error (worst over loads)
     source: str = ""
+    signed: bool = True                   # False: a norm |Δu|/|u| (no sign to print)
 
 
 def _worst(values) -> float:
@@ -40,7 +41,7 @@ def bars(docs: str = DOCS) -> list[Reference]:
         errs = {int(r["resolution"].split()[0]): float(r["rel_error"]) for r in mine if r["model"] == "ANCF 2pt"}
         out.append(Reference(f"bar: {case}", "|Δu|/|u| end centroid", f"{len(solid)} meshes, h {solid[0]['resolution'][2:]}"
                              f"-{solid[-1]['resolution'][2:]}", float(mine[0]["ref_rel_uncertainty"]),
-                             {n: errs.get(n, math.nan) for n in ELEMENTS}, "solid_comparison.csv"))
+                             {n: errs.get(n, math.nan) for n in ELEMENTS}, "solid_comparison.csv", signed=False))
     return out
 
 
@@ -88,7 +89,7 @@ def fibres(docs: str = DOCS) -> list[Reference]:
         e = {int(r["res"].split()[0]): r["err_u"] for r in c["ancf"]}
         out.append(Reference(f"fibre bar: {c['law']}, K/μ = {c['ratio']:g}", "|Δu|/|u| end centroid", f"{len(c['solid'])} meshes, "
                              f"{c['solid'][0]['res'][2:]}-{c['solid'][-1]['res'][2:]}", c["unc_u"],
-                             {n: e.get(n, math.nan) for n in ELEMENTS}, "solid_fibres.csv"))
+                             {n: e.get(n, math.nan) for n in ELEMENTS}, "solid_fibres.csv", signed=False))
     return out
 
 
@@ -122,8 +123,8 @@ def references(docs: str = DOCS) -> list[Reference]:
     return out
 
 
-def _pct(x: float) -> str:
-    return "—" if not np.isfinite(x) else f"{100 * x:+.2f} %"
+def _pct(x: float, signed: bool = True) -> str:
+    return "—" if not np.isfinite(x) else f"{100 * x:+.2f} %" if signed else f"{100 * x:.2f} %"
 
 
 def table(refs: list[Reference]) -> str:
@@ -134,5 +135,5 @@ def table(refs: list[Reference]) -> str:
     for r in refs:
         conv = "—" if not np.isfinite(r.convergence) else f"{100 * r.convergence:.2f} %"
         lines.append(f"| {r.name} | {r.quantity} | {r.meshes} | {conv} | "
-                     + " | ".join(_pct(r.errors.get(n, math.nan)) for n in ELEMENTS) + " |")
+                     + " | ".join(_pct(r.errors.get(n, math.nan), r.signed) for n in ELEMENTS) + " |")
     return "\n".join(lines)

@@ -60,3 +60,14 @@ def test_the_checks_read_the_given_docs(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(ancf_verify.checks, "every_check", lambda **kw: seen.append(kw.get("docs")) or [])
     assert main(["--docs", str(tmp_path)]) == 0
     assert seen == [str(tmp_path)] and "bar: tension" in capsys.readouterr().out
+
+
+def test_a_norm_is_printed_without_a_sign():
+    """The bars' and fibre bars' errors are norms |u − u_ref| / |u_ref| (solid_comparison.csv:
+    tension, 8 el., 2 points: 1.18e-03 where the beam's |u| is 0.07 % *short* of the solid's) but
+    were printed '+0.12 %', as if the beam were that much softer; the signed u_x errors of the
+    contact and soft-matrix rows keep their sign."""
+    lines = {line.split(" | ")[0][2:]: line for line in table(references()).splitlines()[2:]}
+    assert lines["bar: tension"].endswith("| 0.88 % | 0.10 % | 0.12 % | 0.09 % |")
+    assert "+" not in lines["fibre bar: goh_twist, K/μ = 50"]
+    assert lines["soft-matrix bar (GOH alex set), beams locking: none"].endswith("| +30.39 % | +30.31 % | — |")

@@ -3,7 +3,6 @@ reference nodal vectors, fingerprint, partition, sections) and per converged lev
 ``/steps/step_NNNN`` with its nodal vectors, record, contact fields, reactions and restart data."""
 from __future__ import annotations
 
-import h5py
 import numpy as np
 import yaml
 
@@ -197,7 +196,7 @@ def recover_level(h5_path: str, name: str) -> bool:
     """After a failed write of level ``name`` (``step_NNNN``): drop a partial level; True if
     the level is complete in the file after all (``/steps`` attributes then name it)."""
     try:
-        with h5py.File(h5_path, "a") as h5:
+        with fast.open_file(h5_path, "a") as h5:
             steps = h5["steps"]
             if name + ".partial" in steps:
                 del steps[name + ".partial"]
@@ -229,7 +228,7 @@ def truncate_levels(h5_path: str, step: int, load_factor: float, config: str | N
     ``config`` (the restarted run's ``config_text``) is stored as the one solved with, and
     ``layout`` with its ``stats`` as the partition (the restart's ranks may differ)."""
     try:
-        with h5py.File(h5_path, "a") as h5:
+        with fast.open_file(h5_path, "a") as h5:
             if config is not None:
                 h5["model"].attrs["config_yaml"] = config
             if layout is not None:

@@ -60,7 +60,7 @@ class Results:
         """Nodal vectors (n_nodes, V, 3) at converged level ``step`` (0: the reference state,
         -1: the last level)."""
         k = self.level(step)
-        with h5py.File(self.h5_path, "r") as h5:
+        with opened(self.h5_path) as h5:
             if k == 0:
                 return h5["model/reference_nodal_vectors"][()]
             return h5["steps"][f"step_{k:04d}"]["nodal_vectors"][()]
@@ -112,11 +112,12 @@ def read_results(directory: str) -> Results:
 
 
 @contextmanager
-def opened(results_h5: str, locking: bool | None = None):
-    """results.h5 open for reading; InputError naming it when HDF5 cannot open it (truncated,
-    empty, not HDF5: an OSError traceback in ancf-report --existing before)."""
+def opened(results_h5: str):
+    """results.h5 open for reading, without a file lock (a running run writes its next level);
+    InputError naming it when HDF5 cannot open it (truncated, empty, not HDF5: an OSError
+    traceback in ancf-report --existing before)."""
     try:
-        h5 = h5py.File(results_h5, "r", locking=locking)
+        h5 = h5py.File(results_h5, "r", locking=False)
     except OSError as exc:
         raise InputError("results", f"{results_h5}: cannot read ({exc}): not a whole results.h5; "
                                     "run ancf-solve again") from None
@@ -139,7 +140,7 @@ def check_levels(directory: str, summary: dict) -> None:
     (InputError naming it if not: a truncated file or another run's ended ancf-report in a traceback)."""
     path = os.path.join(directory, "results.h5")
     if os.path.exists(path):
-        with opened(path, locking=False) as h5:
+        with opened(path) as h5:
             for k in range(1, len(summary.get("steps", [])) + 1):
                 _level(h5, path, k)
 

@@ -30,7 +30,6 @@ import os
 import re
 import time
 
-import h5py
 import numpy as np
 
 from ..model.beams import Model
@@ -194,7 +193,7 @@ class ResultsWriter:
             pass                                   # no room even for that: the exit code says it
         if os.path.exists(self.h5_path):
             try:
-                with h5py.File(self.h5_path, "a") as h5:
+                with h5fast.open_file(self.h5_path, "a") as h5:
                     h5.attrs["status"] = "failed"
                     h5.attrs["reason_code"] = OUTPUT_ERROR
             except (OSError, RuntimeError):
@@ -215,7 +214,7 @@ class ResultsWriter:
             raise OutputError(self.dir, f"cannot set aside {RESERVE_BYTES // 1024} KB for the results: "
                                         f"{os_reason(exc)}") from None
         try:
-            with h5py.File(self.h5_path, "w") as h5:
+            with h5fast.open_file(self.h5_path, "w") as h5:
                 write_model_group(h5, self.model, layout, run_info, self.summary["version"])
         except (OSError, RuntimeError) as exc:
             self._release_reserve()
@@ -321,7 +320,7 @@ class ResultsWriter:
         if surface is not None:
             level["surface"] = {"points": surface[0], **surface[2]}
         try:
-            with h5py.File(self.h5_path, "a") as h5:
+            with h5fast.open_file(self.h5_path, "a") as h5:
                 steps = h5["steps"]
                 g = steps.create_group(name + ".partial")      # renamed once complete
                 write_level_group(g, record, q, level, contact, path, self.model)
@@ -369,7 +368,7 @@ class ResultsWriter:
         except OutputError as exc:
             problem = str(exc)
         try:
-            with h5py.File(self.h5_path, "a") as h5:
+            with h5fast.open_file(self.h5_path, "a") as h5:
                 h5.attrs["status"] = status
                 h5.attrs["reason_code"] = str(info.get("reason_code", ""))
         except (OSError, RuntimeError):

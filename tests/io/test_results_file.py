@@ -143,3 +143,37 @@ def test_a_subtendons_elongation_is_last_minus_first(tmp_path):
     assert abs(st["probes"]["tip"]["displacement"][0] + 2.4604212883e-2) < 1e-12
     assert abs(bar["elongation"] - 2.4604212883e-2) < 1e-12
     assert abs(bar["strain"] - 0.24604212883) < 1e-10
+
+
+def test_a_reader_holding_results_h5_does_not_stop_the_run(tmp_path, monkeypatch):
+    """A reader that holds results.h5 open while the run goes on (``ancf-report --existing`` on
+    it, a notebook's ``h5py.File``, both with HDF5's file lock) made the run's next level fail:
+    'output error: results.h5: cannot write level 53: Resource temporarily unavailable', failed,
+    OUTPUT_ERROR, exit 2.  The writer now opens it without HDF5's lock (the directory's own lock
+    keeps other runs out), and every level is written."""
+    import subprocess
+    import sys
+    from ancf_petsc.io import results
+    held, check = [], results.ResultsWriter._check_space
+    hold = ("import h5py, sys, time; f = h5py.File(sys.argv[1], 'r', locking=True); "
+            "print('open', flush=True); time.sleep(300)")
+
+    def held_then_check(self, k, q):
+        if not held:                            # before level 1 is written: another process reads
+            held.append(subprocess.Popen([sys.executable, "-c", hold, self.h5_path], stdout=subprocess.PIPE,
+                                         text=True))
+            assert held[0].stdout.readline().strip() == "open"
+        return check(self, k, q)
+
+    monkeypatch.setattr(results.ResultsWriter, "_check_space", held_then_check)
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["steps"] = [0.5, 1.0]
+    try:
+        s = run_inline(raw, tmp_path)
+    finally:
+        for p in held:
+            p.kill()
+            p.wait()
+    assert held and s["status"] == "completed" and len(s["steps"]) == 2, s.get("message")
+    with h5py.File(tmp_path / "results.h5", "r") as f:
+        assert f["steps"].attrs["converged"] == 2 and f.attrs["status"] == "completed"

@@ -84,6 +84,7 @@ def main(argv=None) -> int:
     if args.replot:
         if not os.path.exists(os.path.join(args.out, "solid_comparison.csv")):
             ap.error(f"--replot: no solid_comparison.csv in --out {args.out!r}; give the directory of a run's CSV")
+        os.makedirs(os.path.join(args.out, "figures"), exist_ok=True)
         replot(os.path.join(args.out, "solid_comparison.csv"),
                os.path.join(args.out, "figures", "solid_vs_ancf.png"))
         return 0

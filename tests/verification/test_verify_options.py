@@ -95,3 +95,14 @@ def test_a_bad_law_or_local_size_is_refused_before_solving(command, argv, want, 
         importlib.import_module(f"ancf_verify.cli.{command}").main([*argv, "--out", str(tmp_path)])
     prog = os.path.basename(sys.argv[0])
     assert exc.value.code == 2 and capsys.readouterr().err.splitlines() == [f"{prog}: {want} (see {prog} --help)"]
+
+
+def test_verify_solid_replots_into_a_new_directory(tmp_path):
+    """verify_solid.py --replot --out DIR (DIR holding a copy of solid_comparison.csv) ended in
+    'FileNotFoundError: ... DIR/figures/solid_vs_ancf.png', exit 1: figures/ was not made."""
+    import shutil
+
+    from ancf_verify.cli.bars import main
+    shutil.copy(os.path.join(ROOT, "docs", "solid_comparison.csv"), tmp_path)
+    assert main(["--replot", "--out", str(tmp_path)]) == 0
+    assert os.path.getsize(tmp_path / "figures" / "solid_vs_ancf.png") > 0

@@ -128,12 +128,16 @@ def _main(argv: list[str] | None) -> int:
             sections.append(("Bulk modulus fitted to Table 1, psi = 0", rp.fit_markdown(fit)))
         if args.figures and t1 is not None:
             rp.figures(inputs, t1, out, t2, log)
+        text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
+        with open(os.path.join(out, "report.md"), "w") as fh:
+            fh.write(f"# {heading}\n\n" + text + "\n")
     except InputError as exc:
         say_stderr(f"ancf-report: {exc}")
         return 2
-    text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
-    with open(os.path.join(out, "report.md"), "w") as fh:
-        fh.write(f"# {heading}\n\n" + text + "\n")
+    except OSError as exc:               # a figure or report.md not writable, a full disk
+        from ancf_petsc.io.files import os_reason
+        say_stderr(f"ancf-report: output error: {exc.filename or out}: {os_reason(exc)}")
+        return 2
     log(text)
     log(f"\n[report] {os.path.join(out, 'report.md')}")
     return 0

@@ -321,3 +321,18 @@ def test_a_damaged_or_foreign_results_h5_is_a_one_line_error(tmp_path):
         assert len(p.stderr.strip().splitlines()) == 1 and f"--existing: {h5}: " in p.stderr, (case, p.stderr)
         assert ("no level 2 (it holds 1)" if case == "foreign" else "cannot read") in p.stderr, p.stderr
         assert not os.path.exists(tmp_path / f"o_{case}")
+
+
+def test_a_report_that_cannot_be_written_is_a_one_line_error(tmp_path):
+    """--out holding a report.md that cannot be replaced (here a folder so named; another user's
+    file, a full disk alike) ended ancf-report --existing in an IsADirectoryError /
+    PermissionError traceback, exit 1; so did a figure's file.  Now one line naming it, exit 2."""
+    raw = load_raw("pretwisted_bar.yaml")
+    raw["steps"], raw["output"] = raw["steps"][:1], {"vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "bar.yaml"), extra=["--output-dir", str(tmp_path / "bar"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    (tmp_path / "rep" / "report.md").mkdir(parents=True)
+    cmd = [os.path.join(VENV_BIN, "ancf-report"), "--existing", str(tmp_path / "bar"), "--out", str(tmp_path / "rep")]
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.strip() == f"ancf-report: output error: {tmp_path / 'rep' / 'report.md'}: Is a directory", p.stderr

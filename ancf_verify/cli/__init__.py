@@ -12,7 +12,7 @@ import sys
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-__all__ = ["Parser", "count", "run", "size", "sizes", "study_parts"]
+__all__ = ["Parser", "count", "out_dir", "run", "size", "sizes", "study_parts"]
 
 
 def run(command: str, name: str, argv: list[str] | None = None) -> int:
@@ -63,6 +63,15 @@ def count(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
     return value
+
+
+def out_dir(out: str | None, quick: bool, name: str) -> str:
+    """Where a command writes: ``out`` if given, else docs/; a ``--quick`` smoke run without
+    ``--out`` writes to results/<name>_quick/ (git ignores it), not over the committed references."""
+    from ..paths import DOCS, ROOT
+    if out:
+        return out
+    return os.path.join(ROOT, "results", f"{name}_quick") if quick else DOCS
 
 
 def study_parts(prog: str, doc: str, names, argv: list[str] | None, more: str = "") -> list[str]:

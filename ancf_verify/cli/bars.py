@@ -41,9 +41,8 @@ from ancf_verify.bars.mesh import solid_mesh
 from ancf_verify.bars.report import (fmt_u, goal_lines, limit_lines, plot, render_md, replot, summary_table,
     table, write_csv)
 from ancf_verify.bars.solid import run_solid, solve_solid
-from ancf_verify.cli import Parser, count
+from ancf_verify.cli import Parser, count, out_dir
 from ancf_verify.convergence import goal, richardson
-from ancf_verify.paths import ROOT
 from ancf_verify.stack import import_stack
 
 
@@ -71,7 +70,7 @@ def run_case(case: Case, args, tmp: str) -> tuple:
 def main(argv=None) -> int:
     ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarser set (smoke run)")
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="output directory (default docs/)")
+    ap.add_argument("--out", help="output directory (default docs/; with --quick results/verify_solid_quick/)")
     ap.add_argument("--cases", default=",".join(c.key for c in CASES), help="comma-separated case keys")
     ap.add_argument("--ancf-repeats", type=count, default=3)
     ap.add_argument("--solid-repeats", type=count, default=2)
@@ -81,6 +80,7 @@ def main(argv=None) -> int:
     ap.add_argument("--replot", action="store_true",
                     help="only redraw figures/solid_vs_ancf.png from <out>/solid_comparison.csv")
     args = ap.parse_args(argv)
+    args.out = out_dir(args.out, args.quick, "verify_solid")
     if args.replot:
         if not os.path.exists(os.path.join(args.out, "solid_comparison.csv")):
             ap.error(f"--replot: no solid_comparison.csv in --out {args.out!r}; give the directory of a run's CSV")

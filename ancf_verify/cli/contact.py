@@ -45,7 +45,7 @@ Usage (make verify-solid-contact runs the first two; about 75 min on one shared 
   python scripts/verify_solid_contact.py                       # sliding study + free soleus + checks
   python scripts/verify_solid_contact.py --merge --no-selftest --no-free --no-checks --laws unilateral       --psi 45 --h 2e-3,1.4e-3 --loads 10,20,40 --max-increment 10   # unilateral rows, added to the CSV
   python scripts/verify_solid_contact.py --ancf-src DIR        # ANCF (and configs) from an export of a commit
-  python scripts/verify_solid_contact.py --quick               # smoke run, coarse meshes
+  python scripts/verify_solid_contact.py --quick               # smoke run, coarse meshes (into results/)
   python scripts/verify_solid_contact.py --selftest            # contact implementation checks
   python scripts/verify_solid_contact.py --replot              # figure + report from the CSV
 Writes docs/solid_contact.csv, docs/solid_contact.md, docs/figures/solid_contact.png.
@@ -57,7 +57,7 @@ import sys
 import tempfile
 import time
 
-from ancf_verify.cli import Parser, sizes
+from ancf_verify.cli import Parser, out_dir, sizes
 from ancf_verify.contact.beams import run_ancf
 from ancf_verify.contact.report import plot, render_md
 from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_csv, reference_rows, row_key,
@@ -65,7 +65,6 @@ from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_cs
 from ancf_verify.contact.selftest import selftest
 from ancf_verify.contact.solid import run_solid
 from ancf_verify.contact.tendon import tendon_sections, use_source
-from ancf_verify.paths import ROOT
 from ancf_verify.roots import ROOTS
 from ancf_verify.stack import import_stack
 
@@ -86,7 +85,7 @@ def main(argv=None) -> int:
                     help="Gauss points per sub-triangle of a slave face (4 sub-triangles)")
     ap.add_argument("--replot", action="store_true", help="figure and report from the CSV (no solving)")
     ap.add_argument("--report", action="store_true", help="same as --replot")
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="output directory")
+    ap.add_argument("--out", help="output directory (default docs/; with --quick results/verify_solid_contact_quick/)")
     ap.add_argument("--loads", default="10,20,40,100,200,300,400",
                     help="solid load levels [N] (the ANCF columns run all of Table 1's levels)")
     ap.add_argument("--max-increment", type=float, default=100.0, help="largest solid load increment [N]")
@@ -107,6 +106,7 @@ def main(argv=None) -> int:
     laws = [law.strip() for law in args.laws.split(",") if law.strip()]
     if not laws or set(laws) - {"sliding", "unilateral"}:
         ap.error(f"--laws: expected sliding and/or unilateral separated by commas; got {args.laws!r}")
+    args.out = out_dir(args.out, args.quick, "verify_solid_contact")
     use_source(args.ancf_src, args.ancf_label)
     csv_path = os.path.join(args.out, "solid_contact.csv")
     md_path = os.path.join(args.out, "solid_contact.md")

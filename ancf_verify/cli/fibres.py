@@ -48,25 +48,26 @@ import tempfile
 import time
 
 from ancf_verify.bars.cases import ancf_section
+from ancf_verify.cli import out_dir
 from ancf_verify.fibres.beams import ancf_runs
 from ancf_verify.fibres.cases import (ANCF_MIXED, ANCF_MODELS, BLOCK, BULK_RATIOS, CSV_NAME, ELEMENTS,
     FIGURE, LAWS, make_case)
 from ancf_verify.fibres.report import csv_rows, page_for, read_csv, render_block, write_csv, write_outputs
 from ancf_verify.fibres.solid import run_solid
-from ancf_verify.paths import ROOT
 from ancf_verify.stack import import_stack
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="coarse meshes, K/mu = 50 only (smoke run)")
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV and figures/")
+    ap.add_argument("--out", help="directory of the CSV and figures/ (default docs/; with --quick results/verify_solid_fibres_quick/)")
     ap.add_argument("--doc", default=None, help="the page with the marked block (default docs/fibres.md with --out docs, else a copy of it in --out)")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
     ap.add_argument("--replot", action="store_true", help="block and figure from <out>/solid_fibres.csv")
     ap.add_argument("--ancf-only", action="store_true",
                     help="run the ANCF models again and keep the solid rows of <out>/solid_fibres.csv (no dolfinx)")
     args = ap.parse_args(argv)
+    args.out = out_dir(args.out, args.quick, "verify_solid_fibres")
     if args.replot:
         write_outputs(args.out, read_csv(os.path.join(args.out, CSV_NAME)), page_for(args.out, args.doc))
         return 0
@@ -94,6 +95,7 @@ def main(argv=None) -> int:
                           f"(ANCF {ELEMENTS[-1]} el.: {1e3 * a['u'][0]:.4f} mm, {a['rot']:+.4f} deg; "
                           f"{ANCF_MIXED}: {1e3 * m['u'][0]:.4f} mm, {m['rot']:+.4f} deg)", flush=True)
                 rows += csv_rows(case, law.key, ratio, runs)
+    os.makedirs(args.out, exist_ok=True)
     write_csv(os.path.join(args.out, CSV_NAME), rows)
     args.doc = page_for(args.out, args.doc)
     write_outputs(args.out, rows, args.doc)

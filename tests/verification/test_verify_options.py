@@ -106,3 +106,18 @@ def test_verify_solid_replots_into_a_new_directory(tmp_path):
     shutil.copy(os.path.join(ROOT, "docs", "solid_comparison.csv"), tmp_path)
     assert main(["--replot", "--out", str(tmp_path)]) == 0
     assert os.path.getsize(tmp_path / "figures" / "solid_vs_ancf.png") > 0
+
+
+def test_a_quick_smoke_run_does_not_write_over_the_committed_references(capsys):
+    """verify_solid.py --quick (and verify_solid_fibres.py / verify_solid_contact.py --quick) wrote
+    their coarse rows over docs/solid_comparison.csv and .md (the fibres: docs/solid_fibres.csv and
+    the block of docs/fibres.md), the committed references that make verify-solid and the docs tests
+    read; without --out a smoke run now writes to results/<command>_quick/ (git ignores results/)."""
+    from ancf_verify.cli import out_dir
+    from ancf_verify.cli.bars import main
+    assert out_dir(None, False, "verify_solid") == os.path.join(ROOT, "docs")
+    assert out_dir(None, True, "verify_solid") == os.path.join(ROOT, "results", "verify_solid_quick")
+    assert out_dir("/tmp/x", True, "verify_solid") == "/tmp/x"
+    with pytest.raises(SystemExit):
+        main(["--quick", "--replot"])
+    assert f"in --out '{os.path.join(ROOT, 'results', 'verify_solid_quick')}'" in capsys.readouterr().err

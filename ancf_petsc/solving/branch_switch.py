@@ -202,9 +202,9 @@ class BranchSwitch:
         size = section_size(P.model)
         modes = (point.modes if point.modes is not None
                  else critical_modes(P, point.J, min(MAX_MODES, point.negative)))
-        self.outcome = ("no stable state along the critical mode(s)" if modes else
-                        "its tangent has no negative eigenvalue whose vector is on the beam nodes (the "
-                        "count's saddle lies mostly on the contact multipliers): nothing to switch along")
+        self.outcome = ("no stable state along the critical mode(s)" if modes else "its tangent has no negative eigenvalue " + (
+            "whose vector is on the beam nodes (the count's saddle lies mostly on the contact multipliers)" if P.contact is not None
+            else "(the count is of null pivots: modes the factorisation rounds to 0)") + ": nothing to switch along")
         conservative = P.contact is None or not P.contact.terms
         P.load_factor = point.lam
         base = constrained_potential(P, point.X) if conservative else None

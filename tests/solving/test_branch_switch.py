@@ -103,3 +103,19 @@ def test_the_final_status_names_the_switches_and_unsettled_weights_together():
     assert "switching branch 1 time(s) at a bifurcation (load factor 0.75)" in message
     assert "contact weights not settled at 1 of 2 levels (load factor 1;" in message
     assert final_status([record(0.5), record(1.0, unsettled=True)], None, False)[1] == status.WEIGHTS_UNSETTLED
+
+
+def test_without_contact_a_count_of_null_pivots_is_not_blamed_on_contact_multipliers(tmp_path):
+    """The uniaxial bar at L = 100 m (slenderness ~1e4): its positive definite tangent's softest
+    modes (~1e-7) are null pivots, counted as 2 negative eigenvalues; the switch found no negative
+    eigenvalue and said the saddle lay 'on the contact multipliers' of a model without contact."""
+    from helpers import load_raw, petsc_init
+    from ancf_petsc.api import solve
+    from ancf_petsc.config.parse import parse_config
+    petsc_init()
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["geometry"]["length"], raw["steps"], raw["output"] = 100.0, [0.1], {"vtk": False, "dir": str(tmp_path)}
+    lines: list[str] = []
+    solve(parse_config(raw), log=lambda *a: lines.append(" ".join(map(str, a))))
+    said = [s for s in lines if "nothing to switch along" in s]
+    assert said and all("contact multipliers" not in s and "null pivots" in s for s in said), said

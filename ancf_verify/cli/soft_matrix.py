@@ -52,7 +52,7 @@ def main(argv=None) -> int:
     ap.add_argument("--force", type=float, default=FORCE, help="end force [N] (other than 200: beam only)")
     ap.add_argument("--beam-only", action="store_true", help="the beam runs, printed; nothing written")
     ap.add_argument("--more-solid", action="store_true", help="keep the CSV's rows, add solid meshes --h")
-    ap.add_argument("--profile", type=float, metavar="H",
+    ap.add_argument("--profile", type=size, metavar="H",
                     help="print u_x along the end face's semi-axes: beams and the solid of mesh size H [mm]")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
     ap.add_argument("--h", type=size, nargs="+", default=[1e3 * h for h in H], help="solid mesh sizes [mm]")
@@ -62,6 +62,8 @@ def main(argv=None) -> int:
         write_doc(page_for(args.out, args.doc), read_csv(path))
         return 0
     case = make_case(args.force)
+    if args.profile or not (args.beam_only or args.force != FORCE or args.ancf_only):
+        import_stack()             # a missing dolfinx is said before the beams run, not after
     if args.profile:
         with tempfile.TemporaryDirectory(prefix="verify_solid_soft_") as tmp:
             profile(case, args.profile, tmp)
@@ -75,14 +77,12 @@ def main(argv=None) -> int:
         if args.beam_only or args.force != FORCE:
             return 0
         if args.more_solid:
-            import_stack()
             sec = ancf_section(case)
             solids = [run_solid(case, sec, 1e-3 * h, args.quad_degree, probe=SoftProbe) for h in args.h]
             rows = read_csv(path) + rows_of(case, solids)
         elif args.ancf_only:
             rows = rows_of(case, beams) + [d for d in read_csv(path) if not d["model"].startswith("ANCF")]
         else:
-            import_stack()
             sec, solids = ancf_section(case), []
             for h in args.h:
                 solids.append(run_solid(case, sec, 1e-3 * h, args.quad_degree, probe=SoftProbe))

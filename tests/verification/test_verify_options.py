@@ -121,3 +121,19 @@ def test_a_quick_smoke_run_does_not_write_over_the_committed_references(capsys):
     with pytest.raises(SystemExit):
         main(["--quick", "--replot"])
     assert f"in --out '{os.path.join(ROOT, 'results', 'verify_solid_quick')}'" in capsys.readouterr().err
+
+
+def test_the_soft_matrix_bar_says_a_missing_dolfinx_before_its_beams_run(tmp_path):
+    """verify_solid_soft_matrix.py without dolfinx ran its eight beam columns first (minutes on the
+    shared cores) and only then said 'dolfinx/gmsh missing'; --profile 0 was taken for no --profile
+    and started the whole 26-minute study."""
+    code = ("import sys; sys.modules['dolfinx'] = None\nfrom ancf_verify.cli import run\n"
+            f"sys.exit(run('soft_matrix', 'verify_solid_soft_matrix', ['--out', {str(tmp_path)!r}]))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT,
+                       env={**os.environ, **MPI_ENV})
+    assert p.returncode == 1 and "[ANCF]" not in p.stdout, (p.stdout[-500:], p.stderr[-500:])
+    assert p.stderr.splitlines() == ["verify_solid_soft_matrix: dolfinx/gmsh missing (import of dolfinx halted; "
+                                     "None in sys.modules); run: bash scripts/setup_solid.sh"]
+    q = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "verify_solid_soft_matrix.py"), "--profile", "0"],
+                       capture_output=True, text=True, timeout=120, env={**os.environ, **MPI_ENV})
+    assert q.returncode == 2 and "argument --profile: mesh sizes must be > 0; got '0'" in q.stderr, q.stderr

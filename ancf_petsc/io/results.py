@@ -273,7 +273,7 @@ class ResultsWriter:
             self._last_sizes["vtu"] += self.vtk.write(series, k, t, *mesh, field_data=fields)
         except OSError as exc:
             self._release_reserve()
-            raise OutputError(os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
+            raise OutputError(exc.filename or os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
                               f"cannot write: {os_reason(exc)}") from None
 
     def probe_values(self, q: np.ndarray) -> dict:

@@ -233,10 +233,15 @@ class VtkSeries:
         return None
 
     def _write_index(self, series: str, entries: list) -> None:
+        """The .pvd collection; an OSError names it (not the VTU being written, nor the temporary
+        file: a folder named surface.pvd was reported as 'surface_0000.vtu: Is a directory')."""
         rows = "\n".join(f'    <DataSet timestep="{t:.10g}" part="0" file="{f}"/>' for t, f in entries)
-        atomic_write(os.path.join(self.dir, f"{series}.pvd"),
-                     '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                     f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+        path = os.path.join(self.dir, f"{series}.pvd")
+        try:
+            atomic_write(path, '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                               f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror, path) from None
 
     def resume(self, times: list[float | None]) -> None:
         """Continue the series of a restarted run whose levels 0 … n are at ``times`` (``write``'s

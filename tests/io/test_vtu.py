@@ -55,6 +55,20 @@ def test_pvd_collections_rewritten_when_due_and_complete_at_the_end(tmp_path, mo
     assert reason is not None and "surface.pvd: cannot write" in reason
 
 
+def test_a_collection_that_cannot_be_written_is_named_not_the_vtu(tmp_path):
+    """A folder named surface.pvd in the output directory: the run failed with 'output error:
+    DIR/surface_0000.vtu: cannot write: Is a directory', naming the VTU it had written, not the
+    collection in the way; now 'DIR/surface.pvd: cannot write: Is a directory'."""
+    import json
+    from ancf_petsc.errors import OutputError
+    from helpers import load_raw, run_inline
+    (tmp_path / "surface.pvd").mkdir()
+    with pytest.raises(OutputError) as err:
+        run_inline(dict(load_raw("uniaxial_neohookean.yaml"), steps=[0.5]), tmp_path)
+    assert str(err.value) == f"{tmp_path / 'surface.pvd'}: cannot write: Is a directory"
+    s = json.load(open(tmp_path / "summary.json"))
+    assert s["status"] == "failed" and str(err.value) in s["message"], s
+
 def test_a_restart_removes_only_the_run_s_later_vtus(tmp_path):
     """``VtkSeries.resume`` (a restart after level 1) removed every name starting with
     surface_/contact_ whose last '_' part was a number past it: a user's surface_notes_7.txt went,

@@ -26,13 +26,6 @@ from .section_rotation import SectionTurns
 #: failed with 10)
 MAX_STEP_SECTIONS = 10.0
 MAX_STEP_SECTIONS_CONTACT = 2.0
-#: without contact a step along x alone (its node moves across x at most this share of those along
-#: it) may move a node by the beams' length L: a straight bar's stretch has a regular tangent, and
-#: held to 10 sections a bar of radius 2 mm stretched 23 % took 10 Newton iterations at L = 1 m
-#: against 5 at 0.2 m.  Steps with a move across x keep the 10 sections: the Euler column's branch
-#: switch (tests/solving/test_branch_switch.py) converges in its last allowed Newton iteration from
-#: a first step scaled by 0.91 (lateral 0.05 m, axial 0.085 m), and not within them unscaled
-AXIAL_SHARE = 1e-6
 #: largest growth of a fibre law's exponent k2 Ē² at any Gauss point in one Newton step or load
 #: predictor: the fibres' stiffness e^(k2 Ē²) grows by at most e^8 ≈ 3e3 per step.  With k2 =
 #: 524.6 (the GOH set solver_default_2025) the first Newton step from rest stretched fibres to
@@ -104,7 +97,6 @@ class StepLimits:
                                            # partner place (``solver.band_step``; 0: no limit)
         self._local: PETSc.Vec | None = None
         self.size = min(np.sqrt(b.section.area) for b in problem.model.beams)
-        self.length = problem.model.spec.length if problem.contact is None else 0.0   # AXIAL_SHARE
         self.fibres = False                # a law whose fibres carry stress, on some rank
         self.find_fibres()
 
@@ -172,13 +164,13 @@ class StepLimits:
 
     def precheck(self, X: PETSc.Vec, Y: PETSc.Vec) -> bool:
         """Line-search pre-check (collective): scale the step X − Y down to ``sections``
-        section sizes or, along x alone, L (``node_move``; a turned step also to direction-vector
-        changes of ``MAX_STEP_TURN``), then halve it until no Gauss point has det F below ``j_min`` and no fibre exponent grows
+        section sizes (a turned step also to direction-vector changes of ``MAX_STEP_TURN``),
+        then halve it until no Gauss point has det F below ``j_min`` and no fibre exponent grows
         by more than ``MAX_EXPONENT_GROWTH``; if that fails, Y is filled with NaN so that SNES
         reports a domain failure and the load step is cut back.  Returns whether Y was changed."""
         P = self.problem
         y = Y.getArray(readonly=True).reshape(-1, P.model.block.vectors_per_node, 3)[P.owned_physical]
-        move = self.node_move(y)
+        move = np.abs(y[:, 0]).max(initial=0.0) / (self.sections * self.size)
         turn = 0.0                          # and a turned step to MAX_STEP_TURN
         if self.turns is not None:
             turn = np.linalg.norm(y[:, 1:3], axis=2).max(initial=0.0) / MAX_STEP_TURN
@@ -206,18 +198,6 @@ class StepLimits:
             return True
         finally:
             trial.destroy()
-
-    def node_move(self, y: np.ndarray) -> float:
-        """The largest node move of a step (this rank's position rows ``y``) over its limit:
-        ``sections`` section sizes, or without contact the beams' length L for a step along x alone
-        (``AXIAL_SHARE``, over every rank: collective then)."""
-        moves = np.abs(y[:, 0]).max(axis=0, initial=0.0)
-        limit = self.sections * self.size
-        if self.length > 0.0:
-            self.problem.comm.tompi4py().Allreduce(MPI.IN_PLACE, moves, op=MPI.MAX)
-            if moves[1:].max() <= AXIAL_SHARE * moves[0]:
-                limit = max(limit, self.length)
-        return float(moves.max()) / limit
 
     def band_moves(self, X: PETSc.Vec, Y: PETSc.Vec) -> float:
         """This rank's largest move of a partner place through a fade band by the step X − Y, over

@@ -17,6 +17,7 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from .files import os_reason
 
 
 @dataclass
@@ -118,8 +119,8 @@ def opened(results_h5: str):
     traceback in ancf-report --existing before)."""
     try:
         h5 = h5py.File(results_h5, "r", locking=False)
-    except OSError as exc:
-        raise InputError("results", f"{results_h5}: cannot read ({exc}): not a whole results.h5; "
+    except OSError as exc:                 # HDF5's words run over lines: the OS's, or the first line
+        raise InputError("results", f"{results_h5}: cannot read ({os_reason(exc)}): not a whole results.h5; "
                                     "run ancf-solve again") from None
     with h5:
         yield h5

@@ -292,8 +292,8 @@ def test_an_accepted_unstable_level_is_marked_in_the_tables(tmp_path):
 
 
 def test_a_damaged_or_foreign_results_h5_is_a_one_line_error(tmp_path):
-    """A contact run whose results.h5 was truncated (a full disk, a copy cut short), emptied, or
-    is another run's with fewer levels: ancf-report --existing ended in an OSError or KeyError
+    """A contact run whose results.h5 was truncated (a full disk, a copy cut short), emptied, is a
+    folder, or is another run's with fewer levels: ancf-report --existing ended in an OSError or KeyError
     traceback (exit 1) from the slip figure's read_contact; now one line naming the file, exit 2,
     before anything is written."""
     import shutil
@@ -307,10 +307,13 @@ def test_a_damaged_or_foreign_results_h5_is_a_one_line_error(tmp_path):
     run = tmp_path / "run"
     p = solve_cli(write_config(raw, tmp_path / "t.yaml"), extra=["--output-dir", str(run), "--quiet"])
     assert p.returncode == 0, p.stderr
-    for case in ("truncated", "empty", "foreign"):
+    for case in ("truncated", "empty", "foreign", "folder"):
         shutil.copytree(run, tmp_path / case)
         h5 = tmp_path / case / "results.h5"
-        if case == "foreign":
+        if case == "folder":                    # HDF5's message for it ran over two lines
+            os.remove(h5)
+            os.mkdir(h5)
+        elif case == "foreign":
             with h5py.File(h5, "a") as f:
                 del f["steps/step_0002"]
         else:

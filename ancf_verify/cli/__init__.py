@@ -12,7 +12,7 @@ import sys
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-__all__ = ["Parser", "count", "out_dir", "run", "size", "sizes", "study_parts"]
+__all__ = ["Parser", "count", "counts", "numbers", "out_dir", "run", "size", "sizes", "study_parts"]
 
 
 def run(command: str, name: str, argv: list[str] | None = None) -> int:
@@ -63,6 +63,22 @@ def count(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer; got {value}")
     return value
+
+
+def numbers(text: str) -> list[float]:
+    """Comma-separated numbers (``--psi 0,45``, ``--loads 10,20``); '' is none."""
+    try:
+        return [float(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, e.g. 10,20; got {text!r}") from None
+
+
+def counts(text: str) -> list[int]:
+    """Comma-separated counts >= 1 (``--elements 4,8,16``)."""
+    out = [count(x) for x in text.split(",") if x.strip()]
+    if not out:
+        raise argparse.ArgumentTypeError(f"expected positive integers separated by commas, e.g. 4,8; got {text!r}")
+    return out
 
 
 def out_dir(out: str | None, quick: bool, name: str) -> str:

@@ -57,7 +57,7 @@ import sys
 import tempfile
 import time
 
-from ancf_verify.cli import Parser, out_dir, sizes
+from ancf_verify.cli import Parser, counts, numbers, out_dir, sizes
 from ancf_verify.contact.beams import run_ancf
 from ancf_verify.contact.report import plot, render_md
 from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_csv, reference_rows, row_key,
@@ -71,10 +71,10 @@ from ancf_verify.stack import import_stack
 
 def main(argv=None) -> int:
     ap = Parser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--psi", default="0,15,45", help="pretwist angles [deg]")
+    ap.add_argument("--psi", type=numbers, default="0,15,45", help="pretwist angles [deg]")
     ap.add_argument("--laws", default="sliding", help="contact laws: sliding,unilateral")
     ap.add_argument("--h", type=sizes, default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m], coarse to fine")
-    ap.add_argument("--elements", default="2,4,8,16", help="ANCF elements per subtendon")
+    ap.add_argument("--elements", type=counts, default="2,4,8,16", help="ANCF elements per subtendon")
     ap.add_argument("--quick", action="store_true", help="coarse meshes only (smoke run)")
     ap.add_argument("--selftest", action="store_true", help="only the contact self-tests")
     ap.add_argument("--no-selftest", action="store_true", help="skip the self-tests in a full run")
@@ -86,10 +86,10 @@ def main(argv=None) -> int:
     ap.add_argument("--replot", action="store_true", help="figure and report from the CSV (no solving)")
     ap.add_argument("--report", action="store_true", help="same as --replot")
     ap.add_argument("--out", help="output directory (default docs/; with --quick results/verify_solid_contact_quick/)")
-    ap.add_argument("--loads", default="10,20,40,100,200,300,400",
+    ap.add_argument("--loads", type=numbers, default="10,20,40,100,200,300,400",
                     help="solid load levels [N] (the ANCF columns run all of Table 1's levels)")
     ap.add_argument("--max-increment", type=float, default=100.0, help="largest solid load increment [N]")
-    ap.add_argument("--free-psi", default="0,15,45", help="pretwists at which the free soleus is solved too")
+    ap.add_argument("--free-psi", type=numbers, default="0,15,45", help="pretwists at which the free soleus is solved too")
     ap.add_argument("--ancf-src", default="",
                     help="import ancf_petsc (and read configs/) from this directory, e.g. an export of a commit")
     ap.add_argument("--ancf-label", default="the working tree", help="what --ancf-src is (recorded in the CSV)")
@@ -149,11 +149,11 @@ def main(argv=None) -> int:
         if args.merge:
             finish(rows, {"argv": " ".join(sys.argv[1:])})
         return 0
-    psis = [float(p) for p in args.psi.split(",") if p.strip()]
+    psis = args.psi
     hs = args.h
-    elements = [int(e) for e in args.elements.split(",")]
-    loads = [float(f) for f in args.loads.split(",") if f.strip()]
-    free_psis = [float(p) for p in args.free_psi.split(",") if p.strip()]
+    elements = args.elements
+    loads = args.loads
+    free_psis = args.free_psi
     if args.quick:
         hs, elements = [3e-3, 2e-3], [e for e in elements if e <= 4] or [2]
     kw = {"rule_points": args.rule_points, "root": args.root, "penalty": args.penalty}

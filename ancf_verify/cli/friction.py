@@ -34,7 +34,7 @@ import sys
 import tempfile
 import time
 
-from ancf_verify.cli import Parser, sizes
+from ancf_verify.cli import Parser, counts, numbers, sizes
 from ancf_verify.contact.mesh import LocalSize
 from ancf_verify.contact.tendon import LOADS, tendon_sections
 from ancf_verify.friction.beams import run_ancf, zone_label
@@ -51,7 +51,7 @@ from ancf_verify.stack import import_stack
 # ============================================================================================
 def main(argv=None) -> int:
     ap = Parser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--psi", default="45,0", help="pretwist angles [deg]")
+    ap.add_argument("--psi", type=numbers, default="45,0", help="pretwist angles [deg]")
     ap.add_argument("--mu", type=float, default=0.3, help="friction coefficient")
     ap.add_argument("--h", type=sizes, default="2e-3,1.4e-3,1.15e-3", help="solid mesh sizes [m] at the first pretwist, coarse to fine")
     ap.add_argument("--h-more", type=sizes, default="2e-3,1.4e-3", help="solid mesh sizes at the other pretwists")
@@ -60,9 +60,9 @@ def main(argv=None) -> int:
                          "the bulk size; the axial layers follow it; '' or 0: uniform), e.g. --h 2e-3,2e-3 "
                          "--h-interface 1e-3,7e-4")
     ap.add_argument("--refine-at", default="mg_sol", help="the interface curve of --h-interface")
-    ap.add_argument("--loads", default="", help="solid load levels [N] (default: Table 1's 10 ... 400 N)")
+    ap.add_argument("--loads", type=numbers, default="", help="solid load levels [N] (default: Table 1's 10 ... 400 N)")
     ap.add_argument("--stick", type=float, default=100.0, help="solid stick stiffness k in mu_max/h")
-    ap.add_argument("--elements", default="4,8,16", help="ANCF elements per subtendon")
+    ap.add_argument("--elements", type=counts, default="4,8,16", help="ANCF elements per subtendon")
     ap.add_argument("--ancf-augmentations", default="default,10,0.1",
                     help="ANCF augmentation factors c of contact.tangential ('default': the law's, "
                          "G/E of the softer beam since 2026-12-02, 1 before)")
@@ -81,7 +81,7 @@ def main(argv=None) -> int:
     ap.add_argument("--no-solid", action="store_true", help="only the ANCF columns")
     ap.add_argument("--no-ancf", action="store_true", help="only the solid")
     ap.add_argument("--merge", action="store_true", help="keep the CSV rows this run does not redo")
-    ap.add_argument("--profiles", default="100", help="load levels [N] of the pressure/friction profiles "
+    ap.add_argument("--profiles", type=numbers, default="100", help="load levels [N] of the pressure/friction profiles "
                     "(solid h = the coarsest mesh, mu = 0 and mu; ANCF at each element count; '' for none)")
     ap.add_argument("--replot", action="store_true", help="figure and page section from the CSV")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"))
@@ -100,6 +100,7 @@ def main(argv=None) -> int:
         finish(paths, read_csv(paths.csv), {})
         return 0
     import_stack()
+    os.makedirs(args.out, exist_ok=True)   # the CSV is saved after each run (a new --out failed there)
     t_start = time.perf_counter()
     secs = tendon_sections()
     rows = read_csv(paths.csv) if args.merge and os.path.exists(paths.csv) else []
@@ -116,9 +117,9 @@ def main(argv=None) -> int:
         if args.selftest:
             finish(paths, rows, {"argv": " ".join(sys.argv[1:])})
             return 0
-    psis = [float(p) for p in args.psi.split(",") if p.strip()]
+    psis = args.psi
     hs = args.h
-    loads = [float(F) for F in args.loads.split(",") if F.strip()] or list(LOADS)
+    loads = args.loads or list(LOADS)
     mu = args.mu
     zone = args.free_zone
     for psi in psis:
@@ -145,7 +146,7 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory(prefix="solid_friction_") as tmp:
             for space, aug in ((s, a) for s in spaces(args) for a in args.ancf_augmentations.split(",")):
                 c = None if aug == "default" else float(aug)
-                for ne in [int(e) for e in args.elements.split(",")]:
+                for ne in args.elements:
                     a = run_ancf(psi, ne, mu, c, tmp, zone, space, element=args.element or None)
                     last = a["levels"][-1] if a["levels"] else None
                     print(f"[ancf] psi {psi:g}, {ne} el., element {args.element or 'default'}, augmentation {aug}, "
@@ -153,7 +154,7 @@ def main(argv=None) -> int:
                           + (f"{last['load']:g} N, soleus u_x {1e3 * last['u']['soleus']:.5f} mm" if last else "")
                           + (f", {a['wall']:.0f} s" if a["ok"] else f" FAILED ({a['msg']})"), flush=True)
                     save(ancf_rows(a, mu))
-    levels = [float(F) for F in args.profiles.split(",") if F.strip()] if not zone else []
+    levels = args.profiles if not zone else []
     if levels:
         profiles(secs, args, levels, psis[0])
     finish(paths, rows, {"argv": " ".join(sys.argv[1:]), "total": time.perf_counter() - t_start})

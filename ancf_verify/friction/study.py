@@ -104,7 +104,7 @@ def profiles(secs, args, levels: list, psi: float) -> None:
                 if not args.no_solid:
                     print(f"[profile] solid, mu {mu:g}, h {h * 1e3:.2f} mm, {F:g} N", flush=True)
                     rows += solid_profile(secs, psi, h, mu, F, args.stick)
-                for space, ne in ((s, e) for s in spaces(args) for e in [int(e) for e in args.elements.split(",")]):
+                for space, ne in ((s, e) for s in spaces(args) for e in args.elements):
                     for aug in (args.ancf_augmentations.split(",") if mu else ["default"]):
                         got = ancf_profile(psi, ne, mu, F, None if aug == "default" else float(aug), tmp, space,
                                            element=args.element or None)

@@ -137,3 +137,31 @@ def test_the_soft_matrix_bar_says_a_missing_dolfinx_before_its_beams_run(tmp_pat
     q = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "verify_solid_soft_matrix.py"), "--profile", "0"],
                        capture_output=True, text=True, timeout=120, env={**os.environ, **MPI_ENV})
     assert q.returncode == 2 and "argument --profile: mesh sizes must be > 0; got '0'" in q.stderr, q.stderr
+
+
+@pytest.mark.parametrize("command, argv, want", [
+    ("contact", ["--psi", "45deg"], "argument --psi: expected numbers separated by commas, e.g. 10,20; got '45deg'"),
+    ("contact", ["--elements", "2,0"], "argument --elements: expected a positive integer; got 0"),
+    ("friction", ["--elements", "4,x"], "argument --elements: expected a positive integer; got 'x'"),
+    ("friction", ["--loads", "10N"], "argument --loads: expected numbers separated by commas, e.g. 10,20; got '10N'"),
+])
+def test_a_bad_list_option_is_refused_before_solving(command, argv, want, tmp_path, capsys):
+    """verify_solid_contact.py --psi 45deg said 'ValueError: could not convert string to float',
+    naming no option (exit 1); verify_solid_friction.py read --elements only after its solid runs
+    (hours), then 'ValueError: invalid literal for int()'."""
+    import importlib
+    with pytest.raises(SystemExit) as exc:
+        importlib.import_module(f"ancf_verify.cli.{command}").main([*argv, "--out", str(tmp_path)])
+    prog = os.path.basename(sys.argv[0])
+    assert exc.value.code == 2 and capsys.readouterr().err.splitlines() == [f"{prog}: {want} (see {prog} --help)"]
+
+
+def test_the_friction_study_makes_its_out_directory(tmp_path, capsys):
+    """verify_solid_friction.py --out NEW ran its first column (a solid run: hours) and then failed to
+    save it: 'FileNotFoundError: ... NEW/solid_friction.csv'. Beams only, 4 elements: seconds."""
+    pytest.importorskip("dolfinx")
+    from ancf_verify.cli.friction import main
+    out = tmp_path / "new"
+    assert main(["--no-selftest", "--no-solid", "--no-checks", "--psi", "45", "--elements", "4",
+                 "--ancf-augmentations", "default", "--profiles", "", "--out", str(out)]) == 0
+    assert (out / "solid_friction.csv").read_text().count("ANCF") >= 13

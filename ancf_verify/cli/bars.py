@@ -43,6 +43,7 @@ from ancf_verify.bars.report import (fmt_u, goal_lines, limit_lines, plot, rende
 from ancf_verify.bars.solid import run_solid, solve_solid
 from ancf_verify.cli import Parser, count, out_dir
 from ancf_verify.convergence import goal, richardson
+from ancf_verify.paths import DOCS
 from ancf_verify.stack import import_stack
 
 
@@ -96,6 +97,9 @@ def main(argv=None) -> int:
         what = f"unknown case(s) {', '.join(sorted(unknown))}" if unknown else "no case"
         ap.error(f"--cases: {what}; choose from "
                  f"{', '.join(c.key for c in CASES)}; got {args.cases!r}")
+    if len(set(wanted)) < len(CASES) and os.path.realpath(args.out) == os.path.realpath(DOCS):
+        ap.error(f"--cases: a run into docs/ writes solid_comparison.csv and .md with its cases alone (the "
+                 f"committed references of the others would go); give --out DIR; got {args.cases!r}")
     import_stack()
     t_start = time.perf_counter()
     figdir = os.path.join(args.out, "figures")

@@ -50,11 +50,14 @@ def test_the_meshes_refuse_a_size_gmsh_cannot_take():
     (["--quad-degree", "-1"], "argument --quad-degree: expected a positive integer; got -1"),
     (["--replot", "--out", "/nonexistent"], "--replot: no solid_comparison.csv in --out '/nonexistent'; "
                                             "give the directory of a run's CSV"),
+    (["--cases", "tension"], "--cases: a run into docs/ writes solid_comparison.csv and .md with its cases alone "
+                             "(the committed references of the others would go); give --out DIR; got 'tension'"),
 ])
 def test_verify_solid_names_the_bad_option(argv, want, capsys):
     """verify_solid.py --cases tensoin said 'unknown case(s) ['tensoin']' naming no option, exit 1;
     --cases , ended in 'StopIteration', --ancf-repeats 0 in an AttributeError after the solid's JIT,
-    --replot --out /nonexistent in a FileNotFoundError (exit 1 each); now one line, exit 2."""
+    --replot --out /nonexistent in a FileNotFoundError (exit 1 each); --cases tension into docs/
+    replaced docs/solid_comparison.csv and .md by the tension rows alone. Now one line, exit 2."""
     from ancf_verify.cli.bars import main
     with pytest.raises(SystemExit) as exc:
         main(argv)

@@ -64,7 +64,7 @@ from ancf_verify.contact.rows import (REF, ancf_rows, independence_rows, read_cs
     selftest_rows, solid_rows, write_csv)
 from ancf_verify.contact.selftest import selftest
 from ancf_verify.contact.solid import run_solid
-from ancf_verify.contact.tendon import tendon_sections, use_source
+from ancf_verify.contact.tendon import ContactError, tendon_sections, use_source
 from ancf_verify.roots import ROOTS
 from ancf_verify.stack import import_stack
 
@@ -107,7 +107,10 @@ def main(argv=None) -> int:
     if not laws or set(laws) - {"sliding", "unilateral"}:
         ap.error(f"--laws: expected sliding and/or unilateral separated by commas; got {args.laws!r}")
     args.out = out_dir(args.out, args.quick, "verify_solid_contact")
-    use_source(args.ancf_src, args.ancf_label)
+    try:
+        use_source(args.ancf_src, args.ancf_label)
+    except ContactError as exc:
+        ap.error(str(exc))
     csv_path = os.path.join(args.out, "solid_contact.csv")
     md_path = os.path.join(args.out, "solid_contact.md")
     png_path = os.path.join(args.out, "figures", "solid_contact.png")

@@ -55,6 +55,9 @@ def use_source(src: str, label: str) -> None:
     if src:
         if "ancf_petsc" in sys.modules:
             raise ContactError("--ancf-src: ancf_petsc is imported already")
+        if not os.path.isfile(os.path.join(src, "ancf_petsc", "__init__.py")):
+            raise ContactError(f"--ancf-src: no ancf_petsc package in {src!r} (this checkout's would be "
+                               "solved under its label); give the directory of an export of a commit")
         sys.path.insert(0, os.path.abspath(src))
         SOURCE.configs = os.path.join(os.path.abspath(src), "configs")
 

@@ -168,3 +168,17 @@ def test_the_friction_study_makes_its_out_directory(tmp_path, capsys):
     assert main(["--no-selftest", "--no-solid", "--no-checks", "--psi", "45", "--elements", "4",
                  "--ancf-augmentations", "default", "--profiles", "", "--out", str(out)]) == 0
     assert (out / "solid_friction.csv").read_text().count("ANCF") >= 13
+
+
+def test_an_ancf_src_without_the_package_is_refused(tmp_path):
+    """verify_solid_contact.py --ancf-src DIR put DIR first on sys.path whether or not it held
+    ancf_petsc: with DIR/configs/ but no package the columns were this checkout's, recorded in the
+    CSV under --ancf-label as the export's (with neither, a section file error deep in the run)."""
+    (tmp_path / "configs").mkdir()
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "verify_solid_contact.py"), "--ancf-src",
+                        str(tmp_path), "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, **MPI_ENV})
+    prog = "verify_solid_contact.py"
+    assert p.returncode == 2 and p.stderr.splitlines() == [
+        f"{prog}: --ancf-src: no ancf_petsc package in {str(tmp_path)!r} (this checkout's would be solved under "
+        f"its label); give the directory of an export of a commit (see {prog} --help)"], p.stderr

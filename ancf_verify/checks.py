@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ancf_verify.paths import DOCS
+from ancf_verify.stack import SolidError
 
 
 @dataclass
@@ -26,6 +27,14 @@ class Check:
         return bool(self.difference <= self.tolerance)
 
 
+def _row(rows, what: str, csv_name: str):
+    """The first of ``rows`` (an iterator), or a SolidError naming the CSV and the missing row."""
+    row = next(rows, None)
+    if row is None:
+        raise SolidError(f"{csv_name}: no row {what} to re-solve (a CSV of another run?)")
+    return row
+
+
 def _rel(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(np.asarray(a) - np.asarray(b)) / np.linalg.norm(b))
 
@@ -35,9 +44,11 @@ def bar(case, docs: str = DOCS) -> Check:
     from ancf_verify.bars.cases import ancf_section
     from ancf_verify.bars.solid import run_solid
     h = case.h[0]
-    with open(os.path.join(docs, "solid_comparison.csv"), newline="") as fh:
-        want = next(np.array([float(r[f"u{c}_m"]) for c in "xyz"]) for r in csv.DictReader(fh)
-                    if r["case"] == case.key and r["model"] == "solid P2 tet" and r["resolution"] == f"h {h * 1e3:.2f} mm")
+    path = os.path.join(docs, "solid_comparison.csv")
+    with open(path, newline="") as fh:
+        want = _row((np.array([float(r[f"u{c}_m"]) for c in "xyz"]) for r in csv.DictReader(fh)
+                     if r["case"] == case.key and r["model"] == "solid P2 tet" and r["resolution"] == f"h {h * 1e3:.2f} mm"),
+                    f"'{case.key}, solid P2 tet, h {h * 1e3:.2f} mm'", path)
     got = run_solid(case, ancf_section(case), h, repeats=1, max_repeat_time=0.0)["u"]
     return Check(f"bar {case.key}, h {h * 1e3:.2f} mm: |u|", float(np.linalg.norm(got)), float(np.linalg.norm(want)),
                  _rel(got, want), 1e-6)
@@ -50,8 +61,9 @@ def fibre_bar(law, docs: str = DOCS) -> Check:
     from ancf_verify.fibres.report import read_csv, runs_of
     from ancf_verify.fibres.solid import run_solid
     case = make_case(law, BULK_RATIOS[0])
-    want = next(r for r in runs_of(read_csv(os.path.join(docs, "solid_fibres.csv")))[case_key(law.key, BULK_RATIOS[0])]
-                ["solid"] if r["res"] == f"h {H[0] * 1e3:.2f} mm")
+    path = os.path.join(docs, "solid_fibres.csv")
+    want = _row((r for r in runs_of(read_csv(path)).get(case_key(law.key, BULK_RATIOS[0]), {"solid": []})["solid"]
+                 if r["res"] == f"h {H[0] * 1e3:.2f} mm"), f"'{law.key}, solid, h {H[0] * 1e3:.2f} mm'", path)
     got = run_solid(case, ancf_section(case), H[0], 2)
     diff = max(_rel(got["u"], want["u"]), abs(got["levels"][-1]["rot"] / want["rot"] - 1.0),
                0.0 if not got["field_err"] > 1e-10 else np.inf)
@@ -67,8 +79,9 @@ def soft_matrix_bar(docs: str = DOCS) -> Check:
     from ancf_verify.soft_matrix.cases import H, make_case
     from ancf_verify.soft_matrix.solid import SoftProbe, evaluate
     case = make_case()
-    want = next(r for r in evaluate(read_csv(os.path.join(docs, "solid_soft_matrix.csv")))["solid"]
-                if r["res"] == f"h {H[0] * 1e3:.2f} mm")
+    path = os.path.join(docs, "solid_soft_matrix.csv")
+    want = _row((r for r in evaluate(read_csv(path))["solid"] if r["res"] == f"h {H[0] * 1e3:.2f} mm"),
+                f"'solid, h {H[0] * 1e3:.2f} mm'", path)
     got = run_solid(case, ancf_section(case), H[0], 2, probe=SoftProbe)
     diff = max(_rel(got["u"], want["u"]), abs(got["rot"] / want["rot"] - 1.0),
                abs(got["u_mean"][0] / want["ux_mean"] - 1.0))

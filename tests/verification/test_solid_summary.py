@@ -71,3 +71,16 @@ def test_a_norm_is_printed_without_a_sign():
     assert lines["bar: tension"].endswith("| 0.88 % | 0.10 % | 0.12 % | 0.09 % |")
     assert "+" not in lines["fibre bar: goh_twist, K/μ = 50"]
     assert lines["soft-matrix bar (GOH alex set), beams locking: none"].endswith("| +30.39 % | +30.31 % | — |")
+
+
+def test_a_check_without_its_csv_row_names_the_row(tmp_path):
+    """With --docs a run's directory (verify_solid.py --cases tension --out DIR), the bending check
+    ended in 'StopIteration: ' (run: exit 1, nothing named); now a SolidError naming CSV and row."""
+    from ancf_verify import checks
+    from ancf_verify.bars.cases import CASES
+    from ancf_verify.stack import SolidError
+    lines = open(os.path.join(ROOT, "docs", "solid_comparison.csv")).read().splitlines()
+    (tmp_path / "solid_comparison.csv").write_text("\n".join(l for l in lines if not l.startswith("bending,")) + "\n")
+    with pytest.raises(SolidError, match=r"solid_comparison.csv: no row 'bending, solid P2 tet, h 8.00 mm' to "
+                                         r"re-solve \(a CSV of another run\?\)"):
+        checks.bar(next(c for c in CASES if c.key == "bending"), str(tmp_path))

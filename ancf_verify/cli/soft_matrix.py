@@ -27,6 +27,7 @@ Usage: python scripts/verify_solid_soft_matrix.py [--out docs]
 """
 from __future__ import annotations
 
+import argparse
 import os
 import tempfile
 import time
@@ -43,6 +44,16 @@ from ancf_verify.soft_matrix.solid import SoftProbe, profile, rows_of
 from ancf_verify.stack import import_stack
 
 
+def size_mm(text: str) -> float:
+    """A mesh size in mm, as this command takes them: under 0.1 mm is a size in m given by mistake
+    (the other solid commands take m), whose mesh gmsh would build for hours."""
+    value = size(text)
+    if value < 0.1:
+        raise argparse.ArgumentTypeError(f"mesh sizes are in mm here (the other solid commands take m), "
+                                          f"e.g. 2 for 2 mm; got {text!r}")
+    return value
+
+
 def main(argv=None) -> int:
     ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV")
@@ -52,10 +63,10 @@ def main(argv=None) -> int:
     ap.add_argument("--force", type=float, default=FORCE, help="end force [N] (other than 200: beam only)")
     ap.add_argument("--beam-only", action="store_true", help="the beam runs, printed; nothing written")
     ap.add_argument("--more-solid", action="store_true", help="keep the CSV's rows, add solid meshes --h")
-    ap.add_argument("--profile", type=size, metavar="H",
+    ap.add_argument("--profile", type=size_mm, metavar="H",
                     help="print u_x along the end face's semi-axes: beams and the solid of mesh size H [mm]")
     ap.add_argument("--quad-degree", type=int, default=2, help="solid quadrature degree (default 2)")
-    ap.add_argument("--h", type=size, nargs="+", default=[1e3 * h for h in H], help="solid mesh sizes [mm]")
+    ap.add_argument("--h", type=size_mm, nargs="+", default=[1e3 * h for h in H], help="solid mesh sizes [mm]")
     args = ap.parse_args(argv)
     path = os.path.join(args.out, CSV_NAME)
     if args.replot:

@@ -17,11 +17,14 @@ from helpers import MPI_ENV, ROOT
     ("solid_friction_across.py", ["--h", ","],
      "argument --h: expected mesh sizes > 0 separated by commas, e.g. 2e-3,1.4e-3; got ','"),
     ("verify_solid_soft_matrix.py", ["--h", "2", "-1"], "argument --h: mesh sizes must be > 0; got '-1'"),
+    ("verify_solid_soft_matrix.py", ["--h", "2e-3"], "argument --h: mesh sizes are in mm here (the other solid "
+                                                     "commands take m), e.g. 2 for 2 mm; got '2e-3'"),
 ])
 def test_a_mesh_size_at_or_below_zero_is_refused_by_its_option(script, argv, want, tmp_path):
     """verify_solid_contact.py --h=-2e-3 went on to gmsh, which aborted the whole process
     ('terminate called after throwing ...', a C++ backtrace, exit 134); '2mm' ended in
-    'ValueError: could not convert string to float', exit 1, naming no option."""
+    'ValueError: could not convert string to float', exit 1, naming no option.  The soft-matrix bar
+    takes mm: --h 2e-3 (2 mm in the other commands' m) asked gmsh for 2 µm tetrahedra (hours, memory)."""
     p = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", script), *argv, "--out", str(tmp_path)]
                        if script != "solid_friction_across.py" else
                        [sys.executable, os.path.join(ROOT, "scripts", script), *argv],

@@ -14,6 +14,7 @@ import h5py
 import numpy as np
 from h5py import h5a, h5d, h5g, h5p, h5s, h5t
 
+
 def open_file(path: str, mode: str) -> h5py.File:
     """results.h5 opened without HDF5's file lock.  With it, any reader holding the file (an
     ``ancf-report --existing`` on the running run, a notebook's ``h5py.File``) made the run's next

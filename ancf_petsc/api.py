@@ -136,8 +136,8 @@ def _check_edited_sections(spec: ModelSpec) -> None:
     from .config.beams import parse_section
     from .physics.elements import ELEMENTS
     for i, beam in enumerate(spec.beams):
-        section = parse_section(_section_as_written(beam.section), f"beams[{i}].section", spec.base_dir)
-        section.cubature_degree = max(section.cubature_degree, ELEMENTS[beam.element].section_degree)
+        section = ELEMENTS[beam.element].raise_section_rule(
+            parse_section(_section_as_written(beam.section), f"beams[{i}].section", spec.base_dir))
         section.spline_degree_given |= beam.section.spline_degree_given
         beam.section = section
 
@@ -166,16 +166,14 @@ def _section_of(entry: dict, beam, base_dir: str):
     from .config.beams import parse_section
     from .physics.elements import ELEMENTS
     try:
-        section = parse_section(entry.get("section"), "section", base_dir)
+        return ELEMENTS[beam.element].raise_section_rule(parse_section(entry.get("section"), "section", base_dir))
     except ConfigError:
         return None
-    section.cubature_degree = max(section.cubature_degree, ELEMENTS[beam.element].section_degree)
-    return section
 
 
 def _petsc_of(raw: dict) -> dict | None:
     """A config's ``petsc:`` as parsed (None where it does not parse)."""
-    from .config.solving import check_edited_solver, parse_petsc
+    from .config.solving import parse_petsc
     try:
         return parse_petsc(raw.get("petsc") or {})
     except ConfigError:

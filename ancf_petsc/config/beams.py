@@ -43,7 +43,7 @@ def _element_choices(beam: BeamSpec, raw: dict, p: str) -> None:
     (2 × order for 33103, 33153: ``Element.section_degree``), the locking remedy (its default
     unless given) among those it accepts (``Element.remedies``)."""
     e = ELEMENTS[beam.element]
-    beam.section.cubature_degree = max(beam.section.cubature_degree, e.section_degree)
+    e.raise_section_rule(beam.section)
     beam.locking = string(raw.get("locking", e.default_locking), f"{p}.locking", LOCKING)
     beam.parsed = (beam.element, "locking" in raw)
     _check_remedy(beam, p)

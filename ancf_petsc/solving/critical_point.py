@@ -127,8 +127,9 @@ def verdict_count(stepper, path, step: float, tally, converged: bool) -> int | N
     iterate's (chord steps near convergence), and a neo-Hookean bar of radius 2 mm and L = 1 m,
     stretched 23 % in one step, read 1-2 negative eigenvalues there (−5e-5 against +4.5e-7 at the
     state) and was cut back 4 times: 35 Newton iterations against 10.  With contact the last
-    factor's count stands (not re-checked on the tendon runs).  A state a loose ``-snes_rtol`` accepted with |F| above that share of
-    the loads is polished first (``loose_relative``).  Collective."""
+    factor's count stands (not re-checked on the tendon runs).  A state a loose ``-snes_rtol``
+    accepted with |F| above that share of the loads is polished first (``loose_relative``).
+    Collective."""
     S, P = stepper.solver, stepper.problem
     tally.polished = None
     rtol, atol, _, _ = S.snes.getTolerances()

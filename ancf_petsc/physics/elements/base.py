@@ -197,6 +197,11 @@ class Element:
         """The degree of the section field it interpolates (3333: 1, 3363: 2)."""
         return max(sum(self.block.monomials[v]) for v in self.vectors)
 
+    def raise_section_rule(self, section):
+        """``section`` (a SectionSpec) with its ``cubature_degree`` raised to ``section_degree``."""
+        section.cubature_degree = max(section.cubature_degree, self.section_degree)
+        return section
+
     @property
     def held(self) -> tuple[int, ...]:
         """Vectors of the block this element does not interpolate with (held at 0)."""

@@ -13,10 +13,10 @@ import os
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
+from .h5fast import open_file
 from .files import os_reason
 
 
@@ -105,7 +105,7 @@ def read_results(directory: str) -> Results:
     h5_path = os.path.join(directory, "results.h5")
     if summary.get("status") == "running" and os.path.exists(h5_path):
         try:                         # no file lock: the run's next level must not find one
-            with h5py.File(h5_path, "r", locking=False) as h5:
+            with open_file(h5_path, "r") as h5:
                 append_levels(summary, h5["steps"])
         except (OSError, KeyError, ValueError, RuntimeError):
             pass                     # results.h5 being written or damaged: summary.json's levels
@@ -118,7 +118,7 @@ def opened(results_h5: str):
     InputError naming it when HDF5 cannot open it (truncated, empty, not HDF5: an OSError
     traceback in ancf-report --existing before)."""
     try:
-        h5 = h5py.File(results_h5, "r", locking=False)
+        h5 = open_file(results_h5, "r")
     except OSError as exc:                 # HDF5's words run over lines: the OS's, or the first line
         raise InputError("results", f"{results_h5}: cannot read ({os_reason(exc)}): not a whole results.h5; "
                                     "run ancf-solve again") from None

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import os
 
-import h5py
 
 import yaml
 
 from ..config.parse import load_config
 from ..errors import InputError
 from ..status import LEVELS_PASSED_OVER
+from ..io.h5fast import open_file
 from ..io.levels import step_at
 from ..io.reader import check_levels, read_results
 from ..io.restart import fingerprint, first_difference
@@ -71,7 +71,7 @@ class ExistingRun:
     def _config(self) -> dict:
         """The run's config as written into results.h5 (empty when it cannot be read)."""
         try:
-            with h5py.File(os.path.join(self.dir, "results.h5"), "r", locking=False) as f:
+            with open_file(os.path.join(self.dir, "results.h5"), "r") as f:
                 raw = yaml.safe_load(f["model"].attrs["config_yaml"])
         except (OSError, KeyError, yaml.YAMLError):
             return {}
@@ -93,7 +93,7 @@ class ExistingRun:
             return f"ψ = {self.twist}° is not one of the paper's {', '.join(f'{p}°' for p in TWISTS)}"
         h5 = os.path.join(self.dir, "results.h5")
         try:
-            with h5py.File(h5, "r", locking=False) as f:
+            with open_file(h5, "r") as f:
                 if "fingerprint" not in f["model"]:
                     return "results.h5 has no model fingerprint (written by an older version)"
                 stored = {}

@@ -26,6 +26,11 @@ from .refinement import choose, level_step, quantity
 from .section_order import check_section_order
 
 
+def rung_elements(elements: int, factor: float) -> int:
+    """A beam's element count on the rung that scales the first beam's by ``factor``."""
+    return max(1, int(round(elements * factor)))
+
+
 def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> dict:
     """The scene up to ``level`` with every beam's element count scaled by ``factor`` (a load
     history's rungs run its frames: a history has no ``steps`` to cut, and refused one)."""
@@ -36,7 +41,7 @@ def _scaled_raw(spec: ModelSpec, factor: float, out_dir: str, level: float) -> d
     if spec.output.vtk:                      # vtk_samples with vtk off is refused (config/solving.py)
         raw["output"]["vtk_samples"] = spec.output.vtk_samples
     for b in raw.get("beams", []):
-        b["elements"] = max(1, int(round(b["elements"] * factor)))
+        b["elements"] = rung_elements(b["elements"], factor)
     return raw
 
 
@@ -118,7 +123,7 @@ def unresolved(spec: ModelSpec, counts: list[int]) -> list[int]:
     base = spec.beams[0].elements
     need = [(b.elements, (elements_resolving(spec.twist_deg, b.axial_points, ELEMENTS[b.element].block)
                           or (10 ** 9,))[0]) for b in spec.beams]
-    return [n for n in counts if any(max(1, int(round(e * n / base))) < k for e, k in need)]
+    return [n for n in counts if any(rung_elements(e, n / base) < k for e, k in need)]
 
 
 def select_and_run(spec: ModelSpec, comm, log, run_model):

@@ -23,8 +23,8 @@ from .beams import Beam, Model, Support
 from .fibre_setup import set_fibre_directions
 from .loading import LoadCurve, LoadGroup, group_for
 from .plausibility import (fibre_warnings, load_warnings, material_warnings, point_force_warnings,
-                           pretwist_resolution_warnings, reversed_load_warnings, section_warnings, size_warnings,
-                           twist_warnings)
+                           pretwist_resolution_warnings, reversed_load_warnings, section_warnings,
+                           sections_file_length_warnings, size_warnings, twist_warnings)
 
 _SECTIONS_FILE_CACHE: dict = {}
 
@@ -342,7 +342,9 @@ def build_model(spec: ModelSpec) -> Model:
               for p in spec.probes}
     warnings = (section_warnings(spec, beams) + size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
                 + material_warnings(spec, beams) + twist_warnings(spec, beams)
-                + pretwist_resolution_warnings(spec, beams, q0) + load_warnings(spec) + reversed_load_warnings(spec))
+                + pretwist_resolution_warnings(spec, beams, q0) + load_warnings(spec) + reversed_load_warnings(spec)
+                + sections_file_length_warnings(spec, {b.section.file: _sections_file(b.section.file, b.section.spline_degree)
+                                                       .length_m for b in spec.beams if b.section.file is not None}))
     end_means, root_means = ([_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[k]) for b in beams]
                              for k in (-1, 0))
     return Model(spec=spec, beams=beams, q0=q0, fixed_dofs=fixed_dofs, loading=loading, probes=probes,

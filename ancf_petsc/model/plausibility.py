@@ -4,6 +4,8 @@ iterations and fail without a word.  Each check gives one warning line naming th
 likely unit mistake; the model is built and solved as given."""
 from __future__ import annotations
 
+import math
+import os
 import re
 
 import numpy as np
@@ -279,6 +281,18 @@ def twist_warnings(spec, beams) -> list[str]:
             out.append(f"warning: geometry.twist_axis: the axis is {dist:.3g} m from the nearest section centroid "
                        f"({dist / width:.3g} x the sections' width), so the sections wind round it on a helix; "
                        f"coordinates are in metres (units: SI): if they are millimetres, divide them by 1000")
+    return out
+
+
+def sections_file_length_warnings(spec, file_lengths: dict[str, float | None]) -> list[str]:
+    """A sections file's ``length_m`` (the source's tendon length, not read by the model) that is
+    not geometry.length: a traced subject's file with its own length ran silently at the config's."""
+    out = []
+    for path, length in file_lengths.items():
+        if length is not None and not math.isclose(length, spec.length, rel_tol=1e-6):
+            out.append(f"warning: geometry.length: {spec.length:g} m, but the sections file "
+                       f"'{os.path.basename(path)}' gives length_m {length:g} m; the config's length is "
+                       "used (set geometry.length to the file's if that is the tendon's)")
     return out
 
 

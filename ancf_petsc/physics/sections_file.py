@@ -46,8 +46,9 @@ class SectionsFile:
 
     ``curves``: each named curve built once (in metres, tendon frame), shared by both
     neighbours; ``loops``: per sub-section a list of (SplineCurve, reversed_flag);
-    ``twist_axis``: the triple point [m]; ``length_m``; ``c10_MPa`` per sub-section;
-    ``scale`` in metres per pixel.
+    ``twist_axis``: the triple point [m]; ``length_m`` (None when not given) and ``c10_MPa``
+    per sub-section (empty when not given), the source's data, which the model does not read
+    (the config gives geometry.length and each beam's material); ``scale`` in metres per pixel.
     """
 
     path: str
@@ -55,7 +56,7 @@ class SectionsFile:
     curves: dict[str, SplineCurve]
     loops: dict[str, list[tuple[SplineCurve, bool]]]
     twist_axis: np.ndarray
-    length_m: float
+    length_m: float | None
     c10_MPa: dict[str, float]
     spline_degree: int = DEFAULT_SPLINE_DEGREE
     notes: list[str] = field(default_factory=list)
@@ -97,7 +98,7 @@ def load_sections_file(path: str | Path,
                        spline_degree: int = DEFAULT_SPLINE_DEGREE) -> SectionsFile:
     """Load a sections file: pixel control points (y = px_x * scale, z = -px_y * scale),
     named ``curves``, loops under ``subtendons`` ('-name' = reversed), ``triple_point_px``,
-    ``scale_m_per_px``, ``length_m``, ``c10_MPa``.  Each curve becomes ONE SplineCurve of
+    ``scale_m_per_px``, and optionally the source's ``length_m`` and ``c10_MPa``.  Each curve becomes ONE SplineCurve of
     degree ``spline_degree`` (Sec. 2.2) shared by every loop that uses it."""
     import yaml
 
@@ -120,16 +121,17 @@ def load_sections_file(path: str | Path,
                            "fix its syntax") from None
     if not isinstance(data, Mapping):
         raise SectionError(f"the sections file '{p}' must be a YAML mapping with the keys "
-                           "scale_m_per_px, triple_point_px, curves, subtendons, c10_MPa, "
-                           "length_m")
-    required = ["scale_m_per_px", "triple_point_px", "curves", "subtendons", "c10_MPa",
-                "length_m"]
+                           "scale_m_per_px, triple_point_px, curves, subtendons (and optionally "
+                           "c10_MPa, length_m)")
+    # length_m and c10_MPa were required though nothing reads them: a traced subject's file had
+    # to state a length and moduli that the config's geometry.length and materials override
+    required = ["scale_m_per_px", "triple_point_px", "curves", "subtendons"]
     missing = [k for k in required if k not in data]
     if missing:
         raise SectionError(f"the sections file '{p}' lacks the key(s) {', '.join(missing)}; "
                            "add them (see configs/data/achilles_type3_sections.yaml)")
     scale = _positive_number(data["scale_m_per_px"], f"scale_m_per_px in '{p}'")
-    length = _positive_number(data["length_m"], f"length_m in '{p}'")
+    length = _positive_number(data["length_m"], f"length_m in '{p}'") if "length_m" in data else None
     twist = _px_to_m(data["triple_point_px"], scale, f"triple_point_px in '{p}'")
     if twist.shape[0] != 1:
         raise SectionError(f"triple_point_px in '{p}' must be one [px_x, px_y] pair")
@@ -169,7 +171,7 @@ def load_sections_file(path: str | Path,
             loop.append((curves[key], flip))
         loops[lname] = loop
 
-    raw_c10 = data["c10_MPa"]
+    raw_c10 = data.get("c10_MPa", {})
     if not isinstance(raw_c10, Mapping):
         raise SectionError(f"'c10_MPa' in '{p}' must map subtendon names to moduli in MPa")
     c10: dict[str, float] = {}

@@ -26,8 +26,26 @@ def test_shipped_configs_give_no_warning(path):
 def test_length_in_mm_is_named():
     raw = load_raw("achilles_type3_psi0.yaml")
     raw["geometry"]["length"] = 70
-    (w,) = _warnings(raw)
+    w, file_length = _warnings(raw)
     assert "geometry.length is 70 m" in w and "write length: 0.07" in w
+    assert "gives length_m 0.07 m" in file_length
+
+
+def test_a_length_other_than_the_sections_files_is_named(tmp_path):
+    """The sections file's length_m is the source's, not read by the model: a config at another
+    length ran silently at the config's."""
+    raw = load_raw("achilles_type3_psi0.yaml")
+    raw["geometry"]["length"] = 0.06
+    (w,) = _warnings(raw)
+    assert w.startswith("warning: geometry.length: 0.06 m") and "length_m 0.07 m" in w
+    # a traced subject's file may leave out the source's length and moduli altogether
+    with open(os.path.join(CONFIGS, "data", "achilles_type3_sections.yaml")) as f:
+        data = yaml.safe_load(f)
+    del data["length_m"], data["c10_MPa"]
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
+    for b in raw["beams"]:
+        b["section"]["file"] = str(tmp_path / "s.yaml")
+    assert _warnings(raw) == []
 
 
 def test_section_in_mm_is_named():

@@ -192,9 +192,7 @@ def reference_value(scene: Scene, ref: Discretisation, extrapolate: bool, out_di
     """The reference quantity: the reference discretisation's value, or the Richardson limit
     of it and its two halvings in element count.  Returns (value, rows, description)."""
     n = ref.elements or _discretisation_of(scene.raw)[1]
-    counts = [n // 4, n // 2, n] if extrapolate else [n]
-    if extrapolate and counts[0] < 1:
-        raise StudyError("reference.elements", f"Richardson needs n/4 >= 1 elements; got {n}")
+    counts = halvings(n) if extrapolate else [n]
     rows = []
     for k in counts:
         d = Discretisation(elements=k, axial_points=ref.axial_points,
@@ -214,6 +212,13 @@ def reference_value(scene: Scene, ref: Discretisation, extrapolate: bool, out_di
         return rows[-1].value, rows, f"{rows[-1].label} (extrapolation unreliable)"
     return ex.limit, rows, (f"Richardson limit of {', '.join(str(r.elements) for r in rows)} "
                             f"elements (observed order {ex.order:.2f})")
+
+
+def halvings(n: int) -> list[int]:
+    """n/4, n/2, n elements: ``richardson``'s meshes, each refined by 2 (10 gave 2, 5, 10)."""
+    expect(n >= 4 and n % 4 == 0, "reference.elements", "Richardson extrapolates from n/4, n/2 and n "
+           f"elements, each twice the last: give a multiple of 4, e.g. {max(4, n - n % 4)}; got {n}")
+    return [n // 4, n // 2, n]
 
 
 def check_reference(scene: Scene, ref: float) -> float:
@@ -384,6 +389,8 @@ def load_study(path: str) -> StudySpec:
     ref = parse_discretisation(doc.get("reference", {}), "reference", ("richardson",))
     extrapolate = doc.get("reference", {}).get("richardson", False)
     expect(isinstance(extrapolate, bool), "reference.richardson", "expected true or false")
+    if extrapolate:
+        halvings(ref.get("elements") or _discretisation_of(scene.raw)[1])
     repeats = doc.get("repeats", 1)
     expect(isinstance(repeats, int) and repeats >= 1, "repeats", "expected an integer >= 1")
     name = doc.get("name", os.path.splitext(os.path.basename(path))[0])

@@ -175,3 +175,22 @@ def test_an_axis_value_the_scene_refuses_is_named_by_its_axis(tmp_path):
     with pytest.raises(StudyError) as exc:
         run_stability(spec, log=lambda *_: None)
     assert exc.value.path == "axes.contact" and "the scene refuses {'contact': 'sliding'}" in exc.value.message
+
+
+
+@pytest.mark.parametrize("elements", [10, 6])
+def test_a_richardson_reference_is_a_multiple_of_four_elements(tmp_path, elements):
+    """richardson() takes its three meshes as each refined by 2, but reference elements 10 solved
+    2, 5 and 10 elements: on the cantilever with 3 axial points a 'limit' of 0.039198 m where the
+    meshes 20, 40, 80 extrapolate to 0.040069 m, every row's error measured from it. Such a count
+    is refused before anything is solved or written, naming reference.elements."""
+    from ancf_petsc.workflows.study import StudyError, load_study
+    doc = {"kind": "pareto", "base": BASE, "probe": "tip", "component": "z",
+           "grid": {"elements": [1]}, "reference": {"elements": elements, "richardson": True},
+           "output": str(tmp_path / "out")}
+    with pytest.raises(StudyError) as exc:
+        load_study(_write(tmp_path, doc))
+    assert exc.value.path == "reference.elements" and "multiple of 4" in exc.value.message
+    assert f"got {elements}" in exc.value.message and not os.path.exists(tmp_path / "out")
+    doc["reference"] = {"elements": 8, "richardson": True}
+    assert load_study(_write(tmp_path, doc)).reference.elements == 8

@@ -26,6 +26,9 @@ NEGATIVE_EIGENVALUES = "NEGATIVE_EIGENVALUES"
 WEIGHTS_UNSETTLED = "WEIGHTS_UNSETTLED"
 #: completed, after switching to a stable branch at a bifurcation (solving/branch_switch.py)
 BRANCH_SWITCHED = "BRANCH_SWITCHED"
+#: completed, but no rung of the accuracy ladder met its rtol: the answer's error is not known to meet
+#: it (workflows/accuracy.py)
+ACCURACY_NOT_MET = "ACCURACY_NOT_MET"
 #: completed, with levels inside a gap of the load path reported just past it (solving/step_over.py)
 LEVELS_PASSED_OVER = "LEVELS_PASSED_OVER"
 OUTPUT_ERROR = "OUTPUT_ERROR"

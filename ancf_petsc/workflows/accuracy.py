@@ -17,6 +17,7 @@ import os
 import shutil
 import time
 
+from .. import status as st
 from ..config.parse import parse_config
 from ..config.values import ConfigError
 from ..config.specs import ModelSpec
@@ -205,8 +206,32 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
         if comm.rank == 0:
             res.summary.update(accuracy=info, output_dir=os.path.abspath(spec.output.dir))
         say(f"[accuracy] the {n}-element rung is the whole scene: its results are in {spec.output.dir}")
-        return res
+        say(f"[ancf] {res.status}: {res.message}; results in {spec.output.dir}")    # the rung ran quiet
+        return _say_not_met(res, info, spec.output.dir, comm, say)
     info["reused_rung"] = False
     final = parse_config(_scaled_raw(spec, n / base, spec.output.dir, max(spec.steps)),
                          base_dir=spec.base_dir)
-    return run_model(final, comm, log, info={"accuracy": info})
+    return _say_not_met(run_model(final, comm, log, info={"accuracy": info}), info, spec.output.dir, comm, say)
+
+
+def _say_not_met(res, info: dict, out_dir: str, comm, say):
+    """A completed run whose ladder met no rtol says so (reason code ACCURACY_NOT_MET, in its message
+    and summary.json): it ended as a plain "completed", its error unknown (collective)."""
+    if info["met"] or res.status != "completed":
+        return res
+    note = (f"accuracy not met: no rung met rtol {info['rtol']:g} with a reliable estimate "
+            f"(ladder {[r['elements'] for r in info['ladder']]} elements); this is the "
+            f"{info['chosen_elements']}-element answer, its error unknown (raise accuracy.max_elements)")
+    res.message = f"{res.message}; {note}"
+    if res.reason_code == st.COMPLETED:
+        res.reason_code = st.ACCURACY_NOT_MET
+    if comm.rank == 0:
+        path = os.path.join(out_dir, "summary.json")
+        with open(path) as fh:
+            summary = json.load(fh)
+        summary.update(message=res.message, reason_code=res.reason_code)
+        atomic_write(path, json.dumps(summary, indent=1))
+        res.summary.update(message=res.message, reason_code=res.reason_code)
+    comm.tompi4py().Barrier()
+    say(f"[accuracy] {note}")
+    return res

@@ -227,3 +227,23 @@ def test_the_ladder_leaves_out_rungs_whose_pretwist_is_under_resolved(twist, axi
         b["axial_points"] = axial
     raw["accuracy"] = {"probe": "soleus", "component": "x", "rtol": 2e-3}
     assert element_counts(parse_config(raw, base_dir=CONFIGS)) == ladder
+
+
+@pytest.mark.parametrize("level", [1.0, 0.5])       # the rung is the whole scene / a second solve
+def test_a_ladder_that_meets_no_rtol_says_so(tmp_path, level):
+    """No rung met rtol 1e-9 up to 4 elements: the run ended as a plain "completed" (and without a
+    final line when the finest rung was the whole scene).  Now its reason code, message and
+    summary say the accuracy was not met; every level converged, so the exit code stays 0."""
+    raw = load_raw("bending_neohookean.yaml")
+    raw["accuracy"] = {"probe": "tip", "component": "z", "rtol": 1e-9, "start": 1, "max_elements": 4,
+                       "level": level}
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    proc = solve_cli(write_config(raw, tmp_path / "c.yaml"))
+    assert proc.returncode == 0, proc.stderr
+    s = read_summary(tmp_path / "out")
+    assert s["status"] == "completed" and s["reason_code"] == "ACCURACY_NOT_MET"
+    assert "accuracy not met: no rung met rtol 1e-09" in s["message"]
+    assert s["accuracy"]["met"] is False and s["accuracy"]["chosen_elements"] == 4
+    assert s["accuracy"]["reused_rung"] is (level == 1.0)
+    lines = proc.stdout.strip().splitlines()
+    assert lines[-1].startswith("[accuracy] accuracy not met") and lines[-2].startswith("[ancf] completed:")

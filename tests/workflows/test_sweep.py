@@ -571,3 +571,32 @@ def test_a_run_made_with_other_petsc_options_is_run_again(tmp_path):
     rc, out, _ = run_main([path])
     assert rc == 0 and "skipped" not in out, out
     assert read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"] != loose
+
+
+def test_a_run_whose_data_file_was_edited_is_run_again(tmp_path):
+    """The load history a sweep's runs read (history.file: load.csv) edited after they ran, its
+    peak 45 -> 20 N: every run was 'skipped (already done)' and results.csv kept the 45 N tip
+    (24.60 mm, against 9.75 mm at 20 N) with no word: config.yaml names the file, not its
+    contents. params.json records the digests of the files the run reads now."""
+    raw = yaml.safe_load(open(UNIAXIAL))
+    raw.pop("steps")
+    raw["history"] = {"file": "load.csv", "time": "time"}
+    raw["loads"][0].update(traction_force=[1.0, 0.0, 0.0], column="f")
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    (tmp_path / "load.csv").write_text("time,f\n0,0\n1,20\n2,45\n")
+    body = {"base": "base.yaml", "parameters": {"output.vtk": [False]}, "output": "o"}
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump(body))
+    path = str(tmp_path / "sweep.yaml")
+    assert run_main([path])[0] == 0
+    at_45 = float(read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"])
+    (tmp_path / "load.csv").write_text("time,f\n0,0\n1,10\n2,20\n")
+    assert "1 to run, 0 already done" in run_main([path, "--dry-run"])[1]
+    rc, out, _ = run_main([path, "--collect"])
+    row = read_csv(tmp_path / "o" / "results.csv")[0]
+    assert rc == 1 and row["status"] == "missing" and "data file" in row["reason"] and not row.get("tip_dx")
+    rc, out, _ = run_main([path])
+    assert rc == 0 and "skipped" not in out, out
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump(dict(body, output="fresh")))
+    assert run_main([path])[0] == 0                  # the edited file, in a new directory
+    at_20 = float(read_csv(tmp_path / "fresh" / "results.csv")[0]["tip_dx"])
+    assert float(read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"]) == at_20 < 0.5 * at_45

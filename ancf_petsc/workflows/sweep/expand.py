@@ -2,6 +2,7 @@
 it is already done."""
 from __future__ import annotations
 
+import contextlib
 import copy
 import hashlib
 import itertools
@@ -12,6 +13,7 @@ from typing import Any
 
 import yaml
 
+from ... import yamlio
 from ...io.files import atomic_write, remove_quietly
 from .base import DONE_STATUSES, read_json, read_text, set_key_path
 from .spec import RunSpec, Sweep
@@ -129,13 +131,62 @@ def _unplaced(text: str | None) -> Any:
     return raw
 
 
+def input_files(sweep: Sweep, run: RunSpec) -> dict[str, str]:
+    """The data files the run reads (``file`` / ``source`` of its config and of the geometry
+    files it names), as the config names them from the run directory -> a digest of each."""
+    found: dict[str, str] = {}
+    _digest_named(run_config(sweep, run), run.dir, run.dir, found, 0)
+    return found
+
+
+def _digest_named(value: Any, here: str, run_dir: str, found: dict[str, str], depth: int) -> None:
+    if isinstance(value, list):
+        for v in value:
+            _digest_named(v, here, run_dir, found, depth)
+    elif isinstance(value, dict):
+        for key, v in value.items():
+            if key not in ("file", "source") or not isinstance(v, str) or not v:
+                _digest_named(v, here, run_dir, found, depth)
+                continue
+            path = os.path.normpath(os.path.join(here, v))
+            shared = os.path.commonpath([path, os.path.abspath(run_dir)]) != os.sep
+            name = os.path.relpath(path, run_dir) if shared else path
+            if name in found:
+                continue
+            found[name] = _digest(path)
+            if depth < 3 and found[name] != "missing" and os.path.getsize(path) < 1 << 20:
+                with contextlib.suppress(Exception):     # a geometry file's own files; else none
+                    _digest_named(yamlio.load(yamlio.read_text(path)), os.path.dirname(path),
+                                  run_dir, found, depth + 1)
+
+
+_DIGESTS: dict[tuple, str] = {}
+
+
+def _digest(path: str) -> str:
+    """sha256 of a file's bytes (16 hex digits; 'missing' if unreadable), kept per path, mtime, size."""
+    try:
+        st = os.stat(path)
+        key = (path, st.st_mtime_ns, st.st_size)
+        if key not in _DIGESTS:
+            with open(path, "rb") as fh:
+                _DIGESTS[key] = hashlib.sha256(fh.read()).hexdigest()[:16]
+        return _DIGESTS[key]
+    except OSError:
+        return "missing"
+
+
 def same_config(sweep: Sweep, run: RunSpec) -> bool:
     """The run directory's config.yaml is the one this sweep would write now, wherever the sweep
     directory was prepared (a sweep moved to another machine keeps its runs), and its
-    params.json names the sweep's run.petsc (one written before it named them: taken as the same)."""
+    params.json names the sweep's run.petsc and the data files' contents as they are now (one
+    written before it named them: taken as the same)."""
     old = _unplaced(read_text(os.path.join(run.dir, "config.yaml")))
-    petsc = (read_json(os.path.join(run.dir, "params.json")) or {}).get("petsc", sweep.petsc)
-    return old is not None and old == _unplaced(config_text(sweep, run)) and petsc == sweep.petsc
+    params = read_json(os.path.join(run.dir, "params.json")) or {}
+    petsc = params.get("petsc", sweep.petsc)
+    if old is None or old != _unplaced(config_text(sweep, run)) or petsc != sweep.petsc:
+        return False
+    return "inputs" not in params or params["inputs"] == input_files(sweep, run)
 
 
 def is_done(sweep: Sweep, run: RunSpec) -> bool:
@@ -149,9 +200,10 @@ def is_done(sweep: Sweep, run: RunSpec) -> bool:
 def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     """Write ``config.yaml`` and ``params.json``; True if a completed result of this config exists.
 
-    A run directory whose config or PETSc options differ from the current ones (the sweep or
-    base config was edited) loses its summary.json/run.json, so neither this tool nor a SLURM
-    task skips it; one only moved (``same_config``) keeps them and gets its new ``output.dir``."""
+    A run directory whose config, PETSc options or data files differ from the current ones (the
+    sweep, its base config or a file they name was edited) loses its summary.json/run.json, so
+    neither this tool nor a SLURM task skips it; one only moved (``same_config``) keeps them and
+    gets its new ``output.dir``."""
     os.makedirs(run.dir, exist_ok=True)
     cfg_path = os.path.join(run.dir, "config.yaml")
     text = config_text(sweep, run)
@@ -161,7 +213,8 @@ def prepare_run(sweep: Sweep, run: RunSpec) -> bool:
     if old != text:
         atomic_write(cfg_path, text)
     params = {"sweep": sweep.name, "sweep_file": sweep.file, "base": sweep.base,
-              "run_id": run.run_id, "index": run.index, "parameters": run.params, "petsc": sweep.petsc}
+              "run_id": run.run_id, "index": run.index, "parameters": run.params, "petsc": sweep.petsc,
+              "inputs": input_files(sweep, run)}
     atomic_write(os.path.join(run.dir, "params.json"),
                   json.dumps(params, indent=1, default=str) + "\n")
     return is_done(sweep, run)

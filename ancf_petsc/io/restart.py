@@ -53,8 +53,10 @@ class RestartPoint:
     stored_config: dict | None = None  # its config (runs without a fingerprint)
     levels: tuple = ()            # the converged load factors, in order
     contact_fields: dict | None = None   # the level's contact fields (a contact term's state)
-    #: the level before's (None: the first level, whose increment started from rest)
+    #: the history of the tangent the run factored last: the level before the last one that took
+    #: Newton iterations (None: from rest; ``_factoring_level``)
     previous_contact_fields: dict | None = None
+    factored: bool = True          # a level factored a tangent (False: no prediction to prime)
     pointwise_from: float | None = None  # the run's switch to pointwise fade forces (fade_switch.py)
     window_whole_from: float | None = None  # its contact search windows widened (window_widening.py)
 
@@ -298,6 +300,14 @@ def _contact_fields(group) -> dict | None:
     return {key: v[()] for key, v in group["contact"].items()} if "contact" in group else None
 
 
+def _factoring_level(entries: list, k: int) -> int:
+    """The last of the levels 1 … k whose solve took Newton iterations (0: none), whose factor
+    the run's tangent predictor holds: a level reached in none (a frame repeating the loads of
+    the one before) factors nothing.  Priming with the history of the level before k instead made a
+    friction history restarted at such a frame go on along another path."""
+    return next((i for i in range(k, 0, -1) if entries[i - 1].get("iterations", 1) > 0), 0)
+
+
 def read_restart(directory: str) -> RestartPoint:
     """The last converged level of the run in ``directory`` (``check_same_run`` compares it
     with the continuing run's model).  InputError with one line when the directory has no
@@ -326,6 +336,7 @@ def read_restart(directory: str) -> RestartPoint:
             if k == 0:
                 raise InputError("--restart", f"{path}: no converged level to restart from; run it afresh")
             g = steps[f"step_{k:04d}"]
+            j = _factoring_level(summary["steps"], k)
             if "restart" not in g:
                 raise InputError("--restart", f"{path}: written without restart data (an older version)")
             r = g["restart"]
@@ -343,8 +354,9 @@ def read_restart(directory: str) -> RestartPoint:
                                  levels=tuple(float(steps[f"step_{i:04d}"].attrs["load_factor"])
                                               for i in range(1, k + 1)),
                                  contact_fields=_contact_fields(g),
-                                 previous_contact_fields=(_contact_fields(steps[f"step_{k - 1:04d}"])
-                                                          if k > 1 else None),
+                                 previous_contact_fields=(_contact_fields(steps[f"step_{j - 1:04d}"])
+                                                          if j > 1 else None),
+                                 factored=j > 0,
                                  pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
                                                  if "fade_forces_pointwise_from" in r.attrs else None),
                                  window_whole_from=(float(r.attrs["search_window_whole_from"])

@@ -201,7 +201,7 @@ class Run:
         self.stepper.fade_switch.resume(self.stepper, point.pointwise_from, self.spec.output.dir)
         self.stepper.windows.resume(point.window_whole_from)
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
-        if self.stepper.spec.predictor == "tangent":            # the factor the interrupted run had
+        if self.stepper.spec.predictor == "tangent" and point.factored:   # the interrupted run's factor
             self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
         levels = list(self.spec.steps[len(point.levels):])    # the converged ones start the steps
         path.dlam = restart_increment(point, levels, self.say)

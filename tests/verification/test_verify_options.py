@@ -185,3 +185,28 @@ def test_an_ancf_src_without_the_package_is_refused(tmp_path):
     assert p.returncode == 2 and p.stderr.splitlines() == [
         f"{prog}: --ancf-src: no ancf_petsc package in {str(tmp_path)!r} (this checkout's would be solved under "
         f"its label); give the directory of an export of a commit (see {prog} --help)"], p.stderr
+
+
+def test_soft_matrix_makes_its_out_directory_before_solving(tmp_path, monkeypatch, capsys):
+    """verify_solid_soft_matrix.py --out NEW wrote its CSV into NEW only at the end, and NEW was
+    never made: FileNotFoundError after the solid's 26 minutes; --ancf-only into a directory without
+    the CSV it merges into failed there too.  Now --out is made before anything is solved, and the
+    merge's missing CSV is refused at once (exit 2)."""
+    from ancf_verify.cli import soft_matrix
+
+    class Solving(Exception):
+        pass
+
+    def solve(*_):
+        raise Solving
+
+    monkeypatch.setattr(soft_matrix, "import_stack", solve)
+    new = tmp_path / "new" / "out"
+    with pytest.raises(Solving):
+        soft_matrix.main(["--out", str(new)])
+    assert new.is_dir()
+    monkeypatch.setattr(soft_matrix, "beam_runs", solve)
+    with pytest.raises(SystemExit) as exc:
+        soft_matrix.main(["--ancf-only", "--out", str(tmp_path / "other")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "--ancf-only merges into" in err and "does not exist" in err

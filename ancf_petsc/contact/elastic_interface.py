@@ -49,6 +49,7 @@ class ElasticMatrix(PartnerTerm):
     """σ = k_t s: an elastic interlayer of shear modulus G and thickness h, k_t = G / h [Pa/m]."""
     law = "elastic"
     symmetric = True
+    couples_beams = True
 
     def __init__(self, stiffness: float, model, points, projector):
         super().__init__(model, points, projector)

@@ -104,6 +104,9 @@ class PartnerTerm:
     options: dict = {}
     #: whether the law has unknowns of its own (tangential multipliers in the multiplier space)
     multipliers = False
+    #: whether the law's forces tie A's displacements to B's directly (a stiffness between two
+    #: beams, outside the fascicle blocks and the multipliers: linalg.choice)
+    couples_beams = False
     #: whether the law's bounds follow the state (friction's μ ẑ: ``hold_bounds``)
     bounded = False
     #: per-interface statistics of ``sums``: (name, how ranks combine it)

@@ -57,8 +57,9 @@ def choose(choice: str, model, contact, petsc_options: dict, prefix: str = "") -
     """The linear solver for ``solver.linear`` = ``choice`` (auto | direct | fieldsplit) and why:
     ('direct' | 'fieldsplit', reason).  ``fieldsplit`` needs contact multipliers between at
     least two beams, each held by its own supports, and no PC/KSP chosen through PETSc options;
-    ``auto`` takes it from ``AUTO_MIN_MULTIPLIERS`` multipliers on.  Raises InputError when
-    ``fieldsplit`` is asked for and cannot run (the same on every rank)."""
+    ``auto`` takes it from ``AUTO_MIN_MULTIPLIERS`` multipliers on, unless a tangential law
+    couples the beams' displacements directly (the elastic matrix: a K_× that is not small).
+    Raises InputError when ``fieldsplit`` is asked for and cannot run (the same on every rank)."""
     if choice == "direct":
         return "direct", "solver.linear: direct"
     why_not = _why_not_fieldsplit(model, contact, petsc_options, prefix)
@@ -68,6 +69,10 @@ def choose(choice: str, model, contact, petsc_options: dict, prefix: str = "") -
         return "fieldsplit", "solver.linear: fieldsplit"
     if why_not:
         return "direct", f"auto: direct, fieldsplit not possible: {why_not}"
+    coupling = [t.describe() for t in contact.terms if t.couples_beams]
+    if coupling:
+        return "direct", (f"auto: direct, the {coupling[0]} ties the fascicles to each other outside "
+                          "their blocks (fieldsplit leaves that to FGMRES, which fails on a stiff matrix)")
     m = contact.n_multipliers
     if m < AUTO_MIN_MULTIPLIERS:
         return "direct", f"auto: {m} contact multipliers < {AUTO_MIN_MULTIPLIERS}"

@@ -206,6 +206,41 @@ def test_auto_rule_and_its_refusals():
         choose("fieldsplit", mb, None, {})
 
 
+def test_auto_takes_direct_with_an_elastic_interface_matrix(tmp_path):
+    """An elastic interface matrix ties neighbouring fascicles' displacements directly (K_× of
+    the order of k_t), which the fascicle Schur preconditioner leaves to FGMRES: on the
+    7-fascicle bundle with k_t = 1e12 Pa/m an explicit fieldsplit fails (DIVERGED_LINEAR_SOLVE)
+    where direct converges, so auto takes direct for 19 fascicles (2 772 multipliers) with the
+    matrix, and fieldsplit without it."""
+    petsc_init()
+    from ancf_petsc.config.parse import parse_config
+    from ancf_petsc.contact import build_contact
+    from ancf_petsc.model.build import build_model
+    from ancf_petsc.linalg.choice import choose
+
+    def raw(count, tangential=None, elements=16):
+        r = load_raw("bundle_hex37.yaml")
+        r["bundle"].update(count=count, elements=elements)
+        if tangential:
+            r["contact"]["tangential"] = tangential
+        return r
+    matrix = {"law": "elastic", "stiffness": 1.0e12}
+    for tangential, expected in ((None, "fieldsplit"), (matrix, "direct")):
+        spec = parse_config(raw(19, tangential), base_dir=CONFIGS)
+        model = build_model(spec)
+        linear, why = choose("auto", model, build_contact(model, spec.contact, lambda *a: None), {})
+        assert linear == expected, why
+    assert "elastic interface matrix" in why
+    runs = {}
+    for linear in ("direct", "fieldsplit"):
+        r = raw(7, matrix, elements=2)
+        r["solver"] = {"linear": linear, "max_cutbacks": 1}
+        r["steps"] = [1.0]
+        runs[linear] = run_inline(r, tmp_path / linear)
+    assert runs["direct"]["status"] == "completed"
+    assert runs["fieldsplit"]["reason_code"] == "DIVERGED_LINEAR_SOLVE", runs["fieldsplit"]["status"]
+
+
 @pytest.mark.mpi
 def test_fieldsplit_gives_the_direct_answer_on_1_2_3_ranks(tmp_path):
     """bundle_hex7 with solver.linear: fieldsplit on 1, 2 and 3 ranks (whole fascicles per

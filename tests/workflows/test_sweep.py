@@ -275,6 +275,11 @@ BAD = {
                                         "run.petsc: 'snes_max_it' is neither an option nor an option's value"),
     "a PETSc value refused": ({"parameters": {"geometry.length": [1]}, "run": {"petsc": {"snes_max_it": 2.5}}},
                               "run.petsc: PETSc option -snes_max_it 2.5: expected an integer"),
+    # ancf-solve took the last --output-dir: every run wrote into /tmp/elsewhere, over the one
+    # before, and each was recorded 'crashed: exit code 0 but summary.json says status None'
+    "ancf-solve's own option": ({"parameters": {"geometry.length": [0.1, 0.2]},
+                                 "run": {"petsc": ["--output-dir", "/tmp/elsewhere"]}},
+                                "run.petsc: '--output-dir' is ancf-solve's own option, not PETSc's"),
 }
 
 

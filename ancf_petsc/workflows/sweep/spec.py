@@ -142,9 +142,14 @@ class Sweep:
 
 
 def _petsc_args(value: Any) -> list[str]:
-    """run.petsc as ancf-solve's PETSc arguments, refused (SweepError) where every run would be: a
-    stray word PETSc skips (``["snes_max_it", "3"]``: each run ignored it) or a value PETSc refuses."""
+    """run.petsc as ancf-solve's PETSc arguments, refused (SweepError) where every run would be: an
+    option of ancf-solve's own (``--output-dir``), a stray word PETSc skips (``["snes_max_it", "3"]``: each run ignored it) or a value PETSc refuses."""
     args = _petsc_list(value)
+    own = [a for a in args if a.startswith("--")]
+    if own:                 # ancf-solve's: --output-dir sent every run into one directory
+        raise SweepError("run.petsc", f"{own[0]!r} is ancf-solve's own option, not PETSc's (one dash): "
+                                      "the sweep gives each run its own (--output-dir, --restart); "
+                                      "leave it out")
     stray = stray_words(args)
     if stray:
         raise SweepError("run.petsc", f"{stray[0]!r} is neither an option nor an option's value (PETSc would "

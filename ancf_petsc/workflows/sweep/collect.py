@@ -68,7 +68,7 @@ def run_state(run: RunSpec, current: bool = True) -> RunState:
         st.reason_code = reason_code(run.dir, st.status) if rstat != st.status or not record \
             else str(record.get("reason_code") or reason_code(run.dir, st.status))
     if record and record.get("wall_time") is not None and rstat != "running":
-        st.wall_time = record["wall_time"]
+        st.wall_time = record["wall_time"] + float(record.get("earlier_wall_time") or 0.0)
     return st
 
 

@@ -91,6 +91,9 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     # summary.json as the attempt starts: one it leaves unchanged is an earlier attempt's
     mark = ("import sys; from ancf_petsc.workflows.sweep.execute import summary_mark; "
             "print(summary_mark(sys.argv[1]))")
+    begin = ("import os, sys; from ancf_petsc.workflows.sweep.execute import begin_attempt; "
+             'begin_attempt(sys.argv[1], sys.argv[2] == "--restart", {"slurm_job": '
+             'os.environ.get("SLURM_ARRAY_JOB_ID"), "slurm_task": os.environ.get("SLURM_ARRAY_TASK_ID")})')
     lines = [
         "#!/bin/bash",
         f"#SBATCH --job-name={sweep.name}",
@@ -163,12 +166,10 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     lines += [
         'export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"',
         'export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"',
-        'rm -f "$RUN_DIR/run.json"',
         'echo "ancf-sweep: task $TASK: $RUN_DIR on $(hostname), $RANKS rank(s)"',
         f'echo "{ATTEMPT_HEADER}: job ${{SLURM_ARRAY_JOB_ID:-?}}_$TASK on $(hostname) at '
         '$(date +%Y-%m-%dT%H:%M:%S) ===" >> "$LOG"',
         f'BEFORE=$("$PYTHON" -c {q(mark)} "$RUN_DIR" 2>/dev/null)',
-        "START=$(date +%s.%N)",
         # a task killed at the time limit (interrupted) or with its node (running) goes on from
         # its last converged level when the array is submitted again
         'WHERE=(--output-dir "$RUN_DIR")',
@@ -177,6 +178,9 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         "and os.path.exists(sys.argv[2])))' \"$RUN_DIR/summary.json\" \"$RUN_DIR/results.h5\" 2>/dev/null; then",
         '  WHERE=(--restart "$RUN_DIR"); echo "ancf-sweep: continuing $RUN_DIR from its last converged level"',
         "fi",
+        # run.json says running (with a restart: the wall time of the attempts it continues)
+        f'"$PYTHON" -c {q(begin)} "$RUN_DIR" "${{WHERE[0]}}" 2>/dev/null || rm -f "$RUN_DIR/run.json"',
+        "START=$(date +%s.%N)",
         '"${LAUNCH[@]}" "${ANCF_SOLVE[@]}" "$RUN_DIR/config.yaml" "${WHERE[@]}"'
         f'{petsc} >> "$LOG" 2>&1',
         "RC=$?",

@@ -178,6 +178,8 @@ def write_restart_group(gid, record, path: dict) -> None:
         fast.attribute(r, "fade_forces_pointwise_from", path["fade_forces_pointwise_from"])
     if path.get("search_window_whole_from") is not None:          # solving/window_widening.py
         fast.attribute(r, "search_window_whole_from", path["search_window_whole_from"])
+    if path.get("settled_increments"):                            # solving/newton.py
+        fast.attribute(r, "settled_increments", path["settled_increments"])
 
 
 def write_contact_group(gid, contact: dict, multipliers: np.ndarray) -> None:

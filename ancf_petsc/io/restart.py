@@ -59,6 +59,7 @@ class RestartPoint:
     factored: bool = True          # a level factored a tangent (False: no prediction to prime)
     pointwise_from: float | None = None  # the run's switch to pointwise fade forces (fade_switch.py)
     window_whole_from: float | None = None  # its contact search windows widened (window_widening.py)
+    settled_increments: int = 0   # increments whose active set settled in a row (solving/newton.py)
 
 
 def fingerprint(model) -> dict[str, np.ndarray]:
@@ -360,7 +361,8 @@ def read_restart(directory: str) -> RestartPoint:
                                  pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
                                                  if "fade_forces_pointwise_from" in r.attrs else None),
                                  window_whole_from=(float(r.attrs["search_window_whole_from"])
-                                                    if "search_window_whole_from" in r.attrs else None))
+                                                    if "search_window_whole_from" in r.attrs else None),
+                                 settled_increments=int(r.attrs.get("settled_increments", 0)))
     except (OSError, KeyError) as exc:
         raise InputError("--restart", f"{path}: not a readable results file ({exc}); a run killed "
                                       "while writing it leaves it so: run afresh with --output-dir") from None

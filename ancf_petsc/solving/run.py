@@ -200,6 +200,8 @@ class Run:
                          accepted_negative=point.accepted_negative, spent=spent_before(point))
         self.stepper.fade_switch.resume(self.stepper, point.pointwise_from, self.spec.output.dir)
         self.stepper.windows.resume(point.window_whole_from)
+        if self.stepper.predictor is not None:      # the active set's settled streak (newton.py)
+            self.stepper.predictor.settled = point.settled_increments
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
         if self.stepper.spec.predictor == "tangent" and point.factored:   # the interrupted run's factor
             self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
@@ -237,7 +239,8 @@ class Run:
                 "increment_blocks": increment.reshape(-1, self.model.dofs_per_node),
                 "accepted_negative": stepper.path.accepted_negative,
                 "fade_forces_pointwise_from": stepper.fade_switch.at,
-                "search_window_whole_from": stepper.windows.at}
+                "search_window_whole_from": stepper.windows.at,
+                "settled_increments": stepper.predictor and stepper.predictor.settled}
             self.writer.write_step(rec, q, extra, fields, path)
             self.converged.append(rec)
             self.timings["output"] += time.perf_counter() - t0

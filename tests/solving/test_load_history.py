@@ -528,3 +528,21 @@ def test_a_friction_history_restarted_at_a_repeated_frame_goes_on_as_the_uninter
         assert np.abs(_ends(done, k) - _ends(full, k)).max() <= 1e-9 * scale, k
         reactions = [np.array(list(s["steps"][k]["reactions"].values())) for s in (full, done)]
         assert np.abs(reactions[0] - reactions[1]).max() <= 1e-6, k
+
+
+def test_a_unilateral_history_restarted_at_an_unloaded_frame_reloads_as_the_uninterrupted_run(tmp_path):
+    """The active set's settled streak (solving/newton.py: increments whose predictions changed
+    no status) decides whether an increment is first solved with its status kept; a restart
+    started it again at 0.  Reloading from a frame of zero loads (40/80/0/80 N on the soleus,
+    10/20/0/20 on each gastrocnemius, unilateral, 2 elements), the restarted run then predicted
+    from rest, lost its way and took 122 Newton iterations against the uninterrupted run's 16.
+    The streak is now kept in results.h5 (restart/settled_increments): the same iterations and
+    answers."""
+    table = {"time": [0.0, 0.1, 0.2, 0.3], "soleus": [40.0, 80.0, 0.0, 80.0],
+             "medial": [10.0, 20.0, 0.0, 20.0], "lateral": [10.0, 20.0, 0.0, 20.0]}
+    raw = tendon(table, contact="unilateral")
+    full = run_inline(raw, tmp_path / "full")
+    assert full["status"] == "completed"
+    assert len(_stopped(raw, full, 3, tmp_path)["steps"]) == 3
+    done = _restarted(full, write_config(raw, tmp_path / "again.yaml"), tmp_path, 1e-10)
+    assert [s["iterations"] for s in done["steps"]] == [s["iterations"] for s in full["steps"]]

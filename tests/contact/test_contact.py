@@ -249,6 +249,11 @@ def test_one_contact_point_along_an_element_is_refused():
     ("listed twice", "contact.interfaces[1]", "interface mg_sol .soleus.medial_gastrocnemius. is listed "
      "twice .also contact.interfaces.0..: list each shared curve of two beams once.*; got .a: "
      "medial_gastrocnemius, b: soleus, curve: mg_sol."),
+    # a gap or an overlap at rest named neither the interface nor its entry (key "contact")
+    ("curves apart", "contact.interfaces[1]", "do not match in the reference configuration .interface "
+     "upper_interface .core.top.: largest gap 2.000e-03 m."),
+    ("overlap", "contact.interfaces[1]", "interpenetrate in the reference configuration .interface "
+     "top_low .core.top.: gap -1.000e-04 m."),
 ])
 def test_contact_setup_errors_name_their_config_key(case, key, words, tmp_path):
     """The contact layer's setup errors reach the user as config errors naming the key
@@ -266,6 +271,18 @@ def test_contact_setup_errors_name_their_config_key(case, key, words, tmp_path):
     elif case == "unknown curve_b":
         raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius", "curve": "mg_sol",
                                                 "curve_b": "lg_sol"}]})
+    elif case in ("curves apart", "overlap"):
+        raw = load_raw("shear_lag_sandwich.yaml")
+        top = raw["beams"][2]["section"]["curves"]
+        top[0]["name"] = "top_low"                        # the top strip's lower face
+        if case == "overlap":                             # the top strip 0.1 mm into the core
+            for c in top:
+                c["points"] = [[x, y - 1e-4] for x, y in c["points"]]
+        faces = ("top_low", "upper_interface") if case == "overlap" else ("upper_interface", "top_face")
+        raw["contact"] = {"mode": "unilateral" if case == "overlap" else "sliding", "interfaces": [
+            {"a": "core", "b": "bottom", "curve": "lower_interface"},
+            {"a": "top", "b": "core", "curve": faces[0], "curve_b": faces[1]} if case == "overlap" else
+            {"a": "core", "b": "top", "curve": faces[0], "curve_b": faces[1]}]}
     elif case == "unknown curve":
         raw = achilles(contact={"interfaces": [{"a": "soleus", "b": "medial_gastrocnemius", "curve": "nosuch"}]})
     else:

@@ -213,4 +213,7 @@ def expand_bundle(raw: dict) -> dict:
             # (along the beam: the contact default, capped by the elements' degree and linear under friction)
             contact.setdefault("projection", {"curve": 1})
         out["contact"] = contact
+    elif out.get("contact") is not None:
+        raise ConfigError("contact", "a bundle of one fascicle has no interfaces (bundle.count: 1); "
+                                     "remove contact, or give count 7 or more")
     return out

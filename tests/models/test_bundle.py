@@ -57,6 +57,9 @@ def test_circles_pair_facing_arcs():
     ({"fascicle_section": "circle", "contact": {"mode": "sliding"}}, "contact.mode", "unilateral"),
     ({"fascicle_section": "circle", "contact": {"tangential": {"law": "elastic", "stiffness": 1e10}}},
      "contact.tangential", "coincide at rest"),
+    # one fascicle has no neighbour: the contact block was refused at the model's build, with
+    # 'contact: no two beam outlines share a curve; give the neighbours a common named curve'
+    ({"count": 1, "contact": {"mode": "sliding"}}, "contact", "a bundle of one fascicle has no interfaces"),
     ({"sections": {"units": "mm", "axes": ["y", "z"], "outlines": {"a": {"points": [[0, 0], [2, 0], [2, 3], [0, 3]]}}}},
      "geometry.sections", "no beam uses its outlines (a)"),
 ])

@@ -20,9 +20,14 @@ def _elastic(value: dict, p: str, t: TangentialSpec) -> None:
         t.stiffness = number(value["stiffness"], f"{p}.stiffness", positive=True,
                              hint=" (k_t = G / thickness of the interface matrix, Pa/m)")
         return
-    if "shear_modulus" not in value or "thickness" not in value:
+    if "shear_modulus" not in value and "thickness" not in value:
         raise ConfigError(f"{p}.stiffness", "missing value (required): give stiffness (Pa/m), or "
                                             "shear_modulus (Pa) and thickness (m) of the matrix layer")
+    for key, given, what in (("thickness", "shear_modulus", "thickness (m)"),
+                             ("shear_modulus", "thickness", "shear modulus (Pa)")):
+        if key not in value:
+            raise ConfigError(f"{p}.{key}", f"missing value (required with {given}): the matrix layer's "
+                                            f"{what}, k_t = shear_modulus / thickness; or give stiffness alone")
     G = number(value["shear_modulus"], f"{p}.shear_modulus", positive=True, hint=" (Pa)")
     h = number(value["thickness"], f"{p}.thickness", positive=True, hi=1e-2,
                hint=" (m; interfascicular matrix layers are ~1e-5 m)")

@@ -290,6 +290,11 @@ def test_displacement_control_gives_the_state_of_the_force(tmp_path):
     ({"tangential": {"law": "coulomb", "friction": 0.3, "stiffness": 1e6}}, "contact.tangential.stiffness",
      "not a value of law coulomb"),
     ({"tangential": {"law": "elastic"}}, "contact.tangential.stiffness", "thickness"),
+    # half of the pair named stiffness as missing, which was given neither
+    ({"tangential": {"law": "elastic", "shear_modulus": 1e6}}, "contact.tangential.thickness",
+     "missing value (required with shear_modulus)"),
+    ({"tangential": {"law": "elastic", "thickness": 1e-5}}, "contact.tangential.shear_modulus",
+     "missing value (required with thickness)"),
     ({"tangential": {"law": "elastic", "stiffness": 1e6, "thickness": 3e-5}}, "contact.tangential", "not both"),
     ({"tangential": {"law": "coulomb", "friction": 0.3, "augmentation": 0}}, "contact.tangential.augmentation",
      ">= 0.0001"),

@@ -150,8 +150,7 @@ class DirectoryLock:
                 fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             except FileExistsError:
                 holder = self._holder()
-                if holder is None or (holder.get("host") == me["host"]
-                                      and not _alive(int(holder.get("pid", -1)), holder.get("start"))):
+                if not self._live(holder):
                     self.stale = ("a stale lock" if holder is None else
                                   f"the stale lock of pid {holder.get('pid')} (since {holder.get('since')}, "
                                   "no longer running)")
@@ -168,6 +167,17 @@ class DirectoryLock:
             self.held = True
             return
         raise OutputError(self.path, "could not take the lock (another run took it meanwhile)")
+
+    def live_holder(self) -> dict | None:
+        """The run that holds the lock (pid, host, since), or None: no lock, or a stale one."""
+        holder = self._holder()
+        return holder if self._live(holder) else None
+
+    @staticmethod
+    def _live(holder: dict | None) -> bool:
+        """A lock's holder runs: on this host its process is alive; another host's is taken as running."""
+        return holder is not None and (holder.get("host") != socket.gethostname()
+                                       or _alive(int(holder.get("pid", -1)), holder.get("start")))
 
     def _holder(self) -> dict | None:
         try:

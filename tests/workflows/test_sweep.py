@@ -653,3 +653,22 @@ def test_a_continued_runs_wall_time_is_the_whole_runs(tmp_path, how):
         last = json.load(fh)["wall_time"]
     row = read_csv(tmp_path / "o" / "results.csv")[0]
     assert row["status"] == "completed" and float(row["wall_time"]) == pytest.approx(earlier + last, abs=1e-3)
+
+
+def test_a_run_another_process_is_solving_is_left_alone(tmp_path):
+    """A second ancf-sweep of the same sweep (another terminal) started every run the first was
+    solving: it truncated their log.txt, wrote over their run.json and summary.json, and its
+    ancf-solve, refused by the output directory's lock, was recorded 'config_error: input error
+    (exit code 2); see log.txt'. A run whose directory a live process holds is now not started."""
+    from ancf_petsc.io.files import DirectoryLock
+    path = write_sweep(str(tmp_path), {"parameters": {"output.vtk": [False]}, "output": "o"})
+    run = expand(load_sweep(path))[0]
+    os.makedirs(run.dir)
+    lock = DirectoryLock(run.dir)
+    lock.acquire()                                  # as a running ancf-solve holds it: this process
+    rc, out, _ = run_main([path])
+    assert rc == 1 and f"being run by another process (pid {os.getpid()}" in out, out
+    assert not os.path.exists(os.path.join(run.dir, "log.txt"))
+    assert not os.path.exists(os.path.join(run.dir, "run.json"))
+    lock.release()                                  # the other process is done
+    assert run_main([path])[0] == 0

@@ -15,7 +15,7 @@ import time
 from dataclasses import dataclass
 
 from ...errors import InputError
-from ...io.files import atomic_write, remove_quietly
+from ...io.files import DirectoryLock, atomic_write, remove_quietly
 from ...status import CONFIG_ERROR, EXIT_INPUT, EXIT_UNSTABLE
 from .base import read_json
 from .processes import Active, stop_processes
@@ -26,7 +26,7 @@ from .spec import RunSpec, Sweep
 @dataclass
 class Outcome:
     """How one attempt ended."""
-    status: str                     # one of FINAL_STATUSES
+    status: str                     # one of FINAL_STATUSES, or running (by another process)
     reason: str = ""
     wall_time: float | None = None
     returncode: int | None = None
@@ -205,12 +205,26 @@ def _kill(proc: subprocess.Popen) -> None:
     stop_processes([proc], signal.SIGTERM, grace=5.0)
 
 
+def solved_elsewhere(run_dir: str) -> Outcome | None:
+    """The outcome 'running' when a live process holds the run directory's lock, else None."""
+    lock = DirectoryLock(run_dir)
+    holder = lock.live_holder()
+    if holder is None:
+        return None
+    return Outcome("running", f"being run by another process (pid {holder.get('pid')} on "
+                              f"{holder.get('host')}, since {holder.get('since')}); not started "
+                              f"here (remove {lock.path} if that run is gone)", 0.0)
+
+
 def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Outcome | None:
     """Run one prepared run directory; writes log.txt and run.json, returns the outcome (None:
     not started, the sweep is being stopped)."""
     active = active or Active()
     if active.cancelled.is_set():
         return None
+    busy = solved_elsewhere(run.dir)
+    if busy is not None:                         # another ancf-sweep's: its files are left alone
+        return busy
     cmd = solve_command(sweep, run)              # decides on a restart from summary.json
     if "--restart" not in cmd:
         remove_quietly(os.path.join(run.dir, "summary.json"))

@@ -56,7 +56,6 @@ class RestartPoint:
     #: the history of the tangent the run factored last: the level before the last one that took
     #: Newton iterations (None: from rest; ``_factoring_level``)
     previous_contact_fields: dict | None = None
-    factored: bool = True          # a level factored a tangent (False: no prediction to prime)
     pointwise_from: float | None = None  # the run's switch to pointwise fade forces (fade_switch.py)
     window_whole_from: float | None = None  # its contact search windows widened (window_widening.py)
     settled_increments: int = 0   # increments whose active set settled in a row (solving/newton.py)
@@ -302,9 +301,10 @@ def _contact_fields(group) -> dict | None:
 
 
 def _factoring_level(entries: list, k: int) -> int:
-    """The last of the levels 1 … k whose solve took Newton iterations (0: none), whose factor
-    the run's tangent predictor holds: a level reached in none (a frame repeating the loads of
-    the one before) factors nothing.  Priming with the history of the level before k instead made a
+    """The last of the levels 1 … k whose solve took Newton iterations, whose factor the run's
+    tangent predictor holds: a level reached in none (a frame repeating the loads of the one
+    before) factors nothing (0: none did; the first level's stability count factored the rest
+    state, SNESSolver.factor_at).  Priming with the history of the level before k instead made a
     friction history restarted at such a frame go on along another path."""
     return next((i for i in range(k, 0, -1) if entries[i - 1].get("iterations", 1) > 0), 0)
 
@@ -357,7 +357,6 @@ def read_restart(directory: str) -> RestartPoint:
                                  contact_fields=_contact_fields(g),
                                  previous_contact_fields=(_contact_fields(steps[f"step_{j - 1:04d}"])
                                                           if j > 1 else None),
-                                 factored=j > 0,
                                  pointwise_from=(float(r.attrs["fade_forces_pointwise_from"])
                                                  if "fade_forces_pointwise_from" in r.attrs else None),
                                  window_whole_from=(float(r.attrs["search_window_whole_from"])

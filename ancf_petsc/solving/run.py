@@ -203,7 +203,7 @@ class Run:
         if self.stepper.predictor is not None:      # the active set's settled streak (newton.py)
             self.stepper.predictor.settled = point.settled_increments
         check_restart_state(self.problem, self.stepper, point, path.X, self.spec.output.dir)
-        if self.stepper.spec.predictor == "tangent" and point.factored:   # the interrupted run's factor
+        if self.stepper.spec.predictor == "tangent":            # the factor the interrupted run had
             self.stepper.tangent.prime(path.X, path.lam, point.previous_contact_fields)
         levels = list(self.spec.steps[len(point.levels):])    # the converged ones start the steps
         path.dlam = restart_increment(point, levels, self.say)

@@ -530,6 +530,22 @@ def test_a_friction_history_restarted_at_a_repeated_frame_goes_on_as_the_uninter
         assert np.abs(reactions[0] - reactions[1]).max() <= 1e-6, k
 
 
+def test_a_friction_history_restarted_before_any_load_goes_on_as_the_uninterrupted_run(tmp_path):
+    """Frames of zero loads first take no Newton iteration, but the first one's stability count
+    factors the tangent at rest, which the uninterrupted run's predictor then uses: a restart
+    after them must prime that factor too (not priming it, frame 3 started unpredicted: 19 Newton
+    iterations against 16).  Stopped after frame 2 (a table of 2 frames), restarted with all 4."""
+    table = {"time": [0.0, 0.1, 0.2, 0.3], "soleus": [0.0, 0.0, 100.0, 300.0],
+             "medial": [0.0, 0.0, 20.0, 60.0], "lateral": [0.0, 0.0, 20.0, 60.0]}
+    raw = tendon(table)
+    raw["contact"]["tangential"] = {"law": "coulomb", "friction": 0.3}
+    full = run_inline(raw, tmp_path / "full")
+    assert full["status"] == "completed" and full["steps"][1]["iterations"] == 0
+    run_inline(tendon({k: v[:2] for k, v in table.items()}) | {"contact": raw["contact"]}, tmp_path / "run")
+    done = _restarted(full, write_config(raw, tmp_path / "again.yaml"), tmp_path, 1e-10)
+    assert [s["iterations"] for s in done["steps"]] == [s["iterations"] for s in full["steps"]]
+
+
 def test_a_unilateral_history_restarted_at_an_unloaded_frame_reloads_as_the_uninterrupted_run(tmp_path):
     """The active set's settled streak (solving/newton.py: increments whose predictions changed
     no status) decides whether an increment is first solved with its status kept; a restart

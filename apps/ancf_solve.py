@@ -15,7 +15,7 @@ import sys
 
 from ancf_petsc.parallel.launch import launch_rank
 from ancf_petsc.solving.interrupt import say_stderr
-from apps.cli import Parser, path
+from apps.cli import Parser, first_rank, path
 
 OPTIONS = ("--output-dir", "--restart", "--quiet", "--version", "--help", "--check", "--output")
 
@@ -97,17 +97,15 @@ def _main(argv: list[str], interrupt) -> int:
         return 2
     if "--version" in ours:
         from ancf_petsc.version import version_line
-        interrupt.SafePrinter()(version_line())
+        interrupt.SafePrinter(quiet=not first_rank())(version_line())
         return 0
     parser = _parser()
     if petsc_help and not [a for a in ours if not a.startswith("-")]:
-        say = interrupt.SafePrinter()    # ancf-solve -help | head: no BrokenPipeError
+        say = interrupt.SafePrinter(quiet=not first_rank())   # -help | head: no BrokenPipeError
         say(parser.format_help() + "\nPETSc's own options are listed by running a model: "
                                     "ancf-solve CONFIG.yaml -help")
         return 0
-    try:
-        if launch_rank():                # argparse's usage error from rank 0 only
-            parser.error = lambda message: sys.exit(2)      # type: ignore[method-assign]
+    try:                                 # usage errors and --help from rank 0 only (Parser)
         args, petsc_args = parser.parse_known_args(ours)
     except SystemExit as exc:            # argparse already printed its one-line usage error
         return 2 if exc.code else 0

@@ -18,13 +18,21 @@ import sys
 
 from ancf_petsc.solving.interrupt import SafePrinter, say_stderr
 
-__all__ = ["Parser", "at_least", "path", "positive", "printer", "report_unused_options", "say_stderr",
-           "start_petsc", "started_by_mpirun"]
+__all__ = ["Parser", "at_least", "first_rank", "path", "positive", "printer", "report_unused_options",
+           "say_stderr", "start_petsc", "started_by_mpirun"]
 
 
 def printer(quiet: bool = False) -> SafePrinter:
     """``print`` to stdout, flushed, that stops quietly once stdout is a closed pipe."""
     return SafePrinter(quiet=quiet)
+
+
+def first_rank() -> bool:
+    """Whether this process prints what a command line says before MPI starts (help, version,
+    usage errors): every process without a launcher, rank 0 alone under mpirun (``mpirun -n 3
+    ancf-solve --version`` printed its line three times)."""
+    from ancf_petsc.parallel.launch import launch_rank
+    return launch_rank() == 0
 
 
 def path(text: str) -> str:
@@ -99,17 +107,20 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
     def exit(self, status: int = 0, message: str | None = None):
-        """``message`` through ``say_stderr`` (a gone stderr keeps ``status``), then exit."""
-        if message:
+        """``message`` through ``say_stderr`` (a gone stderr keeps ``status``; under mpirun from
+        rank 0 alone), then exit."""
+        if message and first_rank():
             say_stderr(message.rstrip("\n"))
         sys.exit(status)
 
     def print_help(self, file=None) -> None:
-        """The help on stdout through ``printer`` (``--help | head``: no BrokenPipeError)."""
+        """The help on stdout through ``printer`` (``--help | head``: no BrokenPipeError); under
+        mpirun from rank 0 alone."""
         if file is not None and file is not sys.stdout:
             super().print_help(file)
             return
-        printer()(self.format_help().rstrip("\n"))
+        if first_rank():
+            printer()(self.format_help().rstrip("\n"))
 
     def parse_with_petsc(self, argv: list[str] | None) -> tuple[argparse.Namespace, list[str]]:
         """(our options, PETSc's): an unknown option with two dashes (``--output`` for ``--out``),

@@ -317,3 +317,23 @@ def test_a_program_that_starts_its_own_runs_refuses_mpirun(program, tmp_path):
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert len(lines) == 1 and lines[0].startswith(f"{program}: started by mpirun (2 processes): "), lines
     assert lines[0].endswith("; run it without mpirun") and not os.path.exists(os.path.dirname(written))
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("args,start", [
+    (["ancf-solve", "--version"], "ancf-solve "),
+    (["ancf-solve", "--help"], "usage: ancf-solve"),
+    (["ancf-solve", "-help"], "usage: ancf-solve"),
+    (["ancf-fit", "--help"], "usage: ancf-fit"),
+    (["ancf-report", "--bogus"], "ancf-report: unrecognized arguments: --bogus"),
+    (["ancf-sweep"], "ancf-sweep: the following arguments are required: sweep")],
+    ids=["solve --version", "solve --help", "solve -help", "fit --help", "report bad option",
+         "sweep no file"])
+def test_help_version_and_usage_errors_print_once_under_mpirun(args, start, tmp_path):
+    """``mpirun -n 3 ancf-solve --version`` printed its line three times, ``--help`` its usage
+    three times, and the other programs' option errors came once per rank: rank 0 alone now."""
+    cmd = ["mpirun", "--oversubscribe", "-n", "3", os.path.join(VENV_BIN, args[0])] + args[1:]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT, cwd=str(tmp_path),
+                       env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
+    lines = [ln for ln in (p.stdout + p.stderr).splitlines() if ln.startswith(start)]
+    assert len(lines) == 1 and "Traceback" not in p.stderr, p.stdout + p.stderr

@@ -605,6 +605,20 @@ def test_a_run_whose_data_file_was_edited_is_run_again(tmp_path):
     assert run_main([path])[0] == 0                  # the edited file, in a new directory
     at_20 = float(read_csv(tmp_path / "fresh" / "results.csv")[0]["tip_dx"])
     assert float(read_csv(tmp_path / "o" / "results.csv")[0]["tip_dx"]) == at_20 < 0.5 * at_45
+    if shutil.which("srun"):
+        return                                    # on a SLURM host, do not launch srun here
+    # an array task resubmitted after the edit (no --slurm again) solves it again too
+    assert run_main([path, "--slurm"])[0] == 0
+    (tmp_path / "load.csv").write_text("time,f\n0,0\n1,20\n2,45\n")
+    assert run_main([path, "--collect"])[0] == 1
+    env = dict(os.environ, **MPI_ENV, SLURM_ARRAY_TASK_ID="0")
+    task = ["bash", str(tmp_path / "fresh" / "sweep.slurm")]
+    p = subprocess.run(task, env=env, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and "load.csv was edited since it ran" in p.stdout, (p.stdout, p.stderr)
+    assert run_main([path, "--collect"])[0] == 0
+    assert float(read_csv(tmp_path / "fresh" / "results.csv")[0]["tip_dx"]) == at_45
+    p = subprocess.run(task, env=env, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and "already done; skipping" in p.stdout, (p.stdout, p.stderr)
 
 
 def _stop_after_level_1(run) -> float:

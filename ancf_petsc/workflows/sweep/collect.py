@@ -30,7 +30,8 @@ class RunState:
 
 #: the reason of a run directory solved with another config than the sweep's current one
 EDITED = ("it ran with another config.yaml, run.petsc or data file than the sweep's now (the sweep, its "
-          "base config or a file they name was edited after it ran): rerun the sweep")
+          "base config or a file they name was edited after it ran): rerun the sweep (a SLURM array: "
+          "ancf-sweep SWEEP --slurm again, then resubmit)")
 
 
 def run_state(run: RunSpec, current: bool = True) -> RunState:

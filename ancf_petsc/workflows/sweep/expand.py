@@ -139,6 +139,31 @@ def input_files(sweep: Sweep, run: RunSpec) -> dict[str, str]:
     return found
 
 
+def refresh_inputs(run_dir: str) -> str | None:
+    """A SLURM task's check (it has no sweep file) that the data files its config.yaml names are
+    the ones its result was solved with (params.json ``inputs``): if not, the result is cleared
+    (the task solves it again) and the new digests are recorded; returns the first file edited."""
+    params = read_json(os.path.join(run_dir, "params.json")) or {}
+    raw = _unplaced(read_text(os.path.join(run_dir, "config.yaml")))
+    if "inputs" not in params or raw is None:
+        return None
+    found: dict[str, str] = {}
+    _digest_named(raw, run_dir, run_dir, found, 0)
+    edited = _edited(params["inputs"], found)
+    if not edited:
+        return None
+    remove_quietly(os.path.join(run_dir, "summary.json"), os.path.join(run_dir, "run.json"))
+    atomic_write(os.path.join(run_dir, "params.json"),
+                 json.dumps(dict(params, inputs=found), indent=1, default=str) + "\n")
+    return edited[0]
+
+
+def _edited(old: dict, now: dict) -> list[str]:
+    """The files whose digest is not the recorded one (one unreadable now says nothing of a result
+    on disk: a sweep copied without its data keeps its runs)."""
+    return sorted(n for n in set(old) | set(now) if now.get(n, "missing") not in (old.get(n), "missing"))
+
+
 def _digest_named(value: Any, here: str, run_dir: str, found: dict[str, str], depth: int) -> None:
     if isinstance(value, list):
         for v in value:
@@ -186,7 +211,7 @@ def same_config(sweep: Sweep, run: RunSpec) -> bool:
     petsc = params.get("petsc", sweep.petsc)
     if old is None or old != _unplaced(config_text(sweep, run)) or petsc != sweep.petsc:
         return False
-    return "inputs" not in params or params["inputs"] == input_files(sweep, run)
+    return "inputs" not in params or not _edited(params["inputs"], input_files(sweep, run))
 
 
 def is_done(sweep: Sweep, run: RunSpec) -> bool:

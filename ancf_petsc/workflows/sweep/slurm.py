@@ -94,6 +94,9 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
     begin = ("import os, sys; from ancf_petsc.workflows.sweep.execute import begin_attempt; "
              'begin_attempt(sys.argv[1], sys.argv[2] == "--restart", {"slurm_job": '
              'os.environ.get("SLURM_ARRAY_JOB_ID"), "slurm_task": os.environ.get("SLURM_ARRAY_TASK_ID")})')
+    refresh = ("import sys; from ancf_petsc.workflows.sweep.expand import refresh_inputs; "
+               "f = refresh_inputs(sys.argv[1]); "
+               'f and print("ancf-sweep: " + sys.argv[1] + ": " + f + " was edited since it ran; solving it again")')
     lines = [
         "#!/bin/bash",
         f"#SBATCH --job-name={sweep.name}",
@@ -147,6 +150,8 @@ def write_slurm(sweep: Sweep, force: bool = False) -> tuple[str, str]:
         '  echo "ancf-sweep: no ancf-solve at ${ANCF_SOLVE[0]} (set ANCF_VENV or slurm.venv)" >&2',
         "  exit 1",
         "fi",
+        # a data file edited since the run was solved: its result is cleared and solved again
+        f'"$PYTHON" -c {q(refresh)} "$RUN_DIR" 2>/dev/null',
         "if \"$PYTHON\" -c 'import json, sys; sys.exit(json.load(open(sys.argv[1])).get(\"status\") "
         "not in (\"completed\", \"unstable\"))' \"$RUN_DIR/summary.json\" 2>/dev/null; then",
         '  echo "ancf-sweep: $RUN_DIR already done; skipping"',

@@ -31,7 +31,7 @@ from .load_control import LevelTally, LoadControl
 from .newton import MAX_WEIGHT_UPDATES, PhasedNewton
 from .predictor import TangentPredictor
 from .critical_point import critical_point, verdict_count
-from .rest_response import at_rest, bounded_first_increment
+from .rest_response import at_rest, increment_from_rest
 from .records import (STALLED_STEP, UNCLEAN_STATE, UNSTABLE_STEP, VIOLATED_STATE, LoadStepFailure, PathState,
                       StepRecord, reason_name)
 from .snes_solver import SNESSolver
@@ -158,6 +158,8 @@ class LoadStepper:
         logging.stage(logging.SOLVE).push()
         try:
             for target in levels:           # one a gap's step over passed too: reported with it
+                if path.lam > 0.0 and at_rest(P, path.lam):      # a frame of zero loads
+                    path.dlam = increment_from_rest(self, path.lam, target, levels[-1])
                 rec = (behind(self, path, target, records[-1] if records else before)
                        or self._reach(path, target, records[-1].load_factor if records else path.lam))
                 records.append(rec)
@@ -167,16 +169,12 @@ class LoadStepper:
         return records
 
     def initial_path(self, first_level: float, last_level: float | None = None) -> PathState:
-        """The path at the reference state, with the first increment (``LoadControl``)."""
+        """The path at the reference state, with the first increment (rest_response.py)."""
         X = self.problem.q0.copy()
-        c = self.problem.contact
-        dlam = self.control.first_increment(first_level, None if c is None else c.law.first_increment,
-                                            last_level, self.predictor is not None)
-        if self.spec.initial_increment is None:         # fibre laws: the linear response's range
-            dlam = bounded_first_increment(self.problem, self.solver.snes, dlam)
         dX = X.duplicate()
         dX.set(0.0)
-        return PathState(X=X, dX_last=dX, lam=0.0, dlam=dlam, dlam_last=0.0)
+        return PathState(X=X, dX_last=dX, lam=0.0, dlam=increment_from_rest(self, 0.0, first_level, last_level),
+                         dlam_last=0.0)
 
     def _reach(self, path: PathState, target: float, level: float) -> StepRecord:
         """Sub-steps from ``path.lam`` to ``target``: accept converged ones (growing the

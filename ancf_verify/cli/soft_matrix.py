@@ -54,6 +54,20 @@ def size_mm(text: str) -> float:
     return value
 
 
+def _prepare_out(ap: argparse.ArgumentParser, args: argparse.Namespace, path: str) -> None:
+    """Make --out before anything is solved (the CSV is written at the end: a new --out failed
+    there, after the solid's 26 minutes) and refuse a merge into a CSV that is not there."""
+    if args.profile or args.beam_only or args.force != FORCE:
+        return                                    # nothing written
+    if (args.ancf_only or args.more_solid) and not os.path.isfile(path):
+        ap.error(f"--{'ancf-only' if args.ancf_only else 'more-solid'} merges into {path}, which does not "
+                 "exist: give --out a directory holding solid_soft_matrix.csv")
+    try:
+        os.makedirs(args.out, exist_ok=True)
+    except OSError as exc:
+        ap.error(f"--out: cannot make {args.out!r} ({exc.strerror})")
+
+
 def main(argv=None) -> int:
     ap = Parser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "docs"), help="directory of the CSV")
@@ -72,15 +86,7 @@ def main(argv=None) -> int:
     if args.replot:
         write_doc(page_for(args.out, args.doc), read_csv(path))
         return 0
-    writes = not (args.profile or args.beam_only or args.force != FORCE)
-    if writes and (args.ancf_only or args.more_solid) and not os.path.isfile(path):
-        ap.error(f"--{'ancf-only' if args.ancf_only else 'more-solid'} merges into {path}, which does not "
-                 "exist: give --out a directory holding solid_soft_matrix.csv")
-    if writes:
-        try:      # the CSV is written at the end: a new --out failed there, after the solid's 26 minutes
-            os.makedirs(args.out, exist_ok=True)
-        except OSError as exc:
-            ap.error(f"--out: cannot make {args.out!r} ({exc.strerror})")
+    _prepare_out(ap, args, path)
     case = make_case(args.force)
     if args.profile or not (args.beam_only or args.force != FORCE or args.ancf_only):
         import_stack()             # a missing dolfinx is said before the beams run, not after

@@ -323,7 +323,7 @@ def _cubature_degree(value, path: str) -> int:
     n = integer(value, path, hi=30)
     if n < 2:
         raise ConfigError(path, f"must be >= 2; got {n}: a rule of degree {n} does not integrate y^2, z^2, "
-                                "so bending has no (or a wrong) stiffness; use 2 or more (6, the default)")
+                                "so bending has no (or a wrong) stiffness; use 2 or more (the default: 6 for a section, 4 in a bundle)")
     return n
 
 

@@ -53,6 +53,8 @@ def test_circles_pair_facing_arcs():
     ({"locking": "foo"}, "bundle.locking", "one of"),
     ({"axial_points": 0}, "bundle.axial_points", "must be >= 2; got 0"),     # was 'must be >= 1', then 1 '>= 2'
     ({"axial_points": "3"}, "bundle.axial_points", "expected an integer; got '3'"),
+    # said "use 2 or more (6, the default)", where a bundle's default is 4
+    ({"cubature_degree": 1}, "bundle.cubature_degree", "the default: 6 for a section, 4 in a bundle"),
     ({"force": [10.0, 1.0, 0.0]}, "bundle.force", "give an axial force [F, 0, 0], or pulled_end: free; got [10.0, 1.0, 0.0]"),
     ({"fascicle_section": "circle", "contact": {"mode": "sliding"}}, "contact.mode", "unilateral"),
     ({"fascicle_section": "circle", "contact": {"tangential": {"law": "elastic", "stiffness": 1e10}}},

@@ -41,6 +41,12 @@ class Layout:
     def local_elements(self) -> np.ndarray:
         return np.flatnonzero(self.elem_owner == self.rank)
 
+    def blocks_per_rank(self) -> tuple[list[int], list[int]]:
+        """(beam nodes, extra blocks) each rank owns: the multipliers' blocks are no nodes."""
+        n = len(self.node_owner) if self.n_nodes < 0 else self.n_nodes
+        return tuple(np.bincount(owners, minlength=self.size).tolist()
+                     for owners in (self.node_owner[:n], self.node_owner[n:]))
+
     def petsc_dofs(self, model_dofs: np.ndarray) -> np.ndarray:
         """Map model DOF ids to PETSc DOF ids (negative ids pass through unchanged)."""
         model_dofs = np.asarray(model_dofs)
@@ -52,11 +58,12 @@ class Layout:
         """The log's partition line; ``asked``: the config's partition.method, named when the
         ranks are split otherwise (the fieldsplit solver keeps every beam whole on one rank)."""
         counts = np.bincount(self.elem_owner, minlength=self.size)
-        nodes = np.diff(self.ranges)
+        nodes, extra = self.blocks_per_rank()
+        blocks = f", multiplier blocks per rank {extra}" if sum(extra) else ""
         note = f", not partition.method {asked}: the fieldsplit solver keeps every beam whole on " \
                "one rank" if self.size > 1 and asked not in (None, self.method) else ""
         return (f"partition ({self.method}{note}): elements per rank {counts.tolist()}, "
-                f"nodes per rank {nodes.tolist()}")
+                f"nodes per rank {nodes}{blocks}")
 
 
 def layout_from_owner(elem_owner: np.ndarray, connectivity: np.ndarray, n_nodes: int,

@@ -147,7 +147,8 @@ def make_layout(model: Model, method: str, size: int, rank: int, contact=None, c
 
 
 def partition_stats(layout: Layout, model: Model, contact=None) -> dict:
-    """Elements/nodes per rank, cut beam couplings and cut contact pairs (reference pairs)."""
+    """Elements, beam nodes and contact multiplier blocks per rank, cut beam couplings and cut
+    contact pairs (reference pairs)."""
     conn = model.connectivity()
     own = layout.elem_owner
     # a node shared by elements of different ranks is a cut coupling
@@ -157,9 +158,11 @@ def partition_stats(layout: Layout, model: Model, contact=None) -> dict:
     lo = np.full(model.n_nodes, layout.size); hi = np.full(model.n_nodes, -1)
     np.minimum.at(lo, nodes, rk); np.maximum.at(hi, nodes, rk)
     cut_nodes = int(np.sum(lo != hi))
+    beam_nodes, extra = layout.blocks_per_rank()
     out = {"method": layout.method, "elements_per_rank": np.bincount(own, minlength=layout.size).tolist(),
-           "nodes_per_rank": np.diff(layout.ranges).tolist(), "cut_beam_nodes": cut_nodes}
+           "nodes_per_rank": beam_nodes, "cut_beam_nodes": cut_nodes}
     if contact is not None:
+        out["multiplier_blocks_per_rank"] = extra
         graph = contact.coupling_graph()
         pairs = graph.pairs
         out["contact_pairs"] = int(len(pairs))

@@ -686,3 +686,27 @@ def test_a_run_another_process_is_solving_is_left_alone(tmp_path):
     assert not os.path.exists(os.path.join(run.dir, "run.json"))
     lock.release()                                  # the other process is done
     assert run_main([path])[0] == 0
+
+
+def test_an_attempt_stopped_before_it_starts_keeps_the_record_before(tmp_path, monkeypatch):
+    """A Ctrl-C between a restart attempt's run.json and its ancf-solve (Active.start: None)
+    removed run.json: the interrupted attempt's record and wall time were gone, and results.csv
+    gave the continued run the last attempt's wall time only."""
+    from ancf_petsc.workflows.sweep import execute
+    from ancf_petsc.workflows.sweep.processes import Active
+    path = write_sweep(str(tmp_path), {"parameters": {"output.vtk": [False]}, "output": "o"})
+    assert run_main([path])[0] == 0
+    sweep = load_sweep(path)
+    run = expand(sweep)[0]
+    _stop_after_level_1(run)
+    with open(os.path.join(run.dir, "run.json")) as fh:
+        before = json.load(fh)
+    monkeypatch.setattr(Active, "start", lambda self, cmd, **popen: None)
+    assert execute.execute_run(sweep, run) is None
+    with open(os.path.join(run.dir, "run.json")) as fh:
+        assert json.load(fh) == before
+    monkeypatch.undo()
+    assert run_main([path])[0] == 0
+    row = read_csv(tmp_path / "o" / "results.csv")[0]
+    with open(os.path.join(run.dir, "run.json")) as fh:
+        assert float(row["wall_time"]) == pytest.approx(before["wall_time"] + json.load(fh)["wall_time"], abs=1e-3)

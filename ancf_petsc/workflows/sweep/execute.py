@@ -164,10 +164,12 @@ def record_outcome(run_dir: str, returncode: int | None, wall_time: float,
     return Outcome(status, reason, wall_time, returncode)
 
 
-def begin_attempt(run_dir: str, restart: bool, extra: dict | None = None) -> None:
+def begin_attempt(run_dir: str, restart: bool, extra: dict | None = None) -> dict | None:
     """run.json of an attempt that starts: status running, and with a restart the wall time of
-    the attempts it continues (``earlier_wall_time``: results.csv gives the whole run's)."""
-    old = read_json(os.path.join(run_dir, "run.json")) or {}
+    the attempts it continues (``earlier_wall_time``: results.csv gives the whole run's); returns
+    the record it replaces (put back by an attempt that does not start)."""
+    previous = read_json(os.path.join(run_dir, "run.json"))
+    old = previous or {}
     earlier = float(old.get("earlier_wall_time") or 0.0) + float(old.get("wall_time") or 0.0)
     remove_quietly(os.path.join(run_dir, "run.json"))
     record = {"status": "running", "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
@@ -175,6 +177,7 @@ def begin_attempt(run_dir: str, restart: bool, extra: dict | None = None) -> Non
     if restart and earlier:
         record["earlier_wall_time"] = earlier
     atomic_write(os.path.join(run_dir, "run.json"), json.dumps(record, indent=1) + "\n")
+    return previous
 
 
 #: first line of each attempt in an appended log.txt (SLURM resubmissions)
@@ -229,8 +232,8 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
     if "--restart" not in cmd:
         remove_quietly(os.path.join(run.dir, "summary.json"))
     before = summary_mark(run.dir)               # a restart's: the stopped attempt's summary
-    begin_attempt(run.dir, "--restart" in cmd, {"sweep_pid": os.getpid(), "ranks": sweep.ranks,
-                                                "command": shlex.join(cmd)})
+    previous = begin_attempt(run.dir, "--restart" in cmd, {"sweep_pid": os.getpid(), "ranks": sweep.ranks,
+                                                           "command": shlex.join(cmd)})
     t0 = time.monotonic()
     with open(os.path.join(run.dir, "log.txt"), "wb", buffering=0) as log:
         log.write(("$ " + shlex.join(cmd) + "\n").encode())
@@ -244,6 +247,8 @@ def execute_run(sweep: Sweep, run: RunSpec, active: Active | None = None) -> Out
         if proc is None:                         # stopped between the check above and now
             log.write(b"not started: ancf-sweep was interrupted\n")
             remove_quietly(os.path.join(run.dir, "run.json"))
+            if previous is not None:             # the attempt before's record (its wall time)
+                atomic_write(os.path.join(run.dir, "run.json"), json.dumps(previous, indent=1) + "\n")
             return None
 
         def pump() -> None:

@@ -2,9 +2,10 @@
 
 A run is compared with the paper's Table 1 only when it *is* the paper's model: its resolved
 model (results.h5 ``/model/fingerprint``, io/restart.py) equals that of the paper's config at its
-pretwist.  Anything else (a subject's own tendon, ψ = 30°, another element count, a bundle) gets
-its own table of the levels it reached, without a comparison.  An interrupted or failed run is
-reported as such: the levels reached, the levels not reached, the level a figure draws.
+pretwist, and the probes Table 1 reads are the paper's (``probe_difference``).  Anything else (a
+subject's own tendon, ψ = 30°, another element count, a bundle, a section-mean probe) gets its own
+table of the levels it reached, without a comparison.  An interrupted or failed run is reported
+as such: the levels reached, the levels not reached, the level a figure draws.
 """
 from __future__ import annotations
 
@@ -13,7 +14,9 @@ import os
 
 import yaml
 
+from ..config.conditions import parse_probes
 from ..config.parse import load_config
+from ..config.values import ConfigError
 from ..errors import InputError
 from ..status import LEVELS_PASSED_OVER
 from ..io.h5fast import open_file
@@ -21,11 +24,12 @@ from ..io.levels import step_at
 from ..io.reader import check_levels, read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
+from ..physics.elements import ELEMENTS
 from .inputs import TWISTS, PaperInputs
 from .run_outputs import interface_markdown, probe_markdown, run_figures, support_markdown
 
-__all__ = ["ExistingRun", "levels_missing", "other_figures", "paper_summaries", "read_existing", "runs_markdown",
-           "title"]
+__all__ = ["ExistingRun", "levels_missing", "other_figures", "paper_summaries", "probe_difference",
+           "read_existing", "runs_markdown", "title"]
 
 #: what a fingerprint item (io/restart.py) is, in words: "<beam>'s ..." for a beam's items
 DIFFERENCE_WORDS = {
@@ -101,12 +105,14 @@ class ExistingRun:
                     lambda n, o: stored.__setitem__(n, o[()]) if hasattr(o, "shape") else None)
         except (OSError, KeyError) as exc:
             return f"{h5}: not readable ({exc})"
-        paper = fingerprint(build_model(load_config(
-            os.path.join(inputs.configs, f"achilles_type3_psi{self.psi}.yaml"))))
+        spec = load_config(os.path.join(inputs.configs, f"achilles_type3_psi{self.psi}.yaml"))
+        paper = fingerprint(build_model(spec))
         differs = first_difference(paper, stored)
         if differs is not None and differs[0].endswith("/elements") and differs[1] not in ("added", "removed"):
             return "its model is not the paper's: " + element_counts(paper, stored)
-        return None if differs is None else "its model is not the paper's: " + difference_words(*differs)
+        if differs is not None:
+            return "its model is not the paper's: " + difference_words(*differs)
+        return probe_difference(spec, self.config)
 
     def ended(self) -> str:
         """How the run ended, in words."""
@@ -129,6 +135,31 @@ def difference_words(key: str, detail: str) -> str:
         return "a load or displacement follows a load curve"
     words = DIFFERENCE_WORDS.get(item, f"{key} differs").format(beam=beam)
     return f"{words} ({detail})" if item in ("elements", "element", "length", "twist_deg", "contact") else words
+
+
+def probe_difference(paper, config: dict) -> str | None:
+    """Where the run's probes that Table 1 reads (the paper config's ``probes``, by name) are not
+    the paper's nodal vector at the paper's node, in words; None when they are.  ``paper`` is the
+    paper config's spec, whose beams the run's model has (its fingerprint is the paper's)."""
+    if not config:
+        return "its config cannot be read from results.h5, so its probes are not known"
+    names = [b.name for b in paper.beams]
+    blocks = [ELEMENTS[b.element].block for b in paper.beams]
+    n_nodes = [blk.nodes_of(b.elements) for b, blk in zip(paper.beams, blocks)]
+    try:
+        ours = {p.name: p for p in parse_probes(config.get("probes") or [], names, n_nodes, blocks)}
+    except ConfigError as exc:
+        return f"its probes cannot be read ({exc})"
+
+    def what(p) -> str:
+        return f"vector {p.vector} at node {p.node} of {names[p.beam]}"
+    for p in paper.probes:
+        q = ours.get(p.name)
+        if q is None:
+            return f"it has no probe {p.name!r}, which Table 1 reads ({what(p)})"
+        if (q.beam, q.node, q.vector) != (p.beam, p.node, p.vector):
+            return f"its probe {p.name!r} is {what(q)}, not the paper's {what(p)}, which Table 1 reads"
+    return None
 
 
 def element_counts(paper: dict, stored: dict) -> str:

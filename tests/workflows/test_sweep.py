@@ -710,3 +710,20 @@ def test_an_attempt_stopped_before_it_starts_keeps_the_record_before(tmp_path, m
     row = read_csv(tmp_path / "o" / "results.csv")[0]
     with open(os.path.join(run.dir, "run.json")) as fh:
         assert float(row["wall_time"]) == pytest.approx(before["wall_time"] + json.load(fh)["wall_time"], abs=1e-3)
+
+
+def test_a_run_that_completed_as_its_time_ran_out_is_recorded_completed(tmp_path):
+    """run.timeout 2 s on the 4-element tendon as a SLURM task: `timeout` signalled ancf-solve
+    as it finished its last level (400 N), summary.json said completed, and run.json said
+    'timeout: timed out after 2 s; last converged load factor 400' (the local sweep: '1
+    timeout', exit 1) while results.csv and --collect said completed; a run stopped by Ctrl-C
+    just so was already recorded completed."""
+    from ancf_petsc.workflows.sweep import RunSpec, classify, run_state
+    from ancf_petsc.workflows.sweep.execute import finish_slurm_task
+    (tmp_path / "summary.json").write_text(json.dumps({"status": "completed", "steps": [{"load_factor": 400.0}]}))
+    assert classify(str(tmp_path), 124, timed_out=True, timeout=2.0) == ("completed", "")
+    assert finish_slurm_task(str(tmp_path), 124, 3.1, timeout=2.0).status == "completed"
+    assert run_state(RunSpec(0, "r", {}, str(tmp_path))).status == "completed"
+    (tmp_path / "summary.json").write_text(json.dumps({"status": "interrupted", "steps": [{"load_factor": 300.0}]}))
+    assert classify(str(tmp_path), 124, timed_out=True, timeout=2.0) == (
+        "timeout", "timed out after 2 s; last converged load factor 300")

@@ -110,6 +110,8 @@ def classify(run_dir: str, returncode: int | None, timed_out: bool = False,
         summary = {}
     sstat = summary.get("status")
     message = str(summary.get("message") or "")
+    if timed_out and sstat == "completed":     # its last level was written as the time ran out
+        return "completed", ""
     if timed_out:
         steps = summary.get("steps") or []
         last = f"; last converged load factor {steps[-1].get('load_factor'):g}" if steps else ""

@@ -97,10 +97,20 @@ def _adopt(rung_dir: str, out_dir: str, info: dict, comm) -> None:
 
 def element_counts(spec: ModelSpec) -> list[int]:
     """First-beam element counts of the ladder: start, 2 start, … ≤ max_elements, but those on
-    which some beam's pretwist is under-resolved (``unresolved``) while three others remain."""
+    which some beam's pretwist is under-resolved (``unresolved``) or some beam's count is rounded
+    (``inexact``) while three others remain."""
     counts = _rungs(spec.accuracy)
-    resolved = [n for n in counts if n not in unresolved(spec, counts)]
+    left = set(unresolved(spec, counts)) | set(inexact(spec, counts))
+    resolved = [n for n in counts if n not in left]
     return resolved if len(resolved) >= 3 else counts
+
+
+def inexact(spec: ModelSpec, counts: list[int]) -> list[int]:
+    """The counts of ``counts`` whose rung rounds some beam's element count (beams of 4 and 6
+    elements from start 1: 1, 1.5 -> 2, 3, 6): that beam is not refined by 2 from such a rung to
+    the next, as the Richardson estimate assumes (refinement.richardson)."""
+    base = spec.beams[0].elements
+    return [n for n in counts if any((b.elements * n) % base for b in spec.beams)]
 
 
 def _rungs(acc) -> list[int]:
@@ -127,6 +137,16 @@ def unresolved(spec: ModelSpec, counts: list[int]) -> list[int]:
     return [n for n in counts if any(rung_elements(e, n / base) < k for e, k in need)]
 
 
+def _left_out_note(spec: ModelSpec, skipped: list[int]) -> str:
+    """Why the rungs ``skipped`` are left out of the ladder ('' when none is)."""
+    rounded = inexact(spec, skipped)
+    why = [f"{', '.join(map(str, w))} left out: {what}" for w, what in (
+        ([n for n in skipped if n not in rounded], f"the {spec.twist_deg:g} deg pretwist is under-resolved there, "
+                                                     "docs/model.md"),
+        (rounded, "some beam's element count would be rounded, not doubled")) if w]
+    return f" ({'; '.join(why)})" if why else ""
+
+
 def select_and_run(spec: ModelSpec, comm, log, run_model):
     """Run the ladder, choose the element count, then ``run_model`` the chosen model (collective)."""
     from ..linalg.database import own_prefix
@@ -141,9 +161,7 @@ def select_and_run(spec: ModelSpec, comm, log, run_model):
     counts = element_counts(spec)
     skipped = [n for n in _rungs(acc) if n not in counts]
     say(f"[accuracy] probe {acc.probe} ({acc.component}) at load factor {level:g}, rtol {acc.rtol:g}: "
-        f"ladder over elements per beam {counts}" + (f" ({', '.join(map(str, skipped))} left out: the "
-                                                      f"{spec.twist_deg:g} deg pretwist is under-resolved there, "
-                                                      "docs/model.md)" if skipped else ""))
+        f"ladder over elements per beam {counts}" + _left_out_note(spec, skipped))
     quiet = (lambda *_: None)
     for n in counts:
         out = os.path.join(spec.output.dir, "accuracy", f"elements_{n}")

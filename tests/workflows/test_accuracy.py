@@ -247,3 +247,31 @@ def test_a_ladder_that_meets_no_rtol_says_so(tmp_path, level):
     assert s["accuracy"]["reused_rung"] is (level == 1.0)
     lines = proc.stdout.strip().splitlines()
     assert lines[-1].startswith("[accuracy] accuracy not met") and lines[-2].startswith("[ancf] completed:")
+
+
+def test_rungs_that_round_a_beams_count_are_left_out(tmp_path):
+    """Beams of 4 and 6 elements from start 1: the second beam ran 2 (1.5 rounded), 3, 6, …, so it
+    was not refined by 2 between the first rungs, as the Richardson estimate assumes.  Such rungs
+    are now left out while three remain, and the run says why."""
+    import copy
+    from ancf_petsc.workflows.accuracy import element_counts
+    raw = load_raw("uniaxial_neohookean.yaml")
+    raw["beams"][0]["elements"] = 4
+    other = copy.deepcopy(raw["beams"][0]) | {"name": "bar2", "elements": 6}
+    other["section"] = dict(other["section"], center=[0.0, 0.02])
+    raw["beams"].append(other)
+    raw["boundary_conditions"].append({"beam": "bar2", "node": "first", "fix": "reduced"})
+    raw["loads"].append({"beam": "bar2", "node": "last", "traction_force": [45.0, 0.0, 0.0]})
+    raw["steps"] = [1.0]
+    raw["accuracy"] = {"probe": "tip", "component": "x", "rtol": 1e-6, "start": 1, "max_elements": 16}
+    assert element_counts(parse_config(raw, base_dir=CONFIGS)) == [2, 4, 8, 16]
+    raw["accuracy"]["max_elements"] = 4           # 2 and 4 alone: too few to leave 1 out
+    assert element_counts(parse_config(raw, base_dir=CONFIGS)) == [1, 2, 4]
+    raw["accuracy"]["max_elements"] = 8
+    raw["output"] = {"dir": str(tmp_path / "out"), "vtk": False}
+    proc = solve_cli(write_config(raw, tmp_path / "c.yaml"))
+    assert proc.returncode == 0, proc.stderr
+    assert "ladder over elements per beam [2, 4, 8] (1 left out: some beam's element count would be rounded" \
+        in proc.stdout
+    s = read_summary(tmp_path / "out")
+    assert s["accuracy"]["left_out"] == [1] and s["elements_per_beam"] == {"bar": 2, "bar2": 3}

@@ -90,6 +90,7 @@ def _main(argv: list[str] | None) -> int:
     log = printer()                       # ancf-report ... | head: no BrokenPipeError
     try:
         t1 = t2 = None
+        drawn = []
         if args.existing:
             heading = existing.title(runs)
             sections.append(("The runs", existing.runs_markdown(runs)))
@@ -127,10 +128,11 @@ def _main(argv: list[str] | None) -> int:
             fit = rp.fit_bulk_modulus(inputs, out, jobs=args.jobs, log=log)
             sections.append(("Bulk modulus fitted to Table 1, psi = 0", rp.fit_markdown(fit)))
         if args.figures and t1 is not None:
-            rp.figures(inputs, t1, out, t2, log)
+            drawn += rp.figures(inputs, t1, out, t2, log)
         text = "\n\n".join(f"## {title}\n\n{body}" for title, body in sections)
         with open(os.path.join(out, "report.md"), "w") as fh:
             fh.write(f"# {heading}\n\n" + text + "\n")
+        rp.keep_only(out, drawn, others=not args.existing)   # another run's figures are not this report's
     except InputError as exc:
         say_stderr(f"ancf-report: {exc}")
         return 2

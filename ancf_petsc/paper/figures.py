@@ -7,6 +7,7 @@ import os
 import numpy as np
 
 from .. import viz
+from ..io.files import atomic_write, remove_quietly
 from ..io.levels import step_at
 from ..io.reader import read_contact
 from .inputs import TWISTS, PaperInputs, read_paper
@@ -15,6 +16,30 @@ from .tables import Table1
 #: Figure 5's camera: from the soleus' side (+y), rolled by 180° so that x runs 0 -> L from
 #: left to right (z then points down; a rotation, not a mirror image)
 FIGURE5_VIEW = (-8.0, 70.0, 180.0)
+
+
+#: the figures the last report drew into its --out, one file name a line (``keep_only``)
+FIGURE_LIST = ".ancf-report-figures"
+
+
+def keep_only(out: str, made: list[str], others: bool = False) -> None:
+    """Remove from ``out`` the figures an earlier report listed there and this one did not draw
+    again (left beside this report's report.md they read as its own: the paper's Table 1 figure
+    beside another model's report), then list this report's.  ``others``: keep and list them too
+    (a report of the paper's sweeps, whose runs, reused, drew them: ``ancf-report --contact``
+    after ``ancf-report``)."""
+    path = os.path.join(out, FIGURE_LIST)
+    names = {os.path.basename(f) for f in made}
+    try:
+        with open(path) as fh:
+            earlier = {line.strip() for line in fh if line.strip() and os.sep not in line.strip()}
+    except OSError:                       # the first report here (or one before this list)
+        earlier = set()
+    if others:
+        names |= {n for n in earlier if os.path.exists(os.path.join(out, n))}
+    else:
+        remove_quietly(*[os.path.join(out, n) for n in sorted(earlier - names)])
+    atomic_write(path, "".join(f"{n}\n" for n in sorted(names)))
 
 
 #: load levels the slip figure shows [N]

@@ -1,0 +1,54 @@
+"""The figures in an ``ancf-report --out`` directory are the report's own: an earlier report's
+figures there, of other runs, read as this one's (``make demo`` says 'plots: report/*.png')."""
+import os
+import subprocess
+
+from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, solve_cli, write_config
+
+
+def _solved(raw: dict, tmp_path, name: str) -> str:
+    p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), extra=["--output-dir", str(tmp_path / name), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    return str(tmp_path / name)
+
+
+def _report(run: str, out) -> None:
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", run, "--out", str(out)],
+                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+    assert p.returncode == 0, p.stderr
+
+
+def test_a_report_leaves_no_figure_of_an_earlier_report_in_its_directory(tmp_path):
+    """The tendon on 2 elements (its force and slip figures), then the one-element bar (no
+    figure) reported into the same --out: the tendon's two figures stayed beside the bar's
+    report.md, which names no figure; they are removed now, and a third report of the tendon
+    draws them again."""
+    tendon = load_raw("achilles_type3_psi45.yaml")
+    for b in tendon["beams"]:
+        b["elements"] = 2
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    tendon["steps"], tendon["output"] = [10.0, 20.0], {"vtk": False}
+    bar = load_raw("uniaxial_neohookean.yaml")
+    bar["steps"] = [0.5, 1.0]
+    runs = [_solved(tendon, tmp_path, "tendon"), _solved(bar, tmp_path, "bar")]
+    out = tmp_path / "rep"
+    figures = {"achilles_type3_psi45_force.png", "achilles_type3_psi45_slip.png"}
+    _report(runs[0], out)
+    assert figures <= set(os.listdir(out))
+    _report(runs[1], out)
+    assert not [f for f in os.listdir(out) if f.endswith(".png")] and "png" not in open(out / "report.md").read()
+    _report(runs[0], out)
+    assert figures <= set(os.listdir(out))
+
+
+def test_a_report_of_the_papers_sweeps_keeps_the_figures_of_the_one_before(tmp_path):
+    """ancf-report --contact after ancf-report (one --out, the same reused runs): the first one's
+    figures stay and are listed, so that a later --existing report removes them."""
+    from ancf_petsc.paper.figures import FIGURE_LIST, keep_only
+    for name in ("load_elongation.png", "figure5.png", "mine.png"):
+        (tmp_path / name).write_text("png")
+    keep_only(str(tmp_path), [str(tmp_path / "load_elongation.png"), str(tmp_path / "figure5.png")])
+    keep_only(str(tmp_path), [], others=True)
+    assert (tmp_path / FIGURE_LIST).read_text().split() == ["figure5.png", "load_elongation.png"]
+    keep_only(str(tmp_path), [str(tmp_path / "figure5.png")])
+    assert sorted(os.listdir(tmp_path)) == sorted([FIGURE_LIST, "figure5.png", "mine.png"])

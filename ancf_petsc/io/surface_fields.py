@@ -28,6 +28,7 @@ class SampledState:
     beam: int                     # the beam's index
     fibre_law: object | None      # the beam's fibre-reinforced law bound to the points' directions
     theta: np.ndarray | None = None   # (n,) the projected dilatation of ``locking: mixed``, else None
+    P: np.ndarray | None = None       # (n, 3, 3) the stress of ``locking: ecm`` (not the law's at F), else None
 
 
 def _everywhere(s: SampledState) -> bool:
@@ -80,7 +81,7 @@ SURFACE_FIELDS = {f.name: f for f in (
                  lambda s: s.fibre_law.fibre_stretch(s.F)[0], applies=_fibre_reinforced,
                  where="fibre-reinforced models (first family; NaN on other beams)"),
     SurfaceField("fibre_stress", r"fibre Cauchy stress $\sigma_{ff}$", "MPa", MPA,
-                 lambda s: s.fibre_law.fibre_cauchy_stress(s.F, s.theta)[0], applies=_fibre_reinforced,
+                 lambda s: s.fibre_law.fibre_cauchy_stress(s.F, s.theta, s.P)[0], applies=_fibre_reinforced,
                  where="fibre-reinforced models (first family; NaN on other beams)", si_unit="Pa"),
 )}
 

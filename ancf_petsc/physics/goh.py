@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .materials import NeoHookean, TangentTerms
+from .materials import NeoHookean, TangentTerms, determinant
 
 #: |Ē| below this is Ē = 0 for the switch's tangent (Ē of the reference state is ±1e-15: rounding)
 E_ROUNDING = 1e-12
@@ -168,11 +168,14 @@ class GOH:
             self._add_times_FH(P, 2.0 * self.k1 * E * self._exp(E), F, Fa, a0)
         return P, J
 
-    def fibre_cauchy_stress(self, F: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+    def fibre_cauchy_stress(self, F: np.ndarray, theta: np.ndarray | None = None,
+                            P: np.ndarray | None = None) -> np.ndarray:
         """Cauchy normal stress along each deformed fibre, n·σn with n = Fa0/|Fa0| and σ = PFᵀ/J
         (families, ...): the stress a fibre-aligned cut carries, matrix included (``theta``: the
-        matrix's pressure on that dilatation, ``locking: mixed``)."""
-        P, J = self.stress(F, theta)
+        matrix's pressure on that dilatation, ``locking: mixed``; ``P``: the model's stress where
+        it is not the law's at F, ``locking: ecm``'s, io/vtk.py ``AxisCorrection``)."""
+        P = self.stress(F, theta)[0] if P is None else P
+        J = determinant(F)
         out = []
         with np.errstate(over="ignore", invalid="ignore"):      # an overflowed fibre term: inf
             sigma = np.matmul(P, np.swapaxes(F, -1, -2)) / J[..., None, None]

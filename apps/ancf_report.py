@@ -106,7 +106,7 @@ def _main(argv: list[str] | None) -> int:
                 t1 = rp.table1_from(inputs, found)
                 missing = existing.levels_missing(t1, found)
                 if missing:
-                    sections.append(("Levels not reached", missing))
+                    sections.append(("Levels of Table 1 not reached or not asked", missing))
             args.figures = bool(found)
         if args.table1:
             t1 = rp.table1(inputs, out, args.ranks, args.jobs, log)

@@ -42,3 +42,11 @@ def gap_note(at: float | None, unit: str = " N") -> str:
     """'reported at 2500.5 N, past a gap of the load path' for a level reported at ``at`` (from
     ``reported_at``), '' for None."""
     return "" if at is None else f"reported at {at:g}{unit}, past a gap of the load path"
+
+
+def not_asked(summary: dict, level: float) -> bool:
+    """Whether a run with no step at ``level`` (``step_at``) was never asked for it rather than
+    stopped before it: it completed (its steps are the levels its config asked), or went on past
+    it."""
+    steps = summary.get("steps") or []
+    return summary.get("status") == "completed" or any(st["load_factor"] > level for st in steps)

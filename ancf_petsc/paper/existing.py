@@ -20,7 +20,7 @@ from ..config.values import ConfigError
 from ..errors import InputError
 from ..status import LEVELS_PASSED_OVER
 from ..io.h5fast import open_file
-from ..io.levels import step_at
+from ..io.levels import not_asked, step_at
 from ..io.reader import check_levels, read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
@@ -235,9 +235,13 @@ def levels_missing(t1, summaries: dict) -> str:
     """The Table 1 levels a paper run did not reach, per column (empty when every one did)."""
     parts = []
     for p, s in summaries.items():       # a level passed over in a gap is reached (Table 1's †)
-        missing = [f for f in t1.loads if step_at(s.get("steps", []), float(f)) is None]
-        if missing:
-            parts.append(f"ψ = {p}°: not reached {', '.join(f'{f:g}' for f in missing)} N "
+        missing = [float(f) for f in t1.loads if step_at(s.get("steps", []), float(f)) is None]
+        unasked = [f for f in missing if not_asked(s, f)]
+        if unasked:
+            parts.append(f"ψ = {p}°: not asked {', '.join(f'{f:g}' for f in unasked)} N (not among the run's "
+                         "steps)")
+        if len(missing) > len(unasked):
+            parts.append(f"ψ = {p}°: not reached {', '.join(f'{f:g}' for f in missing if f not in unasked)} N "
                          f"(the run ended {s.get('status')})")
     return "; ".join(parts)
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config.specs import DEFAULT_CONTACT_MODE
-from ..io.levels import gap_note, reported_at, step_at
+from ..io.levels import gap_note, not_asked, reported_at, step_at
 from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
 from ..workflows.sweep.collect import run_iterations
 from .runs import elongation, execute, make_sweep, summary_of
@@ -45,6 +45,11 @@ class Table1:
                 "is against the paper's value at the level asked)"
                 for p in self.columns for i, f in enumerate(self.loads) if self.passed(p, i) is not None]
 
+    def missing(self, p: int, i: int) -> str:
+        """Why column ψ = p has no value at the i-th level: 'not asked' (not among the run's
+        steps) or 'not reached' (the run stopped before it)."""
+        return "not asked" if not_asked(self.summaries[p], float(self.loads[i])) else "not reached"
+
     @property
     def columns(self) -> list[int]:
         """The pretwists that have results."""
@@ -63,7 +68,7 @@ class Table1:
                  "|---:|" + "---:|---:|---:|" * len(cols)]
         for i, f in enumerate(self.loads):
             cells = [f"{self.paper[p][i]:.3f} | {self.ours[p][i]:.3f}{self.mark(p, i)} | {100 * e[p][i]:+.2f} %"
-                     if np.isfinite(self.ours[p][i]) else f"{self.paper[p][i]:.3f} | not reached | "
+                     if np.isfinite(self.ours[p][i]) else f"{self.paper[p][i]:.3f} | {self.missing(p, i)} | "
                      for p in cols]
             lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
         lines += ["", *self.gap_notes()] if self.gap_notes() else []

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..io.levels import gap_note, reported_at, step_at
 from ..workflows import sweep as sw
+from ..workflows.sweep.collect import run_iterations
 from .inputs import BEAMS, TWISTS, PaperInputs, read_paper
 from .runs import elongation, elongations, execute, make_sweep, summary_of
 from .tables import Table1
@@ -49,7 +50,7 @@ def scaling_row(s: dict | None, mode: str, scaling: float, projection: dict | No
                 row[key] = elongation(step)
                 if reported_at(step) is not None:
                     row["reported"][key] = (load, reported_at(step))
-        row["iterations"] = s.get("newton_iterations")
+        row["iterations"] = run_iterations(s)
     return row
 
 
@@ -119,8 +120,8 @@ def laws_markdown(sliding: Table1, unilateral: Table1) -> str:
         lines.append(f"| {f:g} | " + " | ".join(cells) + " |")
     notes = sliding.gap_notes("sliding, ") + unilateral.gap_notes("unilateral, ")
     lines += ["", *notes] if notes else []
-    its = " · ".join(f"ψ={p}°: {sliding.summaries[p]['newton_iterations']} / "
-                     f"{unilateral.summaries[p]['newton_iterations']}" for p in TWISTS
+    its = " · ".join(f"ψ={p}°: {run_iterations(sliding.summaries[p])} / "
+                     f"{run_iterations(unilateral.summaries[p])}" for p in TWISTS
                      if p in sliding.summaries and p in unilateral.summaries)
     lines += ["", f"Newton iterations per column (sliding / unilateral): {its}."]
     return "\n".join(lines)

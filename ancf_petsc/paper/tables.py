@@ -161,8 +161,8 @@ def table2_row(s: dict | None, status: str, reason: str, load: float = T2_LOAD) 
             "status": status, "reason": reason,
             "reached": float(steps[-1]["load_factor"]) if steps else 0.0,
             "unstable_from": min(unstable) if unstable else None,
-            "time": s["timings"]["total"] if s else np.nan,
-            "iterations": s.get("newton_iterations") if s else None,
+            "time": (s.get("timings") or {}).get("total", np.nan) if s else np.nan,   # none: killed
+            "iterations": run_iterations(s) if s else None,
             "dofs": s.get("dofs") if s else None}
 
 

@@ -12,7 +12,8 @@ from ..contact.partners import HISTORY
 from ..model.beams import Model
 from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
-from ..physics.materials import determinant
+from ..physics.cubature import gauss_legendre
+from ..physics.materials import det_and_inverse_transpose, determinant
 from ..physics.mixed import grouped_basis, pressure_basis
 from .files import atomic_write, os_reason, remove_quietly
 from .surface_fields import SampledState, fields_for
@@ -55,7 +56,8 @@ class SurfaceSampler:
             law = self._fibre_law(beam, xi, m, YZ, keep)
             theta = StationDilatation(beam, block, xi, YZ, q0e, keep) if law and beam.locking == "mixed" else None
             ecm = AxisCorrection(block, xi, m, q0e, keep, law, self._fibre_law(beam, xi, m, np.zeros(np.shape(YZ)), keep)) \
-                if law and beam.locking == "ecm" else None
+                if law and beam.locking == "ecm" else AxialRecovery(beam, block, xi, YZ, q0e, keep) \
+                if law and beam.locking == "none" else None
             self.parts.append((beam, m, len(xi) - 1, N, G.reshape(-1, SLOTS, 3)[keep], e_of, r0, law, theta, ecm))
 
     def _fibre_law(self, beam, xi, m, YZ, keep):
@@ -80,7 +82,7 @@ class SurfaceSampler:
             r = np.einsum("pa,pai->pi", N, qe[e_of])
             F = np.matmul(np.swapaxes(qe[e_of], 1, 2), G)
             states.append(SampledState(r, r0, F, beam.index, law, None if theta is None else theta.at(qe),
-                                       None if ecm is None else ecm.stress(qe[e_of], F)))
+                                       None if ecm is None else ecm.stress(qe[e_of], F, law)))
         quads, caps = self._topology()
         data = {f.name: np.concatenate([f.values(s) for s in states]) for f in fields_for(states)}
         return np.concatenate([s.r for s in states]), quads, caps, data
@@ -117,11 +119,43 @@ class AxisCorrection:
         self.G = G.reshape(-1, block.slots, 3)[keep]
         self.free, self.axis_law, self.axis_free = law.poisson_free(), axis_law, axis_law.poisson_free()
 
-    def stress(self, qe: np.ndarray, F: np.ndarray) -> np.ndarray:
+    def stress(self, qe: np.ndarray, F: np.ndarray, law=None) -> np.ndarray:
         """P (n, 3, 3) at the samples for their elements' nodal vectors qe (n, S, 3) and F (n, 3, 3)."""
         Fa = np.matmul(np.swapaxes(qe, 1, 2), self.G)
         with np.errstate(over="ignore", invalid="ignore"):
             return self.free.stress(F)[0] + self.axis_law.stress(Fa)[0] - self.axis_free.stress(Fa)[0]
+
+
+class AxialRecovery:
+    """The stress at a beam's surface samples as the solution determines it (``locking: none``):
+    the law's Cauchy stress at the axial Gauss stations (the sample's own y, z and fibres),
+    interpolated along ξ between them (Lagrange through the stations).  The element's own F at
+    other stations is not held by the solve (the quadrature sees the stations only): at element
+    ends the fibre stress from it was up to 34x beam theory's on a nearly incompressible
+    cantilever, mostly the matrix's pressure K (J − 1) (docs/fibres.md, "Output")."""
+
+    def __init__(self, beam, block, xi: np.ndarray, YZ, q0e: np.ndarray, keep: np.ndarray):
+        E, n = len(q0e), np.shape(YZ)[1]
+        xa = gauss_legendre(beam.axial_points)[0]
+        y, z = (np.asarray(YZ)[..., k].ravel() for k in (0, 1))
+        self.G = []
+        for g in xa:
+            _, dN = block.shape_functions(np.full(len(y), g), y, z)
+            self.G.append(el.reference_gradients(q0e, dN.reshape(E, n, block.slots, 3))[0].reshape(-1, block.slots, 3)[keep])
+        xs = np.tile(np.repeat(xi, n // len(xi)), E)[keep]                 # each sample's ξ
+        self.ell = np.stack([np.prod([(xs - b) / (a - b) for b in xa if b != a], axis=0) for a in xa])
+
+    def stress(self, qe: np.ndarray, F: np.ndarray, law) -> np.ndarray:
+        """P (n, 3, 3) at the samples with deformation gradient F whose Cauchy stress is the
+        stations' interpolated, for their elements' nodal vectors qe (n, S, 3)."""
+        qt, sigma = np.swapaxes(qe, 1, 2), 0.0
+        with np.errstate(over="ignore", invalid="ignore"):
+            for ell, G in zip(self.ell, self.G):
+                Fg = np.matmul(qt, G)
+                P, J = law.stress(Fg)
+                sigma = sigma + (ell / J)[:, None, None] * np.matmul(P, np.swapaxes(Fg, 1, 2))
+            J, H = det_and_inverse_transpose(F)
+            return J[:, None, None] * np.matmul(sigma, H)
 
 
 class StationDilatation:

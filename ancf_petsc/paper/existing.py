@@ -225,9 +225,9 @@ def title(runs: list[ExistingRun]) -> str:
 def paper_summaries(runs: list[ExistingRun]) -> dict[int, dict]:
     """ψ → summary of the runs that are the paper's model (the last one given per ψ)."""
     out = {}
-    for r in runs:
+    for r in runs:      # its files are where it was given: summary.json's output_dir is where it ran
         if r.is_paper:
-            out[r.psi] = dict(r.summary, output_dir=r.summary.get("output_dir") or os.path.abspath(r.dir))
+            out[r.psi] = dict(r.summary, output_dir=os.path.abspath(r.dir))
     return out
 
 

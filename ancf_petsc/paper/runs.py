@@ -40,11 +40,13 @@ def execute(sweep: sw.Sweep, log=print) -> list[sw.RunState]:
 
 
 def summary_of(state: sw.RunState) -> dict | None:
+    """The run's summary.json, its ``output_dir`` the run's directory now (a sweep moved after its
+    runs keeps them; summary.json names where they ran, which the figures read otherwise)."""
     path = os.path.join(state.run.dir, "summary.json")
     if not os.path.exists(path):
         return None
     with open(path) as fh:
-        return json.load(fh)
+        return dict(json.load(fh), output_dir=os.path.abspath(state.run.dir))
 
 
 def elongation(step: dict, probe: str = PROBE) -> float:

@@ -52,3 +52,24 @@ def test_a_report_of_the_papers_sweeps_keeps_the_figures_of_the_one_before(tmp_p
     assert (tmp_path / FIGURE_LIST).read_text().split() == ["figure5.png", "load_elongation.png"]
     keep_only(str(tmp_path), [str(tmp_path / "figure5.png")])
     assert sorted(os.listdir(tmp_path)) == sorted([FIGURE_LIST, "figure5.png", "mine.png"])
+
+
+def test_a_moved_paper_run_draws_its_own_figures(tmp_path):
+    """The paper's column solved into A and moved to B (copied from a cluster, or kept aside
+    before A was solved again): the figures read results.h5 and the VTUs from A, where
+    summary.json says it ran; with A gone figure5_psi45.png and slip_psi45.png were left out with
+    no word, with another run in A they drew that run (a 50 MPa soleus: 20 % strain where B's
+    Table 1 says 9 %).  Likewise a sweep moved after its runs (paper/runs.summary_of)."""
+    import shutil
+    from types import SimpleNamespace
+    from ancf_petsc.paper.runs import summary_of
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["steps"] = [10.0, 400.0]
+    ran = _solved(raw, tmp_path, "A")
+    shutil.move(ran, tmp_path / "B")
+    _report(str(tmp_path / "B"), tmp_path / "rep")
+    assert {"figure5_psi45.png", "slip_psi45.png", "load_elongation.png"} <= set(os.listdir(tmp_path / "rep"))
+    moved = summary_of(SimpleNamespace(run=SimpleNamespace(dir=str(tmp_path / "B"))))
+    assert moved["output_dir"] == str(tmp_path / "B") and len(moved["steps"]) == 2

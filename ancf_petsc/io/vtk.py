@@ -55,9 +55,8 @@ class SurfaceSampler:
             r0 = np.einsum("pa,pai->pi", N, q0e[e_of])          # reference points, once
             law = self._fibre_law(beam, xi, m, YZ, keep)
             theta = StationDilatation(beam, block, xi, YZ, q0e, keep) if law and beam.locking == "mixed" else None
-            ecm = AxisCorrection(block, xi, m, q0e, keep, law, self._fibre_law(beam, xi, m, np.zeros(np.shape(YZ)), keep)) \
-                if law and beam.locking == "ecm" else AxialRecovery(beam, block, xi, YZ, q0e, keep) \
-                if law and beam.locking == "none" else None
+            axis = self._fibre_law(beam, xi, m, np.zeros(np.shape(YZ)), keep) if beam.locking == "ecm" else None
+            ecm = AxialRecovery(beam, block, xi, YZ, q0e, keep, axis) if law and beam.locking != "mixed" else None
             self.parts.append((beam, m, len(xi) - 1, N, G.reshape(-1, SLOTS, 3)[keep], e_of, r0, law, theta, ecm))
 
     def _fibre_law(self, beam, xi, m, YZ, keep):
@@ -106,42 +105,29 @@ class SurfaceSampler:
         return self._cells
 
 
-class AxisCorrection:
-    """``locking: ecm``'s stress at a beam's surface samples, P₀(F) + P(F_a) − P₀(F_a): the energy
-    of model.Beam.parts, Ψ₀ (the ν = 0 law) over the section and Ψ − Ψ₀ on the axis, F_a the
-    deformation gradient on the axis at the sample's x.  The law's own P(F) is the stress of
-    3333's locked lateral strains: a cantilever's fibre stress came out 1.6-2.2x beam theory's."""
-
-    def __init__(self, block, xi: np.ndarray, m: int, q0e: np.ndarray, keep: np.ndarray, law, axis_law):
-        E, zeros = len(q0e), np.zeros(len(q0e) * len(xi) * m)
-        _, dN = block.shape_functions(np.tile(np.repeat(xi, m), E), zeros, zeros)
-        G, _ = el.reference_gradients(q0e, dN.reshape(E, len(xi) * m, block.slots, 3))
-        self.G = G.reshape(-1, block.slots, 3)[keep]
-        self.free, self.axis_law, self.axis_free = law.poisson_free(), axis_law, axis_law.poisson_free()
-
-    def stress(self, qe: np.ndarray, F: np.ndarray, law=None) -> np.ndarray:
-        """P (n, 3, 3) at the samples for their elements' nodal vectors qe (n, S, 3) and F (n, 3, 3)."""
-        Fa = np.matmul(np.swapaxes(qe, 1, 2), self.G)
-        with np.errstate(over="ignore", invalid="ignore"):
-            return self.free.stress(F)[0] + self.axis_law.stress(Fa)[0] - self.axis_free.stress(Fa)[0]
-
-
 class AxialRecovery:
-    """The stress at a beam's surface samples as the solution determines it (``locking: none``):
-    the law's Cauchy stress at the axial Gauss stations (the sample's own y, z and fibres),
+    """The stress at a beam's surface samples as the solution determines it (``locking: none`` and
+    ``ecm``): the Cauchy stress at the axial Gauss stations (the sample's own y, z and fibres),
     interpolated along ξ between them (Lagrange through the stations).  The element's own F at
     other stations is not held by the solve (the quadrature sees the stations only): at element
     ends the fibre stress from it was up to 34x beam theory's on a nearly incompressible
-    cantilever, mostly the matrix's pressure K (J − 1) (docs/fibres.md, "Output")."""
+    cantilever, mostly the matrix's pressure K (J − 1) (docs/fibres.md, "Output").  With ``ecm``
+    (``axis_law``: the law bound to the axis' fibres) the stress is that of the energy it solves,
+    P₀(F) + P(F_a) − P₀(F_a) (model.Beam.parts: Ψ₀ the ν = 0 law over the section, Ψ − Ψ₀ on the
+    axis, F_a on the axis at the station): the law's own P(F) there is the stress of 3333's
+    locked lateral strains, 1.6-2.2x beam theory's on the same cantilever."""
 
-    def __init__(self, beam, block, xi: np.ndarray, YZ, q0e: np.ndarray, keep: np.ndarray):
+    def __init__(self, beam, block, xi: np.ndarray, YZ, q0e: np.ndarray, keep: np.ndarray, axis_law=None):
         E, n = len(q0e), np.shape(YZ)[1]
         xa = gauss_legendre(beam.axial_points)[0]
         y, z = (np.asarray(YZ)[..., k].ravel() for k in (0, 1))
-        self.G = []
-        for g in xa:
+
+        def gradients(g, y, z):
             _, dN = block.shape_functions(np.full(len(y), g), y, z)
-            self.G.append(el.reference_gradients(q0e, dN.reshape(E, n, block.slots, 3))[0].reshape(-1, block.slots, 3)[keep])
+            return el.reference_gradients(q0e, dN.reshape(E, n, block.slots, 3))[0].reshape(-1, block.slots, 3)[keep]
+        self.G = [gradients(g, y, z) for g in xa]
+        self.G_axis = None if axis_law is None else [gradients(g, 0.0 * y, 0.0 * z) for g in xa]
+        self.axis_law, self.axis_free = axis_law, None if axis_law is None else axis_law.poisson_free()
         xs = np.tile(np.repeat(xi, n // len(xi)), E)[keep]                 # each sample's ξ
         self.ell = np.stack([np.prod([(xs - b) / (a - b) for b in xa if b != a], axis=0) for a in xa])
 
@@ -150,9 +136,14 @@ class AxialRecovery:
         stations' interpolated, for their elements' nodal vectors qe (n, S, 3)."""
         qt, sigma = np.swapaxes(qe, 1, 2), 0.0
         with np.errstate(over="ignore", invalid="ignore"):
-            for ell, G in zip(self.ell, self.G):
+            for k, (ell, G) in enumerate(zip(self.ell, self.G)):
                 Fg = np.matmul(qt, G)
-                P, J = law.stress(Fg)
+                if self.G_axis is None:
+                    P, J = law.stress(Fg)
+                else:
+                    Fa = np.matmul(qt, self.G_axis[k])
+                    P0, J = law.poisson_free().stress(Fg)
+                    P = P0 + self.axis_law.stress(Fa)[0] - self.axis_free.stress(Fa)[0]
                 sigma = sigma + (ell / J)[:, None, None] * np.matmul(P, np.swapaxes(Fg, 1, 2))
             J, H = det_and_inverse_transpose(F)
             return J[:, None, None] * np.matmul(sigma, H)

@@ -173,7 +173,7 @@ class GOH:
         """Cauchy normal stress along each deformed fibre, n·σn with n = Fa0/|Fa0| and σ = PFᵀ/J
         (families, ...): the stress a fibre-aligned cut carries, matrix included (``theta``: the
         matrix's pressure on that dilatation, ``locking: mixed``; ``P``: the model's stress where
-        it is not the law's at F, ``locking: ecm``'s, io/vtk.py ``AxisCorrection``)."""
+        it is not the law's at F: io/vtk.py ``AxialRecovery``)."""
         P = self.stress(F, theta)[0] if P is None else P
         J = determinant(F)
         out = []

@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 
-from ...io.files import atomic_write
+from ...io.files import atomic_write, remove_quietly
 from .calibrate import CalibrationResult
 from .identify import CHI2_95, RCOND
 from .log import SampleLog
@@ -106,14 +106,18 @@ def markdown(res: CalibrationResult, log: SampleLog) -> str:
 
 
 def write_report(res: CalibrationResult, log: SampleLog) -> list[str]:
-    """fit.json, report.md, fit.png and profiles.png in the output directory; their paths."""
+    """fit.json, report.md, fit.png and profiles.png in the output directory; their paths.  Those
+    of them this fit does not write (profiles.png without profiles) are removed: an earlier fit's
+    there would read as this one's."""
     os.makedirs(res.output, exist_ok=True)
-    out = [os.path.join(res.output, "fit.json"), os.path.join(res.output, "report.md")]
+    names = ("fit.json", "report.md", "fit.png", "profiles.png")
+    out = [os.path.join(res.output, "fit.json")]
     atomic_write(out[0], json.dumps(summary(res, log), indent=1) + "\n")
-    if not res.parameters:
-        return out[:1]
-    atomic_write(out[1], markdown(res, log))
-    out.append(plot_fit(res, os.path.join(res.output, "fit.png")))
-    if any(p.profile for p in res.parameters):
-        out.append(plot_profiles(res, os.path.join(res.output, "profiles.png")))
+    if res.parameters:
+        out.append(os.path.join(res.output, "report.md"))
+        atomic_write(out[1], markdown(res, log))
+        out.append(plot_fit(res, os.path.join(res.output, "fit.png")))
+        if any(p.profile for p in res.parameters):
+            out.append(plot_profiles(res, os.path.join(res.output, "profiles.png")))
+    remove_quietly(*[os.path.join(res.output, n) for n in names if os.path.join(res.output, n) not in out])
     return out

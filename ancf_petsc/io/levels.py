@@ -50,3 +50,11 @@ def not_asked(summary: dict, level: float) -> bool:
     it."""
     steps = summary.get("steps") or []
     return summary.get("status") == "completed" or any(st["load_factor"] > level for st in steps)
+
+
+def ended_words(summary: dict) -> str:
+    """'the run ended failed' (its summary's status), or for a summary still 'running' 'the run has
+    no final status: still running, or killed'."""
+    status = summary.get("status")
+    return ("the run has no final status: still running, or killed" if status == "running"
+            else f"the run ended {status}")

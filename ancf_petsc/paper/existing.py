@@ -20,7 +20,7 @@ from ..config.values import ConfigError
 from ..errors import InputError
 from ..status import LEVELS_PASSED_OVER
 from ..io.h5fast import open_file
-from ..io.levels import not_asked, step_at
+from ..io.levels import ended_words, not_asked, step_at
 from ..io.reader import check_levels, read_results
 from ..io.restart import fingerprint, first_difference
 from ..model.build import build_model
@@ -242,6 +242,6 @@ def levels_missing(t1, summaries: dict) -> str:
                          "steps)")
         if len(missing) > len(unasked):
             parts.append(f"ψ = {p}°: not reached {', '.join(f'{f:g}' for f in missing if f not in unasked)} N "
-                         f"(the run ended {s.get('status')})")
+                         f"({ended_words(s)})")
     return "; ".join(parts)
 

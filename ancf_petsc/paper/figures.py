@@ -8,7 +8,7 @@ import numpy as np
 
 from .. import viz
 from ..io.files import atomic_write, remove_quietly
-from ..io.levels import step_at
+from ..io.levels import ended_words, step_at
 from ..io.reader import read_contact
 from .inputs import TWISTS, PaperInputs, read_paper
 from .tables import Table1
@@ -96,7 +96,7 @@ def figures(inputs: PaperInputs, t1: Table1, out: str, t2rows: dict | None = Non
                 vtus[p] = (last, os.path.join(run_dir, "surface_0000.vtu"))
                 f = s["steps"][-1]["load_factor"]   # the level drawn: the last one the run reached
                 drawn[p] = f"{f:g} N" + ("" if s.get("status") == "completed" else
-                                         f" (the last level reached; the run ended {s.get('status')})")
+                                         f" (the last level reached; {ended_words(s)})")
     if len(vtus) == 2:
         made.append(viz.render_pair(vtus[15][0], vtus[45][0], os.path.join(out, "figure5.png"),
                                          titles=(f"(a) ψ = 15°, {drawn[15]}", f"(b) ψ = 45°, {drawn[45]}"),

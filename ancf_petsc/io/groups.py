@@ -99,6 +99,17 @@ def write_model_group(h5, model, layout, run_info: dict, info: dict) -> None:
     steps.attrs["last_load_factor"] = 0.0
 
 
+def load_factor_units(spec) -> str:
+    """What a level's ``load_factor`` is: the multiple of the config's loads and displacements, or
+    with load curves their argument, or for a load history the frame number."""
+    if spec.history is not None:
+        return ("1 (the frame number of the load history: the loads are the config's times their columns "
+                "at that frame)")
+    if any(x.curve is not None for x in [*spec.loads, *spec.boundary_conditions] if hasattr(x, "curve")):
+        return "1 (the load factor: a load or displacement on a curve is the config's times the curve's value at it)"
+    return "1 (the multiple of the config's loads and displacements)"
+
+
 def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dict | None,
                       path: dict | None, model) -> None:
     """One converged level (``steps/step_NNNN``): nodal vectors, the solve's record, the probes,
@@ -108,7 +119,7 @@ def write_level_group(g, record, q: np.ndarray, extra: dict | None, contact: dic
     fast.attribute(fast.dataset(gid, "nodal_vectors", q), "units", nodal_units(model.block))
     fast.attributes(gid, {
         "load_factor": record.load_factor,
-        "load_factor_units": "1 (the multiple of the config's loads and displacements)",
+        "load_factor_units": load_factor_units(model.spec),
         "snes_iterations": record.iterations, "snes_reason": record.reason,
         "substeps": record.substeps, "wall_time": record.wall_time,
         "negative_eigenvalues": -1 if record.negative_eigenvalues is None else record.negative_eigenvalues})

@@ -56,6 +56,8 @@ def slip_figures(t1: Table1, out: str, twist: int = 45) -> list[str]:
         return []
     at = [step_at(s["steps"], f) for f in SLIP_LEVELS]            # a level passed over: where reported
     levels = [read_contact(h5, s["steps"].index(st) + 1) for st in at if st is not None]
+    if not levels:                       # none of SLIP_LEVELS reached: an empty chart says nothing
+        return []
     names = viz.interface_labels(s["contact_interfaces"])
     soleus = tuple(k for k, n in enumerate(s["contact_interfaces"]) if "soleus" in n)
     return [viz.plot_slip(levels, names, os.path.join(out, f"slip_psi{twist}.png"), soleus,

@@ -38,3 +38,21 @@ def test_a_killed_column_is_not_said_to_have_ended_running():
     t1 = rp.table1_from(PAPER_INPUTS, {45: killed})
     assert levels_missing(t1, {45: killed}) == ("ψ = 45°: not reached 150, 200, 300, 400 N (the run has no final "
                                                "status: still running, or killed)")
+
+
+def test_a_column_that_reached_no_level_draws_no_empty_slip_chart(tmp_path):
+    """The paper's column failing at its first level (a Newton budget of 2): ancf-report drew
+    slip_psi45.png with no level on it, axes and the title 'the soleus slides past the
+    gastrocnemius subtendons' only."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw["solver"], raw["output"] = {"max_newton_iterations": 2}, {"vtk": False}
+    run = str(tmp_path / "run")
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", run, "--quiet"])
+    assert p.returncode == 3, p.stderr
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", run, "--out", str(tmp_path / "rep")],
+                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert not os.path.exists(tmp_path / "rep" / "slip_psi45.png")
+    assert "ψ = 45°: not reached 10, 20" in open(tmp_path / "rep" / "report.md").read()

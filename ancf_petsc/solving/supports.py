@@ -1,4 +1,4 @@
-"""Rigid-body motions the supports and the sliding contact leave free (checked before solving).
+"""Rigid-body motions the supports and the contact leave free (checked before solving).
 
 A model in which some beam, or some group of beams tied only by frictionless contact, can move
 as a rigid body has no unique equilibrium: Newton wanders or fails "at load factor 0.0002".
@@ -10,6 +10,8 @@ exactly the constraint violation of v; combinations of modes with J·v = 0 (the 
 Gram matrix of J·R) are the free motions.  Unilateral contact is counted as holding (it stops a
 beam from moving into its neighbour, not from lifting off): its constraints are evaluated held
 (every one active, laws.HELD), as at rest, pressure-free, the law's status leaves them all out.
+An elastic interface matrix holds too (its stiffness ties the beams at rest: ``_layer_rows``);
+Coulomb friction does not (at rest nothing presses).
 """
 from __future__ import annotations
 
@@ -71,9 +73,19 @@ def check_supports(problem) -> None:
     """One input error naming the beams and motions the supports and contact leave free."""
     free = free_rigid_motions(problem)
     if free:
-        held = " (frictionless contact lets beams slide along each other)" if problem.contact else ""
+        held = f" ({_what_contact_holds(problem.contact)})" if problem.contact else ""
         raise InputError("boundary_conditions", "nothing holds " + "; ".join(free) + held
                          + "; add supports so that no beam can move as a rigid body")
+
+
+def _what_contact_holds(c) -> str:
+    """What the contact ``c`` leaves free, by its tangential law (an elastic matrix holds)."""
+    if any(t.bounded for t in c.terms):
+        return ("contact lets beams slide along each other at rest: Coulomb friction holds only "
+                "where the bodies are pressed")
+    if any(t.couples_beams for t in c.terms):
+        return "contact and its elastic matrix tie beams only to their neighbours"
+    return "frictionless contact lets beams slide along each other"
 
 
 def free_rigid_motions(problem) -> list[str]:
@@ -123,6 +135,7 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     Vmat.assemble()
     with _held_jacobian(P, X):
         JV = P.J.matMult(Vmat)
+        layer = _layer_rows(P, norms)
     # rigid modes give no strain: only the held and constraint rows are nonzero
     nz = np.flatnonzero(scale)
     JVs = JV.getDenseArray()[nz] * scale[nz, None]
@@ -138,11 +151,42 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
             i_list.append(i)
             j_list.append(6 * b[i] + m)
             v_list.append(JVs[i, 6 * colours[b[i]] + m])
-    Y = sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
-                      shape=(len(nz), 6 * nb))
+    Y = sp.vstack([sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
+                                 shape=(len(nz), 6 * nb)), layer.reshape(-1, 6 * nb)])
     labels = [(beam.name, "translation" if m < 3 else "rotation", m % 3)
               for beam in model.beams for m in range(6)]
     return comm.allreduce((Y.T @ Y).toarray()), labels
+
+
+def _layer_rows(P, norms: np.ndarray) -> np.ndarray:
+    """(P, 3, 6 n_beams) per local contact point of a tangential law that ties the two beams by a
+    stiffness at rest (the elastic matrix, ``couples_beams``) the tangential relative motion
+    (I − n nᵀ)(u_A − u_B) of every unit rigid mode (``norms`` (n_beams, 6)), times
+    sqrt(k_t ω_p / k_s): the layer's energy Hessian on the modes, scaled like the contact rows.
+    Such a layer holds a beam pulled along its neighbour (the shear-lag core held only by it was
+    refused as free).  Rigid modes move the touching points alike on both bodies: u = e_k
+    (translation) or e_k × X_p (rotation) at the point's reference position X_p."""
+    c = P.contact
+    nb = len(P.model.beams)
+    st = c.last_evaluation if c is not None else None
+    terms = [t for t in (c.terms if c is not None else []) if t.couples_beams]
+    if not terms or st is None or len(c.local) == 0:
+        return np.zeros((0, 3, 6 * nb))
+    X = st.xA
+    ends = np.array([[i.a.index, i.b.index] for i in c.interfaces])[c.points.itf[c.local]]
+    out = np.zeros((len(X), 3, 6 * nb))
+    E = np.eye(3)
+    for t in terms:
+        ev = st.terms[t.name]
+        tangent = E[None] - ev.n[:, :, None] * ev.n[:, None, :]                # (P, 3, 3)
+        scale = np.sqrt(t.stiffness * ev.omega / c.stiffness)
+        for m in range(6):
+            u = np.broadcast_to(E[m], X.shape) if m < 3 else np.cross(E[m - 3], X)
+            s = scale[:, None] * np.einsum("pij,pj->pi", tangent, u)
+            for side, sign in ((0, 1.0), (1, -1.0)):
+                b = ends[:, side]
+                np.add.at(out, (np.arange(len(X)), slice(None), 6 * b + m), sign * s / norms[b, m][:, None])
+    return out
 
 
 @contextmanager

@@ -162,10 +162,13 @@ def _layer_rows(P, norms: np.ndarray) -> np.ndarray:
     """(P, 3, 6 n_beams) per local contact point of a tangential law that ties the two beams by a
     stiffness at rest (the elastic matrix, ``couples_beams``) the tangential relative motion
     (I − n nᵀ)(u_A − u_B) of every unit rigid mode (``norms`` (n_beams, 6)), times
-    sqrt(k_t ω_p / k_s): the layer's energy Hessian on the modes, scaled like the contact rows.
-    Such a layer holds a beam pulled along its neighbour (the shear-lag core held only by it was
-    refused as free).  Rigid modes move the touching points alike on both bodies: u = e_k
-    (translation) or e_k × X_p (rotation) at the point's reference position X_p."""
+    sqrt(ω_p / A) (A the interface's area): its root mean square over the interface, like the
+    weighted mean gaps of the contact rows, whatever k_t > 0 (the layer's stiffness on a mode
+    compares with the beams', not with k_s: at k_t = 1e3 Pa/m the core's turn about z is held as
+    stiffly by the layer as by its own bending).  Such a layer holds a beam pulled along its
+    neighbour (the shear-lag core held only by it was refused as free).  Rigid modes move the
+    touching points alike on both bodies: u = e_k (translation) or e_k × X_p (rotation) at the
+    point's reference position X_p."""
     c = P.contact
     nb = len(P.model.beams)
     st = c.last_evaluation if c is not None else None
@@ -173,13 +176,15 @@ def _layer_rows(P, norms: np.ndarray) -> np.ndarray:
     if not terms or st is None or len(c.local) == 0:
         return np.zeros((0, 3, 6 * nb))
     X = st.xA
-    ends = np.array([[i.a.index, i.b.index] for i in c.interfaces])[c.points.itf[c.local]]
+    itf = c.points.itf[c.local]
+    ends = np.array([[i.a.index, i.b.index] for i in c.interfaces])[itf]
+    area = np.bincount(c.points.itf, c.points.w, minlength=len(c.interfaces))[itf]
     out = np.zeros((len(X), 3, 6 * nb))
     E = np.eye(3)
     for t in terms:
         ev = st.terms[t.name]
         tangent = E[None] - ev.n[:, :, None] * ev.n[:, None, :]                # (P, 3, 3)
-        scale = np.sqrt(t.stiffness * ev.omega / c.stiffness)
+        scale = np.sqrt(ev.omega / area)
         for m in range(6):
             u = np.broadcast_to(E[m], X.shape) if m < 3 else np.cross(E[m - 3], X)
             s = scale[:, None] * np.einsum("pij,pj->pi", tangent, u)

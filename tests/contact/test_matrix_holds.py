@@ -49,3 +49,14 @@ def test_a_core_held_by_sliding_or_friction_alone_is_refused(tmp_path, law, word
     with pytest.raises(InputError) as exc:
         run_inline(raw, tmp_path)
     assert "nothing holds core" in str(exc.value) and words in str(exc.value)
+
+
+def test_a_soft_matrix_holds_the_core_as_well(tmp_path):
+    """At k_t = 1e3 Pa/m the layer holds the core's turn about z about as stiffly as the core's own
+    bending does (k_t Σ ω x² 8e-5 against EI/L 3e-5 N m): held, whatever k_t > 0, not compared
+    with the multipliers' unit k_s (which found that turn free).  The core slides 2.6 mm; the
+    two roots carry F between them."""
+    s = run_inline(free_core(1.0e3), tmp_path)
+    assert s["status"] == "completed"
+    roots = sum(-s["steps"][-1]["reactions"][r][0] for r in ("top.0", "bottom.0"))
+    assert abs(roots - F) < 1e-6 * F

@@ -9,6 +9,7 @@ as such: the levels reached, the levels not reached, the level a figure draws.
 """
 from __future__ import annotations
 
+import glob
 import os
 
 
@@ -46,6 +47,18 @@ DIFFERENCE_WORDS = {
     "contact": "the contact differs"}
 
 
+def _runs_inside(directory: str) -> str:
+    """What to do about a directory without summary.json: run ancf-solve, or, for a sweep's or
+    study's top directory (which said only that), give the run directories it holds."""
+    runs = sorted(os.path.relpath(os.path.dirname(p), directory)
+                  for p in glob.glob(os.path.join(directory, "*", "summary.json"))
+                  + glob.glob(os.path.join(directory, "*", "*", "summary.json")))
+    if not runs:
+        return "run ancf-solve first"
+    return (f"it holds {len(runs)} run director{'y' if len(runs) == 1 else 'ies'}, e.g. {runs[0]}: give "
+            f"those, e.g. --existing {os.path.join(directory, os.path.dirname(runs[0]), '*')}")
+
+
 class ExistingRun:
     """One run directory: its summary, whether it is the paper's model and why not."""
 
@@ -56,7 +69,7 @@ class ExistingRun:
             what = "not a directory" if os.path.exists(directory) else "no such directory"
             raise InputError("--existing", f"{directory}: {what} (give ancf-solve output directories)")
         if not os.path.exists(path):
-            raise InputError("--existing", f"{path}: no summary.json (run ancf-solve first)")
+            raise InputError("--existing", f"{path}: no summary.json ({_runs_inside(directory)})")
         try:
             # read_results: a run still 'running' (or killed) gets the levels results.h5 holds
             # beyond summary.json's, as read_results and --restart see them

@@ -239,6 +239,11 @@ EXISTING = {
     "no run": (lambda d: os.mkdir(d), "summary.json: no summary.json (run ancf-solve first)"),
     "an unreadable summary": (lambda d: os.makedirs(os.path.join(d, "summary.json")),
                               "summary.json: cannot read: Is a directory"),
+    # a sweep's top directory said only 'no summary.json (run ancf-solve first)'
+    "a sweep's top directory": (lambda d: [os.makedirs(os.path.join(d, "out", r)) or open(
+        os.path.join(d, "out", r, "summary.json"), "w").close() for r in ("run_0000", "run_0001")],
+                                "no summary.json (it holds 2 run directories, e.g. out/run_0000: give those, "
+                                "e.g. --existing run/out/*)"),
 }
 
 

@@ -76,7 +76,8 @@ class GOH:
 
     @property
     def young(self) -> float:
-        """Small-strain Young's modulus of the matrix (fibres add nothing at zero strain)."""
+        """Small-strain Young's modulus of the matrix alone: a stretched fibre adds 4 k1 (times
+        cos^4 of its angle to the stretch, with kappa = 0) on the tension side, not counted here."""
         return self.matrix.young
 
     def with_directions(self, a0: np.ndarray) -> "GOH":

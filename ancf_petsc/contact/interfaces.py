@@ -143,7 +143,8 @@ def find_interfaces(model, spec) -> list[Interface]:
                 f"the same number of elements (a conforming interface); give both {more}",
                 key=f"beams[{a.index}].elements")
         first, second = (a, b) if a.index < b.index else (b, a)
-        name = f"{c.name} ({first.name}|{second.name})"
+        # named by the first beam's curve, whichever carries the points (two curves: curve_b)
+        name = f"{(c if a is first or cb is None else cb).name} ({first.name}|{second.name})"
         if name in entry and k is not None:
             _listed_twice(name, entry[name], k, a, b, c)
         entry[name] = k

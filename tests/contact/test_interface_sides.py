@@ -147,3 +147,18 @@ def test_shared_curves_an_explicit_list_leaves_out_are_warned_about(listed, miss
         assert name in warned[0] and "carry no contact" in warned[0]
     for name, *_ in SIDES:                                    # no listed interface among them
         assert name in missing or not warned or name not in warned[0]
+
+
+def test_two_curves_name_the_interface_by_the_first_beams_curve_on_either_side():
+    """The pressed strips with the slider's face renamed (the same points: two curves, curve and
+    curve_b) listed with the points on either beam: one name, 'interface (base|slider)', the base's
+    curve; before, the side carrying the points gave its own curve's name ('face (base|slider)'
+    with the points on the slider), so the outputs' keys followed the side."""
+    names = []
+    for a, b, ca, cb in (("slider", "base", "face", "interface"), ("base", "slider", "interface", "face")):
+        raw = load_raw("friction_pressed_strips.yaml")
+        raw["beams"][1]["section"]["curves"][0]["name"] = "face"
+        raw["contact"]["interfaces"] = [{"a": a, "b": b, "curve": ca, "curve_b": cb}]
+        spec = parse_config(raw, base_dir=CONFIGS)
+        names.append([(i.name, i.a.name) for i in find_interfaces(build_model(spec), spec.contact)])
+    assert names == [[("interface (base|slider)", "slider")], [("interface (base|slider)", "base")]]

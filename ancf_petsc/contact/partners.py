@@ -219,12 +219,14 @@ class PartnerTerm:
 
     def sums(self, c, st, on: np.ndarray) -> list[float]:
         """The local parts of ``columns`` over the local points ``on`` (bool) of one interface:
-        the stick share is the sticking part of the pressed area (p > 0 at the point)."""
+        the stick share is the sticking part of the pressed area (p > 0 at the point) for a law
+        the pressure bounds (friction), of the whole area for one it does not (the elastic matrix
+        holds opened and pulled interfaces too: docs/running.md, 1)."""
         ev = st.terms[self.name]
         slip = np.linalg.norm(tangential(ev.d[on], st.pr.n[on]), axis=1)
         sigma = ev.sigma[on]
         force = ev.omega[on] @ sigma if on.any() else np.zeros(3)
-        pressed = st.pressure[on] > 0.0
+        pressed = st.pressure[on] > 0.0 if self.bounded else np.ones(int(on.sum()), dtype=bool)
         return [slip.max(initial=0.0), np.linalg.norm(sigma, axis=1).max(initial=0.0), *force,
                 float(ev.omega[on] @ (ev.stick[on] & pressed)), float(ev.omega[on] @ pressed)]
 

@@ -152,16 +152,16 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
             j_list.append(6 * b[i] + m)
             v_list.append(JVs[i, 6 * colours[b[i]] + m])
     Y = sp.vstack([sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
-                                 shape=(len(nz), 6 * nb)), layer.reshape(-1, 6 * nb)])
+                                 shape=(len(nz), 6 * nb)), layer])
     labels = [(beam.name, "translation" if m < 3 else "rotation", m % 3)
               for beam in model.beams for m in range(6)]
     return comm.allreduce((Y.T @ Y).toarray()), labels
 
 
-def _layer_rows(P, norms: np.ndarray) -> np.ndarray:
-    """(P, 3, 6 n_beams) per local contact point of a tangential law that ties the two beams by a
-    stiffness at rest (the elastic matrix, ``couples_beams``) the tangential relative motion
-    (I − n nᵀ)(u_A − u_B) of every unit rigid mode (``norms`` (n_beams, 6)), times
+def _layer_rows(P, norms: np.ndarray) -> sp.csr_matrix:
+    """(3 P, 6 n_beams) sparse: per local contact point of a tangential law that ties the two
+    beams by a stiffness at rest (the elastic matrix, ``couples_beams``) the tangential relative
+    motion (I − n nᵀ)(u_A − u_B) of every unit rigid mode (``norms`` (n_beams, 6)), times
     sqrt(ω_p / A) (A the interface's area): its root mean square over the interface, like the
     weighted mean gaps of the contact rows, whatever k_t > 0 (the layer's stiffness on a mode
     compares with the beams', not with k_s: at k_t = 1e3 Pa/m the core's turn about z is held as
@@ -174,24 +174,30 @@ def _layer_rows(P, norms: np.ndarray) -> np.ndarray:
     st = c.last_evaluation if c is not None else None
     terms = [t for t in (c.terms if c is not None else []) if t.couples_beams]
     if not terms or st is None or len(c.local) == 0:
-        return np.zeros((0, 3, 6 * nb))
+        return sp.csr_matrix((0, 6 * nb))
     X = st.xA
     itf = c.points.itf[c.local]
     ends = np.array([[i.a.index, i.b.index] for i in c.interfaces])[itf]
     area = np.bincount(c.points.itf, c.points.w, minlength=len(c.interfaces))[itf]
-    out = np.zeros((len(X), 3, 6 * nb))
+    rows = np.arange(3 * len(X)).reshape(-1, 3)
     E = np.eye(3)
+    blocks = []
     for t in terms:
         ev = st.terms[t.name]
         tangent = E[None] - ev.n[:, :, None] * ev.n[:, None, :]                # (P, 3, 3)
         scale = np.sqrt(ev.omega / area)
+        i_list, j_list, v_list = [], [], []
         for m in range(6):
             u = np.broadcast_to(E[m], X.shape) if m < 3 else np.cross(E[m - 3], X)
             s = scale[:, None] * np.einsum("pij,pj->pi", tangent, u)
             for side, sign in ((0, 1.0), (1, -1.0)):
                 b = ends[:, side]
-                np.add.at(out, (np.arange(len(X)), slice(None), 6 * b + m), sign * s / norms[b, m][:, None])
-    return out
+                i_list.append(rows.ravel())
+                j_list.append(np.repeat(6 * b + m, 3))
+                v_list.append((sign * s / norms[b, m][:, None]).ravel())
+        blocks.append(sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
+                                    shape=(3 * len(X), 6 * nb)))
+    return sp.vstack(blocks).tocsr()
 
 
 @contextmanager

@@ -15,6 +15,8 @@ from ..io.reader import read_contact
 #: how a probe's change is shown: a displacement (r, or the section mean) as u in mm, another
 #: vector's change in its own unit (io.groups.PROBE_UNITS)
 SHOWN = {"r": "u", "mean": "section-mean u"}
+#: a probe's y or z displacement is shown where it reaches this share of its largest component
+MOVED = 1e-3
 #: slip and pressure are drawn at up to this many levels (the last among them)
 SLIP_LEVELS = 4
 
@@ -25,9 +27,20 @@ def probe_vectors(config: dict) -> dict[str, str]:
             if isinstance(p, dict) and "name" in p}
 
 
+def moved_components(steps: list[dict], name: str) -> list[int]:
+    """The components of probe ``name``'s displacement shown: x, and y or z where they reach
+    ``MOVED`` of its largest component at some level (a cantilever's u_z was left out: the table
+    showed u_x alone, -10 mm, of a tip that moved 40 mm down)."""
+    d = np.array([st["probes"][name]["displacement"] for st in steps if name in st.get("probes", {})],
+                 dtype=float).reshape(-1, 3)
+    big = np.abs(d).max(axis=0) if len(d) else np.zeros(3)
+    return [0] + [k for k in (1, 2) if big[k] > MOVED * big.max()]
+
+
 def probe_markdown(summary: dict, config: dict) -> list[str]:
-    """A table of every probe per level: u_x [mm] of a position (r, mean), the three components
-    of a direction vector's change [1] (r_y, r_z) or of a curvature vector's [1/m]."""
+    """A table of every probe per level: u [mm] of a position (r, mean), x and the components it
+    moves along (``moved_components``), the three components of a direction vector's change [1]
+    (r_y, r_z) or of a curvature vector's [1/m]."""
     steps = summary["steps"]
     names = sorted({p for st in steps for p in st.get("probes", {})})
     if not names:                       # a run without probes: no table (not an empty one)
@@ -38,15 +51,18 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
         vector = vectors.get(name, "r")
         position = PROBE_UNITS.get(vector, "m") == "m"
         scale = 1e3 if position else 1.0
-        heads.append(f"{name} {SHOWN.get(vector, 'u')}_x [mm]" if position
-                     else f"{name} Δ{vector} (x, y, z) [{PROBE_UNITS[vector]}]")
+        shown = moved_components(steps, name) if position else [0, 1, 2]
+        if position:
+            heads += [f"{name} {SHOWN.get(vector, 'u')}_{'xyz'[k]} [mm]" for k in shown]
+        else:
+            heads.append(f"{name} Δ{vector} (x, y, z) [{PROBE_UNITS[vector]}]")
 
-        def cell(st, name=name, scale=scale, position=position):
+        def value(st, k, name=name, scale=scale, position=position):
             if name not in st.get("probes", {}):
                 return ""
             d = np.asarray(st["probes"][name]["displacement"], dtype=float) * scale
-            return f"{d[0]:.5f}" if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
-        cells.append(cell)
+            return f"{d[k]:.5f}" if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
+        cells += [lambda st, k=k, value=value: value(st, k) for k in (shown if position else [0])]
     lines = [level_head(steps) + " | ".join(heads) + " |", level_rule(steps) + "---:|" * len(heads)]
     lines += [f"| {level_cell(st)} | " + " | ".join(c(st) for c in cells) + " |" for st in steps]
     return lines

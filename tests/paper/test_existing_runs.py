@@ -339,3 +339,20 @@ def test_a_report_that_cannot_be_written_is_a_one_line_error(tmp_path):
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert p.stderr.strip() == f"ancf-report: output error: {tmp_path / 'rep' / 'report.md'}: Is a directory", p.stderr
+
+
+def test_a_probe_table_shows_the_components_a_run_moves(tmp_path):
+    """The cantilever's tip moves 40 mm down (z) and 10 mm back (x): the report's table showed
+    u_x alone.  Now x and every component that moves (here z; y stays at rounding) are shown."""
+    raw = load_raw("bending_neohookean.yaml")
+    p = solve_cli(write_config(raw, tmp_path / "bend.yaml"), extra=["--output-dir", str(tmp_path / "bend"), "--quiet"])
+    assert p.returncode == 0, p.stderr
+    text = _report([str(tmp_path / "bend")], tmp_path / "rep")
+    head = "| load factor | tip u_x [mm] | tip u_z [mm] |"
+    assert head in text and "tip u_y" not in text
+    last = [line for line in text.split(head)[1].splitlines() if line.startswith("| 1 | ")][0].split("|")
+    import json
+    with open(tmp_path / "bend" / "summary.json") as fh:
+        u = json.load(fh)["steps"][-1]["probes"]["tip"]["displacement"]
+    assert abs(float(last[2]) - 1e3 * u[0]) < 1e-5 and abs(float(last[3]) - 1e3 * u[2]) < 1e-5
+    assert float(last[3]) > 30.0

@@ -27,11 +27,13 @@ def history_series(summary: dict) -> dict:
 
 
 def plot_history(summary: dict, out_png: str, title: str = "") -> str:
-    """Three panels over the frames: muscle forces [N], strains [%], end differences [mm]."""
+    """Three panels over the frames: muscle forces [N], strains [%], end differences [mm]; the
+    last only where the run has neighbours to differ (a history without contact drew it empty)."""
     d = history_series(summary)
-    fig = Figure(figsize=(7.0, 7.5))
+    panels = 3 if d["difference"] else 2
+    fig = Figure(figsize=(7.0, 2.5 * panels))
     FigureCanvasAgg(fig)
-    axes = fig.subplots(3, 1, sharex=True)
+    axes = list(fig.subplots(panels, 1, sharex=True))
     for k, (name, f) in enumerate(d["force"].items()):
         c = COLOURS[k % len(COLOURS)]
         axes[0].plot(d["time"], f, color=c, label=name.replace("_", " "))
@@ -40,11 +42,11 @@ def plot_history(summary: dict, out_png: str, title: str = "") -> str:
         axes[2].plot(d["time"], 1e3 * v, color=COLOURS[(k + 3) % len(COLOURS)], label=pair.replace("_", " "))
     axes[0].set_ylabel("muscle force [N]")
     axes[1].set_ylabel("subtendon strain [%]\n(end-section mean)")
-    axes[2].set_ylabel("end displacement\ndifference [mm]")
-    axes[2].set_xlabel("time [s]" if d["timed"] else "load factor")
-    axes[0].legend(fontsize=8, frameon=False)
     if d["difference"]:
+        axes[2].set_ylabel("end displacement\ndifference [mm]")
         axes[2].legend(fontsize=7, frameon=False)
+    axes[-1].set_xlabel("time [s]" if d["timed"] else "load factor")
+    axes[0].legend(fontsize=8, frameon=False)
     for ax in axes:
         ax.grid(alpha=0.3)
     if title:

@@ -218,3 +218,20 @@ def test_the_interface_study_chart_gives_every_law_its_own_style(tmp_path):
     runs = [{"loading": "soleus", "law": label, "elements": 4, "status": "completed", "steps": steps} for label in labels]
     out = plot_law_differences(runs, labels, ["soleus"], "a|b", 4, str(tmp_path / "laws.png"))
     assert os.path.getsize(out) > 10_000
+
+
+def test_a_history_without_neighbours_draws_no_empty_difference_panel(tmp_path):
+    """A load history of one beam (no contact, no displacement_differences) drew a third panel,
+    'end displacement difference [mm]', with nothing in it; it now has the force and strain
+    panels alone, and a run with a pair keeps all three."""
+    from ancf_petsc.viz.history import plot_history
+
+    def summary(diff):
+        steps = [{"load_factor": k, "frame": k, "time": 0.1 * k,
+                  "subtendons": {"bar": {"end_force": [10.0 * k, 0, 0], "strain": 0.01 * k}},
+                  **({"displacement_differences": {"bar_other": {"end": 1e-4 * k}}} if diff else {})}
+                 for k in (1, 2, 3)]
+        return {"steps": steps}
+    heights = [mpimg.imread(plot_history(summary(diff), str(tmp_path / f"h{diff}.png"))).shape[0]
+               for diff in (False, True)]
+    assert heights[0] < 0.75 * heights[1]

@@ -146,20 +146,21 @@ def find_interfaces(model, spec) -> list[Interface]:
         # named by the first beam's curve, whichever carries the points (two curves: curve_b)
         name = f"{(c if a is first or cb is None else cb).name} ({first.name}|{second.name})"
         if name in entry and k is not None:
-            _listed_twice(name, entry[name], k, a, b, c)
+            _listed_twice(name, entry[name], k, a, b, c, cb)
         entry[name] = k
         out.append(Interface(name, a, b, c, fb, cb))
     return out
 
 
-def _listed_twice(name: str, before: int, k: int, a, b, curve) -> None:
+def _listed_twice(name: str, before: int, k: int, a, b, curve, curve_b=None) -> None:
     """Refuse an interface listed twice in ``contact.interfaces`` (entries ``before`` and ``k``,
     in either order of a and b): its constraints would repeat (sliding: multipliers not unique,
     the tendon at 2 elements failed at 312 of 400 N with points on both sides) and its outputs,
     keyed by name, would keep one copy's arbitrary share of the force."""
     raise ContactSetupError(
         f"interface {name} is listed twice (also contact.interfaces[{before}]): list each shared curve of two beams "
-        f"once, in either order of a and b; got {{a: {a.name}, b: {b.name}, curve: {curve.name}}}", k)
+        f"once, in either order of a and b; got {{a: {a.name}, b: {b.name}, curve: {curve.name}"
+        + ("" if curve_b is None else f", curve_b: {curve_b.name}") + "}", k)
 
 
 def supported_ends(model, interfaces, rule: str = "merge", held_slots: int | None = None) -> np.ndarray:

@@ -162,3 +162,18 @@ def test_two_curves_name_the_interface_by_the_first_beams_curve_on_either_side()
         spec = parse_config(raw, base_dir=CONFIGS)
         names.append([(i.name, i.a.name) for i in find_interfaces(build_model(spec), spec.contact)])
     assert names == [[("interface (base|slider)", "slider")], [("interface (base|slider)", "base")]]
+
+
+def test_an_interface_of_two_curves_listed_twice_names_both_curves():
+    """The strips' interface of two curves listed from each side was refused naming the entry's
+    curve alone ('got {a: base, b: slider, curve: interface}'), which does not say which entry it
+    is of two that differ in curve_b; it now gives curve_b too."""
+    raw = load_raw("friction_pressed_strips.yaml")
+    raw["beams"][1]["section"]["curves"][0]["name"] = "face"
+    raw["contact"]["interfaces"] = [{"a": "slider", "b": "base", "curve": "face", "curve_b": "interface"},
+                                    {"a": "base", "b": "slider", "curve": "interface", "curve_b": "face"}]
+    spec = parse_config(raw, base_dir=CONFIGS)
+    with pytest.raises(Exception) as exc:
+        find_interfaces(build_model(spec), spec.contact)
+    assert "is listed twice" in str(exc.value)
+    assert "got {a: base, b: slider, curve: interface, curve_b: face}" in str(exc.value)

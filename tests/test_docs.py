@@ -307,3 +307,23 @@ def test_paper_refinement_numbers_are_what_the_psi45_column_gives(tmp_path):
                 raw["loads"] = [{"beam": "soleus", "node": "last", "traction_force": [1.0, 0.0, 0.0]}]
             got.append(f"{probe(run_inline(raw, tmp_path / f'{n}_{change}'), 'soleus')[0] * 1e3:.3f}")
         assert list(stated.groups()) == got, f"docs/paper.md says {stated.groups()}, the runs give {got}"
+
+
+def test_geometry_guide_merge_warnings_are_what_the_mask_example_gives(tmp_path):
+    """docs/geometry.md: the mask example at ``merge_tolerance: 2.0e-5`` prints exactly the
+    warnings the page shows (``ancf-solve --check``, no solve)."""
+    from helpers import solve_cli
+    with open(os.path.join(DOCS, "geometry.md"), encoding="utf-8") as fh:
+        text = fh.read()
+    block = re.search(r"The\s+header says so, with the fix.*?```\n(.*?)```", text, re.S).group(1)
+    stated = [ln.strip() for ln in block.splitlines() if ln.strip()]
+    with open(os.path.join(ROOT, "configs", "geometry_mask_demo.yaml"), encoding="utf-8") as fh:
+        cfg = fh.read()
+    geo = os.path.join(ROOT, "configs", "data", "demo_tendon_geometry.yaml")
+    cfg = cfg.replace("file: data/demo_tendon_geometry.yaml", f"file: {geo}\n    merge_tolerance: 2.0e-5")
+    (tmp_path / "mask.yaml").write_text(cfg)
+    p = solve_cli(str(tmp_path / "mask.yaml"), timeout=120,
+                  extra=["--check", "--output", str(tmp_path / "g.png")])
+    assert p.returncode == 0, p.stderr
+    got = [ln.split("]", 1)[1].strip() for ln in p.stdout.splitlines() if "warning:" in ln]
+    assert got == stated, f"docs/geometry.md shows {stated}, --check prints {got}"

@@ -81,7 +81,7 @@ def _main(argv: list[str]) -> int:
                      + ("the runs at once here are --jobs" if given[0] == "throttle" else
                         "add --slurm, or leave it out"))
 
-    from ancf_petsc.workflows.sweep import (FAILED_STATUSES, SweepError, collect, expand, is_done,
+    from ancf_petsc.workflows.sweep import (FAILED_STATUSES, SweepError, check_values, collect, expand, is_done,
         load_sweep, run_sweep, slurm_spec, write_slurm)
 
     say = printer()                       # ancf-sweep ... --dry-run | head: no BrokenPipeError
@@ -96,10 +96,12 @@ def _main(argv: list[str]) -> int:
                 except SweepError as exc:
                     raise SweepError("--" + key.replace("_", "-"), exc.message) from None
         sweep = load_sweep(args.sweep).with_overrides(jobs=args.jobs, ranks=args.ranks, **overrides)
+        runs = expand(sweep)
+        if not args.collect:              # a sweep already run is collected as it ran
+            check_values(sweep, runs)
     except SweepError as exc:
         say_stderr(f"ancf-sweep: {args.sweep}: {exc}")
         return 2
-    runs = expand(sweep)
     say(f"[sweep] {sweep.name}: {len(runs)} runs ({sweep.shape()}) of {sweep.base}; "
         f"{sweep.ranks} rank(s) per run, {sweep.jobs} at a time; output {sweep.output}")
 

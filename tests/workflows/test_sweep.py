@@ -127,9 +127,11 @@ def test_dry_run_lists_and_writes_nothing(tmp_path):
 
 
 def test_failures_are_classified_and_listed(tmp_path):
-    """list mode: a good run, a config error, a run whose first load level diverges, a timeout."""
+    """list mode: a good run, a config error the model's build finds (a load on a held component:
+    a swept value the config refuses is refused with the sweep, below), a run whose first load
+    level diverges, a timeout."""
     body = {"mode": "list",
-            "parameters": {"beams[0].elements": [1, 0, 1],
+            "parameters": {"boundary_conditions[0].node": ["first", "last", "first"],
                            "loads[0].traction_force[0]": [45.0, 45.0, 4.5e6],
                            "solver.max_cutbacks": [2, 2, 2],        # not in the base: created
                            "output.vtk": [False, False, False]},
@@ -138,7 +140,8 @@ def test_failures_are_classified_and_listed(tmp_path):
     rc, out, _ = run_main([path])
     assert rc == 1
     assert "3 runs: 1 completed, 1 failed, 1 config_error" in out
-    assert "config_error: config error: beams[0].elements: must be >= 1; got 0" in out
+    held = "config error: loads[0].traction_force: bar node last: r.x is held by boundary_conditions[0]"
+    assert f"config_error: {held}" in out
     rows = read_csv(tmp_path / "sweeps" / "sweep" / "results.csv")
     assert [r["status"] for r in rows] == ["completed", "config_error", "failed"]
     assert "DIVERGED" in rows[2]["reason"] and "could not reach load factor 0.1" in rows[2]["reason"]
@@ -149,8 +152,8 @@ def test_failures_are_classified_and_listed(tmp_path):
     with open(tmp_path / "sweeps" / "sweep" / "failed.txt") as fh:
         failed = fh.read().splitlines()
     assert len(failed) == 2
-    assert failed[0].split("\t") == [rows[1]["run_id"], "config_error",
-                                     "config error: beams[0].elements: must be >= 1; got 0"]
+    assert failed[0].split("\t")[:2] == [rows[1]["run_id"], "config_error"]
+    assert failed[0].split("\t")[2].startswith(held)
     assert failed[1].startswith(rows[2]["run_id"] + "\tfailed\tcould not reach load factor")
 
     # a timeout kills the run (ancf-solve needs ~0.5 s just to import)
@@ -727,3 +730,18 @@ def test_a_run_that_completed_as_its_time_ran_out_is_recorded_completed(tmp_path
     (tmp_path / "summary.json").write_text(json.dumps({"status": "interrupted", "steps": [{"load_factor": 300.0}]}))
     assert classify(str(tmp_path), 124, timed_out=True, timeout=2.0) == (
         "timeout", "timed out after 2 s; last converged load factor 300")
+
+
+@pytest.mark.parametrize("flags", [[], ["--dry-run"], ["--slurm"]])
+def test_a_swept_value_the_config_refuses_is_refused_with_the_sweep(tmp_path, flags):
+    """beams[0].elements: [1, 0] ran the good run and recorded the other 'config_error' when its
+    turn came (on a cluster: after the array was queued).  The sweep is now refused at once, one
+    line naming the parameter, the run and the config's own error, exit 2; nothing is written."""
+    path = write_sweep(str(tmp_path), {"mode": "grid", "output": "bad",
+                                       "parameters": {"beams[0].elements": [1, 0],
+                                                      "beams[0].material.mu": [1e6, 2e6]}})
+    rc, out, err = run_main([path, *flags])
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "parameters.beams[0].elements: run run_0002__elements=0__mu=1e+06" in err
+    assert err.rstrip().endswith("is no valid config: beams[0].elements: must be >= 1; got 0"), err
+    assert not (tmp_path / "bad").exists()

@@ -36,13 +36,13 @@ from .base import (DONE_STATUSES, FAILED_STATUSES, FINAL_STATUSES, STATUS_ORDER,
                    parse_key_path, set_key_path)
 from .collect import Collection, RunState, collect, run_state
 from .execute import Outcome, classify, execute_run, finish_slurm_task
-from .expand import config_text, expand, format_value, is_done, prepare_run, run_config
+from .expand import check_values, config_text, expand, format_value, is_done, prepare_run, run_config
 from .runner import SweepReport, run_sweep
 from .slurm import write_slurm
 from .spec import Parameter, RunSpec, Sweep, load_sweep, slurm_spec
 
 __all__ = ["DONE_STATUSES", "FAILED_STATUSES", "FINAL_STATUSES", "STATUS_ORDER", "Collection", "Outcome",
            "Parameter", "RunSpec", "RunState", "Sweep", "SweepError", "SweepReport", "classify", "collect",
-           "config_text", "execute_run", "expand", "finish_slurm_task", "format_key_path", "format_value",
+           "check_values", "config_text", "execute_run", "expand", "finish_slurm_task", "format_key_path", "format_value",
            "is_done", "load_sweep", "parse_key_path", "prepare_run", "run_config", "run_state", "run_sweep",
            "set_key_path", "slurm_spec", "write_slurm"]

@@ -15,7 +15,7 @@ import yaml
 
 from ... import yamlio
 from ...io.files import atomic_write, remove_quietly
-from .base import DONE_STATUSES, read_json, read_text, set_key_path
+from .base import DONE_STATUSES, SweepError, read_json, read_text, set_key_path
 from .spec import RunSpec, Sweep
 
 
@@ -63,6 +63,31 @@ def expand(sweep: Sweep) -> list[RunSpec]:
             run_id = run_id[:140].rstrip("_") + "__" + digest[:8]
         runs.append(RunSpec(i, run_id, params, os.path.join(sweep.output, run_id)))
     return runs
+
+
+def check_values(sweep: Sweep, runs: list[RunSpec]) -> None:
+    """Refuse a swept value the model config refuses (``elements: 0``, ``mu: -1``), before any run
+    starts: such a value was found only when its runs ran, each a ``config_error`` after the others
+    had taken their time (on a cluster, after the array was queued).  Each value of each parameter
+    is parsed once, in the first run that has it (config.parse, no model built)."""
+    from ...config.parse import parse_config
+    from ...errors import InputError
+    seen: set = set()
+    for run in runs:
+        new = {(p.path, repr(run.params[p.path])) for p in sweep.parameters} - seen
+        if not new:
+            continue
+        seen |= new
+        raw = copy.deepcopy(sweep.base_raw)
+        for p in sweep.parameters:
+            set_key_path(raw, p.tokens, run.params[p.path])
+        try:
+            parse_config(raw, base_dir=sweep.base_dir, source=f"run {run.run_id}")
+        except InputError as exc:
+            swept = next((p.path for p in sweep.parameters if exc.path.startswith(p.path)), None)
+            values = ", ".join(f"{k}={v!r}" for k, v in run.params.items())
+            raise SweepError(f"parameters.{swept}" if swept else "parameters",
+                             f"run {run.run_id} ({values}) is no valid config: {exc}") from None
 
 
 def run_config(sweep: Sweep, run: RunSpec) -> dict:

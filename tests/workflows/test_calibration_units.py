@@ -219,3 +219,21 @@ def test_verdicts_follow_the_stated_rule():
     assert CHI2_95 == pytest.approx(3.8415, abs=1e-4)
     failed = close_profile(Profile([1.0, 1.5, 3.0], [1e6, 0.5, 9.0], ["failed", "completed", "completed"]), 2.0)
     assert failed.closed == (False, True) and failed.interval[0] == 1.5     # a failure proves nothing
+
+
+@pytest.mark.parametrize("unit,bounds,start,si", [("MPa", [0.2, 10.0], 2.0, "2e+06"),
+                                                   ("N/mm", [0.2, 10.0], 2.0, "2000")])
+def test_a_prefixed_unit_is_refused_not_taken_as_a_label(tmp_path, unit, bounds, start, si):
+    # bounds in MPa went to the model as Pa (mu = 2 Pa: no level reached, exit 0), or SI values got
+    # an MPa label; the values are the model config's, in SI
+    path = _edit(bar_case(str(tmp_path)), lambda d: d["parameters"][0].update(unit=unit, bounds=bounds,
+                                                                              start=start))
+    with pytest.raises(CalibrationError) as info:
+        load_fit(path)
+    assert info.value.path == "parameters[0].unit" and si in info.value.message, info.value.message
+
+
+@pytest.mark.parametrize("unit", ["Pa", "m", "N/m", "kg", "1", ""])
+def test_an_si_unit_labels_the_parameter(tmp_path, unit):
+    spec = load_fit(_edit(bar_case(str(tmp_path)), lambda d: d["parameters"][0].update(unit=unit)))
+    assert spec.parameters[0].unit == unit and spec.parameters[0].start == 2.0e6

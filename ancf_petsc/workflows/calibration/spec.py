@@ -168,7 +168,27 @@ def _parameter(item: Any, i: int, raw: dict) -> Parameter:
            "(required with keys)")
     unit = item.get("unit", "")
     expect(isinstance(unit, str), f"{where}.unit", "expected a unit name like Pa")
+    _si_unit(unit, f"{where}.unit", start)
     return Parameter(name, keys, lo, hi, start, log, factor, base, unit)
+
+
+_SI_BASES = ("Pa", "N", "m", "J", "W", "s", "g", "rad")
+_PREFIX = {"k": 1e3, "M": 1e6, "G": 1e9, "T": 1e12, "c": 1e-2, "m": 1e-3, "u": 1e-6, "\u00b5": 1e-6,
+           "n": 1e-9}
+
+
+def _si_unit(unit: str, path: str, start: float) -> None:
+    """``unit`` only names the unit of the values, which are the model config's (SI): a prefixed
+    unit (MPa, mm, N/mm) would label Pa as MPa, or mean bounds the model reads in Pa."""
+    factor, si = 1.0, unit
+    for k, part in enumerate(unit.strip().split("/")):
+        for word in re.split(r"[*\u00b7 ]", part):
+            stem, power = re.fullmatch(r"(.*?)\^?(\d*)", word).groups()
+            if stem[:1] in _PREFIX and stem[1:] in _SI_BASES and stem != "kg":
+                factor *= _PREFIX[stem[0]] ** (int(power or 1) * (-1 if k else 1))
+                si = si.replace(stem, stem[1:])
+    expect(factor == 1.0, path, f"{unit!r}: bounds and start are values of the model config, in SI "
+           f"units; give them in {si} ({start:g} {unit} = {start * factor:g} {si}) and unit: {si}")
 
 
 def _parameters(doc: dict, raw: dict, model_dir: str) -> list[Parameter]:

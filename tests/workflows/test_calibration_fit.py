@@ -183,3 +183,23 @@ def test_a_sample_past_a_gap_is_no_warm_start(tmp_path, monkeypatch):
     finally:
         ev.close()
     assert s.ok and s.passed_over and len(ev.library) == 0
+
+
+def test_a_linear_parameter_with_wide_bounds_is_differenced_on_its_own_size(tmp_path):
+    """mu linear in [0.2 MPa, 100 GPa]: its finite-difference step was fd_step x the upper bound
+    (1 MPa on mu = 1.2 MPa), so on exact data the fit stopped at 1.2059 MPa, "converged", with a
+    standard error of 3.2 kPa; central differences of the solves (step 1e-4 of each value) give 1.55."""
+    wide = dict(MU, bounds=[2.0e5, 1.0e11], log=False)
+    spec = load_fit(bar_case(str(tmp_path), parameters=(wide, K)))
+    exact = exact_data(spec, TRUE)
+    res = run_calibration(with_data(spec, exact, str(tmp_path / "out")), fresh=True, say=lambda *_: None)
+    assert np.array([p.value for p in res.parameters]) == pytest.approx(TRUE, rel=1e-6)
+
+    def weighted(p):
+        out = exact_data(spec, p)
+        return np.concatenate([out[d.name] / d.sigmas for d in spec.data])
+    cols = [(weighted(np.where(np.arange(2) == j, 1.0001, 1.0) * TRUE)
+             - weighted(np.where(np.arange(2) == j, 0.9999, 1.0) * TRUE)) / (2e-4 * TRUE[j]) for j in range(2)]
+    J = np.array(cols).T
+    se = np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
+    assert [p.se for p in res.parameters] == pytest.approx(se, rel=0.02)

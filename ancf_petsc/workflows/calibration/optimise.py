@@ -2,7 +2,8 @@
 fit, ``differential_evolution`` for a global search, multi-start local fits.
 
 The local fit's Jacobian is by forward differences of the solves, one step ``fd_step`` along each
-coordinate u (backwards at an upper bound), its n samples evaluated as one batch, i.e. in
+coordinate u (a linear one's: ``fd_step`` of the value, ``Parameter.fd_step_u``; backwards at an
+upper bound), its n samples evaluated as one batch, i.e. in
 parallel over the ranks.  With more than one rank a trial point is evaluated together with its n
 finite-difference neighbours (speculatively: when the step is accepted, least_squares asks for
 exactly those), so a Newton-like iteration costs one batch instead of two.  A neighbour that fails
@@ -44,6 +45,7 @@ class _Problem:
         self.ev, self.spec, self.phase, self.budget = ev, spec, phase, budget
         self.u0 = np.asarray(u0, dtype=float)
         self.free = list(free)
+        self.params = [spec.parameters[j] for j in self.free]
         lo, hi = bounds_u(spec.parameters)
         self.lo, self.hi = lo[self.free], hi[self.free]
         self.h = spec.optimizer.fd_step
@@ -64,7 +66,8 @@ class _Problem:
         return out
 
     def steps(self, x) -> np.ndarray:
-        return np.where(x + self.h <= self.hi, self.h, -self.h)
+        h = np.array([par.fd_step_u(xi, self.h) for par, xi in zip(self.params, x)])
+        return np.where(x + h <= self.hi, h, -h)
 
     def neighbours(self, x, steps) -> list:
         return [x + s * e for s, e in zip(steps, np.eye(len(x)))]

@@ -43,6 +43,14 @@ class Parameter:
     def from_u(self, u: float) -> float:
         return pow10(u) if self.log else u * self.scale
 
+    def fd_step_u(self, u: float, h: float) -> float:
+        """The finite-difference step in u at u: h (log-scaled: relative in p), else h times the
+        size of p (near 0: its smallest nonzero start or bound) in u, never h times the scale."""
+        if self.log:
+            return h
+        typical = min((abs(v) for v in (self.start, self.lower, self.upper) if v), default=1.0)
+        return h * max(abs(self.from_u(u)), typical) / self.scale
+
     @property
     def bounds_u(self) -> tuple[float, float]:
         return self.to_u(self.lower), self.to_u(self.upper)

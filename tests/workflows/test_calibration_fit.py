@@ -203,3 +203,17 @@ def test_a_linear_parameter_with_wide_bounds_is_differenced_on_its_own_size(tmp_
     J = np.array(cols).T
     se = np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
     assert [p.se for p in res.parameters] == pytest.approx(se, rel=0.02)
+
+
+def test_differential_evolution_counts_parameter_sets_not_batches(tmp_path):
+    """scipy counts a vectorized call (a generation: popsize x parameters sets) as one evaluation:
+    the log said '(cost ..., 3 samples)' after 3 batches of 5 solved sets (15)."""
+    spec = load_fit(bar_case(str(tmp_path), optimizer={"method": "differential_evolution", "popsize": 2,
+                                                       "generations": 2, "polish": False},
+                             identifiability={"profiles": False}))
+    said = []
+    res = run_calibration(spec, fresh=True, say=said.append)
+    batches = [int(m.split(": ")[1].split()[0]) for m in said if "differential evolution batch" in m]
+    line = next(m for m in said if m.startswith("[fit] differential evolution:"))
+    assert len(batches) == 3 and f"{sum(batches)} samples)" in line, (batches, line)
+    assert res.fit.samples == sum(batches) + 1          # and the best one solved again

@@ -126,11 +126,12 @@ def global_fit(ev: Evaluator, spec: FitSpec, say=lambda *_: None) -> LocalFit:
     opt = spec.optimizer
     params = spec.parameters
     lo, hi = bounds_u(params)
-    generation = [0]
+    generation, asked = [0], [0]           # batches; parameter sets (scipy counts a batch as 1)
 
     def costs(X: np.ndarray) -> np.ndarray:
         out = np.array([s.cost for s in ev([X[:, k] for k in range(X.shape[1])], "de")])
         generation[0] += 1
+        asked[0] += X.shape[1]
         say(f"[fit] differential evolution batch {generation[0]}: {X.shape[1]} samples, "
             f"best cost {out.min():.6g}")
         return out
@@ -139,8 +140,8 @@ def global_fit(ev: Evaluator, spec: FitSpec, say=lambda *_: None) -> LocalFit:
                                  popsize=opt.popsize, maxiter=opt.generations, seed=opt.seed,
                                  polish=False, init="latinhypercube",
                                  x0=to_u(params, [p.start for p in params]))
-    say(f"[fit] differential evolution: {res.message.strip()} (cost {res.fun:.6g}, {res.nfev} samples)")
+    say(f"[fit] differential evolution: {res.message.strip()} (cost {res.fun:.6g}, {asked[0]} samples)")
     if opt.polish:
         return local_fit(ev, spec, res.x, "fit")
     best = ev([res.x], "de")[0]
-    return LocalFit(np.asarray(res.x), best, None, "converged", str(res.message), int(res.nfev))
+    return LocalFit(np.asarray(res.x), best, None, "converged", str(res.message), asked[0] + 1)

@@ -132,6 +132,33 @@ def solved_config(tmp_path_factory, name: str, timeout: float = 300):
     return out
 
 
+def paper_column(name: str = "achilles_type3_psi45.yaml") -> dict:
+    """A shipped tendon config whose sections file is named by its absolute path (the config is
+    written elsewhere, e.g. under tmp_path)."""
+    raw = load_raw(name)
+    for b in raw["beams"]:
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    return raw
+
+
+def solved_run(raw: dict, tmp_path, name: str = "run", returncode: int = 0) -> str:
+    """``raw`` written to tmp_path/<name>.yaml and solved by ancf-solve into tmp_path/<name>
+    (quiet), its exit code checked; the run directory."""
+    run = str(tmp_path / name)
+    p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), extra=["--output-dir", run, "--quiet"])
+    assert p.returncode == returncode, p.stderr
+    return run
+
+
+def report_existing(runs, out) -> str:
+    """``ancf-report --existing RUNS --out OUT`` (exit 0 checked): the report.md it wrote."""
+    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", *runs, "--out", str(out)],
+                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
+    assert p.returncode == 0, p.stderr
+    with open(os.path.join(out, "report.md")) as fh:
+        return fh.read()
+
+
 def read_summary(out_dir) -> dict:
     with open(os.path.join(out_dir, "summary.json")) as fh:
         return json.load(fh)

@@ -1,26 +1,17 @@
 """``ancf-report --existing`` on a paper column whose config asked for some of Table 1's levels
 only: the others were not asked, not 'not reached' (which says the run stopped before them)."""
 import os
-import subprocess
 
-from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, solve_cli, write_config
+from helpers import paper_column, report_existing, solved_run
 
 
 def test_levels_a_completed_column_did_not_ask_for_are_not_called_not_reached(tmp_path):
     """The paper's tendon (psi 45) solved at 10 and 400 N only, completed: Table 1 said 'not
     reached' at the 11 levels between and 'ψ = 45°: not reached 20, ..., 300 N (the run ended
     completed)'; now 'not asked'.  A column that failed keeps 'not reached' (test_achilles.py)."""
-    raw = load_raw("achilles_type3_psi45.yaml")
-    for b in raw["beams"]:
-        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw = paper_column()
     raw["steps"], raw["output"] = [10.0, 400.0], {"vtk": False}
-    run = str(tmp_path / "run")
-    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", run, "--quiet"])
-    assert p.returncode == 0, p.stderr
-    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", run, "--out", str(tmp_path / "rep")],
-                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
-    assert p.returncode == 0, p.stderr
-    text = open(tmp_path / "rep" / "report.md").read()
+    text = report_existing([solved_run(raw, tmp_path)], tmp_path / "rep")
     assert "| not reached |" not in text and "ψ = 45°: not reached" not in text
     assert "ψ = 45°: not asked 20, 30, 40, 45, 60, 80, 90, 100, 150, 200, 300 N (not among the run's steps)" in text
     assert "| 100 | 1.481 | not asked |  |" in text and "| 400 | 6.187 | 6.205 | +0.28 % |" in text
@@ -44,15 +35,8 @@ def test_a_column_that_reached_no_level_draws_no_empty_slip_chart(tmp_path):
     """The paper's column failing at its first level (a Newton budget of 2): ancf-report drew
     slip_psi45.png with no level on it, axes and the title 'the soleus slides past the
     gastrocnemius subtendons' only."""
-    raw = load_raw("achilles_type3_psi45.yaml")
-    for b in raw["beams"]:
-        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw = paper_column()
     raw["solver"], raw["output"] = {"max_newton_iterations": 2}, {"vtk": False}
-    run = str(tmp_path / "run")
-    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", run, "--quiet"])
-    assert p.returncode == 3, p.stderr
-    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", run, "--out", str(tmp_path / "rep")],
-                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
-    assert p.returncode == 0, p.stderr
+    text = report_existing([solved_run(raw, tmp_path, returncode=3)], tmp_path / "rep")
     assert not os.path.exists(tmp_path / "rep" / "slip_psi45.png")
-    assert "ψ = 45°: not reached 10, 20" in open(tmp_path / "rep" / "report.md").read()
+    assert "ψ = 45°: not reached 10, 20" in text

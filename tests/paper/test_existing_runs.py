@@ -5,14 +5,7 @@ reaction, the first − second differences, a force chart and slip and pressure 
 import os
 import subprocess
 
-from helpers import MPI_ENV, ROOT, VENV_BIN, load_raw, solve_cli, write_config
-
-
-def _report(runs: list[str], out) -> str:
-    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", *runs, "--out", str(out)],
-                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
-    assert p.returncode == 0, p.stderr
-    return open(os.path.join(out, "report.md")).read()
+from helpers import MPI_ENV, ROOT, VENV_BIN, load_raw, report_existing, solve_cli, write_config
 
 
 def test_existing_runs_of_other_models_say_what_they_hold(tmp_path):
@@ -24,7 +17,7 @@ def test_existing_runs_of_other_models_say_what_they_hold(tmp_path):
         p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), extra=["--output-dir", str(tmp_path / name), "--quiet"])
         assert p.returncode == 0, p.stderr
         runs.append(str(tmp_path / name))
-    text = _report(runs, tmp_path / "rep")
+    text = report_existing(runs, tmp_path / "rep")
     title = text.splitlines()[0]
     assert "reproduction" not in title and "pretwisted_bar" in title and "not the paper's model" in title
     # the r_y probe: its change (x, y, z), dimensionless; before: "tip_r_y u_x [mm]" 10.95
@@ -62,7 +55,7 @@ def test_a_history_run_reports_the_load_of_each_frame(tmp_path):
     raw["output"] = {"vtk": False}
     p = solve_cli(write_config(raw, tmp_path / "h.yaml"), extra=["--output-dir", str(tmp_path / "h"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "h")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "h")], tmp_path / "rep")
     head = "| frame | time [s] | applied load along x [N] |"
     rows = [line.split("|") for line in text.split(head)[1].splitlines()[2:5]]
     assert [(int(r[1]), float(r[2]), float(r[3])) for r in rows] == [(1, 0.0, 40.0), (2, 0.1, 120.0), (3, 0.2, 20.0)]
@@ -90,7 +83,7 @@ def test_a_killed_run_is_reported_with_the_levels_results_h5_holds(tmp_path):
         s.pop(key, None)
     json.dump(s, open(path, "w"))
     assert len(read_results(str(tmp_path / "bar")).summary["steps"]) == 3
-    text = _report([str(tmp_path / "bar")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "bar")], tmp_path / "rep")
     assert "running (no final status: still running, or killed)" in text and "(: )" not in text
     row = next(line for line in text.splitlines() if line.startswith(f"| {tmp_path / 'bar'} |"))
     assert row.rstrip().endswith("| 3 |"), row
@@ -142,7 +135,7 @@ def test_two_runs_of_one_model_keep_their_own_figures(tmp_path):
     report linked one file twice; each run now has its own."""
     strips = load_raw("friction_pressed_strips.yaml")
     strips["steps"] = [1.0, 1.5, 2.0]
-    text = _report(_solved_twice(strips, tmp_path, "s"), tmp_path / "rep")
+    text = report_existing(_solved_twice(strips, tmp_path, "s"), tmp_path / "rep")
     for k in (1, 2):
         png = f"friction_pressed_strips_{k}_force.png"
         assert os.path.getsize(tmp_path / "rep" / png) > 10_000 and f"]({png})" in text
@@ -154,7 +147,7 @@ def test_a_second_run_at_one_pretwist_is_named_not_dropped_silently(tmp_path):
     raw = load_raw("achilles_type3_psi45.yaml")
     for b in raw["beams"]:
         b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
-    text = _report(_solved_twice(raw, tmp_path, "a"), tmp_path / "rep")
+    text = report_existing(_solved_twice(raw, tmp_path, "a"), tmp_path / "rep")
     assert f"{tmp_path / 'a1'} (ψ = 45°: {tmp_path / 'a2'} is the column)" in text, text[:3000]
 
 
@@ -193,10 +186,10 @@ def test_the_force_column_is_the_moved_supports_reaction_or_the_applied_load(tmp
         p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"),
                       extra=["--output-dir", str(tmp_path / name), "--quiet"])
         assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "grip")], tmp_path / "rep1")
+    text = report_existing([str(tmp_path / "grip")], tmp_path / "rep1")
     force = _force_column(text, "| load factor | reaction of slider.0 along x [N] | base − slider [mm] |")
     assert abs(force[1.5] - 0.5 * 0.01) < 1e-3 * 0.005
-    text = _report([str(tmp_path / "held")], tmp_path / "rep2")
+    text = report_existing([str(tmp_path / "held")], tmp_path / "rep2")
     force = _force_column(text, "| load factor | applied load along x [N] | base − slider [mm] |")
     assert force == {1.0: 0.0, 1.5: 0.002, 2.0: 0.004}
 
@@ -210,7 +203,7 @@ def test_a_run_without_probes_has_no_probe_table(tmp_path):
     raw.pop("probes")
     p = solve_cli(write_config(raw, tmp_path / "s.yaml"), extra=["--output-dir", str(tmp_path / "s"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "s")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "s")], tmp_path / "rep")
     assert "| load factor |  |" not in text and "\n|---:|\n" not in text
     assert "| load factor | reaction of grip along x [N] | base − slider [mm] |" in text
 
@@ -224,7 +217,7 @@ def test_a_displacement_controlled_run_without_interfaces_has_a_whole_force_tabl
     raw["boundary_conditions"].append({"beam": "bar", "node": "last", "displacement": {"r": {"x": 0.02}}})
     p = solve_cli(write_config(raw, tmp_path / "g.yaml"), extra=["--output-dir", str(tmp_path / "g"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "g")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "g")], tmp_path / "rep")
     assert "|  |" not in text and "moved against each other" not in text
     assert "| load factor | reaction of bar.2 along x [N] |\n|---:|---:|\n" in text
     force = _force_column(text, "| load factor | reaction of bar.2 along x [N] |")
@@ -239,7 +232,7 @@ def test_the_supports_force_and_moment_at_the_last_level(tmp_path):
     raw["beams"][0]["elements"], raw["steps"], raw["output"] = 4, [1e-3], {"vtk": False}
     p = solve_cli(write_config(raw, tmp_path / "b.yaml"), extra=["--output-dir", str(tmp_path / "b"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "b")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "b")], tmp_path / "rep")
     head = "| support | F_x | F_y | F_z | M_x | M_y | M_z |"
     assert "The supports at the last level (load factor 0.001)" in text and head in text
     row = text.split(head)[1].splitlines()[2].split("|")
@@ -262,7 +255,7 @@ def test_a_run_whose_beams_have_other_element_counts_names_every_one(tmp_path):
     raw["output"] = {"vtk": False}
     p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "c"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "c")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "c")], tmp_path / "rep")
     assert ("its model is not the paper's: soleus (4 → 1), medial_gastrocnemius (4 → 1) and "
             "lateral_gastrocnemius (4 → 1) have other numbers of elements.") in text, text[:2000]
     paper = {"beams/soleus/elements": 4, "beams/medial_gastrocnemius/elements": 4}
@@ -285,7 +278,7 @@ def test_an_accepted_unstable_level_is_marked_in_the_tables(tmp_path):
     raw["output"] = {"vtk": False}
     p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["--output-dir", str(tmp_path / "c"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "c")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "c")], tmp_path / "rep")
     assert "| completed |" in text
     assert text.count("| 50 (unstable: 1 negative tangent eigenvalue(s)) | ") == 2, text[:3000]
     assert "| 10 | " in text
@@ -347,7 +340,7 @@ def test_a_probe_table_shows_the_components_a_run_moves(tmp_path):
     raw = load_raw("bending_neohookean.yaml")
     p = solve_cli(write_config(raw, tmp_path / "bend.yaml"), extra=["--output-dir", str(tmp_path / "bend"), "--quiet"])
     assert p.returncode == 0, p.stderr
-    text = _report([str(tmp_path / "bend")], tmp_path / "rep")
+    text = report_existing([str(tmp_path / "bend")], tmp_path / "rep")
     head = "| load factor | tip u_x [mm] | tip u_z [mm] |"
     assert head in text and "tip u_y" not in text
     last = [line for line in text.split(head)[1].splitlines() if line.startswith("| 1 | ")][0].split("|")

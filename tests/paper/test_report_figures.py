@@ -1,21 +1,8 @@
 """The figures in an ``ancf-report --out`` directory are the report's own: an earlier report's
 figures there, of other runs, read as this one's (``make demo`` says 'plots: report/*.png')."""
 import os
-import subprocess
 
-from helpers import CONFIGS, MPI_ENV, ROOT, VENV_BIN, load_raw, solve_cli, write_config
-
-
-def _solved(raw: dict, tmp_path, name: str) -> str:
-    p = solve_cli(write_config(raw, tmp_path / f"{name}.yaml"), extra=["--output-dir", str(tmp_path / name), "--quiet"])
-    assert p.returncode == 0, p.stderr
-    return str(tmp_path / name)
-
-
-def _report(run: str, out) -> None:
-    p = subprocess.run([os.path.join(VENV_BIN, "ancf-report"), "--existing", run, "--out", str(out)],
-                       capture_output=True, text=True, cwd=ROOT, env=dict(os.environ, **MPI_ENV), timeout=300)
-    assert p.returncode == 0, p.stderr
+from helpers import load_raw, paper_column, report_existing, solved_run
 
 
 def test_a_report_leaves_no_figure_of_an_earlier_report_in_its_directory(tmp_path):
@@ -23,21 +10,20 @@ def test_a_report_leaves_no_figure_of_an_earlier_report_in_its_directory(tmp_pat
     figure) reported into the same --out: the tendon's two figures stayed beside the bar's
     report.md, which names no figure; they are removed now, and a third report of the tendon
     draws them again."""
-    tendon = load_raw("achilles_type3_psi45.yaml")
+    tendon = paper_column()
     for b in tendon["beams"]:
         b["elements"] = 2
-        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
     tendon["steps"], tendon["output"] = [10.0, 20.0], {"vtk": False}
     bar = load_raw("uniaxial_neohookean.yaml")
     bar["steps"] = [0.5, 1.0]
-    runs = [_solved(tendon, tmp_path, "tendon"), _solved(bar, tmp_path, "bar")]
+    runs = [solved_run(tendon, tmp_path, "tendon"), solved_run(bar, tmp_path, "bar")]
     out = tmp_path / "rep"
     figures = {"achilles_type3_psi45_force.png", "achilles_type3_psi45_slip.png"}
-    _report(runs[0], out)
+    report_existing([runs[0]], out)
     assert figures <= set(os.listdir(out))
-    _report(runs[1], out)
+    report_existing([runs[1]], out)
     assert not [f for f in os.listdir(out) if f.endswith(".png")] and "png" not in open(out / "report.md").read()
-    _report(runs[0], out)
+    report_existing([runs[0]], out)
     assert figures <= set(os.listdir(out))
 
 
@@ -63,13 +49,11 @@ def test_a_moved_paper_run_draws_its_own_figures(tmp_path):
     import shutil
     from types import SimpleNamespace
     from ancf_petsc.paper.runs import summary_of
-    raw = load_raw("achilles_type3_psi45.yaml")
-    for b in raw["beams"]:
-        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw = paper_column()
     raw["steps"] = [10.0, 400.0]
-    ran = _solved(raw, tmp_path, "A")
+    ran = solved_run(raw, tmp_path, "A")
     shutil.move(ran, tmp_path / "B")
-    _report(str(tmp_path / "B"), tmp_path / "rep")
+    report_existing([str(tmp_path / "B")], tmp_path / "rep")
     assert {"figure5_psi45.png", "slip_psi45.png", "load_elongation.png"} <= set(os.listdir(tmp_path / "rep"))
     moved = summary_of(SimpleNamespace(run=SimpleNamespace(dir=str(tmp_path / "B"))))
     assert moved["output_dir"] == str(tmp_path / "B") and len(moved["steps"]) == 2

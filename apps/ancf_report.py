@@ -17,7 +17,7 @@ import os
 import signal
 import sys
 
-from apps.cli import Parser, path, positive, printer, say_stderr, started_by_mpirun
+from apps.cli import Parser, launch_status, path, positive, printer, say_stderr, started_by_mpirun
 
 #: the configs shipped beside the command lines (a checkout or an editable install)
 CONFIGS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
@@ -62,7 +62,7 @@ def _main(argv: list[str] | None) -> int:
                  f"anyway): leave out {', '.join(solving)}; got --existing with {', '.join(solving)}")
     args.ranks, args.jobs = args.ranks or 1, args.jobs or 1
     if started_by_mpirun("ancf-report", "it is one process that starts its runs itself (--ranks: ranks per run)"):
-        return 2
+        return launch_status(2)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     from ancf_petsc import paper as rp
     from ancf_petsc.errors import InputError

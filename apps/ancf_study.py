@@ -15,8 +15,8 @@ import argparse
 import os
 import sys
 
-from apps.cli import (Parser, path, printer, report_unused_options, say_stderr, start_petsc,
-                      started_by_mpirun)
+from apps.cli import (Parser, launch_status, path, printer, report_unused_options, say_stderr,
+                      start_petsc, started_by_mpirun)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -26,7 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=path, help="output directory (default: the study file's 'output')")
     args, petsc_args = ap.parse_with_petsc(argv)
     if started_by_mpirun("ancf-study", "it is one process that solves its runs one after another"):
-        return 2
+        return launch_status(2)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     start_petsc(petsc_args)
 

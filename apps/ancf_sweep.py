@@ -16,7 +16,7 @@ import shlex
 import signal
 import sys
 
-from apps.cli import Parser, path, positive, printer, say_stderr, started_by_mpirun
+from apps.cli import Parser, launch_status, path, positive, printer, say_stderr, started_by_mpirun
 
 #: the options of --slurm's script (the sweep file's slurm: keys)
 SLURM_OPTIONS = ("throttle", "cpus_per_task", "mem", "time", "partition", "account", "venv", "logs")
@@ -70,7 +70,7 @@ def _main(argv: list[str]) -> int:
     if extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     if started_by_mpirun("ancf-sweep", "it is one process that starts its runs itself (run.ranks: ranks per run)"):
-        return 2
+        return launch_status(2)
     unread = [k for k in ("jobs", "ranks", "force") if args.collect and getattr(args, k)]
     if unread or (args.slurm and args.jobs):   # else ignored: --collect runs nothing
         parser.error(f"--{(unread or ['jobs'])[0]}: " + ("--collect only reads the runs' outputs: leave it out"

@@ -18,8 +18,8 @@ import sys
 
 from ancf_petsc.solving.interrupt import SafePrinter, say_stderr
 
-__all__ = ["Parser", "at_least", "first_rank", "path", "positive", "printer", "report_unused_options",
-           "say_stderr", "start_petsc", "started_by_mpirun"]
+__all__ = ["Parser", "at_least", "first_rank", "launch_status", "path", "positive", "printer",
+           "report_unused_options", "say_stderr", "start_petsc", "started_by_mpirun"]
 
 
 def printer(quiet: bool = False) -> SafePrinter:
@@ -33,6 +33,14 @@ def first_rank() -> bool:
     ancf-solve --version`` printed its line three times)."""
     from ancf_petsc.parallel.launch import launch_rank
     return launch_rank() == 0
+
+
+def launch_status(status: int) -> int:
+    """The exit code of a process that stops before MPI starts (a usage error, a program
+    refusing mpirun): ``status`` on rank 0, which printed why, 0 on the other ranks.  Under
+    mpirun a rank leaving first with 2 made mpirun kill rank 0 before it had printed its line
+    (``mpirun -n 3 ancf-report --bogus``: no message, in CI); the job's code is rank 0's."""
+    return status if first_rank() else 0
 
 
 def path(text: str) -> str:
@@ -64,9 +72,10 @@ positive = at_least(1)
 
 def started_by_mpirun(prog: str, how: str) -> bool:
     """Whether ``prog``, a program that starts or solves its runs itself (``how``), was started
-    by mpirun/mpiexec; rank 0 then says so in one line (the caller exits 2).  Its copies ran the
+    by mpirun/mpiexec; rank 0 then says so in one line.  Its copies ran the
     same runs into the same directories: ``mpirun -n 2 ancf-sweep`` crashed half of them, and
-    the runs' own mpirun failed in the children of any launched copy."""
+    the runs' own mpirun failed in the children of any launched copy.  The caller then exits
+    with ``launch_status(2)``."""
     from ancf_petsc.parallel.launch import launch_rank, launch_size
     n = launch_size()
     if n and launch_rank() == 0:
@@ -108,10 +117,10 @@ class Parser(argparse.ArgumentParser):
 
     def exit(self, status: int = 0, message: str | None = None):
         """``message`` through ``say_stderr`` (a gone stderr keeps ``status``; under mpirun from
-        rank 0 alone), then exit."""
+        rank 0 alone), then exit with ``launch_status(status)``."""
         if message and first_rank():
             say_stderr(message.rstrip("\n"))
-        sys.exit(status)
+        sys.exit(launch_status(status))
 
     def print_help(self, file=None) -> None:
         """The help on stdout through ``printer`` (``--help | head``: no BrokenPipeError); under

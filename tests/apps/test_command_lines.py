@@ -342,3 +342,18 @@ def test_help_version_and_usage_errors_print_once_under_mpirun(args, start, tmp_
                        env=dict(os.environ, **MPI_ENV, PYTHONPATH=ROOT))
     lines = [ln for ln in (p.stdout + p.stderr).splitlines() if ln.startswith(start)]
     assert len(lines) == 1 and "Traceback" not in p.stderr, p.stdout + p.stderr
+    assert p.returncode == (2 if "arguments" in start else 0), p.returncode
+
+
+@pytest.mark.parametrize("rank,code", [("0", 2), ("2", 0)])
+def test_a_usage_error_under_mpirun_exits_2_on_rank_0_alone(rank, code, monkeypatch, capsys):
+    """CI: ``mpirun -n 3 ancf-report --bogus`` printed nothing: rank 2 left first with exit 2
+    and mpirun killed rank 0 before it had printed its line.  The other ranks now leave with 0,
+    quiet; rank 0 prints and gives the job its 2."""
+    from apps.cli import Parser, launch_status
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "3")
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", rank)
+    with pytest.raises(SystemExit) as stop:
+        Parser(prog="ancf-report").parse_args(["--bogus"])
+    assert stop.value.code == code == launch_status(2)
+    assert ("unrecognized arguments: --bogus" in capsys.readouterr().err) == (rank == "0")

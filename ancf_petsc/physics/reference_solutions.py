@@ -9,12 +9,15 @@ from scipy.optimize import brentq, root
 def uniaxial_stretches(material, nominal_stress: float) -> tuple[float, float]:
     """Homogeneous uniaxial tension: F = diag(λ, λ_t, λ_t) with P11 = s, P22 = P33 = 0.
 
-    Uses only the material's stress function; returns (λ, λ_t).
+    Uses only the material's stress function; returns (λ, λ_t).  The residual is measured
+    against the material's Young's modulus (or the stress, if larger): the lateral equation
+    P22 = 0 is only met to the rounding of stresses of that size.
     """
+    scale = max(abs(nominal_stress), material.young)
+
     def eqs(v):
         lam, lt = v
         P, _ = material.stress(np.diag([lam, lt, lt])[None])
-        scale = max(abs(nominal_stress), 1.0)
         return [(P[0, 0, 0] - nominal_stress) / scale, P[0, 1, 1] / scale]
 
     guess = 1.0 + nominal_stress / (3.0 * getattr(material, "mu", 1.0))

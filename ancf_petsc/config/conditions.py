@@ -188,12 +188,16 @@ def resolve_nodes(spec) -> None:
     they are now: a spec changed through the Python API after parsing (``spec.beams[0].elements
     = 8``) kept the nodes its config's 'last' named for the old count, so that the load, the
     support and the probe sat on an interior node and the run completed with another model's
-    answers (or an IndexError).  Raises ConfigError for an index the beam no longer has."""
+    answers (or an IndexError).  A ``node`` edited itself is the node as given (it was put back
+    to the config's: a probe edited to node 1 reported the tip).  Raises ConfigError for an
+    index the beam no longer has."""
     n_nodes = [ELEMENTS[b.element].block.nodes_of(b.elements) for b in spec.beams]
     for item in [*spec.boundary_conditions, *spec.loads, *spec.probes]:
+        if item.node != item.resolved:
+            item.given = item.node
         if item.given is None or not 0 <= item.beam < len(n_nodes):
             continue
-        item.node = node_ref(item.given, f"{item.path}.node", n_nodes[item.beam])
+        item.node = item.resolved = node_ref(item.given, f"{item.path}.node", n_nodes[item.beam])
     check_one_support(spec.boundary_conditions, [b.name for b in spec.beams],
                       [ELEMENTS[b.element].block for b in spec.beams])
     for ld in spec.loads:

@@ -85,8 +85,18 @@ class BeamSpec:
     parsed: tuple | None = None
 
 
+class _Placed:
+    """A support, load or probe: ``resolved`` is its node as last resolved (parsing,
+    ``conditions.resolve_nodes``), so that a ``node`` edited through the Python API is told apart."""
+    resolved: int | None
+    node: int
+
+    def __post_init__(self) -> None:
+        self.resolved = self.node
+
+
 @dataclass
-class BCSpec:
+class BCSpec(_Placed):
     beam: int
     node: int
     dofs: list[tuple[int, int]]           # (vector slot 0..5, component 0..2), held at the reference
@@ -97,10 +107,11 @@ class BCSpec:
     curve: tuple | None = None            # ((λ, m), ...): displacement × m(λ) (None: × λ)
     given: object = None                  # the node as written (first, last, an index): resolve_nodes
     column: str | None = None             # the history column its curve was made from
+    resolved: int | None = field(default=None, init=False, repr=False, compare=False)  # _Placed
 
 
 @dataclass
-class LoadSpec:
+class LoadSpec(_Placed):
     beam: int
     node: int
     kind: str                             # 'force' | 'traction_force'
@@ -109,16 +120,18 @@ class LoadSpec:
     curve: tuple | None = None            # ((λ, m), ...): force × m(λ) (None: × λ)
     given: object = None                  # the node as written: conditions.resolve_nodes
     column: str | None = None             # the history column its curve was made from
+    resolved: int | None = field(default=None, init=False, repr=False, compare=False)  # _Placed
 
 
 @dataclass
-class ProbeSpec:
+class ProbeSpec(_Placed):
     name: str
     beam: int
     node: int
     vector: str = "r"
     given: object = None                  # the node as written: conditions.resolve_nodes
     path: str = ""
+    resolved: int | None = field(default=None, init=False, repr=False, compare=False)  # _Placed
 
 
 @dataclass

@@ -1,0 +1,56 @@
+"""A researcher's session through the Python API (ancf_petsc/api.py): parts of a parsed spec
+edited before ``solve`` are solved as the config that says them would be, or refused as it
+would be, with an InputError naming the key."""
+import pytest
+import yaml
+
+from helpers import CONFIGS, petsc_init
+
+
+def _spec(name: str, out):
+    petsc_init()
+    import ancf_petsc as ap
+    spec = ap.load_config(f"{CONFIGS}/{name}")
+    spec.output.dir = str(out)
+    return ap, spec
+
+
+def _probe_of_config(ap, name: str, edit, out, probe: str = "tip"):
+    """Probe ``probe`` at every level of config ``name`` with ``edit(raw)`` applied to its YAML."""
+    from ancf_petsc.config.parse import parse_config
+    raw = yaml.safe_load(open(f"{CONFIGS}/{name}"))
+    edit(raw)
+    spec = parse_config(raw, base_dir=CONFIGS)
+    spec.output.dir = str(out)
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    return ap.read_results(out).probe(probe)
+
+
+def test_an_edited_node_of_a_probe_and_a_load_is_the_node_solved(tmp_path):
+    """bending_neohookean at 2 elements (nodes 0..4 along the beam), its tip load moved to node 3
+    and its probe to node 2 by editing ``node``: the answers of the config saying node 3 and 2.
+    Before, resolve_nodes put both back to the config's 'last' (the probe reported the tip,
+    the load stayed there) and the run completed with the unedited model's answers."""
+    ap, spec = _spec("bending_neohookean.yaml", tmp_path / "edited")
+    spec.beams[0].elements, spec.steps = 2, [0.5, 1.0]
+    spec.loads[0].kind, spec.loads[0].node, spec.probes[0].node = "force", 3, 2
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    got = ap.read_results(tmp_path / "edited").probe("tip")
+
+    def edit(raw):
+        raw["beams"][0]["elements"], raw["steps"] = 2, [0.5, 1.0]
+        raw["loads"][0] = {"beam": "beam", "node": 3, "force": raw["loads"][0]["traction_force"]}
+        raw["probes"][0]["node"] = 2
+    want = _probe_of_config(ap, "bending_neohookean.yaml", edit, tmp_path / "parsed")
+    assert abs(want[-1][2]) > 1e-3                    # the beam bends
+    assert got == pytest.approx(want, rel=1e-12, abs=1e-15)
+    assert spec.probes[0].node == 2 and spec.loads[0].node == 3
+
+
+def test_an_edited_node_the_beam_does_not_have_is_refused(tmp_path):
+    """A probe's node edited past the beam's last node: InputError naming probes[0].node."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "out")
+    spec.probes[0].node = 9
+    with pytest.raises(ap.InputError) as err:
+        ap.solve(spec, log=lambda *_: None)
+    assert err.value.path == "probes[0].node" and "node 9 does not exist" in err.value.message

@@ -220,10 +220,8 @@ class ResultsWriter:
             self._release_reserve()
             raise OutputError(self.h5_path, f"cannot write: {os_reason(exc)}") from None
         if self.sampler is not None:                 # the rest state: no history time (VtkSeries)
-            rest = None if self.timed else 0.0
-            self._write_series("surface", 0, rest, surface_cells(self.sampler, model.q0), level_fields(None))
-            if rest_contact is not None:
-                self._write_series("contact", 0, rest, contact_cells(rest_contact), level_fields(None))
+            self._write_vtus(0, None if self.timed else 0.0, surface_cells(self.sampler, model.q0),
+                             rest_contact, level_fields(None))
         self._write_summary()
 
     def _resume(self, layout, run_info: dict) -> None:
@@ -267,13 +265,15 @@ class ResultsWriter:
         self._summary_time = time.monotonic()
         self._summary_cost = self._summary_time - t0
 
-    def _write_series(self, series: str, k: int, t: float | None, mesh: tuple, fields: dict) -> None:
-        """One VTU of ``series`` at time ``t`` (``vtk.VtkSeries``); a failure is an OutputError."""
+    def _write_vtus(self, k: int, t: float | None, surface: tuple, contact: dict | None, fields: dict) -> None:
+        """Level ``k``'s surface and contact VTUs at time ``t``, both or neither
+        (``vtk.VtkSeries.write_level``); a failure is an OutputError."""
+        meshes = {"surface": surface, **({"contact": contact_cells(contact)} if contact is not None else {})}
         try:
-            self._last_sizes["vtu"] += self.vtk.write(series, k, t, *mesh, field_data=fields)
+            self._last_sizes["vtu"] = self.vtk.write_level(k, t, meshes, fields)
         except OSError as exc:
             self._release_reserve()
-            raise OutputError(exc.filename or os.path.join(self.dir, f"{series}_{k:04d}.vtu"),
+            raise OutputError(exc.filename or os.path.join(self.dir, f"surface_{k:04d}.vtu"),
                               f"cannot write: {os_reason(exc)}") from None
 
     def probe_values(self, q: np.ndarray) -> dict:
@@ -319,6 +319,9 @@ class ResultsWriter:
         surface = surface_cells(self.sampler, q) if self.sampler is not None else None
         if surface is not None:
             level["surface"] = {"points": surface[0], **surface[2]}
+            # the VTUs before results.h5 takes the level: a run killed between leaves VTUs a
+            # restart removes, never a level on disk without them (a frame missing after it)
+            self._write_vtus(k, series_time(entry, self.timed), surface, contact, level_fields(record))
         try:
             with h5fast.open_file(self.h5_path, "a") as h5:
                 steps = h5["steps"]
@@ -332,15 +335,11 @@ class ResultsWriter:
             self._release_reserve()
             if recover_level(self.h5_path, name):            # the level made it to disk after all
                 self._append(entry)
+            else:
+                self.vtk.discard(k)
             raise OutputError(self.h5_path, f"cannot write level {k}: {os_reason(exc)}") from None
         self._last_sizes["h5"] = max(os.path.getsize(self.h5_path) - size0, q.nbytes)
         self._append(entry, text)
-        if self.sampler is not None:
-            self._last_sizes["vtu"] = 0                  # the level's VTUs together
-            t, fields = series_time(entry, self.timed), level_fields(record)
-            self._write_series("surface", k, t, surface, fields)
-            if contact is not None:
-                self._write_series("contact", k, t, contact_cells(contact), fields)
         if k == 1 or time.monotonic() - self._summary_time >= self._summary_cost / SUMMARY_SHARE:
             self._write_summary()
 

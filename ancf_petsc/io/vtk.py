@@ -256,6 +256,23 @@ class VtkSeries:
         self.entries[series] += listed
         return size
 
+    def write_level(self, k: int, t: float | None, meshes: dict, field_data: dict) -> int:
+        """Level ``k``'s VTU in each series of ``meshes`` ({series: (pts, cells, data)}), all or
+        none: if one fails, the others are discarded and the OSError raised.  Returns the size."""
+        try:
+            return sum(self.write(series, k, t, *mesh, field_data=field_data)
+                       for series, mesh in meshes.items())
+        except OSError:
+            self.discard(k)
+            raise
+
+    def discard(self, k: int) -> None:
+        """Level ``k``'s VTUs removed from disk and from the collections (a level not kept)."""
+        for series in self.entries:
+            name = f"{series}_{k:04d}.vtu"
+            self.entries[series] = [e for e in self.entries[series] if e[1] != name]
+            remove_quietly(os.path.join(self.dir, name))
+
     def _listed(self, series: str, t: float | None, name: str) -> list[tuple[float, str]]:
         """The .pvd entry of a VTU at time ``t``: none without a time or at the last entry's time."""
         entries = self.entries[series]

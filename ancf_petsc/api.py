@@ -7,10 +7,12 @@
     print(result.status, ap.read_results("/tmp/bar").probe("tip")[-1])
 
 A spec may be changed before ``solve`` (``spec.beams[0].elements = 8``, its ``material['mu']``,
-``element`` within one node block: 3363/3333, ``spec.steps``, ``spec.petsc``): ``solve`` places
+``element`` within one node block: 3363/3333, ``spec.steps``, ``spec.petsc``, ``spec.contact``'s
+keys, a config's ``contact:`` mapping or None): ``solve`` places
 'first'/'last' of the supports, loads and probes on the beams as they are then, checks the beams,
-sections, geometry, steps and PETSc options as the config's, and stores the element counts, types,
-materials, sections, length, twist, steps and PETSc options solved with in results.h5.
+sections, geometry, steps, contact and PETSc options as the config's, and stores the element
+counts, types, materials, sections, length, twist, steps, contact and PETSc options solved with
+in results.h5.
 ``solve`` initialises PETSc on first use (with no command-line options; call
 ``petsc4py.init(argv)`` first to pass some).  Everything here is re-exported by ``ancf_petsc``.
 
@@ -63,35 +65,35 @@ def check_edited(spec: ModelSpec) -> None:
     beam as it is now), its steps increase strictly (a spec edited to decreasing steps raised
     an UnboundLocalError in the load stepping; with a history they are its first frames), and its
     ``petsc`` options read as the config's ``petsc:`` (an edited {'snes_rtol': 'abc'} was PETSc's
-    refusal naming no key), its contact's pressure space fits the edited elements, its solver,
-    partition and output keys read as the config's (config.solving.check_edited_solver), and the
-    solver keys the config left to the model are the edited model's (config.parse.refresh_defaults).
+    refusal naming no key), its contact reads as the config's for the edited beams
+    (config.contact_edits), its solver, partition and output keys read as the config's
+    (config.solving.check_edited_solver), and the solver keys the config left to the model are
+    the edited model's (config.parse.refresh_defaults).
     Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
     from .config.conditions import parse_steps, resolve_nodes
-    from .config.contact import check_edited_contact
+    from .config.contact_edits import check_edited_contact
     from .config.history import check_frames, check_history_edits
     from .config.parse import check_edited_geometry, refresh_defaults
     from .config.solving import check_edited_solver, parse_petsc
-    from .physics.elements import ELEMENTS
     check_edited_geometry(spec)
     check_edited_beams(spec.beams)
     _check_edited_sections(spec)
-    check_edited_contact(spec.contact, min(ELEMENTS[b.element].order for b in spec.beams))
+    contact = check_edited_contact(spec)
     refresh_defaults(spec)
     spec.petsc = parse_petsc(spec.petsc)
     resolve_nodes(spec)
     spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
     check_edited_solver(spec)
     check_history_edits(spec)
-    _raw_as_solved(spec)
+    _raw_as_solved(spec, contact)
 
 
-def _raw_as_solved(spec: ModelSpec) -> None:
+def _raw_as_solved(spec: ModelSpec, contact: dict | None = None) -> None:
     """The config stored with the results (results.h5 ``/model`` ``config_yaml``) says the element
-    counts, types, locking remedies, axial points, materials and steps the spec is solved with, also where
-    they were changed after parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's
-    record of its config)."""
+    counts, types, locking remedies, axial points, materials, steps and contact (``contact``: as
+    written, config.contact_edits) the spec is solved with, also where they were changed after
+    parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's record of its config)."""
     import copy
 
     from .config.beams import material_as_written
@@ -126,6 +128,8 @@ def _raw_as_solved(spec: ModelSpec) -> None:
         raw["steps"] = list(spec.steps)
     if isinstance(raw, dict) and _petsc_of(raw) != spec.petsc:
         raw["petsc"] = {k: v if v else None for k, v in spec.petsc.items()}   # '': a flag
+    if isinstance(raw, dict) and _contact_of(raw, spec) != spec.contact:
+        raw["contact"] = contact
     if raw != spec.raw:
         spec.raw = raw
 
@@ -178,6 +182,19 @@ def _petsc_of(raw: dict) -> dict | None:
         return parse_petsc(raw.get("petsc") or {})
     except ConfigError:
         return None
+
+
+def _contact_of(raw: dict, spec: ModelSpec):
+    """A config's ``contact:`` as parsed for ``spec``'s beams (None where it does not parse)."""
+    from dataclasses import replace
+
+    from .config.contact_edits import check_edited_contact
+    probe = replace(spec, contact=raw.get("contact"), raw={})
+    try:
+        check_edited_contact(probe)
+    except ConfigError:
+        return None
+    return probe.contact
 
 
 def _material_of(entry: dict) -> dict | None:

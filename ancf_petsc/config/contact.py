@@ -192,14 +192,6 @@ def _parse_projection(c, proj, pp: str, node_dofs: int, section_order: int = 2, 
     _bounded_across(c, pp, section_order)
 
 
-def check_edited_contact(c, section_order: int) -> None:
-    """The bound on pressure functions across again for beams edited after parsing (the Python
-    API): a sliding tendon with projection.curve: 2, valid on 3363, edited to 3333 (degree 1 across)
-    ran with 3 functions across a linear section, which its config refuses."""
-    if c is not None:
-        _bounded_across(c, "contact.projection", section_order)
-
-
 def _bounded_across(c, pp: str, order: int) -> None:
     """Under Coulomb friction or the sliding law at most order + 1 pressure functions across
     (curve + curve_spans): the gap between two section fields of degree p has p + 1 modes across

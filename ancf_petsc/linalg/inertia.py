@@ -94,3 +94,36 @@ def mumps_error(ksp: PETSc.KSP) -> int | None:
         return None
     code = int(factor.getMumpsInfog(1))
     return code if code < 0 else None
+
+
+#: the SNES preconditioning matrices that are no assembled tangent (nothing to factor)
+UNASSEMBLED = (PETSc.Mat.Type.MFFD, PETSc.Mat.Type.SHELL, PETSc.Mat.Type.PYTHON)
+_own_count: list = [None, None]                 # (P's handle, state, norm), its counts
+
+
+def own_factor_possible(snes: PETSc.SNES, symmetric: bool) -> bool:
+    """Whether ``solver_pivot_counts`` can factor the SNES's assembled tangent itself: a
+    symmetric Jacobian, assembled, and MUMPS in this PETSc."""
+    P = snes.getJacobian()[1]
+    return symmetric and P.getType() not in UNASSEMBLED and PETSc.Sys.hasExternalPackage("mumps")
+
+
+def counts_inertia(snes: PETSc.SNES, symmetric: bool) -> bool:
+    """Whether ``solver_pivot_counts`` counts: the linear solver's factor or one of its own."""
+    return pivot_counts(snes.getKSP()) is not None or own_factor_possible(snes, symmetric)
+
+
+def solver_pivot_counts(snes: PETSc.SNES, symmetric: bool) -> tuple[int, int] | None:
+    """``pivot_counts`` of the SNES's linear solver; where that counts none (LU, PETSc's or
+    SuperLU's factors, Krylov methods), of a MUMPS LDLᵀ of its last assembled tangent
+    (``exact_pivot_counts``), once per state of that matrix, so that the stability verdict does
+    not depend on the linear solver (a column at 3 x its Euler load: 'unstable' by default,
+    'completed' with -pc_type lu).  None for an unsymmetric or unassembled Jacobian.  Collective."""
+    counts = pivot_counts(snes.getKSP())
+    if counts is not None or not own_factor_possible(snes, symmetric):
+        return counts
+    P = snes.getJacobian()[1]
+    key = (P.handle, P.stateGet(), P.norm(PETSc.NormType.FROBENIUS))
+    if _own_count[0] != key:
+        _own_count[:] = [key, exact_pivot_counts(P)]
+    return _own_count[1]

@@ -17,7 +17,7 @@ from ..linalg.compact_factor import install_for
 from ..linalg.database import remove
 from ..linalg.diagnostics import petsc_message, used_anywhere
 from ..linalg.full_step_first import install_full_step_first
-from ..linalg.inertia import exact_pivot_counts, mumps_error, pivot_counts
+from ..linalg.inertia import counts_inertia, exact_pivot_counts, mumps_error, solver_pivot_counts
 from ..petsc.mixed_tangent import mixed_tangent
 from ..petsc.potential import rounding_floor
 from ..petsc.problem import Problem
@@ -202,7 +202,7 @@ class SNESSolver:
         iterate of it (``factor_at``), or (``own``) is not X's own."""
         if X is not None and not self.factor_at(X, own):
             return None
-        counts = pivot_counts(self.snes.getKSP())
+        counts = solver_pivot_counts(self.snes, self.problem.symmetric)
         if counts is None:
             return None
         negative, null = counts
@@ -224,7 +224,7 @@ class SNESSolver:
         contact status is kept (the stepper has checked it at X).  False where the factorisation
         failed (no count, as for a solver without inertia).  With ``solver.tangent: mixed`` a
         factor whose tangent was corrected (petsc/mixed_tangent.py) is replaced too (``own``: any).  Collective."""
-        mixed = self.problem.mixed is not None and pivot_counts(self.snes.getKSP()) is not None \
+        mixed = self.problem.mixed is not None and counts_inertia(self.snes, self.problem.symmetric) \
             and self.problem.comm.tompi4py().allreduce(self.problem.mixed.corrected, op=MPI.LOR)
         if not (mixed or own) and (self.snes.getIterationNumber() > 0 or self.assemblies == self.accepted_assemblies):
             return True

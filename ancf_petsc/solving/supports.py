@@ -92,14 +92,35 @@ def free_rigid_motions(problem) -> list[str]:
     """Descriptions of the rigid motions nothing holds (collective; empty when supported)."""
     gram, labels = rigid_mode_gram(problem)
     w, V = np.linalg.eigh(gram)
-    free = w <= FREE_TOLERANCE ** 2
-    return _summary([_describe(V[:, i], labels) for i in np.flatnonzero(free)])
+    N = canonical_basis(V[:, w <= FREE_TOLERANCE ** 2])
+    return _summary([_describe(N[:, i], labels) for i in range(N.shape[1])])
+
+
+def canonical_basis(N: np.ndarray) -> np.ndarray:
+    """The free motions ``N`` (columns, orthonormal) as the basis that is 1 on one unit mode each
+    and 0 on the others' (pivoted QR picks the modes; in the modes' order): a free translation
+    along x and y and a turn about z read so, not as any mixtures of them that eigh returns for a
+    multiple zero eigenvalue."""
+    if N.shape[1] == 0:
+        return N
+    import scipy.linalg
+    _, _, pivots = scipy.linalg.qr(N.T, pivoting=True)
+    return N @ np.linalg.inv(N[np.sort(pivots[:N.shape[1]]), :])
+
+
+def length_scale(model) -> float:
+    """ℓ [m], the unit of length of the check: the beams' length.  A nodal vector of section
+    degree d is measured in ℓ^(1−d) (r in ℓ, r_y and r_z as they are, r_yy in 1/ℓ), a gap in ℓ,
+    so that the check does not depend on the model's size (in metres, the pressed strips'
+    slider turned about x, held by supports of r_y and by the contact, violated them by 6.2e-4
+    at 20 mm long and by 6.2e-5 at 2 mm, and was refused as free there)."""
+    return max(float(np.ptp(beam.x_nodes)) for beam in model.beams)
 
 
 def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     """Gram matrix (6 n_beams)² of the constraint violations J·v of every beam's unit rigid modes
-    (held rows in metres or slope units, constraint rows divided by k_s), and (beam, kind, axis)
-    per mode.  Collective.
+    (held rows, constraint rows divided by k_s; lengths in ℓ, ``length_scale``), and (beam,
+    kind, axis) per mode.  Collective.
 
     J is applied to the modes of all beams of one colour at once (``beam_colours``: beams that
     share an interface differ): a held or constraint row belongs to at most one beam of a
@@ -113,13 +134,9 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     colours = beam_colours(nb, pairs)
     n_col = int(colours.max()) + 1
     owner, rows = _row_beams(P)
-    x = P.q0.getArray(readonly=True).reshape(-1, D // 3, 3)
-    modes = np.stack([v.ravel() for v in rigid_modes(x)], axis=1)          # (n_local, 6)
-    modes[owner < 0] = 0.0
-    norms = np.zeros((nb, 6))
-    np.add.at(norms, owner[owner >= 0], modes[owner >= 0] ** 2)
-    norms = np.sqrt(comm.allreduce(norms))
-    norms[norms == 0.0] = 1.0
+    ell = length_scale(model)
+    unit = np.tile(np.repeat([ell ** (i + j - 1.0) for i, j in model.block.monomials], 3), len(owner) // D)
+    modes, norms = _unit_modes(P, owner, unit)
     V = np.zeros((len(owner), 6 * n_col))
     r = np.flatnonzero(owner >= 0)
     for m in range(6):                                   # unit modes, summed per colour
@@ -129,13 +146,14 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     lo, hi = P.layout.owned_nodes
     held = P.fixed_mask[D * lo:D * hi]
     constraint = np.repeat(~P.owned_physical, D) & ~held
-    scale = np.where(held, 1.0, 0.0) + np.where(constraint, 1.0 / (P.contact.stiffness if P.contact else 1.0), 0.0)
+    k_s = P.contact.stiffness if P.contact else 1.0
+    scale = np.where(held, unit, 0.0) + np.where(constraint, 1.0 / (k_s * ell), 0.0)
     Vf = np.asfortranarray(V)                        # PETSc's dense storage; kept alive below
     Vmat = PETSc.Mat().createDense(((len(V), None), (None, V.shape[1])), array=Vf, comm=P.comm)
     Vmat.assemble()
     with _held_jacobian(P, X):
         JV = P.J.matMult(Vmat)
-        layer = _layer_rows(P, norms)
+        layer = _layer_rows(P, norms) / ell
     # rigid modes give no strain: only the held and constraint rows are nonzero
     nz = np.flatnonzero(scale)
     JVs = JV.getDenseArray()[nz] * scale[nz, None]
@@ -156,6 +174,19 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
     labels = [(beam.name, "translation" if m < 3 else "rotation", m % 3)
               for beam in model.beams for m in range(6)]
     return comm.allreduce((Y.T @ Y).toarray()), labels
+
+
+def _unit_modes(P, owner: np.ndarray, unit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The six rigid modes of every owned row (n_local, 6), 0 on multiplier rows, and the norm of
+    each beam's modes (n_beams, 6) in units of ℓ (``unit``: ℓ^(d−1) per DOF).  Collective."""
+    x = P.q0.getArray(readonly=True).reshape(-1, P.model.dofs_per_node // 3, 3)
+    modes = np.stack([v.ravel() for v in rigid_modes(x)], axis=1)
+    modes[owner < 0] = 0.0
+    norms = np.zeros((len(P.model.beams), 6))
+    np.add.at(norms, owner[owner >= 0], (modes[owner >= 0] * unit[owner >= 0, None]) ** 2)
+    norms = np.sqrt(P.comm.tompi4py().allreduce(norms))
+    norms[norms == 0.0] = 1.0
+    return modes, norms
 
 
 def _layer_rows(P, norms: np.ndarray) -> sp.csr_matrix:

@@ -281,7 +281,7 @@ def test_support_check_by_colour_equals_one_product_per_mode(matrix_type):
     from helpers import build_problem
     from ancf_petsc.physics.element3363 import DOFS_PER_NODE
     from ancf_petsc.physics.rigid import rigid_modes
-    from ancf_petsc.solving.supports import beam_colours, rigid_mode_gram
+    from ancf_petsc.solving.supports import beam_colours, length_scale, rigid_mode_gram
     P, PETSc = build_problem(load_raw("bundle_hex7.yaml"), matrix_type)
     pairs = [(i.a.index, i.b.index) for i in P.contact.interfaces]
     colours = beam_colours(len(P.model.beams), pairs)
@@ -294,14 +294,17 @@ def test_support_check_by_colour_equals_one_product_per_mode(matrix_type):
     x = P.q0.getArray(readonly=True).reshape(-1, 6, 3)
     held = P.fixed_mask[DOFS_PER_NODE * lo:DOFS_PER_NODE * hi]
     constraint = np.repeat(~P.owned_physical, DOFS_PER_NODE) & ~held
-    scale = held + constraint / P.contact.stiffness
+    # lengths in ℓ: r in ℓ, r_y and r_z as they are, r_yy, r_zz, r_yz in 1/ℓ; gaps in ℓ
+    ell = length_scale(P.model)
+    unit = np.tile(np.repeat([1 / ell, 1, 1, ell, ell, ell], 3), len(model_block))
+    scale = held * unit + constraint / (P.contact.stiffness * ell)
     v, y = P.J.createVecs()
     Y = []
     for beam in P.model.beams:
         mine = ((model_block >= beam.node_offset) & (model_block < beam.node_offset + beam.n_nodes))
         for mode in rigid_modes(x):
             col = (mode * mine[:, None, None]).ravel()
-            v.setArray(col / np.linalg.norm(col))
+            v.setArray(col / np.linalg.norm(col * unit))
             P.J.mult(v, y)
             Y.append(y.getArray().copy() * scale)
     Y = np.array(Y).T

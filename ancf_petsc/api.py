@@ -61,9 +61,10 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
 def check_edited(spec: ModelSpec) -> None:
     """What a spec changed after parsing must still satisfy: its beams' element counts, types
     and axial points are the config's kinds (a changed type takes its own locking remedy), its
-    supports, loads and probes follow its beams' element counts ('last' is the last node of the
-    beam as it is now), its steps increase strictly (a spec edited to decreasing steps raised
-    an UnboundLocalError in the load stepping; with a history they are its first frames), and its
+    supports, loads and probes read as the config's (config.conditions.check_edited_conditions)
+    and follow its beams' element counts ('last' is the last node of the beam as it is now), its
+    steps increase strictly (a spec edited to decreasing steps raised an UnboundLocalError in
+    the load stepping; with a history they are its first frames), and its
     ``petsc`` options read as the config's ``petsc:`` (an edited {'snes_rtol': 'abc'} was PETSc's
     refusal naming no key), its contact reads as the config's for the edited beams
     (config.contact_edits), its solver, partition and output keys read as the config's
@@ -71,7 +72,7 @@ def check_edited(spec: ModelSpec) -> None:
     the edited model's (config.parse.refresh_defaults).
     Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
-    from .config.conditions import parse_steps, resolve_nodes
+    from .config.conditions import check_edited_conditions, parse_steps, resolve_nodes
     from .config.contact_edits import check_edited_contact
     from .config.history import check_frames, check_history_edits
     from .config.parse import check_edited_geometry, refresh_defaults
@@ -79,6 +80,7 @@ def check_edited(spec: ModelSpec) -> None:
     check_edited_geometry(spec)
     check_edited_beams(spec.beams)
     _check_edited_sections(spec)
+    check_edited_conditions(spec)
     contact = check_edited_contact(spec)
     refresh_defaults(spec)
     spec.petsc = parse_petsc(spec.petsc)

@@ -183,6 +183,55 @@ def parse_loads(value, names: list[str], n_nodes: list[int],
     return loads
 
 
+def check_edited_conditions(spec) -> None:
+    """The supports, loads and probes of a spec edited after parsing (the Python API) read as a
+    config's: a beam index the model does not have (an IndexError in the build), a force of two
+    components or of text (numpy's broadcast error), a load kind or probe vector the config does
+    not know (kind 'foo' ran as a point force), a probe name given twice (one probe's answers
+    lost), a fixed component past the node block, and beams of one name (results.h5's
+    'name already exists').  A beam may be given by name; numpy values are taken as numbers."""
+    names = [string(b.name, f"beams[{i}].name") for i, b in enumerate(spec.beams)]
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            raise ConfigError(f"beams[{i}].name", f"duplicate beam name {name!r}; names must be unique")
+    for key in ("boundary_conditions", "loads", "probes"):
+        for i, item in enumerate(getattr(spec, key)):
+            item.path = item.path or f"{key}[{i}]"
+            beam = _python(item.beam)
+            item.beam = beam_ref(beam, f"{item.path}.beam", names) if isinstance(beam, str) \
+                else _index(beam, f"{item.path}.beam", names)
+            item.node = _python(item.node)
+    blocks = [ELEMENTS[b.element].block for b in spec.beams]
+    for ld in spec.loads:
+        ld.kind = string(ld.kind, f"{ld.path}.kind", ("force", "traction_force"))
+        ld.force = vector(_python(ld.force), f"{ld.path}.{ld.kind}", 3)
+    for i, pr in enumerate(spec.probes):
+        pr.name = string(pr.name, f"{pr.path}.name")
+        if pr.name in [x.name for x in spec.probes[:i]]:
+            raise ConfigError(f"{pr.path}.name", f"duplicate probe name {pr.name!r}")
+        pr.vector = string(pr.vector, f"{pr.path}.vector", blocks[pr.beam].names + ("mean",))
+    for bc in spec.boundary_conditions:
+        n = blocks[bc.beam].vectors_per_node
+        for v, c in [held[:2] for held in [*bc.dofs, *bc.displacement]]:
+            if not (isinstance(v, int) and isinstance(c, int) and 0 <= v < n and 0 <= c < 3):
+                raise ConfigError(f"{bc.path}.fix", f"(vector, component) ({v!r}, {c!r}) is not a "
+                                                    f"component of a node: vectors 0..{n - 1} "
+                                                    f"({', '.join(blocks[bc.beam].names)}), components 0..2")
+
+
+def _python(value):
+    """A numpy value (array or scalar) as Python's (``spec.loads[0].force = np.array(...)``)."""
+    return value.tolist() if hasattr(value, "tolist") else value
+
+
+def _index(value, path: str, names: list[str]) -> int:
+    """A beam given by its index in ``names``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < len(names):
+        raise ConfigError(path, f"unknown beam {shown(value)}; beams are: "
+                                + ", ".join(f"{i} {n}" for i, n in enumerate(names)) + " (an index or a name)")
+    return value
+
+
 def resolve_nodes(spec) -> None:
     """The nodes of the supports, loads and probes of ``spec`` for its beams' element counts as
     they are now: a spec changed through the Python API after parsing (``spec.beams[0].elements

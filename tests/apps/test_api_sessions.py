@@ -115,3 +115,42 @@ def test_an_edited_contact_is_checked_as_the_configs(tmp_path, key, value, path)
         ap.solve(spec, log=lambda *_: None)
     assert err.value.path == path
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("edit,path", [
+    (lambda s: setattr(s.loads[0], "beam", 7), "loads[0].beam"),             # an IndexError before
+    (lambda s: setattr(s.loads[0], "force", (1.0, 0.0)), "loads[0].force"),  # numpy's broadcast error
+    (lambda s: setattr(s.loads[0], "kind", "foo"), "loads[0].kind"),         # ran as a point force
+    (lambda s: setattr(s.probes[0], "vector", "foo"), "probes[0].vector"),   # a ValueError before
+    (lambda s: setattr(s.probes[1], "name", "soleus"), "probes[1].name"),    # one probe lost
+    (lambda s: setattr(s.boundary_conditions[0], "dofs", [(9, 0)]), "boundary_conditions[0].fix"),
+    (lambda s: setattr(s.beams[1], "name", "soleus"), "beams[1].name"),      # results.h5's OutputError
+    (lambda s: s.beams.pop(), "boundary_conditions[2].beam"),                # an IndexError before
+])
+def test_edited_supports_loads_and_probes_are_checked_as_the_configs(tmp_path, edit, path):
+    """A support, load or probe (or a beam they name) edited to what a config cannot say: an
+    InputError naming it, before anything is written."""
+    petsc_init()
+    import ancf_petsc as ap
+    spec = _paper_tendon(ap, tmp_path / "out")
+    edit(spec)
+    with pytest.raises(ap.InputError) as err:
+        ap.solve(spec, log=lambda *_: None)
+    assert err.value.path == path
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_load_moved_to_a_beam_by_name_is_that_beams_load(tmp_path):
+    """The paper's tendon with its 100 N moved from the soleus to the lateral gastrocnemius by
+    name (spec.loads[0].beam = 'lateral_gastrocnemius', a numpy force): the config's answers."""
+    import numpy as np
+    petsc_init()
+    import ancf_petsc as ap
+    spec = _paper_tendon(ap, tmp_path / "edited")
+    spec.loads[0].beam, spec.loads[0].force = "lateral_gastrocnemius", np.array([1.0, 0.0, 0.0])
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    config = _paper_tendon(ap, tmp_path / "config", lambda raw: raw["loads"][0].update(beam="lateral_gastrocnemius"))
+    assert ap.solve(config, log=lambda *_: None).status == "completed"
+    got, want = ap.read_results(tmp_path / "edited"), ap.read_results(tmp_path / "config")
+    assert want.probe("lateral_gastrocnemius")[-1][0] > 1e-4
+    assert got.probe("lateral_gastrocnemius") == pytest.approx(want.probe("lateral_gastrocnemius"), rel=1e-12)

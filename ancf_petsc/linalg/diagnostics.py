@@ -76,7 +76,9 @@ def solver_hint(pc: str, factor: str, ranks: int, has_package=lambda name: True)
         return f"this PETSc has no hypre: use -pc_type gamg, or {direct}"
     if pc in ("lu", "cholesky", "ilu", "icc") and factor:
         return f"-pc_factor_mat_solver_type {factor} cannot do {pc} here: use {direct}"
-    return f"use {direct}, or -ksp_type gmres with -pc_type gamg, hypre, bjacobi or asm"
+    # not the one that failed (-ksp_type gmres -pc_type gamg was told to use it)
+    others = [p for p in ("gamg", "hypre", "bjacobi", "asm") if p != pc and (p != "hypre" or has_package(p))]
+    return f"use {direct}, or -ksp_type gmres with -pc_type {', '.join(others[:-1])} or {others[-1]}"
 
 
 #: MUMPS errors (INFOG(1)) that a larger workspace margin (ICNTL(14), percent) cures

@@ -9,7 +9,7 @@ from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.options import DEFAULT_OPTIONS, factor_package, solver_options
 from .failure_cause import Detail
-from .given_options import given_cause, given_option
+from .given_options import NEWTON_STOPS, given_cause, given_option
 from .records import STALLED_STEP, VIOLATED_STATE
 
 
@@ -169,7 +169,7 @@ def failure_detail(solver, reason: int) -> Detail:
         return Detail(linear_solver_detail(solver, linear), "linear_solver")
     unreachable = (unreachable_atol(solver)
                    if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)
-    unreachable = unreachable or given_cause(solver, reason)
+    unreachable = unreachable or given_cause(solver, reason) or applied_once(solver, reason)
     if unreachable is not None:
         return unreachable
     if reason == VIOLATED_STATE:
@@ -218,6 +218,46 @@ def failure_detail(solver, reason: int) -> Detail:
                       f"-snes_max_it {maxit} Newton iterations: try -snes_max_it {4 * maxit})",
                       "active_set_iterations")
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])
+
+
+#: share of the residual a Newton step may leave in its linear equations (an exact solve: rounding)
+INEXACT_STEP = 1e-6
+#: preconditioners that solve the Newton equations under -ksp_type preonly (none: its own message)
+SOLVING_PCS = ("lu", "cholesky", "python", "none", "redundant")
+
+
+def applied_once(solver, reason: int) -> Detail | None:
+    """Under -ksp_type preonly (the default) a preconditioner that is no factorisation (jacobi,
+    gamg, bjacobi or asm on several ranks, ...) is applied once instead of solving, so the steps
+    are no Newton steps: -pc_type jacobi on the 2-element cantilever failed as 'Newton's iterates
+    wander ... as near a limit or bifurcation point', -pc_type gamg as 'a nearly singular
+    tangent'.  Measured: ‖J y − F‖ / ‖F‖ for y the preconditioner applied to the last residual F
+    (one application, at a failure only); None where that is rounding (ILU of a beam's banded
+    tangent on one rank is its LU).  Collective."""
+    ksp = solver.snes.getKSP()
+    pc = ksp.getPC()
+    if reason not in (STALLED_STEP, *NEWTON_STOPS) or ksp.getType() != "preonly" or pc.getType() in SOLVING_PCS:
+        return None
+    F = solver.snes.getFunction()[0]
+    y, r = F.duplicate(), F.duplicate()
+    try:
+        pc.apply(F, y)
+        ksp.getOperators()[0].mult(y, r)
+        r.axpy(-1.0, F)
+        share = r.norm() / F.norm()
+    except (PETSc.Error, ZeroDivisionError):
+        return None
+    finally:
+        y.destroy()
+        r.destroy()
+    if not share > INEXACT_STEP:                # also NaN: nothing measured
+        return None
+    name = pc.getType()
+    return Detail(f" (-pc_type {name} with -ksp_type preonly is applied once instead of solving the Newton "
+                  f"equations: its steps leave |J step - F| = {share:.2g} |F|, so Newton converges slowly or not "
+                  f"at all; add -ksp_type gmres to solve them with -pc_type {name}, or use a "
+                  "factorisation, the default (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu"
+                  + ("" if solver.problem.contact is None else f"; {SADDLE_POINT_HINT}") + ")", "linear_solver")
 
 
 def small_newton_budget(solver) -> Detail | None:

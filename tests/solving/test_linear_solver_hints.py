@@ -1,0 +1,46 @@
+"""What a failed level says about the linear solver the options chose: a preconditioner applied
+once under -ksp_type preonly, and what to try after a Krylov method failed."""
+import re
+
+import pytest
+
+from helpers import cantilever, read_summary, solve_cli, write_config
+
+
+@pytest.mark.parametrize("pc", ["jacobi", "gamg"])
+def test_a_preconditioner_applied_once_is_named_not_a_limit_point(tmp_path, pc):
+    """With the default -ksp_type preonly, -pc_type jacobi (or gamg) is applied once instead of
+    solving the Newton equations.  The 2-element cantilever's failure read 'Newton's iterates
+    wander ... as near a limit or bifurcation point' (gamg: 'Newton converges only linearly
+    here ... a nearly singular tangent'), pointing at the model.  The step's linear residual
+    |J y - F| / |F| is now measured at the failure and the option named."""
+    raw = cantilever([0.5, 1.0], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    raw["solver"] = {"max_cutbacks": 0}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-pc_type", pc, "--quiet"])
+    assert p.returncode == 3, p.stdout + p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert f"(-pc_type {pc} with -ksp_type preonly is applied once instead of solving" in line, line
+    assert "limit or bifurcation" not in line and "add -ksp_type gmres" in line
+    share = float(re.search(r"\|J step - F\| = (\S+) \|F\|", line).group(1))
+    assert share > 0.1                             # measured: jacobi 5.2, gamg 0.98
+    assert read_summary(tmp_path / "out")["failure_cause"] == "linear_solver"
+
+
+def test_an_exact_preconditioner_under_preonly_is_not_blamed(tmp_path):
+    """ILU(0) of a beam's banded tangent on one rank is its LU: the run completes as the default."""
+    raw = cantilever([0.5, 1.0], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-pc_type", "ilu", "--quiet"])
+    assert p.returncode == 0, p.stderr
+
+
+def test_the_hint_after_a_failed_krylov_solve_names_other_preconditioners():
+    """-ksp_type gmres -pc_type gamg broke down on the cantilever and was told to use
+    '-ksp_type gmres with -pc_type gamg, hypre, bjacobi or asm'."""
+    from ancf_petsc.linalg.diagnostics import solver_hint
+    for pc in ("gamg", "hypre", "bjacobi", "asm"):
+        krylov = solver_hint(pc, "", 1).split("-ksp_type gmres with -pc_type ")[1]
+        assert pc not in krylov and len(krylov.split(",")) == 2, krylov
+    assert solver_hint("jacobi", "", 1).endswith("-pc_type gamg, hypre, bjacobi or asm")
+    assert solver_hint("jacobi", "", 1, lambda name: name != "hypre").endswith("-pc_type gamg, bjacobi or asm")

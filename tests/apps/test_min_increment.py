@@ -75,3 +75,46 @@ def test_not_floored_where_the_level_crept_on_by_cut_backs():
     dlam, give_up = control.after_failure(step, False, tally)
     assert give_up and not control.floored(step, tally)
     assert control.stop_reason(dlam, tally).startswith("the increment 0.0001221 would be below")
+
+
+def elastica_in_one_step(unit: float) -> dict:
+    """configs/elastica_svk.yaml at P L²/EI = 20 reached in one level, its load factor in units
+    of ``unit`` (the force 20 N / unit at load factor ``unit``): the same loads."""
+    from helpers import load_raw
+    raw = load_raw("elastica_svk.yaml")
+    raw["loads"][0]["force"] = [0.0, 0.0, 20.0 / unit]
+    raw["steps"] = [unit]
+    raw["output"] = {"vtk": False}
+    return raw
+
+
+@pytest.mark.parametrize("unit", [1e-3, 1e-4])
+def test_the_cut_backs_do_not_depend_on_the_unit_of_the_load_factor(tmp_path, unit):
+    """Before: as 20 N x load factor 1 the elastica took 10 sub-steps to its tip (-0.684, 0.869) L;
+    as 2e4 N x 1e-3 the fixed floor 1e-4 left three halvings and the run failed (exit 3, 'Newton's
+    iterates wander'), as 2e5 N x 1e-4 no cut-back at all.  Now the default floor is 1e-4 of
+    the largest load factor below 1: the same sub-steps and tip to 1e-9."""
+    from helpers import run_inline
+    base = run_inline(elastica_in_one_step(1.0), tmp_path / "base")
+    scaled = run_inline(elastica_in_one_step(unit), tmp_path / "scaled")
+    assert base["status"] == scaled["status"] == "completed"
+    a, b = base["steps"][-1], scaled["steps"][-1]
+    assert (b["substeps"], b["iterations"]) == (a["substeps"], a["iterations"]) and a["substeps"] > 4
+    tip_a, tip_b = (s["probes"]["tip"]["displacement"] for s in (a, b))
+    assert max(abs(x - y) for x, y in zip(tip_a, tip_b)) < 1e-9 * max(abs(x) for x in tip_a)
+
+
+def test_the_default_floor_of_load_factors_of_1_or_more_is_1e_4():
+    """The paper's column (load factors in N, to 400) and the elastica (to 1) keep 1e-4; load
+    factors to 0.04 (in N, for mN loads) get 4e-6; a given min_increment is kept."""
+    from helpers import load_raw
+    from ancf_petsc.config.parse import parse_config
+    from helpers import CONFIGS
+    for name, steps, expected in (("achilles_type3_psi45.yaml", None, 1e-4), ("elastica_svk.yaml", None, 1e-4),
+                                  ("elastica_svk.yaml", [0.01, 0.04], 4e-6)):
+        raw = load_raw(name)
+        if steps:
+            raw["steps"] = steps
+        assert parse_config(raw, base_dir=CONFIGS).solver.min_increment == pytest.approx(expected, rel=1e-12)
+    raw = dict(load_raw("elastica_svk.yaml"), steps=[0.01, 0.04], solver={"min_increment": 1e-3})
+    assert parse_config(raw, base_dir=CONFIGS).solver.min_increment == 1e-3

@@ -19,8 +19,16 @@ def open_file(path: str, mode: str) -> h5py.File:
     """results.h5 opened without HDF5's file lock.  With it, any reader holding the file (an
     ``ancf-report --existing`` on the running run, a notebook's ``h5py.File``) made the run's next
     level fail: 'Resource temporarily unavailable', OUTPUT_ERROR, exit 2.  Other runs are kept
-    out of the directory by its own lock (``files.DirectoryLock``)."""
-    return h5py.File(path, mode, locking=False)
+    out of the directory by its own lock (``files.DirectoryLock``).  HDF5 opens a file once per
+    process, with one lock setting: a file this process holds open with the lock (a notebook's
+    ``h5py.File(path)``) is read with it (Results.nodal_vectors said 'file locking flag values
+    don't match': not a whole results.h5; run ancf-solve again)."""
+    try:
+        return h5py.File(path, mode, locking=False)
+    except OSError:
+        if mode != "r":
+            raise
+    return h5py.File(path, mode)      # held here with the lock (a file it cannot read: its error)
 
 
 #: link creation: intermediate groups on (``probes/<name>``), as h5py's

@@ -154,3 +154,22 @@ def test_a_load_moved_to_a_beam_by_name_is_that_beams_load(tmp_path):
     got, want = ap.read_results(tmp_path / "edited"), ap.read_results(tmp_path / "config")
     assert want.probe("lateral_gastrocnemius")[-1][0] > 1e-4
     assert got.probe("lateral_gastrocnemius") == pytest.approx(want.probe("lateral_gastrocnemius"), rel=1e-12)
+
+
+def test_results_read_a_file_the_session_holds_open_with_h5py(tmp_path):
+    """results.h5 open in the same process through h5py's default (locked) h5py.File, as a
+    notebook exploring it holds it: Results.nodal_vectors reads the level.  Before, HDF5 refused
+    to open it again without the lock ('file locking flag values don't match') and the reader
+    said 'not a whole results.h5; run ancf-solve again'."""
+    import h5py
+    import numpy as np
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "out")
+    spec.steps = [0.5, 1.0]
+    assert ap.solve(spec, log=lambda *_: None).status == "completed"
+    run = ap.read_results(tmp_path / "out")
+    with h5py.File(tmp_path / "out" / "results.h5", "r") as held:
+        last = run.nodal_vectors(-1)
+        assert np.array_equal(last, held["steps/step_0002/nodal_vectors"][()])
+        assert np.array_equal(run.nodal_vectors(0), held["model/reference_nodal_vectors"][()])
+    # the tip's r moved by the probe's displacement
+    assert last[-1, 0] - run.nodal_vectors(0)[-1, 0] == pytest.approx(run.probe("tip")[-1], rel=1e-12)

@@ -75,14 +75,17 @@ def _error(line: str, rank: int | None = None) -> None:
         say_stderr(f"ancf-solve: {line}")
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, hold_signals: bool = False) -> int:
+    """``ancf-solve`` with ``argv``; the exit code.  ``hold_signals``: keep the SIGTERM/SIGINT
+    handlers when it returns (``cli``: until the process is gone), else the caller's are back."""
     argv = sys.argv[1:] if argv is None else argv
     from ancf_petsc.solving import interrupt
     interrupt.install()                  # from the start: Ctrl-C is a clean stop, never a traceback
     try:
         code = _main(argv, interrupt)
     finally:
-        interrupt.uninstall()            # back to the caller's handlers (main() called in-process)
+        if not hold_signals:
+            interrupt.uninstall()        # back to the caller's handlers (main() called in-process)
     try:
         sys.stdout.flush()
     except OSError:                      # stdout was a pipe that closed (ancf-solve ... | head)
@@ -255,8 +258,10 @@ def _check_model(args, say) -> int:
 
 def cli() -> None:
     """The ``ancf-solve`` command: ``main`` and a quick process exit (``launch.exit_process``);
-    an exception ``main`` lets through (a bug) ends the ordinary way, with its traceback."""
-    code = main()
+    an exception ``main`` lets through (a bug) ends the ordinary way, with its traceback.  The
+    signal handlers stay through PETSc's and MPI's finalize: a SIGTERM/SIGINT there (a time
+    limit as the run ends) keeps the run's exit code; a second one ends the process at once."""
+    code = main(hold_signals=True)
     from ancf_petsc.parallel.launch import exit_process
     exit_process(code)
 

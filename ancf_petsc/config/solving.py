@@ -144,13 +144,17 @@ def parse_petsc(value) -> dict[str, str]:
     """``petsc:`` options as PETSc will read them (values checked like PETSc parses them)."""
     if not isinstance(value, dict):
         raise ConfigError("petsc", f"expected a mapping of PETSc options, e.g. {{snes_rtol: 1e-10}}; got {shown(value)}")
-    petsc = {}
+    petsc, keys = {}, {}
     for k, v in value.items():
         if not isinstance(k, str) or not k.strip("-"):
             raise ConfigError(f"petsc.{k}", "option names are strings like snes_monitor")
         if isinstance(v, (dict, list)):
             raise ConfigError(f"petsc.{k}", "option values are scalars (number, string, true/false)")
-        name = k.lstrip("-")
+        name = k.lstrip("-").lower()              # PETSc's option names ignore case
+        if name in keys:        # {snes_rtol: 1e-8, SNES_RTOL: 0.5} ran at 1e-8 without a word
+            raise ConfigError(f"petsc.{k}", f"the same PETSc option as petsc.{keys[name]} (PETSc reads "
+                                            "names without their dashes and case); give it once")
+        keys[name] = k
         if "=" in name:                   # PETSc would read an option named 'snes_max_it=3'
             raise ConfigError(f"petsc.{k}", f"an option's name has no '=': write {name.partition('=')[0]}: "
                                             f"{name.partition('=')[2]}; got {shown(k)}")

@@ -152,8 +152,9 @@ def _bases(name: str) -> list[str]:
 
 
 def _kind(name: str) -> tuple[str, str]:
-    """(kind, base name) of an option name without its dash; kind '' = not checked."""
-    for key in _bases(name):
+    """(kind, base name) of an option name without its dash, in any case (PETSc's names ignore
+    it: -SNES_RTOL abc passed the checks); kind '' = not checked."""
+    for key in _bases(name.lower()):
         if key in TYPES:
             return "type", key
         if key in ENUMS:

@@ -17,7 +17,7 @@ compression take the same path and the same cut-backs).
 ``bounded_first_increment`` solves the linearised problem at rest for the first increment once
 (the tangent at the reference state, the SNES's own linear solver) and shrinks the increment so
 that no section vector of a node (r_y, r_z: strains and rotations, dimensionless; r_yy, r_zz,
-r_yz times the section size) moves by more than ``REST_LINEAR_BOUND`` in that linear response:
+r_yz times the section size, a cubic element's r_yyy ... times its square) moves by more than ``REST_LINEAR_BOUND`` in that linear response:
 within the range where the linearisation of a rotation stays accurate (a rotation θ stretches a
 fibre across it by θ²/2 in the linear step).  Only for models with a fibre law: the isotropic
 models' linear response at their first level is far inside the bound (the paper's columns:
@@ -54,10 +54,10 @@ def linear_gradient_change(problem, snes: PETSc.SNES, lam: float) -> float:
         ksp.solve(F, dX)
         ok = ksp.getConvergedReason() > 0 and bool(np.isfinite(dX.norm()))
         d = np.abs(dX.getArray(readonly=True).reshape(-1, P.model.block.vectors_per_node, 3)[P.owned_physical])
-        # r_y, r_z are dimensionless; the section's higher vectors (r_yy, r_zz, r_yz: per metre)
-        # count times the section size
-        local = (max(float(d[:, 1:3].max(initial=0.0)), P.limits.size * float(d[:, 3:].max(initial=0.0)))
-                 if ok else np.inf)
+        # r_y, r_z are dimensionless; a higher vector of section degree k (r_yy: per metre, r_yyy:
+        # per square metre) counts times the section size^(k - 1)
+        size = P.limits.size ** np.array([i + j - 1.0 for i, j in P.model.block.monomials])
+        local = float((d[:, 1:] * size[None, 1:, None]).max(initial=0.0)) if ok else np.inf
         return P.comm.tompi4py().allreduce(local, op=MPI.MAX)
     finally:
         for v in (X, F, dX):

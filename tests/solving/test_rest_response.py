@@ -60,3 +60,31 @@ def test_a_soft_goh_history_reloaded_from_a_frame_of_zero_loads_starts_from_rest
     assert again["iterations"] <= 1.25 * first["iterations"]
     a, b = (np.array(st["probes"]["soleus"]["displacement"]) for st in (first, again))
     assert np.abs(a - b).max() <= 1e-8 * np.abs(a).max()
+
+
+def _cubic_goh_bar(s: float) -> dict:
+    """configs/pretwisted_bar.yaml as the soft-matrix GOH set (alex) on cubic sections (33103),
+    every length x ``s`` and the load x s² (the same stresses)."""
+    raw = load_raw("pretwisted_bar.yaml")
+    beam = raw["beams"][0]
+    beam["element"] = "33103"
+    beam["material"] = {"model": "goh", "mu": 107.2e3, "bulk_modulus": 5.324624e6, "k1": 75.351e6,
+                        "k2": 23.926, "kappa": 0.0, "fibres": {"follow": "twist"}}
+    raw["geometry"]["length"] *= s
+    beam["section"]["semi_axes"] = [s * a for a in beam["section"]["semi_axes"]]
+    beam["section"]["center"] = [s * c for c in beam["section"]["center"]]
+    raw["loads"][0]["traction_force"] = [s * s * f for f in raw["loads"][0]["traction_force"]]
+    return raw
+
+
+def test_the_linear_response_at_rest_is_measured_alike_at_every_size():
+    """Before: a cubic element's r_yyy ... (per square metre) counted times the section size like
+    r_yy, so the same bar 1/16 the size moved 'by' 16 times more and its first increment was cut
+    16-fold (the alex tendon on 33103 at 0.7 mm: 22 sub-steps and 135 Newton iterations to 10 N
+    against 15 and 118 at 70 mm).  Now times the size^(k - 1): the same measure at every size."""
+    from ancf_petsc.solving.rest_response import linear_gradient_change
+    changes = []
+    for s in (1.0, 1.0 / 16.0):
+        P, PETSc = build_problem(_cubic_goh_bar(s))
+        changes.append(linear_gradient_change(P, _snes(PETSc), 1.0))
+    assert changes[0] > 0.0 and changes[1] == pytest.approx(changes[0], rel=1e-8)

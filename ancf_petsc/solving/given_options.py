@@ -6,6 +6,7 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from ..linalg.database import option
+from ..linalg.option_syntax import parse_bool
 from ..linalg.options import DEFAULT_OPTIONS, SolverOptionError
 from .failure_cause import Detail
 from .records import STALLED_STEP
@@ -70,6 +71,13 @@ def given_method(solver) -> str:
         return (f"-{name} {lag}, given in the run's options, keeps an old tangent over Newton's iterations, "
                 "so its steps do not follow the residual: leave it out (solver.reuse_tangent takes chord "
                 "steps only where they converge)")
+    norms = given_option(solver, "snes_linesearch_norms")
+    if norms is not None and parse_bool(norms) is False and solver.linesearch == "basic":
+        # PETSc's basic line search then never measures |F| again: every solve 'stalled' at its
+        # first |F| ('Newton stalls at |F| 4.55e-05 N ... more iterations do not help')
+        return ("-snes_linesearch_norms false, given in the run's options, keeps the basic line search "
+                "from measuring |F| after its steps, so the solve sees its first |F| for ever and cannot "
+                "converge: leave it out")
     try:
         damping = float(given_option(solver, "snes_linesearch_damping"))
     except (TypeError, ValueError):

@@ -12,6 +12,8 @@ from helpers import load_raw, read_summary, solve_cli, write_config
     (["-snes_type", "ngmres"], "-snes_type ngmres, given in the run's options, is not Newton's method"),
     (["-snes_linesearch_damping", "0.5"], "-snes_linesearch_damping 0.5, given in the run's options"),
     (["-snes_linesearch_damping", "0.5", "-snes_linesearch_type", "bt"], "-snes_linesearch_damping 0.5, given"),
+    # |F| never measured after a step: 'Newton stalls at |F| ... more iterations do not help'
+    (["-snes_linesearch_norms", "false"], "-snes_linesearch_norms false, given in the run's options, keeps"),
 ])
 def test_a_given_nonlinear_method_is_named_in_the_failure_it_causes(tmp_path, options, named):
     raw = load_raw("uniaxial_neohookean.yaml")
@@ -21,6 +23,7 @@ def test_a_given_nonlinear_method_is_named_in_the_failure_it_causes(tmp_path, op
     assert p.returncode == 3, p.stdout + p.stderr
     line = p.stderr.strip().splitlines()[-1]
     assert named in line and "singular tangent" not in line and "does not predict" not in line, line
+    assert "stalls" not in line, line
     assert read_summary(tmp_path / "out")["failure_cause"] == "nonlinear_method"
 
 

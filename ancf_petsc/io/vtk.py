@@ -12,6 +12,7 @@ from ..contact.partners import HISTORY
 from ..model.beams import Model
 from ..model.fibre_setup import directions_at
 from ..physics import element3363 as el
+from ..physics.axial_shear import axial_shear_for
 from ..physics.cubature import gauss_legendre
 from ..physics.materials import det_and_inverse_transpose, determinant
 from ..physics.mixed import grouped_basis, pressure_basis
@@ -114,8 +115,9 @@ class AxialRecovery:
     cantilever, mostly the matrix's pressure K (J − 1) (docs/fibres.md, "Output").  With ``ecm``
     (``axis_law``: the law bound to the axis' fibres) the stress is that of the energy it solves,
     P₀(F) + P(F_a) − P₀(F_a) (model.Beam.parts: Ψ₀ the ν = 0 law over the section, Ψ − Ψ₀ on the
-    axis, F_a on the axis at the station): the law's own P(F) there is the stress of 3333's
-    locked lateral strains, 1.6-2.2x beam theory's on the same cantilever."""
+    axis, F_a on the axis at the station; Ψ₀ with its axial-shear part, physics/axial_shear.py):
+    the law's own P(F) there is the stress of 3333's locked lateral strains, 1.6-2.2x beam
+    theory's on the same cantilever."""
 
     def __init__(self, beam, block, xi: np.ndarray, YZ, q0e: np.ndarray, keep: np.ndarray, axis_law=None):
         E, n = len(q0e), np.shape(YZ)[1]
@@ -142,8 +144,12 @@ class AxialRecovery:
                     P, J = law.stress(Fg)
                 else:
                     Fa = np.matmul(qt, self.G_axis[k])
-                    P0, J = law.poisson_free().stress(Fg)
+                    free = law.poisson_free()
+                    P0, J = free.stress(Fg)
                     P = P0 + self.axis_law.stress(Fa)[0] - self.axis_free.stress(Fa)[0]
+                    shear = axial_shear_for(law, free)         # its shear part (physics/axial_shear.py)
+                    if shear is not None:
+                        P = P + shear.stress(Fg)[0] - shear.stress(Fa)[0]
                 sigma = sigma + (ell / J)[:, None, None] * np.matmul(P, np.swapaxes(Fg, 1, 2))
             J, H = det_and_inverse_transpose(F)
             return J[:, None, None] * np.matmul(sigma, H)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..config.specs import ModelSpec
 from ..physics import element3363 as el
+from ..physics.axial_shear import axial_shear_for
 from ..physics.cubature import ellipse_rule, gauss_legendre
 from ..physics.elements import Element, NodeBlock, element as registered_element
 from ..physics.goh import GOH
@@ -72,8 +73,10 @@ class Beam:
         Mikkola (2008) against Poisson locking of the linear section (3333), which cannot contract
         linearly in y, z under bending:  Π = ∫ Ψ₀ dV + ∫ A [Ψ − Ψ₀]_axis dx, with Ψ₀ the same
         material at ν = 0 (``material.poisson_free()``) over the full section rule and the
-        difference Ψ − Ψ₀ on the beam axis (one point per axial station, weight = area).  A
-        homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν)).
+        difference Ψ − Ψ₀ on the beam axis (one point per axial station, weight = area), Ψ₀'s
+        shear modulus μ₀ = E/2 in the axial planes brought back to μ (physics/axial_shear.py).  A
+        homogeneous state keeps Ψ exactly; bending sees E instead of the locked E(1−ν)/((1+ν)(1−2ν)),
+        torsion μ instead of μ₀.
         A fibre-reinforced law comes bound to its fibre directions at each part's points (all
         elements; ``Model.element_data`` takes a rank's).
 
@@ -91,8 +94,10 @@ class Beam:
         on_axis = self._bound(self.material, self.fibres_axis)
         if self.locking == "ecm":
             free = self.material.poisson_free()
-            return [(self.dN, self.wq, self._bound(free, self.fibres)), (self.dN_axis, self.wq_axis, on_axis),
-                    (self.dN_axis, -self.wq_axis, self._bound(free, self.fibres_axis))]
+            parts = [(self.dN, self.wq, self._bound(free, self.fibres)), (self.dN_axis, self.wq_axis, on_axis),
+                     (self.dN_axis, -self.wq_axis, self._bound(free, self.fibres_axis))]
+            shear = axial_shear_for(self.material, free)      # ν = 0's μ₀ = E/2 back to μ (torsion)
+            return parts + ([] if shear is None else [(self.dN, self.wq, shear), (self.dN_axis, -self.wq_axis, shear)])
         return [(self.dN, self.wq, mat)]
 
     def _selective_parts(self) -> list[tuple[np.ndarray, np.ndarray, object]]:

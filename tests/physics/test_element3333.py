@@ -33,7 +33,8 @@ def test_mixed_3363_3333_jacobian_matches_finite_differences(locking, material):
     raw["beams"][1]["material"] = {"model": "neo-hookean", "mu": 1.0e6, "bulk_modulus": 30.0e6} \
         if material == "neo-hookean" else dict(GOH_3333)
     P, PETSc = _problem(raw)
-    assert P.blocks[1].rows.shape[1] == 27 and len(P.blocks[1].parts) == (3 if locking == "ecm" else 1)
+    # ecm: Ψ₀ and its axial-shear part over the section, Ψ on the axis, both subtracted there
+    assert P.blocks[1].rows.shape[1] == 27 and len(P.blocks[1].parts) == (5 if locking == "ecm" else 1)
     P.load_factor = 0.7
     rng = np.random.default_rng(1)
     X, free = perturbed_state(P, rng, 2e-3)
@@ -91,6 +92,33 @@ def test_3333_poisson_locking_and_its_remedy(tmp_path, kappa):
     locked = run_inline(cantilever("3333", "none", kappa), tmp_path / "none")["steps"][-1]["probes"]["tip"]
     assert ecm["displacement"][2] == pytest.approx(ref, rel=2e-3)
     assert locked["displacement"][2] < 0.3 * ref          # 74 % / 97 % / 99.5 % too stiff
+
+
+def twisted_bar(element, locking, radius=0.005, theta=1.0e-4):
+    """A neo-Hookean bar (K/μ = 50, ν = 0.49) on a circular section twisted by ``theta`` at its
+    last node (r_y·e_z = θ, r_z·e_y = −θ), free to warp at both ends."""
+    hold = {"r": "xyz", "r_y": "xz", "r_z": "xy"}
+    return {"name": "torsion", "geometry": {"length": 0.1},
+            "beams": [{"name": "bar", "section": {"shape": "circle", "radius": radius},
+                       "material": {"model": "neo-hookean", "mu": 1.0e6, "bulk_modulus": 50.0e6},
+                       "elements": 2, "element": element, "locking": locking}],
+            "boundary_conditions": [{"beam": "bar", "node": "first", "fix": hold},
+                                    {"beam": "bar", "node": "last", "name": "grip",
+                                     "displacement": {"r_y": {"z": theta}, "r_z": {"y": -theta}}}],
+            "loads": [], "steps": [1.0], "output": {"vtk": False}}
+
+
+@pytest.mark.parametrize("element", ["3333", "3363"])
+def test_ecm_twists_a_circular_bar_with_the_shear_modulus(tmp_path, element):
+    """St Venant: a circular bar twisted by θ over L carries T = μ J θ / L, J = π r⁴ / 2.  ecm's
+    ν = 0 law over the section shears with μ₀ = E/2 = μ (1 + ν), and torsion's shear vanishes on
+    the axis where ecm corrects: the torque was 1.49 μ J θ / L (K/μ = 50), and 3363 + ecm ended
+    'unstable'.  Its axial-shear part (physics/axial_shear.py) gives μ back."""
+    s = run_inline(twisted_bar(element, "ecm"), tmp_path)
+    assert s["status"] == "completed"
+    torque = s["steps"][-1]["reaction_moments"]["grip"][0]
+    exact = 1.0e6 * np.pi * 0.005 ** 4 / 2.0 * 1.0e-4 / 0.1
+    assert torque == pytest.approx(exact, rel=1e-6)                  # measured: 1.5e-9
 
 
 @pytest.mark.mpi

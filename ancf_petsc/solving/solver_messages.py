@@ -2,6 +2,8 @@
 linear solve failed with what works instead."""
 from __future__ import annotations
 
+import math
+
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
@@ -9,7 +11,7 @@ from ..linalg.inertia import mumps_error
 from ..linalg.diagnostics import mumps_hint, solver_hint
 from ..linalg.options import DEFAULT_OPTIONS, factor_package, solver_options
 from .failure_cause import Detail
-from .given_options import NEWTON_STOPS, given_cause, given_option
+from .given_options import given_cause, given_option
 from .records import STALLED_STEP, VIOLATED_STATE
 
 
@@ -169,7 +171,7 @@ def failure_detail(solver, reason: int) -> Detail:
         return Detail(linear_solver_detail(solver, linear), "linear_solver")
     unreachable = (unreachable_atol(solver)
                    if reason in (STALLED_STEP, PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT) else None)
-    unreachable = unreachable or given_cause(solver, reason) or applied_once(solver, reason)
+    unreachable = unreachable or given_cause(solver, reason) or applied_once(solver)
     if unreachable is not None:
         return unreachable
     if reason == VIOLATED_STATE:
@@ -226,38 +228,43 @@ INEXACT_STEP = 1e-6
 SOLVING_PCS = ("lu", "cholesky", "python", "none", "redundant")
 
 
-def applied_once(solver, reason: int) -> Detail | None:
+def applied_once(solver) -> Detail | None:
     """Under -ksp_type preonly (the default) a preconditioner that is no factorisation (jacobi,
     gamg, bjacobi or asm on several ranks, ...) is applied once instead of solving, so the steps
     are no Newton steps: -pc_type jacobi on the 2-element cantilever failed as 'Newton's iterates
     wander ... as near a limit or bifurcation point', -pc_type gamg as 'a nearly singular
-    tangent'.  Measured: ‖J y − F‖ / ‖F‖ for y the preconditioner applied to the last residual F
-    (one application, at a failure only); None where that is rounding (ILU of a beam's banded
-    tangent on one rank is its LU).  Collective."""
+    tangent', and on the paper's tendon jacobi's steps inverted an element.  Measured: ‖J y − b‖ /
+    ‖b‖ for y the preconditioner applied to b, the last residual (J·1 where that is not finite),
+    once, at a failure only; None where that is rounding (ILU of a beam's banded tangent on one
+    rank is its LU).  Collective."""
     ksp = solver.snes.getKSP()
     pc = ksp.getPC()
-    if reason not in (STALLED_STEP, *NEWTON_STOPS) or ksp.getType() != "preonly" or pc.getType() in SOLVING_PCS:
+    if ksp.getType() != "preonly" or pc.getType() in SOLVING_PCS:
         return None
-    F = solver.snes.getFunction()[0]
-    y, r = F.duplicate(), F.duplicate()
+    J, F = ksp.getOperators()[0], solver.snes.getFunction()[0]
+    b, y, r = F.copy(), F.duplicate(), F.duplicate()
     try:
-        pc.apply(F, y)
-        ksp.getOperators()[0].mult(y, r)
-        r.axpy(-1.0, F)
-        share = r.norm() / F.norm()
+        if not 0.0 < b.norm() < math.inf:           # an inverted element's NaN: J's own range
+            y.set(1.0)
+            J.mult(y, b)
+        pc.apply(b, y)
+        J.mult(y, r)
+        r.axpy(-1.0, b)
+        share = r.norm() / b.norm()
     except (PETSc.Error, ZeroDivisionError):
         return None
     finally:
-        y.destroy()
-        r.destroy()
+        for v in (b, y, r):
+            v.destroy()
     if not share > INEXACT_STEP:                # also NaN: nothing measured
         return None
     name = pc.getType()
+    instead = (SADDLE_POINT_HINT if solver.problem.contact is not None else
+               f"add -ksp_type gmres to solve them with -pc_type {name}, or use a factorisation, the "
+               "default (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu")
     return Detail(f" (-pc_type {name} with -ksp_type preonly is applied once instead of solving the Newton "
                   f"equations: its steps leave |J step - F| = {share:.2g} |F|, so Newton converges slowly or not "
-                  f"at all; add -ksp_type gmres to solve them with -pc_type {name}, or use a "
-                  "factorisation, the default (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu"
-                  + ("" if solver.problem.contact is None else f"; {SADDLE_POINT_HINT}") + ")", "linear_solver")
+                  f"at all; {instead})", "linear_solver")
 
 
 def small_newton_budget(solver) -> Detail | None:

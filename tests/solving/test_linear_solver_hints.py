@@ -1,10 +1,11 @@
 """What a failed level says about the linear solver the options chose: a preconditioner applied
 once under -ksp_type preonly, and what to try after a Krylov method failed."""
+import os
 import re
 
 import pytest
 
-from helpers import cantilever, read_summary, solve_cli, write_config
+from helpers import CONFIGS, cantilever, load_raw, read_summary, solve_cli, write_config
 
 
 @pytest.mark.parametrize("pc", ["jacobi", "gamg"])
@@ -25,6 +26,21 @@ def test_a_preconditioner_applied_once_is_named_not_a_limit_point(tmp_path, pc):
     share = float(re.search(r"\|J step - F\| = (\S+) \|F\|", line).group(1))
     assert share > 0.1                             # measured: jacobi 5.2, gamg 0.98
     assert read_summary(tmp_path / "out")["failure_cause"] == "linear_solver"
+
+
+def test_on_a_contact_model_its_inverted_element_is_put_down_to_the_preconditioner(tmp_path):
+    """-pc_type jacobi on the paper's tendon (1 element per subtendon): the steps inverted an
+    element, and the failure said only 'with DIVERGED_FNORM_NAN (an element was inverted)'.  The
+    residual there is not finite: the preconditioner is measured on J's own range instead."""
+    raw = load_raw("achilles_type3_psi45.yaml")
+    for b in raw["beams"]:
+        b["elements"] = 1
+        b["section"]["file"] = os.path.join(CONFIGS, b["section"]["file"])
+    raw.update(steps=[10.0], solver={"max_cutbacks": 0}, output={"dir": str(tmp_path / "out"), "vtk": False})
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-pc_type", "jacobi", "--quiet"])
+    line = p.stderr.strip().splitlines()[-1]
+    assert p.returncode == 3 and "with DIVERGED_FNORM_NAN (-pc_type jacobi with -ksp_type preonly is applied once" in line
+    assert "saddle-point matrix" in line and "add -ksp_type gmres" not in line, line
 
 
 def test_an_exact_preconditioner_under_preonly_is_not_blamed(tmp_path):

@@ -23,9 +23,9 @@ from ..contact.interfaces import unlisted_warnings
 from .beams import Beam, Model, Support
 from .fibre_setup import set_fibre_directions
 from .loading import LoadCurve, LoadGroup, group_for
-from .plausibility import (fibre_warnings, load_warnings, material_warnings, point_force_warnings,
-                           pretwist_resolution_warnings, reversed_load_warnings, section_warnings,
-                           sections_file_length_warnings, size_warnings, twist_warnings)
+from .plausibility import (cubature_warnings, fibre_warnings, load_warnings, material_warnings,
+                           point_force_warnings, pretwist_resolution_warnings, reversed_load_warnings,
+                           section_warnings, sections_file_length_warnings, size_warnings, twist_warnings)
 
 _SECTIONS_FILE_CACHE: dict = {}
 
@@ -341,7 +341,7 @@ def build_model(spec: ModelSpec) -> Model:
                        _end_moments(beams[p.beam], tendon, spec.beams[p.beam], beams[p.beam].x_nodes[p.node])
                        if p.vector == "mean" else np.eye(block.vectors_per_node)[block.index(p.vector)])
               for p in spec.probes}
-    warnings = (section_warnings(spec, beams) + size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
+    warnings = (section_warnings(spec, beams) + cubature_warnings(spec, beams) + size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
                 + material_warnings(spec, beams) + twist_warnings(spec, beams)
                 + pretwist_resolution_warnings(spec, beams, q0) + load_warnings(spec) + reversed_load_warnings(spec)
                 + unlisted_warnings(beams, spec.contact)

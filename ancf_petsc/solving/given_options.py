@@ -136,3 +136,22 @@ def check_given_atol(solver, levels: list[float]) -> None:
                                     f"level (load factor {lam:g}, {size:.4g} N): the unloaded state meets it, so "
                                     "the level would be accepted without a Newton step; give a tolerance well "
                                     f"below the loads, or leave it out (the run's own is {solver.own_atol:.1e})")
+
+
+def rest_level_warning(solver, levels: list[float]) -> list[str]:
+    """A warning when the loads of the first loaded level are within the residual's rounding at
+    rest (at most 20 x |F(q0, 0)|, the floor of the run's own -snes_atol): the unloaded state
+    meets the tolerance, and the level is reported at rest, zero displacements and 'completed'
+    (configs/uniaxial_neohookean.yaml at 4.5e-11 N: every level; the paper's tendon at 4e-10 N
+    first).  Not with a -snes_atol given (check_given_atol) or on a restart (no ``levels``)."""
+    if given_option(solver, "snes_atol") is not None:
+        return []
+    lam, size = first_load(solver.problem.loads, levels)
+    floor = 20.0 * solver.rounding_floor
+    if not 0.0 < size <= floor:
+        return []
+    return [f"warning: the loads of the first level (load factor {lam:g}, {size:.3g} N) are within the "
+            f"rounding of the elastic forces at rest (20 x |F(q0,0)| = {floor:.2g} N, the run's tolerance): "
+            "the unloaded state meets them and the level is reported at rest; loads this small beside the "
+            "model's stiffness are not resolved: check the units (N in loads, Pa in materials)"]
+

@@ -31,7 +31,7 @@ from ..linalg.diagnostics import unused_command_line_options
 from ..petsc.problem import Problem
 from ..petsc.reactions import reaction_entries
 from . import solver_messages, step_over
-from .given_options import check_given_atol
+from .given_options import check_given_atol, rest_level_warning
 from .interrupt import RunInterrupted
 from ..linalg.choice import choose as choose_linear
 from ..linalg.options import matrix_type
@@ -136,7 +136,9 @@ class Run:
                 check_supports(self.problem)
             self.stepper = LoadStepper(self.problem, spec.solver, spec.petsc, say,
                                        max_level=max(spec.steps), linear=self.linear[0])
-            check_given_atol(self.stepper.solver, [] if restored_records(point) else spec.steps)
+            levels = [] if restored_records(point) else spec.steps
+            check_given_atol(self.stepper.solver, levels)
+            self.model.warnings += rest_level_warning(self.stepper.solver, levels)
         except BaseException:
             self.destroy()
             raise

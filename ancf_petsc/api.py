@@ -32,12 +32,13 @@ from .model.beams import Model
 from .model.build import build_model
 
 
-def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restart: str | None = None):
+def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] | None = print, restart: str | None = None):
     """Solve ``spec`` and return a ``solving.run.RunResult`` (status, message, exit code, summary
     on rank 0); every converged level is written to ``spec.output.dir`` as it is reached.
     With ``accuracy:`` in the config the element count is chosen first (workflows/accuracy.py);
     ``restart``: continue the run in that directory from its last converged level.  ``comm``: a
-    PETSc or mpi4py communicator (default PETSc.COMM_WORLD)."""
+    PETSc or mpi4py communicator (default PETSc.COMM_WORLD).  ``log``: called with each line of
+    the run's report on rank 0 (None: no report)."""
     _init_petsc()
     from mpi4py import MPI
     from petsc4py import PETSc
@@ -45,6 +46,11 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
     from .solving.run import run_model
     if not isinstance(spec, ModelSpec):
         raise TypeError(f"solve: expected a ModelSpec (load_config, parse_config); got {type(spec).__name__}")
+    if log is None:            # 'NoneType' object is not callable, after the output directory was made
+        log = _quiet
+    elif not callable(log):
+        raise TypeError(f"solve: log must be a function of one line (str), or None for no report; "
+                        f"got {type(log).__name__}")
     # an mpi4py communicator ended in an AttributeError ('Intracomm' has no 'tompi4py') mid-setup
     comm = PETSc.COMM_WORLD if comm is None else PETSc.Comm(comm) if isinstance(comm, MPI.Comm) else comm
     check_edited(spec)
@@ -56,6 +62,10 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] = print, restar
         check_rungs_carry(spec)
         return select_and_run(spec, comm, log, run_model)
     return run_model(spec, comm, log, restart=restart)
+
+
+def _quiet(*_) -> None:
+    """The report of a run solved with ``log=None``: nothing."""
 
 
 def check_edited(spec: ModelSpec) -> None:

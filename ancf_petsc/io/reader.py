@@ -9,6 +9,7 @@ from results.h5, where every level carries its summary entry.
 from __future__ import annotations
 
 import json
+import operator
 import os
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -18,6 +19,10 @@ import numpy as np
 from ..errors import InputError
 from .h5fast import open_file
 from .files import os_reason
+
+
+#: what a probe reports at each level (summary.json ``probes``): its change and its nodal vector
+PROBE_FIELDS = ("displacement", "value")
 
 
 @dataclass
@@ -38,6 +43,8 @@ class Results:
 
     def probe(self, name: str, what: str = "displacement") -> np.ndarray:
         """A probe's displacement (or ``value``) at every converged level, shape (levels, 3)."""
+        if what not in PROBE_FIELDS:
+            raise ValueError(f"probe {name!r}: what must be one of {', '.join(PROBE_FIELDS)}; got {what!r}")
         steps = self.summary.get("steps", [])
         if steps and name not in steps[0]["probes"]:
             raise KeyError(f"no probe {name!r}; the run has {', '.join(steps[0]['probes'])}")
@@ -50,6 +57,11 @@ class Results:
     def level(self, step: int) -> int:
         """Level number 1 … n of ``step`` (0: the reference state; negative counts from the last
         converged level, as Python's indices do); IndexError naming the levels there are."""
+        try:
+            step = operator.index(step)          # 1.5 was 'Unknown format code 'd'' deep in the read
+        except TypeError:
+            raise TypeError(f"step must be an integer level (0 the reference state, -1 the last); "
+                            f"got {step!r}") from None
         n = len(self.summary.get("steps", []))
         k = step + n + 1 if step < 0 else step
         if not 0 <= k <= n:

@@ -173,3 +173,22 @@ def test_results_read_a_file_the_session_holds_open_with_h5py(tmp_path):
         assert np.array_equal(run.nodal_vectors(0), held["model/reference_nodal_vectors"][()])
     # the tip's r moved by the probe's displacement
     assert last[-1, 0] - run.nodal_vectors(0)[-1, 0] == pytest.approx(run.probe("tip")[-1], rel=1e-12)
+
+
+def test_the_apis_own_arguments_are_refused_by_name(tmp_path):
+    """solve(log=None) runs without a report (it was "'NoneType' object is not callable" after
+    the output directory was made); a log that is no function, a level 1.5 (numpy's and
+    h5py's 'Unknown format code') and a probe field 'force' (a bare KeyError) are refused
+    saying what is expected."""
+    import numpy as np
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "out")
+    spec.steps = [0.5, 1.0]
+    with pytest.raises(TypeError, match="log must be a function"):
+        ap.solve(spec, log="quiet")
+    assert ap.solve(spec, log=None).status == "completed"
+    run = ap.read_results(tmp_path / "out")
+    assert run.probe("tip")[-1][0] == pytest.approx(run.nodal_vectors(np.int64(2))[-1, 0, 0] - 0.1, rel=1e-12)
+    with pytest.raises(TypeError, match="step must be an integer level"):
+        run.nodal_vectors(1.5)
+    with pytest.raises(ValueError, match="what must be one of displacement, value; got 'force'"):
+        run.probe("tip", "force")

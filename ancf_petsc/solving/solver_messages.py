@@ -1,17 +1,15 @@
-"""The load solver's messages: its solver in one line, the linear solver in effect, and why a
-linear solve failed with what works instead."""
+"""The load solver's messages: its solver in one line, and why a level failed with what to try
+instead (the linear solver's part: linear_messages.py)."""
 from __future__ import annotations
-
-import math
 
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
-from ..linalg.inertia import mumps_error
-from ..linalg.diagnostics import mumps_hint, solver_hint
-from ..linalg.options import DEFAULT_OPTIONS, factor_package, solver_options
+from ..linalg.options import DEFAULT_OPTIONS
 from .failure_cause import Detail
 from .given_options import given_cause, given_option
+from .linear_messages import (MF_NO_MATRIX, MF_OPERATOR, SADDLE_POINT_HINT, applied_once,  # noqa: F401
+                              linear_solver_detail, matrix_free, solver_text)
 from .records import STALLED_STEP, VIOLATED_STATE
 
 
@@ -54,30 +52,6 @@ def _band_text(solver) -> str:
         return f"; Newton steps held to {solver.spec.band_step:g} fade-band widths"
     why = "no contact" if solver.problem.contact is None else f"line search {solver.linesearch}"
     return f"; Newton steps not held to the fade bands (solver.band_step needs full steps with contact, {why})"
-
-
-#: what works on the saddle-point Jacobian of a model with contact multipliers (measured on
-#: configs/achilles_type3_psi45.yaml, docs/running.md)
-SADDLE_POINT_HINT = ("a contact model's Jacobian is a saddle-point matrix (a zero block for the "
-                     "multipliers): only a pivoting direct solver factors it, the default (-pc_type cholesky, "
-                     "MUMPS LDLᵀ) or -pc_type lu (MUMPS); Krylov methods with gamg, hypre, bjacobi, asm, ilu or "
-                     "jacobi and the factorisations of PETSc and SuperLU_DIST fail on it")
-
-
-#: what works instead of ``-snes_mf`` (measured on the two-element bar of tests/apps/test_edges.py
-#: and configs/achilles_type3_psi45.yaml: -snes_mf_operator -ksp_type gmres converges like the
-#: default; -snes_mf -ksp_type gmres solves the bar but did not reach the contact model's first
-#: level in 5 minutes)
-MF_OPERATOR = ("-snes_mf_operator -ksp_type gmres (GMRES on matrix-free products, preconditioned by "
-               "the factored assembled Jacobian)")
-MF_NO_MATRIX = "-snes_mf leaves no matrix to precondition with, so PETSc sets -pc_type none"
-
-
-def matrix_free(snes: PETSc.SNES) -> bool:
-    """Whether the SNES runs matrix-free without a preconditioning matrix (``-snes_mf``; not
-    ``-snes_mf_operator``, which keeps the assembled Jacobian for the preconditioner)."""
-    P = snes.getJacobian()[1]
-    return P is not None and P.getType() == PETSc.Mat.Type.MFFD
 
 
 def floor_detail(step: float, lam: float, floor: float) -> Detail:
@@ -222,51 +196,6 @@ def failure_detail(solver, reason: int) -> Detail:
     return newton_course(solver.last_solve_history, solver.snes.getTolerances()[3])
 
 
-#: share of the residual a Newton step may leave in its linear equations (an exact solve: rounding)
-INEXACT_STEP = 1e-6
-#: preconditioners that solve the Newton equations under -ksp_type preonly (none: its own message)
-SOLVING_PCS = ("lu", "cholesky", "python", "none", "redundant")
-
-
-def applied_once(solver) -> Detail | None:
-    """Under -ksp_type preonly (the default) a preconditioner that is no factorisation (jacobi,
-    gamg, bjacobi or asm on several ranks, ...) is applied once instead of solving, so the steps
-    are no Newton steps: -pc_type jacobi on the 2-element cantilever failed as 'Newton's iterates
-    wander ... as near a limit or bifurcation point', -pc_type gamg as 'a nearly singular
-    tangent', and on the paper's tendon jacobi's steps inverted an element.  Measured: ‖J y − b‖ /
-    ‖b‖ for y the preconditioner applied to b, the last residual (J·1 where that is not finite),
-    once, at a failure only; None where that is rounding (ILU of a beam's banded tangent on one
-    rank is its LU).  Collective."""
-    ksp = solver.snes.getKSP()
-    pc = ksp.getPC()
-    if ksp.getType() != "preonly" or pc.getType() in SOLVING_PCS:
-        return None
-    J, F = ksp.getOperators()[0], solver.snes.getFunction()[0]
-    b, y, r = F.copy(), F.duplicate(), F.duplicate()
-    try:
-        if not 0.0 < b.norm() < math.inf:           # an inverted element's NaN: J's own range
-            y.set(1.0)
-            J.mult(y, b)
-        pc.apply(b, y)
-        J.mult(y, r)
-        r.axpy(-1.0, b)
-        share = r.norm() / b.norm()
-    except (PETSc.Error, ZeroDivisionError):
-        return None
-    finally:
-        for v in (b, y, r):
-            v.destroy()
-    if not share > INEXACT_STEP:                # also NaN: nothing measured
-        return None
-    name = pc.getType()
-    instead = (SADDLE_POINT_HINT if solver.problem.contact is not None else
-               f"add -ksp_type gmres to solve them with -pc_type {name}, or use a factorisation, the "
-               "default (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu")
-    return Detail(f" (-pc_type {name} with -ksp_type preonly is applied once instead of solving the Newton "
-                  f"equations: its steps leave |J step - F| = {share:.2g} |F|, so Newton converges slowly or not "
-                  f"at all; {instead})", "linear_solver")
-
-
 def small_newton_budget(solver) -> Detail | None:
     """A solve out of iterations under a -snes_max_it (command line or config ``petsc:``) below
     the run's own budget (15, unilateral contact 60, friction 200): the budget given is the
@@ -349,36 +278,6 @@ def newton_cycle(history: list[float]) -> tuple[int, float, float] | None:
         if all(abs(tail[k] - tail[k + p]) <= CYCLE_TOL * max(tail[k], tail[k + p]) for k in range(n)):
             return p, min(h[-p:]), max(h[-p:])
     return None
-
-
-def linear_solver_detail(solver, reason: int) -> str:
-    """Why a DIVERGED_LINEAR_SOLVE happened and what works (empty for other reasons)."""
-    if reason != PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
-        return ""
-    kreason = {getattr(PETSc.KSP.ConvergedReason, k): k for k in dir(PETSc.KSP.ConvergedReason)
-               if not k.startswith("_")}.get(solver.ksp_reason, str(solver.ksp_reason))
-    infog1 = mumps_error(solver.snes.getKSP())
-    if solver.linear == "fieldsplit":
-        hint = "solver.linear: direct factors the whole Jacobian instead"
-    elif matrix_free(solver.snes):
-        hint = f"{MF_NO_MATRIX}; use {MF_OPERATOR}, or leave out -snes_mf"
-    elif infog1 is not None:
-        hint = mumps_hint(infog1)
-    elif solver.problem.contact is not None:
-        hint = SADDLE_POINT_HINT
-    else:
-        pc, factor = factor_package(solver.petsc_options, solver.prefix, solver.problem.symmetric)
-        hint = solver_hint(pc, factor, solver.problem.comm.size, PETSc.Sys.hasExternalPackage)
-    return f" (the linear solver {solver_text(solver)} stopped with {kreason}; {hint})"
-
-
-def solver_text(solver) -> str:
-    """The linear solver in effect, for messages."""
-    if solver.linear == "fieldsplit":
-        return "FGMRES with the fascicle Schur preconditioner, solver.linear: fieldsplit"
-    if matrix_free(solver.snes):
-        return f"-snes_mf -ksp_type {solver.snes.getKSP().getType()} (no preconditioner)"
-    return solver_options(solver.petsc_options, solver.prefix, solver.problem.symmetric)
 
 
 def unsettled_message(unsettled: list[float], levels: int) -> str:

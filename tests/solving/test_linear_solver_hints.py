@@ -60,3 +60,18 @@ def test_the_hint_after_a_failed_krylov_solve_names_other_preconditioners():
         assert pc not in krylov and len(krylov.split(",")) == 2, krylov
     assert solver_hint("jacobi", "", 1).endswith("-pc_type gamg, hypre, bjacobi or asm")
     assert solver_hint("jacobi", "", 1, lambda name: name != "hypre").endswith("-pc_type gamg, bjacobi or asm")
+
+
+def test_a_krylov_budget_given_below_the_solvers_own_is_named(tmp_path):
+    """-ksp_max_it 2 with the fascicle Schur solver (FGMRES, its own budget 100) on the 7-fascicle
+    bundle: the failure said only 'solver.linear: direct factors the whole Jacobian instead'.
+    (GMRES with -ksp_max_it 3 on the direct path: tests/apps/test_edges.py.)"""
+    raw = load_raw("bundle_hex7.yaml")
+    raw["bundle"]["elements"] = 2
+    raw.update(steps=[0.5], output={"dir": str(tmp_path / "out"), "vtk": False},
+               solver={"max_cutbacks": 0, "linear": "fieldsplit"})
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-ksp_max_it", "2", "--quiet"])
+    line = p.stderr.strip().splitlines()[-1]
+    assert p.returncode == 3 and "stopped with DIVERGED_MAX_IT; -ksp_max_it 2, given in the run's options, " \
+        "is below the linear solver's own 100" in line, line
+    assert "solver.linear: direct factors the whole Jacobian instead" in line

@@ -50,9 +50,11 @@ def event_count(name: str) -> int:
 
 
 def view_at_exit(config_options: dict) -> None:
-    """Put the config's ``log_view`` (``AT_FINISH_OPTIONS``) into PETSc's options database for the
-    rest of the process: PETSc prints the log in PetscFinalize, as for ``-log_view`` on the
-    command line (which wins).  The log itself runs already (``PETSc.Log.begin`` in each run)."""
+    """Put the config's ``log_view`` and ``options_left`` (``AT_FINISH_OPTIONS``) into PETSc's
+    options database for the rest of the process: PETSc prints the log (and the options never
+    used) in PetscFinalize, as for ``-log_view`` on the command line (which wins), and
+    ``options_left`` turns ancf-solve's own report off as on the command line (it was itself
+    reported as never used).  The log itself runs already (``PETSc.Log.begin`` in each run)."""
     for key in AT_FINISH_OPTIONS:
         if key in config_options and option(key) is None:
             insert(key, config_options[key])

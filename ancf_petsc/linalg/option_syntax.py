@@ -92,7 +92,7 @@ START_UP_OPTIONS = ("help", "version", "info", "log_trace", "malloc_debug", "on_
                     "no_signal_handler", "options_file", "skip_petscrc", "fp_trap")
 #: options PETSc reads when it finishes (PetscFinalize): the config's value is put into the
 #: database for the rest of the process (linalg/logging.view_at_exit), not around a solve
-AT_FINISH_OPTIONS = ("log_view",)
+AT_FINISH_OPTIONS = ("log_view", "options_left")
 
 #: prefixes under which the same option names appear (block, multigrid and split solvers)
 PREFIX = re.compile(r"^(?:(?:sub|mg_coarse|mg_levels(?:_\d+)?|fieldsplit_\w+?|redundant|ksp)_)+")

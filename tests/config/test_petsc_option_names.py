@@ -6,7 +6,7 @@ import pytest
 from ancf_petsc.config.solving import parse_petsc
 from ancf_petsc.config.values import ConfigError
 from ancf_petsc.linalg.option_syntax import check_command_line
-from helpers import cantilever, probe, run_inline
+from helpers import cantilever, probe, run_inline, solve_cli, write_config
 
 
 @pytest.mark.parametrize("block, key, first", [
@@ -46,3 +46,17 @@ def test_a_solver_named_in_capitals_is_the_solver_used(tmp_path):
     assert "PC lu (mumps) on AIJ" in s["solver"] and s["status"] == "completed"
     tip, tip_ref = np.array(probe(s, "tip")), np.array(probe(ref, "tip"))
     assert np.abs(tip - tip_ref).max() <= 1e-8 * np.abs(tip_ref).max()
+
+
+@pytest.mark.parametrize("value, petsc_reports", [(0, False), (True, True)])
+def test_options_left_in_the_config_works_as_on_the_command_line(tmp_path, value, petsc_reports):
+    """petsc: {options_left: 0} did not turn the report of unused options off: it was itself
+    reported ('PETSc option -options_left (config) was never used: misspelt ...').  0 now turns the
+    report off and true hands it to PETSc, as -options_left on the command line."""
+    raw = cantilever([0.5], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    raw["petsc"] = {"options_left": value}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-snes_montor", "--quiet"])
+    assert p.returncode == 0, p.stderr
+    assert "was never used" not in p.stderr, p.stderr
+    assert ("Option left: name:-snes_montor" in p.stdout + p.stderr) == petsc_reports

@@ -27,6 +27,12 @@ def probe_vectors(config: dict) -> dict[str, str]:
             if isinstance(p, dict) and "name" in p}
 
 
+def mm_cell(value: float) -> str:
+    """A length in mm for a table: 5 decimals, or 4 significant digits below 0.01 mm (a fascicle's
+    displacements of 20 nm read -0.00002, of 4 nm -0.00000, at 5 decimals)."""
+    return f"{value:.5f}" if value == 0.0 or abs(value) >= 0.01 or not np.isfinite(value) else f"{value:.4g}"
+
+
 def moved_components(steps: list[dict], name: str) -> list[int]:
     """The components of probe ``name``'s displacement shown: x, and y or z where they reach
     ``MOVED`` of its largest component at some level (a cantilever's u_z was left out: the table
@@ -61,7 +67,7 @@ def probe_markdown(summary: dict, config: dict) -> list[str]:
             if name not in st.get("probes", {}):
                 return ""
             d = np.asarray(st["probes"][name]["displacement"], dtype=float) * scale
-            return f"{d[k]:.5f}" if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
+            return mm_cell(d[k]) if position else "(" + ", ".join(f"{x:.5g}" for x in d) + ")"
         cells += [lambda st, k=k, value=value: value(st, k) for k in (shown if position else [0])]
     lines = [level_head(steps) + " | ".join(heads) + " |", level_rule(steps) + "---:|" * len(heads)]
     lines += [f"| {level_cell(st)} | " + " | ".join(c(st) for c in cells) + " |" for st in steps]
@@ -159,7 +165,7 @@ def interface_markdown(summary: dict, config: dict) -> list[str]:
     lines = ["", intro, "", level_head(steps) + " | ".join(heads) + " |", level_rule(steps) + "---:|" * len(heads)]
     for st, f in zip(steps, force):
         dd = st.get("displacement_differences", {})
-        cells = [f"{f:.6g}"] + [f"{1e3 * dd[p]['end']:.5f}" if p in dd else "" for p in pairs]
+        cells = [f"{f:.6g}"] + [mm_cell(1e3 * dd[p]["end"]) if p in dd else "" for p in pairs]
         lines.append(f"| {level_cell(st)} | " + " | ".join(cells) + " |")
     return lines
 

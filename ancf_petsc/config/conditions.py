@@ -189,7 +189,9 @@ def check_edited_conditions(spec) -> None:
     components or of text (numpy's broadcast error), a load kind or probe vector the config does
     not know (kind 'foo' ran as a point force), a probe name given twice (one probe's answers
     lost), a fixed component past the node block, and beams of one name (results.h5's
-    'name already exists').  A beam may be given by name; numpy values are taken as numbers."""
+    'name already exists'), or a model name that is no text (an OutputError).  A beam may be
+    given by name; numpy values are taken as numbers."""
+    spec.name = string(spec.name, "name")
     names = [string(b.name, f"beams[{i}].name") for i, b in enumerate(spec.beams)]
     for i, name in enumerate(names):
         if name in names[:i]:
@@ -212,7 +214,11 @@ def check_edited_conditions(spec) -> None:
         pr.vector = string(pr.vector, f"{pr.path}.vector", blocks[pr.beam].names + ("mean",))
     for bc in spec.boundary_conditions:
         n = blocks[bc.beam].vectors_per_node
-        for v, c in [held[:2] for held in [*bc.dofs, *bc.displacement]]:
+        bc.displacement = [(*held[:2], number(_python(held[2]), f"{bc.path}.displacement"))
+                           if isinstance(held, (tuple, list)) and len(held) == 3 else held
+                           for held in _python(bc.displacement)]
+        for held in [*bc.dofs, *bc.displacement]:
+            v, c = held[:2] if isinstance(held, (tuple, list)) and len(held) in (2, 3) else (held, None)
             if not (isinstance(v, int) and isinstance(c, int) and 0 <= v < n and 0 <= c < 3):
                 raise ConfigError(f"{bc.path}.fix", f"(vector, component) ({v!r}, {c!r}) is not a "
                                                     f"component of a node: vectors 0..{n - 1} "
@@ -242,7 +248,7 @@ def resolve_nodes(spec) -> None:
     index the beam no longer has."""
     n_nodes = [ELEMENTS[b.element].block.nodes_of(b.elements) for b in spec.beams]
     for item in [*spec.boundary_conditions, *spec.loads, *spec.probes]:
-        if item.node != item.resolved:
+        if item.node != item.resolved or item.given is None:     # edited, or made in code
             item.given = item.node
         if item.given is None or not 0 <= item.beam < len(n_nodes):
             continue

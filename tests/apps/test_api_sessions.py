@@ -126,6 +126,9 @@ def test_an_edited_contact_is_checked_as_the_configs(tmp_path, key, value, path)
     (lambda s: setattr(s.boundary_conditions[0], "dofs", [(9, 0)]), "boundary_conditions[0].fix"),
     (lambda s: setattr(s.beams[1], "name", "soleus"), "beams[1].name"),      # results.h5's OutputError
     (lambda s: s.beams.pop(), "boundary_conditions[2].beam"),                # an IndexError before
+    (lambda s: setattr(s.boundary_conditions[0], "displacement", [(0, 0, "x")]),
+     "boundary_conditions[0].displacement"),                                  # a ValueError in the build
+    (lambda s: setattr(s, "name", None), "name"),                             # an OutputError
 ])
 def test_edited_supports_loads_and_probes_are_checked_as_the_configs(tmp_path, edit, path):
     """A support, load or probe (or a beam they name) edited to what a config cannot say: an
@@ -192,3 +195,17 @@ def test_the_apis_own_arguments_are_refused_by_name(tmp_path):
         run.nodal_vectors(1.5)
     with pytest.raises(ValueError, match="what must be one of displacement, value; got 'force'"):
         run.probe("tip", "force")
+
+
+def test_probes_made_in_code_are_placed_as_a_configs(tmp_path):
+    """ProbeSpec('end', 0, 'last') appended to a parsed spec (it raised a TypeError in the build:
+    'last' was never resolved) reports the tip, and ProbeSpec('mid', 0, 2) the middle node of the
+    2-element bar: half the tip's displacement in this homogeneous stretch."""
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "out")
+    from ancf_petsc.config.specs import ProbeSpec
+    spec.beams[0].elements, spec.steps = 2, [1.0]
+    spec.probes += [ProbeSpec("end", 0, "last"), ProbeSpec("mid", 0, 2)]
+    assert ap.solve(spec, log=None).status == "completed"
+    run = ap.read_results(tmp_path / "out")
+    assert run.probe("end")[-1] == pytest.approx(run.probe("tip")[-1], rel=1e-14, abs=1e-18)
+    assert run.probe("mid")[-1][0] == pytest.approx(run.probe("tip")[-1][0] / 2, rel=1e-9)

@@ -21,6 +21,7 @@ from ..physics.sections_file import inline_loop, load_sections_file
 from ..physics.spline import SectionError
 from ..contact.interfaces import unlisted_warnings
 from .beams import Beam, Model, Support
+from .face_turns import slope_warnings
 from .fibre_setup import set_fibre_directions
 from .loading import LoadCurve, LoadGroup, group_for
 from .plausibility import (cubature_warnings, fibre_warnings, load_warnings, material_warnings,
@@ -344,7 +345,7 @@ def build_model(spec: ModelSpec) -> Model:
     warnings = (section_warnings(spec, beams) + cubature_warnings(spec, beams) + size_warnings(spec, beams) + point_force_warnings(spec, beams) + fibre_warnings(spec, beams)
                 + material_warnings(spec, beams) + twist_warnings(spec, beams)
                 + pretwist_resolution_warnings(spec, beams, q0) + load_warnings(spec) + reversed_load_warnings(spec)
-                + unlisted_warnings(beams, spec.contact)
+                + unlisted_warnings(beams, spec.contact) + slope_warnings(spec)
                 + sections_file_length_warnings(spec, {b.section.file: _sections_file(b.section.file, b.section.spline_degree)
                                                        .length_m for b in spec.beams if b.section.file is not None}))
     end_means, root_means = ([_end_moments(b, tendon, spec.beams[b.index], b.x_nodes[k]) for b in beams]

@@ -62,6 +62,10 @@ def petsc_message(exc: Exception) -> str:
     return lines[-1] if lines else "PETSc error"
 
 
+#: factorisation packages without a Cholesky factorisation (PETSc 3.18)
+LU_ONLY = ("superlu", "superlu_dist", "umfpack", "klu", "strumpack")
+
+
 def solver_hint(pc: str, factor: str, ranks: int, has_package=lambda name: True) -> str:
     """What works instead of a preconditioner / factorisation PETSc refused."""
     direct = ("the default direct solver (-pc_type cholesky, MUMPS LDLᵀ) or -pc_type lu with "
@@ -74,6 +78,8 @@ def solver_hint(pc: str, factor: str, ranks: int, has_package=lambda name: True)
         return f"-pc_factor_mat_solver_type {factor} is sequential: on {ranks} ranks use {direct}"
     if pc == "hypre" and not has_package("hypre"):
         return f"this PETSc has no hypre: use -pc_type gamg, or {direct}"
+    if pc == "cholesky" and factor in LU_ONLY:      # -pc_factor_mat_solver_type superlu alone
+        return (f"-pc_factor_mat_solver_type {factor} factors LU only: add -pc_type lu, or use {direct}")
     if pc in ("lu", "cholesky", "ilu", "icc") and factor:
         return f"-pc_factor_mat_solver_type {factor} cannot do {pc} here: use {direct}"
     # not the one that failed (-ksp_type gmres -pc_type gamg was told to use it)

@@ -75,3 +75,21 @@ def test_a_krylov_budget_given_below_the_solvers_own_is_named(tmp_path):
     assert p.returncode == 3 and "stopped with DIVERGED_MAX_IT; -ksp_max_it 2, given in the run's options, " \
         "is below the linear solver's own 100" in line, line
     assert "solver.linear: direct factors the whole Jacobian instead" in line
+
+
+def test_an_lu_only_package_with_the_default_cholesky_is_told_to_add_lu(tmp_path):
+    """-pc_factor_mat_solver_type superlu alone (the default -pc_type cholesky) was refused with
+    'superlu cannot do cholesky here: use ... -pc_type lu with -pc_factor_mat_solver_type mumps',
+    not that -pc_type lu makes SuperLU run; with it the cantilever gets the default's tip."""
+    from ancf_petsc.linalg.diagnostics import solver_hint
+    assert "superlu_dist factors LU only: add -pc_type lu" in solver_hint("cholesky", "superlu_dist", 2)
+    raw = cantilever([0.5], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    cfg = write_config(raw, tmp_path / "c.yaml")
+    p = solve_cli(cfg, extra=["-pc_factor_mat_solver_type", "superlu", "--quiet"])
+    assert p.returncode == 2 and "superlu factors LU only: add -pc_type lu" in p.stderr, p.stderr
+    tips = []
+    for extra in ([], ["-pc_factor_mat_solver_type", "superlu", "-pc_type", "lu"]):
+        assert solve_cli(cfg, extra=extra + ["--quiet"]).returncode == 0
+        tips.append(read_summary(tmp_path / "out")["steps"][-1]["probes"]["tip"]["displacement"])
+    assert max(abs(a - b) for a, b in zip(*tips)) <= 1e-10 * max(abs(a) for a in tips[0])

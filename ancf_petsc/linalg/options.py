@@ -186,7 +186,7 @@ def prefixed_option_problem(prefix: str) -> str | None:
         return None
     # read without marking them used: -left_snes_maxit (options_prefix left_) was never reported
     for name, value in sorted(option_values().items()):
-        if name.startswith(prefix):
+        if name.lower().startswith(prefix.lower()):           # PETSc's names ignore case
             value = value or None                  # a flag without a value: None
             why = check_value(name[len(prefix):], value)
             if why:

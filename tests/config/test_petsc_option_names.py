@@ -60,3 +60,13 @@ def test_options_left_in_the_config_works_as_on_the_command_line(tmp_path, value
     assert p.returncode == 0, p.stderr
     assert "was never used" not in p.stderr, p.stderr
     assert ("Option left: name:-snes_montor" in p.stdout + p.stderr) == petsc_reports
+
+
+def test_an_option_under_the_prefix_in_capitals_is_checked(tmp_path):
+    """With solver.options_prefix left_, -LEFT_SNES_MAX_IT abc passed the prefix's checks and PETSc
+    stopped at set-up with 'Input string abc has no integer value'."""
+    raw = cantilever([0.5], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    raw["solver"] = {"options_prefix": "left_"}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-LEFT_SNES_MAX_IT", "abc", "--quiet"])
+    assert p.returncode == 2 and "PETSc option -LEFT_SNES_MAX_IT abc: expected an integer" in p.stderr, p.stderr

@@ -284,7 +284,10 @@ def check_command_line(args: list[str]) -> str | None:
 #: set up in code; shell/python: a user's routine): refused before the solve, which failed with
 #: "Must call SNESShellSetSolve() first" reported as a linear-solver failure (exit 3)
 NEEDS_CODE = {"snes_type": ("aspin", "composite", "nasm", "patch", "python", "shell"),
-              "snes_linesearch_type": ("shell",)}
+              "snes_linesearch_type": ("shell",),
+              # -pc_type shell: 'PETSC_ERROR in the linear solver ... No apply() routine provided
+              # to Shell PC' at the first level (exit 3)
+              "pc_type": ("python", "shell"), "ksp_type": ("python",)}
 
 _COMMON = {
     "snes_type": ("newtonls", "newtontr", "vinewtonrsls", "qn", "ksponly"),

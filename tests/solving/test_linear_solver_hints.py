@@ -93,3 +93,16 @@ def test_an_lu_only_package_with_the_default_cholesky_is_told_to_add_lu(tmp_path
         assert solve_cli(cfg, extra=extra + ["--quiet"]).returncode == 0
         tips.append(read_summary(tmp_path / "out")["steps"][-1]["probes"]["tip"]["displacement"])
     assert max(abs(a - b) for a, b in zip(*tips)) <= 1e-10 * max(abs(a) for a in tips[0])
+
+
+@pytest.mark.parametrize("option, value", [("pc_type", "shell"), ("pc_type", "python"), ("ksp_type", "python"),
+                                           ("sub_pc_type", "shell")])
+def test_a_solver_type_that_needs_code_is_refused_before_the_run(tmp_path, option, value):
+    """-pc_type shell ran to the first level and failed there, exit 3: 'PETSC_ERROR in the linear
+    solver (-ksp_type preonly -pc_type shell): No apply() routine provided to Shell PC'."""
+    raw = cantilever([0.5], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=[f"-{option}", value, "--quiet"])
+    kind = option.removeprefix("sub_").rsplit("_", 1)[0]
+    assert p.returncode == 2 and f"-{option} {value}: {kind} type '{value}' needs setup code" in p.stderr, p.stderr
+    assert not (tmp_path / "out" / "results.h5").exists()

@@ -149,6 +149,14 @@ def test_the_count_does_not_depend_on_the_linear_solver(tmp_path, petsc):
     assert s["status"] == "unstable" and s["stability_checked"]
 
 
+def test_the_count_on_a_saddle_point_jacobian_does_not_depend_on_the_linear_solver(tmp_path):
+    """The mean-gap Achilles model's step to 50 N lands on a saddle (1 negative eigenvalue on the
+    constraint surface, the dense spectrum's: test_negative_pivots_equal_the_dense_spectrum); with
+    -pc_type lu it was 'completed' without a count."""
+    s = run_inline(unguarded(coarse_achilles()), tmp_path / "lu", petsc={"pc_type": "lu"})
+    assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 1] and s["status"] == "unstable"
+
+
 def test_no_count_for_an_unsymmetric_jacobian(tmp_path):
     """Inertia says nothing of an unsymmetric matrix: Coulomb friction's Jacobian (LU) is not
     counted, nor factored again for a count."""

@@ -30,6 +30,7 @@ from ..contact.interfaces import ContactSetupError, find_interfaces, supported_e
 from ..contact.tangential import TANGENTIAL_LAWS
 from ..errors import InputError
 from .restart_curves import curve_difference, curve_owner, grown_histories, same_curve
+from .restart_places import difference_text
 
 #: config keys that define the model (a restart must not change them; steps, solver, petsc,
 #: output and partition may change)
@@ -213,7 +214,7 @@ def check_same_run(point: RestartPoint, model, steps: list, directory: str = "")
             stored = dict(stored, contact=_word(json.dumps(words, sort_keys=True)))
         now = fingerprint(model)
         found = first_difference(grown_histories(stored, now, point.load_factor), now)
-        differs = None if found is None else f"{found[0]} ({found[1]}) differs"
+        differs = None if found is None else f"{difference_text(model, found, stored, now)} differs"
         if found is not None and found[0].startswith("load_curve_"):
             differs = f"{curve_owner(model, found[0])}: {found[1]}"
     else:                                         # written before fingerprints: the YAML keys

@@ -1,6 +1,7 @@
 """The validated config as dataclasses (ModelSpec and its parts) and the vocabularies of choices."""
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -44,8 +45,24 @@ FIX_PRESETS = {
 
 
 # --------------------------------------------------------------------------------- spec types
+class _Fields:
+    """A spec part whose attributes are its fields: one set under another name through the Python
+    API (``spec.twist = 30`` for twist_deg, ``beam.n_elements = 8``) was kept and never read, and
+    the run solved the unedited model; it now raises AttributeError naming the fields."""
+    __slots__ = ()
+
+    def __setattr__(self, name: str, value) -> None:
+        fields = type(self).__dataclass_fields__
+        if name not in fields:
+            near = difflib.get_close_matches(name, list(fields), 1)
+            raise AttributeError(f"{type(self).__name__} has no field {name!r}"
+                                 + (f" (did you mean {near[0]!r}?)" if near else "")
+                                 + f"; its fields: {', '.join(fields)}")
+        object.__setattr__(self, name, value)
+
+
 @dataclass
-class SectionSpec:
+class SectionSpec(_Fields):
     shape: str
     center: tuple[float, float] = (0.0, 0.0)
     semi_axes: tuple[float, float] | None = None
@@ -67,7 +84,7 @@ DEFAULT_AXIAL_POINTS = 2
 
 
 @dataclass
-class BeamSpec:
+class BeamSpec(_Fields):
     name: str
     section: SectionSpec
     material: dict
@@ -85,7 +102,7 @@ class BeamSpec:
     parsed: tuple | None = None
 
 
-class _Placed:
+class _Placed(_Fields):
     """A support, load or probe: ``resolved`` is its node as last resolved (parsing,
     ``conditions.resolve_nodes``), so that a ``node`` edited through the Python API is told apart."""
     resolved: int | None
@@ -135,7 +152,7 @@ class ProbeSpec(_Placed):
 
 
 @dataclass
-class TangentialSpec:
+class TangentialSpec(_Fields):
     """``contact.tangential``: the interface's tangential law (contact/tangential.py) and its values."""
     law: str = TANGENTIAL_LAW_NAMES[0]     # a name of TANGENTIAL_LAWS; the first is frictionless
     stiffness: float | None = None         # elastic matrix: k_t = G / thickness [Pa/m]
@@ -151,7 +168,7 @@ class TangentialSpec:
 
 
 @dataclass
-class ContactSpec:
+class ContactSpec(_Fields):
     mode: str = DEFAULT_CONTACT_MODE       # a name of contact/laws.py LAWS
     interfaces: list = field(default_factory=list)   # [(beam_a, beam_b, curve name or None)]
     axial_points: int = 3
@@ -183,7 +200,7 @@ class ContactSpec:
 
 
 @dataclass
-class SolverSpec:
+class SolverSpec(_Fields):
     max_increment: float | None = None
     initial_increment: float | None = None    # first increment (default: the first level)
     min_increment: float = 1e-4
@@ -223,7 +240,7 @@ class SolverSpec:
 
 
 @dataclass
-class OutputSpec:
+class OutputSpec(_Fields):
     dir: str
     vtk: bool = True
     vtk_samples: int = 4
@@ -232,7 +249,7 @@ class OutputSpec:
 
 
 @dataclass
-class AccuracySpec:
+class AccuracySpec(_Fields):
     """``accuracy:``: pick the coarsest element count whose probe is within rtol (refinement.py)."""
     probe: str
     rtol: float = 1e-3
@@ -244,7 +261,7 @@ class AccuracySpec:
 
 
 @dataclass
-class ModelSpec:
+class ModelSpec(_Fields):
     name: str
     length: float
     twist_deg: float

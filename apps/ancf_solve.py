@@ -184,7 +184,7 @@ def _main(argv: list[str], interrupt) -> int:
             for name in result.unused_options:
                 source = "config" if name.startswith("petsc.") else ""
                 option = "-" + name[len("petsc."):] if source else name
-                say_stderr(unused_line(option, source))
+                say_stderr(unused_line(option, source, prefix=spec.solver.options_prefix))
         for note in (result.summary or {}).get("warnings", []):   # e.g. a first level strained > 50 %
             say_stderr(f"ancf-solve: {note}")
         if result.status == "unstable":

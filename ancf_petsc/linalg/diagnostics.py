@@ -43,10 +43,15 @@ def used_anywhere(names: list[str], comm) -> list[bool]:
     return [bool(u) for u in used]
 
 
-def unused_line(option: str, source: str = "", prog: str = "ancf-solve") -> str:
-    """One warning line of ``prog`` for an unused option (``source``: where it was set)."""
+def unused_line(option: str, source: str = "", prog: str = "ancf-solve", prefix: str = "") -> str:
+    """One warning line of ``prog`` for an unused option (``source``: where it was set; ``prefix``:
+    the run's ``solver.options_prefix``, under which it reads its solver options)."""
     base = option.lstrip("-")
     hint = HINTS.get(PREFIX.sub("", base)) or "misspelt, or not read by the solver in use"
+    if prefix and not source and not base.lower().startswith(prefix.lower()) \
+            and base.lower().startswith(("snes_", "ksp_", "pc_", "mat_")):
+        # -snes_max_it 3 with options_prefix left_ was called 'misspelt'
+        hint += f" (the config's solver.options_prefix is {prefix}: the solver reads -{prefix}{base})"
     where = f" ({source})" if source else ""
     return f"{prog}: warning: PETSc option {option}{where} was never used: {hint}"
 

@@ -106,3 +106,16 @@ def test_a_solver_type_that_needs_code_is_refused_before_the_run(tmp_path, optio
     kind = option.removeprefix("sub_").rsplit("_", 1)[0]
     assert p.returncode == 2 and f"-{option} {value}: {kind} type '{value}' needs setup code" in p.stderr, p.stderr
     assert not (tmp_path / "out" / "results.h5").exists()
+
+
+def test_an_unprefixed_option_under_an_options_prefix_names_the_prefix(tmp_path):
+    """With solver.options_prefix left_, -snes_max_it 3 is not read (the solver reads
+    -left_snes_max_it) and was reported only as 'misspelt, or not read by the solver in use'."""
+    raw = cantilever([0.5], elements=2)
+    raw["output"]["dir"] = str(tmp_path / "out")
+    raw["solver"] = {"options_prefix": "left_"}
+    p = solve_cli(write_config(raw, tmp_path / "c.yaml"), extra=["-snes_max_it", "3", "--quiet"])
+    assert p.returncode == 0, p.stderr
+    assert ("PETSc option -snes_max_it was never used: misspelt, or not read by the solver in use (the "
+            "config's solver.options_prefix is left_: the solver reads -left_snes_max_it)") in p.stderr, p.stderr
+    assert read_summary(tmp_path / "out")["tolerances"]["max_it"] == 15

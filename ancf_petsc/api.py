@@ -77,16 +77,16 @@ def check_edited(spec: ModelSpec) -> None:
     the load stepping; with a history they are its first frames), and its
     ``petsc`` options read as the config's ``petsc:`` (an edited {'snes_rtol': 'abc'} was PETSc's
     refusal naming no key), its contact reads as the config's for the edited beams
-    (config.contact_edits), its solver, partition and output keys read as the config's
-    (config.solving.check_edited_solver), and the solver keys the config left to the model are
-    the edited model's (config.parse.refresh_defaults).
+    (config.contact_edits), its solver, partition, output and accuracy keys read as the config's
+    (config.solving.check_edited_solver, check_edited_accuracy), and the solver keys the config
+    left to the model are the edited model's (config.parse.refresh_defaults).
     Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
     from .config.conditions import check_edited_conditions, parse_steps, resolve_nodes
     from .config.contact_edits import check_edited_contact
     from .config.history import check_frames, check_history_edits
     from .config.parse import check_edited_geometry, refresh_defaults
-    from .config.solving import check_edited_solver, parse_petsc
+    from .config.solving import check_edited_accuracy, check_edited_solver, parse_petsc
     check_edited_geometry(spec)
     check_edited_beams(spec.beams)
     _check_edited_sections(spec)
@@ -97,6 +97,7 @@ def check_edited(spec: ModelSpec) -> None:
     resolve_nodes(spec)
     spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
     check_edited_solver(spec)
+    check_edited_accuracy(spec)
     check_history_edits(spec)
     _raw_as_solved(spec, contact)
 

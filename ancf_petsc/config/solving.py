@@ -199,3 +199,15 @@ def parse_accuracy(value, probes: list, steps: list[float]) -> AccuracySpec:
         raise ConfigError(f"{p}.max_elements", "the ladder needs three rungs: use at least 4 x start "
                                                f"(= {4 * acc.start}); got {acc.max_elements}")
     return acc
+
+
+def check_edited_accuracy(spec) -> None:
+    """``accuracy`` of a spec edited after parsing (the Python API) read as the config's (after
+    its steps): a probe the run does not have raised a KeyError in the ladder, component 'w' a
+    ValueError, and rtol -1 or a level not among the steps ran the whole ladder to 'accuracy not
+    met'.  A config's ``accuracy:`` mapping is taken too."""
+    acc = spec.accuracy
+    if isinstance(acc, AccuracySpec):
+        acc = {k: v for k, v in vars(acc).items() if v is not None}
+    if acc is not None:
+        spec.accuracy = parse_accuracy(acc, spec.probes, spec.steps)

@@ -227,3 +227,27 @@ def test_a_misspelt_field_is_refused_not_ignored(tmp_path, part, name, near):
     with pytest.raises(AttributeError, match=f"has no field '{name}' \\(did you mean '{near}'\\?\\)"):
         setattr(part(spec), name, 30)
     setattr(part(spec), near, getattr(part(spec), near))
+
+
+@pytest.mark.parametrize("edit,path", [
+    ({"probe": "foo"}, "accuracy.probe"),               # a KeyError in the ladder before
+    ({"component": "w"}, "accuracy.component"),         # a ValueError before
+    ({"rtol": -1.0}, "accuracy.rtol"),                  # the whole ladder, 'accuracy not met'
+    ({"level": 7.0}, "accuracy.level"),                 # the same: 7 is none of the steps
+])
+def test_an_edited_accuracy_is_checked_as_the_configs(tmp_path, edit, path):
+    """accuracy: set or edited through the API (an AccuracySpec, or a config's mapping, which
+    raised an AttributeError) is read as the config's, after the edited steps."""
+    from dataclasses import replace
+
+    from ancf_petsc.api import check_edited
+    from ancf_petsc.config.specs import AccuracySpec
+    ap, spec = _spec("pretwisted_bar.yaml", tmp_path / "out")
+    spec.accuracy = {"probe": "tip", "rtol": 1e-2}
+    check_edited(spec)
+    assert spec.accuracy == AccuracySpec(probe="tip", rtol=1e-2)
+    spec.accuracy = replace(spec.accuracy, **edit)
+    with pytest.raises(ap.InputError) as err:
+        ap.solve(spec, log=None)
+    assert err.value.path == path
+    assert not (tmp_path / "out").exists()

@@ -10,6 +10,7 @@ Held DOFs carry unit diagonal rows, so the count is that of the free-DOF tangent
 """
 from __future__ import annotations
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 def mumps_factor(ksp: PETSc.KSP) -> PETSc.Mat | None:
@@ -124,6 +125,7 @@ def solver_pivot_counts(snes: PETSc.SNES, symmetric: bool) -> tuple[int, int] | 
         return counts
     P = snes.getJacobian()[1]
     key = (P.handle, P.stateGet(), P.norm(PETSc.NormType.FROBENIUS))
-    if _own_count[0] != key:
+    # one decision for all ranks (a state counter is a rank's own): the factorisation is collective
+    if not P.getComm().tompi4py().allreduce(_own_count[0] == key, op=MPI.LAND):
         _own_count[:] = [key, exact_pivot_counts(P)]
     return _own_count[1]

@@ -235,7 +235,8 @@ class ResultsWriter:
         self.summary["last_converged"] = {"step": point.step, "load_factor": point.load_factor}
         self.summary["warnings"] = list(point.summary.get("warnings", self.summary["warnings"]))
         rest = None if self.timed else 0.0          # a history's rest state: no time (VtkSeries)
-        self.vtk.resume([rest] + [series_time(st, self.timed) for st in self.summary["steps"]])
+        self.vtk.resume([rest] + [series_time(st, self.timed) for st in self.summary["steps"]],
+                        self.summary["warnings"] if self.sampler is not None else None)
         truncate_levels(self.h5_path, point.step, point.load_factor, config_text(self.model.spec),
                         layout, run_info.get("partition"))
         with open(os.path.join(self.dir, RESERVE), "wb") as fh:

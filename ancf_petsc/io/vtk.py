@@ -314,10 +314,11 @@ class VtkSeries:
         except OSError as exc:
             raise OSError(exc.errno, exc.strerror, path) from None
 
-    def resume(self, times: list[float | None]) -> None:
+    def resume(self, times: list[float | None], warnings: list | None = None) -> None:
         """Continue the series of a restarted run whose levels 0 … n are at ``times`` (``write``'s
         t): their files are listed again, the VTUs of later levels removed (``<series>_NNNN.vtu``
-        only: other files and folders so named are a user's and stay)."""
+        only: other files and folders so named are a user's and stay).  ``warnings`` (the run's,
+        when it writes VTUs) gets a note on the levels without one (solved with output.vtk off)."""
         for series in self.entries:
             for k in range(len(times)):
                 if os.path.exists(os.path.join(self.dir, f"{series}_{k:04d}.vtu")):
@@ -327,3 +328,9 @@ class VtkSeries:
             match = ours.fullmatch(name)        # a run's VTU, not a user's surface_notes_7.txt
             if match and int(match.group(2)) >= len(times) and os.path.isfile(os.path.join(self.dir, name)):
                 os.remove(os.path.join(self.dir, name))
+        missing = [k for k in range(len(times)) if not os.path.exists(os.path.join(self.dir, f"surface_{k:04d}.vtu"))]
+        note = (f"output.vtk: {len(missing)} state(s) before the restart ({missing[0]}-{missing[-1]}; 0 is the "
+                "rest state) have no ParaView files (solved with output.vtk false, or removed): the .pvd "
+                "series lacks them; results.h5 has their surfaces") if missing else ""
+        if warnings is not None and note and note not in warnings:
+            warnings.append(note)

@@ -5,7 +5,7 @@ import re
 import subprocess
 import sys
 
-from helpers import CONFIGS, MPI_ENV, ROOT, paper_column, solve_cli, write_config
+from helpers import CONFIGS, MPI_ENV, ROOT, load_raw, paper_column, solve_cli, write_config
 
 _KILL_AT = """
 import os, sys
@@ -49,3 +49,19 @@ def test_a_run_killed_while_writing_a_levels_vtu_restarts_to_a_full_series(tmp_p
         listed = _pvd(os.path.join(out, f"{series}.pvd"))
         assert listed == [(f"{t:.10g}", f"{series}_{k:04d}.vtu") for k, t in enumerate(times)], listed
         assert all(os.path.getsize(os.path.join(out, f)) > 0 for _, f in listed)
+
+
+def test_a_restart_that_turns_vtk_on_says_which_states_the_series_lacks(tmp_path):
+    """The bar solved to 0.2 with output.vtk false and restarted to 0.4 with it on: surface.pvd
+    listed 0.3 and 0.4 alone, its rest state and first levels missing without a word.  Now a
+    warning (printed, and in summary.json) says which states have no ParaView files."""
+    from ancf_petsc.api import solve
+    from ancf_petsc.config.parse import parse_config
+    raw = dict(load_raw("uniaxial_neohookean.yaml"), steps=[0.1, 0.2, 0.3, 0.4])
+    for steps, vtk, restart in (([0.1, 0.2], False, None), (raw["steps"], True, str(tmp_path))):
+        spec = parse_config(dict(raw, steps=steps, output={"dir": str(tmp_path), "vtk": vtk}), base_dir=CONFIGS)
+        res = solve(spec, log=lambda *_: None, restart=restart)
+    assert res.status == "completed" and [f for _, f in _pvd(tmp_path / "surface.pvd")] == \
+        ["surface_0003.vtu", "surface_0004.vtu"]
+    assert "output.vtk: 3 state(s) before the restart (0-2; 0 is the rest state) have no ParaView files" \
+        in " ".join(res.summary["warnings"]), res.summary["warnings"]

@@ -149,6 +149,20 @@ def test_the_count_does_not_depend_on_the_linear_solver(tmp_path, petsc):
     assert s["status"] == "unstable" and s["stability_checked"]
 
 
+@pytest.mark.mpi
+def test_the_count_without_the_solvers_own_inertia_on_two_ranks(tmp_path):
+    """The column of test_the_count_does_not_depend_on_the_linear_solver with SuperLU_DIST on 2
+    ranks: the tangent's own LDLᵀ is factored on both ranks alike (one decision for all)."""
+    raw = unguarded(cantilever([0.25, 1.0], elements=2))
+    raw["loads"][0]["traction_force"] = [-2.0, 0.0, 0.0]
+    raw["output"] = {"dir": str(tmp_path / "n2"), "vtk": False}
+    p = solve_cli(write_config(raw, tmp_path / "n2.yaml"), ranks=2,
+                  extra=["-pc_type", "lu", "-pc_factor_mat_solver_type", "superlu_dist", "--quiet"])
+    assert p.returncode == 4, p.stderr
+    s = read_summary(tmp_path / "n2")
+    assert [st["negative_eigenvalues"] for st in s["steps"]] == [0, 2] and s["stability_checked"]
+
+
 def test_the_count_on_a_saddle_point_jacobian_does_not_depend_on_the_linear_solver(tmp_path):
     """The mean-gap Achilles model's step to 50 N lands on a saddle (1 negative eigenvalue on the
     constraint surface, the dense spectrum's: test_negative_pivots_equal_the_dense_spectrum); with

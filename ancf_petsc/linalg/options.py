@@ -14,7 +14,7 @@ from petsc4py import PETSc
 from ..errors import InputError
 from .database import insert, option, option_values, remove
 from .diagnostics import petsc_message, solver_hint
-from .option_syntax import AT_FINISH_OPTIONS, check_value
+from .option_syntax import AT_FINISH_OPTIONS, check_value, parse_bool
 
 def node_blocks_fit(model) -> bool:
     """Whether every node's DOFs are active (all beams interpolate their whole node block, e.g.
@@ -93,6 +93,10 @@ def matrix_type(model, choice: str, config_options: dict, prefix: str = "",
     # the VI Newton types reduce the Jacobian to its free rows (MatCreateSubMatrix), which
     # segfaults on SBAIJ (-snes_type vinewtonssls, measured): they get AIJ
     vi = option_in_effect("snes_type", config_options, prefix, symmetric).startswith("vi")
+    # so does -snes_fd_color: its colouring needs AIJ ('PETSC_ERROR in the linear solver ...:
+    # Ordering requires IJ' at the first level on SBAIJ)
+    if option("snes_fd_color", prefix) is not None or "snes_fd_color" in config_options:
+        vi = vi or bool(parse_bool(option_in_effect("snes_fd_color", config_options, prefix) or "true"))
     if choice == "auto":
         return "sbaij" if (pc == "cholesky" and factor == "mumps" and full and symmetric and not vi) else "aij"
     if choice == "sbaij":

@@ -35,7 +35,11 @@ TOP_KEYS = ("name", "units", "geometry", "beams", "boundary_conditions", "loads"
 
 
 def parse_config(raw: Any, base_dir: str = ".", source: str = "config") -> ModelSpec:
-    """Validate a loaded YAML document and return the ``ModelSpec``."""
+    """Validate a loaded YAML document and return the ``ModelSpec``; relative paths in it are
+    read from ``base_dir``, taken absolute now (a relative one was joined again when ``solve``
+    read the sections once more: parse_config(raw, base_dir='configs') then solve refused
+    'configs/configs/data/...', and a directory changed between them moved every file)."""
+    base_dir = os.path.abspath(base_dir)
     if isinstance(raw, dict) and "bundle" in raw:
         raw = expand_bundle(raw)
         try:

@@ -251,3 +251,28 @@ def test_an_edited_accuracy_is_checked_as_the_configs(tmp_path, edit, path):
         ap.solve(spec, log=None)
     assert err.value.path == path
     assert not (tmp_path / "out").exists()
+
+
+def test_a_config_parsed_from_a_relative_directory_is_solved_as_loaded(tmp_path, monkeypatch):
+    """parse_config(raw, base_dir='configs') (the repository's root the working directory) of
+    the paper's tendon, then the working directory changed, then solve: the answers of
+    load_config.  Before, solve read the sections again joining base_dir a second time and
+    refused 'configs/configs/data/achilles_type3_sections.yaml: file not found'."""
+    import os
+
+    from ancf_petsc.config.parse import parse_config
+    petsc_init()
+    import ancf_petsc as ap
+    monkeypatch.chdir(os.path.dirname(CONFIGS))
+    raw = yaml.safe_load(open("configs/achilles_type3_psi45.yaml"))
+    for beam in raw["beams"]:
+        beam["elements"] = 1
+    raw["steps"] = [10, 100]
+    spec = parse_config(raw, base_dir="configs")
+    spec.output.dir = str(tmp_path / "relative")
+    monkeypatch.chdir(tmp_path)
+    assert ap.solve(spec, log=None).status == "completed"
+    loaded = _paper_tendon(ap, tmp_path / "loaded")
+    assert ap.solve(loaded, log=None).status == "completed"
+    got, want = ap.read_results(tmp_path / "relative"), ap.read_results(tmp_path / "loaded")
+    assert got.probe("soleus") == pytest.approx(want.probe("soleus"), rel=1e-12)

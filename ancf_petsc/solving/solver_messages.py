@@ -59,7 +59,8 @@ def floor_detail(step: float, lam: float, floor: float) -> Detail:
     ``solver.min_increment`` (``floor``), so no smaller step was tried (load_control.floored)."""
     return Detail(f" (no cut-back was tried: half the failed step from load factor {lam:.6g} to {lam + step:.6g} "
                   f"is {0.5 * step:.4g}, below solver.min_increment = {floor:g}; lower solver.min_increment "
-                  f"to at most {0.5 * step:.4g} (the default is {SolverSpec.min_increment:g}) so that the step "
+                  f"to at most {0.5 * step:.4g} (the default is {SolverSpec.min_increment:g}, times the largest load "
+                  "factor where that is below 1) so that the step "
                   "can be cut back)", "min_increment")
 
 

@@ -29,7 +29,6 @@ from .config import ConfigError, ModelSpec, load_config, parse_config
 from .errors import InputError, OutputError
 from .io.reader import Results, read_results
 from .model.beams import Model
-from .model.build import build_model
 
 
 def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] | None = print, restart: str | None = None):
@@ -62,6 +61,15 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] | None = print,
         check_rungs_carry(spec)
         return select_and_run(spec, comm, log, run_model)
     return run_model(spec, comm, log, restart=restart)
+
+
+def build_model(spec: ModelSpec) -> Model:
+    """The model ``solve`` would solve for ``spec``: its edits checked and placed first
+    (``check_edited``; built as it stood, a bar edited from 1 to 3 elements had its load and tip
+    probe on interior node 2), then ``model.build.build_model``."""
+    from .model.build import build_model as build
+    check_edited(spec)
+    return build(spec)
 
 
 def _quiet(*_) -> None:

@@ -276,3 +276,19 @@ def test_a_config_parsed_from_a_relative_directory_is_solved_as_loaded(tmp_path,
     assert ap.solve(loaded, log=None).status == "completed"
     got, want = ap.read_results(tmp_path / "relative"), ap.read_results(tmp_path / "loaded")
     assert got.probe("soleus") == pytest.approx(want.probe("soleus"), rel=1e-12)
+
+
+def test_build_model_builds_the_model_solve_would_solve(tmp_path):
+    """ancf_petsc.build_model of uniaxial_neohookean edited from 1 element to 3 (nodes 0..6):
+    the tip load and probe on node 6, the end.  Before, the exported build_model built the spec
+    as it stood: both on node 2, inside the bar."""
+    import numpy as np
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "out")
+    spec.beams[0].elements = 3
+    model = ap.build_model(spec)
+    last = model.n_nodes - 1
+    assert set(np.nonzero(model.f_ext)[0] // model.dofs_per_node) == {last}
+    assert model.probes["tip"][0] == last
+    spec.beams[0].material["mu"] = -1.0
+    with pytest.raises(ap.InputError, match="mu"):
+        ap.build_model(spec)

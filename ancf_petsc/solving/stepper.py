@@ -105,18 +105,21 @@ class LoadStepper:
 
     def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float, from_rest: bool = False,
                  converged: PETSc.Vec | None = None, unchanged: bool = False) -> tuple[int, int, float]:
-        """Newton at load factor ``lam`` from ``X`` (``newton.PhasedNewton``: the contact law's
-        phases; ``converged``: the converged state a load predictor moved X from, where a
-        Josephy–Newton iteration that loses its predictions starts again; ``unchanged``: X is
-        converged at the same loads).  Returns the last solve's reason, the iterations of all of
-        them and the final residual norm; ``history`` the residuals."""
+        """Newton at load factor ``lam`` from ``X`` (newton.PhasedNewton; ``converged``: the state a
+        load predictor moved X from; ``unchanged``: X is converged at these loads): the last
+        solve's reason, all their iterations, the final |F|; ``history`` the residuals."""
         self.problem.load_factor = lam
         self.problem.impose(X)                  # prescribed displacements at this load factor
         S = self.solver
         S.history = []
         newton = PhasedNewton(S.contact_steps, lambda Y: S.solve(Y, target, lam, reached),
                               self.predictor, S.linesearch)
-        reason, its = newton.solve(X, lam, from_rest, converged, unchanged)
+        spent = S.spent
+        try:
+            reason, its = newton.solve(X, lam, from_rest, converged, unchanged)
+        except RunInterrupted:                  # a solve stopped by a signal: its iterations count
+            self.newton_iterations += S.spent - spent
+            raise
         self.tresca_solves = newton.bound_updates
         if newton.bound_updates:
             self.log(f"  load factor {lam:.6g}: friction's semi-smooth iteration failed; solved again "
@@ -170,8 +173,7 @@ class LoadStepper:
 
     def initial_path(self, first_level: float, last_level: float | None = None) -> PathState:
         """The path at the reference state, with the first increment (rest_response.py)."""
-        X = self.problem.q0.copy()
-        dX = X.duplicate()
+        X, dX = self.problem.q0.copy(), self.problem.q0.duplicate()
         dX.set(0.0)
         return PathState(X=X, dX_last=dX, lam=0.0, dlam=increment_from_rest(self, 0.0, first_level, last_level),
                          dlam_last=0.0)

@@ -23,6 +23,7 @@ another run's lock).  A write failing after the run started ends it instead: ``s
 """
 from __future__ import annotations
 
+import os
 from typing import Callable
 
 from .config import ConfigError, ModelSpec, load_config, parse_config
@@ -53,6 +54,7 @@ def solve(spec: ModelSpec, comm=None, log: Callable[[str], None] | None = print,
     # an mpi4py communicator ended in an AttributeError ('Intracomm' has no 'tompi4py') mid-setup
     comm = PETSc.COMM_WORLD if comm is None else PETSc.Comm(comm) if isinstance(comm, MPI.Comm) else comm
     check_edited(spec)
+    restart = None if restart is None else os.path.expanduser(restart)
     if spec.accuracy is not None:
         if restart is not None:
             raise InputError("--restart", "a run with accuracy: chooses its mesh first; restart "

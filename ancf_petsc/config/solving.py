@@ -103,6 +103,7 @@ def check_edited_solver(spec) -> None:
     out = spec.output
     if not isinstance(out.dir, (str, os.PathLike)):
         raise ConfigError("output.dir", f"expected a directory path; got {shown(out.dir)}")
+    out.dir = os.path.expanduser(out.dir)     # '~/runs/a' was made as ./~/runs/a
     out.vtk = boolean(out.vtk, "output.vtk")
     out.vtk_samples = integer(out.vtk_samples, "output.vtk_samples", lo=1, hi=64)
     if out.vtk_compress is not None:
@@ -110,14 +111,14 @@ def check_edited_solver(spec) -> None:
 
 
 def parse_output(value, name: str) -> OutputSpec:
-    """``output``: directory (default results/<name>), VTK on/off, its samples per element edge
-    and whether the VTUs are zlib-compressed."""
+    """``output``: directory (default results/<name>; ~ is the home directory), VTK on/off, its
+    samples per element edge and whether the VTUs are zlib-compressed."""
     out = mapping(value, "output", optional=("dir", "vtk", "vtk_samples", "vtk_compress"))
     for key in ("vtk_samples", "vtk_compress"):
         if key in out and out.get("vtk") is False:        # read by nothing: no ParaView files
             raise ConfigError(f"output.{key}", "applies to the ParaView files, which output.vtk: false "
                                                f"turns off; remove it or set output.vtk: true; got {shown(out[key])}")
-    return OutputSpec(dir=string(out.get("dir", os.path.join("results", name)), "output.dir"),
+    return OutputSpec(dir=os.path.expanduser(string(out.get("dir", os.path.join("results", name)), "output.dir")),
                       vtk=boolean(out.get("vtk", True), "output.vtk"),
                       vtk_samples=integer(out.get("vtk_samples", 4), "output.vtk_samples", lo=1, hi=64),
                       vtk_compress=_auto_boolean(out.get("vtk_compress", "auto"), "output.vtk_compress"))

@@ -101,7 +101,9 @@ def append_levels(summary: dict, steps) -> None:
 
 def read_results(directory: str) -> Results:
     """The run in ``directory`` (its summary.json must exist; results.h5 is read on demand, and
-    for a run that still says ``running`` to add the levels summary.json does not list yet)."""
+    for a run that still says ``running`` to add the levels summary.json does not list yet;
+    ~ is the home directory, as in output.dir)."""
+    directory = os.path.expanduser(directory)
     path = os.path.join(directory, "summary.json")
     try:
         with open(path) as fh:

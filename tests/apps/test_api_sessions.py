@@ -292,3 +292,21 @@ def test_build_model_builds_the_model_solve_would_solve(tmp_path):
     spec.beams[0].material["mu"] = -1.0
     with pytest.raises(ap.InputError, match="mu"):
         ap.build_model(spec)
+
+
+def test_an_output_directory_under_home_is_the_home_directorys(tmp_path, monkeypatch):
+    """spec.output.dir = '~/runs/bar' wrote the run into ./~/runs/bar, a directory named '~'
+    in the working directory, with no word; now into the home directory, where read_results
+    and solve(restart=) find it by the same words."""
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
+    ap, spec = _spec("uniaxial_neohookean.yaml", "~/runs/bar")
+    spec.steps = [0.5]
+    result = ap.solve(spec, log=None)
+    assert result.status == "completed"
+    assert result.output_dir == str(tmp_path / "home" / "runs" / "bar")
+    assert not (tmp_path / "work" / "~").exists()
+    spec.steps = [0.5, 1.0]
+    assert ap.solve(spec, log=None, restart="~/runs/bar").status == "completed"
+    assert list(ap.read_results("~/runs/bar").load_factors) == [0.5, 1.0]

@@ -377,7 +377,7 @@ def _finish(run: Run, failure, signum: int, inverted: bool, total: float, solver
         failure_cause=failure[3] if failure is not None else "", jacobian_pattern_growths=run.problem.pattern_growths,
         unstable_levels=[r.load_factor for r in records if r.negative_eigenvalues],
         allow_unstable=spec.solver.allow_unstable,
-        stability_checked=all(r.negative_eigenvalues is not None for r in records),
+        stability_checked=bool(records) and all(r.negative_eigenvalues is not None for r in records),
         **stepper.fade_switch.summary(stepper), **stepper.windows.summary(),
         unused_petsc_options=unused)
     if comm.size > 1:

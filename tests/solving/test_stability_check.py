@@ -369,3 +369,12 @@ def test_a_loose_rtol_under_displacement_control_is_polished(tmp_path):
     s = run_inline(raw, tmp_path / "loose", petsc={"snes_rtol": 1e-2})
     r, r0 = s["steps"][-1]["reactions"]["beam.32"][2], ref["steps"][-1]["reactions"]["beam.32"][2]
     assert s["status"] == "completed" and r == pytest.approx(r0, rel=1e-6), (r, r0)
+
+
+def test_a_run_that_reaches_no_level_has_not_checked_its_stability(tmp_path, monkeypatch):
+    """A run that failed before any level said ``stability_checked: true`` (all() of no levels):
+    nothing was counted, so it says false."""
+    from helpers import fail_solves
+    fail_solves(lambda solver, lam: True, put=monkeypatch.setattr)
+    s = run_inline(cantilever([1.0], elements=2), tmp_path)
+    assert s["status"] == "failed" and s["steps"] == [] and s["stability_checked"] is False

@@ -114,9 +114,10 @@ def check_edited(spec: ModelSpec) -> None:
 
 def _raw_as_solved(spec: ModelSpec, contact: dict | None = None) -> None:
     """The config stored with the results (results.h5 ``/model`` ``config_yaml``) says the element
-    counts, types, locking remedies, axial points, materials, steps and contact (``contact``: as
-    written, config.contact_edits) the spec is solved with, also where they were changed after
-    parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's record of its config)."""
+    counts, types, locking remedies, axial points, materials, steps, contact (``contact``: as
+    written, config.contact_edits) and probes the spec is solved with, also where they were
+    changed after parsing (a new dict: ``spec.raw`` may be shared, e.g. by a sample's record of
+    its config)."""
     import copy
 
     from .config.beams import material_as_written
@@ -153,8 +154,18 @@ def _raw_as_solved(spec: ModelSpec, contact: dict | None = None) -> None:
         raw["petsc"] = {k: v if v else None for k, v in spec.petsc.items()}   # '': a flag
     if isinstance(raw, dict) and _contact_of(raw, spec) != spec.contact:
         raw["contact"] = contact
+    probes = _probes_as_written(spec)
+    if isinstance(raw, dict) and [{"vector": "r", **p} for p in raw.get("probes") or []] != probes:
+        raw["probes"] = probes
     if raw != spec.raw:
         spec.raw = raw
+
+
+def _probes_as_written(spec: ModelSpec) -> list[dict]:
+    """The probes solved, as a config writes them (ancf-report --existing reads them: a probe
+    edited to another node kept its config's node there, and the run passed for the paper's)."""
+    return [{"name": p.name, "beam": spec.beams[p.beam].name, "node": p.given, "vector": p.vector}
+            for p in spec.probes]
 
 
 def _check_edited_sections(spec: ModelSpec) -> None:

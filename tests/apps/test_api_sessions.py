@@ -310,3 +310,23 @@ def test_an_output_directory_under_home_is_the_home_directorys(tmp_path, monkeyp
     spec.steps = [0.5, 1.0]
     assert ap.solve(spec, log=None, restart="~/runs/bar").status == "completed"
     assert list(ap.read_results("~/runs/bar").load_factors) == [0.5, 1.0]
+
+
+def test_a_probe_moved_through_the_api_is_stored_as_solved(tmp_path):
+    """The paper's ψ = 45° tendon with its soleus probe edited to node 0 (the held root: 0 mm):
+    results.h5's config says node 0, and ancf-report --existing does not compare the run with
+    Table 1.  Before, the stored config kept 'last' and the report called the run the paper's
+    reproduction, its soleus elongation 0."""
+    import h5py
+
+    from helpers import report_existing
+    ap, spec = _spec("achilles_type3_psi45.yaml", tmp_path / "run")
+    spec.steps = [10]
+    spec.probes[0].node = 0
+    assert ap.solve(spec, log=None).status == "completed"
+    with h5py.File(tmp_path / "run" / "results.h5", "r") as h5:
+        stored = yaml.safe_load(h5["model"].attrs["config_yaml"])
+    assert stored["probes"][0] == {"name": "soleus", "beam": "soleus", "node": 0, "vector": "r"}
+    assert stored["probes"][1]["node"] == "last"
+    text = report_existing([str(tmp_path / "run")], tmp_path / "rep")
+    assert "is not compared with the paper: its probe 'soleus' is vector r at node 0" in text

@@ -105,7 +105,9 @@ def check_edited(spec: ModelSpec) -> None:
     refresh_defaults(spec)
     spec.petsc = parse_petsc(spec.petsc)
     resolve_nodes(spec)
-    spec.steps = parse_steps(spec.steps) if spec.history is None else check_frames(spec.steps, spec.history)
+    steps = spec.steps.tolist() if hasattr(spec.steps, "tolist") else spec.steps   # np.linspace(...)
+    steps = list(steps) if isinstance(steps, tuple) else steps
+    spec.steps = parse_steps(steps) if spec.history is None else check_frames(steps, spec.history)
     check_edited_solver(spec)
     check_edited_accuracy(spec)
     check_history_edits(spec)

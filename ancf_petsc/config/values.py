@@ -4,6 +4,7 @@ from __future__ import annotations
 import reprlib
 
 import math
+import numbers
 
 from ..errors import MISSING_KEY, UNKNOWN_KEY, InputError
 
@@ -57,7 +58,9 @@ def plain_number(field: str) -> float:
 
 def number(value, path: str, *, positive=False, nonneg=False, lo=None, hi=None,
            hint: str = "") -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    """A real number (numpy's too: spec.steps = list(np.arange(1, 5)) was 'expected a number;
+    got 1'), or its text."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         if isinstance(value, str):
             text, value = value, plain_number(value)
             if math.isnan(value) and text.strip().lower() not in ("nan", "+nan", "-nan"):
@@ -88,8 +91,10 @@ def _beside(value: float, bound: float) -> str:
 
 
 def integer(value, path: str, *, lo: int | None = None, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
+    """An integer (numpy's too, as a Python int)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ConfigError(path, f"expected an integer; got {shown(value)}")
+    value = int(value)
     if lo is not None and value < lo:
         raise ConfigError(path, f"must be >= {lo}; got {value}")
     if hi is not None and value > hi:

@@ -330,3 +330,21 @@ def test_a_probe_moved_through_the_api_is_stored_as_solved(tmp_path):
     assert stored["probes"][1]["node"] == "last"
     text = report_existing([str(tmp_path / "run")], tmp_path / "rep")
     assert "is not compared with the paper: its probe 'soleus' is vector r at node 0" in text
+
+
+@pytest.mark.parametrize("steps", [
+    "arange",            # list(np.arange(1, 3)): 'steps[0]: expected a number; got 1' before
+    "linspace",          # an array: 'steps: expected a list; got array([0.5, 1. ])' before
+    "tuple",             # (0.5, 1.0): 'steps: expected a list' before
+])
+def test_numpy_steps_and_counts_are_taken_as_numbers(tmp_path, steps):
+    """Load factors and an element count as numpy makes them solve as the same Python numbers."""
+    import numpy as np
+    ap, spec = _spec("uniaxial_neohookean.yaml", tmp_path / "out")
+    spec.steps = {"arange": lambda: list(np.arange(1, 3)), "linspace": lambda: np.linspace(0.5, 1.0, 2),
+                  "tuple": lambda: (0.5, 1.0)}[steps]()
+    spec.beams[0].elements = np.int32(2)
+    assert ap.solve(spec, log=None).status == "completed"
+    want = {"arange": [1.0, 2.0], "linspace": [0.5, 1.0], "tuple": [0.5, 1.0]}[steps]
+    assert list(ap.read_results(tmp_path / "out").load_factors) == want
+    assert spec.steps == want and type(spec.beams[0].elements) is int

@@ -13,7 +13,8 @@ from .state import ContactState
 GAP_COLUMNS = (("max_gap", "max"), ("max_penetration", "max"), ("sum_sq_gap", "sum"), ("valid_points", "sum"),
                ("max_weighted_gap", "max"), ("open_area", "sum"), ("area", "sum"),
                ("max_pressure", "max"), ("normal_force", "sum"), ("pressing_force", "sum"),
-               ("tension_force", "sum"), ("points", "sum"), ("past_ends_force", "sum"))
+               ("tension_force", "sum"), ("points", "sum"), ("past_ends_force", "sum"),
+               ("max_penetration_along", "max"))
 
 
 #: a unilateral interface whose largest pointwise penetration exceeds this share of the smaller of
@@ -79,9 +80,24 @@ def gap_sums(c, st: ContactState) -> np.ndarray:
                   np.abs(st.gbar[act]).max(initial=0.0), area[m & ~st.active].sum(), area[m].sum(),
                   lam[m].max(initial=0.0), float(st.tau[v].sum()),
                   float(np.maximum(st.tau[v], 0.0).sum()), float(np.minimum(st.tau[v], 0.0).sum()),
-                  on.sum(), float(np.abs(st.tau[v & ~over]).sum())] + [
+                  on.sum(), float(np.abs(st.tau[v & ~over]).sum()),
+                  along_penetration(c, pr.g, v & over)] + [
                   x for t in c.terms for x in t.sums(c, st, on)]
     return out
+
+
+def along_penetration(c, g: np.ndarray, sel: np.ndarray) -> float:
+    """The largest penetration at a station (A element and axial point) of the local points
+    ``sel`` that none of its points across the interface opens: −max g over the station, the
+    part of a penetration that no tilt across explains (0 where every station has an open point)."""
+    if not sel.any():
+        return 0.0
+    idx = c.local[sel]
+    _, station = np.unique(np.column_stack([c.points.seg[idx], c.points.xi[idx]]), axis=0,
+                           return_inverse=True)
+    top = np.full(station.max() + 1, -np.inf)
+    np.maximum.at(top, station.ravel(), g[sel])
+    return float(max(0.0, -top.min()))
 
 
 def pressure_coefficients(c, st: ContactState) -> np.ndarray:
@@ -100,6 +116,7 @@ def gap_report(contact, sums: np.ndarray) -> dict:
         absolute = c["pressing_force"] - c["tension_force"]        # Σ|τ_p|
         out[itf.name] = {"points_on": itf.a.name,
                          "max_gap": c["max_gap"], "max_penetration": c["max_penetration"],
+                         "max_penetration_along": c["max_penetration_along"],
                          "rms_gap": float(np.sqrt(c["sum_sq_gap"] / nv)) if nv else 0.0,
                          "max_weighted_gap": c["max_weighted_gap"],
                          "open_share": c["open_area"] / c["area"] if c["area"] else 0.0,
@@ -214,14 +231,26 @@ def penetration_warnings(c, report: dict) -> list[str]:
         names = ", ".join(n.split(" (")[0] for _, _, n in deep[1:])
         others = (f" and {len(deep) - 1} other(s) ({names}: {deep[-1][0] * 1e6:.3g}-"
                   f"{deep[1][0] * 1e6:.3g} um)")
+    along = report[name].get("max_penetration_along", 0.0)
     return [f"warning: contact interface {name}{others}: the bodies interpenetrate at the contact points by "
             f"up to {depth * 1e6:.3g} um {LAST_LEVEL}, above {PENETRATION_SHARE:.0%} of the thinner section "
             f"({width * 1e3:.3g} mm wide): the unilateral law holds each pressure function's weighted gap "
-            ">= 0, not each point's: a function spanning the interface across lets one edge cross while "
-            "the other opens; local functions across (contact.projection.curve_spans: 4 "
-            "with contact.curve_points: 4) held the points to 14 um on the paper's tendon at 10 and 400 N"
-            + (FRICTION_ACROSS if any(t.bounded for t in c.terms) else "")
+            ">= 0, not each point's: "
+            + (_ALONG.format(along * 1e6) if along >= 0.5 * depth else
+               _ACROSS + (FRICTION_ACROSS if any(t.bounded for t in c.terms) else ""))
             + "; see docs/contact.md, \"Pointwise penetration\""]
+
+
+#: the cause and remedy of a penetration that tilts across the interface (one edge in, one out)
+_ACROSS = ("a function spanning the interface across lets one edge cross while the other opens; local "
+           "functions across (contact.projection.curve_spans: 4 with contact.curve_points: 4) held the "
+           "points to 14 um on the paper's tendon at 10 and 400 N")
+
+#: ... and of one that every point across shares (a contact concentrated along the beam: two
+#: strips pressed at their tips, 2 / 4 / 8 elements: 36 / 10 / 2.3 um; curve_spans 4: 36.5 um)
+_ALONG = ("{:.3g} um of it where every point across the interface penetrates: a function spans an "
+          "element along the beam, so a contact concentrated along it (a loaded end, a point load) "
+          "crosses between its functions there; more elements along reduce it (functions across do not)")
 
 
 #: the penetration warning's remedy under Coulomb friction (measured 2026-12-07, the paper's tendon,

@@ -63,6 +63,9 @@ def test_a_unilateral_run_that_ends_interpenetrating_warns_and_sliding_never(tmp
     # what it measures: the points themselves (they are where the gap is read), not between them
     assert "interpenetrate at the contact points by up to" in notes[0], notes[0]
     assert "weighted gap >= 0, not each point's" in notes[0], notes[0]
+    # one edge in, the other open: across, none of it along (tests/contact/test_penetration_along.py)
+    assert s["steps"][-1]["contact"][MG_SOL]["max_penetration_along"] < 0.5 * depth
+    assert "curve_spans: 4" in notes[0] and "elements along" not in notes[0], notes[0]
     s = run_inline(_column("sliding"), tmp_path / "sliding")
     assert max(c["max_penetration"] for c in s["steps"][-1]["contact"].values()) > 0.0
     assert not _notes(s)

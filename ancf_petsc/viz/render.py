@@ -17,6 +17,9 @@ from matplotlib.figure import Figure
 from .surface_mesh import (MM, SurfaceMesh, face_normals, field_values, generator_columns, outward_signs,
                            quad_index, read_surface, reference_lines, topology)
 
+#: the colour of faces where the field has no value (NaN: fibre fields on beams without fibres)
+NO_VALUE = "0.8"
+
 
 def _box(points_mm: list[np.ndarray], section_scale: float | None) -> tuple[np.ndarray, np.ndarray,
                                                                              float]:
@@ -73,7 +76,7 @@ def _draw(ax, mesh: SurfaceMesh, fvals: np.ndarray, norm: colors.Normalize, cmap
     nq *= outward_signs(nq, box(quads).mean(axis=1), qbeam)[:, None]
     nq /= np.maximum(np.linalg.norm(nq, axis=1, keepdims=True), 1e-30)
     front = nq @ eye > 0
-    cmap_ = colormaps[cmap] if isinstance(cmap, str) else cmap
+    cmap_ = (colormaps[cmap] if isinstance(cmap, str) else cmap).with_extremes(bad=NO_VALUE)
     rgba = cmap_(norm(fvals))
     rgba[:, :3] *= (0.55 + 0.45 * np.abs(nq @ light))[:, None]  # Lambert
     ax.computed_zorder = False  # collections in zorder: interfaces, surface, edges on top
@@ -182,10 +185,14 @@ def _prepare(vtu_path: str, color_by: str) -> tuple[SurfaceMesh, np.ndarray]:
 
 
 def _norm(fvals: list[np.ndarray], clim: tuple | None) -> colors.Normalize:
+    """The colour scale: ``clim``, else the range of the faces' values where the field has one
+    (NaN where it is not defined, e.g. fibre fields on beams without fibres)."""
     if clim is not None:
         return colors.Normalize(*clim)
-    lo = min(float(v.min()) for v in fvals)
-    hi = max(float(v.max()) for v in fvals)
+    finite = [v[np.isfinite(v)] for v in fvals]
+    finite = [v for v in finite if v.size] or [np.zeros(1)]
+    lo = min(float(v.min()) for v in finite)
+    hi = max(float(v.max()) for v in finite)
     if hi - lo < 1e-12:
         lo, hi = lo - 0.5, hi + 0.5
     return colors.Normalize(lo, hi)
@@ -251,7 +258,8 @@ def _render(panels: list[tuple[SurfaceMesh, np.ndarray, SurfaceMesh | None, str]
     rolled = len(view) > 2 and abs((view[2] + 180.0) % 360.0 - 180.0) > 90.0
     notes = ([f"y and z stretched {scale:g}x"] if scale != 1 else []) \
         + (["camera rolled: z points down"] if rolled else []) \
-        + (["grey wireframe: reference configuration"] if any(p[2] for p in panels) else [])
+        + (["grey wireframe: reference configuration"] if any(p[2] for p in panels) else []) \
+        + (["light grey faces: no value there"] if any(np.isnan(p[1]).any() for p in panels) else [])
     note_h = 0.25 if notes else 0.0
     w = [b[2] - b[0] for b in boxes]
     h = [b[3] - b[1] for b in boxes]
@@ -304,8 +312,9 @@ def render_surfaces(vtu_path: str, out_png: str, color_by: str = "E_xx", title: 
     surface_0000.vtu) is drawn as a grey wireframe (end outlines and longitudinal edges).
     ``section_scale`` stretches y and z in the box aspect (default: automatic, 1-3x; stated in
     a footnote).  Dark lines mark each beam's longitudinal edges and end-cap outlines; faint
-    ones follow a few generators (the twist).  ``ValueError`` for an unknown ``color_by``.
-    Returns ``out_png``.
+    ones follow a few generators (the twist).  Faces where the field has no value (fibre fields
+    on beams without fibres) are light grey, outside the colour scale.  ``ValueError`` for an
+    unknown ``color_by``.  Returns ``out_png``.
     """
     mesh, fv = _prepare(vtu_path, color_by)
     ref = read_surface(reference_vtu) if reference_vtu else None

@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from helpers import CONFIGS, ROOT, solved_config
+from helpers import CONFIGS, ROOT, solved_config, solved_run
 
 matplotlib = pytest.importorskip("matplotlib")
 from matplotlib import image as mpimg  # noqa: E402
@@ -235,3 +235,35 @@ def test_a_history_without_neighbours_draws_no_empty_difference_panel(tmp_path):
     heights = [mpimg.imread(plot_history(summary(diff), str(tmp_path / f"h{diff}.png"))).shape[0]
                for diff in (False, True)]
     assert heights[0] < 0.75 * heights[1]
+
+
+def _fibre_and_plain_beams() -> dict:
+    """Two 40 mm bars side by side (no contact), pulled at their tips: the first fibre-reinforced
+    (GOH, fibres along x), the second neo-Hookean, so the VTU's fibre fields are NaN on it."""
+    def beam(name, y0, material):
+        return {"name": name, "elements": 1, "material": material,
+                "section": {"shape": "ellipse", "semi_axes": [0.003, 0.002], "center": [y0, 0.0]}}
+    goh = {"model": "goh", "mu": 1e6, "bulk_modulus": 50e6, "k1": 2e6, "k2": 5.0, "kappa": 0.0}
+    neo = {"model": "neo-hookean", "mu": 1e6, "bulk_modulus": 50e6}
+    return {"name": "fibre_and_plain", "units": "SI", "geometry": {"length": 0.04, "twist_axis": "origin"},
+            "beams": [beam("fibres", -0.004, goh), beam("plain", 0.004, neo)],
+            "boundary_conditions": [{"beam": b, "node": "first", "fix": "reduced"} for b in ("fibres", "plain")],
+            "loads": [{"beam": b, "node": "last", "traction_force": [2.0, 0.0, 0.0]} for b in ("fibres", "plain")],
+            "steps": [1.0]}
+
+
+def test_a_field_of_one_beam_colours_it_and_greys_the_others(tmp_path):
+    """fibre_stress is NaN on a beam without fibres: the render drew no face at all (the colour
+    scale's limits were NaN; its bar read -0.1..0.1 MPa); now the fibre beam is coloured over the
+    range of its values and the other beam is light grey."""
+    run = solved_run(_fibre_and_plain_beams(), tmp_path)
+    vtu = os.path.join(run, "surface_0001.vtu")
+    stress = viz.read_surface(vtu).point_data["fibre_stress"]
+    assert np.isnan(stress).any() and np.isfinite(stress).any()
+    img = mpimg.imread(viz.render_surfaces(vtu, str(tmp_path / "f.png"), color_by="fibre_stress",
+                                           view=(30.0, -90.0)))[..., :3]
+    axes = img[:, : img.shape[1] - 220]                  # the 3D axes, left of the colour bar
+    chroma = axes.max(axis=-1) - axes.min(axis=-1)
+    grey = (chroma < 0.03) & (axes.mean(axis=-1) > 0.4) & (axes.mean(axis=-1) < 0.85)
+    assert np.mean(chroma > 0.2) > 0.03, "the fibre beam is not coloured"
+    assert np.mean(grey) > 0.03, "the beam without fibres is not drawn"

@@ -335,3 +335,13 @@ def install(ksp: PETSc.KSP, held: np.ndarray, multiplier: np.ndarray, prefix: st
     pc.setType(PETSc.PC.Type.PYTHON)
     pc.setPythonContext(context)
     return context
+
+
+def release_python_pc(ksp: PETSc.KSP, comm) -> None:
+    """On one rank, a Python preconditioner (compact factor, fascicle Schur) lets go of its
+    context before ``ksp`` is destroyed: a wrapper kept by an exception's traceback (the one PETSc
+    passed a callback) left the PC to PETSc's final clean-up, which reset it after Python had
+    finalised (a SEGV at exit)."""
+    pc = ksp.getPC()
+    if comm.size == 1 and pc.getType() == PETSc.PC.Type.PYTHON:
+        pc.setType(PETSc.PC.Type.NONE)

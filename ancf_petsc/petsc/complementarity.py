@@ -65,7 +65,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..contact.laws import HELD, PROBE
-from ..linalg.compact_factor import install_for
+from ..linalg.compact_factor import install_for, release_python_pc
 from ..linalg.inertia import mumps_factor
 from .lcp import INDEFINITE_SHARE, held_lcp, solve_lcp
 from .step_limits import MAX_EXPONENT_GROWTH
@@ -154,7 +154,9 @@ class ComplementarityPredictor:
                 and not any(t.multipliers for t in c.terms))
 
     def destroy(self) -> None:
+        """Free the factor of K (its compact factor's context first: ``release_python_pc``)."""
         self._kept.forget()
+        release_python_pc(self.ksp, self.problem.comm)
         self.ksp.destroy()
         if self._select is not None:
             self._select.destroy()

@@ -13,7 +13,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..config.specs import SolverSpec
-from ..linalg.compact_factor import install_for
+from ..linalg.compact_factor import install_for, release_python_pc
 from ..linalg.database import remove
 from ..linalg.diagnostics import petsc_message, used_anywhere
 from ..linalg.full_step_first import install_full_step_first
@@ -57,16 +57,6 @@ def budget_left(budget: int | None, spent: int, snes: PETSc.SNES) -> tuple[int, 
     197."""
     maxit = snes.getTolerances()[3]
     return maxit, (maxit if budget is None else min(maxit, budget + 1 - spent))
-
-
-def release_python_pc(snes: PETSc.SNES, comm) -> None:
-    """On one rank, a Python preconditioner (compact factor, fascicle Schur) lets go of its
-    context before the SNES is destroyed: a wrapper of the SNES kept by an exception's traceback
-    (the one PETSc passed a callback) left the PC to PETSc's final clean-up, which reset it after
-    Python had finalised (a SEGV at exit)."""
-    pc = snes.getKSP().getPC()
-    if comm.size == 1 and pc.getType() == PETSc.PC.Type.PYTHON:
-        pc.setType(PETSc.PC.Type.NONE)
 
 
 def confirmed_count(solver, count: int) -> int:
@@ -185,7 +175,7 @@ class SNESSolver:
         """Free the SNES (with its KSP, PC and factor); not collective.  On one rank a Python PC
         lets go of its context first: a wrapper of this SNES kept by a traceback's frames left it
         to PETSc's final clean-up, after Python had finalised (a SEGV at exit)."""
-        release_python_pc(self.snes, self.problem.comm)
+        release_python_pc(self.snes.getKSP(), self.problem.comm)
         self.trail.destroy()
         self.snes.destroy()
 

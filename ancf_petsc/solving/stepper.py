@@ -95,13 +95,13 @@ class LoadStepper:
         self.path = None
 
     def destroy(self) -> None:
-        """Free the SNES and the path's vectors, and take the solver's options out of PETSc's
-        database if a run that raised left them (a refused restart left MUMPS's null-pivot
-        options to the next run of the process); not collective."""
+        """Free the SNES, the complementarity predictor's factor and the path's vectors, and take the
+        options a raising run left out of PETSc's database (MUMPS's null-pivot ones); not collective."""
         self.close(collective=False)
         self.release_path()
         self.branches.destroy()
-        self.solver.destroy()
+        for part in (self.solver, self.predictor) if self.predictor is not None else (self.solver,):
+            part.destroy()
 
     def solve_at(self, lam: float, X: PETSc.Vec, target: float, reached: float, from_rest: bool = False,
                  converged: PETSc.Vec | None = None, unchanged: bool = False) -> tuple[int, int, float]:

@@ -51,7 +51,9 @@ def applied_once(solver) -> Detail | None:
     tangent', and on the paper's tendon jacobi's steps inverted an element.  Measured: ‖J y − b‖ /
     ‖b‖ for y the preconditioner applied to b, the last residual (J·1 where that is not finite),
     once, at a failure only; None where that is rounding (ILU of a beam's banded tangent on one
-    rank is its LU).  Collective."""
+    rank is its LU).  None without a solver (a failure named from its reason alone).  Collective."""
+    if solver is None:
+        return None
     ksp = solver.snes.getKSP()
     pc = ksp.getPC()
     if ksp.getType() != "preonly" or pc.getType() in SOLVING_PCS:

@@ -133,7 +133,7 @@ class Run:
                                                self.linear[0], self.contact is None or self.contact.symmetric))
             self.stepper = None
             if point is None:
-                check_supports(self.problem)
+                self.model.warnings += check_supports(self.problem)
             self.stepper = LoadStepper(self.problem, spec.solver, spec.petsc, say,
                                        max_level=max(spec.steps), linear=self.linear[0])
             levels = [] if restored_records(point) else spec.steps

@@ -69,13 +69,29 @@ def _row_beams(P) -> tuple[np.ndarray, np.ndarray]:
     return owner, out
 
 
-def check_supports(problem) -> None:
-    """One input error naming the beams and motions the supports and contact leave free."""
-    free = free_rigid_motions(problem)
+def check_supports(problem) -> list[str]:
+    """One input error naming the beams and motions the supports and contact leave free; else
+    the warning of ``lift_off_warnings`` (collective)."""
+    gram, supported, labels = rigid_mode_grams(problem)
+    free = _free(gram, labels)
     if free:
         held = f" ({_what_contact_holds(problem.contact)})" if problem.contact else ""
         raise InputError("boundary_conditions", "nothing holds " + "; ".join(free) + held
                          + "; add supports so that no beam can move as a rigid body")
+    return lift_off_warnings(problem, _free(supported, labels))
+
+
+def lift_off_warnings(problem, lifted: list[str]) -> list[str]:
+    """One warning line for the motions ``lifted`` that only the unilateral law's constraints
+    hold (counted as holding above, as at rest): a beam that lifts off there has nothing holding
+    it (two strips, the upper held along z by contact alone and pulled off: the run failed at its
+    first increment, Newton stalling at |F| 5e28 N, with no word of why)."""
+    c = problem.contact
+    if not lifted or c is None or not c.law.decides_activity:
+        return []
+    return ["warning: only unilateral contact holds " + "; ".join(lifted) + ": where it lifts off "
+            "its neighbours nothing holds it, and a load that pulls it off fails the run (Newton "
+            "stalls); support it, or hold the interface with contact.mode: sliding"]
 
 
 def _what_contact_holds(c) -> str:
@@ -90,7 +106,11 @@ def _what_contact_holds(c) -> str:
 
 def free_rigid_motions(problem) -> list[str]:
     """Descriptions of the rigid motions nothing holds (collective; empty when supported)."""
-    gram, labels = rigid_mode_gram(problem)
+    return _free(*rigid_mode_gram(problem))
+
+
+def _free(gram: np.ndarray, labels: list) -> list[str]:
+    """Descriptions of the free motions of a Gram matrix of ``rigid_mode_grams``."""
     w, V = np.linalg.eigh(gram)
     N = canonical_basis(V[:, w <= FREE_TOLERANCE ** 2])
     return _summary([_describe(N[:, i], labels) for i in range(N.shape[1])])
@@ -118,9 +138,16 @@ def length_scale(model) -> float:
 
 
 def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
+    """``rigid_mode_grams`` without the supports' own Gram matrix (collective)."""
+    gram, _, labels = rigid_mode_grams(problem)
+    return gram, labels
+
+
+def rigid_mode_grams(problem) -> tuple[np.ndarray, np.ndarray, list[tuple[str, str, int]]]:
     """Gram matrix (6 n_beams)² of the constraint violations J·v of every beam's unit rigid modes
     (held rows, constraint rows divided by k_s; lengths in ℓ, ``length_scale``), and (beam,
-    kind, axis) per mode.  Collective.
+    kind, axis) per mode, and the same without the contact constraints' rows (what the supports
+    and a tangential layer hold).  Collective.
 
     J is applied to the modes of all beams of one colour at once (``beam_colours``: beams that
     share an interface differ): a held or constraint row belongs to at most one beam of a
@@ -169,11 +196,13 @@ def rigid_mode_gram(problem) -> tuple[np.ndarray, list[tuple[str, str, int]]]:
             i_list.append(i)
             j_list.append(6 * b[i] + m)
             v_list.append(JVs[i, 6 * colours[b[i]] + m])
-    Y = sp.vstack([sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
-                                 shape=(len(nz), 6 * nb)), layer])
+    Y = sp.csr_matrix((np.concatenate(v_list), (np.concatenate(i_list), np.concatenate(j_list))),
+                      shape=(len(nz), 6 * nb))
+    Y_held = sp.vstack([Y[np.flatnonzero(held[nz])], layer])
+    Y = sp.vstack([Y, layer])
     labels = [(beam.name, "translation" if m < 3 else "rotation", m % 3)
               for beam in model.beams for m in range(6)]
-    return comm.allreduce((Y.T @ Y).toarray()), labels
+    return comm.allreduce((Y.T @ Y).toarray()), comm.allreduce((Y_held.T @ Y_held).toarray()), labels
 
 
 def _unit_modes(P, owner: np.ndarray, unit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

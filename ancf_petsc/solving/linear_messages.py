@@ -105,7 +105,6 @@ def linear_solver_detail(solver, reason: int) -> str:
     return f" (the linear solver {solver_text(solver)} stopped with {kreason}; {krylov_budget(solver)}{hint})"
 
 
-
 def solver_text(solver) -> str:
     """The linear solver in effect, for messages."""
     if solver.linear == "fieldsplit":

@@ -194,9 +194,7 @@ def build_station(src: GeometrySource, opts: SectionsSpec, label: str = "") -> S
     for name in names:
         P, closed, scale, is_px, nts = _read(src, name)
         P = _close(_to_tendon(P, scale, src.axes), closed, name, src)
-        if pl.signed_area(P) < 0:
-            P = P[::-1].copy()
-        raw[name] = P
+        raw[name] = pl.canonical_start(P[::-1] if pl.signed_area(P) < 0 else P)
         notes += [f"{name}: {n}" for n in nts]
         if is_px:
             pixel = float(np.sqrt(scale[0] * scale[1]))

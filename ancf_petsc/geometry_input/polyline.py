@@ -12,8 +12,8 @@ from scipy.spatial import cKDTree
 
 from ..physics.polygon import first_self_intersection, points_in_polygon
 
-__all__ = ["signed_area", "centroid", "perimeter", "drop_duplicates", "densify", "resample",
-           "smooth", "PolylineDistance", "douglas_peucker", "self_intersection", "inside"]
+__all__ = ["signed_area", "centroid", "perimeter", "drop_duplicates", "canonical_start", "densify",
+           "resample", "smooth", "PolylineDistance", "douglas_peucker", "self_intersection", "inside"]
 
 
 def signed_area(P: np.ndarray) -> float:
@@ -54,6 +54,13 @@ def drop_duplicates(P: np.ndarray, tol: float, closed: bool = True) -> np.ndarra
     if closed and len(P) > 1 and np.linalg.norm(P[-1] - P[0]) <= tol:
         P = P[:-1]
     return P
+
+
+def canonical_start(P: np.ndarray) -> np.ndarray:
+    """The closed polyline P started at its vertex farthest from its area centroid: where the
+    tracing started (a mask's scan order, a click) then changes nothing that is built from it."""
+    d = np.linalg.norm(P - centroid(P)[None, :], axis=1)
+    return np.roll(P, -int(np.argmax(d)), axis=0)
 
 
 def densify(P: np.ndarray, h: float, closed: bool = True,

@@ -22,7 +22,8 @@ MAX_REFINEMENTS = 12
 CHORD_FACTOR = 4.0
 CORNER_DEG = 45.0
 #: arc lengths closer than this (relative to the trace's) are one: a spacing target that falls on a
-#: trace point within rounding takes it, whichever way the section is turned
+#: trace point within rounding takes it, whichever way the section is turned, and one midway between
+#: two takes both
 TIE = 1e-9
 
 
@@ -100,6 +101,16 @@ def _local_means(Q: np.ndarray, s: np.ndarray, idx: np.ndarray, traced: np.ndarr
     return P
 
 
+def _nearest(s: np.ndarray, targets: np.ndarray, tie: float) -> np.ndarray:
+    """Indices of the trace points nearest the arc lengths ``targets``, both where two are equally
+    near (within ``tie``): the same points whichever way the trace runs (a mirrored section) and
+    however it is turned (a target on a point within rounding takes it)."""
+    hi = np.clip(np.searchsorted(s, targets), 1, len(s) - 1)
+    lo = hi - 1
+    d_lo, d_hi = targets - s[lo], s[hi] - targets
+    return np.r_[lo[d_lo <= d_hi + tie], hi[d_hi <= d_lo + tie]]
+
+
 def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
               max_spacing: float | None = None, min_points: int = 2,
               traced: np.ndarray | None = None, periodic: bool = False) -> FittedCurve:
@@ -123,8 +134,7 @@ def fit_curve(Q: np.ndarray, degree: int, tol: float, name: str,
         k = int(np.ceil((s[j] - s[i]) / spacing - 1e-9))
         if k > 1:
             targets = s[i] + (s[j] - s[i]) * np.arange(1, k) / k
-            # a target on a trace point within rounding takes that point (else the next one)
-            extra.append(np.searchsorted(s, targets - TIE * s[-1]))
+            extra.append(_nearest(s, targets, TIE * s[-1]))
     if extra:
         idx = np.unique(np.concatenate([idx] + extra))
     curve = SplineCurve(_local_means(Q, s, idx, traced), degree, name, periodic=periodic)

@@ -36,12 +36,13 @@ def three(mirror=False, r=3.0):
     return out
 
 
-def halves():
-    """The two halves of an ellipse 6 x 4 mm, each traced with its own copy of the border y = 0."""
+def halves(gap=0.0):
+    """The two halves of an ellipse 6 x 4 mm, each traced with its own copy of the border y = 0
+    (each moved away from it by half ``gap`` [mm])."""
     arc = np.linspace(np.pi / 2, 3 * np.pi / 2, 60)
     border = np.column_stack([np.zeros(19), np.linspace(-1.8, 1.8, 19)])
-    left = np.vstack([np.column_stack([3 * np.cos(arc), 2 * np.sin(arc)]), border])
-    right = np.vstack([np.column_stack([-3 * np.cos(arc), -2 * np.sin(arc)]), border[::-1]])
+    left = np.vstack([np.column_stack([3 * np.cos(arc), 2 * np.sin(arc)]), border]) - [gap / 2, 0.0]
+    right = np.vstack([np.column_stack([-3 * np.cos(arc), -2 * np.sin(arc)]), border[::-1]]) + [gap / 2, 0.0]
     return {"l": {"points": left.tolist()}, "r": {"points": right.tolist()}}
 
 
@@ -140,7 +141,9 @@ CASES = [
                                     "would erase: it is in metres (50 um = 5e-05); give at most 0.002 m; got 0.05"),
     ("merge tolerance in mm", config(inline(halves(), merge_tolerance=0.05), beams=("l", "r")),
      "geometry.sections.merge_tolerance", "0.05 m is 16.7 x the width of the narrowest outline"),
-    ("merge tolerance that moves a border", config(inline(halves(), merge_tolerance=0.00074), beams=("l", "r")),
+    # a gap of 0.6 mm closed, half from each side: +12 % (without it, the merge and a coarse fit
+    # of the touching halves gave -6.1 %, -4.4 % once the fit took the nearest trace points)
+    ("merge tolerance that moves a border", config(inline(halves(0.6), merge_tolerance=0.00074), beams=("l", "r")),
      "geometry.sections.outlines.l", "give geometry.sections.merge_tolerance (0.74 mm) a smaller value"),
     # two beams on one outline filled one region; a center moved an outline into its neighbour by 1 mm
     ("one outline for two beams", dict(config(inline(three()), beams=("p", "q")), beams=[

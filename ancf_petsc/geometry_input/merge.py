@@ -11,8 +11,9 @@ curve per border, used by both loops (contact.find_interfaces).  Here, with the 
 2. runs of equal labels shorter than ``min_run`` are absorbed by their neighbours (flicker where
    two traces drift apart near the tolerance);
 3. each border run of A is paired with the run of B it faces; the interface is the midline of the
-   pair (A's points and their closest points on B, averaged), so each side moves by about half the
-   local gap;
+   pair (each side's points averaged with their closest points on the other, the two midlines
+   averaged at equal fractions of their length: neither side, nor the order the outlines are
+   listed in, is the reference), so each side moves by about half the local gap;
 4. the ends of all interfaces are clustered (within ``2 tol`` plus the sampling step) into
    junctions, so that where three subtendons meet the three interfaces end at one point;
 5. every loop becomes a cyclic sequence of segments between junctions: interfaces (shared,
@@ -29,7 +30,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..physics.spline import SectionError
-from .polyline import PolylineDistance, densify, inside
+from .polyline import PolylineDistance, densify, inside, resample
 
 __all__ = ["Segment", "Merged", "MergeError", "merge_outlines", "Unmerged", "unmerged_borders",
            "gap_closed"]
@@ -219,17 +220,27 @@ def _pair_runs(names, label, seg):
     return pairs, unpaired
 
 
+def _midline(Pa: np.ndarray, dist_b, Pb: np.ndarray, dist_a) -> np.ndarray:
+    """The midline of a border traced as Pa (on A) and Pb (on B, in A's direction): each side's
+    points averaged with their closest points on the other side, the two midlines resampled at
+    equal fractions of their arc length and averaged, so that neither side is the reference."""
+    mids = []
+    for P, dist in ((Pa, dist_b), (Pb, dist_a)):
+        _, _, foot = dist.query(P)
+        mids.append(0.5 * (P + foot))
+    n = max(len(Pa), len(Pb))
+    return 0.5 * sum(resample(M, n, closed=False) if len(M) > 1 else np.repeat(M, n, axis=0) for M in mids)
+
+
 def _assemble(names, D, V, dist, pairs, tol, h) -> Merged:
     rho = 2.0 * tol + 2.0 * h
-    # interfaces: midline of A's run and its closest points on B (recomputed: cleaning may have
-    # given a run points that were nearer another neighbour, or none)
+    # interfaces: midline of A's run and B's (recomputed: cleaning may have given a run points that
+    # were nearer another neighbour, or none); every midline point counts as traced
     mids, ends = [], []
-    for a, (s, m, _), b, _rb in pairs:
-        n = len(D[a])
-        idx = (s + np.arange(m)) % n
-        _, _, foot = dist[b].query(D[a][idx])
-        mid = 0.5 * (D[a][idx] + foot)
-        mids.append((mid, V[a][idx]))
+    for a, (s, m, _), b, (sb, mb, _) in pairs:
+        ia, ib = (s + np.arange(m)) % len(D[a]), (sb + np.arange(mb)) % len(D[b])
+        mid = _midline(D[a][ia], dist[b], D[b][ib][::-1], dist[a])
+        mids.append((mid, np.ones(len(mid), dtype=bool)))
         ends += [mid[0], mid[-1]]
     # junctions: cluster the interface ends
     if ends:

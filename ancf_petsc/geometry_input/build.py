@@ -221,7 +221,7 @@ def build_station(src: GeometrySource, opts: SectionsSpec, label: str = "") -> S
             len(merged.loops[owner]) == 1
         try:
             curves_of.append(fit_segment(seg.points, closed, opts.spline_degree, fit_tol, seg.name,
-                                          MAX_SPACING * perim[owner], seg.traced))
+                                          MAX_SPACING * min(perim[o] for o in seg.owners), seg.traced))
         except SectionError as exc:
             raise src.err(f"outlines.{owner}", str(exc)) from None
     loops = {}

@@ -159,7 +159,8 @@ class SectionField:
     # ------------------------------------------------------------------ registered mode
     def _register(self) -> None:
         """Matched rings of every outline at every station and the rotation between stations."""
-        self.rings = [{n: pl.resample(st.polyline(n), RING) for n in self.names} for st in self.stations]
+        self.rings = [{n: pl.resample(pl.canonical_start(st.polyline(n)), RING) for n in self.names}
+                      for st in self.stations]
         self.centres, self.theta = [], []
         for st, rings in zip(self.stations, self.rings):
             areas = np.array([pl.signed_area(rings[n]) for n in self.names])
@@ -220,7 +221,7 @@ class SectionField:
                 out += [(c, False) for c in fit_segment(blend, False, self.degree, self.fit_tolerance,
                                                          name_k, np.inf)]
         else:
-            ring = self.ring_at(name, x)
+            ring = pl.canonical_start(self.ring_at(name, x))
             Q = np.vstack([ring, ring[:1]])
             out = [(c, False) for c in fit_segment(Q, True, self.degree, self.fit_tolerance, name,
                                                     pl.perimeter(ring) / 12.0)]

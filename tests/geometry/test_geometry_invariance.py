@@ -155,3 +155,31 @@ def test_interfaces_are_fitted_alike_whichever_neighbour_is_listed_first():
            for order in (["left", "middle", "right"], ["right", "middle", "left"])]
     assert_same(got[0], got[1], 1e-9)
 
+
+def test_the_left_leg_measured_at_two_stations_gives_the_mirrored_field():
+    """Three traced subtendons at x = 0 and, 0.8 x smaller, turned by 20 deg and shifted, at
+    x = L; the same with y negated at both stations (the other leg): the stated section rotations
+    were +19.97 and -19.95 deg and the sections between the stations differed from the mirror
+    image's by 2.4e-4 (relative), the stations' rings and the blended outline's fit starting
+    where each loop's first curve did. Both legs now turn by 19.99 deg."""
+    from ancf_petsc.geometry_input.tendon import build_tendon
+    rng = np.random.default_rng(3)
+    near = {n: gc.trace(P, rng) for n, P in gc.strip_tendon(800).items()}
+    t = np.deg2rad(20.0)
+    far = {n: 0.8 * P @ np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]]) + [0.5, 0.2]
+           for n, P in near.items()}
+    legs = []
+    for sign in (1, -1):
+        st = [{"x": x, "units": "mm", "axes": ["y", "z"],
+               "outlines": {n: {"points": (P * [sign, 1]).tolist()} for n, P in t_.items()}}
+              for x, t_ in ((0.0, near), (0.05, far))]
+        legs.append(build_tendon(parse_sections({"stations": st}, "geometry.sections", ".", 0.05)))
+    assert legs[0].field.theta[0] == pytest.approx(-legs[1].field.theta[0], abs=1e-12)
+    assert np.rad2deg(legs[0].field.theta[0]) == pytest.approx(20.0, abs=0.05)
+    for x in (0.0125, 0.025):
+        right, left = ({n: make_outline(T.loop(n, x), 6) for n in T.names} for T in legs)
+        for n in right:
+            for q in ("area", "Syy", "Szz"):
+                assert getattr(left[n], q) == pytest.approx(getattr(right[n], q), rel=1e-9), (n, q, x)
+            assert left[n].Syz == pytest.approx(-right[n].Syz, rel=1e-9)
+            assert np.allclose(left[n].centroid * [-1, 1], right[n].centroid, rtol=0, atol=1e-9 * 3e-3)

@@ -96,6 +96,18 @@ def _whole_section_picks(terms: dict[str, list[complex]]) -> dict[str, int]:
     return pick
 
 
+def _same_curve(base, cv: SplineCurve, f: bool, atol: float) -> tuple[SplineCurve, bool]:
+    """(b, f) for the curve b of ``base`` equal to cv, (b, not f) for one equal to cv reversed (a
+    station listing the two neighbours of an interface in the other order), else (cv, f)."""
+    for b in base:
+        if b.points.shape != cv.points.shape or b.degree != cv.degree:
+            continue
+        for flip, P in ((False, cv.points), (True, cv.points[::-1])):
+            if np.allclose(b.points, P, rtol=0, atol=atol):
+                return b, f != flip
+    return cv, f
+
+
 class SectionField:
     """Reference sections along x from stations (see the module docstring)."""
 
@@ -128,9 +140,7 @@ class SectionField:
             for name in self.names:
                 new = []
                 for cv, f in st.loops[name]:
-                    same = next((b for b in base if b.points.shape == cv.points.shape and b.degree == cv.degree
-                                 and np.allclose(b.points, cv.points, rtol=0, atol=1e-12 * size)), None)
-                    new.append((same if same is not None else cv, f))
+                    new.append(_same_curve(base, cv, f, 1e-12 * size))
                 st.loops[name] = new
         users: dict[int, set] = {}
         for st in self.stations:

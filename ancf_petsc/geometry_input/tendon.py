@@ -75,14 +75,14 @@ def _check_mirror(stations, key: str) -> None:
     axes of one station mirror it."""
     if len(stations[0][1].loops) < 3:
         return
-    orders = []
+    orders, first = [], next(iter(stations[0][1].loops))
     for _, st in stations:
         names = list(st.loops)
         cents = np.array([pl.centroid(st.polyline(n)) for n in names])
         c = cents.mean(axis=0)
         ang = np.arctan2(cents[:, 1] - c[1], cents[:, 0] - c[0])
         order = [names[i] for i in np.argsort(ang)]
-        k = order.index(names[0])
+        k = order.index(first)          # station 0's first outline (a station may list them otherwise)
         orders.append(order[k:] + order[:k])
     for i, o in enumerate(orders[1:], start=1):
         rev = [o[0]] + o[1:][::-1]

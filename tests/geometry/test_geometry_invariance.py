@@ -7,6 +7,7 @@ import pytest
 
 import geometry_cases as gc
 from ancf_petsc.config.sections import parse_sections
+from ancf_petsc.config.values import ConfigError
 from ancf_petsc.geometry_input.build import build_station
 from ancf_petsc.physics.section import make_outline
 from helpers import CONFIGS
@@ -183,3 +184,25 @@ def test_the_left_leg_measured_at_two_stations_gives_the_mirrored_field():
                 assert getattr(left[n], q) == pytest.approx(getattr(right[n], q), rel=1e-9), (n, q, x)
             assert left[n].Syz == pytest.approx(-right[n].Syz, rel=1e-9)
             assert np.allclose(left[n].centroid * [-1, 1], right[n].centroid, rtol=0, atol=1e-9 * 3e-3)
+
+
+def _two_stations(order1, axes1):
+    from ancf_petsc.geometry_input.tendon import build_tendon
+    rng = np.random.default_rng(3)
+    traced = {n: gc.trace(P, rng) for n, P in gc.strip_tendon(800).items()}
+    st = [{"x": x, "units": "mm", "axes": axes, "outlines": {n: {"points": traced[n].tolist()} for n in order}}
+          for x, order, axes in ((0.0, ["left", "middle", "right"], ["y", "z"]), (0.05, order1, axes1))]
+    return build_tendon(parse_sections({"stations": st}, "geometry.sections", ".", 0.05))
+
+
+@pytest.mark.parametrize("order1", [["right", "left", "middle"], ["middle", "right", "left"]])
+def test_a_station_listing_its_outlines_in_another_order(order1):
+    """Station 1 the same tracings listed in another order: it was taken for another section (its
+    interfaces, fitted the other way round, did not match station 0's: outlines registered and
+    blended, rotation +0.01 deg, and contact refused); with axes [-y, z] (the mirror image) it was
+    accepted and blended with a section rotation of -176 deg, the mirror check starting each
+    station's round of outlines at its own first-listed one."""
+    same = _two_stations(order1, ["y", "z"])
+    assert same.field.structured, same.report()
+    with pytest.raises(ConfigError, match=r"stations\[1\]: this station is the mirror image of station 0"):
+        _two_stations(order1, ["-y", "z"])

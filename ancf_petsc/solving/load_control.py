@@ -37,6 +37,7 @@ class LevelTally:
     #: (load factor, negative eigenvalues, the last accepted state's) of the first sub-step
     #: that converged to a less stable state (a stability retry)
     unstable_at: tuple[float, int, int] | None = None
+    after_unstable: int = 0  # failed sub-steps since then (early_switch.py)
     #: the branch switches of this level (solving/branch_switch.py reports)
     switches: list = field(default_factory=list)
 

@@ -7,10 +7,10 @@ from petsc4py import PETSc
 from ..config.specs import SolverSpec
 from ..linalg.options import DEFAULT_OPTIONS
 from .failure_cause import Detail
-from .given_options import given_cause, given_option
+from .given_options import given_cause, given_option, stalled_text
 from .linear_messages import (MF_NO_MATRIX, MF_OPERATOR, SADDLE_POINT_HINT, applied_once,  # noqa: F401
                               linear_solver_detail, matrix_free, solver_text)
-from .records import STALLED_STEP, VIOLATED_STATE
+from .records import STALLED_STEP, UNSTABLE_STEP, VIOLATED_STATE
 
 
 def describe(solver) -> str:
@@ -289,3 +289,27 @@ def unsettled_message(unsettled: list[float], levels: int) -> str:
     return (f"contact weights not settled at {len(unsettled)} of {levels} levels (load factor "
             f"{', '.join(f'{x:g}' for x in unsettled)}; their residual_norm is |F| with the state's own "
             "weights): contact.fade: newton solves for them")
+
+
+def attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_negative) -> str:
+    """What went wrong with a failed sub-step, for its cut-back line in the log."""
+    if reason == STALLED_STEP:
+        return stalled_text(solver)
+    if reason == UNSTABLE_STEP:
+        return f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
+    if reason == VIOLATED_STATE:
+        return " (converged with a multiplier pulling or a gap penetrating: the exact rule would change the status)"
+    return " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+
+
+def tresca_line(lam: float, bound_updates: int, reason: int, its: int) -> str:
+    """The log line of a solve that friction's semi-smooth iteration failed (newton.py's Tresca problems)."""
+    return (f"  load factor {lam:.6g}: friction's semi-smooth iteration failed; solved again "
+            f"through {bound_updates} Tresca problems (bounds held): "
+            f"{'converged' if reason > 0 else 'failed'}, {its} Newton iterations in all")
+
+
+def unsettled_line(lam: float, updates: int, fnorm: float) -> str:
+    """The log line of a level accepted with its contact weights unsettled (contact/weights.py)."""
+    return (f"  contact weights not settled at load factor {lam:.6g} after {updates} updates: "
+            f"|F| with the state's own weights {fnorm:.2e} (contact.fade: newton solves for them)")

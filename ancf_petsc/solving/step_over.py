@@ -47,10 +47,14 @@ def creeping(stepper, tally, at_level: bool) -> bool:
     return bool(stepper.spec.step_over_jumps) and tally.at_level_failures >= CREEP_FAILURES
 
 
-def reported_level(target: float, reason: int, fnorm: float, tally) -> tuple[float, int, float]:
+def reported_level(target: float, reason: int, fnorm: float, tally, snes, lam: float) -> tuple[float, int, float]:
     """The level's load factor, SNES reason and |F| as reported: the level's own (its state's
     polished for the stability verdict: ``tally.polished``, critical_point.verdict_count), or
-    where it was stepped over (``tally.passed_over``), that solve's."""
+    where it was stepped over (``tally.passed_over``), that solve's.  A level that ends on a
+    branch switch's state (at ``lam``) has the switch's settling solve's, the last of ``snes``
+    (branch_switch.py ``_keep``), not the failed attempt's before it."""
+    if tally.switches and tally.switches[-1]["load_factor"] == lam:
+        reason, fnorm = snes.getConvergedReason(), snes.getFunctionNorm()
     over = tally.passed_over
     own = fnorm if tally.polished is None else tally.polished
     return (target, reason, own) if not over else tuple(over[1:])

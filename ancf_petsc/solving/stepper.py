@@ -5,8 +5,7 @@ converged solve it accepts it (growing Δλ after easy steps), on divergence (in
 residuals from inverted elements, J ≤ 0) it restores the last converged state and halves Δλ, at
 most ``max_cutbacks`` times in a row (the rest of the way to a level in one step when that is at
 most ``load_control.STRETCH`` increments).  Requested levels are always hit exactly.  All decisions use
-the SNES converged reason, which is the same on every rank.  The SNES and its options are
-snes_solver.py; an increment's Newton solves (the contact law's phases) are newton.py.
+the SNES converged reason, the same on every rank.  SNES: snes_solver.py; Newton phases: newton.py.
 """
 from __future__ import annotations
 
@@ -23,8 +22,8 @@ from ..petsc.problem import Problem, unclean
 from . import solver_messages
 from .branch_switch import BranchSwitch
 from .fade_switch import FadeForcesSwitch
-from .given_options import stalled_text
 from .continuity import jump_detail, residual_jump
+from .early_switch import switch_early
 from .failure_cause import Detail, give_up_cause, with_critical_point
 from .interrupt import RunInterrupted, stop_requested
 from .load_control import LevelTally, LoadControl
@@ -43,19 +42,7 @@ from .window_widening import WindowWidening
 #: ran out of iterations (cycling, wandering, stalling), its line search found no descent or its
 #: residual grew past the divergence tolerance
 JUMP_REASONS = (PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT, PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH,
-                PETSc.SNES.ConvergedReason.DIVERGED_DTOL,
-                STALLED_STEP)
-
-
-def _attempt_why(solver, reason: int, neg, inverted: bool, lost: bool, accepted_negative) -> str:
-    """What went wrong with a failed sub-step, for its cut-back line in the log."""
-    if reason == STALLED_STEP:
-        return stalled_text(solver)
-    if reason == UNSTABLE_STEP:
-        return f" ({neg} negative tangent eigenvalue(s), the last state had {accepted_negative})"
-    if reason == VIOLATED_STATE:
-        return " (converged with a multiplier pulling or a gap penetrating: the exact rule would change the status)"
-    return " (inverted element)" if inverted else (" (contact projection lost)" if lost else "")
+                PETSc.SNES.ConvergedReason.DIVERGED_DTOL, STALLED_STEP)
 
 
 class LoadStepper:
@@ -122,9 +109,7 @@ class LoadStepper:
             raise
         self.tresca_solves = newton.bound_updates
         if newton.bound_updates:
-            self.log(f"  load factor {lam:.6g}: friction's semi-smooth iteration failed; solved again "
-                     f"through {newton.bound_updates} Tresca problems (bounds held): "
-                     f"{'converged' if reason > 0 else 'failed'}, {its} Newton iterations in all")
+            self.log(solver_messages.tresca_line(lam, newton.bound_updates, reason, its))
         self.history = S.history
         self.newton_iterations += its
         # a SNES type that keeps no norm (ksponly, ms report 0: their levels were accepted with
@@ -136,9 +121,7 @@ class LoadStepper:
             # a level accepted with its weights' last update unsettled reports the residual
             # with the state's own weights (contact/weights.py), never the stale one
             fnorm = max(fnorm, newton.unsettled)
-            self.log(f"  contact weights not settled at load factor {lam:.6g} after "
-                     f"{MAX_WEIGHT_UPDATES} updates: |F| with the state's own weights {fnorm:.2e} "
-                     "(contact.fade: newton solves for them)")
+            self.log(solver_messages.unsettled_line(lam, MAX_WEIGHT_UPDATES, fnorm))
         return reason, its, fnorm
 
     def _stop_if_requested(self, target: float, level: float) -> None:
@@ -223,7 +206,7 @@ class LoadStepper:
             X_prev.destroy()
             if mixed is not None:
                 mixed.paused = False
-        reported, reason, fnorm = reported_level(target, reason, fnorm, tally)
+        reported, reason, fnorm = reported_level(target, reason, fnorm, tally, self.solver.snes, path.lam)
         return StepRecord(load_factor=reported, iterations=tally.its, substeps=tally.substeps,
                           cutbacks=tally.cutbacks, reason=reason_name(reason),
                           tresca_solves=tally.tresca_solves,
@@ -301,7 +284,9 @@ class LoadStepper:
         then = (f"no retry: {self.control.stop_reason(path.dlam, tally)}" if give_up
                 else f"retry with increment {path.dlam:.4g}")
         self.log(f"  cut back at load factor {path.lam + step:.6g}: {reason_name(reason)}"
-                 f"{_attempt_why(self.solver, reason, neg, inverted, lost, path.accepted_negative)}; {then}")
+                 f"{solver_messages.attempt_why(self.solver, reason, neg, inverted, lost, path.accepted_negative)}; {then}")
+        if not give_up and switch_early(self, path, X_prev, target, tally):   # creeping to a bifurcation
+            return
         if give_up or creeping(self, tally, path.lam + step == target):
             failure = _given_up(self, path, X_prev, step, target, reason, tally, inverted, lost)
             if give_up:

@@ -4,8 +4,10 @@ without waiting for every halving (solving/early_switch.py).
 The second subject's sliding column at twist 90°, gastrocnemius-biased (4 elements): the step
 1000 → 1200 N converges on a saddle (1 negative tangent eigenvalue), the smaller steps stall
 near the bifurcation at 1034.02 N.  The switch from the 1200 N saddle reaches a stable state
-0.4 mm away; taken after every halving it cost 519 Newton iterations at the level, and the level
-was reported with the last failed attempt's reason (DIVERGED_MAX_IT, |F| 4e-7).
+0.4 mm away; taken after every halving it cost 519 Newton iterations at the level (32 cut-backs),
+and the level was reported with the last failed attempt's reason (DIVERGED_MAX_IT, |F| 4e-7).
+It is now taken at the first failure from the 8th on whose last converged state is near the
+critical point (14 cut-backs, 238 iterations).
 """
 import numpy as np
 
@@ -28,8 +30,8 @@ def test_a_creep_towards_a_bifurcation_switches_from_the_saddle_at_once(tmp_path
     (switch,) = last["branch_switches"]
     assert switch["kind"] == "bifurcation" and switch["load_factor"] == 1200.0 and switch["negative_before"] == 1
     assert 0.2e-3 < switch["jump"] < 1e-3                  # a stable state 0.4 mm from the saddle
-    # eight failed attempts after the saddle, not 31 (519 Newton iterations at the level)
-    assert last["cutbacks"] <= 9 and last["iterations"] < 200
+    # not every halving down to the smallest increment (32 cut-backs, 519 Newton iterations)
+    assert 9 <= last["cutbacks"] <= 16 and last["iterations"] < 300
     # the level is reported with the state's own solve, not the last failed attempt's
     assert last["reason"].startswith("CONVERGED") and last["residual_norm"] < 1e-7
     # the same state as the switch after every halving gave (its probes at 1200 N)

@@ -179,11 +179,11 @@ def test_unilateral_column_takes_the_serial_path_on_every_rank_count(tmp_path):
 @pytest.mark.mpi
 @pytest.mark.slow
 def test_a_level_passed_over_gives_the_serial_answer(tmp_path):
-    """solving/step_over.py: the second subject's column whose 2500 N level lies in a gap of the
+    """solving/step_over.py: the second subject's column whose 1600 N level lies in a gap of the
     load path (tests/solving/test_step_over.py); 1, 2 and 3 ranks report it at the same load
     factor, past the same last converged state, with the serial probes."""
     from solving.test_step_over import gap_column
     runs = run_on_ranks(gap_column(), tmp_path)
     gaps = {n: s["steps"][-1]["passed_over"] for n, (_, s) in runs.items()}
-    assert all(g == gaps[1] for g in gaps.values()) and gaps[1]["reported_at"] == 2500.5, gaps
+    assert all(g == gaps[1] for g in gaps.values()) and gaps[1]["reported_at"] == 1640.0, gaps
     assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()})

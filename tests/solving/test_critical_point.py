@@ -6,8 +6,8 @@ at twist 120°, soleus-biased, unilateral (the fibre grid's cell, 4 elements), w
 7.27 N: the smallest scaled eigenvalue of the converged states falls as √(λ_f − λ) while the next
 stays at 1.1e-4 (the module docstring's numbers): with ``solver.branch_switch: false`` it
 stops there, and its message names the critical point.  The snap (BranchSwitch.snap) on the
-second subject's sliding column at 120°, gastrocnemius-biased, whose path folds at 2567 N: it
-goes on from a stable state 0.3 mm away, 0.1 % beyond, to 3 kN, the same on 2 and 3 ranks.
+second subject's sliding column at 45°, gastrocnemius-biased, whose path folds at 2977 N: it
+goes on from a stable state 0.8 mm away, 0.1 % beyond, to 3 kN, the same on 2 and 3 ranks.
 """
 import numpy as np
 import pytest
@@ -108,17 +108,17 @@ def test_without_switching_the_fold_stops_the_run_naming_the_critical_point(tmp_
 
 
 def _sliding_fold() -> dict:
-    """The second subject's outlines, twist 120°, gastrocnemius-biased, sliding: its path folds
-    at 2567 N (the subject2 grid's cell, which stopped there before the snap) on the secant
-    predictor's path; the tangent predictor's (frictionless contact's default since 2026-12-02)
-    passes it."""
+    """The second subject's outlines, twist 45°, gastrocnemius-biased, sliding: its path folds
+    at 2977 N (the subject2 grid's cell).  Until the outlines were started at their farthest
+    vertex (geometry_input/polyline.py) this was the 120° column's fold at 2567 N on the secant
+    predictor's path."""
     from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
-    return cell_config(EnvelopeCell(SUBJECT2, 120, "gastrocnemius", "sliding", predictor="secant"))
+    return cell_config(EnvelopeCell(SUBJECT2, 45, "gastrocnemius", "sliding"))
 
 
 def _snap_of(s: dict) -> dict:
     assert s["status"] == "completed" and s["reason_code"] == "BRANCH_SWITCHED", s["message"]
-    assert "snapping 1 time(s) past a critical point (load factor 2567.1" in s["message"], s["message"]
+    assert "snapping 1 time(s) past a critical point (load factor 2977.0" in s["message"], s["message"]
     snaps = [x for st in s["steps"] for x in st.get("branch_switches", [])]
     assert len(snaps) == 1, snaps
     return snaps[0]
@@ -128,7 +128,7 @@ def _snap_of(s: dict) -> dict:
 def test_a_column_snaps_past_its_critical_point_to_a_stable_state_downhill(tmp_path):
     s = run_inline(_sliding_fold(), tmp_path / "snap")
     snap = _snap_of(s)
-    assert snap["kind"] == "limit point" and 2567.0 < snap["critical_load_factor"] < 2568.0
+    assert snap["kind"] == "limit point" and 2977.0 < snap["critical_load_factor"] < 2978.0
     assert snap["critical_share"] < 0.01 and snap["negative_after"] == 0
     # just beyond the critical state (SNAP_STEPS[0]), a jump of a tenth of a section, downhill
     assert snap["load_factor"] == pytest.approx(snap["critical_load_factor"] * 1.001, rel=1e-12)

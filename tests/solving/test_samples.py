@@ -169,14 +169,15 @@ def test_friction_samples_start_from_the_reference_history_and_step_cold():
 
 @pytest.mark.slow
 def test_a_warm_sample_passes_over_a_gap_as_a_cold_one():
-    """The second subject's 30° soleus-biased column (a gap of the load path from ~2499.6 N):
-    cold, its levels 2500 and 2500.3 N are both reported at 2500.5 N. A neighbour (moduli
-    +1e-5) warm from those states solved 2500.3 N directly from the state at 2500.5 N and
-    reported it there, on the far side's branch, not passed over: the soleus end 1.0e-5 m
-    (1.6e-4) from the cold sample's. Now a level the last one's step over passed is reported
-    with it, as cold."""
+    """The second subject's sliding 180° gastrocnemius-biased column (a gap of the load path from
+    ~1599.3 N; tests/solving/test_step_over.py): cold, its levels 1600 and 1600.3 N are both
+    reported at 1640 N. A neighbour (moduli +1e-5) warm from those states solved the second
+    level directly from the state past the gap and reported it there, on the far side's branch,
+    not passed over (found on the 30° soleus-biased column, whose gap was at 2500 N before the
+    outlines were started at their farthest vertex). Now a level the last one's step over passed
+    is reported with it, as cold."""
     from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
-    raw = cell_config(EnvelopeCell(SUBJECT2, 30.0, "soleus", "sliding", levels=(1000.0, 2000.0, 2500.0, 2500.3)))
+    raw = cell_config(EnvelopeCell(SUBJECT2, 180.0, "gastrocnemius", "sliding", levels=(1000.0, 1200.0, 1600.0, 1600.3)))
     raw["output"] = {"vtk": False}
     raw["solver"] = dict(raw.get("solver") or {}, min_increment=0.05)
 
@@ -193,7 +194,7 @@ def test_a_warm_sample_passes_over_a_gap_as_a_cold_one():
     finally:
         one.destroy()
         fresh.destroy()
-    assert [p[0] for p in cold.passed_over] == [2500.0, 2500.3] and warm.warm_levels > 0
+    assert [p[0] for p in cold.passed_over] == [1600.0, 1600.3] and warm.warm_levels > 0
     assert warm.load_factors == cold.load_factors and warm.passed_over == cold.passed_over
     for name, u in cold.displacements.items():
         assert np.abs(warm.displacements[name] - u).max() <= 1e-9 * np.abs(u).max(), name

@@ -70,23 +70,23 @@ def test_the_check_reads_the_converged_evaluation(tmp_path, monkeypatch):
 
 @pytest.mark.slow
 def test_a_prediction_that_repeats_the_failed_settled_solve_is_not_solved(tmp_path, monkeypatch):
-    """The second subject's 90° gastrocnemius-biased unilateral column to 600 N: the settled solve
-    of 600 N fails (a Newton cycle), and the prediction after it changes no status.  Solving that
-    prediction repeats the failure (the same 15 iterations); skipping it reaches the same states
-    in exactly those iterations fewer."""
+    """The second subject's 120° uniform unilateral column to 400 N: the settled solve of 400 N
+    fails, and the prediction after it changes no status.  Solving that prediction repeats the
+    failure (the same 15 iterations); skipping it reaches the same states in exactly those
+    iterations fewer.  (Found on the 90° gastrocnemius-biased column at 600 N until the outlines
+    were started at their farthest vertex, geometry_input/polyline.py; that column repeats none.)"""
     from ancf_petsc.solving.newton import PhasedNewton
     from ancf_petsc.workflows.envelope import SUBJECT2, EnvelopeCell, cell_config
 
-    raw = cell_config(EnvelopeCell(SUBJECT2, 90.0, "gastrocnemius", "unilateral",
-                                   levels=(30.0, 100.0, 200.0, 400.0, 600.0)))
+    raw = cell_config(EnvelopeCell(SUBJECT2, 120.0, "uniform", "unilateral", levels=(30.0, 100.0, 200.0, 400.0)))
     seen: dict = {}
     _counted(monkeypatch, PhasedNewton, "_repeats", seen)
     skipped = run_inline(raw, tmp_path / "skipped", base_dir=CONFIGS)
     monkeypatch.setattr(PhasedNewton, "_repeats", lambda self, status: False)
     solved = run_inline(raw, tmp_path / "solved", base_dir=CONFIGS)
     assert skipped["status"] == solved["status"] == "completed"
-    assert seen == {True: 1}, seen
+    assert seen.get(True) == 1, seen        # (and one settled failure whose prediction changes the status)
     a, b = _probes(skipped), _probes(solved)
     assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
     its = [st["iterations"] for st in skipped["steps"]], [st["iterations"] for st in solved["steps"]]
-    assert its[0][:4] == its[1][:4] and its[1][4] - its[0][4] >= 10, its
+    assert its[0][:3] == its[1][:3] and its[1][3] - its[0][3] >= 10, its

@@ -10,8 +10,9 @@ It is now taken at the first failure from the 8th on whose last converged state 
 critical point (14 cut-backs, 238 iterations).
 """
 import numpy as np
+import pytest
 
-from helpers import probe, read_summary, run_inline
+from helpers import assert_same_as_serial, probe, probes_table, read_summary, run_inline, run_on_ranks
 
 
 def _column() -> dict:
@@ -36,3 +37,16 @@ def test_a_creep_towards_a_bifurcation_switches_from_the_saddle_at_once(tmp_path
     assert last["reason"].startswith("CONVERGED") and last["residual_norm"] < 1e-7
     # the same state as the switch after every halving gave (its probes at 1200 N)
     assert np.allclose(probe(s, "medial_gastrocnemius"), [7.6765e-3, -9.9903e-4, 8.9799e-4], atol=2e-8)
+
+
+@pytest.mark.mpi
+def test_the_early_switch_is_the_same_on_two_and_three_ranks(tmp_path):
+    """The critical-point reading and the failure count are collective: 1, 2 and 3 ranks switch at
+    the same failure, to the same state."""
+    runs = run_on_ranks(_column(), tmp_path, ranks=(1, 2, 3))
+    last = {n: s["steps"][-1] for n, (_, s) in runs.items()}
+    for n in (2, 3):
+        assert last[n]["cutbacks"] < 20 and last[n]["load_factor"] == 1200.0
+        (switch,) = last[n]["branch_switches"]
+        assert switch["sign"] == last[1]["branch_switches"][0]["sign"] and switch["load_factor"] == 1200.0
+    assert_same_as_serial({n: probes_table(s) for n, (_, s) in runs.items()}, rtol=1e-8)

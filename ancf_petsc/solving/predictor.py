@@ -39,7 +39,8 @@ path's curvature from the last increment). A path the tangent follows continuous
 limit point a secant step jumps over (the lone soleus of the stiffest published GOH set stops at
 its limit point near 99.5 N, where the secant path lands on a second stable branch and reaches
 400 N: tests/solving/test_step_limits.py; the second subject's 120° gastrocnemius-biased sliding column
-goes the other way: the secant meets a fold at 2567 N, the tangent passes it), and a cold column
+goes the other way: the secant met a fold at 2567 N, the tangent passed it, with the outlines as
+traced before 2026-12-08), and a cold column
 with it is about as cheap as a warm start from a sample 2 % away (37 against 39 Newton iterations,
 tests/solving/test_samples.py).
 

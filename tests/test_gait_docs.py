@@ -178,7 +178,7 @@ def test_friction_strides_grid_and_the_augmentation_of_its_cells():
 #: names after gait_envelope_): the tangent is the default with contact (GRID.csv; frictionless
 #: since 2026-12-02, with a tangential law since 2026-12-03), the secant's runs are GRID_secant.csv
 PREDICTOR_GRIDS = {"core": ("core_secant", "core_predicted"), "core8": ("core8_secant", "core8"),
-                   "subject2": ("subject2_secant", "subject2"),
+                   "subject2": ("subject2_secant", "subject2_as_traced"),
                    "friction": ("friction_secant", "friction")}
 #: the grids measured with ``solver.tangent: mixed`` (docs/gait_envelope_GRID_mixed.csv) against
 #: the committed default ones on the load predictor the mixed runs had, the secant's where the
@@ -277,7 +277,7 @@ def test_the_mixed_tangent_table_is_its_csvs():
 #: predicted (2026-12-05): the committed rows before (GRID_predicted.csv: every increment
 #: predicted, the tables' comparisons above were made on them) and now (GRID.csv)
 SETTLED_GRIDS = {"core": ("core_predicted", "core"), "strides": ("strides_predicted", "strides"),
-                 "subject2_strides": ("subject2_strides_predicted", "subject2_strides")}
+                 "subject2_strides": ("subject2_strides_predicted", "subject2_strides_as_traced")}
 
 
 def settled_table() -> str:

@@ -92,7 +92,7 @@ def check_edited(spec: ModelSpec) -> None:
     left to the model are the edited model's (config.parse.refresh_defaults).
     Raises ConfigError, as the config itself would."""
     from .config.beams import check_edited_beams
-    from .config.conditions import check_edited_conditions, parse_steps, resolve_nodes
+    from .config.conditions import as_python, check_edited_conditions, parse_steps, resolve_nodes
     from .config.contact_edits import check_edited_contact
     from .config.history import check_frames, check_history_edits
     from .config.parse import check_edited_geometry, refresh_defaults
@@ -105,7 +105,7 @@ def check_edited(spec: ModelSpec) -> None:
     refresh_defaults(spec)
     spec.petsc = parse_petsc(spec.petsc)
     resolve_nodes(spec)
-    steps = spec.steps.tolist() if hasattr(spec.steps, "tolist") else spec.steps   # np.linspace(...)
+    steps = as_python(spec.steps)                   # np.linspace(...)
     steps = list(steps) if isinstance(steps, tuple) else steps
     spec.steps = parse_steps(steps) if spec.history is None else check_frames(steps, spec.history)
     check_edited_solver(spec)

@@ -199,14 +199,14 @@ def check_edited_conditions(spec) -> None:
     for key in ("boundary_conditions", "loads", "probes"):
         for i, item in enumerate(getattr(spec, key)):
             item.path = item.path or f"{key}[{i}]"
-            beam = _python(item.beam)
+            beam = as_python(item.beam)
             item.beam = beam_ref(beam, f"{item.path}.beam", names) if isinstance(beam, str) \
                 else _index(beam, f"{item.path}.beam", names)
-            item.node = _python(item.node)
+            item.node = as_python(item.node)
     blocks = [ELEMENTS[b.element].block for b in spec.beams]
     for ld in spec.loads:
         ld.kind = string(ld.kind, f"{ld.path}.kind", ("force", "traction_force"))
-        ld.force = vector(_python(ld.force), f"{ld.path}.{ld.kind}", 3)
+        ld.force = vector(as_python(ld.force), f"{ld.path}.{ld.kind}", 3)
     for i, pr in enumerate(spec.probes):
         pr.name = string(pr.name, f"{pr.path}.name")
         if pr.name in [x.name for x in spec.probes[:i]]:
@@ -214,9 +214,9 @@ def check_edited_conditions(spec) -> None:
         pr.vector = string(pr.vector, f"{pr.path}.vector", blocks[pr.beam].names + ("mean",))
     for bc in spec.boundary_conditions:
         n = blocks[bc.beam].vectors_per_node
-        bc.displacement = [(*held[:2], number(_python(held[2]), f"{bc.path}.displacement"))
+        bc.displacement = [(*held[:2], number(as_python(held[2]), f"{bc.path}.displacement"))
                            if isinstance(held, (tuple, list)) and len(held) == 3 else held
-                           for held in _python(bc.displacement)]
+                           for held in as_python(bc.displacement)]
         for held in [*bc.dofs, *bc.displacement]:
             v, c = held[:2] if isinstance(held, (tuple, list)) and len(held) in (2, 3) else (held, None)
             if not (isinstance(v, int) and isinstance(c, int) and 0 <= v < n and 0 <= c < 3):
@@ -225,7 +225,7 @@ def check_edited_conditions(spec) -> None:
                                                     f"({', '.join(blocks[bc.beam].names)}), components 0..2")
 
 
-def _python(value):
+def as_python(value):
     """A numpy value (array or scalar) as Python's (``spec.loads[0].force = np.array(...)``)."""
     return value.tolist() if hasattr(value, "tolist") else value
 
